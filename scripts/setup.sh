@@ -1,0 +1,30 @@
+#!/usr/bin/env bash
+# Installs the Debian packages shtool needs (only those missing), then configures and
+# builds it in Release. Idempotent: a second run installs nothing and rebuilds only
+# what changed.
+#   scripts/setup.sh [BUILD_DIR]     (default: build)
+set -euo pipefail
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+build="${1:-$root/build}"
+
+packages=(
+  g++ cmake make pkg-config
+  libeigen3-dev libfftw3-dev nlohmann-json3-dev          # runtime library
+  libcli11-dev libnlopt-cxx-dev libembree-dev libtinyobjloader-dev  # offline tool
+  libgtest-dev libbenchmark-dev                          # tests and benchmarks
+  python3 python3-jsonschema python3-numpy               # schema checks, numpy reader test
+)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]})); then
+  echo "setup: installing missing Debian packages: ${missing[*]}" >&2
+  sudo=""
+  if [ "$(id -u)" -ne 0 ]; then sudo="sudo"; fi
+  $sudo apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >&2
+fi
+
+cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release >/dev/null
+cmake --build "$build" -j "$(nproc)"

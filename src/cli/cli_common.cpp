@@ -1,0 +1,36 @@
+#include "cli_common.h"
+
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <iostream>
+
+namespace shtool::cli {
+
+std::vector<double> parse_number_list(const std::string& text, const std::string& what) {
+  std::vector<double> values;
+  std::size_t pos = 0;
+  while (true) {
+    const std::size_t comma = text.find(',', pos);
+    const std::string field = text.substr(pos, comma == std::string::npos ? std::string::npos
+                                                                          : comma - pos);
+    const char* begin = field.c_str();
+    char* end = nullptr;
+    errno = 0;
+    const double v = std::strtod(begin, &end);
+    while (end && (*end == ' ' || *end == '\t')) ++end;
+    if (field.find_first_not_of(" \t") == std::string::npos || end == begin || *end != '\0')
+      throw UserError(what + ": '" + field + "' is not a number (expected comma-separated numbers, got '" +
+                      text + "')");
+    if (!std::isfinite(v) || errno == ERANGE)
+      throw UserError(what + ": '" + field + "' is not a finite number");
+    values.push_back(v);
+    if (comma == std::string::npos) break;
+    pos = comma + 1;
+  }
+  return values;
+}
+
+void print_json(const nlohmann::json& value) { std::cout << value.dump() << '\n'; }
+
+}  // namespace shtool::cli
