@@ -32,5 +32,7 @@ void print_json(const nlohmann::json& value);
 // Each subcommand registers itself here; see main.cpp.
 void setup_eval(CLI::App& app);
 void setup_inspect(CLI::App& app);
+void setup_gen_tensors(CLI::App& app);
+void setup_rotate(CLI::App& app);
 
 }  // namespace shtool::cli

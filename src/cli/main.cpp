@@ -16,6 +16,8 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   shtool::cli::setup_eval(app);
   shtool::cli::setup_inspect(app);
+  shtool::cli::setup_gen_tensors(app);
+  shtool::cli::setup_rotate(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,0 +1,98 @@
+// SH rotation: one API for every method. Build a rotation once for an order and a
+// 3x3 rotation, then apply it to as many coefficient vectors as needed (an RGB light is
+// three). g(w) = f(R^-1 w); see docs/conventions.md and docs/rotation.md.
+//
+// Methods
+//   reference  dense per-band matrices by the Ivanic-Ruedenberg recurrences (exact);
+//   zxzxz      Rz(a) Rx(-90) Rz(b) Rx(+90) Rz(g) with the sparse X90 table (exact,
+//              Kautz et al. 2002; paper 001 Sec. 2.2, App. C);
+//   taylor1, taylor1.5, taylor2
+//              Rz(a) T(b) Rz(g) where T is the 1st / "1.5th" / 2nd order Taylor expansion
+//              of the y-rotation at b = 0 (paper 001 Sec. 3): approximate, for small tilt b;
+//   automatic  the cheapest method whose error bound for this rotation is within the
+//              tolerance (Taylor when the tilt is small enough, zxzxz otherwise).
+// The Taylor error bounds are exact operator norms for taylor1/taylor2 (the y-rotation
+// generator is normal with eigenvalues i m, |m| < N) and a rigorous bound for taylor1.5.
+//
+// An ShRotation owns its scratch buffers: apply() allocates nothing and is not safe to
+// call concurrently on one object (use one object per thread).
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <span>
+#include <string_view>
+#include <vector>
+
+#include "shtool/euler.h"
+#include "shtool/rotation_helpers.h"
+
+namespace shtool {
+
+enum class RotationMethod { automatic, reference, zxzxz, taylor1, taylor15, taylor2 };
+
+std::string_view rotation_method_name(RotationMethod method);  // "taylor1.5", ...
+std::optional<RotationMethod> rotation_method_from_name(std::string_view name);
+
+// Default tolerance of the automatic choice: largest coefficient-vector error allowed
+// for a unit-length input (spectral norm of the error matrix).
+inline constexpr double kDefaultRotationTolerance = 1e-10;
+
+// Error bound (spectral norm of M(Ry(b)) - approximation) of a Taylor method for
+// tilt b at the given order; 0 for exact methods.
+double taylor_error_bound(RotationMethod method, int order, double beta,
+                          double ddy_offdiag_norm = 0.0);
+
+template <class T>
+class ShRotation {
+ public:
+  // helpers may be null: then only the reference method is available.
+  ShRotation(int order, std::shared_ptr<const RotationHelpers> helpers);
+
+  // Prepares the rotation R (must be orthonormal, det +1). Throws nothing; returns false
+  // (and keeps the previous rotation) if the method needs helpers that are missing or
+  // cover fewer bands than the order.
+  bool set(const Mat3<T>& r, RotationMethod method = RotationMethod::automatic,
+           double tolerance = kDefaultRotationTolerance);
+
+  int order() const { return order_; }
+  RotationMethod method() const { return resolved_; }  // never automatic after set()
+  const EulerZYZ<T>& euler() const { return euler_; }
+
+  // out = M(R) in, both of N^2 coefficients; in and out must not overlap.
+  void apply(std::span<const T> in, std::span<T> out) const;
+
+  // The dense per-band matrices of the reference method for the current rotation
+  // (band l block of (2l+1)^2 values, row-major, starting at l(4l^2-1)/3).
+  std::span<const T> reference_blocks() const { return dense_; }
+
+ private:
+  void apply_z(const std::vector<T>& cs, const std::vector<T>& sn, const T* in, T* out) const;
+  void apply_x90(const T* in, T* out, bool transpose) const;
+  void apply_taylor_y(const T* in, T* out) const;
+  void build_reference(const Mat3<T>& r);
+
+  int order_;
+  std::shared_ptr<const RotationHelpers> helpers_;
+  // Helpers converted to T once (float rotations must not convert in the hot loop).
+  std::vector<int> x90_row_, x90_col_, x90t_row_, x90t_col_;
+  std::vector<T> x90_val_, x90t_val_, dy_sub_, ddy_diag_, ddy_off2_;
+  double ddy_offdiag_norm_ = 0.0;
+
+  RotationMethod resolved_ = RotationMethod::reference;
+  EulerZYZ<T> euler_;
+  T beta_ = 0;
+  std::vector<T> cos_a_, sin_a_, cos_b_, sin_b_, cos_g_, sin_g_;  // cos(m angle), m < N
+  std::vector<T> dense_;
+  mutable std::vector<T> tmp1_, tmp2_;
+};
+
+// Many (rotation, vector) pairs: out[k] = M(rotations[k]) in[k], vectors of N^2
+// coefficients stored contiguously. Same method choice as ShRotation::set.
+template <class T>
+bool rotate_batch(ShRotation<T>& rotation, std::span<const Mat3<T>> rotations,
+                  std::span<const T> in, std::span<T> out,
+                  RotationMethod method = RotationMethod::automatic,
+                  double tolerance = kDefaultRotationTolerance);
+
+}  // namespace shtool

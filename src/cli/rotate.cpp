@@ -1,0 +1,142 @@
+// shtool rotate: rotate an SH vector, g(w) = f(R^-1 w), by any runtime method.
+#include <cmath>
+#include <fstream>
+#include <iostream>
+#include <iterator>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+#include <Eigen/LU>
+
+#include "cli_common.h"
+#include "shtool/rotation.h"
+#include "shtool/sh.h"
+
+namespace shtool::cli {
+namespace {
+
+// How far from unit length / orthonormal a user's rotation may be before it is
+// rejected rather than silently renormalised: a few float epsilons, so rotations
+// printed with 7 significant digits are accepted.
+constexpr double kRotationInputTolerance = 1e-6;
+
+struct RotateOptions {
+  int order = 0;
+  std::string method = "auto";
+  double tol = kDefaultRotationTolerance;
+  std::string quat, matrix, zyz, coeffs, in, tables;
+};
+
+std::vector<double> read_coefficients(const RotateOptions& opt) {
+  if (!opt.coeffs.empty()) return parse_number_list(opt.coeffs, "--coeffs");
+  std::string text;
+  if (opt.in == "-") {
+    text.assign(std::istreambuf_iterator<char>(std::cin), {});
+  } else {
+    std::ifstream file(opt.in, std::ios::binary);
+    if (!file) throw UserError("--in: cannot open '" + opt.in + "'");
+    text.assign(std::istreambuf_iterator<char>(file), {});
+  }
+  const nlohmann::json doc = nlohmann::json::parse(text, nullptr, false);
+  if (doc.is_discarded()) throw UserError("--in: '" + opt.in + "' is not valid JSON");
+  if (!doc.is_object() || !doc.contains("coefficients") || !doc["coefficients"].is_array())
+    throw UserError("--in: expected a JSON object {\"coefficients\": [numbers]}");
+  std::vector<double> c;
+  for (const auto& v : doc["coefficients"]) {
+    if (!v.is_number()) throw UserError("--in: \"coefficients\" must contain only numbers");
+    c.push_back(v.get<double>());
+  }
+  return c;
+}
+
+Mat3<double> read_rotation(const RotateOptions& opt) {
+  const int given = !opt.quat.empty() + !opt.matrix.empty() + !opt.zyz.empty();
+  if (given != 1) throw UserError("give exactly one of --quat, --matrix, --zyz");
+  if (!opt.quat.empty()) {
+    const std::vector<double> q = parse_number_list(opt.quat, "--quat");
+    if (q.size() != 4) throw UserError("--quat needs 4 numbers w,x,y,z, got " + std::to_string(q.size()));
+    const double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    if (std::abs(norm - 1.0) > kRotationInputTolerance)
+      throw UserError("--quat is not a unit quaternion (|q| = " + std::to_string(norm) + ")");
+    return matrix_from_quaternion<double>(q[0] / norm, q[1] / norm, q[2] / norm, q[3] / norm);
+  }
+  if (!opt.zyz.empty()) {
+    const std::vector<double> a = parse_number_list(opt.zyz, "--zyz");
+    if (a.size() != 3) throw UserError("--zyz needs 3 angles a,b,c in radians, got " + std::to_string(a.size()));
+    return matrix_from_zyz<double>({a[0], a[1], a[2]});
+  }
+  const std::vector<double> m = parse_number_list(opt.matrix, "--matrix");
+  if (m.size() != 9) throw UserError("--matrix needs 9 numbers r00,r01,...,r22, got " + std::to_string(m.size()));
+  Mat3<double> r;
+  r << m[0], m[1], m[2], m[3], m[4], m[5], m[6], m[7], m[8];
+  const double defect = orthonormality_defect<double>(r);
+  if (defect > kRotationInputTolerance)
+    throw UserError("--matrix is not orthonormal (max |R^T R - I| = " + std::to_string(defect) + ")");
+  if (r.determinant() < 0) throw UserError("--matrix has determinant -1 (a reflection, not a rotation)");
+  return r;
+}
+
+void run_rotate(const RotateOptions& opt) {
+  if (!is_supported_order(opt.order))
+    throw UserError("--order " + std::to_string(opt.order) + " is not supported (1.." +
+                    std::to_string(kMaxOrder) + ")");
+  const auto method = rotation_method_from_name(opt.method);
+  if (!method)
+    throw UserError("--method: unknown method '" + opt.method +
+                    "' (auto, reference, zxzxz, taylor1, taylor1.5, taylor2)");
+  if (!(opt.tol > 0) || !std::isfinite(opt.tol)) throw UserError("--tol must be a positive number");
+  const Mat3<double> r = read_rotation(opt);
+  const std::vector<double> coeffs = read_coefficients(opt);
+  if (coeffs.size() != static_cast<std::size_t>(sh_count(opt.order)))
+    throw UserError("expected " + std::to_string(sh_count(opt.order)) + " coefficients for order " +
+                    std::to_string(opt.order) + ", got " + std::to_string(coeffs.size()));
+  for (double c : coeffs)
+    if (!std::isfinite(c)) throw UserError("coefficients must be finite numbers");
+
+  std::shared_ptr<const RotationHelpers> helpers;
+  if (*method != RotationMethod::reference) {
+    const std::filesystem::path path =
+        opt.tables.empty() ? default_rotation_helpers_path() : std::filesystem::path(opt.tables);
+    if (path.empty())
+      throw UserError("rotation-helpers table not found (set --tables or SHTOOL_TABLES; "
+                      "generate it with `shtool gen-tensors --what rotation`)");
+    TableResult<RotationHelpers> loaded = RotationHelpers::load(path, opt.order);
+    if (!loaded) throw UserError(loaded.error().message);
+    helpers = std::make_shared<RotationHelpers>(std::move(loaded).value());
+  }
+  ShRotation<double> rotation(opt.order, helpers);
+  if (!rotation.set(r, *method, opt.tol)) throw UserError("rotation method unavailable for this order");
+  std::vector<double> out(coeffs.size());
+  rotation.apply(coeffs, out);
+  print_json({{"order", opt.order},
+              {"method", std::string(rotation_method_name(rotation.method()))},
+              {"coefficients", out}});
+}
+
+}  // namespace
+
+void setup_rotate(CLI::App& app) {
+  auto opt = std::make_shared<RotateOptions>();
+  CLI::App* sub = app.add_subcommand("rotate", "Rotate an SH vector: g(w) = f(R^-1 w) (JSON)");
+  sub->add_option("--order", opt->order, "SH order N (bands 0..N-1)")->required();
+  sub->add_option("--method", opt->method, "auto|reference|zxzxz|taylor1|taylor1.5|taylor2")
+      ->capture_default_str();
+  sub->add_option("--tol", opt->tol,
+                  "auto: largest error allowed for a unit-length vector (spectral norm)")
+      ->capture_default_str();
+  sub->add_option("--quat", opt->quat, "unit quaternion w,x,y,z (Hamilton)");
+  sub->add_option("--matrix", opt->matrix, "rotation matrix r00,r01,...,r22 (row-major)");
+  sub->add_option("--zyz", opt->zyz, "Euler angles a,b,c: R = Rz(a) Ry(b) Rz(c), radians");
+  sub->add_option("--coeffs", opt->coeffs, "N^2 coefficients c0,c1,...");
+  sub->add_option("--in", opt->in, "JSON file {\"coefficients\": [...]}, or - for stdin");
+  sub->add_option("--tables", opt->tables, "rotation-helpers table (default: the shipped one)");
+  sub->callback([opt]() {
+    if (opt->coeffs.empty() == opt->in.empty()) throw UserError("give exactly one of --coeffs, --in");
+    run_rotate(*opt);
+  });
+}
+
+}  // namespace shtool::cli

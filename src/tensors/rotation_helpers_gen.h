@@ -1,0 +1,17 @@
+// gen-tensors: the sparse helper matrices of the zxzxz and Taylor rotations.
+#pragma once
+
+#include "shtool/rotation_helpers.h"
+
+namespace shtool {
+
+// X90 = M(Rx(+90 deg)) by projection with a quadrature that is exact for the degree-2l
+// integrands of band l (so exact up to rounding, and independent of the recurrence the
+// reference rotation uses); D1 = X90^T G_z X90 with G_z the exact generator of
+// z-rotations (Ry(b) = Rx(-90) Rz(b) Rx(+90)), and D2 = D1^2 (M(Ry(b)) = exp(b D1)).
+// Entries below 1e-13 in magnitude are structural zeros (the true values are exact zeros
+// by parity) and are dropped. Throws std::logic_error if the computed matrices lack the
+// expected structure (tridiagonal D1), which would mean a convention error.
+RotationHelpers compute_rotation_helpers(int order);
+
+}  // namespace shtool
