@@ -32,6 +32,18 @@ Mat3<T> matrix_from_zyz(const EulerZYZ<T>& e);
 template <class T>
 EulerZYZ<T> zyz_from_matrix(const Mat3<T>& r);
 
+// The same decomposition as cosines and sines, without any trigonometric call (what
+// the rotations need: the z-rotations use cos(m a), sin(m a) from a recurrence).
+// cos/sin of alpha come from (R02, R12) / sin(beta); those of gamma from the
+// well-conditioned alpha +- gamma combination composed with alpha, so alpha + gamma
+// (beta near 0) or alpha - gamma (beta near pi) is exact even where alpha alone is not.
+template <class T>
+struct ZyzCosSin {
+  T ca = 1, sa = 0, cb = 1, sb = 0, cg = 1, sg = 0;
+};
+template <class T>
+ZyzCosSin<T> zyz_cos_sin_from_matrix(const Mat3<T>& r);
+
 // Largest entry of |R^T R - I| and the determinant, for validating user input.
 template <class T>
 T orthonormality_defect(const Mat3<T>& r);

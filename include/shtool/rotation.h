@@ -57,7 +57,6 @@ class ShRotation {
 
   int order() const { return order_; }
   RotationMethod method() const { return resolved_; }  // never automatic after set()
-  const EulerZYZ<T>& euler() const { return euler_; }
 
   // out = M(R) in, both of N^2 coefficients; in and out must not overlap.
   void apply(std::span<const T> in, std::span<T> out) const;
@@ -71,6 +70,7 @@ class ShRotation {
   void apply_x90(const T* in, T* out, bool transpose) const;
   void apply_taylor_y(const T* in, T* out) const;
   void build_reference(const Mat3<T>& r);
+  void update_taylor_limits(double tolerance);
 
   int order_;
   std::shared_ptr<const RotationHelpers> helpers_;
@@ -80,8 +80,9 @@ class ShRotation {
   double ddy_offdiag_norm_ = 0.0;
 
   RotationMethod resolved_ = RotationMethod::reference;
-  EulerZYZ<T> euler_;
-  T beta_ = 0;
+  T beta_ = 0;  // tilt, for the Taylor methods
+  double cached_tolerance_ = -1.0;
+  double taylor_limit_sin_[3] = {0, 0, 0};  // sin of the largest tilt for taylor1, 1.5, 2
   std::vector<T> cos_a_, sin_a_, cos_b_, sin_b_, cos_g_, sin_g_;  // cos(m angle), m < N
   std::vector<T> dense_;
   mutable std::vector<T> tmp1_, tmp2_;

@@ -1,7 +1,6 @@
 #include "shtool/euler.h"
 
 #include <cmath>
-#include <numbers>
 
 #include <Eigen/Dense>
 
@@ -29,30 +28,40 @@ Mat3<T> matrix_from_zyz(const EulerZYZ<T>& e) {
 }
 
 template <class T>
-EulerZYZ<T> zyz_from_matrix(const Mat3<T>& r) {
-  constexpr T pi = std::numbers::pi_v<T>;
-  EulerZYZ<T> e;
-  e.beta = std::atan2(std::hypot(r(0, 2), r(1, 2)), r(2, 2));
-  // Individual angles: exact up to rounding divided by sin(beta).
-  const bool has_sin = r(0, 2) != 0 || r(1, 2) != 0 || r(2, 0) != 0 || r(2, 1) != 0;
-  const T a1 = has_sin ? std::atan2(r(1, 2), r(0, 2)) : T(0);
-  const T g1 = has_sin ? std::atan2(r(2, 1), -r(2, 0)) : T(0);
-  // R00 + R11 = (1 + cos b) cos(a + g),  R10 - R01 = (1 + cos b) sin(a + g)
-  // R11 - R00 = (1 - cos b) cos(a - g),  R10 + R01 = (cos b - 1) sin(a - g)
-  // One of the two combinations is well conditioned at any beta; the other is only
-  // multiplied by sin(beta) in R, so its error does not matter. The well-conditioned
-  // one is moved by 2 pi to lie next to the raw value, which fixes the branch.
-  auto nearest = [pi](T value, T target) {
-    return value + 2 * pi * std::round((target - value) / (2 * pi));
-  };
-  T sum = a1 + g1, diff = a1 - g1;
-  if (r(2, 2) >= 0)
-    sum = nearest(std::atan2(r(1, 0) - r(0, 1), r(0, 0) + r(1, 1)), sum);
-  else
-    diff = nearest(std::atan2(-(r(1, 0) + r(0, 1)), r(1, 1) - r(0, 0)), diff);
-  e.alpha = (sum + diff) / 2;
-  e.gamma = (sum - diff) / 2;
+ZyzCosSin<T> zyz_cos_sin_from_matrix(const Mat3<T>& r) {
+  // R = Rz(a) Ry(b) Rz(g):
+  //   (R02, R12) = sin b (cos a, sin a),  (-R20, R21) = sin b (cos g, sin g),  R22 = cos b
+  //   (R00 + R11, R10 - R01) = (1 + cos b) (cos(a + g), sin(a + g))
+  //   (R11 - R00, -(R10 + R01)) = (1 - cos b) (cos(a - g), sin(a - g))
+  ZyzCosSin<T> e;
+  e.cb = r(2, 2);
+  e.sb = std::sqrt(r(0, 2) * r(0, 2) + r(1, 2) * r(1, 2));  // not sqrt(1 - cb^2): exact near b = 0
+  if (e.sb > 0) {
+    e.ca = r(0, 2) / e.sb;
+    e.sa = r(1, 2) / e.sb;
+  }
+  if (e.cb >= 0) {
+    T cs = r(0, 0) + r(1, 1), ss = r(1, 0) - r(0, 1);
+    const T norm = std::sqrt(cs * cs + ss * ss);  // = 1 + cos b >= 1
+    cs /= norm;
+    ss /= norm;
+    e.cg = cs * e.ca + ss * e.sa;  // g = (a + g) - a
+    e.sg = ss * e.ca - cs * e.sa;
+  } else {
+    T cd = r(1, 1) - r(0, 0), sd = -(r(1, 0) + r(0, 1));
+    const T norm = std::sqrt(cd * cd + sd * sd);  // = 1 - cos b > 1
+    cd /= norm;
+    sd /= norm;
+    e.cg = e.ca * cd + e.sa * sd;  // g = a - (a - g)
+    e.sg = e.sa * cd - e.ca * sd;
+  }
   return e;
+}
+
+template <class T>
+EulerZYZ<T> zyz_from_matrix(const Mat3<T>& r) {
+  const ZyzCosSin<T> cs = zyz_cos_sin_from_matrix(r);
+  return {std::atan2(cs.sa, cs.ca), std::atan2(cs.sb, cs.cb), std::atan2(cs.sg, cs.cg)};
 }
 
 template <class T>
@@ -64,6 +73,7 @@ T orthonormality_defect(const Mat3<T>& r) {
   template Mat3<T> matrix_from_quaternion<T>(T, T, T, T);            \
   template Mat3<T> matrix_from_zyz<T>(const EulerZYZ<T>&);           \
   template EulerZYZ<T> zyz_from_matrix<T>(const Mat3<T>&);           \
+  template ZyzCosSin<T> zyz_cos_sin_from_matrix<T>(const Mat3<T>&);  \
   template T orthonormality_defect<T>(const Mat3<T>&);
 SHTOOL_INSTANTIATE(float)
 SHTOOL_INSTANTIATE(double)

@@ -12,19 +12,16 @@ namespace {
 // Offset of band l's dense block: sum_{k<l} (2k+1)^2.
 constexpr int block_offset(int l) { return l * (4 * l * l - 1) / 3; }
 
-// cos(m a), sin(m a) for m = 0..n-1 by the multiple-angle (Chebyshev) recurrence
-// (paper 001, App. C): two trig calls per angle instead of 2n.
+// cos(m a), sin(m a) for m = 0..n-1 from cos a, sin a by the multiple-angle recurrence
+// (paper 001, App. C), in its complex form (c + i s)^m, whose rounding error grows
+// only linearly in m: no trigonometric call at all.
 template <class T>
-void multiple_angles(T angle, int n, std::vector<T>& c, std::vector<T>& s) {
+void multiple_angles(T c1, T s1, int n, std::vector<T>& c, std::vector<T>& s) {
   c[0] = 1;
   s[0] = 0;
-  if (n < 2) return;
-  const T c1 = std::cos(angle), s1 = std::sin(angle);
-  c[1] = c1;
-  s[1] = s1;
-  for (int m = 2; m < n; ++m) {
-    c[m] = 2 * c1 * c[m - 1] - c[m - 2];
-    s[m] = 2 * c1 * s[m - 1] - s[m - 2];
+  for (int m = 1; m < n; ++m) {
+    c[m] = c[m - 1] * c1 - s[m - 1] * s1;
+    s[m] = s[m - 1] * c1 + c[m - 1] * s1;
   }
 }
 
@@ -117,24 +114,52 @@ ShRotation<T>::ShRotation(int order, std::shared_ptr<const RotationHelpers> help
 }
 
 template <class T>
+void ShRotation<T>::update_taylor_limits(double tolerance) {
+  // Largest tilt at which each Taylor method's bound is within the tolerance, by
+  // bisection (the bounds increase with the tilt on [0, pi/2]); stored as sin(limit) so
+  // set() compares it with sin(b) straight from the matrix, without an atan2.
+  cached_tolerance_ = tolerance;
+  const RotationMethod methods[3] = {RotationMethod::taylor1, RotationMethod::taylor15,
+                                     RotationMethod::taylor2};
+  for (int k = 0; k < 3; ++k) {
+    double lo = 0.0, hi = 1.5707963267948966;
+    if (taylor_error_bound(methods[k], order_, hi, ddy_offdiag_norm_) <= tolerance) {
+      lo = hi;
+    } else {
+      for (int iter = 0; iter < 60; ++iter) {
+        const double mid = 0.5 * (lo + hi);
+        (taylor_error_bound(methods[k], order_, mid, ddy_offdiag_norm_) <= tolerance ? lo : hi) = mid;
+      }
+    }
+    taylor_limit_sin_[k] = std::sin(lo);
+  }
+}
+
+template <class T>
 bool ShRotation<T>::set(const Mat3<T>& r, RotationMethod method, double tolerance) {
   if (method != RotationMethod::reference && !helpers_) return false;
-  euler_ = zyz_from_matrix<T>(r);
+  const ZyzCosSin<T> e = zyz_cos_sin_from_matrix<T>(r);
   if (method == RotationMethod::automatic) {
+    if (tolerance != cached_tolerance_) update_taylor_limits(tolerance);
     method = RotationMethod::zxzxz;
-    for (RotationMethod m : {RotationMethod::taylor1, RotationMethod::taylor15, RotationMethod::taylor2}) {
-      if (taylor_error_bound(m, order_, static_cast<double>(euler_.beta), ddy_offdiag_norm_) <= tolerance) {
-        method = m;
-        break;
-      }
+    if (e.cb > 0) {
+      const RotationMethod taylor[3] = {RotationMethod::taylor1, RotationMethod::taylor15,
+                                        RotationMethod::taylor2};
+      for (int k = 0; k < 3; ++k)
+        if (static_cast<double>(e.sb) <= taylor_limit_sin_[k]) {
+          method = taylor[k];
+          break;
+        }
     }
   }
   resolved_ = method;
-  beta_ = euler_.beta;
-  multiple_angles<T>(euler_.alpha, order_, cos_a_, sin_a_);
-  multiple_angles<T>(euler_.gamma, order_, cos_g_, sin_g_);
-  if (method == RotationMethod::zxzxz) multiple_angles<T>(euler_.beta, order_, cos_b_, sin_b_);
-  if (method == RotationMethod::reference) build_reference(r);
+  multiple_angles<T>(e.ca, e.sa, order_, cos_a_, sin_a_);
+  multiple_angles<T>(e.cg, e.sg, order_, cos_g_, sin_g_);
+  switch (method) {
+    case RotationMethod::zxzxz: multiple_angles<T>(e.cb, e.sb, order_, cos_b_, sin_b_); break;
+    case RotationMethod::reference: build_reference(r); break;
+    default: beta_ = std::atan2(e.sb, e.cb); break;
+  }
   return true;
 }
 
