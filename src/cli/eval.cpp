@@ -25,10 +25,13 @@ void run_eval(const EvalOptions& opt) {
   if (d.size() != 3)
     throw UserError("--dir needs 3 components x,y,z, got " + std::to_string(d.size()));
   Vec3<double> w(d[0], d[1], d[2]);
-  const double norm = w.norm();
-  if (!(norm > 0.0) || !std::isfinite(norm))
-    throw UserError("--dir must be a non-zero finite vector, got '" + opt.dir + "'");
-  w /= norm;
+  // Scale by the largest component first so that tiny or huge (but valid) directions
+  // neither underflow nor overflow in the norm.
+  const double largest = w.cwiseAbs().maxCoeff();
+  if (!(largest > 0.0))
+    throw UserError("--dir must be a non-zero vector, got '" + opt.dir + "'");
+  w /= largest;
+  w /= w.norm();
   std::vector<double> values(sh_count(opt.order));
   eval_sh<double>(opt.order, w, values);
   print_json({{"order", opt.order}, {"values", values}});

@@ -13,7 +13,8 @@ int main(int argc, char** argv) {
   CLI::App app{"shtool: spherical-harmonics precomputation (lobe search, ZH fitting, tensors) "
                "and checks of the runtime library"};
   app.set_version_flag("--version", std::string("shtool ") + shtool::kVersion);
-  app.require_subcommand(1);
+  // 0..1 rather than exactly 1, so that an unknown subcommand is reported by name.
+  app.require_subcommand(0, 1);
   shtool::cli::setup_eval(app);
   shtool::cli::setup_inspect(app);
   shtool::cli::setup_gen_tensors(app);
@@ -21,13 +22,18 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    // --help/--version exit 0; every command-line error exits 1 like other user errors.
+    return app.exit(e) == 0 ? 0 : 1;
   } catch (const shtool::cli::UserError& e) {
     std::cerr << "shtool: error: " << e.what() << '\n';
     return 1;
   } catch (const std::exception& e) {
     std::cerr << "shtool: internal error: " << e.what() << '\n';
     return 3;
+  }
+  if (app.get_subcommands().empty()) {
+    std::cerr << "shtool: error: a subcommand is required\n" << app.help();
+    return 1;
   }
   return 0;
 }
