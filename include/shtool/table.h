@@ -1,24 +1,31 @@
 // Versioned, self-describing tables: the one format every shtool job writes and the
-// runtime loads. The byte layout is documented in docs/table-format.md; the header
-// schemas are in schemas/.
+// runtime loads. The byte layout, header fields and versioning policy are documented in
+// docs/table-format.md; the header schemas are in schemas/.
 //
 // Two encodings of the same content:
-//   binary  - magic, header length, header CRC, JSON header, then little-endian arrays,
-//             each with its own CRC-32 (the default; exact bits of every value);
-//   json    - one JSON document, header plus the arrays as JSON numbers written with
-//             round-trip precision (for small tables and for people).
-// The loader detects the encoding from the first bytes.
+//   binary  - 8-byte magic, header length, header CRC, JSON header, then little-endian
+//             arrays at 64-byte-aligned offsets, each with its own CRC-32 (the default;
+//             exact bits of every value);
+//   json    - one JSON document: the identical header plus "data" with every array as a
+//             flat list of JSON numbers written with round-trip precision (small tables,
+//             people). The CRCs in its header are those of the binary bytes, and the
+//             loader checks them against the parsed numbers.
+// The loader detects the encoding from the first byte (0x89 binary, '{' JSON).
 //
-// Runtime side: no exceptions cross this API; errors come back as TableResult.
+// Runtime side: nothing here throws across the API; errors come back as TableResult.
 #pragma once
 
+#include <bit>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <filesystem>
 #include <optional>
 #include <span>
 #include <string>
 #include <string_view>
+#include <type_traits>
+#include <utility>
 #include <variant>
 #include <vector>
 
@@ -26,59 +33,99 @@
 
 namespace shtool {
 
-// Format of the container itself (magic, header fields, array layout).
+// Format of the container itself (magic, header fields, array layout). A minor bump
+// only adds optional header fields older readers may ignore; a major bump changes
+// something an older reader would misread, and the loader rejects unknown majors.
 inline constexpr int kTableFormatMajor = 1;
 inline constexpr int kTableFormatMinor = 0;
-// Identifier of the conventions of docs/conventions.md, stored in every header.
+// Identifier of the conventions of docs/conventions.md, stored in every header. The
+// loader rejects tables made under other conventions.
 inline constexpr std::string_view kConventionsId = "shtool-sh-v1";
+// Value of the header's "format" field; identifies the JSON encoding.
+inline constexpr std::string_view kTableFormatName = "shtool-table";
+// First 8 bytes of a binary table, PNG-style: 0x89 (a non-ASCII byte: catches 7-bit
+// transfers), "SHT", CR LF (catches CRLF -> LF), 0x1A (stops `type` on DOS), LF
+// (catches LF -> CRLF).
+inline constexpr unsigned char kTableMagic[8] = {0x89, 'S', 'H', 'T', '\r', '\n', 0x1A, '\n'};
+// Magic (8) + header length (u64) + header CRC (u32) + reserved (u32).
+inline constexpr std::size_t kTablePrefixSize = 24;
+// Alignment of the data section and of every array in it (a cache line; enough for
+// any SIMD load).
+inline constexpr std::size_t kTableAlignment = 64;
 
 enum class DType { f64, f32, i32, u32, i64, u64, u8 };
-std::string_view dtype_name(DType type);
+std::string_view dtype_name(DType type);  // "f64", "f32", "i32", "u32", "i64", "u64", "u8"
 std::size_t dtype_size(DType type);
 std::optional<DType> dtype_from_name(std::string_view name);
 
 template <class T>
-constexpr DType dtype_of();
+constexpr DType dtype_of() {
+  if constexpr (std::is_same_v<T, double>) return DType::f64;
+  else if constexpr (std::is_same_v<T, float>) return DType::f32;
+  else if constexpr (std::is_same_v<T, std::int32_t>) return DType::i32;
+  else if constexpr (std::is_same_v<T, std::uint32_t>) return DType::u32;
+  else if constexpr (std::is_same_v<T, std::int64_t>) return DType::i64;
+  else if constexpr (std::is_same_v<T, std::uint64_t>) return DType::u64;
+  else if constexpr (std::is_same_v<T, std::uint8_t>) return DType::u8;
+  else static_assert(!sizeof(T), "unsupported table element type");
+}
+
+// CRC-32 as zlib computes it (reflected polynomial 0xEDB88320, init and final xor
+// 0xFFFFFFFF), so Python's zlib.crc32 checks a table. `crc` continues a running value.
+std::uint32_t table_crc32(std::span<const std::byte> bytes, std::uint32_t crc = 0);
 
 // One named n-dimensional array, row-major, stored as little-endian bytes.
+// shape {} is a scalar (one element), a 0 anywhere in the shape an empty array.
 struct TableArray {
   std::string name;
   DType dtype = DType::f64;
   std::vector<std::int64_t> shape;
   std::vector<std::byte> data;
 
+  // Product of the shape. Precondition: dims >= 0 and no overflow (the loader and the
+  // writer check this before anything calls it).
   std::size_t element_count() const;
 
+  // The writer checks that the shape matches the number of values.
   template <class T>
   static TableArray from(std::string name, std::vector<std::int64_t> shape,
                          std::span<const T> values);
-  // Copies the values out; dtype must match T exactly (checked by the loader's users
-  // through Table::get, which reports a clear error).
+  template <class T>
+  static TableArray from(std::string name, std::vector<std::int64_t> shape,
+                         const std::vector<T>& values) {
+    return from<T>(std::move(name), std::move(shape), std::span<const T>(values));
+  }
+  // Copies the values out. Precondition: dtype == dtype_of<T>() (otherwise the result is
+  // empty); Table::get checks this and reports a clear error instead.
   template <class T>
   std::vector<T> values() const;
 };
 
 struct Table {
-  std::string kind;             // e.g. "rotation-helpers"; one schema per kind
-  std::string kind_version = "1.0";  // version of that kind's schema, "major.minor"
-  int order = 0;                // SH order N the table is for
+  std::string kind;                  // e.g. "rotation-helpers"; schemas/<kind>.schema.json
+  std::string kind_version = "1.0";  // version of that kind's layout, "major.minor"
+  int order = 0;                     // SH order N the table is for (0: not order-specific)
   // How it was made: {"tool": "shtool", "version": ..., "command": ..., "parameters":
   // {...}} (seed included in parameters when there is one). No timestamps or hostnames:
-  // the same inputs must give byte-identical tables.
+  // the same inputs must give byte-identical tables. Required by the writer.
   nlohmann::json generator = nlohmann::json::object();
   nlohmann::json meta = nlohmann::json::object();  // kind-specific summary values
   std::vector<TableArray> arrays;
 
   const TableArray* find(std::string_view name) const;
+  // Values of array `name`, or an error if it is missing or has another dtype.
+  template <class T>
+  auto get(std::string_view name) const;
 };
 
 enum class TableEncoding { binary, json };
 
 struct TableError {
-  std::string message;  // names the file and the problem, e.g. "checksum mismatch in array 'x'"
+  std::string message;  // names the file and the problem, e.g. "x.shtbl: CRC-32 mismatch in array 'a' ..."
 };
 
-// Expected-style result: either a value or an error message.
+// Expected-style result: either a value or an error message. value() on an error (or
+// error() on a value) is a precondition violation (std::bad_variant_access).
 template <class T>
 class TableResult {
  public:
@@ -87,6 +134,7 @@ class TableResult {
   bool ok() const { return std::holds_alternative<T>(v_); }
   explicit operator bool() const { return ok(); }
   const T& value() const& { return std::get<T>(v_); }
+  T& value() & { return std::get<T>(v_); }
   T&& value() && { return std::get<T>(std::move(v_)); }
   const TableError& error() const { return std::get<TableError>(v_); }
 
@@ -98,22 +146,93 @@ struct TableOk {};
 
 // What a loader expects; empty fields are not checked.
 struct TableExpectation {
-  std::string kind;
+  std::string kind;    // empty: any
   int kind_major = 0;  // 0: any; otherwise the kind's schema major version must match
   int order = 0;       // 0: any
 };
 
-// Header JSON exactly as written into the file (arrays with offsets and checksums).
+// Facts about the file a table was read from (for `shtool inspect`).
+struct TableFileInfo {
+  TableEncoding encoding = TableEncoding::binary;
+  std::uint64_t file_size = 0;
+  // The header exactly as stored (JSON encoding: the document without "data"),
+  // including any fields a newer minor version added that Table does not carry.
+  nlohmann::json header;
+};
+
+// Header JSON exactly as written into the file: arrays with offsets (relative to the
+// data section), sizes and CRCs of their little-endian bytes. Precondition: the table
+// passes the writer's checks (write_table reports them as errors).
 nlohmann::json table_header(const Table& table);
 
 // Writes atomically: a temporary file in the same folder, flushed, then renamed over
-// `path`. On failure nothing is left at `path` (an old file there stays untouched).
+// `path`. On failure nothing is left at `path` (an old file there stays untouched) and
+// the temporary file is removed. Checks first: kind, versions, generator record, array
+// names (non-empty, unique), shapes against data sizes; for the JSON encoding, float
+// values must be finite (JSON has no NaN or infinity).
 TableResult<TableOk> write_table(const Table& table, const std::filesystem::path& path,
                                  TableEncoding encoding = TableEncoding::binary);
 
-// Reads and validates: magic, format major version, header CRC, header fields, array
-// bounds, array CRCs, then the expectation. Never throws, never returns partial data.
+// Reads and validates: magic, format major version, header CRC, header fields and
+// conventions id, the expectation (kind, kind major, order), array bounds, padding, array
+// CRCs. Never throws, never returns partial data; memory use is bounded by the file size.
 TableResult<Table> read_table(const std::filesystem::path& path,
-                              const TableExpectation& expect = {});
+                              const TableExpectation& expect = {},
+                              TableFileInfo* info = nullptr);
+
+// ---------------------------------------------------------------------------
+// Template definitions.
+
+namespace table_detail {
+template <class T>
+void store_le(const T& value, std::byte* out) {
+  std::memcpy(out, &value, sizeof(T));
+  if constexpr (std::endian::native == std::endian::big)
+    for (std::size_t i = 0; i < sizeof(T) / 2; ++i) std::swap(out[i], out[sizeof(T) - 1 - i]);
+}
+template <class T>
+T load_le(const std::byte* in) {
+  std::byte tmp[sizeof(T)];
+  std::memcpy(tmp, in, sizeof(T));
+  if constexpr (std::endian::native == std::endian::big)
+    for (std::size_t i = 0; i < sizeof(T) / 2; ++i) std::swap(tmp[i], tmp[sizeof(T) - 1 - i]);
+  T value;
+  std::memcpy(&value, tmp, sizeof(T));
+  return value;
+}
+}  // namespace table_detail
+
+template <class T>
+TableArray TableArray::from(std::string name, std::vector<std::int64_t> shape,
+                            std::span<const T> values) {
+  TableArray a;
+  a.name = std::move(name);
+  a.dtype = dtype_of<T>();
+  a.shape = std::move(shape);
+  a.data.resize(values.size() * sizeof(T));
+  for (std::size_t i = 0; i < values.size(); ++i)
+    table_detail::store_le(values[i], a.data.data() + i * sizeof(T));
+  return a;
+}
+
+template <class T>
+std::vector<T> TableArray::values() const {
+  if (dtype != dtype_of<T>()) return {};
+  std::vector<T> out(data.size() / sizeof(T));
+  for (std::size_t i = 0; i < out.size(); ++i)
+    out[i] = table_detail::load_le<T>(data.data() + i * sizeof(T));
+  return out;
+}
+
+template <class T>
+auto Table::get(std::string_view name) const {
+  using R = TableResult<std::vector<T>>;
+  const TableArray* a = find(name);
+  if (!a) return R(TableError{"table of kind '" + kind + "' has no array '" + std::string(name) + "'"});
+  if (a->dtype != dtype_of<T>())
+    return R(TableError{"array '" + std::string(name) + "' has dtype " + std::string(dtype_name(a->dtype)) +
+                        ", expected " + std::string(dtype_name(dtype_of<T>()))});
+  return R(a->values<T>());
+}
 
 }  // namespace shtool
