@@ -66,17 +66,26 @@ class ShRotation {
   std::span<const T> reference_blocks() const { return dense_; }
 
  private:
-  void apply_z(const std::vector<T>& cs, const std::vector<T>& sn, const T* in, T* out) const;
-  void apply_x90(const T* in, T* out, bool transpose) const;
-  void apply_taylor_y(const T* in, T* out) const;
+  void apply_zxzxz(const T* in, T* out) const;
+  template <int L>
+  void zxzxz_band(int l, const T* in, T* out) const;
+  void apply_taylor(const T* in, T* out) const;
   void build_reference(const Mat3<T>& r);
   void update_taylor_limits(double tolerance);
 
   int order_;
   std::shared_ptr<const RotationHelpers> helpers_;
   // Helpers converted to T once (float rotations must not convert in the hot loop).
-  std::vector<int> x90_row_, x90_col_, x90t_row_, x90t_col_;
-  std::vector<T> x90_val_, x90t_val_, dy_sub_, ddy_diag_, ddy_off2_;
+  // X90 and X90^T band by band in "strided rows": the non-zeros of a row of band l sit
+  // on every other column (parity), so a row is (first column, count, values) and its
+  // columns are contiguous once the input band is split into even and odd positions.
+  std::vector<T> x90_val_, x90t_val_;
+  std::vector<int> x90_start_, x90t_start_;  // per flat row: first column, split order
+  std::vector<int> x90_band_val_, x90t_band_val_;  // offset of band l's values
+  // Taylor derivative entries with two zeros of padding at the end, so the band loop
+  // needs no bounds tests (entries that would couple two bands are zero).
+  std::vector<T> dy_sub_, ddy_diag_, ddy_off2_;
+  T r1_[9] = {};  // band 1 of M(R): R itself in (y, z, x) order with signs
   double ddy_offdiag_norm_ = 0.0;
 
   RotationMethod resolved_ = RotationMethod::reference;
@@ -85,7 +94,7 @@ class ShRotation {
   double taylor_limit_sin_[3] = {0, 0, 0};  // sin of the largest tilt for taylor1, 1.5, 2
   std::vector<T> cos_a_, sin_a_, cos_b_, sin_b_, cos_g_, sin_g_;  // cos(m angle), m < N
   std::vector<T> dense_;
-  mutable std::vector<T> tmp1_, tmp2_;
+  mutable std::vector<T> tmp1_, tmp2_;  // one band each (2N - 1 values, plus padding)
 };
 
 // Many (rotation, vector) pairs: out[k] = M(rotations[k]) in[k], vectors of N^2

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <stdexcept>
 
 #include "shtool/sh.h"
 
@@ -11,6 +12,16 @@ namespace {
 
 // Offset of band l's dense block: sum_{k<l} (2k+1)^2.
 constexpr int block_offset(int l) { return l * (4 * l * l - 1) / 3; }
+
+// Number of non-zeros in row j (m = j - l) of band l of X90, and of X90^T: X90 maps
+// the four classes of m (sign, parity) onto each other by square dense blocks of sizes
+// floor(l/2) and ceil(l/2) (+1 for m >= 0 even). Checked against the table when the
+// rotation is constructed.
+constexpr int x90_row_length(int l, int j) {
+  const int m = j - l;
+  if (l & 1) return (m < 0 && !(m & 1)) ? (l - 1) / 2 : (l + 1) / 2;
+  return (m >= 0 && !(m & 1)) ? l / 2 + 1 : l / 2;
+}
 
 // cos(m a), sin(m a) for m = 0..n-1 from cos a, sin a by the multiple-angle recurrence
 // (paper 001, App. C), in its complex form (c + i s)^m, whose rounding error grows
@@ -71,28 +82,59 @@ ShRotation<T>::ShRotation(int order, std::shared_ptr<const RotationHelpers> help
   const int n = sh_count(order);
   if (helpers_ && helpers_->order >= order) {
     const RotationHelpers& h = *helpers_;
-    // Keep the first N^2 rows of X90 (the table may cover more bands).
-    x90_row_.assign(h.x90_row.begin(), h.x90_row.begin() + n + 1);
-    const int nnz = x90_row_.back();
-    x90_col_.assign(h.x90_col.begin(), h.x90_col.begin() + nnz);
-    x90_val_.resize(nnz);
-    for (int k = 0; k < nnz; ++k) x90_val_[k] = static_cast<T>(h.x90_val[k]);
-    // Transpose (= X(-90)) in compressed rows too, so both products are gathers.
-    x90t_row_.assign(n + 1, 0);
-    for (int k = 0; k < nnz; ++k) ++x90t_row_[x90_col_[k] + 1];
-    for (int i = 0; i < n; ++i) x90t_row_[i + 1] += x90t_row_[i];
-    x90t_col_.resize(nnz);
-    x90t_val_.resize(nnz);
-    std::vector<int> fill(x90t_row_.begin(), x90t_row_.end() - 1);
-    for (int i = 0; i < n; ++i)
-      for (int k = x90_row_[i]; k < x90_row_[i + 1]; ++k) {
-        const int slot = fill[x90_col_[k]]++;
-        x90t_col_[slot] = i;
-        x90t_val_[slot] = x90_val_[k];
-      }
-    dy_sub_.resize(n);
-    ddy_diag_.resize(n);
-    ddy_off2_.resize(n);
+    // X90 band by band in strided rows (see rotation.h). The non-zeros of a row lie in
+    // one class of columns (sign of m, parity of m), so they are c0, c0 + 2, ... ;
+    // checked here, since the apply loops rely on it. A class may hold a few exact
+    // zeros (kept: the loops are branch-free), so size for the dense blocks.
+    x90_val_.assign(block_offset(order), T(0));
+    x90t_val_.assign(block_offset(order), T(0));
+    x90_start_.assign(n, 0);
+    x90t_start_.assign(n, 0);
+    x90_band_val_.assign(order + 1, 0);
+    x90t_band_val_.assign(order + 1, 0);
+    // Position of band-relative column j once the band is split: even j first, then odd.
+    auto split_pos = [](int l, int j) { return (j & 1) ? l + 1 + (j >> 1) : (j >> 1); };
+    int written = 0, written_t = 0;
+    for (int l = 0; l < order; ++l) {
+      const int first = l * l, size = 2 * l + 1;
+      x90_band_val_[l] = written;
+      x90t_band_val_[l] = written_t;
+      // Dense copy of the band block, to read rows of X90 and of its transpose alike.
+      std::vector<double> block(size * size, 0.0);
+      for (int i = first; i < first + size; ++i)
+        for (int k = h.x90_row[i]; k < h.x90_row[i + 1]; ++k)
+          block[(i - first) * size + (h.x90_col[k] - first)] = h.x90_val[k];
+      auto pack = [&](bool transpose, std::vector<int>& start, std::vector<T>& val, int& out) {
+        for (int r = 0; r < size; ++r) {
+          auto at = [&](int c) { return transpose ? block[c * size + r] : block[r * size + c]; };
+          int nz = -1;
+          for (int c = 0; c < size && nz < 0; ++c)
+            if (at(c) != 0.0) nz = c;
+          if (nz < 0) throw std::logic_error("X90 row is empty");
+          // The class of the first non-zero column (sign of m, parity of m) is the run
+          // of columns this row reads: lo, lo + 2, ..., hi.
+          const int m = nz - l, odd = m & 1;
+          const int m_lo = m < 0 ? -l + (((-l) & 1) != odd) : odd;
+          const int m_hi = m < 0 ? -1 - (odd == 0) : l - ((l & 1) != odd);
+          const int lo = m_lo + l, hi = m_hi + l;
+          if ((hi - lo) / 2 + 1 != x90_row_length(l, r)) throw std::logic_error("X90 row class size");
+          for (int c = 0; c < size; ++c)
+            if (at(c) != 0.0 && (c < lo || c > hi || (c - lo) % 2))
+              throw std::logic_error("X90 row is not parity-strided");
+          start[first + r] = split_pos(l, lo);
+          for (int c = lo; c <= hi; c += 2) val[out++] = static_cast<T>(at(c));
+        }
+      };
+      pack(false, x90_start_, x90_val_, written);
+      pack(true, x90t_start_, x90t_val_, written_t);
+    }
+    x90_band_val_[order] = written;
+    x90t_band_val_[order] = written_t;
+    x90_val_.resize(written);
+    x90t_val_.resize(written_t);
+    dy_sub_.assign(n + 2, T(0));
+    ddy_diag_.assign(n + 2, T(0));
+    ddy_off2_.assign(n + 2, T(0));
     for (int i = 0; i < n; ++i) {
       dy_sub_[i] = static_cast<T>(h.dy_sub[i]);
       ddy_diag_[i] = static_cast<T>(h.ddy_diag[i]);
@@ -108,8 +150,9 @@ ShRotation<T>::ShRotation(int order, std::shared_ptr<const RotationHelpers> help
     helpers_.reset();
   }
   for (auto* v : {&cos_a_, &sin_a_, &cos_b_, &sin_b_, &cos_g_, &sin_g_}) v->assign(order, T(0));
-  tmp1_.assign(n, T(0));
-  tmp2_.assign(n, T(0));
+  // One band at a time, with two zeros of padding on each side for the Taylor loop.
+  tmp1_.assign(2 * order + 4, T(0));
+  tmp2_.assign(2 * order + 4, T(0));
   dense_.assign(block_offset(order), T(0));
 }
 
@@ -153,68 +196,168 @@ bool ShRotation<T>::set(const Mat3<T>& r, RotationMethod method, double toleranc
     }
   }
   resolved_ = method;
-  multiple_angles<T>(e.ca, e.sa, order_, cos_a_, sin_a_);
-  multiple_angles<T>(e.cg, e.sg, order_, cos_g_, sin_g_);
   switch (method) {
-    case RotationMethod::zxzxz: multiple_angles<T>(e.cb, e.sb, order_, cos_b_, sin_b_); break;
+    case RotationMethod::zxzxz: {
+      // The three recurrences are independent: one loop lets them overlap (each is a
+      // chain of dependent multiplications).
+      T* ca = cos_a_.data(); T* sa = sin_a_.data();
+      T* cb = cos_b_.data(); T* sb = sin_b_.data();
+      T* cg = cos_g_.data(); T* sg = sin_g_.data();
+      ca[0] = cb[0] = cg[0] = 1;
+      sa[0] = sb[0] = sg[0] = 0;
+      for (int m = 1; m < order_; ++m) {
+        ca[m] = ca[m - 1] * e.ca - sa[m - 1] * e.sa;
+        sa[m] = sa[m - 1] * e.ca + ca[m - 1] * e.sa;
+        cb[m] = cb[m - 1] * e.cb - sb[m - 1] * e.sb;
+        sb[m] = sb[m - 1] * e.cb + cb[m - 1] * e.sb;
+        cg[m] = cg[m - 1] * e.cg - sg[m - 1] * e.sg;
+        sg[m] = sg[m - 1] * e.cg + cg[m - 1] * e.sg;
+      }
+      // Band 1 of M(R) is R in (y, z, x) order, entries (m, n) with m + n odd negated
+      // (Condon-Shortley phase; see build_reference): exact and cheaper than zxzxz.
+      const int axis[3] = {1, 2, 0};
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) r1_[i * 3 + j] = ((i == 1) != (j == 1)) ? -r(axis[i], axis[j]) : r(axis[i], axis[j]);
+      break;
+    }
     case RotationMethod::reference: build_reference(r); break;
-    default: beta_ = std::atan2(e.sb, e.cb); break;
+    default:
+      multiple_angles<T>(e.ca, e.sa, order_, cos_a_, sin_a_);
+      multiple_angles<T>(e.cg, e.sg, order_, cos_g_, sin_g_);
+      beta_ = std::atan2(e.sb, e.cb);
+      break;
   }
   return true;
 }
 
-// z-rotation of every band: (f_m, f_-m) turns by m a (App. C).
-template <class T>
-void ShRotation<T>::apply_z(const std::vector<T>& cs, const std::vector<T>& sn, const T* in,
-                            T* out) const {
-  for (int l = 0; l < order_; ++l) {
-    const int centre = l * (l + 1);
-    out[centre] = in[centre];
-    for (int m = 1; m <= l; ++m) {
-      const T p = in[centre + m], q = in[centre - m];
-      out[centre + m] = cs[m] * p - sn[m] * q;
-      out[centre - m] = sn[m] * p + cs[m] * q;
-    }
+namespace {
+
+// The band kernels below take the band as a template argument L for the small bands
+// (L > 0: every loop has a fixed trip count and is unrolled; at small orders loop
+// overheads would otherwise cost more than the arithmetic) and at run time otherwise
+// (L = 0: then l is used).
+
+// Band l of a z-rotation: (f_m, f_-m) turns by m a (paper 001, App. C). `in` is the band
+// in natural order (m = -l..l); the result goes to `out` split by parity of the
+// band-relative index j = m + l (even j at j / 2, odd j at l + 1 + j / 2), the order
+// in which the strided X90 rows read their input.
+template <int L, class T>
+inline void z_band_to_split(int l_run, const T* __restrict c, const T* __restrict s,
+                            const T* __restrict in, T* __restrict out) {
+  const int l = L > 0 ? L : l_run;
+  T* even = out;
+  T* odd = out + l + 1;
+  ((l & 1) ? odd : even)[l >> 1] = in[l];
+  for (int m = 1; m <= l; ++m) {
+    const T p = in[l + m], q = in[l - m];
+    T* half = ((l + m) & 1) ? odd : even;  // l + m and l - m have the same parity
+    half[(l + m) >> 1] = c[m] * p - s[m] * q;
+    half[(l - m) >> 1] = s[m] * p + c[m] * q;
   }
 }
 
-template <class T>
-void ShRotation<T>::apply_x90(const T* in, T* out, bool transpose) const {
-  const int n = sh_count(order_);
-  const std::vector<int>& row = transpose ? x90t_row_ : x90_row_;
-  const std::vector<int>& col = transpose ? x90t_col_ : x90_col_;
-  const std::vector<T>& val = transpose ? x90t_val_ : x90_val_;
-  for (int i = 0; i < n; ++i) {
+// Band l of a z-rotation, natural order in and out.
+template <int L, class T>
+inline void z_band(int l_run, const T* __restrict c, const T* __restrict s, const T* __restrict in,
+                   T* __restrict out) {
+  const int l = L > 0 ? L : l_run;
+  out[l] = in[l];
+  for (int m = 1; m <= l; ++m) {
+    const T p = in[l + m], q = in[l - m];
+    out[l + m] = c[m] * p - s[m] * q;
+    out[l - m] = s[m] * p + c[m] * q;
+  }
+}
+
+// Rows of one band of X90 (or its transpose) in strided form, reading the split input.
+template <int L, class T>
+inline void strided_rows(int l_run, const int* __restrict start, const T* __restrict val,
+                         const T* __restrict in, T* __restrict out) {
+  const int l = L > 0 ? L : l_run;
+  for (int r = 0; r <= 2 * l; ++r) {
+    const T* x = in + start[r];
+    const int count = x90_row_length(l, r);
     T sum = 0;
-    for (int k = row[i]; k < row[i + 1]; ++k) sum += val[k] * in[col[k]];
-    out[i] = sum;
+    for (int k = 0; k < count; ++k) sum += val[k] * x[k];
+    val += count;
+    out[r] = sum;
   }
 }
 
-// y-rotation by the truncated Taylor series I + b D1 (+ b^2/2 D2), band by band
-// (paper 001, Sec. 3; D1 antisymmetric tridiagonal, D2 diagonal plus distance 2).
+}  // namespace
+
+// Band l of M(R) = Z(a) X90^T Z(b) X90 Z(g) (Ry(b) = Rx(-90) Rz(b) Rx(+90)), with the
+// intermediate vectors in two small buffers.
 template <class T>
-void ShRotation<T>::apply_taylor_y(const T* in, T* out) const {
-  const T b = beta_, hb2 = T(0.5) * beta_ * beta_;
-  const bool diag2 = resolved_ != RotationMethod::taylor1;
-  const bool full2 = resolved_ == RotationMethod::taylor2;
-  for (int l = 0; l < order_; ++l) {
-    const int first = l * l, last = first + 2 * l;  // inclusive
-    for (int i = first; i <= last; ++i) {
-      T d = 0;  // (D1 in)_i = D1[i][i-1] in[i-1] + D1[i][i+1] in[i+1], D1[i][i+1] = -D1[i+1][i]
-      if (i > first) d += dy_sub_[i] * in[i - 1];
-      if (i < last) d -= dy_sub_[i + 1] * in[i + 1];
-      T v = in[i] + b * d;
-      if (diag2) {
-        T dd = ddy_diag_[i] * in[i];
-        if (full2) {
-          if (i - 2 >= first) dd += ddy_off2_[i] * in[i - 2];
-          if (i + 2 <= last) dd += ddy_off2_[i + 2] * in[i + 2];
-        }
-        v += hb2 * dd;
-      }
-      out[i] = v;
+template <int L>
+void ShRotation<T>::zxzxz_band(int l, const T* in, T* out) const {
+  const int first = l * l;
+  T* __restrict t1 = tmp1_.data();
+  T* __restrict t2 = tmp2_.data();
+  z_band_to_split<L>(l, cos_g_.data(), sin_g_.data(), in + first, t1);
+  strided_rows<L>(l, x90_start_.data() + first, x90_val_.data() + x90_band_val_[l], t1, t2);
+  z_band_to_split<L>(l, cos_b_.data(), sin_b_.data(), t2, t1);
+  strided_rows<L>(l, x90t_start_.data() + first, x90t_val_.data() + x90t_band_val_[l], t1, t2);
+  z_band<L>(l, cos_a_.data(), sin_a_.data(), t2, out + first);
+}
+
+// Band 0 is invariant and band 1 is R itself; the others by zxzxz.
+template <class T>
+void ShRotation<T>::apply_zxzxz(const T* in, T* out) const {
+  out[0] = in[0];
+  if (order_ < 2) return;
+  for (int i = 0; i < 3; ++i)
+    out[1 + i] = r1_[i * 3] * in[1] + r1_[i * 3 + 1] * in[2] + r1_[i * 3 + 2] * in[3];
+  for (int l = 2; l < order_; ++l) {
+    switch (l) {
+      case 2: zxzxz_band<2>(l, in, out); break;
+      case 3: zxzxz_band<3>(l, in, out); break;
+      case 4: zxzxz_band<4>(l, in, out); break;
+      case 5: zxzxz_band<5>(l, in, out); break;
+      case 6: zxzxz_band<6>(l, in, out); break;
+      case 7: zxzxz_band<7>(l, in, out); break;
+      default: zxzxz_band<0>(l, in, out); break;
     }
+  }
+}
+
+// Z(a) T(b) Z(g) with T the truncated Taylor series I + b D1 (+ b^2/2 D2) of the
+// y-rotation (paper 001, Sec. 3; D1 antisymmetric tridiagonal, D2 diagonal plus distance
+// 2), one band at a time. The band sits in a buffer with two zeros on each side and the
+// derivative entries that would reach into a neighbouring band are zero, so the loops
+// have no bounds tests.
+template <class T>
+void ShRotation<T>::apply_taylor(const T* in, T* out) const {
+  const T b = beta_, hb2 = T(0.5) * beta_ * beta_;
+  T* __restrict t = tmp1_.data() + 2;  // t[-2], t[-1] and t[size], t[size + 1] are 0
+  t[-2] = t[-1] = 0;  // (the zxzxz path uses the same buffer)
+  T* __restrict u = tmp2_.data();
+  const T* __restrict d1 = dy_sub_.data();
+  const T* __restrict dd = ddy_diag_.data();
+  const T* __restrict d2 = ddy_off2_.data();
+  out[0] = in[0];
+  for (int l = 1; l < order_; ++l) {
+    const int first = l * l, size = 2 * l + 1;
+    z_band<0>(l, cos_g_.data(), sin_g_.data(), in + first, t);
+    t[size] = t[size + 1] = 0;
+    const T* s1 = d1 + first;
+    const T* sd = dd + first;
+    const T* s2 = d2 + first;
+    switch (resolved_) {
+      case RotationMethod::taylor1:
+        for (int i = 0; i < size; ++i) u[i] = t[i] + b * (s1[i] * t[i - 1] - s1[i + 1] * t[i + 1]);
+        break;
+      case RotationMethod::taylor15:
+        for (int i = 0; i < size; ++i)
+          u[i] = t[i] + b * (s1[i] * t[i - 1] - s1[i + 1] * t[i + 1]) + hb2 * (sd[i] * t[i]);
+        break;
+      default:
+        for (int i = 0; i < size; ++i)
+          u[i] = t[i] + b * (s1[i] * t[i - 1] - s1[i + 1] * t[i + 1]) +
+                 hb2 * (sd[i] * t[i] + s2[i] * t[i - 2] + s2[i + 2] * t[i + 2]);
+        break;
+    }
+    z_band<0>(l, cos_a_.data(), sin_a_.data(), u, out + first);
   }
 }
 
@@ -222,8 +365,6 @@ template <class T>
 void ShRotation<T>::apply(std::span<const T> in, std::span<T> out) const {
   const T* src = in.data();
   T* dst = out.data();
-  T* t1 = tmp1_.data();
-  T* t2 = tmp2_.data();
   switch (resolved_) {
     case RotationMethod::reference: {
       for (int l = 0; l < order_; ++l) {
@@ -237,19 +378,8 @@ void ShRotation<T>::apply(std::span<const T> in, std::span<T> out) const {
       }
       break;
     }
-    case RotationMethod::zxzxz:
-      // M(R) = Z(a) X90^T Z(b) X90 Z(g), since Ry(b) = Rx(-90) Rz(b) Rx(+90).
-      apply_z(cos_g_, sin_g_, src, t1);
-      apply_x90(t1, t2, false);
-      apply_z(cos_b_, sin_b_, t2, t1);
-      apply_x90(t1, t2, true);
-      apply_z(cos_a_, sin_a_, t2, dst);
-      break;
-    default:  // Taylor variants
-      apply_z(cos_g_, sin_g_, src, t1);
-      apply_taylor_y(t1, t2);
-      apply_z(cos_a_, sin_a_, t2, dst);
-      break;
+    case RotationMethod::zxzxz: apply_zxzxz(src, dst); break;
+    default: apply_taylor(src, dst); break;  // Taylor variants
   }
 }
 

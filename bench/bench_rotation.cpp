@@ -1,0 +1,160 @@
+// SH rotations, every method side by side (issue 4, "Speed"): rotations per second for
+// N = 2..20, one rotation = build from a unit quaternion (matrix_from_quaternion +
+// ShRotation::set) and apply it to one vector, or to three (an RGB light).
+//
+//   BM_Rotate/<type>/<method>/<tilt>/<vectors>/N
+//     type     float | double
+//     method   reference | zxzxz | taylor1 | taylor1.5 | taylor2 | auto
+//     tilt     large: uniformly random rotations (generic tilt);
+//              small: zyz tilt b = kSmallTilt, random alpha and gamma, so that `auto`
+//              (default tolerance) takes a Taylor branch. The Taylor methods are timed on
+//              the small tilts only (on large ones they are fast but wrong); the exact
+//              methods cost the same at every tilt and are timed on the large ones.
+//     vectors  1 | 3
+//   items_per_second = rotations per second; label of `auto` = the method it chose.
+//
+// Run: build/bench/bench_rotation --benchmark_filter='BM_Rotate/double/.*/1/'
+// Figures, the machine and the peer comparison: docs/benchmarks.md, "Rotations".
+#include <array>
+#include <cmath>
+#include <memory>
+#include <random>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <benchmark/benchmark.h>
+
+#include "shtool/euler.h"
+#include "shtool/rotation.h"
+#include "shtool/rotation_helpers.h"
+#include "shtool/sh.h"
+
+#ifdef SHTOOL_BENCH_HAVE_OFFLINE
+#include "tensors/rotation_helpers_gen.h"
+#endif
+
+namespace {
+
+using shtool::RotationMethod;
+
+constexpr int kMinOrder = 2;
+constexpr int kMaxOrder = 20;
+// Number of precomputed rotations the timed loop cycles through: enough that branch
+// predictors cannot learn one rotation, small enough to stay in L1.
+constexpr int kRotations = 64;
+// Tilt of the "small" set: with the default tolerance 1e-10 the 2nd order Taylor bound
+// (b (N - 1))^3 / 6 passes up to N = 20 (1.1e-12), so `auto` picks a Taylor method.
+constexpr double kSmallTilt = 1e-5;
+
+std::shared_ptr<const shtool::RotationHelpers> helpers() {
+  static const std::shared_ptr<const shtool::RotationHelpers> h = [] {
+#ifdef SHTOOL_BENCH_HAVE_OFFLINE
+    return std::make_shared<const shtool::RotationHelpers>(shtool::compute_rotation_helpers(kMaxOrder));
+#else
+    auto loaded = shtool::RotationHelpers::load(shtool::default_rotation_helpers_path(), kMaxOrder);
+    if (!loaded) throw std::runtime_error("bench_rotation: no rotation-helpers table; run shtool gen-tensors");
+    return std::make_shared<const shtool::RotationHelpers>(std::move(*loaded));
+#endif
+  }();
+  return h;
+}
+
+// Unit quaternions (w, x, y, z), in double so float and double see the same rotations.
+std::vector<std::array<double, 4>> quaternions(bool small_tilt) {
+  std::mt19937_64 rng(small_tilt ? 2024 : 42);
+  std::normal_distribution<double> gauss;
+  std::uniform_real_distribution<double> angle(-M_PI, M_PI);
+  std::vector<std::array<double, 4>> q(kRotations);
+  for (auto& v : q) {
+    if (small_tilt) {
+      // q = qz(a) qy(b) qz(g): Rz(a) Ry(b) Rz(g) with tilt b.
+      const double a = angle(rng), g = angle(rng), b = kSmallTilt;
+      const double cb = std::cos(b / 2), sb = std::sin(b / 2);
+      const double s = (a + g) / 2, d = (a - g) / 2;
+      v = {cb * std::cos(s), -sb * std::sin(d), sb * std::cos(d), cb * std::sin(s)};
+    } else {
+      // Normalised 4D Gaussian: uniform on SO(3).
+      double norm = 0;
+      for (double& x : v) {
+        x = gauss(rng);
+        norm += x * x;
+      }
+      for (double& x : v) x /= std::sqrt(norm);
+    }
+  }
+  return q;
+}
+
+template <class T>
+std::vector<std::vector<T>> random_vectors(int order, int count) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::vector<std::vector<T>> f(count, std::vector<T>(shtool::sh_count(order)));
+  for (auto& v : f)
+    for (auto& x : v) x = static_cast<T>(u(rng));
+  return f;
+}
+
+template <class T>
+void BM_Rotate(benchmark::State& state, RotationMethod method, bool small_tilt, int vectors) {
+  const int order = static_cast<int>(state.range(0));
+  shtool::ShRotation<T> rotation(order, helpers());
+  const auto qd = quaternions(small_tilt);
+  std::vector<std::array<T, 4>> q(qd.size());
+  for (std::size_t k = 0; k < qd.size(); ++k)
+    for (int c = 0; c < 4; ++c) q[k][c] = static_cast<T>(qd[k][c]);
+  const auto in = random_vectors<T>(order, vectors);
+  auto out = random_vectors<T>(order, vectors);
+
+  std::size_t k = 0;
+  bool ok = true;
+  for (auto _ : state) {
+    const auto& qk = q[k];
+    k = (k + 1) % q.size();
+    const shtool::Mat3<T> r = shtool::matrix_from_quaternion<T>(qk[0], qk[1], qk[2], qk[3]);
+    ok &= rotation.set(r, method);
+    for (int v = 0; v < vectors; ++v) rotation.apply(in[v], out[v]);
+    benchmark::DoNotOptimize(out.data());
+    benchmark::ClobberMemory();
+  }
+  if (!ok) state.SkipWithError("ShRotation::set failed (helpers missing?)");
+  state.SetItemsProcessed(state.iterations());
+  if (method == RotationMethod::automatic)
+    state.SetLabel(std::string(shtool::rotation_method_name(rotation.method())));
+}
+
+template <class T>
+void register_all(const char* type) {
+  struct Case {
+    RotationMethod method;
+    bool small_tilt;
+  };
+  const Case cases[] = {
+      {RotationMethod::reference, false}, {RotationMethod::zxzxz, false},
+      {RotationMethod::taylor1, true},    {RotationMethod::taylor15, true},
+      {RotationMethod::taylor2, true},    {RotationMethod::automatic, true},
+      {RotationMethod::automatic, false},
+  };
+  for (int vectors : {1, 3})
+    for (const Case& c : cases) {
+      const std::string name = std::string("BM_Rotate/") + type + "/" +
+                               std::string(shtool::rotation_method_name(c.method)) + "/" +
+                               (c.small_tilt ? "small" : "large") + "/" + std::to_string(vectors);
+      benchmark::RegisterBenchmark(name.c_str(), [c, vectors](benchmark::State& s) {
+        BM_Rotate<T>(s, c.method, c.small_tilt, vectors);
+      })->DenseRange(kMinOrder, kMaxOrder);
+    }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  register_all<float>("float");
+  register_all<double>("double");
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}
