@@ -1,6 +1,5 @@
 #include "cli_common.h"
 
-#include <cerrno>
 #include <cmath>
 #include <cstdlib>
 #include <iostream>
@@ -16,13 +15,14 @@ std::vector<double> parse_number_list(const std::string& text, const std::string
                                                                           : comma - pos);
     const char* begin = field.c_str();
     char* end = nullptr;
-    errno = 0;
     const double v = std::strtod(begin, &end);
     while (end && (*end == ' ' || *end == '\t')) ++end;
     if (field.find_first_not_of(" \t") == std::string::npos || end == begin || *end != '\0')
       throw UserError(what + ": '" + field + "' is not a number (expected comma-separated numbers, got '" +
                       text + "')");
-    if (!std::isfinite(v) || errno == ERANGE)
+    // ERANGE on underflow still yields the nearest (subnormal or zero) value, which is
+    // what the user wrote; only overflow to infinity is an error.
+    if (!std::isfinite(v))
       throw UserError(what + ": '" + field + "' is not a finite number");
     values.push_back(v);
     if (comma == std::string::npos) break;

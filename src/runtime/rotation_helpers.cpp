@@ -68,8 +68,9 @@ TableResult<RotationHelpers> RotationHelpers::from_table(const Table& table) {
   // Every stored entry must lie inside its row's band block: the rotation code relies
   // on that and never checks indices in the hot loop.
   for (std::size_t i = 0; i < n; ++i) {
-    if (h.x90_row[i + 1] < h.x90_row[i])
-      return helpers_error("X90 row starts decrease at row " + std::to_string(i));
+    if (h.x90_row[i + 1] < h.x90_row[i] ||
+        static_cast<std::size_t>(h.x90_row[i + 1]) > h.x90_col.size())
+      return helpers_error("X90 row starts decrease or pass the non-zeros at row " + std::to_string(i));
     const int l = sh_band(static_cast<int>(i));
     for (int k = h.x90_row[i]; k < h.x90_row[i + 1]; ++k)
       if (h.x90_col[k] < l * l || h.x90_col[k] > l * l + 2 * l)
