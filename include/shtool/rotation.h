@@ -35,8 +35,15 @@ std::string_view rotation_method_name(RotationMethod method);  // "taylor1.5", .
 std::optional<RotationMethod> rotation_method_from_name(std::string_view name);
 
 // Default tolerance of the automatic choice: largest coefficient-vector error allowed
-// for a unit-length input (spectral norm of the error matrix).
+// for a unit-length input (spectral norm of the error matrix). Below the rounding error
+// of the type it would only forbid approximations that cost nothing in accuracy, so
+// float gets a float-sized default.
 inline constexpr double kDefaultRotationTolerance = 1e-10;
+inline constexpr double kDefaultRotationToleranceFloat = 1e-6;
+template <class T>
+constexpr double default_rotation_tolerance() {
+  return sizeof(T) < sizeof(double) ? kDefaultRotationToleranceFloat : kDefaultRotationTolerance;
+}
 
 // Error bound (spectral norm of M(Ry(b)) - approximation) of a Taylor method for
 // tilt b at the given order; 0 for exact methods.
@@ -53,7 +60,7 @@ class ShRotation {
   // (and keeps the previous rotation) if the method needs helpers that are missing or
   // cover fewer bands than the order.
   bool set(const Mat3<T>& r, RotationMethod method = RotationMethod::automatic,
-           double tolerance = kDefaultRotationTolerance);
+           double tolerance = default_rotation_tolerance<T>());
 
   int order() const { return order_; }
   RotationMethod method() const { return resolved_; }  // never automatic after set()
@@ -103,6 +110,6 @@ template <class T>
 bool rotate_batch(ShRotation<T>& rotation, std::span<const Mat3<T>> rotations,
                   std::span<const T> in, std::span<T> out,
                   RotationMethod method = RotationMethod::automatic,
-                  double tolerance = kDefaultRotationTolerance);
+                  double tolerance = default_rotation_tolerance<T>());
 
 }  // namespace shtool
