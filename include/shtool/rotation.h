@@ -77,6 +77,10 @@ class ShRotation {
   template <int L>
   void zxzxz_band(int l, const T* in, T* out) const;
   void apply_taylor(const T* in, T* out) const;
+  template <int Order>
+  void apply_taylor_order(const T* in, T* out) const;
+  template <int L, int Order>
+  void taylor_band(int l, const T* in, T* out) const;
   void build_reference(const Mat3<T>& r);
   void update_taylor_limits(double tolerance);
 

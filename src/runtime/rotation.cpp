@@ -23,19 +23,6 @@ constexpr int x90_row_length(int l, int j) {
   return (m >= 0 && !(m & 1)) ? l / 2 + 1 : l / 2;
 }
 
-// cos(m a), sin(m a) for m = 0..n-1 from cos a, sin a by the multiple-angle recurrence
-// (paper 001, App. C), in its complex form (c + i s)^m, whose rounding error grows
-// only linearly in m: no trigonometric call at all.
-template <class T>
-void multiple_angles(T c1, T s1, int n, std::vector<T>& c, std::vector<T>& s) {
-  c[0] = 1;
-  s[0] = 0;
-  for (int m = 1; m < n; ++m) {
-    c[m] = c[m - 1] * c1 - s[m - 1] * s1;
-    s[m] = s[m - 1] * c1 + c[m - 1] * s1;
-  }
-}
-
 }  // namespace
 
 std::string_view rotation_method_name(RotationMethod method) {
@@ -198,8 +185,10 @@ bool ShRotation<T>::set(const Mat3<T>& r, RotationMethod method, double toleranc
   resolved_ = method;
   switch (method) {
     case RotationMethod::zxzxz: {
-      // The three recurrences are independent: one loop lets them overlap (each is a
-      // chain of dependent multiplications).
+      // cos(m a), sin(m a) by the multiple-angle recurrence (paper 001, App. C) in its
+      // complex form (c + i s)^m, whose rounding error grows only linearly in m: no
+      // trigonometric call. The three recurrences are independent: one loop lets them
+      // overlap (each is a chain of dependent multiplications).
       T* ca = cos_a_.data(); T* sa = sin_a_.data();
       T* cb = cos_b_.data(); T* sb = sin_b_.data();
       T* cg = cos_g_.data(); T* sg = sin_g_.data();
@@ -221,11 +210,20 @@ bool ShRotation<T>::set(const Mat3<T>& r, RotationMethod method, double toleranc
       break;
     }
     case RotationMethod::reference: build_reference(r); break;
-    default:
-      multiple_angles<T>(e.ca, e.sa, order_, cos_a_, sin_a_);
-      multiple_angles<T>(e.cg, e.sg, order_, cos_g_, sin_g_);
+    default: {
+      T* ca = cos_a_.data(); T* sa = sin_a_.data();
+      T* cg = cos_g_.data(); T* sg = sin_g_.data();
+      ca[0] = cg[0] = 1;
+      sa[0] = sg[0] = 0;
+      for (int m = 1; m < order_; ++m) {  // one loop: the two recurrences overlap
+        ca[m] = ca[m - 1] * e.ca - sa[m - 1] * e.sa;
+        sa[m] = sa[m - 1] * e.ca + ca[m - 1] * e.sa;
+        cg[m] = cg[m - 1] * e.cg - sg[m - 1] * e.sg;
+        sg[m] = sg[m - 1] * e.cg + cg[m - 1] * e.sg;
+      }
       beta_ = std::atan2(e.sb, e.cb);
       break;
+    }
   }
   return true;
 }
@@ -321,43 +319,64 @@ void ShRotation<T>::apply_zxzxz(const T* in, T* out) const {
   }
 }
 
-// Z(a) T(b) Z(g) with T the truncated Taylor series I + b D1 (+ b^2/2 D2) of the
-// y-rotation (paper 001, Sec. 3; D1 antisymmetric tridiagonal, D2 diagonal plus distance
-// 2), one band at a time. The band sits in a buffer with two zeros on each side and the
-// derivative entries that would reach into a neighbouring band are zero, so the loops
-// have no bounds tests.
+namespace {
+
+// The y part of the Taylor rotation for one band (paper 001, Sec. 3): u = t + b D1 t
+// (+ b^2/2 D2 t), D1 antisymmetric tridiagonal (only its sub-diagonal s1 is stored), D2
+// diagonal (sd) plus distance 2 (s2). Order 1, 15 (diagonal of D2 only) or 2. t has two
+// zeros of padding on each side and the derivative entries that would reach into a
+// neighbouring band are zero, so the loop needs no bounds tests.
+template <int L, int Order, class T>
+inline void taylor_y_band(int l_run, T b, T hb2, const T* __restrict s1, const T* __restrict sd,
+                          const T* __restrict s2, const T* __restrict t, T* __restrict u) {
+  const int size = 2 * (L > 0 ? L : l_run) + 1;
+  for (int i = 0; i < size; ++i) {
+    T v = t[i] + b * (s1[i] * t[i - 1] - s1[i + 1] * t[i + 1]);
+    if constexpr (Order == 15) v += hb2 * (sd[i] * t[i]);
+    if constexpr (Order == 2) v += hb2 * (sd[i] * t[i] + s2[i] * t[i - 2] + s2[i + 2] * t[i + 2]);
+    u[i] = v;
+  }
+}
+
+}  // namespace
+
+// Band l of Z(a) T(b) Z(g), T the truncated Taylor series of the y-rotation.
 template <class T>
-void ShRotation<T>::apply_taylor(const T* in, T* out) const {
-  const T b = beta_, hb2 = T(0.5) * beta_ * beta_;
+template <int L, int Order>
+void ShRotation<T>::taylor_band(int l, const T* in, T* out) const {
+  const int first = l * l, size = 2 * l + 1;
   T* __restrict t = tmp1_.data() + 2;  // t[-2], t[-1] and t[size], t[size + 1] are 0
-  t[-2] = t[-1] = 0;  // (the zxzxz path uses the same buffer)
   T* __restrict u = tmp2_.data();
-  const T* __restrict d1 = dy_sub_.data();
-  const T* __restrict dd = ddy_diag_.data();
-  const T* __restrict d2 = ddy_off2_.data();
+  z_band<L>(l, cos_g_.data(), sin_g_.data(), in + first, t);
+  t[size] = t[size + 1] = 0;
+  taylor_y_band<L, Order>(l, beta_, T(0.5) * beta_ * beta_, dy_sub_.data() + first,
+                          ddy_diag_.data() + first, ddy_off2_.data() + first, t, u);
+  z_band<L>(l, cos_a_.data(), sin_a_.data(), u, out + first);
+}
+
+template <class T>
+template <int Order>
+void ShRotation<T>::apply_taylor_order(const T* in, T* out) const {
+  tmp1_[0] = tmp1_[1] = 0;  // left padding (the zxzxz path shares the buffer)
   out[0] = in[0];
   for (int l = 1; l < order_; ++l) {
-    const int first = l * l, size = 2 * l + 1;
-    z_band<0>(l, cos_g_.data(), sin_g_.data(), in + first, t);
-    t[size] = t[size + 1] = 0;
-    const T* s1 = d1 + first;
-    const T* sd = dd + first;
-    const T* s2 = d2 + first;
-    switch (resolved_) {
-      case RotationMethod::taylor1:
-        for (int i = 0; i < size; ++i) u[i] = t[i] + b * (s1[i] * t[i - 1] - s1[i + 1] * t[i + 1]);
-        break;
-      case RotationMethod::taylor15:
-        for (int i = 0; i < size; ++i)
-          u[i] = t[i] + b * (s1[i] * t[i - 1] - s1[i + 1] * t[i + 1]) + hb2 * (sd[i] * t[i]);
-        break;
-      default:
-        for (int i = 0; i < size; ++i)
-          u[i] = t[i] + b * (s1[i] * t[i - 1] - s1[i + 1] * t[i + 1]) +
-                 hb2 * (sd[i] * t[i] + s2[i] * t[i - 2] + s2[i + 2] * t[i + 2]);
-        break;
+    switch (l) {  // small bands with fixed trip counts, as in apply_zxzxz
+      case 1: taylor_band<1, Order>(l, in, out); break;
+      case 2: taylor_band<2, Order>(l, in, out); break;
+      case 3: taylor_band<3, Order>(l, in, out); break;
+      case 4: taylor_band<4, Order>(l, in, out); break;
+      case 5: taylor_band<5, Order>(l, in, out); break;
+      default: taylor_band<0, Order>(l, in, out); break;
     }
-    z_band<0>(l, cos_a_.data(), sin_a_.data(), u, out + first);
+  }
+}
+
+template <class T>
+void ShRotation<T>::apply_taylor(const T* in, T* out) const {
+  switch (resolved_) {
+    case RotationMethod::taylor1: apply_taylor_order<1>(in, out); break;
+    case RotationMethod::taylor15: apply_taylor_order<15>(in, out); break;
+    default: apply_taylor_order<2>(in, out); break;
   }
 }
 
