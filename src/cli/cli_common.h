@@ -34,5 +34,6 @@ void setup_eval(CLI::App& app);
 void setup_inspect(CLI::App& app);
 void setup_gen_tensors(CLI::App& app);
 void setup_rotate(CLI::App& app);
+void setup_product(CLI::App& app);
 
 }  // namespace shtool::cli

@@ -13,7 +13,9 @@
 #include "offline_version.h"
 #include "shtool/sh.h"
 #include "shtool/table.h"
+#include "tensors/fourier_tables.h"
 #include "tensors/rotation_helpers_gen.h"
+#include "tensors/tripling.h"
 
 namespace shtool::cli {
 namespace {
@@ -21,7 +23,8 @@ namespace {
 struct GenTensorsOptions {
   int order = 8;
   std::string out = "tables";
-  std::string what = "rotation";
+  std::string what = "rotation,tripling,fourier";
+  int inputs = kFourierTableDefaultInputs;
   std::string format = "binary";
 };
 
@@ -39,8 +42,8 @@ void run_gen_tensors(const GenTensorsOptions& opt) {
     std::stringstream ss(opt.what);
     std::string item;
     while (std::getline(ss, item, ',')) {
-      if (item != "rotation")
-        throw UserError("--what: unknown table '" + item + "' (known: rotation)");
+      if (item != "rotation" && item != "tripling" && item != "fourier")
+        throw UserError("--what: unknown table '" + item + "' (known: rotation, tripling, fourier)");
       what.insert(item);
     }
   }
@@ -53,7 +56,12 @@ void run_gen_tensors(const GenTensorsOptions& opt) {
   std::filesystem::create_directories(opt.out, ec);
   if (ec) throw UserError("cannot create output folder '" + opt.out + "': " + ec.message());
 
-  const nlohmann::json params = {{"order", opt.order}, {"what", opt.what}, {"format", opt.format}};
+  if (opt.inputs < 2 || opt.inputs > 8)
+    throw UserError("--inputs must be between 2 and 8, got " + std::to_string(opt.inputs));
+  if (what.count("tripling") && opt.order > kMaxTriplingOrder)
+    throw UserError("--what tripling supports orders up to " + std::to_string(kMaxTriplingOrder));
+  nlohmann::json params = {{"order", opt.order}, {"what", opt.what}, {"format", opt.format}};
+  if (what.count("fourier")) params["inputs"] = opt.inputs;
   const nlohmann::json generator = generator_record("shtool gen-tensors", params);
   if (what.count("rotation")) {
     const RotationHelpers h = compute_rotation_helpers(opt.order);
@@ -61,6 +69,20 @@ void run_gen_tensors(const GenTensorsOptions& opt) {
     write_or_throw(h.to_table(generator), path, encoding);
     std::cerr << "gen-tensors: wrote " << path.string() << " (order " << opt.order << ", X90 "
               << h.x90_val.size() << " non-zeros)\n";
+  }
+  if (what.count("tripling")) {
+    const Table t = tripling_tensor_table(opt.order, generator);
+    const std::filesystem::path path = std::filesystem::path(opt.out) / ("tripling-tensor" + ext);
+    write_or_throw(t, path, encoding);
+    std::cerr << "gen-tensors: wrote " << path.string() << " (order " << opt.order << ", "
+              << t.arrays.back().element_count() << " non-zeros)\n";
+  }
+  if (what.count("fourier")) {
+    const Table t = sh_fourier_tensors_table(opt.order, opt.inputs, generator);
+    const std::filesystem::path path = std::filesystem::path(opt.out) / ("sh-fourier-tensors" + ext);
+    write_or_throw(t, path, encoding);
+    std::cerr << "gen-tensors: wrote " << path.string() << " (order " << opt.order << ", products of up to "
+              << opt.inputs << " inputs)\n";
   }
 }
 
@@ -71,7 +93,12 @@ void setup_gen_tensors(CLI::App& app) {
   CLI::App* sub = app.add_subcommand("gen-tensors", "Generate tensor and rotation tables");
   sub->add_option("--order", opt->order, "SH order N (bands 0..N-1)")->capture_default_str();
   sub->add_option("--out", opt->out, "output folder")->capture_default_str();
-  sub->add_option("--what", opt->what, "comma-separated tables: rotation")->capture_default_str();
+  sub->add_option("--what", opt->what,
+                  "comma-separated tables: rotation (zxzxz/Taylor helpers), tripling (tripling "
+                  "tensor), fourier (SH<->Fourier tensors)")
+      ->capture_default_str();
+  sub->add_option("--inputs", opt->inputs, "fourier: largest number of product inputs covered (2..8)")
+      ->capture_default_str();
   sub->add_option("--format", opt->format, "binary (.shtb) or json (.json)")->capture_default_str();
   sub->callback([opt]() { run_gen_tensors(*opt); });
 }

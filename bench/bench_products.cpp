@@ -1,0 +1,132 @@
+// SH triple and k-multiple products, side by side (paper 003, Sec. 5.1):
+//   BM_Triple/<method>/<type>/N         g = f1 (x) f2 by the tripling tensor or by FFT
+//   BM_Multiple/<method>/<type>/k/N     k - 1 inputs: accurate (Fourier, divide and
+//                                       conquer) vs recursive (Eq. 11, either method)
+//   BM_TriplingBuild/N                  runtime construction of the tripling tensor
+// Run: build-*/bench/bench_products --benchmark_min_time=0.2
+// Figures and the machine they were measured on: docs/products.md.
+#include <random>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <benchmark/benchmark.h>
+
+#include "shtool/fourier_product.h"
+#include "shtool/product.h"
+#include "shtool/sh.h"
+#include "shtool/tripling_product.h"
+
+namespace {
+
+using shtool::sh_count;
+
+template <class T>
+std::vector<std::vector<T>> random_inputs(int order, int count) {
+  std::mt19937 rng(12345);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::vector<std::vector<T>> f(count, std::vector<T>(sh_count(order)));
+  for (auto& v : f)
+    for (auto& x : v) x = static_cast<T>(u(rng));
+  return f;
+}
+
+template <class T>
+void BM_TripleTripling(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  const shtool::TriplingProduct<T> product(shtool::TriplingTensor::compute(n));
+  const auto f = random_inputs<T>(n, 2);
+  std::vector<T> g(sh_count(n));
+  for (auto _ : state) {
+    product.multiply(f[0], f[1], g);
+    benchmark::DoNotOptimize(g.data());
+    benchmark::ClobberMemory();
+  }
+  state.counters["pairs"] = static_cast<double>(product.pair_count());
+}
+
+template <class T>
+void BM_TripleFourier(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  shtool::FourierProduct<T> product(n, 2);
+  const auto f = random_inputs<T>(n, 2);
+  std::vector<T> g(sh_count(n));
+  for (auto _ : state) {
+    product.multiply(f[0], f[1], g);
+    benchmark::DoNotOptimize(g.data());
+    benchmark::ClobberMemory();
+  }
+  state.counters["grid"] = product.grid_theta() * 1000.0 + product.grid_phi();
+}
+
+template <class T>
+void BM_TripleAuto(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  shtool::ShProduct<T> product(n);
+  product.prepare(2);
+  const auto f = random_inputs<T>(n, 2);
+  std::vector<T> g(sh_count(n));
+  for (auto _ : state) {
+    product.triple(f[0], f[1], g);
+    benchmark::DoNotOptimize(g.data());
+    benchmark::ClobberMemory();
+  }
+}
+
+enum Mode { kAccurate, kRecursiveTripling, kRecursiveFourier };
+
+template <class T, Mode mode>
+void BM_Multiple(benchmark::State& state) {
+  const int k = static_cast<int>(state.range(0));
+  const int n = static_cast<int>(state.range(1));
+  const int inputs = k - 1;
+  const auto f = random_inputs<T>(n, inputs);
+  std::vector<std::span<const T>> spans(f.begin(), f.end());
+  std::vector<T> g(sh_count(n));
+  shtool::ShProduct<T> product(n, mode == kRecursiveTripling ? shtool::ProductMethod::tripling
+                                                            : shtool::ProductMethod::fourier);
+  product.prepare(mode == kAccurate ? inputs : 2);
+  for (auto _ : state) {
+    if (mode == kAccurate)
+      product.multiple(spans, g);
+    else
+      product.recursive(spans, g);
+    benchmark::DoNotOptimize(g.data());
+    benchmark::ClobberMemory();
+  }
+}
+
+void BM_TriplingBuild(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  for (auto _ : state) {
+    shtool::TriplingTensor t = shtool::TriplingTensor::compute(n);
+    benchmark::DoNotOptimize(t.value.data());
+    state.counters["nonzeros"] = static_cast<double>(t.size());
+  }
+}
+
+void triple_orders(benchmark::internal::Benchmark* b) {
+  for (int n = 3; n <= 20; ++n) b->Arg(n);
+}
+void multiple_args(benchmark::internal::Benchmark* b) {
+  for (int k : {4, 6, 8})
+    for (int n : {3, 5, 8, 10, 15, 20}) b->Args({k, n});
+}
+
+}  // namespace
+
+BENCHMARK(BM_TripleTripling<float>)->Name("BM_Triple/tripling/float")->Apply(triple_orders);
+BENCHMARK(BM_TripleFourier<float>)->Name("BM_Triple/fourier/float")->Apply(triple_orders);
+BENCHMARK(BM_TripleAuto<float>)->Name("BM_Triple/auto/float")->Apply(triple_orders);
+BENCHMARK(BM_TripleTripling<double>)->Name("BM_Triple/tripling/double")->Apply(triple_orders);
+BENCHMARK(BM_TripleFourier<double>)->Name("BM_Triple/fourier/double")->Apply(triple_orders);
+BENCHMARK(BM_TripleAuto<double>)->Name("BM_Triple/auto/double")->Apply(triple_orders);
+BENCHMARK(BM_Multiple<float, kAccurate>)->Name("BM_Multiple/accurate-fourier/float")->Apply(multiple_args);
+BENCHMARK(BM_Multiple<float, kRecursiveTripling>)->Name("BM_Multiple/recursive-tripling/float")->Apply(multiple_args);
+BENCHMARK(BM_Multiple<float, kRecursiveFourier>)->Name("BM_Multiple/recursive-fourier/float")->Apply(multiple_args);
+BENCHMARK(BM_Multiple<double, kAccurate>)->Name("BM_Multiple/accurate-fourier/double")->Apply(multiple_args);
+BENCHMARK(BM_Multiple<double, kRecursiveTripling>)->Name("BM_Multiple/recursive-tripling/double")->Apply(multiple_args);
+BENCHMARK(BM_Multiple<double, kRecursiveFourier>)->Name("BM_Multiple/recursive-fourier/double")->Apply(multiple_args);
+BENCHMARK(BM_TriplingBuild)->Arg(5)->Arg(10)->Arg(15)->Arg(20)->Unit(benchmark::kMillisecond);
+
+BENCHMARK_MAIN();
