@@ -7,11 +7,12 @@ namespace shtool {
 
 // X90 = M(Rx(+90 deg)) by projection with a quadrature that is exact for the degree-2l
 // integrands of band l (so exact up to rounding, and independent of the recurrence the
-// reference rotation uses); D1 = X90^T G_z X90 with G_z the exact generator of
-// z-rotations (Ry(b) = Rx(-90) Rz(b) Rx(+90)), and D2 = D1^2 (M(Ry(b)) = exp(b D1)).
-// Entries below 1e-13 in magnitude are structural zeros (the true values are exact zeros
-// by parity) and are dropped. Throws std::logic_error if the computed matrices lack the
-// expected structure (tridiagonal D1), which would mean a convention error.
+// reference rotation uses). D1 = dM(Ry(b))/db(0) from its closed form (tridiagonal,
+// antisymmetric), checked against X90^T G_z X90 with G_z the exact generator of
+// z-rotations (Ry(b) = Rx(-90) Rz(b) Rx(+90)); D2 = D1^2 (M(Ry(b)) = exp(b D1)).
+// X90 entries below 1e-13 in magnitude are structural zeros (exact zeros by parity) and
+// are dropped. Throws std::logic_error if the closed form and the X90 table disagree,
+// which would mean a convention error.
 RotationHelpers compute_rotation_helpers(int order);
 
 }  // namespace shtool
