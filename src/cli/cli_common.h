@@ -35,5 +35,7 @@ void setup_inspect(CLI::App& app);
 void setup_gen_tensors(CLI::App& app);
 void setup_rotate(CLI::App& app);
 void setup_product(CLI::App& app);
+void setup_fit_zh(CLI::App& app);
+void setup_search_lobes(CLI::App& app);
 
 }  // namespace shtool::cli

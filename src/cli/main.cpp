@@ -20,6 +20,8 @@ int main(int argc, char** argv) {
   shtool::cli::setup_gen_tensors(app);
   shtool::cli::setup_rotate(app);
   shtool::cli::setup_product(app);
+  shtool::cli::setup_fit_zh(app);
+  shtool::cli::setup_search_lobes(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -4,6 +4,7 @@
 #include <iostream>
 #include <iterator>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -14,6 +15,7 @@
 #include "cli_common.h"
 #include "shtool/rotation.h"
 #include "shtool/sh.h"
+#include "shtool/zhf_rotation.h"
 
 namespace shtool::cli {
 namespace {
@@ -83,10 +85,12 @@ void run_rotate(const RotateOptions& opt) {
   if (!is_supported_order(opt.order))
     throw UserError("--order " + std::to_string(opt.order) + " is not supported (1.." +
                     std::to_string(kMaxOrder) + ")");
-  const auto method = rotation_method_from_name(opt.method);
+  const bool zhf = opt.method == "zhf" || opt.method == "zhf-tailored";
+  const auto method = zhf ? std::optional<RotationMethod>(RotationMethod::reference)
+                          : rotation_method_from_name(opt.method);
   if (!method)
     throw UserError("--method: unknown method '" + opt.method +
-                    "' (auto, reference, zxzxz, taylor1, taylor1.5, taylor2)");
+                    "' (auto, reference, zxzxz, taylor1, taylor1.5, taylor2, zhf, zhf-tailored)");
   if (!(opt.tol > 0) || !std::isfinite(opt.tol)) throw UserError("--tol must be a positive number");
   const Mat3<double> r = read_rotation(opt);
   const std::vector<double> coeffs = read_coefficients(opt);
@@ -95,6 +99,29 @@ void run_rotate(const RotateOptions& opt) {
                     std::to_string(opt.order) + ", got " + std::to_string(coeffs.size()));
   for (double c : coeffs)
     if (!std::isfinite(c)) throw UserError("coefficients must be finite numbers");
+
+  std::vector<double> out(coeffs.size());
+  if (zhf) {
+    // Zonal-harmonic factorisation (paper 000, Eq. 10 and 11) with a shared-lobe table.
+    const std::filesystem::path path =
+        opt.tables.empty() ? default_zhf_lobes_path(opt.order) : std::filesystem::path(opt.tables);
+    if (path.empty())
+      throw UserError("no shipped zhf-lobes table covers order " + std::to_string(opt.order) +
+                      " (give one with --tables; make it with `shtool search-lobes --shared`)");
+    TableResult<ZhfLobes> loaded = load_zhf_lobes(path, opt.order);
+    if (!loaded) throw UserError(loaded.error().message);
+    const auto lobes = std::make_shared<const ZhfLobes>(std::move(loaded).value());
+    if (opt.method == "zhf") {
+      ZhfRotation<double> rotation(opt.order, lobes);
+      rotation.set(r);
+      rotation.apply(coeffs, out);
+    } else {
+      ZhfTailoredSignal<double> signal(lobes, coeffs);
+      signal.rotate(r, out);
+    }
+    print_json({{"order", opt.order}, {"method", opt.method}, {"coefficients", out}});
+    return;
+  }
 
   std::shared_ptr<const RotationHelpers> helpers;
   if (*method != RotationMethod::reference) {
@@ -109,7 +136,6 @@ void run_rotate(const RotateOptions& opt) {
   }
   ShRotation<double> rotation(opt.order, helpers);
   if (!rotation.set(r, *method, opt.tol)) throw UserError("rotation method unavailable for this order");
-  std::vector<double> out(coeffs.size());
   rotation.apply(coeffs, out);
   print_json({{"order", opt.order},
               {"method", std::string(rotation_method_name(rotation.method()))},
@@ -122,7 +148,8 @@ void setup_rotate(CLI::App& app) {
   auto opt = std::make_shared<RotateOptions>();
   CLI::App* sub = app.add_subcommand("rotate", "Rotate an SH vector: g(w) = f(R^-1 w) (JSON)");
   sub->add_option("--order", opt->order, "SH order N (bands 0..N-1)")->required();
-  sub->add_option("--method", opt->method, "auto|reference|zxzxz|taylor1|taylor1.5|taylor2")
+  sub->add_option("--method", opt->method,
+                  "auto|reference|zxzxz|taylor1|taylor1.5|taylor2|zhf|zhf-tailored")
       ->capture_default_str();
   sub->add_option("--tol", opt->tol,
                   "auto: largest error allowed for a unit-length vector (spectral norm)")
@@ -132,7 +159,8 @@ void setup_rotate(CLI::App& app) {
   sub->add_option("--zyz", opt->zyz, "Euler angles a,b,c: R = Rz(a) Ry(b) Rz(c), radians");
   sub->add_option("--coeffs", opt->coeffs, "N^2 coefficients c0,c1,...");
   sub->add_option("--in", opt->in, "JSON file {\"coefficients\": [...]}, or - for stdin");
-  sub->add_option("--tables", opt->tables, "rotation-helpers table (default: the shipped one)");
+  sub->add_option("--tables", opt->tables,
+                  "rotation-helpers table, or zhf-lobes table for zhf methods (default: the shipped one)");
   sub->callback([opt]() {
     if (opt->coeffs.empty() == opt->in.empty()) throw UserError("give exactly one of --coeffs, --in");
     run_rotate(*opt);

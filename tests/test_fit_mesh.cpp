@@ -1,0 +1,108 @@
+// OBJ loading for fit-zh: triangulation, skipped vertices and faces, normals, and the
+// errors for bad input. References are hand-built meshes whose answers are known.
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "fit/mesh.h"
+
+namespace {
+
+using shtool::fit::load_obj;
+using shtool::fit::Mesh;
+using shtool::fit::MeshError;
+
+std::filesystem::path write_obj(const std::string& name, const std::string& text) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "shtool_test_fit_mesh";
+  std::filesystem::create_directories(dir);
+  const std::filesystem::path path = dir / name;
+  std::ofstream(path) << text;
+  return path;
+}
+
+std::string load_error(const std::filesystem::path& path) {
+  try {
+    load_obj(path);
+  } catch (const MeshError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// Normals are normalised sums; 1e-14 allows a few roundings of unit-size values.
+constexpr double kNormalTol = 1e-14;
+
+TEST(FitMesh, QuadIsTriangulatedWithUpNormals) {
+  const Mesh m = load_obj(write_obj("quad.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n"));
+  ASSERT_EQ(m.triangles.size(), 2u);
+  EXPECT_EQ(m.polygons_triangulated, 1u);
+  EXPECT_FALSE(m.normals_from_file);
+  for (const Eigen::Vector3d& n : m.normals) EXPECT_NEAR((n - Eigen::Vector3d::UnitZ()).norm(), 0.0, kNormalTol) << n.transpose();
+}
+
+TEST(FitMesh, UnreferencedVerticesAreSkippedAndCounted) {
+  const Mesh m = load_obj(write_obj("unref.obj", "v 9 9 9\nv 0 0 0\nv 1 0 0\nv 5 5 5\nv 0 1 0\nf 2 3 5\n"));
+  EXPECT_EQ(m.obj_vertices, 5u);
+  EXPECT_EQ(m.unreferenced_vertices, 2u);
+  ASSERT_EQ(m.positions.size(), 3u);
+  EXPECT_EQ(m.source_index, (std::vector<std::uint32_t>{1, 2, 4}));
+  EXPECT_EQ(m.triangles[0], Eigen::Vector3i(0, 1, 2));
+}
+
+TEST(FitMesh, DegenerateFacesAreSkippedAndCounted) {
+  // A repeated index, a zero-area (collinear) triangle and a good one.
+  const Mesh m = load_obj(write_obj("degen.obj",
+                                    "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 1 0\nf 1 2 2\nf 1 2 3\nf 1 2 4\n"));
+  EXPECT_EQ(m.degenerate_faces, 2u);
+  EXPECT_EQ(m.triangles.size(), 1u);
+  EXPECT_EQ(m.unreferenced_vertices, 1u);  // vertex 3 only appears in the collinear face
+}
+
+TEST(FitMesh, CubeCornerNormalsAreAngleWeighted) {
+  // Each corner of a cube touches three faces split into one or two triangles; angle
+  // weighting gives every face the weight pi/2 there, so the normal is the diagonal
+  // (+-1, +-1, +-1)/sqrt(3) exactly. Area weighting would tilt it toward faces
+  // contributing two triangles.
+  const std::string cube =
+      "v -1 -1 -1\nv 1 -1 -1\nv 1 1 -1\nv -1 1 -1\nv -1 -1 1\nv 1 -1 1\nv 1 1 1\nv -1 1 1\n"
+      "f 1 4 3\nf 1 3 2\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\nf 2 3 7\nf 2 7 6\nf 3 4 8\nf 3 8 7\nf 4 1 5\nf 4 5 8\n";
+  const Mesh m = load_obj(write_obj("cube.obj", cube));
+  ASSERT_EQ(m.positions.size(), 8u);
+  for (std::size_t i = 0; i < 8; ++i) {
+    const Eigen::Vector3d expected = m.positions[i] / std::sqrt(3.0);
+    EXPECT_NEAR((m.normals[i] - expected).norm(), 0.0, kNormalTol) << "vertex " << i << ": " << m.normals[i].transpose();
+  }
+}
+
+TEST(FitMesh, FileNormalsAreUsedWhenComplete) {
+  const Mesh m = load_obj(write_obj("vn.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 2\nvn 1 0 0\nf 1//1 2//2 3//1\n"));
+  EXPECT_TRUE(m.normals_from_file);
+  EXPECT_NEAR((m.normals[0] - Eigen::Vector3d::UnitZ()).norm(), 0.0, kNormalTol);  // normalised from length 2
+  EXPECT_NEAR((m.normals[1] - Eigen::Vector3d::UnitX()).norm(), 0.0, kNormalTol);
+  const Mesh c = load_obj(write_obj("vn.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 2\nvn 1 0 0\nf 1//1 2//2 3//1\n"),
+                          shtool::fit::NormalSource::computed);
+  EXPECT_NEAR((c.normals[1] - Eigen::Vector3d::UnitZ()).norm(), 0.0, kNormalTol);
+}
+
+TEST(FitMesh, BadInputGivesClearErrors) {
+  EXPECT_NE(load_error("/nonexistent/shtool/none.obj").find("no such file"), std::string::npos);
+  const std::string nan = load_error(write_obj("nan.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n"));
+  EXPECT_NE(nan.find("line 2: non-finite coordinate"), std::string::npos) << nan;
+  const std::string inf = load_error(write_obj("inf.obj", "v 0 0 0\nv 1e999 0 0\nv 0 1 0\nf 1 2 3\n"));
+  EXPECT_NE(inf.find("non-finite"), std::string::npos) << inf;
+  const std::string range = load_error(write_obj("range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n"));
+  EXPECT_NE(range.find("refers to vertex 7, but the file has 3 vertices"), std::string::npos) << range;
+  const std::string quad_range = load_error(write_obj("qrange.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3 99\n"));
+  EXPECT_NE(quad_range.find("refers to vertex 99"), std::string::npos) << quad_range;
+  const std::string none = load_error(write_obj("none.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n"));
+  EXPECT_NE(none.find("no faces"), std::string::npos) << none;
+  const std::string flat = load_error(write_obj("flat.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n"));
+  EXPECT_NE(flat.find("no usable triangle"), std::string::npos) << flat;
+  const std::string empty = load_error(write_obj("empty.obj", ""));
+  EXPECT_FALSE(empty.empty());
+}
+
+}  // namespace
