@@ -15,6 +15,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <span>
 #include <string_view>
 #include <vector>
@@ -43,6 +44,12 @@ struct TriplingTensor {
   // 3j construction of the offline tool (src/tensors/tripling.h) to ~1e-15.
   // Precondition: 1 <= order <= kMaxTriplingOrder.
   static TriplingTensor compute(int order);
+
+  // The shared skeleton of every construction: enumerates the index triples i <= j <= k
+  // that the selection rules of real SH leave possibly non-zero, asks `coefficient` for
+  // each, drops values below 1e-12 and returns them sorted.
+  static TriplingTensor from_candidates(int order,
+                                        const std::function<double(int i, int j, int k)>& coefficient);
 
   // Table round trip (kind "tripling-tensor", schemas/tripling-tensor.schema.json).
   // from_table checks kind, order, shapes, index bounds, canonical order, uniqueness and

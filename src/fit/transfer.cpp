@@ -12,17 +12,11 @@
 
 #include <embree3/rtcore.h>
 
+#include "offline_random.h"
 #include "shtool/sh.h"
 
 namespace shtool::fit {
 namespace {
-
-std::uint64_t splitmix64(std::uint64_t x) {
-  x += 0x9E3779B97F4A7C15ull;
-  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
-  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
-  return x ^ (x >> 31);
-}
 
 // 53 random bits to [0, 1).
 double unit_double(std::uint64_t x) { return static_cast<double>(x >> 11) * 0x1.0p-53; }

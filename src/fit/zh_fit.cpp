@@ -12,17 +12,11 @@
 #include <Eigen/Dense>
 #include <nlopt.hpp>
 
+#include "offline_random.h"
 #include "shtool/sh.h"
 
 namespace shtool::fit {
 namespace {
-
-std::uint64_t splitmix64(std::uint64_t x) {
-  x += 0x9E3779B97F4A7C15ull;
-  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
-  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
-  return x ^ (x >> 31);
-}
 
 // Deterministic generator for the multi-start axes (same sequence on every platform,
 // unlike std::uniform_real_distribution).

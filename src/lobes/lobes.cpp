@@ -1,4 +1,5 @@
 // Sparse ZHF lobe search (paper 000, Sec. 4-6). See lobes.h and docs/lobes.md.
+#include "offline_random.h"
 #include "lobes/lobes.h"
 
 #include <algorithm>
@@ -36,13 +37,6 @@ std::vector<double> dedupe_sorted(std::vector<double> v) {
 }
 
 }  // namespace
-
-std::uint64_t splitmix64(std::uint64_t x) {
-  x += 0x9e3779b97f4a7c15ULL;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
-  return x ^ (x >> 31);
-}
 
 std::uint64_t stream_seed(std::uint64_t seed, std::uint64_t restart, std::uint64_t generation,
                           std::uint64_t index) {

@@ -119,8 +119,6 @@ Table make_lobes_table(const std::vector<SearchResult>& searches, const nlohmann
                        const SearchOptions& options);
 nlohmann::json lobes_summary_json(const std::vector<SearchResult>& searches);
 
-// splitmix64 finaliser; seeds the per-individual streams (seed, restart, generation, index).
-std::uint64_t splitmix64(std::uint64_t x);
 std::uint64_t stream_seed(std::uint64_t seed, std::uint64_t restart, std::uint64_t generation,
                           std::uint64_t index);
 

@@ -1,6 +1,7 @@
 #include "shtool/tripling_product.h"
 
 #include <algorithm>
+#include <functional>
 #include <array>
 #include <cmath>
 #include <numbers>
@@ -105,18 +106,16 @@ double tripling_azimuthal_factor(int m1, int m2, int m3) {
   return static_cast<double>(v);
 }
 
-TriplingTensor TriplingTensor::compute(int order) {
+TriplingTensor TriplingTensor::from_candidates(int order,
+                                               const std::function<double(int, int, int)>& coefficient) {
   TriplingTensor t;
   t.order = order;
   const int nmax = order - 1;
-  // The polar integrand is a polynomial of degree l1 + l2 + l3 <= 3 (N - 1): the largest
-  // |m| is the sum of the other two, so the sin^|m| factors multiply to an even power.
-  const int nq = (3 * nmax) / 2 + 1;
-  const GaussLegendre gl = gauss_legendre(nq);
-  const PolarTable polar(order, gl.nodes);
   const int count = sh_count(order);
-
   std::vector<std::tuple<std::uint32_t, std::uint32_t, std::uint32_t, double>> entries;
+  // Selection rules of real SH: for each pair i <= j at most two m3 (|m3| = |m1| + |m2|
+  // or ||m1| - |m2||, with the sign rule of the azimuthal factor), and the bands l3 of
+  // the right parity inside the triangle.
   for (int i = 0; i < count; ++i) {
     const Lm a = band_of(i);
     for (int j = i; j < count; ++j) {
@@ -129,20 +128,13 @@ TriplingTensor TriplingTensor::compute(int order) {
         if (ci == 1 && cs[1] == cs[0]) break;
         if (sign < 0 && c == 0) continue;
         const int m3 = sign * c;
-        const double az = tripling_azimuthal_factor(a.m, b.m, m3);
-        if (az == 0.0) continue;
-        const long double* pa = polar.row(a.l, am);
-        const long double* pb = polar.row(b.l, bm);
-        const int lo = std::max(std::abs(a.l - b.l), c);
-        for (int l3 = lo; l3 <= std::min(a.l + b.l, nmax); ++l3) {
+        if (tripling_azimuthal_factor(a.m, b.m, m3) == 0.0) continue;
+        for (int l3 = std::max(std::abs(a.l - b.l), c); l3 <= std::min(a.l + b.l, nmax); ++l3) {
           if ((a.l + b.l + l3) % 2 != 0) continue;
           const int k = sh_index(l3, m3);
           if (k < j) continue;
-          const long double* pc = polar.row(l3, c);
-          long double sum = 0;
-          for (int q = 0; q < nq; ++q) sum += gl.weights[q] * pa[q] * pb[q] * pc[q];
-          const double v = static_cast<double>(az * sum);
-          if (std::abs(v) < kTriplingZero) continue;
+          const double v = coefficient(i, j, k);
+          if (std::abs(v) < kTriplingZero) continue;  // a non-trivial zero (e.g. of a 3j symbol)
           entries.emplace_back(i, j, k, v);
         }
       }
@@ -156,6 +148,23 @@ TriplingTensor TriplingTensor::compute(int order) {
     t.value.push_back(v);
   }
   return t;
+}
+
+TriplingTensor TriplingTensor::compute(int order) {
+  // The polar integrand is a polynomial of degree l1 + l2 + l3 <= 3 (N - 1): the largest
+  // |m| is the sum of the other two, so the sin^|m| factors multiply to an even power.
+  const int nq = (3 * (order - 1)) / 2 + 1;
+  const GaussLegendre gl = gauss_legendre(nq);
+  const PolarTable polar(order, gl.nodes);
+  return from_candidates(order, [&](int i, int j, int k) {
+    const Lm a = band_of(i), b = band_of(j), c = band_of(k);
+    const long double* pa = polar.row(a.l, std::abs(a.m));
+    const long double* pb = polar.row(b.l, std::abs(b.m));
+    const long double* pc = polar.row(c.l, std::abs(c.m));
+    long double sum = 0;
+    for (int q = 0; q < nq; ++q) sum += gl.weights[q] * pa[q] * pb[q] * pc[q];
+    return static_cast<double>(tripling_azimuthal_factor(a.m, b.m, c.m) * sum);
+  });
 }
 
 Table TriplingTensor::to_table(const nlohmann::json& generator, const nlohmann::json& meta) const {

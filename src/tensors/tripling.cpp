@@ -32,7 +32,7 @@ const std::vector<Quad>& factorials() {
   return table;
 }
 
-constexpr double kTriplingZero = 1e-12;  // same threshold as TriplingTensor::compute
+constexpr double kTriplingZero = 1e-12;  // the threshold of TriplingTensor::from_candidates
 
 struct Lm {
   int l, m;
@@ -103,45 +103,7 @@ TriplingTensor compute_tripling_tensor_exact(int order) {
   if (order < 1 || order > kMaxTriplingOrder)
     throw std::out_of_range("tripling tensor: order " + std::to_string(order) +
                             " outside 1.." + std::to_string(kMaxTriplingOrder));
-  TriplingTensor t;
-  t.order = order;
-  const int nmax = order - 1;
-  const int count = sh_count(order);
-  std::vector<std::tuple<std::uint32_t, std::uint32_t, std::uint32_t, double>> entries;
-  // Same enumeration as TriplingTensor::compute: the selection rules pick, for each
-  // pair i <= j, the at most two m3 and the bands l3 of the same parity in the triangle.
-  for (int i = 0; i < count; ++i) {
-    const Lm a = band_of(i);
-    for (int j = i; j < count; ++j) {
-      const Lm b = band_of(j);
-      const int am = std::abs(a.m), bm = std::abs(b.m);
-      const int sign = ((a.m < 0) != (b.m < 0)) ? -1 : 1;
-      const int cs[2] = {am + bm, std::abs(am - bm)};
-      for (int ci = 0; ci < 2; ++ci) {
-        const int c = cs[ci];
-        if (ci == 1 && cs[1] == cs[0]) break;
-        if (sign < 0 && c == 0) continue;
-        const int m3 = sign * c;
-        if (tripling_azimuthal_factor(a.m, b.m, m3) == 0.0) continue;
-        for (int l3 = std::max(std::abs(a.l - b.l), c); l3 <= std::min(a.l + b.l, nmax); ++l3) {
-          if ((a.l + b.l + l3) % 2 != 0) continue;
-          const int k = sh_index(l3, m3);
-          if (k < j) continue;
-          const double v = tripling_coefficient_exact(i, j, k);
-          if (std::abs(v) < kTriplingZero) continue;  // a non-trivial zero of the 3j symbol
-          entries.emplace_back(i, j, k, v);
-        }
-      }
-    }
-  }
-  std::sort(entries.begin(), entries.end());
-  t.index.reserve(3 * entries.size());
-  t.value.reserve(entries.size());
-  for (const auto& [i, j, k, v] : entries) {
-    t.index.insert(t.index.end(), {i, j, k});
-    t.value.push_back(v);
-  }
-  return t;
+  return TriplingTensor::from_candidates(order, tripling_coefficient_exact);
 }
 
 Table tripling_tensor_table(int order, const nlohmann::json& generator) {
