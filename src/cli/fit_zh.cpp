@@ -21,6 +21,7 @@
 #include "fit/mesh.h"
 #include "fit/transfer.h"
 #include "fit/zh_fit.h"
+#include "fit/zh_fit_table.h"
 #include "offline_version.h"
 #include "shtool/sh.h"
 #include "shtool/table.h"
@@ -272,47 +273,10 @@ void run_fit_zh(const FitZhOptions& opt) {
   params["restart_above"] = opt.restart_above;
   params["direct"] = opt.direct;
 
-  double sum_res = 0, sum_norm = 0;
-  for (const fit::ZhFit& f : fits) {
-    sum_res += f.residual * f.residual;
-    sum_norm += f.norm * f.norm;
-  }
   // Paper 004, Fig. 3: RMS error normalised by the total L2 length over all vertices.
-  const double normalized_rms = sum_norm > 0 ? std::sqrt(sum_res / sum_norm) : 0.0;
-
-  // ---- table
-  const std::size_t nl = opt.lobes;
-  std::vector<double> axes(count * nl * 3), coeffs(count * nl * order), residual(count), norm(count);
-  const std::size_t nd = fits.empty() ? 0 : fits[0].direct.size();
-  std::vector<double> direct(count * nd);
-  for (std::size_t v = 0; v < count; ++v) {
-    for (std::size_t k = 0; k < nl; ++k) {
-      for (int c = 0; c < 3; ++c) axes[(v * nl + k) * 3 + c] = fits[v].lobes[k].axis[c];
-      for (int l = 0; l < order; ++l) coeffs[(v * nl + k) * order + l] = fits[v].lobes[k].coeffs[l];
-    }
-    residual[v] = fits[v].residual;
-    norm[v] = fits[v].norm;
-    for (std::size_t d = 0; d < nd; ++d) direct[v * nd + d] = fits[v].direct[d];
-  }
-  Table table;
-  table.kind = "zh-fit";
-  table.kind_version = "1.0";
-  table.order = order;
-  table.generator = generator_record("shtool fit-zh", params);
-  meta["vectors"] = count;
-  meta["lobes"] = opt.lobes;
-  meta["normalized_rms"] = normalized_rms;
-  meta["layout"] = "axes[v][k] unit axis, coeffs[v][k][l] = g*_l (lobe k adds g*_l y_l^m(axis) to SH (l,m)); "
-                   "residual[v] = ||fit - t||, norm[v] = ||t||";
-  table.meta = meta;
-  const auto V = static_cast<std::int64_t>(count), N = static_cast<std::int64_t>(nl);
-  table.arrays.push_back(TableArray::from<double>("axes", {V, N, 3}, axes));
-  table.arrays.push_back(TableArray::from<double>("coeffs", {V, N, order}, coeffs));
-  table.arrays.push_back(TableArray::from<double>("residual", {V}, residual));
-  table.arrays.push_back(TableArray::from<double>("norm", {V}, norm));
-  if (nd) table.arrays.push_back(TableArray::from<double>("direct", {V, static_cast<std::int64_t>(nd)}, direct));
-  if (!mesh.source_index.empty())
-    table.arrays.push_back(TableArray::from<std::uint32_t>("vertex_index", {V}, mesh.source_index));
+  const double normalized_rms = fit::normalized_rms(fits);
+  const Table table = fit::zh_fit_table(fits, order, opt.lobes, mesh.source_index, meta,
+                                        generator_record("shtool fit-zh", params));
 
   std::string out = opt.out;
   if (out.empty())
