@@ -22,6 +22,7 @@
 #include <nlohmann/json.hpp>
 
 #include "run_command.h"
+#include "test_util.h"
 #include "shtool/euler.h"
 #include "shtool/rotation.h"
 #include "shtool/rotation_helpers.h"
@@ -100,18 +101,8 @@ std::string matrix_list(const Mat3<double>& r) {
   return list({r(0, 0), r(0, 1), r(0, 2), r(1, 0), r(1, 1), r(1, 2), r(2, 0), r(2, 1), r(2, 2)});
 }
 
-std::vector<double> random_coeffs(int order, std::mt19937_64& rng) {
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  std::vector<double> f(sh_count(order));
-  for (double& v : f) v = u(rng);
-  return f;
-}
-
-double norm(const std::vector<double>& v) {
-  double s = 0;
-  for (double x : v) s += x * x;
-  return std::sqrt(s);
-}
+using test::norm;
+using test::random_coeffs;
 
 double distance(const std::vector<double>& a, const std::vector<double>& b) {
   double s = 0;

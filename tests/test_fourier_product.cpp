@@ -14,6 +14,7 @@
 
 #include <gtest/gtest.h>
 
+#include "test_util.h"
 #include "shtool/fourier_product.h"
 #include "shtool/fourier_tensors.h"
 #include "shtool/legendre.h"
@@ -25,12 +26,7 @@
 namespace shtool {
 namespace {
 
-// Property values in scientific notation (std::to_string would print 0.000000).
-std::string sci(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.3e", v);
-  return buf;
-}
+using test::sci;
 
 // The accuracy bar for accurate products in double.
 constexpr double kProductTolDouble = 1e-10;

@@ -28,6 +28,7 @@
 #include <gtest/gtest.h>
 
 #include "offline_version.h"
+#include "test_util.h"
 #include "shtool/euler.h"
 #include "shtool/quadrature.h"
 #include "shtool/rotation.h"
@@ -89,18 +90,8 @@ Vec3<double> random_axis(std::mt19937_64& rng) {
   return a.normalized();
 }
 
-std::vector<double> random_coeffs(int order, std::mt19937_64& rng) {
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  std::vector<double> f(sh_count(order));
-  for (double& v : f) v = u(rng);
-  return f;
-}
-
-double norm(const std::vector<double>& v) {
-  double s = 0;
-  for (double x : v) s += x * x;
-  return std::sqrt(s);
-}
+using test::norm;
+using test::random_coeffs;
 
 template <class A, class B>
 double distance(const std::vector<A>& a, const std::vector<B>& b) {

@@ -16,6 +16,7 @@
 
 #include <gtest/gtest.h>
 
+#include "test_util.h"
 #include "shtool/quadrature.h"
 #include "shtool/sh.h"
 #include "shtool/tripling_product.h"
@@ -26,12 +27,7 @@
 namespace shtool {
 namespace {
 
-// Property values in scientific notation (std::to_string would print 0.000000).
-std::string sci(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.3e", v);
-  return buf;
-}
+using test::sci;
 
 // Dense C by a sphere rule exact for degree 3(N-1) (the integrand's degree), from the
 // double-precision SH evaluator: rounding ~1e-16 per term, a few hundred terms.
