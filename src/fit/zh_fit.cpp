@@ -366,7 +366,11 @@ ZhFit fit_zh(std::span<const double> t_in, const ZhFitOptions& o, std::uint64_t 
 
   // Multi-start from random axis sets (Sec. 4.1, "additional searching").
   Rng rng{splitmix64(o.seed ^ splitmix64(stream ^ 0x5A17C0DEull))};
-  const double good = o.restart_above * o.restart_above * squared_norm(t_in);
+  // With at least as many lobes as bands an exact fit exists (paper 004, Fig. 2: six
+  // lobes represent an order-6 vector), so "good enough" means the BFGS tolerance, not
+  // the paper's few-percent level: keep restarting until the fit is exact.
+  const double restart = o.lobes >= order ? std::min(o.restart_above, kExactFitResidual) : o.restart_above;
+  const double good = restart * restart * squared_norm(t_in);
   for (int s = 0; s < o.starts && best_psi > good; ++s) {
     std::vector<ZhLobe> trial(o.lobes);
     for (ZhLobe& lobe : trial) {

@@ -54,6 +54,11 @@ struct ZhFitOptions {
   double restart_above = 0.05;
 };
 
+// Relative residual taken as "exact" when lobes >= order: BFGS stops at a relative
+// change of 1e-12 in the squared residual, so fits that are exact in theory land near
+// 1e-8..1e-7; 1e-6 separates them from the percent-level fits of fewer lobes.
+inline constexpr double kExactFitResidual = 1e-6;
+
 // Eq. 18: best coefficients for a single lobe with fixed unit axis s, using
 // sum_m y_lm(s)^2 = (2l+1)/(4 pi). Writes `coeffs` (order values) and returns the
 // squared residual ||t~ - t||^2. Bands with mask[l] false get coefficient 0 (empty

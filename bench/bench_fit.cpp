@@ -1,0 +1,266 @@
+// fit-zh side by side (issue 6, "Speed"): transfer simulation, ZH fitting and shading.
+//
+//   BM_Transfer/rays:R          shadowed order-6 transfer of data/spot.obj on ONE thread
+//                               (compute_transfer, cosine-weighted rays); per_vertex = time
+//                               per vertex.
+//   BM_Fit/lobes:N/starts:S/always:A
+//                               fit_zh of random unit order-6 vectors (coefficients uniform
+//                               in [-1, 1], normalised), default options except lobes,
+//                               starts (S = 0, 4 = default, 16: the --starts effort knob) and
+//                               A = 1: --restart-above 0 (multi-start even when the residual
+//                               is already below the default 5% of |t|); the same 16
+//                               vectors for every case; per_vector = time per fit,
+//                               nrms = sqrt(sum residual^2 / sum |t|^2) over them.
+//   BM_Shade/<type>/<method>/lobes:N[/res:R]
+//                               one shaded point = N lobes against one order-6 light;
+//                               4096 points with random axes per iteration (random table
+//                               access: the cache-unfriendly case); per_shade = time per
+//                               point. Methods:
+//                                 table         ZhLightTable::shade (Eq. 25, bilinear cube
+//                                               map of resolution R)
+//                                 exact         zh_shade_exact (band sums of Eq. 24 at s)
+//                                 sh_dot        n^2 dot product of a full transfer vector
+//                                               with the light (transfer already rotated)
+//                                 sh_rotate_dot ShRotation set (automatic method, random
+//                                               rotation) + apply + n^2 dot: what a point
+//                                               costs when SH transfer is rotated instead
+//   BM_TableBuild/<type>/res:R  building the light table (per lighting change).
+//
+// Run (CPU times; the machine is shared, compare within one run):
+//   build/bench/bench_fit --benchmark_counters_tabular=true
+#include <cmath>
+#include <memory>
+#include <random>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <benchmark/benchmark.h>
+
+#include "fit/mesh.h"
+#include "fit/transfer.h"
+#include "fit/zh_fit.h"
+#include "shtool/euler.h"
+#include "shtool/rotation.h"
+#include "shtool/sh.h"
+#include "shtool/zh_shading.h"
+#include "tensors/rotation_helpers_gen.h"
+
+#ifndef SHTOOL_SOURCE_DIR
+#error "bench_fit needs SHTOOL_SOURCE_DIR (set in bench/CMakeLists.txt)"
+#endif
+
+namespace {
+
+constexpr int kOrder = 6;
+constexpr int kPoints = 4096;     // shaded points per iteration
+constexpr int kFitVectors = 16;   // vectors fitted per case (one per iteration)
+
+using benchmark::Counter;
+
+// Time per item: the rate counter inverted (seconds per item, printed with a unit).
+Counter per_item(double items) { return Counter(items, Counter::kIsRate | Counter::kInvert); }
+
+const shtool::fit::Mesh& spot() {
+  static const shtool::fit::Mesh mesh = shtool::fit::load_obj(SHTOOL_SOURCE_DIR "/data/spot.obj");
+  return mesh;
+}
+
+void BM_Transfer(benchmark::State& state) {
+  const shtool::fit::Mesh& mesh = spot();
+  shtool::fit::TransferOptions options;
+  options.order = kOrder;
+  options.rays = static_cast<int>(state.range(0));
+  options.mode = shtool::fit::TransferMode::shadowed;
+  options.threads = 1;
+  for (auto _ : state) {
+    std::vector<double> t = shtool::fit::compute_transfer(mesh, options);
+    benchmark::DoNotOptimize(t.data());
+  }
+  const double vertices = static_cast<double>(mesh.positions.size());
+  state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations() * vertices));
+  state.counters["per_vertex"] = per_item(state.iterations() * vertices);
+  state.counters["vertices"] = vertices;
+}
+
+std::vector<double> random_unit_vectors(int count, int order, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::vector<double> v(static_cast<std::size_t>(count) * shtool::sh_count(order));
+  for (int k = 0; k < count; ++k) {
+    double n = 0;
+    double* t = v.data() + static_cast<std::size_t>(k) * shtool::sh_count(order);
+    for (int i = 0; i < shtool::sh_count(order); ++i) {
+      t[i] = u(rng);
+      n += t[i] * t[i];
+    }
+    for (int i = 0; i < shtool::sh_count(order); ++i) t[i] /= std::sqrt(n);
+  }
+  return v;
+}
+
+void BM_Fit(benchmark::State& state) {
+  static const std::vector<double> vectors = random_unit_vectors(kFitVectors, kOrder, 2005);
+  shtool::fit::ZhFitOptions options;
+  options.order = kOrder;
+  options.lobes = static_cast<int>(state.range(0));
+  options.starts = static_cast<int>(state.range(1));
+  if (state.range(2)) options.restart_above = 0.0;
+  const std::size_t n2 = shtool::sh_count(kOrder);
+  double residual2 = 0, norm2 = 0;
+  std::size_t k = 0;
+  for (auto _ : state) {
+    const std::span<const double> t(vectors.data() + (k % kFitVectors) * n2, n2);
+    const shtool::fit::ZhFit fit = shtool::fit::fit_zh(t, options, k % kFitVectors);
+    residual2 += fit.residual * fit.residual;
+    norm2 += fit.norm * fit.norm;
+    ++k;
+  }
+  state.SetItemsProcessed(state.iterations());
+  state.counters["per_vector"] = per_item(static_cast<double>(state.iterations()));
+  state.counters["nrms"] = std::sqrt(residual2 / norm2);
+}
+
+// Shading data in type T: one light, kPoints points of N lobes, each point's full SH
+// transfer vector (the lobes summed, for sh_dot) and a rotation per point.
+template <class T>
+struct ShadeData {
+  std::vector<double> light_d;
+  std::vector<T> light;
+  std::vector<shtool::Vec3<T>> axes;  // kPoints * N
+  std::vector<T> coeffs;              // kPoints * N * order
+  std::vector<T> transfer;            // kPoints * order^2
+  std::vector<shtool::Mat3<T>> rotations;
+
+  explicit ShadeData(int lobes) {
+    std::mt19937_64 rng(42);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    std::normal_distribution<double> g;
+    light_d = random_unit_vectors(1, kOrder, 7);
+    light.assign(light_d.begin(), light_d.end());
+    for (int p = 0; p < kPoints; ++p) {
+      for (int i = 0; i < lobes; ++i) {
+        Eigen::Vector3d a(g(rng), g(rng), g(rng));
+        axes.push_back(a.normalized().cast<T>());
+        for (int l = 0; l < kOrder; ++l) coeffs.push_back(static_cast<T>(u(rng)));
+      }
+      for (int j = 0; j < shtool::sh_count(kOrder); ++j) transfer.push_back(static_cast<T>(u(rng)));
+      Eigen::Vector4d q(g(rng), g(rng), g(rng), g(rng));
+      q.normalize();
+      rotations.push_back(shtool::matrix_from_quaternion<T>(static_cast<T>(q[0]), static_cast<T>(q[1]),
+                                                            static_cast<T>(q[2]), static_cast<T>(q[3])));
+    }
+  }
+};
+
+enum class ShadeMethod { table, exact, sh_dot, sh_rotate_dot };
+
+template <class T>
+void BM_Shade(benchmark::State& state, ShadeMethod method) {
+  const int lobes = static_cast<int>(state.range(0));
+  const int resolution = state.range(1) > 0 ? static_cast<int>(state.range(1)) : shtool::kDefaultZhLightResolution;
+  const ShadeData<T> d(lobes);
+  const shtool::ZhLightTable<T> table(kOrder, d.light_d, resolution);
+  const std::size_t n2 = shtool::sh_count(kOrder);
+  static const auto helpers =
+      std::make_shared<const shtool::RotationHelpers>(shtool::compute_rotation_helpers(kOrder));
+  shtool::ShRotation<T> rotation(kOrder, helpers);
+  std::vector<T> rotated(n2);
+  const std::span<const shtool::Vec3<T>> axes(d.axes);
+  const std::span<const T> coeffs(d.coeffs);
+  const std::span<const T> light(d.light);
+  const std::size_t per_point = static_cast<std::size_t>(lobes) * kOrder;
+
+  for (auto _ : state) {
+    T sum = 0;
+    for (int p = 0; p < kPoints; ++p) {
+      switch (method) {
+        case ShadeMethod::table:
+          sum += table.shade(axes.subspan(p * lobes, lobes), coeffs.subspan(p * per_point, per_point));
+          break;
+        case ShadeMethod::exact:
+          sum += shtool::zh_shade_exact<T>(light, axes.subspan(p * lobes, lobes),
+                                           coeffs.subspan(p * per_point, per_point));
+          break;
+        case ShadeMethod::sh_dot: {
+          const T* t = d.transfer.data() + p * n2;
+          T r = 0;
+          for (std::size_t i = 0; i < n2; ++i) r += t[i] * d.light[i];
+          sum += r;
+          break;
+        }
+        case ShadeMethod::sh_rotate_dot: {
+          rotation.set(d.rotations[p]);
+          rotation.apply(std::span<const T>(d.transfer.data() + p * n2, n2), rotated);
+          T r = 0;
+          for (std::size_t i = 0; i < n2; ++i) r += rotated[i] * d.light[i];
+          sum += r;
+          break;
+        }
+      }
+    }
+    benchmark::DoNotOptimize(sum);
+  }
+  state.SetItemsProcessed(state.iterations() * kPoints);
+  state.counters["per_shade"] = per_item(static_cast<double>(state.iterations()) * kPoints);
+  if (method == ShadeMethod::table) state.counters["table_KB"] = table.bytes() / 1024.0;
+}
+
+template <class T>
+void BM_TableBuild(benchmark::State& state) {
+  const std::vector<double> light = random_unit_vectors(1, kOrder, 7);
+  const int resolution = static_cast<int>(state.range(0));
+  for (auto _ : state) {
+    shtool::ZhLightTable<T> table(kOrder, light, resolution);
+    benchmark::DoNotOptimize(table.nodes().data());
+  }
+  state.counters["table_KB"] = shtool::ZhLightTable<T>(kOrder, light, resolution).bytes() / 1024.0;
+}
+
+template <class T>
+void register_shading(const std::string& type) {
+  const std::vector<long> lobe_counts = {1, 2, 4, 6};
+  auto add = [&](const std::string& name, ShadeMethod method) {
+    return benchmark::RegisterBenchmark(("BM_Shade/" + type + "/" + name).c_str(),
+                                        [method](benchmark::State& s) { BM_Shade<T>(s, method); });
+  };
+  auto* table = add("table", ShadeMethod::table)->ArgNames({"lobes", "res"});
+  for (long n : lobe_counts) table->Args({n, shtool::kDefaultZhLightResolution});
+  // Resolution trade-off at N = 4: table size against cache (random axes).
+  for (long r : {8, 16, 64, 128}) table->Args({4, r});
+  auto* exact = add("exact", ShadeMethod::exact)->ArgNames({"lobes", "res"});
+  for (long n : lobe_counts) exact->Args({n, 0});
+  add("sh_dot", ShadeMethod::sh_dot)->ArgNames({"lobes", "res"})->Args({0, 0});
+  add("sh_rotate_dot", ShadeMethod::sh_rotate_dot)->ArgNames({"lobes", "res"})->Args({0, 0});
+  auto* build = benchmark::RegisterBenchmark(("BM_TableBuild/" + type).c_str(), BM_TableBuild<T>);
+  build->ArgName("res")->Unit(benchmark::kMicrosecond);
+  for (long r : {16, 32, 64}) build->Arg(r);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  benchmark::RegisterBenchmark("BM_Transfer", BM_Transfer)
+      ->ArgName("rays")
+      ->Arg(256)
+      ->Arg(1024)
+      ->Unit(benchmark::kMillisecond)
+      ->MinTime(1.0);
+  auto* fit = benchmark::RegisterBenchmark("BM_Fit", BM_Fit)
+                  ->ArgNames({"lobes", "starts", "always"})
+                  ->Unit(benchmark::kMillisecond)
+                  ->Iterations(kFitVectors);
+  fit->Args({1, 0, 0});  // a single lobe has no multi-start: one effort level
+  for (long n : {2, 4, 6})
+    for (long s : {0, 4, 16}) fit->Args({n, s, 0});
+  // Random vectors stay above 5% residual for N < 6, so `always` only changes N = 6.
+  for (long s : {4, 16}) fit->Args({6, s, 1});
+  register_shading<float>("float");
+  register_shading<double>("double");
+
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}
