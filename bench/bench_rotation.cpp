@@ -10,7 +10,7 @@
 //              (default tolerance) takes a Taylor branch. The Taylor methods are timed on
 //              the small tilts only (on large ones they are fast but wrong); the exact
 //              methods cost the same at every tilt and are timed on the large ones.
-//     vectors  1 | 3
+//     vectors  1 | 3 (three = an RGB light, one apply_rgb call)
 //   items_per_second = rotations per second; label of `auto` = the method it chose.
 //
 // Run: build/bench/bench_rotation --benchmark_filter='BM_Rotate/double/.*/1/'
@@ -19,6 +19,7 @@
 #include <cmath>
 #include <memory>
 #include <random>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -114,7 +115,11 @@ void BM_Rotate(benchmark::State& state, RotationMethod method, bool small_tilt, 
     k = (k + 1) % q.size();
     const shtool::Mat3<T> r = shtool::matrix_from_quaternion<T>(qk[0], qk[1], qk[2], qk[3]);
     ok &= rotation.set(r, method);
-    for (int v = 0; v < vectors; ++v) rotation.apply(in[v], out[v]);
+    if (vectors == 3)  // one pass for the three (ShRotation::apply_rgb)
+      rotation.apply_rgb({std::span<const T>(in[0]), std::span<const T>(in[1]), std::span<const T>(in[2])},
+                         {std::span<T>(out[0]), std::span<T>(out[1]), std::span<T>(out[2])});
+    else
+      for (int v = 0; v < vectors; ++v) rotation.apply(in[v], out[v]);
     benchmark::DoNotOptimize(out.data());
     benchmark::ClobberMemory();
   }

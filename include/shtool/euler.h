@@ -4,6 +4,8 @@
 // Rotating an SH function by R means g(w) = f(R^-1 w) (docs/conventions.md).
 #pragma once
 
+#include <cmath>
+
 #include <Eigen/Core>
 
 namespace shtool {
@@ -16,9 +18,16 @@ struct EulerZYZ {
   T alpha = 0, beta = 0, gamma = 0;  // beta in [0, pi]
 };
 
-// Rotation matrix of a unit quaternion (w, x, y, z). Precondition: |q| = 1.
+// Rotation matrix of a unit quaternion (w, x, y, z). Precondition: |q| = 1. Inline: it
+// is part of every per-object rotation and costs less than a call.
 template <class T>
-Mat3<T> matrix_from_quaternion(T w, T x, T y, T z);
+inline Mat3<T> matrix_from_quaternion(T w, T x, T y, T z) {
+  Mat3<T> r;
+  r << 1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y),  //
+      2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x),   //
+      2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y);
+  return r;
+}
 
 // Rz(alpha) Ry(beta) Rz(gamma).
 template <class T>
@@ -41,8 +50,38 @@ template <class T>
 struct ZyzCosSin {
   T ca = 1, sa = 0, cb = 1, sb = 0, cg = 1, sg = 0;
 };
+// Inline: it is on the path of every rotation.
 template <class T>
-ZyzCosSin<T> zyz_cos_sin_from_matrix(const Mat3<T>& r);
+inline ZyzCosSin<T> zyz_cos_sin_from_matrix(const Mat3<T>& r) {
+  // R = Rz(a) Ry(b) Rz(g):
+  //   (R02, R12) = sin b (cos a, sin a),  (-R20, R21) = sin b (cos g, sin g),  R22 = cos b
+  //   (R00 + R11, R10 - R01) = (1 + cos b) (cos(a + g), sin(a + g))
+  //   (R11 - R00, -(R10 + R01)) = (1 - cos b) (cos(a - g), sin(a - g))
+  ZyzCosSin<T> e;
+  e.cb = r(2, 2);
+  e.sb = std::sqrt(r(0, 2) * r(0, 2) + r(1, 2) * r(1, 2));  // not sqrt(1 - cb^2): exact near b = 0
+  if (e.sb > 0) {
+    e.ca = r(0, 2) / e.sb;
+    e.sa = r(1, 2) / e.sb;
+  }
+  if (e.cb >= 0) {
+    T cs = r(0, 0) + r(1, 1), ss = r(1, 0) - r(0, 1);
+    const T norm = std::sqrt(cs * cs + ss * ss);  // = 1 + cos b >= 1
+    cs /= norm;
+    ss /= norm;
+    e.cg = cs * e.ca + ss * e.sa;  // g = (a + g) - a
+    e.sg = ss * e.ca - cs * e.sa;
+  } else {
+    T cd = r(1, 1) - r(0, 0), sd = -(r(1, 0) + r(0, 1));
+    const T norm = std::sqrt(cd * cd + sd * sd);  // = 1 - cos b > 1
+    cd /= norm;
+    sd /= norm;
+    e.cg = e.ca * cd + e.sa * sd;  // g = a - (a - g)
+    e.sg = e.sa * cd - e.ca * sd;
+  }
+  return e;
+}
+
 
 // Largest entry of |R^T R - I| and the determinant, for validating user input.
 template <class T>

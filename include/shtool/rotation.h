@@ -14,10 +14,11 @@
 // The Taylor error bounds are exact operator norms for taylor1/taylor2 (the y-rotation
 // generator is normal with eigenvalues i m, |m| < N) and a rigorous bound for taylor1.5.
 //
-// An ShRotation owns its scratch buffers: apply() allocates nothing and is not safe to
-// call concurrently on one object (use one object per thread).
+// apply() allocates nothing and only reads the object, so several threads may apply one
+// rotation concurrently; set() must not run concurrently with anything else on it.
 #pragma once
 
+#include <array>
 #include <memory>
 #include <optional>
 #include <span>
@@ -28,6 +29,11 @@
 #include "shtool/rotation_helpers.h"
 
 namespace shtool {
+
+namespace detail {
+template <class T>
+struct KernelState;  // src/runtime/rotation_kernels.h
+}  // namespace detail
 
 enum class RotationMethod { automatic, reference, zxzxz, taylor1, taylor15, taylor2 };
 
@@ -68,25 +74,36 @@ class ShRotation {
   // out = M(R) in, both of N^2 coefficients; in and out must not overlap.
   void apply(std::span<const T> in, std::span<T> out) const;
 
+  // Three vectors (an RGB light) in one pass: out[k] = M(R) in[k], k = 0, 1, 2. The three
+  // run in the lanes of one SIMD vector, so this costs about one apply(), not three;
+  // the results are bit-identical to three apply() calls. No in[k] may overlap an out[j].
+  void apply_rgb(const std::array<std::span<const T>, 3>& in, const std::array<std::span<T>, 3>& out) const;
+
   // The dense per-band matrices of the reference method for the current rotation
   // (band l block of (2l+1)^2 values, row-major, starting at l(4l^2-1)/3).
   std::span<const T> reference_blocks() const { return dense_; }
 
  private:
-  void apply_zxzxz(const T* in, T* out) const;
-  template <int L>
-  void zxzxz_band(int l, const T* in, T* out) const;
-  void apply_taylor(const T* in, T* out) const;
-  template <int Order>
-  void apply_taylor_order(const T* in, T* out) const;
-  template <int L, int Order>
-  void taylor_band(int l, const T* in, T* out) const;
+  template <int V>
+  void apply_lanes(const T* const* in, T* const* out) const;
+  template <int V>
+  void apply_reference(const T* const* in, T* const* out) const;
+  template <int V>
+  void apply_large_bands(const T* const* in, T* const* out) const;
+  template <int V>
+  using Kernel = void (*)(const detail::KernelState<T>&, const T* const*, T* const*);
   void build_reference(const Mat3<T>& r);
   void update_taylor_limits(double tolerance);
 
   int order_;
   std::shared_ptr<const RotationHelpers> helpers_;
-  // Helpers converted to T once (float rotations must not convert in the hot loop).
+  // Generated fixed-order kernels (src/runtime/rotation_kernels.h) for the bands below
+  // detail::kKernelMaxOrder: zxzxz, taylor1, taylor1.5, taylor2; one and three vectors.
+  Kernel<1> kernel1_[4] = {};
+  Kernel<3> kernel3_[4] = {};
+  int kernel_order_ = 0;  // bands [0, kernel_order_) are covered by the kernels
+  // Helpers converted to T once (float rotations must not convert in the hot loop), for
+  // the bands above the kernels.
   // X90 and X90^T band by band in "strided rows": the non-zeros of a row of band l sit
   // on every other column (parity), so a row is (first column, count, values) and its
   // columns are contiguous once the input band is split into even and odd positions.
@@ -96,16 +113,17 @@ class ShRotation {
   // Taylor derivative entries with two zeros of padding at the end, so the band loop
   // needs no bounds tests (entries that would couple two bands are zero).
   std::vector<T> dy_sub_, ddy_diag_, ddy_off2_;
-  T r1_[9] = {};  // band 1 of M(R): R itself in (y, z, x) order with signs
+  T r_[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};  // R row-major (bands 1 and 2 are closed forms in R)
   double ddy_offdiag_norm_ = 0.0;
 
   RotationMethod resolved_ = RotationMethod::reference;
   T beta_ = 0;  // tilt, for the Taylor methods
   double cached_tolerance_ = -1.0;
-  double taylor_limit_sin_[3] = {0, 0, 0};  // sin of the largest tilt for taylor1, 1.5, 2
+  // Squared sine of the largest tilt for taylor1, 1.5, 2: set() compares it with
+  // R02^2 + R12^2 = sin^2 b, without a square root or an atan2.
+  double taylor_limit_sin2_[3] = {0, 0, 0};
   std::vector<T> cos_a_, sin_a_, cos_b_, sin_b_, cos_g_, sin_g_;  // cos(m angle), m < N
   std::vector<T> dense_;
-  mutable std::vector<T> tmp1_, tmp2_;  // one band each (2N - 1 values, plus padding)
 };
 
 // Many (rotation, vector) pairs: out[k] = M(rotations[k]) in[k], vectors of N^2

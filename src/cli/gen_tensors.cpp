@@ -1,5 +1,6 @@
 // shtool gen-tensors: writes the precomputed tables the runtime needs.
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <memory>
 #include <set>
@@ -15,6 +16,7 @@
 #include "shtool/table.h"
 #include "tensors/fourier_tables.h"
 #include "tensors/rotation_helpers_gen.h"
+#include "tensors/rotation_kernels_gen.h"
 #include "tensors/tripling.h"
 
 namespace shtool::cli {
@@ -42,8 +44,9 @@ void run_gen_tensors(const GenTensorsOptions& opt) {
     std::stringstream ss(opt.what);
     std::string item;
     while (std::getline(ss, item, ',')) {
-      if (item != "rotation" && item != "tripling" && item != "fourier")
-        throw UserError("--what: unknown table '" + item + "' (known: rotation, tripling, fourier)");
+      if (item != "rotation" && item != "tripling" && item != "fourier" && item != "rotation-kernels")
+        throw UserError("--what: unknown table '" + item +
+                        "' (known: rotation, tripling, fourier, rotation-kernels)");
       what.insert(item);
     }
   }
@@ -70,6 +73,21 @@ void run_gen_tensors(const GenTensorsOptions& opt) {
     std::cerr << "gen-tensors: wrote " << path.string() << " (order " << opt.order << ", X90 "
               << h.x90_val.size() << " non-zeros)\n";
   }
+  if (what.count("rotation-kernels")) {
+    // C++ source of the runtime's fixed-order kernels (src/runtime); independent of
+    // --order and --format. Written to a temporary file, then renamed.
+    const std::filesystem::path path = std::filesystem::path(opt.out) / kRotationKernelsFile;
+    const std::filesystem::path tmp = path.string() + ".tmp";
+    {
+      std::ofstream f(tmp, std::ios::binary);
+      f << rotation_kernels_source();
+      f.close();
+      if (!f) throw UserError("cannot write '" + tmp.string() + "'");
+    }
+    std::filesystem::rename(tmp, path, ec);
+    if (ec) throw UserError("cannot write '" + path.string() + "': " + ec.message());
+    std::cerr << "gen-tensors: wrote " << path.string() << " (rotation kernels)\n";
+  }
   if (what.count("tripling")) {
     const Table t = tripling_tensor_table(opt.order, generator);
     const std::filesystem::path path = std::filesystem::path(opt.out) / ("tripling-tensor" + ext);
@@ -95,7 +113,8 @@ void setup_gen_tensors(CLI::App& app) {
   sub->add_option("--out", opt->out, "output folder")->capture_default_str();
   sub->add_option("--what", opt->what,
                   "comma-separated tables: rotation (zxzxz/Taylor helpers), tripling (tripling "
-                  "tensor), fourier (SH<->Fourier tensors)")
+                  "tensor), fourier (SH<->Fourier tensors); rotation-kernels writes the C++ "
+                  "source of the runtime's fixed-order rotation kernels (for src/runtime)")
       ->capture_default_str();
   sub->add_option("--inputs", opt->inputs, "fourier: largest number of product inputs covered (2..8)")
       ->capture_default_str();

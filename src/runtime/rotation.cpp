@@ -6,12 +6,17 @@
 #include <stdexcept>
 
 #include "shtool/sh.h"
+#include "rotation_kernels.h"
 
 namespace shtool {
 namespace {
 
 // Offset of band l's dense block: sum_{k<l} (2k+1)^2.
 constexpr int block_offset(int l) { return l * (4 * l * l - 1) / 3; }
+
+// Method codes of the generated kernels (rotation_kernels.h), by index zxzxz, taylor1,
+// taylor1.5, taylor2.
+constexpr int kKernelMethod[4] = {0, 1, 15, 2};
 
 // Number of non-zeros in row j (m = j - l) of band l of X90, and of X90^T: X90 maps
 // the four classes of m (sign, parity) onto each other by square dense blocks of sizes
@@ -137,10 +142,15 @@ ShRotation<T>::ShRotation(int order, std::shared_ptr<const RotationHelpers> help
     helpers_.reset();
   }
   for (auto* v : {&cos_a_, &sin_a_, &cos_b_, &sin_b_, &cos_g_, &sin_g_}) v->assign(order, T(0));
-  // One band at a time, with two zeros of padding on each side for the Taylor loop.
-  tmp1_.assign(2 * order + 4, T(0));
-  tmp2_.assign(2 * order + 4, T(0));
   dense_.assign(block_offset(order), T(0));
+  if (helpers_) {
+    for (int k = 0; k < 4; ++k) {
+      kernel1_[k] = detail::rotation_kernel<T, 1>(kKernelMethod[k], order);
+      kernel3_[k] = detail::rotation_kernel<T, 3>(kKernelMethod[k], order);
+      if (!kernel1_[k] || !kernel3_[k]) throw std::logic_error("no rotation kernel for this order");
+    }
+    kernel_order_ = std::min(order, detail::kKernelMaxOrder);
+  }
 }
 
 template <class T>
@@ -161,67 +171,97 @@ void ShRotation<T>::update_taylor_limits(double tolerance) {
         (taylor_error_bound(methods[k], order_, mid, ddy_offdiag_norm_) <= tolerance ? lo : hi) = mid;
       }
     }
-    taylor_limit_sin_[k] = std::sin(lo);
+    taylor_limit_sin2_[k] = std::sin(lo) * std::sin(lo);
   }
 }
+
+namespace {
+
+// cos(m x), sin(m x) for m < n as the powers (c + i s)^m of the unit complex number
+// (paper 001, App. C uses the same multiple-angle products in sequence), built by the
+// product tree z^m = z^(m/2) z^(m - m/2): the rounding error still grows only linearly
+// in m, but the chain of dependent multiplications is log2(m) long, not m. No
+// trigonometric call. N > 0: a compile-time count (the loop unrolls into registers).
+template <int N, class T>
+inline void multiple_angles(int n_run, T c1, T s1, T* __restrict c, T* __restrict s) {
+  const int n = N > 0 ? N : n_run;
+  c[0] = 1;
+  s[0] = 0;
+  if (n > 1) {
+    c[1] = c1;
+    s[1] = s1;
+  }
+  for (int m = 2; m < n; ++m) {
+    const int h = m / 2, k = m - h;
+    c[m] = c[h] * c[k] - s[h] * s[k];
+    s[m] = s[h] * c[k] + c[h] * s[k];
+  }
+}
+
+// The cos / sin tables of the three zyz angles (beta too if with_beta).
+template <int N, class T>
+inline void zyz_tables(int n, const ZyzCosSin<T>& e, bool with_beta, T* ca, T* sa, T* cb, T* sb, T* cg,
+                       T* sg) {
+  multiple_angles<N>(n, e.ca, e.sa, ca, sa);
+  if (with_beta) multiple_angles<N>(n, e.cb, e.sb, cb, sb);
+  multiple_angles<N>(n, e.cg, e.sg, cg, sg);
+}
+
+}  // namespace
 
 template <class T>
 bool ShRotation<T>::set(const Mat3<T>& r, RotationMethod method, double tolerance) {
   if (method != RotationMethod::reference && !helpers_) return false;
-  const ZyzCosSin<T> e = zyz_cos_sin_from_matrix<T>(r);
   if (method == RotationMethod::automatic) {
     if (tolerance != cached_tolerance_) update_taylor_limits(tolerance);
     method = RotationMethod::zxzxz;
-    if (e.cb > 0) {
+    // sin^2 b = R02^2 + R12^2, cos b = R22: no square root needed for the choice.
+    const double sb2 = static_cast<double>(r(0, 2) * r(0, 2) + r(1, 2) * r(1, 2));
+    if (r(2, 2) > 0) {
       const RotationMethod taylor[3] = {RotationMethod::taylor1, RotationMethod::taylor15,
                                         RotationMethod::taylor2};
       for (int k = 0; k < 3; ++k)
-        if (static_cast<double>(e.sb) <= taylor_limit_sin_[k]) {
+        if (sb2 <= taylor_limit_sin2_[k]) {
           method = taylor[k];
           break;
         }
     }
   }
   resolved_ = method;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) r_[3 * i + j] = r(i, j);
   switch (method) {
-    case RotationMethod::zxzxz: {
-      // cos(m a), sin(m a) by the multiple-angle recurrence (paper 001, App. C) in its
-      // complex form (c + i s)^m, whose rounding error grows only linearly in m: no
-      // trigonometric call. The three recurrences are independent: one loop lets them
-      // overlap (each is a chain of dependent multiplications).
-      T* ca = cos_a_.data(); T* sa = sin_a_.data();
-      T* cb = cos_b_.data(); T* sb = sin_b_.data();
-      T* cg = cos_g_.data(); T* sg = sin_g_.data();
-      ca[0] = cb[0] = cg[0] = 1;
-      sa[0] = sb[0] = sg[0] = 0;
-      for (int m = 1; m < order_; ++m) {
-        ca[m] = ca[m - 1] * e.ca - sa[m - 1] * e.sa;
-        sa[m] = sa[m - 1] * e.ca + ca[m - 1] * e.sa;
-        cb[m] = cb[m - 1] * e.cb - sb[m - 1] * e.sb;
-        sb[m] = sb[m - 1] * e.cb + cb[m - 1] * e.sb;
-        cg[m] = cg[m - 1] * e.cg - sg[m - 1] * e.sg;
-        sg[m] = sg[m - 1] * e.cg + cg[m - 1] * e.sg;
-      }
-      // Band 1 of M(R) is R in (y, z, x) order, entries (m, n) with m + n odd negated
-      // (Condon-Shortley phase; see build_reference): exact and cheaper than zxzxz.
-      const int axis[3] = {1, 2, 0};
-      for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j) r1_[i * 3 + j] = ((i == 1) != (j == 1)) ? -r(axis[i], axis[j]) : r(axis[i], axis[j]);
-      break;
-    }
     case RotationMethod::reference: build_reference(r); break;
+    case RotationMethod::zxzxz:
+      // Bands 1 and 2 are closed forms in R (rotation_kernels.h): orders up to 3 need no
+      // Euler angles at all.
+      if (order_ <= 3) break;
+      [[fallthrough]];
     default: {
-      T* ca = cos_a_.data(); T* sa = sin_a_.data();
-      T* cg = cos_g_.data(); T* sg = sin_g_.data();
-      ca[0] = cg[0] = 1;
-      sa[0] = sg[0] = 0;
-      for (int m = 1; m < order_; ++m) {  // one loop: the two recurrences overlap
-        ca[m] = ca[m - 1] * e.ca - sa[m - 1] * e.sa;
-        sa[m] = sa[m - 1] * e.ca + ca[m - 1] * e.sa;
-        cg[m] = cg[m - 1] * e.cg - sg[m - 1] * e.sg;
-        sg[m] = sg[m - 1] * e.cg + cg[m - 1] * e.sg;
+      const bool zxzxz = method == RotationMethod::zxzxz;
+      const ZyzCosSin<T> e = zyz_cos_sin_from_matrix<T>(r);
+      T* t[6] = {cos_a_.data(), sin_a_.data(), cos_b_.data(), sin_b_.data(), cos_g_.data(), sin_g_.data()};
+      switch (order_) {
+#define SHTOOL_ZYZ_CASE(N) \
+  case N: zyz_tables<N>(N, e, zxzxz, t[0], t[1], t[2], t[3], t[4], t[5]); break;
+        SHTOOL_ZYZ_CASE(1) SHTOOL_ZYZ_CASE(2) SHTOOL_ZYZ_CASE(3) SHTOOL_ZYZ_CASE(4) SHTOOL_ZYZ_CASE(5)
+        SHTOOL_ZYZ_CASE(6) SHTOOL_ZYZ_CASE(7) SHTOOL_ZYZ_CASE(8) SHTOOL_ZYZ_CASE(9) SHTOOL_ZYZ_CASE(10)
+#undef SHTOOL_ZYZ_CASE
+        default: zyz_tables<0>(order_, e, zxzxz, t[0], t[1], t[2], t[3], t[4], t[5]); break;
       }
-      beta_ = std::atan2(e.sb, e.cb);
+      if (!zxzxz) {
+        // The tilt b itself: the Taylor methods are for small b, where b = asin(sin b) =
+        // s + s^3/6 + 3 s^5/40 + O(s^7) is exact to rounding without an atan2 call (the
+        // first omitted term, (5/112) s^7, is below half an ulp of b for s < 1e-3 in
+        // double, s < 0.03 in float); any other tilt by atan2.
+        constexpr T kSeries = sizeof(T) < sizeof(double) ? T(0.03) : T(1e-3);
+        if (e.cb > 0 && e.sb < kSeries) {
+          const T s2 = e.sb * e.sb;
+          beta_ = e.sb + e.sb * s2 * (T(1) / 6 + s2 * (T(3) / 40));
+        } else {
+          beta_ = std::atan2(e.sb, e.cb);
+        }
+      }
       break;
     }
   }
@@ -230,176 +270,183 @@ bool ShRotation<T>::set(const Mat3<T>& r, RotationMethod method, double toleranc
 
 namespace {
 
-// The band kernels below take the band as a template argument L for the small bands
-// (L > 0: every loop has a fixed trip count and is unrolled; at small orders loop
-// overheads would otherwise cost more than the arithmetic) and at run time otherwise
-// (L = 0: then l is used).
+// Bands above the generated kernels (l >= detail::kKernelMaxOrder), at run time. P is the
+// lane type: T for one vector, a 4-wide vector of T for three (rotation_kernels.h).
 
 // Band l of a z-rotation: (f_m, f_-m) turns by m a (paper 001, App. C). `in` is the band
 // in natural order (m = -l..l); the result goes to `out` split by parity of the
 // band-relative index j = m + l (even j at j / 2, odd j at l + 1 + j / 2), the order
 // in which the strided X90 rows read their input.
-template <int L, class T>
-inline void z_band_to_split(int l_run, const T* __restrict c, const T* __restrict s,
-                            const T* __restrict in, T* __restrict out) {
-  const int l = L > 0 ? L : l_run;
-  T* even = out;
-  T* odd = out + l + 1;
+template <class T, class P>
+inline void z_band_to_split(int l, const T* __restrict c, const T* __restrict s,
+                            const P* __restrict in, P* __restrict out) {
+  P* even = out;
+  P* odd = out + l + 1;
   ((l & 1) ? odd : even)[l >> 1] = in[l];
   for (int m = 1; m <= l; ++m) {
-    const T p = in[l + m], q = in[l - m];
-    T* half = ((l + m) & 1) ? odd : even;  // l + m and l - m have the same parity
+    const P p = in[l + m], q = in[l - m];
+    P* half = ((l + m) & 1) ? odd : even;  // l + m and l - m have the same parity
     half[(l + m) >> 1] = c[m] * p - s[m] * q;
     half[(l - m) >> 1] = s[m] * p + c[m] * q;
   }
 }
 
 // Band l of a z-rotation, natural order in and out.
-template <int L, class T>
-inline void z_band(int l_run, const T* __restrict c, const T* __restrict s, const T* __restrict in,
-                   T* __restrict out) {
-  const int l = L > 0 ? L : l_run;
+template <class T, class P>
+inline void z_band(int l, const T* __restrict c, const T* __restrict s, const P* __restrict in,
+                   P* __restrict out) {
   out[l] = in[l];
   for (int m = 1; m <= l; ++m) {
-    const T p = in[l + m], q = in[l - m];
+    const P p = in[l + m], q = in[l - m];
     out[l + m] = c[m] * p - s[m] * q;
     out[l - m] = s[m] * p + c[m] * q;
   }
 }
 
 // Rows of one band of X90 (or its transpose) in strided form, reading the split input.
-template <int L, class T>
-inline void strided_rows(int l_run, const int* __restrict start, const T* __restrict val,
-                         const T* __restrict in, T* __restrict out) {
-  const int l = L > 0 ? L : l_run;
+template <class T, class P>
+inline void strided_rows(int l, const int* __restrict start, const T* __restrict val,
+                         const P* __restrict in, P* __restrict out) {
   for (int r = 0; r <= 2 * l; ++r) {
-    const T* x = in + start[r];
+    const P* x = in + start[r];
     const int count = x90_row_length(l, r);
-    T sum = 0;
-    for (int k = 0; k < count; ++k) sum += val[k] * x[k];
+    P sum = val[0] * x[0];
+    for (int k = 1; k < count; ++k) sum += val[k] * x[k];
     val += count;
     out[r] = sum;
   }
 }
-
-}  // namespace
-
-// Band l of M(R) = Z(a) X90^T Z(b) X90 Z(g) (Ry(b) = Rx(-90) Rz(b) Rx(+90)), with the
-// intermediate vectors in two small buffers.
-template <class T>
-template <int L>
-void ShRotation<T>::zxzxz_band(int l, const T* in, T* out) const {
-  const int first = l * l;
-  T* __restrict t1 = tmp1_.data();
-  T* __restrict t2 = tmp2_.data();
-  z_band_to_split<L>(l, cos_g_.data(), sin_g_.data(), in + first, t1);
-  strided_rows<L>(l, x90_start_.data() + first, x90_val_.data() + x90_band_val_[l], t1, t2);
-  z_band_to_split<L>(l, cos_b_.data(), sin_b_.data(), t2, t1);
-  strided_rows<L>(l, x90t_start_.data() + first, x90t_val_.data() + x90t_band_val_[l], t1, t2);
-  z_band<L>(l, cos_a_.data(), sin_a_.data(), t2, out + first);
-}
-
-// Band 0 is invariant and band 1 is R itself; the others by zxzxz.
-template <class T>
-void ShRotation<T>::apply_zxzxz(const T* in, T* out) const {
-  out[0] = in[0];
-  if (order_ < 2) return;
-  for (int i = 0; i < 3; ++i)
-    out[1 + i] = r1_[i * 3] * in[1] + r1_[i * 3 + 1] * in[2] + r1_[i * 3 + 2] * in[3];
-  for (int l = 2; l < order_; ++l) {
-    switch (l) {
-      case 2: zxzxz_band<2>(l, in, out); break;
-      case 3: zxzxz_band<3>(l, in, out); break;
-      case 4: zxzxz_band<4>(l, in, out); break;
-      case 5: zxzxz_band<5>(l, in, out); break;
-      case 6: zxzxz_band<6>(l, in, out); break;
-      case 7: zxzxz_band<7>(l, in, out); break;
-      default: zxzxz_band<0>(l, in, out); break;
-    }
-  }
-}
-
-namespace {
 
 // The y part of the Taylor rotation for one band (paper 001, Sec. 3): u = t + b D1 t
 // (+ b^2/2 D2 t), D1 antisymmetric tridiagonal (only its sub-diagonal s1 is stored), D2
 // diagonal (sd) plus distance 2 (s2). Order 1, 15 (diagonal of D2 only) or 2. t has two
 // zeros of padding on each side and the derivative entries that would reach into a
 // neighbouring band are zero, so the loop needs no bounds tests.
-template <int L, int Order, class T>
-inline void taylor_y_band(int l_run, T b, T hb2, const T* __restrict s1, const T* __restrict sd,
-                          const T* __restrict s2, const T* __restrict t, T* __restrict u) {
-  const int size = 2 * (L > 0 ? L : l_run) + 1;
+template <int Order, class T, class P>
+inline void taylor_y_band(int l, T b, T hb2, const T* __restrict s1, const T* __restrict sd,
+                          const T* __restrict s2, const P* __restrict t, P* __restrict u) {
+  const int size = 2 * l + 1;
   for (int i = 0; i < size; ++i) {
-    T v = t[i] + b * (s1[i] * t[i - 1] - s1[i + 1] * t[i + 1]);
+    P v = t[i] + b * (s1[i] * t[i - 1] - s1[i + 1] * t[i + 1]);
     if constexpr (Order == 15) v += hb2 * (sd[i] * t[i]);
     if constexpr (Order == 2) v += hb2 * (sd[i] * t[i] + s2[i] * t[i - 2] + s2[i + 2] * t[i + 2]);
     u[i] = v;
   }
 }
 
+// Buffer of one band of lanes (2l + 1 <= 2 kMaxOrder - 1 values, plus padding).
+constexpr int kBandBuffer = 2 * kMaxOrder + 8;
+
 }  // namespace
 
-// Band l of Z(a) T(b) Z(g), T the truncated Taylor series of the y-rotation.
 template <class T>
-template <int L, int Order>
-void ShRotation<T>::taylor_band(int l, const T* in, T* out) const {
-  const int first = l * l, size = 2 * l + 1;
-  T* __restrict t = tmp1_.data() + 2;  // t[-2], t[-1] and t[size], t[size + 1] are 0
-  T* __restrict u = tmp2_.data();
-  z_band<L>(l, cos_g_.data(), sin_g_.data(), in + first, t);
-  t[size] = t[size + 1] = 0;
-  taylor_y_band<L, Order>(l, beta_, T(0.5) * beta_ * beta_, dy_sub_.data() + first,
-                          ddy_diag_.data() + first, ddy_off2_.data() + first, t, u);
-  z_band<L>(l, cos_a_.data(), sin_a_.data(), u, out + first);
+template <int V>
+void ShRotation<T>::apply_reference(const T* const* in, T* const* out) const {
+  if constexpr (V == 3 && 4 * sizeof(T) > detail::kNativeLaneBytes) {
+    for (int k = 0; k < 3; ++k) apply_reference<1>(in + k, out + k);  // see Lanes
+    return;
+  }
+  using P = detail::Pack<T, V>;
+  P x[kBandBuffer], y[kBandBuffer];
+  for (int l = 0; l < order_; ++l) {
+    const int size = 2 * l + 1, first = l * l;
+    const T* block = dense_.data() + block_offset(l);
+    detail::load_lanes<T>(in, first, size, x);
+    for (int r = 0; r < size; ++r) {
+      P sum = block[r * size] * x[0];
+      for (int c = 1; c < size; ++c) sum += block[r * size + c] * x[c];
+      y[r] = sum;
+    }
+    detail::store_lanes<T>(y, first, size, out);
+  }
 }
 
+// Bands kernel_order_..order_-1 (above the generated kernels), at run time.
 template <class T>
-template <int Order>
-void ShRotation<T>::apply_taylor_order(const T* in, T* out) const {
-  tmp1_[0] = tmp1_[1] = 0;  // left padding (the zxzxz path shares the buffer)
-  out[0] = in[0];
-  for (int l = 1; l < order_; ++l) {
-    switch (l) {  // small bands with fixed trip counts, as in apply_zxzxz
-      case 1: taylor_band<1, Order>(l, in, out); break;
-      case 2: taylor_band<2, Order>(l, in, out); break;
-      case 3: taylor_band<3, Order>(l, in, out); break;
-      case 4: taylor_band<4, Order>(l, in, out); break;
-      case 5: taylor_band<5, Order>(l, in, out); break;
-      default: taylor_band<0, Order>(l, in, out); break;
+template <int V>
+void ShRotation<T>::apply_large_bands(const T* const* in, T* const* out) const {
+  // Lanes of the table-driven bands: as in rotation_kernels.h, but three doubles without
+  // AVX run one vector at a time.
+  constexpr bool kSplit = V == 3 && 4 * sizeof(T) > detail::kNativeLaneBytes;
+  using P = detail::Pack<T, kSplit ? 1 : V>;
+  P x[kBandBuffer], y[kBandBuffer], t1[kBandBuffer], t2[kBandBuffer];
+  const T hb2 = T(0.5) * beta_ * beta_;
+  const int k = resolved_ == RotationMethod::zxzxz      ? 0
+                : resolved_ == RotationMethod::taylor1  ? 1
+                : resolved_ == RotationMethod::taylor15 ? 2
+                                                        : 3;
+  const detail::KernelState<T> state{r_,          cos_a_.data(), sin_a_.data(), cos_b_.data(), sin_b_.data(),
+                                     cos_g_.data(), sin_g_.data(), beta_,         hb2};
+  for (int l = kernel_order_; l < order_; ++l) {
+    // Generated kernel of this band, when there is one.
+    if (const auto kernel = detail::band_kernel<T, V>(kKernelMethod[k], l)) {
+      kernel(state, in, out);
+      continue;
+    }
+    const int first = l * l, size = 2 * l + 1;
+    for (int vec = 0; vec < (kSplit ? 3 : 1); ++vec) {
+    detail::load_lanes<T>(in + vec, first, size, x);
+    if (resolved_ == RotationMethod::zxzxz) {
+      // Band l of M(R) = Z(a) X90^T Z(b) X90 Z(g) (Ry(b) = Rx(-90) Rz(b) Rx(+90)).
+      z_band_to_split(l, cos_g_.data(), sin_g_.data(), x, t1);
+      strided_rows(l, x90_start_.data() + first, x90_val_.data() + x90_band_val_[l], t1, t2);
+      z_band_to_split(l, cos_b_.data(), sin_b_.data(), t2, t1);
+      strided_rows(l, x90t_start_.data() + first, x90t_val_.data() + x90t_band_val_[l], t1, t2);
+      z_band(l, cos_a_.data(), sin_a_.data(), t2, y);
+    } else {
+      // Band l of Z(a) T(b) Z(g), T the truncated Taylor series of the y-rotation.
+      P* t = t1 + 2;  // t[-2], t[-1] and t[size], t[size + 1] are 0
+      t1[0] = t1[1] = t[size] = t[size + 1] = P{};
+      z_band(l, cos_g_.data(), sin_g_.data(), x, t);
+      const T* s1 = dy_sub_.data() + first;
+      const T* sd = ddy_diag_.data() + first;
+      const T* s2 = ddy_off2_.data() + first;
+      if (resolved_ == RotationMethod::taylor1) taylor_y_band<1>(l, beta_, hb2, s1, sd, s2, t, t2);
+      else if (resolved_ == RotationMethod::taylor15) taylor_y_band<15>(l, beta_, hb2, s1, sd, s2, t, t2);
+      else taylor_y_band<2>(l, beta_, hb2, s1, sd, s2, t, t2);
+      z_band(l, cos_a_.data(), sin_a_.data(), t2, y);
+    }
+    detail::store_lanes<T>(y, first, size, out + vec);
     }
   }
 }
 
 template <class T>
-void ShRotation<T>::apply_taylor(const T* in, T* out) const {
-  switch (resolved_) {
-    case RotationMethod::taylor1: apply_taylor_order<1>(in, out); break;
-    case RotationMethod::taylor15: apply_taylor_order<15>(in, out); break;
-    default: apply_taylor_order<2>(in, out); break;
-  }
+template <int V>
+void ShRotation<T>::apply_lanes(const T* const* in, T* const* out) const {
+  if (resolved_ == RotationMethod::reference) return apply_reference<V>(in, out);
+  // Generated kernel for the bands below kernel_order_ (every band at orders <= 10).
+  const int k = resolved_ == RotationMethod::zxzxz      ? 0
+                : resolved_ == RotationMethod::taylor1  ? 1
+                : resolved_ == RotationMethod::taylor15 ? 2
+                                                        : 3;
+  const detail::KernelState<T> state{r_,
+                                     cos_a_.data(),
+                                     sin_a_.data(),
+                                     cos_b_.data(),
+                                     sin_b_.data(),
+                                     cos_g_.data(),
+                                     sin_g_.data(),
+                                     beta_,
+                                     T(0.5) * beta_ * beta_};
+  if constexpr (V == 1) kernel1_[k](state, in, out);
+  else kernel3_[k](state, in, out);
+  if (order_ > kernel_order_) apply_large_bands<V>(in, out);
 }
 
 template <class T>
 void ShRotation<T>::apply(std::span<const T> in, std::span<T> out) const {
-  const T* src = in.data();
-  T* dst = out.data();
-  switch (resolved_) {
-    case RotationMethod::reference: {
-      for (int l = 0; l < order_; ++l) {
-        const int size = 2 * l + 1, first = l * l;
-        const T* block = dense_.data() + block_offset(l);
-        for (int r = 0; r < size; ++r) {
-          T sum = 0;
-          for (int c = 0; c < size; ++c) sum += block[r * size + c] * src[first + c];
-          dst[first + r] = sum;
-        }
-      }
-      break;
-    }
-    case RotationMethod::zxzxz: apply_zxzxz(src, dst); break;
-    default: apply_taylor(src, dst); break;  // Taylor variants
-  }
+  const T* src[1] = {in.data()};
+  T* dst[1] = {out.data()};
+  apply_lanes<1>(src, dst);
+}
+
+template <class T>
+void ShRotation<T>::apply_rgb(const std::array<std::span<const T>, 3>& in,
+                              const std::array<std::span<T>, 3>& out) const {
+  const T* src[3] = {in[0].data(), in[1].data(), in[2].data()};
+  T* dst[3] = {out[0].data(), out[1].data(), out[2].data()};
+  apply_lanes<3>(src, dst);
 }
 
 // Ivanic-Ruedenberg recurrences (J. Phys. Chem. 1996, with the 1998 errata), written

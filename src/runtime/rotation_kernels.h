@@ -1,0 +1,187 @@
+// Internal to the runtime: fixed-order SH rotation kernels. The per-band arithmetic of
+// the zxzxz and Taylor rotations for small bands is generated, with X90, D1 and D2 as
+// literal constants and every loop unrolled, into rotation_kernels_generated.cpp by
+// `shtool gen-tensors --what rotation-kernels --out src/runtime` (src/tensors/
+// rotation_kernels_gen.cpp); tests/test_rotation_kernels.cpp regenerates it and compares
+// the bytes, so the committed source cannot drift from its generator. Bands 0, 1 and 2
+// are closed forms in R, written here.
+#pragma once
+
+#include <type_traits>
+
+namespace shtool::detail {
+
+// Largest band with a generated kernel; orders up to kKernelMaxBand + 1 run entirely in
+// one generated function.
+inline constexpr int kKernelMaxBand = 9;
+inline constexpr int kKernelMaxOrder = kKernelMaxBand + 1;
+// Bands kKernelMaxOrder..kBandKernelMaxBand have generated kernels of their own (called
+// one band at a time); larger bands run the table-driven code in rotation.cpp.
+inline constexpr int kBandKernelMaxBand = 19;
+
+// Lanes of one rotation: V = 1 is the plain type; V = 3 (an RGB light) runs the three
+// vectors in the lanes of one 4-wide vector (GCC/Clang vector extension; for float one
+// SSE register), so the three cost one pass over the code and its constants. Lane
+// arithmetic is the same IEEE arithmetic as the scalar code.
+template <class T, int V>
+struct Lanes;
+template <class T>
+struct Lanes<T, 1> {
+  using type = T;
+};
+#pragma GCC diagnostic push
+// Without AVX a 4-double lane vector is passed differently from an AVX build; these
+// functions are internal and inlined, so no ABI is involved.
+#pragma GCC diagnostic ignored "-Wpsabi"
+template <class T>
+struct Lanes<T, 3> {
+  typedef T type __attribute__((vector_size(4 * sizeof(T))));
+};
+template <class T, int V>
+using Pack = typename Lanes<T, V>::type;
+
+// A scalar in every lane.
+template <class P, class T>
+inline P splat(T v) {
+  if constexpr (std::is_same_v<P, T>) return v;
+  else return P{} + v;
+}
+
+// What one rotation needs at apply time (set() fills it): R row-major, cos(m x) and
+// sin(m x) of the zyz angles for m < order, and the Taylor tilt b and b^2 / 2.
+template <class T>
+struct KernelState {
+  const T* r;
+  const T *ca, *sa, *cb, *sb, *cg, *sg;
+  T beta, half_beta2;
+};
+
+// in[v] / out[v]: vector v of N^2 coefficients. Transforms the first
+// min(order, kKernelMaxOrder)^2 coefficients.
+template <class T, int V>
+using RotationKernel = void (*)(const KernelState<T>&, const T* const* in, T* const* out);
+
+// Kernel covering bands 0..min(order, kKernelMaxOrder) - 1. Method: 0 = zxzxz (bands 1
+// and 2 by the closed forms below), 1 / 15 / 2 = taylor1 / taylor1.5 / taylor2.
+template <class T, int V>
+RotationKernel<T, V> rotation_kernel(int method, int order);
+// Kernel of band l alone (kKernelMaxOrder <= l <= kBandKernelMaxBand, else null): same
+// methods, same arguments (it transforms coefficients l^2 .. l^2 + 2l).
+template <class T, int V>
+RotationKernel<T, V> band_kernel(int method, int l);
+
+// Lane vectors wider than 16 bytes (4 doubles) are native only with AVX; without it GCC
+// splits them badly, so three double vectors run as a pair (2 doubles, one SSE2 register)
+// plus a single one. Same operations per lane either way.
+#if defined(__AVX__)
+inline constexpr int kNativeLaneBytes = 32;
+#else
+inline constexpr int kNativeLaneBytes = 16;
+#endif
+template <class T>
+struct Lanes<T, 2> {
+  typedef T type __attribute__((vector_size(2 * sizeof(T))));
+};
+
+template <class T, class P>
+inline P load_lane_vector(const T* const* in, int i) {
+  if constexpr (std::is_same_v<P, T>) return in[0][i];
+  else if constexpr (sizeof(P) == 2 * sizeof(T)) return P{in[0][i], in[1][i]};
+  else return P{in[0][i], in[1][i], in[2][i], T(0)};
+}
+
+template <class T, class P>
+inline void store_lane_vector(const P& y, int i, T* const* out) {
+  if constexpr (std::is_same_v<P, T>) {
+    out[0][i] = y;
+  } else {
+    out[0][i] = y[0];
+    out[1][i] = y[1];
+    if constexpr (sizeof(P) == 4 * sizeof(T)) out[2][i] = y[2];
+  }
+}
+
+template <class T, class P>
+inline void load_lanes(const T* const* in, int first, int count, P* x) {
+  for (int i = 0; i < count; ++i) x[i] = load_lane_vector<T, P>(in, first + i);
+}
+
+template <class T, class P>
+inline void store_lanes(const P* y, int first, int count, T* const* out) {
+  for (int i = 0; i < count; ++i) store_lane_vector<T, P>(y[i], first + i, out);
+}
+
+// Runs bands(x, y) on coefficients first .. first + count - 1 of V vectors: one vector in
+// place on the caller's arrays, three gathered into lane vectors (see Lanes).
+template <class T, int V, int First, int Count, class F>
+inline void run_lanes(const T* const* in, T* const* out, F&& bands) {
+  if constexpr (V == 1) {
+    bands(in[0] + First, out[0] + First);
+  } else if constexpr (4 * sizeof(T) <= kNativeLaneBytes) {
+    Pack<T, 3> x[Count], y[Count];
+    load_lanes<T>(in, First, Count, x);
+    bands(static_cast<const Pack<T, 3>*>(x), y);
+    store_lanes<T>(y, First, Count, out);
+  } else {
+    Pack<T, 2> x[Count], y[Count];
+    load_lanes<T>(in, First, Count, x);
+    bands(static_cast<const Pack<T, 2>*>(x), y);
+    store_lanes<T>(y, First, Count, out);
+    bands(in[2] + First, out[2] + First);
+  }
+}
+
+// Band 1: with y_1^-1 = -c y, y_1^0 = c z, y_1^1 = -c x, band 1 of M(R) is R in
+// (y, z, x) order with the entries that mix z with x or y negated (docs/rotation.md).
+template <class T, class P>
+inline void band1_closed(const T* __restrict r, const P* __restrict x, P* __restrict y) {
+  // r[3 i + j] = R(i, j); our index 0, 1, 2 <-> axis y, z, x with signs -, +, -.
+  const P fy = -x[0], fz = x[1], fx = -x[2];  // the band as a plain vector (times c)
+  y[0] = -(r[3] * fx + r[4] * fy + r[5] * fz);
+  y[1] = r[6] * fx + r[7] * fy + r[8] * fz;
+  y[2] = -(r[0] * fx + r[1] * fy + r[2] * fz);
+}
+
+// Band 2 as a quadratic form: on the unit sphere y_2^m(w) = w^T Q_m w with Q_m traceless
+// symmetric, so f = sum f_m y_2^m is w^T A w with A = sum f_m Q_m, and
+// g(w) = f(R^T w) = w^T (R A R^T) w: rotating band 2 is rotating a 3x3 matrix, quadratic
+// in R's entries, with no Euler angles. With c = sqrt(15 / pi) / 2 and the functions
+// y_2^-2 = c xy, y_2^-1 = -c yz, y_2^0 = (c / sqrt3)(3 z^2 - 1) / 2, y_2^1 = -c xz,
+// y_2^2 = (c / 2)(x^2 - y^2), A scaled by 2 / c is
+//   [[f2 - k f0', f-2, -f1], [f-2, -f2 - k f0', -f-1], [-f1, -f-1, 2 k f0']], k = 1 / sqrt3,
+// and projecting B = R A R^T back (integral of (w^T Q w)(w^T B w) = (8 pi / 15) tr(QB)
+// for traceless Q, B) gives g-2 = B01, g-1 = -B12, g0 = (sqrt3 / 2) B22, g1 = -B02,
+// g2 = (B00 - B11) / 2.
+template <class T, class P>
+inline void band2_closed(const T* __restrict r, const P* __restrict x, P* __restrict y) {
+  const T k = T(0.57735026918962576451);        // 1 / sqrt3
+  const T h3 = T(0.86602540378443864676);       // sqrt3 / 2
+  const P kf0 = k * x[2];
+  const P a00 = x[4] - kf0, a11 = -x[4] - kf0, a22 = kf0 + kf0;
+  const P a01 = x[0], a12 = -x[1], a02 = -x[3];
+  // C = R A (A symmetric), then the needed entries of B = C R^T.
+  const P c00 = r[0] * a00 + r[1] * a01 + r[2] * a02;
+  const P c01 = r[0] * a01 + r[1] * a11 + r[2] * a12;
+  const P c02 = r[0] * a02 + r[1] * a12 + r[2] * a22;
+  const P c10 = r[3] * a00 + r[4] * a01 + r[5] * a02;
+  const P c11 = r[3] * a01 + r[4] * a11 + r[5] * a12;
+  const P c12 = r[3] * a02 + r[4] * a12 + r[5] * a22;
+  const P c20 = r[6] * a00 + r[7] * a01 + r[8] * a02;
+  const P c21 = r[6] * a01 + r[7] * a11 + r[8] * a12;
+  const P c22 = r[6] * a02 + r[7] * a12 + r[8] * a22;
+  const P b00 = c00 * r[0] + c01 * r[1] + c02 * r[2];
+  const P b11 = c10 * r[3] + c11 * r[4] + c12 * r[5];
+  const P b22 = c20 * r[6] + c21 * r[7] + c22 * r[8];
+  const P b01 = c00 * r[3] + c01 * r[4] + c02 * r[5];
+  const P b02 = c00 * r[6] + c01 * r[7] + c02 * r[8];
+  const P b12 = c10 * r[6] + c11 * r[7] + c12 * r[8];
+  y[0] = b01;
+  y[1] = -b12;
+  y[2] = h3 * b22;
+  y[3] = -b02;
+  y[4] = T(0.5) * (b00 - b11);
+}
+
+#pragma GCC diagnostic pop
+
+}  // namespace shtool::detail
