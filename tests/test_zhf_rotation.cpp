@@ -138,6 +138,39 @@ TEST(ZhfRotation, GenericDirectionsTableRoundTrip) {
   for (int n = 1; n <= order; ++n) check_against_reference(lobes, n, "generic");
 }
 
+// Per-band lobes (each band its own 2l+1 directions, N^2 in all, not nested): the
+// evaluators run the SH recurrence for all directions at once and must serve every band
+// from its own direction range, including directions that only higher bands use.
+TEST(ZhfRotation, PerBandDirectionsTableRoundTrip) {
+  const int order = 5;
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(0, 1);
+  std::vector<lobes::SearchResult> searches;
+  for (int l = 0; l < order; ++l) {
+    lobes::SearchResult res;
+    res.order = l + 1;
+    std::vector<Vec3<double>> dirs;
+    for (int d = 0; d < 2 * l + 1; ++d) {
+      res.theta.push_back(std::acos(1 - 2 * u(rng)));
+      res.phi.push_back(2 * M_PI * u(rng));
+      dirs.push_back(lobes::lobe_direction(res.theta.back(), res.phi.back()));
+    }
+    res.bands.push_back(lobes::analyze_band(l, dirs));
+    ASSERT_TRUE(res.bands.back().invertible) << "band " << l;
+    ASSERT_LT(res.bands.back().cond, 1e4) << "band " << l << ": pick another seed";
+    searches.push_back(std::move(res));
+  }
+  const auto path = std::filesystem::temp_directory_path() / "shtool_test_zhf_perband.shtb";
+  const Table t = lobes::make_lobes_table(searches, generator_record("test", {{"seed", 7}}), {});
+  ASSERT_TRUE(write_table(t, path).ok());
+  auto loaded = load_zhf_lobes(path);
+  std::filesystem::remove(path);
+  ASSERT_TRUE(loaded.ok()) << loaded.error().message;
+  auto lobes = std::make_shared<const ZhfLobes>(std::move(loaded).value());
+  ASSERT_EQ(lobes->directions.size(), static_cast<std::size_t>(order * order)) << "one direction set per band";
+  for (int n = 1; n <= order; ++n) check_against_reference(lobes, n, "per-band");
+}
+
 TEST(ZhfRotation, FloatAgreesWithinConditioning) {
   const auto path = default_zhf_lobes_path(6);
   if (path.empty()) GTEST_SKIP() << "no shipped shared table";

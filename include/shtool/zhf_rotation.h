@@ -51,6 +51,25 @@ TableResult<ZhfLobes> load_zhf_lobes(const std::filesystem::path& path, int orde
 // Empty if none is found.
 std::filesystem::path default_zhf_lobes_path(int order);
 
+namespace detail {
+
+// How the evaluators walk the lobe directions. The SH recurrence runs for all directions
+// at once, structure-of-arrays (the direction loop is the innermost one, so it vectorises):
+// band l's recurrence is needed for the directions that some band >= l uses, a range that
+// only shrinks with l; band l's own values are those of its 2l+1 directions
+// band_offset[l] .. band_offset[l] + 2l (shared lobes: directions 0..2l of 2N-1).
+struct ZhfLobePlan {
+  int order = 0;
+  int directions = 0;
+  std::vector<int> band_offset;           // per band: its first direction
+  std::vector<int> active_lo, active_hi;  // per band l: directions [lo, hi) needing band l
+  std::vector<int> block_offset;          // band l's (2l+1)^2 block in a band-major buffer
+  ZhfLobePlan() = default;
+  ZhfLobePlan(const ZhfLobes& lobes, int order);
+};
+
+}  // namespace detail
+
 // Standard ZHF rotation (Eq. 10).
 template <class T>
 class ZhfRotation {
@@ -66,10 +85,15 @@ class ZhfRotation {
  private:
   int order_;
   std::shared_ptr<const ZhfLobes> lobes_;
-  std::vector<T> val_;                 // A^ values converted to T once
-  std::vector<T> y_;                   // y_i(R w_d): direction-major, eval_order^2 values each
-  std::vector<std::size_t> y_offset_;  // start of direction d's values in y_
-  mutable std::vector<T> z_;           // A^_l^T f_l, one band (2N-1 values)
+  detail::ZhfLobePlan plan_;
+  std::vector<Vec3<T>> dirs_;  // lobe directions converted to T once
+  // A^_l^T by band, column-major ("CSC"): for lobe d of band l, the m with A^_l[m][d] != 0
+  // (entries csc_start_[l*l + d] .. csc_start_[l*l + d + 1] - 1), so z = A^T f is a gather.
+  std::vector<int> csc_start_, csc_row_;
+  std::vector<T> csc_val_;
+  std::vector<T> y_;           // Y_l(R)^T [m][d], band-major: band l at plan_.block_offset[l]
+  std::vector<T> walk_;        // recurrence scratch (5 N D + 3 D values)
+  mutable std::vector<T> z_;   // A^_l^T f_l, one band (2N-1 values)
 };
 
 // Signal-tailored rotation (Eq. 11) of one fixed signal.
@@ -90,8 +114,11 @@ class ZhfTailoredSignal {
  private:
   int order_;
   std::shared_ptr<const ZhfLobes> lobes_;
+  detail::ZhfLobePlan plan_;
+  std::vector<Vec3<T>> dirs_;
   std::vector<T> f_;
-  mutable std::vector<T> samples_, ybuf_;
+  std::vector<T> val_;  // A^ values converted to T once
+  mutable std::vector<T> samples_, walk_;
 };
 
 }  // namespace shtool
