@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstring>
 #include <cmath>
 #include <limits>
 #include <numeric>
@@ -11,6 +12,9 @@
 #include <sstream>
 #include <stdexcept>
 #include <thread>
+#include <condition_variable>
+#include <mutex>
+#include <unordered_map>
 #include <utility>
 
 #include <Eigen/LU>
@@ -93,6 +97,40 @@ Eigen::MatrixXd zhf_y_matrix(int l, std::span<const Vec3<double>> dirs) {
   return y;
 }
 
+ZeroCount count_zeros(const double* a, std::size_t count, std::vector<double>& scratch) {
+  // One pass for the common case (the plain count already has a clear gap), sorting the
+  // sub-threshold entries only when it does not.
+  ZeroCount z;
+  int plain = 0;
+  double below = 0, above = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < count; ++i) {
+    const double v = std::abs(a[i]);
+    if (v < kZeroThreshold) {
+      ++plain;
+      below = std::max(below, v);
+    } else {
+      above = std::min(above, v);
+    }
+  }
+  if (plain == 0 || below == 0 || above >= kClearGap * below) {
+    z.zeros = plain;
+    z.largest_zero = below;
+    z.smallest_nonzero = above;
+    return z;
+  }
+  scratch.clear();
+  for (std::size_t i = 0; i < count; ++i)
+    if (std::abs(a[i]) < kZeroThreshold) scratch.push_back(std::abs(a[i]));
+  std::sort(scratch.begin(), scratch.end());
+  std::size_t k = scratch.size();
+  double next = above;
+  while (k > 0 && scratch[k - 1] != 0 && next < kClearGap * scratch[k - 1]) next = scratch[--k];
+  z.zeros = static_cast<int>(k);
+  z.largest_zero = k ? scratch[k - 1] : 0;
+  z.smallest_nonzero = next;
+  return z;
+}
+
 BandReport analyze_band(int l, std::span<const Vec3<double>> dirs) {
   BandReport r;
   r.l = l;
@@ -104,18 +142,19 @@ BandReport analyze_band(int l, std::span<const Vec3<double>> dirs) {
   r.invertible = sv(n - 1) > kSingularRcond * sv(0);
   if (!r.invertible) return r;
   r.a_hat = y.partialPivLu().inverse();
+  std::vector<double> scratch;
+  const ZeroCount z = count_zeros(r.a_hat.data(), static_cast<std::size_t>(r.a_hat.size()), scratch);
+  r.zeros = z.zeros;
+  r.largest_zero = z.largest_zero;
+  r.smallest_nonzero = z.smallest_nonzero;
   r.lobes_per_function.assign(n, 0);
-  r.largest_zero = 0;
-  r.smallest_nonzero = std::numeric_limits<double>::infinity();
   for (int i = 0; i < n; ++i)
     for (int j = 0; j < n; ++j) {
       const double a = std::abs(r.a_hat(i, j));
-      if (a < kZeroThreshold) {
-        ++r.zeros;
-        r.largest_zero = std::max(r.largest_zero, a);
+      // The counted entries are exactly those <= largest_zero (the gap is strict).
+      if (z.zeros > 0 && a <= z.largest_zero) {
         r.a_hat(i, j) = 0.0;  // structural zero: stored as exactly 0 so consumers can skip it
       } else {
-        r.smallest_nonzero = std::min(r.smallest_nonzero, a);
         ++r.lobes_per_function[i];
       }
     }
@@ -192,25 +231,85 @@ constexpr std::int64_t kInvalid = -1;
 // local search starts its rank-1 updates from them).
 struct Workspace {
   std::vector<Eigen::MatrixXd> y, a;
-  std::vector<Eigen::PartialPivLU<Eigen::MatrixXd>> lu;
+  Eigen::MatrixXd lu;           // small_inverse
+  std::vector<int> perm;        // small_inverse
+  std::vector<double> scratch;  // count_zeros
   explicit Workspace(const Problem& p) {
     for (int k : p.bands) {
       const int n = 2 * k + 1;
       y.emplace_back(n, n);
       a.emplace_back(n, n);
-      lu.emplace_back(n);
     }
   }
 };
 
+// inv = y^-1 by LU with partial pivoting, written out for the small sizes of the search
+// (n = 2l+1 <= 37): Eigen's dynamic-size LU and inverse go through its blocked GEMM / TRSM
+// kernels, whose packing and dispatch cost more than the arithmetic at these sizes (the
+// fitness profile was 60 % Eigen LU + inverse). Plain loops over contiguous columns are
+// about 3x faster. Returns false on an exactly zero pivot (singular, e.g. two equal lobes).
+bool small_inverse(const Eigen::MatrixXd& y, Eigen::MatrixXd& inv, Eigen::MatrixXd& lu,
+                   std::vector<int>& perm) {
+  const int n = static_cast<int>(y.rows());
+  lu = y;
+  perm.resize(n);
+  std::iota(perm.begin(), perm.end(), 0);
+  double* m = lu.data();  // column-major: m[i + j * n] = lu(i, j)
+  for (int k = 0; k < n; ++k) {
+    int piv = k;
+    double best = std::abs(m[k + k * n]);
+    for (int i = k + 1; i < n; ++i)
+      if (std::abs(m[i + k * n]) > best) best = std::abs(m[(piv = i) + k * n]);
+    if (best == 0) return false;
+    if (piv != k) {
+      for (int j = 0; j < n; ++j) std::swap(m[k + j * n], m[piv + j * n]);
+      std::swap(perm[k], perm[piv]);
+    }
+    const double inv_p = 1.0 / m[k + k * n];
+    double* ck = m + k * n;
+    for (int i = k + 1; i < n; ++i) ck[i] *= inv_p;
+    for (int j = k + 1; j < n; ++j) {
+      double* cj = m + j * n;
+      const double f = cj[k];
+      if (f == 0) continue;
+      for (int i = k + 1; i < n; ++i) cj[i] -= ck[i] * f;
+    }
+  }
+  // Column c of the inverse solves L U x = P e_c: x starts as e_r with perm[r] = c.
+  inv.setZero(n, n);
+  for (int r = 0; r < n; ++r) inv(r, perm[r]) = 1.0;
+  for (int c = 0; c < n; ++c) {
+    double* x = inv.data() + static_cast<std::size_t>(c) * n;
+    for (int k = 0; k < n; ++k) {  // forward, unit lower L
+      const double xk = x[k];
+      if (xk == 0) continue;
+      const double* ck = m + k * n;
+      for (int i = k + 1; i < n; ++i) x[i] -= ck[i] * xk;
+    }
+    for (int k = n - 1; k >= 0; --k) {  // backward, U
+      const double* ck = m + k * n;
+      const double xk = x[k] / ck[k];
+      x[k] = xk;
+      if (xk == 0) continue;
+      for (int i = 0; i < k; ++i) x[i] -= ck[i] * xk;
+    }
+  }
+  return true;
+}
+
 bool conditioned(const Eigen::MatrixXd& y, const Eigen::MatrixXd& a, double max_cond) {
   const int n = static_cast<int>(y.rows());
   if (!a.allFinite()) return false;
-  // cond_1 / n <= cond_2 <= cond_F: decide cheaply when possible, SVD otherwise.
-  const double c1 = y.cwiseAbs().colwise().sum().maxCoeff() * a.cwiseAbs().colwise().sum().maxCoeff();
-  if (!(c1 <= n * max_cond)) return false;
-  const double cf = y.norm() * a.norm();
-  if (cf <= max_cond) return true;
+  // Cheap bounds on cond_2 = |Y|_2 |A|_2 decide most cases; the SVD decides the rest.
+  // Lower: |M|_1 / sqrt(n) <= |M|_2, |M|_F / sqrt(n) <= |M|_2. Upper: |M|_2 <= |M|_F and
+  // |M|_2 <= sqrt(|M|_1 |M|_inf).
+  const double y1 = y.cwiseAbs().colwise().sum().maxCoeff(), a1 = a.cwiseAbs().colwise().sum().maxCoeff();
+  if (!(y1 * a1 <= n * max_cond)) return false;
+  const double yf = y.norm(), af = a.norm();
+  if (!(yf * af <= n * max_cond)) return false;
+  if (yf * af <= max_cond) return true;
+  const double yi = y.cwiseAbs().rowwise().sum().maxCoeff(), ai = a.cwiseAbs().rowwise().sum().maxCoeff();
+  if (std::min(yf, std::sqrt(y1 * yi)) * std::min(af, std::sqrt(a1 * ai)) <= max_cond) return true;
   const Eigen::VectorXd sv = Eigen::JacobiSVD<Eigen::MatrixXd>(y).singularValues();
   return sv(n - 1) > kSingularRcond * sv(0) && sv(0) <= max_cond * sv(n - 1);
 }
@@ -225,11 +324,13 @@ std::int64_t evaluate(const Problem& p, const int* genes, Workspace& ws) {
       const double* row = cached_row(p, b, genes[d], genes[p.nd + d]);
       for (int j = 0; j < n; ++j) y(d, j) = row[j];
     }
-    ws.lu[b].compute(y);
-    ws.a[b] = ws.lu[b].inverse();
+    if (!small_inverse(y, ws.a[b], ws.lu, ws.perm)) return kInvalid;
     if (!conditioned(y, ws.a[b], p.max_cond)) return kInvalid;
     if (!p.counted[b]) continue;
-    za += (ws.a[b].array().abs() < kZeroThreshold).count();
+    if (p.bands[b] >= kGapFitnessFromBand)
+      za += count_zeros(ws.a[b].data(), static_cast<std::size_t>(ws.a[b].size()), ws.scratch).zeros;
+    else
+      za += (ws.a[b].array().abs() < kZeroThreshold).count();
     if (p.secondary) zy += (y.array().abs() < kZeroThreshold).count();
   }
   return za * p.weight + zy;
@@ -239,22 +340,98 @@ int zeros_of(const Problem& p, std::int64_t score) {
   return score < 0 ? 0 : static_cast<int>(score / p.weight);
 }
 
-// Runs f(i) for i in [0, count) on `threads` threads with a fixed contiguous partition;
-// f writes its result by index, so the outcome does not depend on the thread count.
-template <class F>
-void parallel_for(int count, int threads, F&& f) {
-  threads = std::max(1, std::min(threads, count));
-  if (threads == 1) {
-    f(0, 0, count);
-    return;
+// Runs f(t, lo, hi) over [0, count) on up to `threads` threads with a fixed contiguous
+// partition; f writes its results by index, so the outcome does not depend on the thread
+// count. The workers persist for the whole search: a GA generation has three parallel
+// steps and a local-search sweep one per direction, and spawning threads for each cost
+// ~6 % of the run in system time.
+class ThreadPool {
+ public:
+  explicit ThreadPool(int threads) : threads_(std::max(1, threads)) {
+    for (int t = 1; t < threads_; ++t) workers_.emplace_back([this, t] { work(t); });
   }
-  std::vector<std::thread> pool;
-  for (int t = 0; t < threads; ++t) {
-    const int lo = static_cast<int>(static_cast<long long>(count) * t / threads);
-    const int hi = static_cast<int>(static_cast<long long>(count) * (t + 1) / threads);
-    pool.emplace_back([&f, t, lo, hi] { f(t, lo, hi); });
+  ~ThreadPool() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stop_ = true;
+      ++round_;
+    }
+    wake_.notify_all();
+    for (auto& w : workers_) w.join();
   }
-  for (auto& th : pool) th.join();
+  ThreadPool(const ThreadPool&) = delete;
+  ThreadPool& operator=(const ThreadPool&) = delete;
+
+  template <class F>
+  void run(int count, F&& f) {
+    const int active = std::max(1, std::min(threads_, count));
+    if (active == 1) {
+      f(0, 0, count);
+      return;
+    }
+    const std::function<void(int, int, int)> job = [&f](int t, int lo, int hi) { f(t, lo, hi); };
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      job_ = &job;
+      count_ = count;
+      active_ = active;
+      pending_ = active - 1;
+      ++round_;
+    }
+    wake_.notify_all();
+    job(0, 0, static_cast<int>(static_cast<long long>(count) / active));
+    std::unique_lock<std::mutex> lock(mutex_);
+    done_.wait(lock, [this] { return pending_ == 0; });
+    job_ = nullptr;
+  }
+
+ private:
+  void work(int t) {
+    long long seen = 0;
+    for (;;) {
+      const std::function<void(int, int, int)>* job = nullptr;
+      int count = 0, active = 0;
+      {
+        std::unique_lock<std::mutex> lock(mutex_);
+        wake_.wait(lock, [&] { return round_ != seen; });
+        seen = round_;
+        if (stop_) return;
+        if (t >= active_) continue;
+        job = job_;
+        count = count_;
+        active = active_;
+      }
+      (*job)(t, static_cast<int>(static_cast<long long>(count) * t / active),
+             static_cast<int>(static_cast<long long>(count) * (t + 1) / active));
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        --pending_;
+      }
+      done_.notify_one();
+    }
+  }
+
+  int threads_;
+  std::vector<std::thread> workers_;
+  std::mutex mutex_;
+  std::condition_variable wake_, done_;
+  const std::function<void(int, int, int)>* job_ = nullptr;
+  int count_ = 0, active_ = 0, pending_ = 0;
+  long long round_ = 0;
+  bool stop_ = false;
+};
+
+// Cache key of an individual: its genes as bytes, with the azimuth of a pole lobe set to 0
+// (lobe_direction ignores it there, so the rows of Y are bitwise the same).
+std::string canonical_key(const Problem& p, const int* genes) {
+  std::string key(static_cast<std::size_t>(p.genes()) * sizeof(int), '\0');
+  char* out = key.data();
+  for (int g = 0; g < p.genes(); ++g) {
+    int x = genes[g];
+    if (g >= p.nd && (genes[g - p.nd] == p.north || genes[g - p.nd] == p.south)) x = 0;
+    std::memcpy(out + static_cast<std::size_t>(g) * sizeof(int), &x, sizeof(int));
+  }
+  return key;
 }
 
 struct RunResult {
@@ -276,7 +453,7 @@ std::string percent(double x) {
 // non-elite children, per-gene uniform mutation for the rest, `elitism` best carried over,
 // stop after `stall` generations without improvement. Parents by binary tournament.
 RunResult run_ga(const Problem& p, const SearchOptions& opt, int restart,
-                 std::vector<Workspace>& ws, const std::string& label) {
+                 std::vector<Workspace>& ws, ThreadPool& pool, const std::string& label) {
   const int v = p.genes();
   const int pop = opt.population;
   const double rate = opt.mutation > 0 ? opt.mutation : 1.0 / v;
@@ -297,11 +474,43 @@ RunResult run_ga(const Problem& p, const SearchOptions& opt, int restart,
   std::vector<int> order(pop);
   RunResult res;
   int stall = 0;
+  // Fitness is a pure function of the genes, and a converging population is full of repeats
+  // (a mutation child is an unchanged parent with probability (1 - 1/v)^v ~ 0.37; crossover
+  // of two equal parents is a copy): scores are cached per run by their canonical genes.
+  // `evaluations` still counts fitness requests, so table metadata is unchanged.
+  std::unordered_map<std::string, std::int64_t> cache;
+  std::unordered_map<std::string, int> first_in_gen;
+  std::vector<std::string> keys(pop);
+  std::vector<int> todo, copy_of(pop);
+  constexpr std::size_t kMaxCached = 1 << 21;  // bounds memory; clearing changes no result
   for (long long gen = 0;; ++gen) {
-    parallel_for(pop, opt.threads, [&](int t, int lo, int hi) {
+    todo.clear();
+    first_in_gen.clear();
+    pool.run(pop, [&](int, int lo, int hi) {
       for (int i = lo; i < hi; ++i)
-        if (!known[i]) score[i] = evaluate(p, &cur[static_cast<std::size_t>(i) * v], ws[t]);
+        if (!known[i]) keys[i] = canonical_key(p, &cur[static_cast<std::size_t>(i) * v]);
     });
+    for (int i = 0; i < pop; ++i) {
+      copy_of[i] = -1;
+      if (known[i]) continue;
+      if (const auto it = cache.find(keys[i]); it != cache.end()) {
+        score[i] = it->second;
+        continue;
+      }
+      const auto [it, fresh] = first_in_gen.emplace(keys[i], i);
+      if (fresh) todo.push_back(i);
+      else copy_of[i] = it->second;
+    }
+    pool.run(static_cast<int>(todo.size()), [&](int t, int lo, int hi) {
+      for (int k = lo; k < hi; ++k) {
+        const int i = todo[k];
+        score[i] = evaluate(p, &cur[static_cast<std::size_t>(i) * v], ws[t]);
+      }
+    });
+    if (cache.size() > kMaxCached) cache.clear();
+    for (int i : todo) cache.emplace(std::move(keys[i]), score[i]);
+    for (int i = 0; i < pop; ++i)
+      if (copy_of[i] >= 0) score[i] = score[copy_of[i]];
     for (int i = 0; i < pop; ++i) res.evaluations += !known[i];
     std::iota(order.begin(), order.end(), 0);
     std::sort(order.begin(), order.end(), [&](int a, int b) {
@@ -330,7 +539,9 @@ RunResult run_ga(const Problem& p, const SearchOptions& opt, int restart,
       const int a = pick(rng), b = pick(rng);
       return score[a] != score[b] ? (score[a] > score[b] ? a : b) : std::min(a, b);
     };
-    for (int i = 0; i < pop; ++i) {
+    // Each child draws from its own stream, so making them in parallel changes nothing.
+    pool.run(pop, [&](int, int lo, int hi) {
+    for (int i = lo; i < hi; ++i) {
       int* child = &next[static_cast<std::size_t>(i) * v];
       known[i] = 0;
       if (i < elite) {
@@ -351,6 +562,7 @@ RunResult run_ga(const Problem& p, const SearchOptions& opt, int restart,
         for (int g = 0; g < v; ++g) child[g] = u01(rng) < rate ? random_gene(rng, g) : a[g];
       }
     }
+    });
     std::swap(cur, next);
     std::swap(score, next_score);
   }
@@ -362,9 +574,8 @@ RunResult run_ga(const Problem& p, const SearchOptions& opt, int restart,
 // then verify the best screened moves with a full evaluation (conditioning included) and
 // take the first that really improves. Sweeps until no direction improves.
 void local_search(const Problem& p, const SearchOptions& opt, RunResult& run,
-                  std::vector<Workspace>& ws, const std::string& label) {
+                  std::vector<Workspace>& ws, ThreadPool& pool, const std::string& label) {
   if (run.score < 0) return;
-  const int threads = std::max(1, opt.threads);
   // Moves: all (ti, pi) pairs, with one phi only at the poles (the direction ignores it).
   std::vector<std::pair<int, int>> moves;
   for (int ti = 0; ti < p.nt; ++ti)
@@ -374,6 +585,8 @@ void local_search(const Problem& p, const SearchOptions& opt, RunResult& run,
   std::vector<std::int64_t> screen(nm);
   std::vector<int> rank(nm);
   Workspace base(p);
+  std::vector<std::int64_t> fixed_za(p.bands.size()), fixed_zy(p.bands.size());
+  std::vector<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> a_rowmajor(p.bands.size());
   for (int sweep = 0;; ++sweep) {
     bool improved = false;
     for (int d = 0; d < p.nd; ++d) {
@@ -381,7 +594,15 @@ void local_search(const Problem& p, const SearchOptions& opt, RunResult& run,
       ++run.evaluations;
       run.score = cur;
       const int cti = run.genes[d], cpi = run.genes[p.nd + d];
-      parallel_for(nm, threads, [&](int, int lo, int hi) {
+      // Per band, what does not depend on the move: the zeros of Y_k, and those of A^_k
+      // for a band that does not use direction d.
+      for (std::size_t b = 0; b < p.bands.size(); ++b) {
+        const int n = 2 * p.bands[b] + 1;
+        fixed_zy[b] = (base.y[b].array().abs() < kZeroThreshold).count();
+        fixed_za[b] = d >= n ? (base.a[b].array().abs() < kZeroThreshold).count() : 0;
+        a_rowmajor[b] = base.a[b];
+      }
+      pool.run(nm, [&](int, int lo, int hi) {
         std::vector<double> r, s;
         for (int mi = lo; mi < hi; ++mi) {
           const auto [ti, pi] = moves[mi];
@@ -398,19 +619,22 @@ void local_search(const Problem& p, const SearchOptions& opt, RunResult& run,
             const Eigen::MatrixXd& a = base.a[b];
             if (d >= n) {  // this band does not use direction d
               if (p.counted[b]) {
-                za += (a.array().abs() < kZeroThreshold).count();
-                if (p.secondary) zy += (y.array().abs() < kZeroThreshold).count();
+                za += fixed_za[b];
+                if (p.secondary) zy += fixed_zy[b];
               }
               continue;
             }
             const double* nrow = cached_row(p, b, ti, pi);
             r.assign(n, 0.0);
             for (int j = 0; j < n; ++j) r[j] = nrow[j] - y(d, j);
-            s.assign(n, 0.0);  // s = r^T A^
-            for (int j = 0; j < n; ++j) {
-              double acc = 0;
-              for (int i = 0; i < n; ++i) acc += r[i] * a(i, j);
-              s[j] = acc;
+            // s = r^T A^, accumulated over i in order for every j at once (the same sums as
+            // one dot product per j, bit for bit, but n independent chains that vectorise).
+            s.assign(n, 0.0);
+            const double* arm = a_rowmajor[b].data();
+            for (int i = 0; i < n; ++i) {
+              const double ri = r[i];
+              const double* ai = arm + static_cast<std::size_t>(i) * n;
+              for (int j = 0; j < n; ++j) s[j] += ri * ai[j];
             }
             const double denom = 1.0 + s[d];
             if (!(std::abs(denom) > 1e-12)) {
@@ -418,12 +642,16 @@ void local_search(const Problem& p, const SearchOptions& opt, RunResult& run,
               break;
             }
             if (!p.counted[b]) continue;
+            const double* ad = a.data() + static_cast<std::size_t>(d) * n;
             for (int j = 0; j < n; ++j) {
               const double f = s[j] / denom;
-              for (int i = 0; i < n; ++i) za += std::abs(a(i, j) - a(i, d) * f) < kZeroThreshold;
+              const double* aj = a.data() + static_cast<std::size_t>(j) * n;
+              int cz = 0;
+              for (int i = 0; i < n; ++i) cz += std::abs(aj[i] - ad[i] * f) < kZeroThreshold;
+              za += cz;
             }
             if (p.secondary) {
-              zy += (y.array().abs() < kZeroThreshold).count();
+              zy += fixed_zy[b];
               for (int j = 0; j < n; ++j)
                 zy += (std::abs(nrow[j]) < kZeroThreshold) - (std::abs(y(d, j)) < kZeroThreshold);
             }
@@ -474,13 +702,14 @@ void validate(const SearchOptions& o) {
 
 SearchResult run_search(const Problem& p, const SearchOptions& opt, const std::string& label) {
   std::vector<Workspace> ws;
+  ThreadPool pool(opt.threads);
   for (int t = 0; t < opt.threads; ++t) ws.emplace_back(p);
   SearchResult out;
   RunResult best;
   for (int r = 0; r < opt.restarts; ++r) {
-    RunResult run = run_ga(p, opt, r, ws, label);
+    RunResult run = run_ga(p, opt, r, ws, pool, label);
     const double ga_sparsity = static_cast<double>(zeros_of(p, run.score)) / (p.weight - 1);
-    if (opt.local_search) local_search(p, opt, run, ws, label);
+    if (opt.local_search) local_search(p, opt, run, ws, pool, label);
     out.generations += run.generations;
     out.evaluations += run.evaluations;
     const double sp = static_cast<double>(zeros_of(p, run.score)) / (p.weight - 1);
