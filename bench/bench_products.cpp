@@ -1,7 +1,8 @@
 // SH triple and k-multiple products, side by side (paper 003, Sec. 5.1):
-//   BM_Triple/<method>/<type>/N         g = f1 (x) f2 by the tripling tensor or by FFT
-//   BM_Multiple/<method>/<type>/k/N     k - 1 inputs: accurate (Fourier, divide and
-//                                       conquer) vs recursive (Eq. 11, either method)
+//   BM_Triple/<method>/<type>/N         g = f1 (x) f2 by the tripling tensor, the Fourier
+//                                       method, the grid (quadrature) and auto (default)
+//   BM_Multiple/<method>/<type>/k/N     k - 1 inputs: accurate (grid; Fourier with divide
+//                                       and conquer) vs recursive (Eq. 11, tripling / auto)
 //   BM_TriplingBuild/N                  runtime construction of the tripling tensor
 // Run: build-*/bench/bench_products --benchmark_min_time=0.2
 // Figures and the machine they were measured on: docs/products.md.
@@ -13,6 +14,7 @@
 #include <benchmark/benchmark.h>
 
 #include "shtool/fourier_product.h"
+#include "shtool/grid_product.h"
 #include "shtool/product.h"
 #include "shtool/sh.h"
 #include "shtool/tripling_product.h"
@@ -60,6 +62,20 @@ void BM_TripleFourier(benchmark::State& state) {
 }
 
 template <class T>
+void BM_TripleGrid(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  shtool::GridProduct<T> product(n, 2);
+  const auto f = random_inputs<T>(n, 2);
+  std::vector<T> g(sh_count(n));
+  for (auto _ : state) {
+    product.multiply(f[0], f[1], g);
+    benchmark::DoNotOptimize(g.data());
+    benchmark::ClobberMemory();
+  }
+  state.counters["grid"] = product.grid_theta() * 1000.0 + product.grid_phi();
+}
+
+template <class T>
 void BM_TripleAuto(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));
   shtool::ShProduct<T> product(n);
@@ -73,7 +89,7 @@ void BM_TripleAuto(benchmark::State& state) {
   }
 }
 
-enum Mode { kAccurate, kRecursiveTripling, kRecursiveFourier };
+enum Mode { kAccurateGrid, kAccurateFourier, kRecursiveTripling, kRecursiveAuto };
 
 template <class T, Mode mode>
 void BM_Multiple(benchmark::State& state) {
@@ -83,11 +99,15 @@ void BM_Multiple(benchmark::State& state) {
   const auto f = random_inputs<T>(n, inputs);
   std::vector<std::span<const T>> spans(f.begin(), f.end());
   std::vector<T> g(sh_count(n));
-  shtool::ShProduct<T> product(n, mode == kRecursiveTripling ? shtool::ProductMethod::tripling
-                                                            : shtool::ProductMethod::fourier);
-  product.prepare(mode == kAccurate ? inputs : 2);
+  const shtool::ProductMethod method = mode == kRecursiveTripling ? shtool::ProductMethod::tripling
+                                       : mode == kAccurateFourier ? shtool::ProductMethod::fourier
+                                       : mode == kAccurateGrid    ? shtool::ProductMethod::grid
+                                                                  : shtool::ProductMethod::automatic;
+  shtool::ShProduct<T> product(n, method);
+  const bool accurate = mode == kAccurateGrid || mode == kAccurateFourier;
+  product.prepare(accurate ? inputs : 2);
   for (auto _ : state) {
-    if (mode == kAccurate)
+    if (accurate)
       product.multiple(spans, g);
     else
       product.recursive(spans, g);
@@ -117,16 +137,20 @@ void multiple_args(benchmark::internal::Benchmark* b) {
 
 BENCHMARK(BM_TripleTripling<float>)->Name("BM_Triple/tripling/float")->Apply(triple_orders);
 BENCHMARK(BM_TripleFourier<float>)->Name("BM_Triple/fourier/float")->Apply(triple_orders);
+BENCHMARK(BM_TripleGrid<float>)->Name("BM_Triple/grid/float")->Apply(triple_orders);
 BENCHMARK(BM_TripleAuto<float>)->Name("BM_Triple/auto/float")->Apply(triple_orders);
 BENCHMARK(BM_TripleTripling<double>)->Name("BM_Triple/tripling/double")->Apply(triple_orders);
 BENCHMARK(BM_TripleFourier<double>)->Name("BM_Triple/fourier/double")->Apply(triple_orders);
+BENCHMARK(BM_TripleGrid<double>)->Name("BM_Triple/grid/double")->Apply(triple_orders);
 BENCHMARK(BM_TripleAuto<double>)->Name("BM_Triple/auto/double")->Apply(triple_orders);
-BENCHMARK(BM_Multiple<float, kAccurate>)->Name("BM_Multiple/accurate-fourier/float")->Apply(multiple_args);
+BENCHMARK(BM_Multiple<float, kAccurateGrid>)->Name("BM_Multiple/accurate-grid/float")->Apply(multiple_args);
+BENCHMARK(BM_Multiple<float, kAccurateFourier>)->Name("BM_Multiple/accurate-fourier/float")->Apply(multiple_args);
 BENCHMARK(BM_Multiple<float, kRecursiveTripling>)->Name("BM_Multiple/recursive-tripling/float")->Apply(multiple_args);
-BENCHMARK(BM_Multiple<float, kRecursiveFourier>)->Name("BM_Multiple/recursive-fourier/float")->Apply(multiple_args);
-BENCHMARK(BM_Multiple<double, kAccurate>)->Name("BM_Multiple/accurate-fourier/double")->Apply(multiple_args);
+BENCHMARK(BM_Multiple<float, kRecursiveAuto>)->Name("BM_Multiple/recursive-auto/float")->Apply(multiple_args);
+BENCHMARK(BM_Multiple<double, kAccurateGrid>)->Name("BM_Multiple/accurate-grid/double")->Apply(multiple_args);
+BENCHMARK(BM_Multiple<double, kAccurateFourier>)->Name("BM_Multiple/accurate-fourier/double")->Apply(multiple_args);
 BENCHMARK(BM_Multiple<double, kRecursiveTripling>)->Name("BM_Multiple/recursive-tripling/double")->Apply(multiple_args);
-BENCHMARK(BM_Multiple<double, kRecursiveFourier>)->Name("BM_Multiple/recursive-fourier/double")->Apply(multiple_args);
+BENCHMARK(BM_Multiple<double, kRecursiveAuto>)->Name("BM_Multiple/recursive-auto/double")->Apply(multiple_args);
 BENCHMARK(BM_TriplingBuild)->Arg(5)->Arg(10)->Arg(15)->Arg(20)->Unit(benchmark::kMillisecond);
 
 BENCHMARK_MAIN();

@@ -71,7 +71,7 @@ TEST(CliProduct, SquareOfY10ClosedForm) {
   // 1/sqrt(4 pi) y_0^0 + 1/sqrt(5 pi) y_2^0.
   const int order = 3;
   const std::string in = inputs_json({unit(order, 2), unit(order, 2)});
-  for (const std::string method : {"tripling", "fourier", "auto"}) {
+  for (const std::string method : {"tripling", "fourier", "grid", "auto"}) {
     const TempFile file(in);
     const std::vector<double> g =
         coefficients(product({"--order", "3", "--method", method, "--in", file.path()}), order);
@@ -103,7 +103,9 @@ TEST(CliProduct, AccurateVersusRecursiveTripleOfY10) {
   const std::string in = inputs_json({unit(order, 2), unit(order, 2), unit(order, 2)});
   const std::vector<double> accurate = coefficients(product({"--order", "2", "--method", "fourier", "--in", "-"}, in), order);
   EXPECT_NEAR(accurate[2], 9.0 / (20.0 * kPi), kTol);
-  for (const std::string method : {"tripling", "fourier"}) {
+  const std::vector<double> by_grid = coefficients(product({"--order", "2", "--method", "grid", "--in", "-"}, in), order);
+  EXPECT_NEAR(by_grid[2], 9.0 / (20.0 * kPi), kTol);
+  for (const std::string method : {"tripling", "fourier", "grid"}) {
     const std::vector<double> rec =
         coefficients(product({"--order", "2", "--method", method, "--recursive", "--in", "-"}, in), order);
     EXPECT_NEAR(rec[2], 1.0 / (4.0 * kPi), kTol) << method;
@@ -124,25 +126,29 @@ TEST(CliProduct, EightInputsAndByteIdenticalOutput) {
   EXPECT_NEAR(g[0], std::pow(4 * kPi, -4.0) * std::sqrt(4 * kPi), 1e-18);
 }
 
-TEST(CliProduct, AccurateTriplingChainEqualsFourier) {
-  // Two independent accurate routes for k > 2 inputs: the tripling tensor chained at
-  // growing orders, and the Fourier divide and conquer. Random-looking inputs with every
-  // coefficient non-zero, so that every band of every step contributes.
-  for (const auto& [order, k] : {std::pair{2, 3}, std::pair{4, 3}, std::pair{3, 8}}) {
+TEST(CliProduct, AccurateTriplingChainEqualsFourierAndGrid) {
+  // Three independent accurate routes for k >= 2 inputs: the tripling tensor chained at
+  // growing orders, the Fourier divide and conquer, and the grid quadrature (also the
+  // default, auto). Random-looking inputs with every coefficient non-zero, so that every
+  // band of every step contributes.
+  for (const auto& [order, k] : {std::pair{2, 3}, std::pair{4, 3}, std::pair{3, 8}, std::pair{7, 2},
+                                 std::pair{5, 5}}) {
     std::vector<std::vector<double>> f(k, std::vector<double>(order * order));
     for (int j = 0; j < k; ++j)
       for (int i = 0; i < order * order; ++i) f[j][i] = std::sin(1.0 + 7.0 * j + 3.1 * i);
     const std::string in = inputs_json(f);
     const std::string n = std::to_string(order);
     const std::vector<double> t = coefficients(product({"--order", n, "--method", "tripling", "--in", "-"}, in), order);
-    const std::vector<double> q = coefficients(product({"--order", n, "--method", "fourier", "--in", "-"}, in), order);
-    double diff = 0, norm = 0;
-    for (int i = 0; i < order * order; ++i) {
-      diff += (t[i] - q[i]) * (t[i] - q[i]);
-      norm += q[i] * q[i];
+    for (const std::string method : {"fourier", "grid", "auto"}) {
+      const std::vector<double> q = coefficients(product({"--order", n, "--method", method, "--in", "-"}, in), order);
+      double diff = 0, norm = 0;
+      for (int i = 0; i < order * order; ++i) {
+        diff += (t[i] - q[i]) * (t[i] - q[i]);
+        norm += q[i] * q[i];
+      }
+      // All are exact up to rounding: relative 1e-12 leaves ~1000 ulp for sums of many terms.
+      EXPECT_LT(std::sqrt(diff / norm), 1e-12) << method << ", order " << order << ", k " << k;
     }
-    // Both are exact up to rounding: relative 1e-12 leaves ~1000 ulp for sums of many terms.
-    EXPECT_LT(std::sqrt(diff / norm), 1e-12) << "order " << order << ", k " << k;
   }
 }
 
@@ -172,6 +178,9 @@ TEST(CliProduct, BadInputIsAClearError) {
       {{"--order", "12", "--method", "tripling", "--in", "-"},
        inputs_json(std::vector<std::vector<double>>(8, unit(12, 0))), "needs tripling tensors of order 45"},
       {{"--order", "2", "--in", "-"}, R"({"inputs": [[1e300,0,0,0],[1e300,0,0,0]]})", "overflows"},
+      {{"--order", "7", "--method", "grid", "--in", "-"},
+       inputs_json({std::vector<double>(49, 1e300), std::vector<double>(49, 1e300)}), "overflows"},
+      {{"--order", "2", "--method", "Grid", "--in", "-"}, ok2, "auto, tripling, fourier or grid"},
   };
   for (const BadCase& c : cases) {
     const CommandResult r = product(c.args, c.stdin_data);

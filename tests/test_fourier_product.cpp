@@ -26,6 +26,7 @@
 namespace shtool {
 namespace {
 
+using test::reference_product;
 using test::sci;
 
 // The accuracy bar for accurate products in double.
@@ -131,26 +132,6 @@ TEST(ShFourierTensors, TableRoundTripAndCorruption) {
   EXPECT_FALSE(ShFourierTensors::from_table(bad).ok());
 }
 
-// SH projection of the pointwise product of the inputs, with a sphere rule exact for
-// the integrand (degree (count + 1)(N - 1)), accumulated in long double.
-std::vector<double> reference_product(int order, const std::vector<std::vector<double>>& f) {
-  const int n = sh_count(order);
-  const SphereQuadrature q = sphere_quadrature((static_cast<int>(f.size()) + 1) * (order - 1));
-  std::vector<long double> g(n, 0.0L);
-  std::vector<double> y(n);
-  for (std::size_t p = 0; p < q.weights.size(); ++p) {
-    eval_sh<double>(order, q.directions[p], y);
-    long double v = q.weights[p];
-    for (const auto& fi : f) {
-      long double s = 0;
-      for (int i = 0; i < n; ++i) s += fi[i] * y[i];
-      v *= s;
-    }
-    for (int i = 0; i < n; ++i) g[i] += v * y[i];
-  }
-  return std::vector<double>(g.begin(), g.end());
-}
-
 std::vector<std::vector<double>> random_inputs(int order, int count, unsigned seed) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
@@ -222,12 +203,36 @@ TEST(ShProduct, IntegralAndMethodsAgree) {
   const std::vector<double> ref = reference_product(order, {f[0], f[1]});
   double expected = 0;
   for (int i = 0; i < sh_count(order); ++i) expected += ref[i] * f[2][i];
-  for (ProductMethod m : {ProductMethod::tripling, ProductMethod::fourier, ProductMethod::automatic}) {
+  for (ProductMethod m : {ProductMethod::tripling, ProductMethod::fourier, ProductMethod::grid,
+                          ProductMethod::automatic}) {
     ShProduct<double> product(order, m);
     EXPECT_NEAR(product.triple_integral(f[0], f[1], f[2]), expected, 1e-12 * std::abs(expected) + 1e-14);
+    std::vector<double> g(sh_count(order));
+    product.triple(f[0], f[1], g);
+    EXPECT_LT(relative_l2(g, ref), 1e-13) << "method " << static_cast<int>(m);
   }
-  EXPECT_EQ(ShProduct<double>(kFourierTripleFromOrder - 1).triple_method(), ProductMethod::tripling);
-  EXPECT_EQ(ShProduct<double>(kFourierTripleFromOrder).triple_method(), ProductMethod::fourier);
+  EXPECT_EQ(ShProduct<double>(kGridTripleFromOrder - 1).triple_method(), ProductMethod::tripling);
+  EXPECT_EQ(ShProduct<double>(kGridTripleFromOrder).triple_method(), ProductMethod::grid);
+  EXPECT_EQ(ShProduct<double>(kMaxTriplingOrder + 1).triple_method(), ProductMethod::grid);
+  EXPECT_EQ(ShProduct<double>(5, ProductMethod::fourier).triple_method(), ProductMethod::fourier);
+}
+
+TEST(ShProduct, MultipleByGridAndFourierAgainstQuadrature) {
+  // Accurate k-multiple products through the public entry point: the grid (default) and
+  // the Fourier method (ProductMethod::fourier) both match the quadrature reference.
+  for (const Case c : {Case{4, 3}, Case{9, 5}, Case{15, 7}}) {
+    const auto f = random_inputs(c.order, c.inputs, 500 + c.order);
+    const std::vector<double> ref = reference_product(c.order, f);
+    std::vector<std::span<const double>> spans(f.begin(), f.end());
+    for (ProductMethod m : {ProductMethod::automatic, ProductMethod::grid, ProductMethod::fourier,
+                            ProductMethod::tripling}) {
+      ShProduct<double> product(c.order, m);
+      std::vector<double> g(sh_count(c.order));
+      product.multiple(spans, g);
+      EXPECT_LT(relative_l2(g, ref), kProductTolDouble)
+          << "N " << c.order << " k " << c.inputs + 1 << " method " << static_cast<int>(m);
+    }
+  }
 }
 
 TEST(ShProduct, Deterministic) {
@@ -247,7 +252,7 @@ TEST(ShProduct, RecursiveMatchesTwoStepQuadrature) {
   const auto f = random_inputs(order, 3, 77);
   const std::vector<double> step1 = reference_product(order, {f[0], f[1]});
   const std::vector<double> step2 = reference_product(order, {step1, f[2]});
-  for (ProductMethod m : {ProductMethod::tripling, ProductMethod::fourier}) {
+  for (ProductMethod m : {ProductMethod::tripling, ProductMethod::fourier, ProductMethod::grid}) {
     ShProduct<double> product(order, m);
     std::vector<std::span<const double>> spans(f.begin(), f.end());
     std::vector<double> g(sh_count(order));

@@ -11,6 +11,8 @@
 #include <map>
 #include <numbers>
 #include <random>
+#include <set>
+#include <algorithm>
 #include <tuple>
 #include <vector>
 
@@ -328,6 +330,47 @@ void check_product(double tol) {
 // Double: rounding of ~1e3 terms; float: 24-bit mantissa over the same sums.
 TEST(TriplingProduct, MatchesQuadratureDouble) { check_product<double>(1e-13); }
 TEST(TriplingProduct, MatchesQuadratureFloat) { check_product<float>(2e-5); }
+
+// Orders 2..kUnrolledTriplingOrder run a compile-time unrolled kernel with its own pair
+// enumeration (selection rules) and order; order 1 and 7 the gather loop. Reference: every
+// permutation of every canonical entry of the exact (3j) tensor, summed densely in long
+// double, so a pair the kernel's rules missed or a misplaced weight shows up.
+template <class T>
+void check_small_orders(double tol) {
+  for (int order = 1; order <= kUnrolledTriplingOrder + 1; ++order) {
+    const int n = sh_count(order);
+    const TriplingTensor tensor = compute_tripling_tensor_exact(order);
+    const TriplingProduct<T> product(tensor);
+    std::mt19937 rng(40 + order);
+    std::uniform_real_distribution<double> u(-1, 1);
+    std::vector<T> f1(n), f2(n), g(n);
+    for (int i = 0; i < n; ++i) {
+      f1[i] = static_cast<T>(u(rng));
+      f2[i] = static_cast<T>(u(rng));
+    }
+    product.multiply(f1, f2, g);
+    std::vector<long double> ref(n, 0.0L);
+    for (std::size_t e = 0; e < tensor.size(); ++e) {
+      int p[3] = {int(tensor.index[3 * e]), int(tensor.index[3 * e + 1]), int(tensor.index[3 * e + 2])};
+      std::set<std::tuple<int, int, int>> seen;
+      do {
+        if (seen.insert({p[0], p[1], p[2]}).second)
+          ref[p[2]] += static_cast<long double>(tensor.value[e]) * f1[p[0]] * f2[p[1]];
+      } while (std::next_permutation(p, p + 3));
+    }
+    double err = 0, norm = 0;
+    for (int i = 0; i < n; ++i) {
+      const double d = static_cast<double>(g[i]) - static_cast<double>(ref[i]);
+      err += d * d;
+      norm += static_cast<double>(ref[i] * ref[i]);
+    }
+    EXPECT_LT(std::sqrt(err / norm), tol) << "order " << order << ": relative L2 " << sci(std::sqrt(err / norm));
+  }
+}
+
+// Double: a few dozen rounded terms per output; float: 24-bit mantissa over the same sums.
+TEST(TriplingProduct, UnrolledSmallOrdersMatchDenseTensorDouble) { check_small_orders<double>(1e-15); }
+TEST(TriplingProduct, UnrolledSmallOrdersMatchDenseTensorFloat) { check_small_orders<float>(1e-6); }
 
 }  // namespace
 }  // namespace shtool

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "shtool/quadrature.h"
 #include "shtool/sh.h"
 
 namespace shtool::test {
@@ -31,6 +32,28 @@ inline std::string sci(double v) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.3e", v);
   return buf;
+}
+
+// SH projection of the pointwise product of the inputs, with a sphere rule exact for the
+// integrand (degree (count + 1)(N - 1)), evaluated with eval_sh and accumulated in long
+// double: no FFT, no Legendre table, no tensor, so it is independent of every product
+// method it checks.
+inline std::vector<double> reference_product(int order, const std::vector<std::vector<double>>& f) {
+  const int n = sh_count(order);
+  const SphereQuadrature q = sphere_quadrature((static_cast<int>(f.size()) + 1) * (order - 1));
+  std::vector<long double> g(n, 0.0L);
+  std::vector<double> y(n);
+  for (std::size_t p = 0; p < q.weights.size(); ++p) {
+    eval_sh<double>(order, q.directions[p], y);
+    long double v = q.weights[p];
+    for (const auto& fi : f) {
+      long double s = 0;
+      for (int i = 0; i < n; ++i) s += fi[i] * y[i];
+      v *= s;
+    }
+    for (int i = 0; i < n; ++i) g[i] += v * y[i];
+  }
+  return std::vector<double>(g.begin(), g.end());
 }
 
 }  // namespace shtool::test

@@ -13,9 +13,14 @@
 
 #include <cstddef>
 #include <memory>
+#include <mutex>
 #include <span>
 
 namespace shtool {
+
+// FFTW's planner is not thread-safe (execution of distinct plans is): every plan the
+// runtime makes or destroys is made under this one lock.
+std::mutex& fftw_planner_mutex();
 
 // Highest order the Fourier products accept (grid sizes grow as (k n)^2).
 inline constexpr int kMaxFourierProductOrder = 64;

@@ -4,11 +4,14 @@
 //
 //  - tripling: the sparse tripling tensor (shtool/tripling_product.h), O(N^5);
 //  - fourier:  SH -> Fourier, FFT convolution, Fourier -> SH (shtool/fourier_product.h),
-//              O(N^3) for triple products;
-//  - automatic: whichever is faster at the order (measured, kFourierTripleFromOrder).
-// Accurate multiple products of more than two inputs always use the Fourier method
-// (divide and conquer, Eq. 27); the tripling tensor can only chain triple products, which
-// truncates after every step (Eq. 11) and is what recursive() computes.
+//              the paper's method, O(N^3) for triple products;
+//  - grid:     Gauss-Legendre x equispaced-azimuth quadrature (shtool/grid_product.h):
+//              synthesis, pointwise product, projection; O(N^3), exact to rounding;
+//  - automatic: whichever is faster at the order (measured, kGridTripleFromOrder).
+// Accurate multiple products of more than two inputs use the grid (automatic, grid,
+// tripling) or the Fourier method with divide and conquer (Eq. 27) when it is asked for;
+// the tripling tensor can only chain triple products, which truncates after every step
+// (Eq. 11) and is what recursive() computes.
 //
 // Not thread-safe (the Fourier plans share buffers): one ShProduct per thread.
 #pragma once
@@ -18,16 +21,17 @@
 #include <vector>
 
 #include "shtool/fourier_product.h"
+#include "shtool/grid_product.h"
 #include "shtool/tripling_product.h"
 
 namespace shtool {
 
-enum class ProductMethod { automatic, tripling, fourier };
+enum class ProductMethod { automatic, tripling, fourier, grid };
 
-// From this order on the Fourier triple product beats the tripling tensor on the
-// reference machine in both float and double (bench/bench_products.cpp,
-// docs/products.md); below it the sparse tensor loop is faster.
-inline constexpr int kFourierTripleFromOrder = 9;
+// From this order on the grid triple product beats the tripling tensor on the reference
+// machine in both float and double (bench/bench_products.cpp, docs/products.md); below
+// it the sparse tensor loop is faster. The grid beats the Fourier method at every order.
+inline constexpr int kGridTripleFromOrder = 6;
 
 template <class T>
 class ShProduct {
@@ -51,6 +55,8 @@ class ShProduct {
   T triple_integral(std::span<const T> f1, std::span<const T> f2, std::span<const T> f3);
   // Accurate product of all inputs truncated to order N (Eq. 7). 1 <= f.size() <=
   // kMaxProductInputs; two inputs use triple().
+  // Uses the Fourier method if this object was made with ProductMethod::fourier, the
+  // grid otherwise.
   void multiple(std::span<const std::span<const T>> f, std::span<T> g);
   // Recursive triple-product approximation (Eq. 11): ((f1 (x) f2) (x) f3) ... with the
   // triple method of this object; truncates to order N after every step.
@@ -62,11 +68,14 @@ class ShProduct {
  private:
   const TriplingProduct<T>& tripling();
   FourierProduct<T>& fourier(int inputs);
+  GridProduct<T>& grid(int inputs);
 
   int order_;
   ProductMethod triple_method_;
+  bool multiple_fourier_;  // accurate multiple products by the Fourier method, not the grid
   std::unique_ptr<TriplingProduct<T>> tripling_;
   std::vector<std::unique_ptr<FourierProduct<T>>> fourier_;  // index: number of inputs
+  std::vector<std::unique_ptr<GridProduct<T>>> grid_;        // index: number of inputs
   std::vector<T> scratch_a_, scratch_b_;
 };
 

@@ -85,7 +85,16 @@ class TriplingProduct {
   std::vector<std::uint32_t> row_;   // N^2 + 1 starts into pair_/weight_
   std::vector<std::uint32_t> pair_;  // i | (j << 16)
   std::vector<T> weight_;
+  // Orders 2..kUnrolledTriplingOrder: a kernel unrolled at compile time over the pairs
+  // the selection rules allow (constant indices, outputs interleaved so that the
+  // accumulations of different outputs overlap), with its weights in that order.
+  using Kernel = void (*)(const T* a, const T* b, const T* w, T* g);
+  Kernel kernel_ = nullptr;
+  std::vector<T> kernel_weight_;
 };
+
+// Highest order with a compile-time unrolled tripling kernel.
+inline constexpr int kUnrolledTriplingOrder = 6;
 
 extern template class TriplingProduct<float>;
 extern template class TriplingProduct<double>;

@@ -1,4 +1,4 @@
-// shtool product --order N [--method auto|tripling|fourier] [--recursive] --in FILE
+// shtool product --order N [--method auto|tripling|fourier|grid] [--recursive] --in FILE
 // Reads {"inputs": [[N^2 numbers], ...]} (2 to 8 inputs; FILE or '-' for stdin) and
 // prints {"order": N, "coefficients": [N^2 numbers]}: the product of all inputs
 // truncated to order N, accurate unless --recursive (paper 003; docs/products.md).
@@ -95,8 +95,10 @@ void run_product(const ProductOptions& opt) {
     method = ProductMethod::tripling;
   else if (opt.method == "fourier")
     method = ProductMethod::fourier;
+  else if (opt.method == "grid")
+    method = ProductMethod::grid;
   else if (opt.method != "auto")
-    throw UserError("--method must be auto, tripling or fourier, got '" + opt.method + "'");
+    throw UserError("--method must be auto, tripling, fourier or grid, got '" + opt.method + "'");
   if (method == ProductMethod::tripling && opt.order > kMaxTriplingOrder)
     throw UserError("--method tripling supports orders up to " + std::to_string(kMaxTriplingOrder) +
                     "; use --method fourier");
@@ -134,8 +136,9 @@ void setup_product(CLI::App& app) {
       "{\"inputs\": [[N^2 coefficients], ...]}; output: {\"order\": N, \"coefficients\": [...]}");
   sub->add_option("--order", opt->order, "SH order N (bands 0..N-1)")->required();
   sub->add_option("--method", opt->method,
-                  "auto (fastest at this order), tripling (sparse tripling tensor; more than 2 inputs "
-                  "are chained at growing orders, up to order 32) or fourier (FFT)")
+                  "auto (fastest at this order: tripling below order 6, grid from 6 on), tripling "
+                  "(sparse tripling tensor; more than 2 inputs are chained at growing orders, up to "
+                  "order 32), fourier (paper 003's FFT method) or grid (Gauss-Legendre quadrature)")
       ->capture_default_str();
   sub->add_flag("--recursive", opt->recursive,
                 "recursive triple-product approximation (paper 003, Eq. 11): truncates after "

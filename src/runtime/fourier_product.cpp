@@ -16,13 +16,15 @@
 #include "shtool/sh.h"
 
 namespace shtool {
-namespace {
 
-// FFTW's planner is not thread-safe; execution of distinct plans is.
-std::mutex& planner_mutex() {
+std::mutex& fftw_planner_mutex() {
   static std::mutex m;
   return m;
 }
+
+namespace {
+
+std::mutex& planner_mutex() { return fftw_planner_mutex(); }
 
 // Plans use FFTW_ESTIMATE: deterministic plan choice, hence byte-identical results.
 constexpr unsigned kPlanFlags = FFTW_ESTIMATE;

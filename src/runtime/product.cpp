@@ -11,13 +11,14 @@ namespace shtool {
 
 template <class T>
 ShProduct<T>::ShProduct(int order, ProductMethod method, const TriplingTensor* tensor)
-    : order_(order), fourier_(kMaxProductInputs + 1) {
+    : order_(order), fourier_(kMaxProductInputs + 1), grid_(kMaxProductInputs + 1) {
   if (order < 1 || order > kMaxFourierProductOrder)
     throw std::invalid_argument("ShProduct: order " + std::to_string(order) + " outside 1.." +
                                 std::to_string(kMaxFourierProductOrder));
+  multiple_fourier_ = method == ProductMethod::fourier;
   if (method == ProductMethod::automatic)
-    method = (order >= kFourierTripleFromOrder || order > kMaxTriplingOrder) ? ProductMethod::fourier
-                                                                             : ProductMethod::tripling;
+    method = (order >= kGridTripleFromOrder || order > kMaxTriplingOrder) ? ProductMethod::grid
+                                                                          : ProductMethod::tripling;
   triple_method_ = method;
   if (method == ProductMethod::tripling && order > kMaxTriplingOrder)
     throw std::invalid_argument("ShProduct: the tripling tensor is limited to order " +
@@ -65,11 +66,24 @@ FourierProduct<T>& ShProduct<T>::fourier(int inputs) {
 }
 
 template <class T>
+GridProduct<T>& ShProduct<T>::grid(int inputs) {
+  if (inputs < 1 || inputs > kMaxProductInputs)
+    throw std::invalid_argument("ShProduct: " + std::to_string(inputs) + " inputs (1.." +
+                                std::to_string(kMaxProductInputs) + ")");
+  if (!grid_[inputs]) grid_[inputs] = std::make_unique<GridProduct<T>>(order_, inputs);
+  return *grid_[inputs];
+}
+
+template <class T>
 void ShProduct<T>::prepare(int inputs) {
   if (inputs == 2 && triple_method_ == ProductMethod::tripling)
     tripling();
-  else
+  else if (inputs == 2 && triple_method_ == ProductMethod::grid)
+    grid(2);
+  else if (inputs == 2 || multiple_fourier_)
     fourier(inputs);
+  else
+    grid(inputs);
 }
 
 template <class T>
@@ -81,6 +95,8 @@ void ShProduct<T>::triple(std::span<const T> f1, std::span<const T> f2, std::spa
     T* out = alias ? scratch_a_.data() : g.data();
     tripling().multiply(f1, f2, std::span<T>(out, sh_count(order_)));
     if (alias) std::copy(scratch_a_.begin(), scratch_a_.end(), g.begin());
+  } else if (triple_method_ == ProductMethod::grid) {
+    grid(2).multiply(f1, f2, g);
   } else {
     fourier(2).multiply(f1, f2, g);
   }
@@ -90,6 +106,10 @@ template <class T>
 T ShProduct<T>::triple_integral(std::span<const T> f1, std::span<const T> f2,
                                 std::span<const T> f3) {
   if (triple_method_ == ProductMethod::tripling) return tripling().integral(f1, f2, f3);
+  if (triple_method_ == ProductMethod::grid) {
+    const std::span<const T> f[3] = {f1, f2, f3};
+    return grid(2).integral(std::span<const std::span<const T>>(f, 3));
+  }
   fourier(2).multiply(f1, f2, scratch_a_);
   T sum = 0;
   for (int i = 0; i < sh_count(order_); ++i) sum += scratch_a_[i] * f3[i];
@@ -103,7 +123,10 @@ void ShProduct<T>::multiple(std::span<const std::span<const T>> f, std::span<T> 
     triple(f[0], f[1], g);
     return;
   }
-  fourier(inputs).multiply(f, g);
+  if (multiple_fourier_)
+    fourier(inputs).multiply(f, g);
+  else
+    grid(inputs).multiply(f, g);
 }
 
 template <class T>

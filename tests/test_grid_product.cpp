@@ -1,0 +1,185 @@
+// The quadrature ("grid") products (shtool/grid_product.h): triple products against the
+// exact tripling tensor (Wigner 3j, offline construction) and the runtime one, accurate
+// k-multiple products against the SH projection of the pointwise product by an
+// independent sphere quadrature of eval_sh (N up to 20, k up to 8), triple product
+// integrals, closed forms, aliasing, determinism, grid sizes and bad arguments.
+#include <cmath>
+#include <numbers>
+#include <random>
+#include <span>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "shtool/grid_product.h"
+#include "shtool/product.h"
+#include "shtool/quadrature.h"
+#include "shtool/sh.h"
+#include "shtool/tripling_product.h"
+#include "tensors/tripling.h"
+#include "test_util.h"
+
+namespace shtool {
+namespace {
+
+using test::reference_product;
+using test::sci;
+
+// The accuracy bar for accurate products in double.
+constexpr double kTolDouble = 1e-10;
+// float: 24-bit mantissa; each output sums O(N) Legendre terms per ring over O(N) rings
+// and an FFT of O(N) points per input; measured 9e-8 to 3.0e-7 (N = 3..20, k = 3..8),
+// so 2e-6 leaves a margin of about 7 without hiding an O(1) error.
+constexpr double kTolFloat = 2e-6;
+
+std::vector<std::vector<double>> random_inputs(int order, int count, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::vector<std::vector<double>> f;
+  for (int i = 0; i < count; ++i) f.push_back(test::random_coeffs(order, rng));
+  return f;
+}
+
+template <class T>
+double relative_l2(const std::vector<T>& got, const std::vector<double>& ref) {
+  double e = 0, r = 0;
+  for (std::size_t i = 0; i < ref.size(); ++i) {
+    const double d = static_cast<double>(got[i]) - ref[i];
+    e += d * d;
+    r += ref[i] * ref[i];
+  }
+  return std::sqrt(e / r);
+}
+
+template <class T>
+std::vector<T> grid_multiply(int order, const std::vector<std::vector<double>>& f) {
+  std::vector<std::vector<T>> ft;
+  for (const auto& v : f) ft.emplace_back(v.begin(), v.end());
+  std::vector<std::span<const T>> spans(ft.begin(), ft.end());
+  std::vector<T> g(sh_count(order));
+  GridProduct<T>(order, static_cast<int>(f.size())).multiply(spans, g);
+  return g;
+}
+
+TEST(GridProduct, TripleAgainstExactTriplingTensor) {
+  // Wigner 3j construction (src/tensors/tripling.cpp) for N <= 12; the runtime
+  // Gauss-Legendre construction (itself tested against 3j) at N = 16 and 20.
+  for (int order : {1, 2, 3, 4, 5, 7, 8, 12, 16, 20}) {
+    const TriplingTensor tensor =
+        order <= 12 ? compute_tripling_tensor_exact(order) : TriplingTensor::compute(order);
+    const auto f = random_inputs(order, 2, 300 + order);
+    std::vector<double> ref(sh_count(order));
+    TriplingProduct<double>(tensor).multiply(f[0], f[1], ref);
+    const double err = relative_l2(grid_multiply<double>(order, f), ref);
+    EXPECT_LT(err, kTolDouble) << "N " << order << ": relative L2 " << sci(err);
+    RecordProperty("triple_rel_l2_N" + std::to_string(order), sci(err));
+  }
+}
+
+struct Case {
+  int order, inputs;
+};
+
+TEST(GridProduct, MultipleAgainstQuadratureDouble) {
+  // k = inputs + 1 up to 8, N up to 20.
+  for (const Case c : {Case{1, 2}, Case{2, 7}, Case{3, 2}, Case{4, 3}, Case{5, 1}, Case{6, 5},
+                       Case{10, 2}, Case{10, 7}, Case{13, 4}, Case{20, 2}, Case{20, 3},
+                       Case{20, 5}, Case{20, 7}}) {
+    const auto f = random_inputs(c.order, c.inputs, 100 + c.order * 10 + c.inputs);
+    const std::vector<double> ref = reference_product(c.order, f);
+    const double err = relative_l2(grid_multiply<double>(c.order, f), ref);
+    EXPECT_LT(err, kTolDouble) << "N " << c.order << " k " << c.inputs + 1 << ": " << sci(err);
+    RecordProperty("rel_l2_N" + std::to_string(c.order) + "_k" + std::to_string(c.inputs + 1),
+                   sci(err));
+  }
+}
+
+TEST(GridProduct, MultipleAgainstQuadratureFloat) {
+  for (const Case c : {Case{3, 2}, Case{5, 2}, Case{8, 2}, Case{12, 3}, Case{20, 2}, Case{20, 3},
+                       Case{20, 7}}) {
+    const auto f = random_inputs(c.order, c.inputs, 7 + c.order + c.inputs);
+    const std::vector<double> ref = reference_product(c.order, f);
+    const double err = relative_l2(grid_multiply<float>(c.order, f), ref);
+    EXPECT_LT(err, kTolFloat) << "N " << c.order << " k " << c.inputs + 1 << ": " << sci(err);
+    RecordProperty("float_rel_l2_N" + std::to_string(c.order) + "_k" + std::to_string(c.inputs + 1),
+                   sci(err));
+  }
+}
+
+TEST(GridProduct, ClosedFormSquareOfY10) {
+  // (c z)^2 with c^2 = 3/(4 pi): z^2 = 1/3 + (2/3) P_2, so y_1^0 y_1^0 projects to
+  // 1/sqrt(4 pi) y_0^0 + 1/sqrt(5 pi) y_2^0 (order 2 keeps band 0 only).
+  for (int order : {2, 3, 6}) {
+    std::vector<double> y10(sh_count(order), 0.0);
+    y10[2] = 1.0;
+    const std::vector<double> g = grid_multiply<double>(order, {y10, y10});
+    for (int i = 0; i < sh_count(order); ++i) {
+      const double expected =
+          i == 0 ? 0.5 / std::sqrt(std::numbers::pi) : i == 6 ? 1.0 / std::sqrt(5.0 * std::numbers::pi) : 0.0;
+      EXPECT_NEAR(g[i], expected, 1e-15) << "N " << order << " coefficient " << i;
+    }
+  }
+}
+
+TEST(GridProduct, IntegralsAgainstQuadrature) {
+  // Triple product integral (Eq. 4) and a 5-function integral, against <P_N(f_1..f_q), f_last>.
+  for (const Case c : {Case{4, 2}, Case{9, 2}, Case{20, 2}, Case{7, 4}}) {
+    const auto f = random_inputs(c.order, c.inputs + 1, 40 + c.order);
+    const std::vector<double> ref =
+        reference_product(c.order, std::vector<std::vector<double>>(f.begin(), f.end() - 1));
+    double expected = 0;
+    for (int i = 0; i < sh_count(c.order); ++i) expected += ref[i] * f.back()[i];
+    std::vector<std::span<const double>> spans(f.begin(), f.end());
+    const double got = GridProduct<double>(c.order, c.inputs).integral(spans);
+    EXPECT_NEAR(got, expected, 1e-12 * (std::abs(expected) + 1)) << "N " << c.order;
+  }
+}
+
+TEST(GridProduct, AliasingReuseAndDeterminism) {
+  const int order = 11;
+  const auto f = random_inputs(order, 2, 5);
+  GridProduct<double> product(order, 2);
+  std::vector<double> a(sh_count(order)), b = f[0];
+  product.multiply(f[0], f[1], a);
+  product.multiply(b, f[1], b);  // output aliases the first input
+  EXPECT_EQ(a, b);
+  // Reuse: a different product in between must not leave state behind.
+  const auto h = random_inputs(order, 2, 6);
+  std::vector<double> scratch(sh_count(order)), c(sh_count(order));
+  product.multiply(h[0], h[1], scratch);
+  product.multiply(f[0], f[1], c);
+  EXPECT_EQ(a, c);
+  std::vector<double> d(sh_count(order));
+  GridProduct<double>(order, 2).multiply(f[0], f[1], d);  // fresh object: same bits
+  EXPECT_EQ(a, d);
+}
+
+TEST(GridProduct, GridSizesAreTheExactnessBounds) {
+  for (const Case c : {Case{1, 2}, Case{3, 2}, Case{10, 2}, Case{20, 2}, Case{20, 7}}) {
+    const GridProduct<float> p(c.order, c.inputs);
+    const int degree = (c.inputs + 1) * (c.order - 1);
+    EXPECT_EQ(p.grid_theta(), degree / 2 + 1) << "N " << c.order;
+    EXPECT_GE(p.grid_phi(), degree + 1) << "N " << c.order;
+    EXPECT_EQ(p.grid_phi() % 2, 0);
+  }
+  // 58 -> 72, not 60: FFTW_ESTIMATE transforms of 60 points measured 1.5-1.9x slower.
+  EXPECT_EQ(GridProduct<double>(20, 2).grid_phi(), 72);
+  EXPECT_EQ(GridProduct<double>(3, 2).grid_phi(), 8);
+}
+
+TEST(GridProduct, BadArgumentsThrow) {
+  EXPECT_THROW(GridProduct<double>(0, 2), std::invalid_argument);
+  EXPECT_THROW(GridProduct<double>(kMaxFourierProductOrder + 1, 2), std::invalid_argument);
+  EXPECT_THROW(GridProduct<double>(5, 0), std::invalid_argument);
+  EXPECT_THROW(GridProduct<double>(5, kMaxProductInputs + 1), std::invalid_argument);
+  GridProduct<double> p(3, 2);
+  const std::vector<double> f(9, 1.0);
+  std::vector<double> g(9);
+  const std::span<const double> one[1] = {f};
+  EXPECT_THROW(p.multiply(std::span<const std::span<const double>>(one, 1), g), std::invalid_argument);
+  EXPECT_THROW(p.integral(std::span<const std::span<const double>>(one, 1)), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace shtool
