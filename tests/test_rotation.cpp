@@ -92,6 +92,7 @@ Vec3<double> random_axis(std::mt19937_64& rng) {
 
 using test::norm;
 using test::random_coeffs;
+using test::reference_matrix;
 
 template <class A, class B>
 double distance(const std::vector<A>& a, const std::vector<B>& b) {
@@ -131,23 +132,6 @@ std::vector<double> rotate_by_quadrature(int order, const Mat3<double>& r, const
   return project_sh(order, [&](const Vec3<double>& w) {
     return reconstruct<double>(std::span<const double>(f), Vec3<double>(rinv * w));
   });
-}
-
-// Dense M(R) of the reference method (block diagonal, n x n).
-Eigen::MatrixXd reference_matrix(int order, const Mat3<double>& r) {
-  ShRotation<double> rotation(order, nullptr);
-  EXPECT_TRUE(rotation.set(r, RotationMethod::reference));
-  const std::span<const double> blocks = rotation.reference_blocks();
-  const int n = sh_count(order);
-  Eigen::MatrixXd m = Eigen::MatrixXd::Zero(n, n);
-  std::size_t offset = 0;
-  for (int l = 0; l < order; ++l) {
-    const int size = 2 * l + 1;
-    for (int a = 0; a < size; ++a)
-      for (int b = 0; b < size; ++b) m(l * l + a, l * l + b) = blocks[offset + a * size + b];
-    offset += size * size;
-  }
-  return m;
 }
 
 // D1 = dM(Ry(b))/db(0) from the stored sub-diagonal (antisymmetric, tridiagonal per band).

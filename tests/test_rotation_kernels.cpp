@@ -37,6 +37,7 @@ namespace {
 
 using test::norm;
 using test::random_coeffs;
+using test::reference_matrix;
 
 constexpr int kHelperOrder = 20;
 
@@ -136,23 +137,6 @@ TEST(RotationKernels, ApplyRgbEqualsThreeApplies) {
   }
   // A generic rotation with auto takes zxzxz through apply_rgb too.
   expect_rgb_equals_three_applies<double>(20, random_rotation(rng), RotationMethod::automatic, rng);
-}
-
-// Dense M(R) of the reference method.
-Eigen::MatrixXd reference_matrix(int order, const Mat3<double>& r) {
-  ShRotation<double> rotation(order, nullptr);
-  EXPECT_TRUE(rotation.set(r, RotationMethod::reference));
-  const std::span<const double> blocks = rotation.reference_blocks();
-  const int n = sh_count(order);
-  Eigen::MatrixXd m = Eigen::MatrixXd::Zero(n, n);
-  std::size_t offset = 0;
-  for (int l = 0; l < order; ++l) {
-    const int size = 2 * l + 1;
-    for (int a = 0; a < size; ++a)
-      for (int b = 0; b < size; ++b) m(l * l + a, l * l + b) = blocks[offset + a * size + b];
-    offset += size * size;
-  }
-  return m;
 }
 
 Mat3<double> rz(double a) {

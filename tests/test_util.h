@@ -2,12 +2,19 @@
 #pragma once
 
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <numbers>
 #include <random>
 #include <string>
 #include <vector>
 
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+
 #include "shtool/quadrature.h"
+#include "shtool/rotation.h"
 #include "shtool/sh.h"
 
 namespace shtool::test {
@@ -54,6 +61,50 @@ inline std::vector<double> reference_product(int order, const std::vector<std::v
     for (int i = 0; i < n; ++i) g[i] += v * y[i];
   }
   return std::vector<double>(g.begin(), g.end());
+}
+
+// Fixed-seed test data, identical on every platform and standard library (unlike the
+// <random> distributions).
+struct Lcg {
+  std::uint64_t s;
+  double uniform() {
+    s = s * 6364136223846793005ull + 1442695040888963407ull;
+    return static_cast<double>(s >> 11) * 0x1.0p-53;
+  }
+  Eigen::Vector3d unit() {
+    const double z = 2 * uniform() - 1, p = 2 * std::numbers::pi * uniform(), r = std::sqrt(1 - z * z);
+    return {r * std::cos(p), r * std::sin(p), z};
+  }
+};
+
+// Unit-length SH vector with coefficients uniform in [-1, 1] before normalising (the
+// random vectors of paper 004, Fig. 2).
+inline std::vector<double> random_unit_vector(Lcg& rng, int order) {
+  std::vector<double> t(sh_count(order));
+  double n = 0;
+  for (double& x : t) {
+    x = 2 * rng.uniform() - 1;
+    n += x * x;
+  }
+  for (double& x : t) x /= std::sqrt(n);
+  return t;
+}
+
+// Dense M(R) of the reference rotation (block diagonal, n x n).
+inline Eigen::MatrixXd reference_matrix(int order, const Mat3<double>& r) {
+  ShRotation<double> rotation(order, nullptr);
+  EXPECT_TRUE(rotation.set(r, RotationMethod::reference));
+  const std::span<const double> blocks = rotation.reference_blocks();
+  const int n = sh_count(order);
+  Eigen::MatrixXd m = Eigen::MatrixXd::Zero(n, n);
+  std::size_t offset = 0;
+  for (int l = 0; l < order; ++l) {
+    const int size = 2 * l + 1;
+    for (int a = 0; a < size; ++a)
+      for (int b = 0; b < size; ++b) m(l * l + a, l * l + b) = blocks[offset + a * size + b];
+    offset += size * size;
+  }
+  return m;
 }
 
 }  // namespace shtool::test

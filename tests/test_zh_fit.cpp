@@ -12,34 +12,14 @@
 #include "fit/zh_fit.h"
 #include "shtool/sh.h"
 #include "shtool/zh.h"
+#include "test_util.h"
 
 namespace {
 
 using namespace shtool;
 using namespace shtool::fit;
-
-struct Lcg {  // fixed-seed test data, identical on every platform
-  std::uint64_t s;
-  double uniform() {
-    s = s * 6364136223846793005ull + 1442695040888963407ull;
-    return static_cast<double>(s >> 11) * 0x1.0p-53;
-  }
-  Eigen::Vector3d unit() {
-    const double z = 2 * uniform() - 1, p = 2 * std::numbers::pi * uniform(), r = std::sqrt(1 - z * z);
-    return {r * std::cos(p), r * std::sin(p), z};
-  }
-};
-
-std::vector<double> random_unit_vector(Lcg& rng, int order) {
-  std::vector<double> t(sh_count(order));
-  double n = 0;
-  for (double& x : t) {
-    x = 2 * rng.uniform() - 1;
-    n += x * x;
-  }
-  for (double& x : t) x /= std::sqrt(n);
-  return t;
-}
+using test::Lcg;
+using test::random_unit_vector;
 
 ZhLobe random_lobe(Lcg& rng, int order) {
   ZhLobe lobe;

@@ -42,33 +42,10 @@ namespace {
 
 using namespace shtool;
 using shtool::test::sci;
+using shtool::test::Lcg;
 
 constexpr double kPi = std::numbers::pi;
 constexpr int kOrder = 6;
-
-struct Lcg {  // fixed-seed test data, identical on every platform
-  std::uint64_t s;
-  double uniform() {
-    s = s * 6364136223846793005ull + 1442695040888963407ull;
-    return static_cast<double>(s >> 11) * 0x1.0p-53;
-  }
-  Eigen::Vector3d unit() {
-    const double z = 2 * uniform() - 1, p = 2 * kPi * uniform(), r = std::sqrt(1 - z * z);
-    return {r * std::cos(p), r * std::sin(p), z};
-  }
-};
-
-// Unit-length SH vector with coefficients uniform in [-1, 1] before normalising.
-std::vector<double> random_light(Lcg& rng, int order) {
-  std::vector<double> v(sh_count(order));
-  double n = 0;
-  for (double& x : v) {
-    x = 2 * rng.uniform() - 1;
-    n += x * x;
-  }
-  for (double& x : v) x /= std::sqrt(n);
-  return v;
-}
 
 std::vector<double> random_coeffs(Lcg& rng, int count) {
   std::vector<double> c(count);
@@ -150,7 +127,7 @@ TEST(ZhShadingExact, EqualsZhLobeDotShAndQuadrature) {
   const SphereQuadrature q = sphere_quadrature(2 * kOrder);
   Lcg rng{5};
   for (int trial = 0; trial < 10; ++trial) {
-    const std::vector<double> light = random_light(rng, kOrder);
+    const std::vector<double> light = test::random_unit_vector(rng, kOrder);
     const int lobes = 1 + trial % 4;
     std::vector<Eigen::Vector3d> axes;
     std::vector<double> coeffs;
@@ -187,7 +164,7 @@ TEST(ZhLightTable, NodesHoldTheExactBandSums) {
   // Nodes are computed in double by the same band sums: equality to rounding.
   constexpr double kTol = 1e-15;
   Lcg rng{7};
-  const std::vector<double> light = random_light(rng, kOrder);
+  const std::vector<double> light = test::random_unit_vector(rng, kOrder);
   const int r = 5;  // odd, so face centres are not nodes and every cell kind occurs
   const ZhLightTable<double> table(kOrder, light, r);
   ASSERT_EQ(table.nodes().size(), 6u * (r + 1) * (r + 1) * kOrder);
@@ -218,7 +195,7 @@ TEST(ZhLightTable, NodesHoldTheExactBandSums) {
 // one face) or a seam would leave an O(1) error that does not fall at all.
 TEST(ZhLightTable, ErrorFallsAsResolutionSquared) {
   Lcg rng{11};
-  const std::vector<double> light = random_light(rng, kOrder);
+  const std::vector<double> light = test::random_unit_vector(rng, kOrder);
   const std::vector<Eigen::Vector3d> dirs = test_directions(20000);
   double previous = 0.0;
   for (int r : {8, 16, 32, 64, 128}) {
@@ -243,7 +220,7 @@ TEST(ZhLightTable, DefaultResolutionMeetsTheDocumentedBound) {
   Lcg rng{13};
   for (int trial = 0; trial < 4; ++trial) {
     const int order = trial < 3 ? kOrder : 10;
-    const std::vector<double> light = random_light(rng, order);
+    const std::vector<double> light = test::random_unit_vector(rng, order);
     const ZhLightTable<double> table(order, light);
     ASSERT_EQ(table.resolution(), kDefaultZhLightResolution);
     const std::vector<double> err = table_band_errors(table, light, dirs);
@@ -267,7 +244,7 @@ TEST(ZhLightTable, ContinuousAcrossFaceEdgesAndCorners) {
   // (< 1 here): about 4e-12, plus rounding. A seam would show an O(1e-2) jump at R = 7.
   constexpr double kTol = 1e-11;
   Lcg rng{17};
-  const std::vector<double> light = random_light(rng, kOrder);
+  const std::vector<double> light = test::random_unit_vector(rng, kOrder);
   const ZhLightTable<double> table(kOrder, light, 7);
   std::vector<double> a(kOrder), b(kOrder);
   for (int k = 0; k < 3; ++k) {
@@ -295,7 +272,7 @@ TEST(ZhLightTable, ShadeIsEq25OverLookups) {
   // counts below, at and above shade()'s batch of 8 located lobes.
   constexpr double kTol = 1e-14;
   Lcg rng{19};
-  const std::vector<double> light = random_light(rng, kOrder);
+  const std::vector<double> light = test::random_unit_vector(rng, kOrder);
   const ZhLightTable<double> table(kOrder, light);
   for (int lobes : {1, 4, 8, 11, 17}) {
     std::vector<Eigen::Vector3d> axes;
@@ -323,7 +300,7 @@ TEST(ZhShading, RotatedLobesShadeLikeTheRotatedShVector) {
   ShRotation<double> rotation(kOrder, nullptr);
   std::vector<double> t(sh_count(kOrder)), rotated(sh_count(kOrder));
   for (int trial = 0; trial < 10; ++trial) {
-    const std::vector<double> light = random_light(rng, kOrder);
+    const std::vector<double> light = test::random_unit_vector(rng, kOrder);
     const ZhLightTable<double> table(kOrder, light);
     const std::vector<double> scale = band_scales(light, kOrder);
     double qn = 0;
@@ -383,7 +360,7 @@ void expect_invalid(int order, const std::vector<double>& light, int resolution,
 
 TEST(ZhLightTable, RejectsBadInput) {
   Lcg rng{29};
-  std::vector<double> light = random_light(rng, kOrder);
+  std::vector<double> light = test::random_unit_vector(rng, kOrder);
   expect_invalid(kOrder, std::vector<double>(25, 0.1), 16, "order mismatch");
   expect_invalid(5, light, 16, "order mismatch");
   expect_invalid(0, {}, 16, "order 0");
@@ -415,7 +392,7 @@ TEST(ZhShading, PerPointCallsAreNoexceptAndFlagMismatchesWithNaN) {
                                                std::declval<const Vec3<float>&>(), std::declval<std::span<float>>())));
 
   Lcg rng{31};
-  const std::vector<double> light = random_light(rng, kOrder);
+  const std::vector<double> light = test::random_unit_vector(rng, kOrder);
   const ZhLightTable<double> table(kOrder, light, 8);
   const std::vector<Eigen::Vector3d> axes = {rng.unit(), rng.unit()};
   const std::vector<double> good = random_coeffs(rng, 2 * kOrder);
@@ -443,7 +420,7 @@ TEST(ZhShading, PerPointCallsAreNoexceptAndFlagMismatchesWithNaN) {
 
 TEST(ZhShading, PerPointCallsAllocateNothing) {
   Lcg rng{37};
-  const std::vector<double> light = random_light(rng, kOrder);
+  const std::vector<double> light = test::random_unit_vector(rng, kOrder);
   const std::vector<float> lightf(light.begin(), light.end());
   const ZhLightTable<double> table(kOrder, light);
   const ZhLightTable<float> tablef(kOrder, light);

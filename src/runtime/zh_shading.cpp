@@ -34,10 +34,11 @@ void band_sums(int order, const T* y, const T* light, T* out) noexcept {
   }
 }
 
-template <class T>
-T shade_small(int order, const T* light, std::span<const Vec3<T>> axes, const T* coeffs) noexcept {
-  T y[kSmallOrder * kSmallOrder];
-  T bands[kSmallOrder];
+// Eq. 25 with the exact band sums, for orders up to Capacity (the stack buffer's size).
+template <class T, int Capacity>
+T shade_with_buffer(int order, const T* light, std::span<const Vec3<T>> axes, const T* coeffs) noexcept {
+  T y[Capacity * Capacity];
+  T bands[Capacity];
   T r = 0;
   for (std::size_t i = 0; i < axes.size(); ++i) {
     eval_sh<T>(order, axes[i], std::span<T>(y, sh_count(order)));
@@ -47,24 +48,22 @@ T shade_small(int order, const T* light, std::span<const Vec3<T>> axes, const T*
   return r;
 }
 
+template <class T, int Capacity>
+void bands_with_buffer(int order, const T* light, const Vec3<T>& axis, T* out) noexcept {
+  T y[Capacity * Capacity];
+  eval_sh<T>(order, axis, std::span<T>(y, sh_count(order)));
+  band_sums(order, y, light, out);
+}
+
+// Out of line so only calls with order > kSmallOrder pay for the large frame.
 template <class T>
 [[gnu::noinline]] T shade_large(int order, const T* light, std::span<const Vec3<T>> axes, const T* coeffs) noexcept {
-  T y[kMaxOrder * kMaxOrder];
-  T bands[kMaxOrder];
-  T r = 0;
-  for (std::size_t i = 0; i < axes.size(); ++i) {
-    eval_sh<T>(order, axes[i], std::span<T>(y, sh_count(order)));
-    band_sums(order, y, light, bands);
-    for (int l = 0; l < order; ++l) r += bands[l] * coeffs[i * order + l];
-  }
-  return r;
+  return shade_with_buffer<T, kMaxOrder>(order, light, axes, coeffs);
 }
 
 template <class T>
 [[gnu::noinline]] void bands_large(int order, const T* light, const Vec3<T>& axis, T* out) noexcept {
-  T y[kMaxOrder * kMaxOrder];
-  eval_sh<T>(order, axis, std::span<T>(y, sh_count(order)));
-  band_sums(order, y, light, out);
+  bands_with_buffer<T, kMaxOrder>(order, light, axis, out);
 }
 
 }  // namespace
@@ -76,13 +75,10 @@ void zh_light_bands(std::span<const T> light, const Vec3<T>& axis, std::span<T> 
     for (T& v : out) v = std::numeric_limits<T>::quiet_NaN();
     return;
   }
-  if (order <= kSmallOrder) {
-    T y[kSmallOrder * kSmallOrder];
-    eval_sh<T>(order, axis, std::span<T>(y, sh_count(order)));
-    band_sums(order, y, light.data(), out.data());
-  } else {
+  if (order <= kSmallOrder)
+    bands_with_buffer<T, kSmallOrder>(order, light.data(), axis, out.data());
+  else
     bands_large(order, light.data(), axis, out.data());
-  }
 }
 
 template <class T>
@@ -90,7 +86,7 @@ T zh_shade_exact(std::span<const T> light, std::span<const Vec3<T>> axes, std::s
   const int order = order_of_size(light.size());
   if (order == 0 || coeffs.size() != axes.size() * static_cast<std::size_t>(order))
     return std::numeric_limits<T>::quiet_NaN();
-  return order <= kSmallOrder ? shade_small(order, light.data(), axes, coeffs.data())
+  return order <= kSmallOrder ? shade_with_buffer<T, kSmallOrder>(order, light.data(), axes, coeffs.data())
                               : shade_large(order, light.data(), axes, coeffs.data());
 }
 
