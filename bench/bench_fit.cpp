@@ -24,12 +24,16 @@
 //                                 sh_rotate_dot ShRotation set (automatic method, random
 //                                               rotation) + apply + n^2 dot: what a point
 //                                               costs when SH transfer is rotated instead
-//   BM_TableBuild/<type>/res:R  building the light table (per lighting change).
+//   BM_TableBuild/<type>/res:R  building the light table (per lighting change); counters
+//                               err_band1/err_band5: worst look-up error over 50,000 random
+//                               directions relative to the band's largest value.
 //
 // Run (CPU times; the machine is shared, compare within one run):
 //   build/bench/bench_fit --benchmark_counters_tabular=true
+#include <algorithm>
 #include <cmath>
 #include <memory>
+#include <numbers>
 #include <random>
 #include <stdexcept>
 #include <string>
@@ -214,7 +218,28 @@ void BM_TableBuild(benchmark::State& state) {
     shtool::ZhLightTable<T> table(kOrder, light, resolution);
     benchmark::DoNotOptimize(table.nodes().data());
   }
-  state.counters["table_KB"] = shtool::ZhLightTable<T>(kOrder, light, resolution).bytes() / 1024.0;
+  const shtool::ZhLightTable<T> table(kOrder, light, resolution);
+  state.counters["table_KB"] = table.bytes() / 1024.0;
+  // Accuracy of the look-up (docs/fit-zh.md, "Accuracy"): worst error of band l over
+  // random directions, relative to the largest value the band can take,
+  // sqrt((2l+1)/(4 pi)) |L_l| (Cauchy-Schwarz with the addition theorem).
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> g;
+  std::vector<T> fast(kOrder), exact(kOrder);
+  std::vector<double> worst(kOrder, 0.0);
+  const std::vector<T> light_t(light.begin(), light.end());
+  for (int k = 0; k < 50000; ++k) {
+    const shtool::Vec3<T> axis = Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized().cast<T>();
+    table.lookup(axis, fast);
+    shtool::zh_light_bands<T>(light_t, axis, exact);
+    for (int l = 0; l < kOrder; ++l) worst[l] = std::max(worst[l], std::abs(double(fast[l]) - double(exact[l])));
+  }
+  for (int l : {1, kOrder - 1}) {
+    double band = 0;
+    for (int m = -l; m <= l; ++m) band += light[shtool::sh_index(l, m)] * light[shtool::sh_index(l, m)];
+    const double scale = std::sqrt((2 * l + 1) / (4 * std::numbers::pi) * band);
+    state.counters["err_band" + std::to_string(l)] = worst[l] / scale;
+  }
 }
 
 template <class T>
@@ -234,7 +259,7 @@ void register_shading(const std::string& type) {
   add("sh_rotate_dot", ShadeMethod::sh_rotate_dot)->ArgNames({"lobes", "res"})->Args({0, 0});
   auto* build = benchmark::RegisterBenchmark(("BM_TableBuild/" + type).c_str(), BM_TableBuild<T>);
   build->ArgName("res")->Unit(benchmark::kMicrosecond);
-  for (long r : {16, 32, 64}) build->Arg(r);
+  for (long r : {8, 16, 32, 64, 128}) build->Arg(r);
 }
 
 }  // namespace

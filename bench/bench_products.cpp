@@ -47,24 +47,12 @@ void BM_TripleTripling(benchmark::State& state) {
   state.counters["pairs"] = static_cast<double>(product.pair_count());
 }
 
-template <class T>
-void BM_TripleFourier(benchmark::State& state) {
+// Fourier (paper 003) and grid products share the interface and the grid counter
+// (theta points * 1000 + phi points).
+template <class T, template <class> class Product>
+void BM_TripleOnGrid(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));
-  shtool::FourierProduct<T> product(n, 2);
-  const auto f = random_inputs<T>(n, 2);
-  std::vector<T> g(sh_count(n));
-  for (auto _ : state) {
-    product.multiply(f[0], f[1], g);
-    benchmark::DoNotOptimize(g.data());
-    benchmark::ClobberMemory();
-  }
-  state.counters["grid"] = product.grid_theta() * 1000.0 + product.grid_phi();
-}
-
-template <class T>
-void BM_TripleGrid(benchmark::State& state) {
-  const int n = static_cast<int>(state.range(0));
-  shtool::GridProduct<T> product(n, 2);
+  Product<T> product(n, 2);
   const auto f = random_inputs<T>(n, 2);
   std::vector<T> g(sh_count(n));
   for (auto _ : state) {
@@ -136,12 +124,12 @@ void multiple_args(benchmark::internal::Benchmark* b) {
 }  // namespace
 
 BENCHMARK(BM_TripleTripling<float>)->Name("BM_Triple/tripling/float")->Apply(triple_orders);
-BENCHMARK(BM_TripleFourier<float>)->Name("BM_Triple/fourier/float")->Apply(triple_orders);
-BENCHMARK(BM_TripleGrid<float>)->Name("BM_Triple/grid/float")->Apply(triple_orders);
+BENCHMARK(BM_TripleOnGrid<float, shtool::FourierProduct>)->Name("BM_Triple/fourier/float")->Apply(triple_orders);
+BENCHMARK(BM_TripleOnGrid<float, shtool::GridProduct>)->Name("BM_Triple/grid/float")->Apply(triple_orders);
 BENCHMARK(BM_TripleAuto<float>)->Name("BM_Triple/auto/float")->Apply(triple_orders);
 BENCHMARK(BM_TripleTripling<double>)->Name("BM_Triple/tripling/double")->Apply(triple_orders);
-BENCHMARK(BM_TripleFourier<double>)->Name("BM_Triple/fourier/double")->Apply(triple_orders);
-BENCHMARK(BM_TripleGrid<double>)->Name("BM_Triple/grid/double")->Apply(triple_orders);
+BENCHMARK(BM_TripleOnGrid<double, shtool::FourierProduct>)->Name("BM_Triple/fourier/double")->Apply(triple_orders);
+BENCHMARK(BM_TripleOnGrid<double, shtool::GridProduct>)->Name("BM_Triple/grid/double")->Apply(triple_orders);
 BENCHMARK(BM_TripleAuto<double>)->Name("BM_Triple/auto/double")->Apply(triple_orders);
 BENCHMARK(BM_Multiple<float, kAccurateGrid>)->Name("BM_Multiple/accurate-grid/float")->Apply(multiple_args);
 BENCHMARK(BM_Multiple<float, kAccurateFourier>)->Name("BM_Multiple/accurate-fourier/float")->Apply(multiple_args);

@@ -30,6 +30,7 @@
 #include "shtool/rotation.h"
 #include "shtool/rotation_helpers.h"
 #include "shtool/sh.h"
+#include "bench_util.h"
 
 #ifdef SHTOOL_BENCH_HAVE_OFFLINE
 #include "tensors/rotation_helpers_gen.h"
@@ -41,9 +42,6 @@ using shtool::RotationMethod;
 
 constexpr int kMinOrder = 2;
 constexpr int kMaxOrder = 20;
-// Number of precomputed rotations the timed loop cycles through: enough that branch
-// predictors cannot learn one rotation, small enough to stay in L1.
-constexpr int kRotations = 64;
 // Tilt of the "small" set: with the default tolerance 1e-10 the 2nd order Taylor bound
 // (b (N - 1))^3 / 6 passes up to N = 20 (1.1e-12), so `auto` picks a Taylor method.
 constexpr double kSmallTilt = 1e-5;
@@ -55,58 +53,19 @@ std::shared_ptr<const shtool::RotationHelpers> helpers() {
 #else
     auto loaded = shtool::RotationHelpers::load(shtool::default_rotation_helpers_path(), kMaxOrder);
     if (!loaded) throw std::runtime_error("bench_rotation: no rotation-helpers table; run shtool gen-tensors");
-    return std::make_shared<const shtool::RotationHelpers>(std::move(*loaded));
+    return std::make_shared<const shtool::RotationHelpers>(std::move(loaded).value());
 #endif
   }();
   return h;
-}
-
-// Unit quaternions (w, x, y, z), in double so float and double see the same rotations.
-std::vector<std::array<double, 4>> quaternions(bool small_tilt) {
-  std::mt19937_64 rng(small_tilt ? 2024 : 42);
-  std::normal_distribution<double> gauss;
-  std::uniform_real_distribution<double> angle(-M_PI, M_PI);
-  std::vector<std::array<double, 4>> q(kRotations);
-  for (auto& v : q) {
-    if (small_tilt) {
-      // q = qz(a) qy(b) qz(g): Rz(a) Ry(b) Rz(g) with tilt b.
-      const double a = angle(rng), g = angle(rng), b = kSmallTilt;
-      const double cb = std::cos(b / 2), sb = std::sin(b / 2);
-      const double s = (a + g) / 2, d = (a - g) / 2;
-      v = {cb * std::cos(s), -sb * std::sin(d), sb * std::cos(d), cb * std::sin(s)};
-    } else {
-      // Normalised 4D Gaussian: uniform on SO(3).
-      double norm = 0;
-      for (double& x : v) {
-        x = gauss(rng);
-        norm += x * x;
-      }
-      for (double& x : v) x /= std::sqrt(norm);
-    }
-  }
-  return q;
-}
-
-template <class T>
-std::vector<std::vector<T>> random_vectors(int order, int count) {
-  std::mt19937 rng(7);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  std::vector<std::vector<T>> f(count, std::vector<T>(shtool::sh_count(order)));
-  for (auto& v : f)
-    for (auto& x : v) x = static_cast<T>(u(rng));
-  return f;
 }
 
 template <class T>
 void BM_Rotate(benchmark::State& state, RotationMethod method, bool small_tilt, int vectors) {
   const int order = static_cast<int>(state.range(0));
   shtool::ShRotation<T> rotation(order, helpers());
-  const auto qd = quaternions(small_tilt);
-  std::vector<std::array<T, 4>> q(qd.size());
-  for (std::size_t k = 0; k < qd.size(); ++k)
-    for (int c = 0; c < 4; ++c) q[k][c] = static_cast<T>(qd[k][c]);
-  const auto in = random_vectors<T>(order, vectors);
-  auto out = random_vectors<T>(order, vectors);
+  const auto q = shtool::bench::random_quaternions<T>(small_tilt ? kSmallTilt : -1);
+  const auto in = shtool::bench::random_sh_vectors<T>(order, vectors);
+  auto out = shtool::bench::random_sh_vectors<T>(order, vectors);
 
   std::size_t k = 0;
   bool ok = true;

@@ -35,6 +35,7 @@
 #include "shtool/rotation_helpers.h"
 #include "shtool/sh.h"
 #include "shtool/zhf_rotation.h"
+#include "bench_util.h"
 
 namespace {
 
@@ -42,9 +43,6 @@ using shtool::RotationMethod;
 
 constexpr int kMinOrder = 2;
 constexpr int kMaxOrder = 10;
-// Precomputed rotations the timed loop cycles through: enough that branch predictors
-// cannot learn one rotation, small enough to stay in L1 (same as bench_rotation).
-constexpr int kRotations = 64;
 
 std::shared_ptr<const shtool::RotationHelpers> helpers() {
   static const std::shared_ptr<const shtool::RotationHelpers> h = [] {
@@ -68,41 +66,6 @@ std::shared_ptr<const shtool::ZhfLobes> lobes(int order) {
   return slot;
 }
 
-// Unit quaternions (w, x, y, z), uniform on SO(3) (normalised 4D Gaussian), in double so
-// float and double see the same rotations. Same seed as bench_rotation's "large" set.
-std::vector<std::array<double, 4>> quaternions() {
-  std::mt19937_64 rng(42);
-  std::normal_distribution<double> gauss;
-  std::vector<std::array<double, 4>> q(kRotations);
-  for (auto& v : q) {
-    double norm = 0;
-    for (double& x : v) {
-      x = gauss(rng);
-      norm += x * x;
-    }
-    for (double& x : v) x /= std::sqrt(norm);
-  }
-  return q;
-}
-
-template <class T>
-std::vector<std::array<T, 4>> quaternions_as() {
-  const auto qd = quaternions();
-  std::vector<std::array<T, 4>> q(qd.size());
-  for (std::size_t k = 0; k < qd.size(); ++k)
-    for (int c = 0; c < 4; ++c) q[k][c] = static_cast<T>(qd[k][c]);
-  return q;
-}
-
-template <class T>
-std::vector<T> random_vector(int order) {
-  std::mt19937 rng(7);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  std::vector<T> f(shtool::sh_count(order));
-  for (auto& x : f) x = static_cast<T>(u(rng));
-  return f;
-}
-
 enum class Method { reference, zxzxz, zhf, zhf_tailored };
 
 const char* method_name(Method m) {
@@ -118,8 +81,8 @@ const char* method_name(Method m) {
 template <class T>
 void BM_Zhf(benchmark::State& state, Method method) {
   const int order = static_cast<int>(state.range(0));
-  const auto q = quaternions_as<T>();
-  const std::vector<T> in = random_vector<T>(order);
+  const auto q = shtool::bench::random_quaternions<T>();
+  const std::vector<T> in = shtool::bench::random_sh_vectors<T>(order, 1)[0];
   std::vector<T> out(in.size());
   std::size_t k = 0;
   auto next = [&]() {

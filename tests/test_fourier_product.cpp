@@ -27,6 +27,7 @@ namespace shtool {
 namespace {
 
 using test::reference_product;
+using test::random_inputs;
 using test::sci;
 
 // The accuracy bar for accurate products in double.
@@ -130,15 +131,6 @@ TEST(ShFourierTensors, TableRoundTripAndCorruption) {
   bad = table;
   bad.kind = "tripling-tensor";
   EXPECT_FALSE(ShFourierTensors::from_table(bad).ok());
-}
-
-std::vector<std::vector<double>> random_inputs(int order, int count, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  std::vector<std::vector<double>> f(count, std::vector<double>(sh_count(order)));
-  for (auto& v : f)
-    for (auto& x : v) x = u(rng);
-  return f;
 }
 
 template <class T>

@@ -25,6 +25,7 @@ namespace shtool {
 namespace {
 
 using test::reference_product;
+using test::random_inputs;
 using test::sci;
 
 // The accuracy bar for accurate products in double.
@@ -33,13 +34,6 @@ constexpr double kTolDouble = 1e-10;
 // and an FFT of O(N) points per input; measured 9e-8 to 3.0e-7 (N = 3..20, k = 3..8),
 // so 2e-6 leaves a margin of about 7 without hiding an O(1) error.
 constexpr double kTolFloat = 2e-6;
-
-std::vector<std::vector<double>> random_inputs(int order, int count, unsigned seed) {
-  std::mt19937_64 rng(seed);
-  std::vector<std::vector<double>> f;
-  for (int i = 0; i < count; ++i) f.push_back(test::random_coeffs(order, rng));
-  return f;
-}
 
 template <class T>
 double relative_l2(const std::vector<T>& got, const std::vector<double>& ref) {

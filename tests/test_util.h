@@ -27,6 +27,14 @@ inline std::vector<double> random_coeffs(int order, std::mt19937_64& rng) {
   return f;
 }
 
+// `count` product inputs of order N, coefficients uniform in [-1, 1], from one seed.
+inline std::vector<std::vector<double>> random_inputs(int order, int count, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::vector<std::vector<double>> f;
+  for (int i = 0; i < count; ++i) f.push_back(random_coeffs(order, rng));
+  return f;
+}
+
 // Euclidean norm of a coefficient vector.
 inline double norm(const std::vector<double>& v) {
   double s = 0;

@@ -1,0 +1,60 @@
+// Test data shared by the benchmark programs (header-only; each bench is its own program),
+// so every benchmark times the same rotations and vectors.
+#pragma once
+
+#include <array>
+#include <cmath>
+#include <cstddef>
+#include <random>
+#include <vector>
+
+#include "shtool/sh.h"
+
+namespace shtool::bench {
+
+// Number of precomputed rotations a timed loop cycles through: enough that branch
+// predictors cannot learn one rotation, small enough to stay in L1.
+inline constexpr int kRotations = 64;
+
+// Unit quaternions (w, x, y, z) in T, drawn in double so float and double see the same
+// rotations. tilt < 0: uniform on SO(3) (normalised 4D Gaussian, seed 42); tilt >= 0:
+// Rz(a) Ry(tilt) Rz(g) with random a, g (seed 2024), the small-angle set.
+template <class T>
+std::vector<std::array<T, 4>> random_quaternions(double tilt = -1) {
+  std::mt19937_64 rng(tilt >= 0 ? 2024 : 42);
+  std::normal_distribution<double> gauss;
+  std::uniform_real_distribution<double> angle(-M_PI, M_PI);
+  std::vector<std::array<T, 4>> q(kRotations);
+  for (auto& out : q) {
+    std::array<double, 4> v;
+    if (tilt >= 0) {
+      // q = qz(a) qy(b) qz(g).
+      const double a = angle(rng), g = angle(rng);
+      const double cb = std::cos(tilt / 2), sb = std::sin(tilt / 2);
+      const double s = (a + g) / 2, d = (a - g) / 2;
+      v = {cb * std::cos(s), -sb * std::sin(d), sb * std::cos(d), cb * std::sin(s)};
+    } else {
+      double norm = 0;
+      for (double& x : v) {
+        x = gauss(rng);
+        norm += x * x;
+      }
+      for (double& x : v) x /= std::sqrt(norm);
+    }
+    for (int c = 0; c < 4; ++c) out[c] = static_cast<T>(v[c]);
+  }
+  return q;
+}
+
+// `count` SH vectors of order N with coefficients uniform in [-1, 1] (fixed seed).
+template <class T>
+std::vector<std::vector<T>> random_sh_vectors(int order, int count) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::vector<std::vector<T>> f(count, std::vector<T>(sh_count(order)));
+  for (auto& v : f)
+    for (auto& x : v) x = static_cast<T>(u(rng));
+  return f;
+}
+
+}  // namespace shtool::bench
