@@ -246,5 +246,34 @@ TEST(NormalizedLegendre, MatchesStdSphLegendreAndEvalSh) {
   }
 }
 
+TEST(NormalizedLegendre, AllAtOnePointMatchesStdSphLegendre) {
+  // normalized_legendre_all (long double, the table builders' recurrence) against
+  // std::sph_legendre, with p00 = 1/sqrt(4 pi) (plain K_l^m P_l^m) and a second scale
+  // that must multiply every value; exact zeros for m > 0 at the poles.
+  const int order = 31;
+  std::vector<long double> out(order * (order + 1) / 2);
+  for (double t : {0.05, 0.3, 1.0, 1.5707, 2.0, 3.0}) {
+    const long double p00 = 0.5L / std::sqrt(std::numbers::pi_v<long double>);
+    normalized_legendre_all(order, std::cos(static_cast<long double>(t)), std::sin(static_cast<long double>(t)), p00, out);
+    std::vector<long double> scaled(out.size());
+    normalized_legendre_all(order, std::cos(static_cast<long double>(t)), std::sin(static_cast<long double>(t)),
+                            3 * p00, scaled);
+    for (int l = 0; l < order; ++l)
+      for (int m = 0; m <= l; ++m) {
+        const std::size_t k = static_cast<std::size_t>(l) * (l + 1) / 2 + m;
+        // std::sph_legendre's own error dominates: the budget of the test above.
+        const double scale = std::sqrt((2.0 * l + 1) / (4 * kPi));
+        const double tol = 2 * (4.0 + l * l / 3.0) * 2.220446049250313e-16 * scale;
+        EXPECT_NEAR(static_cast<double>(out[k]), std::sph_legendre(l, m, t), tol) << "l " << l << " m " << m << " t " << t;
+        EXPECT_NEAR(static_cast<double>(scaled[k]), 3 * static_cast<double>(out[k]), 1e-15 * scale) << "l " << l << " m " << m;
+      }
+  }
+  for (long double z : {1.0L, -1.0L}) {
+    normalized_legendre_all(order, z, 0.0L, 1.0L, out);
+    for (int l = 0; l < order; ++l)
+      for (int m = 1; m <= l; ++m) EXPECT_EQ(out[static_cast<std::size_t>(l) * (l + 1) / 2 + m], 0.0L) << l << " " << m;
+  }
+}
+
 }  // namespace
 }  // namespace shtool

@@ -3,9 +3,11 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <span>
 #include <string>
 #include <vector>
 
+#include "shtool/legendre.h"
 #include "shtool/sh.h"
 
 namespace shtool {
@@ -47,33 +49,23 @@ ShFourierTensors ShFourierTensors::compute(int order, int degree) {
     cos_table[r] = std::cos(pi * r / J);
     sin_table[r] = std::sin(pi * r / J);
   }
+  // all[j][l (l+1)/2 + m]: sqrt(2 pi) Q_l^m sin^m at every sample (sqrt(2 pi) / sqrt(4 pi)
+  // = 1 / sqrt(2) for (0, 0)), with sin exactly 0 at the poles.
+  const std::size_t per_point = static_cast<std::size_t>(n) * (n + 1) / 2;
+  std::vector<long double> all(per_point * (J + 1));
+  for (int j = 0; j <= J; ++j) {
+    const long double z = (j == 0) ? 1.0L : (j == J) ? -1.0L : cos_table[j];
+    const long double sn = (j == 0 || j == J) ? 0.0L : sin_table[j];
+    normalized_legendre_all(n, z, sn, 1.0L / std::sqrt(2.0L),
+                            std::span<long double>(all.data() + j * per_point, per_point));
+  }
   // samples[l][j] for the current m.
   std::vector<long double> samples(static_cast<std::size_t>(n) * (J + 1));
   std::vector<long double> c(n);
   for (int m = 0; m < n; ++m) {
-    for (int j = 0; j <= J; ++j) {
-      const long double z = (j == 0) ? 1.0L : (j == J) ? -1.0L : cos_table[j];
-      const long double sn = (j == 0 || j == J) ? 0.0L : sin_table[j];
-      // sqrt(2 pi) Q_m^m sin^m, with sqrt(2 pi) / sqrt(4 pi) = 1 / sqrt(2).
-      long double diag = 1.0L / std::sqrt(2.0L);
-      for (int k = 1; k <= m; ++k) diag *= -std::sqrt((2.0L * k + 1.0L) / (2.0L * k)) * sn;
-      long double p2 = 0, p1 = diag;
-      samples[static_cast<std::size_t>(m) * (J + 1) + j] = p1;
-      for (int l = m + 1; l < n; ++l) {
-        long double p;
-        if (l == m + 1) {
-          p = std::sqrt(2.0L * m + 3.0L) * z * p1;
-        } else {
-          const long double ld = l, md = m;
-          const long double a = std::sqrt((4 * ld * ld - 1) / (ld * ld - md * md));
-          const long double b = std::sqrt(((ld - 1) * (ld - 1) - md * md) / (4 * (ld - 1) * (ld - 1) - 1));
-          p = a * (z * p1 - b * p2);
-        }
-        samples[static_cast<std::size_t>(l) * (J + 1) + j] = p;
-        p2 = p1;
-        p1 = p;
-      }
-    }
+    for (int j = 0; j <= J; ++j)
+      for (int l = m; l < n; ++l)
+        samples[static_cast<std::size_t>(l) * (J + 1) + j] = all[j * per_point + static_cast<std::size_t>(l) * (l + 1) / 2 + m];
     for (int l = m; l < n; ++l) {
       const long double* f = samples.data() + static_cast<std::size_t>(l) * (J + 1);
       std::fill(c.begin(), c.end(), 0.0L);

@@ -11,6 +11,7 @@
 
 #include <fftw3.h>
 
+#include "shtool/legendre.h"
 #include "shtool/quadrature.h"
 #include "shtool/sh.h"
 
@@ -81,28 +82,6 @@ int fft_friendly_even(int n) {
   }
 }
 
-// K_l^m P_l^m(x) (Condon-Shortley phase) for 0 <= m <= l < order at one x, in long double:
-// out[l * order + m]. Same recurrence as the SH evaluator (sh.cpp, legendre.cpp).
-void normalized_legendre_all(int order, long double x, std::vector<long double>& out) {
-  out.assign(static_cast<std::size_t>(order) * order, 0.0L);
-  const long double s = std::sqrt((1.0L - x) * (1.0L + x));
-  long double pmm = 0.5L / std::sqrt(std::numbers::pi_v<long double>);
-  for (int m = 0; m < order; ++m) {
-    if (m > 0) pmm *= -std::sqrt((2.0L * m + 1.0L) / (2.0L * m)) * s;
-    long double p2 = 0, p1 = pmm;
-    out[static_cast<std::size_t>(m) * order + m] = pmm;
-    for (int l = m + 1; l < order; ++l) {
-      const long double ll = l, mm = m;
-      const long double a = std::sqrt((4 * ll * ll - 1) / (ll * ll - mm * mm));
-      const long double b = std::sqrt(((ll - 1) * (ll - 1) - mm * mm) / (4 * (ll - 1) * (ll - 1) - 1));
-      const long double p0 = a * (x * p1 - b * p2);
-      out[static_cast<std::size_t>(l) * order + m] = p0;
-      p2 = p1;
-      p1 = p0;
-    }
-  }
-}
-
 }  // namespace
 
 template <class T>
@@ -149,16 +128,21 @@ struct GridProduct<T>::Impl {
     const long double rs2 = 1.0L / std::sqrt(2.0L);
     std::vector<std::vector<long double>> leg(pairs + (equator ? 1 : 0));
     std::vector<long double> weight(leg.size());
+    const long double p00 = 0.5L / std::sqrt(pi);  // K_0^0: the SH normalisation
+    auto legendre_at = [&](long double z, std::vector<long double>& out) {
+      out.resize(static_cast<std::size_t>(n) * (n + 1) / 2);
+      normalized_legendre_all(n, z, std::sqrt((1.0L - z) * (1.0L + z)), p00, out);
+    };
     for (int t = 0; t < pairs; ++t) {
       // nodes ascend; the positive ones are at the end
-      normalized_legendre_all(n, gl.nodes[rings - 1 - t], leg[t]);
+      legendre_at(gl.nodes[rings - 1 - t], leg[t]);
       weight[t] = gl.weights[rings - 1 - t];
     }
     if (equator) {
-      normalized_legendre_all(n, 0.0L, leg[pairs]);
+      legendre_at(0.0L, leg[pairs]);
       weight[pairs] = gl.weights[pairs];
     }
-    auto lp = [&](int t, int l, int m) { return leg[t][static_cast<std::size_t>(l) * n + m]; };
+    auto lp = [&](int t, int l, int m) { return leg[t][static_cast<std::size_t>(l) * (l + 1) / 2 + m]; };
 
     syn_off.resize(n + 1);
     syn_eq.assign(static_cast<std::size_t>(n) * n, T(0));

@@ -40,6 +40,29 @@ double normalized_legendre(int l, int m, double theta) {
   return q * std::pow(std::sin(theta), m);
 }
 
+void normalized_legendre_all(int order, long double z, long double s, long double p00, std::span<long double> out) {
+  long double diag = p00;  // Q_m^m sin^m t, carried along the diagonal
+  for (int m = 0; m < order; ++m) {
+    if (m > 0) diag *= -std::sqrt((2.0L * m + 1.0L) / (2.0L * m)) * s;
+    long double p2 = 0, p1 = diag;
+    out[static_cast<std::size_t>(m) * (m + 1) / 2 + m] = p1;
+    for (int l = m + 1; l < order; ++l) {
+      long double p;
+      if (l == m + 1) {
+        p = std::sqrt(2.0L * m + 3.0L) * z * p1;
+      } else {
+        const long double ld = l, md = m;
+        const long double a = std::sqrt((4 * ld * ld - 1) / (ld * ld - md * md));
+        const long double b = std::sqrt(((ld - 1) * (ld - 1) - md * md) / (4 * (ld - 1) * (ld - 1) - 1));
+        p = a * (z * p1 - b * p2);
+      }
+      out[static_cast<std::size_t>(l) * (l + 1) / 2 + m] = p;
+      p2 = p1;
+      p1 = p;
+    }
+  }
+}
+
 std::vector<double> legendre_zeros(int l, int m) {
   const int n = l - m;
   std::vector<double> zeros;

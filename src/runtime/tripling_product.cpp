@@ -10,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include "shtool/legendre.h"
 #include "shtool/quadrature.h"
 #include "shtool/sh.h"
 
@@ -32,42 +33,18 @@ Lm band_of(int i) {
 }
 
 // Theta_l^m(x) = sqrt(2 pi) K_l^m P_l^m(x) at Gauss nodes, for 0 <= m <= l < order;
-// normalised so that the integral over [-1, 1] of its square is 1. Same recurrence as
-// the SH evaluator (sh.cpp), in long double.
+// normalised so that the integral over [-1, 1] of its square is 1 (normalized_legendre_all).
 class PolarTable {
  public:
   PolarTable(int order, const std::vector<double>& x) : nq_(static_cast<int>(x.size())) {
     values_.assign(static_cast<std::size_t>(order * (order + 1) / 2) * nq_, 0.0L);
+    std::vector<long double> point(static_cast<std::size_t>(order * (order + 1) / 2));
     for (int q = 0; q < nq_; ++q) {
       const long double z = x[q];
-      const long double s = std::sqrt((1.0L - z) * (1.0L + z));
-      // Q_m^m * sin^m carried along the diagonal; sqrt(2 pi) / sqrt(4 pi) = 1/sqrt(2).
-      long double diag = 1.0L / std::sqrt(2.0L);
-      for (int m = 0; m < order; ++m) {
-        if (m > 0) diag *= -std::sqrt((2.0L * m + 1.0L) / (2.0L * m)) * s;
-        long double p2 = 0, p1 = diag;
-        at(m, m, q) = p1;
-        if (m + 1 < order) {
-          const long double p = std::sqrt(2.0L * m + 3.0L) * z * p1;
-          at(m + 1, m, q) = p;
-          p2 = p1;
-          p1 = p;
-        }
-        for (int l = m + 2; l < order; ++l) {
-          const long double ld = l, md = m;
-          const long double a = std::sqrt((4 * ld * ld - 1) / (ld * ld - md * md));
-          const long double b =
-              std::sqrt(((ld - 1) * (ld - 1) - md * md) / (4 * (ld - 1) * (ld - 1) - 1));
-          const long double p = a * (z * p1 - b * p2);
-          at(l, m, q) = p;
-          p2 = p1;
-          p1 = p;
-        }
-      }
+      // sqrt(2 pi) / sqrt(4 pi) = 1/sqrt(2) for (l, m) = (0, 0).
+      normalized_legendre_all(order, z, std::sqrt((1.0L - z) * (1.0L + z)), 1.0L / std::sqrt(2.0L), point);
+      for (std::size_t k = 0; k < point.size(); ++k) values_[k * nq_ + q] = point[k];
     }
-  }
-  long double& at(int l, int m, int q) {
-    return values_[static_cast<std::size_t>(l * (l + 1) / 2 + m) * nq_ + q];
   }
   const long double* row(int l, int m) const {
     return values_.data() + static_cast<std::size_t>(l * (l + 1) / 2 + m) * nq_;
