@@ -3,6 +3,7 @@
 //                                       method, the grid (quadrature) and auto (default)
 //   BM_Multiple/<method>/<type>/k/N     k - 1 inputs: accurate (grid; Fourier with divide
 //                                       and conquer) vs recursive (Eq. 11, tripling / auto)
+//   BM_GridAzimuth/<direct|fft>/<type>/k/N  the grid product's two azimuthal transforms
 //   BM_TriplingBuild/N                  runtime construction of the tripling tensor
 // Run: build-*/bench/bench_products --benchmark_min_time=0.2
 // Figures and the machine they were measured on: docs/products.md.
@@ -63,6 +64,24 @@ void BM_TripleOnGrid(benchmark::State& state) {
   state.counters["grid"] = product.grid_theta() * 1000.0 + product.grid_phi();
 }
 
+// The grid product's two azimuthal methods at equal (order, inputs): the crossover that
+// kDirectAzimuthMaxPoints (grid_product.cpp) encodes. Args: k (inputs + 1), N.
+template <class T, shtool::GridAzimuth azimuth>
+void BM_GridAzimuth(benchmark::State& state) {
+  const int k = static_cast<int>(state.range(0));
+  const int n = static_cast<int>(state.range(1));
+  shtool::GridProduct<T> product(n, k - 1, azimuth);
+  const auto f = random_inputs<T>(n, k - 1);
+  const std::vector<std::span<const T>> spans(f.begin(), f.end());
+  std::vector<T> g(sh_count(n));
+  for (auto _ : state) {
+    product.multiply(spans, g);
+    benchmark::DoNotOptimize(g.data());
+    benchmark::ClobberMemory();
+  }
+  state.counters["points"] = product.grid_theta() * product.grid_phi();
+}
+
 template <class T>
 void BM_TripleAuto(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));
@@ -116,6 +135,11 @@ void BM_TriplingBuild(benchmark::State& state) {
 void triple_orders(benchmark::internal::Benchmark* b) {
   for (int n = 3; n <= 20; ++n) b->Arg(n);
 }
+void azimuth_args(benchmark::internal::Benchmark* b) {
+  for (int n = 3; n <= 20; ++n) b->Args({3, n});
+  for (int k : {4, 6, 8})
+    for (int n : {3, 4, 5, 6, 8, 10, 15, 20}) b->Args({k, n});
+}
 void multiple_args(benchmark::internal::Benchmark* b) {
   for (int k : {4, 6, 8})
     for (int n : {3, 5, 8, 10, 15, 20}) b->Args({k, n});
@@ -126,6 +150,10 @@ void multiple_args(benchmark::internal::Benchmark* b) {
 BENCHMARK(BM_TripleTripling<float>)->Name("BM_Triple/tripling/float")->Apply(triple_orders);
 BENCHMARK(BM_TripleOnGrid<float, shtool::FourierProduct>)->Name("BM_Triple/fourier/float")->Apply(triple_orders);
 BENCHMARK(BM_TripleOnGrid<float, shtool::GridProduct>)->Name("BM_Triple/grid/float")->Apply(triple_orders);
+BENCHMARK(BM_GridAzimuth<float, shtool::GridAzimuth::direct>)->Name("BM_GridAzimuth/direct/float")->Apply(azimuth_args);
+BENCHMARK(BM_GridAzimuth<float, shtool::GridAzimuth::fft>)->Name("BM_GridAzimuth/fft/float")->Apply(azimuth_args);
+BENCHMARK(BM_GridAzimuth<double, shtool::GridAzimuth::direct>)->Name("BM_GridAzimuth/direct/double")->Apply(azimuth_args);
+BENCHMARK(BM_GridAzimuth<double, shtool::GridAzimuth::fft>)->Name("BM_GridAzimuth/fft/double")->Apply(azimuth_args);
 BENCHMARK(BM_TripleAuto<float>)->Name("BM_Triple/auto/float")->Apply(triple_orders);
 BENCHMARK(BM_TripleTripling<double>)->Name("BM_Triple/tripling/double")->Apply(triple_orders);
 BENCHMARK(BM_TripleOnGrid<double, shtool::FourierProduct>)->Name("BM_Triple/fourier/double")->Apply(triple_orders);

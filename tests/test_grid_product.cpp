@@ -47,14 +47,19 @@ double relative_l2(const std::vector<T>& got, const std::vector<double>& ref) {
 }
 
 template <class T>
-std::vector<T> grid_multiply(int order, const std::vector<std::vector<double>>& f) {
+std::vector<T> grid_multiply(int order, const std::vector<std::vector<double>>& f,
+                             GridAzimuth azimuth = GridAzimuth::automatic) {
   std::vector<std::vector<T>> ft;
   for (const auto& v : f) ft.emplace_back(v.begin(), v.end());
   std::vector<std::span<const T>> spans(ft.begin(), ft.end());
   std::vector<T> g(sh_count(order));
-  GridProduct<T>(order, static_cast<int>(f.size())).multiply(spans, g);
+  GridProduct<T>(order, static_cast<int>(f.size()), azimuth).multiply(spans, g);
   return g;
 }
+
+// Both azimuthal methods are exact; each is checked on its own.
+constexpr GridAzimuth kMethods[] = {GridAzimuth::direct, GridAzimuth::fft};
+std::string name(GridAzimuth a) { return a == GridAzimuth::direct ? "direct" : "fft"; }
 
 TEST(GridProduct, TripleAgainstExactTriplingTensor) {
   // Wigner 3j construction (src/tensors/tripling.cpp) for N <= 12; the runtime
@@ -65,9 +70,11 @@ TEST(GridProduct, TripleAgainstExactTriplingTensor) {
     const auto f = random_inputs(order, 2, 300 + order);
     std::vector<double> ref(sh_count(order));
     TriplingProduct<double>(tensor).multiply(f[0], f[1], ref);
-    const double err = relative_l2(grid_multiply<double>(order, f), ref);
-    EXPECT_LT(err, kTolDouble) << "N " << order << ": relative L2 " << sci(err);
-    RecordProperty("triple_rel_l2_N" + std::to_string(order), sci(err));
+    for (const GridAzimuth a : kMethods) {
+      const double err = relative_l2(grid_multiply<double>(order, f, a), ref);
+      EXPECT_LT(err, kTolDouble) << name(a) << " N " << order << ": relative L2 " << sci(err);
+      RecordProperty(name(a) + "_triple_rel_l2_N" + std::to_string(order), sci(err));
+    }
   }
 }
 
@@ -82,10 +89,14 @@ TEST(GridProduct, MultipleAgainstQuadratureDouble) {
                        Case{20, 5}, Case{20, 7}}) {
     const auto f = random_inputs(c.order, c.inputs, 100 + c.order * 10 + c.inputs);
     const std::vector<double> ref = reference_product(c.order, f);
-    const double err = relative_l2(grid_multiply<double>(c.order, f), ref);
-    EXPECT_LT(err, kTolDouble) << "N " << c.order << " k " << c.inputs + 1 << ": " << sci(err);
-    RecordProperty("rel_l2_N" + std::to_string(c.order) + "_k" + std::to_string(c.inputs + 1),
-                   sci(err));
+    for (const GridAzimuth a : kMethods) {
+      const double err = relative_l2(grid_multiply<double>(c.order, f, a), ref);
+      EXPECT_LT(err, kTolDouble) << name(a) << " N " << c.order << " k " << c.inputs + 1 << ": "
+                                 << sci(err);
+      RecordProperty(name(a) + "_rel_l2_N" + std::to_string(c.order) + "_k" +
+                         std::to_string(c.inputs + 1),
+                     sci(err));
+    }
   }
 }
 
@@ -94,10 +105,14 @@ TEST(GridProduct, MultipleAgainstQuadratureFloat) {
                        Case{20, 7}}) {
     const auto f = random_inputs(c.order, c.inputs, 7 + c.order + c.inputs);
     const std::vector<double> ref = reference_product(c.order, f);
-    const double err = relative_l2(grid_multiply<float>(c.order, f), ref);
-    EXPECT_LT(err, kTolFloat) << "N " << c.order << " k " << c.inputs + 1 << ": " << sci(err);
-    RecordProperty("float_rel_l2_N" + std::to_string(c.order) + "_k" + std::to_string(c.inputs + 1),
-                   sci(err));
+    for (const GridAzimuth a : kMethods) {
+      const double err = relative_l2(grid_multiply<float>(c.order, f, a), ref);
+      EXPECT_LT(err, kTolFloat) << name(a) << " N " << c.order << " k " << c.inputs + 1 << ": "
+                                << sci(err);
+      RecordProperty(name(a) + "_float_rel_l2_N" + std::to_string(c.order) + "_k" +
+                         std::to_string(c.inputs + 1),
+                     sci(err));
+    }
   }
 }
 
@@ -107,11 +122,14 @@ TEST(GridProduct, ClosedFormSquareOfY10) {
   for (int order : {2, 3, 6}) {
     std::vector<double> y10(sh_count(order), 0.0);
     y10[2] = 1.0;
-    const std::vector<double> g = grid_multiply<double>(order, {y10, y10});
-    for (int i = 0; i < sh_count(order); ++i) {
-      const double expected =
-          i == 0 ? 0.5 / std::sqrt(std::numbers::pi) : i == 6 ? 1.0 / std::sqrt(5.0 * std::numbers::pi) : 0.0;
-      EXPECT_NEAR(g[i], expected, 1e-15) << "N " << order << " coefficient " << i;
+    for (const GridAzimuth a : kMethods) {
+      const std::vector<double> g = grid_multiply<double>(order, {y10, y10}, a);
+      for (int i = 0; i < sh_count(order); ++i) {
+        const double expected = i == 0   ? 0.5 / std::sqrt(std::numbers::pi)
+                                : i == 6 ? 1.0 / std::sqrt(5.0 * std::numbers::pi)
+                                         : 0.0;
+        EXPECT_NEAR(g[i], expected, 1e-15) << name(a) << " N " << order << " coefficient " << i;
+      }
     }
   }
 }
@@ -125,15 +143,19 @@ TEST(GridProduct, IntegralsAgainstQuadrature) {
     double expected = 0;
     for (int i = 0; i < sh_count(c.order); ++i) expected += ref[i] * f.back()[i];
     std::vector<std::span<const double>> spans(f.begin(), f.end());
-    const double got = GridProduct<double>(c.order, c.inputs).integral(spans);
-    EXPECT_NEAR(got, expected, 1e-12 * (std::abs(expected) + 1)) << "N " << c.order;
+    for (const GridAzimuth a : kMethods) {
+      const double got = GridProduct<double>(c.order, c.inputs, a).integral(spans);
+      EXPECT_NEAR(got, expected, 1e-12 * (std::abs(expected) + 1)) << name(a) << " N " << c.order;
+    }
   }
 }
 
-TEST(GridProduct, AliasingReuseAndDeterminism) {
+class GridAliasing : public ::testing::TestWithParam<GridAzimuth> {};
+
+TEST_P(GridAliasing, AliasingReuseAndDeterminism) {
   const int order = 11;
   const auto f = random_inputs(order, 2, 5);
-  GridProduct<double> product(order, 2);
+  GridProduct<double> product(order, 2, GetParam());
   std::vector<double> a(sh_count(order)), b = f[0];
   product.multiply(f[0], f[1], a);
   product.multiply(b, f[1], b);  // output aliases the first input
@@ -145,21 +167,30 @@ TEST(GridProduct, AliasingReuseAndDeterminism) {
   product.multiply(f[0], f[1], c);
   EXPECT_EQ(a, c);
   std::vector<double> d(sh_count(order));
-  GridProduct<double>(order, 2).multiply(f[0], f[1], d);  // fresh object: same bits
+  GridProduct<double>(order, 2, GetParam()).multiply(f[0], f[1], d);  // fresh object: same bits
   EXPECT_EQ(a, d);
 }
+INSTANTIATE_TEST_SUITE_P(Methods, GridAliasing, ::testing::ValuesIn(kMethods),
+                         [](const auto& info) { return name(info.param); });
 
 TEST(GridProduct, GridSizesAreTheExactnessBounds) {
   for (const Case c : {Case{1, 2}, Case{3, 2}, Case{10, 2}, Case{20, 2}, Case{20, 7}}) {
-    const GridProduct<float> p(c.order, c.inputs);
     const int degree = (c.inputs + 1) * (c.order - 1);
-    EXPECT_EQ(p.grid_theta(), degree / 2 + 1) << "N " << c.order;
-    EXPECT_GE(p.grid_phi(), degree + 1) << "N " << c.order;
-    EXPECT_EQ(p.grid_phi() % 2, 0);
+    const GridProduct<float> fft(c.order, c.inputs, GridAzimuth::fft);
+    EXPECT_EQ(fft.grid_theta(), degree / 2 + 1) << "N " << c.order;
+    EXPECT_GE(fft.grid_phi(), degree + 1) << "N " << c.order;
+    EXPECT_EQ(fft.grid_phi() % 2, 0);
+    const GridProduct<float> direct(c.order, c.inputs, GridAzimuth::direct);
+    EXPECT_EQ(direct.grid_theta(), degree / 2 + 1) << "N " << c.order;
+    EXPECT_EQ(direct.grid_phi(), degree + 1) << "N " << c.order;
   }
   // 58 -> 72, not 60: FFTW_ESTIMATE transforms of 60 points measured 1.5-1.9x slower.
-  EXPECT_EQ(GridProduct<double>(20, 2).grid_phi(), 72);
-  EXPECT_EQ(GridProduct<double>(3, 2).grid_phi(), 8);
+  EXPECT_EQ(GridProduct<double>(20, 2, GridAzimuth::fft).grid_phi(), 72);
+  EXPECT_EQ(GridProduct<double>(3, 2, GridAzimuth::fft).grid_phi(), 8);
+  // automatic: direct sums for the small grids, FFTW for the large ones
+  EXPECT_EQ(GridProduct<double>(8, 2).azimuth(), GridAzimuth::direct);
+  EXPECT_EQ(GridProduct<double>(20, 7).azimuth(), GridAzimuth::fft);
+  EXPECT_EQ(GridProduct<float>(20, 7).azimuth(), GridAzimuth::direct);
 }
 
 TEST(GridProduct, BadArgumentsThrow) {

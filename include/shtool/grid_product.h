@@ -8,15 +8,18 @@
 //  - polar: n_t = floor(D / 2) + 1 Gauss-Legendre nodes in x = cos t (exact for degree
 //    2 n_t - 1 >= D);
 //  - azimuth: n_p >= D + 1 equispaced points (the product has frequencies |m| <= q (N-1);
-//    aliasing folds frequency m onto m - n_p, which stays outside |m| < N). n_p is the
-//    smallest of a fixed list of even lengths measured fast with FFTW_ESTIMATE plans
-//    (grid_product.cpp), so the grid does not depend on timing.
+//    aliasing folds frequency m onto m - n_p, which stays outside |m| < N).
 // Synthesis and projection use the normalized associated Legendre values at the nodes
 // (computed once, in long double, whatever T is) and the equatorial symmetry
-// P_l^m(-x) = (-1)^(l+m) P_l^m(x), which halves the Legendre sums; the azimuthal
-// transforms are FFTW real transforms over all rings at once (one plan_many each way,
-// made once per object, FFTW_ESTIMATE for byte-identical results). Method notes and
-// measured speed: docs/products.md.
+// P_l^m(-x) = (-1)^(l+m) P_l^m(x), which halves the Legendre sums. Two azimuthal
+// transforms, both exact (GridAzimuth):
+//  - direct: sums over the N frequencies the inputs and the projection use, n_p = D + 1,
+//    vectorised across rings; the default in float up to N = 20 and in double up to
+//    N = 11, where it was measured faster (docs/products.md);
+//  - fft: FFTW real transforms over all rings at once (one plan_many each way, made once
+//    per object, FFTW_ESTIMATE for byte-identical results), n_p the smallest of a fixed
+//    list of even lengths measured fast, so the grid does not depend on timing.
+// Method notes and measured speed: docs/products.md.
 //
 // One GridProduct serves one (order, number of inputs) and owns all buffers: multiply()
 // and integral() allocate nothing. Not safe to use from two threads at once; creating
@@ -30,12 +33,19 @@
 
 namespace shtool {
 
+// How the grid goes between azimuthal frequencies and points on each ring.
+enum class GridAzimuth {
+  automatic,  // direct below a measured number of points, FFT above (grid_product.cpp)
+  direct,     // direct sums over |m| < N: nphi = D + 1, the fewest points possible
+  fft,        // FFTW real transforms: nphi an FFT-friendly even length >= D + 1
+};
+
 template <class T>
 class GridProduct {
  public:
   // Preconditions: 1 <= order <= kMaxFourierProductOrder, 1 <= inputs <= kMaxProductInputs
   // (std::invalid_argument otherwise).
-  GridProduct(int order, int inputs);
+  GridProduct(int order, int inputs, GridAzimuth azimuth = GridAzimuth::automatic);
   ~GridProduct();
   GridProduct(GridProduct&&) noexcept;
   GridProduct& operator=(GridProduct&&) noexcept;
@@ -57,9 +67,11 @@ class GridProduct {
   // Grid sizes: Gauss-Legendre rings and azimuthal points.
   int grid_theta() const;
   int grid_phi() const;
+  GridAzimuth azimuth() const;  // never automatic
+
+  struct Impl;  // one per azimuthal method, in grid_product.cpp
 
  private:
-  struct Impl;
   std::unique_ptr<Impl> impl_;
 };
 
