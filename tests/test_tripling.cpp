@@ -22,9 +22,12 @@
 #include "shtool/quadrature.h"
 #include "shtool/sh.h"
 #include "shtool/tripling_product.h"
+#include "generated_source.h"
 #include "run_command.h"
+#include "runtime/tripling_kernels.h"
 #include "tensors/fourier_tables.h"
 #include "tensors/tripling.h"
+#include "tensors/tripling_kernels_gen.h"
 
 namespace shtool {
 namespace {
@@ -331,16 +334,17 @@ void check_product(double tol) {
 TEST(TriplingProduct, MatchesQuadratureDouble) { check_product<double>(1e-13); }
 TEST(TriplingProduct, MatchesQuadratureFloat) { check_product<float>(2e-5); }
 
-// Orders 2..kUnrolledTriplingOrder run a compile-time unrolled kernel with its own pair
-// enumeration (selection rules) and order; order 1 and 7 the gather loop. Reference: every
+// Orders 2..kUnrolledTriplingOrder run a generated straight-line kernel (blocks that share
+// sub-products, values as literals); order 1 and 7 the gather loop. Reference: every
 // permutation of every canonical entry of the exact (3j) tensor, summed densely in long
-// double, so a pair the kernel's rules missed or a misplaced weight shows up.
+// double, so an entry the kernel's blocks missed or counted twice shows up.
 template <class T>
 void check_small_orders(double tol) {
   for (int order = 1; order <= kUnrolledTriplingOrder + 1; ++order) {
     const int n = sh_count(order);
     const TriplingTensor tensor = compute_tripling_tensor_exact(order);
     const TriplingProduct<T> product(tensor);
+    EXPECT_EQ(product.uses_kernel(), order >= 2 && order <= kUnrolledTriplingOrder) << "order " << order;
     std::mt19937 rng(40 + order);
     std::uniform_real_distribution<double> u(-1, 1);
     std::vector<T> f1(n), f2(n), g(n);
@@ -371,6 +375,61 @@ void check_small_orders(double tol) {
 // Double: a few dozen rounded terms per output; float: 24-bit mantissa over the same sums.
 TEST(TriplingProduct, UnrolledSmallOrdersMatchDenseTensorDouble) { check_small_orders<double>(1e-15); }
 TEST(TriplingProduct, UnrolledSmallOrdersMatchDenseTensorFloat) { check_small_orders<float>(1e-6); }
+
+TEST(TriplingKernels, CommittedSourceMatchesGenerator) {
+  test::expect_committed_source("tripling-kernels", kTriplingKernelsFile, tripling_kernels_source());
+}
+
+TEST(TriplingKernels, BakedEntriesAreTheExactTensor) {
+  for (int order = 2; order <= kUnrolledTriplingOrder; ++order) {
+    const TriplingTensor exact = compute_tripling_tensor_exact(order);
+    const auto baked = detail::tripling_kernel_entries(order);
+    ASSERT_EQ(baked.size(), exact.size()) << "order " << order;
+    for (std::size_t e = 0; e < baked.size(); ++e) {
+      EXPECT_EQ(baked[e].a, exact.index[3 * e]);
+      EXPECT_EQ(baked[e].c, exact.index[3 * e + 2]);
+      EXPECT_EQ(baked[e].value, exact.value[e]) << "order " << order << " entry " << e;  // round-trip literal
+    }
+  }
+  EXPECT_TRUE(detail::tripling_kernel_entries(1).empty());
+  EXPECT_EQ(detail::tripling_kernel<double>(kUnrolledTriplingOrder + 1), nullptr);
+}
+
+// The kernel serves any construction of the same tensor (the runtime's Gauss-Legendre one
+// agrees with the literals to ~3e-15) and nothing else: a tensor with one value changed,
+// or one entry missing, falls back to the gather loop and its product follows that tensor.
+TEST(TriplingKernels, UsedOnlyForTheSameTensor) {
+  const int order = 4;
+  EXPECT_TRUE(TriplingProduct<double>(TriplingTensor::compute(order)).uses_kernel());
+  const TriplingTensor exact = compute_tripling_tensor_exact(order);
+  TriplingTensor changed = exact;
+  changed.value[10] *= 1.5;
+  TriplingTensor dropped = exact;
+  dropped.index.erase(dropped.index.begin() + 30, dropped.index.begin() + 33);
+  dropped.value.erase(dropped.value.begin() + 10);
+  const auto f = test::random_inputs(order, 2, 77);
+  std::vector<double> with_kernel(sh_count(order));
+  TriplingProduct<double>(exact).multiply(f[0], f[1], with_kernel);
+  for (const TriplingTensor* t : {&changed, &dropped}) {
+    const TriplingProduct<double> product(*t);
+    EXPECT_FALSE(product.uses_kernel());
+    std::vector<double> got(sh_count(order)), ref(sh_count(order), 0.0);
+    product.multiply(f[0], f[1], got);
+    for (std::size_t e = 0; e < t->size(); ++e) {  // dense reference of that tensor
+      int p[3] = {int(t->index[3 * e]), int(t->index[3 * e + 1]), int(t->index[3 * e + 2])};
+      std::set<std::tuple<int, int, int>> seen;
+      do {
+        if (seen.insert({p[0], p[1], p[2]}).second) ref[p[2]] += t->value[e] * f[0][p[0]] * f[1][p[1]];
+      } while (std::next_permutation(p, p + 3));
+    }
+    double diff = 0;
+    for (int i = 0; i < sh_count(order); ++i) {
+      EXPECT_NEAR(got[i], ref[i], 1e-14) << "coefficient " << i;
+      diff = std::max(diff, std::abs(got[i] - with_kernel[i]));
+    }
+    EXPECT_GT(diff, 1e-6) << "the modified tensor must change the product";
+  }
+}
 
 }  // namespace
 }  // namespace shtool

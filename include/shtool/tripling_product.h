@@ -73,6 +73,8 @@ class TriplingProduct {
 
   int order() const { return order_; }
   std::size_t pair_count() const { return weight_.size(); }
+  // Whether multiply() runs the generated kernel of its order (else the gather loop).
+  bool uses_kernel() const { return kernel_ != nullptr; }
 
   // g = f1 (x) f2 (Eq. 6). All spans hold N^2 coefficients (precondition); g must not
   // alias f1 or f2. Allocation-free.
@@ -85,15 +87,14 @@ class TriplingProduct {
   std::vector<std::uint32_t> row_;   // N^2 + 1 starts into pair_/weight_
   std::vector<std::uint32_t> pair_;  // i | (j << 16)
   std::vector<T> weight_;
-  // Orders 2..kUnrolledTriplingOrder: a kernel unrolled at compile time over the pairs
-  // the selection rules allow (constant indices, outputs interleaved so that the
-  // accumulations of different outputs overlap), with its weights in that order.
-  using Kernel = void (*)(const T* a, const T* b, const T* w, T* g);
+  // Orders 2..kUnrolledTriplingOrder: a generated straight-line kernel (values as
+  // literals, sub-products shared), used when the tensor holds its entries.
+  using Kernel = void (*)(const T* f1, const T* f2, T* g);
   Kernel kernel_ = nullptr;
-  std::vector<T> kernel_weight_;
 };
 
-// Highest order with a compile-time unrolled tripling kernel.
+// Highest order with a generated straight-line tripling kernel
+// (`shtool gen-tensors --what tripling-kernels`).
 inline constexpr int kUnrolledTriplingOrder = 6;
 
 extern template class TriplingProduct<float>;

@@ -17,6 +17,7 @@
 #include "tensors/fourier_tables.h"
 #include "tensors/rotation_helpers_gen.h"
 #include "tensors/rotation_kernels_gen.h"
+#include "tensors/tripling_kernels_gen.h"
 #include "tensors/tripling.h"
 
 namespace shtool::cli {
@@ -44,9 +45,10 @@ void run_gen_tensors(const GenTensorsOptions& opt) {
     std::stringstream ss(opt.what);
     std::string item;
     while (std::getline(ss, item, ',')) {
-      if (item != "rotation" && item != "tripling" && item != "fourier" && item != "rotation-kernels")
+      if (item != "rotation" && item != "tripling" && item != "fourier" && item != "rotation-kernels" &&
+          item != "tripling-kernels")
         throw UserError("--what: unknown table '" + item +
-                        "' (known: rotation, tripling, fourier, rotation-kernels)");
+                        "' (known: rotation, tripling, fourier, rotation-kernels, tripling-kernels)");
       what.insert(item);
     }
   }
@@ -73,21 +75,25 @@ void run_gen_tensors(const GenTensorsOptions& opt) {
     std::cerr << "gen-tensors: wrote " << path.string() << " (order " << opt.order << ", X90 "
               << h.x90_val.size() << " non-zeros)\n";
   }
-  if (what.count("rotation-kernels")) {
-    // C++ source of the runtime's fixed-order kernels (src/runtime); independent of
-    // --order and --format. Written to a temporary file, then renamed.
-    const std::filesystem::path path = std::filesystem::path(opt.out) / kRotationKernelsFile;
+  // C++ sources of the runtime's generated kernels (src/runtime); independent of --order
+  // and --format. Written to a temporary file, then renamed.
+  auto write_source = [&](const char* file, const std::string& text, const char* label) {
+    const std::filesystem::path path = std::filesystem::path(opt.out) / file;
     const std::filesystem::path tmp = path.string() + ".tmp";
     {
       std::ofstream f(tmp, std::ios::binary);
-      f << rotation_kernels_source();
+      f << text;
       f.close();
       if (!f) throw UserError("cannot write '" + tmp.string() + "'");
     }
     std::filesystem::rename(tmp, path, ec);
     if (ec) throw UserError("cannot write '" + path.string() + "': " + ec.message());
-    std::cerr << "gen-tensors: wrote " << path.string() << " (rotation kernels)\n";
-  }
+    std::cerr << "gen-tensors: wrote " << path.string() << " (" << label << ")\n";
+  };
+  if (what.count("rotation-kernels"))
+    write_source(kRotationKernelsFile, rotation_kernels_source(), "rotation kernels");
+  if (what.count("tripling-kernels"))
+    write_source(kTriplingKernelsFile, tripling_kernels_source(), "tripling kernels");
   if (what.count("tripling")) {
     const Table t = tripling_tensor_table(opt.order, generator);
     const std::filesystem::path path = std::filesystem::path(opt.out) / ("tripling-tensor" + ext);
@@ -113,8 +119,9 @@ void setup_gen_tensors(CLI::App& app) {
   sub->add_option("--out", opt->out, "output folder")->capture_default_str();
   sub->add_option("--what", opt->what,
                   "comma-separated tables: rotation (zxzxz/Taylor helpers), tripling (tripling "
-                  "tensor), fourier (SH<->Fourier tensors); rotation-kernels writes the C++ "
-                  "source of the runtime's fixed-order rotation kernels (for src/runtime)")
+                  "tensor), fourier (SH<->Fourier tensors); rotation-kernels and tripling-kernels "
+                  "write the C++ source of the runtime's fixed-order rotation and tripling kernels "
+                  "(for src/runtime)")
       ->capture_default_str();
   sub->add_option("--inputs", opt->inputs, "fourier: largest number of product inputs covered (2..8)")
       ->capture_default_str();

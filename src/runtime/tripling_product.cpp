@@ -10,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include "tripling_kernels.h"
 #include "shtool/legendre.h"
 #include "shtool/quadrature.h"
 #include "shtool/sh.h"
@@ -200,117 +201,7 @@ TableResult<TriplingTensor> TriplingTensor::from_table(const Table& table) {
   return t;
 }
 
-namespace {
-
-// ---- Unrolled kernels for small orders ----------------------------------------------
-// The index triples (k, i <= j) that the selection rules of real SH allow (triangle,
-// even band sum, one |m| the sum of the other two, an even number of negative m) are
-// enumerated at compile time; a few of them are non-trivial zeros of the 3j symbols and
-// get weight 0. Each output's pairs keep the (i, j) order of the gather loop; the pairs of
-// different outputs are interleaved, so consecutive additions belong to independent
-// accumulators instead of one serial chain per output.
-struct SmallPair {
-  std::uint16_t k, i, j;
-};
-
-constexpr int small_band(int index) {
-  int l = 0;
-  while ((l + 1) * (l + 1) <= index) ++l;
-  return l;
-}
-
-constexpr bool allowed(int k, int i, int j) {
-  const int lk = small_band(k), li = small_band(i), lj = small_band(j);
-  const int mk = k - lk * (lk + 1), mi = i - li * (li + 1), mj = j - lj * (lj + 1);
-  if (lk < (li > lj ? li - lj : lj - li) || lk > li + lj || (li + lj + lk) % 2) return false;
-  const int a = mi < 0 ? -mi : mi, b = mj < 0 ? -mj : mj, c = mk < 0 ? -mk : mk;
-  if (a != b + c && b != a + c && c != a + b) return false;
-  return ((mi < 0) + (mj < 0) + (mk < 0)) % 2 == 0;
-}
-
-template <int N>
-constexpr std::size_t small_pair_count() {
-  std::size_t count = 0;
-  for (int k = 0; k < N * N; ++k)
-    for (int i = 0; i < N * N; ++i)
-      for (int j = i; j < N * N; ++j) count += allowed(k, i, j);
-  return count;
-}
-
-template <int N>
-constexpr auto small_pairs() {
-  std::array<SmallPair, small_pair_count<N>()> out{};
-  // per output, its allowed pairs in (i, j) order; then round-robin over the outputs
-  std::array<std::size_t, N * N + 1> start{};
-  std::array<SmallPair, small_pair_count<N>()> by_k{};
-  std::size_t n = 0;
-  for (int k = 0; k < N * N; ++k) {
-    start[k] = n;
-    for (int i = 0; i < N * N; ++i)
-      for (int j = i; j < N * N; ++j)
-        if (allowed(k, i, j))
-          by_k[n++] = {static_cast<std::uint16_t>(k), static_cast<std::uint16_t>(i),
-                       static_cast<std::uint16_t>(j)};
-  }
-  start[N * N] = n;
-  // (i, j)-major, then k: consecutive terms share f1_i f2_j + f1_j f2_i (the compiler may
-  // evaluate it once) and go to different accumulators; each output still adds its pairs
-  // in (i, j) order. Measured against a round-robin over k: the same within noise at
-  // N = 3..5, 1.3x faster at N = 6.
-  std::size_t e = 0;
-  for (int i = 0; i < N * N; ++i)
-    for (int j = i; j < N * N; ++j)
-      for (int k = 0; k < N * N; ++k)
-        if (allowed(k, i, j))
-          out[e++] = {static_cast<std::uint16_t>(k), static_cast<std::uint16_t>(i),
-                      static_cast<std::uint16_t>(j)};
-  (void)start;
-  return out;
-}
-
-template <int N>
-struct SmallTripling {
-  static constexpr auto pairs = small_pairs<N>();
-
-  template <class T, std::size_t... E>
-  static void run(const T* a, const T* b, const T* w, T* g, std::index_sequence<E...>) {
-    T acc[N * N] = {};
-    ((acc[pairs[E].k] += w[E] * (a[pairs[E].i] * b[pairs[E].j] + a[pairs[E].j] * b[pairs[E].i])),
-     ...);
-    for (int k = 0; k < N * N; ++k) g[k] = acc[k];
-  }
-  template <class T>
-  static void kernel(const T* a, const T* b, const T* w, T* g) {
-    run(a, b, w, g, std::make_index_sequence<pairs.size()>());
-  }
-};
-
-template <class T>
-struct SmallKernel {
-  void (*fn)(const T*, const T*, const T*, T*);
-  const SmallPair* pairs;
-  std::size_t count;
-};
-
-template <class T>
-SmallKernel<T> small_kernel(int order) {
-  switch (order) {
-#define SHTOOL_SMALL(n) \
-  case n:               \
-    return {&SmallTripling<n>::template kernel<T>, SmallTripling<n>::pairs.data(), SmallTripling<n>::pairs.size()};
-    SHTOOL_SMALL(2)
-    SHTOOL_SMALL(3)
-    SHTOOL_SMALL(4)
-    SHTOOL_SMALL(5)
-    SHTOOL_SMALL(6)
-#undef SHTOOL_SMALL
-    default:
-      return {nullptr, nullptr, 0};
-  }
-}
-static_assert(kUnrolledTriplingOrder == 6, "small_kernel() lists the unrolled orders");
-
-}  // namespace
+static_assert(kUnrolledTriplingOrder == detail::kTriplingKernelMaxOrder);
 
 template <class T>
 TriplingProduct<T>::TriplingProduct(const TriplingTensor& tensor) : order_(tensor.order) {
@@ -347,33 +238,25 @@ TriplingProduct<T>::TriplingProduct(const TriplingTensor& tensor) : order_(tenso
   }
   for (int k = 0; k < count; ++k) row_[k + 1] += row_[k];
 
-  // The unrolled kernel takes the gather weights in its own pair order; every stored pair
-  // must be among its candidates (otherwise the generic loop stays in use).
-  const SmallKernel<T> small = small_kernel<T>(order_);
-  if (small.fn) {
-    std::vector<T> w(small.count, T(0));
-    std::size_t matched = 0;
-    for (std::size_t e = 0; e < small.count; ++e) {
-      const SmallPair& p = small.pairs[e];
-      for (std::uint32_t q = row_[p.k]; q < row_[p.k + 1]; ++q)
-        if (pair_[q] == (p.i | (static_cast<std::uint32_t>(p.j) << 16))) {
-          w[e] = weight_[q];
-          ++matched;
-          break;
-        }
-    }
-    if (matched == weight_.size()) {
-      kernel_ = small.fn;
-      kernel_weight_ = std::move(w);
-    }
-  }
+  // Orders 2..6 have a generated straight-line kernel (tripling_kernels.h) with the
+  // values of the exact tensor as literals; it runs when this tensor holds the same
+  // entries (any construction agrees to ~3e-15; a table edited or truncated by hand does
+  // not, and then the gather loop below serves it).
+  constexpr double kSameEntry = 1e-14;
+  const std::span<const detail::TriplingKernelEntry> baked = detail::tripling_kernel_entries(order_);
+  bool same = !baked.empty() && baked.size() == tensor.size();
+  for (std::size_t e = 0; same && e < baked.size(); ++e)
+    same = baked[e].a == tensor.index[3 * e] && baked[e].b == tensor.index[3 * e + 1] &&
+           baked[e].c == tensor.index[3 * e + 2] &&
+           std::abs(baked[e].value - tensor.value[e]) <= kSameEntry;
+  if (same) kernel_ = detail::tripling_kernel<T>(order_);
 }
 
 template <class T>
 void TriplingProduct<T>::multiply(std::span<const T> f1, std::span<const T> f2,
                                   std::span<T> g) const {
   if (kernel_) {
-    kernel_(f1.data(), f2.data(), kernel_weight_.data(), g.data());
+    kernel_(f1.data(), f2.data(), g.data());
     return;
   }
   const int count = sh_count(order_);
