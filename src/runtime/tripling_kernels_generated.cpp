@@ -16,7 +16,7 @@ namespace {
 
 // Order 2: 4 canonical entries in 4 blocks, 20 multiplications.
 template <class T>
-void tripling_kernel_2(const T* f, const T* h, T* y) {
+SHTOOL_KERNEL_CLONES void tripling_kernel_2(const T* f, const T* h, T* y) {
   T tf, th, t;
   // [0,0]: 0
   t = f[0] * h[0];
@@ -43,7 +43,7 @@ void tripling_kernel_2(const T* f, const T* h, T* y) {
 
 // Order 3: 25 canonical entries in 13 blocks, 120 multiplications.
 template <class T>
-void tripling_kernel_3(const T* f, const T* h, T* y) {
+SHTOOL_KERNEL_CLONES void tripling_kernel_3(const T* f, const T* h, T* y) {
   T tf, th, t;
   // [0,0]: 0
   t = f[0] * h[0];
@@ -140,7 +140,7 @@ void tripling_kernel_3(const T* f, const T* h, T* y) {
 
 // Order 4: 77 canonical entries in 37 blocks, 399 multiplications.
 template <class T>
-void tripling_kernel_4(const T* f, const T* h, T* y) {
+SHTOOL_KERNEL_CLONES void tripling_kernel_4(const T* f, const T* h, T* y) {
   T tf, th, t;
   // [0,0]: 0
   t = f[0] * h[0];
@@ -426,7 +426,7 @@ void tripling_kernel_4(const T* f, const T* h, T* y) {
 
 // Order 5: 238 canonical entries in 84 blocks, 1135 multiplications.
 template <class T>
-void tripling_kernel_5(const T* f, const T* h, T* y) {
+SHTOOL_KERNEL_CLONES void tripling_kernel_5(const T* f, const T* h, T* y) {
   T tf, th, t;
   // [0,0]: 0
   t = f[0] * h[0];
@@ -1146,7 +1146,7 @@ void tripling_kernel_5(const T* f, const T* h, T* y) {
 
 // Order 6: 549 canonical entries in 166 blocks, 2527 multiplications.
 template <class T>
-void tripling_kernel_6(const T* f, const T* h, T* y) {
+SHTOOL_KERNEL_CLONES void tripling_kernel_6(const T* f, const T* h, T* y) {
   T tf, th, t;
   // [0,0]: 0
   t = f[0] * h[0];

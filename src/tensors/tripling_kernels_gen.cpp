@@ -161,7 +161,7 @@ std::string kernel_source(int order, const std::vector<Block>& blocks, std::size
   out << "// Order " << order << ": " << entries << " canonical entries in " << blocks.size()
       << " blocks, " << mults << " multiplications.\n";
   out << "template <class T>\n";
-  out << "void tripling_kernel_" << order << "(const T* f, const T* h, T* y) {\n";
+  out << "SHTOOL_KERNEL_CLONES void tripling_kernel_" << order << "(const T* f, const T* h, T* y) {\n";
   out << "  T tf, th, t;\n";
   out << s.str();
   for (int k = 0; k < count; ++k)
