@@ -3,7 +3,10 @@
 // k-multiple products against the SH projection of the pointwise product by an
 // independent sphere quadrature of eval_sh (N up to 20, k up to 8), triple product
 // integrals, closed forms, aliasing, determinism, grid sizes and bad arguments.
+#include <atomic>
 #include <cmath>
+#include <cstdlib>
+#include <new>
 #include <numbers>
 #include <random>
 #include <span>
@@ -20,6 +23,20 @@
 #include "shtool/tripling_product.h"
 #include "tensors/tripling.h"
 #include "test_util.h"
+
+// Counts every allocation through operator new, to check that the hot paths make none.
+namespace {
+std::atomic<long> g_allocations{0};
+}
+// noinline: GCC 12 otherwise inlines free() into callers that it sees calling operator
+// new and warns (-Wmismatched-new-delete) about a pairing that is correct here.
+[[gnu::noinline]] void* operator new(std::size_t n) {
+  g_allocations.fetch_add(1, std::memory_order_relaxed);
+  if (void* p = std::malloc(n ? n : 1)) return p;
+  throw std::bad_alloc();
+}
+[[gnu::noinline]] void operator delete(void* p) noexcept { std::free(p); }
+[[gnu::noinline]] void operator delete(void* p, std::size_t) noexcept { std::free(p); }
 
 namespace shtool {
 namespace {
@@ -191,6 +208,45 @@ TEST(GridProduct, GridSizesAreTheExactnessBounds) {
   EXPECT_EQ(GridProduct<double>(8, 2).azimuth(), GridAzimuth::direct);
   EXPECT_EQ(GridProduct<double>(20, 7).azimuth(), GridAzimuth::fft);
   EXPECT_EQ(GridProduct<float>(20, 7).azimuth(), GridAzimuth::direct);
+}
+
+// Products are built once and applied many times per frame: after construction (and
+// ShProduct::prepare) no call may allocate.
+TEST(Products, HotPathsAllocateNothing) {
+  for (const int order : {4, 8, 20}) {
+    const auto f = random_inputs(order, 4, 9);
+    std::vector<std::vector<float>> ff;
+    for (const auto& v : f) ff.emplace_back(v.begin(), v.end());
+    const std::vector<std::span<const double>> two(f.begin(), f.begin() + 2), four(f.begin(), f.end());
+    const std::vector<std::span<const float>> twof(ff.begin(), ff.begin() + 2);
+    std::vector<double> g(sh_count(order));
+    std::vector<float> gf(sh_count(order));
+    GridProduct<double> direct(order, 2, GridAzimuth::direct), fft(order, 2, GridAzimuth::fft);
+    GridProduct<float> directf(order, 2, GridAzimuth::direct);
+    const TriplingProduct<double> tripling(TriplingTensor::compute(order));
+    ShProduct<double> automatic(order);
+    automatic.prepare(2);
+    automatic.prepare(4);
+    const std::span<const double> spans3[3] = {f[0], f[1], f[2]};
+
+    const long before = g_allocations.load();
+    direct.multiply(two, g);
+    fft.multiply(two, g);
+    directf.multiply(twof, gf);
+    double sum = direct.integral(std::span<const std::span<const double>>(spans3, 3)) +
+                 fft.integral(std::span<const std::span<const double>>(spans3, 3));
+    tripling.multiply(f[0], f[1], g);
+    sum += tripling.integral(f[0], f[1], f[2]);
+    automatic.triple(f[0], f[1], g);
+    automatic.multiple(four, g);
+    automatic.recursive(four, g);
+    EXPECT_EQ(g_allocations.load() - before, 0) << "N " << order << ": allocations in a product";
+    EXPECT_TRUE(std::isfinite(sum + g[0] + gf[0]));
+  }
+  // The counter works: building a product allocates.
+  const long before = g_allocations.load();
+  { const GridProduct<double> p(5, 2); }
+  EXPECT_GT(g_allocations.load(), before);
 }
 
 TEST(GridProduct, BadArgumentsThrow) {
