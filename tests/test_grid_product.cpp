@@ -24,19 +24,7 @@
 #include "tensors/tripling.h"
 #include "test_util.h"
 
-// Counts every allocation through operator new, to check that the hot paths make none.
-namespace {
-std::atomic<long> g_allocations{0};
-}
-// noinline: GCC 12 otherwise inlines free() into callers that it sees calling operator
-// new and warns (-Wmismatched-new-delete) about a pairing that is correct here.
-[[gnu::noinline]] void* operator new(std::size_t n) {
-  g_allocations.fetch_add(1, std::memory_order_relaxed);
-  if (void* p = std::malloc(n ? n : 1)) return p;
-  throw std::bad_alloc();
-}
-[[gnu::noinline]] void operator delete(void* p) noexcept { std::free(p); }
-[[gnu::noinline]] void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+#include "allocation_counter.h"  // counts this program's allocations
 
 namespace shtool {
 namespace {
@@ -229,7 +217,7 @@ TEST(Products, HotPathsAllocateNothing) {
     automatic.prepare(4);
     const std::span<const double> spans3[3] = {f[0], f[1], f[2]};
 
-    const long before = g_allocations.load();
+    const long before = test::allocation_count();
     direct.multiply(two, g);
     fft.multiply(two, g);
     directf.multiply(twof, gf);
@@ -240,13 +228,13 @@ TEST(Products, HotPathsAllocateNothing) {
     automatic.triple(f[0], f[1], g);
     automatic.multiple(four, g);
     automatic.recursive(four, g);
-    EXPECT_EQ(g_allocations.load() - before, 0) << "N " << order << ": allocations in a product";
+    EXPECT_EQ(test::allocation_count() - before, 0) << "N " << order << ": allocations in a product";
     EXPECT_TRUE(std::isfinite(sum + g[0] + gf[0]));
   }
   // The counter works: building a product allocates.
-  const long before = g_allocations.load();
+  const long before = test::allocation_count();
   { const GridProduct<double> p(5, 2); }
-  EXPECT_GT(g_allocations.load(), before);
+  EXPECT_GT(test::allocation_count(), before);
 }
 
 TEST(GridProduct, BadArgumentsThrow) {

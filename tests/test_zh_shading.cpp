@@ -23,20 +23,7 @@
 #include "shtool/zh_shading.h"
 #include "test_util.h"
 
-// Counts every global allocation of this test program, to check that shading allocates
-// nothing (the counter only moves between the two reads inside a test).
-namespace {
-std::atomic<long> g_allocations{0};
-}
-// noinline: GCC 12 otherwise inlines free() into callers that it sees calling operator
-// new and warns (-Wmismatched-new-delete) about a pairing that is correct here.
-[[gnu::noinline]] void* operator new(std::size_t n) {
-  g_allocations.fetch_add(1, std::memory_order_relaxed);
-  if (void* p = std::malloc(n ? n : 1)) return p;
-  throw std::bad_alloc();
-}
-[[gnu::noinline]] void operator delete(void* p) noexcept { std::free(p); }
-[[gnu::noinline]] void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+#include "allocation_counter.h"  // counts this program's allocations
 
 namespace {
 
@@ -433,7 +420,7 @@ TEST(ZhShading, PerPointCallsAllocateNothing) {
   zh_shade_exact<double>(light, axes, coeffs);  // first calls build eval_sh's static tables
   zh_shade_exact<float>(lightf, axesf, coeffsf);
 
-  const long before = g_allocations.load();
+  const long before = test::allocation_count();
   double sum = 0;
   for (int k = 0; k < 100; ++k) {
     sum += table.shade(axes, coeffs) + tablef.shade(axesf, coeffsf);
@@ -444,12 +431,12 @@ TEST(ZhShading, PerPointCallsAllocateNothing) {
     zh_light_bands<float>(lightf, axesf[1], bandsf);
     sum += bands[0] + bandsf[0];
   }
-  const long after = g_allocations.load();
+  const long after = test::allocation_count();
   EXPECT_EQ(after - before, 0) << "allocations during shading";
   EXPECT_TRUE(std::isfinite(sum));
   // The counter works: building a table allocates.
   { const ZhLightTable<double> t(kOrder, light, 2); }
-  EXPECT_GT(g_allocations.load(), after);
+  EXPECT_GT(test::allocation_count(), after);
 }
 
 }  // namespace
