@@ -73,7 +73,9 @@ class TriplingProduct {
 
   int order() const { return order_; }
   std::size_t pair_count() const { return weight_.size(); }
-  // Whether multiply() runs the generated kernel of its order (else the gather loop).
+  // The generated kernel of its order that multiply() runs (nullptr: the gather loop).
+  using Kernel = void (*)(const T* f1, const T* f2, T* g);
+  Kernel kernel() const { return kernel_; }
   bool uses_kernel() const { return kernel_ != nullptr; }
 
   // g = f1 (x) f2 (Eq. 6). All spans hold N^2 coefficients (precondition); g must not
@@ -89,7 +91,6 @@ class TriplingProduct {
   std::vector<T> weight_;
   // Orders 2..kUnrolledTriplingOrder: a generated straight-line kernel (values as
   // literals, sub-products shared), used when the tensor holds its entries.
-  using Kernel = void (*)(const T* f1, const T* f2, T* g);
   Kernel kernel_ = nullptr;
 };
 

@@ -45,6 +45,10 @@ ShProduct<T>::ShProduct(int order, ProductMethod method, const TriplingTensor* t
   }
   scratch_a_.assign(sh_count(order), T(0));
   scratch_b_.assign(sh_count(order), T(0));
+  // The generated kernels' orders: build the (small) tensor now so triple() can call the
+  // kernel directly.
+  if (triple_method_ == ProductMethod::tripling && order <= kUnrolledTriplingOrder)
+    triple_kernel_ = tripling().kernel();
 }
 
 template <class T>
@@ -87,7 +91,7 @@ void ShProduct<T>::prepare(int inputs) {
 }
 
 template <class T>
-void ShProduct<T>::triple(std::span<const T> f1, std::span<const T> f2, std::span<T> g) {
+void ShProduct<T>::triple_general(std::span<const T> f1, std::span<const T> f2, std::span<T> g) {
   if (triple_method_ == ProductMethod::tripling) {
     // The tensor loop reads the inputs while writing g, so an aliased output goes
     // through scratch.
