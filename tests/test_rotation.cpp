@@ -333,12 +333,13 @@ TEST(RotationExact, HalfTurnsAndGimbalLocksMatchQuadrature) {
 TEST(RotationExact, NearIdentityKeepsFullPrecision) {
   // DirectXMath recovers beta from sqrt(1 - cz^2) in float and errs by 1e-4..1e-3 for
   // rotations of 1e-3..1e-4 rad. Here the split is done by atan2 on well-conditioned
-  // combinations, so the error stays at rounding level. Measured (N <= 12): double
-  // <= 2.9e-15 (1.6e-15 at N = 6), float <= 8.2e-7 relative to ||f||.
+  // combinations, so the error stays at rounding level. Measured (N <= 20): double
+  // <= 3.6e-15 (1.0e-15 at N = 6, 1.9e-15 at N = 12), float <= 1.4e-6 (8.9e-7 at
+  // N = 12) relative to ||f||.
   auto tol_double = [](int n) { return 2e-15 + 2.5e-16 * n; };  // ~1e-15 level
   constexpr double kTolFloat = 2e-6;
   std::mt19937_64 rng(108);
-  for (int order : {3, 6, 12}) {
+  for (int order : {3, 6, 12, 20}) {
     for (double angle : {1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8}) {
       for (int k = 0; k < 4; ++k) {
         const Mat3<double> r = axis_angle(random_axis(rng), angle);
@@ -734,8 +735,11 @@ TEST(TaylorBounds, AutomaticMethodMeetsToleranceAndPrefersTaylor) {
                                  std::string(rotation_method_name(chosen));
         EXPECT_LE(distance(got, ref), (tol + kRoundingFloor) * norm(f)) << what;
         EXPECT_NE(chosen, RotationMethod::automatic) << what;
-        // Cheapest first: 1st order whenever its (exact) bound passes.
-        if (taylor_error_bound(RotationMethod::taylor1, order, tilt) <= tol * (1 - 1e-9))
+        // Cheapest first: 1st order whenever its (exact) bound passes; at orders up to 3
+        // zxzxz is closed forms in R, cheaper than any Taylor step (rotation.h).
+        if (order <= 3)
+          EXPECT_EQ(chosen, RotationMethod::zxzxz) << what;
+        else if (taylor_error_bound(RotationMethod::taylor1, order, tilt) <= tol * (1 - 1e-9))
           EXPECT_EQ(chosen, RotationMethod::taylor1) << what;
         // A Taylor method is only chosen when its bound passes; 2nd order never beats
         // the tolerance when its exact error norm exceeds it.
@@ -816,6 +820,23 @@ TEST(RotationApi, MissingOrTooSmallHelpersOnlyAllowReference) {
   // A table for more bands than needed is fine: its first N^2 rows are used.
   ShRotation<double> smaller(3, small);
   EXPECT_TRUE(smaller.set(r, RotationMethod::zxzxz));
+  // Orders up to 3 take the inline set() / apply() path: a refused set() must still keep
+  // the previous rotation.
+  std::mt19937_64 rng(603);
+  for (int order : {2, 3}) {
+    ShRotation<double> bare(order, nullptr);
+    const std::vector<double> f = random_coeffs(order, rng);
+    ASSERT_TRUE(bare.set(r, RotationMethod::reference));
+    std::vector<double> before(f.size()), after(f.size());
+    bare.apply(f, before);
+    for (RotationMethod m : {RotationMethod::automatic, RotationMethod::zxzxz}) {
+      EXPECT_FALSE(bare.set(axis_angle({0, 0, 1}, 1.0), m)) << "N " << order << " " << rotation_method_name(m);
+      EXPECT_EQ(bare.method(), RotationMethod::reference) << "N " << order;
+      bare.apply(f, after);
+      for (std::size_t i = 0; i < f.size(); ++i)
+        EXPECT_EQ(after[i], before[i]) << "N " << order << " " << rotation_method_name(m) << " i " << i;
+    }
+  }
 }
 
 TEST(RotationApi, MethodNamesRoundTrip) {

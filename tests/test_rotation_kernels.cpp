@@ -23,6 +23,7 @@
 #include <Eigen/Dense>
 #include <gtest/gtest.h>
 
+#include "generated_source.h"
 #include "run_command.h"
 #include "test_util.h"
 #include "runtime/rotation_kernels.h"
@@ -47,54 +48,8 @@ std::shared_ptr<const RotationHelpers> helpers() {
   return h;
 }
 
-std::string read_file(const std::filesystem::path& p) {
-  std::ifstream f(p, std::ios::binary);
-  std::stringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
-
-// First differing line, for the failure message.
-std::string first_difference(const std::string& a, const std::string& b) {
-  std::istringstream sa(a), sb(b);
-  std::string la, lb;
-  for (int line = 1;; ++line) {
-    const bool ga = static_cast<bool>(std::getline(sa, la)), gb = static_cast<bool>(std::getline(sb, lb));
-    if (!ga && !gb) return "no line differs (line endings?)";
-    if (!ga || !gb || la != lb)
-      return "line " + std::to_string(line) + ":\n  committed: " + (gb ? lb : "<end>") +
-             "\n  generated: " + (ga ? la : "<end>");
-  }
-}
-
-const char* kRegenerate =
-    "regenerate with: shtool gen-tensors --what rotation-kernels --out src/runtime";
-
 TEST(RotationKernels, CommittedSourceMatchesGenerator) {
-  const std::filesystem::path committed =
-      std::filesystem::path(SHTOOL_SOURCE_DIR) / "src/runtime" / kRotationKernelsFile;
-  const std::string want = read_file(committed);
-  ASSERT_FALSE(want.empty()) << "cannot read " << committed;
-  const std::string got = rotation_kernels_source();
-  EXPECT_TRUE(got == want) << committed << " differs from its generator at "
-                           << first_difference(got, want) << "\n" << kRegenerate;
-}
-
-TEST(RotationKernels, GenTensorsWritesTheSameBytes) {
-  std::string pattern = (std::filesystem::temp_directory_path() / "shtool-test-kernels-XXXXXX").string();
-  ASSERT_NE(mkdtemp(pattern.data()), nullptr);
-  const std::filesystem::path dir = pattern;
-  const test::CommandResult r =
-      test::run_command({SHTOOL_EXE, "gen-tensors", "--what", "rotation-kernels", "--out", dir.string()});
-  EXPECT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_TRUE(r.out.empty()) << r.out;
-  const std::string got = read_file(dir / kRotationKernelsFile);
-  const std::string want =
-      read_file(std::filesystem::path(SHTOOL_SOURCE_DIR) / "src/runtime" / kRotationKernelsFile);
-  EXPECT_TRUE(!got.empty() && got == want) << first_difference(got, want) << "\n" << kRegenerate;
-  EXPECT_FALSE(std::filesystem::exists(dir / (std::string(kRotationKernelsFile) + ".tmp")));
-  std::error_code ec;
-  std::filesystem::remove_all(dir, ec);
+  test::expect_committed_source("rotation-kernels", kRotationKernelsFile, rotation_kernels_source());
 }
 
 Mat3<double> random_rotation(std::mt19937_64& rng) {

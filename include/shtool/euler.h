@@ -22,10 +22,15 @@ struct EulerZYZ {
 // is part of every per-object rotation and costs less than a call.
 template <class T>
 inline Mat3<T> matrix_from_quaternion(T w, T x, T y, T z) {
+  // Doubled components first: scaling by 2 is exact, so these are the same values as
+  // 1 - 2 (y^2 + z^2), 2 (xy - wz), ... with 12 fewer operations.
+  const T x2 = x + x, y2 = y + y, z2 = z + z;
+  const T xx = x * x2, yy = y * y2, zz = z * z2;
+  const T xy = x * y2, xz = x * z2, yz = y * z2, wx = w * x2, wy = w * y2, wz = w * z2;
   Mat3<T> r;
-  r << 1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y),  //
-      2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x),   //
-      2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y);
+  r << 1 - (yy + zz), xy - wz, xz + wy,  //
+      xy + wz, 1 - (xx + zz), yz - wx,   //
+      xz - wy, yz + wx, 1 - (xx + yy);
   return r;
 }
 

@@ -10,7 +10,9 @@
 //              Rz(a) T(b) Rz(g) where T is the 1st / "1.5th" / 2nd order Taylor expansion
 //              of the y-rotation at b = 0 (paper 001 Sec. 3): approximate, for small tilt b;
 //   automatic  the cheapest method whose error bound for this rotation is within the
-//              tolerance (Taylor when the tilt is small enough, zxzxz otherwise).
+//              tolerance (Taylor when the tilt is small enough, zxzxz otherwise; at
+//              orders up to 3 always zxzxz, whose bands 1 and 2 are closed forms in R
+//              and cost less than any Taylor step, which needs the Euler angles).
 // The Taylor error bounds are exact operator norms for taylor1/taylor2 (the y-rotation
 // generator is normal with eigenvalues i m, |m| < N) and a rigorous bound for taylor1.5.
 //
@@ -19,6 +21,7 @@
 #pragma once
 
 #include <array>
+#include <cstring>
 #include <memory>
 #include <optional>
 #include <span>
@@ -33,6 +36,19 @@ namespace shtool {
 namespace detail {
 template <class T>
 struct KernelState;  // src/runtime/rotation_kernels.h
+
+// Band 1 of M(R) for R stored column-major (r[i + 3 j] = R(i, j), Eigen's layout). With
+// y_1^-1 = -c y, y_1^0 = c z, y_1^1 = -c x, band 1 is R in (y, z, x) order with the
+// entries that mix z with x or y negated (docs/rotation.md). P is T or a vector of T
+// (lanes, src/runtime/rotation_kernels.h). Here because ShRotation::apply runs it
+// inline at order 2.
+template <class T, class P>
+inline void band1_closed(const T* __restrict r, const P* __restrict x, P* __restrict y) {
+  const P fy = -x[0], fz = x[1], fx = -x[2];  // the band as a plain vector (times c)
+  y[0] = -(r[1] * fx + r[4] * fy + r[7] * fz);
+  y[1] = r[2] * fx + r[5] * fy + r[8] * fz;
+  y[2] = -(r[0] * fx + r[3] * fy + r[6] * fz);
+}
 }  // namespace detail
 
 enum class RotationMethod { automatic, reference, zxzxz, taylor1, taylor15, taylor2 };
@@ -66,24 +82,55 @@ class ShRotation {
   // (and keeps the previous rotation) if the method needs helpers that are missing or
   // cover fewer bands than the order.
   bool set(const Mat3<T>& r, RotationMethod method = RotationMethod::automatic,
-           double tolerance = default_rotation_tolerance<T>());
+           double tolerance = default_rotation_tolerance<T>()) {
+    // Up to order 3 zxzxz (and the automatic choice, which is zxzxz there) needs R alone,
+    // so set() is a copy, inline: at order 2 a call costs as much as the rotation.
+    if (order_ <= 3 && kernel_order_ > 0 &&
+        (method == RotationMethod::zxzxz || method == RotationMethod::automatic)) {
+      std::memcpy(r_, r.data(), sizeof r_);  // not copy_n: GCC makes that a memmove call
+      resolved_ = RotationMethod::zxzxz;
+      return true;
+    }
+    return set_general(r, method, tolerance);
+  }
 
   int order() const { return order_; }
   RotationMethod method() const { return resolved_; }  // never automatic after set()
 
   // out = M(R) in, both of N^2 coefficients; in and out must not overlap.
-  void apply(std::span<const T> in, std::span<T> out) const;
+  void apply(std::span<const T> in, std::span<T> out) const {
+    // Order 2 under zxzxz is band 1 = R itself, inline (see set()).
+    if (order_ == 2 && resolved_ == RotationMethod::zxzxz) {
+      out[0] = in[0];
+      detail::band1_closed<T, T>(r_, in.data() + 1, out.data() + 1);
+      return;
+    }
+    apply_general(in.data(), out.data());
+  }
 
   // Three vectors (an RGB light) in one pass: out[k] = M(R) in[k], k = 0, 1, 2. The three
   // run in the lanes of one SIMD vector, so this costs about one apply(), not three;
   // the results are bit-identical to three apply() calls. No in[k] may overlap an out[j].
-  void apply_rgb(const std::array<std::span<const T>, 3>& in, const std::array<std::span<T>, 3>& out) const;
+  void apply_rgb(const std::array<std::span<const T>, 3>& in, const std::array<std::span<T>, 3>& out) const {
+    if (order_ == 2 && resolved_ == RotationMethod::zxzxz) {  // inline, as in apply()
+      for (int k = 0; k < 3; ++k) {
+        out[k][0] = in[k][0];
+        detail::band1_closed<T, T>(r_, in[k].data() + 1, out[k].data() + 1);
+      }
+      return;
+    }
+    apply_rgb_general(in, out);
+  }
 
   // The dense per-band matrices of the reference method for the current rotation
   // (band l block of (2l+1)^2 values, row-major, starting at l(4l^2-1)/3).
   std::span<const T> reference_blocks() const { return dense_; }
 
  private:
+  bool set_general(const Mat3<T>& r, RotationMethod method, double tolerance);
+  void apply_general(const T* in, T* out) const;
+  void apply_rgb_general(const std::array<std::span<const T>, 3>& in,
+                         const std::array<std::span<T>, 3>& out) const;
   template <int V>
   void apply_lanes(const T* const* in, T* const* out) const;
   template <int V>
@@ -93,6 +140,7 @@ class ShRotation {
   template <int V>
   using Kernel = void (*)(const detail::KernelState<T>&, const T* const*, T* const*);
   void build_reference(const Mat3<T>& r);
+  void build_pairs();
   void update_taylor_limits(double tolerance);
 
   int order_;
@@ -110,10 +158,19 @@ class ShRotation {
   std::vector<T> x90_val_, x90t_val_;
   std::vector<int> x90_start_, x90t_start_;  // per flat row: first column, split order
   std::vector<int> x90_band_val_, x90t_band_val_;  // offset of band l's values
+  // zxzxz in double from band pair_from_ up (rotation.cpp, paired_rows): the rows of
+  // X90 and X90^T that read the same column class, two at a time in one SSE2 register.
+  // Per pair {first split column, row, second row} and pair_count(l) values per row,
+  // interleaved row by row; per band l and matrix k (0 = X90, 1 = X90^T) the pairs
+  // [pair_band_[2l + k], pair_band_[2l + k + 1]), values from pair_band_val_[2l + k].
+  // pair_from_ = order_ when unused (float, or orders within the generated kernels).
+  std::vector<T> pair_val_;
+  std::vector<int> pair_rows_, pair_band_, pair_band_val_;
+  int pair_from_ = 0;
   // Taylor derivative entries with two zeros of padding at the end, so the band loop
   // needs no bounds tests (entries that would couple two bands are zero).
   std::vector<T> dy_sub_, ddy_diag_, ddy_off2_;
-  T r_[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};  // R row-major (bands 1 and 2 are closed forms in R)
+  T r_[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};  // R column-major (bands 1 and 2 are closed forms in R)
   double ddy_offdiag_norm_ = 0.0;
 
   RotationMethod resolved_ = RotationMethod::reference;

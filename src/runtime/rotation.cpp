@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <cstring>
 #include <stdexcept>
+#include <type_traits>
 
 #include "shtool/sh.h"
 #include "rotation_kernels.h"
@@ -17,6 +19,12 @@ constexpr int block_offset(int l) { return l * (4 * l * l - 1) / 3; }
 // Method codes of the generated kernels (rotation_kernels.h), by index zxzxz, taylor1,
 // taylor1.5, taylor2.
 constexpr int kKernelMethod[4] = {0, 1, 15, 2};
+
+// First band of the paired zxzxz path in double at orders above the generated
+// whole-order kernels (below it the generated kernel of that order runs).
+constexpr int kPairFrom = 10;
+// Values per row of band l in the paired path: the longest class, rounded up to even.
+constexpr int pair_count(int l) { return (l / 2 + 2) & ~1; }
 
 // Number of non-zeros in row j (m = j - l) of band l of X90, and of X90^T: X90 maps
 // the four classes of m (sign, parity) onto each other by square dense blocks of sizes
@@ -150,7 +158,64 @@ ShRotation<T>::ShRotation(int order, std::shared_ptr<const RotationHelpers> help
       if (!kernel1_[k] || !kernel3_[k]) throw std::logic_error("no rotation kernel for this order");
     }
     kernel_order_ = std::min(order, detail::kKernelMaxOrder);
+    pair_from_ = order;
+    if constexpr (std::is_same_v<T, double>) {
+      if (order > detail::kKernelMaxOrder) {
+        pair_from_ = kPairFrom;
+        kernel1_[0] = detail::rotation_kernel<T, 1>(0, pair_from_);
+        kernel3_[0] = detail::rotation_kernel<T, 3>(0, pair_from_);
+        build_pairs();
+      }
+    }
   }
+}
+
+template <class T>
+void ShRotation<T>::build_pairs() {
+  // Rows of one band that read the same column class (the same first split column) are
+  // paired in their order; an odd one out is paired with a dummy row whose values are 0
+  // and whose result goes to the scratch slot 2l + 1.
+  pair_band_.assign(2 * order_ + 1, 0);
+  pair_band_val_.assign(2 * order_ + 1, 0);
+  pair_rows_.clear();
+  pair_val_.clear();
+  for (int l = 0; l < order_; ++l) {
+    const int first = l * l, size = 2 * l + 1;
+    for (int k = 0; k < 2; ++k) {
+      pair_band_[2 * l + k] = static_cast<int>(pair_rows_.size() / 3);
+      pair_band_val_[2 * l + k] = static_cast<int>(pair_val_.size());
+      if (l < pair_from_) continue;
+      const std::vector<int>& start = k == 0 ? x90_start_ : x90t_start_;
+      const T* val = (k == 0 ? x90_val_.data() + x90_band_val_[l] : x90t_val_.data() + x90t_band_val_[l]);
+      std::vector<int> row_val(size);  // offset of each row's values
+      for (int r = 0, at = 0; r < size; ++r) {
+        row_val[r] = at;
+        at += x90_row_length(l, r);
+      }
+      std::vector<bool> done(size, false);
+      for (int r = 0; r < size; ++r) {
+        if (done[r]) continue;
+        int partner = -1;
+        for (int q = r + 1; q < size && partner < 0; ++q)
+          if (!done[q] && start[first + q] == start[first + r]) partner = q;
+        done[r] = true;
+        if (partner >= 0) done[partner] = true;
+        // Every row of the band is padded with zeros to the longest class, l / 2 + 1,
+        // rounded up to even (paired_rows sums even and odd columns apart): one trip
+        // count per band also keeps the inner loop's exit branch predictable. The
+        // padding reads at most two values past a class: the next class, or the two
+        // zeroed slots after the band (apply_large_bands).
+        const int count = x90_row_length(l, r), padded = pair_count(l);
+        pair_rows_.insert(pair_rows_.end(), {start[first + r], r, partner >= 0 ? partner : size});
+        for (int c = 0; c < padded; ++c) {
+          pair_val_.push_back(c < count ? val[row_val[r] + c] : T(0));
+          pair_val_.push_back(partner >= 0 && c < count ? val[row_val[partner] + c] : T(0));
+        }
+      }
+    }
+  }
+  pair_band_[2 * order_] = static_cast<int>(pair_rows_.size() / 3);
+  pair_band_val_[2 * order_] = static_cast<int>(pair_val_.size());
 }
 
 template <class T>
@@ -210,8 +275,9 @@ inline void zyz_tables(int n, const ZyzCosSin<T>& e, bool with_beta, T* ca, T* s
 }  // namespace
 
 template <class T>
-bool ShRotation<T>::set(const Mat3<T>& r, RotationMethod method, double tolerance) {
+bool ShRotation<T>::set_general(const Mat3<T>& r, RotationMethod method, double tolerance) {
   if (method != RotationMethod::reference && !helpers_) return false;
+  if (method == RotationMethod::automatic && order_ <= 3) method = RotationMethod::zxzxz;  // see rotation.h
   if (method == RotationMethod::automatic) {
     if (tolerance != cached_tolerance_) update_taylor_limits(tolerance);
     method = RotationMethod::zxzxz;
@@ -228,8 +294,7 @@ bool ShRotation<T>::set(const Mat3<T>& r, RotationMethod method, double toleranc
     }
   }
   resolved_ = method;
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) r_[3 * i + j] = r(i, j);
+  std::memcpy(r_, r.data(), sizeof r_);  // not copy_n: GCC makes that a memmove call
   switch (method) {
     case RotationMethod::reference: build_reference(r); break;
     case RotationMethod::zxzxz:
@@ -334,6 +399,50 @@ inline void taylor_y_band(int l, T b, T hb2, const T* __restrict s1, const T* __
   }
 }
 
+// Rows of X90 (or its transpose) of one band two at a time (build_pairs): the two rows
+// of a pair read the same split columns, so each column value is multiplied into both
+// in one SSE2 operation. `in` holds each split column value twice (both halves of a
+// register, written so by z_band_to_split_pairs), so no broadcast is needed per use.
+// Two partial sums (even and odd columns; the padded count is even) halve the chain of
+// dependent additions. This path alone computes zxzxz bands >= pair_from_ in double, for
+// apply() and apply_rgb() alike, so their results stay identical.
+using Pair = detail::Pack<double, 2>;
+inline void paired_rows(const int* __restrict rows, int pairs, int count, const double* __restrict val,
+                        const Pair* __restrict in, double* __restrict out) {
+  for (int p = 0; p < pairs; ++p, rows += 3) {
+    const Pair* x = in + rows[0];
+    Pair v0, v1;
+    __builtin_memcpy(&v0, val, sizeof v0);
+    __builtin_memcpy(&v1, val + 2, sizeof v1);
+    Pair even = v0 * x[0], odd = v1 * x[1];
+    for (int k = 2; k < count; k += 2) {
+      __builtin_memcpy(&v0, val + 2 * k, sizeof v0);
+      __builtin_memcpy(&v1, val + 2 * k + 2, sizeof v1);
+      even += v0 * x[k];
+      odd += v1 * x[k + 1];
+    }
+    val += 2 * count;
+    const Pair sum = even + odd;
+    out[rows[1]] = sum[0];
+    out[rows[2]] = sum[1];
+  }
+}
+
+// z_band_to_split with every value written twice, into a register-sized pair.
+inline void z_band_to_split_pairs(int l, const double* __restrict c, const double* __restrict s,
+                                  const double* __restrict in, Pair* __restrict out) {
+  Pair* even = out;
+  Pair* odd = out + l + 1;
+  ((l & 1) ? odd : even)[l >> 1] = Pair{in[l], in[l]};
+  for (int m = 1; m <= l; ++m) {
+    const double p = in[l + m], q = in[l - m];
+    Pair* half = ((l + m) & 1) ? odd : even;
+    const double a = c[m] * p - s[m] * q, b = s[m] * p + c[m] * q;
+    half[(l + m) >> 1] = Pair{a, a};
+    half[(l - m) >> 1] = Pair{b, b};
+  }
+}
+
 // Buffer of one band of lanes (2l + 1 <= 2 kMaxOrder - 1 values, plus padding).
 constexpr int kBandBuffer = 2 * kMaxOrder + 8;
 
@@ -377,6 +486,31 @@ void ShRotation<T>::apply_large_bands(const T* const* in, T* const* out) const {
                                                         : 3;
   const detail::KernelState<T> state{r_,          cos_a_.data(), sin_a_.data(), cos_b_.data(), sin_b_.data(),
                                      cos_g_.data(), sin_g_.data(), beta_,         hb2};
+  if constexpr (std::is_same_v<T, double>) {
+    if (k == 0 && pair_from_ < order_) {
+      // zxzxz in double: X90 two rows at a time, one vector at a time (see Lanes).
+      Pair split[kBandBuffer];
+      double t[kBandBuffer];
+      for (int l = pair_from_; l < order_; ++l) {
+        const int first = l * l, count = pair_count(l);
+        const int* rows = pair_rows_.data() + 3 * pair_band_[2 * l];
+        const int* rows_t = pair_rows_.data() + 3 * pair_band_[2 * l + 1];
+        const int pairs = pair_band_[2 * l + 1] - pair_band_[2 * l];
+        const int pairs_t = pair_band_[2 * l + 2] - pair_band_[2 * l + 1];
+        const double* val = pair_val_.data() + pair_band_val_[2 * l];
+        const double* val_t = pair_val_.data() + pair_band_val_[2 * l + 1];
+        split[2 * l + 1] = split[2 * l + 2] = Pair{};  // read (times 0) by the padding
+        for (int vec = 0; vec < V; ++vec) {
+          z_band_to_split_pairs(l, cos_g_.data(), sin_g_.data(), in[vec] + first, split);
+          paired_rows(rows, pairs, count, val, split, t);
+          z_band_to_split_pairs(l, cos_b_.data(), sin_b_.data(), t, split);
+          paired_rows(rows_t, pairs_t, count, val_t, split, t);
+          z_band(l, cos_a_.data(), sin_a_.data(), t, out[vec] + first);
+        }
+      }
+      return;
+    }
+  }
   for (int l = kernel_order_; l < order_; ++l) {
     // Generated kernel of this band, when there is one.
     if (const auto kernel = detail::band_kernel<T, V>(kKernelMethod[k], l)) {
@@ -431,19 +565,19 @@ void ShRotation<T>::apply_lanes(const T* const* in, T* const* out) const {
                                      T(0.5) * beta_ * beta_};
   if constexpr (V == 1) kernel1_[k](state, in, out);
   else kernel3_[k](state, in, out);
-  if (order_ > kernel_order_) apply_large_bands<V>(in, out);
+  if (order_ > kernel_order_ || (k == 0 && order_ > pair_from_)) apply_large_bands<V>(in, out);
 }
 
 template <class T>
-void ShRotation<T>::apply(std::span<const T> in, std::span<T> out) const {
-  const T* src[1] = {in.data()};
-  T* dst[1] = {out.data()};
+void ShRotation<T>::apply_general(const T* in, T* out) const {
+  const T* src[1] = {in};
+  T* dst[1] = {out};
   apply_lanes<1>(src, dst);
 }
 
 template <class T>
-void ShRotation<T>::apply_rgb(const std::array<std::span<const T>, 3>& in,
-                              const std::array<std::span<T>, 3>& out) const {
+void ShRotation<T>::apply_rgb_general(const std::array<std::span<const T>, 3>& in,
+                                      const std::array<std::span<T>, 3>& out) const {
   const T* src[3] = {in[0].data(), in[1].data(), in[2].data()};
   T* dst[3] = {out[0].data(), out[1].data(), out[2].data()};
   apply_lanes<3>(src, dst);

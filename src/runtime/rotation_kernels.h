@@ -3,11 +3,15 @@
 // literal constants and every loop unrolled, into rotation_kernels_generated.cpp by
 // `shtool gen-tensors --what rotation-kernels --out src/runtime` (src/tensors/
 // rotation_kernels_gen.cpp); tests/test_rotation_kernels.cpp regenerates it and compares
-// the bytes, so the committed source cannot drift from its generator. Bands 0, 1 and 2
-// are closed forms in R, written here.
+// the bytes, so the committed source cannot drift from its generator. Bands 1 and 2 have
+// closed forms in R: band 1 (every order) in shtool/rotation.h, band 2 here (used at
+// order 3 only, where it spares the Euler angles; from order 4 on the angles are needed
+// anyway and the zxzxz band is cheaper).
 #pragma once
 
 #include <type_traits>
+
+#include "shtool/rotation.h"
 
 namespace shtool::detail {
 
@@ -47,7 +51,7 @@ inline P splat(T v) {
   else return P{} + v;
 }
 
-// What one rotation needs at apply time (set() fills it): R row-major, cos(m x) and
+// What one rotation needs at apply time (set() fills it): R column-major, cos(m x) and
 // sin(m x) of the zyz angles for m < order, and the Taylor tilt b and b^2 / 2.
 template <class T>
 struct KernelState {
@@ -131,16 +135,8 @@ inline void run_lanes(const T* const* in, T* const* out, F&& bands) {
   }
 }
 
-// Band 1: with y_1^-1 = -c y, y_1^0 = c z, y_1^1 = -c x, band 1 of M(R) is R in
-// (y, z, x) order with the entries that mix z with x or y negated (docs/rotation.md).
-template <class T, class P>
-inline void band1_closed(const T* __restrict r, const P* __restrict x, P* __restrict y) {
-  // r[3 i + j] = R(i, j); our index 0, 1, 2 <-> axis y, z, x with signs -, +, -.
-  const P fy = -x[0], fz = x[1], fx = -x[2];  // the band as a plain vector (times c)
-  y[0] = -(r[3] * fx + r[4] * fy + r[5] * fz);
-  y[1] = r[6] * fx + r[7] * fy + r[8] * fz;
-  y[2] = -(r[0] * fx + r[1] * fy + r[2] * fz);
-}
+// Band 1 is detail::band1_closed (shtool/rotation.h); like band 2 below it reads R
+// column-major, r[i + 3 j] = R(i, j).
 
 // Band 2 as a quadratic form: on the unit sphere y_2^m(w) = w^T Q_m w with Q_m traceless
 // symmetric, so f = sum f_m y_2^m is w^T A w with A = sum f_m Q_m, and
@@ -160,21 +156,21 @@ inline void band2_closed(const T* __restrict r, const P* __restrict x, P* __rest
   const P a00 = x[4] - kf0, a11 = -x[4] - kf0, a22 = kf0 + kf0;
   const P a01 = x[0], a12 = -x[1], a02 = -x[3];
   // C = R A (A symmetric), then the needed entries of B = C R^T.
-  const P c00 = r[0] * a00 + r[1] * a01 + r[2] * a02;
-  const P c01 = r[0] * a01 + r[1] * a11 + r[2] * a12;
-  const P c02 = r[0] * a02 + r[1] * a12 + r[2] * a22;
-  const P c10 = r[3] * a00 + r[4] * a01 + r[5] * a02;
-  const P c11 = r[3] * a01 + r[4] * a11 + r[5] * a12;
-  const P c12 = r[3] * a02 + r[4] * a12 + r[5] * a22;
-  const P c20 = r[6] * a00 + r[7] * a01 + r[8] * a02;
-  const P c21 = r[6] * a01 + r[7] * a11 + r[8] * a12;
-  const P c22 = r[6] * a02 + r[7] * a12 + r[8] * a22;
-  const P b00 = c00 * r[0] + c01 * r[1] + c02 * r[2];
-  const P b11 = c10 * r[3] + c11 * r[4] + c12 * r[5];
-  const P b22 = c20 * r[6] + c21 * r[7] + c22 * r[8];
-  const P b01 = c00 * r[3] + c01 * r[4] + c02 * r[5];
-  const P b02 = c00 * r[6] + c01 * r[7] + c02 * r[8];
-  const P b12 = c10 * r[6] + c11 * r[7] + c12 * r[8];
+  const P c00 = r[0] * a00 + r[3] * a01 + r[6] * a02;
+  const P c01 = r[0] * a01 + r[3] * a11 + r[6] * a12;
+  const P c02 = r[0] * a02 + r[3] * a12 + r[6] * a22;
+  const P c10 = r[1] * a00 + r[4] * a01 + r[7] * a02;
+  const P c11 = r[1] * a01 + r[4] * a11 + r[7] * a12;
+  const P c12 = r[1] * a02 + r[4] * a12 + r[7] * a22;
+  const P c20 = r[2] * a00 + r[5] * a01 + r[8] * a02;
+  const P c21 = r[2] * a01 + r[5] * a11 + r[8] * a12;
+  const P c22 = r[2] * a02 + r[5] * a12 + r[8] * a22;
+  const P b00 = c00 * r[0] + c01 * r[3] + c02 * r[6];
+  const P b11 = c10 * r[1] + c11 * r[4] + c12 * r[7];
+  const P b22 = c20 * r[2] + c21 * r[5] + c22 * r[8];
+  const P b01 = c00 * r[1] + c01 * r[4] + c02 * r[7];
+  const P b02 = c00 * r[2] + c01 * r[5] + c02 * r[8];
+  const P b12 = c10 * r[2] + c11 * r[5] + c12 * r[8];
   y[0] = b01;
   y[1] = -b12;
   y[2] = h3 * b22;

@@ -12,6 +12,42 @@ static_assert(kKernelMaxBand == 9, "regenerate rotation_kernels_generated.cpp");
 
 namespace {
 
+// Band 2 of Z(a) X90^T Z(b) X90 Z(g), Ry(b) = Rx(-90) Rz(b) Rx(+90).
+template <class T, class P>
+inline void zxzxz_band2(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+  const P t2 = x[2];
+  const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
+  const P t3 = cg1 * x[3] - sg1 * x[1];
+  const P t1 = sg1 * x[3] + cg1 * x[1];
+  const P cg2 = splat<P>(s.cg[2]), sg2 = splat<P>(s.sg[2]);
+  const P t4 = cg2 * x[4] - sg2 * x[0];
+  const P t0 = sg2 * x[4] + cg2 * x[0];
+  const P u0 = T(1.0000000000000002) * t3;
+  const P u1 = -t1;
+  const P u2 = T(-0.5) * t2 - T(0.8660254037844386) * t4;
+  const P u3 = -t0;
+  const P u4 = T(-0.8660254037844386) * t2 + T(0.49999999999999994) * t4;
+  const P w2 = u2;
+  const P cb1 = splat<P>(s.cb[1]), sb1 = splat<P>(s.sb[1]);
+  const P w3 = cb1 * u3 - sb1 * u1;
+  const P w1 = sb1 * u3 + cb1 * u1;
+  const P cb2 = splat<P>(s.cb[2]), sb2 = splat<P>(s.sb[2]);
+  const P w4 = cb2 * u4 - sb2 * u0;
+  const P w0 = sb2 * u4 + cb2 * u0;
+  const P v0 = -w3;
+  const P v1 = -w1;
+  const P v2 = T(-0.5) * w2 - T(0.8660254037844386) * w4;
+  const P v3 = T(1.0000000000000002) * w0;
+  const P v4 = T(-0.8660254037844386) * w2 + T(0.49999999999999994) * w4;
+  y[2] = v2;
+  const P ca1 = splat<P>(s.ca[1]), sa1 = splat<P>(s.sa[1]);
+  y[3] = ca1 * v3 - sa1 * v1;
+  y[1] = sa1 * v3 + ca1 * v1;
+  const P ca2 = splat<P>(s.ca[2]), sa2 = splat<P>(s.sa[2]);
+  y[4] = ca2 * v4 - sa2 * v0;
+  y[0] = sa2 * v4 + ca2 * v0;
+}
+
 // Band 3 of Z(a) X90^T Z(b) X90 Z(g), Ry(b) = Rx(-90) Rz(b) Rx(+90).
 template <class T, class P>
 inline void zxzxz_band3(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
@@ -5303,7 +5339,7 @@ template <class T, class P>
 inline void zxzxz_order4_bands(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
   y[0] = x[0];
   band1_closed<T, P>(s.r, x + 1, y + 1);
-  band2_closed<T, P>(s.r, x + 4, y + 4);
+  zxzxz_band2<T, P>(s, x + 4, y + 4);
   zxzxz_band3<T, P>(s, x + 9, y + 9);
 }
 
@@ -5318,7 +5354,7 @@ template <class T, class P>
 inline void zxzxz_order5_bands(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
   y[0] = x[0];
   band1_closed<T, P>(s.r, x + 1, y + 1);
-  band2_closed<T, P>(s.r, x + 4, y + 4);
+  zxzxz_band2<T, P>(s, x + 4, y + 4);
   zxzxz_band3<T, P>(s, x + 9, y + 9);
   zxzxz_band4<T, P>(s, x + 16, y + 16);
 }
@@ -5334,7 +5370,7 @@ template <class T, class P>
 inline void zxzxz_order6_bands(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
   y[0] = x[0];
   band1_closed<T, P>(s.r, x + 1, y + 1);
-  band2_closed<T, P>(s.r, x + 4, y + 4);
+  zxzxz_band2<T, P>(s, x + 4, y + 4);
   zxzxz_band3<T, P>(s, x + 9, y + 9);
   zxzxz_band4<T, P>(s, x + 16, y + 16);
   zxzxz_band5<T, P>(s, x + 25, y + 25);
@@ -5351,7 +5387,7 @@ template <class T, class P>
 inline void zxzxz_order7_bands(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
   y[0] = x[0];
   band1_closed<T, P>(s.r, x + 1, y + 1);
-  band2_closed<T, P>(s.r, x + 4, y + 4);
+  zxzxz_band2<T, P>(s, x + 4, y + 4);
   zxzxz_band3<T, P>(s, x + 9, y + 9);
   zxzxz_band4<T, P>(s, x + 16, y + 16);
   zxzxz_band5<T, P>(s, x + 25, y + 25);
@@ -5369,7 +5405,7 @@ template <class T, class P>
 inline void zxzxz_order8_bands(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
   y[0] = x[0];
   band1_closed<T, P>(s.r, x + 1, y + 1);
-  band2_closed<T, P>(s.r, x + 4, y + 4);
+  zxzxz_band2<T, P>(s, x + 4, y + 4);
   zxzxz_band3<T, P>(s, x + 9, y + 9);
   zxzxz_band4<T, P>(s, x + 16, y + 16);
   zxzxz_band5<T, P>(s, x + 25, y + 25);
@@ -5388,7 +5424,7 @@ template <class T, class P>
 inline void zxzxz_order9_bands(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
   y[0] = x[0];
   band1_closed<T, P>(s.r, x + 1, y + 1);
-  band2_closed<T, P>(s.r, x + 4, y + 4);
+  zxzxz_band2<T, P>(s, x + 4, y + 4);
   zxzxz_band3<T, P>(s, x + 9, y + 9);
   zxzxz_band4<T, P>(s, x + 16, y + 16);
   zxzxz_band5<T, P>(s, x + 25, y + 25);
@@ -5408,7 +5444,7 @@ template <class T, class P>
 inline void zxzxz_order10_bands(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
   y[0] = x[0];
   band1_closed<T, P>(s.r, x + 1, y + 1);
-  band2_closed<T, P>(s.r, x + 4, y + 4);
+  zxzxz_band2<T, P>(s, x + 4, y + 4);
   zxzxz_band3<T, P>(s, x + 9, y + 9);
   zxzxz_band4<T, P>(s, x + 16, y + 16);
   zxzxz_band5<T, P>(s, x + 25, y + 25);

@@ -16,6 +16,10 @@ using detail::kKernelMaxBand;
 using detail::kKernelMaxOrder;
 using detail::kBandKernelMaxBand;
 
+// prefix followed by the number (append: GCC 12 warns, wrongly, -Wrestrict about
+// "literal" + std::string at -O3).
+std::string indexed(const char* prefix, int j) { return std::string(prefix).append(std::to_string(j)); }
+
 // Round-trip text of a double (17 significant digits), identical on every run.
 std::string literal(double v) {
   char buf[40];
@@ -45,8 +49,8 @@ void z_rotation(std::ostream& o, int l, const std::string& angle, const std::str
                 const std::string& dst, bool dst_array) {
   auto in = [&](int j) { return src_array ? src + "[" + std::to_string(j) + "]" : src + std::to_string(j); };
   auto out = [&](int j) {
-    return dst_array ? "  " + dst + "[" + std::to_string(j) + "] = "
-                     : "  const P " + dst + std::to_string(j) + " = ";
+    return dst_array ? std::string("  ").append(dst).append("[").append(std::to_string(j)).append("] = ")
+                     : std::string("  const P ").append(dst).append(std::to_string(j)).append(" = ");
   };
   o << out(l) << in(l) << ";\n";
   for (int m = 1; m <= l; ++m) {
@@ -78,13 +82,13 @@ void zxzxz_band(std::ostream& o, const RotationHelpers& h, int l) {
   z_rotation(o, l, "g", "x", true, "t", false);
   for (int i = 0; i < size; ++i) {
     std::vector<std::pair<double, std::string>> terms;
-    for (int j = 0; j < size; ++j) terms.emplace_back(x[i][j], "t" + std::to_string(j));
+    for (int j = 0; j < size; ++j) terms.emplace_back(x[i][j], indexed("t", j));
     o << "  const P u" << i << " = " << linear_sum(terms) << ";\n";
   }
   z_rotation(o, l, "b", "u", false, "w", false);
   for (int i = 0; i < size; ++i) {
     std::vector<std::pair<double, std::string>> terms;
-    for (int j = 0; j < size; ++j) terms.emplace_back(x[j][i], "w" + std::to_string(j));
+    for (int j = 0; j < size; ++j) terms.emplace_back(x[j][i], indexed("w", j));
     o << "  const P v" << i << " = " << linear_sum(terms) << ";\n";
   }
   z_rotation(o, l, "a", "v", false, "y", true);
@@ -97,7 +101,7 @@ void taylor_band(std::ostream& o, const RotationHelpers& h, int l) {
   // distance-2 entries D2[j][j-2] = off2[j] = D2[j-2][j].
   auto sub = [&](int j) { return j >= 1 && j < size ? h.dy_sub[first + j] : 0.0; };
   auto off2 = [&](int j) { return j >= 2 && j < size ? h.ddy_off2[first + j] : 0.0; };
-  auto t = [](int j) { return "t" + std::to_string(j); };
+  auto t = [](int j) { return indexed("t", j); };
   o << "// Band " << l << " of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) (paper 001, Sec. 3).\n"
     << "template <int Order, class T, class P>\n"
     << "inline void taylor_band" << l
@@ -134,10 +138,13 @@ void order_function(std::ostream& o, bool taylor, int n) {
   o << "inline void " << name << "_bands(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {\n"
     << "  y[0] = x[0];\n";
   for (int l = 1; l < n; ++l) {
-    const std::string args = "(s, x + " + std::to_string(l * l) + ", y + " + std::to_string(l * l) + ");\n";
+    const std::string args =
+        indexed("(s, x + ", l * l).append(", y + ").append(std::to_string(l * l)).append(");\n");
     if (taylor) o << "  taylor_band" << l << "<Order, T, P>" << args;
     else if (l == 1) o << "  band1_closed<T, P>(s.r, x + 1, y + 1);\n";
-    else if (l == 2) o << "  band2_closed<T, P>(s.r, x + 4, y + 4);\n";
+    // Band 2 by its closed form only where it saves the Euler angles (order 3); once
+    // they are computed anyway, the zxzxz band costs fewer operations.
+    else if (l == 2 && n <= 3) o << "  band2_closed<T, P>(s.r, x + 4, y + 4);\n";
     else o << "  zxzxz_band" << l << "<T, P>" << args;
   }
   if (n == 1) o << "  (void)s;\n";
@@ -181,7 +188,7 @@ std::string rotation_kernels_source() {
     << kKernelMaxBand
     << ", \"regenerate rotation_kernels_generated.cpp\");\n\n"
        "namespace {\n\n";
-  for (int l = 3; l <= kBandKernelMaxBand; ++l) zxzxz_band(o, h, l);
+  for (int l = 2; l <= kBandKernelMaxBand; ++l) zxzxz_band(o, h, l);
   for (int l = 1; l <= kBandKernelMaxBand; ++l) taylor_band(o, h, l);
   for (int l = kKernelMaxOrder; l <= kBandKernelMaxBand; ++l) {
     band_entry(o, false, l);

@@ -7,7 +7,7 @@
 namespace shtool {
 
 // File name the kernels are written to, and the complete C++ source: straight-line
-// zxzxz band kernels for bands 3..kBandKernelMaxBand (X90 as literals, exact zeros and
+// zxzxz band kernels for bands 2..kBandKernelMaxBand (X90 as literals, exact zeros and
 // unit entries skipped), Taylor band kernels for bands 1..kBandKernelMaxBand (D1 and D2
 // entries as literals), one function per whole order up to kKernelMaxOrder and one per
 // band above it, float and double, one vector and three (src/runtime/rotation_kernels.h). The constants come from compute_rotation_helpers; the text
