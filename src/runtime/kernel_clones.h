@@ -9,7 +9,9 @@
 // their order-2/3 paths are inline).
 #pragma once
 
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__linux__)
+// SHTOOL_NO_KERNEL_CLONES builds the baseline copy alone (test_tripling_baseline).
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__linux__) && \
+    !defined(SHTOOL_NO_KERNEL_CLONES)
 #define SHTOOL_KERNEL_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
 #else
 #define SHTOOL_KERNEL_CLONES
