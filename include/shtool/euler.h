@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cmath>
+#include <limits>
 
 #include <Eigen/Core>
 
@@ -87,6 +88,49 @@ inline ZyzCosSin<T> zyz_cos_sin_from_matrix(const Mat3<T>& r) {
   return e;
 }
 
+
+// The same cosines and sines straight from a unit quaternion (w, x, y, z), with one
+// square root and one division where the matrix route needs two and four. For
+// R = Rz(a) Ry(b) Rz(g) the Hamilton product of the half-angle quaternions gives
+//   (w, z) = cos(b/2) (cos P, sin P),  (y, -x) = sin(b/2) (cos Q, sin Q),
+// P = (a + g) / 2, Q = (a - g) / 2 (-q gives P + pi, Q + pi: the same a mod 2 pi and g),
+// so a = P + Q, g = P - Q and, with r1 = |(w, z)|, r2 = |(x, y)|:
+//   (cos a, sin a) = (w y + z x, z y - w x) / (r1 r2),  (cos g, sin g) = (w y - z x, z y + w x) / (r1 r2)
+//   cos b = r1^2 - r2^2,  sin b = 2 r1 r2.
+// At a gimbal lock one of r1, r2 vanishes and only a + g (b = 0) or a - g (b = pi) is
+// defined: then g = 0. Below a tilt of about 2 eps^1.5 (8e-11 in float, 3e-24 in double)
+// the tilt is taken as 0, which changes nothing at T's precision and keeps (r1 r2)^2
+// far from underflow.
+template <class T>
+inline ZyzCosSin<T> zyz_cos_sin_from_quaternion(T w, T x, T y, T z) {
+  constexpr T kTiny = std::numeric_limits<T>::epsilon() * std::numeric_limits<T>::epsilon() *
+                      std::numeric_limits<T>::epsilon();
+  const T wz = w * w + z * z, xy = x * x + y * y;
+  ZyzCosSin<T> e;
+  e.cb = wz - xy;
+  if (xy < kTiny) {  // b = 0: a = 2P
+    const T inv = 1 / wz;
+    e.cb = 1;
+    e.ca = (w * w - z * z) * inv;
+    e.sa = 2 * w * z * inv;
+    return e;
+  }
+  if (wz < kTiny) {  // b = pi: a = 2Q
+    const T inv = 1 / xy;
+    e.cb = -1;
+    e.ca = (y * y - x * x) * inv;
+    e.sa = -2 * x * y * inv;
+    return e;
+  }
+  const T r = std::sqrt(wz * xy);  // r1 r2
+  const T inv = 1 / r;
+  e.sb = r + r;
+  e.ca = (w * y + z * x) * inv;
+  e.sa = (z * y - w * x) * inv;
+  e.cg = (w * y - z * x) * inv;
+  e.sg = (z * y + w * x) * inv;
+  return e;
+}
 
 // Largest entry of |R^T R - I| and the determinant, for validating user input.
 template <class T>

@@ -275,7 +275,8 @@ inline void zyz_tables(int n, const ZyzCosSin<T>& e, bool with_beta, T* ca, T* s
 }  // namespace
 
 template <class T>
-bool ShRotation<T>::set_general(const Mat3<T>& r, RotationMethod method, double tolerance) {
+bool ShRotation<T>::set_general(const Mat3<T>& r, RotationMethod method, double tolerance,
+                                 const ZyzCosSin<T>* given) {
   if (method != RotationMethod::reference && !helpers_) return false;
   if (method == RotationMethod::automatic && order_ <= 3) method = RotationMethod::zxzxz;  // see rotation.h
   if (method == RotationMethod::automatic) {
@@ -304,7 +305,7 @@ bool ShRotation<T>::set_general(const Mat3<T>& r, RotationMethod method, double 
       [[fallthrough]];
     default: {
       const bool zxzxz = method == RotationMethod::zxzxz;
-      const ZyzCosSin<T> e = zyz_cos_sin_from_matrix<T>(r);
+      const ZyzCosSin<T> e = given ? *given : zyz_cos_sin_from_matrix<T>(r);
       T* t[6] = {cos_a_.data(), sin_a_.data(), cos_b_.data(), sin_b_.data(), cos_g_.data(), sin_g_.data()};
       switch (order_) {
 #define SHTOOL_ZYZ_CASE(N) \
