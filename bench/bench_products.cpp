@@ -7,7 +7,6 @@
 //   BM_TriplingBuild/N                  runtime construction of the tripling tensor
 // Run: build-*/bench/bench_products --benchmark_min_time=0.2
 // Figures and the machine they were measured on: docs/products.md.
-#include <random>
 #include <span>
 #include <string>
 #include <vector>
@@ -19,26 +18,17 @@
 #include "shtool/product.h"
 #include "shtool/sh.h"
 #include "shtool/tripling_product.h"
+#include "bench_util.h"
 
 namespace {
 
 using shtool::sh_count;
 
 template <class T>
-std::vector<std::vector<T>> random_inputs(int order, int count) {
-  std::mt19937 rng(12345);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  std::vector<std::vector<T>> f(count, std::vector<T>(sh_count(order)));
-  for (auto& v : f)
-    for (auto& x : v) x = static_cast<T>(u(rng));
-  return f;
-}
-
-template <class T>
 void BM_TripleTripling(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));
   const shtool::TriplingProduct<T> product(shtool::TriplingTensor::compute(n));
-  const auto f = random_inputs<T>(n, 2);
+  const auto f = shtool::bench::random_sh_vectors<T>(n, 2);
   std::vector<T> g(sh_count(n));
   for (auto _ : state) {
     product.multiply(f[0], f[1], g);
@@ -54,7 +44,7 @@ template <class T, template <class> class Product>
 void BM_TripleOnGrid(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));
   Product<T> product(n, 2);
-  const auto f = random_inputs<T>(n, 2);
+  const auto f = shtool::bench::random_sh_vectors<T>(n, 2);
   std::vector<T> g(sh_count(n));
   for (auto _ : state) {
     product.multiply(f[0], f[1], g);
@@ -71,7 +61,7 @@ void BM_GridAzimuth(benchmark::State& state) {
   const int k = static_cast<int>(state.range(0));
   const int n = static_cast<int>(state.range(1));
   shtool::GridProduct<T> product(n, k - 1, azimuth);
-  const auto f = random_inputs<T>(n, k - 1);
+  const auto f = shtool::bench::random_sh_vectors<T>(n, k - 1);
   const std::vector<std::span<const T>> spans(f.begin(), f.end());
   std::vector<T> g(sh_count(n));
   for (auto _ : state) {
@@ -87,7 +77,7 @@ void BM_TripleAuto(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));
   shtool::ShProduct<T> product(n);
   product.prepare(2);
-  const auto f = random_inputs<T>(n, 2);
+  const auto f = shtool::bench::random_sh_vectors<T>(n, 2);
   std::vector<T> g(sh_count(n));
   for (auto _ : state) {
     product.triple(f[0], f[1], g);
@@ -103,7 +93,7 @@ void BM_Multiple(benchmark::State& state) {
   const int k = static_cast<int>(state.range(0));
   const int n = static_cast<int>(state.range(1));
   const int inputs = k - 1;
-  const auto f = random_inputs<T>(n, inputs);
+  const auto f = shtool::bench::random_sh_vectors<T>(n, inputs);
   std::vector<std::span<const T>> spans(f.begin(), f.end());
   std::vector<T> g(sh_count(n));
   const shtool::ProductMethod method = mode == kRecursiveTripling ? shtool::ProductMethod::tripling

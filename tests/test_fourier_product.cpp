@@ -27,6 +27,7 @@ namespace shtool {
 namespace {
 
 using test::reference_product;
+using test::relative_l2;
 using test::random_inputs;
 using test::sci;
 
@@ -131,16 +132,6 @@ TEST(ShFourierTensors, TableRoundTripAndCorruption) {
   bad = table;
   bad.kind = "tripling-tensor";
   EXPECT_FALSE(ShFourierTensors::from_table(bad).ok());
-}
-
-template <class T>
-double relative_l2(const std::vector<T>& got, const std::vector<double>& ref) {
-  double e = 0, r = 0;
-  for (std::size_t i = 0; i < ref.size(); ++i) {
-    e += (static_cast<double>(got[i]) - ref[i]) * (static_cast<double>(got[i]) - ref[i]);
-    r += ref[i] * ref[i];
-  }
-  return std::sqrt(e / r);
 }
 
 struct Case {

@@ -30,6 +30,7 @@ namespace shtool {
 namespace {
 
 using test::reference_product;
+using test::relative_l2;
 using test::random_inputs;
 using test::sci;
 
@@ -39,17 +40,6 @@ constexpr double kTolDouble = 1e-10;
 // and an FFT of O(N) points per input; measured 9e-8 to 3.0e-7 (N = 3..20, k = 3..8),
 // so 2e-6 leaves a margin of about 7 without hiding an O(1) error.
 constexpr double kTolFloat = 2e-6;
-
-template <class T>
-double relative_l2(const std::vector<T>& got, const std::vector<double>& ref) {
-  double e = 0, r = 0;
-  for (std::size_t i = 0; i < ref.size(); ++i) {
-    const double d = static_cast<double>(got[i]) - ref[i];
-    e += d * d;
-    r += ref[i] * ref[i];
-  }
-  return std::sqrt(e / r);
-}
 
 template <class T>
 std::vector<T> grid_multiply(int order, const std::vector<std::vector<double>>& f,

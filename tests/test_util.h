@@ -43,6 +43,18 @@ inline double norm(const std::vector<double>& v) {
 }
 
 // Property values in scientific notation (std::to_string would print 0.000000).
+// Relative L2 distance of got (any floating type) from ref: sqrt(sum err^2 / sum ref^2).
+template <class T>
+double relative_l2(const std::vector<T>& got, const std::vector<double>& ref) {
+  double e = 0, r = 0;
+  for (std::size_t i = 0; i < ref.size(); ++i) {
+    const double d = static_cast<double>(got[i]) - ref[i];
+    e += d * d;
+    r += ref[i] * ref[i];
+  }
+  return std::sqrt(e / r);
+}
+
 inline std::string sci(double v) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.3e", v);

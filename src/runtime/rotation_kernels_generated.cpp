@@ -5698,6 +5698,7 @@ template <class T, int V>
 RotationKernel<T, V> band_kernel(int method, int l) {
   switch (method) {
     case 0:
+      if constexpr (std::is_same_v<T, double>) return nullptr;
       switch (l) {
         case 10: return &zxzxz_band10_entry<T, V>;
         case 11: return &zxzxz_band11_entry<T, V>;
