@@ -13,6 +13,11 @@
 //     vectors  1 | 3 (three = an RGB light, one apply_rgb call)
 //   items_per_second = rotations per second; label of `auto` = the method it chose.
 //
+//   BM_RotateBatch/<type>/<method>/N: the same rotations (large tilt, one vector each)
+//     through rotate_batch, kRotations (rotation, vector) pairs per call, matrices from
+//     the quaternions inside the timed loop; items_per_second = rotations per second,
+//     comparable with BM_Rotate/<type>/<method>/large/1/N.
+//
 // Run: build/bench/bench_rotation --benchmark_filter='BM_Rotate/double/.*/1/'
 // Figures, the machine and the peer comparison: docs/benchmarks.md, "Rotations".
 #include <array>
@@ -89,6 +94,27 @@ void BM_Rotate(benchmark::State& state, RotationMethod method, bool small_tilt, 
 }
 
 template <class T>
+void BM_RotateBatch(benchmark::State& state, RotationMethod method) {
+  const int order = static_cast<int>(state.range(0));
+  shtool::ShRotation<T> rotation(order, helpers());
+  const auto q = shtool::bench::random_quaternions<T>();
+  const int count = static_cast<int>(q.size());
+  std::vector<T> in;  // count vectors of N^2, one after the other
+  for (const auto& v : shtool::bench::random_sh_vectors<T>(order, count)) in.insert(in.end(), v.begin(), v.end());
+  std::vector<T> out(in.size());
+  std::vector<shtool::Mat3<T>> r(q.size());
+  bool ok = true;
+  for (auto _ : state) {
+    for (int k = 0; k < count; ++k) r[k] = shtool::matrix_from_quaternion<T>(q[k][0], q[k][1], q[k][2], q[k][3]);
+    ok &= shtool::rotate_batch<T>(rotation, r, in, out, method);
+    benchmark::DoNotOptimize(out.data());
+    benchmark::ClobberMemory();
+  }
+  if (!ok) state.SkipWithError("rotate_batch failed (helpers missing?)");
+  state.SetItemsProcessed(state.iterations() * count);
+}
+
+template <class T>
 void register_all(const char* type) {
   struct Case {
     RotationMethod method;
@@ -109,6 +135,12 @@ void register_all(const char* type) {
         BM_Rotate<T>(s, c.method, c.small_tilt, vectors);
       })->DenseRange(kMinOrder, kMaxOrder);
     }
+  for (RotationMethod m : {RotationMethod::zxzxz, RotationMethod::automatic}) {
+    const std::string name =
+        std::string("BM_RotateBatch/") + type + "/" + std::string(shtool::rotation_method_name(m));
+    benchmark::RegisterBenchmark(name.c_str(), [m](benchmark::State& s) { BM_RotateBatch<T>(s, m); })
+        ->DenseRange(kMinOrder, kMaxOrder);
+  }
 }
 
 }  // namespace

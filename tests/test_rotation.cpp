@@ -28,6 +28,7 @@
 #include <gtest/gtest.h>
 
 #include "offline_version.h"
+#include "allocation_counter.h"
 #include "test_util.h"
 #include "shtool/euler.h"
 #include "shtool/quadrature.h"
@@ -879,6 +880,82 @@ TEST(RotationApi, BatchEqualsIndividualRotations) {
       const std::vector<float> one = rotate<float>(order, rs[k], m, f, 1e-6);
       for (int i = 0; i < n; ++i) EXPECT_EQ(outf[k * n + i], one[i]) << "float pair " << k;
     }
+  }
+}
+
+// The lane path of rotate_batch (groups of 4 float / 2 double rotations, orders <= 10)
+// against set() + apply() of each pair, bit for bit: counts that leave a tail, every
+// order with a generated kernel and two above, the edge rotations (half turns, gimbal
+// locks, tiny tilts) mixed with generic ones, and under `automatic` groups where some
+// rotation resolves to a Taylor method (those groups run one at a time).
+template <class T>
+void check_batch_lanes_bitwise() {
+  std::mt19937_64 rng(617);
+  std::vector<Mat3<T>> rs;
+  for (const auto& [name, r] : edge_rotations()) rs.push_back(r.template cast<T>());
+  for (int k = 0; k < 13; ++k) rs.push_back(random_rotation(rng).template cast<T>());
+  std::shuffle(rs.begin(), rs.end(), rng);
+  const int count = static_cast<int>(rs.size());
+  ASSERT_NE(count % 4, 0);  // a tail in float
+  for (int order = 1; order <= 12; ++order) {
+    const int n = sh_count(order);
+    std::vector<T> in(count * n);
+    for (T& v : in) v = static_cast<T>(std::uniform_real_distribution<double>(-1, 1)(rng));
+    for (RotationMethod m : {RotationMethod::zxzxz, RotationMethod::automatic}) {
+      ShRotation<T> batch(order, helpers()), single(order, helpers());
+      std::vector<T> out(in.size(), T(7)), one(n);
+      ASSERT_TRUE(rotate_batch<T>(batch, rs, in, out, m, 1e-5));
+      for (int k = 0; k < count; ++k) {
+        ASSERT_TRUE(single.set(rs[k], m, 1e-5));
+        single.apply(std::span<const T>(in.data() + k * n, n), one);
+        for (int i = 0; i < n; ++i)
+          ASSERT_EQ(out[k * n + i], one[i]) << "order " << order << " " << rotation_method_name(m) << " pair "
+                                            << k << " (" << rotation_method_name(single.method()) << ") i " << i;
+      }
+      // The rotation object holds the last rotation afterwards.
+      EXPECT_EQ(batch.method(), single.method());
+      std::vector<T> again(n);
+      batch.apply(std::span<const T>(in.data() + (count - 1) * n, n), again);
+      for (int i = 0; i < n; ++i) EXPECT_EQ(again[i], one[i]);
+    }
+  }
+}
+
+TEST(RotationApi, BatchLanesAreBitIdenticalToSingleRotationsFloat) { check_batch_lanes_bitwise<float>(); }
+TEST(RotationApi, BatchLanesAreBitIdenticalToSingleRotationsDouble) { check_batch_lanes_bitwise<double>(); }
+
+TEST(RotationApi, BatchOfNothingAndWrongSizes) {
+  ShRotation<float> rotation(4, helpers());
+  std::vector<Mat3<float>> rs(5, Mat3<float>::Identity());
+  std::vector<float> in(5 * 16, 1.0f), out(5 * 16), short_out(4 * 16);
+  EXPECT_TRUE(rotate_batch<float>(rotation, std::span<const Mat3<float>>(), {}, {}));
+  try {
+    rotate_batch<float>(rotation, rs, in, short_out);
+    FAIL() << "no exception for a short output";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("need 80 coefficients"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(rotate_batch<float>(rotation, rs, std::span<const float>(in).first(79), out), std::invalid_argument);
+  // Without helpers only the reference method works, in batches as in set().
+  ShRotation<float> none(4, nullptr);
+  EXPECT_FALSE(rotate_batch<float>(none, rs, in, out, RotationMethod::zxzxz));
+  EXPECT_TRUE(rotate_batch<float>(none, rs, in, out, RotationMethod::reference));
+  EXPECT_EQ(out, in);  // identity rotations
+}
+
+TEST(RotationApi, BatchAllocatesNothing) {
+  std::mt19937_64 rng(619);
+  for (int order : {3, 6, 10, 14}) {
+    const int n = sh_count(order), count = 9;
+    std::vector<Mat3<float>> rs;
+    for (int k = 0; k < count; ++k) rs.push_back(random_rotation(rng).cast<float>());
+    std::vector<float> in(count * n, 0.5f), out(count * n);
+    ShRotation<float> rotation(order, helpers());
+    ASSERT_TRUE(rotate_batch<float>(rotation, rs, in, out, RotationMethod::zxzxz));  // warm-up
+    const long before = test::allocation_count();
+    ASSERT_TRUE(rotate_batch<float>(rotation, rs, in, out, RotationMethod::zxzxz));
+    ASSERT_TRUE(rotate_batch<float>(rotation, rs, in, out, RotationMethod::automatic));
+    EXPECT_EQ(test::allocation_count(), before) << "order " << order;
   }
 }
 

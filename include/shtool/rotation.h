@@ -40,10 +40,10 @@ struct KernelState;  // src/runtime/rotation_kernels.h
 // Band 1 of M(R) for R stored column-major (r[i + 3 j] = R(i, j), Eigen's layout). With
 // y_1^-1 = -c y, y_1^0 = c z, y_1^1 = -c x, band 1 is R in (y, z, x) order with the
 // entries that mix z with x or y negated (docs/rotation.md). P is T or a vector of T
-// (lanes, src/runtime/rotation_kernels.h). Here because ShRotation::apply runs it
-// inline at order 2.
-template <class T, class P>
-inline void band1_closed(const T* __restrict r, const P* __restrict x, P* __restrict y) {
+// (lanes, src/runtime/rotation_kernels.h); R is T, or P when every lane has its own
+// rotation (rotate_batch). Here because ShRotation::apply runs it inline at order 2.
+template <class T, class P, class R = T>
+inline void band1_closed(const R* __restrict r, const P* __restrict x, P* __restrict y) {
   const P fy = -x[0], fz = x[1], fx = -x[2];  // the band as a plain vector (times c)
   y[0] = -(r[1] * fx + r[4] * fy + r[7] * fz);
   y[1] = r[2] * fx + r[5] * fy + r[8] * fz;
@@ -71,6 +71,24 @@ constexpr double default_rotation_tolerance() {
 // tilt b at the given order; 0 for exact methods.
 double taylor_error_bound(RotationMethod method, int order, double beta,
                           double ddy_offdiag_norm = 0.0);
+
+template <class T>
+class ShRotation;
+
+// Many (rotation, vector) pairs: out[k] = M(rotations[k]) in[k], vectors of N^2
+// coefficients stored contiguously (in and out at least rotations.size() N^2 long, else
+// std::invalid_argument; they must not overlap). Same method choice as ShRotation::set,
+// and the same results bit for bit as set() + apply() of each pair; afterwards
+// `rotation` holds the last rotation. Where every rotation of a group resolves to zxzxz
+// at an order with a generated kernel (N <= 10), the group runs one rotation per SIMD
+// lane (4 in float, 2 in double): the setup of several rotations overlaps and the
+// kernel's instructions are shared. Returns false (like set()) if the method needs
+// helpers that are missing.
+template <class T>
+bool rotate_batch(ShRotation<T>& rotation, std::span<const Mat3<T>> rotations,
+                  std::span<const T> in, std::span<T> out,
+                  RotationMethod method = RotationMethod::automatic,
+                  double tolerance = default_rotation_tolerance<T>());
 
 template <class T>
 class ShRotation {
@@ -139,6 +157,14 @@ class ShRotation {
   std::span<const T> reference_blocks() const { return dense_; }
 
  private:
+  friend bool rotate_batch<T>(ShRotation<T>&, std::span<const Mat3<T>>, std::span<const T>, std::span<T>,
+                              RotationMethod, double);
+  // What set() resolves `method` to for r (never automatic).
+  RotationMethod choose_method(const Mat3<T>& r, RotationMethod method, double tolerance);
+  // rotate_batch's lane path over whole groups of lanes; returns how many rotations it
+  // did (0 if it does not apply: then every pair goes through set() and apply()).
+  std::size_t rotate_lanes(std::span<const Mat3<T>> rotations, const T* in, T* out, RotationMethod method,
+                           double tolerance);
   // e: the zyz cosines and sines of r if the caller has them (else computed from r).
   bool set_general(const Mat3<T>& r, RotationMethod method, double tolerance,
                    const ZyzCosSin<T>* e = nullptr);
@@ -196,13 +222,5 @@ class ShRotation {
   std::vector<T> cos_a_, sin_a_, cos_b_, sin_b_, cos_g_, sin_g_;  // cos(m angle), m < N
   std::vector<T> dense_;
 };
-
-// Many (rotation, vector) pairs: out[k] = M(rotations[k]) in[k], vectors of N^2
-// coefficients stored contiguously. Same method choice as ShRotation::set.
-template <class T>
-bool rotate_batch(ShRotation<T>& rotation, std::span<const Mat3<T>> rotations,
-                  std::span<const T> in, std::span<T> out,
-                  RotationMethod method = RotationMethod::automatic,
-                  double tolerance = default_rotation_tolerance<T>());
 
 }  // namespace shtool

@@ -5,10 +5,15 @@
 #include <complex>
 #include <cstring>
 #include <stdexcept>
+#include <string>
 #include <type_traits>
 
 #include "shtool/sh.h"
 #include "rotation_kernels.h"
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 namespace shtool {
 namespace {
@@ -250,8 +255,8 @@ namespace {
 template <int N, class T>
 inline void multiple_angles(int n_run, T c1, T s1, T* __restrict c, T* __restrict s) {
   const int n = N > 0 ? N : n_run;
-  c[0] = 1;
-  s[0] = 0;
+  c[0] = T{} + 1;  // T may be a lane vector (rotate_batch)
+  s[0] = T{};
   if (n > 1) {
     c[1] = c1;
     s[1] = s1;
@@ -263,37 +268,95 @@ inline void multiple_angles(int n_run, T c1, T s1, T* __restrict c, T* __restric
   }
 }
 
-// The cos / sin tables of the three zyz angles (beta too if with_beta).
-template <int N, class T>
-inline void zyz_tables(int n, const ZyzCosSin<T>& e, bool with_beta, T* ca, T* sa, T* cb, T* sb, T* cg,
+// The cos / sin tables of the three zyz angles (beta too if with_beta). E: ZyzCosSin<T>,
+// or ZyzLanes<T> when T is a lane vector.
+template <int N, class T, class E>
+inline void zyz_tables(int n, const E& e, bool with_beta, T* ca, T* sa, T* cb, T* sb, T* cg,
                        T* sg) {
   multiple_angles<N>(n, e.ca, e.sa, ca, sa);
   if (with_beta) multiple_angles<N>(n, e.cb, e.sb, cb, sb);
   multiple_angles<N>(n, e.cg, e.sg, cg, sg);
 }
 
+// zyz_tables with the count fixed at compile time where the kernels are generated.
+// t: ca, sa, cb, sb, cg, sg.
+template <class T, class E>
+void fill_zyz_tables(int order, const E& e, bool with_beta, T* const* t) {
+  switch (order) {
+#define SHTOOL_ZYZ_CASE(N) \
+  case N: zyz_tables<N>(N, e, with_beta, t[0], t[1], t[2], t[3], t[4], t[5]); break;
+    SHTOOL_ZYZ_CASE(1) SHTOOL_ZYZ_CASE(2) SHTOOL_ZYZ_CASE(3) SHTOOL_ZYZ_CASE(4) SHTOOL_ZYZ_CASE(5)
+    SHTOOL_ZYZ_CASE(6) SHTOOL_ZYZ_CASE(7) SHTOOL_ZYZ_CASE(8) SHTOOL_ZYZ_CASE(9) SHTOOL_ZYZ_CASE(10)
+#undef SHTOOL_ZYZ_CASE
+    default: zyz_tables<0>(order, e, with_beta, t[0], t[1], t[2], t[3], t[4], t[5]); break;
+  }
+}
+
+// Square root lane by lane (correctly rounded, as std::sqrt).
+template <class T>
+inline detail::BatchPack<T> sqrt_lanes(detail::BatchPack<T> x) {
+#if defined(__SSE2__)
+  if constexpr (sizeof(T) == 4) return reinterpret_cast<detail::BatchPack<T>>(_mm_sqrt_ps(reinterpret_cast<__m128>(x)));
+  else return reinterpret_cast<detail::BatchPack<T>>(_mm_sqrt_pd(reinterpret_cast<__m128d>(x)));
+#else
+  for (int k = 0; k < detail::kBatchLanes<T>; ++k) x[k] = std::sqrt(x[k]);
+  return x;
+#endif
+}
+
+// zyz_cos_sin_from_matrix (shtool/euler.h) for one rotation per lane, r column-major:
+// the same operations in the same order, both sides of each branch computed and the
+// lane's side selected, so every lane gets the bits the scalar function returns.
+template <class P>
+struct ZyzLanes {
+  P ca, sa, cb, sb, cg, sg;
+};
+
+template <class T>
+inline ZyzLanes<detail::BatchPack<T>> zyz_cos_sin_lanes(const detail::BatchPack<T>* r) {
+  using P = detail::BatchPack<T>;
+  auto at = [r](int i, int j) { return r[i + 3 * j]; };
+  const P zero = P{}, one = P{} + 1;
+  ZyzLanes<P> e;
+  e.cb = at(2, 2);
+  e.sb = sqrt_lanes<T>(at(0, 2) * at(0, 2) + at(1, 2) * at(1, 2));
+  const auto tilted = e.sb > zero;
+  e.ca = tilted ? at(0, 2) / e.sb : one;
+  e.sa = tilted ? at(1, 2) / e.sb : zero;
+  const auto near = e.cb >= zero;  // b <= pi / 2: from a + g, else from a - g
+  P u = near ? at(0, 0) + at(1, 1) : at(1, 1) - at(0, 0);
+  P v = near ? at(1, 0) - at(0, 1) : -(at(1, 0) + at(0, 1));
+  const P norm = sqrt_lanes<T>(u * u + v * v);
+  u /= norm;
+  v /= norm;
+  e.cg = near ? u * e.ca + v * e.sa : e.ca * u + e.sa * v;
+  e.sg = near ? v * e.ca - u * e.sa : e.sa * u - e.ca * v;
+  return e;
+}
+
 }  // namespace
+
+template <class T>
+RotationMethod ShRotation<T>::choose_method(const Mat3<T>& r, RotationMethod method, double tolerance) {
+  if (method == RotationMethod::automatic && order_ <= 3) return RotationMethod::zxzxz;  // see rotation.h
+  if (method != RotationMethod::automatic) return method;
+  if (tolerance != cached_tolerance_) update_taylor_limits(tolerance);
+  // sin^2 b = R02^2 + R12^2, cos b = R22: no square root needed for the choice.
+  const double sb2 = static_cast<double>(r(0, 2) * r(0, 2) + r(1, 2) * r(1, 2));
+  if (r(2, 2) > 0) {
+    const RotationMethod taylor[3] = {RotationMethod::taylor1, RotationMethod::taylor15,
+                                      RotationMethod::taylor2};
+    for (int k = 0; k < 3; ++k)
+      if (sb2 <= taylor_limit_sin2_[k]) return taylor[k];
+  }
+  return RotationMethod::zxzxz;
+}
 
 template <class T>
 bool ShRotation<T>::set_general(const Mat3<T>& r, RotationMethod method, double tolerance,
                                  const ZyzCosSin<T>* given) {
   if (method != RotationMethod::reference && !helpers_) return false;
-  if (method == RotationMethod::automatic && order_ <= 3) method = RotationMethod::zxzxz;  // see rotation.h
-  if (method == RotationMethod::automatic) {
-    if (tolerance != cached_tolerance_) update_taylor_limits(tolerance);
-    method = RotationMethod::zxzxz;
-    // sin^2 b = R02^2 + R12^2, cos b = R22: no square root needed for the choice.
-    const double sb2 = static_cast<double>(r(0, 2) * r(0, 2) + r(1, 2) * r(1, 2));
-    if (r(2, 2) > 0) {
-      const RotationMethod taylor[3] = {RotationMethod::taylor1, RotationMethod::taylor15,
-                                        RotationMethod::taylor2};
-      for (int k = 0; k < 3; ++k)
-        if (sb2 <= taylor_limit_sin2_[k]) {
-          method = taylor[k];
-          break;
-        }
-    }
-  }
+  method = choose_method(r, method, tolerance);
   resolved_ = method;
   std::memcpy(r_, r.data(), sizeof r_);  // not copy_n: GCC makes that a memmove call
   switch (method) {
@@ -306,15 +369,8 @@ bool ShRotation<T>::set_general(const Mat3<T>& r, RotationMethod method, double 
     default: {
       const bool zxzxz = method == RotationMethod::zxzxz;
       const ZyzCosSin<T> e = given ? *given : zyz_cos_sin_from_matrix<T>(r);
-      T* t[6] = {cos_a_.data(), sin_a_.data(), cos_b_.data(), sin_b_.data(), cos_g_.data(), sin_g_.data()};
-      switch (order_) {
-#define SHTOOL_ZYZ_CASE(N) \
-  case N: zyz_tables<N>(N, e, zxzxz, t[0], t[1], t[2], t[3], t[4], t[5]); break;
-        SHTOOL_ZYZ_CASE(1) SHTOOL_ZYZ_CASE(2) SHTOOL_ZYZ_CASE(3) SHTOOL_ZYZ_CASE(4) SHTOOL_ZYZ_CASE(5)
-        SHTOOL_ZYZ_CASE(6) SHTOOL_ZYZ_CASE(7) SHTOOL_ZYZ_CASE(8) SHTOOL_ZYZ_CASE(9) SHTOOL_ZYZ_CASE(10)
-#undef SHTOOL_ZYZ_CASE
-        default: zyz_tables<0>(order_, e, zxzxz, t[0], t[1], t[2], t[3], t[4], t[5]); break;
-      }
+      T* const t[6] = {cos_a_.data(), sin_a_.data(), cos_b_.data(), sin_b_.data(), cos_g_.data(), sin_g_.data()};
+      fill_zyz_tables(order_, e, zxzxz, t);
       if (!zxzxz) {
         // The tilt b itself: the Taylor methods are for small b, where b = asin(sin b) =
         // s + s^3/6 + 3 s^5/40 + O(s^7) is exact to rounding without an atan2 call (the
@@ -649,13 +705,63 @@ void ShRotation<T>::build_reference(const Mat3<T>& r) {
 }
 
 template <class T>
+std::size_t ShRotation<T>::rotate_lanes(std::span<const Mat3<T>> rotations, const T* in, T* out,
+                                        RotationMethod method, double tolerance) {
+  using P = detail::BatchPack<T>;
+  constexpr int B = detail::kBatchLanes<T>;
+  const detail::BatchKernel<T> kernel = helpers_ ? detail::batch_kernel<T>(order_) : nullptr;
+  if (!kernel || (method != RotationMethod::zxzxz && method != RotationMethod::automatic)) return 0;
+  const std::size_t n = static_cast<std::size_t>(sh_count(order_)), groups = rotations.size() / B;
+  // Per lane: R column-major, and (order > 3) the tables set() would compute, filled by
+  // the same code, so each lane's kernel input is bit-identical to set()'s.
+  P r[9], tables[6][detail::kKernelMaxOrder];
+  const detail::BatchState<T> state{r, tables[0], tables[1], tables[2], tables[3], tables[4], tables[5]};
+  for (std::size_t g = 0; g < groups; ++g) {
+    const Mat3<T>* group = rotations.data() + g * B;
+    const T* src[B];
+    T* dst[B];
+    bool zxzxz = true;
+    for (int j = 0; j < B; ++j) {
+      src[j] = in + (g * B + j) * n;
+      dst[j] = out + (g * B + j) * n;
+      zxzxz = zxzxz && choose_method(group[j], method, tolerance) == RotationMethod::zxzxz;
+    }
+    if (!zxzxz) {  // a Taylor rotation among them: one at a time
+      for (int j = 0; j < B; ++j) {
+        set(group[j], method, tolerance);
+        apply(std::span<const T>(src[j], n), std::span<T>(dst[j], n));
+      }
+      continue;
+    }
+    const T* lane_src[B];
+    for (int j = 0; j < B; ++j) lane_src[j] = group[j].data();
+    detail::gather_lanes<T>(lane_src, 9, r);
+    if (order_ > 3) {  // below, bands 1 and 2 come from R alone
+      P* const t[6] = {tables[0], tables[1], tables[2], tables[3], tables[4], tables[5]};
+      fill_zyz_tables(order_, zyz_cos_sin_lanes<T>(r), true, t);
+    }
+    kernel(state, src, dst);
+  }
+  return groups * B;
+}
+
+template <class T>
 bool rotate_batch(ShRotation<T>& rotation, std::span<const Mat3<T>> rotations, std::span<const T> in,
                   std::span<T> out, RotationMethod method, double tolerance) {
-  const std::size_t n = static_cast<std::size_t>(sh_count(rotation.order()));
-  for (std::size_t k = 0; k < rotations.size(); ++k) {
+  const std::size_t n = static_cast<std::size_t>(sh_count(rotation.order())), count = rotations.size();
+  if (in.size() < count * n || out.size() < count * n)
+    throw std::invalid_argument("rotate_batch: " + std::to_string(count) + " rotations of order " +
+                                std::to_string(rotation.order()) + " need " + std::to_string(count * n) +
+                                " coefficients in and out, got " + std::to_string(in.size()) + " and " +
+                                std::to_string(out.size()));
+  if (count == 0) return true;
+  if (method != RotationMethod::reference && !rotation.helpers_) return false;
+  const std::size_t done = rotation.rotate_lanes(rotations, in.data(), out.data(), method, tolerance);
+  for (std::size_t k = done; k < count; ++k) {
     if (!rotation.set(rotations[k], method, tolerance)) return false;
     rotation.apply(in.subspan(k * n, n), out.subspan(k * n, n));
   }
+  if (done == count) rotation.set(rotations[count - 1], method, tolerance);
   return true;
 }
 

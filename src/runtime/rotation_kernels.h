@@ -135,6 +135,95 @@ inline void run_lanes(const T* const* in, T* const* out, F&& bands) {
   }
 }
 
+// Batches of rotations (rotate_batch): one rotation per lane of a 16-byte SIMD vector
+// (4 floats or 2 doubles), each lane with its own R and angle tables, running the same
+// zxzxz band code as one rotation, so each lane's result is bit-identical to
+// set() + apply() of its rotation.
+template <class T>
+inline constexpr int kBatchLanes = 16 / sizeof(T);
+template <class T>
+struct BatchLanes {
+  typedef T type __attribute__((vector_size(16)));
+};
+template <class T>
+using BatchPack = typename BatchLanes<T>::type;
+
+// KernelState with a value per lane; only zxzxz (no Taylor tilt).
+template <class T>
+struct BatchState {
+  const BatchPack<T>* r;
+  const BatchPack<T>*ca, *sa, *cb, *sb, *cg, *sg;
+};
+
+// in[k] / out[k], k < kBatchLanes<T>: the vectors of the lanes' rotations.
+template <class T>
+using BatchKernel = void (*)(const BatchState<T>&, const T* const* in, T* const* out);
+
+// zxzxz kernel of a whole order (1..kKernelMaxOrder) for a batch; null above.
+template <class T>
+BatchKernel<T> batch_kernel(int order);
+
+// x[i] = {src[0][i], .., src[B-1][i]} for i < count, B = kBatchLanes<T>: B x B transposes
+// of register-sized loads (values never pass through memory one lane at a time, which
+// would stall store forwarding). scatter_lanes is the inverse.
+template <class T>
+inline void transpose_lanes(const BatchPack<T>* a, BatchPack<T>* x) {
+  if constexpr (kBatchLanes<T> == 4) {
+    const BatchPack<T> t0 = __builtin_shufflevector(a[0], a[1], 0, 4, 1, 5);
+    const BatchPack<T> t1 = __builtin_shufflevector(a[2], a[3], 0, 4, 1, 5);
+    const BatchPack<T> t2 = __builtin_shufflevector(a[0], a[1], 2, 6, 3, 7);
+    const BatchPack<T> t3 = __builtin_shufflevector(a[2], a[3], 2, 6, 3, 7);
+    x[0] = __builtin_shufflevector(t0, t1, 0, 1, 4, 5);
+    x[1] = __builtin_shufflevector(t0, t1, 2, 3, 6, 7);
+    x[2] = __builtin_shufflevector(t2, t3, 0, 1, 4, 5);
+    x[3] = __builtin_shufflevector(t2, t3, 2, 3, 6, 7);
+  } else {
+    x[0] = __builtin_shufflevector(a[0], a[1], 0, 2);
+    x[1] = __builtin_shufflevector(a[0], a[1], 1, 3);
+  }
+}
+
+template <class T>
+inline BatchPack<T> lanes_at(const T* const* src, int i) {
+  if constexpr (kBatchLanes<T> == 4) return BatchPack<T>{src[0][i], src[1][i], src[2][i], src[3][i]};
+  else return BatchPack<T>{src[0][i], src[1][i]};
+}
+
+template <class T>
+inline void gather_lanes(const T* const* src, int count, BatchPack<T>* x) {
+  constexpr int B = kBatchLanes<T>;
+  int i = 0;
+  for (; i + B <= count; i += B) {
+    BatchPack<T> a[B];
+    for (int k = 0; k < B; ++k) __builtin_memcpy(&a[k], src[k] + i, sizeof a[k]);
+    transpose_lanes<T>(a, x + i);
+  }
+  for (; i < count; ++i) x[i] = lanes_at<T>(src, i);
+}
+
+template <class T>
+inline void scatter_lanes(const BatchPack<T>* y, int count, T* const* dst) {
+  constexpr int B = kBatchLanes<T>;
+  int i = 0;
+  for (; i + B <= count; i += B) {
+    BatchPack<T> a[B];
+    transpose_lanes<T>(y + i, a);
+    for (int k = 0; k < B; ++k) __builtin_memcpy(dst[k] + i, &a[k], sizeof a[k]);
+  }
+  for (; i < count; ++i)
+    for (int k = 0; k < B; ++k) dst[k][i] = y[i][k];
+}
+
+// Runs bands(x, y) on coefficients 0 .. Count - 1 of kBatchLanes<T> vectors gathered
+// into lanes.
+template <class T, int Count, class F>
+inline void run_batch_lanes(const T* const* in, T* const* out, F&& bands) {
+  BatchPack<T> x[Count], y[Count];
+  gather_lanes<T>(in, Count, x);
+  bands(static_cast<const BatchPack<T>*>(x), y);
+  scatter_lanes<T>(y, Count, out);
+}
+
 // Band 1 is detail::band1_closed (shtool/rotation.h); like band 2 below it reads R
 // column-major, r[i + 3 j] = R(i, j).
 
@@ -148,8 +237,8 @@ inline void run_lanes(const T* const* in, T* const* out, F&& bands) {
 // and projecting B = R A R^T back (integral of (w^T Q w)(w^T B w) = (8 pi / 15) tr(QB)
 // for traceless Q, B) gives g-2 = B01, g-1 = -B12, g0 = (sqrt3 / 2) B22, g1 = -B02,
 // g2 = (B00 - B11) / 2.
-template <class T, class P>
-inline void band2_closed(const T* __restrict r, const P* __restrict x, P* __restrict y) {
+template <class T, class P, class R = T>
+inline void band2_closed(const R* __restrict r, const P* __restrict x, P* __restrict y) {
   const T k = T(0.57735026918962576451);        // 1 / sqrt3
   const T h3 = T(0.86602540378443864676);       // sqrt3 / 2
   const P kf0 = k * x[2];

@@ -13,8 +13,8 @@ static_assert(kKernelMaxBand == 9, "regenerate rotation_kernels_generated.cpp");
 namespace {
 
 // Band 2 of Z(a) X90^T Z(b) X90 Z(g), Ry(b) = Rx(-90) Rz(b) Rx(+90).
-template <class T, class P>
-inline void zxzxz_band2(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <class T, class P, class S>
+inline void zxzxz_band2(const S& s, const P* __restrict x, P* __restrict y) {
   const P t2 = x[2];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
   const P t3 = cg1 * x[3] - sg1 * x[1];
@@ -49,8 +49,8 @@ inline void zxzxz_band2(const KernelState<T>& s, const P* __restrict x, P* __res
 }
 
 // Band 3 of Z(a) X90^T Z(b) X90 Z(g), Ry(b) = Rx(-90) Rz(b) Rx(+90).
-template <class T, class P>
-inline void zxzxz_band3(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <class T, class P, class S>
+inline void zxzxz_band3(const S& s, const P* __restrict x, P* __restrict y) {
   const P t3 = x[3];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
   const P t4 = cg1 * x[4] - sg1 * x[2];
@@ -98,8 +98,8 @@ inline void zxzxz_band3(const KernelState<T>& s, const P* __restrict x, P* __res
 }
 
 // Band 4 of Z(a) X90^T Z(b) X90 Z(g), Ry(b) = Rx(-90) Rz(b) Rx(+90).
-template <class T, class P>
-inline void zxzxz_band4(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <class T, class P, class S>
+inline void zxzxz_band4(const S& s, const P* __restrict x, P* __restrict y) {
   const P t4 = x[4];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
   const P t5 = cg1 * x[5] - sg1 * x[3];
@@ -160,8 +160,8 @@ inline void zxzxz_band4(const KernelState<T>& s, const P* __restrict x, P* __res
 }
 
 // Band 5 of Z(a) X90^T Z(b) X90 Z(g), Ry(b) = Rx(-90) Rz(b) Rx(+90).
-template <class T, class P>
-inline void zxzxz_band5(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <class T, class P, class S>
+inline void zxzxz_band5(const S& s, const P* __restrict x, P* __restrict y) {
   const P t5 = x[5];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
   const P t6 = cg1 * x[6] - sg1 * x[4];
@@ -235,8 +235,8 @@ inline void zxzxz_band5(const KernelState<T>& s, const P* __restrict x, P* __res
 }
 
 // Band 6 of Z(a) X90^T Z(b) X90 Z(g), Ry(b) = Rx(-90) Rz(b) Rx(+90).
-template <class T, class P>
-inline void zxzxz_band6(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <class T, class P, class S>
+inline void zxzxz_band6(const S& s, const P* __restrict x, P* __restrict y) {
   const P t6 = x[6];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
   const P t7 = cg1 * x[7] - sg1 * x[5];
@@ -323,8 +323,8 @@ inline void zxzxz_band6(const KernelState<T>& s, const P* __restrict x, P* __res
 }
 
 // Band 7 of Z(a) X90^T Z(b) X90 Z(g), Ry(b) = Rx(-90) Rz(b) Rx(+90).
-template <class T, class P>
-inline void zxzxz_band7(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <class T, class P, class S>
+inline void zxzxz_band7(const S& s, const P* __restrict x, P* __restrict y) {
   const P t7 = x[7];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
   const P t8 = cg1 * x[8] - sg1 * x[6];
@@ -424,8 +424,8 @@ inline void zxzxz_band7(const KernelState<T>& s, const P* __restrict x, P* __res
 }
 
 // Band 8 of Z(a) X90^T Z(b) X90 Z(g), Ry(b) = Rx(-90) Rz(b) Rx(+90).
-template <class T, class P>
-inline void zxzxz_band8(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <class T, class P, class S>
+inline void zxzxz_band8(const S& s, const P* __restrict x, P* __restrict y) {
   const P t8 = x[8];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
   const P t9 = cg1 * x[9] - sg1 * x[7];
@@ -538,8 +538,8 @@ inline void zxzxz_band8(const KernelState<T>& s, const P* __restrict x, P* __res
 }
 
 // Band 9 of Z(a) X90^T Z(b) X90 Z(g), Ry(b) = Rx(-90) Rz(b) Rx(+90).
-template <class T, class P>
-inline void zxzxz_band9(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <class T, class P, class S>
+inline void zxzxz_band9(const S& s, const P* __restrict x, P* __restrict y) {
   const P t9 = x[9];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
   const P t10 = cg1 * x[10] - sg1 * x[8];
@@ -665,8 +665,8 @@ inline void zxzxz_band9(const KernelState<T>& s, const P* __restrict x, P* __res
 }
 
 // Band 10 of Z(a) X90^T Z(b) X90 Z(g), Ry(b) = Rx(-90) Rz(b) Rx(+90).
-template <class T, class P>
-inline void zxzxz_band10(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <class T, class P, class S>
+inline void zxzxz_band10(const S& s, const P* __restrict x, P* __restrict y) {
   const P t10 = x[10];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
   const P t11 = cg1 * x[11] - sg1 * x[9];
@@ -805,8 +805,8 @@ inline void zxzxz_band10(const KernelState<T>& s, const P* __restrict x, P* __re
 }
 
 // Band 11 of Z(a) X90^T Z(b) X90 Z(g), Ry(b) = Rx(-90) Rz(b) Rx(+90).
-template <class T, class P>
-inline void zxzxz_band11(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <class T, class P, class S>
+inline void zxzxz_band11(const S& s, const P* __restrict x, P* __restrict y) {
   const P t11 = x[11];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
   const P t12 = cg1 * x[12] - sg1 * x[10];
@@ -958,8 +958,8 @@ inline void zxzxz_band11(const KernelState<T>& s, const P* __restrict x, P* __re
 }
 
 // Band 12 of Z(a) X90^T Z(b) X90 Z(g), Ry(b) = Rx(-90) Rz(b) Rx(+90).
-template <class T, class P>
-inline void zxzxz_band12(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <class T, class P, class S>
+inline void zxzxz_band12(const S& s, const P* __restrict x, P* __restrict y) {
   const P t12 = x[12];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
   const P t13 = cg1 * x[13] - sg1 * x[11];
@@ -1124,8 +1124,8 @@ inline void zxzxz_band12(const KernelState<T>& s, const P* __restrict x, P* __re
 }
 
 // Band 13 of Z(a) X90^T Z(b) X90 Z(g), Ry(b) = Rx(-90) Rz(b) Rx(+90).
-template <class T, class P>
-inline void zxzxz_band13(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <class T, class P, class S>
+inline void zxzxz_band13(const S& s, const P* __restrict x, P* __restrict y) {
   const P t13 = x[13];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
   const P t14 = cg1 * x[14] - sg1 * x[12];
@@ -1303,8 +1303,8 @@ inline void zxzxz_band13(const KernelState<T>& s, const P* __restrict x, P* __re
 }
 
 // Band 14 of Z(a) X90^T Z(b) X90 Z(g), Ry(b) = Rx(-90) Rz(b) Rx(+90).
-template <class T, class P>
-inline void zxzxz_band14(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <class T, class P, class S>
+inline void zxzxz_band14(const S& s, const P* __restrict x, P* __restrict y) {
   const P t14 = x[14];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
   const P t15 = cg1 * x[15] - sg1 * x[13];
@@ -1495,8 +1495,8 @@ inline void zxzxz_band14(const KernelState<T>& s, const P* __restrict x, P* __re
 }
 
 // Band 15 of Z(a) X90^T Z(b) X90 Z(g), Ry(b) = Rx(-90) Rz(b) Rx(+90).
-template <class T, class P>
-inline void zxzxz_band15(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <class T, class P, class S>
+inline void zxzxz_band15(const S& s, const P* __restrict x, P* __restrict y) {
   const P t15 = x[15];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
   const P t16 = cg1 * x[16] - sg1 * x[14];
@@ -1700,8 +1700,8 @@ inline void zxzxz_band15(const KernelState<T>& s, const P* __restrict x, P* __re
 }
 
 // Band 16 of Z(a) X90^T Z(b) X90 Z(g), Ry(b) = Rx(-90) Rz(b) Rx(+90).
-template <class T, class P>
-inline void zxzxz_band16(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <class T, class P, class S>
+inline void zxzxz_band16(const S& s, const P* __restrict x, P* __restrict y) {
   const P t16 = x[16];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
   const P t17 = cg1 * x[17] - sg1 * x[15];
@@ -1918,8 +1918,8 @@ inline void zxzxz_band16(const KernelState<T>& s, const P* __restrict x, P* __re
 }
 
 // Band 17 of Z(a) X90^T Z(b) X90 Z(g), Ry(b) = Rx(-90) Rz(b) Rx(+90).
-template <class T, class P>
-inline void zxzxz_band17(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <class T, class P, class S>
+inline void zxzxz_band17(const S& s, const P* __restrict x, P* __restrict y) {
   const P t17 = x[17];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
   const P t18 = cg1 * x[18] - sg1 * x[16];
@@ -2149,8 +2149,8 @@ inline void zxzxz_band17(const KernelState<T>& s, const P* __restrict x, P* __re
 }
 
 // Band 18 of Z(a) X90^T Z(b) X90 Z(g), Ry(b) = Rx(-90) Rz(b) Rx(+90).
-template <class T, class P>
-inline void zxzxz_band18(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <class T, class P, class S>
+inline void zxzxz_band18(const S& s, const P* __restrict x, P* __restrict y) {
   const P t18 = x[18];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
   const P t19 = cg1 * x[19] - sg1 * x[17];
@@ -2393,8 +2393,8 @@ inline void zxzxz_band18(const KernelState<T>& s, const P* __restrict x, P* __re
 }
 
 // Band 19 of Z(a) X90^T Z(b) X90 Z(g), Ry(b) = Rx(-90) Rz(b) Rx(+90).
-template <class T, class P>
-inline void zxzxz_band19(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <class T, class P, class S>
+inline void zxzxz_band19(const S& s, const P* __restrict x, P* __restrict y) {
   const P t19 = x[19];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
   const P t20 = cg1 * x[20] - sg1 * x[18];
@@ -5295,8 +5295,8 @@ void taylor_band19_entry(const KernelState<T>& s, const T* const* in, T* const* 
   });
 }
 
-template <class T, class P>
-inline void zxzxz_order1_bands(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <class T, class P, class S>
+inline void zxzxz_order1_bands(const S& s, const P* __restrict x, P* __restrict y) {
   y[0] = x[0];
   (void)s;
 }
@@ -5308,8 +5308,15 @@ void zxzxz_order1(const KernelState<T>& s, const T* const* in, T* const* out) {
   });
 }
 
-template <class T, class P>
-inline void zxzxz_order2_bands(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <class T>
+void zxzxz_order1_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 1>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
+    zxzxz_order1_bands<T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <class T, class P, class S>
+inline void zxzxz_order2_bands(const S& s, const P* __restrict x, P* __restrict y) {
   y[0] = x[0];
   band1_closed<T, P>(s.r, x + 1, y + 1);
 }
@@ -5321,8 +5328,15 @@ void zxzxz_order2(const KernelState<T>& s, const T* const* in, T* const* out) {
   });
 }
 
-template <class T, class P>
-inline void zxzxz_order3_bands(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <class T>
+void zxzxz_order2_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 4>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
+    zxzxz_order2_bands<T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <class T, class P, class S>
+inline void zxzxz_order3_bands(const S& s, const P* __restrict x, P* __restrict y) {
   y[0] = x[0];
   band1_closed<T, P>(s.r, x + 1, y + 1);
   band2_closed<T, P>(s.r, x + 4, y + 4);
@@ -5335,8 +5349,15 @@ void zxzxz_order3(const KernelState<T>& s, const T* const* in, T* const* out) {
   });
 }
 
-template <class T, class P>
-inline void zxzxz_order4_bands(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <class T>
+void zxzxz_order3_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 9>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
+    zxzxz_order3_bands<T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <class T, class P, class S>
+inline void zxzxz_order4_bands(const S& s, const P* __restrict x, P* __restrict y) {
   y[0] = x[0];
   band1_closed<T, P>(s.r, x + 1, y + 1);
   zxzxz_band2<T, P>(s, x + 4, y + 4);
@@ -5350,8 +5371,15 @@ void zxzxz_order4(const KernelState<T>& s, const T* const* in, T* const* out) {
   });
 }
 
-template <class T, class P>
-inline void zxzxz_order5_bands(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <class T>
+void zxzxz_order4_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 16>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
+    zxzxz_order4_bands<T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <class T, class P, class S>
+inline void zxzxz_order5_bands(const S& s, const P* __restrict x, P* __restrict y) {
   y[0] = x[0];
   band1_closed<T, P>(s.r, x + 1, y + 1);
   zxzxz_band2<T, P>(s, x + 4, y + 4);
@@ -5366,8 +5394,15 @@ void zxzxz_order5(const KernelState<T>& s, const T* const* in, T* const* out) {
   });
 }
 
-template <class T, class P>
-inline void zxzxz_order6_bands(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <class T>
+void zxzxz_order5_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 25>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
+    zxzxz_order5_bands<T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <class T, class P, class S>
+inline void zxzxz_order6_bands(const S& s, const P* __restrict x, P* __restrict y) {
   y[0] = x[0];
   band1_closed<T, P>(s.r, x + 1, y + 1);
   zxzxz_band2<T, P>(s, x + 4, y + 4);
@@ -5383,8 +5418,15 @@ void zxzxz_order6(const KernelState<T>& s, const T* const* in, T* const* out) {
   });
 }
 
-template <class T, class P>
-inline void zxzxz_order7_bands(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <class T>
+void zxzxz_order6_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 36>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
+    zxzxz_order6_bands<T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <class T, class P, class S>
+inline void zxzxz_order7_bands(const S& s, const P* __restrict x, P* __restrict y) {
   y[0] = x[0];
   band1_closed<T, P>(s.r, x + 1, y + 1);
   zxzxz_band2<T, P>(s, x + 4, y + 4);
@@ -5401,8 +5443,15 @@ void zxzxz_order7(const KernelState<T>& s, const T* const* in, T* const* out) {
   });
 }
 
-template <class T, class P>
-inline void zxzxz_order8_bands(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <class T>
+void zxzxz_order7_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 49>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
+    zxzxz_order7_bands<T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <class T, class P, class S>
+inline void zxzxz_order8_bands(const S& s, const P* __restrict x, P* __restrict y) {
   y[0] = x[0];
   band1_closed<T, P>(s.r, x + 1, y + 1);
   zxzxz_band2<T, P>(s, x + 4, y + 4);
@@ -5420,8 +5469,15 @@ void zxzxz_order8(const KernelState<T>& s, const T* const* in, T* const* out) {
   });
 }
 
-template <class T, class P>
-inline void zxzxz_order9_bands(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <class T>
+void zxzxz_order8_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 64>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
+    zxzxz_order8_bands<T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <class T, class P, class S>
+inline void zxzxz_order9_bands(const S& s, const P* __restrict x, P* __restrict y) {
   y[0] = x[0];
   band1_closed<T, P>(s.r, x + 1, y + 1);
   zxzxz_band2<T, P>(s, x + 4, y + 4);
@@ -5440,8 +5496,15 @@ void zxzxz_order9(const KernelState<T>& s, const T* const* in, T* const* out) {
   });
 }
 
-template <class T, class P>
-inline void zxzxz_order10_bands(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <class T>
+void zxzxz_order9_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 81>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
+    zxzxz_order9_bands<T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <class T, class P, class S>
+inline void zxzxz_order10_bands(const S& s, const P* __restrict x, P* __restrict y) {
   y[0] = x[0];
   band1_closed<T, P>(s.r, x + 1, y + 1);
   zxzxz_band2<T, P>(s, x + 4, y + 4);
@@ -5458,6 +5521,13 @@ template <class T, int V>
 void zxzxz_order10(const KernelState<T>& s, const T* const* in, T* const* out) {
   run_lanes<T, V, 0, 100>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
     zxzxz_order10_bands<T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <class T>
+void zxzxz_order10_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 100>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
+    zxzxz_order10_bands<T, BatchPack<T>>(s, x, y);
   });
 }
 
@@ -5758,6 +5828,25 @@ RotationKernel<T, V> band_kernel(int method, int l) {
   return nullptr;
 }
 
+template <class T>
+BatchKernel<T> batch_kernel(int order) {
+  switch (order) {
+    case 1: return &zxzxz_order1_batch<T>;
+    case 2: return &zxzxz_order2_batch<T>;
+    case 3: return &zxzxz_order3_batch<T>;
+    case 4: return &zxzxz_order4_batch<T>;
+    case 5: return &zxzxz_order5_batch<T>;
+    case 6: return &zxzxz_order6_batch<T>;
+    case 7: return &zxzxz_order7_batch<T>;
+    case 8: return &zxzxz_order8_batch<T>;
+    case 9: return &zxzxz_order9_batch<T>;
+    case 10: return &zxzxz_order10_batch<T>;
+  }
+  return nullptr;
+}
+
+template BatchKernel<float> batch_kernel<float>(int);
+template BatchKernel<double> batch_kernel<double>(int);
 template RotationKernel<float, 1> rotation_kernel<float, 1>(int, int);
 template RotationKernel<float, 1> band_kernel<float, 1>(int, int);
 template RotationKernel<float, 3> rotation_kernel<float, 3>(int, int);

@@ -75,10 +75,11 @@ std::vector<std::vector<double>> x90_block(const RotationHelpers& h, int l) {
 void zxzxz_band(std::ostream& o, const RotationHelpers& h, int l) {
   const int size = 2 * l + 1;
   const auto x = x90_block(h, l);
+  // S: KernelState<T>, or BatchState<T> (a rotation per lane).
   o << "// Band " << l << " of Z(a) X90^T Z(b) X90 Z(g), Ry(b) = Rx(-90) Rz(b) Rx(+90).\n"
-    << "template <class T, class P>\n"
+    << "template <class T, class P, class S>\n"
     << "inline void zxzxz_band" << l
-    << "(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {\n";
+    << "(const S& s, const P* __restrict x, P* __restrict y) {\n";
   z_rotation(o, l, "g", "x", true, "t", false);
   for (int i = 0; i < size; ++i) {
     std::vector<std::pair<double, std::string>> terms;
@@ -134,8 +135,9 @@ void order_function(std::ostream& o, bool taylor, int n) {
   // Bands 0..n-1 on lanes P; then the entry point: one vector works in place on the
   // caller's arrays, three are gathered into lanes first.
   if (taylor) o << "template <int Order, class T, class P>\n";
-  else o << "template <class T, class P>\n";
-  o << "inline void " << name << "_bands(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {\n"
+  else o << "template <class T, class P, class S>\n";
+  o << "inline void " << name << "_bands(const " << (taylor ? "KernelState<T>" : "S")
+    << "& s, const P* __restrict x, P* __restrict y) {\n"
     << "  y[0] = x[0];\n";
   for (int l = 1; l < n; ++l) {
     const std::string args =
@@ -155,6 +157,12 @@ void order_function(std::ostream& o, bool taylor, int n) {
   o << "void " << name << "(const KernelState<T>& s, const T* const* in, T* const* out) {\n"
     << "  run_lanes<T, V, 0, " << count << ">(in, out, [&s](const auto* __restrict x, auto* __restrict y) {\n"
     << "    " << name << "_bands<" << targs << "std::remove_cvref_t<decltype(*y)>>(s, x, y);\n"
+    << "  });\n}\n\n";
+  if (taylor) return;
+  o << "template <class T>\n"
+    << "void " << name << "_batch(const BatchState<T>& s, const T* const* in, T* const* out) {\n"
+    << "  run_batch_lanes<T, " << count << ">(in, out, [&s](const auto* __restrict x, auto* __restrict y) {\n"
+    << "    " << name << "_bands<T, BatchPack<T>>(s, x, y);\n"
     << "  });\n}\n\n";
 }
 
@@ -227,6 +235,14 @@ std::string rotation_kernels_source() {
     o << "      }\n      break;\n";
   }
   o << "  }\n  return nullptr;\n}\n\n";
+  o << "template <class T>\n"
+    << "BatchKernel<T> batch_kernel(int order) {\n"
+    << "  switch (order) {\n";
+  for (int n = 1; n <= kKernelMaxOrder; ++n)
+    o << "    case " << n << ": return &zxzxz_order" << n << "_batch<T>;\n";
+  o << "  }\n  return nullptr;\n}\n\n";
+  for (const char* type : {"float", "double"})
+    o << "template BatchKernel<" << type << "> batch_kernel<" << type << ">(int);\n";
   for (const char* type : {"float", "double"})
     for (int v : {1, 3})
       o << "template RotationKernel<" << type << ", " << v << "> rotation_kernel<" << type << ", " << v
