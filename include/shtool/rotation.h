@@ -105,7 +105,7 @@ class ShRotation {
     // so set() is a copy, inline: at order 2 a call costs as much as the rotation.
     if (order_ <= 3 && kernel_order_ > 0 &&
         (method == RotationMethod::zxzxz || method == RotationMethod::automatic)) {
-      std::memcpy(r_, r.data(), sizeof r_);  // not copy_n: GCC makes that a memmove call
+      store_matrix(r);
       resolved_ = RotationMethod::zxzxz;
       return true;
     }
@@ -159,6 +159,13 @@ class ShRotation {
  private:
   friend bool rotate_batch<T>(ShRotation<T>&, std::span<const Mat3<T>>, std::span<const T>, std::span<T>,
                               RotationMethod, double);
+  // r_ = R. Two register-sized copies and one element (Eigen packets), spelled out: as a
+  // memcpy, or as copy_n, GCC 12 has emitted a memmove call or `rep movs` here, either of
+  // which costs more than a small-order rotation.
+  void store_matrix(const Mat3<T>& r) {
+    Eigen::Map<Mat3<T>> dst(r_);
+    dst = r;
+  }
   // What set() resolves `method` to for r (never automatic).
   RotationMethod choose_method(const Mat3<T>& r, RotationMethod method, double tolerance);
   // rotate_batch's lane path over whole groups of lanes; returns how many rotations it

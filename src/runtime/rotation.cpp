@@ -358,7 +358,7 @@ bool ShRotation<T>::set_general(const Mat3<T>& r, RotationMethod method, double 
   if (method != RotationMethod::reference && !helpers_) return false;
   method = choose_method(r, method, tolerance);
   resolved_ = method;
-  std::memcpy(r_, r.data(), sizeof r_);  // not copy_n: GCC makes that a memmove call
+  store_matrix(r);
   switch (method) {
     case RotationMethod::reference: build_reference(r); break;
     case RotationMethod::zxzxz:
