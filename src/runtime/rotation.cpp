@@ -709,12 +709,19 @@ std::size_t ShRotation<T>::rotate_lanes(std::span<const Mat3<T>> rotations, cons
                                         RotationMethod method, double tolerance) {
   using P = detail::BatchPack<T>;
   constexpr int B = detail::kBatchLanes<T>;
-  const detail::BatchKernel<T> kernel = helpers_ ? detail::batch_kernel<T>(order_) : nullptr;
-  if (!kernel || (method != RotationMethod::zxzxz && method != RotationMethod::automatic)) return 0;
+  constexpr int kMaxBatchOrder = detail::kBandKernelMaxBand + 1;
+  if (!helpers_ || order_ > kMaxBatchOrder ||
+      (method != RotationMethod::zxzxz && method != RotationMethod::automatic))
+    return 0;
+  // The whole-order kernel up to kKernelMaxOrder, then one kernel per band.
+  const detail::BatchKernel<T> kernel = detail::batch_kernel<T>(std::min(order_, detail::kKernelMaxOrder));
+  detail::BatchKernel<T> band_kernels[kMaxBatchOrder] = {};
+  for (int l = detail::kKernelMaxOrder; l < order_; ++l)
+    if (!(band_kernels[l] = detail::batch_band_kernel<T>(l))) return 0;
   const std::size_t n = static_cast<std::size_t>(sh_count(order_)), groups = rotations.size() / B;
   // Per lane: R column-major, and (order > 3) the tables set() would compute, filled by
   // the same code, so each lane's kernel input is bit-identical to set()'s.
-  P r[9], tables[6][detail::kKernelMaxOrder];
+  P r[9], tables[6][kMaxBatchOrder];
   const detail::BatchState<T> state{r, tables[0], tables[1], tables[2], tables[3], tables[4], tables[5]};
   for (std::size_t g = 0; g < groups; ++g) {
     const Mat3<T>* group = rotations.data() + g * B;
@@ -741,6 +748,7 @@ std::size_t ShRotation<T>::rotate_lanes(std::span<const Mat3<T>> rotations, cons
       fill_zyz_tables(order_, zyz_cos_sin_lanes<T>(r), true, t);
     }
     kernel(state, src, dst);
+    for (int l = detail::kKernelMaxOrder; l < order_; ++l) band_kernels[l](state, src, dst);
   }
   return groups * B;
 }

@@ -162,6 +162,10 @@ using BatchKernel = void (*)(const BatchState<T>&, const T* const* in, T* const*
 // zxzxz kernel of a whole order (1..kKernelMaxOrder) for a batch; null above.
 template <class T>
 BatchKernel<T> batch_kernel(int order);
+// zxzxz kernel of band l alone (kKernelMaxOrder <= l <= kBandKernelMaxBand) for a batch,
+// where apply() runs the same generated band code (float); null otherwise.
+template <class T>
+BatchKernel<T> batch_band_kernel(int l);
 
 // x[i] = {src[0][i], .., src[B-1][i]} for i < count, B = kBatchLanes<T>: B x B transposes
 // of register-sized loads (values never pass through memory one lane at a time, which
@@ -214,14 +218,21 @@ inline void scatter_lanes(const BatchPack<T>* y, int count, T* const* dst) {
     for (int k = 0; k < B; ++k) dst[k][i] = y[i][k];
 }
 
-// Runs bands(x, y) on coefficients 0 .. Count - 1 of kBatchLanes<T> vectors gathered
-// into lanes.
-template <class T, int Count, class F>
+// Runs bands(x, y) on coefficients First .. First + Count - 1 of kBatchLanes<T> vectors
+// gathered into lanes.
+template <class T, int First, int Count, class F>
 inline void run_batch_lanes(const T* const* in, T* const* out, F&& bands) {
+  constexpr int B = kBatchLanes<T>;
+  const T* src[B];
+  T* dst[B];
+  for (int k = 0; k < B; ++k) {
+    src[k] = in[k] + First;
+    dst[k] = out[k] + First;
+  }
   BatchPack<T> x[Count], y[Count];
-  gather_lanes<T>(in, Count, x);
+  gather_lanes<T>(src, Count, x);
   bands(static_cast<const BatchPack<T>*>(x), y);
-  scatter_lanes<T>(y, Count, out);
+  scatter_lanes<T>(y, Count, dst);
 }
 
 // Band 1 is detail::band1_closed (shtool/rotation.h); like band 2 below it reads R

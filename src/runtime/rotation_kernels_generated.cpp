@@ -5162,6 +5162,13 @@ void zxzxz_band10_entry(const KernelState<T>& s, const T* const* in, T* const* o
   });
 }
 
+template <class T>
+void zxzxz_band10_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 100, 21>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
+    zxzxz_band10<T, BatchPack<T>>(s, x, y);
+  });
+}
+
 template <int Order, class T, int V>
 void taylor_band10_entry(const KernelState<T>& s, const T* const* in, T* const* out) {
   run_lanes<T, V, 100, 21>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
@@ -5173,6 +5180,13 @@ template <class T, int V>
 void zxzxz_band11_entry(const KernelState<T>& s, const T* const* in, T* const* out) {
   run_lanes<T, V, 121, 23>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
     zxzxz_band11<T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <class T>
+void zxzxz_band11_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 121, 23>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
+    zxzxz_band11<T, BatchPack<T>>(s, x, y);
   });
 }
 
@@ -5190,6 +5204,13 @@ void zxzxz_band12_entry(const KernelState<T>& s, const T* const* in, T* const* o
   });
 }
 
+template <class T>
+void zxzxz_band12_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 144, 25>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
+    zxzxz_band12<T, BatchPack<T>>(s, x, y);
+  });
+}
+
 template <int Order, class T, int V>
 void taylor_band12_entry(const KernelState<T>& s, const T* const* in, T* const* out) {
   run_lanes<T, V, 144, 25>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
@@ -5201,6 +5222,13 @@ template <class T, int V>
 void zxzxz_band13_entry(const KernelState<T>& s, const T* const* in, T* const* out) {
   run_lanes<T, V, 169, 27>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
     zxzxz_band13<T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <class T>
+void zxzxz_band13_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 169, 27>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
+    zxzxz_band13<T, BatchPack<T>>(s, x, y);
   });
 }
 
@@ -5218,6 +5246,13 @@ void zxzxz_band14_entry(const KernelState<T>& s, const T* const* in, T* const* o
   });
 }
 
+template <class T>
+void zxzxz_band14_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 196, 29>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
+    zxzxz_band14<T, BatchPack<T>>(s, x, y);
+  });
+}
+
 template <int Order, class T, int V>
 void taylor_band14_entry(const KernelState<T>& s, const T* const* in, T* const* out) {
   run_lanes<T, V, 196, 29>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
@@ -5229,6 +5264,13 @@ template <class T, int V>
 void zxzxz_band15_entry(const KernelState<T>& s, const T* const* in, T* const* out) {
   run_lanes<T, V, 225, 31>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
     zxzxz_band15<T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <class T>
+void zxzxz_band15_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 225, 31>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
+    zxzxz_band15<T, BatchPack<T>>(s, x, y);
   });
 }
 
@@ -5246,6 +5288,13 @@ void zxzxz_band16_entry(const KernelState<T>& s, const T* const* in, T* const* o
   });
 }
 
+template <class T>
+void zxzxz_band16_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 256, 33>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
+    zxzxz_band16<T, BatchPack<T>>(s, x, y);
+  });
+}
+
 template <int Order, class T, int V>
 void taylor_band16_entry(const KernelState<T>& s, const T* const* in, T* const* out) {
   run_lanes<T, V, 256, 33>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
@@ -5257,6 +5306,13 @@ template <class T, int V>
 void zxzxz_band17_entry(const KernelState<T>& s, const T* const* in, T* const* out) {
   run_lanes<T, V, 289, 35>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
     zxzxz_band17<T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <class T>
+void zxzxz_band17_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 289, 35>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
+    zxzxz_band17<T, BatchPack<T>>(s, x, y);
   });
 }
 
@@ -5274,6 +5330,13 @@ void zxzxz_band18_entry(const KernelState<T>& s, const T* const* in, T* const* o
   });
 }
 
+template <class T>
+void zxzxz_band18_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 324, 37>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
+    zxzxz_band18<T, BatchPack<T>>(s, x, y);
+  });
+}
+
 template <int Order, class T, int V>
 void taylor_band18_entry(const KernelState<T>& s, const T* const* in, T* const* out) {
   run_lanes<T, V, 324, 37>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
@@ -5285,6 +5348,13 @@ template <class T, int V>
 void zxzxz_band19_entry(const KernelState<T>& s, const T* const* in, T* const* out) {
   run_lanes<T, V, 361, 39>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
     zxzxz_band19<T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <class T>
+void zxzxz_band19_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 361, 39>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
+    zxzxz_band19<T, BatchPack<T>>(s, x, y);
   });
 }
 
@@ -5310,7 +5380,7 @@ void zxzxz_order1(const KernelState<T>& s, const T* const* in, T* const* out) {
 
 template <class T>
 void zxzxz_order1_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
-  run_batch_lanes<T, 1>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
+  run_batch_lanes<T, 0, 1>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
     zxzxz_order1_bands<T, BatchPack<T>>(s, x, y);
   });
 }
@@ -5330,7 +5400,7 @@ void zxzxz_order2(const KernelState<T>& s, const T* const* in, T* const* out) {
 
 template <class T>
 void zxzxz_order2_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
-  run_batch_lanes<T, 4>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
+  run_batch_lanes<T, 0, 4>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
     zxzxz_order2_bands<T, BatchPack<T>>(s, x, y);
   });
 }
@@ -5351,7 +5421,7 @@ void zxzxz_order3(const KernelState<T>& s, const T* const* in, T* const* out) {
 
 template <class T>
 void zxzxz_order3_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
-  run_batch_lanes<T, 9>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
+  run_batch_lanes<T, 0, 9>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
     zxzxz_order3_bands<T, BatchPack<T>>(s, x, y);
   });
 }
@@ -5373,7 +5443,7 @@ void zxzxz_order4(const KernelState<T>& s, const T* const* in, T* const* out) {
 
 template <class T>
 void zxzxz_order4_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
-  run_batch_lanes<T, 16>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
+  run_batch_lanes<T, 0, 16>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
     zxzxz_order4_bands<T, BatchPack<T>>(s, x, y);
   });
 }
@@ -5396,7 +5466,7 @@ void zxzxz_order5(const KernelState<T>& s, const T* const* in, T* const* out) {
 
 template <class T>
 void zxzxz_order5_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
-  run_batch_lanes<T, 25>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
+  run_batch_lanes<T, 0, 25>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
     zxzxz_order5_bands<T, BatchPack<T>>(s, x, y);
   });
 }
@@ -5420,7 +5490,7 @@ void zxzxz_order6(const KernelState<T>& s, const T* const* in, T* const* out) {
 
 template <class T>
 void zxzxz_order6_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
-  run_batch_lanes<T, 36>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
+  run_batch_lanes<T, 0, 36>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
     zxzxz_order6_bands<T, BatchPack<T>>(s, x, y);
   });
 }
@@ -5445,7 +5515,7 @@ void zxzxz_order7(const KernelState<T>& s, const T* const* in, T* const* out) {
 
 template <class T>
 void zxzxz_order7_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
-  run_batch_lanes<T, 49>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
+  run_batch_lanes<T, 0, 49>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
     zxzxz_order7_bands<T, BatchPack<T>>(s, x, y);
   });
 }
@@ -5471,7 +5541,7 @@ void zxzxz_order8(const KernelState<T>& s, const T* const* in, T* const* out) {
 
 template <class T>
 void zxzxz_order8_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
-  run_batch_lanes<T, 64>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
+  run_batch_lanes<T, 0, 64>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
     zxzxz_order8_bands<T, BatchPack<T>>(s, x, y);
   });
 }
@@ -5498,7 +5568,7 @@ void zxzxz_order9(const KernelState<T>& s, const T* const* in, T* const* out) {
 
 template <class T>
 void zxzxz_order9_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
-  run_batch_lanes<T, 81>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
+  run_batch_lanes<T, 0, 81>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
     zxzxz_order9_bands<T, BatchPack<T>>(s, x, y);
   });
 }
@@ -5526,7 +5596,7 @@ void zxzxz_order10(const KernelState<T>& s, const T* const* in, T* const* out) {
 
 template <class T>
 void zxzxz_order10_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
-  run_batch_lanes<T, 100>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
+  run_batch_lanes<T, 0, 100>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
     zxzxz_order10_bands<T, BatchPack<T>>(s, x, y);
   });
 }
@@ -5845,8 +5915,30 @@ BatchKernel<T> batch_kernel(int order) {
   return nullptr;
 }
 
+template <class T>
+BatchKernel<T> batch_band_kernel(int l) {
+  // Double zxzxz bands above the whole-order kernels run the paired X90 rows of
+  // rotation.cpp in apply(), whose sums are ordered differently.
+  if constexpr (std::is_same_v<T, double>) return nullptr;
+  switch (l) {
+    case 10: return &zxzxz_band10_batch<T>;
+    case 11: return &zxzxz_band11_batch<T>;
+    case 12: return &zxzxz_band12_batch<T>;
+    case 13: return &zxzxz_band13_batch<T>;
+    case 14: return &zxzxz_band14_batch<T>;
+    case 15: return &zxzxz_band15_batch<T>;
+    case 16: return &zxzxz_band16_batch<T>;
+    case 17: return &zxzxz_band17_batch<T>;
+    case 18: return &zxzxz_band18_batch<T>;
+    case 19: return &zxzxz_band19_batch<T>;
+  }
+  return nullptr;
+}
+
 template BatchKernel<float> batch_kernel<float>(int);
+template BatchKernel<float> batch_band_kernel<float>(int);
 template BatchKernel<double> batch_kernel<double>(int);
+template BatchKernel<double> batch_band_kernel<double>(int);
 template RotationKernel<float, 1> rotation_kernel<float, 1>(int, int);
 template RotationKernel<float, 1> band_kernel<float, 1>(int, int);
 template RotationKernel<float, 3> rotation_kernel<float, 3>(int, int);

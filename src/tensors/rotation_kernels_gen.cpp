@@ -161,7 +161,7 @@ void order_function(std::ostream& o, bool taylor, int n) {
   if (taylor) return;
   o << "template <class T>\n"
     << "void " << name << "_batch(const BatchState<T>& s, const T* const* in, T* const* out) {\n"
-    << "  run_batch_lanes<T, " << count << ">(in, out, [&s](const auto* __restrict x, auto* __restrict y) {\n"
+    << "  run_batch_lanes<T, 0, " << count << ">(in, out, [&s](const auto* __restrict x, auto* __restrict y) {\n"
     << "    " << name << "_bands<T, BatchPack<T>>(s, x, y);\n"
     << "  });\n}\n\n";
 }
@@ -177,6 +177,13 @@ void band_entry(std::ostream& o, bool taylor, int l) {
     << "  run_lanes<T, V, " << first << ", " << size
     << ">(in, out, [&s](const auto* __restrict x, auto* __restrict y) {\n"
     << "    " << band << "<" << targs << "std::remove_cvref_t<decltype(*y)>>(s, x, y);\n"
+    << "  });\n}\n\n";
+  if (taylor) return;
+  o << "template <class T>\n"
+    << "void " << band << "_batch(const BatchState<T>& s, const T* const* in, T* const* out) {\n"
+    << "  run_batch_lanes<T, " << first << ", " << size
+    << ">(in, out, [&s](const auto* __restrict x, auto* __restrict y) {\n"
+    << "    " << band << "<T, BatchPack<T>>(s, x, y);\n"
     << "  });\n}\n\n";
 }
 
@@ -241,8 +248,18 @@ std::string rotation_kernels_source() {
   for (int n = 1; n <= kKernelMaxOrder; ++n)
     o << "    case " << n << ": return &zxzxz_order" << n << "_batch<T>;\n";
   o << "  }\n  return nullptr;\n}\n\n";
+  o << "template <class T>\n"
+    << "BatchKernel<T> batch_band_kernel(int l) {\n"
+    << "  // Double zxzxz bands above the whole-order kernels run the paired X90 rows of\n"
+    << "  // rotation.cpp in apply(), whose sums are ordered differently.\n"
+    << "  if constexpr (std::is_same_v<T, double>) return nullptr;\n"
+    << "  switch (l) {\n";
+  for (int l = kKernelMaxOrder; l <= kBandKernelMaxBand; ++l)
+    o << "    case " << l << ": return &zxzxz_band" << l << "_batch<T>;\n";
+  o << "  }\n  return nullptr;\n}\n\n";
   for (const char* type : {"float", "double"})
-    o << "template BatchKernel<" << type << "> batch_kernel<" << type << ">(int);\n";
+    o << "template BatchKernel<" << type << "> batch_kernel<" << type << ">(int);\n"
+      << "template BatchKernel<" << type << "> batch_band_kernel<" << type << ">(int);\n";
   for (const char* type : {"float", "double"})
     for (int v : {1, 3})
       o << "template RotationKernel<" << type << ", " << v << "> rotation_kernel<" << type << ", " << v
