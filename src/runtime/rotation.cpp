@@ -329,7 +329,7 @@ inline ZyzLanes<detail::BatchPack<T>> zyz_cos_sin_lanes(const detail::BatchPack<
   const P norm = sqrt_lanes<T>(u * u + v * v);
   u /= norm;
   v /= norm;
-  e.cg = near ? u * e.ca + v * e.sa : e.ca * u + e.sa * v;
+  e.cg = u * e.ca + v * e.sa;  // both scalar branches (products commute exactly)
   e.sg = near ? v * e.ca - u * e.sa : e.sa * u - e.ca * v;
   return e;
 }
