@@ -927,6 +927,44 @@ void check_batch_lanes_bitwise() {
 TEST(RotationApi, BatchLanesAreBitIdenticalToSingleRotationsFloat) { check_batch_lanes_bitwise<float>(); }
 TEST(RotationApi, BatchLanesAreBitIdenticalToSingleRotationsDouble) { check_batch_lanes_bitwise<double>(); }
 
+// apply() and apply_rgb() call the generated kernel of the current rotation directly
+// when it covers every band: one object switched between methods, tilts and orders of
+// rotation must give what a fresh object gives for each, bit for bit.
+template <class T>
+void check_reused_rotation() {
+  std::mt19937_64 rng(631);
+  const RotationMethod methods[] = {RotationMethod::zxzxz,   RotationMethod::reference, RotationMethod::taylor1,
+                                    RotationMethod::taylor2, RotationMethod::automatic, RotationMethod::taylor15,
+                                    RotationMethod::zxzxz};
+  for (int order : {2, 3, 4, 7, 10, 11, 14}) {
+    const int n = sh_count(order);
+    ShRotation<T> reused(order, helpers());
+    std::vector<T> in(3 * n);
+    for (T& v : in) v = static_cast<T>(std::uniform_real_distribution<double>(-1, 1)(rng));
+    for (int round = 0; round < 2; ++round)
+      for (RotationMethod m : methods) {
+        const Mat3<T> r = (round ? axis_angle({1, 2, 3}, 1e-4) : random_rotation(rng)).template cast<T>();
+        ShRotation<T> fresh(order, helpers());
+        ASSERT_TRUE(reused.set(r, m));
+        ASSERT_TRUE(fresh.set(r, m));
+        ASSERT_EQ(reused.method(), fresh.method());
+        std::vector<T> a(3 * n), b(3 * n);
+        reused.apply(std::span<const T>(in).first(n), std::span<T>(a).first(n));
+        fresh.apply(std::span<const T>(in).first(n), std::span<T>(b).first(n));
+        auto part = [n](std::vector<T>& v, int k) { return std::span<T>(v).subspan(k * n, n); };
+        auto cpart = [n](const std::vector<T>& v, int k) { return std::span<const T>(v).subspan(k * n, n); };
+        for (int i = 0; i < n; ++i) ASSERT_EQ(a[i], b[i]) << "order " << order << " " << rotation_method_name(m);
+        reused.apply_rgb({cpart(in, 0), cpart(in, 1), cpart(in, 2)}, {part(a, 0), part(a, 1), part(a, 2)});
+        fresh.apply_rgb({cpart(in, 0), cpart(in, 1), cpart(in, 2)}, {part(b, 0), part(b, 1), part(b, 2)});
+        for (int i = 0; i < 3 * n; ++i)
+          ASSERT_EQ(a[i], b[i]) << "rgb order " << order << " " << rotation_method_name(m);
+      }
+  }
+}
+
+TEST(RotationApi, ReusedRotationMatchesFreshOneFloat) { check_reused_rotation<float>(); }
+TEST(RotationApi, ReusedRotationMatchesFreshOneDouble) { check_reused_rotation<double>(); }
+
 TEST(RotationApi, BatchOfNothingAndWrongSizes) {
   ShRotation<float> rotation(4, helpers());
   std::vector<Mat3<float>> rs(5, Mat3<float>::Identity());

@@ -34,8 +34,16 @@
 namespace shtool {
 
 namespace detail {
+// What one rotation needs at apply time (set() fills it): R column-major, cos(m x) and
+// sin(m x) of the zyz angles for m < order, and the Taylor tilt b and b^2 / 2. Read by
+// the generated kernels (src/runtime/rotation_kernels.h); here because apply() calls the
+// kernel of a whole rotation inline.
 template <class T>
-struct KernelState;  // src/runtime/rotation_kernels.h
+struct KernelState {
+  const T* r;
+  const T *ca, *sa, *cb, *sb, *cg, *sg;
+  T beta, half_beta2;
+};
 
 // Band 1 of M(R) for R stored column-major (r[i + 3 j] = R(i, j), Eigen's layout). With
 // y_1^-1 = -c y, y_1^0 = c z, y_1^1 = -c x, band 1 is R in (y, z, x) order with the
@@ -107,6 +115,8 @@ class ShRotation {
         (method == RotationMethod::zxzxz || method == RotationMethod::automatic)) {
       store_matrix(r);
       resolved_ = RotationMethod::zxzxz;
+      whole_kernel_ = kernel1_[0];
+      whole_kernel3_ = kernel3_[0];
       return true;
     }
     return set_general(r, method, tolerance);
@@ -135,6 +145,15 @@ class ShRotation {
       detail::band1_closed<T, T>(r_, in.data() + 1, out.data() + 1);
       return;
     }
+    if (whole_kernel_) {  // one generated kernel covers the rotation: call it from here
+      const detail::KernelState<T> state{r_,           cos_a_.data(), sin_a_.data(), cos_b_.data(),
+                                         sin_b_.data(), cos_g_.data(), sin_g_.data(), beta_,
+                                         T(0.5) * beta_ * beta_};
+      const T* src = in.data();
+      T* dst = out.data();
+      whole_kernel_(state, &src, &dst);
+      return;
+    }
     apply_general(in.data(), out.data());
   }
 
@@ -147,6 +166,15 @@ class ShRotation {
         out[k][0] = in[k][0];
         detail::band1_closed<T, T>(r_, in[k].data() + 1, out[k].data() + 1);
       }
+      return;
+    }
+    if (whole_kernel3_) {  // as in apply()
+      const detail::KernelState<T> state{r_,           cos_a_.data(), sin_a_.data(), cos_b_.data(),
+                                         sin_b_.data(), cos_g_.data(), sin_g_.data(), beta_,
+                                         T(0.5) * beta_ * beta_};
+      const T* src[3] = {in[0].data(), in[1].data(), in[2].data()};
+      T* dst[3] = {out[0].data(), out[1].data(), out[2].data()};
+      whole_kernel3_(state, src, dst);
       return;
     }
     apply_rgb_general(in, out);
@@ -195,6 +223,10 @@ class ShRotation {
   // Generated fixed-order kernels (src/runtime/rotation_kernels.h) for the bands below
   // detail::kKernelMaxOrder: zxzxz, taylor1, taylor1.5, taylor2; one and three vectors.
   Kernel<1> kernel1_[4] = {};
+  // The kernel of the current rotation when it covers every band (orders <= 10, not the
+  // reference method), else null.
+  Kernel<1> whole_kernel_ = nullptr;
+  Kernel<3> whole_kernel3_ = nullptr;
   Kernel<3> kernel3_[4] = {};
   int kernel_order_ = 0;  // bands [0, kernel_order_) are covered by the kernels
   // Helpers converted to T once (float rotations must not convert in the hot loop), for

@@ -358,6 +358,13 @@ bool ShRotation<T>::set_general(const Mat3<T>& r, RotationMethod method, double 
   if (method != RotationMethod::reference && !helpers_) return false;
   method = choose_method(r, method, tolerance);
   resolved_ = method;
+  const bool whole = method != RotationMethod::reference && order_ <= kernel_order_;
+  const int k = method == RotationMethod::zxzxz      ? 0
+                : method == RotationMethod::taylor1  ? 1
+                : method == RotationMethod::taylor15 ? 2
+                                                     : 3;
+  whole_kernel_ = whole ? kernel1_[k] : nullptr;
+  whole_kernel3_ = whole ? kernel3_[k] : nullptr;
   store_matrix(r);
   switch (method) {
     case RotationMethod::reference: build_reference(r); break;

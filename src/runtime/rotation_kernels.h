@@ -51,14 +51,7 @@ inline P splat(T v) {
   else return P{} + v;
 }
 
-// What one rotation needs at apply time (set() fills it): R column-major, cos(m x) and
-// sin(m x) of the zyz angles for m < order, and the Taylor tilt b and b^2 / 2.
-template <class T>
-struct KernelState {
-  const T* r;
-  const T *ca, *sa, *cb, *sb, *cg, *sg;
-  T beta, half_beta2;
-};
+// KernelState (what one rotation needs at apply time) is in shtool/rotation.h.
 
 // in[v] / out[v]: vector v of N^2 coefficients. Transforms the first
 // min(order, kKernelMaxOrder)^2 coefficients.
