@@ -883,45 +883,55 @@ TEST(RotationApi, BatchEqualsIndividualRotations) {
   }
 }
 
-// The lane path of rotate_batch (groups of 4 float / 2 double rotations; orders <= 10,
-// and <= 20 in float) against set() + apply() of each pair, bit for bit: counts that
-// leave a tail, every order with a whole-order kernel, band kernels, and order 21 (no
-// lane path), the edge rotations (half turns, gimbal
-// locks, tiny tilts) mixed with generic ones, and under `automatic` groups where some
-// rotation resolves to a Taylor method (those groups run one at a time).
+// The lane path of rotate_batch (groups of 4 float / 2 double rotations of one method;
+// orders <= 20, double zxzxz <= 10) against set() + apply() of each pair, bit for bit:
+// counts that leave a tail, every order with a whole-order kernel, band kernels, and
+// order 21 (no lane path); every method but the reference; the edge rotations (half
+// turns, gimbal locks, tiny tilts) mixed with generic ones (under `automatic`, groups
+// mixing Taylor and zxzxz run one at a time), and small tilts only (Taylor lanes).
 template <class T>
 void check_batch_lanes_bitwise() {
   std::mt19937_64 rng(617);
-  std::vector<Mat3<T>> rs;
-  for (const auto& [name, r] : edge_rotations()) rs.push_back(r.template cast<T>());
-  for (int k = 0; k < 13; ++k) rs.push_back(random_rotation(rng).template cast<T>());
-  std::shuffle(rs.begin(), rs.end(), rng);
-  const int count = static_cast<int>(rs.size());
-  ASSERT_NE(count % 4, 0);  // a tail in float
+  std::vector<Mat3<T>> mixed, small;
+  for (const auto& [name, r] : edge_rotations()) mixed.push_back(r.template cast<T>());
+  for (int k = 0; k < 13; ++k) mixed.push_back(random_rotation(rng).template cast<T>());
+  std::shuffle(mixed.begin(), mixed.end(), rng);
+  // Small tilts only: under `automatic` every group is one Taylor method.
+  for (int k = 0; k < 11; ++k) {
+    const double a = std::uniform_real_distribution<double>(-kPi, kPi)(rng);
+    const double g = std::uniform_real_distribution<double>(-kPi, kPi)(rng);
+    small.push_back(matrix_from_zyz<double>({a, 1e-4 * (1 + k % 3), g}).template cast<T>());
+  }
+  ASSERT_NE(mixed.size() % 4, 0u);  // a tail in float
   // Helpers beyond the other tests' order, for an order without a lane path.
   static const auto h22 = std::make_shared<const RotationHelpers>(compute_rotation_helpers(22));
-  for (int order : {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 15, 20, 21}) {
-    const int n = sh_count(order);
-    std::vector<T> in(count * n);
-    for (T& v : in) v = static_cast<T>(std::uniform_real_distribution<double>(-1, 1)(rng));
-    for (RotationMethod m : {RotationMethod::zxzxz, RotationMethod::automatic}) {
-      ShRotation<T> batch(order, h22), single(order, h22);
-      std::vector<T> out(in.size(), T(7)), one(n);
-      ASSERT_TRUE(rotate_batch<T>(batch, rs, in, out, m, 1e-5));
-      for (int k = 0; k < count; ++k) {
-        ASSERT_TRUE(single.set(rs[k], m, 1e-5));
-        single.apply(std::span<const T>(in.data() + k * n, n), one);
-        for (int i = 0; i < n; ++i)
-          ASSERT_EQ(out[k * n + i], one[i]) << "order " << order << " " << rotation_method_name(m) << " pair "
-                                            << k << " (" << rotation_method_name(single.method()) << ") i " << i;
+  for (const std::vector<Mat3<T>>* rs : {&mixed, &small})
+    for (int order : {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 15, 20, 21}) {
+      const int n = sh_count(order), count = static_cast<int>(rs->size());
+      std::vector<T> in(count * n);
+      for (T& v : in) v = static_cast<T>(std::uniform_real_distribution<double>(-1, 1)(rng));
+      for (RotationMethod m : {RotationMethod::zxzxz, RotationMethod::automatic, RotationMethod::taylor1,
+                               RotationMethod::taylor15, RotationMethod::taylor2}) {
+        const double tol = rs == &small ? 0.1 : 1e-5;  // small: `automatic` takes Taylor
+        ShRotation<T> batch(order, h22), single(order, h22);
+        std::vector<T> out(in.size(), T(7)), one(n);
+        ASSERT_TRUE(rotate_batch<T>(batch, *rs, in, out, m, tol));
+        for (int k = 0; k < count; ++k) {
+          ASSERT_TRUE(single.set((*rs)[k], m, tol));
+          if (rs == &small && m == RotationMethod::automatic && order > 3)  // zxzxz up to 3
+            ASSERT_NE(single.method(), RotationMethod::zxzxz) << "order " << order;
+          single.apply(std::span<const T>(in.data() + k * n, n), one);
+          for (int i = 0; i < n; ++i)
+            ASSERT_EQ(out[k * n + i], one[i]) << "order " << order << " " << rotation_method_name(m) << " pair "
+                                              << k << " (" << rotation_method_name(single.method()) << ") i " << i;
+        }
+        // The rotation object holds the last rotation afterwards.
+        EXPECT_EQ(batch.method(), single.method());
+        std::vector<T> again(n);
+        batch.apply(std::span<const T>(in.data() + (count - 1) * n, n), again);
+        for (int i = 0; i < n; ++i) EXPECT_EQ(again[i], one[i]);
       }
-      // The rotation object holds the last rotation afterwards.
-      EXPECT_EQ(batch.method(), single.method());
-      std::vector<T> again(n);
-      batch.apply(std::span<const T>(in.data() + (count - 1) * n, n), again);
-      for (int i = 0; i < n; ++i) EXPECT_EQ(again[i], one[i]);
     }
-  }
 }
 
 TEST(RotationApi, BatchLanesAreBitIdenticalToSingleRotationsFloat) { check_batch_lanes_bitwise<float>(); }

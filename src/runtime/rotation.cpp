@@ -292,6 +292,20 @@ void fill_zyz_tables(int order, const E& e, bool with_beta, T* const* t) {
   }
 }
 
+// The tilt b itself, for the Taylor methods: they are for small b, where b = asin(sin b) =
+// s + s^3/6 + 3 s^5/40 + O(s^7) is exact to rounding without an atan2 call (the first
+// omitted term, (5/112) s^7, is below half an ulp of b for s < 1e-3 in double, s < 0.03
+// in float); any other tilt by atan2.
+template <class T>
+T taylor_tilt(T cb, T sb) {
+  constexpr T kSeries = sizeof(T) < sizeof(double) ? T(0.03) : T(1e-3);
+  if (cb > 0 && sb < kSeries) {
+    const T s2 = sb * sb;
+    return sb + sb * s2 * (T(1) / 6 + s2 * (T(3) / 40));
+  }
+  return std::atan2(sb, cb);
+}
+
 // Square root lane by lane (correctly rounded, as std::sqrt).
 template <class T>
 inline detail::BatchPack<T> sqrt_lanes(detail::BatchPack<T> x) {
@@ -378,19 +392,7 @@ bool ShRotation<T>::set_general(const Mat3<T>& r, RotationMethod method, double 
       const ZyzCosSin<T> e = given ? *given : zyz_cos_sin_from_matrix<T>(r);
       T* const t[6] = {cos_a_.data(), sin_a_.data(), cos_b_.data(), sin_b_.data(), cos_g_.data(), sin_g_.data()};
       fill_zyz_tables(order_, e, zxzxz, t);
-      if (!zxzxz) {
-        // The tilt b itself: the Taylor methods are for small b, where b = asin(sin b) =
-        // s + s^3/6 + 3 s^5/40 + O(s^7) is exact to rounding without an atan2 call (the
-        // first omitted term, (5/112) s^7, is below half an ulp of b for s < 1e-3 in
-        // double, s < 0.03 in float); any other tilt by atan2.
-        constexpr T kSeries = sizeof(T) < sizeof(double) ? T(0.03) : T(1e-3);
-        if (e.cb > 0 && e.sb < kSeries) {
-          const T s2 = e.sb * e.sb;
-          beta_ = e.sb + e.sb * s2 * (T(1) / 6 + s2 * (T(3) / 40));
-        } else {
-          beta_ = std::atan2(e.sb, e.cb);
-        }
-      }
+      if (!zxzxz) beta_ = taylor_tilt(e.cb, e.sb);
       break;
     }
   }
@@ -717,30 +719,39 @@ std::size_t ShRotation<T>::rotate_lanes(std::span<const Mat3<T>> rotations, cons
   using P = detail::BatchPack<T>;
   constexpr int B = detail::kBatchLanes<T>;
   constexpr int kMaxBatchOrder = detail::kBandKernelMaxBand + 1;
-  if (!helpers_ || order_ > kMaxBatchOrder ||
-      (method != RotationMethod::zxzxz && method != RotationMethod::automatic))
-    return 0;
-  // The whole-order kernel up to kKernelMaxOrder, then one kernel per band.
-  const detail::BatchKernel<T> kernel = detail::batch_kernel<T>(std::min(order_, detail::kKernelMaxOrder));
-  detail::BatchKernel<T> band_kernels[kMaxBatchOrder] = {};
-  for (int l = detail::kKernelMaxOrder; l < order_; ++l)
-    if (!(band_kernels[l] = detail::batch_band_kernel<T>(l))) return 0;
+  if (!helpers_ || order_ > kMaxBatchOrder || method == RotationMethod::reference) return 0;
+  // Per method (zxzxz, taylor1, taylor1.5, taylor2): the whole-order kernel up to
+  // kKernelMaxOrder, then one kernel per band; a method with a missing part runs one
+  // rotation at a time.
+  detail::BatchKernel<T> kernels[4][kMaxBatchOrder] = {};
+  bool lanes[4];
+  for (int k = 0; k < 4; ++k) {
+    kernels[k][0] = detail::batch_kernel<T>(kKernelMethod[k], std::min(order_, detail::kKernelMaxOrder));
+    lanes[k] = kernels[k][0] != nullptr;
+    for (int l = detail::kKernelMaxOrder; l < order_; ++l)
+      lanes[k] = (kernels[k][l] = detail::batch_band_kernel<T>(kKernelMethod[k], l)) && lanes[k];
+  }
   const std::size_t n = static_cast<std::size_t>(sh_count(order_)), groups = rotations.size() / B;
-  // Per lane: R column-major, and (order > 3) the tables set() would compute, filled by
-  // the same code, so each lane's kernel input is bit-identical to set()'s.
+  // Per lane: R column-major, and the tables (and tilt) set() would compute, by the same
+  // operations, so each lane's kernel input is bit-identical to set()'s.
   P r[9], tables[6][kMaxBatchOrder];
-  const detail::BatchState<T> state{r, tables[0], tables[1], tables[2], tables[3], tables[4], tables[5]};
+  detail::BatchState<T> state{r, tables[0], tables[1], tables[2], tables[3], tables[4], tables[5], P{}, P{}};
   for (std::size_t g = 0; g < groups; ++g) {
     const Mat3<T>* group = rotations.data() + g * B;
     const T* src[B];
     T* dst[B];
-    bool zxzxz = true;
+    const RotationMethod chosen = choose_method(group[0], method, tolerance);
+    bool same = true;  // one method for the whole group
     for (int j = 0; j < B; ++j) {
       src[j] = in + (g * B + j) * n;
       dst[j] = out + (g * B + j) * n;
-      zxzxz = zxzxz && choose_method(group[j], method, tolerance) == RotationMethod::zxzxz;
+      same = same && (j == 0 || choose_method(group[j], method, tolerance) == chosen);
     }
-    if (!zxzxz) {  // a Taylor rotation among them: one at a time
+    const int k = chosen == RotationMethod::zxzxz      ? 0
+                  : chosen == RotationMethod::taylor1  ? 1
+                  : chosen == RotationMethod::taylor15 ? 2
+                                                       : 3;
+    if (!same || !lanes[k]) {  // one at a time
       for (int j = 0; j < B; ++j) {
         set(group[j], method, tolerance);
         apply(std::span<const T>(src[j], n), std::span<T>(dst[j], n));
@@ -750,12 +761,18 @@ std::size_t ShRotation<T>::rotate_lanes(std::span<const Mat3<T>> rotations, cons
     const T* lane_src[B];
     for (int j = 0; j < B; ++j) lane_src[j] = group[j].data();
     detail::gather_lanes<T>(lane_src, 9, r);
-    if (order_ > 3) {  // below, bands 1 and 2 come from R alone
+    const bool zxzxz = k == 0;
+    if (!zxzxz || order_ > 3) {  // zxzxz below order 4: bands 1 and 2 from R alone
+      const ZyzLanes<P> e = zyz_cos_sin_lanes<T>(r);
       P* const t[6] = {tables[0], tables[1], tables[2], tables[3], tables[4], tables[5]};
-      fill_zyz_tables(order_, zyz_cos_sin_lanes<T>(r), true, t);
+      fill_zyz_tables(order_, e, zxzxz, t);
+      if (!zxzxz) {
+        for (int j = 0; j < B; ++j) state.beta[j] = taylor_tilt(e.cb[j], e.sb[j]);
+        state.half_beta2 = T(0.5) * state.beta * state.beta;
+      }
     }
-    kernel(state, src, dst);
-    for (int l = detail::kKernelMaxOrder; l < order_; ++l) band_kernels[l](state, src, dst);
+    kernels[k][0](state, src, dst);
+    for (int l = detail::kKernelMaxOrder; l < order_; ++l) kernels[k][l](state, src, dst);
   }
   return groups * B;
 }

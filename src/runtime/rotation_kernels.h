@@ -141,24 +141,26 @@ struct BatchLanes {
 template <class T>
 using BatchPack = typename BatchLanes<T>::type;
 
-// KernelState with a value per lane; only zxzxz (no Taylor tilt).
+// KernelState with a value per lane.
 template <class T>
 struct BatchState {
   const BatchPack<T>* r;
   const BatchPack<T>*ca, *sa, *cb, *sb, *cg, *sg;
+  BatchPack<T> beta, half_beta2;
 };
 
 // in[k] / out[k], k < kBatchLanes<T>: the vectors of the lanes' rotations.
 template <class T>
 using BatchKernel = void (*)(const BatchState<T>&, const T* const* in, T* const* out);
 
-// zxzxz kernel of a whole order (1..kKernelMaxOrder) for a batch; null above.
+// Kernel of a whole order (1..kKernelMaxOrder) for a batch, methods as in
+// rotation_kernel; null above.
 template <class T>
-BatchKernel<T> batch_kernel(int order);
-// zxzxz kernel of band l alone (kKernelMaxOrder <= l <= kBandKernelMaxBand) for a batch,
-// where apply() runs the same generated band code (float); null otherwise.
+BatchKernel<T> batch_kernel(int method, int order);
+// Kernel of band l alone (kKernelMaxOrder <= l <= kBandKernelMaxBand) for a batch, where
+// apply() runs the same generated band code (all but double zxzxz); null otherwise.
 template <class T>
-BatchKernel<T> batch_band_kernel(int l);
+BatchKernel<T> batch_band_kernel(int method, int l);
 
 // x[i] = {src[0][i], .., src[B-1][i]} for i < count, B = kBatchLanes<T>: B x B transposes
 // of register-sized loads (values never pass through memory one lane at a time, which

@@ -2650,13 +2650,13 @@ inline void zxzxz_band19(const S& s, const P* __restrict x, P* __restrict y) {
 }
 
 // Band 1 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) (paper 001, Sec. 3).
-template <int Order, class T, class P>
-inline void taylor_band1(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <int Order, class T, class P, class S>
+inline void taylor_band1(const S& s, const P* __restrict x, P* __restrict y) {
   const P t1 = x[1];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
   const P t2 = cg1 * x[2] - sg1 * x[0];
   const P t0 = sg1 * x[2] + cg1 * x[0];
-  const T b = s.beta, h = s.half_beta2;
+  const auto b = s.beta, h = s.half_beta2;
   (void)h;
   P u0 = t0;
   P u1 = t1 + b * (t2);
@@ -2672,8 +2672,8 @@ inline void taylor_band1(const KernelState<T>& s, const P* __restrict x, P* __re
 }
 
 // Band 2 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) (paper 001, Sec. 3).
-template <int Order, class T, class P>
-inline void taylor_band2(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <int Order, class T, class P, class S>
+inline void taylor_band2(const S& s, const P* __restrict x, P* __restrict y) {
   const P t2 = x[2];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
   const P t3 = cg1 * x[3] - sg1 * x[1];
@@ -2681,7 +2681,7 @@ inline void taylor_band2(const KernelState<T>& s, const P* __restrict x, P* __re
   const P cg2 = splat<P>(s.cg[2]), sg2 = splat<P>(s.sg[2]);
   const P t4 = cg2 * x[4] - sg2 * x[0];
   const P t0 = sg2 * x[4] + cg2 * x[0];
-  const T b = s.beta, h = s.half_beta2;
+  const auto b = s.beta, h = s.half_beta2;
   (void)h;
   P u0 = t0 + b * (-t1);
   if constexpr (Order == 15) u0 += h * (-t0);
@@ -2708,8 +2708,8 @@ inline void taylor_band2(const KernelState<T>& s, const P* __restrict x, P* __re
 }
 
 // Band 3 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) (paper 001, Sec. 3).
-template <int Order, class T, class P>
-inline void taylor_band3(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <int Order, class T, class P, class S>
+inline void taylor_band3(const S& s, const P* __restrict x, P* __restrict y) {
   const P t3 = x[3];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
   const P t4 = cg1 * x[4] - sg1 * x[2];
@@ -2720,7 +2720,7 @@ inline void taylor_band3(const KernelState<T>& s, const P* __restrict x, P* __re
   const P cg3 = splat<P>(s.cg[3]), sg3 = splat<P>(s.sg[3]);
   const P t6 = cg3 * x[6] - sg3 * x[0];
   const P t0 = sg3 * x[6] + cg3 * x[0];
-  const T b = s.beta, h = s.half_beta2;
+  const auto b = s.beta, h = s.half_beta2;
   (void)h;
   P u0 = t0 + b * (T(-1.2247448713915889) * t1);
   if constexpr (Order == 15) u0 += h * (T(-1.5) * t0);
@@ -2756,8 +2756,8 @@ inline void taylor_band3(const KernelState<T>& s, const P* __restrict x, P* __re
 }
 
 // Band 4 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) (paper 001, Sec. 3).
-template <int Order, class T, class P>
-inline void taylor_band4(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <int Order, class T, class P, class S>
+inline void taylor_band4(const S& s, const P* __restrict x, P* __restrict y) {
   const P t4 = x[4];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
   const P t5 = cg1 * x[5] - sg1 * x[3];
@@ -2771,7 +2771,7 @@ inline void taylor_band4(const KernelState<T>& s, const P* __restrict x, P* __re
   const P cg4 = splat<P>(s.cg[4]), sg4 = splat<P>(s.sg[4]);
   const P t8 = cg4 * x[8] - sg4 * x[0];
   const P t0 = sg4 * x[8] + cg4 * x[0];
-  const T b = s.beta, h = s.half_beta2;
+  const auto b = s.beta, h = s.half_beta2;
   (void)h;
   P u0 = t0 + b * (T(-1.4142135623730951) * t1);
   if constexpr (Order == 15) u0 += h * (T(-2) * t0);
@@ -2816,8 +2816,8 @@ inline void taylor_band4(const KernelState<T>& s, const P* __restrict x, P* __re
 }
 
 // Band 5 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) (paper 001, Sec. 3).
-template <int Order, class T, class P>
-inline void taylor_band5(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <int Order, class T, class P, class S>
+inline void taylor_band5(const S& s, const P* __restrict x, P* __restrict y) {
   const P t5 = x[5];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
   const P t6 = cg1 * x[6] - sg1 * x[4];
@@ -2834,7 +2834,7 @@ inline void taylor_band5(const KernelState<T>& s, const P* __restrict x, P* __re
   const P cg5 = splat<P>(s.cg[5]), sg5 = splat<P>(s.sg[5]);
   const P t10 = cg5 * x[10] - sg5 * x[0];
   const P t0 = sg5 * x[10] + cg5 * x[0];
-  const T b = s.beta, h = s.half_beta2;
+  const auto b = s.beta, h = s.half_beta2;
   (void)h;
   P u0 = t0 + b * (T(-1.5811388300841898) * t1);
   if constexpr (Order == 15) u0 += h * (T(-2.5) * t0);
@@ -2888,8 +2888,8 @@ inline void taylor_band5(const KernelState<T>& s, const P* __restrict x, P* __re
 }
 
 // Band 6 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) (paper 001, Sec. 3).
-template <int Order, class T, class P>
-inline void taylor_band6(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <int Order, class T, class P, class S>
+inline void taylor_band6(const S& s, const P* __restrict x, P* __restrict y) {
   const P t6 = x[6];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
   const P t7 = cg1 * x[7] - sg1 * x[5];
@@ -2909,7 +2909,7 @@ inline void taylor_band6(const KernelState<T>& s, const P* __restrict x, P* __re
   const P cg6 = splat<P>(s.cg[6]), sg6 = splat<P>(s.sg[6]);
   const P t12 = cg6 * x[12] - sg6 * x[0];
   const P t0 = sg6 * x[12] + cg6 * x[0];
-  const T b = s.beta, h = s.half_beta2;
+  const auto b = s.beta, h = s.half_beta2;
   (void)h;
   P u0 = t0 + b * (T(-1.7320508075688772) * t1);
   if constexpr (Order == 15) u0 += h * (T(-3) * t0);
@@ -2972,8 +2972,8 @@ inline void taylor_band6(const KernelState<T>& s, const P* __restrict x, P* __re
 }
 
 // Band 7 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) (paper 001, Sec. 3).
-template <int Order, class T, class P>
-inline void taylor_band7(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <int Order, class T, class P, class S>
+inline void taylor_band7(const S& s, const P* __restrict x, P* __restrict y) {
   const P t7 = x[7];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
   const P t8 = cg1 * x[8] - sg1 * x[6];
@@ -2996,7 +2996,7 @@ inline void taylor_band7(const KernelState<T>& s, const P* __restrict x, P* __re
   const P cg7 = splat<P>(s.cg[7]), sg7 = splat<P>(s.sg[7]);
   const P t14 = cg7 * x[14] - sg7 * x[0];
   const P t0 = sg7 * x[14] + cg7 * x[0];
-  const T b = s.beta, h = s.half_beta2;
+  const auto b = s.beta, h = s.half_beta2;
   (void)h;
   P u0 = t0 + b * (T(-1.8708286933869707) * t1);
   if constexpr (Order == 15) u0 += h * (T(-3.5) * t0);
@@ -3068,8 +3068,8 @@ inline void taylor_band7(const KernelState<T>& s, const P* __restrict x, P* __re
 }
 
 // Band 8 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) (paper 001, Sec. 3).
-template <int Order, class T, class P>
-inline void taylor_band8(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <int Order, class T, class P, class S>
+inline void taylor_band8(const S& s, const P* __restrict x, P* __restrict y) {
   const P t8 = x[8];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
   const P t9 = cg1 * x[9] - sg1 * x[7];
@@ -3095,7 +3095,7 @@ inline void taylor_band8(const KernelState<T>& s, const P* __restrict x, P* __re
   const P cg8 = splat<P>(s.cg[8]), sg8 = splat<P>(s.sg[8]);
   const P t16 = cg8 * x[16] - sg8 * x[0];
   const P t0 = sg8 * x[16] + cg8 * x[0];
-  const T b = s.beta, h = s.half_beta2;
+  const auto b = s.beta, h = s.half_beta2;
   (void)h;
   P u0 = t0 + b * (T(-2) * t1);
   if constexpr (Order == 15) u0 += h * (T(-4) * t0);
@@ -3176,8 +3176,8 @@ inline void taylor_band8(const KernelState<T>& s, const P* __restrict x, P* __re
 }
 
 // Band 9 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) (paper 001, Sec. 3).
-template <int Order, class T, class P>
-inline void taylor_band9(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <int Order, class T, class P, class S>
+inline void taylor_band9(const S& s, const P* __restrict x, P* __restrict y) {
   const P t9 = x[9];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
   const P t10 = cg1 * x[10] - sg1 * x[8];
@@ -3206,7 +3206,7 @@ inline void taylor_band9(const KernelState<T>& s, const P* __restrict x, P* __re
   const P cg9 = splat<P>(s.cg[9]), sg9 = splat<P>(s.sg[9]);
   const P t18 = cg9 * x[18] - sg9 * x[0];
   const P t0 = sg9 * x[18] + cg9 * x[0];
-  const T b = s.beta, h = s.half_beta2;
+  const auto b = s.beta, h = s.half_beta2;
   (void)h;
   P u0 = t0 + b * (T(-2.1213203435596424) * t1);
   if constexpr (Order == 15) u0 += h * (T(-4.5) * t0);
@@ -3296,8 +3296,8 @@ inline void taylor_band9(const KernelState<T>& s, const P* __restrict x, P* __re
 }
 
 // Band 10 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) (paper 001, Sec. 3).
-template <int Order, class T, class P>
-inline void taylor_band10(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <int Order, class T, class P, class S>
+inline void taylor_band10(const S& s, const P* __restrict x, P* __restrict y) {
   const P t10 = x[10];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
   const P t11 = cg1 * x[11] - sg1 * x[9];
@@ -3329,7 +3329,7 @@ inline void taylor_band10(const KernelState<T>& s, const P* __restrict x, P* __r
   const P cg10 = splat<P>(s.cg[10]), sg10 = splat<P>(s.sg[10]);
   const P t20 = cg10 * x[20] - sg10 * x[0];
   const P t0 = sg10 * x[20] + cg10 * x[0];
-  const T b = s.beta, h = s.half_beta2;
+  const auto b = s.beta, h = s.half_beta2;
   (void)h;
   P u0 = t0 + b * (T(-2.2360679774997898) * t1);
   if constexpr (Order == 15) u0 += h * (T(-5) * t0);
@@ -3428,8 +3428,8 @@ inline void taylor_band10(const KernelState<T>& s, const P* __restrict x, P* __r
 }
 
 // Band 11 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) (paper 001, Sec. 3).
-template <int Order, class T, class P>
-inline void taylor_band11(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <int Order, class T, class P, class S>
+inline void taylor_band11(const S& s, const P* __restrict x, P* __restrict y) {
   const P t11 = x[11];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
   const P t12 = cg1 * x[12] - sg1 * x[10];
@@ -3464,7 +3464,7 @@ inline void taylor_band11(const KernelState<T>& s, const P* __restrict x, P* __r
   const P cg11 = splat<P>(s.cg[11]), sg11 = splat<P>(s.sg[11]);
   const P t22 = cg11 * x[22] - sg11 * x[0];
   const P t0 = sg11 * x[22] + cg11 * x[0];
-  const T b = s.beta, h = s.half_beta2;
+  const auto b = s.beta, h = s.half_beta2;
   (void)h;
   P u0 = t0 + b * (T(-2.3452078799117149) * t1);
   if constexpr (Order == 15) u0 += h * (T(-5.5) * t0);
@@ -3572,8 +3572,8 @@ inline void taylor_band11(const KernelState<T>& s, const P* __restrict x, P* __r
 }
 
 // Band 12 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) (paper 001, Sec. 3).
-template <int Order, class T, class P>
-inline void taylor_band12(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <int Order, class T, class P, class S>
+inline void taylor_band12(const S& s, const P* __restrict x, P* __restrict y) {
   const P t12 = x[12];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
   const P t13 = cg1 * x[13] - sg1 * x[11];
@@ -3611,7 +3611,7 @@ inline void taylor_band12(const KernelState<T>& s, const P* __restrict x, P* __r
   const P cg12 = splat<P>(s.cg[12]), sg12 = splat<P>(s.sg[12]);
   const P t24 = cg12 * x[24] - sg12 * x[0];
   const P t0 = sg12 * x[24] + cg12 * x[0];
-  const T b = s.beta, h = s.half_beta2;
+  const auto b = s.beta, h = s.half_beta2;
   (void)h;
   P u0 = t0 + b * (T(-2.4494897427831779) * t1);
   if constexpr (Order == 15) u0 += h * (T(-6) * t0);
@@ -3728,8 +3728,8 @@ inline void taylor_band12(const KernelState<T>& s, const P* __restrict x, P* __r
 }
 
 // Band 13 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) (paper 001, Sec. 3).
-template <int Order, class T, class P>
-inline void taylor_band13(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <int Order, class T, class P, class S>
+inline void taylor_band13(const S& s, const P* __restrict x, P* __restrict y) {
   const P t13 = x[13];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
   const P t14 = cg1 * x[14] - sg1 * x[12];
@@ -3770,7 +3770,7 @@ inline void taylor_band13(const KernelState<T>& s, const P* __restrict x, P* __r
   const P cg13 = splat<P>(s.cg[13]), sg13 = splat<P>(s.sg[13]);
   const P t26 = cg13 * x[26] - sg13 * x[0];
   const P t0 = sg13 * x[26] + cg13 * x[0];
-  const T b = s.beta, h = s.half_beta2;
+  const auto b = s.beta, h = s.half_beta2;
   (void)h;
   P u0 = t0 + b * (T(-2.5495097567963922) * t1);
   if constexpr (Order == 15) u0 += h * (T(-6.5) * t0);
@@ -3896,8 +3896,8 @@ inline void taylor_band13(const KernelState<T>& s, const P* __restrict x, P* __r
 }
 
 // Band 14 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) (paper 001, Sec. 3).
-template <int Order, class T, class P>
-inline void taylor_band14(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <int Order, class T, class P, class S>
+inline void taylor_band14(const S& s, const P* __restrict x, P* __restrict y) {
   const P t14 = x[14];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
   const P t15 = cg1 * x[15] - sg1 * x[13];
@@ -3941,7 +3941,7 @@ inline void taylor_band14(const KernelState<T>& s, const P* __restrict x, P* __r
   const P cg14 = splat<P>(s.cg[14]), sg14 = splat<P>(s.sg[14]);
   const P t28 = cg14 * x[28] - sg14 * x[0];
   const P t0 = sg14 * x[28] + cg14 * x[0];
-  const T b = s.beta, h = s.half_beta2;
+  const auto b = s.beta, h = s.half_beta2;
   (void)h;
   P u0 = t0 + b * (T(-2.6457513110645907) * t1);
   if constexpr (Order == 15) u0 += h * (T(-7) * t0);
@@ -4076,8 +4076,8 @@ inline void taylor_band14(const KernelState<T>& s, const P* __restrict x, P* __r
 }
 
 // Band 15 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) (paper 001, Sec. 3).
-template <int Order, class T, class P>
-inline void taylor_band15(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <int Order, class T, class P, class S>
+inline void taylor_band15(const S& s, const P* __restrict x, P* __restrict y) {
   const P t15 = x[15];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
   const P t16 = cg1 * x[16] - sg1 * x[14];
@@ -4124,7 +4124,7 @@ inline void taylor_band15(const KernelState<T>& s, const P* __restrict x, P* __r
   const P cg15 = splat<P>(s.cg[15]), sg15 = splat<P>(s.sg[15]);
   const P t30 = cg15 * x[30] - sg15 * x[0];
   const P t0 = sg15 * x[30] + cg15 * x[0];
-  const T b = s.beta, h = s.half_beta2;
+  const auto b = s.beta, h = s.half_beta2;
   (void)h;
   P u0 = t0 + b * (T(-2.7386127875258306) * t1);
   if constexpr (Order == 15) u0 += h * (T(-7.5) * t0);
@@ -4268,8 +4268,8 @@ inline void taylor_band15(const KernelState<T>& s, const P* __restrict x, P* __r
 }
 
 // Band 16 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) (paper 001, Sec. 3).
-template <int Order, class T, class P>
-inline void taylor_band16(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <int Order, class T, class P, class S>
+inline void taylor_band16(const S& s, const P* __restrict x, P* __restrict y) {
   const P t16 = x[16];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
   const P t17 = cg1 * x[17] - sg1 * x[15];
@@ -4319,7 +4319,7 @@ inline void taylor_band16(const KernelState<T>& s, const P* __restrict x, P* __r
   const P cg16 = splat<P>(s.cg[16]), sg16 = splat<P>(s.sg[16]);
   const P t32 = cg16 * x[32] - sg16 * x[0];
   const P t0 = sg16 * x[32] + cg16 * x[0];
-  const T b = s.beta, h = s.half_beta2;
+  const auto b = s.beta, h = s.half_beta2;
   (void)h;
   P u0 = t0 + b * (T(-2.8284271247461903) * t1);
   if constexpr (Order == 15) u0 += h * (T(-8) * t0);
@@ -4472,8 +4472,8 @@ inline void taylor_band16(const KernelState<T>& s, const P* __restrict x, P* __r
 }
 
 // Band 17 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) (paper 001, Sec. 3).
-template <int Order, class T, class P>
-inline void taylor_band17(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <int Order, class T, class P, class S>
+inline void taylor_band17(const S& s, const P* __restrict x, P* __restrict y) {
   const P t17 = x[17];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
   const P t18 = cg1 * x[18] - sg1 * x[16];
@@ -4526,7 +4526,7 @@ inline void taylor_band17(const KernelState<T>& s, const P* __restrict x, P* __r
   const P cg17 = splat<P>(s.cg[17]), sg17 = splat<P>(s.sg[17]);
   const P t34 = cg17 * x[34] - sg17 * x[0];
   const P t0 = sg17 * x[34] + cg17 * x[0];
-  const T b = s.beta, h = s.half_beta2;
+  const auto b = s.beta, h = s.half_beta2;
   (void)h;
   P u0 = t0 + b * (T(-2.9154759474226504) * t1);
   if constexpr (Order == 15) u0 += h * (T(-8.5) * t0);
@@ -4688,8 +4688,8 @@ inline void taylor_band17(const KernelState<T>& s, const P* __restrict x, P* __r
 }
 
 // Band 18 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) (paper 001, Sec. 3).
-template <int Order, class T, class P>
-inline void taylor_band18(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <int Order, class T, class P, class S>
+inline void taylor_band18(const S& s, const P* __restrict x, P* __restrict y) {
   const P t18 = x[18];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
   const P t19 = cg1 * x[19] - sg1 * x[17];
@@ -4745,7 +4745,7 @@ inline void taylor_band18(const KernelState<T>& s, const P* __restrict x, P* __r
   const P cg18 = splat<P>(s.cg[18]), sg18 = splat<P>(s.sg[18]);
   const P t36 = cg18 * x[36] - sg18 * x[0];
   const P t0 = sg18 * x[36] + cg18 * x[0];
-  const T b = s.beta, h = s.half_beta2;
+  const auto b = s.beta, h = s.half_beta2;
   (void)h;
   P u0 = t0 + b * (T(-3) * t1);
   if constexpr (Order == 15) u0 += h * (T(-9) * t0);
@@ -4916,8 +4916,8 @@ inline void taylor_band18(const KernelState<T>& s, const P* __restrict x, P* __r
 }
 
 // Band 19 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) (paper 001, Sec. 3).
-template <int Order, class T, class P>
-inline void taylor_band19(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <int Order, class T, class P, class S>
+inline void taylor_band19(const S& s, const P* __restrict x, P* __restrict y) {
   const P t19 = x[19];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
   const P t20 = cg1 * x[20] - sg1 * x[18];
@@ -4976,7 +4976,7 @@ inline void taylor_band19(const KernelState<T>& s, const P* __restrict x, P* __r
   const P cg19 = splat<P>(s.cg[19]), sg19 = splat<P>(s.sg[19]);
   const P t38 = cg19 * x[38] - sg19 * x[0];
   const P t0 = sg19 * x[38] + cg19 * x[0];
-  const T b = s.beta, h = s.half_beta2;
+  const auto b = s.beta, h = s.half_beta2;
   (void)h;
   P u0 = t0 + b * (T(-3.082207001484488) * t1);
   if constexpr (Order == 15) u0 += h * (T(-9.5) * t0);
@@ -5176,6 +5176,13 @@ void taylor_band10_entry(const KernelState<T>& s, const T* const* in, T* const* 
   });
 }
 
+template <int Order, class T>
+void taylor_band10_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 100, 21>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
+    taylor_band10<Order, T, BatchPack<T>>(s, x, y);
+  });
+}
+
 template <class T, int V>
 void zxzxz_band11_entry(const KernelState<T>& s, const T* const* in, T* const* out) {
   run_lanes<T, V, 121, 23>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
@@ -5194,6 +5201,13 @@ template <int Order, class T, int V>
 void taylor_band11_entry(const KernelState<T>& s, const T* const* in, T* const* out) {
   run_lanes<T, V, 121, 23>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
     taylor_band11<Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <int Order, class T>
+void taylor_band11_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 121, 23>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
+    taylor_band11<Order, T, BatchPack<T>>(s, x, y);
   });
 }
 
@@ -5218,6 +5232,13 @@ void taylor_band12_entry(const KernelState<T>& s, const T* const* in, T* const* 
   });
 }
 
+template <int Order, class T>
+void taylor_band12_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 144, 25>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
+    taylor_band12<Order, T, BatchPack<T>>(s, x, y);
+  });
+}
+
 template <class T, int V>
 void zxzxz_band13_entry(const KernelState<T>& s, const T* const* in, T* const* out) {
   run_lanes<T, V, 169, 27>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
@@ -5236,6 +5257,13 @@ template <int Order, class T, int V>
 void taylor_band13_entry(const KernelState<T>& s, const T* const* in, T* const* out) {
   run_lanes<T, V, 169, 27>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
     taylor_band13<Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <int Order, class T>
+void taylor_band13_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 169, 27>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
+    taylor_band13<Order, T, BatchPack<T>>(s, x, y);
   });
 }
 
@@ -5260,6 +5288,13 @@ void taylor_band14_entry(const KernelState<T>& s, const T* const* in, T* const* 
   });
 }
 
+template <int Order, class T>
+void taylor_band14_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 196, 29>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
+    taylor_band14<Order, T, BatchPack<T>>(s, x, y);
+  });
+}
+
 template <class T, int V>
 void zxzxz_band15_entry(const KernelState<T>& s, const T* const* in, T* const* out) {
   run_lanes<T, V, 225, 31>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
@@ -5278,6 +5313,13 @@ template <int Order, class T, int V>
 void taylor_band15_entry(const KernelState<T>& s, const T* const* in, T* const* out) {
   run_lanes<T, V, 225, 31>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
     taylor_band15<Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <int Order, class T>
+void taylor_band15_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 225, 31>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
+    taylor_band15<Order, T, BatchPack<T>>(s, x, y);
   });
 }
 
@@ -5302,6 +5344,13 @@ void taylor_band16_entry(const KernelState<T>& s, const T* const* in, T* const* 
   });
 }
 
+template <int Order, class T>
+void taylor_band16_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 256, 33>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
+    taylor_band16<Order, T, BatchPack<T>>(s, x, y);
+  });
+}
+
 template <class T, int V>
 void zxzxz_band17_entry(const KernelState<T>& s, const T* const* in, T* const* out) {
   run_lanes<T, V, 289, 35>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
@@ -5320,6 +5369,13 @@ template <int Order, class T, int V>
 void taylor_band17_entry(const KernelState<T>& s, const T* const* in, T* const* out) {
   run_lanes<T, V, 289, 35>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
     taylor_band17<Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <int Order, class T>
+void taylor_band17_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 289, 35>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
+    taylor_band17<Order, T, BatchPack<T>>(s, x, y);
   });
 }
 
@@ -5344,6 +5400,13 @@ void taylor_band18_entry(const KernelState<T>& s, const T* const* in, T* const* 
   });
 }
 
+template <int Order, class T>
+void taylor_band18_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 324, 37>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
+    taylor_band18<Order, T, BatchPack<T>>(s, x, y);
+  });
+}
+
 template <class T, int V>
 void zxzxz_band19_entry(const KernelState<T>& s, const T* const* in, T* const* out) {
   run_lanes<T, V, 361, 39>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
@@ -5362,6 +5425,13 @@ template <int Order, class T, int V>
 void taylor_band19_entry(const KernelState<T>& s, const T* const* in, T* const* out) {
   run_lanes<T, V, 361, 39>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
     taylor_band19<Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <int Order, class T>
+void taylor_band19_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 361, 39>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
+    taylor_band19<Order, T, BatchPack<T>>(s, x, y);
   });
 }
 
@@ -5601,8 +5671,8 @@ void zxzxz_order10_batch(const BatchState<T>& s, const T* const* in, T* const* o
   });
 }
 
-template <int Order, class T, class P>
-inline void taylor_order1_bands(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <int Order, class T, class P, class S>
+inline void taylor_order1_bands(const S& s, const P* __restrict x, P* __restrict y) {
   y[0] = x[0];
   (void)s;
 }
@@ -5614,8 +5684,15 @@ void taylor_order1(const KernelState<T>& s, const T* const* in, T* const* out) {
   });
 }
 
-template <int Order, class T, class P>
-inline void taylor_order2_bands(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <int Order, class T>
+void taylor_order1_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 0, 1>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
+    taylor_order1_bands<Order, T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <int Order, class T, class P, class S>
+inline void taylor_order2_bands(const S& s, const P* __restrict x, P* __restrict y) {
   y[0] = x[0];
   taylor_band1<Order, T, P>(s, x + 1, y + 1);
 }
@@ -5627,8 +5704,15 @@ void taylor_order2(const KernelState<T>& s, const T* const* in, T* const* out) {
   });
 }
 
-template <int Order, class T, class P>
-inline void taylor_order3_bands(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <int Order, class T>
+void taylor_order2_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 0, 4>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
+    taylor_order2_bands<Order, T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <int Order, class T, class P, class S>
+inline void taylor_order3_bands(const S& s, const P* __restrict x, P* __restrict y) {
   y[0] = x[0];
   taylor_band1<Order, T, P>(s, x + 1, y + 1);
   taylor_band2<Order, T, P>(s, x + 4, y + 4);
@@ -5641,8 +5725,15 @@ void taylor_order3(const KernelState<T>& s, const T* const* in, T* const* out) {
   });
 }
 
-template <int Order, class T, class P>
-inline void taylor_order4_bands(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <int Order, class T>
+void taylor_order3_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 0, 9>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
+    taylor_order3_bands<Order, T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <int Order, class T, class P, class S>
+inline void taylor_order4_bands(const S& s, const P* __restrict x, P* __restrict y) {
   y[0] = x[0];
   taylor_band1<Order, T, P>(s, x + 1, y + 1);
   taylor_band2<Order, T, P>(s, x + 4, y + 4);
@@ -5656,8 +5747,15 @@ void taylor_order4(const KernelState<T>& s, const T* const* in, T* const* out) {
   });
 }
 
-template <int Order, class T, class P>
-inline void taylor_order5_bands(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <int Order, class T>
+void taylor_order4_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 0, 16>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
+    taylor_order4_bands<Order, T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <int Order, class T, class P, class S>
+inline void taylor_order5_bands(const S& s, const P* __restrict x, P* __restrict y) {
   y[0] = x[0];
   taylor_band1<Order, T, P>(s, x + 1, y + 1);
   taylor_band2<Order, T, P>(s, x + 4, y + 4);
@@ -5672,8 +5770,15 @@ void taylor_order5(const KernelState<T>& s, const T* const* in, T* const* out) {
   });
 }
 
-template <int Order, class T, class P>
-inline void taylor_order6_bands(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <int Order, class T>
+void taylor_order5_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 0, 25>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
+    taylor_order5_bands<Order, T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <int Order, class T, class P, class S>
+inline void taylor_order6_bands(const S& s, const P* __restrict x, P* __restrict y) {
   y[0] = x[0];
   taylor_band1<Order, T, P>(s, x + 1, y + 1);
   taylor_band2<Order, T, P>(s, x + 4, y + 4);
@@ -5689,8 +5794,15 @@ void taylor_order6(const KernelState<T>& s, const T* const* in, T* const* out) {
   });
 }
 
-template <int Order, class T, class P>
-inline void taylor_order7_bands(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <int Order, class T>
+void taylor_order6_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 0, 36>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
+    taylor_order6_bands<Order, T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <int Order, class T, class P, class S>
+inline void taylor_order7_bands(const S& s, const P* __restrict x, P* __restrict y) {
   y[0] = x[0];
   taylor_band1<Order, T, P>(s, x + 1, y + 1);
   taylor_band2<Order, T, P>(s, x + 4, y + 4);
@@ -5707,8 +5819,15 @@ void taylor_order7(const KernelState<T>& s, const T* const* in, T* const* out) {
   });
 }
 
-template <int Order, class T, class P>
-inline void taylor_order8_bands(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <int Order, class T>
+void taylor_order7_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 0, 49>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
+    taylor_order7_bands<Order, T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <int Order, class T, class P, class S>
+inline void taylor_order8_bands(const S& s, const P* __restrict x, P* __restrict y) {
   y[0] = x[0];
   taylor_band1<Order, T, P>(s, x + 1, y + 1);
   taylor_band2<Order, T, P>(s, x + 4, y + 4);
@@ -5726,8 +5845,15 @@ void taylor_order8(const KernelState<T>& s, const T* const* in, T* const* out) {
   });
 }
 
-template <int Order, class T, class P>
-inline void taylor_order9_bands(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <int Order, class T>
+void taylor_order8_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 0, 64>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
+    taylor_order8_bands<Order, T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <int Order, class T, class P, class S>
+inline void taylor_order9_bands(const S& s, const P* __restrict x, P* __restrict y) {
   y[0] = x[0];
   taylor_band1<Order, T, P>(s, x + 1, y + 1);
   taylor_band2<Order, T, P>(s, x + 4, y + 4);
@@ -5746,8 +5872,15 @@ void taylor_order9(const KernelState<T>& s, const T* const* in, T* const* out) {
   });
 }
 
-template <int Order, class T, class P>
-inline void taylor_order10_bands(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {
+template <int Order, class T>
+void taylor_order9_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 0, 81>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
+    taylor_order9_bands<Order, T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <int Order, class T, class P, class S>
+inline void taylor_order10_bands(const S& s, const P* __restrict x, P* __restrict y) {
   y[0] = x[0];
   taylor_band1<Order, T, P>(s, x + 1, y + 1);
   taylor_band2<Order, T, P>(s, x + 4, y + 4);
@@ -5764,6 +5897,13 @@ template <int Order, class T, int V>
 void taylor_order10(const KernelState<T>& s, const T* const* in, T* const* out) {
   run_lanes<T, V, 0, 100>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
     taylor_order10_bands<Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <int Order, class T>
+void taylor_order10_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 0, 100>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
+    taylor_order10_bands<Order, T, BatchPack<T>>(s, x, y);
   });
 }
 
@@ -5899,46 +6039,136 @@ RotationKernel<T, V> band_kernel(int method, int l) {
 }
 
 template <class T>
-BatchKernel<T> batch_kernel(int order) {
-  switch (order) {
-    case 1: return &zxzxz_order1_batch<T>;
-    case 2: return &zxzxz_order2_batch<T>;
-    case 3: return &zxzxz_order3_batch<T>;
-    case 4: return &zxzxz_order4_batch<T>;
-    case 5: return &zxzxz_order5_batch<T>;
-    case 6: return &zxzxz_order6_batch<T>;
-    case 7: return &zxzxz_order7_batch<T>;
-    case 8: return &zxzxz_order8_batch<T>;
-    case 9: return &zxzxz_order9_batch<T>;
-    case 10: return &zxzxz_order10_batch<T>;
+BatchKernel<T> batch_kernel(int method, int order) {
+  switch (method) {
+    case 0:
+      switch (order) {
+        case 1: return &zxzxz_order1_batch<T>;
+        case 2: return &zxzxz_order2_batch<T>;
+        case 3: return &zxzxz_order3_batch<T>;
+        case 4: return &zxzxz_order4_batch<T>;
+        case 5: return &zxzxz_order5_batch<T>;
+        case 6: return &zxzxz_order6_batch<T>;
+        case 7: return &zxzxz_order7_batch<T>;
+        case 8: return &zxzxz_order8_batch<T>;
+        case 9: return &zxzxz_order9_batch<T>;
+        case 10: return &zxzxz_order10_batch<T>;
+      }
+      break;
+    case 1:
+      switch (order) {
+        case 1: return &taylor_order1_batch<1, T>;
+        case 2: return &taylor_order2_batch<1, T>;
+        case 3: return &taylor_order3_batch<1, T>;
+        case 4: return &taylor_order4_batch<1, T>;
+        case 5: return &taylor_order5_batch<1, T>;
+        case 6: return &taylor_order6_batch<1, T>;
+        case 7: return &taylor_order7_batch<1, T>;
+        case 8: return &taylor_order8_batch<1, T>;
+        case 9: return &taylor_order9_batch<1, T>;
+        case 10: return &taylor_order10_batch<1, T>;
+      }
+      break;
+    case 15:
+      switch (order) {
+        case 1: return &taylor_order1_batch<15, T>;
+        case 2: return &taylor_order2_batch<15, T>;
+        case 3: return &taylor_order3_batch<15, T>;
+        case 4: return &taylor_order4_batch<15, T>;
+        case 5: return &taylor_order5_batch<15, T>;
+        case 6: return &taylor_order6_batch<15, T>;
+        case 7: return &taylor_order7_batch<15, T>;
+        case 8: return &taylor_order8_batch<15, T>;
+        case 9: return &taylor_order9_batch<15, T>;
+        case 10: return &taylor_order10_batch<15, T>;
+      }
+      break;
+    case 2:
+      switch (order) {
+        case 1: return &taylor_order1_batch<2, T>;
+        case 2: return &taylor_order2_batch<2, T>;
+        case 3: return &taylor_order3_batch<2, T>;
+        case 4: return &taylor_order4_batch<2, T>;
+        case 5: return &taylor_order5_batch<2, T>;
+        case 6: return &taylor_order6_batch<2, T>;
+        case 7: return &taylor_order7_batch<2, T>;
+        case 8: return &taylor_order8_batch<2, T>;
+        case 9: return &taylor_order9_batch<2, T>;
+        case 10: return &taylor_order10_batch<2, T>;
+      }
+      break;
   }
   return nullptr;
 }
 
 template <class T>
-BatchKernel<T> batch_band_kernel(int l) {
-  // Double zxzxz bands above the whole-order kernels run the paired X90 rows of
-  // rotation.cpp in apply(), whose sums are ordered differently.
-  if constexpr (std::is_same_v<T, double>) return nullptr;
-  switch (l) {
-    case 10: return &zxzxz_band10_batch<T>;
-    case 11: return &zxzxz_band11_batch<T>;
-    case 12: return &zxzxz_band12_batch<T>;
-    case 13: return &zxzxz_band13_batch<T>;
-    case 14: return &zxzxz_band14_batch<T>;
-    case 15: return &zxzxz_band15_batch<T>;
-    case 16: return &zxzxz_band16_batch<T>;
-    case 17: return &zxzxz_band17_batch<T>;
-    case 18: return &zxzxz_band18_batch<T>;
-    case 19: return &zxzxz_band19_batch<T>;
+BatchKernel<T> batch_band_kernel(int method, int l) {
+  switch (method) {
+    case 0:
+      if constexpr (std::is_same_v<T, double>) return nullptr;
+      switch (l) {
+        case 10: return &zxzxz_band10_batch<T>;
+        case 11: return &zxzxz_band11_batch<T>;
+        case 12: return &zxzxz_band12_batch<T>;
+        case 13: return &zxzxz_band13_batch<T>;
+        case 14: return &zxzxz_band14_batch<T>;
+        case 15: return &zxzxz_band15_batch<T>;
+        case 16: return &zxzxz_band16_batch<T>;
+        case 17: return &zxzxz_band17_batch<T>;
+        case 18: return &zxzxz_band18_batch<T>;
+        case 19: return &zxzxz_band19_batch<T>;
+      }
+      break;
+    case 1:
+      switch (l) {
+        case 10: return &taylor_band10_batch<1, T>;
+        case 11: return &taylor_band11_batch<1, T>;
+        case 12: return &taylor_band12_batch<1, T>;
+        case 13: return &taylor_band13_batch<1, T>;
+        case 14: return &taylor_band14_batch<1, T>;
+        case 15: return &taylor_band15_batch<1, T>;
+        case 16: return &taylor_band16_batch<1, T>;
+        case 17: return &taylor_band17_batch<1, T>;
+        case 18: return &taylor_band18_batch<1, T>;
+        case 19: return &taylor_band19_batch<1, T>;
+      }
+      break;
+    case 15:
+      switch (l) {
+        case 10: return &taylor_band10_batch<15, T>;
+        case 11: return &taylor_band11_batch<15, T>;
+        case 12: return &taylor_band12_batch<15, T>;
+        case 13: return &taylor_band13_batch<15, T>;
+        case 14: return &taylor_band14_batch<15, T>;
+        case 15: return &taylor_band15_batch<15, T>;
+        case 16: return &taylor_band16_batch<15, T>;
+        case 17: return &taylor_band17_batch<15, T>;
+        case 18: return &taylor_band18_batch<15, T>;
+        case 19: return &taylor_band19_batch<15, T>;
+      }
+      break;
+    case 2:
+      switch (l) {
+        case 10: return &taylor_band10_batch<2, T>;
+        case 11: return &taylor_band11_batch<2, T>;
+        case 12: return &taylor_band12_batch<2, T>;
+        case 13: return &taylor_band13_batch<2, T>;
+        case 14: return &taylor_band14_batch<2, T>;
+        case 15: return &taylor_band15_batch<2, T>;
+        case 16: return &taylor_band16_batch<2, T>;
+        case 17: return &taylor_band17_batch<2, T>;
+        case 18: return &taylor_band18_batch<2, T>;
+        case 19: return &taylor_band19_batch<2, T>;
+      }
+      break;
   }
   return nullptr;
 }
 
-template BatchKernel<float> batch_kernel<float>(int);
-template BatchKernel<float> batch_band_kernel<float>(int);
-template BatchKernel<double> batch_kernel<double>(int);
-template BatchKernel<double> batch_band_kernel<double>(int);
+template BatchKernel<float> batch_kernel<float>(int, int);
+template BatchKernel<float> batch_band_kernel<float>(int, int);
+template BatchKernel<double> batch_kernel<double>(int, int);
+template BatchKernel<double> batch_band_kernel<double>(int, int);
 template RotationKernel<float, 1> rotation_kernel<float, 1>(int, int);
 template RotationKernel<float, 1> band_kernel<float, 1>(int, int);
 template RotationKernel<float, 3> rotation_kernel<float, 3>(int, int);

@@ -104,11 +104,11 @@ void taylor_band(std::ostream& o, const RotationHelpers& h, int l) {
   auto off2 = [&](int j) { return j >= 2 && j < size ? h.ddy_off2[first + j] : 0.0; };
   auto t = [](int j) { return indexed("t", j); };
   o << "// Band " << l << " of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) (paper 001, Sec. 3).\n"
-    << "template <int Order, class T, class P>\n"
+    << "template <int Order, class T, class P, class S>\n"
     << "inline void taylor_band" << l
-    << "(const KernelState<T>& s, const P* __restrict x, P* __restrict y) {\n";
+    << "(const S& s, const P* __restrict x, P* __restrict y) {\n";
   z_rotation(o, l, "g", "x", true, "t", false);
-  o << "  const T b = s.beta, h = s.half_beta2;\n  (void)h;\n";
+  o << "  const auto b = s.beta, h = s.half_beta2;\n  (void)h;\n";
   for (int j = 0; j < size; ++j) {
     std::vector<std::pair<double, std::string>> d1;
     if (j > 0) d1.emplace_back(sub(j), t(j - 1));
@@ -134,10 +134,10 @@ void order_function(std::ostream& o, bool taylor, int n) {
   const std::string name = (taylor ? "taylor_order" : "zxzxz_order") + std::to_string(n);
   // Bands 0..n-1 on lanes P; then the entry point: one vector works in place on the
   // caller's arrays, three are gathered into lanes first.
-  if (taylor) o << "template <int Order, class T, class P>\n";
+  // S: KernelState<T>, or BatchState<T> (a rotation per lane).
+  if (taylor) o << "template <int Order, class T, class P, class S>\n";
   else o << "template <class T, class P, class S>\n";
-  o << "inline void " << name << "_bands(const " << (taylor ? "KernelState<T>" : "S")
-    << "& s, const P* __restrict x, P* __restrict y) {\n"
+  o << "inline void " << name << "_bands(const S& s, const P* __restrict x, P* __restrict y) {\n"
     << "  y[0] = x[0];\n";
   for (int l = 1; l < n; ++l) {
     const std::string args =
@@ -158,11 +158,10 @@ void order_function(std::ostream& o, bool taylor, int n) {
     << "  run_lanes<T, V, 0, " << count << ">(in, out, [&s](const auto* __restrict x, auto* __restrict y) {\n"
     << "    " << name << "_bands<" << targs << "std::remove_cvref_t<decltype(*y)>>(s, x, y);\n"
     << "  });\n}\n\n";
-  if (taylor) return;
-  o << "template <class T>\n"
+  o << (taylor ? "template <int Order, class T>\n" : "template <class T>\n")
     << "void " << name << "_batch(const BatchState<T>& s, const T* const* in, T* const* out) {\n"
     << "  run_batch_lanes<T, 0, " << count << ">(in, out, [&s](const auto* __restrict x, auto* __restrict y) {\n"
-    << "    " << name << "_bands<T, BatchPack<T>>(s, x, y);\n"
+    << "    " << name << "_bands<" << targs << "BatchPack<T>>(s, x, y);\n"
     << "  });\n}\n\n";
 }
 
@@ -178,12 +177,11 @@ void band_entry(std::ostream& o, bool taylor, int l) {
     << ">(in, out, [&s](const auto* __restrict x, auto* __restrict y) {\n"
     << "    " << band << "<" << targs << "std::remove_cvref_t<decltype(*y)>>(s, x, y);\n"
     << "  });\n}\n\n";
-  if (taylor) return;
-  o << "template <class T>\n"
+  o << (taylor ? "template <int Order, class T>\n" : "template <class T>\n")
     << "void " << band << "_batch(const BatchState<T>& s, const T* const* in, T* const* out) {\n"
     << "  run_batch_lanes<T, " << first << ", " << size
     << ">(in, out, [&s](const auto* __restrict x, auto* __restrict y) {\n"
-    << "    " << band << "<T, BatchPack<T>>(s, x, y);\n"
+    << "    " << band << "<" << targs << "BatchPack<T>>(s, x, y);\n"
     << "  });\n}\n\n";
 }
 
@@ -243,23 +241,35 @@ std::string rotation_kernels_source() {
   }
   o << "  }\n  return nullptr;\n}\n\n";
   o << "template <class T>\n"
-    << "BatchKernel<T> batch_kernel(int order) {\n"
-    << "  switch (order) {\n";
-  for (int n = 1; n <= kKernelMaxOrder; ++n)
-    o << "    case " << n << ": return &zxzxz_order" << n << "_batch<T>;\n";
+    << "BatchKernel<T> batch_kernel(int method, int order) {\n"
+    << "  switch (method) {\n";
+  for (int k = 0; k < 4; ++k) {
+    o << "    case " << methods[k][0] << ":\n"
+      << "      switch (order) {\n";
+    for (int n = 1; n <= kKernelMaxOrder; ++n)
+      o << "        case " << n << ": return &" << (k == 0 ? "zxzxz_order" : "taylor_order") << n << "_batch<"
+        << methods[k][1] << "T>;\n";
+    o << "      }\n      break;\n";
+  }
   o << "  }\n  return nullptr;\n}\n\n";
   o << "template <class T>\n"
-    << "BatchKernel<T> batch_band_kernel(int l) {\n"
-    << "  // Double zxzxz bands above the whole-order kernels run the paired X90 rows of\n"
-    << "  // rotation.cpp in apply(), whose sums are ordered differently.\n"
-    << "  if constexpr (std::is_same_v<T, double>) return nullptr;\n"
-    << "  switch (l) {\n";
-  for (int l = kKernelMaxOrder; l <= kBandKernelMaxBand; ++l)
-    o << "    case " << l << ": return &zxzxz_band" << l << "_batch<T>;\n";
+    << "BatchKernel<T> batch_band_kernel(int method, int l) {\n"
+    << "  switch (method) {\n";
+  for (int k = 0; k < 4; ++k) {
+    o << "    case " << methods[k][0] << ":\n";
+    // As in band_kernel: apply() runs the paired X90 rows there, whose sums are
+    // ordered differently.
+    if (k == 0) o << "      if constexpr (std::is_same_v<T, double>) return nullptr;\n";
+    o << "      switch (l) {\n";
+    for (int l = kKernelMaxOrder; l <= kBandKernelMaxBand; ++l)
+      o << "        case " << l << ": return &" << (k == 0 ? "zxzxz_band" : "taylor_band") << l << "_batch<"
+        << methods[k][1] << "T>;\n";
+    o << "      }\n      break;\n";
+  }
   o << "  }\n  return nullptr;\n}\n\n";
   for (const char* type : {"float", "double"})
-    o << "template BatchKernel<" << type << "> batch_kernel<" << type << ">(int);\n"
-      << "template BatchKernel<" << type << "> batch_band_kernel<" << type << ">(int);\n";
+    o << "template BatchKernel<" << type << "> batch_kernel<" << type << ">(int, int);\n"
+      << "template BatchKernel<" << type << "> batch_band_kernel<" << type << ">(int, int);\n";
   for (const char* type : {"float", "double"})
     for (int v : {1, 3})
       o << "template RotationKernel<" << type << ", " << v << "> rotation_kernel<" << type << ", " << v
