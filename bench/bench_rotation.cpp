@@ -13,10 +13,10 @@
 //     vectors  1 | 3 (three = an RGB light, one apply_rgb call)
 //   items_per_second = rotations per second; label of `auto` = the method it chose.
 //
-//   BM_RotateBatch/<type>/<method>/N: the same rotations (large tilt, one vector each)
-//     through rotate_batch, kRotations (rotation, vector) pairs per call, matrices from
-//     the quaternions inside the timed loop; items_per_second = rotations per second,
-//     comparable with BM_Rotate/<type>/<method>/large/1/N.
+//   BM_RotateBatch/<type>/<method>/<tilt>/N: the same rotations (one vector each) through
+//     rotate_batch, kRotations (rotation, vector) pairs per call, matrices from the
+//     quaternions inside the timed loop; items_per_second = rotations per second,
+//     comparable with BM_Rotate/<type>/<method>/<tilt>/1/N.
 //
 // Run: build/bench/bench_rotation --benchmark_filter='BM_Rotate/double/.*/1/'
 // Figures, the machine and the peer comparison: docs/benchmarks.md, "Rotations".
@@ -94,10 +94,10 @@ void BM_Rotate(benchmark::State& state, RotationMethod method, bool small_tilt, 
 }
 
 template <class T>
-void BM_RotateBatch(benchmark::State& state, RotationMethod method) {
+void BM_RotateBatch(benchmark::State& state, RotationMethod method, bool small_tilt) {
   const int order = static_cast<int>(state.range(0));
   shtool::ShRotation<T> rotation(order, helpers());
-  const auto q = shtool::bench::random_quaternions<T>();
+  const auto q = shtool::bench::random_quaternions<T>(small_tilt ? kSmallTilt : -1);
   const int count = static_cast<int>(q.size());
   std::vector<T> in;  // count vectors of N^2, one after the other
   for (const auto& v : shtool::bench::random_sh_vectors<T>(order, count)) in.insert(in.end(), v.begin(), v.end());
@@ -135,11 +135,13 @@ void register_all(const char* type) {
         BM_Rotate<T>(s, c.method, c.small_tilt, vectors);
       })->DenseRange(kMinOrder, kMaxOrder);
     }
-  for (RotationMethod m : {RotationMethod::zxzxz, RotationMethod::automatic}) {
-    const std::string name =
-        std::string("BM_RotateBatch/") + type + "/" + std::string(shtool::rotation_method_name(m));
-    benchmark::RegisterBenchmark(name.c_str(), [m](benchmark::State& s) { BM_RotateBatch<T>(s, m); })
-        ->DenseRange(kMinOrder, kMaxOrder);
+  for (const Case& c : cases) {
+    const std::string name = std::string("BM_RotateBatch/") + type + "/" +
+                             std::string(shtool::rotation_method_name(c.method)) + "/" +
+                             (c.small_tilt ? "small" : "large");
+    benchmark::RegisterBenchmark(name.c_str(), [c](benchmark::State& s) {
+      BM_RotateBatch<T>(s, c.method, c.small_tilt);
+    })->DenseRange(kMinOrder, kMaxOrder);
   }
 }
 

@@ -87,11 +87,11 @@ class ShRotation;
 // coefficients stored contiguously (in and out at least rotations.size() N^2 long, else
 // std::invalid_argument; they must not overlap). Same method choice as ShRotation::set,
 // and the same results bit for bit as set() + apply() of each pair; afterwards
-// `rotation` holds the last rotation. Where every rotation of a group resolves to zxzxz
-// (N <= 10; float N <= 20), the group runs one rotation per SIMD lane (4 in float, 2 in
-// double): the setup of several rotations overlaps and the kernel's instructions are
-// shared (docs/rotation.md, "Many rotations"). Returns false (like set()) if the method
-// needs helpers that are missing.
+// `rotation` holds the last rotation. Where every rotation of a group resolves to one
+// method other than the reference (N <= 20; double zxzxz N <= 10), the group runs one
+// rotation per SIMD lane (4 in float, 2 in double): the setup of several rotations
+// overlaps and the kernel's instructions are shared (docs/rotation.md, "Many
+// rotations"). Returns false (like set()) if the method needs helpers that are missing.
 template <class T>
 bool rotate_batch(ShRotation<T>& rotation, std::span<const Mat3<T>> rotations,
                   std::span<const T> in, std::span<T> out,
