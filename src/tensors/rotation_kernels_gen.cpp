@@ -185,6 +185,27 @@ void band_entry(std::ostream& o, bool taylor, int l) {
     << "  });\n}\n\n";
 }
 
+// A lookup from (method, order) or (method, band l) to the address of a generated
+// function: `signature` opens it, then a switch over the four methods and over the
+// whole orders 1..kKernelMaxOrder (orders) or the bands kKernelMaxOrder..kBandKernelMaxBand
+// returns &<zxzxz|taylor>_<order|band><n><suffix><[Order, ]targs>.
+void lookup_function(std::ostream& o, const std::string& signature, const char* var, bool orders,
+                     const std::string& suffix, const std::string& targs, bool no_double_zxzxz) {
+  const char* methods[4][2] = {{"0", ""}, {"1", "1, "}, {"15", "15, "}, {"2", "2, "}};
+  const int lo = orders ? 1 : kKernelMaxOrder, hi = orders ? kKernelMaxOrder : kBandKernelMaxBand;
+  o << signature << "  switch (method) {\n";
+  for (int k = 0; k < 4; ++k) {
+    o << "    case " << methods[k][0] << ":\n";
+    if (k == 0 && no_double_zxzxz) o << "      if constexpr (std::is_same_v<T, double>) return nullptr;\n";
+    o << "      switch (" << var << ") {\n";
+    for (int n = lo; n <= hi; ++n)
+      o << "        case " << n << ": return &" << (k == 0 ? "zxzxz_" : "taylor_") << (orders ? "order" : "band") << n
+        << suffix << "<" << methods[k][1] << targs << ">;\n";
+    o << "      }\n      break;\n";
+  }
+  o << "  }\n  return nullptr;\n}\n\n";
+}
+
 }  // namespace
 
 std::string rotation_kernels_source() {
@@ -209,64 +230,21 @@ std::string rotation_kernels_source() {
   }
   for (int n = 1; n <= kKernelMaxOrder; ++n) order_function(o, false, n);
   for (int n = 1; n <= kKernelMaxOrder; ++n) order_function(o, true, n);
-  o << "}  // namespace\n\n"
-    << "template <class T, int V>\n"
-    << "RotationKernel<T, V> rotation_kernel(int method, int order) {\n"
-    << "  if (order < 1) return nullptr;\n"
-    << "  if (order > kKernelMaxOrder) order = kKernelMaxOrder;\n"
-    << "  switch (method) {\n";
-  const char* methods[4][2] = {{"0", ""}, {"1", "1, "}, {"15", "15, "}, {"2", "2, "}};
-  for (int k = 0; k < 4; ++k) {
-    o << "    case " << methods[k][0] << ":\n"
-      << "      switch (order) {\n";
-    for (int n = 1; n <= kKernelMaxOrder; ++n)
-      o << "        case " << n << ": return &" << (k == 0 ? "zxzxz_order" : "taylor_order") << n << "<"
-        << methods[k][1] << "T, V>;\n";
-    o << "      }\n      break;\n";
-  }
-  o << "  }\n  return nullptr;\n}\n\n";
-  o << "template <class T, int V>\n"
-    << "RotationKernel<T, V> band_kernel(int method, int l) {\n"
-    << "  switch (method) {\n";
-  for (int k = 0; k < 4; ++k) {
-    o << "    case " << methods[k][0] << ":\n";
-    // Double zxzxz bands above the whole-order kernels run the paired X90 rows of
-    // rotation.cpp, so their band kernels would be dead code: not instantiated.
-    if (k == 0) o << "      if constexpr (std::is_same_v<T, double>) return nullptr;\n";
-    o << "      switch (l) {\n";
-    for (int l = kKernelMaxOrder; l <= kBandKernelMaxBand; ++l)
-      o << "        case " << l << ": return &" << (k == 0 ? "zxzxz_band" : "taylor_band") << l << "_entry<"
-        << methods[k][1] << "T, V>;\n";
-    o << "      }\n      break;\n";
-  }
-  o << "  }\n  return nullptr;\n}\n\n";
-  o << "template <class T>\n"
-    << "BatchKernel<T> batch_kernel(int method, int order) {\n"
-    << "  switch (method) {\n";
-  for (int k = 0; k < 4; ++k) {
-    o << "    case " << methods[k][0] << ":\n"
-      << "      switch (order) {\n";
-    for (int n = 1; n <= kKernelMaxOrder; ++n)
-      o << "        case " << n << ": return &" << (k == 0 ? "zxzxz_order" : "taylor_order") << n << "_batch<"
-        << methods[k][1] << "T>;\n";
-    o << "      }\n      break;\n";
-  }
-  o << "  }\n  return nullptr;\n}\n\n";
-  o << "template <class T>\n"
-    << "BatchKernel<T> batch_band_kernel(int method, int l) {\n"
-    << "  switch (method) {\n";
-  for (int k = 0; k < 4; ++k) {
-    o << "    case " << methods[k][0] << ":\n";
-    // As in band_kernel: apply() runs the paired X90 rows there, whose sums are
-    // ordered differently.
-    if (k == 0) o << "      if constexpr (std::is_same_v<T, double>) return nullptr;\n";
-    o << "      switch (l) {\n";
-    for (int l = kKernelMaxOrder; l <= kBandKernelMaxBand; ++l)
-      o << "        case " << l << ": return &" << (k == 0 ? "zxzxz_band" : "taylor_band") << l << "_batch<"
-        << methods[k][1] << "T>;\n";
-    o << "      }\n      break;\n";
-  }
-  o << "  }\n  return nullptr;\n}\n\n";
+  o << "}  // namespace\n\n";
+  lookup_function(o,
+                  "template <class T, int V>\nRotationKernel<T, V> rotation_kernel(int method, int order) {\n"
+                  "  if (order < 1) return nullptr;\n"
+                  "  if (order > kKernelMaxOrder) order = kKernelMaxOrder;\n",
+                  "order", true, "", "T, V", false);
+  // Double zxzxz bands above the whole-order kernels run the paired X90 rows of
+  // rotation.cpp, so their band kernels would be dead code (and batches running them
+  // would not match apply() bit for bit): not instantiated.
+  lookup_function(o, "template <class T, int V>\nRotationKernel<T, V> band_kernel(int method, int l) {\n", "l",
+                  false, "_entry", "T, V", true);
+  lookup_function(o, "template <class T>\nBatchKernel<T> batch_kernel(int method, int order) {\n", "order", true,
+                  "_batch", "T", false);
+  lookup_function(o, "template <class T>\nBatchKernel<T> batch_band_kernel(int method, int l) {\n", "l", false,
+                  "_batch", "T", true);
   for (const char* type : {"float", "double"})
     o << "template BatchKernel<" << type << "> batch_kernel<" << type << ">(int, int);\n"
       << "template BatchKernel<" << type << "> batch_band_kernel<" << type << ">(int, int);\n";
