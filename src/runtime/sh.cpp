@@ -60,11 +60,14 @@ inline void walk_basis(int order, const Vec3<T>& w, Visitor&& visit) {
   const RecurrenceTable<T>& tab = recurrence_table<T>();
   const T x = w.x(), y = w.y(), z = w.z();
 
-  // Q_{l-2}^m, Q_{l-1}^m, Q_l^m for every m (and their z derivatives).
+  // Q_{l-2}^m, Q_{l-1}^m, Q_l^m for every m (and their z derivatives), in three buffers
+  // whose roles rotate after each band (copying them instead became `rep movs` or a
+  // memmove call per band, which dominated at low orders).
   // Left uninitialised on purpose: entry m is written before it is read, and zeroing
   // 8 x kMaxOrder values would dominate the cost at low orders.
-  std::array<T, kMaxOrder> q2, q1, q0;
-  std::array<T, kMaxOrder> dq2, dq1, dq0;
+  std::array<T, kMaxOrder> qa, qb, qc, dqa, dqb, dqc;
+  T *q2 = qa.data(), *q1 = qb.data(), *q0 = qc.data();
+  T *dq2 = dqa.data(), *dq1 = dqb.data(), *dq0 = dqc.data();
   // (x + i y)^m
   std::array<T, kMaxOrder> cm, sm;
   cm[0] = 1;
@@ -97,13 +100,15 @@ inline void walk_basis(int order, const Vec3<T>& w, Visitor&& visit) {
       const int ma = m < 0 ? -m : m;
       visit(l, m, q0[ma], dq0[ma], cm, sm);
     }
-    for (int m = 0; m <= l; ++m) {
-      q2[m] = q1[m];
-      q1[m] = q0[m];
-      if constexpr (kGradient) {
-        dq2[m] = dq1[m];
-        dq1[m] = dq0[m];
-      }
+    T* const q_free = q2;  // next band overwrites every entry it reads
+    q2 = q1;
+    q1 = q0;
+    q0 = q_free;
+    if constexpr (kGradient) {
+      T* const dq_free = dq2;
+      dq2 = dq1;
+      dq1 = dq0;
+      dq0 = dq_free;
     }
   }
 }
