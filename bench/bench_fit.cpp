@@ -24,6 +24,9 @@
 //                                 sh_rotate_dot ShRotation set (automatic method, random
 //                                               rotation) + apply + n^2 dot: what a point
 //                                               costs when SH transfer is rotated instead
+//   BM_EvalSh/<type>/N          the order-N SH basis at one direction (eval_sh), the inner
+//                               step of the transfer simulation; 1024 random directions
+//                               per iteration, per_eval = time per direction.
 //   BM_TableBuild/<type>/res:R  building the light table (per lighting change); counters
 //                               err_band1/err_band5: worst look-up error over 50,000 random
 //                               directions relative to the band's largest value.
@@ -243,6 +246,25 @@ void BM_TableBuild(benchmark::State& state) {
 }
 
 template <class T>
+void BM_EvalSh(benchmark::State& state) {
+  const int order = static_cast<int>(state.range(0));
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> gauss;
+  std::vector<shtool::Vec3<T>> dirs(1024);
+  for (auto& d : dirs) d = shtool::Vec3<double>(gauss(rng), gauss(rng), gauss(rng)).normalized().cast<T>();
+  std::vector<T> out(static_cast<std::size_t>(order * order));
+  for (auto _ : state) {
+    for (const auto& d : dirs) {
+      shtool::eval_sh<T>(order, d, out);
+      benchmark::DoNotOptimize(out.data());
+    }
+    benchmark::ClobberMemory();
+  }
+  state.counters["per_eval"] = benchmark::Counter(static_cast<double>(state.iterations() * dirs.size()),
+                                                  benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+
+template <class T>
 void register_shading(const std::string& type) {
   const std::vector<long> lobe_counts = {1, 2, 4, 6};
   auto add = [&](const std::string& name, ShadeMethod method) {
@@ -257,6 +279,7 @@ void register_shading(const std::string& type) {
   for (long n : lobe_counts) exact->Args({n, 0});
   add("sh_dot", ShadeMethod::sh_dot)->ArgNames({"lobes", "res"})->Args({0, 0});
   add("sh_rotate_dot", ShadeMethod::sh_rotate_dot)->ArgNames({"lobes", "res"})->Args({0, 0});
+  benchmark::RegisterBenchmark(("BM_EvalSh/" + type).c_str(), BM_EvalSh<T>)->Arg(2)->Arg(4)->Arg(6)->Arg(8)->Arg(16);
   auto* build = benchmark::RegisterBenchmark(("BM_TableBuild/" + type).c_str(), BM_TableBuild<T>);
   build->ArgName("res")->Unit(benchmark::kMicrosecond);
   for (long r : {8, 16, 32, 64, 128}) build->Arg(r);
