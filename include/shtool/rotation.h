@@ -39,6 +39,9 @@ namespace detail {
 // the generated kernels (src/runtime/rotation_kernels.h); here because apply() calls the
 // kernel of a whole rotation inline.
 template <class T>
+struct BatchState;  // src/runtime/rotation_kernels.h
+
+template <class T>
 struct KernelState {
   const T* r;
   const T *ca, *sa, *cb, *sb, *cg, *sg;
@@ -227,6 +230,11 @@ class ShRotation {
   // reference method), else null.
   Kernel<1> whole_kernel_ = nullptr;
   Kernel<3> whole_kernel3_ = nullptr;
+  // rotate_batch's lane kernels per method (zxzxz, taylor1, taylor1.5, taylor2): the
+  // whole-order kernel, then one per band from detail::kKernelMaxOrder on; empty for a
+  // method without lanes at this order. Looked up once, here.
+  using BatchKernel = void (*)(const detail::BatchState<T>&, const T* const*, T* const*);
+  std::vector<BatchKernel> batch_kernels_[4];
   Kernel<3> kernel3_[4] = {};
   int kernel_order_ = 0;  // bands [0, kernel_order_) are covered by the kernels
   // Helpers converted to T once (float rotations must not convert in the hot loop), for

@@ -163,6 +163,15 @@ ShRotation<T>::ShRotation(int order, std::shared_ptr<const RotationHelpers> help
       if (!kernel1_[k] || !kernel3_[k]) throw std::logic_error("no rotation kernel for this order");
     }
     kernel_order_ = std::min(order, detail::kKernelMaxOrder);
+    if (order <= detail::kBandKernelMaxBand + 1) {
+      for (int k = 0; k < 4; ++k) {
+        std::vector<BatchKernel>& v = batch_kernels_[k];
+        v.push_back(detail::batch_kernel<T>(kKernelMethod[k], kernel_order_));
+        for (int l = detail::kKernelMaxOrder; l < order; ++l)
+          v.push_back(detail::batch_band_kernel<T>(kKernelMethod[k], l));
+        if (std::find(v.begin(), v.end(), nullptr) != v.end()) v.clear();
+      }
+    }
     pair_from_ = order;
     if constexpr (std::is_same_v<T, double>) {
       if (order > detail::kKernelMaxOrder) {
@@ -720,17 +729,6 @@ std::size_t ShRotation<T>::rotate_lanes(std::span<const Mat3<T>> rotations, cons
   constexpr int B = detail::kBatchLanes<T>;
   constexpr int kMaxBatchOrder = detail::kBandKernelMaxBand + 1;
   if (!helpers_ || order_ > kMaxBatchOrder || method == RotationMethod::reference) return 0;
-  // Per method (zxzxz, taylor1, taylor1.5, taylor2): the whole-order kernel up to
-  // kKernelMaxOrder, then one kernel per band; a method with a missing part runs one
-  // rotation at a time.
-  detail::BatchKernel<T> kernels[4][kMaxBatchOrder] = {};
-  bool lanes[4];
-  for (int k = 0; k < 4; ++k) {
-    kernels[k][0] = detail::batch_kernel<T>(kKernelMethod[k], std::min(order_, detail::kKernelMaxOrder));
-    lanes[k] = kernels[k][0] != nullptr;
-    for (int l = detail::kKernelMaxOrder; l < order_; ++l)
-      lanes[k] = (kernels[k][l] = detail::batch_band_kernel<T>(kKernelMethod[k], l)) && lanes[k];
-  }
   const std::size_t n = static_cast<std::size_t>(sh_count(order_)), groups = rotations.size() / B;
   // Per lane: R column-major, and the tables (and tilt) set() would compute, by the same
   // operations, so each lane's kernel input is bit-identical to set()'s.
@@ -751,7 +749,8 @@ std::size_t ShRotation<T>::rotate_lanes(std::span<const Mat3<T>> rotations, cons
                   : chosen == RotationMethod::taylor1  ? 1
                   : chosen == RotationMethod::taylor15 ? 2
                                                        : 3;
-    if (!same || !lanes[k]) {  // one at a time
+    const std::vector<BatchKernel>& kernels = batch_kernels_[k];
+    if (!same || kernels.empty()) {  // one at a time
       for (int j = 0; j < B; ++j) {
         set(group[j], method, tolerance);
         apply(std::span<const T>(src[j], n), std::span<T>(dst[j], n));
@@ -771,8 +770,7 @@ std::size_t ShRotation<T>::rotate_lanes(std::span<const Mat3<T>> rotations, cons
         state.half_beta2 = T(0.5) * state.beta * state.beta;
       }
     }
-    kernels[k][0](state, src, dst);
-    for (int l = detail::kKernelMaxOrder; l < order_; ++l) kernels[k][l](state, src, dst);
+    for (const BatchKernel kernel : kernels) kernel(state, src, dst);  // whole order, then bands
   }
   return groups * B;
 }
