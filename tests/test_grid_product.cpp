@@ -6,6 +6,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstdlib>
+#include <initializer_list>
 #include <new>
 #include <numbers>
 #include <random>
@@ -77,38 +78,34 @@ struct Case {
   int order, inputs;
 };
 
-TEST(GridProduct, MultipleAgainstQuadratureDouble) {
-  // k = inputs + 1 up to 8, N up to 20.
-  for (const Case c : {Case{1, 2}, Case{2, 7}, Case{3, 2}, Case{4, 3}, Case{5, 1}, Case{6, 5},
-                       Case{10, 2}, Case{10, 7}, Case{13, 4}, Case{20, 2}, Case{20, 3},
-                       Case{20, 5}, Case{20, 7}}) {
-    const auto f = random_inputs(c.order, c.inputs, 100 + c.order * 10 + c.inputs);
+// Product of `inputs` + 1 random vectors in T against the quadrature projection, by
+// each azimuthal method; errors recorded as test properties (prefix + "_rel_l2_N.._k..").
+template <class T>
+void check_multiple(std::initializer_list<Case> cases, int seed_base, int seed_order, double tol,
+                    const std::string& prefix) {
+  for (const Case c : cases) {
+    const auto f = random_inputs(c.order, c.inputs, seed_base + c.order * seed_order + c.inputs);
     const std::vector<double> ref = reference_product(c.order, f);
     for (const GridAzimuth a : kMethods) {
-      const double err = relative_l2(grid_multiply<double>(c.order, f, a), ref);
-      EXPECT_LT(err, kTolDouble) << name(a) << " N " << c.order << " k " << c.inputs + 1 << ": "
-                                 << sci(err);
-      RecordProperty(name(a) + "_rel_l2_N" + std::to_string(c.order) + "_k" +
-                         std::to_string(c.inputs + 1),
-                     sci(err));
+      const double err = relative_l2(grid_multiply<T>(c.order, f, a), ref);
+      EXPECT_LT(err, tol) << name(a) << " N " << c.order << " k " << c.inputs + 1 << ": " << sci(err);
+      ::testing::Test::RecordProperty(name(a) + prefix + "_rel_l2_N" + std::to_string(c.order) + "_k" +
+                                          std::to_string(c.inputs + 1),
+                                      sci(err));
     }
   }
 }
 
+TEST(GridProduct, MultipleAgainstQuadratureDouble) {
+  // k = inputs + 1 up to 8, N up to 20.
+  check_multiple<double>({Case{1, 2}, Case{2, 7}, Case{3, 2}, Case{4, 3}, Case{5, 1}, Case{6, 5}, Case{10, 2},
+                          Case{10, 7}, Case{13, 4}, Case{20, 2}, Case{20, 3}, Case{20, 5}, Case{20, 7}},
+                         100, 10, kTolDouble, "");
+}
+
 TEST(GridProduct, MultipleAgainstQuadratureFloat) {
-  for (const Case c : {Case{3, 2}, Case{5, 2}, Case{8, 2}, Case{12, 3}, Case{20, 2}, Case{20, 3},
-                       Case{20, 7}}) {
-    const auto f = random_inputs(c.order, c.inputs, 7 + c.order + c.inputs);
-    const std::vector<double> ref = reference_product(c.order, f);
-    for (const GridAzimuth a : kMethods) {
-      const double err = relative_l2(grid_multiply<float>(c.order, f, a), ref);
-      EXPECT_LT(err, kTolFloat) << name(a) << " N " << c.order << " k " << c.inputs + 1 << ": "
-                                << sci(err);
-      RecordProperty(name(a) + "_float_rel_l2_N" + std::to_string(c.order) + "_k" +
-                         std::to_string(c.inputs + 1),
-                     sci(err));
-    }
-  }
+  check_multiple<float>({Case{3, 2}, Case{5, 2}, Case{8, 2}, Case{12, 3}, Case{20, 2}, Case{20, 3}, Case{20, 7}}, 7,
+                        1, kTolFloat, "_float");
 }
 
 TEST(GridProduct, ClosedFormSquareOfY10) {
