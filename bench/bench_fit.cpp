@@ -1,4 +1,4 @@
-// fit-zh side by side (issue 6, "Speed"): transfer simulation, ZH fitting and shading.
+// fit-zh side by side: transfer simulation, ZH fitting and shading.
 //
 //   BM_Transfer/rays:R          shadowed order-6 transfer of data/spot.obj on ONE thread
 //                               (compute_transfer, cosine-weighted rays); per_vertex = time

@@ -1,4 +1,4 @@
-// SH triple and k-multiple products, side by side (paper 003, Sec. 5.1):
+// SH triple and k-multiple products, side by side ([3] Sec. 5.1):
 //   BM_Triple/<method>/<type>/N         g = f1 (x) f2 by the tripling tensor, the Fourier
 //                                       method, the grid (quadrature) and auto (default)
 //   BM_Multiple/<method>/<type>/k/N     k - 1 inputs: accurate (grid; Fourier with divide
@@ -38,7 +38,7 @@ void BM_TripleTripling(benchmark::State& state) {
   state.counters["pairs"] = static_cast<double>(product.pair_count());
 }
 
-// Fourier (paper 003) and grid products share the interface and the grid counter
+// Fourier ([3]) and grid products share the interface and the grid counter
 // (theta points * 1000 + phi points).
 template <class T, template <class> class Product>
 void BM_TripleOnGrid(benchmark::State& state) {

@@ -1,4 +1,4 @@
-// SH rotations, every method side by side (issue 4, "Speed"): rotations per second for
+// SH rotations, every method side by side: rotations per second for
 // N = 2..20, one rotation = build from a unit quaternion (matrix_from_quaternion +
 // ShRotation::set) and apply it to one vector, or to three (an RGB light).
 //

@@ -1,4 +1,4 @@
-// ZHF rotation (paper 000, Sec. 7.1) against zxzxz and the reference, side by side in one
+// ZHF rotation ([1] Sec. 7.1) against zxzxz and the reference, side by side in one
 // run: rotations per second for N = 2..10. One rotation = build from a unit quaternion
 // (matrix_from_quaternion + set) and apply to one vector.
 //

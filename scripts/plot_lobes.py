@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Sparsity figures of the ZHF lobe tables for docs/lobes.md (paper 000, Table I, Fig. 3).
+"""Sparsity figures of the ZHF lobe tables for docs/lobes.md ([1] Table I, Fig. 3).
 
     /usr/bin/python3 scripts/plot_lobes.py                      # figures + markdown table
     /usr/bin/python3 scripts/plot_lobes.py --check --shtool build/shtool   # self-check only
@@ -14,7 +14,7 @@ tables/zhf-shared-N*.shtb (shared lobes, Sec. 6) with tests/read_table_numpy.py,
 and prints the numbers as a markdown table on stdout.
 
 Everything is recomputed here with numpy, independently of the C++ code:
-  - real SH in the DESIGN.md convention, through the derivatives of the Legendre
+  - real SH in the convention of docs/conventions.md, through the derivatives of the Legendre
     polynomials (P_l^m = (-1)^m (1 - z^2)^(m/2) d^m P_l / dz^m, Condon-Shortley phase) and
     (x + i y)^m for the azimuth, exact at the poles (the C++ uses a recurrence instead);
     `--check` compares it with `shtool eval`;
@@ -47,14 +47,14 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "tests"))
 from read_table_numpy import read_table  # noqa: E402
 
-ZERO_THRESHOLD = 1e-9    # paper 000, Sec. 5; src/lobes/lobes.h kZeroThreshold
-MAX_COND = 1e4           # src/lobes/lobes.h kDefaultMaxCond (what the search accepts)
-SINGULAR_RCOND = 1e-12   # src/lobes/lobes.h kSingularRcond
-# Paper 000, Table I (per-band sparsity, %), l = 2..18.
+ZERO_THRESHOLD = 1e-9    # [1] Sec. 5; src/offline/lobes/lobes.h kZeroThreshold
+MAX_COND = 1e4           # src/offline/lobes/lobes.h kDefaultMaxCond (what the search accepts)
+SINGULAR_RCOND = 1e-12   # src/offline/lobes/lobes.h kSingularRcond
+# [1] Table I (per-band sparsity, %), l = 2..18.
 PAPER_TABLE_I = dict(zip(range(2, 19), [64, 67, 62, 53, 49, 46, 42, 39, 38, 38, 37, 37, 36, 36, 36, 35, 35]))
-# Paper 000, Fig. 3 caption, N = 8: random mean, random max, GA result (%).
+# [1] Fig. 3 caption, N = 8: random mean, random max, GA result (%).
 PAPER_FIG3_N8 = (3, 29, 45)
-# Issue 5: the transcribed supplemental table as a nested shared set, N = 4..8 (%).
+# [1]'s supplemental data (transcribed) as a nested shared set, N = 4..8 (%).
 TRANSCRIBED_SHARED = {4: 55.4, 5: 51.6, 6: 50.4, 7: 44.7, 8: 42.7}
 # Agreement of this script's SH with `shtool eval`: both double, different algorithms
 # (Legendre-series derivatives here, a three-term recurrence there); values are O(1) and
@@ -70,7 +70,7 @@ class ScriptError(Exception):
 
 
 # ---------------------------------------------------------------------------
-# Real SH of one band (DESIGN.md convention).
+# Real SH of one band (docs/conventions.md).
 
 def _legendre_derivative_coeffs(l, m):
     c = np.zeros(l + 1)
@@ -104,7 +104,7 @@ def band_sh(l, dirs):
 
 
 def direction(theta, phi):
-    """Unit vectors of (t, p), exact at the poles (as src/lobes lobe_direction)."""
+    """Unit vectors of (t, p), exact at the poles (as src/offline/lobes lobe_direction)."""
     theta, phi = np.broadcast_arrays(np.asarray(theta, dtype=float), np.asarray(phi, dtype=float))
     st = np.sin(theta)
     ct = np.cos(theta)
@@ -426,7 +426,7 @@ def plot_fig3(band_rows, shared_rows, path):
         ax.grid(True, alpha=0.3)
         ax.set_title(title, fontsize=10)
         ax.legend(fontsize=7, loc="upper right")
-    fig.suptitle("Random lobe sets from the search's candidates vs. the searched sets (cf. paper 000, Fig. 3); "
+    fig.suptitle("Random lobe sets from the search's candidates vs. the searched sets (cf. [1] Fig. 3); "
                  "random sets with cond(Y) > 1e4 or singular are omitted", fontsize=9)
     fig.tight_layout(rect=(0, 0, 1, 0.95))
     savefig(fig, path)

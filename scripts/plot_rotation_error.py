@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Plot the Taylor y-rotation error curves (paper 001, Fig. 3) from the CSV written by
+"""Plot the Taylor y-rotation error curves ([2] Fig. 3) from the CSV written by
 tests/test_rotation_error_curve.cpp:
 
     SHTOOL_WRITE_ERROR_CSV=/tmp/rotation-error.csv \\
@@ -58,7 +58,7 @@ def main(argv):
                 ax.set_xlabel("tilt b (degrees)")
             if r == 0 and c == 0:
                 ax.legend(loc="lower right", fontsize=8)
-    fig.suptitle("Taylor y-rotation error E(b) (cf. paper 001, Fig. 3)")
+    fig.suptitle("Taylor y-rotation error E(b) (cf. [2] Fig. 3)")
     fig.tight_layout()
     fig.savefig(argv[2], dpi=100, metadata={"Software": None})
     return 0

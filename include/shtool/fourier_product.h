@@ -1,4 +1,4 @@
-// Accurate SH triple and k-multiple products in Fourier space (paper 003, Sec. 4):
+// Accurate SH triple and k-multiple products in Fourier space ([3] Sec. 4):
 // SH -> 2D Fourier series (Eq. 17), 2D convolution by FFT (Eq. 24-25) in the
 // divide-and-conquer order of Eq. 27, Fourier -> SH with the truncated range of Eq. 29.
 // Exact for band-limited inputs up to rounding: no approximation is involved.
@@ -13,14 +13,9 @@
 
 #include <cstddef>
 #include <memory>
-#include <mutex>
 #include <span>
 
 namespace shtool {
-
-// FFTW's planner is not thread-safe (execution of distinct plans is): every plan the
-// runtime makes or destroys is made under this one lock.
-std::mutex& fftw_planner_mutex();
 
 // Highest order the Fourier products accept (grid sizes grow as (k n)^2).
 inline constexpr int kMaxFourierProductOrder = 64;

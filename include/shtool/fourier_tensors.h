@@ -1,4 +1,4 @@
-// SH-to-Fourier and Fourier-to-SH tensors (paper 003, Sec. 3.2.3-3.2.4 and 4.3) in
+// SH-to-Fourier and Fourier-to-SH tensors ([3] Sec. 3.2.3-3.2.4 and 4.3) in
 // their reduced real form. Derivations, the mapping to the paper's complex 4D tensors
 // y*_{l,m,s,t} and h*_{l,m,s,t}, and accuracy figures: docs/products.md.
 //
@@ -52,9 +52,8 @@ struct ShFourierTensors {
   // Preconditions: 1 <= order <= kMaxOrder, order - 1 <= degree <= 4096.
   static ShFourierTensors compute(int order, int degree);
 
-  // Table round trip (kind "sh-fourier-tensors", schemas/sh-fourier-tensors.schema.json).
-  Table to_table(const nlohmann::json& generator) const;
-  static TableResult<ShFourierTensors> from_table(const Table& table);
+  // Table loading (kind "sh-fourier-tensors", schemas/sh-fourier-tensors.schema.json).
+  static Result<ShFourierTensors> from_table(const Table& table);
 };
 
 }  // namespace shtool

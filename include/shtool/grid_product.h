@@ -55,7 +55,7 @@ class GridProduct {
   int order() const;
   int inputs() const;
 
-  // g = product of the inputs() functions f truncated to the order (paper 003, Eq. 7).
+  // g = product of the inputs() functions f truncated to the order ([3] Eq. 7).
   // Every span holds N^2 coefficients; g may alias an input.
   void multiply(std::span<const std::span<const T>> f, std::span<T> g);
   // Triple product g = f1 (x) f2 (only when inputs() == 2).

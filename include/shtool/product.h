@@ -1,6 +1,6 @@
 // SH products, one entry point: triple products g = f1 (x) f2, triple product integrals,
 // accurate k-multiple products and the recursive triple-product approximation
-// (paper 003; methods and measured speed in docs/products.md).
+// ([3]; methods and measured speed in docs/products.md).
 //
 //  - tripling: the sparse tripling tensor (shtool/tripling_product.h), O(N^5);
 //  - fourier:  SH -> Fourier, FFT convolution, Fourier -> SH (shtool/fourier_product.h),

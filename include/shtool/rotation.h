@@ -5,10 +5,10 @@
 // Methods
 //   reference  dense per-band matrices by the Ivanic-Ruedenberg recurrences (exact);
 //   zxzxz      Rz(a) Rx(-90) Rz(b) Rx(+90) Rz(g) with the sparse X90 table (exact,
-//              Kautz et al. 2002; paper 001 Sec. 2.2, App. C);
+//              Kautz et al. 2002; [2] Sec. 2.2, App. C);
 //   taylor1, taylor1.5, taylor2
 //              Rz(a) T(b) Rz(g) where T is the 1st / "1.5th" / 2nd order Taylor expansion
-//              of the y-rotation at b = 0 (paper 001 Sec. 3): approximate, for small tilt b;
+//              of the y-rotation at b = 0 ([2] Sec. 3): approximate, for small tilt b;
 //   automatic  the cheapest method whose error bound for this rotation is within the
 //              tolerance (Taylor when the tilt is small enough, zxzxz otherwise; at
 //              orders up to 3 always zxzxz, whose bands 1 and 2 are closed forms in R

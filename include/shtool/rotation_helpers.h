@@ -5,7 +5,7 @@
 //  - X90 = M(Rx(+90 deg)), the SH rotation matrix of a +90 degree turn about x, block
 //    diagonal by band and about half zeros; stored in compressed rows (CSR) over the
 //    flat index. M(Rx(-90 deg)) = X90^T.
-//  - The derivatives at b = 0 of the y-rotation M(Ry(b)) (paper 001, Sec. 3, App. A):
+//  - The derivatives at b = 0 of the y-rotation M(Ry(b)) ([2] Sec. 3, App. A):
 //    D1 = dM/db(0) is antisymmetric and tridiagonal inside each band, so only its
 //    sub-diagonal D1[i][i-1] is stored; D2 = d2M/db2(0) = D1^2 is symmetric with
 //    non-zeros on the diagonal and at distance 2, so D2[i][i] and D2[i][i-2] are stored.
@@ -30,17 +30,15 @@ struct RotationHelpers {
   std::vector<double> ddy_diag; // N^2 entries: D2[i][i]
   std::vector<double> ddy_off2; // N^2 entries: D2[i][i-2] (0 where i-2 is in another band)
 
-  // Table round trip. from_table checks kind, shapes and internal consistency (CSR
+  // Table loading (the writer is offline). from_table checks kind, shapes and internal consistency (CSR
   // bounds, columns inside the row's band) so a corrupted table cannot index out of range.
-  Table to_table(const nlohmann::json& generator) const;
-  static TableResult<RotationHelpers> from_table(const Table& table);
+  static Result<RotationHelpers> from_table(const Table& table);
   // Loads and checks that the table covers at least `min_order` bands.
-  static TableResult<RotationHelpers> load(const std::filesystem::path& path, int min_order = 1);
+  static Result<RotationHelpers> load(const std::filesystem::path& path, int min_order = 1);
 };
 
-// Where the shipped table is looked for when no path is given: $SHTOOL_TABLES, then the
-// tables/ folder of the source tree this library was built from, then the installed
-// share/shtool/tables. Returns an empty path if none exists.
+// The shipped table (find_shipped_table in shtool/table.h: $SHTOOL_TABLES, then the
+// installed share/shtool/tables). Returns an empty path if none exists.
 std::filesystem::path default_rotation_helpers_path();
 
 }  // namespace shtool

@@ -12,7 +12,8 @@
 //             loader checks them against the parsed numbers.
 // The loader detects the encoding from the first byte (0x89 binary, '{' JSON).
 //
-// Runtime side: nothing here throws across the API; errors come back as TableResult.
+// Nothing here throws; errors come back as Result. This is the header an engine includes
+// to load tables: JSON is parsed inside the library, never in a header.
 #pragma once
 
 #include <bit>
@@ -26,10 +27,9 @@
 #include <string_view>
 #include <type_traits>
 #include <utility>
-#include <variant>
 #include <vector>
 
-#include <nlohmann/json.hpp>
+#include "shtool/result.h"
 
 namespace shtool {
 
@@ -105,11 +105,12 @@ struct Table {
   std::string kind;                  // e.g. "rotation-helpers"; schemas/<kind>.schema.json
   std::string kind_version = "1.0";  // version of that kind's layout, "major.minor"
   int order = 0;                     // SH order N the table is for (0: not order-specific)
-  // How it was made: {"tool": "shtool", "version": ..., "command": ..., "parameters":
-  // {...}} (seed included in parameters when there is one). No timestamps or hostnames:
-  // the same inputs must give byte-identical tables. Required by the writer.
-  nlohmann::json generator = nlohmann::json::object();
-  nlohmann::json meta = nlohmann::json::object();  // kind-specific summary values
+  // How it was made, as compact JSON text: {"tool": "shtool", "version": ..., "command":
+  // ..., "parameters": {...}} (seed included in parameters when there is one). No
+  // timestamps or hostnames: the same inputs must give byte-identical tables. Required
+  // by the writer.
+  std::string generator = "{}";
+  std::string meta = "{}";  // kind-specific summary values, compact JSON text
   std::vector<TableArray> arrays;
 
   const TableArray* find(std::string_view name) const;
@@ -119,30 +120,6 @@ struct Table {
 };
 
 enum class TableEncoding { binary, json };
-
-struct TableError {
-  std::string message;  // names the file and the problem, e.g. "x.shtbl: CRC-32 mismatch in array 'a' ..."
-};
-
-// Expected-style result: either a value or an error message. value() on an error (or
-// error() on a value) is a precondition violation (std::bad_variant_access).
-template <class T>
-class TableResult {
- public:
-  TableResult(T value) : v_(std::move(value)) {}
-  TableResult(TableError error) : v_(std::move(error)) {}
-  bool ok() const { return std::holds_alternative<T>(v_); }
-  explicit operator bool() const { return ok(); }
-  const T& value() const& { return std::get<T>(v_); }
-  T& value() & { return std::get<T>(v_); }
-  T&& value() && { return std::get<T>(std::move(v_)); }
-  const TableError& error() const { return std::get<TableError>(v_); }
-
- private:
-  std::variant<T, TableError> v_;
-};
-
-struct TableOk {};
 
 // What a loader expects; empty fields are not checked.
 struct TableExpectation {
@@ -155,30 +132,24 @@ struct TableExpectation {
 struct TableFileInfo {
   TableEncoding encoding = TableEncoding::binary;
   std::uint64_t file_size = 0;
-  // The header exactly as stored (JSON encoding: the document without "data"),
-  // including any fields a newer minor version added that Table does not carry.
-  nlohmann::json header;
+  // The header exactly as stored, as compact JSON text (JSON encoding: the document
+  // without "data"), including any fields a newer minor version added that Table does
+  // not carry.
+  std::string header_json;
 };
-
-// Header JSON exactly as written into the file: arrays with offsets (relative to the
-// data section), sizes and CRCs of their little-endian bytes. Precondition: the table
-// passes the writer's checks (write_table reports them as errors).
-nlohmann::json table_header(const Table& table);
-
-// Writes atomically: a temporary file in the same folder, flushed, then renamed over
-// `path`. On failure nothing is left at `path` (an old file there stays untouched) and
-// the temporary file is removed. Checks first: kind, versions, generator record, array
-// names (non-empty, unique), shapes against data sizes; for the JSON encoding, float
-// values must be finite (JSON has no NaN or infinity).
-TableResult<TableOk> write_table(const Table& table, const std::filesystem::path& path,
-                                 TableEncoding encoding = TableEncoding::binary);
 
 // Reads and validates: magic, format major version, header CRC, header fields and
 // conventions id, the expectation (kind, kind major, order), array bounds, padding, array
 // CRCs. Never throws, never returns partial data; memory use is bounded by the file size.
-TableResult<Table> read_table(const std::filesystem::path& path,
-                              const TableExpectation& expect = {},
-                              TableFileInfo* info = nullptr);
+// (The writer is offline: `shtool` writes tables, engines read them.)
+Result<Table> read_table(const std::filesystem::path& path, const TableExpectation& expect = {},
+                         TableFileInfo* info = nullptr);
+
+// Where a shipped table named `file_name` (e.g. "rotation-helpers.shtb") is looked for
+// when no path is given: the folder named by the environment variable SHTOOL_TABLES, then
+// <prefix>/share/shtool/tables as `cmake --install` lays it out. Returns the first path
+// that exists, or an empty path.
+std::filesystem::path find_shipped_table(std::string_view file_name);
 
 // ---------------------------------------------------------------------------
 // Template definitions.
@@ -226,11 +197,11 @@ std::vector<T> TableArray::values() const {
 
 template <class T>
 auto Table::get(std::string_view name) const {
-  using R = TableResult<std::vector<T>>;
+  using R = Result<std::vector<T>>;
   const TableArray* a = find(name);
-  if (!a) return R(TableError{"table of kind '" + kind + "' has no array '" + std::string(name) + "'"});
+  if (!a) return R(Error{"table of kind '" + kind + "' has no array '" + std::string(name) + "'"});
   if (a->dtype != dtype_of<T>())
-    return R(TableError{"array '" + std::string(name) + "' has dtype " + std::string(dtype_name(a->dtype)) +
+    return R(Error{"array '" + std::string(name) + "' has dtype " + std::string(dtype_name(a->dtype)) +
                         ", expected " + std::string(dtype_name(dtype_of<T>()))});
   return R(a->values<T>());
 }

@@ -1,5 +1,5 @@
 // The tripling tensor C_ijk = integral y_i y_j y_k over the sphere (the real-SH Gaunt
-// coefficients; paper 003, Eq. 5) and the SH triple product by that tensor:
+// coefficients; [3] Eq. 5) and the SH triple product by that tensor:
 //   g_k = sum_ij C_ijk f1_i f2_j            (Eq. 6, g = f1 (x) f2 truncated to order N)
 //   integral F1 F2 F3 = sum_ijk C_ijk f1_i f2_j f3_k    (Eq. 4)
 // Conventions (real SH, Condon-Shortley phase, flat index l(l+1)+m): docs/conventions.md.
@@ -51,11 +51,10 @@ struct TriplingTensor {
   static TriplingTensor from_candidates(int order,
                                         const std::function<double(int i, int j, int k)>& coefficient);
 
-  // Table round trip (kind "tripling-tensor", schemas/tripling-tensor.schema.json).
+  // Table loading (kind "tripling-tensor", schemas/tripling-tensor.schema.json).
   // from_table checks kind, order, shapes, index bounds, canonical order, uniqueness and
   // the selection rules, so a corrupted table cannot make the product read out of range.
-  Table to_table(const nlohmann::json& generator, const nlohmann::json& meta = {}) const;
-  static TableResult<TriplingTensor> from_table(const Table& table);
+  static Result<TriplingTensor> from_table(const Table& table);
 };
 
 // Azimuthal factor of the real-SH tripling coefficient: the integral over p in [0, 2 pi)

@@ -1,4 +1,4 @@
-// Light-specialized shading of zonal-harmonic (ZH) transfer (paper 004, Sec. 5, Eq. 24-25).
+// Light-specialized shading of zonal-harmonic (ZH) transfer ([4] Sec. 5, Eq. 24-25).
 //
 // A point's transfer is N lobes (unit axis s_i, convolved coefficients g*_il, l < n, in the
 // convention of docs/conventions.md: a lobe adds g*_l y_l^m(s) to SH coefficient (l, m)).

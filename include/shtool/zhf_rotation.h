@@ -1,4 +1,4 @@
-// SH rotation through the sparse zonal-harmonic factorisation (paper 000, Sec. 7.1).
+// SH rotation through the sparse zonal-harmonic factorisation ([1] Sec. 7.1).
 //
 // A "zhf-lobes" table (written by `shtool search-lobes`, layout in docs/lobes.md) gives, for
 // every band l = 0..N-1, 2l+1 lobe directions w_d and the sparse matrix A^_l = Y_l^-1 with
@@ -12,7 +12,7 @@
 // Both are exact up to rounding amplified by cond(Y_l) (recorded in the table).
 //
 // Objects own their scratch: apply()/rotate() allocate nothing and are not safe to call
-// concurrently on one object. Nothing here throws; loading reports errors as TableResult.
+// concurrently on one object. Nothing here throws; loading reports errors as Result.
 #pragma once
 
 #include <filesystem>
@@ -44,10 +44,10 @@ struct ZhfLobes {
 // Loads and validates a zhf-lobes table covering bands 0..order-1 (a table with more bands
 // is truncated to `order`; order 0: all of the table's bands). Fails on a table that lacks
 // some band below `order`, on inconsistent sparse rows, and on every read_table error.
-TableResult<ZhfLobes> load_zhf_lobes(const std::filesystem::path& path, int order = 0);
+Result<ZhfLobes> load_zhf_lobes(const std::filesystem::path& path, int order = 0);
 
 // The shipped shared-lobe table for `order`: tables/zhf-shared-N<order>.shtb, or the
-// smallest shipped order above it ($SHTOOL_TABLES, the source tree, the install prefix).
+// smallest shipped order above it (find_shipped_table: $SHTOOL_TABLES, then the install prefix).
 // Empty if none is found.
 std::filesystem::path default_zhf_lobes_path(int order);
 

@@ -18,17 +18,28 @@ std::vector<double> parse_number_list(const std::string& text, const std::string
     const double v = std::strtod(begin, &end);
     while (end && (*end == ' ' || *end == '\t')) ++end;
     if (field.find_first_not_of(" \t") == std::string::npos || end == begin || *end != '\0')
-      throw UserError(what + ": '" + field + "' is not a number (expected comma-separated numbers, got '" +
+      throw InputError(what + ": '" + field + "' is not a number (expected comma-separated numbers, got '" +
                       text + "')");
     // ERANGE on underflow still yields the nearest (subnormal or zero) value, which is
     // what the user wrote; only overflow to infinity is an error.
     if (!std::isfinite(v))
-      throw UserError(what + ": '" + field + "' is not a finite number");
+      throw InputError(what + ": '" + field + "' is not a finite number");
     values.push_back(v);
     if (comma == std::string::npos) break;
     pos = comma + 1;
   }
   return values;
+}
+
+std::vector<std::string> split_list(const std::string& text) {
+  std::vector<std::string> items;
+  std::size_t pos = 0;
+  while (true) {
+    const std::size_t comma = text.find(',', pos);
+    items.push_back(text.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos));
+    if (comma == std::string::npos) return items;
+    pos = comma + 1;
+  }
 }
 
 void print_json(const nlohmann::json& value) { std::cout << value.dump() << '\n'; }

@@ -1,4 +1,4 @@
-// Shared pieces of the thin CLI layer: the one user-error type, strict parsing of
+// Shared pieces of the thin CLI layer: strict parsing of
 // numeric lists, and JSON printing with round-trip precision.
 #pragma once
 
@@ -8,22 +8,25 @@
 
 #include <nlohmann/json.hpp>
 
+#include "common/input_error.h"
+
 namespace CLI {
 class App;
 }
 
 namespace shtool::cli {
 
-// Bad input from the user (malformed option, unreadable file, invalid table...).
+// Bad input (malformed option, unreadable file, invalid table...) is
+// shtool::InputError (common/input_error.h), from the libraries and the CLI alike;
 // main() turns it into "shtool: error: <message>" on stderr and exit code 1.
-class UserError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
+using shtool::InputError;
 
 // Parses "a,b,c" into finite doubles; `what` names the option in error messages.
-// Throws UserError on empty fields, trailing garbage, NaN or infinity.
+// Throws InputError on empty fields, trailing garbage, NaN or infinity.
 std::vector<double> parse_number_list(const std::string& text, const std::string& what);
+
+// "a,b,c" -> {"a", "b", "c"}; empty items are kept (so that they can be reported).
+std::vector<std::string> split_list(const std::string& text);
 
 // Prints JSON to stdout followed by a newline. nlohmann-json writes doubles with the
 // shortest representation that reads back to the same bits (round-trip exact).

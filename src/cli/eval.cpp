@@ -19,17 +19,17 @@ struct EvalOptions {
 
 void run_eval(const EvalOptions& opt) {
   if (!is_supported_order(opt.order))
-    throw UserError("--order " + std::to_string(opt.order) + " is not supported (1.." +
+    throw InputError("--order " + std::to_string(opt.order) + " is not supported (1.." +
                     std::to_string(kMaxOrder) + ")");
   const std::vector<double> d = parse_number_list(opt.dir, "--dir");
   if (d.size() != 3)
-    throw UserError("--dir needs 3 components x,y,z, got " + std::to_string(d.size()));
+    throw InputError("--dir needs 3 components x,y,z, got " + std::to_string(d.size()));
   Vec3<double> w(d[0], d[1], d[2]);
   // Scale by the largest component first so that tiny or huge (but valid) directions
   // neither underflow nor overflow in the norm.
   const double largest = w.cwiseAbs().maxCoeff();
   if (!(largest > 0.0))
-    throw UserError("--dir must be a non-zero vector, got '" + opt.dir + "'");
+    throw InputError("--dir must be a non-zero vector, got '" + opt.dir + "'");
   w /= largest;
   w /= w.norm();
   std::vector<double> values(sh_count(opt.order));

@@ -27,7 +27,7 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     // --help/--version exit 0; every command-line error exits 1 like other user errors.
     return app.exit(e) == 0 ? 0 : 1;
-  } catch (const shtool::cli::UserError& e) {
+  } catch (const shtool::cli::InputError& e) {
     std::cerr << "shtool: error: " << e.what() << '\n';
     return 1;
   } catch (const std::exception& e) {

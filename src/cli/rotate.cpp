@@ -1,6 +1,5 @@
 // shtool rotate: rotate an SH vector, g(w) = f(R^-1 w), by any runtime method.
 #include <cmath>
-#include <fstream>
 #include <iostream>
 #include <iterator>
 #include <memory>
@@ -13,6 +12,8 @@
 #include <Eigen/LU>
 
 #include "cli_common.h"
+#include "common/input_file.h"
+#include "tensors/rotation_helpers_gen.h"
 #include "shtool/rotation.h"
 #include "shtool/sh.h"
 #include "shtool/zhf_rotation.h"
@@ -35,20 +36,14 @@ struct RotateOptions {
 std::vector<double> read_coefficients(const RotateOptions& opt) {
   if (!opt.coeffs.empty()) return parse_number_list(opt.coeffs, "--coeffs");
   std::string text;
-  if (opt.in == "-") {
-    text.assign(std::istreambuf_iterator<char>(std::cin), {});
-  } else {
-    std::ifstream file(opt.in, std::ios::binary);
-    if (!file) throw UserError("--in: cannot open '" + opt.in + "'");
-    text.assign(std::istreambuf_iterator<char>(file), {});
-  }
-  const nlohmann::json doc = nlohmann::json::parse(text, nullptr, false);
-  if (doc.is_discarded()) throw UserError("--in: '" + opt.in + "' is not valid JSON");
+  if (opt.in == "-") text.assign(std::istreambuf_iterator<char>(std::cin), {});
+  else text = read_input_file(opt.in, "--in");
+  const nlohmann::json doc = parse_json_input(text, opt.in, "--in");
   if (!doc.is_object() || !doc.contains("coefficients") || !doc["coefficients"].is_array())
-    throw UserError("--in: expected a JSON object {\"coefficients\": [numbers]}");
+    throw InputError("--in: expected a JSON object {\"coefficients\": [numbers]}");
   std::vector<double> c;
   for (const auto& v : doc["coefficients"]) {
-    if (!v.is_number()) throw UserError("--in: \"coefficients\" must contain only numbers");
+    if (!v.is_number()) throw InputError("--in: \"coefficients\" must contain only numbers");
     c.push_back(v.get<double>());
   }
   return c;
@@ -56,60 +51,60 @@ std::vector<double> read_coefficients(const RotateOptions& opt) {
 
 Mat3<double> read_rotation(const RotateOptions& opt) {
   const int given = !opt.quat.empty() + !opt.matrix.empty() + !opt.zyz.empty();
-  if (given != 1) throw UserError("give exactly one of --quat, --matrix, --zyz");
+  if (given != 1) throw InputError("give exactly one of --quat, --matrix, --zyz");
   if (!opt.quat.empty()) {
     const std::vector<double> q = parse_number_list(opt.quat, "--quat");
-    if (q.size() != 4) throw UserError("--quat needs 4 numbers w,x,y,z, got " + std::to_string(q.size()));
+    if (q.size() != 4) throw InputError("--quat needs 4 numbers w,x,y,z, got " + std::to_string(q.size()));
     const double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
     if (std::abs(norm - 1.0) > kRotationInputTolerance)
-      throw UserError("--quat is not a unit quaternion (|q| = " + std::to_string(norm) + ")");
+      throw InputError("--quat is not a unit quaternion (|q| = " + std::to_string(norm) + ")");
     return matrix_from_quaternion<double>(q[0] / norm, q[1] / norm, q[2] / norm, q[3] / norm);
   }
   if (!opt.zyz.empty()) {
     const std::vector<double> a = parse_number_list(opt.zyz, "--zyz");
-    if (a.size() != 3) throw UserError("--zyz needs 3 angles a,b,c in radians, got " + std::to_string(a.size()));
+    if (a.size() != 3) throw InputError("--zyz needs 3 angles a,b,c in radians, got " + std::to_string(a.size()));
     return matrix_from_zyz<double>({a[0], a[1], a[2]});
   }
   const std::vector<double> m = parse_number_list(opt.matrix, "--matrix");
-  if (m.size() != 9) throw UserError("--matrix needs 9 numbers r00,r01,...,r22, got " + std::to_string(m.size()));
+  if (m.size() != 9) throw InputError("--matrix needs 9 numbers r00,r01,...,r22, got " + std::to_string(m.size()));
   Mat3<double> r;
   r << m[0], m[1], m[2], m[3], m[4], m[5], m[6], m[7], m[8];
   const double defect = orthonormality_defect<double>(r);
   if (defect > kRotationInputTolerance)
-    throw UserError("--matrix is not orthonormal (max |R^T R - I| = " + std::to_string(defect) + ")");
-  if (r.determinant() < 0) throw UserError("--matrix has determinant -1 (a reflection, not a rotation)");
+    throw InputError("--matrix is not orthonormal (max |R^T R - I| = " + std::to_string(defect) + ")");
+  if (r.determinant() < 0) throw InputError("--matrix has determinant -1 (a reflection, not a rotation)");
   return r;
 }
 
 void run_rotate(const RotateOptions& opt) {
   if (!is_supported_order(opt.order))
-    throw UserError("--order " + std::to_string(opt.order) + " is not supported (1.." +
+    throw InputError("--order " + std::to_string(opt.order) + " is not supported (1.." +
                     std::to_string(kMaxOrder) + ")");
   const bool zhf = opt.method == "zhf" || opt.method == "zhf-tailored";
   const auto method = zhf ? std::optional<RotationMethod>(RotationMethod::reference)
                           : rotation_method_from_name(opt.method);
   if (!method)
-    throw UserError("--method: unknown method '" + opt.method +
+    throw InputError("--method: unknown method '" + opt.method +
                     "' (auto, reference, zxzxz, taylor1, taylor1.5, taylor2, zhf, zhf-tailored)");
-  if (!(opt.tol > 0) || !std::isfinite(opt.tol)) throw UserError("--tol must be a positive number");
+  if (!(opt.tol > 0) || !std::isfinite(opt.tol)) throw InputError("--tol must be a positive number");
   const Mat3<double> r = read_rotation(opt);
   const std::vector<double> coeffs = read_coefficients(opt);
   if (coeffs.size() != static_cast<std::size_t>(sh_count(opt.order)))
-    throw UserError("expected " + std::to_string(sh_count(opt.order)) + " coefficients for order " +
+    throw InputError("expected " + std::to_string(sh_count(opt.order)) + " coefficients for order " +
                     std::to_string(opt.order) + ", got " + std::to_string(coeffs.size()));
   for (double c : coeffs)
-    if (!std::isfinite(c)) throw UserError("coefficients must be finite numbers");
+    if (!std::isfinite(c)) throw InputError("coefficients must be finite numbers");
 
   std::vector<double> out(coeffs.size());
   if (zhf) {
-    // Zonal-harmonic factorisation (paper 000, Eq. 10 and 11) with a shared-lobe table.
+    // Zonal-harmonic factorisation ([1] Eq. 10 and 11) with a shared-lobe table.
     const std::filesystem::path path =
         opt.tables.empty() ? default_zhf_lobes_path(opt.order) : std::filesystem::path(opt.tables);
     if (path.empty())
-      throw UserError("no shipped zhf-lobes table covers order " + std::to_string(opt.order) +
+      throw InputError("no shipped zhf-lobes table covers order " + std::to_string(opt.order) +
                       " (give one with --tables; make it with `shtool search-lobes --shared`)");
-    TableResult<ZhfLobes> loaded = load_zhf_lobes(path, opt.order);
-    if (!loaded) throw UserError(loaded.error().message);
+    Result<ZhfLobes> loaded = load_zhf_lobes(path, opt.order);
+    if (!loaded) throw InputError(loaded.error().message);
     const auto lobes = std::make_shared<const ZhfLobes>(std::move(loaded).value());
     if (opt.method == "zhf") {
       ZhfRotation<double> rotation(opt.order, lobes);
@@ -127,15 +122,18 @@ void run_rotate(const RotateOptions& opt) {
   if (*method != RotationMethod::reference) {
     const std::filesystem::path path =
         opt.tables.empty() ? default_rotation_helpers_path() : std::filesystem::path(opt.tables);
-    if (path.empty())
-      throw UserError("rotation-helpers table not found (set --tables or SHTOOL_TABLES; "
-                      "generate it with `shtool gen-tensors --what rotation`)");
-    TableResult<RotationHelpers> loaded = RotationHelpers::load(path, opt.order);
-    if (!loaded) throw UserError(loaded.error().message);
-    helpers = std::make_shared<RotationHelpers>(std::move(loaded).value());
+    if (path.empty()) {
+      // No table given or shipped: the offline tool computes the helpers itself (the
+      // same bytes gen-tensors writes).
+      helpers = std::make_shared<RotationHelpers>(compute_rotation_helpers(opt.order));
+    } else {
+      Result<RotationHelpers> loaded = RotationHelpers::load(path, opt.order);
+      if (!loaded) throw InputError(loaded.error().message);
+      helpers = std::make_shared<RotationHelpers>(std::move(loaded).value());
+    }
   }
   ShRotation<double> rotation(opt.order, helpers);
-  if (!rotation.set(r, *method, opt.tol)) throw UserError("rotation method unavailable for this order");
+  if (!rotation.set(r, *method, opt.tol)) throw InputError("rotation method unavailable for this order");
   rotation.apply(coeffs, out);
   print_json({{"order", opt.order},
               {"method", std::string(rotation_method_name(rotation.method()))},
@@ -162,7 +160,7 @@ void setup_rotate(CLI::App& app) {
   sub->add_option("--tables", opt->tables,
                   "rotation-helpers table, or zhf-lobes table for zhf methods (default: the shipped one)");
   sub->callback([opt]() {
-    if (opt->coeffs.empty() == opt->in.empty()) throw UserError("give exactly one of --coeffs, --in");
+    if (opt->coeffs.empty() == opt->in.empty()) throw InputError("give exactly one of --coeffs, --in");
     run_rotate(*opt);
   });
 }

@@ -1,10 +1,9 @@
-// shtool search-lobes: genetic search for sparse ZHF lobe directions (paper 000, Sec. 5-6).
+// shtool search-lobes: genetic search for sparse ZHF lobe directions ([1] Sec. 5-6).
 #include <unistd.h>
 
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
 #include <memory>
 #include <string>
@@ -14,7 +13,9 @@
 
 #include "cli_common.h"
 #include "lobes/lobes.h"
-#include "offline_version.h"
+#include "common/atomic_file.h"
+#include "common/generator_record.h"
+#include "common/table_writer.h"
 
 namespace shtool::cli {
 namespace {
@@ -34,9 +35,9 @@ struct SearchLobesOptions {
 };
 
 std::vector<int> band_list(const SearchLobesOptions& o) {
-  if (o.band && !o.bands.empty()) throw UserError("give either --band or --bands, not both");
+  if (o.band && !o.bands.empty()) throw InputError("give either --band or --bands, not both");
   if (o.band) {
-    if (o.band < 1 || o.band >= kMaxOrder) throw UserError("--band must be in 1.." + std::to_string(kMaxOrder - 1));
+    if (o.band < 1 || o.band >= kMaxOrder) throw InputError("--band must be in 1.." + std::to_string(kMaxOrder - 1));
     return {o.band};
   }
   const auto dash = o.bands.find('-');
@@ -54,10 +55,10 @@ std::vector<int> band_list(const SearchLobesOptions& o) {
       if (used != sb.size()) throw std::invalid_argument("trailing");
     }
   } catch (const std::exception&) {
-    throw UserError("--bands: expected 'a-b' or a single band, got '" + o.bands + "'");
+    throw InputError("--bands: expected 'a-b' or a single band, got '" + o.bands + "'");
   }
   if (a < 1 || b < a || b >= kMaxOrder)
-    throw UserError("--bands: need 1 <= a <= b < " + std::to_string(kMaxOrder) + ", got '" + o.bands + "'");
+    throw InputError("--bands: need 1 <= a <= b < " + std::to_string(kMaxOrder) + ", got '" + o.bands + "'");
   std::vector<int> v;
   for (int l = a; l <= b; ++l) v.push_back(l);
   return v;
@@ -66,9 +67,9 @@ std::vector<int> band_list(const SearchLobesOptions& o) {
 void run_search_lobes(SearchLobesOptions o) {
   lobes::SearchOptions& s = o.search;
   if (o.theta != "band" && o.theta != "pooled")
-    throw UserError("--theta-candidates must be 'band' or 'pooled', got '" + o.theta + "'");
+    throw InputError("--theta-candidates must be 'band' or 'pooled', got '" + o.theta + "'");
   if (o.paper) {
-    // The literal algorithm of paper 000, Sec. 5: one GA run, zeros of A^ only, no local
+    // The literal algorithm of [1] Sec. 5: one GA run, zeros of A^ only, no local
     // step, theta candidates pooled over bands 1..l (unless given explicitly).
     s.secondary = false;
     s.local_search = false;
@@ -79,22 +80,17 @@ void run_search_lobes(SearchLobesOptions o) {
   s.seed = o.seed;
   std::vector<int> bands;
   if (o.shared) {
-    if (o.band || !o.bands.empty()) throw UserError("--shared takes --order, not --band/--bands");
+    if (o.band || !o.bands.empty()) throw InputError("--shared takes --order, not --band/--bands");
     if (o.order < 3 || o.order > kMaxOrder)
-      throw UserError("--shared needs --order N with 3 <= N <= " + std::to_string(kMaxOrder));
+      throw InputError("--shared needs --order N with 3 <= N <= " + std::to_string(kMaxOrder));
   } else {
-    if (o.order) throw UserError("--order is for --shared; per-band searches take --band or --bands");
-    if (!o.band && o.bands.empty()) throw UserError("give --band l, --bands a-b, or --shared --order N");
+    if (o.order) throw InputError("--order is for --shared; per-band searches take --band or --bands");
+    if (!o.band && o.bands.empty()) throw InputError("give --band l, --bands a-b, or --shared --order N");
     bands = band_list(o);
   }
   // Fail before a long search, not after it.
-  for (const std::string* f : {&o.out, &o.json}) {
-    if (f->empty()) continue;
-    const std::filesystem::path parent = std::filesystem::absolute(*f).parent_path();
-    std::error_code ec;
-    if (!std::filesystem::is_directory(parent, ec))
-      throw UserError("output folder '" + parent.string() + "' of '" + *f + "' does not exist");
-  }
+  if (!o.out.empty()) check_output_path(o.out, "--out");
+  if (!o.json.empty()) check_output_path(o.json, "--json");
 
   const bool tty = isatty(fileno(stderr)) && !o.quiet;
   s.progress = [tty, quiet = o.quiet](const std::string& line, bool persistent) {
@@ -140,9 +136,9 @@ void run_search_lobes(SearchLobesOptions o) {
       }
     }
   } catch (const std::invalid_argument& e) {
-    throw UserError(e.what());
+    throw InputError(e.what());
   } catch (const std::runtime_error& e) {
-    throw UserError(e.what());
+    throw InputError(e.what());
   }
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (o.shared && !o.quiet) {
@@ -155,33 +151,21 @@ void run_search_lobes(SearchLobesOptions o) {
     std::fprintf(stderr, "search-lobes: total %.1f s\n", secs);
   }
 
+  const nlohmann::json summary = lobes::lobes_summary_json(results);
+  std::vector<std::string> bytes;
+  bytes.reserve(2);  // outputs hold views of these
+  std::vector<OutputFile> outputs;
   if (!o.out.empty()) {
     const Table t = lobes::make_lobes_table(results, generator_record("shtool search-lobes", params), s);
     const bool json = std::filesystem::path(o.out).extension() == ".json";
-    const TableResult<TableOk> w = write_table(t, o.out, json ? TableEncoding::json : TableEncoding::binary);
-    if (!w) throw UserError(w.error().message);
+    bytes.push_back(encode_table(t, json ? TableEncoding::json : TableEncoding::binary));
+    outputs.push_back({o.out, bytes.back()});
   }
-  const nlohmann::json summary = lobes::lobes_summary_json(results);
   if (!o.json.empty()) {
-    // Written through a temporary file and a rename, like the tables: no partial output.
-    const std::string tmp = o.json + ".tmp";
-    {
-      std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
-      if (!f) throw UserError("--json: cannot write '" + o.json + "'");
-      f << summary.dump(2) << '\n';
-      f.close();
-      if (!f) {
-        std::filesystem::remove(tmp);
-        throw UserError("--json: write error on '" + o.json + "'");
-      }
-    }
-    std::error_code ec;
-    std::filesystem::rename(tmp, o.json, ec);
-    if (ec) {
-      std::filesystem::remove(tmp);
-      throw UserError("--json: cannot write '" + o.json + "': " + ec.message());
-    }
+    bytes.push_back(summary.dump(2) + "\n");
+    outputs.push_back({o.json, bytes.back()});
   }
+  write_files_atomically(outputs);
   if (o.out.empty() && o.json.empty()) print_json(summary);
 }
 
@@ -191,7 +175,7 @@ void setup_search_lobes(CLI::App& app) {
   auto o = std::make_shared<SearchLobesOptions>();
   CLI::App* sub = app.add_subcommand(
       "search-lobes",
-      "Genetic search for sparse zonal-harmonic factorisations (paper 000): lobe directions whose "
+      "Genetic search for sparse zonal-harmonic factorisations ([1]): lobe directions whose "
       "A^_l = Y_l^-1 has many zeros, per band or shared across bands. See docs/lobes.md.");
   sub->add_option("--band", o->band, "search one band l");
   sub->add_option("--bands", o->bands, "search bands a-b (each independently)");

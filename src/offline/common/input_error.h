@@ -1,0 +1,17 @@
+// The offline side's one error type for bad input: a malformed option, an unreadable or
+// invalid file, an output that cannot be written. Library code and the CLI alike throw
+// it; main() maps it once to "shtool: error: <message>" on stderr and exit code 1.
+// Anything else that escapes is a bug in shtool (exit 3).
+#pragma once
+
+#include <stdexcept>
+#include <string>
+
+namespace shtool {
+
+class InputError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+}  // namespace shtool

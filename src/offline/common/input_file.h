@@ -1,0 +1,32 @@
+// Reading the offline tool's input files: the one place that opens them, so every input
+// gets the same checks and messages (a folder, a missing file, a read error, JSON that
+// is malformed or nested absurdly deep).
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <string_view>
+
+#include <nlohmann/json.hpp>
+
+namespace shtool {
+
+// The whole file as bytes. `what` names the input in messages ("--transfer", "mesh").
+// Throws InputError.
+std::string read_input_file(const std::filesystem::path& path, std::string_view what);
+
+// JSON nested deeper than this is refused before parsing, so that no later step
+// (printing, recursion in a consumer) can exhaust the stack.
+inline constexpr int kMaxInputJsonDepth = 64;
+
+// Parses `text` (the contents of `path`) as JSON. Throws InputError naming the input, the
+// parser's position and message, or the nesting limit.
+nlohmann::json parse_json_input(std::string_view text, const std::filesystem::path& path, std::string_view what);
+
+// read_input_file + parse_json_input.
+nlohmann::json read_json_input(const std::filesystem::path& path, std::string_view what);
+
+// The CRC-32 of bytes (as table_crc32): records which input a table was made from.
+std::uint32_t input_crc32(std::string_view bytes);
+
+}  // namespace shtool

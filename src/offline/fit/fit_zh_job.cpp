@@ -1,0 +1,268 @@
+#include "fit/fit_zh_job.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numbers>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "common/atomic_file.h"
+#include "common/generator_record.h"
+#include "common/input_error.h"
+#include "common/input_file.h"
+#include "common/parallel_for.h"
+#include "common/table_writer.h"
+#include "fit/zh_fit.h"
+#include "fit/zh_fit_table.h"
+#include "shtool/sh.h"
+
+namespace shtool::fit {
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+const char* mode_name(TransferMode m) {
+  switch (m) {
+    case TransferMode::unshadowed: return "unshadowed";
+    case TransferMode::shadowed: return "shadowed";
+    case TransferMode::interreflected: return "interreflected";
+  }
+  return "?";
+}
+
+const char* normals_name(NormalSource n) {
+  switch (n) {
+    case NormalSource::automatic: return "auto";
+    case NormalSource::file: return "file";
+    case NormalSource::computed: return "computed";
+  }
+  return "?";
+}
+
+std::string ply_text(const Mesh& mesh, const std::vector<double>& transfer, int order,
+                     const std::vector<ZhFit>& fits) {
+  std::ostringstream s;
+  s.precision(9);
+  s << "ply\nformat ascii 1.0\ncomment shtool fit-zh: colour = transfer DC (grey, 1 = unshadowed), "
+       "red where the fit error is high\n"
+    << "element vertex " << mesh.positions.size() << "\nproperty float x\nproperty float y\nproperty float z\n"
+    << "property float nx\nproperty float ny\nproperty float nz\n"
+    << "property uchar red\nproperty uchar green\nproperty uchar blue\n"
+    << "property float transfer_dc\nproperty float fit_error\n"
+    << "element face " << mesh.triangles.size() << "\nproperty list uchar int vertex_indices\nend_header\n";
+  const double y00 = 0.5 / std::sqrt(std::numbers::pi);  // DC of the unshadowed transfer
+  const std::size_t n2 = sh_count(order);
+  for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
+    const double dc = std::clamp(transfer[v * n2] / y00, 0.0, 1.0);
+    const double err = fits[v].norm > 0 ? fits[v].residual / fits[v].norm : 0.0;
+    const double e = std::clamp(4.0 * err, 0.0, 1.0);  // 25% relative error is full red
+    auto byte = [](double x) { return static_cast<int>(std::lround(255.0 * x)); };
+    const Eigen::Vector3d& p = mesh.positions[v];
+    const Eigen::Vector3d& n = mesh.normals[v];
+    s << p.x() << ' ' << p.y() << ' ' << p.z() << ' ' << n.x() << ' ' << n.y() << ' ' << n.z() << ' '
+      << byte(dc * (1 - e) + e) << ' ' << byte(dc * (1 - e)) << ' ' << byte(dc * (1 - e)) << ' '
+      << transfer[v * n2] << ' ' << err << '\n';
+  }
+  for (const Eigen::Vector3i& t : mesh.triangles) s << "3 " << t[0] << ' ' << t[1] << ' ' << t[2] << '\n';
+  return s.str();
+}
+
+// The --json output: every fit's lobes, residual and norm.
+std::string fits_json(const std::vector<ZhFit>& fits, int order, int lobes, bool direct) {
+  nlohmann::json doc = {{"order", order}, {"lobes", lobes}, {"fits", nlohmann::json::array()}};
+  for (const ZhFit& f : fits) {
+    nlohmann::json jf = {{"lobes", nlohmann::json::array()}};
+    for (const ZhLobe& lobe : f.lobes)
+      jf["lobes"].push_back({{"axis", {lobe.axis.x(), lobe.axis.y(), lobe.axis.z()}}, {"coeffs", lobe.coeffs}});
+    jf["residual"] = f.residual;
+    jf["norm"] = f.norm;
+    if (direct) jf["direct"] = f.direct;
+    doc["fits"].push_back(std::move(jf));
+  }
+  return doc.dump() + "\n";
+}
+
+// The --save-transfer output, in the --transfer format.
+std::string transfer_json(const std::vector<double>& transfer, int order) {
+  const std::size_t n2 = sh_count(order);
+  nlohmann::json doc = {{"order", order}, {"vectors", nlohmann::json::array()}};
+  for (std::size_t v = 0; v < transfer.size() / n2; ++v)
+    doc["vectors"].push_back(std::vector<double>(transfer.begin() + v * n2, transfer.begin() + (v + 1) * n2));
+  return doc.dump() + "\n";
+}
+
+void check_request(const FitZhRequest& r) {
+  if (r.mesh.empty() == r.transfer.empty())
+    throw InputError(r.mesh.empty() ? "give a mesh (MESH.obj) or --transfer FILE"
+                                    : "give either a mesh or --transfer FILE, not both");
+  if (!is_supported_order(r.order)) throw InputError("--order " + std::to_string(r.order) + " is not supported");
+  if (r.lobes < 1 || r.lobes > 64) throw InputError("--lobes must be in 1..64, got " + std::to_string(r.lobes));
+  if (r.rays < 1) throw InputError("--rays must be at least 1, got " + std::to_string(r.rays));
+  if (r.starts < 0) throw InputError("--starts must be >= 0, got " + std::to_string(r.starts));
+  if (!(r.restart_above >= 0)) throw InputError("--restart-above must be >= 0");
+  if (r.threads < 0) throw InputError("--threads must be >= 0");
+  if (r.mode == TransferMode::interreflected) {
+    if (r.bounces < 1) throw InputError("--bounces must be at least 1");
+    if (!(r.albedo >= 0 && r.albedo < 1)) throw InputError("--albedo must be in [0, 1)");
+  }
+  if (!r.transfer.empty() && !r.ply.empty()) throw InputError("--ply needs a mesh (not --transfer)");
+  if (!r.transfer.empty() && !r.save_transfer.empty())
+    throw InputError("--save-transfer needs a mesh (not --transfer)");
+}
+
+}  // namespace
+
+// {"order": n, "vectors": [[n^2 numbers], ...]}
+std::vector<double> parse_transfer_json(std::string_view text, const std::filesystem::path& path_in, int& order) {
+  const std::string path = path_in.string();
+  const nlohmann::json doc = parse_json_input(text, path_in, "--transfer");
+  if (!doc.is_object() || !doc.contains("order") || !doc.at("order").is_number_integer())
+    throw InputError("--transfer '" + path + "': expected {\"order\": n, \"vectors\": [[n^2 numbers], ...]}");
+  const nlohmann::json& o = doc.at("order");
+  const std::int64_t order64 = o.is_number_unsigned()
+                                   ? (o.get<std::uint64_t>() > static_cast<std::uint64_t>(kMaxOrder) ? -1 : o.get<std::int64_t>())
+                                   : o.get<std::int64_t>();
+  if (order64 < 1 || order64 > kMaxOrder)
+    throw InputError("--transfer '" + path + "': order " + o.dump() + " is not supported (1.." +
+                     std::to_string(kMaxOrder) + ")");
+  order = static_cast<int>(order64);
+  if (!doc.contains("vectors") || !doc.at("vectors").is_array() || doc.at("vectors").empty())
+    throw InputError("--transfer '" + path + "': \"vectors\" must be a non-empty array");
+  const std::size_t n2 = sh_count(order);
+  std::vector<double> values;
+  std::size_t v = 0;
+  for (const nlohmann::json& vec : doc.at("vectors")) {
+    if (!vec.is_array() || vec.size() != n2)
+      throw InputError("--transfer '" + path + "': vector " + std::to_string(v) + " must have " +
+                      std::to_string(n2) + " numbers (order " + std::to_string(order) + ")");
+    for (const nlohmann::json& x : vec) {
+      if (!x.is_number()) throw InputError("--transfer '" + path + "': vector " + std::to_string(v) + " has a non-number");
+      const double d = x.get<double>();
+      if (!std::isfinite(d)) throw InputError("--transfer '" + path + "': vector " + std::to_string(v) + " is not finite");
+      values.push_back(d);
+    }
+    ++v;
+  }
+  return values;
+}
+
+
+FitZhReport run_fit_zh(const FitZhRequest& r, const FitZhCallbacks& cb) {
+  check_request(r);
+  const int threads = resolve_threads(r.threads);
+  const std::filesystem::path input_path = r.mesh.empty() ? r.transfer : r.mesh;
+  const bool json_table = r.encoding == TableEncoding::json;
+  const std::filesystem::path out =
+      !r.out.empty() ? r.out
+                     : std::filesystem::path(input_path.stem().string() + (json_table ? ".zh.json" : ".zh.shtb"));
+  // Fail before a long bake, not after it.
+  check_output_path(out, "--out");
+  if (!r.json.empty()) check_output_path(r.json, "--json");
+  if (!r.ply.empty()) check_output_path(r.ply, "--ply");
+  if (!r.save_transfer.empty()) check_output_path(r.save_transfer, "--save-transfer");
+
+  FitZhReport report;
+  report.threads = threads;
+  report.lobes = r.lobes;
+  report.out = out;
+  report.from_mesh = !r.mesh.empty();
+
+  // ---- transfer vectors
+  int order = r.order;
+  std::vector<double> transfer;
+  Mesh mesh;
+  nlohmann::json params;
+  nlohmann::json meta = nlohmann::json::object();
+  if (!r.transfer.empty()) {
+    const std::string text = read_input_file(r.transfer, "--transfer");
+    int file_order = 0;
+    transfer = parse_transfer_json(text, r.transfer, file_order);
+    if (r.order_given && file_order != r.order)
+      throw InputError("--order " + std::to_string(r.order) + " but --transfer '" + r.transfer.string() +
+                       "' has order " + std::to_string(file_order));
+    order = file_order;
+    params = {{"transfer", r.transfer.filename().string()}, {"input_crc32", input_crc32(text)}};
+  } else {
+    mesh = load_obj(r.mesh, r.normals);
+    if (cb.warning) {
+      if (mesh.unreferenced_vertices)
+        cb.warning("skipped " + std::to_string(mesh.unreferenced_vertices) + " unreferenced vertices");
+      if (mesh.degenerate_faces) cb.warning("skipped " + std::to_string(mesh.degenerate_faces) + " degenerate faces");
+      if (mesh.zero_normals)
+        cb.warning(std::to_string(mesh.zero_normals) + " vertices have no defined normal (+z used)");
+    }
+    TransferOptions to;
+    to.order = order;
+    to.rays = r.rays;
+    to.seed = r.seed;
+    to.mode = r.mode;
+    to.bounces = r.bounces;
+    to.albedo = r.albedo;
+    to.threads = threads;
+    to.progress = cb.simulate_progress;
+    const auto t0 = std::chrono::steady_clock::now();
+    transfer = compute_transfer(mesh, to);
+    report.simulate_seconds = seconds_since(t0);
+    params = {{"mesh", r.mesh.filename().string()},
+              {"input_crc32", mesh.input_crc32},
+              {"mode", mode_name(r.mode)},
+              {"rays", r.rays},
+              {"normals", normals_name(r.normals)}};
+    if (r.mode == TransferMode::interreflected) {
+      params["bounces"] = r.bounces;
+      params["albedo"] = r.albedo;
+    }
+    meta["obj_vertices"] = mesh.obj_vertices;
+    meta["unreferenced_vertices"] = mesh.unreferenced_vertices;
+    meta["degenerate_faces"] = mesh.degenerate_faces;
+    meta["triangles"] = mesh.triangles.size();
+    meta["normals_from_file"] = mesh.normals_from_file;
+  }
+  report.order = order;
+  report.count = transfer.size() / sh_count(order);
+
+  // ---- fit
+  ZhFitOptions fo;
+  fo.order = order;
+  fo.lobes = r.lobes;
+  fo.direct = r.direct;
+  fo.starts = r.starts;
+  fo.restart_above = r.restart_above;
+  fo.seed = r.seed;
+  const auto t1 = std::chrono::steady_clock::now();
+  const std::vector<ZhFit> fits = fit_zh_all(transfer, fo, threads, cb.fit_progress);
+  report.fit_seconds = seconds_since(t1);
+
+  params["order"] = order;
+  params["lobes"] = r.lobes;
+  params["seed"] = r.seed;
+  params["starts"] = r.starts;
+  params["restart_above"] = r.restart_above;
+  params["direct"] = r.direct;
+
+  // [4] Fig. 3: RMS error normalised by the total L2 length over all vertices.
+  report.normalized_rms = normalized_rms(fits);
+  const Table table =
+      zh_fit_table(fits, order, r.lobes, mesh.source_index, meta, generator_record("shtool fit-zh", params));
+
+  // ---- outputs: everything is computed, then written as one set.
+  std::vector<std::string> bytes;
+  bytes.reserve(4);  // outputs hold views of these
+  std::vector<OutputFile> outputs;
+  auto add = [&](const std::filesystem::path& path, std::string content) {
+    bytes.push_back(std::move(content));
+    outputs.push_back({path, bytes.back()});
+  };
+  add(out, encode_table(table, r.encoding));
+  if (!r.json.empty()) add(r.json, fits_json(fits, order, r.lobes, r.direct));
+  if (!r.ply.empty()) add(r.ply, ply_text(mesh, transfer, order, fits));
+  if (!r.save_transfer.empty()) add(r.save_transfer, transfer_json(transfer, order));
+  write_files_atomically(outputs);
+  return report;
+}
+
+}  // namespace shtool::fit

@@ -1,0 +1,63 @@
+// fit-zh as a library job: PRT transfer simulated on a mesh (or SH vectors read from
+// JSON), a multi-lobe ZH fit per vertex ([4] Sec. 4.1), and the outputs (zh-fit table,
+// JSON fits, coloured PLY, the transfer vectors) written all together or not at all.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "fit/mesh.h"
+#include "fit/transfer.h"
+#include "shtool/table.h"
+
+namespace shtool::fit {
+
+struct FitZhRequest {
+  std::filesystem::path mesh;      // OBJ mesh, or empty with `transfer`
+  std::filesystem::path transfer;  // JSON {"order": n, "vectors": [[n^2 numbers], ...]}
+  // Outputs. `out` empty: <input stem>.zh.shtb (or .zh.json) in the current folder.
+  std::filesystem::path out, json, ply, save_transfer;
+  TableEncoding encoding = TableEncoding::binary;
+  TransferMode mode = TransferMode::shadowed;
+  NormalSource normals = NormalSource::automatic;
+  int order = 6;
+  bool order_given = false;  // with `transfer`: the file's order must match
+  int lobes = 4;
+  int rays = 1024;
+  int bounces = 2;
+  double albedo = 0.8;
+  std::uint64_t seed = 1;
+  int starts = 4;
+  double restart_above = 0.05;
+  bool direct = false;
+  int threads = 0;  // 0: all cores
+};
+
+struct FitZhCallbacks {
+  std::function<void(std::size_t, std::size_t)> simulate_progress, fit_progress;
+  std::function<void(const std::string&)> warning;  // e.g. skipped degenerate faces
+};
+
+struct FitZhReport {
+  std::size_t count = 0;  // vertices or vectors fitted
+  bool from_mesh = false;
+  double simulate_seconds = 0, fit_seconds = 0;
+  int threads = 1;
+  int order = 0, lobes = 0;
+  double normalized_rms = 0;
+  std::filesystem::path out;
+};
+
+// The vectors of a --transfer document, vertex-major; sets `order`. Throws InputError
+// naming `path` and the problem.
+std::vector<double> parse_transfer_json(std::string_view text, const std::filesystem::path& path, int& order);
+
+// Checks the request and every output path before any work (InputError), runs the job,
+// writes the outputs.
+FitZhReport run_fit_zh(const FitZhRequest& request, const FitZhCallbacks& callbacks = {});
+
+}  // namespace shtool::fit

@@ -1,0 +1,217 @@
+#include "fit/mesh.h"
+
+#include <array>
+#include <cmath>
+#include <cstdlib>
+#include <numbers>
+#include <sstream>
+
+#include <tiny_obj_loader.h>
+
+#include "common/input_file.h"
+
+namespace shtool::fit {
+namespace {
+
+[[noreturn]] void fail(const std::filesystem::path& path, const std::string& what) {
+  throw MeshError(path.string() + ": " + what);
+}
+
+// tinyobjloader reads a coordinate it cannot parse ("nan", "inf") as 0 without a
+// warning, so non-finite values would pass silently. Scan "v" and "vn" lines first.
+void check_finite_coordinates(const std::filesystem::path& path, const std::string& text) {
+  std::istringstream in(text);
+  std::string line;
+  std::size_t number = 0;
+  while (std::getline(in, line)) {
+    ++number;
+    std::size_t p = line.find_first_not_of(" \t");
+    if (p == std::string::npos) continue;
+    const bool is_v = line.compare(p, 2, "v ") == 0 || line.compare(p, 2, "v\t") == 0;
+    const bool is_vn = line.compare(p, 3, "vn ") == 0 || line.compare(p, 3, "vn\t") == 0;
+    if (!is_v && !is_vn) continue;
+    const char* s = line.c_str() + p + (is_v ? 1 : 2);
+    for (int c = 0; c < 3; ++c) {
+      char* end = nullptr;
+      const double value = std::strtod(s, &end);
+      if (end == s)
+        fail(path, "line " + std::to_string(number) + ": missing or unreadable coordinate in '" + line + "'");
+      if (!std::isfinite(value))
+        fail(path, "line " + std::to_string(number) + ": non-finite coordinate in '" + line + "'");
+      s = end;
+    }
+  }
+}
+
+}  // namespace
+
+double Mesh::bbox_diagonal() const {
+  if (positions.empty()) return 0.0;
+  Eigen::Vector3d lo = positions[0], hi = positions[0];
+  for (const Eigen::Vector3d& p : positions) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  return (hi - lo).norm();
+}
+
+std::size_t compute_angle_weighted_normals(Mesh& mesh) {
+  std::vector<Eigen::Vector3d> sum(mesh.positions.size(), Eigen::Vector3d::Zero());
+  for (const Eigen::Vector3i& t : mesh.triangles) {
+    const Eigen::Vector3d face = (mesh.positions[t[1]] - mesh.positions[t[0]])
+                                     .cross(mesh.positions[t[2]] - mesh.positions[t[0]]);
+    const double len = face.norm();
+    if (!(len > 0)) continue;
+    const Eigen::Vector3d n = face / len;
+    for (int c = 0; c < 3; ++c) {
+      const Eigen::Vector3d a = mesh.positions[t[(c + 1) % 3]] - mesh.positions[t[c]];
+      const Eigen::Vector3d b = mesh.positions[t[(c + 2) % 3]] - mesh.positions[t[c]];
+      // atan2 of |a x b| and a.b: accurate for small and near-pi angles alike.
+      const double angle = std::atan2(a.cross(b).norm(), a.dot(b));
+      sum[t[c]] += angle * n;
+    }
+  }
+  std::size_t zero = 0;
+  mesh.normals.resize(mesh.positions.size());
+  for (std::size_t i = 0; i < sum.size(); ++i) {
+    const double len = sum[i].norm();
+    if (len > 0 && std::isfinite(len)) {
+      mesh.normals[i] = sum[i] / len;
+    } else {
+      mesh.normals[i] = Eigen::Vector3d::UnitZ();
+      ++zero;
+    }
+  }
+  return zero;
+}
+
+Mesh load_obj(const std::filesystem::path& path, NormalSource normal_source) {
+  // Read once: the same bytes are checked, parsed and hashed.
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) fail(path, "no such file");
+  if (std::filesystem::is_directory(path, ec)) fail(path, "is a directory, not an OBJ file");
+  const std::string text = read_input_file(path, "mesh");
+  check_finite_coordinates(path, text);
+
+  tinyobj::ObjReaderConfig config;
+  // Triangulated here instead, after the index check: tinyobjloader's own triangulation
+  // reads vertex positions through unchecked indices.
+  config.triangulate = false;
+  config.vertex_color = false;
+  tinyobj::ObjReader reader;
+  if (!reader.ParseFromString(text, std::string(), config)) {
+    std::string e = reader.Error();
+    while (!e.empty() && (e.back() == '\n' || e.back() == '.')) e.pop_back();
+    fail(path, "cannot parse OBJ" + (e.empty() ? std::string() : ": " + e));
+  }
+  const tinyobj::attrib_t& attrib = reader.GetAttrib();
+  const std::size_t nv = attrib.vertices.size() / 3;
+  const std::size_t nn = attrib.normals.size() / 3;
+
+  Mesh mesh;
+  mesh.input_crc32 = input_crc32(text);
+  mesh.obj_vertices = nv;
+  if (nv == 0) fail(path, "no vertices");
+
+  // Corners of every face, checked, then fanned: (c0, ci, ci+1).
+  struct Corner {
+    int v, n;
+  };
+  std::vector<std::array<Corner, 3>> tris;
+  std::size_t face_number = 0;
+  for (const tinyobj::shape_t& shape : reader.GetShapes()) {
+    const tinyobj::mesh_t& m = shape.mesh;
+    std::size_t offset = 0;
+    for (std::size_t f = 0; f < m.num_face_vertices.size(); ++f, ++face_number) {
+      const std::size_t count = m.num_face_vertices[f];
+      std::vector<Corner> corners;
+      for (std::size_t k = 0; k < count; ++k) {
+        const tinyobj::index_t& idx = m.indices[offset + k];
+        if (idx.vertex_index < 0 || static_cast<std::size_t>(idx.vertex_index) >= nv)
+          fail(path, "face " + std::to_string(face_number + 1) + " refers to vertex " +
+                         std::to_string(static_cast<long long>(idx.vertex_index) + 1) +
+                         ", but the file has " + std::to_string(nv) + " vertices");
+        if (idx.normal_index >= 0 && static_cast<std::size_t>(idx.normal_index) >= nn)
+          fail(path, "face " + std::to_string(face_number + 1) + " refers to normal " +
+                         std::to_string(static_cast<long long>(idx.normal_index) + 1) +
+                         ", but the file has " + std::to_string(nn) + " normals");
+        corners.push_back({idx.vertex_index, idx.normal_index});
+      }
+      offset += count;
+      if (count < 3) {
+        ++mesh.degenerate_faces;
+        continue;
+      }
+      if (count > 3) ++mesh.polygons_triangulated;
+      for (std::size_t k = 1; k + 1 < count; ++k) tris.push_back({corners[0], corners[k], corners[k + 1]});
+    }
+  }
+
+  auto position = [&](int v) {
+    return Eigen::Vector3d(attrib.vertices[3 * v], attrib.vertices[3 * v + 1], attrib.vertices[3 * v + 2]);
+  };
+  // Degenerate: repeated index or zero area. Zero area is tested exactly (cross product
+  // of edges equal to zero): a sliver with tiny but non-zero area still has a normal.
+  std::vector<std::array<Corner, 3>> kept;
+  kept.reserve(tris.size());
+  for (const auto& t : tris) {
+    const bool repeated = t[0].v == t[1].v || t[1].v == t[2].v || t[0].v == t[2].v;
+    const Eigen::Vector3d p0 = position(t[0].v);
+    const double area2 = (position(t[1].v) - p0).cross(position(t[2].v) - p0).norm();
+    if (repeated || !(area2 > 0)) {
+      ++mesh.degenerate_faces;
+      continue;
+    }
+    kept.push_back(t);
+  }
+  if (kept.empty())
+    fail(path, tris.empty() ? "no faces (need at least one triangle)"
+                            : "no usable triangle (all " + std::to_string(tris.size()) + " are degenerate)");
+
+  // Keep referenced vertices only, in OBJ order (so output order follows the file).
+  std::vector<int> remap(nv, -1);
+  for (const auto& t : kept)
+    for (const Corner& c : t) remap[c.v] = 0;
+  for (std::size_t v = 0; v < nv; ++v) {
+    if (remap[v] < 0) {
+      ++mesh.unreferenced_vertices;
+      continue;
+    }
+    remap[v] = static_cast<int>(mesh.positions.size());
+    mesh.positions.push_back(position(static_cast<int>(v)));
+    mesh.source_index.push_back(static_cast<std::uint32_t>(v));
+  }
+  for (const auto& t : kept) mesh.triangles.emplace_back(remap[t[0].v], remap[t[1].v], remap[t[2].v]);
+
+  bool all_have_normals = nn > 0;
+  for (const auto& t : kept)
+    for (const Corner& c : t) all_have_normals = all_have_normals && c.n >= 0;
+  if (normal_source == NormalSource::file && !all_have_normals)
+    fail(path, "--normals file: not every face corner has a normal in the file");
+  if (normal_source != NormalSource::computed && all_have_normals) {
+    // A vertex may carry different normals on different faces (a crease); average them.
+    std::vector<Eigen::Vector3d> sum(mesh.positions.size(), Eigen::Vector3d::Zero());
+    for (const auto& t : kept)
+      for (const Corner& c : t) {
+        Eigen::Vector3d n(attrib.normals[3 * c.n], attrib.normals[3 * c.n + 1], attrib.normals[3 * c.n + 2]);
+        const double len = n.norm();
+        if (len > 0) sum[remap[c.v]] += n / len;
+      }
+    mesh.normals.resize(mesh.positions.size());
+    for (std::size_t i = 0; i < sum.size(); ++i) {
+      const double len = sum[i].norm();
+      if (len > 0) {
+        mesh.normals[i] = sum[i] / len;
+      } else {
+        mesh.normals[i] = Eigen::Vector3d::UnitZ();
+        ++mesh.zero_normals;
+      }
+    }
+    mesh.normals_from_file = true;
+  } else {
+    mesh.zero_normals = compute_angle_weighted_normals(mesh);
+  }
+  return mesh;
+}
+
+}  // namespace shtool::fit

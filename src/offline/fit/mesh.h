@@ -1,0 +1,59 @@
+// Triangle meshes for the fit-zh job: OBJ loading with validation and vertex normals.
+//
+// Only vertices referenced by a valid triangle are kept (the Stanford bunny has
+// unreferenced vertices; fitting them would produce garbage for points that are not on
+// the surface). `source_index` maps each kept vertex back to its 0-based OBJ index.
+#pragma once
+
+#include "common/input_error.h"
+
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+namespace shtool::fit {
+
+// Malformed or unusable input mesh. The message names the file and the problem.
+using MeshError = InputError;  // every mesh problem is bad input
+
+struct Mesh {
+  std::vector<Eigen::Vector3d> positions;  // kept vertices only
+  std::vector<Eigen::Vector3d> normals;    // unit vertex normals, one per position
+  std::vector<std::uint32_t> source_index; // OBJ vertex index of each kept vertex
+  std::vector<Eigen::Vector3i> triangles;  // indices into positions
+
+  std::uint32_t input_crc32 = 0;           // CRC-32 of the file's bytes (provenance)
+
+  // Counters for what was skipped while loading (reported as warnings, not errors).
+  std::size_t obj_vertices = 0;            // vertices ("v" lines) in the file
+  std::size_t unreferenced_vertices = 0;   // vertices no valid triangle uses
+  std::size_t degenerate_faces = 0;        // triangles with repeated indices or zero area
+  std::size_t polygons_triangulated = 0;   // faces with more than 3 corners (fanned)
+  bool normals_from_file = false;          // false: angle-weighted normals computed here
+  std::size_t zero_normals = 0;            // vertices whose normal summed to zero (set to +z)
+
+  // Length of the bounding-box diagonal (scale for ray offsets).
+  double bbox_diagonal() const;
+};
+
+enum class NormalSource { automatic, file, computed };
+
+// Loads an OBJ file. Throws MeshError on: missing/unreadable file, parse failure,
+// non-finite coordinates or normals, face indices out of range, no usable triangle.
+// Polygons are fan-triangulated here (after the index check, so a bad index can never
+// be dereferenced). NormalSource::automatic uses the file's normals when every corner
+// of every kept triangle has one, and computed angle-weighted normals otherwise.
+Mesh load_obj(const std::filesystem::path& path, NormalSource normals = NormalSource::automatic);
+
+// Angle-weighted vertex normals (Thürmer and Wüthrich 1998): each incident triangle
+// contributes its unit normal times the corner angle, which makes the result independent
+// of how a surface is tessellated. Returns the number of vertices left at +z because the
+// sum vanished.
+std::size_t compute_angle_weighted_normals(Mesh& mesh);
+
+}  // namespace shtool::fit

@@ -1,0 +1,210 @@
+#include "common/input_error.h"
+#include "fit/transfer.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <numbers>
+#include <stdexcept>
+#include <string>
+#include <thread>
+
+#include <embree3/rtcore.h>
+
+#include "common/parallel_for.h"
+#include "common/random.h"
+#include "shtool/sh.h"
+
+namespace shtool::fit {
+namespace {
+
+// Orthonormal basis around n without a branch-dependent discontinuity at the poles
+// (Duff et al., "Building an Orthonormal Basis, Revisited", JCGT 2017).
+void orthonormal_basis(const Eigen::Vector3d& n, Eigen::Vector3d& t, Eigen::Vector3d& b) {
+  const double sign = std::copysign(1.0, n.z());
+  const double a = -1.0 / (sign + n.z());
+  const double c = n.x() * n.y() * a;
+  t = Eigen::Vector3d(1.0 + sign * n.x() * n.x() * a, sign * c, -sign * n.x());
+  b = Eigen::Vector3d(c, sign + n.y() * n.y() * a, -n.y());
+}
+
+struct EmbreeScene {
+  RTCDevice device = nullptr;
+  RTCScene scene = nullptr;
+  ~EmbreeScene() {
+    if (scene) rtcReleaseScene(scene);
+    if (device) rtcReleaseDevice(device);
+  }
+};
+
+std::unique_ptr<EmbreeScene> build_scene(const Mesh& mesh) {
+  auto s = std::make_unique<EmbreeScene>();
+  s->device = rtcNewDevice(nullptr);
+  if (!s->device) throw std::runtime_error("Embree: cannot create a device");
+  s->scene = rtcNewScene(s->device);
+  // Robust mode: watertight traversal, so rays grazing a shared edge cannot leak.
+  rtcSetSceneFlags(s->scene, RTC_SCENE_FLAG_ROBUST);
+  rtcSetSceneBuildQuality(s->scene, RTC_BUILD_QUALITY_HIGH);
+  RTCGeometry geom = rtcNewGeometry(s->device, RTC_GEOMETRY_TYPE_TRIANGLE);
+  auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                         3 * sizeof(float), mesh.positions.size()));
+  auto* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                            3 * sizeof(unsigned), mesh.triangles.size()));
+  if (!vb || !ib) {
+    rtcReleaseGeometry(geom);
+    throw std::runtime_error("Embree: cannot allocate geometry buffers");
+  }
+  for (std::size_t i = 0; i < mesh.positions.size(); ++i)
+    for (int c = 0; c < 3; ++c) vb[3 * i + c] = static_cast<float>(mesh.positions[i][c]);
+  for (std::size_t i = 0; i < mesh.triangles.size(); ++i)
+    for (int c = 0; c < 3; ++c) ib[3 * i + c] = static_cast<unsigned>(mesh.triangles[i][c]);
+  rtcCommitGeometry(geom);
+  rtcAttachGeometry(s->scene, geom);
+  rtcReleaseGeometry(geom);
+  rtcCommitScene(s->scene);
+  if (rtcGetDeviceError(s->device) != RTC_ERROR_NONE) throw std::runtime_error("Embree: scene build failed");
+  return s;
+}
+
+// Runs body(v) for every vertex (common/parallel_for.h: the partition never changes
+// what is computed), reporting progress through the pass's share of the total.
+template <class Body>
+void parallel_vertices(std::size_t count, int threads, std::size_t progress_base, std::size_t progress_total,
+                       const TransferOptions& options, Body body) {
+  std::function<void(std::size_t, std::size_t)> progress;
+  if (options.progress)
+    progress = [&](std::size_t done, std::size_t) { options.progress(progress_base + done, progress_total); };
+  parallel_for(count, threads, body, progress);
+}
+
+}  // namespace
+
+Eigen::Vector3d cosine_fibonacci_direction(int k, int count, double a, double b) {
+  // 1/phi: consecutive points turn by the golden angle, the most irrational rotation.
+  constexpr double kInvGolden = 0.61803398874989484820;
+  const double u = (k + b) / count;
+  double turn = k * kInvGolden + a;
+  turn -= std::floor(turn);
+  const double phi = 2.0 * std::numbers::pi * turn;
+  const double r = std::sqrt(u);
+  // Malley: uniform on the disk, lifted to the hemisphere, is cosine-weighted.
+  return Eigen::Vector3d(r * std::cos(phi), r * std::sin(phi), std::sqrt(std::max(0.0, 1.0 - u)));
+}
+
+std::vector<double> compute_transfer(const Mesh& mesh, const TransferOptions& options) {
+  if (!is_supported_order(options.order))
+    throw InputError("order " + std::to_string(options.order) + " is not supported");
+  if (options.rays < 1) throw InputError("rays must be at least 1, got " + std::to_string(options.rays));
+  if (options.mode == TransferMode::interreflected) {
+    if (options.bounces < 1) throw InputError("bounces must be at least 1");
+    if (!(options.albedo >= 0.0 && options.albedo < 1.0))
+      throw InputError("albedo must be in [0, 1), got " + std::to_string(options.albedo));
+  }
+  if (mesh.positions.size() != mesh.normals.size())
+    throw InputError("mesh has " + std::to_string(mesh.positions.size()) + " positions but " +
+                                std::to_string(mesh.normals.size()) + " normals");
+  const int threads = resolve_threads(options.threads);
+
+  const std::size_t nv = mesh.positions.size();
+  const int n2 = sh_count(options.order);
+  const int rays = options.rays;
+  const double offset = options.offset_scale * mesh.bbox_diagonal();
+  std::unique_ptr<EmbreeScene> scene;
+  if (options.mode != TransferMode::unshadowed) scene = build_scene(mesh);
+
+  const int passes = options.mode == TransferMode::interreflected ? 1 + options.bounces : 1;
+  const std::size_t progress_total = nv * passes;
+
+  // The ray set of vertex v, identical in every pass.
+  auto ray_frame = [&](std::size_t v, Eigen::Vector3d& t, Eigen::Vector3d& b, double& ra, double& rb) {
+    orthonormal_basis(mesh.normals[v], t, b);
+    const std::uint64_t h = splitmix64(options.seed ^ splitmix64(static_cast<std::uint64_t>(v)));
+    ra = unit_double(h);
+    rb = unit_double(splitmix64(h));
+  };
+  auto direction = [&](const Eigen::Vector3d& t, const Eigen::Vector3d& b, const Eigen::Vector3d& n, int k,
+                       double ra, double rb) {
+    const Eigen::Vector3d local = cosine_fibonacci_direction(k, rays, ra, rb);
+    return Eigen::Vector3d(local.x() * t + local.y() * b + local.z() * n).normalized();
+  };
+  auto make_ray = [&](const Eigen::Vector3d& origin, const Eigen::Vector3d& dir) {
+    RTCRay ray{};
+    ray.org_x = static_cast<float>(origin.x());
+    ray.org_y = static_cast<float>(origin.y());
+    ray.org_z = static_cast<float>(origin.z());
+    ray.dir_x = static_cast<float>(dir.x());
+    ray.dir_y = static_cast<float>(dir.y());
+    ray.dir_z = static_cast<float>(dir.z());
+    ray.tnear = 0.0f;
+    ray.tfar = std::numeric_limits<float>::infinity();
+    ray.mask = 0xFFFFFFFFu;
+    ray.time = 0.0f;
+    return ray;
+  };
+
+  std::vector<double> result(nv * n2, 0.0);
+  // Pass 0: direct transfer.
+  parallel_vertices(nv, threads, 0, progress_total, options, [&](std::size_t v) {
+    Eigen::Vector3d t, b;
+    double ra, rb;
+    ray_frame(v, t, b, ra, rb);
+    const Eigen::Vector3d& n = mesh.normals[v];
+    const Eigen::Vector3d origin = mesh.positions[v] + offset * n;
+    std::vector<double> y(n2), sum(n2, 0.0);
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    for (int k = 0; k < rays; ++k) {
+      const Eigen::Vector3d dir = direction(t, b, n, k, ra, rb);
+      if (scene) {
+        RTCRay ray = make_ray(origin, dir);
+        rtcOccluded1(scene->scene, &context, &ray);
+        if (ray.tfar < 0.0f) continue;  // blocked: Embree sets tfar to -inf
+      }
+      eval_sh<double>(options.order, dir, y);
+      for (int i = 0; i < n2; ++i) sum[i] += y[i];
+    }
+    for (int i = 0; i < n2; ++i) result[v * n2 + i] = sum[i] / rays;
+  });
+
+  // Bounces (Sloan et al. 2002, interreflected transfer): light leaving a hit point q
+  // after b-1 bounces is albedo * T_{b-1}(q) . L, so with cosine-weighted rays
+  // T_b(p) = albedo * mean over rays of [hit front face] T_{b-1}(q), with T_{b-1}(q)
+  // interpolated from the hit triangle's vertices. Back-face hits (inside of the
+  // surface) contribute nothing.
+  std::vector<double> previous = result, current(nv * n2);
+  for (int bounce = 1; bounce < passes; ++bounce) {
+    parallel_vertices(nv, threads, nv * bounce, progress_total, options, [&](std::size_t v) {
+      Eigen::Vector3d t, b;
+      double ra, rb;
+      ray_frame(v, t, b, ra, rb);
+      const Eigen::Vector3d& n = mesh.normals[v];
+      const Eigen::Vector3d origin = mesh.positions[v] + offset * n;
+      std::vector<double> sum(n2, 0.0);
+      RTCIntersectContext context;
+      rtcInitIntersectContext(&context);
+      for (int k = 0; k < rays; ++k) {
+        const Eigen::Vector3d dir = direction(t, b, n, k, ra, rb);
+        RTCRayHit hit{};
+        hit.ray = make_ray(origin, dir);
+        hit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+        rtcIntersect1(scene->scene, &context, &hit);
+        if (hit.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
+        const Eigen::Vector3i& tri = mesh.triangles[hit.hit.primID];
+        const Eigen::Vector3d ng = (mesh.positions[tri[1]] - mesh.positions[tri[0]])
+                                       .cross(mesh.positions[tri[2]] - mesh.positions[tri[0]]);
+        if (ng.dot(dir) >= 0.0) continue;
+        const double w1 = hit.hit.u, w2 = hit.hit.v, w0 = 1.0 - w1 - w2;
+        for (int i = 0; i < n2; ++i)
+          sum[i] += w0 * previous[tri[0] * n2 + i] + w1 * previous[tri[1] * n2 + i] + w2 * previous[tri[2] * n2 + i];
+      }
+      for (int i = 0; i < n2; ++i) current[v * n2 + i] = options.albedo * sum[i] / rays;
+    });
+    for (std::size_t i = 0; i < result.size(); ++i) result[i] += current[i];
+    std::swap(previous, current);
+  }
+  return result;
+}
+
+}  // namespace shtool::fit

@@ -1,0 +1,52 @@
+// Diffuse PRT transfer vectors per mesh vertex ([4] Sec. 4; Sloan et al. 2002):
+//   t_p = (1/pi) integral over S^2 of V(p, s) max(n_p . s, 0) y(s) ds
+// with V the visibility of the distant environment from p (shadowed) or 1
+// (unshadowed); interreflected adds diffuse bounces with a constant albedo.
+//
+// Estimator: cosine-weighted directions (pdf max(n.s,0)/pi), so each ray contributes
+// V(s) y(s) / rays and the unshadowed DC term is exact. The directions of a vertex are
+// a spherical-Fibonacci set on the unit disk (Malley's method lifts it to the cosine-
+// weighted hemisphere), rotated about the normal by an angle and shifted radially by a
+// fraction taken from a hash of (seed, vertex index): stratified, deterministic, and
+// without the correlated aliasing a set shared by all vertices would show.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "common/input_error.h"
+#include "fit/mesh.h"
+
+namespace shtool::fit {
+
+enum class TransferMode { unshadowed, shadowed, interreflected };
+
+struct TransferOptions {
+  int order = 6;
+  int rays = 1024;           // directions per vertex
+  std::uint64_t seed = 1;
+  TransferMode mode = TransferMode::shadowed;
+  int bounces = 2;           // interreflected only
+  double albedo = 0.8;       // interreflected only; in [0, 1)
+  int threads = 0;           // 0: std::thread::hardware_concurrency()
+  // Ray origins move off the surface by offset_scale * bounding-box diagonal along the
+  // vertex normal (avoids self-intersection with the vertex's own triangles).
+  double offset_scale = 1e-4;
+  // Called from worker 0 only with (vertices done by all workers, total); may be empty.
+  std::function<void(std::size_t, std::size_t)> progress;
+};
+
+// Transfer vectors, vertex-major: result[v * order^2 + i]. Bytes do not depend on the
+// thread count (fixed partition by vertex index, each vertex summed by one thread in a
+// fixed order). Throws InputError on bad options, std::runtime_error if
+// Embree fails.
+std::vector<double> compute_transfer(const Mesh& mesh, const TransferOptions& options);
+
+// The k-th of `count` cosine-weighted directions around +z before the per-vertex
+// rotation: disk point (sqrt(u), 2 pi frac(k phi^-1 + a)) with u = (k + b) / count,
+// lifted to the hemisphere. a, b in [0, 1) are the per-vertex rotation and shift.
+Eigen::Vector3d cosine_fibonacci_direction(int k, int count, double a, double b);
+
+}  // namespace shtool::fit

@@ -1,0 +1,400 @@
+#include "common/input_error.h"
+#include "fit/zh_fit.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <stdexcept>
+#include <string>
+#include <thread>
+
+#include <Eigen/Dense>
+#include <nlopt.hpp>
+
+#include "common/parallel_for.h"
+#include "common/random.h"
+#include "shtool/sh.h"
+
+namespace shtool::fit {
+namespace {
+
+// The multi-start axes: uniform on the sphere from a splitmix64 stream.
+struct Rng : SplitMixStream {
+  Eigen::Vector3d unit_vector() {
+    const double z = 2.0 * uniform() - 1.0, phi = 2.0 * std::numbers::pi * uniform();
+    const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
+    return {r * std::cos(phi), r * std::sin(phi), z};
+  }
+};
+
+double squared_norm(std::span<const double> v) {
+  double s = 0;
+  for (double x : v) s += x * x;
+  return s;
+}
+
+std::vector<bool> free_bands(const ZhFitOptions& o) {
+  std::vector<bool> mask(o.order, true);
+  if (o.direct) {
+    mask[0] = false;
+    if (o.lobes >= 3 && o.order > 1) mask[1] = false;
+  }
+  return mask;
+}
+
+// Bands with mask[l] false are frozen at 0 and left out of the BFGS variables.
+struct Packing {
+  int order;
+  std::vector<int> bands;  // free bands
+  int per_lobe() const { return 3 + static_cast<int>(bands.size()); }
+};
+
+void pack(const Packing& p, const std::vector<ZhLobe>& lobes, std::vector<double>& x) {
+  x.assign(lobes.size() * p.per_lobe(), 0.0);
+  for (std::size_t k = 0; k < lobes.size(); ++k) {
+    double* o = x.data() + k * p.per_lobe();
+    for (int c = 0; c < 3; ++c) o[c] = lobes[k].axis[c];
+    for (std::size_t j = 0; j < p.bands.size(); ++j) o[3 + j] = lobes[k].coeffs[p.bands[j]];
+  }
+}
+
+void unpack(const Packing& p, const std::vector<double>& x, std::vector<ZhLobe>& lobes) {
+  for (std::size_t k = 0; k < lobes.size(); ++k) {
+    const double* o = x.data() + k * p.per_lobe();
+    lobes[k].axis = Eigen::Vector3d(o[0], o[1], o[2]);
+    std::fill(lobes[k].coeffs.begin(), lobes[k].coeffs.end(), 0.0);
+    for (std::size_t j = 0; j < p.bands.size(); ++j) lobes[k].coeffs[p.bands[j]] = o[3 + j];
+  }
+}
+
+void normalize_axes(std::vector<ZhLobe>& lobes) {
+  for (ZhLobe& lobe : lobes) {
+    const double len = lobe.axis.norm();
+    lobe.axis = len > 0 && std::isfinite(len) ? Eigen::Vector3d(lobe.axis / len) : Eigen::Vector3d::UnitZ();
+  }
+}
+
+struct BfgsData {
+  int order;
+  std::span<const double> t;
+  const Packing* packing;
+  std::vector<ZhLobe> lobes;
+  std::vector<double> full_grad;
+  double best = std::numeric_limits<double>::infinity();
+  std::vector<double> best_x;
+};
+
+constexpr unsigned kLbfgsMemory = 6;
+
+double bfgs_objective(const std::vector<double>& x, std::vector<double>& grad, void* raw) {
+  auto* d = static_cast<BfgsData*>(raw);
+  const Packing& p = *d->packing;
+  unpack(p, x, d->lobes);
+  const int per_full = 3 + d->order;
+  d->full_grad.assign(d->lobes.size() * per_full, 0.0);
+  const double psi = zh_objective(d->order, d->t, d->lobes, grad.empty() ? std::span<double>() : d->full_grad);
+  if (!grad.empty()) {
+    for (std::size_t k = 0; k < d->lobes.size(); ++k) {
+      for (int c = 0; c < 3; ++c) grad[k * p.per_lobe() + c] = d->full_grad[k * per_full + c];
+      for (std::size_t j = 0; j < p.bands.size(); ++j)
+        grad[k * p.per_lobe() + 3 + j] = d->full_grad[k * per_full + 3 + p.bands[j]];
+    }
+  }
+  // NLopt may end with an exception (roundoff_limited) after a good step; keep the
+  // best point seen so that work is never lost.
+  if (psi < d->best) {
+    d->best = psi;
+    d->best_x = x;
+  }
+  return psi;
+}
+
+// Joint BFGS over all lobe parameters (Sec. 4.1). Returns psi; lobes are updated with
+// unit axes.
+double bfgs(int order, std::span<const double> t, const Packing& packing, std::vector<ZhLobe>& lobes,
+            int max_evaluations) {
+  normalize_axes(lobes);
+  if (packing.bands.empty()) return zh_objective(order, t, lobes, {});
+  BfgsData data{order, t, &packing, lobes, {}, std::numeric_limits<double>::infinity(), {}};
+  std::vector<double> x;
+  pack(packing, lobes, x);
+  nlopt::opt opt(nlopt::LD_LBFGS, static_cast<unsigned>(x.size()));
+  opt.set_min_objective(bfgs_objective, &data);
+  // ftol_rel 1e-12: below that the gains are invisible in the normalised RMS, and
+  // the evaluation budget is the cost of the whole job. ftol_abs lets a vector that
+  // is exactly representable (N >= order) stop at rounding level.
+  opt.set_ftol_rel(1e-12);
+  opt.set_ftol_abs(1e-28);
+  opt.set_xtol_rel(1e-10);
+  opt.set_maxeval(max_evaluations);
+  // NLopt's default L-BFGS memory is sized from available RAM and made its own
+  // bookkeeping 75% of the run time here; a short history converges as well on this
+  // smooth, small problem.
+  opt.set_vector_storage(kLbfgsMemory);
+  double value = 0;
+  try {
+    opt.optimize(x, value);
+  } catch (const std::exception&) {
+    // roundoff_limited and friends: fall back to the best point evaluated.
+  }
+  if (!data.best_x.empty()) unpack(packing, data.best_x, lobes);
+  normalize_axes(lobes);
+  return zh_objective(order, t, lobes, {});
+}
+
+// Coefficients with axes frozen: per band an independent least-squares problem
+// t_l ~ sum_k g*_kl y_l(s_k) (bands do not interact, Sec. 4.1 note 2), solved with
+// the minimum-norm solution (band 0 has identical columns).
+void refit_coefficients(int order, std::span<const double> t, const std::vector<bool>& mask,
+                        std::vector<ZhLobe>& lobes) {
+  const int n = static_cast<int>(lobes.size());
+  std::vector<std::vector<double>> y(n, std::vector<double>(sh_count(order)));
+  for (int k = 0; k < n; ++k) eval_sh<double>(order, lobes[k].axis, y[k]);
+  for (int l = 0; l < order; ++l) {
+    if (!mask[l]) {
+      for (ZhLobe& lobe : lobes) lobe.coeffs[l] = 0.0;
+      continue;
+    }
+    Eigen::MatrixXd a(2 * l + 1, n);
+    Eigen::VectorXd b(2 * l + 1);
+    for (int m = -l; m <= l; ++m) {
+      b[m + l] = t[sh_index(l, m)];
+      for (int k = 0; k < n; ++k) a(m + l, k) = y[k][sh_index(l, m)];
+    }
+    const Eigen::VectorXd g = a.completeOrthogonalDecomposition().solve(b);
+    for (int k = 0; k < n; ++k) lobes[k].coeffs[l] = g[k];
+  }
+}
+
+ZhLobe fit_one_lobe(int order, std::span<const double> t, const std::vector<bool>& mask,
+                    const std::vector<Eigen::Vector3d>& axes, const Packing& packing, const ZhFitOptions& o) {
+  // Dense scan with the closed form (Eq. 18): psi(s) for every axis of the set.
+  std::vector<std::pair<double, int>> scored;
+  std::vector<double> coeffs(order);
+  for (std::size_t i = 0; i < axes.size(); ++i)
+    scored.emplace_back(single_lobe_closed_form(order, t, axes[i], coeffs, mask), static_cast<int>(i));
+  const int keep = std::min<int>(o.single_lobe_refinements, static_cast<int>(scored.size()));
+  std::partial_sort(scored.begin(), scored.begin() + keep, scored.end());
+  std::vector<Eigen::Vector3d> starts;
+  for (int i = 0; i < keep; ++i) starts.push_back(axes[scored[i].second]);
+  starts.push_back(optimal_linear_axis(t));
+
+  ZhLobe best;
+  double best_psi = std::numeric_limits<double>::infinity();
+  for (const Eigen::Vector3d& s : starts) {
+    std::vector<ZhLobe> lobe(1);
+    lobe[0].axis = s;
+    lobe[0].coeffs.assign(order, 0.0);
+    single_lobe_closed_form(order, t, s, lobe[0].coeffs, mask);
+    double psi = bfgs(order, t, packing, lobe, o.max_evaluations);
+    // BFGS moves axis and coefficients together; re-solving Eq. 18 at its final axis
+    // can only lower psi.
+    std::vector<double> c(order);
+    const double closed = single_lobe_closed_form(order, t, lobe[0].axis, c, mask);
+    if (closed < psi) {
+      lobe[0].coeffs = c;
+      psi = closed;
+    }
+    if (psi < best_psi) {
+      best_psi = psi;
+      best = lobe[0];
+    }
+  }
+  return best;
+}
+
+void canonicalize(std::vector<ZhLobe>& lobes) {
+  for (ZhLobe& lobe : lobes) {
+    const Eigen::Vector3d& s = lobe.axis;
+    const bool flip = s.z() < 0 || (s.z() == 0 && (s.y() < 0 || (s.y() == 0 && s.x() < 0)));
+    if (!flip) continue;
+    // y_l^m(-s) = (-1)^l y_l^m(s): the lobe along -s with odd bands negated is the same.
+    lobe.axis = -s;
+    for (std::size_t l = 1; l < lobe.coeffs.size(); l += 2) lobe.coeffs[l] = -lobe.coeffs[l];
+  }
+}
+
+}  // namespace
+
+double single_lobe_closed_form(int order, std::span<const double> t, const Eigen::Vector3d& axis,
+                               std::span<double> coeffs, const std::vector<bool>& mask) {
+  double y[kMaxOrder * kMaxOrder];
+  eval_sh<double>(order, axis, std::span<double>(y, sh_count(order)));
+  double psi = squared_norm(t.first(sh_count(order)));
+  for (int l = 0; l < order; ++l) {
+    if (!mask.empty() && !mask[l]) {
+      coeffs[l] = 0.0;
+      continue;
+    }
+    double dot = 0;
+    for (int m = -l; m <= l; ++m) dot += y[sh_index(l, m)] * t[sh_index(l, m)];
+    const double inv_sum_sq = 4.0 * std::numbers::pi / (2 * l + 1);  // 1 / sum_m y_lm^2
+    coeffs[l] = dot * inv_sum_sq;
+    // ||t_l - g y_l||^2 = ||t_l||^2 - dot^2 / sum_m y_lm^2 at the optimum.
+    psi -= dot * dot * inv_sum_sq;
+  }
+  return std::max(0.0, psi);
+}
+
+Eigen::Vector3d optimal_linear_axis(std::span<const double> t) {
+  if (t.size() < 4) return Eigen::Vector3d::UnitZ();
+  const Eigen::Vector3d a(-t[sh_index(1, 1)], -t[sh_index(1, -1)], t[sh_index(1, 0)]);
+  const double len = a.norm();
+  return len > 0 ? Eigen::Vector3d(a / len) : Eigen::Vector3d::UnitZ();
+}
+
+std::vector<Eigen::Vector3d> hemisphere_axes(int count) {
+  constexpr double kInvGolden = 0.61803398874989484820;
+  std::vector<Eigen::Vector3d> axes;
+  axes.reserve(count);
+  for (int i = 0; i < count; ++i) {
+    const double z = 1.0 - (i + 0.5) / count;  // equal-area bands of the hemisphere
+    const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
+    double turn = i * kInvGolden;
+    turn -= std::floor(turn);
+    const double phi = 2.0 * std::numbers::pi * turn;
+    axes.emplace_back(r * std::cos(phi), r * std::sin(phi), z);
+  }
+  return axes;
+}
+
+void lobes_to_sh(int order, const std::vector<ZhLobe>& lobes, std::span<double> out) {
+  std::fill(out.begin(), out.begin() + sh_count(order), 0.0);
+  double y[kMaxOrder * kMaxOrder];
+  for (const ZhLobe& lobe : lobes) {
+    eval_sh<double>(order, lobe.axis, std::span<double>(y, sh_count(order)));
+    for (int l = 0; l < order; ++l)
+      for (int m = -l; m <= l; ++m) out[sh_index(l, m)] += lobe.coeffs[l] * y[sh_index(l, m)];
+  }
+}
+
+double zh_objective(int order, std::span<const double> t, const std::vector<ZhLobe>& lobes,
+                    std::span<double> grad) {
+  const int n2 = sh_count(order);
+  const std::size_t nl = lobes.size();
+  // Scratch reused across calls: this is the inner loop of every BFGS run.
+  thread_local std::vector<double> y, g, r, length;
+  thread_local std::vector<Eigen::Vector3d> unit;
+  y.resize(nl * n2);
+  g.resize(grad.empty() ? 0 : nl * 3 * n2);
+  r.resize(n2);
+  unit.resize(nl);
+  length.resize(nl);
+  for (std::size_t k = 0; k < nl; ++k) {
+    length[k] = lobes[k].axis.norm();
+    unit[k] = lobes[k].axis / length[k];  // h(s) of Eq. 21
+    if (grad.empty())
+      eval_sh<double>(order, unit[k], std::span<double>(y.data() + k * n2, n2));
+    else
+      eval_sh_with_gradient<double>(order, unit[k], std::span<double>(y.data() + k * n2, n2),
+                                    std::span<double>(g.data() + k * 3 * n2, 3 * n2));
+  }
+  // r = t~ - t (Eq. 11 and 17).
+  for (int i = 0; i < n2; ++i) r[i] = -t[i];
+  for (std::size_t k = 0; k < nl; ++k)
+    for (int l = 0; l < order; ++l)
+      for (int m = -l; m <= l; ++m) r[sh_index(l, m)] += lobes[k].coeffs[l] * y[k * n2 + sh_index(l, m)];
+  const double psi = squared_norm(r);
+  if (grad.empty()) return psi;
+  const int per = 3 + order;
+  for (std::size_t k = 0; k < nl; ++k) {
+    double* out = grad.data() + k * per;
+    Eigen::Vector3d ds = Eigen::Vector3d::Zero();
+    for (int l = 0; l < order; ++l) {
+      double dg = 0;
+      for (int m = -l; m <= l; ++m) {
+        const int i = sh_index(l, m);
+        dg += y[k * n2 + i] * r[i];  // Eq. 19
+        const double w = lobes[k].coeffs[l] * r[i];
+        ds += w * Eigen::Vector3d(g[k * 3 * n2 + 3 * i], g[k * 3 * n2 + 3 * i + 1], g[k * 3 * n2 + 3 * i + 2]);
+      }
+      out[3 + l] = 2.0 * dg;
+    }
+    // Eq. 20 with Eq. 21: the surface gradient is tangent at h(s), and
+    // J_h^T = (I - h h^T) / |s| maps a tangent vector v to v / |s|.
+    ds *= 2.0 / length[k];
+    for (int c = 0; c < 3; ++c) out[c] = ds[c];
+  }
+  return psi;
+}
+
+ZhFit fit_zh(std::span<const double> t_in, const ZhFitOptions& o, std::uint64_t stream) {
+  if (!is_supported_order(o.order)) throw InputError("fit_zh: unsupported order " + std::to_string(o.order));
+  if (o.lobes < 1) throw InputError("fit_zh: need at least one lobe");
+  const int order = o.order, n2 = sh_count(order);
+  if (static_cast<int>(t_in.size()) != n2)
+    throw InputError("fit_zh: vector has " + std::to_string(t_in.size()) + " values, order " +
+                                std::to_string(order) + " needs " + std::to_string(n2));
+  ZhFit fit;
+  fit.norm = std::sqrt(squared_norm(t_in));
+  const std::vector<bool> mask = free_bands(o);
+  // Target for the lobes: t without the directly stored bands.
+  std::vector<double> t(t_in.begin(), t_in.end());
+  for (int l = 0; l < order; ++l)
+    if (!mask[l])
+      for (int m = -l; m <= l; ++m) {
+        fit.direct.push_back(t[sh_index(l, m)]);
+        t[sh_index(l, m)] = 0.0;
+      }
+  Packing packing{order, {}};
+  for (int l = 0; l < order; ++l)
+    if (mask[l]) packing.bands.push_back(l);
+  const std::vector<Eigen::Vector3d> axes = hemisphere_axes(o.axis_samples);
+
+  // Greedy: each lobe fitted to what the previous ones left (Sec. 4.1).
+  std::vector<ZhLobe> lobes;
+  std::vector<double> residual = t, approx(n2);
+  for (int k = 0; k < o.lobes; ++k) {
+    lobes.push_back(fit_one_lobe(order, residual, mask, axes, packing, o));
+    lobes_to_sh(order, lobes, approx);
+    for (int i = 0; i < n2; ++i) residual[i] = t[i] - approx[i];
+  }
+  double best_psi;
+  if (o.lobes > 1) {
+    refit_coefficients(order, t, mask, lobes);
+    best_psi = bfgs(order, t, packing, lobes, o.max_evaluations);
+  } else {
+    best_psi = zh_objective(order, t, lobes, {});
+  }
+  std::vector<ZhLobe> best = lobes;
+
+  // Multi-start from random axis sets (Sec. 4.1, "additional searching").
+  Rng rng{splitmix64(o.seed ^ splitmix64(stream ^ 0x5A17C0DEull))};
+  // With at least as many lobes as bands an exact fit exists ([4] Fig. 2: six
+  // lobes represent an order-6 vector), so "good enough" means the BFGS tolerance, not
+  // the paper's few-percent level: keep restarting until the fit is exact.
+  const double restart = o.lobes >= order ? std::min(o.restart_above, kExactFitResidual) : o.restart_above;
+  const double good = restart * restart * squared_norm(t_in);
+  for (int s = 0; s < o.starts && best_psi > good; ++s) {
+    std::vector<ZhLobe> trial(o.lobes);
+    for (ZhLobe& lobe : trial) {
+      lobe.axis = rng.unit_vector();
+      lobe.coeffs.assign(order, 0.0);
+    }
+    refit_coefficients(order, t, mask, trial);
+    const double psi = bfgs(order, t, packing, trial, o.max_evaluations);
+    if (psi < best_psi) {
+      best_psi = psi;
+      best = trial;
+    }
+  }
+  canonicalize(best);
+  fit.lobes = best;
+  fit.residual = std::sqrt(zh_objective(order, t, best, {}));
+  return fit;
+}
+
+std::vector<ZhFit> fit_zh_all(std::span<const double> vectors, const ZhFitOptions& options, int threads,
+                              const std::function<void(std::size_t, std::size_t)>& progress) {
+  const std::size_t n2 = sh_count(options.order);
+  if (vectors.size() % n2 != 0) throw InputError("fit_zh_all: size is not a multiple of order^2");
+  const std::size_t count = vectors.size() / n2;
+  std::vector<ZhFit> fits(count);
+  parallel_for(count, resolve_threads(threads),
+               [&](std::size_t v) { fits[v] = fit_zh(vectors.subspan(v * n2, n2), options, v); }, progress);
+  return fits;
+}
+
+}  // namespace shtool::fit

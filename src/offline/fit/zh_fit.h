@@ -1,0 +1,98 @@
+// Fitting sums of zonal-harmonic lobes to SH vectors ([4] Sec. 4.1).
+//
+// Model ([4] Eq. 7-11, docs/conventions.md): a lobe with unit axis s and convolved
+// coefficients g*_l contributes g*_l y_l^m(s) to SH coefficient (l, m). The objective is
+// psi = ||t~ - t||^2 (Eq. 17), minimised with NLopt's LD_LBFGS over axes and
+// coefficients together using the analytic gradients of Eq. 19-21. NLopt's L-BFGS is
+// used rather than a hand-written BFGS: the problem is smooth and small (4 (3 + n)
+// variables), L-BFGS with the exact gradient converges on it, and it is a packaged,
+// tested implementation.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <span>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace shtool::fit {
+
+struct ZhLobe {
+  Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();  // unit vector
+  std::vector<double> coeffs;                       // g*_l, l = 0..order-1
+};
+
+struct ZhFit {
+  std::vector<ZhLobe> lobes;
+  std::vector<double> direct;  // stored SH coefficients (DC, then linear) when direct storage is on
+  double residual = 0.0;       // ||t~ - t||, L2 over all order^2 coefficients
+  double norm = 0.0;           // ||t||
+};
+
+struct ZhFitOptions {
+  int order = 6;
+  int lobes = 4;
+  // Store DC (and the linear band when lobes >= 3) directly, fit lobes to the rest
+  // ([4] Sec. 3.3).
+  bool direct = false;
+  // Random axis sets tried after the greedy start (the multi-start of Sec. 4.1); the
+  // effort/quality knob. 0: greedy + coefficient refit + joint BFGS only.
+  int starts = 4;
+  // Axes of the dense well-spread set scanned with the closed form of Eq. 18 for each
+  // single lobe (a spherical-Fibonacci set on the upper hemisphere: s and -s give the
+  // same lobe).
+  int axis_samples = 256;
+  // Local refinements started from the best scanned axes (plus the optimal linear lobe).
+  int single_lobe_refinements = 2;
+  int max_evaluations = 300;  // per BFGS run
+  std::uint64_t seed = 1;
+  // Multi-start runs only while the residual is above this fraction of ||t|| ("we apply
+  // further computation when the fit error is high", Sec. 4.1): well-fitted vertices,
+  // most of a mesh, stay cheap. 0: always run all starts.
+  double restart_above = 0.05;
+};
+
+// Relative residual taken as "exact" when lobes >= order: BFGS stops at a relative
+// change of 1e-12 in the squared residual, so fits that are exact in theory land near
+// 1e-8..1e-7; 1e-6 separates them from the percent-level fits of fewer lobes.
+inline constexpr double kExactFitResidual = 1e-6;
+
+// Eq. 18: best coefficients for a single lobe with fixed unit axis s, using
+// sum_m y_lm(s)^2 = (2l+1)/(4 pi). Writes `coeffs` (order values) and returns the
+// squared residual ||t~ - t||^2. Bands with mask[l] false get coefficient 0 (empty
+// mask: all bands free).
+double single_lobe_closed_form(int order, std::span<const double> t, const Eigen::Vector3d& axis,
+                               std::span<double> coeffs, const std::vector<bool>& mask = {});
+
+// Axis of symmetry of the linear band of t: normalise (-t_1^1, -t_1^-1, t_1^0)
+// (Sec. 3.3, with y_1^-1 = -c y, y_1^0 = c z, y_1^1 = -c x). +z if that band is zero.
+Eigen::Vector3d optimal_linear_axis(std::span<const double> t);
+
+// `count` well-spread unit vectors with z >= 0 (spherical Fibonacci, upper hemisphere).
+std::vector<Eigen::Vector3d> hemisphere_axes(int count);
+
+// The SH vector of a sum of lobes: out[i] = sum over lobes of g*_l y_i(s).
+void lobes_to_sh(int order, const std::vector<ZhLobe>& lobes, std::span<double> out);
+
+// psi of Eq. 17 for lobes with (possibly non-unit) axes s_k evaluated at h(s_k) = s_k/|s_k|,
+// and its gradient (Eq. 19-21) when grad is non-empty, packed per lobe as
+// [ds_x, ds_y, ds_z, dg*_0 .. dg*_{order-1}].
+double zh_objective(int order, std::span<const double> t, const std::vector<ZhLobe>& lobes,
+                    std::span<double> grad);
+
+// Full fit of one vector (t.size() == order^2): single lobe = dense axis scan + Eq. 18 +
+// BFGS from the best axes and the optimal linear lobe; multi-lobe = greedy, coefficient
+// refit with axes frozen, joint BFGS, then `starts` random axis sets (seeded by
+// options.seed and `stream`) each refit and BFGS-refined; the best is returned.
+// Axes are returned unit length with z >= 0 (odd-band coefficients flipped with them).
+ZhFit fit_zh(std::span<const double> t, const ZhFitOptions& options, std::uint64_t stream = 0);
+
+// Fits vectors[v * order^2 ...] for every v on `threads` workers (fixed partition by
+// index; stream = v, so results do not depend on the thread count). progress(done,
+// total) is called from worker 0 only.
+std::vector<ZhFit> fit_zh_all(std::span<const double> vectors, const ZhFitOptions& options, int threads,
+                              const std::function<void(std::size_t, std::size_t)>& progress = {});
+
+}  // namespace shtool::fit

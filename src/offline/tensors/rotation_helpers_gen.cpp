@@ -1,0 +1,125 @@
+#include "tensors/rotation_helpers_gen.h"
+
+#include "common/input_error.h"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include <Eigen/Dense>
+
+#include "shtool/euler.h"
+#include "shtool/quadrature.h"
+#include "shtool/sh.h"
+
+namespace shtool {
+namespace {
+
+constexpr double kStructuralZero = 1e-13;
+
+}  // namespace
+
+RotationHelpers compute_rotation_helpers(int order) {
+  if (!is_supported_order(order)) throw InputError("unsupported order " + std::to_string(order));
+  const int n = sh_count(order);
+  // Rx(+90): y -> z, z -> -y. g(w) = f(R^-1 w) gives X[i][j] = integral y_i(w) y_j(R^-1 w).
+  Mat3<double> rx;
+  rx << 1, 0, 0, 0, 0, -1, 0, 1, 0;
+  const Mat3<double> rx_inv = rx.transpose();
+  const SphereQuadrature q = sphere_quadrature(2 * order - 2);
+  // Accumulated in long double: the sums run over ~2 N^2 nodes and a double sum would
+  // leave errors of ~1e-14 on exact values such as X90[0][0] = 1.
+  using Accum = Eigen::Matrix<long double, Eigen::Dynamic, Eigen::Dynamic>;
+  std::vector<Accum> sums(order);
+  for (int l = 0; l < order; ++l) sums[l] = Accum::Zero(2 * l + 1, 2 * l + 1);
+  std::vector<double> yw(n), yr(n);
+  for (std::size_t k = 0; k < q.directions.size(); ++k) {
+    eval_sh<double>(order, q.directions[k], yw);
+    eval_sh<double>(order, rx_inv * q.directions[k], yr);
+    for (int l = 0; l < order; ++l)
+      for (int a = 0; a <= 2 * l; ++a)
+        for (int b = 0; b <= 2 * l; ++b)
+          sums[l](a, b) += static_cast<long double>(q.weights[k] * yw[l * l + a]) * yr[l * l + b];
+  }
+  std::vector<Eigen::MatrixXd> x90(order);
+  for (int l = 0; l < order; ++l) x90[l] = sums[l].cast<double>();
+
+  RotationHelpers h;
+  h.order = order;
+  h.x90_row.assign(n + 1, 0);
+  h.dy_sub.assign(n, 0.0);
+  h.ddy_diag.assign(n, 0.0);
+  h.ddy_off2.assign(n, 0.0);
+  for (int l = 0; l < order; ++l) {
+    const int size = 2 * l + 1, first = l * l;
+    for (int a = 0; a < size; ++a) {
+      for (int b = 0; b < size; ++b) {
+        const double v = x90[l](a, b);
+        if (std::abs(v) < kStructuralZero) continue;
+        h.x90_col.push_back(first + b);
+        h.x90_val.push_back(v);
+      }
+      h.x90_row[first + a + 1] = static_cast<int>(h.x90_col.size());
+    }
+    // Generator of z-rotations in band l: d/da of (f_m, f_-m) -> (-m f_-m, m f_m).
+    Eigen::MatrixXd gz = Eigen::MatrixXd::Zero(size, size);
+    for (int m = 1; m <= l; ++m) {
+      gz(l + m, l - m) = -m;
+      gz(l - m, l + m) = m;
+    }
+    // D1 from the X90 table carries the quadrature's rounding (~1e-15 relative, more on
+    // the l^2-sized entries of D2 = D1^2). It is only the check; the stored values come
+    // from the closed form of D1's sub-diagonal in our basis (docs/rotation.md), squared
+    // in long double, so each is correctly rounded or 1 ulp off.
+    const Eigen::MatrixXd d1_check = x90[l].transpose() * gz * x90[l];
+    using LMat = Eigen::Matrix<long double, Eigen::Dynamic, Eigen::Dynamic>;
+    LMat d1 = LMat::Zero(size, size);
+    for (int a = 1; a < size; ++a) {
+      const int m = a - l;  // D1[m][m-1]
+      const long double lm = l;
+      long double v;
+      if (m <= -1) v = 0.5L * std::sqrt((lm + m) * (lm - m + 1));
+      else if (m == 0) v = 0.0L;
+      else if (m == 1) v = -std::sqrt(lm * (lm + 1) / 2);
+      else v = -0.5L * std::sqrt((lm + m) * (lm - m + 1));
+      d1(a, a - 1) = v;
+      d1(a - 1, a) = -v;  // antisymmetric
+    }
+    const LMat d2 = d1 * d1;
+    const double scale = std::max(1.0, double(l) * l);
+    for (int a = 0; a < size; ++a)
+      for (int b = 0; b < size; ++b)
+        if (std::abs(d1_check(a, b) - static_cast<double>(d1(a, b))) > 1e-12 * scale)
+          throw std::logic_error("D1 closed form disagrees with X90^T G_z X90 in band " +
+                                 std::to_string(l));
+    for (int a = 0; a < size; ++a) {
+      if (a > 0) h.dy_sub[first + a] = static_cast<double>(d1(a, a - 1));
+      h.ddy_diag[first + a] = static_cast<double>(d2(a, a));
+      if (a > 1) h.ddy_off2[first + a] = static_cast<double>(d2(a, a - 2));
+    }
+  }
+  return h;
+}
+
+Table to_table(const RotationHelpers& h, const nlohmann::json& generator) {
+  const std::int64_t n = sh_count(h.order);
+  const std::int64_t nnz = static_cast<std::int64_t>(h.x90_val.size());
+  Table t;
+  t.kind = std::string(kRotationHelpersKind);
+  t.kind_version = "1.0";
+  t.order = h.order;
+  t.generator = generator.dump();
+  const nlohmann::json meta = {{"x90_nonzeros", nnz}, {"description",
+            "X90 = M(Rx(+90 deg)) in CSR; D1 = dM(Ry(b))/db(0) sub-diagonal; D2 = D1^2 diagonal "
+            "and distance-2 diagonal"}};
+  t.meta = meta.dump();
+  t.arrays.push_back(TableArray::from<std::int32_t>("x90_row", {n + 1}, h.x90_row));
+  t.arrays.push_back(TableArray::from<std::int32_t>("x90_col", {nnz}, h.x90_col));
+  t.arrays.push_back(TableArray::from<double>("x90_val", {nnz}, h.x90_val));
+  t.arrays.push_back(TableArray::from<double>("dy_sub", {n}, h.dy_sub));
+  t.arrays.push_back(TableArray::from<double>("ddy_diag", {n}, h.ddy_diag));
+  t.arrays.push_back(TableArray::from<double>("ddy_off2", {n}, h.ddy_off2));
+  return t;
+}
+
+}  // namespace shtool

@@ -1,0 +1,25 @@
+// gen-tensors: the sparse helper matrices of the zxzxz and Taylor rotations.
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include "shtool/rotation_helpers.h"
+#include "shtool/table.h"
+
+namespace shtool {
+
+// X90 = M(Rx(+90 deg)) by projection with a quadrature that is exact for the degree-2l
+// integrands of band l (so exact up to rounding, and independent of the recurrence the
+// reference rotation uses). D1 = dM(Ry(b))/db(0) from its closed form (tridiagonal,
+// antisymmetric), checked against X90^T G_z X90 with G_z the exact generator of
+// z-rotations (Ry(b) = Rx(-90) Rz(b) Rx(+90)); D2 = D1^2 (M(Ry(b)) = exp(b D1)).
+// X90 entries below 1e-13 in magnitude are structural zeros (exact zeros by parity) and
+// are dropped. Throws std::logic_error if the closed form and the X90 table disagree,
+// which would mean a convention error.
+RotationHelpers compute_rotation_helpers(int order);
+
+// The "rotation-helpers" table of `h` (schemas/rotation-helpers.schema.json), with the
+// generator record the caller made (common/generator_record.h).
+Table to_table(const RotationHelpers& h, const nlohmann::json& generator);
+
+}  // namespace shtool

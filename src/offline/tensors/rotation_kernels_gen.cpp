@@ -1,0 +1,261 @@
+#include "tensors/rotation_kernels_gen.h"
+
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "kernels/rotation_kernels.h"
+#include "tensors/rotation_helpers_gen.h"
+
+namespace shtool {
+namespace {
+
+using detail::kKernelMaxBand;
+using detail::kKernelMaxOrder;
+using detail::kBandKernelMaxBand;
+
+// prefix followed by the number (append: GCC 12 warns, wrongly, -Wrestrict about
+// "literal" + std::string at -O3).
+std::string indexed(const char* prefix, int j) { return std::string(prefix).append(std::to_string(j)); }
+
+// Round-trip text of a double (17 significant digits), identical on every run.
+std::string literal(double v) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
+
+// Sum of coefficient * variable terms as C++; exact zeros dropped, unit coefficients
+// written without a multiplication. Empty sums give "".
+std::string linear_sum(const std::vector<std::pair<double, std::string>>& terms) {
+  std::string s;
+  for (const auto& [c, name] : terms) {
+    if (c == 0.0) continue;
+    const bool neg = c < 0, first = s.empty();
+    const double a = std::abs(c);
+    std::string term = a == 1.0 ? name : "T(" + literal(a) + ") * " + name;
+    if (first) s = neg ? (a == 1.0 ? "-" + name : "T(" + literal(-a) + ") * " + name) : term;
+    else s += (neg ? " - " : " + ") + term;
+  }
+  return s;
+}
+
+// z-rotation of band l by angle x ([2] App. C: (f_m, f_-m) turns by m x), from
+// variables src<j> (or src[j]) into dst<j>. cos(m x), sin(m x) are read from the state's
+// tables (s.c<x>, s.s<x>) where they are used, which keeps few values live at a time.
+void z_rotation(std::ostream& o, int l, const std::string& angle, const std::string& src, bool src_array,
+                const std::string& dst, bool dst_array) {
+  auto in = [&](int j) { return src_array ? src + "[" + std::to_string(j) + "]" : src + std::to_string(j); };
+  auto out = [&](int j) {
+    return dst_array ? std::string("  ").append(dst).append("[").append(std::to_string(j)).append("] = ")
+                     : std::string("  const P ").append(dst).append(std::to_string(j)).append(" = ");
+  };
+  o << out(l) << in(l) << ";\n";
+  for (int m = 1; m <= l; ++m) {
+    const std::string cm = "c" + angle + std::to_string(m), sm = "s" + angle + std::to_string(m);
+    o << "  const P " << cm << " = splat<P>(s.c" << angle << "[" << m << "]), " << sm << " = splat<P>(s.s"
+      << angle << "[" << m << "]);\n";
+    o << out(l + m) << cm << " * " << in(l + m) << " - " << sm << " * " << in(l - m) << ";\n";
+    o << out(l - m) << sm << " * " << in(l + m) << " + " << cm << " * " << in(l - m) << ";\n";
+  }
+}
+
+// Dense band block of X90 from the compressed rows.
+std::vector<std::vector<double>> x90_block(const RotationHelpers& h, int l) {
+  const int size = 2 * l + 1, first = l * l;
+  std::vector<std::vector<double>> b(size, std::vector<double>(size, 0.0));
+  for (int i = 0; i < size; ++i)
+    for (int k = h.x90_row[first + i]; k < h.x90_row[first + i + 1]; ++k)
+      b[i][h.x90_col[k] - first] = h.x90_val[k];
+  return b;
+}
+
+void zxzxz_band(std::ostream& o, const RotationHelpers& h, int l) {
+  const int size = 2 * l + 1;
+  const auto x = x90_block(h, l);
+  // S: KernelState<T>, or BatchState<T> (a rotation per lane).
+  o << "// Band " << l << " of Z(a) X90^T Z(b) X90 Z(g), Ry(b) = Rx(-90) Rz(b) Rx(+90).\n"
+    << "template <class T, class P, class S>\n"
+    << "inline void zxzxz_band" << l
+    << "(const S& s, const P* __restrict x, P* __restrict y) {\n";
+  z_rotation(o, l, "g", "x", true, "t", false);
+  for (int i = 0; i < size; ++i) {
+    std::vector<std::pair<double, std::string>> terms;
+    for (int j = 0; j < size; ++j) terms.emplace_back(x[i][j], indexed("t", j));
+    o << "  const P u" << i << " = " << linear_sum(terms) << ";\n";
+  }
+  z_rotation(o, l, "b", "u", false, "w", false);
+  for (int i = 0; i < size; ++i) {
+    std::vector<std::pair<double, std::string>> terms;
+    for (int j = 0; j < size; ++j) terms.emplace_back(x[j][i], indexed("w", j));
+    o << "  const P v" << i << " = " << linear_sum(terms) << ";\n";
+  }
+  z_rotation(o, l, "a", "v", false, "y", true);
+  o << "}\n\n";
+}
+
+void taylor_band(std::ostream& o, const RotationHelpers& h, int l) {
+  const int size = 2 * l + 1, first = l * l;
+  // D1[j][j-1] = sub[j], D1[j][j+1] = -sub[j+1] (antisymmetric); D2 diagonal and
+  // distance-2 entries D2[j][j-2] = off2[j] = D2[j-2][j].
+  auto sub = [&](int j) { return j >= 1 && j < size ? h.dy_sub[first + j] : 0.0; };
+  auto off2 = [&](int j) { return j >= 2 && j < size ? h.ddy_off2[first + j] : 0.0; };
+  auto t = [](int j) { return indexed("t", j); };
+  o << "// Band " << l << " of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) (paper 001, Sec. 3).\n"
+    << "template <int Order, class T, class P, class S>\n"
+    << "inline void taylor_band" << l
+    << "(const S& s, const P* __restrict x, P* __restrict y) {\n";
+  z_rotation(o, l, "g", "x", true, "t", false);
+  o << "  const auto b = s.beta, h = s.half_beta2;\n  (void)h;\n";
+  for (int j = 0; j < size; ++j) {
+    std::vector<std::pair<double, std::string>> d1;
+    if (j > 0) d1.emplace_back(sub(j), t(j - 1));
+    if (j + 1 < size) d1.emplace_back(-sub(j + 1), t(j + 1));
+    const std::string s1 = linear_sum(d1);
+    o << "  P u" << j << " = " << t(j);
+    if (!s1.empty()) o << " + b * (" << s1 << ")";
+    o << ";\n";
+    const std::string diag = linear_sum({{h.ddy_diag[first + j], t(j)}});
+    std::vector<std::pair<double, std::string>> d2 = {{h.ddy_diag[first + j], t(j)}};
+    if (j >= 2) d2.emplace_back(off2(j), t(j - 2));
+    if (j + 2 < size) d2.emplace_back(off2(j + 2), t(j + 2));
+    const std::string full = linear_sum(d2);
+    if (!diag.empty()) o << "  if constexpr (Order == 15) u" << j << " += h * (" << diag << ");\n";
+    if (!full.empty()) o << "  if constexpr (Order == 2) u" << j << " += h * (" << full << ");\n";
+  }
+  z_rotation(o, l, "a", "u", false, "y", true);
+  o << "}\n\n";
+}
+
+void order_function(std::ostream& o, bool taylor, int n) {
+  const int count = n * n;
+  const std::string name = (taylor ? "taylor_order" : "zxzxz_order") + std::to_string(n);
+  // Bands 0..n-1 on lanes P; then the entry point: one vector works in place on the
+  // caller's arrays, three are gathered into lanes first.
+  // S: KernelState<T>, or BatchState<T> (a rotation per lane).
+  if (taylor) o << "template <int Order, class T, class P, class S>\n";
+  else o << "template <class T, class P, class S>\n";
+  o << "inline void " << name << "_bands(const S& s, const P* __restrict x, P* __restrict y) {\n"
+    << "  y[0] = x[0];\n";
+  for (int l = 1; l < n; ++l) {
+    const std::string args =
+        indexed("(s, x + ", l * l).append(", y + ").append(std::to_string(l * l)).append(");\n");
+    if (taylor) o << "  taylor_band" << l << "<Order, T, P>" << args;
+    else if (l == 1) o << "  band1_closed<T, P>(s.r, x + 1, y + 1);\n";
+    // Band 2 by its closed form only where it saves the Euler angles (order 3); once
+    // they are computed anyway, the zxzxz band costs fewer operations.
+    else if (l == 2 && n <= 3) o << "  band2_closed<T, P>(s.r, x + 4, y + 4);\n";
+    else o << "  zxzxz_band" << l << "<T, P>" << args;
+  }
+  if (n == 1) o << "  (void)s;\n";
+  o << "}\n\n";
+  const std::string targs = taylor ? "Order, T, " : "T, ";
+  if (taylor) o << "template <int Order, class T, int V>\n";
+  else o << "template <class T, int V>\n";
+  o << "void " << name << "(const KernelState<T>& s, const T* const* in, T* const* out) {\n"
+    << "  run_lanes<T, V, 0, " << count << ">(in, out, [&s](const auto* __restrict x, auto* __restrict y) {\n"
+    << "    " << name << "_bands<" << targs << "std::remove_cvref_t<decltype(*y)>>(s, x, y);\n"
+    << "  });\n}\n\n";
+  o << (taylor ? "template <int Order, class T>\n" : "template <class T>\n")
+    << "void " << name << "_batch(const BatchState<T>& s, const T* const* in, T* const* out) {\n"
+    << "  run_batch_lanes<T, 0, " << count << ">(in, out, [&s](const auto* __restrict x, auto* __restrict y) {\n"
+    << "    " << name << "_bands<" << targs << "BatchPack<T>>(s, x, y);\n"
+    << "  });\n}\n\n";
+}
+
+// Entry point of one band above the whole-order kernels.
+void band_entry(std::ostream& o, bool taylor, int l) {
+  const int first = l * l, size = 2 * l + 1;
+  const std::string band = (taylor ? "taylor_band" : "zxzxz_band") + std::to_string(l);
+  const std::string targs = taylor ? "Order, T, " : "T, ";
+  if (taylor) o << "template <int Order, class T, int V>\n";
+  else o << "template <class T, int V>\n";
+  o << "void " << band << "_entry(const KernelState<T>& s, const T* const* in, T* const* out) {\n"
+    << "  run_lanes<T, V, " << first << ", " << size
+    << ">(in, out, [&s](const auto* __restrict x, auto* __restrict y) {\n"
+    << "    " << band << "<" << targs << "std::remove_cvref_t<decltype(*y)>>(s, x, y);\n"
+    << "  });\n}\n\n";
+  o << (taylor ? "template <int Order, class T>\n" : "template <class T>\n")
+    << "void " << band << "_batch(const BatchState<T>& s, const T* const* in, T* const* out) {\n"
+    << "  run_batch_lanes<T, " << first << ", " << size
+    << ">(in, out, [&s](const auto* __restrict x, auto* __restrict y) {\n"
+    << "    " << band << "<" << targs << "BatchPack<T>>(s, x, y);\n"
+    << "  });\n}\n\n";
+}
+
+// A lookup from (method, order) or (method, band l) to the address of a generated
+// function: `signature` opens it, then a switch over the four methods and over the
+// whole orders 1..kKernelMaxOrder (orders) or the bands kKernelMaxOrder..kBandKernelMaxBand
+// returns &<zxzxz|taylor>_<order|band><n><suffix><[Order, ]targs>.
+void lookup_function(std::ostream& o, const std::string& signature, const char* var, bool orders,
+                     const std::string& suffix, const std::string& targs, bool no_double_zxzxz) {
+  const char* methods[4][2] = {{"0", ""}, {"1", "1, "}, {"15", "15, "}, {"2", "2, "}};
+  const int lo = orders ? 1 : kKernelMaxOrder, hi = orders ? kKernelMaxOrder : kBandKernelMaxBand;
+  o << signature << "  switch (method) {\n";
+  for (int k = 0; k < 4; ++k) {
+    o << "    case " << methods[k][0] << ":\n";
+    if (k == 0 && no_double_zxzxz) o << "      if constexpr (std::is_same_v<T, double>) return nullptr;\n";
+    o << "      switch (" << var << ") {\n";
+    for (int n = lo; n <= hi; ++n)
+      o << "        case " << n << ": return &" << (k == 0 ? "zxzxz_" : "taylor_") << (orders ? "order" : "band") << n
+        << suffix << "<" << methods[k][1] << targs << ">;\n";
+    o << "      }\n      break;\n";
+  }
+  o << "  }\n  return nullptr;\n}\n\n";
+}
+
+}  // namespace
+
+std::string rotation_kernels_source() {
+  const RotationHelpers h = compute_rotation_helpers(kBandKernelMaxBand + 1);
+  std::ostringstream o;
+  o << "// Generated by `shtool gen-tensors --what rotation-kernels --out src/runtime/kernels`\n"
+       "// (src/offline/tensors/rotation_kernels_gen.cpp) from the rotation helpers of\n"
+       "// compute_rotation_helpers: X90 = M(Rx(+90 deg)), D1 and D2. Do not edit: the test\n"
+       "// test_rotation_kernels regenerates this file and compares the bytes.\n"
+       "#include \"rotation_kernels.h\"\n\n"
+       "#include <type_traits>\n\n"
+       "namespace shtool::detail {\n\n"
+       "static_assert(kKernelMaxBand == "
+    << kKernelMaxBand
+    << ", \"regenerate rotation_kernels_generated.cpp\");\n\n"
+       "namespace {\n\n";
+  for (int l = 2; l <= kBandKernelMaxBand; ++l) zxzxz_band(o, h, l);
+  for (int l = 1; l <= kBandKernelMaxBand; ++l) taylor_band(o, h, l);
+  for (int l = kKernelMaxOrder; l <= kBandKernelMaxBand; ++l) {
+    band_entry(o, false, l);
+    band_entry(o, true, l);
+  }
+  for (int n = 1; n <= kKernelMaxOrder; ++n) order_function(o, false, n);
+  for (int n = 1; n <= kKernelMaxOrder; ++n) order_function(o, true, n);
+  o << "}  // namespace\n\n";
+  lookup_function(o,
+                  "template <class T, int V>\nRotationKernel<T, V> rotation_kernel(int method, int order) {\n"
+                  "  if (order < 1) return nullptr;\n"
+                  "  if (order > kKernelMaxOrder) order = kKernelMaxOrder;\n",
+                  "order", true, "", "T, V", false);
+  // Double zxzxz bands above the whole-order kernels run the paired X90 rows of
+  // rotation.cpp, so their band kernels would be dead code (and batches running them
+  // would not match apply() bit for bit): not instantiated.
+  lookup_function(o, "template <class T, int V>\nRotationKernel<T, V> band_kernel(int method, int l) {\n", "l",
+                  false, "_entry", "T, V", true);
+  lookup_function(o, "template <class T>\nBatchKernel<T> batch_kernel(int method, int order) {\n", "order", true,
+                  "_batch", "T", false);
+  lookup_function(o, "template <class T>\nBatchKernel<T> batch_band_kernel(int method, int l) {\n", "l", false,
+                  "_batch", "T", true);
+  for (const char* type : {"float", "double"})
+    o << "template BatchKernel<" << type << "> batch_kernel<" << type << ">(int, int);\n"
+      << "template BatchKernel<" << type << "> batch_band_kernel<" << type << ">(int, int);\n";
+  for (const char* type : {"float", "double"})
+    for (int v : {1, 3})
+      o << "template RotationKernel<" << type << ", " << v << "> rotation_kernel<" << type << ", " << v
+        << ">(int, int);\n"
+        << "template RotationKernel<" << type << ", " << v << "> band_kernel<" << type << ", " << v
+        << ">(int, int);\n";
+  o << "\n}  // namespace shtool::detail\n";
+  return o.str();
+}
+
+}  // namespace shtool

@@ -1,0 +1,109 @@
+#include "shtool/zh_fit_table.h"
+
+#include <cmath>
+#include <limits>
+#include <string>
+
+namespace shtool {
+namespace {
+
+Error zh_fit_error(const std::string& what) { return Error{"zh-fit table: " + what}; }
+
+std::string shape_text(const std::vector<std::int64_t>& shape) {
+  std::string s = "[";
+  for (std::size_t i = 0; i < shape.size(); ++i) s += (i ? ", " : "") + std::to_string(shape[i]);
+  return s + "]";
+}
+
+// The f64 array `name` with exactly `shape`, or an error naming what differs.
+Result<std::vector<double>> f64_array(const Table& t, const char* name, const std::vector<std::int64_t>& shape) {
+  const TableArray* a = t.find(name);
+  if (!a) return zh_fit_error("missing array '" + std::string(name) + "'");
+  if (a->dtype != DType::f64) return zh_fit_error("array '" + std::string(name) + "' is not f64");
+  if (a->shape != shape)
+    return zh_fit_error("array '" + std::string(name) + "' has shape " + shape_text(a->shape) + ", expected " +
+                        shape_text(shape));
+  std::vector<double> v = a->values<double>();
+  for (std::size_t i = 0; i < v.size(); ++i)
+    if (!std::isfinite(v[i]))
+      return zh_fit_error("array '" + std::string(name) + "' element " + std::to_string(i) + " is not finite");
+  return v;
+}
+
+}  // namespace
+
+template <class T>
+Result<ZhFitTable<T>> ZhFitTable<T>::from_table(const Table& t) {
+  if (t.kind != kZhFitKind) return zh_fit_error("wrong kind '" + t.kind + "'");
+  if (!is_supported_order(t.order)) return zh_fit_error("unsupported order " + std::to_string(t.order));
+  const TableArray* axes = t.find("axes");
+  if (!axes || axes->shape.size() != 3 || axes->shape[2] != 3)
+    return zh_fit_error("array 'axes' is missing or not of shape [V, N, 3]");
+  const std::int64_t V = axes->shape[0], N = axes->shape[1], n = t.order;
+  // 64 lobes is fit-zh's own limit; V is bounded by the bytes the reader accepted.
+  if (V < 1 || N < 1 || N > 64) return zh_fit_error("axes shape " + shape_text(axes->shape) + " is out of range");
+  auto ax = f64_array(t, "axes", {V, N, 3});
+  auto co = f64_array(t, "coeffs", {V, N, n});
+  auto re = f64_array(t, "residual", {V});
+  auto no = f64_array(t, "norm", {V});
+  for (const auto* r : {&ax, &co, &re, &no})
+    if (!*r) return r->error();
+
+  ZhFitTable z;
+  z.order = static_cast<int>(n);
+  z.lobes = static_cast<int>(N);
+  z.vertices = static_cast<std::size_t>(V);
+  const std::vector<double>& a = ax.value();
+  z.axes.reserve(a.size() / 3);
+  for (std::size_t i = 0; i < a.size(); i += 3) {
+    const Vec3<double> w(a[i], a[i + 1], a[i + 2]);
+    if (std::abs(w.norm() - 1.0) > 1e-6)
+      return zh_fit_error("axis " + std::to_string(i / 3) + " is not a unit vector");
+    z.axes.push_back(w.cast<T>());
+  }
+  auto narrow = [](const std::vector<double>& in, std::vector<T>& out) {
+    out.assign(in.begin(), in.end());
+  };
+  for (const double r : re.value())
+    if (r < 0) return zh_fit_error("negative residual");
+  for (const double r : no.value())
+    if (r < 0) return zh_fit_error("negative norm");
+  // A float table must not overflow on the way in.
+  for (const double c : co.value())
+    if (std::abs(c) > static_cast<double>(std::numeric_limits<T>::max()))
+      return zh_fit_error("a coefficient does not fit the requested precision");
+  narrow(co.value(), z.coeffs);
+  narrow(re.value(), z.residual);
+  narrow(no.value(), z.norm);
+
+  if (const TableArray* d = t.find("direct")) {
+    if (d->shape.size() != 2 || d->shape[0] != V || (d->shape[1] != 1 && d->shape[1] != 4))
+      return zh_fit_error("array 'direct' has shape " + shape_text(d->shape) + ", expected [V, 1] or [V, 4]");
+    auto dv = f64_array(t, "direct", d->shape);
+    if (!dv) return dv.error();
+    z.direct_count = static_cast<int>(d->shape[1]);
+    narrow(dv.value(), z.direct);
+  }
+  if (const TableArray* vi = t.find("vertex_index")) {
+    if (vi->dtype != DType::u32 || vi->shape != std::vector<std::int64_t>{V})
+      return zh_fit_error("array 'vertex_index' is not u32 of shape [V]");
+    z.vertex_index = vi->values<std::uint32_t>();
+  }
+  return z;
+}
+
+template <class T>
+Result<ZhFitTable<T>> load_zh_fit(const std::filesystem::path& path) {
+  Result<Table> table = read_table(path, TableExpectation{std::string(kZhFitKind), 1, 0});
+  if (!table) return table.error();
+  Result<ZhFitTable<T>> z = ZhFitTable<T>::from_table(table.value());
+  if (!z) return Error{path.string() + ": " + z.error().message};
+  return z;
+}
+
+template struct ZhFitTable<float>;
+template struct ZhFitTable<double>;
+template Result<ZhFitTable<float>> load_zh_fit<float>(const std::filesystem::path&);
+template Result<ZhFitTable<double>> load_zh_fit<double>(const std::filesystem::path&);
+
+}  // namespace shtool

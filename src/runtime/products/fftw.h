@@ -1,0 +1,114 @@
+// Internal to the runtime: the one FFTW binding of the Fourier and grid products (float
+// and double through one traits type), the planner lock and FFTW-aligned buffers. FFTW
+// stays inside the library: no public header names it.
+#pragma once
+
+#include <cstddef>
+#include <cstring>
+#include <mutex>
+#include <new>
+#include <utility>
+
+#include <fftw3.h>
+
+namespace shtool::detail {
+
+// FFTW_ESTIMATE: the plan does not depend on timing (FFTW_MEASURE would pick algorithms
+// by timing), so the same inputs give byte-identical results from run to run.
+inline constexpr unsigned kFftwPlanFlags = FFTW_ESTIMATE;
+
+// FFTW's planner is not thread-safe (execution of distinct plans is): every plan the
+// runtime makes or destroys is made under this one lock.
+std::mutex& fftw_planner_mutex();
+
+template <class T>
+struct Fftw;
+
+template <>
+struct Fftw<double> {
+  using Plan = fftw_plan;
+  using Complex = fftw_complex;
+  static void* alloc(std::size_t bytes) { return fftw_malloc(bytes); }
+  static void release(void* p) { fftw_free(p); }
+  // 2D real transforms (Fourier products).
+  static Plan c2r_2d(int n0, int n1, Complex* in, double* out) {
+    return fftw_plan_dft_c2r_2d(n0, n1, in, out, kFftwPlanFlags);
+  }
+  static Plan r2c_2d(int n0, int n1, double* in, Complex* out) {
+    return fftw_plan_dft_r2c_2d(n0, n1, in, out, kFftwPlanFlags);
+  }
+  static void run_c2r(Plan p, Complex* in, double* out) { fftw_execute_dft_c2r(p, in, out); }
+  static void run_r2c(Plan p, double* in, Complex* out) { fftw_execute_dft_r2c(p, in, out); }
+  // `howmany` 1D transforms of length n; complex side strided (stride `cstride`,
+  // distance 1), real side contiguous (distance n) (grid products).
+  static Plan c2r_many(int n, int howmany, Complex* in, int cstride, double* out) {
+    return fftw_plan_many_dft_c2r(1, &n, howmany, in, nullptr, cstride, 1, out, nullptr, 1, n, kFftwPlanFlags);
+  }
+  static Plan r2c_many(int n, int howmany, double* in, Complex* out, int cstride) {
+    return fftw_plan_many_dft_r2c(1, &n, howmany, in, nullptr, 1, n, out, nullptr, cstride, 1, kFftwPlanFlags);
+  }
+  static void execute(Plan p) { fftw_execute(p); }
+  static void destroy(Plan p) { fftw_destroy_plan(p); }
+};
+
+template <>
+struct Fftw<float> {
+  using Plan = fftwf_plan;
+  using Complex = fftwf_complex;
+  static void* alloc(std::size_t bytes) { return fftwf_malloc(bytes); }
+  static void release(void* p) { fftwf_free(p); }
+  static Plan c2r_2d(int n0, int n1, Complex* in, float* out) {
+    return fftwf_plan_dft_c2r_2d(n0, n1, in, out, kFftwPlanFlags);
+  }
+  static Plan r2c_2d(int n0, int n1, float* in, Complex* out) {
+    return fftwf_plan_dft_r2c_2d(n0, n1, in, out, kFftwPlanFlags);
+  }
+  static void run_c2r(Plan p, Complex* in, float* out) { fftwf_execute_dft_c2r(p, in, out); }
+  static void run_r2c(Plan p, float* in, Complex* out) { fftwf_execute_dft_r2c(p, in, out); }
+  static Plan c2r_many(int n, int howmany, Complex* in, int cstride, float* out) {
+    return fftwf_plan_many_dft_c2r(1, &n, howmany, in, nullptr, cstride, 1, out, nullptr, 1, n, kFftwPlanFlags);
+  }
+  static Plan r2c_many(int n, int howmany, float* in, Complex* out, int cstride) {
+    return fftwf_plan_many_dft_r2c(1, &n, howmany, in, nullptr, 1, n, out, nullptr, cstride, 1, kFftwPlanFlags);
+  }
+  static void execute(Plan p) { fftwf_execute(p); }
+  static void destroy(Plan p) { fftwf_destroy_plan(p); }
+};
+
+// Zero-initialised buffer from fftw_malloc: SIMD-aligned, and equally aligned for every
+// buffer, which the new-array execute interface requires.
+template <class T, class E>
+class FftwBuffer {
+ public:
+  FftwBuffer() = default;
+  explicit FftwBuffer(std::size_t count) : size_(count) {
+    data_ = static_cast<E*>(Fftw<T>::alloc(count * sizeof(E)));
+    if (!data_) throw std::bad_alloc();
+    zero();
+  }
+  ~FftwBuffer() {
+    if (data_) Fftw<T>::release(data_);
+  }
+  FftwBuffer(FftwBuffer&& o) noexcept : data_(o.data_), size_(o.size_) {
+    o.data_ = nullptr;
+    o.size_ = 0;
+  }
+  FftwBuffer& operator=(FftwBuffer&& o) noexcept {
+    std::swap(data_, o.data_);
+    std::swap(size_, o.size_);
+    return *this;
+  }
+  FftwBuffer(const FftwBuffer&) = delete;
+  FftwBuffer& operator=(const FftwBuffer&) = delete;
+  E* data() const { return data_; }
+  std::size_t size() const { return size_; }
+  void zero() {
+    if (size_) std::memset(static_cast<void*>(data_), 0, size_ * sizeof(E));
+  }
+
+ private:
+  E* data_ = nullptr;
+  std::size_t size_ = 0;
+};
+
+}  // namespace shtool::detail

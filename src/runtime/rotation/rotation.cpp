@@ -1,0 +1,804 @@
+#include "shtool/rotation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <stdexcept>
+#include <string>
+#include <type_traits>
+
+#include "shtool/sh.h"
+#include "kernels/rotation_kernels.h"
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
+namespace shtool {
+namespace {
+
+// Offset of band l's dense block: sum_{k<l} (2k+1)^2.
+constexpr int block_offset(int l) { return l * (4 * l * l - 1) / 3; }
+
+// Method codes of the generated kernels (rotation_kernels.h), by index zxzxz, taylor1,
+// taylor1.5, taylor2.
+constexpr int kKernelMethod[4] = {0, 1, 15, 2};
+
+// First band of the paired zxzxz path in double at orders above the generated
+// whole-order kernels (below it the generated kernel of that order runs).
+constexpr int kPairFrom = 10;
+// Values per row of band l in the paired path: the longest class, rounded up to even.
+constexpr int pair_count(int l) { return (l / 2 + 2) & ~1; }
+
+// Number of non-zeros in row j (m = j - l) of band l of X90, and of X90^T: X90 maps
+// the four classes of m (sign, parity) onto each other by square dense blocks of sizes
+// floor(l/2) and ceil(l/2) (+1 for m >= 0 even). Checked against the table when the
+// rotation is constructed.
+constexpr int x90_row_length(int l, int j) {
+  const int m = j - l;
+  if (l & 1) return (m < 0 && !(m & 1)) ? (l - 1) / 2 : (l + 1) / 2;
+  return (m >= 0 && !(m & 1)) ? l / 2 + 1 : l / 2;
+}
+
+}  // namespace
+
+std::string_view rotation_method_name(RotationMethod method) {
+  switch (method) {
+    case RotationMethod::automatic: return "auto";
+    case RotationMethod::reference: return "reference";
+    case RotationMethod::zxzxz: return "zxzxz";
+    case RotationMethod::taylor1: return "taylor1";
+    case RotationMethod::taylor15: return "taylor1.5";
+    case RotationMethod::taylor2: return "taylor2";
+  }
+  return "?";
+}
+
+std::optional<RotationMethod> rotation_method_from_name(std::string_view name) {
+  for (RotationMethod m : {RotationMethod::automatic, RotationMethod::reference, RotationMethod::zxzxz,
+                           RotationMethod::taylor1, RotationMethod::taylor15, RotationMethod::taylor2})
+    if (rotation_method_name(m) == name) return m;
+  return std::nullopt;
+}
+
+double taylor_error_bound(RotationMethod method, int order, double beta, double ddy_offdiag_norm) {
+  // M(Ry(b)) = exp(b D1) with D1 real antisymmetric (normal), eigenvalues i m for
+  // |m| <= l in band l. Truncations of the exponential series are polynomials in D1, so
+  // the error is normal too and its norm is the largest scalar error over the spectrum:
+  //   |e^{i t} - 1 - i t| (1st order), |e^{i t} - 1 - i t + t^2 / 2| (2nd order),
+  // both increasing in t = |b| m on the range where they matter, so m = N - 1.
+  const double t = std::abs(beta) * (order - 1);
+  const std::complex<double> e = std::polar(1.0, t);
+  const std::complex<double> first = e - std::complex<double>(1.0, t);
+  const std::complex<double> second = first + 0.5 * t * t;
+  switch (method) {
+    case RotationMethod::taylor1: return std::abs(first);
+    case RotationMethod::taylor2: return std::abs(second);
+    // 1.5th order drops the off-diagonal part of D2 from the 2nd order expansion.
+    case RotationMethod::taylor15: return std::abs(second) + 0.5 * beta * beta * ddy_offdiag_norm;
+    default: return 0.0;
+  }
+}
+
+template <class T>
+ShRotation<T>::ShRotation(int order, std::shared_ptr<const RotationHelpers> helpers)
+    : order_(order), helpers_(std::move(helpers)) {
+  const int n = sh_count(order);
+  if (helpers_ && helpers_->order >= order) {
+    const RotationHelpers& h = *helpers_;
+    // X90 band by band in strided rows (see rotation.h). The non-zeros of a row lie in
+    // one class of columns (sign of m, parity of m), so they are c0, c0 + 2, ... ;
+    // checked here, since the apply loops rely on it. A class may hold a few exact
+    // zeros (kept: the loops are branch-free), so size for the dense blocks.
+    x90_val_.assign(block_offset(order), T(0));
+    x90t_val_.assign(block_offset(order), T(0));
+    x90_start_.assign(n, 0);
+    x90t_start_.assign(n, 0);
+    x90_band_val_.assign(order + 1, 0);
+    x90t_band_val_.assign(order + 1, 0);
+    // Position of band-relative column j once the band is split: even j first, then odd.
+    auto split_pos = [](int l, int j) { return (j & 1) ? l + 1 + (j >> 1) : (j >> 1); };
+    int written = 0, written_t = 0;
+    for (int l = 0; l < order; ++l) {
+      const int first = l * l, size = 2 * l + 1;
+      x90_band_val_[l] = written;
+      x90t_band_val_[l] = written_t;
+      // Dense copy of the band block, to read rows of X90 and of its transpose alike.
+      std::vector<double> block(size * size, 0.0);
+      for (int i = first; i < first + size; ++i)
+        for (int k = h.x90_row[i]; k < h.x90_row[i + 1]; ++k)
+          block[(i - first) * size + (h.x90_col[k] - first)] = h.x90_val[k];
+      auto pack = [&](bool transpose, std::vector<int>& start, std::vector<T>& val, int& out) {
+        for (int r = 0; r < size; ++r) {
+          auto at = [&](int c) { return transpose ? block[c * size + r] : block[r * size + c]; };
+          int nz = -1;
+          for (int c = 0; c < size && nz < 0; ++c)
+            if (at(c) != 0.0) nz = c;
+          if (nz < 0) throw std::logic_error("X90 row is empty");
+          // The class of the first non-zero column (sign of m, parity of m) is the run
+          // of columns this row reads: lo, lo + 2, ..., hi.
+          const int m = nz - l, odd = m & 1;
+          const int m_lo = m < 0 ? -l + (((-l) & 1) != odd) : odd;
+          const int m_hi = m < 0 ? -1 - (odd == 0) : l - ((l & 1) != odd);
+          const int lo = m_lo + l, hi = m_hi + l;
+          if ((hi - lo) / 2 + 1 != x90_row_length(l, r)) throw std::logic_error("X90 row class size");
+          for (int c = 0; c < size; ++c)
+            if (at(c) != 0.0 && (c < lo || c > hi || (c - lo) % 2))
+              throw std::logic_error("X90 row is not parity-strided");
+          start[first + r] = split_pos(l, lo);
+          for (int c = lo; c <= hi; c += 2) val[out++] = static_cast<T>(at(c));
+        }
+      };
+      pack(false, x90_start_, x90_val_, written);
+      pack(true, x90t_start_, x90t_val_, written_t);
+    }
+    x90_band_val_[order] = written;
+    x90t_band_val_[order] = written_t;
+    x90_val_.resize(written);
+    x90t_val_.resize(written_t);
+    dy_sub_.assign(n + 2, T(0));
+    ddy_diag_.assign(n + 2, T(0));
+    ddy_off2_.assign(n + 2, T(0));
+    for (int i = 0; i < n; ++i) {
+      dy_sub_[i] = static_cast<T>(h.dy_sub[i]);
+      ddy_diag_[i] = static_cast<T>(h.ddy_diag[i]);
+      ddy_off2_[i] = static_cast<T>(h.ddy_off2[i]);
+    }
+    // Infinity norm of the off-diagonal part of D2 (symmetric, so it bounds the
+    // spectral norm): what the 1.5th order expansion leaves out.
+    for (int i = 0; i < n; ++i) {
+      const double row = std::abs(h.ddy_off2[i]) + (i + 2 < n ? std::abs(h.ddy_off2[i + 2]) : 0.0);
+      ddy_offdiag_norm_ = std::max(ddy_offdiag_norm_, row);
+    }
+  } else {
+    helpers_.reset();
+  }
+  for (auto* v : {&cos_a_, &sin_a_, &cos_b_, &sin_b_, &cos_g_, &sin_g_}) v->assign(order, T(0));
+  dense_.assign(block_offset(order), T(0));
+  if (helpers_) {
+    for (int k = 0; k < 4; ++k) {
+      kernel1_[k] = detail::rotation_kernel<T, 1>(kKernelMethod[k], order);
+      kernel3_[k] = detail::rotation_kernel<T, 3>(kKernelMethod[k], order);
+      if (!kernel1_[k] || !kernel3_[k]) throw std::logic_error("no rotation kernel for this order");
+    }
+    kernel_order_ = std::min(order, detail::kKernelMaxOrder);
+    if (order <= detail::kBandKernelMaxBand + 1) {
+      for (int k = 0; k < 4; ++k) {
+        std::vector<BatchKernel>& v = batch_kernels_[k];
+        v.push_back(detail::batch_kernel<T>(kKernelMethod[k], kernel_order_));
+        for (int l = detail::kKernelMaxOrder; l < order; ++l)
+          v.push_back(detail::batch_band_kernel<T>(kKernelMethod[k], l));
+        if (std::find(v.begin(), v.end(), nullptr) != v.end()) v.clear();
+      }
+    }
+    pair_from_ = order;
+    if constexpr (std::is_same_v<T, double>) {
+      if (order > detail::kKernelMaxOrder) {
+        pair_from_ = kPairFrom;
+        kernel1_[0] = detail::rotation_kernel<T, 1>(0, pair_from_);
+        kernel3_[0] = detail::rotation_kernel<T, 3>(0, pair_from_);
+        build_pairs();
+      }
+    }
+  }
+}
+
+template <class T>
+void ShRotation<T>::build_pairs() {
+  // Rows of one band that read the same column class (the same first split column) are
+  // paired in their order; an odd one out is paired with a dummy row whose values are 0
+  // and whose result goes to the scratch slot 2l + 1.
+  pair_band_.assign(2 * order_ + 1, 0);
+  pair_band_val_.assign(2 * order_ + 1, 0);
+  pair_rows_.clear();
+  pair_val_.clear();
+  for (int l = 0; l < order_; ++l) {
+    const int first = l * l, size = 2 * l + 1;
+    for (int k = 0; k < 2; ++k) {
+      pair_band_[2 * l + k] = static_cast<int>(pair_rows_.size() / 3);
+      pair_band_val_[2 * l + k] = static_cast<int>(pair_val_.size());
+      if (l < pair_from_) continue;
+      const std::vector<int>& start = k == 0 ? x90_start_ : x90t_start_;
+      const T* val = (k == 0 ? x90_val_.data() + x90_band_val_[l] : x90t_val_.data() + x90t_band_val_[l]);
+      std::vector<int> row_val(size);  // offset of each row's values
+      for (int r = 0, at = 0; r < size; ++r) {
+        row_val[r] = at;
+        at += x90_row_length(l, r);
+      }
+      std::vector<bool> done(size, false);
+      for (int r = 0; r < size; ++r) {
+        if (done[r]) continue;
+        int partner = -1;
+        for (int q = r + 1; q < size && partner < 0; ++q)
+          if (!done[q] && start[first + q] == start[first + r]) partner = q;
+        done[r] = true;
+        if (partner >= 0) done[partner] = true;
+        // Every row of the band is padded with zeros to the longest class, l / 2 + 1,
+        // rounded up to even (paired_rows sums even and odd columns apart): one trip
+        // count per band also keeps the inner loop's exit branch predictable. The
+        // padding reads at most two values past a class: the next class, or the two
+        // zeroed slots after the band (apply_large_bands).
+        const int count = x90_row_length(l, r), padded = pair_count(l);
+        pair_rows_.insert(pair_rows_.end(), {start[first + r], r, partner >= 0 ? partner : size});
+        for (int c = 0; c < padded; ++c) {
+          pair_val_.push_back(c < count ? val[row_val[r] + c] : T(0));
+          pair_val_.push_back(partner >= 0 && c < count ? val[row_val[partner] + c] : T(0));
+        }
+      }
+    }
+  }
+  pair_band_[2 * order_] = static_cast<int>(pair_rows_.size() / 3);
+  pair_band_val_[2 * order_] = static_cast<int>(pair_val_.size());
+}
+
+template <class T>
+void ShRotation<T>::update_taylor_limits(double tolerance) {
+  // Largest tilt at which each Taylor method's bound is within the tolerance, by
+  // bisection (the bounds increase with the tilt on [0, pi/2]); stored as sin(limit) so
+  // set() compares it with sin(b) straight from the matrix, without an atan2.
+  cached_tolerance_ = tolerance;
+  const RotationMethod methods[3] = {RotationMethod::taylor1, RotationMethod::taylor15,
+                                     RotationMethod::taylor2};
+  for (int k = 0; k < 3; ++k) {
+    double lo = 0.0, hi = 1.5707963267948966;
+    if (taylor_error_bound(methods[k], order_, hi, ddy_offdiag_norm_) <= tolerance) {
+      lo = hi;
+    } else {
+      for (int iter = 0; iter < 60; ++iter) {
+        const double mid = 0.5 * (lo + hi);
+        (taylor_error_bound(methods[k], order_, mid, ddy_offdiag_norm_) <= tolerance ? lo : hi) = mid;
+      }
+    }
+    taylor_limit_sin2_[k] = std::sin(lo) * std::sin(lo);
+  }
+}
+
+namespace {
+
+// cos(m x), sin(m x) for m < n as the powers (c + i s)^m of the unit complex number
+// ([2] App. C uses the same multiple-angle products in sequence), built by the
+// product tree z^m = z^(m/2) z^(m - m/2): the rounding error still grows only linearly
+// in m, but the chain of dependent multiplications is log2(m) long, not m. No
+// trigonometric call. N > 0: a compile-time count (the loop unrolls into registers).
+template <int N, class T>
+inline void multiple_angles(int n_run, T c1, T s1, T* __restrict c, T* __restrict s) {
+  const int n = N > 0 ? N : n_run;
+  c[0] = T{} + 1;  // T may be a lane vector (rotate_batch)
+  s[0] = T{};
+  if (n > 1) {
+    c[1] = c1;
+    s[1] = s1;
+  }
+  for (int m = 2; m < n; ++m) {
+    const int h = m / 2, k = m - h;
+    c[m] = c[h] * c[k] - s[h] * s[k];
+    s[m] = s[h] * c[k] + c[h] * s[k];
+  }
+}
+
+// The cos / sin tables of the three zyz angles (beta too if with_beta). E: ZyzCosSin<T>,
+// or ZyzLanes<T> when T is a lane vector.
+template <int N, class T, class E>
+inline void zyz_tables(int n, const E& e, bool with_beta, T* ca, T* sa, T* cb, T* sb, T* cg,
+                       T* sg) {
+  multiple_angles<N>(n, e.ca, e.sa, ca, sa);
+  if (with_beta) multiple_angles<N>(n, e.cb, e.sb, cb, sb);
+  multiple_angles<N>(n, e.cg, e.sg, cg, sg);
+}
+
+// zyz_tables with the count fixed at compile time where the kernels are generated.
+// t: ca, sa, cb, sb, cg, sg.
+template <class T, class E>
+void fill_zyz_tables(int order, const E& e, bool with_beta, T* const* t) {
+  switch (order) {
+#define SHTOOL_ZYZ_CASE(N) \
+  case N: zyz_tables<N>(N, e, with_beta, t[0], t[1], t[2], t[3], t[4], t[5]); break;
+    SHTOOL_ZYZ_CASE(1) SHTOOL_ZYZ_CASE(2) SHTOOL_ZYZ_CASE(3) SHTOOL_ZYZ_CASE(4) SHTOOL_ZYZ_CASE(5)
+    SHTOOL_ZYZ_CASE(6) SHTOOL_ZYZ_CASE(7) SHTOOL_ZYZ_CASE(8) SHTOOL_ZYZ_CASE(9) SHTOOL_ZYZ_CASE(10)
+#undef SHTOOL_ZYZ_CASE
+    default: zyz_tables<0>(order, e, with_beta, t[0], t[1], t[2], t[3], t[4], t[5]); break;
+  }
+}
+
+// The tilt b itself, for the Taylor methods: they are for small b, where b = asin(sin b) =
+// s + s^3/6 + 3 s^5/40 + O(s^7) is exact to rounding without an atan2 call (the first
+// omitted term, (5/112) s^7, is below half an ulp of b for s < 1e-3 in double, s < 0.03
+// in float); any other tilt by atan2.
+template <class T>
+T taylor_tilt(T cb, T sb) {
+  constexpr T kSeries = sizeof(T) < sizeof(double) ? T(0.03) : T(1e-3);
+  if (cb > 0 && sb < kSeries) {
+    const T s2 = sb * sb;
+    return sb + sb * s2 * (T(1) / 6 + s2 * (T(3) / 40));
+  }
+  return std::atan2(sb, cb);
+}
+
+// Square root lane by lane (correctly rounded, as std::sqrt).
+template <class T>
+inline detail::BatchPack<T> sqrt_lanes(detail::BatchPack<T> x) {
+#if defined(__SSE2__)
+  if constexpr (sizeof(T) == 4) return reinterpret_cast<detail::BatchPack<T>>(_mm_sqrt_ps(reinterpret_cast<__m128>(x)));
+  else return reinterpret_cast<detail::BatchPack<T>>(_mm_sqrt_pd(reinterpret_cast<__m128d>(x)));
+#else
+  for (int k = 0; k < detail::kBatchLanes<T>; ++k) x[k] = std::sqrt(x[k]);
+  return x;
+#endif
+}
+
+// zyz_cos_sin_from_matrix (shtool/euler.h) for one rotation per lane, r column-major:
+// the same operations in the same order, both sides of each branch computed and the
+// lane's side selected, so every lane gets the bits the scalar function returns.
+template <class P>
+struct ZyzLanes {
+  P ca, sa, cb, sb, cg, sg;
+};
+
+template <class T>
+inline ZyzLanes<detail::BatchPack<T>> zyz_cos_sin_lanes(const detail::BatchPack<T>* r) {
+  using P = detail::BatchPack<T>;
+  auto at = [r](int i, int j) { return r[i + 3 * j]; };
+  const P zero = P{}, one = P{} + 1;
+  ZyzLanes<P> e;
+  e.cb = at(2, 2);
+  e.sb = sqrt_lanes<T>(at(0, 2) * at(0, 2) + at(1, 2) * at(1, 2));
+  const auto tilted = e.sb > zero;
+  e.ca = tilted ? at(0, 2) / e.sb : one;
+  e.sa = tilted ? at(1, 2) / e.sb : zero;
+  const auto near = e.cb >= zero;  // b <= pi / 2: from a + g, else from a - g
+  P u = near ? at(0, 0) + at(1, 1) : at(1, 1) - at(0, 0);
+  P v = near ? at(1, 0) - at(0, 1) : -(at(1, 0) + at(0, 1));
+  const P norm = sqrt_lanes<T>(u * u + v * v);
+  u /= norm;
+  v /= norm;
+  e.cg = u * e.ca + v * e.sa;  // both scalar branches (products commute exactly)
+  e.sg = near ? v * e.ca - u * e.sa : e.sa * u - e.ca * v;
+  return e;
+}
+
+}  // namespace
+
+template <class T>
+RotationMethod ShRotation<T>::choose_method(const Mat3<T>& r, RotationMethod method, double tolerance) {
+  if (method == RotationMethod::automatic && order_ <= 3) return RotationMethod::zxzxz;  // see rotation.h
+  if (method != RotationMethod::automatic) return method;
+  if (tolerance != cached_tolerance_) update_taylor_limits(tolerance);
+  // sin^2 b = R02^2 + R12^2, cos b = R22: no square root needed for the choice.
+  const double sb2 = static_cast<double>(r(0, 2) * r(0, 2) + r(1, 2) * r(1, 2));
+  if (r(2, 2) > 0) {
+    const RotationMethod taylor[3] = {RotationMethod::taylor1, RotationMethod::taylor15,
+                                      RotationMethod::taylor2};
+    for (int k = 0; k < 3; ++k)
+      if (sb2 <= taylor_limit_sin2_[k]) return taylor[k];
+  }
+  return RotationMethod::zxzxz;
+}
+
+template <class T>
+bool ShRotation<T>::set_general(const Mat3<T>& r, RotationMethod method, double tolerance,
+                                 const ZyzCosSin<T>* given) {
+  if (method != RotationMethod::reference && !helpers_) return false;
+  method = choose_method(r, method, tolerance);
+  resolved_ = method;
+  const bool whole = method != RotationMethod::reference && order_ <= kernel_order_;
+  const int k = method == RotationMethod::zxzxz      ? 0
+                : method == RotationMethod::taylor1  ? 1
+                : method == RotationMethod::taylor15 ? 2
+                                                     : 3;
+  whole_kernel_ = whole ? kernel1_[k] : nullptr;
+  whole_kernel3_ = whole ? kernel3_[k] : nullptr;
+  store_matrix(r);
+  switch (method) {
+    case RotationMethod::reference: build_reference(r); break;
+    case RotationMethod::zxzxz:
+      // Bands 1 and 2 are closed forms in R (rotation_kernels.h): orders up to 3 need no
+      // Euler angles at all.
+      if (order_ <= 3) break;
+      [[fallthrough]];
+    default: {
+      const bool zxzxz = method == RotationMethod::zxzxz;
+      const ZyzCosSin<T> e = given ? *given : zyz_cos_sin_from_matrix<T>(r);
+      T* const t[6] = {cos_a_.data(), sin_a_.data(), cos_b_.data(), sin_b_.data(), cos_g_.data(), sin_g_.data()};
+      fill_zyz_tables(order_, e, zxzxz, t);
+      if (!zxzxz) beta_ = taylor_tilt(e.cb, e.sb);
+      break;
+    }
+  }
+  return true;
+}
+
+namespace {
+
+// Bands above the generated kernels (l >= detail::kKernelMaxOrder), at run time. P is the
+// lane type: T for one vector, a 4-wide vector of T for three (rotation_kernels.h).
+
+// Band l of a z-rotation: (f_m, f_-m) turns by m a ([2] App. C). `in` is the band
+// in natural order (m = -l..l); the result goes to `out` split by parity of the
+// band-relative index j = m + l (even j at j / 2, odd j at l + 1 + j / 2), the order
+// in which the strided X90 rows read their input.
+template <class T, class P>
+inline void z_band_to_split(int l, const T* __restrict c, const T* __restrict s,
+                            const P* __restrict in, P* __restrict out) {
+  P* even = out;
+  P* odd = out + l + 1;
+  ((l & 1) ? odd : even)[l >> 1] = in[l];
+  for (int m = 1; m <= l; ++m) {
+    const P p = in[l + m], q = in[l - m];
+    P* half = ((l + m) & 1) ? odd : even;  // l + m and l - m have the same parity
+    half[(l + m) >> 1] = c[m] * p - s[m] * q;
+    half[(l - m) >> 1] = s[m] * p + c[m] * q;
+  }
+}
+
+// Band l of a z-rotation, natural order in and out.
+template <class T, class P>
+inline void z_band(int l, const T* __restrict c, const T* __restrict s, const P* __restrict in,
+                   P* __restrict out) {
+  out[l] = in[l];
+  for (int m = 1; m <= l; ++m) {
+    const P p = in[l + m], q = in[l - m];
+    out[l + m] = c[m] * p - s[m] * q;
+    out[l - m] = s[m] * p + c[m] * q;
+  }
+}
+
+// Rows of one band of X90 (or its transpose) in strided form, reading the split input.
+template <class T, class P>
+inline void strided_rows(int l, const int* __restrict start, const T* __restrict val,
+                         const P* __restrict in, P* __restrict out) {
+  for (int r = 0; r <= 2 * l; ++r) {
+    const P* x = in + start[r];
+    const int count = x90_row_length(l, r);
+    P sum = val[0] * x[0];
+    for (int k = 1; k < count; ++k) sum += val[k] * x[k];
+    val += count;
+    out[r] = sum;
+  }
+}
+
+// The y part of the Taylor rotation for one band ([2] Sec. 3): u = t + b D1 t
+// (+ b^2/2 D2 t), D1 antisymmetric tridiagonal (only its sub-diagonal s1 is stored), D2
+// diagonal (sd) plus distance 2 (s2). Order 1, 15 (diagonal of D2 only) or 2. t has two
+// zeros of padding on each side and the derivative entries that would reach into a
+// neighbouring band are zero, so the loop needs no bounds tests.
+template <int Order, class T, class P>
+inline void taylor_y_band(int l, T b, T hb2, const T* __restrict s1, const T* __restrict sd,
+                          const T* __restrict s2, const P* __restrict t, P* __restrict u) {
+  const int size = 2 * l + 1;
+  for (int i = 0; i < size; ++i) {
+    P v = t[i] + b * (s1[i] * t[i - 1] - s1[i + 1] * t[i + 1]);
+    if constexpr (Order == 15) v += hb2 * (sd[i] * t[i]);
+    if constexpr (Order == 2) v += hb2 * (sd[i] * t[i] + s2[i] * t[i - 2] + s2[i + 2] * t[i + 2]);
+    u[i] = v;
+  }
+}
+
+// Rows of X90 (or its transpose) of one band two at a time (build_pairs): the two rows
+// of a pair read the same split columns, so each column value is multiplied into both
+// in one SSE2 operation. `in` holds each split column value twice (both halves of a
+// register, written so by z_band_to_split_pairs), so no broadcast is needed per use.
+// Two partial sums (even and odd columns; the padded count is even) halve the chain of
+// dependent additions. This path alone computes zxzxz bands >= pair_from_ in double, for
+// apply() and apply_rgb() alike, so their results stay identical.
+using Pair = detail::Pack<double, 2>;
+inline void paired_rows(const int* __restrict rows, int pairs, int count, const double* __restrict val,
+                        const Pair* __restrict in, double* __restrict out) {
+  for (int p = 0; p < pairs; ++p, rows += 3) {
+    const Pair* x = in + rows[0];
+    Pair v0, v1;
+    __builtin_memcpy(&v0, val, sizeof v0);
+    __builtin_memcpy(&v1, val + 2, sizeof v1);
+    Pair even = v0 * x[0], odd = v1 * x[1];
+    for (int k = 2; k < count; k += 2) {
+      __builtin_memcpy(&v0, val + 2 * k, sizeof v0);
+      __builtin_memcpy(&v1, val + 2 * k + 2, sizeof v1);
+      even += v0 * x[k];
+      odd += v1 * x[k + 1];
+    }
+    val += 2 * count;
+    const Pair sum = even + odd;
+    out[rows[1]] = sum[0];
+    out[rows[2]] = sum[1];
+  }
+}
+
+// z_band_to_split with every value written twice, into a register-sized pair.
+inline void z_band_to_split_pairs(int l, const double* __restrict c, const double* __restrict s,
+                                  const double* __restrict in, Pair* __restrict out) {
+  Pair* even = out;
+  Pair* odd = out + l + 1;
+  ((l & 1) ? odd : even)[l >> 1] = Pair{in[l], in[l]};
+  for (int m = 1; m <= l; ++m) {
+    const double p = in[l + m], q = in[l - m];
+    Pair* half = ((l + m) & 1) ? odd : even;
+    const double a = c[m] * p - s[m] * q, b = s[m] * p + c[m] * q;
+    half[(l + m) >> 1] = Pair{a, a};
+    half[(l - m) >> 1] = Pair{b, b};
+  }
+}
+
+// Buffer of one band of lanes (2l + 1 <= 2 kMaxOrder - 1 values, plus padding).
+constexpr int kBandBuffer = 2 * kMaxOrder + 8;
+
+}  // namespace
+
+template <class T>
+template <int V>
+void ShRotation<T>::apply_reference(const T* const* in, T* const* out) const {
+  if constexpr (V == 3 && 4 * sizeof(T) > detail::kNativeLaneBytes) {
+    for (int k = 0; k < 3; ++k) apply_reference<1>(in + k, out + k);  // see Lanes
+    return;
+  }
+  using P = detail::Pack<T, V>;
+  P x[kBandBuffer], y[kBandBuffer];
+  for (int l = 0; l < order_; ++l) {
+    const int size = 2 * l + 1, first = l * l;
+    const T* block = dense_.data() + block_offset(l);
+    detail::load_lanes<T>(in, first, size, x);
+    for (int r = 0; r < size; ++r) {
+      P sum = block[r * size] * x[0];
+      for (int c = 1; c < size; ++c) sum += block[r * size + c] * x[c];
+      y[r] = sum;
+    }
+    detail::store_lanes<T>(y, first, size, out);
+  }
+}
+
+// Bands kernel_order_..order_-1 (above the generated kernels), at run time.
+template <class T>
+template <int V>
+void ShRotation<T>::apply_large_bands(const T* const* in, T* const* out) const {
+  // Lanes of the table-driven bands: as in rotation_kernels.h, but three doubles without
+  // AVX run one vector at a time.
+  constexpr bool kSplit = V == 3 && 4 * sizeof(T) > detail::kNativeLaneBytes;
+  using P = detail::Pack<T, kSplit ? 1 : V>;
+  P x[kBandBuffer], y[kBandBuffer], t1[kBandBuffer], t2[kBandBuffer];
+  const T hb2 = T(0.5) * beta_ * beta_;
+  const int k = resolved_ == RotationMethod::zxzxz      ? 0
+                : resolved_ == RotationMethod::taylor1  ? 1
+                : resolved_ == RotationMethod::taylor15 ? 2
+                                                        : 3;
+  const detail::KernelState<T> state{r_,          cos_a_.data(), sin_a_.data(), cos_b_.data(), sin_b_.data(),
+                                     cos_g_.data(), sin_g_.data(), beta_,         hb2};
+  if constexpr (std::is_same_v<T, double>) {
+    if (k == 0 && pair_from_ < order_) {
+      // zxzxz in double: X90 two rows at a time, one vector at a time (see Lanes).
+      Pair split[kBandBuffer];
+      double t[kBandBuffer];
+      for (int l = pair_from_; l < order_; ++l) {
+        const int first = l * l, count = pair_count(l);
+        const int* rows = pair_rows_.data() + 3 * pair_band_[2 * l];
+        const int* rows_t = pair_rows_.data() + 3 * pair_band_[2 * l + 1];
+        const int pairs = pair_band_[2 * l + 1] - pair_band_[2 * l];
+        const int pairs_t = pair_band_[2 * l + 2] - pair_band_[2 * l + 1];
+        const double* val = pair_val_.data() + pair_band_val_[2 * l];
+        const double* val_t = pair_val_.data() + pair_band_val_[2 * l + 1];
+        split[2 * l + 1] = split[2 * l + 2] = Pair{};  // read (times 0) by the padding
+        for (int vec = 0; vec < V; ++vec) {
+          z_band_to_split_pairs(l, cos_g_.data(), sin_g_.data(), in[vec] + first, split);
+          paired_rows(rows, pairs, count, val, split, t);
+          z_band_to_split_pairs(l, cos_b_.data(), sin_b_.data(), t, split);
+          paired_rows(rows_t, pairs_t, count, val_t, split, t);
+          z_band(l, cos_a_.data(), sin_a_.data(), t, out[vec] + first);
+        }
+      }
+      return;
+    }
+  }
+  for (int l = kernel_order_; l < order_; ++l) {
+    // Generated kernel of this band, when there is one.
+    if (const auto kernel = detail::band_kernel<T, V>(kKernelMethod[k], l)) {
+      kernel(state, in, out);
+      continue;
+    }
+    const int first = l * l, size = 2 * l + 1;
+    for (int vec = 0; vec < (kSplit ? 3 : 1); ++vec) {
+    detail::load_lanes<T>(in + vec, first, size, x);
+    if (resolved_ == RotationMethod::zxzxz) {
+      // Band l of M(R) = Z(a) X90^T Z(b) X90 Z(g) (Ry(b) = Rx(-90) Rz(b) Rx(+90)).
+      z_band_to_split(l, cos_g_.data(), sin_g_.data(), x, t1);
+      strided_rows(l, x90_start_.data() + first, x90_val_.data() + x90_band_val_[l], t1, t2);
+      z_band_to_split(l, cos_b_.data(), sin_b_.data(), t2, t1);
+      strided_rows(l, x90t_start_.data() + first, x90t_val_.data() + x90t_band_val_[l], t1, t2);
+      z_band(l, cos_a_.data(), sin_a_.data(), t2, y);
+    } else {
+      // Band l of Z(a) T(b) Z(g), T the truncated Taylor series of the y-rotation.
+      P* t = t1 + 2;  // t[-2], t[-1] and t[size], t[size + 1] are 0
+      t1[0] = t1[1] = t[size] = t[size + 1] = P{};
+      z_band(l, cos_g_.data(), sin_g_.data(), x, t);
+      const T* s1 = dy_sub_.data() + first;
+      const T* sd = ddy_diag_.data() + first;
+      const T* s2 = ddy_off2_.data() + first;
+      if (resolved_ == RotationMethod::taylor1) taylor_y_band<1>(l, beta_, hb2, s1, sd, s2, t, t2);
+      else if (resolved_ == RotationMethod::taylor15) taylor_y_band<15>(l, beta_, hb2, s1, sd, s2, t, t2);
+      else taylor_y_band<2>(l, beta_, hb2, s1, sd, s2, t, t2);
+      z_band(l, cos_a_.data(), sin_a_.data(), t2, y);
+    }
+    detail::store_lanes<T>(y, first, size, out + vec);
+    }
+  }
+}
+
+template <class T>
+template <int V>
+void ShRotation<T>::apply_lanes(const T* const* in, T* const* out) const {
+  if (resolved_ == RotationMethod::reference) return apply_reference<V>(in, out);
+  // Generated kernel for the bands below kernel_order_ (every band at orders <= 10).
+  const int k = resolved_ == RotationMethod::zxzxz      ? 0
+                : resolved_ == RotationMethod::taylor1  ? 1
+                : resolved_ == RotationMethod::taylor15 ? 2
+                                                        : 3;
+  const detail::KernelState<T> state{r_,
+                                     cos_a_.data(),
+                                     sin_a_.data(),
+                                     cos_b_.data(),
+                                     sin_b_.data(),
+                                     cos_g_.data(),
+                                     sin_g_.data(),
+                                     beta_,
+                                     T(0.5) * beta_ * beta_};
+  if constexpr (V == 1) kernel1_[k](state, in, out);
+  else kernel3_[k](state, in, out);
+  if (order_ > kernel_order_ || (k == 0 && order_ > pair_from_)) apply_large_bands<V>(in, out);
+}
+
+template <class T>
+void ShRotation<T>::apply_general(const T* in, T* out) const {
+  const T* src[1] = {in};
+  T* dst[1] = {out};
+  apply_lanes<1>(src, dst);
+}
+
+template <class T>
+void ShRotation<T>::apply_rgb_general(const std::array<std::span<const T>, 3>& in,
+                                      const std::array<std::span<T>, 3>& out) const {
+  const T* src[3] = {in[0].data(), in[1].data(), in[2].data()};
+  T* dst[3] = {out[0].data(), out[1].data(), out[2].data()};
+  apply_lanes<3>(src, dst);
+}
+
+// Ivanic-Ruedenberg recurrences (J. Phys. Chem. 1996, with the 1998 errata), written
+// for real SH without the Condon-Shortley phase, whose band-1 matrix is R itself in
+// the (y, z, x) order. Our basis differs from theirs by (-1)^m on every function, so
+// the result is conjugated by diag((-1)^m) at the end.
+template <class T>
+void ShRotation<T>::build_reference(const Mat3<T>& r) {
+  // Band 0.
+  dense_[0] = 1;
+  if (order_ < 2) return;
+  // Band 1 in IR's basis: index m = -1, 0, 1 <-> y, z, x.
+  const int axis[3] = {1, 2, 0};
+  T* b1 = dense_.data() + block_offset(1);
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) b1[i * 3 + j] = r(axis[i], axis[j]);
+  auto r1 = [b1](int i, int j) { return b1[(i + 1) * 3 + (j + 1)]; };
+
+  for (int l = 2; l < order_; ++l) {
+    const T* prev = dense_.data() + block_offset(l - 1);
+    T* cur = dense_.data() + block_offset(l);
+    const int ps = 2 * l - 1, cs = 2 * l + 1;
+    auto mp = [prev, ps, l](int a, int b) { return prev[(a + l - 1) * ps + (b + l - 1)]; };
+    // P^l_{i,a,b}
+    auto P = [&](int i, int a, int b) -> T {
+      if (b == l) return r1(i, 1) * mp(a, l - 1) - r1(i, -1) * mp(a, -l + 1);
+      if (b == -l) return r1(i, 1) * mp(a, -l + 1) + r1(i, -1) * mp(a, l - 1);
+      return r1(i, 0) * mp(a, b);
+    };
+    for (int m = -l; m <= l; ++m) {
+      const int am = std::abs(m);
+      const T d = m == 0 ? T(1) : T(0);
+      for (int n = -l; n <= l; ++n) {
+        const T denom = std::abs(n) == l ? T(2 * l * (2 * l - 1)) : T((l + n) * (l - n));
+        const T u = std::sqrt(T((l + m) * (l - m)) / denom);
+        const T v = T(0.5) * std::sqrt((1 + d) * T((l + am - 1) * (l + am)) / denom) * (1 - 2 * d);
+        const T w = T(-0.5) * std::sqrt(T((l - am - 1) * (l - am)) / denom) * (1 - d);
+        T value = 0;
+        if (u != 0) value += u * P(0, m, n);
+        if (v != 0) {
+          T V;
+          if (m == 0) V = P(1, 1, n) + P(-1, -1, n);
+          else if (m > 0) V = P(1, m - 1, n) * std::sqrt(T(1) + (m == 1)) - P(-1, -m + 1, n) * T(m != 1);
+          else V = P(1, m + 1, n) * T(m != -1) + P(-1, -m - 1, n) * std::sqrt(T(1) + (m == -1));
+          value += v * V;
+        }
+        if (w != 0) {
+          T W;
+          if (m > 0) W = P(1, m + 1, n) + P(-1, -m - 1, n);
+          else W = P(1, m - 1, n) - P(-1, -m + 1, n);
+          value += w * W;
+        }
+        cur[(m + l) * cs + (n + l)] = value;
+      }
+    }
+  }
+  // Condon-Shortley phase: entry (m, n) of every band picks up (-1)^(m + n).
+  for (int l = 1; l < order_; ++l) {
+    T* block = dense_.data() + block_offset(l);
+    const int size = 2 * l + 1;
+    for (int m = -l; m <= l; ++m)
+      for (int n = -l; n <= l; ++n)
+        if ((m + n) & 1) block[(m + l) * size + (n + l)] = -block[(m + l) * size + (n + l)];
+  }
+}
+
+template <class T>
+std::size_t ShRotation<T>::rotate_lanes(std::span<const Mat3<T>> rotations, const T* in, T* out,
+                                        RotationMethod method, double tolerance) {
+  using P = detail::BatchPack<T>;
+  constexpr int B = detail::kBatchLanes<T>;
+  constexpr int kMaxBatchOrder = detail::kBandKernelMaxBand + 1;
+  if (!helpers_ || order_ > kMaxBatchOrder || method == RotationMethod::reference) return 0;
+  const std::size_t n = static_cast<std::size_t>(sh_count(order_)), groups = rotations.size() / B;
+  // Per lane: R column-major, and the tables (and tilt) set() would compute, by the same
+  // operations, so each lane's kernel input is bit-identical to set()'s.
+  P r[9], tables[6][kMaxBatchOrder];
+  detail::BatchState<T> state{r, tables[0], tables[1], tables[2], tables[3], tables[4], tables[5], P{}, P{}};
+  for (std::size_t g = 0; g < groups; ++g) {
+    const Mat3<T>* group = rotations.data() + g * B;
+    const T* src[B];
+    T* dst[B];
+    const RotationMethod chosen = choose_method(group[0], method, tolerance);
+    bool same = true;  // one method for the whole group
+    for (int j = 0; j < B; ++j) {
+      src[j] = in + (g * B + j) * n;
+      dst[j] = out + (g * B + j) * n;
+      same = same && (j == 0 || choose_method(group[j], method, tolerance) == chosen);
+    }
+    const int k = chosen == RotationMethod::zxzxz      ? 0
+                  : chosen == RotationMethod::taylor1  ? 1
+                  : chosen == RotationMethod::taylor15 ? 2
+                                                       : 3;
+    const std::vector<BatchKernel>& kernels = batch_kernels_[k];
+    if (!same || kernels.empty()) {  // one at a time
+      for (int j = 0; j < B; ++j) {
+        set(group[j], method, tolerance);
+        apply(std::span<const T>(src[j], n), std::span<T>(dst[j], n));
+      }
+      continue;
+    }
+    const T* lane_src[B];
+    for (int j = 0; j < B; ++j) lane_src[j] = group[j].data();
+    detail::gather_lanes<T>(lane_src, 9, r);
+    const bool zxzxz = k == 0;
+    if (!zxzxz || order_ > 3) {  // zxzxz below order 4: bands 1 and 2 from R alone
+      const ZyzLanes<P> e = zyz_cos_sin_lanes<T>(r);
+      P* const t[6] = {tables[0], tables[1], tables[2], tables[3], tables[4], tables[5]};
+      fill_zyz_tables(order_, e, zxzxz, t);
+      if (!zxzxz) {
+        for (int j = 0; j < B; ++j) state.beta[j] = taylor_tilt(e.cb[j], e.sb[j]);
+        state.half_beta2 = T(0.5) * state.beta * state.beta;
+      }
+    }
+    for (const BatchKernel kernel : kernels) kernel(state, src, dst);  // whole order, then bands
+  }
+  return groups * B;
+}
+
+template <class T>
+bool rotate_batch(ShRotation<T>& rotation, std::span<const Mat3<T>> rotations, std::span<const T> in,
+                  std::span<T> out, RotationMethod method, double tolerance) {
+  const std::size_t n = static_cast<std::size_t>(sh_count(rotation.order())), count = rotations.size();
+  if (in.size() < count * n || out.size() < count * n)
+    throw std::invalid_argument("rotate_batch: " + std::to_string(count) + " rotations of order " +
+                                std::to_string(rotation.order()) + " need " + std::to_string(count * n) +
+                                " coefficients in and out, got " + std::to_string(in.size()) + " and " +
+                                std::to_string(out.size()));
+  if (count == 0) return true;
+  if (method != RotationMethod::reference && !rotation.helpers_) return false;
+  const std::size_t done = rotation.rotate_lanes(rotations, in.data(), out.data(), method, tolerance);
+  for (std::size_t k = done; k < count; ++k) {
+    if (!rotation.set(rotations[k], method, tolerance)) return false;
+    rotation.apply(in.subspan(k * n, n), out.subspan(k * n, n));
+  }
+  if (done == count) rotation.set(rotations[count - 1], method, tolerance);
+  return true;
+}
+
+template class ShRotation<float>;
+template class ShRotation<double>;
+template bool rotate_batch<float>(ShRotation<float>&, std::span<const Mat3<float>>, std::span<const float>,
+                                  std::span<float>, RotationMethod, double);
+template bool rotate_batch<double>(ShRotation<double>&, std::span<const Mat3<double>>,
+                                   std::span<const double>, std::span<double>, RotationMethod, double);
+
+}  // namespace shtool

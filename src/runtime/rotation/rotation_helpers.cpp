@@ -1,0 +1,76 @@
+#include "shtool/rotation_helpers.h"
+
+#include <cstdlib>
+#include <string>
+#include <system_error>
+
+#include "shtool/sh.h"
+
+namespace shtool {
+namespace {
+
+Error helpers_error(const std::string& what) {
+  return Error{"rotation-helpers table: " + what};
+}
+
+}  // namespace
+
+Result<RotationHelpers> RotationHelpers::from_table(const Table& table) {
+  if (table.kind != kRotationHelpersKind)
+    return helpers_error("wrong kind '" + table.kind + "'");
+  if (!is_supported_order(table.order))
+    return helpers_error("unsupported order " + std::to_string(table.order));
+  RotationHelpers h;
+  h.order = table.order;
+  const std::size_t n = static_cast<std::size_t>(sh_count(h.order));
+  auto get = [&](const char* name, DType type, const TableArray*& out) -> bool {
+    out = table.find(name);
+    return out && out->dtype == type;
+  };
+  const TableArray *row, *col, *val, *dy, *ddd, *ddo;
+  if (!get("x90_row", DType::i32, row) || !get("x90_col", DType::i32, col) ||
+      !get("x90_val", DType::f64, val) || !get("dy_sub", DType::f64, dy) ||
+      !get("ddy_diag", DType::f64, ddd) || !get("ddy_off2", DType::f64, ddo))
+    return helpers_error("missing array or wrong dtype (need i32 x90_row, x90_col; f64 x90_val, "
+                         "dy_sub, ddy_diag, ddy_off2)");
+  h.x90_row = row->values<std::int32_t>();
+  h.x90_col = col->values<std::int32_t>();
+  h.x90_val = val->values<double>();
+  h.dy_sub = dy->values<double>();
+  h.ddy_diag = ddd->values<double>();
+  h.ddy_off2 = ddo->values<double>();
+  if (h.x90_row.size() != n + 1 || h.dy_sub.size() != n || h.ddy_diag.size() != n ||
+      h.ddy_off2.size() != n)
+    return helpers_error("array sizes do not match order " + std::to_string(h.order));
+  if (h.x90_col.size() != h.x90_val.size() || h.x90_row.front() != 0 ||
+      static_cast<std::size_t>(h.x90_row.back()) != h.x90_col.size())
+    return helpers_error("inconsistent X90 compressed rows");
+  // Every stored entry must lie inside its row's band block: the rotation code relies
+  // on that and never checks indices in the hot loop.
+  for (std::size_t i = 0; i < n; ++i) {
+    if (h.x90_row[i + 1] < h.x90_row[i] ||
+        static_cast<std::size_t>(h.x90_row[i + 1]) > h.x90_col.size())
+      return helpers_error("X90 row starts decrease or pass the non-zeros at row " + std::to_string(i));
+    const int l = sh_band(static_cast<int>(i));
+    for (int k = h.x90_row[i]; k < h.x90_row[i + 1]; ++k)
+      if (h.x90_col[k] < l * l || h.x90_col[k] > l * l + 2 * l)
+        return helpers_error("X90 entry outside its band in row " + std::to_string(i));
+  }
+  return h;
+}
+
+Result<RotationHelpers> RotationHelpers::load(const std::filesystem::path& path, int min_order) {
+  Result<Table> table = read_table(path, TableExpectation{std::string(kRotationHelpersKind), 1, 0});
+  if (!table) return table.error();
+  Result<RotationHelpers> h = from_table(table.value());
+  if (!h) return Error{path.string() + ": " + h.error().message};
+  if (h.value().order < min_order)
+    return Error{path.string() + ": rotation-helpers table covers order " +
+                      std::to_string(h.value().order) + ", order " + std::to_string(min_order) +
+                      " was asked for"};
+  return h;
+}
+
+std::filesystem::path default_rotation_helpers_path() { return find_shipped_table("rotation-helpers.shtb"); }
+
+}  // namespace shtool

@@ -1,0 +1,82 @@
+#!/usr/bin/env python3
+"""The layout rules of docs/architecture.md, checked on the sources.
+
+  1. include/shtool/ (what an engine includes) reaches neither nlohmann/json nor FFTW,
+     directly or through another shtool header;
+  2. src/runtime/ and include/shtool/ include nothing of src/offline/ or src/cli/;
+  3. src/offline/ includes nothing of src/cli/;
+  4. no source names a file or tracker outside the repository.
+
+Usage: check_layout.py SOURCE_DIR   (exit 1 and one line per violation)
+"""
+import pathlib
+import re
+import sys
+
+INCLUDE = re.compile(r'^\s*#\s*include\s*[<"]([^>"]+)[>"]', re.M)
+OFFLINE_ROOTS = ("common/", "fit/", "lobes/", "tensors/")
+FORBIDDEN_IN_ENGINE = ("nlohmann/", "fftw3")
+
+
+def includes(path):
+    return INCLUDE.findall(path.read_text(encoding="utf-8", errors="replace"))
+
+
+def main():
+    root = pathlib.Path(sys.argv[1])
+    problems = []
+    headers = {p.name: p for p in (root / "include/shtool").glob("*.h")}
+
+    # 1. transitive closure inside include/shtool
+    for name, path in sorted(headers.items()):
+        seen, todo = set(), [path]
+        while todo:
+            p = todo.pop()
+            if p in seen:
+                continue
+            seen.add(p)
+            for inc in includes(p):
+                if any(inc.startswith(f) for f in FORBIDDEN_IN_ENGINE):
+                    chain = "" if p == path else f" (through {p.name})"
+                    problems.append(f"include/shtool/{name} reaches <{inc}>{chain}")
+                if inc.startswith("shtool/") and inc[len("shtool/"):] in headers:
+                    todo.append(headers[inc[len("shtool/"):]])
+
+    # 2. and 3.
+    def check_tree(tree, forbidden, what):
+        for p in sorted((root / tree).rglob("*")):
+            if p.suffix not in (".h", ".cpp"):
+                continue
+            for inc in includes(p):
+                if any(inc.startswith(f) for f in forbidden):
+                    problems.append(f"{p.relative_to(root)} includes \"{inc}\" ({what})")
+
+    check_tree("include/shtool", OFFLINE_ROOTS + ("cli_common",), "the engine API must not depend on the offline tool")
+    check_tree("src/runtime", OFFLINE_ROOTS + ("cli_common",), "the runtime must not depend on the offline tool")
+    check_tree("src/offline", ("cli_common",), "the offline libraries must not depend on the CLI")
+
+    # 4. references that a reader of the repository cannot follow
+    outside = re.compile(r"DESIGN\.md|STYLE\.md|\.\./shared/papers|\b00[0-4]_[0-9a-f]{16}\.txt")
+    for tree in ("include", "src", "docs", "bench", "scripts", "tests", "schemas", "README.md", "CMakeLists.txt"):
+        base = root / tree
+        files = [base] if base.is_file() else sorted(base.rglob("*"))
+        for p in files:
+            if not p.is_file() or p.suffix not in (".h", ".cpp", ".md", ".py", ".sh", ".txt", ".cmake", ".json", ""):
+                continue
+            if p.name == "check_layout.py":
+                continue
+            for n, line in enumerate(p.read_text(encoding="utf-8", errors="replace").splitlines(), 1):
+                if outside.search(line):
+                    problems.append(f"{p.relative_to(root)}:{n}: names a file outside the repository")
+
+    for line in problems:
+        print(line)
+    if problems:
+        print(f"{len(problems)} layout rule violation(s)", file=sys.stderr)
+        return 1
+    print("layout rules hold")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,164 @@
+// Diffuse transfer simulation: a plane with nothing above gives the analytic
+// clamped-cosine transfer; on a convex mesh shadowing changes nothing; a vertex under a
+// huge roof sees almost nothing; results are deterministic and thread-count independent.
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "fit/mesh.h"
+#include "fit/transfer.h"
+#include "shtool/sh.h"
+
+namespace {
+
+using namespace shtool;
+using namespace shtool::fit;
+
+fit::Mesh from_obj(const std::string& name, const std::string& text) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "shtool_test_transfer";
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / name) << text;
+  return load_obj(dir / name);
+}
+
+// 3x3 grid in z = 0 (centre vertex 5 has triangles all around it), normal +z.
+const std::string kPlane =
+    "v -1 -1 0\nv 0 -1 0\nv 1 -1 0\nv -1 0 0\nv 0 0 0\nv 1 0 0\nv -1 1 0\nv 0 1 0\nv 1 1 0\n"
+    "f 1 2 5\nf 1 5 4\nf 2 3 6\nf 2 6 5\nf 4 5 8\nf 4 8 7\nf 5 6 9\nf 5 9 8\n";
+
+const std::string kCube =
+    "v -1 -1 -1\nv 1 -1 -1\nv 1 1 -1\nv -1 1 -1\nv -1 -1 1\nv 1 -1 1\nv 1 1 1\nv -1 1 1\n"
+    "f 1 4 3\nf 1 3 2\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\nf 2 3 7\nf 2 7 6\nf 3 4 8\nf 3 8 7\nf 4 1 5\nf 4 5 8\n";
+
+// (1/pi) integral of max(cos t, 0) y_l^0 = 2 K_l integral_0^1 x P_l(x) dx, with
+// K_l = sqrt((2l+1)/(4 pi)) and integral_0^1 x P_l = 1/2, 1/3, 1/8, 0, -1/48, 0 for
+// l = 0..5 (the clamped-cosine zonal coefficients). Bands m != 0 vanish.
+double clamped_cosine_transfer(int l) {
+  static const double moment[] = {1.0 / 2, 1.0 / 3, 1.0 / 8, 0.0, -1.0 / 48, 0.0};
+  return 2.0 * std::sqrt((2 * l + 1) / (4 * std::numbers::pi)) * moment[l];
+}
+
+TEST(Transfer, ClampedCosineConstants) {
+  // Band 0 is sqrt(pi)/2 / pi = 1/(2 sqrt(pi)); band 1 is 2/3 sqrt(3/(4 pi)) = 1/sqrt(3 pi).
+  EXPECT_DOUBLE_EQ(clamped_cosine_transfer(0), std::sqrt(std::numbers::pi) / 2 / std::numbers::pi);
+  EXPECT_DOUBLE_EQ(clamped_cosine_transfer(1), 1.0 / std::sqrt(3 * std::numbers::pi));
+}
+
+TEST(Transfer, OpenPlaneGivesClampedCosine) {
+  const fit::Mesh plane = from_obj("plane.obj", kPlane);
+  for (TransferMode mode : {TransferMode::unshadowed, TransferMode::shadowed}) {
+    TransferOptions o;
+    o.order = 6;
+    o.rays = 4096;
+    o.mode = mode;
+    o.threads = 1;
+    const std::vector<double> t = compute_transfer(plane, o);
+    const int n2 = 36;
+    for (int v : {0, 4, 8}) {
+      // Band 0 is exact up to summation: every cosine-weighted ray contributes the
+      // constant y_0^0, and summing `rays` equal values errs by at most rays * eps * t.
+      EXPECT_NEAR(t[v * n2], clamped_cosine_transfer(0), o.rays * 0x1.0p-52 * clamped_cosine_transfer(0))
+          << "vertex " << v;
+      for (int l = 1; l < 6; ++l)
+        for (int m = -l; m <= l; ++m) {
+          const double expected = m == 0 ? clamped_cosine_transfer(l) : 0.0;
+          // Stratified 4096-ray estimate of a smooth integrand: the error is O(1/rays)
+          // times the basis scale (|y| <= 1.5 here); 2e-3 leaves a margin of ~3x over
+          // the largest error measured, and a wrong constant or sign is off by > 0.02.
+          EXPECT_NEAR(t[v * n2 + sh_index(l, m)], expected, 2e-3)
+              << "vertex " << v << " l " << l << " m " << m << " mode " << static_cast<int>(mode);
+        }
+    }
+  }
+}
+
+TEST(Transfer, ConvexMeshShadowedEqualsUnshadowed) {
+  // From a vertex of a convex mesh the vertex normal spans a supporting plane: no ray
+  // of the upper hemisphere can hit the mesh, so shadowing and bounces change nothing.
+  const fit::Mesh cube = from_obj("cube.obj", kCube);
+  TransferOptions o;
+  o.order = 4;
+  o.rays = 256;
+  o.mode = TransferMode::unshadowed;
+  const std::vector<double> free = compute_transfer(cube, o);
+  o.mode = TransferMode::shadowed;
+  EXPECT_EQ(compute_transfer(cube, o), free);
+  o.mode = TransferMode::interreflected;
+  EXPECT_EQ(compute_transfer(cube, o), free);
+}
+
+TEST(Transfer, RoofBlocksAlmostEverything) {
+  // A plane under a square roof of half-width 1000 at height 1: only directions with
+  // tan(theta) > ~1000 escape, a cosine-weighted fraction cos^2 ~ 1e-6.
+  const fit::Mesh m = from_obj("roof.obj", kPlane +
+                                               "v -1000 -1000 1\nv 1000 -1000 1\nv 1000 1000 1\nv -1000 1000 1\n"
+                                               "f 10 12 11\nf 10 13 12\n");
+  TransferOptions o;
+  o.order = 3;
+  o.rays = 1024;
+  const std::vector<double> shadowed = compute_transfer(m, o);
+  // Centre vertex of the plane (index 4): no sample direction escapes.
+  for (int i = 0; i < 9; ++i) EXPECT_EQ(shadowed[4 * 9 + i], 0.0) << "coefficient " << i;
+  o.mode = TransferMode::interreflected;
+  o.albedo = 0.5;
+  o.bounces = 1;
+  const std::vector<double> bounced = compute_transfer(m, o);
+  // The roof faces down; its vertices (1000 away from the small plane) see the open
+  // lower hemisphere, so their direct transfer is the clamped cosine, constant over the
+  // roof. Every ray from the centre hits the roof: one bounce gives exactly
+  // albedo * 1/(2 sqrt(pi)) in band 0, up to summation (1e-12 >> 1024 eps).
+  EXPECT_NEAR(bounced[4 * 9], 0.5 * clamped_cosine_transfer(0), 1e-12);
+}
+
+TEST(Transfer, InterreflectionAddsLightInAnOpenCorner) {
+  // A floor and a wall meeting at a right angle: the floor vertex in front of the
+  // wall loses light to the wall (shadowed < unshadowed) and gets some back from it.
+  const fit::Mesh m = from_obj("corner.obj", kPlane +
+                                                 "v -1 1 2\nv 0 1 2\nv 1 1 2\nf 7 9 12\nf 7 12 10\n");
+  TransferOptions o;
+  o.order = 3;
+  o.rays = 1024;
+  o.mode = TransferMode::unshadowed;
+  const double free = compute_transfer(m, o)[4 * 9];
+  o.mode = TransferMode::shadowed;
+  const double shadowed = compute_transfer(m, o)[4 * 9];
+  o.mode = TransferMode::interreflected;
+  o.albedo = 0.5;
+  const double bounced = compute_transfer(m, o)[4 * 9];
+  EXPECT_LT(shadowed, free);
+  EXPECT_GT(bounced, shadowed);
+}
+
+TEST(Transfer, DeterministicAndIndependentOfThreads) {
+  const fit::Mesh plane = from_obj("plane.obj", kPlane +
+                                                    "v 0 0 3\nv 1 0 3\nv 0 1 3\nf 10 12 11\n");
+  TransferOptions o;
+  o.order = 4;
+  o.rays = 64;
+  o.seed = 7;
+  o.threads = 1;
+  const std::vector<double> one = compute_transfer(plane, o);
+  o.threads = 2;
+  EXPECT_EQ(compute_transfer(plane, o), one);
+  o.threads = 5;
+  EXPECT_EQ(compute_transfer(plane, o), one);
+  o.seed = 8;
+  EXPECT_NE(compute_transfer(plane, o), one);
+}
+
+TEST(Transfer, RejectsBadOptions) {
+  const fit::Mesh plane = from_obj("plane.obj", kPlane);
+  TransferOptions o;
+  o.rays = 0;
+  EXPECT_THROW(compute_transfer(plane, o), shtool::InputError);
+  o.rays = 4;
+  o.order = 0;
+  EXPECT_THROW(compute_transfer(plane, o), shtool::InputError);
+}
+
+}  // namespace
