@@ -1,9 +1,9 @@
 #!/usr/bin/python3
 """Plot the Taylor y-rotation error curves ([2] Fig. 3) from the CSV written by
-tests/test_rotation_error_curve.cpp:
+rotation_error_csv (scripts/rotation_error_csv.cpp); scripts/plot_rotation_error.sh runs
+both:
 
-    SHTOOL_WRITE_ERROR_CSV=/tmp/rotation-error.csv \\
-        build/tests/test_rotation_error_curve --gtest_filter='*WriteCsv*'
+    build/tests/rotation_error_csv /tmp/rotation-error.csv
     /usr/bin/python3 scripts/plot_rotation_error.py /tmp/rotation-error.csv docs/rotation-error.png
 
 Layout as in the paper: one column per order (5 and 8), rows = maximum error over

@@ -17,7 +17,7 @@ using shtool::test::run_command;
 const std::string kScript = std::string(SHTOOL_SOURCE_DIR) + "/scripts/plot_lobes.py";
 
 TEST(PlotLobes, SelfCheckAgreesWithShtoolEvalAndTables) {
-  if (std::string(SHTOOL_EXE).empty()) GTEST_SKIP() << "shtool executable not built";
+  ASSERT_FALSE(std::string(SHTOOL_EXE).empty()) << "shtool executable not built";
   const auto r = run_command({SHTOOL_PYTHON, kScript, "--check", "--shtool", SHTOOL_EXE}, {.timeout_seconds = 120});
   EXPECT_EQ(r.exit_code, 0) << "stdout:\n" << r.out << "\nstderr:\n" << r.err;
   EXPECT_NE(r.out.find("SH: max |script - shtool eval|"), std::string::npos) << r.out;

@@ -1,56 +1,208 @@
-// Links the installed runtime and checks a few SH values against closed forms, so a
-// package that installs headers but a broken or mismatched library fails here.
+// An engine's view of shtool: built against the installed package with -fno-exceptions
+// and -fno-rtti, it loads the shipped tables (found through SHTOOL_TABLES), rotates by
+// three methods, multiplies, and shades a fit-zh output (argv[1], when given) through
+// load_zh_fit. Every result is checked against an independent route (closed forms,
+// evaluation at rotated directions, pointwise products, the lobes summed into SH), so a
+// package whose headers and library disagree, or whose tables do not load, fails here.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <memory>
 #include <numbers>
 #include <vector>
 
+#include <shtool/euler.h>
+#include <shtool/product.h>
+#include <shtool/rotation.h>
 #include <shtool/sh.h>
+#include <shtool/table.h>
+#include <shtool/tripling_product.h>
 #include <shtool/version.h>
+#include <shtool/zh.h>
+#include <shtool/zh_fit_table.h>
+#include <shtool/zh_shading.h>
+#include <shtool/zhf_rotation.h>
+
+#if defined(__cpp_exceptions) || defined(__GXX_RTTI)
+#error "the consumer must be compiled with -fno-exceptions -fno-rtti"
+#endif
 
 namespace {
 
 int failures = 0;
 
-// Closed forms are a handful of floating-point operations from eval_sh's recurrence;
-// 4 ulp of slack covers that difference.
-constexpr double kTol = 4 * 2.220446049250313e-16;
-
-void check(const char* name, double got, double want) {
-  if (!(std::abs(got - want) <= kTol * std::max(1.0, std::abs(want)))) {
-    std::fprintf(stderr, "consumer: %s = %.17g, expected %.17g\n", name, got, want);
+void check(const char* name, double got, double want, double tol) {
+  if (!(std::abs(got - want) <= tol * std::max(1.0, std::abs(want)))) {
+    std::fprintf(stderr, "consumer: %s = %.17g, expected %.17g (tolerance %.3g)\n", name, got, want, tol);
     ++failures;
   }
 }
 
-}  // namespace
-
-int main() {
-  if (std::strcmp(shtool::kVersion, SHTOOL_PACKAGE_VERSION) != 0) {
-    std::fprintf(stderr, "consumer: package version %s but shtool/version.h says %s\n",
-                 SHTOOL_PACKAGE_VERSION, shtool::kVersion);
+void require(bool ok, const char* what, const char* detail = "") {
+  if (!ok) {
+    std::fprintf(stderr, "consumer: %s %s\n", what, detail);
     ++failures;
   }
+}
 
-  const double pi = std::numbers::pi;
-  const double c = std::sqrt(3 / (4 * pi));  // band-1 constant (docs/conventions.md)
-  // An unnormalised direction, normalised here: eval_sh expects a unit vector.
+// A fixed, non-trivial SH vector of the given order.
+std::vector<double> test_vector(int order) {
+  std::vector<double> f(shtool::sh_count(order));
+  for (std::size_t i = 0; i < f.size(); ++i) f[i] = std::sin(1.7 * static_cast<double>(i) + 0.3) / (1.0 + i / 4.0);
+  return f;
+}
+
+double evaluate(const std::vector<double>& f, int order, const shtool::Vec3<double>& w) {
+  std::vector<double> y(shtool::sh_count(order));
+  shtool::eval_sh<double>(order, w, y);
+  double s = 0;
+  for (std::size_t i = 0; i < y.size(); ++i) s += f[i] * y[i];
+  return s;
+}
+
+const shtool::Vec3<double> kDirections[] = {{0.3, -0.5, 0.8}, {-0.9, 0.1, 0.2}, {0.0, 0.0, -1.0}, {0.5, 0.5, 0.5}};
+
+void check_sh_closed_forms() {
+  const double c = std::sqrt(3 / (4 * std::numbers::pi));
   shtool::Vec3<double> w(0.3, -0.5, 0.8);
   w.normalize();
-
   std::vector<double> y(shtool::sh_count(2));
   shtool::eval_sh<double>(2, w, y);
-  check("y_0^0", y[shtool::sh_index(0, 0)], 0.28209479177387814);
-  check("y_1^-1", y[shtool::sh_index(1, -1)], -c * w.y());
-  check("y_1^0", y[shtool::sh_index(1, 0)], c * w.z());
-  check("y_1^1", y[shtool::sh_index(1, 1)], -c * w.x());
+  const double ulp4 = 4 * 2.220446049250313e-16;
+  check("y_0^0", y[shtool::sh_index(0, 0)], 0.28209479177387814, ulp4);
+  check("y_1^-1", y[shtool::sh_index(1, -1)], -c * w.y(), ulp4);
+  check("y_1^0", y[shtool::sh_index(1, 0)], c * w.z(), ulp4);
+  check("y_1^1", y[shtool::sh_index(1, 1)], -c * w.x(), ulp4);
+}
+
+// g = rotate(f) must satisfy g(R w) = f(w) ([2]: g(w) = f(R^-1 w)).
+void check_rotated(const char* name, const std::vector<double>& f, const std::vector<double>& g, int order,
+                   const shtool::Mat3<double>& r, double tol) {
+  for (shtool::Vec3<double> w : kDirections) {
+    w.normalize();
+    check(name, evaluate(g, order, r * w), evaluate(f, order, w), tol);
+  }
+}
+
+void check_rotations(const shtool::Mat3<double>& r) {
+  const std::filesystem::path helpers_path = shtool::default_rotation_helpers_path();
+  require(!helpers_path.empty(), "rotation-helpers.shtb not found through SHTOOL_TABLES");
+  if (helpers_path.empty()) return;
+  shtool::Result<shtool::RotationHelpers> helpers = shtool::RotationHelpers::load(helpers_path, 8);
+  require(helpers.ok(), "cannot load the rotation helpers:", helpers.ok() ? "" : helpers.error().message.c_str());
+  if (!helpers) return;
+  const auto shared = std::make_shared<const shtool::RotationHelpers>(std::move(helpers).value());
+  for (int order : {3, 8}) {
+    const std::vector<double> f = test_vector(order);
+    std::vector<double> g(f.size());
+    shtool::ShRotation<double> rotation(order, shared);
+    require(rotation.set(r, shtool::RotationMethod::zxzxz), "zxzxz rotation refused a rotation matrix");
+    rotation.apply(f, g);
+    check_rotated(order == 3 ? "zxzxz N=3" : "zxzxz N=8", f, g, order, r, 1e-12);
+    // Float, through the same tables.
+    std::vector<float> ff(f.begin(), f.end()), gf(f.size());
+    shtool::ShRotation<float> rotf(order, shared);
+    require(rotf.set(r.cast<float>()), "float rotation refused a rotation matrix");
+    rotf.apply(ff, gf);
+    check_rotated("float N=8", f, std::vector<double>(gf.begin(), gf.end()), order, r, 1e-5);
+  }
+
+  // ZHF with the shipped shared-lobe table ([1] Eq. 10).
+  const std::filesystem::path lobes_path = shtool::default_zhf_lobes_path(4);
+  require(!lobes_path.empty(), "no zhf-shared table found through SHTOOL_TABLES");
+  if (lobes_path.empty()) return;
+  shtool::Result<shtool::ZhfLobes> lobes = shtool::load_zhf_lobes(lobes_path, 4);
+  require(lobes.ok(), "cannot load the ZHF lobes:", lobes.ok() ? "" : lobes.error().message.c_str());
+  if (!lobes) return;
+  const std::vector<double> f = test_vector(4);
+  std::vector<double> g(f.size());
+  shtool::ZhfRotation<double> zhf(4, std::make_shared<const shtool::ZhfLobes>(std::move(lobes).value()));
+  zhf.set(r);
+  zhf.apply(f, g);
+  check_rotated("zhf N=4", f, g, 4, r, 1e-9);
+}
+
+// Orders <= 2 multiply into order 3 exactly: (f1 f2)(w) = f1(w) f2(w) pointwise.
+void check_products() {
+  const std::filesystem::path path = shtool::find_shipped_table("tripling-tensor.shtb");
+  require(!path.empty(), "tripling-tensor.shtb not found through SHTOOL_TABLES");
+  if (path.empty()) return;
+  shtool::Result<shtool::Table> table = shtool::read_table(path, {"tripling-tensor", 1, 0});
+  require(table.ok(), "cannot read the tripling tensor:", table.ok() ? "" : table.error().message.c_str());
+  if (!table) return;
+  shtool::Result<shtool::TriplingTensor> tensor = shtool::TriplingTensor::from_table(table.value());
+  require(tensor.ok(), "bad tripling tensor:", tensor.ok() ? "" : tensor.error().message.c_str());
+  if (!tensor) return;
+  std::vector<double> f1(9, 0.0), f2(9, 0.0), g(9);
+  for (int i = 0; i < 4; ++i) {
+    f1[i] = 0.5 + 0.25 * i;
+    f2[i] = 1.0 - 0.3 * i;
+  }
+  for (shtool::ProductMethod method :
+       {shtool::ProductMethod::tripling, shtool::ProductMethod::fourier, shtool::ProductMethod::grid}) {
+    shtool::ShProduct<double> product(3, method, &tensor.value());
+    product.triple(f1, f2, g);
+    for (shtool::Vec3<double> w : kDirections) {
+      w.normalize();
+      check("triple product", evaluate(g, 3, w), evaluate(f1, 3, w) * evaluate(f2, 3, w), 1e-13);
+    }
+  }
+}
+
+// A fit-zh table shaded by [4] Eq. 13 equals the lobes summed into SH, dotted with the
+// light; the light-specialised table of Eq. 24-25 agrees within its documented bound.
+void check_zh_fit(const char* path) {
+  shtool::Result<shtool::ZhFitTable<double>> fit = shtool::load_zh_fit<double>(path);
+  require(fit.ok(), "cannot load the zh-fit table:", fit.ok() ? "" : fit.error().message.c_str());
+  if (!fit) return;
+  const shtool::ZhFitTable<double>& z = fit.value();
+  require(z.vertices > 0 && z.lobes > 0 && z.order > 0, "empty zh-fit table");
+  const std::vector<double> light = test_vector(z.order);
+  const shtool::ZhLightTable<double> light_table(z.order, light);
+  double scale = 0;
+  for (double c : light) scale += c * c;
+  // Band l's look-up error is relative to sqrt((2l+1)/(4 pi)) |e_l| <= that factor at
+  // l = n-1 times |light|.
+  scale = std::sqrt(scale) * std::max(1.0, std::sqrt((2.0 * z.order - 1.0) / (4 * std::numbers::pi)));
+  for (std::size_t v = 0; v < std::min<std::size_t>(z.vertices, 50); ++v) {
+    std::vector<double> sh(shtool::sh_count(z.order), 0.0);
+    for (int k = 0; k < z.lobes; ++k)
+      shtool::add_zh_lobe_to_sh(z.axes_of(v)[k], z.coeffs_of(v).subspan(k * z.order, z.order), sh);
+    double want = 0;
+    for (std::size_t i = 0; i < sh.size(); ++i) want += sh[i] * light[i];
+    const double exact = shtool::zh_shade_exact<double>(light, z.axes_of(v), z.coeffs_of(v));
+    check("zh_shade_exact", exact, want, 1e-12);
+    double coeff_sum = 0;
+    for (double c : z.coeffs_of(v)) coeff_sum += std::abs(c);
+    const double bound = shtool::zh_light_table_error_bound(z.order - 1, light_table.resolution()) * scale * coeff_sum;
+    const double tabled = light_table.shade(z.axes_of(v), z.coeffs_of(v));
+    require(std::abs(tabled - want) <= bound + 1e-12, "ZhLightTable::shade is outside its error bound");
+  }
+  shtool::Result<shtool::ZhFitTable<float>> fitf = shtool::load_zh_fit<float>(path);
+  require(fitf.ok() && fitf.value().vertices == z.vertices, "the float load of the zh-fit table differs");
+  std::printf("consumer: shaded %zu vertices of %s (%d lobes, order %d)\n", z.vertices, path, z.lobes, z.order);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (std::strcmp(shtool::kVersion, SHTOOL_PACKAGE_VERSION) != 0) {
+    std::fprintf(stderr, "consumer: package version %s but shtool/version.h says %s\n", SHTOOL_PACKAGE_VERSION,
+                 shtool::kVersion);
+    ++failures;
+  }
+  check_sh_closed_forms();
+  const shtool::Mat3<double> r = shtool::matrix_from_zyz<double>({0.7, 1.1, -0.4});
+  check_rotations(r);
+  check_products();
+  if (argc > 1) check_zh_fit(argv[1]);
 
   if (failures != 0) {
     std::fprintf(stderr, "consumer: %d check(s) failed\n", failures);
     return 1;
   }
-  std::printf("consumer: shtool %s runtime OK\n", shtool::kVersion);
+  std::printf("consumer: shtool %s runtime OK (tables, rotations, products%s; -fno-exceptions -fno-rtti)\n",
+              shtool::kVersion, argc > 1 ? ", zh-fit shading" : "");
   return 0;
 }

@@ -4,7 +4,8 @@
 #                     check it found the package in PREFIX (not the build tree), run it.
 # Other inputs: BUILD_DIR, PREFIX, CONFIG, and for the consumer step CONSUMER_SOURCE_DIR,
 # CONSUMER_BINARY_DIR, GENERATOR, MAKE_PROGRAM, CXX_COMPILER (the parent's toolchain, so
-# the consumer is built the way the package was).
+# the consumer is built the way the package was), SOURCE_DIR and, when the tool is built,
+# SHTOOL (its path: a fit-zh output of data/spot.obj is made for the consumer to shade).
 cmake_minimum_required(VERSION 3.20)
 
 foreach(var STEP BUILD_DIR PREFIX)
@@ -83,7 +84,20 @@ elseif(STEP STREQUAL "consumer")
 
   find_program(consumer_exe consumer PATHS "${CONSUMER_BINARY_DIR}" "${CONSUMER_BINARY_DIR}/${CONFIG}"
                NO_DEFAULT_PATH REQUIRED)
-  run_step("run consumer" "${consumer_exe}")
+  # The shipped tables as an engine finds them: SHTOOL_TABLES naming the installed folder.
+  set(tables "${PREFIX}/share/shtool/tables")
+  if(NOT EXISTS "${tables}/rotation-helpers.shtb")
+    message(FATAL_ERROR "install did not put the shipped tables in ${tables}")
+  endif()
+  # A fit-zh output to shade, made by the built tool (absent when only the runtime is built).
+  set(fit_args)
+  if(SHTOOL)
+    set(fit "${CONSUMER_BINARY_DIR}/spot.zh.shtb")
+    run_step("fit-zh for the consumer" "${SHTOOL}" fit-zh "${SOURCE_DIR}/data/spot.obj" --order 4 --lobes 2
+             --rays 64 --out "${fit}")
+    set(fit_args "${fit}")
+  endif()
+  run_step("run consumer" "${CMAKE_COMMAND}" -E env "SHTOOL_TABLES=${tables}" "${consumer_exe}" ${fit_args})
   message(STATUS "${step_output}")
 
 else()

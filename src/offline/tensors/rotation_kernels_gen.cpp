@@ -103,7 +103,7 @@ void taylor_band(std::ostream& o, const RotationHelpers& h, int l) {
   auto sub = [&](int j) { return j >= 1 && j < size ? h.dy_sub[first + j] : 0.0; };
   auto off2 = [&](int j) { return j >= 2 && j < size ? h.ddy_off2[first + j] : 0.0; };
   auto t = [](int j) { return indexed("t", j); };
-  o << "// Band " << l << " of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) (paper 001, Sec. 3).\n"
+  o << "// Band " << l << " of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) ([2] Sec. 3).\n"
     << "template <int Order, class T, class P, class S>\n"
     << "inline void taylor_band" << l
     << "(const S& s, const P* __restrict x, P* __restrict y) {\n";

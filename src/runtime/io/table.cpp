@@ -540,7 +540,9 @@ const TableArray* Table::find(std::string_view name) const {
 
 Result<Table> read_table(const std::filesystem::path& path, const TableExpectation& expect,
                               TableFileInfo* info) {
+#if defined(__cpp_exceptions)
   try {
+#endif
     std::error_code ec;
     const auto status = std::filesystem::status(path, ec);
     if (ec || !std::filesystem::exists(status))
@@ -558,10 +560,12 @@ Result<Table> read_table(const std::filesystem::path& path, const TableExpectati
     std::snprintf(buf, sizeof buf, "0x%02x", first & 0xFF);
     return error_at(path, std::string("bad magic: first byte ") + buf +
                               " is neither 0x89 (binary table) nor '{' (JSON table)");
+#if defined(__cpp_exceptions)
   } catch (const std::exception& e) {
     // Out of memory for a huge (but size-consistent) table, or an I/O exception.
     return error_at(path, std::string("cannot read table: ") + e.what());
   }
+#endif
 }
 
 std::filesystem::path find_shipped_table(std::string_view file_name) {

@@ -2649,7 +2649,7 @@ inline void zxzxz_band19(const S& s, const P* __restrict x, P* __restrict y) {
   y[0] = sa19 * v38 + ca19 * v0;
 }
 
-// Band 1 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) (paper 001, Sec. 3).
+// Band 1 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) ([2] Sec. 3).
 template <int Order, class T, class P, class S>
 inline void taylor_band1(const S& s, const P* __restrict x, P* __restrict y) {
   const P t1 = x[1];
@@ -2671,7 +2671,7 @@ inline void taylor_band1(const S& s, const P* __restrict x, P* __restrict y) {
   y[0] = sa1 * u2 + ca1 * u0;
 }
 
-// Band 2 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) (paper 001, Sec. 3).
+// Band 2 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) ([2] Sec. 3).
 template <int Order, class T, class P, class S>
 inline void taylor_band2(const S& s, const P* __restrict x, P* __restrict y) {
   const P t2 = x[2];
@@ -2707,7 +2707,7 @@ inline void taylor_band2(const S& s, const P* __restrict x, P* __restrict y) {
   y[0] = sa2 * u4 + ca2 * u0;
 }
 
-// Band 3 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) (paper 001, Sec. 3).
+// Band 3 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) ([2] Sec. 3).
 template <int Order, class T, class P, class S>
 inline void taylor_band3(const S& s, const P* __restrict x, P* __restrict y) {
   const P t3 = x[3];
@@ -2755,7 +2755,7 @@ inline void taylor_band3(const S& s, const P* __restrict x, P* __restrict y) {
   y[0] = sa3 * u6 + ca3 * u0;
 }
 
-// Band 4 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) (paper 001, Sec. 3).
+// Band 4 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) ([2] Sec. 3).
 template <int Order, class T, class P, class S>
 inline void taylor_band4(const S& s, const P* __restrict x, P* __restrict y) {
   const P t4 = x[4];
@@ -2815,7 +2815,7 @@ inline void taylor_band4(const S& s, const P* __restrict x, P* __restrict y) {
   y[0] = sa4 * u8 + ca4 * u0;
 }
 
-// Band 5 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) (paper 001, Sec. 3).
+// Band 5 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) ([2] Sec. 3).
 template <int Order, class T, class P, class S>
 inline void taylor_band5(const S& s, const P* __restrict x, P* __restrict y) {
   const P t5 = x[5];
@@ -2887,7 +2887,7 @@ inline void taylor_band5(const S& s, const P* __restrict x, P* __restrict y) {
   y[0] = sa5 * u10 + ca5 * u0;
 }
 
-// Band 6 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) (paper 001, Sec. 3).
+// Band 6 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) ([2] Sec. 3).
 template <int Order, class T, class P, class S>
 inline void taylor_band6(const S& s, const P* __restrict x, P* __restrict y) {
   const P t6 = x[6];
@@ -2971,7 +2971,7 @@ inline void taylor_band6(const S& s, const P* __restrict x, P* __restrict y) {
   y[0] = sa6 * u12 + ca6 * u0;
 }
 
-// Band 7 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) (paper 001, Sec. 3).
+// Band 7 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) ([2] Sec. 3).
 template <int Order, class T, class P, class S>
 inline void taylor_band7(const S& s, const P* __restrict x, P* __restrict y) {
   const P t7 = x[7];
@@ -3067,7 +3067,7 @@ inline void taylor_band7(const S& s, const P* __restrict x, P* __restrict y) {
   y[0] = sa7 * u14 + ca7 * u0;
 }
 
-// Band 8 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) (paper 001, Sec. 3).
+// Band 8 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) ([2] Sec. 3).
 template <int Order, class T, class P, class S>
 inline void taylor_band8(const S& s, const P* __restrict x, P* __restrict y) {
   const P t8 = x[8];
@@ -3175,7 +3175,7 @@ inline void taylor_band8(const S& s, const P* __restrict x, P* __restrict y) {
   y[0] = sa8 * u16 + ca8 * u0;
 }
 
-// Band 9 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) (paper 001, Sec. 3).
+// Band 9 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) ([2] Sec. 3).
 template <int Order, class T, class P, class S>
 inline void taylor_band9(const S& s, const P* __restrict x, P* __restrict y) {
   const P t9 = x[9];
@@ -3295,7 +3295,7 @@ inline void taylor_band9(const S& s, const P* __restrict x, P* __restrict y) {
   y[0] = sa9 * u18 + ca9 * u0;
 }
 
-// Band 10 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) (paper 001, Sec. 3).
+// Band 10 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) ([2] Sec. 3).
 template <int Order, class T, class P, class S>
 inline void taylor_band10(const S& s, const P* __restrict x, P* __restrict y) {
   const P t10 = x[10];
@@ -3427,7 +3427,7 @@ inline void taylor_band10(const S& s, const P* __restrict x, P* __restrict y) {
   y[0] = sa10 * u20 + ca10 * u0;
 }
 
-// Band 11 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) (paper 001, Sec. 3).
+// Band 11 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) ([2] Sec. 3).
 template <int Order, class T, class P, class S>
 inline void taylor_band11(const S& s, const P* __restrict x, P* __restrict y) {
   const P t11 = x[11];
@@ -3571,7 +3571,7 @@ inline void taylor_band11(const S& s, const P* __restrict x, P* __restrict y) {
   y[0] = sa11 * u22 + ca11 * u0;
 }
 
-// Band 12 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) (paper 001, Sec. 3).
+// Band 12 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) ([2] Sec. 3).
 template <int Order, class T, class P, class S>
 inline void taylor_band12(const S& s, const P* __restrict x, P* __restrict y) {
   const P t12 = x[12];
@@ -3727,7 +3727,7 @@ inline void taylor_band12(const S& s, const P* __restrict x, P* __restrict y) {
   y[0] = sa12 * u24 + ca12 * u0;
 }
 
-// Band 13 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) (paper 001, Sec. 3).
+// Band 13 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) ([2] Sec. 3).
 template <int Order, class T, class P, class S>
 inline void taylor_band13(const S& s, const P* __restrict x, P* __restrict y) {
   const P t13 = x[13];
@@ -3895,7 +3895,7 @@ inline void taylor_band13(const S& s, const P* __restrict x, P* __restrict y) {
   y[0] = sa13 * u26 + ca13 * u0;
 }
 
-// Band 14 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) (paper 001, Sec. 3).
+// Band 14 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) ([2] Sec. 3).
 template <int Order, class T, class P, class S>
 inline void taylor_band14(const S& s, const P* __restrict x, P* __restrict y) {
   const P t14 = x[14];
@@ -4075,7 +4075,7 @@ inline void taylor_band14(const S& s, const P* __restrict x, P* __restrict y) {
   y[0] = sa14 * u28 + ca14 * u0;
 }
 
-// Band 15 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) (paper 001, Sec. 3).
+// Band 15 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) ([2] Sec. 3).
 template <int Order, class T, class P, class S>
 inline void taylor_band15(const S& s, const P* __restrict x, P* __restrict y) {
   const P t15 = x[15];
@@ -4267,7 +4267,7 @@ inline void taylor_band15(const S& s, const P* __restrict x, P* __restrict y) {
   y[0] = sa15 * u30 + ca15 * u0;
 }
 
-// Band 16 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) (paper 001, Sec. 3).
+// Band 16 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) ([2] Sec. 3).
 template <int Order, class T, class P, class S>
 inline void taylor_band16(const S& s, const P* __restrict x, P* __restrict y) {
   const P t16 = x[16];
@@ -4471,7 +4471,7 @@ inline void taylor_band16(const S& s, const P* __restrict x, P* __restrict y) {
   y[0] = sa16 * u32 + ca16 * u0;
 }
 
-// Band 17 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) (paper 001, Sec. 3).
+// Band 17 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) ([2] Sec. 3).
 template <int Order, class T, class P, class S>
 inline void taylor_band17(const S& s, const P* __restrict x, P* __restrict y) {
   const P t17 = x[17];
@@ -4687,7 +4687,7 @@ inline void taylor_band17(const S& s, const P* __restrict x, P* __restrict y) {
   y[0] = sa17 * u34 + ca17 * u0;
 }
 
-// Band 18 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) (paper 001, Sec. 3).
+// Band 18 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) ([2] Sec. 3).
 template <int Order, class T, class P, class S>
 inline void taylor_band18(const S& s, const P* __restrict x, P* __restrict y) {
   const P t18 = x[18];
@@ -4915,7 +4915,7 @@ inline void taylor_band18(const S& s, const P* __restrict x, P* __restrict y) {
   y[0] = sa18 * u36 + ca18 * u0;
 }
 
-// Band 19 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) (paper 001, Sec. 3).
+// Band 19 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) ([2] Sec. 3).
 template <int Order, class T, class P, class S>
 inline void taylor_band19(const S& s, const P* __restrict x, P* __restrict y) {
   const P t19 = x[19];

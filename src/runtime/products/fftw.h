@@ -11,6 +11,8 @@
 
 #include <fftw3.h>
 
+#include "precondition.h"
+
 namespace shtool::detail {
 
 // FFTW_ESTIMATE: the plan does not depend on timing (FFTW_MEASURE would pick algorithms
@@ -83,7 +85,7 @@ class FftwBuffer {
   FftwBuffer() = default;
   explicit FftwBuffer(std::size_t count) : size_(count) {
     data_ = static_cast<E*>(Fftw<T>::alloc(count * sizeof(E)));
-    if (!data_) throw std::bad_alloc();
+    if (!data_) detail::allocation_failed();
     zero();
   }
   ~FftwBuffer() {

@@ -13,6 +13,7 @@
 #include "products/fftw.h"
 #include "shtool/fourier_tensors.h"
 #include "shtool/sh.h"
+#include "precondition.h"
 
 namespace shtool {
 
@@ -93,10 +94,10 @@ struct FourierProduct<T>::Impl {
 
   Impl(int order, int count) : n(order), inputs(count) {
     if (order < 1 || order > kMaxFourierProductOrder)
-      throw std::invalid_argument("FourierProduct: order " + std::to_string(order) + " outside 1.." +
+      detail::precondition_failed("FourierProduct: order " + std::to_string(order) + " outside 1.." +
                                   std::to_string(kMaxFourierProductOrder));
     if (count < 1 || count > kMaxProductInputs)
-      throw std::invalid_argument("FourierProduct: " + std::to_string(count) + " inputs (1.." +
+      detail::precondition_failed("FourierProduct: " + std::to_string(count) + " inputs (1.." +
                                   std::to_string(kMaxProductInputs) + ")");
     nodes.reserve(2 * count);
     build_node(0, count, true);
@@ -151,7 +152,7 @@ struct FourierProduct<T>::Impl {
       node.c2r = F::c2r_2d(node.m_phi, node.m_theta, node.spec_a.data(), node.grid_a.data());
       node.r2c = F::r2c_2d(node.m_phi, node.m_theta, node.grid_a.data(), node.spec_a.data());
     }
-    if (!node.c2r || !node.r2c) throw std::runtime_error("FourierProduct: FFTW planning failed");
+    if (!node.c2r || !node.r2c) detail::dependency_failed("FourierProduct: FFTW planning failed");
     if (!top) node.coeff.assign(static_cast<std::size_t>(2 * d + 1) * (d + 1), {});
     return id;
   }

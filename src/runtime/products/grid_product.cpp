@@ -14,6 +14,7 @@
 #include "shtool/legendre.h"
 #include "shtool/quadrature.h"
 #include "shtool/sh.h"
+#include "precondition.h"
 
 namespace shtool {
 namespace {
@@ -175,7 +176,7 @@ struct FftGrid final : GridProduct<T>::Impl {
     out = static_cast<Complex*>(F::alloc(sizeof(Complex) * static_cast<std::size_t>(ncplx) * rings));
     if (!spec || !grid || !prod || !out) {
       release();
-      throw std::bad_alloc();
+      detail::allocation_failed();
     }
     std::memset(spec, 0, sizeof(Complex) * spec_count);
     {
@@ -185,7 +186,7 @@ struct FftGrid final : GridProduct<T>::Impl {
     }
     if (!c2r || !r2c) {
       release();
-      throw std::runtime_error("GridProduct: FFTW could not make a plan");
+      detail::dependency_failed("GridProduct: FFTW could not make a plan");
     }
   }
 
@@ -578,10 +579,10 @@ constexpr int kDirectAzimuthMaxOrder = std::is_same_v<T, float> ? 20 : 11;
 template <class T>
 GridProduct<T>::GridProduct(int order, int inputs, GridAzimuth azimuth) {
   if (order < 1 || order > kMaxFourierProductOrder)
-    throw std::invalid_argument("GridProduct: order " + std::to_string(order) + " outside 1.." +
+    detail::precondition_failed("GridProduct: order " + std::to_string(order) + " outside 1.." +
                                 std::to_string(kMaxFourierProductOrder));
   if (inputs < 1 || inputs > kMaxProductInputs)
-    throw std::invalid_argument("GridProduct: " + std::to_string(inputs) + " inputs (1.." +
+    detail::precondition_failed("GridProduct: " + std::to_string(inputs) + " inputs (1.." +
                                 std::to_string(kMaxProductInputs) + ")");
   if (azimuth == GridAzimuth::automatic)
     azimuth = order <= kDirectAzimuthMaxOrder<T> ? GridAzimuth::direct : GridAzimuth::fft;
@@ -622,7 +623,7 @@ GridAzimuth GridProduct<T>::azimuth() const {
 template <class T>
 void GridProduct<T>::multiply(std::span<const std::span<const T>> f, std::span<T> g) {
   if (static_cast<int>(f.size()) != impl_->inputs)
-    throw std::invalid_argument("GridProduct: " + std::to_string(f.size()) + " inputs given, " +
+    detail::precondition_failed("GridProduct: " + std::to_string(f.size()) + " inputs given, " +
                                 std::to_string(impl_->inputs) + " expected");
   impl_->multiply(f.data(), g.data());
 }
@@ -636,7 +637,7 @@ void GridProduct<T>::multiply(std::span<const T> f1, std::span<const T> f2, std:
 template <class T>
 T GridProduct<T>::integral(std::span<const std::span<const T>> f) {
   if (static_cast<int>(f.size()) != impl_->inputs + 1)
-    throw std::invalid_argument("GridProduct::integral: " + std::to_string(f.size()) +
+    detail::precondition_failed("GridProduct::integral: " + std::to_string(f.size()) +
                                 " functions given, " + std::to_string(impl_->inputs + 1) +
                                 " expected");
   // integral (f_1 ... f_q) f_{q+1} = <P_N(f_1 ... f_q), f_{q+1}> exactly, since f_{q+1}

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "shtool/sh.h"
+#include "precondition.h"
 
 namespace shtool {
 
@@ -13,7 +14,7 @@ template <class T>
 ShProduct<T>::ShProduct(int order, ProductMethod method, const TriplingTensor* tensor)
     : order_(order), fourier_(kMaxProductInputs + 1), grid_(kMaxProductInputs + 1) {
   if (order < 1 || order > kMaxFourierProductOrder)
-    throw std::invalid_argument("ShProduct: order " + std::to_string(order) + " outside 1.." +
+    detail::precondition_failed("ShProduct: order " + std::to_string(order) + " outside 1.." +
                                 std::to_string(kMaxFourierProductOrder));
   multiple_fourier_ = method == ProductMethod::fourier;
   if (method == ProductMethod::automatic)
@@ -21,11 +22,11 @@ ShProduct<T>::ShProduct(int order, ProductMethod method, const TriplingTensor* t
                                                                           : ProductMethod::tripling;
   triple_method_ = method;
   if (method == ProductMethod::tripling && order > kMaxTriplingOrder)
-    throw std::invalid_argument("ShProduct: the tripling tensor is limited to order " +
+    detail::precondition_failed("ShProduct: the tripling tensor is limited to order " +
                                 std::to_string(kMaxTriplingOrder));
   if (tensor) {
     if (tensor->order < order)
-      throw std::invalid_argument("ShProduct: tripling tensor of order " +
+      detail::precondition_failed("ShProduct: tripling tensor of order " +
                                   std::to_string(tensor->order) + " for products of order " +
                                   std::to_string(order));
     if (tensor->order == order) {
@@ -63,7 +64,7 @@ const TriplingProduct<T>& ShProduct<T>::tripling() {
 template <class T>
 FourierProduct<T>& ShProduct<T>::fourier(int inputs) {
   if (inputs < 1 || inputs > kMaxProductInputs)
-    throw std::invalid_argument("ShProduct: " + std::to_string(inputs) + " inputs (1.." +
+    detail::precondition_failed("ShProduct: " + std::to_string(inputs) + " inputs (1.." +
                                 std::to_string(kMaxProductInputs) + ")");
   if (!fourier_[inputs]) fourier_[inputs] = std::make_unique<FourierProduct<T>>(order_, inputs);
   return *fourier_[inputs];
@@ -72,7 +73,7 @@ FourierProduct<T>& ShProduct<T>::fourier(int inputs) {
 template <class T>
 GridProduct<T>& ShProduct<T>::grid(int inputs) {
   if (inputs < 1 || inputs > kMaxProductInputs)
-    throw std::invalid_argument("ShProduct: " + std::to_string(inputs) + " inputs (1.." +
+    detail::precondition_failed("ShProduct: " + std::to_string(inputs) + " inputs (1.." +
                                 std::to_string(kMaxProductInputs) + ")");
   if (!grid_[inputs]) grid_[inputs] = std::make_unique<GridProduct<T>>(order_, inputs);
   return *grid_[inputs];
@@ -137,7 +138,7 @@ template <class T>
 void ShProduct<T>::recursive(std::span<const std::span<const T>> f, std::span<T> g) {
   const int inputs = static_cast<int>(f.size());
   if (inputs < 1 || inputs > kMaxProductInputs)
-    throw std::invalid_argument("ShProduct: " + std::to_string(inputs) + " inputs (1.." +
+    detail::precondition_failed("ShProduct: " + std::to_string(inputs) + " inputs (1.." +
                                 std::to_string(kMaxProductInputs) + ")");
   if (inputs == 1) {
     std::copy(f[0].begin(), f[0].begin() + sh_count(order_), g.begin());

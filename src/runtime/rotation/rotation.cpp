@@ -9,6 +9,7 @@
 
 #include "shtool/sh.h"
 #include "kernels/rotation_kernels.h"
+#include "precondition.h"
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -114,17 +115,17 @@ ShRotation<T>::ShRotation(int order, std::shared_ptr<const RotationHelpers> help
           int nz = -1;
           for (int c = 0; c < size && nz < 0; ++c)
             if (at(c) != 0.0) nz = c;
-          if (nz < 0) throw std::logic_error("X90 row is empty");
+          if (nz < 0) detail::invariant_failed("X90 row is empty");
           // The class of the first non-zero column (sign of m, parity of m) is the run
           // of columns this row reads: lo, lo + 2, ..., hi.
           const int m = nz - l, odd = m & 1;
           const int m_lo = m < 0 ? -l + (((-l) & 1) != odd) : odd;
           const int m_hi = m < 0 ? -1 - (odd == 0) : l - ((l & 1) != odd);
           const int lo = m_lo + l, hi = m_hi + l;
-          if ((hi - lo) / 2 + 1 != x90_row_length(l, r)) throw std::logic_error("X90 row class size");
+          if ((hi - lo) / 2 + 1 != x90_row_length(l, r)) detail::invariant_failed("X90 row class size");
           for (int c = 0; c < size; ++c)
             if (at(c) != 0.0 && (c < lo || c > hi || (c - lo) % 2))
-              throw std::logic_error("X90 row is not parity-strided");
+              detail::invariant_failed("X90 row is not parity-strided");
           start[first + r] = split_pos(l, lo);
           for (int c = lo; c <= hi; c += 2) val[out++] = static_cast<T>(at(c));
         }
@@ -159,7 +160,7 @@ ShRotation<T>::ShRotation(int order, std::shared_ptr<const RotationHelpers> help
     for (int k = 0; k < 4; ++k) {
       kernel1_[k] = detail::rotation_kernel<T, 1>(kKernelMethod[k], order);
       kernel3_[k] = detail::rotation_kernel<T, 3>(kKernelMethod[k], order);
-      if (!kernel1_[k] || !kernel3_[k]) throw std::logic_error("no rotation kernel for this order");
+      if (!kernel1_[k] || !kernel3_[k]) detail::invariant_failed("no rotation kernel for this order");
     }
     kernel_order_ = std::min(order, detail::kKernelMaxOrder);
     if (order <= detail::kBandKernelMaxBand + 1) {
@@ -779,7 +780,7 @@ bool rotate_batch(ShRotation<T>& rotation, std::span<const Mat3<T>> rotations, s
                   std::span<T> out, RotationMethod method, double tolerance) {
   const std::size_t n = static_cast<std::size_t>(sh_count(rotation.order())), count = rotations.size();
   if (in.size() < count * n || out.size() < count * n)
-    throw std::invalid_argument("rotate_batch: " + std::to_string(count) + " rotations of order " +
+    detail::precondition_failed("rotate_batch: " + std::to_string(count) + " rotations of order " +
                                 std::to_string(rotation.order()) + " need " + std::to_string(count * n) +
                                 " coefficients in and out, got " + std::to_string(in.size()) + " and " +
                                 std::to_string(out.size()));

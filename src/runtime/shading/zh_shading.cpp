@@ -5,6 +5,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "precondition.h"
+
 namespace shtool {
 namespace {
 
@@ -94,23 +96,23 @@ template <class T>
 ZhLightTable<T>::ZhLightTable(int order, std::span<const double> light, int resolution)
     : order_(order), resolution_(resolution) {
   if (order < 1 || order > kMaxOrder)
-    throw std::invalid_argument("ZH light table: order " + std::to_string(order) + " is outside 1.." +
+    detail::precondition_failed("ZH light table: order " + std::to_string(order) + " is outside 1.." +
                                 std::to_string(kMaxOrder));
   if (light.size() != static_cast<std::size_t>(sh_count(order)))
-    throw std::invalid_argument("ZH light table: order mismatch: the lighting has " + std::to_string(light.size()) +
+    detail::precondition_failed("ZH light table: order mismatch: the lighting has " + std::to_string(light.size()) +
                                 " coefficients, order " + std::to_string(order) + " needs " +
                                 std::to_string(sh_count(order)));
   for (std::size_t i = 0; i < light.size(); ++i)
     if (!std::isfinite(light[i]))
-      throw std::invalid_argument("ZH light table: lighting coefficient " + std::to_string(i) + " is not finite");
+      detail::precondition_failed("ZH light table: lighting coefficient " + std::to_string(i) + " is not finite");
   if (resolution < 1 || resolution > kMaxZhLightResolution)
-    throw std::invalid_argument("ZH light table: resolution " + std::to_string(resolution) + " is outside 1.." +
+    detail::precondition_failed("ZH light table: resolution " + std::to_string(resolution) + " is outside 1.." +
                                 std::to_string(kMaxZhLightResolution));
 
   const int r = resolution;
   const double values = 6.0 * (r + 1.0) * (r + 1.0) * order;
   if (values > kMaxTableValues)
-    throw std::invalid_argument("ZH light table: resolution " + std::to_string(r) + " at order " +
+    detail::precondition_failed("ZH light table: resolution " + std::to_string(r) + " at order " +
                                 std::to_string(order) + " needs " + std::to_string(static_cast<long long>(values)) +
                                 " values, more than the limit of " +
                                 std::to_string(static_cast<long long>(kMaxTableValues)));

@@ -1,0 +1,205 @@
+// The offline floor (src/offline/common): atomic outputs, all-or-none output sets, the
+// thread pool's determinism and error propagation, the input reader's messages, and the
+// platform-stable random draws against the standard library they reproduce.
+#include <algorithm>
+#include <atomic>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <unistd.h>
+
+#include <gtest/gtest.h>
+
+#include "common/atomic_file.h"
+#include "common/input_error.h"
+#include "common/input_file.h"
+#include "common/parallel_for.h"
+#include "common/random.h"
+
+namespace shtool {
+namespace {
+
+namespace fs = std::filesystem;
+
+class CommonFiles : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("shtool-test-common-" + std::to_string(::getpid()) + "-" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override {
+    std::error_code ec;
+    fs::remove_all(dir_, ec);
+  }
+  std::vector<std::string> listing() const {
+    std::vector<std::string> names;
+    for (const auto& e : fs::directory_iterator(dir_)) names.push_back(e.path().filename().string());
+    std::sort(names.begin(), names.end());
+    return names;
+  }
+  static std::string read(const fs::path& p) {
+    std::ifstream f(p, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(f), {});
+  }
+  fs::path dir_;
+};
+
+TEST_F(CommonFiles, AtomicWriteReplacesAndLeavesNoTemporary) {
+  write_file_atomically(dir_ / "a.txt", "first");
+  write_file_atomically(dir_ / "a.txt", "second");
+  EXPECT_EQ(read(dir_ / "a.txt"), "second");
+  EXPECT_EQ(listing(), std::vector<std::string>{"a.txt"});
+}
+
+TEST_F(CommonFiles, AbandonedPendingFileRemovesItsTemporary) {
+  write_file_atomically(dir_ / "a.txt", "old");
+  {
+    PendingFile f(dir_ / "a.txt");
+    f.write(std::string_view("new, never committed"));
+    f.finish();
+    EXPECT_EQ(listing().size(), 2u) << "the temporary file exists while pending";
+  }
+  EXPECT_EQ(listing(), std::vector<std::string>{"a.txt"});
+  EXPECT_EQ(read(dir_ / "a.txt"), "old");
+}
+
+TEST_F(CommonFiles, OutputSetIsAllOrNothing) {
+  write_file_atomically(dir_ / "keep.txt", "old");
+  const std::string a = "A", b = "B";
+  // The second output's folder does not exist: neither output is written.
+  const std::vector<OutputFile> bad = {{dir_ / "keep.txt", a}, {dir_ / "missing" / "b.txt", b}};
+  try {
+    write_files_atomically(bad);
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("does not exist"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(read(dir_ / "keep.txt"), "old");
+  EXPECT_EQ(listing(), std::vector<std::string>{"keep.txt"});
+  // Two outputs naming one file (here through a different spelling) are refused.
+  const std::vector<OutputFile> twice = {{dir_ / "keep.txt", a}, {dir_ / "." / "keep.txt", b}};
+  EXPECT_THROW(write_files_atomically(twice), InputError);
+  EXPECT_EQ(read(dir_ / "keep.txt"), "old");
+  // And a good set writes both.
+  const std::vector<OutputFile> good = {{dir_ / "keep.txt", a}, {dir_ / "b.txt", b}};
+  write_files_atomically(good);
+  EXPECT_EQ(read(dir_ / "keep.txt"), "A");
+  EXPECT_EQ(read(dir_ / "b.txt"), "B");
+  EXPECT_EQ(listing(), (std::vector<std::string>{"b.txt", "keep.txt"}));
+}
+
+TEST_F(CommonFiles, OutputPathChecksNameTheProblem) {
+  try {
+    check_output_path(dir_, "--out");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("--out: cannot write"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("is a folder"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(check_output_path(dir_ / "no" / "x", "--json"), InputError);
+  EXPECT_NO_THROW(check_output_path(dir_ / "x", "--json"));
+}
+
+TEST_F(CommonFiles, InputReaderMessages) {
+  auto message = [](const fs::path& p) {
+    try {
+      read_json_input(p, "--in");
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_NE(message(dir_ / "none.json").find("--in '"), std::string::npos);
+  EXPECT_NE(message(dir_ / "none.json").find("no such file"), std::string::npos);
+  EXPECT_NE(message(dir_).find("is a folder"), std::string::npos);
+  write_file_atomically(dir_ / "bad.json", "{\"a\": [1, 2");
+  EXPECT_NE(message(dir_ / "bad.json").find("not valid JSON"), std::string::npos);
+  write_file_atomically(dir_ / "deep.json", std::string(100000, '[') + std::string(100000, ']'));
+  EXPECT_NE(message(dir_ / "deep.json").find("nested more than"), std::string::npos) << message(dir_ / "deep.json");
+  // Brackets inside strings do not count.
+  write_file_atomically(dir_ / "ok.json", "{\"s\": \"" + std::string(1000, '[') + "\"}");
+  EXPECT_EQ(message(dir_ / "ok.json"), "");
+}
+
+TEST(ParallelFor, SameResultsForEveryThreadCountAndAllItemsOnce) {
+  const std::size_t n = 1000;
+  std::vector<std::uint64_t> reference(n);
+  for (std::size_t i = 0; i < n; ++i) reference[i] = splitmix64(i);
+  for (int threads : {1, 2, 3, 7, 16}) {
+    std::vector<std::uint64_t> out(n, 0);
+    std::vector<std::atomic<int>> hits(n);
+    parallel_for(n, threads, [&](std::size_t i) {
+      out[i] = splitmix64(i);
+      ++hits[i];
+    });
+    EXPECT_EQ(out, reference) << threads << " threads";
+    for (std::size_t i = 0; i < n; ++i) ASSERT_EQ(hits[i].load(), 1) << i;
+  }
+}
+
+TEST(ParallelFor, ExceptionsReachTheCaller) {
+  for (int threads : {1, 4}) {
+    EXPECT_THROW(parallel_for(100, threads,
+                              [](std::size_t i) {
+                                if (i == 77) throw InputError("item 77");
+                              }),
+                 InputError);
+  }
+  ThreadPool pool(3);
+  EXPECT_THROW(pool.run(10, [](int worker, std::size_t, std::size_t) {
+    if (worker == 2) throw std::runtime_error("worker 2");
+  }),
+               std::runtime_error);
+  // The pool still works after an error.
+  std::atomic<std::size_t> sum{0};
+  pool.run(10, [&](int, std::size_t b, std::size_t e) {
+    for (std::size_t i = b; i < e; ++i) sum += i;
+  });
+  EXPECT_EQ(sum.load(), 45u);
+}
+
+TEST(ParallelFor, ThreadRequestsAreCapped) {
+  EXPECT_GE(resolve_threads(0), 1);
+  EXPECT_EQ(resolve_threads(2), 2);
+  EXPECT_THROW(resolve_threads(max_threads() + 1), InputError);
+  EXPECT_THROW(resolve_threads(100000), InputError);
+}
+
+// The draws reproduce libstdc++'s distributions on std::mt19937_64 bit for bit (the
+// shipped lobe tables were made with those); this build is libstdc++, so they are the
+// independent reference here.
+TEST(Random, UniformDrawsMatchLibstdcxxDistributions) {
+  for (std::uint64_t n : {1ull, 2ull, 3ull, 7ull, 10ull, 1000ull, (1ull << 32) + 3, ~0ull / 3}) {
+    std::mt19937_64 a(42 + n), b(42 + n);
+    std::uniform_int_distribution<std::uint64_t> d(0, n - 1);
+    for (int k = 0; k < 2000; ++k) ASSERT_EQ(uniform_below(a, n), d(b)) << "n " << n << " draw " << k;
+  }
+  std::mt19937_64 a(7), b(7);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (int k = 0; k < 20000; ++k) ASSERT_EQ(uniform_01(a), u(b)) << k;
+  // int-typed distributions (as the lobe search once used) give the same values.
+  std::mt19937_64 c(9), e(9);
+  std::uniform_int_distribution<int> di(0, 40);
+  for (int k = 0; k < 2000; ++k) ASSERT_EQ(static_cast<int>(uniform_below(c, 41)), di(e));
+}
+
+TEST(Random, UnitDoubleIsInRange) {
+  EXPECT_EQ(unit_double(0), 0.0);
+  EXPECT_LT(unit_double(~0ull), 1.0);
+  SplitMixStream s{1};
+  for (int k = 0; k < 1000; ++k) {
+    const double u = s.uniform();
+    ASSERT_GE(u, 0.0);
+    ASSERT_LT(u, 1.0);
+  }
+}
+
+}  // namespace
+}  // namespace shtool
