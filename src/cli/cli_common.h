@@ -4,15 +4,14 @@
 
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
 #include "common/input_error.h"
 
-namespace CLI {
-class App;
-}
+#include <CLI/CLI.hpp>
 
 namespace shtool::cli {
 
@@ -27,6 +26,27 @@ std::vector<double> parse_number_list(const std::string& text, const std::string
 
 // "a,b,c" -> {"a", "b", "c"}; empty items are kept (so that they can be reported).
 std::vector<std::string> split_list(const std::string& text);
+
+// An option that takes one of `names` and stores the matching enum value into `target`
+// (default: whatever `target` holds, shown in --help as `default_name`). A value not in
+// the list is a CLI11 error naming the option and the accepted values.
+template <class E>
+CLI::Option* add_enum_option(CLI::App* app, const std::string& name, E& target,
+                             const std::vector<std::pair<std::string, E>>& names, const std::string& help,
+                             const std::string& default_name) {
+  std::vector<std::string> accepted;
+  for (const auto& n : names) accepted.push_back(n.first);
+  return app
+      ->add_option_function<std::string>(
+          name,
+          [&target, names](const std::string& v) {
+            for (const auto& n : names)
+              if (n.first == v) target = n.second;
+          },
+          help)
+      ->check(CLI::IsMember(accepted))
+      ->default_str(default_name);
+}
 
 // Prints JSON to stdout followed by a newline. nlohmann-json writes doubles with the
 // shortest representation that reads back to the same bits (round-trip exact).

@@ -3,7 +3,6 @@
 // fit::run_fit_zh (src/offline/fit/fit_zh_job.h); this file parses and prints.
 #include <cstdio>
 #include <iostream>
-#include <map>
 #include <memory>
 #include <sstream>
 #include <string>
@@ -39,30 +38,26 @@ void setup_fit_zh(CLI::App& app) {
   sub->add_option("mesh", opt->mesh, "OBJ mesh (polygons are triangulated)");
   sub->add_option("--transfer", opt->transfer, "fit SH vectors from JSON {\"order\": n, \"vectors\": [[n^2], ...]}");
   sub->add_option("--out", opt->out, "output table (default: <input stem>.zh.shtb in the current folder)");
-  sub->add_option("--format", opt->encoding, "table encoding: binary or json")
-      ->transform(CLI::CheckedTransformer(std::map<std::string, TableEncoding>{{"binary", TableEncoding::binary},
-                                                                                {"json", TableEncoding::json}}))
-      ->default_str("binary");
+  add_enum_option(sub, "--format", opt->encoding, {{"binary", TableEncoding::binary}, {"json", TableEncoding::json}},
+                  "table encoding: binary or json", "binary");
   sub->add_option("--json", opt->json, "also write the fits as JSON to this file");
   sub->add_option("--ply", opt->ply, "also write the mesh with per-vertex colours (transfer DC, fit error)");
   sub->add_option("--save-transfer", opt->save_transfer, "also write the simulated transfer vectors (--transfer format)");
   CLI::Option* order = sub->add_option("--order", opt->order, "SH order n (bands 0..n-1)")->capture_default_str();
   sub->add_option("--lobes", opt->lobes, "ZH lobes N per vertex")->capture_default_str();
   sub->add_option("--rays", opt->rays, "directions per vertex")->capture_default_str();
-  sub->add_option("--mode", opt->mode, "unshadowed, shadowed or interreflected")
-      ->transform(CLI::CheckedTransformer(std::map<std::string, fit::TransferMode>{
-          {"unshadowed", fit::TransferMode::unshadowed},
-          {"shadowed", fit::TransferMode::shadowed},
-          {"interreflected", fit::TransferMode::interreflected}}))
-      ->default_str("shadowed");
+  add_enum_option(sub, "--mode", opt->mode,
+                  {{"unshadowed", fit::TransferMode::unshadowed},
+                   {"shadowed", fit::TransferMode::shadowed},
+                   {"interreflected", fit::TransferMode::interreflected}},
+                  "unshadowed, shadowed or interreflected", "shadowed");
   sub->add_option("--bounces", opt->bounces, "interreflected: diffuse bounces")->capture_default_str();
   sub->add_option("--albedo", opt->albedo, "interreflected: surface albedo in [0, 1)")->capture_default_str();
-  sub->add_option("--normals", opt->normals, "auto (file if complete, else computed), file or computed")
-      ->transform(CLI::CheckedTransformer(std::map<std::string, fit::NormalSource>{
-          {"auto", fit::NormalSource::automatic},
-          {"file", fit::NormalSource::file},
-          {"computed", fit::NormalSource::computed}}))
-      ->default_str("auto");
+  add_enum_option(sub, "--normals", opt->normals,
+                  {{"auto", fit::NormalSource::automatic},
+                   {"file", fit::NormalSource::file},
+                   {"computed", fit::NormalSource::computed}},
+                  "auto (file if complete, else computed), file or computed", "auto");
   sub->add_option("--seed", opt->seed, "seed of the ray rotations and multi-start axes")->capture_default_str();
   sub->add_option("--starts", opt->starts, "random multi-start axis sets per vertex (effort/quality)")
       ->capture_default_str();

@@ -1,6 +1,5 @@
 // shtool gen-tensors: writes the precomputed tables the runtime needs.
 #include <iostream>
-#include <map>
 #include <memory>
 #include <string>
 
@@ -27,10 +26,8 @@ void setup_gen_tensors(CLI::App& app) {
       ->capture_default_str();
   sub->add_option("--inputs", req->inputs, "fourier: largest number of product inputs covered (2..8)")
       ->capture_default_str();
-  sub->add_option("--format", req->encoding, "binary (.shtb) or json (.json)")
-      ->transform(CLI::CheckedTransformer(std::map<std::string, TableEncoding>{{"binary", TableEncoding::binary},
-                                                                                {"json", TableEncoding::json}}))
-      ->default_str("binary");
+  add_enum_option(sub, "--format", req->encoding, {{"binary", TableEncoding::binary}, {"json", TableEncoding::json}},
+                  "binary (.shtb) or json (.json)", "binary");
   sub->callback([req, what]() {
     GenTensorsRequest r = *req;
     r.what = split_list(*what);

@@ -81,9 +81,8 @@ void run_rotate(const RotateOptions& opt) {
     throw InputError("--order " + std::to_string(opt.order) + " is not supported (1.." +
                     std::to_string(kMaxOrder) + ")");
   const bool zhf = opt.method == "zhf" || opt.method == "zhf-tailored";
-  const auto method = zhf ? std::optional<RotationMethod>(RotationMethod::reference)
-                          : rotation_method_from_name(opt.method);
-  if (!method)
+  const std::optional<RotationMethod> method = rotation_method_from_name(opt.method);
+  if (!zhf && !method)
     throw InputError("--method: unknown method '" + opt.method +
                     "' (auto, reference, zxzxz, taylor1, taylor1.5, taylor2, zhf, zhf-tailored)");
   if (!(opt.tol > 0) || !std::isfinite(opt.tol)) throw InputError("--tol must be a positive number");

@@ -1,0 +1,86 @@
+#include "lobes/search_lobes_job.h"
+
+#include <chrono>
+#include <string>
+
+#include "common/atomic_file.h"
+#include "common/generator_record.h"
+#include "common/input_error.h"
+#include "common/table_writer.h"
+#include "shtool/sh.h"
+
+namespace shtool::lobes {
+
+SearchLobesReport run_search_lobes(SearchLobesRequest r, const SearchLobesCallbacks& cb) {
+  SearchOptions& s = r.search;
+  if (r.paper) {
+    s.secondary = false;
+    s.local_search = false;
+    if (!r.restarts_given) s.restarts = 1;
+    if (!r.theta_given) s.theta = ThetaCandidates::pooled;
+  }
+  if (r.shared) {
+    if (!r.bands.empty()) throw InputError("--shared takes --order, not --band/--bands");
+    if (r.order < 3 || r.order > kMaxOrder)
+      throw InputError("--shared needs --order N with 3 <= N <= " + std::to_string(kMaxOrder));
+  } else {
+    if (r.order) throw InputError("--order is for --shared; per-band searches take --band or --bands");
+    if (r.bands.empty()) throw InputError("give --band l, --bands a-b, or --shared --order N");
+  }
+  // Fail before a long search, not after it.
+  if (!r.out.empty()) check_output_path(r.out, "--out");
+  if (!r.json.empty()) check_output_path(r.json, "--json");
+  s.progress = cb.progress;
+
+  const nlohmann::json params = {
+      {"mode", r.shared ? "shared" : "band"},
+      {"bands", r.shared ? nlohmann::json(nullptr) : nlohmann::json(r.bands)},
+      {"order", r.shared ? r.order : 0},
+      {"seed", s.seed},
+      {"population", s.population},
+      {"crossover", s.crossover},
+      {"mutation", s.mutation > 0 ? nlohmann::json(s.mutation) : nlohmann::json("1/v")},
+      {"elitism", s.elitism},
+      {"stall", s.stall},
+      {"max_generations", s.max_generations},
+      {"restarts", s.restarts},
+      {"local_search", s.local_search},
+      {"secondary_score", s.secondary},
+      {"theta_candidates", s.theta == ThetaCandidates::pooled ? "pooled" : "band"},
+      {"max_cond", s.max_cond},
+      {"paper", r.paper}};
+  // Threads are deliberately not recorded: results do not depend on them.
+
+  SearchLobesReport report;
+  const auto t0 = std::chrono::steady_clock::now();
+  if (r.shared) {
+    report.results.push_back(search_shared(r.order, s));
+  } else {
+    for (int l : r.bands) {
+      const auto tb = std::chrono::steady_clock::now();
+      report.results.push_back(search_band(l, s));
+      if (cb.band_done)
+        cb.band_done(report.results.back(),
+                     std::chrono::duration<double>(std::chrono::steady_clock::now() - tb).count());
+    }
+  }
+  report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  report.summary = lobes_summary_json(report.results);
+
+  std::vector<std::string> bytes;
+  bytes.reserve(2);  // outputs hold views of these
+  std::vector<OutputFile> outputs;
+  if (!r.out.empty()) {
+    const Table t = make_lobes_table(report.results, generator_record("shtool search-lobes", params), s);
+    bytes.push_back(encode_table(t, r.out.extension() == ".json" ? TableEncoding::json : TableEncoding::binary));
+    outputs.push_back({r.out, bytes.back()});
+  }
+  if (!r.json.empty()) {
+    bytes.push_back(report.summary.dump(2) + "\n");
+    outputs.push_back({r.json, bytes.back()});
+  }
+  write_files_atomically(outputs);
+  return report;
+}
+
+}  // namespace shtool::lobes
