@@ -48,6 +48,12 @@ CLI::Option* add_enum_option(CLI::App* app, const std::string& name, E& target,
       ->default_str(default_name);
 }
 
+// For unsigned options (seeds): CLI11 reads "-1" into a std::uint64_t as 2^64 - 1;
+// this refuses a sign instead.
+inline const CLI::Validator kUnsignedText(
+    [](std::string& v) { return v.find('-') == std::string::npos ? std::string() : "must not be negative"; },
+    "UINT");
+
 // Prints JSON to stdout followed by a newline. nlohmann-json writes doubles with the
 // shortest representation that reads back to the same bits (round-trip exact).
 void print_json(const nlohmann::json& value);

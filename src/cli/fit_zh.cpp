@@ -58,7 +58,9 @@ void setup_fit_zh(CLI::App& app) {
                    {"file", fit::NormalSource::file},
                    {"computed", fit::NormalSource::computed}},
                   "auto (file if complete, else computed), file or computed", "auto");
-  sub->add_option("--seed", opt->seed, "seed of the ray rotations and multi-start axes")->capture_default_str();
+  sub->add_option("--seed", opt->seed, "seed of the ray rotations and multi-start axes")
+      ->check(kUnsignedText)
+      ->capture_default_str();
   sub->add_option("--starts", opt->starts, "random multi-start axis sets per vertex (effort/quality)")
       ->capture_default_str();
   sub->add_option("--restart-above", opt->restart_above,

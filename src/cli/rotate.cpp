@@ -113,6 +113,8 @@ void run_rotate(const RotateOptions& opt) {
       ZhfTailoredSignal<double> signal(lobes, coeffs);
       signal.rotate(r, out);
     }
+    for (double c : out)
+      if (!std::isfinite(c)) throw InputError("the rotated coefficients overflow double precision (inputs too large)");
     print_json({{"order", opt.order}, {"method", opt.method}, {"coefficients", out}});
     return;
   }
@@ -134,6 +136,8 @@ void run_rotate(const RotateOptions& opt) {
   ShRotation<double> rotation(opt.order, helpers);
   if (!rotation.set(r, *method, opt.tol)) throw InputError("rotation method unavailable for this order");
   rotation.apply(coeffs, out);
+  for (double c : out)
+    if (!std::isfinite(c)) throw InputError("the rotated coefficients overflow double precision (inputs too large)");
   print_json({{"order", opt.order},
               {"method", std::string(rotation_method_name(rotation.method()))},
               {"coefficients", out}});

@@ -94,11 +94,15 @@ void setup_search_lobes(CLI::App& app) {
       "search-lobes",
       "Genetic search for sparse zonal-harmonic factorisations ([1]): lobe directions whose "
       "A^_l = Y_l^-1 has many zeros, per band or shared across bands. See docs/lobes.md.");
-  sub->add_option("--band", o->band, "search one band l");
+  sub->add_option("--band", o->band,
+                  "search one band l (1..127; the candidate table grows as l^5: about 3 GiB at l = 50, "
+                  "91 GiB at l = 100, refused beyond half the machine's memory)");
   sub->add_option("--bands", o->bands, "search bands a-b (each independently)");
   sub->add_flag("--shared", o->request.shared, "shared lobes for an order N (2N-1 nested directions, Sec. 6)");
   sub->add_option("--order", o->request.order, "order N for --shared");
-  sub->add_option("--seed", o->request.search.seed, "random seed (results do not depend on --threads)")->capture_default_str();
+  sub->add_option("--seed", o->request.search.seed, "random seed (results do not depend on --threads)")
+      ->check(kUnsignedText)
+      ->capture_default_str();
   sub->add_option("--population", o->request.search.population, "GA population")->capture_default_str();
   sub->add_option("--crossover", o->request.search.crossover, "fraction of children made by uniform crossover")
       ->capture_default_str();

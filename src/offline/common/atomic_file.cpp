@@ -1,11 +1,16 @@
 #include "common/atomic_file.h"
 
 #include <cerrno>
+#include <csignal>
+#include <cstdlib>
 #include <cstdio>
 #include <cstring>
 #include <random>
 #include <string>
 #include <system_error>
+
+#include <signal.h>
+#include <unistd.h>
 
 #include "common/input_error.h"
 
@@ -21,15 +26,36 @@ std::filesystem::path folder_of(const std::filesystem::path& target) {
   return dir.empty() ? std::filesystem::path(".") : dir;
 }
 
+// Temporary files of this target left by a process that no longer runs (killed between
+// writing and renaming): ".<name>.tmp-<pid>-<random>" whose pid is gone.
+void remove_stale_temporaries(const std::filesystem::path& target) {
+  std::string prefix(".");  // piece by piece: GCC 12's -Wrestrict false positive on "." + s
+  prefix += target.filename().string();
+  prefix += ".tmp-";
+  std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator(folder_of(target), ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name.compare(0, prefix.size(), prefix) != 0) continue;
+    char* end = nullptr;
+    const long pid = std::strtol(name.c_str() + prefix.size(), &end, 10);
+    if (pid <= 0 || !end || *end != '-') continue;
+    if (::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH) {
+      std::error_code rm;
+      std::filesystem::remove(entry.path(), rm);
+    }
+  }
+}
+
 }  // namespace
 
 PendingFile::PendingFile(std::filesystem::path target) : target_(std::move(target)) {
   check_output_path(target_, "");
+  remove_stale_temporaries(target_);
   std::random_device rd;
   int open_errno = 0;
   for (int attempt = 0; attempt < 16 && !file_; ++attempt) {
-    char suffix[32];
-    std::snprintf(suffix, sizeof suffix, ".tmp-%08x%08x", rd(), rd());
+    char suffix[64];
+    std::snprintf(suffix, sizeof suffix, ".tmp-%ld-%08x%08x", static_cast<long>(::getpid()), rd(), rd());
     // Hidden and named after the target, so a leftover of a killed run is recognisable.
     // Appended piece by piece: GCC 12 warns (-Wrestrict, a false positive) on "." + s.
     std::string name(".");
@@ -96,13 +122,28 @@ void write_file_atomically(const std::filesystem::path& target, std::string_view
   f.commit();
 }
 
+bool same_file(const std::filesystem::path& a, const std::filesystem::path& b) {
+  std::error_code ec;
+  // Existing files by identity (hard links, symbolic links, other spellings) ...
+  if (std::filesystem::exists(a, ec) && std::filesystem::exists(b, ec))
+    return std::filesystem::equivalent(a, b, ec);
+  // ... and paths that do not exist yet by their normalised absolute form.
+  const std::filesystem::path ca = std::filesystem::weakly_canonical(std::filesystem::absolute(a, ec), ec);
+  const std::filesystem::path cb = std::filesystem::weakly_canonical(std::filesystem::absolute(b, ec), ec);
+  return ca == cb;
+}
+
+void check_not_an_input(const std::filesystem::path& output, std::string_view what,
+                        const std::filesystem::path& input) {
+  if (!output.empty() && !input.empty() && same_file(output, input))
+    throw InputError(std::string(what) + ": '" + output.string() + "' is the input '" + input.string() +
+                     "'; refusing to overwrite it");
+}
+
 void write_files_atomically(std::span<const OutputFile> outputs) {
   for (std::size_t i = 0; i < outputs.size(); ++i)
     for (std::size_t j = 0; j < i; ++j) {
-      std::error_code ec;
-      const bool same = outputs[i].path == outputs[j].path ||
-                        (std::filesystem::exists(outputs[i].path, ec) &&
-                         std::filesystem::equivalent(outputs[i].path, outputs[j].path, ec));
+      const bool same = same_file(outputs[i].path, outputs[j].path);
       if (same)
         throw InputError("two outputs are the same file: '" + outputs[j].path.string() + "' and '" +
                          outputs[i].path.string() + "'");

@@ -1,8 +1,10 @@
 // Output files written in full or not at all. Every file the offline tool writes goes
 // through here: the bytes go to an exclusive, hidden temporary file in the target's
-// folder (".<name>.tmp-<random>"), flushed and closed, then renamed over the target. On
-// any failure, including an exception unwinding past a PendingFile, the temporary file
-// is removed and an old file at the target stays untouched.
+// folder (".<name>.tmp-<pid>-<random>"), flushed and closed, then renamed over the
+// target. On any failure, including an exception unwinding past a PendingFile, the
+// temporary file is removed and an old file at the target stays untouched; temporary
+// files of the target whose process is gone (killed between write and rename) are
+// removed by the next write.
 #pragma once
 
 #include <filesystem>
@@ -52,6 +54,15 @@ struct OutputFile {
 // a full disk or a missing folder leaves none of the outputs behind. Refuses two outputs
 // that are the same file.
 void write_files_atomically(std::span<const OutputFile> outputs);
+
+// Whether two paths name one file: existing files by identity (links, other spellings),
+// others by their normalised absolute paths.
+bool same_file(const std::filesystem::path& a, const std::filesystem::path& b);
+
+// Refuses an output that is the command's input (InputError naming both); `what` names
+// the output's option.
+void check_not_an_input(const std::filesystem::path& output, std::string_view what,
+                        const std::filesystem::path& input);
 
 // Checks, before any work, that `path` can be written: its folder exists and is a
 // folder, and the path itself is not a folder. `what` names the option in the message

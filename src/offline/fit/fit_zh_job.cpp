@@ -21,6 +21,10 @@
 namespace shtool::fit {
 namespace {
 
+// Transfer coefficients are O(1) (radiance transfer of a unit light); far larger inputs
+// would overflow the squared norms of the fit (about 1e154).
+constexpr double kMaxTransferMagnitude = 1e100;
+
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
@@ -106,7 +110,8 @@ void check_request(const FitZhRequest& r) {
   if (!(r.restart_above >= 0)) throw InputError("--restart-above must be >= 0");
   if (r.threads < 0) throw InputError("--threads must be >= 0");
   if (r.mode == TransferMode::interreflected) {
-    if (r.bounces < 1) throw InputError("--bounces must be at least 1");
+    if (r.bounces < 1 || r.bounces > kMaxBounces)
+      throw InputError("--bounces must be in 1.." + std::to_string(kMaxBounces) + ", got " + std::to_string(r.bounces));
     if (!(r.albedo >= 0 && r.albedo < 1)) throw InputError("--albedo must be in [0, 1)");
   }
   if (!r.transfer.empty() && !r.ply.empty()) throw InputError("--ply needs a mesh (not --transfer)");
@@ -143,6 +148,10 @@ std::vector<double> parse_transfer_json(std::string_view text, const std::filesy
       if (!x.is_number()) throw InputError("--transfer '" + path + "': vector " + std::to_string(v) + " has a non-number");
       const double d = x.get<double>();
       if (!std::isfinite(d)) throw InputError("--transfer '" + path + "': vector " + std::to_string(v) + " is not finite");
+      if (std::abs(d) > kMaxTransferMagnitude)
+        throw InputError("--transfer '" + path + "': vector " + std::to_string(v) +
+                         " has a coefficient beyond 1e100 in magnitude, more than the fit handles (its squared "
+                         "norms would overflow)");
       values.push_back(d);
     }
     ++v;
@@ -159,11 +168,20 @@ FitZhReport run_fit_zh(const FitZhRequest& r, const FitZhCallbacks& cb) {
   const std::filesystem::path out =
       !r.out.empty() ? r.out
                      : std::filesystem::path(input_path.stem().string() + (json_table ? ".zh.json" : ".zh.shtb"));
-  // Fail before a long bake, not after it.
-  check_output_path(out, "--out");
-  if (!r.json.empty()) check_output_path(r.json, "--json");
-  if (!r.ply.empty()) check_output_path(r.ply, "--ply");
-  if (!r.save_transfer.empty()) check_output_path(r.save_transfer, "--save-transfer");
+  // Fail before a long bake, not after it: every output writable, none the input, no two
+  // the same file.
+  const std::pair<const std::filesystem::path*, const char*> outputs_named[] = {
+      {&out, "--out"}, {&r.json, "--json"}, {&r.ply, "--ply"}, {&r.save_transfer, "--save-transfer"}};
+  for (std::size_t i = 0; i < std::size(outputs_named); ++i) {
+    const auto& [path, what] = outputs_named[i];
+    if (path->empty()) continue;
+    check_output_path(*path, what);
+    check_not_an_input(*path, what, input_path);
+    for (std::size_t j = 0; j < i; ++j)
+      if (!outputs_named[j].first->empty() && same_file(*path, *outputs_named[j].first))
+        throw InputError(std::string(what) + " and " + outputs_named[j].second + " name the same file '" +
+                         path->string() + "'");
+  }
 
   FitZhReport report;
   report.threads = threads;

@@ -3,6 +3,7 @@
 #include <array>
 #include <cmath>
 #include <cstdlib>
+#include <limits>
 #include <numbers>
 #include <sstream>
 
@@ -18,27 +19,54 @@ namespace {
 }
 
 // tinyobjloader reads a coordinate it cannot parse ("nan", "inf") as 0 without a
-// warning, so non-finite values would pass silently. Scan "v" and "vn" lines first.
-void check_finite_coordinates(const std::filesystem::path& path, const std::string& text) {
-  std::istringstream in(text);
-  std::string line;
-  std::size_t number = 0;
-  while (std::getline(in, line)) {
+// warning, and a face index beyond int as a wrapped value, so both would pass silently.
+// Scan the text first: "v" and "vn" coordinates must parse and be finite, "f" indices must
+// fit an int. Lines end at LF, CR or CR LF, as tinyobjloader splits them.
+void check_obj_text(const std::filesystem::path& path, const std::string& text) {
+  std::size_t number = 0, pos = 0;
+  while (pos < text.size()) {
+    std::size_t end = text.find_first_of("\r\n", pos);
+    if (end == std::string::npos) end = text.size();
+    const std::string line = text.substr(pos, end - pos);
+    pos = end + 1;
+    if (end < text.size() && text[end] == '\r' && pos < text.size() && text[pos] == '\n') ++pos;
     ++number;
-    std::size_t p = line.find_first_not_of(" \t");
+    const std::size_t p = line.find_first_not_of(" \t");
     if (p == std::string::npos) continue;
     const bool is_v = line.compare(p, 2, "v ") == 0 || line.compare(p, 2, "v\t") == 0;
     const bool is_vn = line.compare(p, 3, "vn ") == 0 || line.compare(p, 3, "vn\t") == 0;
-    if (!is_v && !is_vn) continue;
-    const char* s = line.c_str() + p + (is_v ? 1 : 2);
-    for (int c = 0; c < 3; ++c) {
-      char* end = nullptr;
-      const double value = std::strtod(s, &end);
-      if (end == s)
-        fail(path, "line " + std::to_string(number) + ": missing or unreadable coordinate in '" + line + "'");
-      if (!std::isfinite(value))
-        fail(path, "line " + std::to_string(number) + ": non-finite coordinate in '" + line + "'");
-      s = end;
+    const bool is_f = line.compare(p, 2, "f ") == 0 || line.compare(p, 2, "f\t") == 0;
+    const std::string shown = line.size() > 80 ? line.substr(0, 80) + "..." : line;
+    if (is_v || is_vn) {
+      const char* s = line.c_str() + p + (is_v ? 1 : 2);
+      for (int c = 0; c < 3; ++c) {
+        char* stop = nullptr;
+        const double value = std::strtod(s, &stop);
+        if (stop == s)
+          fail(path, "line " + std::to_string(number) + ": missing or unreadable coordinate in '" + shown + "'");
+        // Stored as float: a double beyond float's range would become infinite.
+        if (!std::isfinite(value) || std::abs(value) > std::numeric_limits<float>::max())
+          fail(path, "line " + std::to_string(number) + ": non-finite coordinate (or beyond float range) in '" +
+                         shown + "'");
+        s = stop;
+      }
+    } else if (is_f) {
+      for (const char* s = line.c_str() + p + 1; *s;) {
+        if (*s == '-' || *s == '+' || (*s >= '0' && *s <= '9')) {
+          char* stop = nullptr;
+          const long long value = std::strtoll(s, &stop, 10);
+          if (stop == s) {
+            ++s;
+            continue;
+          }
+          if (value > std::numeric_limits<int>::max() || value < -std::numeric_limits<int>::max())
+            fail(path, "line " + std::to_string(number) + ": face index " + std::string(s, static_cast<const char*>(stop)) +
+                           " is out of range in '" + shown + "'");
+          s = stop;
+        } else {
+          ++s;
+        }
+      }
     }
   }
 }
@@ -91,7 +119,7 @@ Mesh load_obj(const std::filesystem::path& path, NormalSource normal_source) {
   if (!std::filesystem::exists(path, ec)) fail(path, "no such file");
   if (std::filesystem::is_directory(path, ec)) fail(path, "is a directory, not an OBJ file");
   const std::string text = read_input_file(path, "mesh");
-  check_finite_coordinates(path, text);
+  check_obj_text(path, text);
 
   tinyobj::ObjReaderConfig config;
   // Triangulated here instead, after the index check: tinyobjloader's own triangulation
@@ -107,6 +135,12 @@ Mesh load_obj(const std::filesystem::path& path, NormalSource normal_source) {
   const tinyobj::attrib_t& attrib = reader.GetAttrib();
   const std::size_t nv = attrib.vertices.size() / 3;
   const std::size_t nn = attrib.normals.size() / 3;
+
+  // What tinyobjloader stored, whatever the text said.
+  for (std::size_t i = 0; i < attrib.vertices.size(); ++i)
+    if (!std::isfinite(attrib.vertices[i])) fail(path, "vertex " + std::to_string(i / 3 + 1) + " is not finite");
+  for (std::size_t i = 0; i < attrib.normals.size(); ++i)
+    if (!std::isfinite(attrib.normals[i])) fail(path, "normal " + std::to_string(i / 3 + 1) + " is not finite");
 
   Mesh mesh;
   mesh.input_crc32 = input_crc32(text);

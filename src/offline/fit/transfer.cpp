@@ -98,7 +98,11 @@ std::vector<double> compute_transfer(const Mesh& mesh, const TransferOptions& op
     throw InputError("order " + std::to_string(options.order) + " is not supported");
   if (options.rays < 1) throw InputError("rays must be at least 1, got " + std::to_string(options.rays));
   if (options.mode == TransferMode::interreflected) {
-    if (options.bounces < 1) throw InputError("bounces must be at least 1");
+    // Each bounce is a full pass over the mesh and the albedo^b terms vanish long before
+    // this many; the cap also keeps 1 + bounces far from overflow.
+    if (options.bounces < 1 || options.bounces > kMaxBounces)
+      throw InputError("bounces must be in 1.." + std::to_string(kMaxBounces) + ", got " +
+                       std::to_string(options.bounces));
     if (!(options.albedo >= 0.0 && options.albedo < 1.0))
       throw InputError("albedo must be in [0, 1), got " + std::to_string(options.albedo));
   }

@@ -23,6 +23,9 @@ namespace shtool::fit {
 
 enum class TransferMode { unshadowed, shadowed, interreflected };
 
+// Most diffuse bounces an interreflected simulation runs.
+inline constexpr int kMaxBounces = 64;
+
 struct TransferOptions {
   int order = 6;
   int rays = 1024;           // directions per vertex

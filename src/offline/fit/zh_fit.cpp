@@ -202,6 +202,12 @@ ZhLobe fit_one_lobe(int order, std::span<const double> t, const std::vector<bool
       best = lobe[0];
     }
   }
+  // Every candidate non-finite (inputs near the end of the double range): a zero lobe
+  // along the first start, so that callers always get `order` coefficients.
+  if (best.coeffs.size() != static_cast<std::size_t>(order)) {
+    best.axis = starts.front();
+    best.coeffs.assign(order, 0.0);
+  }
   return best;
 }
 

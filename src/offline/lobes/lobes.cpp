@@ -1,7 +1,4 @@
 // Sparse ZHF lobe search ([1] Sec. 4-6). See lobes.h and docs/lobes.md.
-#include "common/input_error.h"
-#include "common/parallel_for.h"
-#include "common/random.h"
 #include "lobes/lobes.h"
 
 #include <algorithm>
@@ -19,9 +16,14 @@
 #include <unordered_map>
 #include <utility>
 
+#include <unistd.h>
+
 #include <Eigen/LU>
 #include <Eigen/SVD>
 
+#include "common/input_error.h"
+#include "common/parallel_for.h"
+#include "common/random.h"
 #include "lobes/legendre_zeros.h"
 #include "shtool/legendre.h"
 
@@ -188,6 +190,20 @@ struct Problem {
   int genes() const { return 2 * nd; }
 };
 
+// Half the physical memory: the candidate table plus the workspaces must fit beside the
+// rest of the machine's work.
+double search_memory_budget() {
+  const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGE_SIZE);
+  if (pages <= 0 || page <= 0) return 4.0 * (1ull << 30);
+  return 0.5 * static_cast<double>(pages) * static_cast<double>(page);
+}
+
+std::string gib(double bytes) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.1f GiB", bytes / (1ull << 30));
+  return buf;
+}
+
 Problem make_problem(std::vector<int> bands, std::vector<char> counted, int cand_band,
                      const SearchOptions& opt) {
   Problem p;
@@ -202,6 +218,17 @@ Problem make_problem(std::vector<int> bands, std::vector<char> counted, int cand
   p.south = p.nt - 1;
   p.max_cond = opt.max_cond;
   p.secondary = opt.secondary;
+  // The candidate rows grow as about l^5 (band l: ~l^2/2 polar x ~2.4 l^2 azimuthal
+  // candidates x 2l+1 values): refuse up front, with the figure, what this machine
+  // cannot hold, instead of failing an allocation minutes later.
+  std::size_t per_direction = 0;
+  for (int k : p.bands) per_direction += static_cast<std::size_t>(2 * k + 1);
+  const double bytes = static_cast<double>(p.nt) * p.np * per_direction * sizeof(double);
+  const double budget = search_memory_budget();
+  if (bytes > budget)
+    throw InputError("band " + std::to_string(p.bands.back()) + " needs " + gib(bytes) +
+                     " for its candidate directions (" + std::to_string(p.nt) + " x " + std::to_string(p.np) +
+                     " candidates), more than the " + gib(budget) + " this search may use (half the machine's memory)");
   const int order = p.bands.back() + 1;
   std::vector<double> buf(sh_count(order));
   p.rows.resize(p.bands.size());
@@ -618,6 +645,7 @@ void validate(const SearchOptions& o) {
   if (o.stall < 1) throw InputError("stall generations must be at least 1");
   if (o.restarts < 1) throw InputError("restarts must be at least 1");
   if (o.threads < 1) throw InputError("threads must be at least 1");
+  resolve_threads(o.threads);  // refuses more than the machine can use
   if (!(o.max_cond >= 1)) throw InputError("max condition number must be >= 1");
 }
 

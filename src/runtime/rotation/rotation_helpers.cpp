@@ -1,5 +1,6 @@
 #include "shtool/rotation_helpers.h"
 
+#include <cmath>
 #include <cstdlib>
 #include <string>
 #include <system_error>
@@ -55,6 +56,17 @@ Result<RotationHelpers> RotationHelpers::from_table(const Table& table) {
     for (int k = h.x90_row[i]; k < h.x90_row[i + 1]; ++k)
       if (h.x90_col[k] < l * l || h.x90_col[k] > l * l + 2 * l)
         return helpers_error("X90 entry outside its band in row " + std::to_string(i));
+  }
+  // Values: X90 is orthogonal (|entries| <= 1); D1's entries are at most l in band l and
+  // D2 = D1^2's at most l (l + 1). Far looser bounds still keep a corrupted value (an
+  // infinity, 1e300) from turning rotations into NaN.
+  for (double v : h.x90_val)
+    if (!(std::abs(v) <= 1.0 + 1e-9)) return helpers_error("X90 value outside [-1, 1]");
+  for (std::size_t i = 0; i < n; ++i) {
+    const double l = sh_band(static_cast<int>(i));
+    if (!(std::abs(h.dy_sub[i]) <= l + 1)) return helpers_error("D1 value out of range at " + std::to_string(i));
+    if (!(std::abs(h.ddy_diag[i]) <= 2 * (l + 1) * (l + 1)) || !(std::abs(h.ddy_off2[i]) <= 2 * (l + 1) * (l + 1)))
+      return helpers_error("D2 value out of range at " + std::to_string(i));
   }
   return h;
 }

@@ -50,12 +50,23 @@ Result<ZhfLobes> load_zhf_lobes(const std::filesystem::path& path, int order) {
   const std::size_t nd = dirs.value().size() / 3;
   if (offset.value().size() != b.size() || cond.value().size() != b.size() || dirs.value().size() != 3 * nd)
     return bad(path, "arrays 'direction_offset', 'cond' and 'bands' differ in length");
+  // Every count and index is checked against the array sizes before it is used: the
+  // bytes may come from anywhere.
   std::size_t rows = 0;
-  for (int l = 0; l < nb; ++l) rows += 2 * b[l] + 1;
+  for (int l = 0; l < nb; ++l) {
+    if (b[l] < 0 || b[l] >= kMaxOrder)
+      return bad(path, "band entry " + std::to_string(l) + " is " + std::to_string(b[l]) + ", outside 0.." +
+                           std::to_string(kMaxOrder - 1));
+    rows += 2 * static_cast<std::size_t>(b[l]) + 1;
+  }
   const auto& start = rs.value();
-  if (start.size() != rows + 1 || start[0] != 0 || static_cast<std::size_t>(start.back()) != col.value().size() ||
-      col.value().size() != val.value().size())
+  const std::size_t nnz = col.value().size();
+  if (start.size() != rows + 1 || start[0] != 0 || nnz != val.value().size() ||
+      start.back() < 0 || static_cast<std::size_t>(start.back()) != nnz)
     return bad(path, "sparse rows are inconsistent with 'bands'");
+  for (std::size_t i = 0; i + 1 < start.size(); ++i)
+    if (start[i + 1] < start[i] || static_cast<std::size_t>(start[i + 1]) > nnz)
+      return bad(path, "sparse_row_start is not monotone within 0.." + std::to_string(nnz));
 
   ZhfLobes z;
   z.order = want;
@@ -66,6 +77,8 @@ Result<ZhfLobes> load_zhf_lobes(const std::filesystem::path& path, int order) {
     if (off < 0 || static_cast<std::size_t>(off) + n > nd)
       return bad(path, "band " + std::to_string(l) + " uses directions beyond the table");
     z.band_offset.push_back(off);
+    if (!(cond.value()[l] >= 1.0) || !std::isfinite(cond.value()[l]))
+      return bad(path, "cond of band " + std::to_string(l) + " is not a finite number >= 1");
     z.cond.push_back(cond.value()[l]);
     for (int m = 0; m < n; ++m, ++row) {
       const int lo = start[row], hi = start[row + 1];
