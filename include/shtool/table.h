@@ -145,6 +145,20 @@ struct TableFileInfo {
 Result<Table> read_table(const std::filesystem::path& path, const TableExpectation& expect = {},
                          TableFileInfo* info = nullptr);
 
+// How read_table_bytes checks what it reads.
+struct TableReadOptions {
+  // CRC-32s of the header and of every array. Off only for tests and fuzzers that must
+  // reach the kind validators with arbitrary bytes; every other check stays.
+  bool verify_checksums = true;
+};
+
+// read_table for bytes already in memory (an asset archive, a network buffer); `name`
+// stands for the path in messages. Same guarantees: never throws, never returns partial
+// data, memory bounded by the input size.
+Result<Table> read_table_bytes(std::span<const std::byte> bytes, std::string_view name,
+                               const TableExpectation& expect = {}, TableFileInfo* info = nullptr,
+                               const TableReadOptions& options = {});
+
 // Where a shipped table named `file_name` (e.g. "rotation-helpers.shtb") is looked for
 // when no path is given: the folder named by the environment variable SHTOOL_TABLES, then
 // <prefix>/share/shtool/tables as `cmake --install` lays it out. Returns the first path

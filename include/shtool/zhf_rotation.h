@@ -45,6 +45,8 @@ struct ZhfLobes {
 // is truncated to `order`; order 0: all of the table's bands). Fails on a table that lacks
 // some band below `order`, on inconsistent sparse rows, and on every read_table error.
 Result<ZhfLobes> load_zhf_lobes(const std::filesystem::path& path, int order = 0);
+// The same checks on a table already read (read_table or read_table_bytes).
+Result<ZhfLobes> zhf_lobes_from_table(const Table& table, int order = 0);
 
 // The shipped shared-lobe table for `order`: tables/zhf-shared-N<order>.shtb, or the
 // smallest shipped order above it (find_shipped_table: $SHTOOL_TABLES, then the install prefix).

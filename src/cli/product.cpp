@@ -15,6 +15,7 @@
 
 #include "cli_common.h"
 #include "common/input_file.h"
+#include "common/sh_inputs.h"
 #include "tensors/fourier_tables.h"
 #include "shtool/product.h"
 #include "shtool/sh.h"
@@ -42,44 +43,6 @@ std::string read_input(const std::string& path) {
   return read_input_file(path, "--in");
 }
 
-std::vector<std::vector<double>> parse_inputs(const std::string& text, const std::string& where,
-                                              int order) {
-  // Syntax errors, numbers beyond double and absurd nesting are refused here.
-  const nlohmann::json doc = parse_json_input(text, where, "--in");
-  if (!doc.is_object() || !doc.contains("inputs"))
-    throw InputError(where + ": expected a JSON object {\"inputs\": [[...], ...]}");
-  const nlohmann::json& inputs = doc["inputs"];
-  if (!inputs.is_array()) throw InputError(where + ": \"inputs\" must be an array of arrays");
-  const int count = static_cast<int>(inputs.size());
-  if (count < kMinInputs || count > kMaxInputs)
-    throw InputError(where + ": " + std::to_string(count) + " inputs given; a product takes " +
-                    std::to_string(kMinInputs) + " to " + std::to_string(kMaxInputs));
-  const std::size_t expected = static_cast<std::size_t>(sh_count(order));
-  std::vector<std::vector<double>> f(count);
-  for (int i = 0; i < count; ++i) {
-    const nlohmann::json& v = inputs[i];
-    const std::string name = "input " + std::to_string(i + 1);
-    if (!v.is_array()) throw InputError(where + ": " + name + " is not an array of numbers");
-    if (v.size() != expected)
-      throw InputError(where + ": " + name + " has " + std::to_string(v.size()) +
-                      " coefficients; order " + std::to_string(order) + " needs " +
-                      std::to_string(expected) + " (N^2)");
-    f[i].reserve(expected);
-    for (std::size_t j = 0; j < v.size(); ++j) {
-      // null is how JSON writers spell NaN and infinity; strings and the like are errors too.
-      if (!v[j].is_number())
-        throw InputError(where + ": " + name + ", coefficient " + std::to_string(j) +
-                        " is not a number (" + v[j].type_name() + ")");
-      const double x = v[j].get<double>();
-      if (!std::isfinite(x))
-        throw InputError(where + ": " + name + ", coefficient " + std::to_string(j) +
-                        " is not finite");
-      f[i].push_back(x);
-    }
-  }
-  return f;
-}
-
 void run_product(const ProductOptions& opt) {
   if (opt.order < 1 || opt.order > kMaxFourierProductOrder)
     throw InputError("--order " + std::to_string(opt.order) + " is not supported (1.." +
@@ -97,7 +60,7 @@ void run_product(const ProductOptions& opt) {
     throw InputError("--method tripling supports orders up to " + std::to_string(kMaxTriplingOrder) +
                     "; use --method fourier");
   const std::string where = opt.in == "-" ? "stdin" : "'" + opt.in + "'";
-  const std::vector<std::vector<double>> f = parse_inputs(read_input(opt.in), where, opt.order);
+  const std::vector<std::vector<double>> f = parse_product_inputs(read_input(opt.in), where, opt.order, kMinInputs, kMaxInputs);
   const int count = static_cast<int>(f.size());
   if (method == ProductMethod::tripling && count > 2 && !opt.recursive &&
       tripling_order_needed(opt.order, count) > kMaxTriplingOrder)

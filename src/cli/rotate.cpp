@@ -13,6 +13,7 @@
 
 #include "cli_common.h"
 #include "common/input_file.h"
+#include "common/sh_inputs.h"
 #include "tensors/rotation_helpers_gen.h"
 #include "shtool/rotation.h"
 #include "shtool/sh.h"
@@ -38,15 +39,7 @@ std::vector<double> read_coefficients(const RotateOptions& opt) {
   std::string text;
   if (opt.in == "-") text.assign(std::istreambuf_iterator<char>(std::cin), {});
   else text = read_input_file(opt.in, "--in");
-  const nlohmann::json doc = parse_json_input(text, opt.in, "--in");
-  if (!doc.is_object() || !doc.contains("coefficients") || !doc["coefficients"].is_array())
-    throw InputError("--in: expected a JSON object {\"coefficients\": [numbers]}");
-  std::vector<double> c;
-  for (const auto& v : doc["coefficients"]) {
-    if (!v.is_number()) throw InputError("--in: \"coefficients\" must contain only numbers");
-    c.push_back(v.get<double>());
-  }
-  return c;
+  return parse_coefficients_json(text, opt.in);
 }
 
 Mat3<double> read_rotation(const RotateOptions& opt) {

@@ -5,7 +5,8 @@
 # Other inputs: BUILD_DIR, PREFIX, CONFIG, and for the consumer step CONSUMER_SOURCE_DIR,
 # CONSUMER_BINARY_DIR, GENERATOR, MAKE_PROGRAM, CXX_COMPILER (the parent's toolchain, so
 # the consumer is built the way the package was), SOURCE_DIR and, when the tool is built,
-# SHTOOL (its path: a fit-zh output of data/spot.obj is made for the consumer to shade).
+# SHTOOL (its path: a fit-zh output of data/spot.obj is made for the consumer to shade),
+# SANITIZE (ON: the package was built with sanitizers; the consumer is too).
 cmake_minimum_required(VERSION 3.20)
 
 foreach(var STEP BUILD_DIR PREFIX)
@@ -65,6 +66,11 @@ elseif(STEP STREQUAL "consumer")
   endif()
   if(CXX_COMPILER)
     list(APPEND configure_args "-DCMAKE_CXX_COMPILER=${CXX_COMPILER}")
+  endif()
+  # A sanitizer build of the package is consumed with the same instrumentation.
+  if(SANITIZE)
+    list(APPEND configure_args "-DCMAKE_CXX_FLAGS=-fsanitize=address,undefined -fno-sanitize-recover=all"
+         "-DCMAKE_EXE_LINKER_FLAGS=-fsanitize=address,undefined")
   endif()
   run_step("configure consumer" "${CMAKE_COMMAND}" ${configure_args})
 

@@ -118,7 +118,10 @@ Mesh load_obj(const std::filesystem::path& path, NormalSource normal_source) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) fail(path, "no such file");
   if (std::filesystem::is_directory(path, ec)) fail(path, "is a directory, not an OBJ file");
-  const std::string text = read_input_file(path, "mesh");
+  return load_obj_text(read_input_file(path, "mesh"), path, normal_source);
+}
+
+Mesh load_obj_text(const std::string& text, const std::filesystem::path& path, NormalSource normal_source) {
   check_obj_text(path, text);
 
   tinyobj::ObjReaderConfig config;

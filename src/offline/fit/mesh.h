@@ -49,6 +49,9 @@ enum class NormalSource { automatic, file, computed };
 // be dereferenced). NormalSource::automatic uses the file's normals when every corner
 // of every kept triangle has one, and computed angle-weighted normals otherwise.
 Mesh load_obj(const std::filesystem::path& path, NormalSource normals = NormalSource::automatic);
+// The same for OBJ text already in memory; `path` names it in messages.
+Mesh load_obj_text(const std::string& text, const std::filesystem::path& path,
+                   NormalSource normals = NormalSource::automatic);
 
 // Angle-weighted vertex normals (Thürmer and Wüthrich 1998): each incident triangle
 // contributes its unit normal times the corner angle, which makes the result independent

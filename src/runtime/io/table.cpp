@@ -280,13 +280,16 @@ std::optional<std::string> check_expectation(const Table& t, const TableExpectat
   return std::nullopt;
 }
 
+// Sequential reads from the table's bytes.
 class Reader {
  public:
-  Reader(std::ifstream& in) : in_(in) {}
+  explicit Reader(std::span<const std::byte> bytes) : bytes_(bytes) {}
   bool read(void* p, std::uint64_t n) {
     if (n == 0) return true;
-    in_.read(static_cast<char*>(p), static_cast<std::streamsize>(n));
-    return in_.gcount() == static_cast<std::streamsize>(n);
+    if (n > bytes_.size() - pos_) return false;
+    std::memcpy(p, bytes_.data() + pos_, static_cast<std::size_t>(n));
+    pos_ += static_cast<std::size_t>(n);
+    return true;
   }
   // Reads n padding bytes; false with bad_at set if one is not zero.
   bool zeros(std::uint64_t n, std::uint64_t pos, std::optional<std::uint64_t>& bad_at) {
@@ -306,11 +309,13 @@ class Reader {
   }
 
  private:
-  std::ifstream& in_;
+  std::span<const std::byte> bytes_;
+  std::size_t pos_ = 0;
 };
 
-Result<Table> read_binary(std::ifstream& in, std::uint64_t size, const std::filesystem::path& path,
-                               const TableExpectation& expect, TableFileInfo* info) {
+Result<Table> read_binary(std::span<const std::byte> in, const std::filesystem::path& path,
+                          const TableExpectation& expect, TableFileInfo* info, bool verify) {
+  const std::uint64_t size = in.size();
   auto fail = [&](const std::string& p) { return Result<Table>(error_at(path, p)); };
   Reader r(in);
   unsigned char prefix[kTablePrefixSize] = {};
@@ -339,7 +344,7 @@ Result<Table> read_binary(std::ifstream& in, std::uint64_t size, const std::file
   if (!r.read(header_text.data(), header_len)) return fail("read error in the header");
   const std::uint32_t crc = table_crc32(
       std::span<const std::byte>(reinterpret_cast<const std::byte*>(header_text.data()), header_text.size()));
-  if (crc != header_crc)
+  if (verify && crc != header_crc)
     return fail("header CRC-32 mismatch: stored " + hex32(header_crc) + ", computed " + hex32(crc) +
                 " (header corrupted)");
   if (auto p = check_json_depth(header_text, kMaxJsonDepth)) return fail("malformed header JSON: " + *p);
@@ -385,7 +390,7 @@ Result<Table> read_binary(std::ifstream& in, std::uint64_t size, const std::file
     if (!r.read(a.data.data(), layout[i].nbytes)) return fail("read error in array '" + a.name + "'");
     pos += layout[i].nbytes;
     const std::uint32_t c = table_crc32(a.data);
-    if (c != layout[i].crc)
+    if (verify && c != layout[i].crc)
       return fail("CRC-32 mismatch in array '" + a.name + "': stored " + hex32(layout[i].crc) + ", computed " +
                   hex32(c) + " (data corrupted)");
   }
@@ -442,8 +447,9 @@ std::optional<std::string> store_json_value(const json& v, DType dtype, std::byt
   return "has an unknown dtype";
 }
 
-Result<Table> read_json(std::ifstream& in, std::uint64_t size, const std::filesystem::path& path,
-                             const TableExpectation& expect, TableFileInfo* info) {
+Result<Table> read_json(std::span<const std::byte> in, const std::filesystem::path& path,
+                        const TableExpectation& expect, TableFileInfo* info, bool verify) {
+  const std::uint64_t size = in.size();
   auto fail = [&](const std::string& p) { return Result<Table>(error_at(path, p)); };
   std::string text(static_cast<std::size_t>(size), '\0');
   if (!Reader(in).read(text.data(), size)) return fail("read error");
@@ -476,7 +482,7 @@ Result<Table> read_json(std::ifstream& in, std::uint64_t size, const std::filesy
       if (auto p = store_json_value((*v)[k], a.dtype, a.data.data() + k * es))
         return fail("array '" + a.name + "' element " + std::to_string(k) + " " + *p);
     const std::uint32_t c = table_crc32(a.data);
-    if (c != layout[i].crc)
+    if (verify && c != layout[i].crc)
       return fail("CRC-32 mismatch in array '" + a.name + "': header says " + hex32(layout[i].crc) +
                   ", the values give " + hex32(c) + " (a value was edited or rounded)");
   }
@@ -538,8 +544,29 @@ const TableArray* Table::find(std::string_view name) const {
   return nullptr;
 }
 
-Result<Table> read_table(const std::filesystem::path& path, const TableExpectation& expect,
-                              TableFileInfo* info) {
+Result<Table> read_table_bytes(std::span<const std::byte> bytes, std::string_view name,
+                               const TableExpectation& expect, TableFileInfo* info, const TableReadOptions& options) {
+  const std::filesystem::path path(name);
+#if defined(__cpp_exceptions)
+  try {
+#endif
+    if (bytes.empty()) return error_at(path, "empty file (not a shtool table)");
+    const int first = static_cast<int>(bytes[0]);
+    if (first == kTableMagic[0]) return read_binary(bytes, path, expect, info, options.verify_checksums);
+    if (first == '{') return read_json(bytes, path, expect, info, options.verify_checksums);
+    char buf[8];
+    std::snprintf(buf, sizeof buf, "0x%02x", first & 0xFF);
+    return error_at(path, std::string("bad magic: first byte ") + buf +
+                              " is neither 0x89 (binary table) nor '{' (JSON table)");
+#if defined(__cpp_exceptions)
+  } catch (const std::exception& e) {
+    // Out of memory for a huge (but size-consistent) table.
+    return error_at(path, std::string("cannot read table: ") + e.what());
+  }
+#endif
+}
+
+Result<Table> read_table(const std::filesystem::path& path, const TableExpectation& expect, TableFileInfo* info) {
 #if defined(__cpp_exceptions)
   try {
 #endif
@@ -552,17 +579,13 @@ Result<Table> read_table(const std::filesystem::path& path, const TableExpectati
     if (ec) return error_at(path, "cannot read the file size: " + ec.message());
     std::ifstream in(path, std::ios::binary);
     if (!in) return error_at(path, std::string("cannot open: ") + std::strerror(errno));
-    if (size == 0) return error_at(path, "empty file (not a shtool table)");
-    const int first = in.peek();
-    if (first == kTableMagic[0]) return read_binary(in, size, path, expect, info);
-    if (first == '{') return read_json(in, size, path, expect, info);
-    char buf[8];
-    std::snprintf(buf, sizeof buf, "0x%02x", first & 0xFF);
-    return error_at(path, std::string("bad magic: first byte ") + buf +
-                              " is neither 0x89 (binary table) nor '{' (JSON table)");
+    std::vector<std::byte> bytes(static_cast<std::size_t>(size));
+    in.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(size));
+    if (in.gcount() != static_cast<std::streamsize>(size)) return error_at(path, "read error");
+    return read_table_bytes(bytes, path.string(), expect, info);
 #if defined(__cpp_exceptions)
   } catch (const std::exception& e) {
-    // Out of memory for a huge (but size-consistent) table, or an I/O exception.
+    // Out of memory for a huge file, or an I/O exception.
     return error_at(path, std::string("cannot read table: ") + e.what());
   }
 #endif

@@ -422,7 +422,9 @@ inline void z_band_to_split(int l, const T* __restrict c, const T* __restrict s,
                             const P* __restrict in, P* __restrict out) {
   P* even = out;
   P* odd = out + l + 1;
-  ((l & 1) ? odd : even)[l >> 1] = in[l];
+  // The middle (m = 0) entry, by index arithmetic: GCC 12 under -fsanitize=shift
+  // miscompiles the equivalent `((l & 1) ? odd : even)[l >> 1] = ...`.
+  out[(l & 1) ? l + 1 + (l >> 1) : (l >> 1)] = in[l];
   for (int m = 1; m <= l; ++m) {
     const P p = in[l + m], q = in[l - m];
     P* half = ((l + m) & 1) ? odd : even;  // l + m and l - m have the same parity
@@ -508,7 +510,7 @@ inline void z_band_to_split_pairs(int l, const double* __restrict c, const doubl
                                   const double* __restrict in, Pair* __restrict out) {
   Pair* even = out;
   Pair* odd = out + l + 1;
-  ((l & 1) ? odd : even)[l >> 1] = Pair{in[l], in[l]};
+  out[(l & 1) ? l + 1 + (l >> 1) : (l >> 1)] = Pair{in[l], in[l]};  // as in z_band_to_split
   for (int m = 1; m <= l; ++m) {
     const double p = in[l + m], q = in[l - m];
     Pair* half = ((l + m) & 1) ? odd : even;

@@ -14,16 +14,20 @@ namespace shtool {
 
 namespace {
 
-Error bad(const std::filesystem::path& path, const std::string& what) {
-  return Error{path.string() + ": zhf-lobes table: " + what};
-}
+Error bad(const std::string& what) { return Error{"zhf-lobes table: " + what}; }
 
 }  // namespace
 
 Result<ZhfLobes> load_zhf_lobes(const std::filesystem::path& path, int order) {
   Result<Table> read = read_table(path, TableExpectation{"zhf-lobes", 1, 0});
   if (!read) return read.error();
-  const Table& t = read.value();
+  Result<ZhfLobes> z = zhf_lobes_from_table(read.value(), order);
+  if (!z) return Error{path.string() + ": " + z.error().message};
+  return z;
+}
+
+Result<ZhfLobes> zhf_lobes_from_table(const Table& t, int order) {
+  if (t.kind != "zhf-lobes") return bad("wrong kind '" + t.kind + "'");
   auto bands = t.get<std::int32_t>("bands");
   auto offset = t.get<std::int32_t>("direction_offset");
   auto dirs = t.get<double>("directions");
@@ -32,30 +36,30 @@ Result<ZhfLobes> load_zhf_lobes(const std::filesystem::path& path, int order) {
   auto val = t.get<double>("sparse_val");
   auto cond = t.get<double>("cond");
   for (const auto* r : {&bands, &offset, &rs, &col})
-    if (!*r) return bad(path, r->error().message);
+    if (!*r) return bad(r->error().message);
   for (const auto* r : {&dirs, &val, &cond})
-    if (!*r) return bad(path, r->error().message);
+    if (!*r) return bad(r->error().message);
   const auto& b = bands.value();
   const int nb = static_cast<int>(b.size());
-  if (nb == 0) return bad(path, "no bands");
-  if (order < 0) return bad(path, "negative order requested");
+  if (nb == 0) return bad("no bands");
+  if (order < 0) return bad("negative order requested");
   const int want = order == 0 ? nb : order;
-  if (want > kMaxOrder) return bad(path, "order " + std::to_string(want) + " exceeds kMaxOrder");
+  if (want > kMaxOrder) return bad("order " + std::to_string(want) + " exceeds kMaxOrder");
   // Rotation needs every band 0..want-1, stored in order (shared and full tables do this).
   for (int l = 0; l < want; ++l)
     if (l >= nb || b[l] != l)
-      return bad(path, "does not hold band " + std::to_string(l) + " at position " + std::to_string(l) +
+      return bad("does not hold band " + std::to_string(l) + " at position " + std::to_string(l) +
                            " (bands 0.." + std::to_string(want - 1) + " are needed; a per-band search table "
                            "cannot rotate on its own)");
   const std::size_t nd = dirs.value().size() / 3;
   if (offset.value().size() != b.size() || cond.value().size() != b.size() || dirs.value().size() != 3 * nd)
-    return bad(path, "arrays 'direction_offset', 'cond' and 'bands' differ in length");
+    return bad("arrays 'direction_offset', 'cond' and 'bands' differ in length");
   // Every count and index is checked against the array sizes before it is used: the
   // bytes may come from anywhere.
   std::size_t rows = 0;
   for (int l = 0; l < nb; ++l) {
     if (b[l] < 0 || b[l] >= kMaxOrder)
-      return bad(path, "band entry " + std::to_string(l) + " is " + std::to_string(b[l]) + ", outside 0.." +
+      return bad("band entry " + std::to_string(l) + " is " + std::to_string(b[l]) + ", outside 0.." +
                            std::to_string(kMaxOrder - 1));
     rows += 2 * static_cast<std::size_t>(b[l]) + 1;
   }
@@ -63,10 +67,10 @@ Result<ZhfLobes> load_zhf_lobes(const std::filesystem::path& path, int order) {
   const std::size_t nnz = col.value().size();
   if (start.size() != rows + 1 || start[0] != 0 || nnz != val.value().size() ||
       start.back() < 0 || static_cast<std::size_t>(start.back()) != nnz)
-    return bad(path, "sparse rows are inconsistent with 'bands'");
+    return bad("sparse rows are inconsistent with 'bands'");
   for (std::size_t i = 0; i + 1 < start.size(); ++i)
     if (start[i + 1] < start[i] || static_cast<std::size_t>(start[i + 1]) > nnz)
-      return bad(path, "sparse_row_start is not monotone within 0.." + std::to_string(nnz));
+      return bad("sparse_row_start is not monotone within 0.." + std::to_string(nnz));
 
   ZhfLobes z;
   z.order = want;
@@ -75,18 +79,18 @@ Result<ZhfLobes> load_zhf_lobes(const std::filesystem::path& path, int order) {
   for (int l = 0; l < want; ++l) {
     const int n = 2 * l + 1, off = offset.value()[l];
     if (off < 0 || static_cast<std::size_t>(off) + n > nd)
-      return bad(path, "band " + std::to_string(l) + " uses directions beyond the table");
+      return bad("band " + std::to_string(l) + " uses directions beyond the table");
     z.band_offset.push_back(off);
     if (!(cond.value()[l] >= 1.0) || !std::isfinite(cond.value()[l]))
-      return bad(path, "cond of band " + std::to_string(l) + " is not a finite number >= 1");
+      return bad("cond of band " + std::to_string(l) + " is not a finite number >= 1");
     z.cond.push_back(cond.value()[l]);
     for (int m = 0; m < n; ++m, ++row) {
       const int lo = start[row], hi = start[row + 1];
-      if (hi < lo) return bad(path, "sparse_row_start is not monotone");
+      if (hi < lo) return bad("sparse_row_start is not monotone");
       for (int k = lo; k < hi; ++k) {
         const int c = col.value()[k];
-        if (c < 0 || c >= n) return bad(path, "sparse_col out of range in band " + std::to_string(l));
-        if (!std::isfinite(val.value()[k])) return bad(path, "non-finite A^ value in band " + std::to_string(l));
+        if (c < 0 || c >= n) return bad("sparse_col out of range in band " + std::to_string(l));
+        if (!std::isfinite(val.value()[k])) return bad("non-finite A^ value in band " + std::to_string(l));
         z.col.push_back(c);
         z.val.push_back(val.value()[k]);
       }
@@ -100,7 +104,7 @@ Result<ZhfLobes> load_zhf_lobes(const std::filesystem::path& path, int order) {
   for (int d = 0; d < used; ++d) {
     const Vec3<double> w(dirs.value()[3 * d], dirs.value()[3 * d + 1], dirs.value()[3 * d + 2]);
     if (!w.allFinite() || std::abs(w.norm() - 1.0) > 1e-12)
-      return bad(path, "direction " + std::to_string(d) + " is not a unit vector");
+      return bad("direction " + std::to_string(d) + " is not a unit vector");
     z.directions.push_back(w);
   }
   for (int l = 0; l < want; ++l)

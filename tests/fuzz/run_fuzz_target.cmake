@@ -1,0 +1,19 @@
+# Runs one fuzz target for SECONDS on a scratch copy of its seed corpus (so that what it
+# finds never lands in the source tree), then reports its last status line.
+#   cmake -DTARGET=... -DCORPUS=... -DSCRATCH=... -DSECONDS=30 -P run_fuzz_target.cmake
+cmake_minimum_required(VERSION 3.20)
+file(REMOVE_RECURSE "${SCRATCH}")
+file(MAKE_DIRECTORY "${SCRATCH}/corpus" "${SCRATCH}/artifacts")
+file(COPY "${CORPUS}/" DESTINATION "${SCRATCH}/corpus")
+execute_process(COMMAND "${TARGET}" -max_total_time=${SECONDS} -max_len=65536 -timeout=10 -rss_limit_mb=2048
+                        -print_final_stats=1 "-artifact_prefix=${SCRATCH}/artifacts/" "${SCRATCH}/corpus"
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+string(REGEX MATCHALL "stat::[a-z_]+:[ \t]*[0-9]+" stats "${err}")
+string(REGEX MATCH "#[0-9]+[^\n]*DONE[^\n]*" done "${err}")
+message(STATUS "${done}")
+foreach(s IN LISTS stats)
+  message(STATUS "${s}")
+endforeach()
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "fuzz target failed (exit ${rc}); reproducer in ${SCRATCH}/artifacts\n${err}")
+endif()

@@ -1,0 +1,136 @@
+// Inputs that once crashed shtool or produced silent garbage, kept as regression tests:
+// each must now be refused with a message naming the problem (InputError or an Error
+// result), never a crash, an exit 0 with NaN, or a wrapped value.
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "common/generator_record.h"
+#include "common/input_error.h"
+#include "common/sh_inputs.h"
+#include "fit/fit_zh_job.h"
+#include "fit/mesh.h"
+#include "fit/zh_fit.h"
+#include "shtool/rotation_helpers.h"
+#include "shtool/table.h"
+#include "shtool/zhf_rotation.h"
+#include "tensors/rotation_helpers_gen.h"
+
+namespace shtool {
+namespace {
+
+std::string input_error(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+Table shipped_zhf(int n) {
+  const auto t = read_table(find_shipped_table("zhf-shared-N" + std::to_string(n) + ".shtb"));
+  EXPECT_TRUE(t.ok());
+  return t.value();
+}
+
+void set_i32(Table& t, const char* name, std::size_t i, std::int32_t v) {
+  for (TableArray& a : t.arrays)
+    if (a.name == name) {
+      std::vector<std::int32_t> x = a.values<std::int32_t>();
+      x[i] = v;
+      a = TableArray::from<std::int32_t>(a.name, a.shape, x);
+    }
+}
+
+TEST(UntrustedZhfLobes, RowStartsBeyondTheNonZerosAreRefused) {
+  Table t = shipped_zhf(4);
+  ASSERT_TRUE(zhf_lobes_from_table(t).ok());
+  set_i32(t, "sparse_row_start", 3, 1 << 30);  // past sparse_col, monotone up to there
+  const auto z = zhf_lobes_from_table(t);
+  ASSERT_FALSE(z.ok());
+  EXPECT_NE(z.error().message.find("sparse_row_start"), std::string::npos) << z.error().message;
+}
+
+TEST(UntrustedZhfLobes, HugeBandEntriesAreRefused) {
+  Table t = shipped_zhf(4);
+  set_i32(t, "bands", 3, std::numeric_limits<std::int32_t>::max());  // 2 * b + 1 overflows
+  const auto z = zhf_lobes_from_table(t, 3);
+  ASSERT_FALSE(z.ok());
+  EXPECT_NE(z.error().message.find("band entry 3"), std::string::npos) << z.error().message;
+}
+
+TEST(UntrustedRotationHelpers, NonFiniteOrHugeValuesAreRefused) {
+  const Table good = to_table(compute_rotation_helpers(6), generator_record("test", nlohmann::json::object()));
+  ASSERT_TRUE(RotationHelpers::from_table(good).ok());
+  for (const char* name : {"x90_val", "dy_sub", "ddy_diag", "ddy_off2"})
+    for (double bad : {std::numeric_limits<double>::infinity(), 1e300, std::nan("")}) {
+      Table t = good;
+      for (TableArray& a : t.arrays)
+        if (a.name == name) {
+          std::vector<double> x = a.values<double>();
+          x[x.size() / 2] = bad;
+          a = TableArray::from<double>(a.name, a.shape, x);
+        }
+      EXPECT_FALSE(RotationHelpers::from_table(t).ok()) << name << " = " << bad;
+    }
+}
+
+TEST(UntrustedTransfer, HugeOrMistypedValuesAreRefused) {
+  int order = 0;
+  // Finite but huge: the fit used to index an empty lobe and crash.
+  EXPECT_NE(input_error([&] { fit::parse_transfer_json(R"({"order":3,"vectors":[[1,8,1e308,3,8,8,0,3,3]]})", "t", order); })
+                .find("beyond 1e100"),
+            std::string::npos);
+  // 2^32 + 3 used to be read as order 3.
+  EXPECT_NE(input_error([&] { fit::parse_transfer_json(R"({"order":4294967299,"vectors":[[1]]})", "t", order); })
+                .find("not supported"),
+            std::string::npos);
+  EXPECT_NE(input_error([&] { fit::parse_transfer_json(R"({"order":-1,"vectors":[[1]]})", "t", order); })
+                .find("not supported"),
+            std::string::npos);
+  // Accepted values give finite fits.
+  const std::vector<double> v = fit::parse_transfer_json(R"({"order":2,"vectors":[[1e99,0,1e99,0]]})", "t", order);
+  fit::ZhFitOptions o;
+  o.order = order;
+  o.lobes = 2;
+  const fit::ZhFit f = fit::fit_zh(v, o);
+  ASSERT_EQ(f.lobes.size(), 2u);
+  for (const auto& lobe : f.lobes) ASSERT_EQ(lobe.coeffs.size(), 2u);
+}
+
+TEST(UntrustedObj, CoordinatesAndIndicesOutOfRange) {
+  // A double that is no float, CR-only line endings hiding a NaN, an index beyond int.
+  const std::pair<std::string, std::string> cases[] = {
+      {"v 1e39 1 1\nv 0 1 0\nv 1 0 0\nf 1 2 3\n", "beyond float range"},
+      {"v 0 0 0\rv nan 1 0\rv 1 0 0\rf 1 2 3\r", "line 2: non-finite"},
+      {"v 0 0 0\nv 0 1 0\nv 1 0 0\nf 1 2 99999999999\n", "face index 99999999999 is out of range"},
+      {"v 0 0 0\r\nv 0 1 0\r\nv 1 0 0\r\nf 1 2 -99999999999\r\n", "out of range"},
+  };
+  for (const auto& [text, fragment] : cases) {
+    const std::string m = input_error([&] { fit::load_obj_text(text, "m.obj"); });
+    EXPECT_NE(m.find(fragment), std::string::npos) << "'" << m << "' lacks '" << fragment << "'";
+  }
+  // CR-only line endings are otherwise fine.
+  EXPECT_EQ(fit::load_obj_text("v 0 0 0\rv 1 0 0\rv 0 1 0\rf 1 2 3\r", "m.obj").triangles.size(), 1u);
+}
+
+TEST(UntrustedJsonInputs, DeepNestingAndNonNumbers) {
+  const std::string deep = "{\"inputs\": " + std::string(52000, '[') + std::string(52000, ']') + "}";
+  EXPECT_NE(input_error([&] { parse_product_inputs(deep, "stdin", 2, 2, 8); }).find("nested more than"),
+            std::string::npos);
+  EXPECT_NE(input_error([&] { parse_coefficients_json(std::string(52000, '['), "stdin"); }).find("nested more than"),
+            std::string::npos);
+  // A non-number is named by its type, never dumped (a dump of deep JSON overflowed the stack).
+  const std::string m = input_error([&] {
+    parse_product_inputs(R"({"inputs": [[1,0,0,0],[0,1,0,[[[1]]]]]})", "stdin", 2, 2, 8);
+  });
+  EXPECT_NE(m.find("is not a number (array)"), std::string::npos) << m;
+}
+
+}  // namespace
+}  // namespace shtool
