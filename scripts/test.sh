@@ -1,8 +1,27 @@
 #!/usr/bin/env bash
-# The whole test suite: installs what is missing, builds (Release), runs ctest.
+# The whole test suite, in three builds (each configured and built here):
+#   BUILD_DIR           Release: every test, the label "long" included (the shipped lobe
+#                       tables regenerated from scratch);
+#   BUILD_DIR-sanitize  ASan + UBSan, no recovery: every test but the label "long"
+#                       (the same searches, several times slower under the sanitizers);
+#   BUILD_DIR-fuzz      clang + libFuzzer: each reader's fuzz target for 30 s (label fuzz).
+# Installs what is missing first (scripts/setup.sh).
 #   scripts/test.sh [BUILD_DIR]
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="${1:-$root/build}"
+jobs="$(nproc)"
 "$root/scripts/setup.sh" "$build"
-ctest --test-dir "$build" --output-on-failure -j "$(nproc)"
+ctest --test-dir "$build" --output-on-failure -j "$jobs"
+
+echo "== sanitizers (ASan + UBSan)" >&2
+cmake -S "$root" -B "$build-sanitize" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSHTOOL_SANITIZE=ON \
+  -DSHTOOL_BUILD_BENCH=OFF -DPython3_EXECUTABLE=/usr/bin/python3 >/dev/null
+cmake --build "$build-sanitize" -j "$jobs"
+ctest --test-dir "$build-sanitize" --output-on-failure -j "$jobs" -LE long
+
+echo "== fuzz targets (clang, libFuzzer)" >&2
+CXX=clang++ cmake -S "$root" -B "$build-fuzz" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSHTOOL_FUZZ=ON \
+  -DSHTOOL_BUILD_TESTS=OFF -DSHTOOL_BUILD_BENCH=OFF >/dev/null
+cmake --build "$build-fuzz" -j "$jobs" --target fuzz_table_reader fuzz_table_kinds fuzz_obj fuzz_json_inputs
+ctest --test-dir "$build-fuzz" --output-on-failure -j "$jobs" -L fuzz

@@ -3,6 +3,7 @@
 // turned into a message and an exit code here, in one place.
 #include <exception>
 #include <iostream>
+#include <new>
 
 #include <CLI/CLI.hpp>
 
@@ -27,8 +28,12 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     // --help/--version exit 0; every command-line error exits 1 like other user errors.
     return app.exit(e) == 0 ? 0 : 1;
-  } catch (const shtool::cli::InputError& e) {
+  } catch (const shtool::InputError& e) {
     std::cerr << "shtool: error: " << e.what() << '\n';
+    return 1;
+  } catch (const std::bad_alloc&) {
+    // An input too large for this machine (the jobs refuse what they can estimate first).
+    std::cerr << "shtool: error: out of memory\n";
     return 1;
   } catch (const std::exception& e) {
     std::cerr << "shtool: internal error: " << e.what() << '\n';
