@@ -46,17 +46,11 @@ void setup_fit_zh(CLI::App& app) {
   CLI::Option* order = sub->add_option("--order", opt->order, "SH order n (bands 0..n-1)")->capture_default_str();
   sub->add_option("--lobes", opt->lobes, "ZH lobes N per vertex")->capture_default_str();
   sub->add_option("--rays", opt->rays, "directions per vertex")->capture_default_str();
-  add_enum_option(sub, "--mode", opt->mode,
-                  {{"unshadowed", fit::TransferMode::unshadowed},
-                   {"shadowed", fit::TransferMode::shadowed},
-                   {"interreflected", fit::TransferMode::interreflected}},
-                  "unshadowed, shadowed or interreflected", "shadowed");
+  add_enum_option(sub, "--mode", opt->mode, fit::transfer_mode_names(), "unshadowed, shadowed or interreflected",
+                  "shadowed");
   sub->add_option("--bounces", opt->bounces, "interreflected: diffuse bounces")->capture_default_str();
   sub->add_option("--albedo", opt->albedo, "interreflected: surface albedo in [0, 1)")->capture_default_str();
-  add_enum_option(sub, "--normals", opt->normals,
-                  {{"auto", fit::NormalSource::automatic},
-                   {"file", fit::NormalSource::file},
-                   {"computed", fit::NormalSource::computed}},
+  add_enum_option(sub, "--normals", opt->normals, fit::normal_source_names(),
                   "auto (file if complete, else computed), file or computed", "auto");
   sub->add_option("--seed", opt->seed, "seed of the ray rotations and multi-start axes")
       ->check(kUnsignedText)

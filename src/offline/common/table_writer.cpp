@@ -152,6 +152,16 @@ std::string binary_document(const Table& t, const std::string& header_text, cons
 
 }  // namespace
 
+Table new_table(std::string_view kind, int order, const nlohmann::json& generator, const nlohmann::json& meta) {
+  Table t;
+  t.kind = std::string(kind);
+  t.kind_version = "1.0";
+  t.order = order;
+  t.generator = generator.dump();
+  t.meta = meta.dump();
+  return t;
+}
+
 nlohmann::json table_header(const Table& table) {
   return header_from(table, parse_field(table.generator, "generator"), parse_field(table.meta, "meta"),
                      compute_layout(table));

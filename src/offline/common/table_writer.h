@@ -4,6 +4,7 @@
 
 #include <filesystem>
 #include <string>
+#include <string_view>
 
 #include <nlohmann/json.hpp>
 
@@ -25,6 +26,10 @@ std::string encode_table(const Table& table, TableEncoding encoding = TableEncod
 // left at `path` and an old file there stays untouched. Throws InputError.
 void write_table(const Table& table, const std::filesystem::path& path,
                  TableEncoding encoding = TableEncoding::binary);
+
+// A table of `kind` (kind_version 1.0) for SH order `order` with its generator record
+// and kind-specific meta, arrays still to add: how every job starts its output.
+Table new_table(std::string_view kind, int order, const nlohmann::json& generator, const nlohmann::json& meta);
 
 // The generator record and meta of a table as JSON (they are stored as JSON text).
 inline nlohmann::json table_generator(const Table& t) { return nlohmann::json::parse(t.generator); }

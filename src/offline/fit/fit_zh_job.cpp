@@ -29,22 +29,12 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-const char* mode_name(TransferMode m) {
-  switch (m) {
-    case TransferMode::unshadowed: return "unshadowed";
-    case TransferMode::shadowed: return "shadowed";
-    case TransferMode::interreflected: return "interreflected";
-  }
-  return "?";
-}
-
-const char* normals_name(NormalSource n) {
-  switch (n) {
-    case NormalSource::automatic: return "auto";
-    case NormalSource::file: return "file";
-    case NormalSource::computed: return "computed";
-  }
-  return "?";
+template <class E>
+const std::string& name_of(E value, const std::vector<std::pair<std::string, E>>& names) {
+  for (const auto& n : names)
+    if (n.second == value) return n.first;
+  static const std::string unknown = "?";
+  return unknown;
 }
 
 std::string ply_text(const Mesh& mesh, const std::vector<double>& transfer, int order,
@@ -160,6 +150,20 @@ std::vector<double> parse_transfer_json(std::string_view text, const std::filesy
 }
 
 
+const std::vector<std::pair<std::string, TransferMode>>& transfer_mode_names() {
+  static const std::vector<std::pair<std::string, TransferMode>> names = {
+      {"unshadowed", TransferMode::unshadowed},
+      {"shadowed", TransferMode::shadowed},
+      {"interreflected", TransferMode::interreflected}};
+  return names;
+}
+
+const std::vector<std::pair<std::string, NormalSource>>& normal_source_names() {
+  static const std::vector<std::pair<std::string, NormalSource>> names = {
+      {"auto", NormalSource::automatic}, {"file", NormalSource::file}, {"computed", NormalSource::computed}};
+  return names;
+}
+
 FitZhReport run_fit_zh(const FitZhRequest& r, const FitZhCallbacks& cb) {
   check_request(r);
   const int threads = resolve_threads(r.threads);
@@ -227,9 +231,9 @@ FitZhReport run_fit_zh(const FitZhRequest& r, const FitZhCallbacks& cb) {
     report.simulate_seconds = seconds_since(t0);
     params = {{"mesh", r.mesh.filename().string()},
               {"input_crc32", mesh.input_crc32},
-              {"mode", mode_name(r.mode)},
+              {"mode", name_of(r.mode, transfer_mode_names())},
               {"rays", r.rays},
-              {"normals", normals_name(r.normals)}};
+              {"normals", name_of(r.normals, normal_source_names())}};
     if (r.mode == TransferMode::interreflected) {
       params["bounces"] = r.bounces;
       params["albedo"] = r.albedo;

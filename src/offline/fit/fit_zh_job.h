@@ -8,6 +8,7 @@
 #include <functional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "fit/mesh.h"
@@ -15,6 +16,10 @@
 #include "shtool/table.h"
 
 namespace shtool::fit {
+
+// The names the command line and the generator record use for the enums.
+const std::vector<std::pair<std::string, TransferMode>>& transfer_mode_names();
+const std::vector<std::pair<std::string, NormalSource>>& normal_source_names();
 
 struct FitZhRequest {
   std::filesystem::path mesh;      // OBJ mesh, or empty with `transfer`

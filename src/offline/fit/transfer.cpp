@@ -1,4 +1,3 @@
-#include "common/input_error.h"
 #include "fit/transfer.h"
 
 #include <algorithm>
@@ -13,6 +12,7 @@
 
 #include <embree3/rtcore.h>
 
+#include "common/input_error.h"
 #include "common/parallel_for.h"
 #include "common/random.h"
 #include "shtool/sh.h"

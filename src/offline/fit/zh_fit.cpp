@@ -1,4 +1,3 @@
-#include "common/input_error.h"
 #include "fit/zh_fit.h"
 
 #include <algorithm>
@@ -13,6 +12,7 @@
 #include <Eigen/Dense>
 #include <nlopt.hpp>
 
+#include "common/input_error.h"
 #include "common/parallel_for.h"
 #include "common/random.h"
 #include "shtool/sh.h"

@@ -1,5 +1,7 @@
 #include "fit/zh_fit_table.h"
 
+#include "common/table_writer.h"
+
 #include <cmath>
 
 namespace shtool::fit {
@@ -30,17 +32,12 @@ Table zh_fit_table(const std::vector<ZhFit>& fits, int order, int lobes,
     norm[v] = fits[v].norm;
     for (std::size_t d = 0; d < nd; ++d) direct[v * nd + d] = fits[v].direct[d];
   }
-  Table table;
-  table.kind = "zh-fit";
-  table.kind_version = "1.0";
-  table.order = order;
-  table.generator = generator.dump();
   meta["vectors"] = count;
   meta["lobes"] = lobes;
   meta["normalized_rms"] = normalized_rms(fits);
   meta["layout"] = "axes[v][k] unit axis, coeffs[v][k][l] = g*_l (lobe k adds g*_l y_l^m(axis) to SH (l,m)); "
                    "residual[v] = ||fit - t||, norm[v] = ||t||";
-  table.meta = meta.dump();
+  Table table = new_table("zh-fit", order, generator, meta);
   const auto V = static_cast<std::int64_t>(count), N = static_cast<std::int64_t>(nl);
   table.arrays.push_back(TableArray::from<double>("axes", {V, N, 3}, axes));
   table.arrays.push_back(TableArray::from<double>("coeffs", {V, N, order}, coeffs));

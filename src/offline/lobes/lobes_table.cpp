@@ -1,9 +1,11 @@
 // The "zhf-lobes" table and JSON summary of search results (layout in lobes.h).
+#include "lobes/lobes.h"
+
 #include <cstdint>
 #include <stdexcept>
 
 #include "common/input_error.h"
-#include "lobes/lobes.h"
+#include "common/table_writer.h"
 
 namespace shtool::lobes {
 
@@ -55,10 +57,7 @@ Table make_lobes_table(const std::vector<SearchResult>& searches, const nlohmann
                        const SearchOptions& options) {
   const Layout lay = layout_of(searches);
   const bool shared = searches[0].shared;
-  Table t;
-  t.kind = "zhf-lobes";
-  t.kind_version = "1.0";
-  t.generator = generator.dump();
+  Table t = new_table("zhf-lobes", 0, generator, nlohmann::json::object());
   std::vector<std::int32_t> bands, offsets, row_start{0}, cols, lobes, zeros;
   std::vector<double> dirs, a_hat, vals, sparsity, cond, largest, smallest;
   for (std::size_t i = 0; i < lay.theta.size(); ++i) {

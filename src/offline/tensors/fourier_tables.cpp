@@ -1,10 +1,11 @@
-#include "common/input_error.h"
 #include "tensors/fourier_tables.h"
 
 #include <algorithm>
 #include <stdexcept>
 #include <string>
 
+#include "common/input_error.h"
+#include "common/table_writer.h"
 #include "shtool/sh.h"
 
 namespace shtool {
@@ -24,17 +25,12 @@ Table sh_fourier_tensors_table(int order, int max_inputs, const nlohmann::json& 
 }
 
 Table to_table(const ShFourierTensors& f, const nlohmann::json& generator) {
-  Table t;
-  t.kind = std::string(kShFourierTensorsKind);
-  t.kind_version = "1.0";
-  t.order = f.order;
-  t.generator = generator.dump();
   const nlohmann::json meta = {{"degree", f.degree},
             {"layout",
              "to_fourier[l][m][s]: Theta_l^m(t) = sum_s to_fourier * (m even ? cos(s t) : sin(s t)); "
              "to_sh[l][m][s] = integral_0^pi (m even ? cos(s t) : sin(s t)) Theta_l^m(t) sin t dt; "
              "Theta_l^m = sqrt(2 pi) K_l^m P_l^m(cos t), 0 <= m <= l"}};
-  t.meta = meta.dump();
+  Table t = new_table(kShFourierTensorsKind, f.order, generator, meta);
   const std::int64_t n = f.order;
   t.arrays.push_back(TableArray::from<double>("to_fourier", {n, n, n}, f.to_fourier));
   t.arrays.push_back(TableArray::from<double>("to_sh", {n, n, std::int64_t{f.degree} + 1}, f.to_sh));

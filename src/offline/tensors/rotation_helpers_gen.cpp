@@ -1,6 +1,7 @@
 #include "tensors/rotation_helpers_gen.h"
 
 #include "common/input_error.h"
+#include "common/table_writer.h"
 
 #include <cmath>
 #include <stdexcept>
@@ -104,15 +105,10 @@ RotationHelpers compute_rotation_helpers(int order) {
 Table to_table(const RotationHelpers& h, const nlohmann::json& generator) {
   const std::int64_t n = sh_count(h.order);
   const std::int64_t nnz = static_cast<std::int64_t>(h.x90_val.size());
-  Table t;
-  t.kind = std::string(kRotationHelpersKind);
-  t.kind_version = "1.0";
-  t.order = h.order;
-  t.generator = generator.dump();
   const nlohmann::json meta = {{"x90_nonzeros", nnz}, {"description",
             "X90 = M(Rx(+90 deg)) in CSR; D1 = dM(Ry(b))/db(0) sub-diagonal; D2 = D1^2 diagonal "
             "and distance-2 diagonal"}};
-  t.meta = meta.dump();
+  Table t = new_table(kRotationHelpersKind, h.order, generator, meta);
   t.arrays.push_back(TableArray::from<std::int32_t>("x90_row", {n + 1}, h.x90_row));
   t.arrays.push_back(TableArray::from<std::int32_t>("x90_col", {nnz}, h.x90_col));
   t.arrays.push_back(TableArray::from<double>("x90_val", {nnz}, h.x90_val));

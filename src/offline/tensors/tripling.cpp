@@ -1,4 +1,3 @@
-#include "common/input_error.h"
 #include "tensors/tripling.h"
 
 #include <algorithm>
@@ -9,6 +8,8 @@
 #include <tuple>
 #include <vector>
 
+#include "common/input_error.h"
+#include "common/table_writer.h"
 #include "shtool/sh.h"
 
 namespace shtool {
@@ -118,17 +119,12 @@ Table tripling_tensor_table(int order, const nlohmann::json& generator) {
 
 Table to_table(const TriplingTensor& tensor, const nlohmann::json& generator, const nlohmann::json& extra_meta) {
   const std::int64_t nnz = static_cast<std::int64_t>(tensor.value.size());
-  Table t;
-  t.kind = std::string(kTriplingTensorKind);
-  t.kind_version = "1.0";
-  t.order = tensor.order;
-  t.generator = generator.dump();
   nlohmann::json meta = extra_meta.is_object() ? extra_meta : nlohmann::json::object();
   meta["nonzeros"] = nnz;
   meta["layout"] =
       "canonical non-zeros C_ijk = integral y_i y_j y_k with i <= j <= k < N^2, sorted by "
       "(i, j, k); the other permutations have the same value";
-  t.meta = meta.dump();
+  Table t = new_table(kTriplingTensorKind, tensor.order, generator, meta);
   t.arrays.push_back(TableArray::from<std::uint32_t>("index", {nnz, 3}, tensor.index));
   t.arrays.push_back(TableArray::from<double>("value", {nnz}, tensor.value));
   return t;
