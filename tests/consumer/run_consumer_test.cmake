@@ -67,9 +67,11 @@ elseif(STEP STREQUAL "consumer")
   if(CXX_COMPILER)
     list(APPEND configure_args "-DCMAKE_CXX_COMPILER=${CXX_COMPILER}")
   endif()
-  # A sanitizer build of the package is consumed with the same instrumentation.
+  # A sanitizer build of the package is consumed with the same instrumentation, but for
+  # UBSan's vptr check, which needs RTTI (the consumer is built with -fno-rtti).
   if(SANITIZE)
-    list(APPEND configure_args "-DCMAKE_CXX_FLAGS=-fsanitize=address,undefined -fno-sanitize-recover=all"
+    list(APPEND configure_args
+         "-DCMAKE_CXX_FLAGS=-fsanitize=address,undefined -fno-sanitize=vptr -fno-sanitize-recover=all"
          "-DCMAKE_EXE_LINKER_FLAGS=-fsanitize=address,undefined")
   endif()
   run_step("configure consumer" "${CMAKE_COMMAND}" ${configure_args})
