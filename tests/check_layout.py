@@ -5,7 +5,8 @@
      directly or through another shtool header;
   2. src/runtime/ and include/shtool/ include nothing of src/offline/ or src/cli/;
   3. src/offline/ includes nothing of src/cli/;
-  4. no source names a file or tracker outside the repository.
+  4. no source or doc names a file the repository does not hold, a path out of it,
+     or a tracker's issue.
 
 Usage: check_layout.py SOURCE_DIR   (exit 1 and one line per violation)
 """
@@ -55,19 +56,37 @@ def main():
     check_tree("src/runtime", OFFLINE_ROOTS + ("cli_common",), "the runtime must not depend on the offline tool")
     check_tree("src/offline", ("cli_common",), "the offline libraries must not depend on the CLI")
 
-    # 4. references that a reader of the repository cannot follow
-    outside = re.compile(r"DESIGN\.md|STYLE\.md|\.\./shared/papers|\b00[0-4]_[0-9a-f]{16}\.txt")
+    # 4. references that a reader of the repository cannot follow: a document (.md,
+    # .pdf) named but not held by the repository, a content-addressed text file (a name
+    # with a long hexadecimal run), a relative path that climbs out of the repository, or
+    # an issue of a tracker. Scratch files the tests create (a.txt) are not documents.
+    def in_repository(p):
+        top = p.relative_to(root).parts[0]
+        return top != ".git" and not top.startswith("build")
+    held = {p.name for p in root.rglob("*") if p.is_file() and in_repository(p)}
+    named_file = re.compile(r"([A-Za-z0-9_./-]+\.(?:md|pdf))\b")
+    hashed_text = re.compile(r"[0-9a-f]{12,}\.txt\b")
+    climbing = re.compile(r"(?<![A-Za-z0-9_.])\.\./[A-Za-z]")
+    tracker = re.compile(r"\bissues? #?[0-9]+\b", re.I)
     for tree in ("include", "src", "docs", "bench", "scripts", "tests", "schemas", "README.md", "CMakeLists.txt"):
         base = root / tree
         files = [base] if base.is_file() else sorted(base.rglob("*"))
         for p in files:
             if not p.is_file() or p.suffix not in (".h", ".cpp", ".md", ".py", ".sh", ".txt", ".cmake", ".json", ""):
                 continue
-            if p.name == "check_layout.py":
+            if "corpus" in p.parts:
                 continue
             for n, line in enumerate(p.read_text(encoding="utf-8", errors="replace").splitlines(), 1):
-                if outside.search(line):
-                    problems.append(f"{p.relative_to(root)}:{n}: names a file outside the repository")
+                where = f"{p.relative_to(root)}:{n}"
+                for name in named_file.findall(line):
+                    if pathlib.PurePosixPath(name).name not in held:
+                        problems.append(f"{where}: names '{name}', which the repository does not hold")
+                if hashed_text.search(line):
+                    problems.append(f"{where}: names a text file outside the repository")
+                if climbing.search(line):
+                    problems.append(f"{where}: a relative path that leaves the repository")
+                if tracker.search(line):
+                    problems.append(f"{where}: refers to a tracker's issue")
 
     for line in problems:
         print(line)
