@@ -140,7 +140,8 @@ struct TableFileInfo {
 
 // Reads and validates: magic, format major version, header CRC, header fields and
 // conventions id, the expectation (kind, kind major, order), array bounds, padding, array
-// CRCs. Never throws, never returns partial data; memory use is bounded by the file size.
+// CRCs. Never throws, never returns partial data; memory use is bounded by about twice the
+// file size (the file is read whole, then its arrays are copied out).
 // (The writer is offline: `shtool` writes tables, engines read them.)
 Result<Table> read_table(const std::filesystem::path& path, const TableExpectation& expect = {},
                          TableFileInfo* info = nullptr);

@@ -6,14 +6,12 @@
 #include <CLI/CLI.hpp>
 
 #include "cli_common.h"
-#include "tensors/fourier_tables.h"
 #include "tensors/gen_tensors_job.h"
 
 namespace shtool::cli {
 
 void setup_gen_tensors(CLI::App& app) {
   auto req = std::make_shared<GenTensorsRequest>();
-  req->inputs = kFourierTableDefaultInputs;
   auto what = std::make_shared<std::string>("rotation,tripling,fourier");
   CLI::App* sub = app.add_subcommand("gen-tensors", "Generate tensor and rotation tables");
   sub->add_option("--order", req->order, "SH order N (bands 0..N-1)")->capture_default_str();

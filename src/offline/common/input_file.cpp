@@ -38,7 +38,7 @@ std::string read_input_file(const std::filesystem::path& path, std::string_view 
 }
 
 nlohmann::json parse_json_input(std::string_view text, const std::filesystem::path& path, std::string_view what) {
-  if (auto problem = table_format::check_json_depth(text, kMaxInputJsonDepth))
+  if (auto problem = table_format::check_json_depth(text, table_format::kMaxJsonDepth))
     throw InputError(where(path, what) + ": JSON " + *problem);
   try {
     return nlohmann::json::parse(text);

@@ -15,12 +15,9 @@ namespace shtool {
 // Throws InputError.
 std::string read_input_file(const std::filesystem::path& path, std::string_view what);
 
-// JSON nested deeper than this is refused before parsing, so that no later step
-// (printing, recursion in a consumer) can exhaust the stack.
-inline constexpr int kMaxInputJsonDepth = 64;
-
 // Parses `text` (the contents of `path`) as JSON. Throws InputError naming the input, the
-// parser's position and message, or the nesting limit.
+// parser's position and message, or nesting deeper than the tables' limit (64 levels,
+// refused before parsing so that no later step can exhaust the stack).
 nlohmann::json parse_json_input(std::string_view text, const std::filesystem::path& path, std::string_view what);
 
 // read_input_file + parse_json_input.

@@ -16,6 +16,7 @@
 #include "common/parallel_for.h"
 #include "common/random.h"
 #include "shtool/sh.h"
+#include "shtool/zh.h"
 
 namespace shtool::fit {
 namespace {
@@ -268,12 +269,7 @@ std::vector<Eigen::Vector3d> hemisphere_axes(int count) {
 
 void lobes_to_sh(int order, const std::vector<ZhLobe>& lobes, std::span<double> out) {
   std::fill(out.begin(), out.begin() + sh_count(order), 0.0);
-  double y[kMaxOrder * kMaxOrder];
-  for (const ZhLobe& lobe : lobes) {
-    eval_sh<double>(order, lobe.axis, std::span<double>(y, sh_count(order)));
-    for (int l = 0; l < order; ++l)
-      for (int m = -l; m <= l; ++m) out[sh_index(l, m)] += lobe.coeffs[l] * y[sh_index(l, m)];
-  }
+  for (const ZhLobe& lobe : lobes) add_zh_lobe_to_sh(lobe.axis, lobe.coeffs, out);
 }
 
 double zh_objective(int order, std::span<const double> t, const std::vector<ZhLobe>& lobes,

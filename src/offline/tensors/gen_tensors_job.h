@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "shtool/table.h"
+#include "tensors/fourier_tables.h"
 
 namespace shtool {
 
@@ -16,7 +17,7 @@ struct GenTensorsRequest {
   // Any of "rotation", "tripling", "fourier" (tables), "rotation-kernels",
   // "tripling-kernels" (C++ sources, independent of order and encoding).
   std::vector<std::string> what = {"rotation", "tripling", "fourier"};
-  int inputs = 8;                     // fourier: largest number of product inputs covered (2..8)
+  int inputs = kFourierTableDefaultInputs;  // fourier: largest number of product inputs covered (2..8)
   TableEncoding encoding = TableEncoding::binary;
 };
 

@@ -451,12 +451,11 @@ Result<Table> read_json(std::span<const std::byte> in, const std::filesystem::pa
                         const TableExpectation& expect, TableFileInfo* info, bool verify) {
   const std::uint64_t size = in.size();
   auto fail = [&](const std::string& p) { return Result<Table>(error_at(path, p)); };
-  std::string text(static_cast<std::size_t>(size), '\0');
-  if (!Reader(in).read(text.data(), size)) return fail("read error");
+  // Parsed in place: the bytes are the document.
+  const std::string_view text(reinterpret_cast<const char*>(in.data()), static_cast<std::size_t>(size));
   if (auto p = check_json_depth(text, kMaxJsonDepth)) return fail("malformed JSON table: " + *p);
   json doc = json::parse(text, nullptr, /*allow_exceptions=*/false);
   if (doc.is_discarded()) return fail("malformed JSON table: " + json_syntax_error(text));
-  text.clear();
   if (!doc.is_object()) return fail("JSON table is not an object");
   auto data_it = doc.find("data");
   if (data_it == doc.end() || !data_it->is_object()) return fail("JSON table has no \"data\" object");

@@ -4,16 +4,14 @@
 #include <limits>
 #include <string>
 
+#include "io/table_format.h"
+
 namespace shtool {
 namespace {
 
 Error zh_fit_error(const std::string& what) { return Error{"zh-fit table: " + what}; }
 
-std::string shape_text(const std::vector<std::int64_t>& shape) {
-  std::string s = "[";
-  for (std::size_t i = 0; i < shape.size(); ++i) s += (i ? ", " : "") + std::to_string(shape[i]);
-  return s + "]";
-}
+using table_format::shape_text;
 
 // The f64 array `name` with exactly `shape`, or an error naming what differs.
 Result<std::vector<double>> f64_array(const Table& t, const char* name, const std::vector<std::int64_t>& shape) {

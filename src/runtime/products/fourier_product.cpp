@@ -30,8 +30,6 @@ using detail::Fftw;
 template <class T, class E>
 using AlignedBuffer = detail::FftwBuffer<T, E>;
 
-std::mutex& planner_mutex() { return detail::fftw_planner_mutex(); }
-
 // Smallest m >= need whose prime factors are 2, 3 and 5 (FFTW's fastest sizes), even
 // if asked (the halved real dimension).
 int fft_size(int need, bool even) {
@@ -111,7 +109,7 @@ struct FourierProduct<T>::Impl {
   }
 
   ~Impl() {
-    std::lock_guard<std::mutex> lock(planner_mutex());
+    std::lock_guard<std::mutex> lock(detail::fftw_planner_mutex());
     for (Node& node : nodes) {
       if (node.c2r) F::destroy(node.c2r);
       if (node.r2c) F::destroy(node.r2c);
@@ -148,7 +146,7 @@ struct FourierProduct<T>::Impl {
     node.grid_a = AlignedBuffer<T, T>(grid);
     node.grid_b = AlignedBuffer<T, T>(grid);
     {
-      std::lock_guard<std::mutex> lock(planner_mutex());
+      std::lock_guard<std::mutex> lock(detail::fftw_planner_mutex());
       node.c2r = F::c2r_2d(node.m_phi, node.m_theta, node.spec_a.data(), node.grid_a.data());
       node.r2c = F::r2c_2d(node.m_phi, node.m_theta, node.grid_a.data(), node.spec_a.data());
     }
