@@ -1174,6 +1174,26 @@ TEST(RotationHelpersTable, FromTableRejectsCorruption) {
        },
        "missing"},
       {"wrong kind", [&](Table& t) { t.kind = "tripling"; }, "wrong kind"},
+      // Values that pass every index check but break the class structure the packed
+      // rotation loops rely on: ShRotation's constructor used to throw a logic_error on
+      // them (found by the fuzz target fuzz_table_kinds).
+      {"a row of zeros",
+       [&](Table& t) {
+         auto v = h.x90_val;
+         for (int k = h.x90_row[1]; k < h.x90_row[2]; ++k) v[k] = 0;
+         replace_array(t, "x90_val", v);
+       },
+       "sparsity structure"},
+      {"a non-zero outside its class",
+       [&](Table& t) {
+         // Row 6 (band 2, m = 0) has two non-zeros of one parity: one moves by a column.
+         ASSERT_EQ(h.x90_row[7] - h.x90_row[6], 2);
+         auto c = h.x90_col;
+         int& first = c[h.x90_row[6]];
+         first = first < 8 ? first + 1 : first - 1;
+         replace_array(t, "x90_col", c);
+       },
+       "sparsity structure"},
   };
   for (const Case& c : cases) {
     Table t = good;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
@@ -10,6 +11,7 @@
 #include "shtool/sh.h"
 #include "kernels/rotation_kernels.h"
 #include "precondition.h"
+#include "rotation/x90_structure.h"
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -30,16 +32,6 @@ constexpr int kKernelMethod[4] = {0, 1, 15, 2};
 constexpr int kPairFrom = 10;
 // Values per row of band l in the paired path: the longest class, rounded up to even.
 constexpr int pair_count(int l) { return (l / 2 + 2) & ~1; }
-
-// Number of non-zeros in row j (m = j - l) of band l of X90, and of X90^T: X90 maps
-// the four classes of m (sign, parity) onto each other by square dense blocks of sizes
-// floor(l/2) and ceil(l/2) (+1 for m >= 0 even). Checked against the table when the
-// rotation is constructed.
-constexpr int x90_row_length(int l, int j) {
-  const int m = j - l;
-  if (l & 1) return (m < 0 && !(m & 1)) ? (l - 1) / 2 : (l + 1) / 2;
-  return (m >= 0 && !(m & 1)) ? l / 2 + 1 : l / 2;
-}
 
 }  // namespace
 
@@ -112,22 +104,12 @@ ShRotation<T>::ShRotation(int order, std::shared_ptr<const RotationHelpers> help
       auto pack = [&](bool transpose, std::vector<int>& start, std::vector<T>& val, int& out) {
         for (int r = 0; r < size; ++r) {
           auto at = [&](int c) { return transpose ? block[c * size + r] : block[r * size + c]; };
-          int nz = -1;
-          for (int c = 0; c < size && nz < 0; ++c)
-            if (at(c) != 0.0) nz = c;
-          if (nz < 0) detail::invariant_failed("X90 row is empty");
-          // The class of the first non-zero column (sign of m, parity of m) is the run
-          // of columns this row reads: lo, lo + 2, ..., hi.
-          const int m = nz - l, odd = m & 1;
-          const int m_lo = m < 0 ? -l + (((-l) & 1) != odd) : odd;
-          const int m_hi = m < 0 ? -1 - (odd == 0) : l - ((l & 1) != odd);
-          const int lo = m_lo + l, hi = m_hi + l;
-          if ((hi - lo) / 2 + 1 != x90_row_length(l, r)) detail::invariant_failed("X90 row class size");
-          for (int c = 0; c < size; ++c)
-            if (at(c) != 0.0 && (c < lo || c > hi || (c - lo) % 2))
-              detail::invariant_failed("X90 row is not parity-strided");
-          start[first + r] = split_pos(l, lo);
-          for (int c = lo; c <= hi; c += 2) val[out++] = static_cast<T>(at(c));
+          // RotationHelpers::from_table checked the structure of every row.
+          const std::optional<detail::X90Run> run = detail::x90_row_run(l, r, at);
+          if (!run) detail::precondition_failed("rotation helpers: X90 band " + std::to_string(l) +
+                                                " breaks the class structure (see RotationHelpers::from_table)");
+          start[first + r] = split_pos(l, run->lo);
+          for (int c = run->lo; c <= run->hi; c += 2) val[out++] = static_cast<T>(at(c));
         }
       };
       pack(false, x90_start_, x90_val_, written);
@@ -204,7 +186,7 @@ void ShRotation<T>::build_pairs() {
       std::vector<int> row_val(size);  // offset of each row's values
       for (int r = 0, at = 0; r < size; ++r) {
         row_val[r] = at;
-        at += x90_row_length(l, r);
+        at += detail::x90_row_length(l, r);
       }
       std::vector<bool> done(size, false);
       for (int r = 0; r < size; ++r) {
@@ -219,7 +201,7 @@ void ShRotation<T>::build_pairs() {
         // count per band also keeps the inner loop's exit branch predictable. The
         // padding reads at most two values past a class: the next class, or the two
         // zeroed slots after the band (apply_large_bands).
-        const int count = x90_row_length(l, r), padded = pair_count(l);
+        const int count = detail::x90_row_length(l, r), padded = pair_count(l);
         pair_rows_.insert(pair_rows_.end(), {start[first + r], r, partner >= 0 ? partner : size});
         for (int c = 0; c < padded; ++c) {
           pair_val_.push_back(c < count ? val[row_val[r] + c] : T(0));
@@ -451,7 +433,7 @@ inline void strided_rows(int l, const int* __restrict start, const T* __restrict
                          const P* __restrict in, P* __restrict out) {
   for (int r = 0; r <= 2 * l; ++r) {
     const P* x = in + start[r];
-    const int count = x90_row_length(l, r);
+    const int count = detail::x90_row_length(l, r);
     P sum = val[0] * x[0];
     for (int k = 1; k < count; ++k) sum += val[k] * x[k];
     val += count;

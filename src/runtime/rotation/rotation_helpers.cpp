@@ -4,7 +4,9 @@
 #include <cstdlib>
 #include <string>
 #include <system_error>
+#include <vector>
 
+#include "rotation/x90_structure.h"
 #include "shtool/sh.h"
 
 namespace shtool {
@@ -56,6 +58,22 @@ Result<RotationHelpers> RotationHelpers::from_table(const Table& table) {
     for (int k = h.x90_row[i]; k < h.x90_row[i + 1]; ++k)
       if (h.x90_col[k] < l * l || h.x90_col[k] > l * l + 2 * l)
         return helpers_error("X90 entry outside its band in row " + std::to_string(i));
+  }
+  // The class structure of every row of X90 and of X90^T (rotation/x90_structure.h),
+  // which the rotation's packed loops rely on.
+  for (int l = 0; l < h.order; ++l) {
+    const int first = l * l, size = 2 * l + 1;
+    std::vector<double> block(static_cast<std::size_t>(size) * size, 0.0);
+    for (int i = first; i < first + size; ++i)
+      for (int k = h.x90_row[i]; k < h.x90_row[i + 1]; ++k)
+        block[static_cast<std::size_t>(i - first) * size + (h.x90_col[k] - first)] = h.x90_val[k];
+    for (int r = 0; r < size; ++r) {
+      const bool rows_ok = detail::x90_row_run(l, r, [&](int c) { return block[r * size + c]; }).has_value();
+      const bool cols_ok = detail::x90_row_run(l, r, [&](int c) { return block[c * size + r]; }).has_value();
+      if (!rows_ok || !cols_ok)
+        return helpers_error("X90 band " + std::to_string(l) + (rows_ok ? " column " : " row ") + std::to_string(r) +
+                             " breaks the sparsity structure of a rotation by 90 degrees about x");
+    }
   }
   // Values: X90 is orthogonal (|entries| <= 1); D1's entries are at most l in band l and
   // D2 = D1^2's at most l (l + 1). Far looser bounds still keep a corrupted value (an
