@@ -1,0 +1,324 @@
+#include "shtool/env_projection.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numbers>
+#include <string>
+
+#include "shtool/legendre.h"
+#include "shtool/quadrature.h"
+#include "shtool/sh.h"
+
+namespace shtool {
+namespace {
+
+constexpr long double kPiL = std::numbers::pi_v<long double>;
+
+std::size_t legendre_count(int order) { return static_cast<std::size_t>(order) * (order + 1) / 2; }
+std::size_t legendre_index(int l, int m) { return static_cast<std::size_t>(l) * (l + 1) / 2 + m; }
+
+Error order_error(int order) {
+  return Error{"order " + std::to_string(order) + " is outside 1.." + std::to_string(kMaxEnvOrder)};
+}
+
+// Fourier coefficients of f_l^m(t) = K_l^m P_l^m(cos t) sin t, a trigonometric
+// polynomial of degree l+1: a sine series for even m, a cosine series for odd m (P_l^m
+// is sin^m t times a polynomial in cos t). coeffs[legendre_index(l, m) * (N+1) + k] is the
+// factor of sin(k t) (m even) or cos(k t) (m odd). Found exactly by a DFT of 2N+4
+// samples over a whole period, where the recurrence continues the polynomial in
+// (cos t, sin t) to sin t < 0.
+std::vector<long double> legendre_fourier_coefficients(int order) {
+  const int samples = 2 * order + 4;
+  const std::size_t count = legendre_count(order);
+  std::vector<long double> values(static_cast<std::size_t>(samples) * count);
+  std::vector<long double> p(count);
+  for (int j = 0; j < samples; ++j) {
+    const long double t = 2 * kPiL * j / samples;
+    const long double s = std::sin(t);
+    normalized_legendre_all(order, std::cos(t), s, 1 / std::sqrt(4 * kPiL), p);
+    for (std::size_t i = 0; i < count; ++i) values[j * count + i] = p[i] * s;
+  }
+  std::vector<long double> coeffs(count * (order + 1), 0.0L);
+  for (int l = 0; l < order; ++l) {
+    for (int m = 0; m <= l; ++m) {
+      const std::size_t i = legendre_index(l, m);
+      for (int k = 0; k <= l + 1; ++k) {
+        long double sum = 0;
+        for (int j = 0; j < samples; ++j) {
+          const long double arg = 2 * kPiL * ((k * j) % samples) / samples;
+          sum += values[j * count + i] * (m % 2 == 0 ? std::sin(arg) : std::cos(arg));
+        }
+        coeffs[i * (order + 1) + k] = sum * (k == 0 ? 1 : 2) / samples;
+      }
+    }
+  }
+  return coeffs;
+}
+
+// Index of the azimuthal sum that multiplies coefficient (l, m): 0 for m = 0, 2m-1 for
+// the cosines (m > 0), 2|m| for the sines (m < 0).
+int azimuth_slot(int m) { return m == 0 ? 0 : (m > 0 ? 2 * m - 1 : -2 * m); }
+
+Error non_finite_error(const char* where, int x, int y, int c, float v) {
+  return Error{std::string(where) + "texel (" + std::to_string(x) + ", " + std::to_string(y) + ") channel " +
+               std::to_string(c) + " is " + (std::isnan(v) ? "NaN" : "infinite")};
+}
+
+}  // namespace
+
+Result<EquirectProjector> EquirectProjector::create(int width, int height, int order) {
+  if (order < 1 || order > kMaxEnvOrder) return order_error(order);
+  if (height < 1 || width != 2 * height)
+    return Error{"an equirect image must be 2:1 (width = 2 height), got " + std::to_string(width) + " x " +
+                 std::to_string(height)};
+  EquirectProjector p;
+  p.width_ = width;
+  p.height_ = height;
+  p.order_ = order;
+  const int slots = 2 * order - 1;
+  p.column_weights_.resize(static_cast<std::size_t>(width) * slots);
+  const long double half = kPiL / width;  // half a column's width in p
+  for (int x = 0; x < width; ++x) {
+    // The integrals of cos(m p), sin(m p) over [c - h, c + h] are 2 cos(m c) sin(m h) / m
+    // and 2 sin(m c) sin(m h) / m: no cancellation for thin columns.
+    const long double centre = kPiL - 2 * kPiL * (x + 0.5L) / width;
+    double* w = &p.column_weights_[static_cast<std::size_t>(x) * slots];
+    w[0] = static_cast<double>(2 * half);
+    for (int m = 1; m < order; ++m) {
+      const long double f = std::numbers::sqrt2_v<long double> * 2 * std::sin(m * half) / m;
+      w[2 * m - 1] = static_cast<double>(f * std::cos(m * centre));
+      w[2 * m] = static_cast<double>(f * std::sin(m * centre));
+    }
+  }
+  const std::vector<long double> fourier = legendre_fourier_coefficients(order);
+  const std::size_t count = legendre_count(order);
+  p.row_integrals_.resize(static_cast<std::size_t>(height) * count);
+  std::vector<long double> moment_sin(order + 2), moment_cos(order + 2);
+  for (int y = 0; y < height; ++y) {
+    const long double centre = kPiL * (y + 0.5L) / height, h = kPiL / (2 * height);
+    moment_cos[0] = 2 * h;
+    moment_sin[0] = 0;
+    for (int k = 1; k <= order; ++k) {
+      const long double f = 2 * std::sin(k * h) / k;
+      moment_sin[k] = f * std::sin(k * centre);
+      moment_cos[k] = f * std::cos(k * centre);
+    }
+    for (int l = 0; l < order; ++l) {
+      for (int m = 0; m <= l; ++m) {
+        const std::size_t i = legendre_index(l, m);
+        const long double* a = &fourier[i * (order + 1)];
+        const std::vector<long double>& moment = m % 2 == 0 ? moment_sin : moment_cos;
+        long double sum = 0;
+        for (int k = 0; k <= l + 1; ++k) sum += a[k] * moment[k];
+        p.row_integrals_[static_cast<std::size_t>(y) * count + i] = static_cast<double>(sum);
+      }
+    }
+  }
+  return p;
+}
+
+std::size_t EquirectProjector::partial_size(int channels) const {
+  return static_cast<std::size_t>(sh_count(order_)) * channels;
+}
+
+std::span<const double> EquirectProjector::row_integrals(int y) const {
+  const std::size_t count = legendre_count(order_);
+  return std::span<const double>(row_integrals_).subspan(static_cast<std::size_t>(y) * count, count);
+}
+
+Result<Ok> EquirectProjector::accumulate_block(const FloatImageView& image, int block,
+                                               std::span<double> partial) const {
+  const int channels = image.channels;
+  const int slots = 2 * order_ - 1;
+  // The azimuthal sums of one row, channel-major: sums[c * slots + k]. A fixed-size
+  // buffer on the stack (orders <= kMaxEnvOrder, channels <= 4) keeps this allocation-free.
+  // Summed in runs of kRun texels first: the rounding error of a row's sum grows with
+  // kRun + W / kRun rather than W (a uniform 4096-wide row stays within a few ulps).
+  constexpr int kRun = 16;
+  std::array<double, 4 * (2 * kMaxEnvOrder - 1)> sums, run;
+  const int used = channels * slots;
+  const int y_end = std::min(height_, (block + 1) * kRowsPerBlock);
+  for (int y = block * kRowsPerBlock; y < y_end; ++y) {
+    std::fill(sums.begin(), sums.begin() + used, 0.0);
+    const float* row = image.row(y);
+    for (int x0 = 0; x0 < width_; x0 += kRun) {
+      std::fill(run.begin(), run.begin() + used, 0.0);
+      const int x1 = std::min(width_, x0 + kRun);
+      for (int x = x0; x < x1; ++x) {
+        const double* w = &column_weights_[static_cast<std::size_t>(x) * slots];
+        for (int c = 0; c < channels; ++c) {
+          const double v = row[static_cast<std::size_t>(x) * channels + c];
+          double* s = &run[static_cast<std::size_t>(c) * slots];
+          for (int k = 0; k < slots; ++k) s[k] += w[k] * v;
+        }
+      }
+      for (int k = 0; k < used; ++k) sums[k] += run[k];
+    }
+    // A non-finite texel makes its row's sums non-finite (floats cannot overflow a
+    // double sum), so the texels are only searched when one is there.
+    bool finite = true;
+    for (int c = 0; c < channels; ++c) finite = finite && std::isfinite(sums[static_cast<std::size_t>(c) * slots]);
+    if (!finite) {
+      for (int x = 0; x < width_; ++x)
+        for (int c = 0; c < channels; ++c)
+          if (const float v = row[static_cast<std::size_t>(x) * channels + c]; !std::isfinite(v))
+            return non_finite_error("", x, y, c, v);
+    }
+    const double* t = &row_integrals_[static_cast<std::size_t>(y) * legendre_count(order_)];
+    for (int l = 0; l < order_; ++l) {
+      for (int m = -l; m <= l; ++m) {
+        const double tl = t[legendre_index(l, std::abs(m))];
+        const int slot = azimuth_slot(m);
+        double* out = &partial[static_cast<std::size_t>(sh_index(l, m)) * channels];
+        for (int c = 0; c < channels; ++c) out[c] += tl * sums[static_cast<std::size_t>(c) * slots + slot];
+      }
+    }
+  }
+  return Ok{};
+}
+
+namespace {
+
+bool valid_view(const FloatImageView& v, int width, int height) {
+  return v.texels && v.width == width && v.height == height && v.channels >= 1 && v.channels <= 4 &&
+         v.stride() >= static_cast<std::size_t>(width) * v.channels;
+}
+
+// Runs every block in order, each into its own zeroed partial, and adds the partials
+// in block order: the same sums a parallel caller gets (docs/lighting.md).
+template <class Projector, class Image>
+Result<EnvCoefficients> project_in_order(const Projector& p, const Image& image, int channels) {
+  EnvCoefficients out{p.order(), channels, std::vector<double>(p.partial_size(channels), 0.0)};
+  std::vector<double> partial(out.coefficients.size());
+  for (int b = 0; b < p.block_count(); ++b) {
+    std::fill(partial.begin(), partial.end(), 0.0);
+    if (Result<Ok> r = p.accumulate_block(image, b, partial); !r) return r.error();
+    for (std::size_t i = 0; i < partial.size(); ++i) out.coefficients[i] += partial[i];
+  }
+  return out;
+}
+
+}  // namespace
+
+Result<EnvCoefficients> project_equirect(const FloatImageView& image, int order) {
+  Result<EquirectProjector> p = EquirectProjector::create(image.width, image.height, order);
+  if (!p) return p.error();
+  if (!valid_view(image, image.width, image.height))
+    return Error{"the image view needs texels, 1..4 channels and a row stride of at least width * channels"};
+  return project_in_order(p.value(), image, image.channels);
+}
+
+// ---------------------------------------------------------------------------
+// Cubemaps
+
+int cubemap_nodes_per_side(int face_size, int order) {
+  // One texel is [-1, 1]^2 in its own coordinates, 1/R of the face's half-width per
+  // unit. The integrand y_i(w(s, t)) / (1 + s^2 + t^2)^(3/2) is analytic away from
+  // 1 + s^2 + t^2 = 0, at least 1 away from the real face in s or t: R in texel units.
+  // A Gauss rule of K nodes errs by at most 64/15 M rho^(-2K) / (rho^2 - 1) for an
+  // integrand bounded by M on the Bernstein ellipse rho (semi-minor axis b = beta R);
+  // there a degree-l harmonic grows by at most (1 + beta)^l / (1 - beta^2)^((l+3)/2).
+  // The smallest K that one of a few ellipses bounds below 1e-13 (two dimensions: twice).
+  const double degree = order - 1;
+  for (int k = 1; k < 64; ++k) {
+    for (double beta : {0.01, 0.02, 0.05, 0.1, 0.2, 0.3, 0.45}) {
+      const double b = beta * face_size;
+      const double rho = b + std::sqrt(b * b + 1);
+      const double growth = std::pow(1 + beta, degree) / std::pow(1 - beta * beta, (degree + 3) / 2);
+      const double bound = 2 * 64.0 / 15 * growth * std::pow(rho, -2.0 * k) / (rho * rho - 1);
+      if (bound < 1e-13) return k;
+    }
+  }
+  return 64;
+}
+
+Result<CubemapProjector> CubemapProjector::create(int face_size, int order, bool mirror_x) {
+  if (order < 1 || order > kMaxEnvOrder) return order_error(order);
+  if (face_size < 1) return Error{"a cubemap face must have at least one texel"};
+  CubemapProjector p;
+  p.size_ = face_size;
+  p.order_ = order;
+  p.mirror_x_ = mirror_x;
+  p.nodes_ = cubemap_nodes_per_side(face_size, order);
+  const GaussLegendre g = gauss_legendre(p.nodes_);
+  p.nodes_unit_ = g.nodes;
+  p.weights_unit_ = g.weights;
+  return p;
+}
+
+int CubemapProjector::block_count() const { return 6 * ((size_ + kRowsPerBlock - 1) / kRowsPerBlock); }
+
+std::size_t CubemapProjector::partial_size(int channels) const {
+  return static_cast<std::size_t>(sh_count(order_)) * channels;
+}
+
+Eigen::Vector3d CubemapProjector::direction(CubeFace face, double s, double t) const {
+  Eigen::Vector3d cube = Eigen::Vector3d::Zero();
+  switch (face) {
+    case CubeFace::px: cube = {1, -t, -s}; break;
+    case CubeFace::nx: cube = {-1, -t, s}; break;
+    case CubeFace::py: cube = {s, 1, t}; break;
+    case CubeFace::ny: cube = {s, -1, -t}; break;
+    case CubeFace::pz: cube = {s, -t, 1}; break;
+    case CubeFace::nz: cube = {-s, -t, -1}; break;
+  }
+  if (mirror_x_) cube.x() = -cube.x();
+  return Eigen::Vector3d(cube.x(), -cube.z(), cube.y()).normalized();
+}
+
+Result<Ok> CubemapProjector::accumulate_block(std::span<const FloatImageView, 6> faces, int block,
+                                              std::span<double> partial) const {
+  const int blocks_per_face = (size_ + kRowsPerBlock - 1) / kRowsPerBlock;
+  const int f = block / blocks_per_face;
+  const FloatImageView& image = faces[static_cast<std::size_t>(f)];
+  const CubeFace face = static_cast<CubeFace>(f);
+  const int channels = image.channels;
+  const int n = sh_count(order_);
+  static constexpr const char* kFaceNames[6] = {"+X face ", "-X face ", "+Y face ", "-Y face ", "+Z face ", "-Z face "};
+  // A texel's nodes are summed row of nodes by row of nodes (fewer roundings per sum).
+  std::array<double, kMaxEnvOrder * kMaxEnvOrder> y_values, texel_integral, node_row;
+  const double half = 1.0 / size_;  // half a texel's width in face coordinates
+  const int y_begin = (block % blocks_per_face) * kRowsPerBlock;
+  const int y_end = std::min(size_, y_begin + kRowsPerBlock);
+  for (int y = y_begin; y < y_end; ++y) {
+    const float* row = image.row(y);
+    const double t_centre = -1 + (2 * y + 1) * half;
+    for (int x = 0; x < size_; ++x) {
+      const float* texel = row + static_cast<std::size_t>(x) * channels;
+      for (int c = 0; c < channels; ++c)
+        if (!std::isfinite(texel[c])) return non_finite_error(kFaceNames[f], x, y, c, texel[c]);
+      const double s_centre = -1 + (2 * x + 1) * half;
+      std::fill(texel_integral.begin(), texel_integral.begin() + n, 0.0);
+      for (int j = 0; j < nodes_; ++j) {
+        const double t = t_centre + half * nodes_unit_[j];
+        std::fill(node_row.begin(), node_row.begin() + n, 0.0);
+        for (int i = 0; i < nodes_; ++i) {
+          const double s = s_centre + half * nodes_unit_[i];
+          const double r2 = 1 + s * s + t * t;
+          // ds dt / r^3 is the solid angle of the face element at (s, t).
+          const double w = weights_unit_[i] * weights_unit_[j] * half * half / (r2 * std::sqrt(r2));
+          eval_sh<double>(order_, direction(face, s, t), std::span<double>(y_values.data(), n));
+          for (int k = 0; k < n; ++k) node_row[k] += w * y_values[k];
+        }
+        for (int k = 0; k < n; ++k) texel_integral[k] += node_row[k];
+      }
+      for (int k = 0; k < n; ++k)
+        for (int c = 0; c < channels; ++c) partial[static_cast<std::size_t>(k) * channels + c] += texel_integral[k] * texel[c];
+    }
+  }
+  return Ok{};
+}
+
+Result<EnvCoefficients> project_cubemap(std::span<const FloatImageView, 6> faces, int order, bool mirror_x) {
+  const int size = faces[0].width;
+  for (const FloatImageView& f : faces) {
+    if (!valid_view(f, size, size) || f.channels != faces[0].channels)
+      return Error{"the six cube faces must be square, of one size and one channel count (1..4)"};
+  }
+  Result<CubemapProjector> p = CubemapProjector::create(size, order, mirror_x);
+  if (!p) return p.error();
+  return project_in_order(p.value(), faces, faces[0].channels);
+}
+
+}  // namespace shtool
