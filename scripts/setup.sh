@@ -11,6 +11,7 @@ packages=(
   g++ cmake make pkg-config
   libeigen3-dev libfftw3-dev nlohmann-json3-dev          # runtime library
   libcli11-dev libnlopt-cxx-dev libembree-dev libtinyobjloader-dev  # offline tool
+  libopenexr-dev libstb-dev                              # offline tool: images
   libgtest-dev libbenchmark-dev                          # tests and benchmarks
   clang libclang-rt-14-dev                               # fuzz targets (libFuzzer), sanitizers
   python3 python3-jsonschema python3-numpy               # schema checks, numpy reader test

@@ -66,5 +66,7 @@ void setup_rotate(CLI::App& app);
 void setup_product(CLI::App& app);
 void setup_fit_zh(CLI::App& app);
 void setup_search_lobes(CLI::App& app);
+void setup_project_env(CLI::App& app);
+void setup_light(CLI::App& app);
 
 }  // namespace shtool::cli

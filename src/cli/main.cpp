@@ -12,7 +12,7 @@
 
 int main(int argc, char** argv) {
   CLI::App app{"shtool: spherical-harmonics precomputation (lobe search, ZH fitting, tensors) "
-               "and checks of the runtime library"};
+               "lighting projection, and checks of the runtime library"};
   app.set_version_flag("--version", std::string("shtool ") + shtool::kVersion);
   // 0..1 rather than exactly 1, so that an unknown subcommand is reported by name.
   app.require_subcommand(0, 1);
@@ -23,6 +23,8 @@ int main(int argc, char** argv) {
   shtool::cli::setup_product(app);
   shtool::cli::setup_fit_zh(app);
   shtool::cli::setup_search_lobes(app);
+  shtool::cli::setup_project_env(app);
+  shtool::cli::setup_light(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

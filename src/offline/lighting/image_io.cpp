@@ -1,0 +1,254 @@
+#include "lighting/image_io.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstring>
+#include <exception>
+#include <memory>
+
+#include <stb_image.h>
+#include <stb_image_write.h>
+
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfIO.h>
+#include <ImfInputFile.h>
+#include <ImfOutputFile.h>
+
+#include "common/input_error.h"
+#include "common/input_file.h"
+
+namespace shtool::lighting {
+namespace {
+
+enum class Format { exr, hdr, png, jpeg, unknown };
+
+Format sniff(std::string_view b) {
+  auto starts = [&](std::string_view magic) { return b.substr(0, magic.size()) == magic; };
+  if (starts(std::string_view("\x76\x2f\x31\x01", 4))) return Format::exr;
+  if (starts("#?RADIANCE") || starts("#?RGBE")) return Format::hdr;
+  if (starts("\x89PNG\r\n\x1a\n")) return Format::png;
+  if (starts("\xff\xd8\xff")) return Format::jpeg;
+  return Format::unknown;
+}
+
+const char* format_name(Format f) {
+  switch (f) {
+    case Format::exr: return "OpenEXR";
+    case Format::hdr: return "Radiance HDR";
+    case Format::png: return "PNG";
+    case Format::jpeg: return "JPEG";
+    case Format::unknown: break;
+  }
+  return "unknown";
+}
+
+Format format_of_extension(const std::filesystem::path& p) {
+  std::string e = p.extension().string();
+  std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (e == ".exr") return Format::exr;
+  if (e == ".hdr" || e == ".rgbe" || e == ".pic") return Format::hdr;
+  if (e == ".png") return Format::png;
+  if (e == ".jpg" || e == ".jpeg") return Format::jpeg;
+  return Format::unknown;
+}
+
+[[noreturn]] void fail(const std::filesystem::path& name, const std::string& what) {
+  throw InputError(name.string() + ": " + what);
+}
+
+void check_size(const std::filesystem::path& name, std::int64_t w, std::int64_t h) {
+  if (w < 1 || h < 1) fail(name, "the image is empty");
+  if (w * h > kMaxImageTexels)
+    fail(name, std::to_string(w) + " x " + std::to_string(h) + " texels is more than the " +
+                   std::to_string(kMaxImageTexels) + " accepted");
+}
+
+// ---- OpenEXR from and to memory
+class MemoryIStream : public Imf::IStream {
+ public:
+  MemoryIStream(std::string_view bytes, const std::string& name) : Imf::IStream(name.c_str()), bytes_(bytes) {}
+  bool read(char c[], int n) override {
+    if (n < 0 || pos_ + static_cast<std::uint64_t>(n) > bytes_.size())
+      throw std::runtime_error("unexpected end of file");
+    std::memcpy(c, bytes_.data() + pos_, static_cast<std::size_t>(n));
+    pos_ += static_cast<std::uint64_t>(n);
+    return pos_ < bytes_.size();
+  }
+  std::uint64_t tellg() override { return pos_; }
+  void seekg(std::uint64_t pos) override { pos_ = pos; }
+
+ private:
+  std::string_view bytes_;
+  std::uint64_t pos_ = 0;
+};
+
+class MemoryOStream : public Imf::OStream {
+ public:
+  MemoryOStream() : Imf::OStream("memory") {}
+  void write(const char c[], int n) override {
+    if (pos_ + n > data_.size()) data_.resize(pos_ + n);
+    std::memcpy(data_.data() + pos_, c, static_cast<std::size_t>(n));
+    pos_ += static_cast<std::size_t>(n);
+  }
+  std::uint64_t tellp() override { return pos_; }
+  void seekp(std::uint64_t pos) override { pos_ = static_cast<std::size_t>(pos); }
+  std::string& data() { return data_; }
+
+ private:
+  std::string data_;
+  std::size_t pos_ = 0;
+};
+
+Image decode_exr(std::string_view bytes, const std::filesystem::path& name) {
+  try {
+    MemoryIStream stream(bytes, name.string());
+    Imf::InputFile file(stream);
+    const Imf::Header& header = file.header();
+    const Imath::Box2i data = header.dataWindow(), display = header.displayWindow();
+    if (data != display)
+      fail(name, "the data window (" + std::to_string(data.min.x) + ", " + std::to_string(data.min.y) + ")-(" +
+                     std::to_string(data.max.x) + ", " + std::to_string(data.max.y) +
+                     ") differs from the display window (" + std::to_string(display.min.x) + ", " +
+                     std::to_string(display.min.y) + ")-(" + std::to_string(display.max.x) + ", " +
+                     std::to_string(display.max.y) + "): crop or pad the image to its display window first");
+    const std::int64_t w = std::int64_t(data.max.x) - data.min.x + 1, h = std::int64_t(data.max.y) - data.min.y + 1;
+    check_size(name, w, h);
+    const Imf::ChannelList& list = header.channels();
+    std::array<const char*, 3> names{"R", "G", "B"};
+    const bool rgb = list.findChannel("R") && list.findChannel("G") && list.findChannel("B");
+    if (!rgb) {
+      if (!list.findChannel("Y")) {
+        std::string found;
+        for (auto c = list.begin(); c != list.end(); ++c) found += std::string(found.empty() ? "" : ", ") + c.name();
+        fail(name, "no R, G, B or Y channels (found: " + (found.empty() ? std::string("none") : found) + ")");
+      }
+      names = {"Y", "Y", "Y"};
+    }
+    for (const char* c : names) {
+      const Imf::Channel* ch = list.findChannel(c);
+      if (ch->xSampling != 1 || ch->ySampling != 1) fail(name, std::string("channel ") + c + " is subsampled");
+    }
+    Image img;
+    img.width = static_cast<int>(w);
+    img.height = static_cast<int>(h);
+    img.texels.assign(static_cast<std::size_t>(w * h * 3), 0.0f);
+    Imf::FrameBuffer fb;
+    for (int c = 0; c < 3; ++c)
+      fb.insert(names[c], Imf::Slice::Make(Imf::FLOAT, img.texels.data() + c, data, 3 * sizeof(float),
+                                           static_cast<std::size_t>(w) * 3 * sizeof(float)));
+    file.setFrameBuffer(fb);
+    file.readPixels(data.min.y, data.max.y);
+    return img;
+  } catch (const InputError&) {
+    throw;
+  } catch (const std::exception& e) {
+    fail(name, std::string("OpenEXR: ") + e.what());
+  }
+}
+
+Image decode_stb(std::string_view bytes, const std::filesystem::path& name, Format format) {
+  const auto* data = reinterpret_cast<const stbi_uc*>(bytes.data());
+  const int size = static_cast<int>(std::min<std::size_t>(bytes.size(), INT32_MAX));
+  int w = 0, h = 0, comp = 0;
+  if (!stbi_info_from_memory(data, size, &w, &h, &comp))
+    fail(name, std::string(format_name(format)) + ": " + stbi_failure_reason());
+  check_size(name, w, h);
+  Image img;
+  img.width = w;
+  img.height = h;
+  img.texels.resize(static_cast<std::size_t>(w) * h * 3);
+  auto take = [&](auto* pixels, auto convert) {
+    if (!pixels) fail(name, std::string(format_name(format)) + ": " + stbi_failure_reason());
+    std::unique_ptr<void, void (*)(void*)> owner(pixels, stbi_image_free);
+    for (std::size_t i = 0; i < img.texels.size(); ++i) img.texels[i] = convert(pixels[i]);
+  };
+  if (format == Format::hdr) {
+    take(stbi_loadf_from_memory(data, size, &w, &h, &comp, 3), [](float v) { return v; });
+  } else if (stbi_is_16_bit_from_memory(data, size)) {
+    take(stbi_load_16_from_memory(data, size, &w, &h, &comp, 3),
+         [](stbi_us v) { return static_cast<float>(srgb_to_linear(v / 65535.0)); });
+  } else {
+    std::array<float, 256> table;
+    for (int v = 0; v < 256; ++v) table[v] = static_cast<float>(srgb_to_linear(v / 255.0));
+    take(stbi_load_from_memory(data, size, &w, &h, &comp, 3), [&](stbi_uc v) { return table[v]; });
+  }
+  return img;
+}
+
+}  // namespace
+
+double srgb_to_linear(double v) { return v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4); }
+double linear_to_srgb(double v) { return v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1 / 2.4) - 0.055; }
+
+Image decode_image(std::string_view bytes, const std::filesystem::path& name) {
+  const Format content = sniff(bytes), extension = format_of_extension(name);
+  if (content == Format::unknown) {
+    if (extension != Format::unknown)
+      fail(name, std::string("not a ") + format_name(extension) + " file (its first bytes are not a " +
+                     format_name(extension) + " signature)");
+    fail(name, "not an image shtool reads (OpenEXR, Radiance .hdr, PNG or JPEG)");
+  }
+  if (extension != Format::unknown && extension != content)
+    fail(name, std::string("the extension says ") + format_name(extension) + " but the content is " +
+                   format_name(content));
+  return content == Format::exr ? decode_exr(bytes, name) : decode_stb(bytes, name, content);
+}
+
+ImageFile read_image(const std::filesystem::path& path, std::string_view what) {
+  const std::string bytes = read_input_file(path, what);
+  ImageFile f;
+  f.image = decode_image(bytes, path);
+  f.crc32 = input_crc32(bytes);
+  return f;
+}
+
+std::string encode_exr(const Image& image) {
+  Imf::Header header(image.width, image.height);
+  header.compression() = Imf::ZIP_COMPRESSION;
+  static constexpr const char* kNames[4] = {"R", "G", "B", "A"};
+  for (int c = 0; c < image.channels; ++c) header.channels().insert(kNames[c], Imf::Channel(Imf::FLOAT));
+  MemoryOStream stream;
+  {
+    Imf::OutputFile file(stream, header);
+    Imf::FrameBuffer fb;
+    const std::size_t xs = image.channels * sizeof(float), ys = xs * image.width;
+    for (int c = 0; c < image.channels; ++c)
+      fb.insert(kNames[c], Imf::Slice(Imf::FLOAT, (char*)(image.texels.data() + c), xs, ys));
+    file.setFrameBuffer(fb);
+    file.writePixels(image.height);
+  }
+  return std::move(stream.data());
+}
+
+std::string encode_png(const Image& image, double exposure) {
+  const double scale = std::exp2(exposure);
+  std::vector<unsigned char> bytes(image.texels.size());
+  for (std::size_t i = 0; i < bytes.size(); ++i) {
+    const bool alpha = image.channels == 4 && i % 4 == 3;
+    const double v = std::max(0.0, static_cast<double>(image.texels[i]));
+    const double mapped = alpha ? std::min(v, 1.0) : linear_to_srgb(v * scale / (1 + v * scale));
+    bytes[i] = static_cast<unsigned char>(std::lround(255 * mapped));
+  }
+  std::string out;
+  auto append = [](void* context, void* data, int size) {
+    static_cast<std::string*>(context)->append(static_cast<const char*>(data), static_cast<std::size_t>(size));
+  };
+  if (!stbi_write_png_to_func(append, &out, image.width, image.height, image.channels, bytes.data(),
+                              image.width * image.channels))
+    throw InputError("PNG encoding failed");
+  return out;
+}
+
+std::string encode_image_for(const std::filesystem::path& path, const Image& image, std::string_view what) {
+  switch (format_of_extension(path)) {
+    case Format::exr: return encode_exr(image);
+    case Format::png: return encode_png(image);
+    default: break;
+  }
+  throw InputError(std::string(what) + " '" + path.string() + "': write .exr (linear float) or .png (tone-mapped)");
+}
+
+}  // namespace shtool::lighting

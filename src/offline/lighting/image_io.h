@@ -1,0 +1,55 @@
+// Image files in and out for the lighting jobs: OpenEXR (half or float, any compression
+// the library reads), Radiance .hdr (RGBE, run-length or flat) and 8/16-bit PNG and JPEG
+// through stb_image, decoded with the exact IEC 61966-2-1 sRGB curve. Images are linear
+// float RGB, rows top first. Every file is read through read_input_file and decoded from
+// memory, so that the decoders see exactly the bytes that were checked and hashed.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "shtool/env_projection.h"
+
+namespace shtool::lighting {
+
+struct Image {
+  int width = 0;
+  int height = 0;
+  int channels = 3;
+  std::vector<float> texels;  // width * height * channels, rows top first
+
+  FloatImageView view() const { return {texels.data(), width, height, channels}; }
+};
+
+// Largest image accepted (texels): a bound checked before anything is allocated.
+inline constexpr std::int64_t kMaxImageTexels = std::int64_t(1) << 28;
+
+// The format is recognised by the content (magic numbers), not the extension; a file
+// whose content does not match its extension (.exr, .hdr, .png, .jpg/.jpeg) is refused
+// naming both. Single-channel files become grey RGB; alpha is dropped. Throws InputError
+// naming `name`.
+Image decode_image(std::string_view bytes, const std::filesystem::path& name);
+
+// The file's bytes (read_input_file, `what` naming the option) and their CRC-32.
+struct ImageFile {
+  Image image;
+  std::uint32_t crc32 = 0;
+};
+ImageFile read_image(const std::filesystem::path& path, std::string_view what);
+
+// Float RGB OpenEXR (ZIP compression); alpha written when the image has 4 channels.
+std::string encode_exr(const Image& image);
+// 8-bit PNG of the tone-mapped image: x -> x / (1 + x) per channel (Reinhard) after
+// scaling by 2^exposure, then the sRGB transfer curve; alpha (4 channels) kept linear.
+std::string encode_png(const Image& image, double exposure = 0);
+// By the extension of `path`: .exr or .png (InputError otherwise, naming `what`).
+std::string encode_image_for(const std::filesystem::path& path, const Image& image, std::string_view what);
+
+// The IEC 61966-2-1 curves.
+double srgb_to_linear(double v);
+double linear_to_srgb(double v);
+
+}  // namespace shtool::lighting

@@ -1,0 +1,35 @@
+// The lighting JSON and table that `project-env` and `light` write, and that later
+// commands (render, export-light) read (docs/lighting.md):
+//   {"order": N, "quantity": "radiance"|"irradiance", "channels": ["r","g","b"],
+//    "window": {...}, "coefficients": [[r, g, b], ... N^2 rows in index order]}
+// The table (kind "env-sh", schemas/env-sh.schema.json) holds the same coefficients as
+// one f64 array [N^2, 3] with the window and quantity in its meta.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "shtool/table.h"
+
+namespace shtool::lighting {
+
+enum class Quantity { radiance, irradiance };
+const char* quantity_name(Quantity q);
+
+struct Lighting {
+  int order = 0;
+  Quantity quantity = Quantity::radiance;
+  std::vector<double> coefficients;  // [i * 3 + c]
+  nlohmann::json window = {{"type", "none"}};
+};
+
+std::string lighting_json(const Lighting& lighting);
+Table lighting_table(const Lighting& lighting, const nlohmann::json& generator);
+
+// Reads the lighting JSON (any order, RGB): InputError naming the file on anything else.
+Lighting read_lighting_json(const std::filesystem::path& path, std::string_view what);
+
+}  // namespace shtool::lighting

@@ -1,0 +1,298 @@
+#include "lighting/project_env_job.h"
+
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <numbers>
+
+#include "common/atomic_file.h"
+#include "common/generator_record.h"
+#include "common/input_error.h"
+#include "common/parallel_for.h"
+#include "common/table_writer.h"
+#include "shtool/env_projection.h"
+#include "shtool/irradiance.h"
+#include "shtool/orthogonal_map.h"
+#include "shtool/sh.h"
+
+namespace shtool::lighting {
+namespace {
+
+template <class E>
+std::string name_of(E value, const std::vector<std::pair<std::string, E>>& names) {
+  for (const auto& [n, v] : names)
+    if (v == value) return n;
+  return "?";
+}
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// The direction an equirect preset gives a texel, as Q times shtool's own direction of
+// that texel (docs/lighting.md, "Equirect mappings"):
+//   three     u = atan2(z, x) / 2 pi + 1/2, v = asin(y) / pi + 1/2 in three's y-up frame
+//             (equirectUv in three.js' common.glsl.js): shtool's mapping exactly;
+//   filament  cmgen's default: CubemapUtils::equirectangularToCubemap (image centre
+//             along +z of the y-up frame), then mirrorCubemap (x negated): a quarter
+//             turn, w = (s_y, -s_x, s_z);
+//   google    google/spherical-harmonics' ImageXToPhi / ImageYToTheta, z up, the
+//             azimuth growing to the right: a mirror, w = (-s_x, s_y, s_z).
+Eigen::Matrix3d preset_map(EquirectPreset preset) {
+  Eigen::Matrix3d q = Eigen::Matrix3d::Identity();
+  if (preset == EquirectPreset::filament) q << 0, 1, 0, -1, 0, 0, 0, 0, 1;
+  if (preset == EquirectPreset::google) q.diagonal() << -1, 1, 1;
+  return q;
+}
+
+// Blocks of a projector in parallel into their own partials, added in block order: the
+// bytes do not depend on the thread count.
+template <class Projector, class Images>
+std::vector<double> project_parallel(const Projector& p, const Images& images, int channels, int threads) {
+  std::vector<std::vector<double>> partials(p.block_count(), std::vector<double>(p.partial_size(channels), 0.0));
+  parallel_for(partials.size(), threads, [&](std::size_t b) {
+    const Result<Ok> r = p.accumulate_block(images, static_cast<int>(b), partials[b]);
+    if (!r) throw InputError(r.error().message);
+  });
+  std::vector<double> sum(p.partial_size(channels), 0.0);
+  for (const std::vector<double>& part : partials)
+    for (std::size_t i = 0; i < sum.size(); ++i) sum[i] += part[i];
+  return sum;
+}
+
+// A cross image cut into six faces (CubeFace order). Both layouts put +Y, -X +Z +X, -Y
+// in the same places; -Z sits right of +X (horizontal, 4:3) or below -Y turned by 180
+// degrees (vertical, 3:4): cmft's imageCubemapFromCross and filament's
+// CubemapUtils::crossToCubemap agree on it.
+std::array<Image, 6> faces_from_cross(const Image& cross, const std::filesystem::path& name) {
+  const bool horizontal = cross.width * 3 == cross.height * 4;
+  const bool vertical = cross.width * 4 == cross.height * 3;
+  if (!horizontal && !vertical)
+    throw InputError(name.string() + ": a cross must be 4:3 (horizontal) or 3:4 (vertical), got " +
+                     std::to_string(cross.width) + " x " + std::to_string(cross.height));
+  const int size = horizontal ? cross.width / 4 : cross.width / 3;
+  // (column, row) of each face in face units, CubeFace order +X -X +Y -Y +Z -Z.
+  const std::array<std::array<int, 2>, 6> at = {
+      {{2, 1}, {0, 1}, {1, 0}, {1, 2}, {1, 1}, horizontal ? std::array<int, 2>{3, 1} : std::array<int, 2>{1, 3}}};
+  std::array<Image, 6> faces;
+  for (int f = 0; f < 6; ++f) {
+    Image& face = faces[f];
+    face.width = face.height = size;
+    face.channels = cross.channels;
+    face.texels.resize(static_cast<std::size_t>(size) * size * cross.channels);
+    const bool turned = vertical && f == static_cast<int>(CubeFace::nz);
+    for (int y = 0; y < size; ++y)
+      for (int x = 0; x < size; ++x) {
+        const int sx = turned ? size - 1 - x : x, sy = turned ? size - 1 - y : y;
+        const std::size_t src =
+            (static_cast<std::size_t>(at[f][1] * size + sy) * cross.width + at[f][0] * size + sx) * cross.channels;
+        std::copy_n(cross.texels.begin() + src, cross.channels,
+                    face.texels.begin() + (static_cast<std::size_t>(y) * size + x) * cross.channels);
+      }
+  }
+  return faces;
+}
+
+constexpr std::array<const char*, 6> kFaceSuffix = {"px", "nx", "py", "ny", "pz", "nz"};
+
+}  // namespace
+
+const std::vector<std::pair<std::string, Layout>>& layout_names() {
+  static const std::vector<std::pair<std::string, Layout>> names = {
+      {"auto", Layout::automatic}, {"equirect", Layout::equirect}, {"cross", Layout::cross}, {"faces", Layout::faces}};
+  return names;
+}
+
+const std::vector<std::pair<std::string, EquirectPreset>>& equirect_preset_names() {
+  static const std::vector<std::pair<std::string, EquirectPreset>> names = {{"shtool", EquirectPreset::shtool},
+                                                                            {"three", EquirectPreset::three},
+                                                                            {"filament", EquirectPreset::filament},
+                                                                            {"google", EquirectPreset::google}};
+  return names;
+}
+
+const std::vector<std::pair<std::string, WindowChoice>>& window_names() {
+  static const std::vector<std::pair<std::string, WindowChoice>> names = {{"none", WindowChoice::none},
+                                                                          {"hann", WindowChoice::hann},
+                                                                          {"lanczos", WindowChoice::lanczos},
+                                                                          {"sinc4", WindowChoice::sinc4},
+                                                                          {"auto", WindowChoice::automatic}};
+  return names;
+}
+
+Image render_equirect(const Lighting& lighting, int width, int height, int threads) {
+  Image img;
+  img.width = width;
+  img.height = height;
+  img.texels.resize(static_cast<std::size_t>(width) * height * 3);
+  const int n = sh_count(lighting.order);
+  parallel_for(static_cast<std::size_t>(height), threads, [&](std::size_t y) {
+    std::vector<double> basis(n);
+    for (int x = 0; x < width; ++x) {
+      const double t = std::numbers::pi * (y + 0.5) / height;
+      const double p = std::numbers::pi - 2 * std::numbers::pi * (x + 0.5) / width;
+      eval_sh<double>(lighting.order, direction_from_angles(t, p), basis);
+      for (int c = 0; c < 3; ++c) {
+        double v = 0;
+        for (int i = 0; i < n; ++i) v += lighting.coefficients[3 * i + c] * basis[i];
+        img.texels[(y * width + x) * 3 + c] = static_cast<float>(v);
+      }
+    }
+  });
+  return img;
+}
+
+ProjectEnvReport run_project_env(const ProjectEnvRequest& r) {
+  if (r.order < 1 || r.order > kMaxEnvOrder)
+    throw InputError("--order " + std::to_string(r.order) + " is outside 1.." + std::to_string(kMaxEnvOrder));
+  if (r.json.empty()) throw InputError("--json is required");
+  if (r.cutoff && !(*r.cutoff > 0 && std::isfinite(*r.cutoff)))
+    throw InputError("--cutoff must be a positive number");
+  if (r.cutoff && (r.window == WindowChoice::none || r.window == WindowChoice::automatic))
+    throw InputError("--cutoff applies to --window hann, lanczos or sinc4");
+  const bool pattern = r.image.string().find("%s") != std::string::npos;
+  if (r.layout == Layout::faces && !pattern)
+    throw InputError("--layout faces needs an image pattern with %s (replaced by px nx py ny pz nz)");
+  const Layout layout_choice = r.layout == Layout::automatic && pattern ? Layout::faces : r.layout;
+  if (r.preset != EquirectPreset::shtool && (layout_choice == Layout::cross || layout_choice == Layout::faces))
+    throw InputError("--equirect-preset applies to equirect images");
+  check_output_path(r.json, "--json");
+  if (!pattern) {
+    check_not_an_input(r.json, "--json", r.image);
+    if (!r.out.empty()) check_not_an_input(r.out, "--out", r.image);
+    if (!r.render_back.empty()) check_not_an_input(r.render_back, "--render-back", r.image);
+  }
+  if (!r.out.empty()) check_output_path(r.out, "--out");
+  if (!r.render_back.empty()) {
+    check_output_path(r.render_back, "--render-back");
+    encode_image_for(r.render_back, Image{1, 1, 3, {0, 0, 0}}, "--render-back");  // the extension, early
+  }
+  const int threads = resolve_threads(r.threads);
+  ProjectEnvReport report;
+  report.threads = threads;
+
+  // ---- read
+  const auto t0 = std::chrono::steady_clock::now();
+  nlohmann::json inputs;
+  std::vector<Image> faces;
+  Image equirect;
+  Layout layout = layout_choice;
+  if (layout == Layout::faces) {
+    std::string text = r.image.string();
+    const std::size_t at = text.find("%s");
+    inputs = nlohmann::json::array();
+    for (const char* suffix : kFaceSuffix) {
+      const std::filesystem::path path = text.substr(0, at) + suffix + text.substr(at + 2);
+      ImageFile f = read_image(path, "image");
+      inputs.push_back({{"image", path.filename().string()}, {"input_crc32", f.crc32}});
+      faces.push_back(std::move(f.image));
+    }
+    for (const Image& f : faces)
+      if (f.width != faces[0].width || f.height != faces[0].height || f.width != f.height)
+        throw InputError("the six faces of '" + text + "' must be square and of one size (" +
+                         std::to_string(faces[0].width) + " x " + std::to_string(faces[0].height) + " and " +
+                         std::to_string(f.width) + " x " + std::to_string(f.height) + " given)");
+    report.layout = "faces " + std::to_string(faces[0].width) + " x " + std::to_string(faces[0].width);
+  } else {
+    ImageFile f = read_image(r.image, "image");
+    inputs = {{"image", r.image.filename().string()}, {"input_crc32", f.crc32}};
+    const Image& img = f.image;
+    if (layout == Layout::automatic) {
+      if (img.width == 2 * img.height) layout = Layout::equirect;
+      else if (img.width * 3 == img.height * 4 || img.width * 4 == img.height * 3) layout = Layout::cross;
+      else
+        throw InputError(r.image.string() + ": " + std::to_string(img.width) + " x " + std::to_string(img.height) +
+                         " is neither an equirect (2:1) nor a cross (4:3 or 3:4); --layout faces reads six files");
+    }
+    if (layout == Layout::equirect) {
+      if (img.width != 2 * img.height)
+        throw InputError(r.image.string() + ": an equirect image must be 2:1, got " + std::to_string(img.width) +
+                         " x " + std::to_string(img.height));
+      equirect = std::move(f.image);
+      report.layout = "equirect " + std::to_string(equirect.width) + " x " + std::to_string(equirect.height);
+    } else {
+      const std::array<Image, 6> cut = faces_from_cross(img, r.image);
+      faces.assign(cut.begin(), cut.end());
+      report.layout = std::string(img.width > img.height ? "horizontal" : "vertical") + " cross, faces " +
+                      std::to_string(faces[0].width) + " x " + std::to_string(faces[0].width);
+    }
+  }
+  report.read_seconds = seconds_since(t0);
+
+  // ---- project
+  const auto t1 = std::chrono::steady_clock::now();
+  Lighting& out = report.lighting;
+  out.order = r.order;
+  out.quantity = r.quantity;
+  auto with_name = [&](const std::string& message) { return r.image.string() + ": " + message; };
+  try {
+    if (layout == Layout::equirect) {
+      Result<EquirectProjector> p = EquirectProjector::create(equirect.width, equirect.height, r.order);
+      if (!p) throw InputError(p.error().message);
+      out.coefficients = project_parallel(p.value(), equirect.view(), 3, threads);
+      if (r.preset != EquirectPreset::shtool) {
+        const Result<Ok> m = apply_orthogonal_map(preset_map(r.preset), 3, out.coefficients);
+        if (!m) throw InputError(m.error().message);
+      }
+    } else {
+      Result<CubemapProjector> p = CubemapProjector::create(faces[0].width, r.order, r.mirror_x);
+      if (!p) throw InputError(p.error().message);
+      std::array<FloatImageView, 6> views;
+      for (int f = 0; f < 6; ++f) views[f] = faces[f].view();
+      out.coefficients = project_parallel(p.value(), std::span<const FloatImageView, 6>(views), 3, threads);
+    }
+  } catch (const InputError& e) {
+    throw InputError(with_name(e.what()));
+  }
+
+  // ---- window, then quantity (both zonal: they commute)
+  std::vector<double> factors(r.order, 1.0);
+  if (r.window == WindowChoice::automatic) {
+    const Result<AutoWindow> w = choose_auto_window(out.coefficients, 3);
+    if (!w) throw InputError(with_name(w.error().message));
+    factors = w.value().factors;
+    out.window = {{"type", "auto"}, {"shape", "sinc4"}, {"factors", factors}, {"minimum", w.value().minimum}};
+    out.window["cutoff"] = w.value().cutoff ? nlohmann::json(*w.value().cutoff) : nlohmann::json(nullptr);
+  } else if (r.window != WindowChoice::none) {
+    const ShWindow shape = *sh_window_from_name(name_of(r.window, window_names()));
+    const double cutoff = r.cutoff.value_or(r.order);
+    factors = sh_window_factors(shape, cutoff, r.order);
+    out.window = {{"type", sh_window_name(shape)}, {"cutoff", cutoff}, {"factors", factors}};
+  } else {
+    out.window = {{"type", "none"}};
+  }
+  scale_bands(factors, 3, out.coefficients);
+  if (r.quantity == Quantity::irradiance) radiance_to_irradiance(3, out.coefficients);
+  report.project_seconds = seconds_since(t1);
+
+  // ---- outputs, all or none
+  nlohmann::json params = {{"order", r.order},
+                           {"layout", name_of(layout, layout_names())},
+                           {"quantity", quantity_name(r.quantity)},
+                           {"window", name_of(r.window, window_names())}};
+  if (layout == Layout::faces) params["faces"] = inputs;
+  else {
+    params["image"] = inputs["image"];
+    params["input_crc32"] = inputs["input_crc32"];
+  }
+  if (layout == Layout::equirect) params["equirect_preset"] = name_of(r.preset, equirect_preset_names());
+  else params["mirror_x"] = r.mirror_x;
+  if (r.cutoff) params["cutoff"] = *r.cutoff;
+  std::vector<std::string> bytes;
+  bytes.reserve(3);
+  std::vector<OutputFile> outputs;
+  auto add = [&](const std::filesystem::path& path, std::string content) {
+    bytes.push_back(std::move(content));
+    outputs.push_back({path, bytes.back()});
+  };
+  add(r.json, lighting_json(out));
+  if (!r.out.empty()) add(r.out, encode_table(lighting_table(out, generator_record("shtool project-env", params)), r.encoding));
+  if (!r.render_back.empty()) {
+    const int h = std::clamp(layout == Layout::equirect ? equirect.height : 2 * faces[0].width, 16, 1024);
+    add(r.render_back, encode_image_for(r.render_back, render_equirect(out, 2 * h, h, threads), "--render-back"));
+  }
+  write_files_atomically(outputs);
+  return report;
+}
+
+}  // namespace shtool::lighting

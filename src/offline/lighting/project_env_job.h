@@ -1,0 +1,59 @@
+// shtool project-env: an environment image (equirect, cross or six faces; EXR, HDR,
+// PNG, JPEG) projected exactly onto SH, then optionally windowed and turned into
+// irradiance (docs/lighting.md). The CLI (src/cli/project_env.cpp) fills the request.
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "lighting/image_io.h"
+#include "lighting/lighting_output.h"
+#include "shtool/sh_window.h"
+
+namespace shtool::lighting {
+
+enum class Layout { automatic, equirect, cross, faces };
+const std::vector<std::pair<std::string, Layout>>& layout_names();
+
+// Equirect mappings of other tools, each an orthogonal map from shtool's own mapping
+// (docs/lighting.md has the sources).
+enum class EquirectPreset { shtool, three, filament, google };
+const std::vector<std::pair<std::string, EquirectPreset>>& equirect_preset_names();
+
+// "auto" joins the windows of the runtime (sh_window.h).
+enum class WindowChoice { none, hann, lanczos, sinc4, automatic };
+const std::vector<std::pair<std::string, WindowChoice>>& window_names();
+
+struct ProjectEnvRequest {
+  std::filesystem::path image;  // for --layout faces: a pattern with %s (px nx py ny pz nz)
+  int order = 3;
+  Layout layout = Layout::automatic;
+  EquirectPreset preset = EquirectPreset::shtool;
+  bool mirror_x = false;
+  Quantity quantity = Quantity::radiance;
+  WindowChoice window = WindowChoice::none;
+  std::optional<double> cutoff;  // default: the order
+  std::filesystem::path json;
+  std::filesystem::path out;  // optional table
+  TableEncoding encoding = TableEncoding::binary;
+  std::filesystem::path render_back;  // optional equirect image (.exr or .png)
+  int threads = 0;
+};
+
+struct ProjectEnvReport {
+  std::string layout;  // "equirect 4096 x 2048", "cross 3 x 4 faces of 256", ...
+  int threads = 1;
+  double read_seconds = 0, project_seconds = 0;
+  Lighting lighting;
+};
+
+ProjectEnvReport run_project_env(const ProjectEnvRequest& request);
+
+// The render-back: the reconstruction sum_i c_i y_i(w) at the texel centres of a W x H
+// equirect image in shtool's mapping (rows in parallel).
+Image render_equirect(const Lighting& lighting, int width, int height, int threads);
+
+}  // namespace shtool::lighting

@@ -1,0 +1,33 @@
+#include "shtool/orthogonal_map.h"
+
+#include <cmath>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "shtool/rotation.h"
+#include "shtool/sh.h"
+
+namespace shtool {
+
+Result<Ok> apply_orthogonal_map(const Eigen::Matrix3d& q, int channels, std::span<double> coefficients) {
+  if (!q.allFinite() || !(q.transpose() * q).isApprox(Eigen::Matrix3d::Identity(), 1e-9))
+    return Error{"the frame map is not an orthogonal matrix"};
+  const int order = static_cast<int>(std::lround(std::sqrt(static_cast<double>(coefficients.size() / channels))));
+  const bool reflection = q.determinant() < 0;
+  const Eigen::Matrix3d p = reflection ? Eigen::Matrix3d(-q) : q;
+  ShRotation<double> rotation(order, nullptr);
+  rotation.set(p, RotationMethod::reference);
+  std::vector<double> f(sh_count(order)), g(f.size());
+  for (int c = 0; c < channels; ++c) {
+    for (int i = 0; i < sh_count(order); ++i) {
+      const double sign = reflection && sh_band(i) % 2 == 1 ? -1 : 1;
+      f[i] = sign * coefficients[static_cast<std::size_t>(i) * channels + c];
+    }
+    rotation.apply(f, g);
+    for (int i = 0; i < sh_count(order); ++i) coefficients[static_cast<std::size_t>(i) * channels + c] = g[i];
+  }
+  return Ok{};
+}
+
+}  // namespace shtool
