@@ -288,7 +288,7 @@ ProjectEnvReport run_project_env(const ProjectEnvRequest& r) {
   add(r.json, lighting_json(out));
   if (!r.out.empty()) add(r.out, encode_table(lighting_table(out, generator_record("shtool project-env", params)), r.encoding));
   if (!r.render_back.empty()) {
-    const int h = std::clamp(layout == Layout::equirect ? equirect.height : 2 * faces[0].width, 16, 1024);
+    const int h = std::clamp(layout == Layout::equirect ? equirect.height : 2 * faces[0].width, 256, 1024);
     add(r.render_back, encode_image_for(r.render_back, render_equirect(out, 2 * h, h, threads), "--render-back"));
   }
   write_files_atomically(outputs);
