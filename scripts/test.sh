@@ -23,5 +23,6 @@ ctest --test-dir "$build-sanitize" --output-on-failure -j "$jobs" -LE long
 echo "== fuzz targets (clang, libFuzzer)" >&2
 CXX=clang++ cmake -S "$root" -B "$build-fuzz" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSHTOOL_FUZZ=ON \
   -DSHTOOL_BUILD_TESTS=OFF -DSHTOOL_BUILD_BENCH=OFF >/dev/null
-cmake --build "$build-fuzz" -j "$jobs" --target fuzz_table_reader fuzz_table_kinds fuzz_obj fuzz_json_inputs
+cmake --build "$build-fuzz" -j "$jobs" --target fuzz_table_reader fuzz_table_kinds fuzz_obj fuzz_json_inputs \
+  fuzz_images
 ctest --test-dir "$build-fuzz" --output-on-failure -j "$jobs" -L fuzz

@@ -109,6 +109,8 @@ class CubemapProjector {
 
   // Unit direction (shtool's frame) at face coordinates (s, t).
   Eigen::Vector3d direction(CubeFace face, double s, double t) const;
+  // The integrals of every y_i over texel (x, y) of `face`: out[i], i < N^2.
+  void texel_integrals(CubeFace face, int x, int y, std::span<double> out) const;
 
   static constexpr int kRowsPerBlock = 4;
 

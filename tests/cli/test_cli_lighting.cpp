@@ -384,7 +384,19 @@ TEST(CliProjectEnv, BadInputIsAnErrorWithNoOutput) {
   const fs::path png_named_exr = scratch("png.exr");
   write_stb(scratch("real.png"), 8, 4, Texels(8 * 4 * 3, 0.5f));
   fs::copy_file(scratch("real.png"), png_named_exr, fs::copy_options::overwrite_existing);
+  // Truncated files: stb_image would read zeros (HDR) or grey (JPEG) past the end.
+  const Texels grey(16 * 8 * 3, 0.5f);
+  write_stb(scratch("full_rle.hdr"), 16, 8, grey);
+  write_flat_hdr(scratch("full_flat.hdr"), 16, 8, grey);
+  write_stb(scratch("full.jpg"), 16, 8, grey);
+  for (const char* name : {"full_rle.hdr", "full_flat.hdr", "full.jpg"}) {
+    const std::string bytes = read_text(scratch(name));
+    write_bytes(scratch(std::string("cut_") + name), bytes.substr(0, bytes.size() - 20));
+  }
   const std::vector<BadCase> cases = {
+      {"truncated run-length HDR", {scratch("cut_full_rle.hdr").string()}, "data ends before"},
+      {"truncated flat HDR", {scratch("cut_full_flat.hdr").string()}, "data ends before"},
+      {"truncated JPEG", {scratch("cut_full.jpg").string()}, "truncated"},
       {"missing file", {scratch("nope.exr").string()}, "nope.exr"},
       {"text named .exr", {text.string()}, "not a OpenEXR file"},
       {"png named .exr", {png_named_exr.string()}, "content is PNG"},

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <numbers>
 #include <random>
+#include <tuple>
 #include <vector>
 
 #include "shtool/env_projection.h"
@@ -225,6 +226,42 @@ TEST(CubemapProjection, MatchesPerTexelQuadratureOnRandomImages) {
     for (std::size_t i = 0; i < ref.size(); ++i)
       ASSERT_NEAR(r.value().coefficients[i], static_cast<double>(ref[i]), 1e-12 * static_cast<double>(scale))
           << "size " << k.size << " order " << k.order << " coefficient " << i / k.channels;
+  }
+}
+
+TEST(CubemapProjection, SingleTexelsOfLargeFacesAtHighOrders) {
+  // The node count shrinks with the texel; check one texel's integrals against a
+  // long-double rule of twice as many nodes and 8 more at face sizes up to 2048 and
+  // orders up to 32, at the face centre, an edge and a corner (where the texels are
+  // smallest and most skewed).
+  std::vector<Ld> y;
+  for (int size : {1, 7, 64, 512, 2048}) {
+    for (int order : {3, 10, 20, 32}) {
+      if (size < 64 && order > 20) continue;  // the reference alone would take seconds
+      const CubemapProjector p = CubemapProjector::create(size, order).value();
+      const Rule g = rule(std::min(64, 2 * p.nodes_per_side() + 8));
+      const int n = sh_count(order);
+      std::vector<double> got(n);
+      for (const auto& [face, x, ty] : {std::tuple{CubeFace::pz, size / 2, size / 2}, std::tuple{CubeFace::nx, 0, size / 3},
+                                        std::tuple{CubeFace::py, size - 1, size - 1}}) {
+        p.texel_integrals(face, x, ty, got);
+        std::vector<Ld> ref(n, 0);
+        Ld solid = 0;
+        for (std::size_t i = 0; i < g.x.size(); ++i)
+          for (std::size_t j = 0; j < g.x.size(); ++j) {
+            const Ld s = -1 + (2 * x + 1 + g.x[j]) / Ld(size), t = -1 + (2 * ty + 1 + g.x[i]) / Ld(size);
+            const Eigen::Vector3d d = p.direction(face, static_cast<double>(s), static_cast<double>(t));
+            const Ld r = std::sqrt(1 + s * s + t * t);
+            const Ld wgt = g.w[i] * g.w[j] / (Ld(size) * size) / (r * r * r);
+            sh_long(order, d.z(), std::sqrt(Ld(d.x()) * d.x() + Ld(d.y()) * d.y()), std::atan2(Ld(d.y()), Ld(d.x())), y);
+            for (int k = 0; k < n; ++k) ref[k] += wgt * y[k];
+            solid += wgt;
+          }
+        for (int k = 0; k < n; ++k)
+          ASSERT_NEAR(got[k], static_cast<double>(ref[k]), 1e-12 * static_cast<double>(solid))
+              << "size " << size << " order " << order << " nodes " << p.nodes_per_side() << " i " << k;
+      }
+    }
   }
 }
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <exception>
 #include <memory>
@@ -149,7 +150,64 @@ Image decode_exr(std::string_view bytes, const std::filesystem::path& name) {
   }
 }
 
+// stb_image reads zeros past the end of a Radiance file instead of failing, so a
+// truncated file (or a header that claims more rows than the data holds) would decode as
+// black rows. This walks the scanlines as stb's reader does (new-style run-length
+// scanlines for widths 8..32767 that start with 2, 2; otherwise flat RGBE from there on)
+// and refuses data that ends early.
+void check_hdr_complete(std::string_view b, const std::filesystem::path& name) {
+  const std::size_t header_end = b.find("\n\n");
+  if (header_end == std::string_view::npos) fail(name, "Radiance HDR: no end of header");
+  const std::size_t line_end = b.find('\n', header_end + 2);
+  if (line_end == std::string_view::npos) fail(name, "Radiance HDR: no resolution line");
+  long long h = 0, w = 0;
+  char tail = 0;
+  const std::string line(b.substr(header_end + 2, line_end - header_end - 2));
+  if (std::sscanf(line.c_str(), "-Y %lld +X %lld%c", &h, &w, &tail) != 2)
+    fail(name, "Radiance HDR: the resolution line is not '-Y <height> +X <width>'");
+  check_size(name, w, h);
+  std::size_t at = line_end + 1;
+  auto need = [&](std::size_t n) {
+    if (b.size() - at < n)
+      fail(name, "Radiance HDR: the data ends before the " + std::to_string(w) + " x " + std::to_string(h) +
+                     " texels of its header");
+  };
+  for (long long y = 0; y < h; ++y) {
+    need(4);
+    const auto* p = reinterpret_cast<const unsigned char*>(b.data() + at);
+    const bool rle = w >= 8 && w < 32768 && p[0] == 2 && p[1] == 2 && !(p[2] & 0x80);
+    if (!rle) {  // flat from here to the end, as stb reads it
+      need(static_cast<std::size_t>(4 * w * (h - y)));
+      return;
+    }
+    if (((p[2] << 8) | p[3]) != w) fail(name, "Radiance HDR: a scanline's width differs from the header's");
+    at += 4;
+    for (int component = 0; component < 4; ++component) {
+      for (long long x = 0; x < w;) {
+        need(1);
+        const int count = static_cast<unsigned char>(b[at++]);
+        const int run = count > 128 ? count - 128 : count;
+        if (run == 0 || x + run > w) fail(name, "Radiance HDR: a run-length scanline is corrupt");
+        need(count > 128 ? 1 : static_cast<std::size_t>(count));
+        at += count > 128 ? 1 : static_cast<std::size_t>(count);
+        x += run;
+      }
+    }
+  }
+}
+
+// stb_image fills a truncated JPEG with grey instead of failing: a complete one ends
+// with the end-of-image marker.
+void check_jpeg_complete(std::string_view b, const std::filesystem::path& name) {
+  std::size_t end = b.size();
+  while (end > 0 && b[end - 1] == '\0') --end;  // some writers pad
+  if (end < 2 || static_cast<unsigned char>(b[end - 2]) != 0xff || static_cast<unsigned char>(b[end - 1]) != 0xd9)
+    fail(name, "JPEG: the file ends before its end-of-image marker (truncated)");
+}
+
 Image decode_stb(std::string_view bytes, const std::filesystem::path& name, Format format) {
+  if (format == Format::hdr) check_hdr_complete(bytes, name);
+  if (format == Format::jpeg) check_jpeg_complete(bytes, name);
   const auto* data = reinterpret_cast<const stbi_uc*>(bytes.data());
   const int size = static_cast<int>(std::min<std::size_t>(bytes.size(), INT32_MAX));
   int w = 0, h = 0, comp = 0;

@@ -216,7 +216,7 @@ int cubemap_nodes_per_side(int face_size, int order) {
   // One texel is [-1, 1]^2 in its own coordinates, 1/R of the face's half-width per
   // unit. The integrand y_i(w(s, t)) / (1 + s^2 + t^2)^(3/2) is analytic away from
   // 1 + s^2 + t^2 = 0, at least 1 away from the real face in s or t: R in texel units.
-  // A Gauss rule of K nodes errs by at most 64/15 M rho^(-2K) / (rho^2 - 1) for an
+  // A Gauss rule of K nodes errs by at most 64/15 M rho^(2-2K) / (rho^2 - 1) for an
   // integrand bounded by M on the Bernstein ellipse rho (semi-minor axis b = beta R);
   // there a degree-l harmonic grows by at most (1 + beta)^l / (1 - beta^2)^((l+3)/2).
   // The smallest K that one of a few ellipses bounds below 1e-13 (two dimensions: twice).
@@ -226,7 +226,7 @@ int cubemap_nodes_per_side(int face_size, int order) {
       const double b = beta * face_size;
       const double rho = b + std::sqrt(b * b + 1);
       const double growth = std::pow(1 + beta, degree) / std::pow(1 - beta * beta, (degree + 3) / 2);
-      const double bound = 2 * 64.0 / 15 * growth * std::pow(rho, -2.0 * k) / (rho * rho - 1);
+      const double bound = 2 * 64.0 / 15 * growth * std::pow(rho, 2.0 - 2.0 * k) / (rho * rho - 1);
       if (bound < 1e-13) return k;
     }
   }
@@ -267,44 +267,48 @@ Eigen::Vector3d CubemapProjector::direction(CubeFace face, double s, double t) c
   return Eigen::Vector3d(cube.x(), -cube.z(), cube.y()).normalized();
 }
 
+void CubemapProjector::texel_integrals(CubeFace face, int x, int y, std::span<double> out) const {
+  const int n = sh_count(order_);
+  // The nodes are summed row of nodes by row of nodes (fewer roundings per sum).
+  std::array<double, kMaxEnvOrder * kMaxEnvOrder> y_values, node_row;
+  const double half = 1.0 / size_;  // half a texel's width in face coordinates
+  const double s_centre = -1 + (2 * x + 1) * half, t_centre = -1 + (2 * y + 1) * half;
+  std::fill(out.begin(), out.begin() + n, 0.0);
+  for (int j = 0; j < nodes_; ++j) {
+    const double t = t_centre + half * nodes_unit_[j];
+    std::fill(node_row.begin(), node_row.begin() + n, 0.0);
+    for (int i = 0; i < nodes_; ++i) {
+      const double s = s_centre + half * nodes_unit_[i];
+      const double r2 = 1 + s * s + t * t;
+      // ds dt / r^3 is the solid angle of the face element at (s, t).
+      const double w = weights_unit_[i] * weights_unit_[j] * half * half / (r2 * std::sqrt(r2));
+      eval_sh<double>(order_, direction(face, s, t), std::span<double>(y_values.data(), n));
+      for (int k = 0; k < n; ++k) node_row[k] += w * y_values[k];
+    }
+    for (int k = 0; k < n; ++k) out[k] += node_row[k];
+  }
+}
+
 Result<Ok> CubemapProjector::accumulate_block(std::span<const FloatImageView, 6> faces, int block,
                                               std::span<double> partial) const {
   const int blocks_per_face = (size_ + kRowsPerBlock - 1) / kRowsPerBlock;
   const int f = block / blocks_per_face;
   const FloatImageView& image = faces[static_cast<std::size_t>(f)];
-  const CubeFace face = static_cast<CubeFace>(f);
   const int channels = image.channels;
   const int n = sh_count(order_);
   static constexpr const char* kFaceNames[6] = {"+X face ", "-X face ", "+Y face ", "-Y face ", "+Z face ", "-Z face "};
-  // A texel's nodes are summed row of nodes by row of nodes (fewer roundings per sum).
-  std::array<double, kMaxEnvOrder * kMaxEnvOrder> y_values, texel_integral, node_row;
-  const double half = 1.0 / size_;  // half a texel's width in face coordinates
+  std::array<double, kMaxEnvOrder * kMaxEnvOrder> integral;
   const int y_begin = (block % blocks_per_face) * kRowsPerBlock;
   const int y_end = std::min(size_, y_begin + kRowsPerBlock);
   for (int y = y_begin; y < y_end; ++y) {
     const float* row = image.row(y);
-    const double t_centre = -1 + (2 * y + 1) * half;
     for (int x = 0; x < size_; ++x) {
       const float* texel = row + static_cast<std::size_t>(x) * channels;
       for (int c = 0; c < channels; ++c)
         if (!std::isfinite(texel[c])) return non_finite_error(kFaceNames[f], x, y, c, texel[c]);
-      const double s_centre = -1 + (2 * x + 1) * half;
-      std::fill(texel_integral.begin(), texel_integral.begin() + n, 0.0);
-      for (int j = 0; j < nodes_; ++j) {
-        const double t = t_centre + half * nodes_unit_[j];
-        std::fill(node_row.begin(), node_row.begin() + n, 0.0);
-        for (int i = 0; i < nodes_; ++i) {
-          const double s = s_centre + half * nodes_unit_[i];
-          const double r2 = 1 + s * s + t * t;
-          // ds dt / r^3 is the solid angle of the face element at (s, t).
-          const double w = weights_unit_[i] * weights_unit_[j] * half * half / (r2 * std::sqrt(r2));
-          eval_sh<double>(order_, direction(face, s, t), std::span<double>(y_values.data(), n));
-          for (int k = 0; k < n; ++k) node_row[k] += w * y_values[k];
-        }
-        for (int k = 0; k < n; ++k) texel_integral[k] += node_row[k];
-      }
+      texel_integrals(static_cast<CubeFace>(f), x, y, integral);
       for (int k = 0; k < n; ++k)
-        for (int c = 0; c < channels; ++c) partial[static_cast<std::size_t>(k) * channels + c] += texel_integral[k] * texel[c];
+        for (int c = 0; c < channels; ++c) partial[static_cast<std::size_t>(k) * channels + c] += integral[k] * texel[c];
     }
   }
   return Ok{};
