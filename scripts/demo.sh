@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
-# The main job on defaults: builds, then runs every shtool job on the bundled mesh
-# (data/spot.obj) and default orders, writes the tables into out/ (or $1) and prints a
-# short summary.
+# The main job on defaults: builds, then runs every shtool job on the bundled data
+# (data/sky.hdr, data/spot.obj) and default orders, writes the tables into out/ (or $1)
+# and prints a short summary.
 #   scripts/demo.sh [OUT_DIR]
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -11,6 +11,14 @@ shtool="$root/build/shtool"
 mkdir -p "$out"
 
 echo "== shtool demo -> $out"
+echo "-- project-env: the sky of data/sky.hdr as order-3 radiance and irradiance (exact texel integrals)"
+"$shtool" project-env "$root/data/sky.hdr" --order 3 --json "$out/sky.json" --out "$out/sky.shtb" \
+  --render-back "$out/sky.back.png"
+"$shtool" project-env "$root/data/sky.hdr" --order 3 --quantity irradiance --json "$out/sky.irradiance.json"
+echo "-- light: its sun alone, as a cone of 1.5 degrees (the analytic closed form)"
+"$shtool" light --type cone --dir 0.409576,0.709406,0.573576 --half-angle 1.5 --color 2000,1800,1500 --order 3 \
+  --json "$out/sun.json"
+
 echo "-- fit-zh: shadowed PRT transfer on data/spot.obj, order 6, 4 ZH lobes per vertex"
 "$shtool" fit-zh "$root/data/spot.obj" --out "$out/spot.zh.shtb" --json "$out/spot.zh.json" \
   --ply "$out/spot.zh.ply"
@@ -21,9 +29,11 @@ echo "-- search-lobes: sparse ZHF lobes shared across bands, order 4"
 echo "-- gen-tensors: rotation helpers, tripling tensor, SH<->Fourier tensors (order 8)"
 "$shtool" gen-tensors --out "$out"
 
-echo "-- rotate: the order-3 lobe y_1^0 (along +z) turned 90 degrees about x"
-"$shtool" rotate --order 3 --quat 0.7071067811865476,0.7071067811865476,0,0 \
-  --coeffs 0,0,1,0,0,0,0,0,0 --tables "$out/rotation-helpers.shtb"
+echo "-- rotate: the sky's red channel turned 90 degrees about z (the sun moves from azimuth 60 to 150)"
+red="$(python3 -c 'import json, sys; print(",".join(repr(r[0]) for r in json.load(open(sys.argv[1]))["coefficients"]))' \
+  "$out/sky.json")"
+"$shtool" rotate --order 3 --quat 0.7071067811865476,0,0,0.7071067811865476 --coeffs "$red" \
+  --tables "$out/rotation-helpers.shtb"
 
 echo "-- tables written (each verified by shtool inspect):"
 for table in "$out"/*.shtb; do
