@@ -68,5 +68,6 @@ void setup_fit_zh(CLI::App& app);
 void setup_search_lobes(CLI::App& app);
 void setup_project_env(CLI::App& app);
 void setup_light(CLI::App& app);
+void setup_transform_splats(CLI::App& app);
 
 }  // namespace shtool::cli

@@ -25,6 +25,7 @@ int main(int argc, char** argv) {
   shtool::cli::setup_search_lobes(app);
   shtool::cli::setup_project_env(app);
   shtool::cli::setup_light(app);
+  shtool::cli::setup_transform_splats(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,0 +1,292 @@
+// shtool transform-splats end to end: a splat seen along d before looks the same along
+// R d after, by the 3D Gaussian Splatting colour formula written here from the
+// reference implementation (utils/sh_utils.py, eval_sh: its constants, its signs);
+// positions, orientations and log-scales follow the similarity; every PLY encoding;
+// identity keeps the bytes; bad files are errors with no output.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <bit>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "run_command.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using shtool::test::run_command;
+const std::string kExe = SHTOOL_EXE;
+
+fs::path scratch(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("shtool_splats_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  return dir / name;
+}
+
+std::string read_text(const fs::path& p) {
+  std::ifstream f(p, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(f), {});
+}
+
+// The reference implementation's eval_sh for one channel, degree <= 3, and its
+// colour: clamp(eval + 0.5) is left out (the clamp hides nothing at these values).
+constexpr double C0 = 0.28209479177387814, C1 = 0.4886025119029199;
+constexpr double C2[5] = {1.0925484305920792, -1.0925484305920792, 0.31539156525252005, -1.0925484305920792,
+                          0.5462742152960396};
+constexpr double C3[7] = {-0.5900435899266435, 2.890611442640554, -0.4570457994644658, 0.3731763325901154,
+                          -0.4570457994644658, 1.445305721320277, -0.5900435899266435};
+
+double eval_3dgs(int deg, const std::vector<double>& sh, const Eigen::Vector3d& d) {
+  double r = C0 * sh[0];
+  if (deg < 1) return r;
+  const double x = d.x(), y = d.y(), z = d.z();
+  r += -C1 * y * sh[1] + C1 * z * sh[2] - C1 * x * sh[3];
+  if (deg < 2) return r;
+  const double xx = x * x, yy = y * y, zz = z * z, xy = x * y, yz = y * z, xz = x * z;
+  r += C2[0] * xy * sh[4] + C2[1] * yz * sh[5] + C2[2] * (2 * zz - xx - yy) * sh[6] + C2[3] * xz * sh[7] +
+       C2[4] * (xx - yy) * sh[8];
+  if (deg < 3) return r;
+  r += C3[0] * y * (3 * xx - yy) * sh[9] + C3[1] * xy * z * sh[10] + C3[2] * y * (4 * zz - xx - yy) * sh[11] +
+       C3[3] * z * (2 * zz - 3 * xx - 3 * yy) * sh[12] + C3[4] * x * (4 * zz - xx - yy) * sh[13] +
+       C3[5] * z * (xx - yy) * sh[14] + C3[6] * x * (xx - 3 * yy) * sh[15];
+  return r;
+}
+
+struct Splat {
+  std::array<float, 3> p, n, scale;
+  std::array<float, 4> rot;
+  float opacity;
+  std::array<std::vector<float>, 3> sh;  // per channel, (deg+1)^2
+  std::int32_t tag;                      // an extra integer property, kept as is
+};
+
+std::vector<Splat> random_splats(int count, int deg, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<float> g;
+  std::vector<Splat> s(count);
+  for (Splat& x : s) {
+    for (float& v : x.p) v = 3 * g(rng);
+    for (float& v : x.n) v = g(rng);
+    for (float& v : x.scale) v = g(rng) - 3;
+    for (float& v : x.rot) v = g(rng);
+    x.opacity = g(rng);
+    for (auto& c : x.sh) {
+      c.resize((deg + 1) * (deg + 1));
+      for (float& v : c) v = 0.5f * g(rng);
+    }
+    x.tag = static_cast<std::int32_t>(rng() % 1000);
+  }
+  return s;
+}
+
+// The reference implementation's layout: x y z nx ny nz f_dc_0..2 f_rest_* (channel
+// major) opacity scale_0..2 rot_0..3, plus one extra int property at the end.
+std::string write_ply(const std::vector<Splat>& splats, int deg, const std::string& format) {
+  const int rest = (deg + 1) * (deg + 1) - 1;
+  std::ostringstream h;
+  h << "ply\nformat " << format << " 1.0\ncomment made by the test\nelement vertex " << splats.size() << "\n";
+  for (const char* n : {"x", "y", "z", "nx", "ny", "nz", "f_dc_0", "f_dc_1", "f_dc_2"}) h << "property float " << n << "\n";
+  for (int k = 0; k < 3 * rest; ++k) h << "property float f_rest_" << k << "\n";
+  for (const char* n : {"opacity", "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3"})
+    h << "property float " << n << "\n";
+  h << "property int tag\nend_header\n";
+  std::string out = h.str();
+  for (const Splat& s : splats) {
+    std::vector<float> v(s.p.begin(), s.p.end());
+    v.insert(v.end(), s.n.begin(), s.n.end());
+    for (int c = 0; c < 3; ++c) v.push_back(s.sh[c][0]);
+    for (int c = 0; c < 3; ++c) v.insert(v.end(), s.sh[c].begin() + 1, s.sh[c].end());
+    v.push_back(s.opacity);
+    v.insert(v.end(), s.scale.begin(), s.scale.end());
+    v.insert(v.end(), s.rot.begin(), s.rot.end());
+    if (format == "ascii") {
+      std::ostringstream line;
+      line.precision(9);
+      for (float f : v) line << f << ' ';
+      line << s.tag << '\n';
+      out += line.str();
+    } else {
+      const bool swap = format == "binary_big_endian";
+      auto put = [&](const void* p) {
+        char b[4];
+        std::memcpy(b, p, 4);
+        if (swap) std::swap(b[0], b[3]), std::swap(b[1], b[2]);
+        out.append(b, 4);
+      };
+      for (float f : v) put(&f);
+      put(&s.tag);
+    }
+  }
+  return out;
+}
+
+// Reads back what write_ply wrote, through the same layout.
+std::vector<Splat> read_ply(const std::string& bytes, int deg, const std::string& format, std::size_t count) {
+  const int rest = (deg + 1) * (deg + 1) - 1;
+  const std::size_t body = bytes.find("end_header\n") + 11;
+  const std::size_t floats = 9 + 3 * rest + 8;
+  std::vector<Splat> out(count);
+  std::istringstream text(bytes.substr(body));
+  for (std::size_t i = 0; i < count; ++i) {
+    std::vector<float> v(floats);
+    Splat& s = out[i];
+    if (format == "ascii") {
+      for (float& f : v) text >> f;
+      text >> s.tag;
+    } else {
+      const bool swap = format == "binary_big_endian";
+      auto get = [&](std::size_t k, void* p) {
+        char b[4];
+        std::memcpy(b, bytes.data() + body + (i * (floats + 1) + k) * 4, 4);
+        if (swap) std::swap(b[0], b[3]), std::swap(b[1], b[2]);
+        std::memcpy(p, b, 4);
+      };
+      for (std::size_t k = 0; k < floats; ++k) get(k, &v[k]);
+      get(floats, &s.tag);
+    }
+    std::size_t k = 0;
+    for (float& f : s.p) f = v[k++];
+    for (float& f : s.n) f = v[k++];
+    for (auto& c : s.sh) c.resize(rest + 1);
+    for (int c = 0; c < 3; ++c) s.sh[c][0] = v[k++];
+    for (int c = 0; c < 3; ++c)
+      for (int j = 0; j < rest; ++j) s.sh[c][1 + j] = v[k++];
+    s.opacity = v[k++];
+    for (float& f : s.scale) f = v[k++];
+    for (float& f : s.rot) f = v[k++];
+  }
+  return out;
+}
+
+Eigen::Matrix3d quat_matrix(const std::array<float, 4>& q) {
+  return Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized().toRotationMatrix();
+}
+
+TEST(CliTransformSplats, ColoursPositionsOrientationsAndScales) {
+  const Eigen::Quaterniond qr = Eigen::Quaterniond(0.8, -0.3, 0.4, 0.33).normalized();
+  const Eigen::Matrix3d R = qr.toRotationMatrix();
+  const double scale = 2.5;
+  const Eigen::Vector3d t(1, -2, 0.5);
+  std::mt19937 rng(7);
+  std::normal_distribution<double> g;
+  for (const std::string format : {"binary_little_endian", "binary_big_endian", "ascii"}) {
+    for (int deg = 0; deg <= 3; ++deg) {
+      const std::vector<Splat> before = random_splats(300, deg, 11 + deg);
+      const fs::path in = scratch("in.ply"), out = scratch("out.ply");
+      std::ofstream(in, std::ios::binary) << write_ply(before, deg, format);
+      std::ostringstream quat;
+      quat.precision(17);
+      quat << qr.w() << "," << qr.x() << "," << qr.y() << "," << qr.z();
+      const auto r = run_command({kExe, "transform-splats", in.string(), "--quat", quat.str(), "--scale", "2.5",
+                                  "--translate", "1,-2,0.5", "--out", out.string()});
+      ASSERT_EQ(r.exit_code, 0) << r.err;
+      const std::string bytes = read_text(out);
+      // The header is kept byte for byte.
+      const std::string in_bytes = read_text(in);
+      ASSERT_EQ(bytes.substr(0, bytes.find("end_header")), in_bytes.substr(0, in_bytes.find("end_header")));
+      const std::vector<Splat> after = read_ply(bytes, deg, format, before.size());
+      for (std::size_t i = 0; i < before.size(); ++i) {
+        const Splat &a = before[i], &b = after[i];
+        const Eigen::Vector3d p(a.p[0], a.p[1], a.p[2]), q(b.p[0], b.p[1], b.p[2]);
+        ASSERT_LT((scale * (R * p) + t - q).norm(), 1e-5 * (1 + q.norm())) << format << " " << i;
+        const Eigen::Vector3d n(a.n[0], a.n[1], a.n[2]), m(b.n[0], b.n[1], b.n[2]);
+        ASSERT_LT((R * n - m).norm(), 1e-5 * (1 + n.norm()));
+        ASSERT_LT((R * quat_matrix(a.rot) - quat_matrix(b.rot)).norm(), 1e-5);
+        for (int k = 0; k < 3; ++k) ASSERT_NEAR(b.scale[k], a.scale[k] + std::log(scale), 1e-5);
+        EXPECT_EQ(b.opacity, a.opacity);
+        EXPECT_EQ(b.tag, a.tag);
+        // The colour along d before is the colour along R d after.
+        for (int k = 0; k < 5; ++k) {
+          const Eigen::Vector3d d = Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized();
+          for (int c = 0; c < 3; ++c) {
+            const std::vector<double> fa(a.sh[c].begin(), a.sh[c].end()), fb(b.sh[c].begin(), b.sh[c].end());
+            ASSERT_NEAR(eval_3dgs(deg, fb, R * d), eval_3dgs(deg, fa, d), 2e-6) << format << " degree " << deg;
+          }
+        }
+      }
+    }
+  }
+}
+
+TEST(CliTransformSplats, IdentityKeepsTheBytes) {
+  for (const std::string format : {"binary_little_endian", "binary_big_endian", "ascii"}) {
+    const std::vector<Splat> s = random_splats(100, 3, 5);
+    const fs::path in = scratch("id.ply"), out = scratch("id_out.ply");
+    std::ofstream(in, std::ios::binary) << write_ply(s, 3, format);
+    for (const std::vector<std::string> how : {std::vector<std::string>{"--quat", "1,0,0,0"},
+                                               std::vector<std::string>{"--matrix", "1,0,0,0,1,0,0,0,1"}}) {
+      std::vector<std::string> argv = {kExe, "transform-splats", in.string(), "--out", out.string()};
+      argv.insert(argv.end(), how.begin(), how.end());
+      const auto r = run_command(argv);
+      ASSERT_EQ(r.exit_code, 0) << r.err;
+      EXPECT_TRUE(read_text(out) == read_text(in)) << format << " " << how[0];
+    }
+  }
+}
+
+TEST(CliTransformSplats, SameBytesWhateverTheThreadCount) {
+  const std::vector<Splat> s = random_splats(20000, 3, 9);
+  const fs::path in = scratch("threads.ply");
+  std::ofstream(in, std::ios::binary) << write_ply(s, 3, "binary_little_endian");
+  std::string bytes[2];
+  for (int k = 0; k < 2; ++k) {
+    const fs::path out = scratch("threads_" + std::to_string(k) + ".ply");
+    const auto r = run_command({kExe, "transform-splats", in.string(), "--quat", "0.5,0.5,-0.5,0.5", "--threads",
+                                k ? "3" : "1", "--out", out.string()});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    bytes[k] = read_text(out);
+  }
+  EXPECT_EQ(bytes[0], bytes[1]);
+}
+
+TEST(CliTransformSplats, BadInputIsAnErrorWithNoOutput) {
+  const std::string good = write_ply(random_splats(10, 1, 3), 1, "binary_little_endian");
+  auto replace = [&](const std::string& from, const std::string& to) {
+    std::string s = good;
+    s.replace(s.find(from), from.size(), to);
+    return s;
+  };
+  struct Case {
+    std::string name, bytes;
+    std::vector<std::string> args;
+    std::string message;
+  };
+  const std::vector<Case> cases = {
+      {"truncated body", good.substr(0, good.size() - 7), {}, "ends before"},
+      {"extra bytes", good + "xyz", {}, "after the last element"},
+      {"no x", replace("property float x\n", "property float u\n"), {}, "'x'"},
+      {"wrong f_rest count", replace("property float f_rest_8\n", "property float other\n"), {}, "f_rest"},
+      {"integer f_rest", replace("property float f_rest_0\n", "property int f_rest_0\n"), {}, "float"},
+      {"list property", replace("end_header", "element face 0\nproperty list uchar int vertex_indices\nend_header"), {},
+       "list"},
+      {"not a PLY", "hello\n", {}, "not a PLY"},
+      {"reflection", good, {"--matrix", "-1,0,0,0,1,0,0,0,1"}, "reflection"},
+      {"not a rotation", good, {"--matrix", "1,0,0,0,2,0,0,0,1"}, "rotation"},
+      {"zero quaternion", good, {"--quat", "0,0,0,0"}, "non-zero"},
+      {"both", good, {"--quat", "1,0,0,0", "--matrix", "1,0,0,0,1,0,0,0,1"}, "exactly one"},
+      {"negative scale", good, {"--quat", "1,0,0,0", "--scale", "-1"}, "--scale"},
+  };
+  for (const Case& c : cases) {
+    const fs::path in = scratch("bad.ply"), out = scratch("bad_out.ply");
+    std::ofstream(in, std::ios::binary) << c.bytes;
+    fs::remove(out);
+    std::vector<std::string> argv = {kExe, "transform-splats", in.string(), "--out", out.string()};
+    if (c.args.empty()) argv.insert(argv.end(), {"--quat", "1,0,0,0"});
+    argv.insert(argv.end(), c.args.begin(), c.args.end());
+    const auto r = run_command(argv);
+    EXPECT_EQ(r.exit_code, 1) << c.name << ": " << r.err;
+    EXPECT_NE(r.err.find(c.message), std::string::npos) << c.name << ": " << r.err;
+    EXPECT_FALSE(fs::exists(out)) << c.name;
+  }
+}
+
+}  // namespace
