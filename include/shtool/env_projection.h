@@ -83,8 +83,9 @@ class EquirectProjector {
 
  private:
   int width_ = 0, height_ = 0, order_ = 0;
-  // column_weights_[x * (2N-1) + k]: k = 0: the column's width in p; k = 2m-1: the
-  // integral of sqrt2 cos(m p); k = 2m: of sqrt2 sin(m p), m = 1..N-1.
+  // column_weights_[k * W/2 + x] for the left half of the columns (x < W/2; column
+  // W-1-x mirrors x): k = 0: the column's width in p; k = 2m-1: the integral of
+  // sqrt2 cos(m p); k = 2m: of sqrt2 sin(m p), m = 1..N-1.
   std::vector<double> column_weights_;
   std::vector<double> row_integrals_;  // H x N (N+1) / 2
 };

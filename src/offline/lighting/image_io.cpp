@@ -60,11 +60,11 @@ Format format_of_extension(const std::filesystem::path& p) {
   throw InputError(name.string() + ": " + what);
 }
 
-void check_size(const std::filesystem::path& name, std::int64_t w, std::int64_t h) {
+void check_size(const std::filesystem::path& name, std::int64_t w, std::int64_t h, std::int64_t max_texels) {
   if (w < 1 || h < 1) fail(name, "the image is empty");
-  if (w * h > kMaxImageTexels)
+  if (w > max_texels || h > max_texels || w * h > max_texels)
     fail(name, std::to_string(w) + " x " + std::to_string(h) + " texels is more than the " +
-                   std::to_string(kMaxImageTexels) + " accepted");
+                   std::to_string(max_texels) + " accepted");
 }
 
 // ---- OpenEXR from and to memory
@@ -103,7 +103,7 @@ class MemoryOStream : public Imf::OStream {
   std::size_t pos_ = 0;
 };
 
-Image decode_exr(std::string_view bytes, const std::filesystem::path& name) {
+Image decode_exr(std::string_view bytes, const std::filesystem::path& name, std::int64_t max_texels) {
   try {
     MemoryIStream stream(bytes, name.string());
     Imf::InputFile file(stream);
@@ -116,7 +116,7 @@ Image decode_exr(std::string_view bytes, const std::filesystem::path& name) {
                      std::to_string(display.min.y) + ")-(" + std::to_string(display.max.x) + ", " +
                      std::to_string(display.max.y) + "): crop or pad the image to its display window first");
     const std::int64_t w = std::int64_t(data.max.x) - data.min.x + 1, h = std::int64_t(data.max.y) - data.min.y + 1;
-    check_size(name, w, h);
+    check_size(name, w, h, max_texels);
     const Imf::ChannelList& list = header.channels();
     std::array<const char*, 3> names{"R", "G", "B"};
     const bool rgb = list.findChannel("R") && list.findChannel("G") && list.findChannel("B");
@@ -155,7 +155,7 @@ Image decode_exr(std::string_view bytes, const std::filesystem::path& name) {
 // black rows. This walks the scanlines as stb's reader does (new-style run-length
 // scanlines for widths 8..32767 that start with 2, 2; otherwise flat RGBE from there on)
 // and refuses data that ends early.
-void check_hdr_complete(std::string_view b, const std::filesystem::path& name) {
+void check_hdr_complete(std::string_view b, const std::filesystem::path& name, std::int64_t max_texels) {
   const std::size_t header_end = b.find("\n\n");
   if (header_end == std::string_view::npos) fail(name, "Radiance HDR: no end of header");
   const std::size_t line_end = b.find('\n', header_end + 2);
@@ -165,7 +165,7 @@ void check_hdr_complete(std::string_view b, const std::filesystem::path& name) {
   const std::string line(b.substr(header_end + 2, line_end - header_end - 2));
   if (std::sscanf(line.c_str(), "-Y %lld +X %lld%c", &h, &w, &tail) != 2)
     fail(name, "Radiance HDR: the resolution line is not '-Y <height> +X <width>'");
-  check_size(name, w, h);
+  check_size(name, w, h, max_texels);
   std::size_t at = line_end + 1;
   auto need = [&](std::size_t n) {
     if (b.size() - at < n)
@@ -205,15 +205,15 @@ void check_jpeg_complete(std::string_view b, const std::filesystem::path& name) 
     fail(name, "JPEG: the file ends before its end-of-image marker (truncated)");
 }
 
-Image decode_stb(std::string_view bytes, const std::filesystem::path& name, Format format) {
-  if (format == Format::hdr) check_hdr_complete(bytes, name);
+Image decode_stb(std::string_view bytes, const std::filesystem::path& name, Format format, std::int64_t max_texels) {
+  if (format == Format::hdr) check_hdr_complete(bytes, name, max_texels);
   if (format == Format::jpeg) check_jpeg_complete(bytes, name);
   const auto* data = reinterpret_cast<const stbi_uc*>(bytes.data());
   const int size = static_cast<int>(std::min<std::size_t>(bytes.size(), INT32_MAX));
   int w = 0, h = 0, comp = 0;
   if (!stbi_info_from_memory(data, size, &w, &h, &comp))
     fail(name, std::string(format_name(format)) + ": " + stbi_failure_reason());
-  check_size(name, w, h);
+  check_size(name, w, h, max_texels);
   Image img;
   img.width = w;
   img.height = h;
@@ -241,7 +241,7 @@ Image decode_stb(std::string_view bytes, const std::filesystem::path& name, Form
 double srgb_to_linear(double v) { return v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4); }
 double linear_to_srgb(double v) { return v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1 / 2.4) - 0.055; }
 
-Image decode_image(std::string_view bytes, const std::filesystem::path& name) {
+Image decode_image(std::string_view bytes, const std::filesystem::path& name, std::int64_t max_texels) {
   const Format content = sniff(bytes), extension = format_of_extension(name);
   if (content == Format::unknown) {
     if (extension != Format::unknown)
@@ -252,7 +252,7 @@ Image decode_image(std::string_view bytes, const std::filesystem::path& name) {
   if (extension != Format::unknown && extension != content)
     fail(name, std::string("the extension says ") + format_name(extension) + " but the content is " +
                    format_name(content));
-  return content == Format::exr ? decode_exr(bytes, name) : decode_stb(bytes, name, content);
+  return content == Format::exr ? decode_exr(bytes, name, max_texels) : decode_stb(bytes, name, content, max_texels);
 }
 
 ImageFile read_image(const std::filesystem::path& path, std::string_view what) {

@@ -29,9 +29,10 @@ inline constexpr std::int64_t kMaxImageTexels = std::int64_t(1) << 28;
 
 // The format is recognised by the content (magic numbers), not the extension; a file
 // whose content does not match its extension (.exr, .hdr, .png, .jpg/.jpeg) is refused
-// naming both. Single-channel files become grey RGB; alpha is dropped. Throws InputError
-// naming `name`.
-Image decode_image(std::string_view bytes, const std::filesystem::path& name);
+// naming both. Single-channel files become grey RGB; alpha is dropped. An image of more
+// than max_texels is refused before anything is allocated. Throws InputError naming `name`.
+Image decode_image(std::string_view bytes, const std::filesystem::path& name,
+                   std::int64_t max_texels = kMaxImageTexels);
 
 // The file's bytes (read_input_file, `what` naming the option) and their CRC-32.
 struct ImageFile {
