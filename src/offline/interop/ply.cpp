@@ -156,53 +156,51 @@ PlyFile PlyFile::parse(std::string bytes, const std::filesystem::path& name) {
     if (f.ascii_tail_.find_first_not_of(" \t\r\n") != std::string::npos)
       throw fail("values after the last element (the header's counts do not match the body)");
   }
+  f.swap_ = big_endian(f.format_) != (std::endian::native == std::endian::big);
   f.data_ = std::move(bytes);
   return f;
 }
 
-double PlyFile::get(const PlyElement& e, std::size_t i, std::size_t p) const {
-  if (format_ == PlyFormat::ascii) {
-    const std::size_t e_index = static_cast<std::size_t>(&e - elements_.data());
-    const std::string& s = ascii_values_[ascii_first_[e_index] + i * e.properties.size() + p];
-    const std::size_t start = s.find_first_not_of(" \t\r\n");
-    double v = 0;
-    std::from_chars(s.data() + start, s.data() + s.size(), v);
-    return v;
-  }
-  const char* at = data_.data() + e.data_offset + i * e.record_size + e.properties[p].offset;
-  const bool swap = big_endian(format_) != (std::endian::native == std::endian::big);
-  switch (e.properties[p].type) {
-    case PlyType::int8: return load<std::int8_t>(at, swap);
-    case PlyType::uint8: return load<std::uint8_t>(at, swap);
-    case PlyType::int16: return load<std::int16_t>(at, swap);
-    case PlyType::uint16: return load<std::uint16_t>(at, swap);
-    case PlyType::int32: return load<std::int32_t>(at, swap);
-    case PlyType::uint32: return load<std::uint32_t>(at, swap);
-    case PlyType::float32: return load<float>(at, swap);
-    case PlyType::float64: return load<double>(at, swap);
+double PlyFile::get_ascii(const PlyElement& e, std::size_t i, std::size_t p) const {
+  const std::size_t e_index = static_cast<std::size_t>(&e - elements_.data());
+  const std::string& s = ascii_values_[ascii_first_[e_index] + i * e.properties.size() + p];
+  const std::size_t start = s.find_first_not_of(" \t\r\n");
+  double v = 0;
+  std::from_chars(s.data() + start, s.data() + s.size(), v);
+  return v;
+}
+
+double PlyFile::get_binary(PlyType type, const char* at) const {
+  switch (type) {
+    case PlyType::int8: return load<std::int8_t>(at, swap_);
+    case PlyType::uint8: return load<std::uint8_t>(at, swap_);
+    case PlyType::int16: return load<std::int16_t>(at, swap_);
+    case PlyType::uint16: return load<std::uint16_t>(at, swap_);
+    case PlyType::int32: return load<std::int32_t>(at, swap_);
+    case PlyType::uint32: return load<std::uint32_t>(at, swap_);
+    case PlyType::float32: return load<float>(at, swap_);
+    case PlyType::float64: return load<double>(at, swap_);
   }
   return 0;
 }
 
-void PlyFile::set(const PlyElement& e, std::size_t i, std::size_t p, double v) {
+void PlyFile::set_ascii(const PlyElement& e, std::size_t i, std::size_t p, double v) {
   const PlyType type = e.properties[p].type;
-  if (format_ == PlyFormat::ascii) {
-    // A value that reads back the same keeps its text (a float32 property holds the
-    // float nearest its text).
-    const double now = get(e, i, p);
-    if (type == PlyType::float32 ? static_cast<float>(now) == static_cast<float>(v) : now == v) return;
-    const std::size_t e_index = static_cast<std::size_t>(&e - elements_.data());
-    std::string& s = ascii_values_[ascii_first_[e_index] + i * e.properties.size() + p];
-    char text[64];
-    const auto r = type == PlyType::float32 ? std::to_chars(text, text + sizeof text, static_cast<float>(v))
-                                            : std::to_chars(text, text + sizeof text, v);
-    s = s.substr(0, s.find_first_not_of(" \t\r\n")) + std::string(text, r.ptr);
-    return;
-  }
-  char* at = data_.data() + e.data_offset + i * e.record_size + e.properties[p].offset;
-  const bool swap = big_endian(format_) != (std::endian::native == std::endian::big);
-  if (type == PlyType::float32) store<float>(at, static_cast<float>(v), swap);
-  else store<double>(at, v, swap);
+  // A value that reads back the same keeps its text (a float32 property holds the
+  // float nearest its text).
+  const double now = get_ascii(e, i, p);
+  if (type == PlyType::float32 ? static_cast<float>(now) == static_cast<float>(v) : now == v) return;
+  const std::size_t e_index = static_cast<std::size_t>(&e - elements_.data());
+  std::string& s = ascii_values_[ascii_first_[e_index] + i * e.properties.size() + p];
+  char text[64];
+  const auto r = type == PlyType::float32 ? std::to_chars(text, text + sizeof text, static_cast<float>(v))
+                                          : std::to_chars(text, text + sizeof text, v);
+  s = s.substr(0, s.find_first_not_of(" \t\r\n")) + std::string(text, r.ptr);
+}
+
+void PlyFile::set_binary(PlyType type, char* at, double v) {
+  if (type == PlyType::float32) store<float>(at, static_cast<float>(v), swap_);
+  else store<double>(at, v, swap_);
 }
 
 std::string PlyFile::bytes() const {

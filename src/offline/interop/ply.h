@@ -7,6 +7,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -47,17 +48,46 @@ class PlyFile {
   const PlyElement* element(std::string_view name) const;
 
   // Value of property p of record i of element e, as double (any type).
-  double get(const PlyElement& e, std::size_t i, std::size_t p) const;
+  double get(const PlyElement& e, std::size_t i, std::size_t p) const {
+    if (format_ == PlyFormat::ascii) return get_ascii(e, i, p);
+    const PlyProperty& q = e.properties[p];
+    const char* at = data_.data() + e.data_offset + i * e.record_size + q.offset;
+    // The common case inline: float32 in the machine's byte order.
+    if (q.type == PlyType::float32 && !swap_) {
+      float v;
+      std::memcpy(&v, at, sizeof v);
+      return v;
+    }
+    return get_binary(q.type, at);
+  }
   // Writes v into that place (binary: the property's type, in the file's byte order;
   // ASCII: the shortest text that reads back to the same float32 / float64 value).
   // Only float32 / float64 properties are written.
-  void set(const PlyElement& e, std::size_t i, std::size_t p, double v);
+  void set(const PlyElement& e, std::size_t i, std::size_t p, double v) {
+    if (format_ == PlyFormat::ascii) return set_ascii(e, i, p, v);
+    const PlyProperty& q = e.properties[p];
+    char* at = data_.data() + e.data_offset + i * e.record_size + q.offset;
+    if (q.type == PlyType::float32 && !swap_) {
+      const float f = static_cast<float>(v);
+      std::memcpy(at, &f, sizeof f);
+      return;
+    }
+    set_binary(q.type, at, v);
+  }
 
-  // The file's bytes with every set() applied.
+  // The file's bytes with every set() applied: a view of them in place for binary files
+  // (no copy of a multi-GiB scene), text assembled for ASCII ones.
+  std::string_view binary_bytes() const { return data_; }
   std::string bytes() const;
 
  private:
+  double get_ascii(const PlyElement& e, std::size_t i, std::size_t p) const;
+  void set_ascii(const PlyElement& e, std::size_t i, std::size_t p, double v);
+  double get_binary(PlyType type, const char* at) const;
+  void set_binary(PlyType type, char* at, double v);
+
   PlyFormat format_ = PlyFormat::binary_little_endian;
+  bool swap_ = false;  // the file's byte order is not the machine's
   std::string data_;
   std::size_t header_size_ = 0;
   std::vector<PlyElement> elements_;

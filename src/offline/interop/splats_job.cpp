@@ -170,7 +170,8 @@ TransformSplatsReport run_transform_splats(const TransformSplatsRequest& r) {
       }
     }
   });
-  write_file_atomically(r.out, ply.bytes());
+  if (ply.format() == PlyFormat::ascii) write_file_atomically(r.out, ply.bytes());
+  else write_file_atomically(r.out, ply.binary_bytes());
   TransformSplatsReport report;
   report.splats = count;
   report.degree = layout.degree;

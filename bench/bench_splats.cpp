@@ -1,0 +1,93 @@
+// transform-splats on synthetic 3D Gaussian Splatting scenes: the whole job (read the
+// file, transform every splat, write the file), as the command runs it.
+//
+//   BM_TransformSplats/splats:S/threads:T   S degree-3 splats in the reference
+//                                           implementation's binary layout (62 floats
+//                                           each), rotation + scale + translation;
+//                                           counter splats_per_s, and the file size.
+//   BM_CopyFile/splats:S                    read the same file and write it back
+//                                           (the floor: the job is I/O bound there).
+//
+// The files are made once per size in the temporary folder and removed at exit.
+//   build/bench/bench_splats --benchmark_counters_tabular=true
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <benchmark/benchmark.h>
+
+#include "common/atomic_file.h"
+#include "common/input_file.h"
+#include "interop/splats_job.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+const fs::path& scene(std::size_t splats) {
+  static std::map<std::size_t, fs::path> made;
+  auto it = made.find(splats);
+  if (it != made.end()) return it->second;
+  const fs::path path = fs::temp_directory_path() / ("shtool_bench_splats_" + std::to_string(splats) + ".ply");
+  std::string header = "ply\nformat binary_little_endian 1.0\nelement vertex " + std::to_string(splats) + "\n";
+  for (const char* n : {"x", "y", "z", "nx", "ny", "nz", "f_dc_0", "f_dc_1", "f_dc_2"})
+    header += std::string("property float ") + n + "\n";
+  for (int k = 0; k < 45; ++k) header += "property float f_rest_" + std::to_string(k) + "\n";
+  for (const char* n : {"opacity", "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3"})
+    header += std::string("property float ") + n + "\n";
+  header += "end_header\n";
+  std::ofstream out(path, std::ios::binary);
+  out << header;
+  std::mt19937 rng(1);
+  std::normal_distribution<float> g;
+  std::vector<float> record(62);
+  for (std::size_t i = 0; i < splats; ++i) {
+    for (float& v : record) v = g(rng);
+    out.write(reinterpret_cast<const char*>(record.data()), static_cast<std::streamsize>(record.size() * 4));
+  }
+  return made.emplace(splats, path).first->second;
+}
+
+void BM_TransformSplats(benchmark::State& state) {
+  const std::size_t splats = static_cast<std::size_t>(state.range(0));
+  shtool::interop::TransformSplatsRequest r;
+  r.in = scene(splats);
+  r.out = fs::temp_directory_path() / "shtool_bench_splats_out.ply";
+  r.quaternion = std::array<double, 4>{0.8, -0.3, 0.4, 0.33};
+  r.scale = 2;
+  r.translate = {1, 2, 3};
+  r.threads = static_cast<int>(state.range(1));
+  for (auto _ : state) benchmark::DoNotOptimize(shtool::interop::run_transform_splats(r));
+  state.counters["splats_per_s"] = benchmark::Counter(static_cast<double>(splats), benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["MiB"] = static_cast<double>(fs::file_size(r.in)) / (1 << 20);
+  fs::remove(r.out);
+}
+BENCHMARK(BM_TransformSplats)
+    ->ArgsProduct({{1 << 20, 6 << 20}, {1, 2}})
+    ->ArgNames({"splats", "threads"})
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(1)
+    ->UseRealTime();
+
+void BM_CopyFile(benchmark::State& state) {
+  const fs::path in = scene(static_cast<std::size_t>(state.range(0)));
+  const fs::path out = fs::temp_directory_path() / "shtool_bench_splats_copy.ply";
+  for (auto _ : state) shtool::write_file_atomically(out, shtool::read_input_file(in, "input"));
+  fs::remove(out);
+}
+BENCHMARK(BM_CopyFile)->Arg(1 << 20)->Arg(6 << 20)->ArgName("splats")->Unit(benchmark::kMillisecond)->Iterations(1)->UseRealTime();
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  benchmark::Initialize(&argc, argv);
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  for (std::size_t s : {std::size_t(1) << 20, std::size_t(6) << 20})
+    fs::remove(fs::temp_directory_path() / ("shtool_bench_splats_" + std::to_string(s) + ".ply"));
+  return 0;
+}
