@@ -16,6 +16,10 @@ packages=(
   clang libclang-rt-14-dev                               # fuzz targets (libFuzzer), sanitizers
   python3 python3-jsonschema python3-numpy               # schema checks, numpy reader test
 )
+# The engine checks run three.js and Babylon.js in node (npm installs them into the
+# build folder at test time). A machine image's own Node.js is used as it is: Debian's
+# npm conflicts with it, so Debian's nodejs and npm are installed only when node is absent.
+if ! command -v node >/dev/null 2>&1; then packages+=(nodejs npm); fi
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

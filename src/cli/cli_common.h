@@ -69,5 +69,7 @@ void setup_search_lobes(CLI::App& app);
 void setup_project_env(CLI::App& app);
 void setup_light(CLI::App& app);
 void setup_transform_splats(CLI::App& app);
+void setup_export_light(CLI::App& app);
+void setup_import_light(CLI::App& app);
 
 }  // namespace shtool::cli

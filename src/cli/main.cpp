@@ -26,6 +26,8 @@ int main(int argc, char** argv) {
   shtool::cli::setup_project_env(app);
   shtool::cli::setup_light(app);
   shtool::cli::setup_transform_splats(app);
+  shtool::cli::setup_export_light(app);
+  shtool::cli::setup_import_light(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,0 +1,87 @@
+// shtool export-light / import-light: the lighting JSON of project-env and light in an
+// engine's convention, and back (docs/interop.md). The conversions are
+// src/offline/interop/engine_light.h; this file parses and prints.
+#include <iostream>
+#include <memory>
+
+#include <CLI/CLI.hpp>
+
+#include "cli_common.h"
+#include "common/atomic_file.h"
+#include "common/input_file.h"
+#include "interop/engine_light.h"
+#include "lighting/lighting_output.h"
+
+namespace shtool::cli {
+namespace {
+
+struct LightOptions {
+  interop::LightFormat format = interop::LightFormat::threejs;
+  std::string frame;  // empty: the format's default
+  interop::RawOptions raw;
+  std::string cs = "on";
+};
+
+void add_common(CLI::App* sub, LightOptions& o) {
+  add_enum_option(sub, "--format", o.format, interop::light_format_names(),
+                  "threejs, filament, filament-radiance, unity, gltf, gltf-khr, babylon, godot or raw", "threejs")
+      ->required();
+  sub->add_option("--frame", o.frame, "engine axes in shtool's, e.g. x,z,-y (default: the format's)");
+  sub->add_option("--cs", o.cs, "raw: Condon-Shortley phase on or off")->check(CLI::IsMember({"on", "off"}))->default_str("on");
+  add_enum_option(sub, "--norm", o.raw.normalization, interop::raw_normalization_names(),
+                  "raw: orthonormal, 4pi or schmidt (semi-normalised)", "orthonormal");
+}
+
+interop::FrameMap frame_of(const LightOptions& o) {
+  return o.frame.empty() ? interop::default_frame(o.format) : interop::parse_frame_map(o.frame);
+}
+
+}  // namespace
+
+void setup_export_light(CLI::App& app) {
+  auto o = std::make_shared<LightOptions>();
+  auto in = std::make_shared<std::filesystem::path>();
+  auto out = std::make_shared<std::filesystem::path>();
+  auto intensity = std::make_shared<double>(1);
+  CLI::App* sub = app.add_subcommand("export-light", "Write SH lighting (project-env / light JSON) in an engine's convention");
+  sub->add_option("light", *in, "lighting JSON (shtool project-env / light)")->required();
+  sub->add_option("--out", *out, "output file")->required();
+  sub->add_option("--intensity", *intensity, "scale (the format's intensity field where it has one)")->capture_default_str();
+  add_common(sub, *o);
+  sub->callback([=]() {
+    o->raw.condon_shortley = o->cs == "on";
+    const lighting::Lighting l = lighting::read_lighting_json(*in, "light");
+    check_output_path(*out, "--out");
+    check_not_an_input(*out, "--out", *in);
+    const interop::ExportedLight e = interop::export_light(l, o->format, frame_of(*o), *intensity, o->raw);
+    write_file_atomically(*out, e.text);
+    for (const std::string& n : e.notes) std::cerr << "export-light: note: " << n << '\n';
+    std::cerr << "export-light: wrote " << out->string() << '\n';
+  });
+}
+
+void setup_import_light(CLI::App& app) {
+  auto o = std::make_shared<LightOptions>();
+  auto in = std::make_shared<std::filesystem::path>();
+  auto json = std::make_shared<std::filesystem::path>();
+  auto quantity = std::make_shared<lighting::Quantity>(lighting::Quantity::radiance);
+  CLI::App* sub = app.add_subcommand("import-light", "Read SH lighting in an engine's convention into shtool's lighting JSON");
+  sub->add_option("file", *in, "the engine's file (as export-light writes it)")->required();
+  sub->add_option("--json", *json, "output lighting JSON")->required();
+  add_enum_option(sub, "--quantity", *quantity,
+                  {{"radiance", lighting::Quantity::radiance}, {"irradiance", lighting::Quantity::irradiance}},
+                  "radiance or irradiance", "radiance");
+  add_common(sub, *o);
+  sub->callback([=]() {
+    o->raw.condon_shortley = o->cs == "on";
+    const std::string text = read_input_file(*in, "file");
+    check_output_path(*json, "--json");
+    check_not_an_input(*json, "--json", *in);
+    const lighting::Lighting l = interop::import_light(text, *in, o->format, frame_of(*o), *quantity, o->raw);
+    write_file_atomically(*json, lighting::lighting_json(l));
+    std::cerr << "import-light: order " << l.order << ", " << lighting::quantity_name(l.quantity) << ", wrote "
+              << json->string() << '\n';
+  });
+}
+
+}  // namespace shtool::cli

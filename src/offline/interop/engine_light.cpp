@@ -1,0 +1,504 @@
+#include "interop/engine_light.h"
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+#include <regex>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "common/input_error.h"
+#include "common/input_file.h"
+#include "shtool/irradiance.h"
+#include "shtool/orthogonal_map.h"
+#include "shtool/sh.h"
+
+namespace shtool::interop {
+namespace {
+
+using lighting::Lighting;
+using lighting::Quantity;
+constexpr double kPi = std::numbers::pi;
+
+// |K_i| of bands 0..2 (the engines' basis constants) and the Condon-Shortley sign
+// (-1)^m of each index: without the phase, c_i = (-1)^m c_i(shtool).
+const std::array<double, 9> kAbsK = {0.28209479177387814, 0.4886025119029199, 0.4886025119029199,
+                                     0.4886025119029199,  1.0925484305920792, 1.0925484305920792,
+                                     0.31539156525252005, 1.0925484305920792, 0.5462742152960396};
+constexpr std::array<double, 9> kSigma = {1, -1, 1, -1, 1, -1, 1, -1, 1};
+double band_a(int i) { return clamped_cosine_band(sh_band(i)); }
+
+// 9 x 3 values, [i * 3 + c].
+using Nine = std::array<double, 27>;
+
+// The light in `want` quantity, as order-3 coefficients (bands above 2 dropped, with a
+// note; missing bands are zero).
+Nine first_nine(const Lighting& l, Quantity want, std::vector<std::string>& notes) {
+  if (l.order > 3)
+    notes.push_back("the format holds bands 0..2: bands 3.." + std::to_string(l.order - 1) + " of the order-" +
+                    std::to_string(l.order) + " light are dropped");
+  Nine out{};
+  for (int i = 0; i < std::min(9, sh_count(l.order)); ++i) {
+    // A_l != 0 for l <= 2, so both directions are exact.
+    const double scale = l.quantity == want ? 1 : (want == Quantity::irradiance ? band_a(i) : 1 / band_a(i));
+    for (int c = 0; c < 3; ++c) out[3 * i + c] = l.coefficients[3 * i + c] * scale;
+  }
+  return out;
+}
+
+Nine engine(const FrameMap& f, const Nine& x) {
+  const std::vector<double> g = to_engine_frame(f, std::vector<double>(x.begin(), x.end()));
+  Nine out{};
+  std::copy(g.begin(), g.end(), out.begin());
+  return out;
+}
+
+Lighting from_nine(const FrameMap& f, const Nine& g, Quantity stored, Quantity want) {
+  Lighting l;
+  l.order = 3;
+  l.quantity = stored;
+  l.coefficients = from_engine_frame(f, std::vector<double>(g.begin(), g.end()));
+  if (want != stored) {
+    for (int i = 0; i < 9; ++i)
+      for (int c = 0; c < 3; ++c) l.coefficients[3 * i + c] *= want == Quantity::irradiance ? band_a(i) : 1 / band_a(i);
+    l.quantity = want;
+  }
+  return l;
+}
+
+[[noreturn]] void bad(const std::filesystem::path& name, const std::string& why) {
+  throw InputError(name.string() + ": " + why);
+}
+
+double finite_number(const nlohmann::json& v, const std::filesystem::path& name, const std::string& what) {
+  if (!v.is_number() || !std::isfinite(v.get<double>())) bad(name, what + " is not a finite number");
+  return v.get<double>();
+}
+
+// 9 [r, g, b] rows.
+Nine rows_of(const nlohmann::json& rows, const std::filesystem::path& name, const std::string& what) {
+  if (!rows.is_array() || rows.size() != 9) bad(name, what + " must hold 9 [r, g, b] rows");
+  Nine out{};
+  for (int i = 0; i < 9; ++i) {
+    if (!rows[i].is_array() || rows[i].size() != 3) bad(name, what + " row " + std::to_string(i) + " is not [r, g, b]");
+    for (int c = 0; c < 3; ++c) out[3 * i + c] = finite_number(rows[i][c], name, what + " row " + std::to_string(i));
+  }
+  return out;
+}
+
+nlohmann::json rows_json(const Nine& v) {
+  nlohmann::json rows = nlohmann::json::array();
+  for (int i = 0; i < 9; ++i) rows.push_back({v[3 * i], v[3 * i + 1], v[3 * i + 2]});
+  return rows;
+}
+
+std::string rows_text(const nlohmann::json& j) {
+  // One row per line inside the document, for reading.
+  std::string s = j.dump(1);
+  return s + "\n";
+}
+
+const char* kBandNames[9] = {"00", "1-1", "10", "11", "2-2", "2-1", "20", "21", "22"};
+
+// Babylon's SphericalPolynomial from harmonics h (its updateFromHarmonics, with the
+// constants exact: 1.02333 = k1 A_1, 0.886277 ~ k0 pi, 0.247708 = k20 A_2, ...), and back.
+constexpr const char* kPolyNames[9] = {"x", "y", "z", "xx", "yy", "zz", "yz", "zx", "xy"};
+Nine polynomial_from_harmonics(const Nine& h) {
+  const double a1 = 2 * kPi / 3, a2 = kPi / 4;
+  Nine p{};
+  for (int c = 0; c < 3; ++c) {
+    auto H = [&](int i) { return h[3 * i + c]; };
+    const double k = kAbsK[0] * kPi * H(0), m20 = kAbsK[6] * a2 * H(6), m22 = kAbsK[8] * a2 * H(8);
+    const double v[9] = {-kAbsK[3] * a1 * H(3), -kAbsK[1] * a1 * H(1), kAbsK[2] * a1 * H(2),
+                         k - m20 + m22,         k - m20 - m22,         k + 2 * m20,
+                         -kAbsK[5] * a2 * H(5), -kAbsK[7] * a2 * H(7), kAbsK[4] * a2 * H(4)};
+    for (int i = 0; i < 9; ++i) p[3 * i + c] = v[i] / kPi;
+  }
+  return p;
+}
+Nine harmonics_from_polynomial(const Nine& p) {
+  const double a1 = 2 * kPi / 3, a2 = kPi / 4;
+  Nine h{};
+  for (int c = 0; c < 3; ++c) {
+    auto P = [&](int i) { return p[3 * i + c] * kPi; };
+    h[3 * 0 + c] = (P(3) + P(4) + P(5)) / (3 * kAbsK[0] * kPi);
+    h[3 * 1 + c] = -P(1) / (kAbsK[1] * a1);
+    h[3 * 2 + c] = P(2) / (kAbsK[2] * a1);
+    h[3 * 3 + c] = -P(0) / (kAbsK[3] * a1);
+    h[3 * 4 + c] = P(8) / (kAbsK[4] * a2);
+    h[3 * 5 + c] = -P(6) / (kAbsK[5] * a2);
+    h[3 * 6 + c] = (P(5) - (P(3) + P(4)) / 2) / (3 * kAbsK[6] * a2);
+    h[3 * 7 + c] = -P(7) / (kAbsK[7] * a2);
+    h[3 * 8 + c] = (P(3) - P(4)) / (2 * kAbsK[8] * a2);
+  }
+  return h;
+}
+
+double raw_scale(int l, RawNormalization n) {
+  switch (n) {
+    case RawNormalization::orthonormal: return 1;
+    case RawNormalization::four_pi: return 1 / std::sqrt(4 * kPi);                   // basis sqrt(4 pi) y
+    case RawNormalization::schmidt: return std::sqrt((2 * l + 1) / (4 * kPi));       // basis sqrt(4 pi / (2l+1)) y
+  }
+  return 1;
+}
+
+}  // namespace
+
+const std::vector<std::pair<std::string, LightFormat>>& light_format_names() {
+  static const std::vector<std::pair<std::string, LightFormat>> names = {
+      {"threejs", LightFormat::threejs}, {"filament", LightFormat::filament},
+      {"filament-radiance", LightFormat::filament_radiance}, {"unity", LightFormat::unity},
+      {"gltf", LightFormat::gltf}, {"gltf-khr", LightFormat::gltf_khr}, {"babylon", LightFormat::babylon},
+      {"godot", LightFormat::godot}, {"raw", LightFormat::raw}};
+  return names;
+}
+
+const std::vector<std::pair<std::string, RawNormalization>>& raw_normalization_names() {
+  static const std::vector<std::pair<std::string, RawNormalization>> names = {
+      {"orthonormal", RawNormalization::orthonormal}, {"4pi", RawNormalization::four_pi},
+      {"schmidt", RawNormalization::schmidt}};
+  return names;
+}
+
+FrameMap parse_frame_map(std::string_view text) {
+  FrameMap f;
+  f.q.setZero();
+  f.text = std::string(text);
+  std::stringstream s{std::string(text)};
+  std::string item;
+  int row = 0;
+  std::array<bool, 3> used{};
+  while (std::getline(s, item, ',')) {
+    if (row >= 3) break;
+    double sign = 1;
+    if (!item.empty() && (item[0] == '-' || item[0] == '+')) sign = item[0] == '-' ? -1 : 1, item = item.substr(1);
+    if (item.size() != 1 || item[0] < 'x' || item[0] > 'z' || used[item[0] - 'x'])
+      throw InputError("--frame '" + std::string(text) +
+                       "': expected three signed, distinct axes such as x,z,-y (engine x, y, z in shtool's axes)");
+    used[item[0] - 'x'] = true;
+    f.q(row++, item[0] - 'x') = sign;
+  }
+  if (row != 3 || std::getline(s, item, ','))
+    throw InputError("--frame '" + std::string(text) + "': expected three signed axes such as x,z,-y");
+  return f;
+}
+
+FrameMap default_frame(LightFormat format) {
+  switch (format) {
+    // y-up right-handed engines: engine = (x, z, -y), the mapping of Blender's glTF exporter.
+    case LightFormat::threejs:
+    case LightFormat::filament:
+    case LightFormat::filament_radiance:
+    case LightFormat::godot: return parse_frame_map("x,z,-y");
+    // Unity, left-handed y-up: the glTF frame with z negated (UnityGLTF's import).
+    case LightFormat::unity: return parse_frame_map("x,z,y");
+    // The frame Babylon's default (left-handed) scene evaluates glTF and .env lighting
+    // in: the glTF frame with x negated by its loader's root node.
+    case LightFormat::gltf:
+    case LightFormat::gltf_khr:
+    case LightFormat::babylon: return parse_frame_map("-x,z,-y");
+    case LightFormat::raw: break;
+  }
+  return parse_frame_map("x,y,z");
+}
+
+std::vector<double> to_engine_frame(const FrameMap& frame, const std::vector<double>& coefficients) {
+  std::vector<double> out = coefficients;
+  const Result<Ok> r = apply_orthogonal_map(frame.q, 3, out);
+  if (!r) throw InputError("--frame '" + frame.text + "': " + r.error().message);
+  return out;
+}
+
+std::vector<double> from_engine_frame(const FrameMap& frame, const std::vector<double>& coefficients) {
+  std::vector<double> out = coefficients;
+  const Result<Ok> r = apply_orthogonal_map(frame.q.transpose(), 3, out);
+  if (!r) throw InputError("--frame '" + frame.text + "': " + r.error().message);
+  return out;
+}
+
+ExportedLight export_light(const Lighting& light, LightFormat format, const FrameMap& frame, double intensity,
+                           const RawOptions& raw) {
+  if (!(intensity > 0) || !std::isfinite(intensity)) throw InputError("--intensity must be a positive number");
+  ExportedLight out;
+  auto scaled = [&](Nine v) {
+    for (double& x : v) x *= intensity;
+    return v;
+  };
+  switch (format) {
+    case LightFormat::threejs: {
+      // three.js SphericalHarmonics3: the basis without the phase, radiance; getAt gives L,
+      // getIrradianceAt E (src/math/SphericalHarmonics3.js); LightProbe.toJSON layout.
+      const Nine g = engine(frame, first_nine(light, Quantity::radiance, out.notes));
+      nlohmann::json sh = nlohmann::json::array();
+      for (int i = 0; i < 9; ++i)
+        for (int c = 0; c < 3; ++c) sh.push_back(kSigma[i] * g[3 * i + c]);
+      const nlohmann::json doc = {
+          {"metadata", {{"version", 4.6}, {"type", "Object"}, {"generator", "shtool export-light"}}},
+          {"object",
+           {{"uuid", "5c2c1a3e-0000-4000-8000-5e7001000001"},
+            {"type", "LightProbe"},
+            {"name", "shtool"},
+            {"layers", 1},
+            {"matrix", {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1}},
+            {"up", {0, 1, 0}},
+            {"color", 16777215},
+            {"intensity", intensity},
+            {"sh", sh}}}};
+      out.text = doc.dump(1) + "\n";
+      break;
+    }
+    case LightFormat::filament:
+    case LightFormat::filament_radiance: {
+      // filament: IndirectLight::Builder::irradiance(3, sh) takes E/pi pre-scaled by the
+      // signed basis constants (cmgen's sh.txt, CubemapSH::preprocessSHForShader);
+      // Builder::radiance(3, sh) takes radiance in the phase-carrying basis.
+      const bool irradiance = format == LightFormat::filament;
+      const Nine g =
+          engine(frame, first_nine(light, irradiance ? Quantity::irradiance : Quantity::radiance, out.notes));
+      char line[256];
+      for (int i = 0; i < 9; ++i) {
+        double v[3];
+        for (int c = 0; c < 3; ++c) v[c] = intensity * (irradiance ? kSigma[i] * g[3 * i + c] * kAbsK[i] / kPi : g[3 * i + c]);
+        std::snprintf(line, sizeof line, "(%.17g, %.17g, %.17g); // L%s%s\n", v[0], v[1], v[2], kBandNames[i],
+                      irradiance ? ", irradiance, pre-scaled base" : ", radiance");
+        out.text += line;
+      }
+      if (intensity != 1) out.notes.push_back("--intensity is folded into the coefficients (filament's is in lux)");
+      break;
+    }
+    case LightFormat::unity: {
+      // SphericalHarmonicsL2 holds E/pi pre-scaled by |K_i| in the phase-free basis of the
+      // left-handed frame; ShadeSH9's unity_SH* constants by HDRP's PackCoefficients.
+      const Nine g = engine(frame, first_nine(light, Quantity::irradiance, out.notes));
+      Nine sh{};
+      for (int i = 0; i < 9; ++i)
+        for (int c = 0; c < 3; ++c) sh[3 * i + c] = intensity * kSigma[i] * g[3 * i + c] * kAbsK[i] / kPi;
+      nlohmann::json l2 = nlohmann::json::array();
+      for (int c = 0; c < 3; ++c)
+        for (int i = 0; i < 9; ++i) l2.push_back(sh[3 * i + c]);
+      auto s = [&](int i, int c) { return sh[3 * i + c]; };
+      nlohmann::json doc = {{"SphericalHarmonicsL2", l2}};
+      const char* rgb = "rgb";
+      for (int c = 0; c < 3; ++c) {
+        doc[std::string("unity_SHA") + rgb[c]] = {s(3, c), s(1, c), s(2, c), s(0, c) - s(6, c)};
+        doc[std::string("unity_SHB") + rgb[c]] = {s(4, c), s(5, c), 3 * s(6, c), s(7, c)};
+      }
+      doc["unity_SHC"] = {s(8, 0), s(8, 1), s(8, 2), 1};
+      out.text = doc.dump(1) + "\n";
+      if (intensity != 1) out.notes.push_back("--intensity is folded into the coefficients");
+      break;
+    }
+    case LightFormat::gltf:
+    case LightFormat::gltf_khr: {
+      // EXT_lights_image_based: irradianceCoefficients as Babylon's loader reads them
+      // (irradiance, phase-carrying basis, its left-handed frame); always an intensity
+      // (Babylon's loader makes the SH NaN without one).
+      const Nine g = engine(frame, first_nine(light, Quantity::irradiance, out.notes));
+      nlohmann::json doc = {{"asset", {{"version", "2.0"}, {"generator", "shtool export-light"}}}};
+      if (format == LightFormat::gltf) {
+        doc["extensionsUsed"] = {"EXT_lights_image_based"};
+        doc["extensions"]["EXT_lights_image_based"]["lights"] = {
+            {{"name", "shtool"}, {"intensity", intensity}, {"rotation", {0, 0, 0, 1}}, {"irradianceCoefficients", rows_json(g)}}};
+        doc["scenes"] = {{{"nodes", nlohmann::json::array()}, {"extensions", {{"EXT_lights_image_based", {{"light", 0}}}}}}};
+      } else {
+        // The draft KHR_lights_environment has no intensity and no rotation.
+        doc["extensionsUsed"] = {"KHR_lights_environment"};
+        doc["extensions"]["KHR_lights_environment"]["lights"] = {{{"name", "shtool"}, {"irradianceCoefficients", rows_json(scaled(g))}}};
+        doc["scenes"] = {{{"nodes", nlohmann::json::array()}, {"extensions", {{"KHR_lights_environment", {{"light", 0}}}}}}};
+        if (intensity != 1) out.notes.push_back("--intensity is folded into the coefficients (no intensity field)");
+      }
+      doc["scene"] = 0;
+      out.text = rows_text(doc);
+      out.notes.push_back("only the diffuse part (irradianceCoefficients) is written; no specular images");
+      break;
+    }
+    case LightFormat::babylon: {
+      // The .env manifest's "irradiance": a SphericalPolynomial, which Babylon turns back
+      // into harmonics (E/pi) for its default shader path (Misc/environmentTextureTools).
+      Nine h = engine(frame, first_nine(light, Quantity::irradiance, out.notes));
+      for (double& v : h) v *= intensity / kPi;
+      const Nine p = polynomial_from_harmonics(h);
+      nlohmann::json poly;
+      for (int i = 0; i < 9; ++i) poly[kPolyNames[i]] = {p[3 * i], p[3 * i + 1], p[3 * i + 2]};
+      nlohmann::json harmonics;
+      // Babylon's SphericalHarmonics field names.
+      static constexpr const char* kHarmonicNames[9] = {"l00", "l1_1", "l10", "l11", "l2_2", "l2_1", "l20", "l21", "l22"};
+      for (int i = 0; i < 9; ++i) harmonics[kHarmonicNames[i]] = {h[3 * i], h[3 * i + 1], h[3 * i + 2]};
+      out.text = rows_text({{"irradiance", poly}, {"harmonics", harmonics}});
+      if (intensity != 1) out.notes.push_back("--intensity is folded into the coefficients");
+      break;
+    }
+    case LightFormat::godot: {
+      // LightmapGI probe captures: the phase-free basis, L/pi (lm_compute.glsl's 4/N).
+      const Nine g = engine(frame, first_nine(light, Quantity::radiance, out.notes));
+      Nine v{};
+      for (int i = 0; i < 9; ++i)
+        for (int c = 0; c < 3; ++c) v[3 * i + c] = intensity * kSigma[i] * g[3 * i + c] / kPi;
+      out.text = rows_text({{"godot_lightmap_probe_sh", rows_json(v)}});
+      if (intensity != 1) out.notes.push_back("--intensity is folded into the coefficients");
+      break;
+    }
+    case LightFormat::raw: {
+      std::vector<double> g = to_engine_frame(frame, light.coefficients);
+      for (int i = 0; i < sh_count(light.order); ++i) {
+        const int l = sh_band(i), m = i - l * (l + 1);
+        const double s = (raw.condon_shortley || m % 2 == 0 ? 1 : -1) * raw_scale(l, raw.normalization) * intensity;
+        for (int c = 0; c < 3; ++c) g[3 * i + c] *= s;
+      }
+      nlohmann::json rows = nlohmann::json::array();
+      for (int i = 0; i < sh_count(light.order); ++i) rows.push_back({g[3 * i], g[3 * i + 1], g[3 * i + 2]});
+      std::string norm;
+      for (const auto& [n, v] : raw_normalization_names())
+        if (v == raw.normalization) norm = n;
+      out.text = rows_text({{"order", light.order},
+                            {"quantity", lighting::quantity_name(light.quantity)},
+                            {"condon_shortley", raw.condon_shortley},
+                            {"normalization", norm},
+                            {"index", "acn"},
+                            {"frame", frame.text},
+                            {"coefficients", rows}});
+      break;
+    }
+  }
+  return out;
+}
+
+Lighting import_light(std::string_view text, const std::filesystem::path& name, LightFormat format,
+                      const FrameMap& frame, Quantity quantity, const RawOptions& raw) {
+  (void)raw;
+  if (format == LightFormat::filament || format == LightFormat::filament_radiance) {
+    const bool irradiance = format == LightFormat::filament;
+    static const std::regex row(
+        R"(\(\s*([-+0-9.eE]+)\s*,\s*([-+0-9.eE]+)\s*,\s*([-+0-9.eE]+)\s*\))");
+    Nine g{};
+    int i = 0;
+    const std::string s(text);
+    for (auto it = std::sregex_iterator(s.begin(), s.end(), row); it != std::sregex_iterator(); ++it, ++i) {
+      if (i >= 9) bad(name, "more than 9 ( r, g, b) rows");
+      for (int c = 0; c < 3; ++c) {
+        char* end = nullptr;
+        const std::string v = (*it)[c + 1].str();
+        const double x = std::strtod(v.c_str(), &end);
+        if (end != v.c_str() + v.size() || !std::isfinite(x)) bad(name, "'" + v + "' is not a finite number");
+        g[3 * i + c] = irradiance ? kSigma[i] * x * kPi / kAbsK[i] : x;
+      }
+    }
+    if (i != 9) bad(name, "expected 9 ( r, g, b) rows, found " + std::to_string(i));
+    return from_nine(frame, g, irradiance ? Quantity::irradiance : Quantity::radiance, quantity);
+  }
+  const nlohmann::json doc = parse_json_input(text, name, "file");
+  if (!doc.is_object()) bad(name, "not a JSON object");
+  switch (format) {
+    case LightFormat::threejs: {
+      const nlohmann::json* object = doc.contains("object") ? &doc["object"] : &doc;
+      if (!object->is_object() || !object->contains("sh")) bad(name, "no object.sh (a three.js LightProbe)");
+      const nlohmann::json& sh = (*object)["sh"];
+      if (!sh.is_array() || sh.size() != 27) bad(name, "object.sh must hold 27 numbers");
+      const double s = object->contains("intensity") ? finite_number((*object)["intensity"], name, "intensity") : 1;
+      Nine g{};
+      for (int i = 0; i < 27; ++i) g[i] = kSigma[i / 3] * finite_number(sh[i], name, "sh[" + std::to_string(i) + "]") * s;
+      return from_nine(frame, g, Quantity::radiance, quantity);
+    }
+    case LightFormat::unity: {
+      const auto it = doc.find("SphericalHarmonicsL2");
+      if (it == doc.end() || !it->is_array() || it->size() != 27) bad(name, "SphericalHarmonicsL2 must hold 27 numbers");
+      Nine g{};
+      for (int c = 0; c < 3; ++c)
+        for (int i = 0; i < 9; ++i)
+          g[3 * i + c] = kSigma[i] * finite_number((*it)[9 * c + i], name, "SphericalHarmonicsL2") * kPi / kAbsK[i];
+      return from_nine(frame, g, Quantity::irradiance, quantity);
+    }
+    case LightFormat::gltf:
+    case LightFormat::gltf_khr: {
+      const char* ext = format == LightFormat::gltf ? "EXT_lights_image_based" : "KHR_lights_environment";
+      const nlohmann::json* lights = nullptr;
+      if (doc.contains("extensions") && doc["extensions"].is_object() && doc["extensions"].contains(ext) &&
+          doc["extensions"][ext].is_object() && doc["extensions"][ext].contains("lights"))
+        lights = &doc["extensions"][ext]["lights"];
+      if (!lights || !lights->is_array() || lights->empty() || !(*lights)[0].is_object())
+        bad(name, std::string("no extensions.") + ext + ".lights[0]");
+      const nlohmann::json& light = (*lights)[0];
+      if (!light.contains("irradianceCoefficients")) bad(name, "the light has no irradianceCoefficients");
+      Nine g = rows_of(light["irradianceCoefficients"], name, "irradianceCoefficients");
+      const double s = light.contains("intensity") ? finite_number(light["intensity"], name, "intensity") : 1;
+      for (double& v : g) v *= s;
+      return from_nine(frame, g, Quantity::irradiance, quantity);
+    }
+    case LightFormat::babylon: {
+      const nlohmann::json* poly = doc.contains("irradiance") ? &doc["irradiance"] : &doc;
+      Nine p{};
+      for (int i = 0; i < 9; ++i) {
+        if (!poly->is_object() || !poly->contains(kPolyNames[i])) bad(name, std::string("irradiance.") + kPolyNames[i] + " is missing");
+        const nlohmann::json& v = (*poly)[kPolyNames[i]];
+        if (!v.is_array() || v.size() != 3) bad(name, std::string("irradiance.") + kPolyNames[i] + " is not [r, g, b]");
+        for (int c = 0; c < 3; ++c) p[3 * i + c] = finite_number(v[c], name, std::string("irradiance.") + kPolyNames[i]);
+      }
+      Nine h = harmonics_from_polynomial(p);
+      for (double& v : h) v *= kPi;
+      return from_nine(frame, h, Quantity::irradiance, quantity);
+    }
+    case LightFormat::godot: {
+      if (!doc.contains("godot_lightmap_probe_sh")) bad(name, "no godot_lightmap_probe_sh");
+      Nine g = rows_of(doc["godot_lightmap_probe_sh"], name, "godot_lightmap_probe_sh");
+      for (int i = 0; i < 27; ++i) g[i] *= kSigma[i / 3] * kPi;
+      return from_nine(frame, g, Quantity::radiance, quantity);
+    }
+    case LightFormat::raw: {
+      // The file says how it was written; --frame is the file's frame.
+      const auto order = doc.find("order");
+      if (order == doc.end() || !order->is_number_integer() || order->get<long long>() < 1 || order->get<long long>() > 32)
+        bad(name, "\"order\" must be an integer in 1..32");
+      const int n = order->get<int>();
+      const bool cs = doc.value("condon_shortley", true);
+      RawNormalization norm = RawNormalization::orthonormal;
+      if (doc.contains("normalization")) {
+        bool known = false;
+        for (const auto& [k, v] : raw_normalization_names())
+          if (doc["normalization"] == k) norm = v, known = true;
+        if (!known) bad(name, "\"normalization\" must be orthonormal, 4pi or schmidt");
+      }
+      FrameMap f = frame;
+      if (doc.contains("frame") && doc["frame"].is_string()) f = parse_frame_map(doc["frame"].get<std::string>());
+      Quantity stored = Quantity::radiance;
+      if (doc.contains("quantity")) {
+        if (doc["quantity"] == "irradiance") stored = Quantity::irradiance;
+        else if (doc["quantity"] != "radiance") bad(name, "\"quantity\" must be radiance or irradiance");
+      }
+      const auto rows = doc.find("coefficients");
+      if (rows == doc.end() || !rows->is_array() || rows->size() != static_cast<std::size_t>(sh_count(n)))
+        bad(name, "\"coefficients\" must hold order^2 rows");
+      std::vector<double> g(static_cast<std::size_t>(sh_count(n)) * 3);
+      for (int i = 0; i < sh_count(n); ++i) {
+        const nlohmann::json& r = (*rows)[i];
+        if (!r.is_array() || r.size() != 3) bad(name, "coefficient row " + std::to_string(i) + " is not [r, g, b]");
+        const int l = sh_band(i), m = i - l * (l + 1);
+        const double s = (cs || m % 2 == 0 ? 1 : -1) / raw_scale(l, norm);
+        for (int c = 0; c < 3; ++c) g[3 * i + c] = s * finite_number(r[c], name, "coefficient row " + std::to_string(i));
+      }
+      Lighting l;
+      l.order = n;
+      l.quantity = stored;
+      l.coefficients = from_engine_frame(f, g);
+      if (quantity != stored) {
+        for (int i = 0; i < sh_count(n); ++i) {
+          const double a = clamped_cosine_band(sh_band(i));
+          if (a == 0 && quantity == Quantity::radiance) {
+            bool zero = true;
+            for (int c = 0; c < 3; ++c) zero = zero && l.coefficients[3 * i + c] == 0;
+            if (!zero) bad(name, "irradiance band " + std::to_string(sh_band(i)) + " is not zero: no radiance has it");
+          }
+          for (int c = 0; c < 3; ++c) l.coefficients[3 * i + c] *= quantity == Quantity::irradiance ? a : (a == 0 ? 0 : 1 / a);
+        }
+        l.quantity = quantity;
+      }
+      return l;
+    }
+    default: break;
+  }
+  bad(name, "unknown format");
+}
+
+}  // namespace shtool::interop

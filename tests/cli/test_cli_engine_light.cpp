@@ -1,0 +1,361 @@
+// export-light and import-light: round trips for every format; every frame map checked
+// by f'(O d) = f(d); three.js and Babylon.js evaluating the exported files with their own
+// code in node; filament's, Unity's and Godot's shader formulas written out from their
+// sources; bad input.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "interop/engine_light.h"
+#include "lighting/lighting_output.h"
+#include "run_command.h"
+#include "shtool/irradiance.h"
+#include "shtool/sh.h"
+
+namespace shtool {
+namespace {
+
+namespace fs = std::filesystem;
+using lighting::Lighting;
+using lighting::Quantity;
+using test::run_command;
+constexpr double kPi = std::numbers::pi;
+const std::string kExe = SHTOOL_EXE;
+
+fs::path scratch(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("shtool_engine_light_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  return dir / name;
+}
+
+std::string read_text(const fs::path& p) {
+  std::ifstream f(p, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(f), {});
+}
+
+Lighting random_light(int order, Quantity q, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g;
+  Lighting l;
+  l.order = order;
+  l.quantity = q;
+  l.coefficients.resize(static_cast<std::size_t>(sh_count(order)) * 3);
+  for (double& v : l.coefficients) v = g(rng);
+  l.coefficients[0] += 5, l.coefficients[1] += 5, l.coefficients[2] += 5;
+  if (q == Quantity::irradiance)  // a real irradiance: A_l times a radiance
+    for (int i = 0; i < sh_count(order); ++i)
+      for (int c = 0; c < 3; ++c) l.coefficients[3 * i + c] *= clamped_cosine_band(sh_band(i));
+  return l;
+}
+
+std::array<double, 3> eval(const Lighting& l, const Eigen::Vector3d& w) {
+  std::vector<double> y(sh_count(l.order));
+  eval_sh<double>(l.order, w, y);
+  std::array<double, 3> out{};
+  for (int i = 0; i < sh_count(l.order); ++i)
+    for (int c = 0; c < 3; ++c) out[c] += l.coefficients[3 * i + c] * y[i];
+  return out;
+}
+
+// The light's irradiance (any quantity in, order 3 used: what the engines keep).
+Lighting irradiance_of(Lighting l) {
+  l.order = std::min(l.order, 3);
+  l.coefficients.resize(static_cast<std::size_t>(sh_count(l.order)) * 3);
+  if (l.quantity == Quantity::radiance)
+    for (int i = 0; i < sh_count(l.order); ++i)
+      for (int c = 0; c < 3; ++c) l.coefficients[3 * i + c] *= clamped_cosine_band(sh_band(i));
+  l.quantity = Quantity::irradiance;
+  return l;
+}
+
+const std::vector<std::string> kFormats = {"threejs", "filament", "filament-radiance", "unity", "gltf",
+                                           "gltf-khr", "babylon", "godot", "raw"};
+
+TEST(EngineLight, ExportThenImportIsTheIdentity) {
+  for (Quantity q : {Quantity::radiance, Quantity::irradiance}) {
+    for (int order : {2, 3, 5}) {
+      const Lighting l = random_light(order, q, 7 + order);
+      const fs::path in = scratch("light.json");
+      std::ofstream(in) << lighting::lighting_json(l);
+      for (const std::string& f : kFormats) {
+        const fs::path out = scratch("exported." + f), back = scratch("back.json");
+        for (const std::string& intensity : {"1", "2.5"}) {
+          auto r = run_command({kExe, "export-light", in.string(), "--format", f, "--out", out.string(), "--intensity", intensity});
+          ASSERT_EQ(r.exit_code, 0) << f << ": " << r.err;
+          if (order > 3 && f != "raw") EXPECT_NE(r.err.find("dropped"), std::string::npos) << f << ": " << r.err;
+          r = run_command({kExe, "import-light", out.string(), "--format", f, "--json", back.string(), "--quantity",
+                           lighting::quantity_name(q)});
+          ASSERT_EQ(r.exit_code, 0) << f << ": " << r.err;
+          const Lighting got = lighting::read_lighting_json(back, "back");
+          const int kept = f == "raw" ? order : std::min(order, 3);
+          const double s = std::stod(intensity);
+          for (int i = 0; i < sh_count(kept); ++i)
+            for (int c = 0; c < 3; ++c)
+              ASSERT_NEAR(got.coefficients[3 * i + c], s * l.coefficients[3 * i + c], 1e-13 * (1 + std::abs(s * l.coefficients[3 * i + c])))
+                  << f << " order " << order << " coefficient " << i;
+          for (int i = sh_count(kept); i < sh_count(got.order); ++i) EXPECT_EQ(got.coefficients[3 * i], 0.0) << f;
+        }
+      }
+    }
+  }
+}
+
+// Every signed permutation, proper or not: the engine-frame coefficients evaluated with
+// the basis formula at O d equal the light at d (1000 random d), at orders up to 6.
+TEST(EngineLight, EveryFrameMapCarriesTheLight) {
+  const std::array<std::array<int, 3>, 6> perms = {{{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}}};
+  const Lighting l = random_light(6, Quantity::radiance, 3);
+  std::mt19937 rng(5);
+  std::normal_distribution<double> g;
+  int maps = 0;
+  for (const auto& p : perms)
+    for (int signs = 0; signs < 8; ++signs) {
+      std::string text;
+      for (int k = 0; k < 3; ++k) text += std::string(k ? "," : "") + ((signs >> k) & 1 ? "-" : "") + char('x' + p[k]);
+      const interop::FrameMap f = interop::parse_frame_map(text);
+      Lighting e = l;
+      e.coefficients = interop::to_engine_frame(f, l.coefficients);
+      for (int k = 0; k < 1000; ++k) {
+        const Eigen::Vector3d d = Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized();
+        const auto a = eval(l, d), b = eval(e, f.q * d);
+        for (int c = 0; c < 3; ++c) ASSERT_NEAR(b[c], a[c], 1e-12) << text;
+      }
+      const std::vector<double> back = interop::from_engine_frame(f, e.coefficients);
+      for (std::size_t i = 0; i < back.size(); ++i) ASSERT_NEAR(back[i], l.coefficients[i], 1e-13) << text;
+      ++maps;
+    }
+  EXPECT_EQ(maps, 48);
+}
+
+// The reflections act on c_lm by signs (docs/interop.md).
+TEST(EngineLight, ReflectionsAreSigns) {
+  const Lighting l = random_light(5, Quantity::radiance, 9);
+  struct Case {
+    const char* map;
+    int (*sign)(int l, int m);
+  };
+  const Case cases[] = {
+      {"x,y,-z", [](int l, int m) { return (l + m) % 2 == 0 ? 1 : -1; }},
+      {"x,-y,z", [](int, int m) { return m < 0 ? -1 : 1; }},
+      {"-x,y,z", [](int, int m) { return m >= 0 ? (m % 2 == 0 ? 1 : -1) : ((m + 1) % 2 == 0 ? 1 : -1); }},
+  };
+  for (const Case& c : cases) {
+    const std::vector<double> e = interop::to_engine_frame(interop::parse_frame_map(c.map), l.coefficients);
+    for (int lb = 0; lb < 5; ++lb)
+      for (int m = -lb; m <= lb; ++m)
+        for (int ch = 0; ch < 3; ++ch)
+          EXPECT_NEAR(e[3 * sh_index(lb, m) + ch], c.sign(lb, m) * l.coefficients[3 * sh_index(lb, m) + ch], 1e-13) << c.map;
+  }
+}
+
+// 50 random unit directions of the engine's frame, and the shtool direction each stands for.
+struct Directions {
+  std::vector<Eigen::Vector3d> engine, shtool;
+};
+Directions directions(const interop::FrameMap& f) {
+  std::mt19937 rng(21);
+  std::normal_distribution<double> g;
+  Directions d;
+  for (int k = 0; k < 50; ++k) {
+    const Eigen::Vector3d e = Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized();
+    d.engine.push_back(e);
+    d.shtool.push_back(f.q.transpose() * e);
+  }
+  return d;
+}
+
+// Runs tests/consumer/node/eval_light.mjs with the engines installed from npm into the
+// build folder (once). Without node or npm: a failure under CI, a skip elsewhere.
+bool node_consumers(std::string& why) {
+  const fs::path dir = fs::path(SHTOOL_BINARY_DIR) / "node_consumers";
+  if (run_command({"node", "--version"}).exit_code != 0) return why = "node is not installed", false;
+  if (!fs::exists(dir / "node_modules" / "three") || !fs::exists(dir / "node_modules" / "@babylonjs" / "core")) {
+    fs::create_directories(dir);
+    fs::copy_file(fs::path(SHTOOL_SOURCE_DIR) / "tests/consumer/node/package.json", dir / "package.json",
+                  fs::copy_options::overwrite_existing);
+    test::CommandOptions o;
+    o.working_directory = dir.string();
+    o.timeout_seconds = 600;
+    const auto r = run_command({"npm", "install", "--no-audit", "--no-fund", "--loglevel=error"}, o);
+    if (r.exit_code != 0) return why = "npm install failed: " + r.err, false;
+  }
+  fs::copy_file(fs::path(SHTOOL_SOURCE_DIR) / "tests/consumer/node/eval_light.mjs", dir / "eval_light.mjs",
+                fs::copy_options::overwrite_existing);
+  return true;
+}
+
+nlohmann::json consumer_eval(const std::string& format, const fs::path& file, const Directions& d) {
+  const fs::path dirs = scratch("dirs.json");
+  nlohmann::json j = nlohmann::json::array();
+  for (const auto& e : d.engine) j.push_back({e.x(), e.y(), e.z()});
+  std::ofstream(dirs) << j.dump();
+  const auto r = run_command({"node", (fs::path(SHTOOL_BINARY_DIR) / "node_consumers" / "eval_light.mjs").string(),
+                              format, file.string(), dirs.string()});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  return nlohmann::json::parse(r.out);
+}
+
+TEST(EngineLight, TheConsumersReadWhatWasMeant) {
+  std::string why;
+  if (!node_consumers(why)) {
+    if (std::getenv("CI")) FAIL() << why;
+    GTEST_SKIP() << why << " (set CI to make this a failure)";
+  }
+  const Lighting l = random_light(4, Quantity::radiance, 13);  // band 3 is dropped on export
+  const fs::path in = scratch("consumer.json");
+  std::ofstream(in) << lighting::lighting_json(l);
+  const Lighting e = irradiance_of(l);
+  Lighting l3 = l;
+  l3.order = 3;
+  l3.coefficients.resize(27);
+  // three.js: radiance and irradiance, the intensity field applied by three.
+  {
+    const fs::path out = scratch("probe.json");
+    ASSERT_EQ(run_command({kExe, "export-light", in.string(), "--format", "threejs", "--intensity", "2", "--out", out.string()}).exit_code, 0);
+    const Directions d = directions(interop::default_frame(interop::LightFormat::threejs));
+    const nlohmann::json got = consumer_eval("threejs", out, d);
+    ASSERT_EQ(got.size(), 50u);
+    for (int k = 0; k < 50; ++k) {
+      const auto L = eval(l3, d.shtool[k]), E = eval(e, d.shtool[k]);
+      for (int c = 0; c < 3; ++c) {
+        // three's constants have 6 digits (0.282095, 0.488603, ...).
+        EXPECT_NEAR(got[k]["radiance"][c].get<double>(), 2 * L[c], 2e-5 * (1 + std::abs(L[c])));
+        EXPECT_NEAR(got[k]["irradiance"][c].get<double>(), 2 * E[c], 2e-5 * (1 + std::abs(E[c])));
+      }
+    }
+  }
+  // Babylon.js, through its glTF EXT_lights_image_based loader steps and through a .env
+  // manifest's polynomial: E / pi at the direction of its default (left-handed) scene.
+  for (const std::string f : {"gltf", "babylon"}) {
+    const fs::path out = scratch("exported_" + f + ".json");
+    ASSERT_EQ(run_command({kExe, "export-light", in.string(), "--format", f, "--out", out.string()}).exit_code, 0);
+    const Directions d = directions(interop::default_frame(interop::LightFormat::babylon));
+    const nlohmann::json got = consumer_eval(f, out, d);
+    ASSERT_EQ(got.size(), 50u);
+    for (int k = 0; k < 50; ++k) {
+      const auto E = eval(e, d.shtool[k]);
+      for (int c = 0; c < 3; ++c)
+        EXPECT_NEAR(got[k]["irradiance_over_pi"][c].get<double>(), E[c] / kPi, 2e-5 * (1 + std::abs(E[c]))) << f;
+    }
+  }
+}
+
+// Engines that cannot run here: their shader formulas, written out from their sources.
+TEST(EngineLight, ShaderFormulasOfFilamentUnityAndGodot) {
+  const Lighting l = random_light(3, Quantity::radiance, 17);
+  const Lighting e = irradiance_of(l);
+  const fs::path in = scratch("shader.json");
+  std::ofstream(in) << lighting::lighting_json(l);
+  auto exported = [&](const std::string& f) {
+    const fs::path out = scratch("shader." + f);
+    EXPECT_EQ(run_command({kExe, "export-light", in.string(), "--format", f, "--out", out.string()}).exit_code, 0);
+    return read_text(out);
+  };
+  // filament shaders/src/surface_light_indirect.fs Irradiance_SphericalHarmonics: the
+  // nine pre-scaled values against (1, y, z, x, yx, yz, 3z^2 - 1, zx, x^2 - y^2): E / pi.
+  {
+    const std::string text = exported("filament");
+    std::array<std::array<double, 3>, 9> sh{};
+    std::size_t at = 0;
+    for (auto& row : sh) {
+      at = text.find('(', at) + 1;
+      for (double& v : row) {
+        v = std::stod(text.substr(at));
+        at = text.find_first_of(",)", at) + 1;
+      }
+    }
+    const Directions d = directions(interop::default_frame(interop::LightFormat::filament));
+    for (int k = 0; k < 50; ++k) {
+      const Eigen::Vector3d n = d.engine[k];
+      const auto E = eval(e, d.shtool[k]);
+      for (int c = 0; c < 3; ++c) {
+        const double v = sh[0][c] + sh[1][c] * n.y() + sh[2][c] * n.z() + sh[3][c] * n.x() + sh[4][c] * n.y() * n.x() +
+                         sh[5][c] * n.y() * n.z() + sh[6][c] * (3 * n.z() * n.z() - 1) + sh[7][c] * n.z() * n.x() +
+                         sh[8][c] * (n.x() * n.x() - n.y() * n.y());
+        EXPECT_NEAR(v, E[c] / kPi, 1e-12) << "filament";
+      }
+    }
+  }
+  // Unity UnityCG.cginc ShadeSH9: dot(SHA, (n, 1)) + dot(SHB, n.xyzz * n.yzzx) + SHC (x^2 - y^2).
+  {
+    const nlohmann::json j = nlohmann::json::parse(exported("unity"));
+    const Directions d = directions(interop::default_frame(interop::LightFormat::unity));
+    const char* rgb = "rgb";
+    for (int k = 0; k < 50; ++k) {
+      const Eigen::Vector3d n = d.engine[k];
+      const auto E = eval(e, d.shtool[k]);
+      const double vb[4] = {n.x() * n.y(), n.y() * n.z(), n.z() * n.z(), n.z() * n.x()};
+      for (int c = 0; c < 3; ++c) {
+        const auto& a = j[std::string("unity_SHA") + rgb[c]];
+        const auto& b = j[std::string("unity_SHB") + rgb[c]];
+        double v = a[0].get<double>() * n.x() + a[1].get<double>() * n.y() + a[2].get<double>() * n.z() + a[3].get<double>();
+        for (int q = 0; q < 4; ++q) v += b[q].get<double>() * vb[q];
+        v += j["unity_SHC"][c].get<double>() * (n.x() * n.x() - n.y() * n.y());
+        EXPECT_NEAR(v, E[c] / kPi, 1e-12) << "unity";
+      }
+    }
+  }
+  // Godot scene_forward_clustered.glsl, the LightmapGI capture branch: constants
+  // 0.886227, 1.023327, 0.858086, 0.247708, 0.429043 on L / pi data give E / pi.
+  {
+    const nlohmann::json j = nlohmann::json::parse(exported("godot"))["godot_lightmap_probe_sh"];
+    const Directions d = directions(interop::default_frame(interop::LightFormat::godot));
+    const double c1 = 0.886227, c2 = 1.023327, c3 = 0.858086, c4 = 0.247708, c5 = 0.429043;
+    for (int k = 0; k < 50; ++k) {
+      const Eigen::Vector3d n = d.engine[k];
+      const auto E = eval(e, d.shtool[k]);
+      for (int c = 0; c < 3; ++c) {
+        auto s = [&](int i) { return j[i][c].get<double>(); };
+        const double v = c1 * s(0) + c2 * (s(1) * n.y() + s(2) * n.z() + s(3) * n.x()) +
+                         c3 * (s(4) * n.x() * n.y() + s(5) * n.y() * n.z() + s(7) * n.x() * n.z()) +
+                         c4 * s(6) * (3 * n.z() * n.z() - 1) + c5 * s(8) * (n.x() * n.x() - n.y() * n.y());
+        EXPECT_NEAR(v, E[c] / kPi, 2e-6 * (1 + std::abs(E[c]))) << "godot";  // 6-digit constants
+      }
+    }
+  }
+}
+
+TEST(EngineLight, BadInput) {
+  const fs::path in = scratch("bad_in.json");
+  std::ofstream(in) << lighting::lighting_json(random_light(3, Quantity::radiance, 1));
+  const fs::path bad_probe = scratch("bad_probe.json"), bad_txt = scratch("bad_sh.txt");
+  std::ofstream(bad_probe) << R"({"object": {"type": "LightProbe", "sh": [1, 2, 3]}})";
+  std::ofstream(bad_txt) << "(1, 2, 3); // L00\n(1, 2, nan); // L1-1\n";
+  struct Case {
+    std::vector<std::string> args;
+    std::string message;
+  };
+  const fs::path out = scratch("bad_out");
+  const std::vector<Case> cases = {
+      {{"export-light", in.string(), "--format", "unreal", "--out", out.string()}, "--format"},
+      {{"export-light", in.string(), "--format", "threejs", "--frame", "x,x,y", "--out", out.string()}, "--frame"},
+      {{"export-light", in.string(), "--format", "threejs", "--frame", "x,z", "--out", out.string()}, "--frame"},
+      {{"export-light", in.string(), "--format", "threejs", "--intensity", "-1", "--out", out.string()}, "--intensity"},
+      {{"export-light", scratch("missing.json").string(), "--format", "threejs", "--out", out.string()}, "missing.json"},
+      {{"import-light", bad_probe.string(), "--format", "threejs", "--json", out.string()}, "27 numbers"},
+      {{"import-light", bad_txt.string(), "--format", "filament", "--json", out.string()}, "9"},
+      {{"import-light", in.string(), "--format", "gltf", "--json", out.string()}, "EXT_lights_image_based"},
+  };
+  for (const Case& c : cases) {
+    fs::remove(out);
+    std::vector<std::string> argv = {kExe};
+    argv.insert(argv.end(), c.args.begin(), c.args.end());
+    const auto r = run_command(argv);
+    EXPECT_EQ(r.exit_code, 1) << c.args[0] << " " << c.message << ": " << r.err;
+    EXPECT_NE(r.err.find(c.message), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out));
+  }
+}
+
+}  // namespace
+}  // namespace shtool
