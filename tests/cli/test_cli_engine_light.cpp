@@ -18,6 +18,7 @@
 
 #include "interop/engine_light.h"
 #include "lighting/lighting_output.h"
+#include "node_consumers.h"
 #include "run_command.h"
 #include "shtool/irradiance.h"
 #include "shtool/sh.h"
@@ -174,26 +175,6 @@ Directions directions(const interop::FrameMap& f) {
   return d;
 }
 
-// Runs tests/consumer/node/eval_light.mjs with the engines installed from npm into the
-// build folder (once). Without node or npm: a failure under CI, a skip elsewhere.
-bool node_consumers(std::string& why) {
-  const fs::path dir = fs::path(SHTOOL_BINARY_DIR) / "node_consumers";
-  if (run_command({"node", "--version"}).exit_code != 0) return why = "node is not installed", false;
-  if (!fs::exists(dir / "node_modules" / "three") || !fs::exists(dir / "node_modules" / "@babylonjs" / "core")) {
-    fs::create_directories(dir);
-    fs::copy_file(fs::path(SHTOOL_SOURCE_DIR) / "tests/consumer/node/package.json", dir / "package.json",
-                  fs::copy_options::overwrite_existing);
-    test::CommandOptions o;
-    o.working_directory = dir.string();
-    o.timeout_seconds = 600;
-    const auto r = run_command({"npm", "install", "--no-audit", "--no-fund", "--loglevel=error"}, o);
-    if (r.exit_code != 0) return why = "npm install failed: " + r.err, false;
-  }
-  fs::copy_file(fs::path(SHTOOL_SOURCE_DIR) / "tests/consumer/node/eval_light.mjs", dir / "eval_light.mjs",
-                fs::copy_options::overwrite_existing);
-  return true;
-}
-
 nlohmann::json consumer_eval(const std::string& format, const fs::path& file, const Directions& d) {
   const fs::path dirs = scratch("dirs.json");
   nlohmann::json j = nlohmann::json::array();
@@ -207,7 +188,7 @@ nlohmann::json consumer_eval(const std::string& format, const fs::path& file, co
 
 TEST(EngineLight, TheConsumersReadWhatWasMeant) {
   std::string why;
-  if (!node_consumers(why)) {
+  if (!test::node_consumers(why)) {
     if (std::getenv("CI")) FAIL() << why;
     GTEST_SKIP() << why << " (set CI to make this a failure)";
   }

@@ -7,6 +7,7 @@
 
 #include <array>
 #include <bit>
+#include <cstdlib>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -18,6 +19,9 @@
 
 #include <Eigen/Dense>
 
+#include <nlohmann/json.hpp>
+
+#include "node_consumers.h"
 #include "run_command.h"
 
 namespace {
@@ -215,6 +219,42 @@ TEST(CliTransformSplats, ColoursPositionsOrientationsAndScales) {
       }
     }
   }
+}
+
+// @playcanvas/splat-transform, a 3DGS tool with its own SH rotation, rotates the same
+// splats' colours by the same quaternion to the same numbers.
+TEST(CliTransformSplats, SplatTransformAgrees) {
+  std::string why;
+  if (!shtool::test::node_consumers(why)) {
+    if (std::getenv("CI")) FAIL() << why;
+    GTEST_SKIP() << why << " (set CI to make this a failure)";
+  }
+  const std::vector<Splat> before = random_splats(40, 3, 31);
+  const fs::path in = scratch("pc_in.ply"), out = scratch("pc_out.ply"), json = scratch("pc_in.json");
+  std::ofstream(in, std::ios::binary) << write_ply(before, 3, "binary_little_endian");
+  const Eigen::Quaterniond q = Eigen::Quaterniond(0.3, 0.5, -0.7, 0.2).normalized();
+  std::ostringstream quat;
+  quat.precision(17);
+  quat << q.w() << "," << q.x() << "," << q.y() << "," << q.z();
+  const auto r = run_command({kExe, "transform-splats", in.string(), "--quat", quat.str(), "--out", out.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::vector<Splat> after = read_ply(read_text(out), 3, "binary_little_endian", before.size());
+  nlohmann::json doc = {{"quat", {q.w(), q.x(), q.y(), q.z()}}, {"rest", nlohmann::json::array()}};
+  for (const Splat& s : before) {
+    nlohmann::json row = nlohmann::json::array();
+    for (int c = 0; c < 3; ++c)
+      for (int k = 1; k < 16; ++k) row.push_back(s.sh[c][k]);
+    doc["rest"].push_back(row);
+  }
+  std::ofstream(json) << doc.dump();
+  const auto node = run_command({"node", (shtool::test::node_consumers_dir() / "rotate_splat_sh.mjs").string(), json.string()});
+  ASSERT_EQ(node.exit_code, 0) << node.err;
+  const nlohmann::json theirs = nlohmann::json::parse(node.out);
+  ASSERT_EQ(theirs.size(), before.size());
+  for (std::size_t i = 0; i < before.size(); ++i)
+    for (int c = 0; c < 3; ++c)
+      for (int k = 1; k < 16; ++k)
+        ASSERT_NEAR(after[i].sh[c][k], theirs[i][15 * c + k - 1].get<double>(), 2e-6) << "splat " << i << " channel " << c;
 }
 
 TEST(CliTransformSplats, IdentityKeepsTheBytes) {
