@@ -20,6 +20,7 @@
 #include "lighting/lighting_output.h"
 #include "node_consumers.h"
 #include "run_command.h"
+#include "scratch_files.h"
 #include "shtool/irradiance.h"
 #include "shtool/sh.h"
 
@@ -33,16 +34,9 @@ using test::run_command;
 constexpr double kPi = std::numbers::pi;
 const std::string kExe = SHTOOL_EXE;
 
-fs::path scratch(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("shtool_engine_light_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  return dir / name;
-}
+fs::path scratch(const std::string& name) { return shtool::test::scratch_path("engine_light", name); }
 
-std::string read_text(const fs::path& p) {
-  std::ifstream f(p, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(f), {});
-}
+std::string read_text(const fs::path& p) { return shtool::test::read_file(p); }
 
 Lighting random_light(int order, Quantity q, unsigned seed) {
   std::mt19937 rng(seed);

@@ -27,6 +27,7 @@
 
 #include "lighting/image_io.h"
 #include "run_command.h"
+#include "scratch_files.h"
 #include "shtool/sh.h"
 #include "shtool/table.h"
 
@@ -39,16 +40,9 @@ constexpr double kPi = std::numbers::pi;
 const std::string kExe = SHTOOL_EXE;
 const std::string kSource = SHTOOL_SOURCE_DIR;
 
-fs::path scratch(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("shtool_lighting_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  return dir / name;
-}
+fs::path scratch(const std::string& name) { return shtool::test::scratch_path("lighting", name); }
 
-std::string read_text(const fs::path& p) {
-  std::ifstream f(p, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(f), {});
-}
+std::string read_text(const fs::path& p) { return shtool::test::read_file(p); }
 
 void write_bytes(const fs::path& p, const std::string& bytes) { std::ofstream(p, std::ios::binary) << bytes; }
 

@@ -23,6 +23,7 @@
 
 #include "node_consumers.h"
 #include "run_command.h"
+#include "scratch_files.h"
 
 namespace {
 
@@ -30,16 +31,9 @@ namespace fs = std::filesystem;
 using shtool::test::run_command;
 const std::string kExe = SHTOOL_EXE;
 
-fs::path scratch(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("shtool_splats_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  return dir / name;
-}
+fs::path scratch(const std::string& name) { return shtool::test::scratch_path("splats", name); }
 
-std::string read_text(const fs::path& p) {
-  std::ifstream f(p, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(f), {});
-}
+std::string read_text(const fs::path& p) { return shtool::test::read_file(p); }
 
 // The reference implementation's eval_sh for one channel, degree <= 3, and its
 // colour: clamp(eval + 0.5) is left out (the clamp hides nothing at these values).

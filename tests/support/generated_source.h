@@ -14,15 +14,9 @@
 #include <gtest/gtest.h>
 
 #include "run_command.h"
+#include "scratch_files.h"
 
 namespace shtool::test {
-
-inline std::string read_file(const std::filesystem::path& p) {
-  std::ifstream f(p, std::ios::binary);
-  std::stringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
 
 // First differing line, for the failure message.
 inline std::string first_difference(const std::string& generated, const std::string& committed) {
