@@ -7,6 +7,7 @@
 #include <cstring>
 #include <exception>
 #include <memory>
+#include <thread>
 
 #include <stb_image.h>
 #include <stb_image_write.h>
@@ -17,6 +18,7 @@
 #include <ImfIO.h>
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
+#include <ImfThreading.h>
 
 #include "common/input_error.h"
 #include "common/input_file.h"
@@ -105,6 +107,12 @@ class MemoryOStream : public Imf::OStream {
 
 Image decode_exr(std::string_view bytes, const std::filesystem::path& name, std::int64_t max_texels) {
   try {
+    // OpenEXR decompresses line blocks on its own thread pool (exact either way).
+    static const bool pool = [] {
+      Imf::setGlobalThreadCount(static_cast<int>(std::max(1u, std::thread::hardware_concurrency())));
+      return true;
+    }();
+    (void)pool;
     MemoryIStream stream(bytes, name.string());
     Imf::InputFile file(stream);
     const Imf::Header& header = file.header();
