@@ -306,6 +306,11 @@ TEST(EngineLight, BadInput) {
   const fs::path bad_probe = scratch("bad_probe.json"), bad_txt = scratch("bad_sh.txt");
   std::ofstream(bad_probe) << R"({"object": {"type": "LightProbe", "sh": [1, 2, 3]}})";
   std::ofstream(bad_txt) << "(1, 2, 3); // L00\n(1, 2, nan); // L1-1\n";
+  const fs::path short_txt = scratch("short_sh.txt");
+  std::ofstream(short_txt) << "(1, 2, 3); // L00\n(1, 2, 3); // L1-1\n";
+  // A row of half a million digits (a recursive regex would exhaust the stack on it).
+  const fs::path long_line = scratch("long_sh.txt");
+  std::ofstream(long_line) << "(" << std::string(500000, '1') << "x, 2, 3); // L00\n";
   struct Case {
     std::vector<std::string> args;
     std::string message;
@@ -315,10 +320,13 @@ TEST(EngineLight, BadInput) {
       {{"export-light", in.string(), "--format", "unreal", "--out", out.string()}, "--format"},
       {{"export-light", in.string(), "--format", "threejs", "--frame", "x,x,y", "--out", out.string()}, "--frame"},
       {{"export-light", in.string(), "--format", "threejs", "--frame", "x,z", "--out", out.string()}, "--frame"},
+      {{"export-light", in.string(), "--format", "threejs", "--frame", "x,y,z,x", "--out", out.string()}, "--frame"},
+      {{"import-light", long_line.string(), "--format", "filament", "--json", out.string()}, "not a finite number"},
       {{"export-light", in.string(), "--format", "threejs", "--intensity", "-1", "--out", out.string()}, "--intensity"},
       {{"export-light", scratch("missing.json").string(), "--format", "threejs", "--out", out.string()}, "missing.json"},
       {{"import-light", bad_probe.string(), "--format", "threejs", "--json", out.string()}, "27 numbers"},
-      {{"import-light", bad_txt.string(), "--format", "filament", "--json", out.string()}, "9"},
+      {{"import-light", bad_txt.string(), "--format", "filament", "--json", out.string()}, "'nan' is not a finite number"},
+      {{"import-light", short_txt.string(), "--format", "filament", "--json", out.string()}, "expected 9"},
       {{"import-light", in.string(), "--format", "gltf", "--json", out.string()}, "EXT_lights_image_based"},
   };
   for (const Case& c : cases) {

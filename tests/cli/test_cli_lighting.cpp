@@ -162,6 +162,19 @@ TEST(CliProjectEnv, UniformRadianceInEveryFormatAndLayout) {
     expect_uniform(project({p.string(), "--order", "5"}), c00, f.name);
     expect_uniform(project({p.string(), "--order", "3", "--quantity", "irradiance"}), kPi * c00, f.name);
   }
+  // A grey (Y-only) EXR is grey RGB.
+  {
+    const fs::path p = scratch("grey.exr");
+    Imf::Header header(w, h);
+    header.channels().insert("Y", Imf::Channel(Imf::FLOAT));
+    const std::vector<float> y(static_cast<std::size_t>(w) * h, 1.0f);
+    Imf::OutputFile file(p.c_str(), header);
+    Imf::FrameBuffer fb;
+    fb.insert("Y", Imf::Slice(Imf::FLOAT, (char*)y.data(), sizeof(float), w * sizeof(float)));
+    file.setFrameBuffer(fb);
+    file.writePixels(h);
+  }
+  expect_uniform(project({scratch("grey.exr").string(), "--order", "4"}), c00, "grey.exr");
   // Cubemaps: two crosses and six files, from the same faces.
   Cube cube{16, {}};
   for (Texels& t : cube.faces) t.assign(16 * 16 * 3, 1.0f);
@@ -387,7 +400,31 @@ TEST(CliProjectEnv, BadInputIsAnErrorWithNoOutput) {
     const std::string bytes = read_text(scratch(name));
     write_bytes(scratch(std::string("cut_") + name), bytes.substr(0, bytes.size() - 20));
   }
+  const fs::path cross43 = scratch("cross43.exr"), windowed_ok = scratch("ok.exr");
+  write_exr(cross43, 64, 48, Texels(64 * 48 * 3, 1.0f), false);
+  write_exr(windowed_ok, 16, 8, Texels(16 * 8 * 3, 1.0f), false);
+  // Run-length rows, then a flat row: stb reads the whole image flat from there.
+  {
+    const std::string rle = read_text(scratch("full_rle.hdr"));
+    const std::size_t body = rle.find("+X 16\n") + 6;
+    std::string mixed = rle.substr(0, body);
+    // First scanline as the file has it (run-length), then 4 bytes that are not a
+    // run-length start, then a little data.
+    std::size_t at = body + 4;
+    for (int component = 0; component < 4; ++component)
+      for (int x = 0; x < 16;) {
+        const int count = static_cast<unsigned char>(rle[at]);
+        const int run = count > 128 ? count - 128 : count;
+        at += 1 + (count > 128 ? 1 : count);
+        x += run;
+      }
+    mixed += rle.substr(body, at - body) + std::string("\x10\x10\x10\x80", 4) + std::string(64, '\x20');
+    std::ofstream(scratch("mixed.hdr"), std::ios::binary) << mixed;
+  }
   const std::vector<BadCase> cases = {
+      {"run-length rows, then a short flat tail", {scratch("mixed.hdr").string()}, "data ends before"},
+      {"preset on a cross", {cross43.string(), "--equirect-preset", "three"}, "--equirect-preset"},
+      {"mirror on an equirect", {windowed_ok.string(), "--mirror-x"}, "--mirror-x"},
       {"truncated run-length HDR", {scratch("cut_full_rle.hdr").string()}, "data ends before"},
       {"truncated flat HDR", {scratch("cut_full_flat.hdr").string()}, "data ends before"},
       {"truncated JPEG", {scratch("cut_full.jpg").string()}, "truncated"},

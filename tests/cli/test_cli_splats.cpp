@@ -303,6 +303,10 @@ TEST(CliTransformSplats, BadInputIsAnErrorWithNoOutput) {
       {"list property", replace("end_header", "element face 0\nproperty list uchar int vertex_indices\nend_header"), {},
        "list"},
       {"not a PLY", "hello\n", {}, "not a PLY"},
+      // A count whose product with the property count wraps around 2^64.
+      {"huge ASCII count", "ply\nformat ascii 1.0\nelement vertex 4611686018427387904\nproperty float x\n"
+                           "property float y\nproperty float z\nproperty float opacity\nend_header\n", {}, "more than the body"},
+      {"end_header in a comment", "ply\nformat ascii 1.0\ncomment end_header\n", {}, "end_header"},
       {"reflection", good, {"--matrix", "-1,0,0,0,1,0,0,0,1"}, "reflection"},
       {"not a rotation", good, {"--matrix", "1,0,0,0,2,0,0,0,1"}, "rotation"},
       {"zero quaternion", good, {"--quat", "0,0,0,0"}, "non-zero"},

@@ -4,7 +4,6 @@
 #include <cmath>
 #include <cstdio>
 #include <numbers>
-#include <regex>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -172,7 +171,7 @@ FrameMap parse_frame_map(std::string_view text) {
   int row = 0;
   std::array<bool, 3> used{};
   while (std::getline(s, item, ',')) {
-    if (row >= 3) break;
+    if (row >= 3) throw InputError("--frame '" + std::string(text) + "': expected three signed axes such as x,z,-y");
     double sign = 1;
     if (!item.empty() && (item[0] == '-' || item[0] == '+')) sign = item[0] == '-' ? -1 : 1, item = item.substr(1);
     if (item.size() != 1 || item[0] < 'x' || item[0] > 'z' || used[item[0] - 'x'])
@@ -222,6 +221,11 @@ std::vector<double> from_engine_frame(const FrameMap& frame, const std::vector<d
 ExportedLight export_light(const Lighting& light, LightFormat format, const FrameMap& frame, double intensity,
                            const RawOptions& raw) {
   if (!(intensity > 0) || !std::isfinite(intensity)) throw InputError("--intensity must be a positive number");
+  // The conversions multiply by constants below 4: a light that would overflow there is
+  // refused here rather than written as JSON null or "inf".
+  for (double c : light.coefficients)
+    if (!std::isfinite(c * intensity * 16))
+      throw InputError("the light times --intensity overflows a double in the export");
   ExportedLight out;
   auto scaled = [&](Nine v) {
     for (double& x : v) x *= intensity;
@@ -371,20 +375,32 @@ Lighting import_light(std::string_view text, const std::filesystem::path& name, 
   (void)raw;
   if (format == LightFormat::filament || format == LightFormat::filament_radiance) {
     const bool irradiance = format == LightFormat::filament;
-    static const std::regex row(
-        R"(\(\s*([-+0-9.eE]+)\s*,\s*([-+0-9.eE]+)\s*,\s*([-+0-9.eE]+)\s*\))");
+    // Lines "( r, g, b); // comment": scanned by hand (a regex engine that recurses per
+    // character would let a long line exhaust the stack).
     Nine g{};
     int i = 0;
-    const std::string s(text);
-    for (auto it = std::sregex_iterator(s.begin(), s.end(), row); it != std::sregex_iterator(); ++it, ++i) {
+    std::istringstream lines{std::string(text)};
+    std::string line;
+    while (std::getline(lines, line)) {
+      const std::size_t open = line.find('('), close = line.find(')');
+      const std::size_t comment = line.find("//");
+      if (open == std::string::npos || (comment != std::string::npos && comment < open)) continue;
+      if (close == std::string::npos || close < open) bad(name, "a row without its ')': " + line.substr(0, 80));
       if (i >= 9) bad(name, "more than 9 ( r, g, b) rows");
+      std::istringstream fields(line.substr(open + 1, close - open - 1));
+      std::string v;
       for (int c = 0; c < 3; ++c) {
+        if (!std::getline(fields, v, ',')) bad(name, "row " + std::to_string(i) + " does not hold three numbers");
+        const std::size_t a = v.find_first_not_of(" \t"), b = v.find_last_not_of(" \t");
+        v = a == std::string::npos ? std::string() : v.substr(a, b - a + 1);
         char* end = nullptr;
-        const std::string v = (*it)[c + 1].str();
         const double x = std::strtod(v.c_str(), &end);
-        if (end != v.c_str() + v.size() || !std::isfinite(x)) bad(name, "'" + v + "' is not a finite number");
+        if (v.empty() || end != v.c_str() + v.size() || !std::isfinite(x))
+          bad(name, "'" + v.substr(0, 40) + "' is not a finite number");
         g[3 * i + c] = irradiance ? kSigma[i] * x * kPi / kAbsK[i] : x;
       }
+      if (std::getline(fields, v, ',')) bad(name, "row " + std::to_string(i) + " holds more than three numbers");
+      ++i;
     }
     if (i != 9) bad(name, "expected 9 ( r, g, b) rows, found " + std::to_string(i));
     return from_nine(frame, g, irradiance ? Quantity::irradiance : Quantity::radiance, quantity);

@@ -73,8 +73,19 @@ PlyFile PlyFile::parse(std::string bytes, const std::filesystem::path& name) {
   auto fail = [&](const std::string& why) { return InputError(name.string() + ": PLY: " + why); };
   PlyFile f;
   if (bytes.rfind("ply\n", 0) != 0 && bytes.rfind("ply\r\n", 0) != 0) throw fail("not a PLY file (no 'ply' line)");
-  const std::size_t end = bytes.find("end_header");
-  if (end == std::string::npos) throw fail("no end_header");
+  // The header ends at a line that is exactly "end_header" (not a comment holding it).
+  std::size_t end = std::string::npos;
+  for (std::size_t at = 0; at < bytes.size();) {
+    const std::size_t eol = std::min(bytes.find('\n', at), bytes.size());
+    std::string_view line(bytes.data() + at, eol - at);
+    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+    if (line == "end_header") {
+      end = at;
+      break;
+    }
+    at = eol + 1;
+  }
+  if (end == std::string::npos) throw fail("no end_header line");
   std::size_t body = bytes.find('\n', end);
   if (body == std::string::npos) throw fail("nothing after end_header");
   ++body;
@@ -133,8 +144,15 @@ PlyFile PlyFile::parse(std::string bytes, const std::filesystem::path& name) {
       throw fail(std::to_string(bytes.size() - at) + " bytes after the last element (the header's counts do not match the body)");
   } else {
     // Tokens with the whitespace that follows each, so that unchanged values keep their text.
+    // Every value takes at least two bytes (a digit and a separator): counts beyond that
+    // are refused before any multiplication can wrap or any memory is reserved.
     std::size_t at = body, total = 0;
-    for (const PlyElement& e : f.elements_) total += e.count * e.properties.size();
+    const std::size_t most = (bytes.size() - body) / 2 + 1;
+    for (const PlyElement& e : f.elements_) {
+      if (!e.properties.empty() && e.count > (most - total) / e.properties.size())
+        throw fail("element '" + e.name + "' claims " + std::to_string(e.count) + " records, more than the body holds");
+      total += e.count * e.properties.size();
+    }
     f.ascii_values_.reserve(total);
     for (PlyElement& e : f.elements_) {
       f.ascii_first_.push_back(f.ascii_values_.size());

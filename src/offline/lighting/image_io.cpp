@@ -74,7 +74,7 @@ class MemoryIStream : public Imf::IStream {
  public:
   MemoryIStream(std::string_view bytes, const std::string& name) : Imf::IStream(name.c_str()), bytes_(bytes) {}
   bool read(char c[], int n) override {
-    if (n < 0 || pos_ + static_cast<std::uint64_t>(n) > bytes_.size())
+    if (n < 0 || pos_ > bytes_.size() || static_cast<std::uint64_t>(n) > bytes_.size() - pos_)
       throw std::runtime_error("unexpected end of file");
     std::memcpy(c, bytes_.data() + pos_, static_cast<std::size_t>(n));
     pos_ += static_cast<std::uint64_t>(n);
@@ -145,11 +145,14 @@ Image decode_exr(std::string_view bytes, const std::filesystem::path& name, std:
     img.height = static_cast<int>(h);
     img.texels.assign(static_cast<std::size_t>(w * h * 3), 0.0f);
     Imf::FrameBuffer fb;
-    for (int c = 0; c < 3; ++c)
+    // A frame buffer holds one slice per channel name: grey (Y) goes into red, then is copied.
+    for (int c = 0; c < (rgb ? 3 : 1); ++c)
       fb.insert(names[c], Imf::Slice::Make(Imf::FLOAT, img.texels.data() + c, data, 3 * sizeof(float),
                                            static_cast<std::size_t>(w) * 3 * sizeof(float)));
     file.setFrameBuffer(fb);
     file.readPixels(data.min.y, data.max.y);
+    if (!rgb)
+      for (std::size_t i = 0; i < img.texels.size(); i += 3) img.texels[i + 1] = img.texels[i + 2] = img.texels[i];
     return img;
   } catch (const InputError&) {
     throw;
@@ -184,8 +187,9 @@ void check_hdr_complete(std::string_view b, const std::filesystem::path& name, s
     need(4);
     const auto* p = reinterpret_cast<const unsigned char*>(b.data() + at);
     const bool rle = w >= 8 && w < 32768 && p[0] == 2 && p[1] == 2 && !(p[2] & 0x80);
-    if (!rle) {  // flat from here to the end, as stb reads it
-      need(static_cast<std::size_t>(4 * w * (h - y)));
+    if (!rle) {
+      // stb then reads the whole image flat from here, starting again at row 0.
+      need(static_cast<std::size_t>(4 * w * h));
       return;
     }
     if (((p[2] << 8) | p[3]) != w) fail(name, "Radiance HDR: a scanline's width differs from the header's");

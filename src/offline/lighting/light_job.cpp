@@ -122,6 +122,8 @@ Lighting light_coefficients(const std::vector<LightSpec>& lights, int order, Qua
     }
   }
   if (quantity == Quantity::irradiance) radiance_to_irradiance(3, out.coefficients);
+  for (double v : out.coefficients)
+    if (!std::isfinite(v)) throw InputError("the lights' coefficients overflow a double (colours too large)");
   return out;
 }
 

@@ -50,10 +50,15 @@ Eigen::Matrix3d preset_map(EquirectPreset preset) {
 template <class Projector, class Images>
 std::vector<double> project_parallel(const Projector& p, const Images& images, int channels, int threads) {
   std::vector<std::vector<double>> partials(p.block_count(), std::vector<double>(p.partial_size(channels), 0.0));
+  // Each block's error kept by index, the first block's reported: the same message
+  // whatever the thread count.
+  std::vector<std::string> errors(partials.size());
   parallel_for(partials.size(), threads, [&](std::size_t b) {
     const Result<Ok> r = p.accumulate_block(images, static_cast<int>(b), partials[b]);
-    if (!r) throw InputError(r.error().message);
+    if (!r) errors[b] = r.error().message;
   });
+  for (const std::string& e : errors)
+    if (!e.empty()) throw InputError(e);
   std::vector<double> sum(p.partial_size(channels), 0.0);
   for (const std::vector<double>& part : partials)
     for (std::size_t i = 0; i < sum.size(); ++i) sum[i] += part[i];
@@ -217,6 +222,9 @@ ProjectEnvReport run_project_env(const ProjectEnvRequest& r) {
                       std::to_string(faces[0].width) + " x " + std::to_string(faces[0].width);
     }
   }
+  if (r.preset != EquirectPreset::shtool && layout != Layout::equirect)
+    throw InputError("--equirect-preset applies to equirect images, not to " + report.layout);
+  if (r.mirror_x && layout == Layout::equirect) throw InputError("--mirror-x applies to cubemaps, not to equirect images");
   report.read_seconds = seconds_since(t0);
 
   // ---- project

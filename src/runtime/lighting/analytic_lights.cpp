@@ -3,13 +3,14 @@
 #include <cmath>
 #include <numbers>
 
+#include "lighting/coefficient_layout.h"
 #include "shtool/sh.h"
 
 namespace shtool {
 namespace {
 
 int order_of(std::span<double> coefficients, int channels) {
-  return static_cast<int>(std::lround(std::sqrt(static_cast<double>(coefficients.size() / channels))));
+  return detail::order_of_layout(coefficients.size(), channels, "analytic light");
 }
 
 // Adds color * sum_l weights[l] sum_m y_l^m(d) y_l^m(w): by the addition theorem, the

@@ -10,6 +10,7 @@
 
 #include "shtool/legendre.h"
 #include "shtool/quadrature.h"
+#include "precondition.h"
 #include "shtool/sh.h"
 
 namespace shtool {
@@ -173,8 +174,21 @@ SHTOOL_SAME_BITS_CLONES double lane_dot(const double* w, const double* v, int n)
 
 }  // namespace
 
+namespace {
+
+bool valid_view(const FloatImageView& v, int width, int height) {
+  return v.texels && v.width == width && v.height == height && v.channels >= 1 && v.channels <= 4 &&
+         v.stride() >= static_cast<std::size_t>(width) * v.channels;
+}
+
+}  // namespace
+
 Result<Ok> EquirectProjector::accumulate_block(const FloatImageView& image, int block,
                                                std::span<double> partial) const {
+  if (!valid_view(image, width_, height_) || block < 0 || block >= block_count() ||
+      partial.size() < partial_size(image.channels))
+    return Error{"equirect block: the image must be the projector's size with 1..4 channels, the block in range "
+                 "and the partial of partial_size(channels) values"};
   const int channels = image.channels;
   const int slots = 2 * order_ - 1;
   const int pairs = width_ / 2;
@@ -257,11 +271,6 @@ Result<Ok> EquirectProjector::accumulate_block(const FloatImageView& image, int 
 }
 
 namespace {
-
-bool valid_view(const FloatImageView& v, int width, int height) {
-  return v.texels && v.width == width && v.height == height && v.channels >= 1 && v.channels <= 4 &&
-         v.stride() >= static_cast<std::size_t>(width) * v.channels;
-}
 
 // Runs every block in order, each into its own zeroed partial, and adds the partials
 // in block order: the same sums a parallel caller gets (docs/lighting.md).
@@ -347,6 +356,8 @@ Eigen::Vector3d CubemapProjector::direction(CubeFace face, double s, double t) c
 
 void CubemapProjector::texel_integrals(CubeFace face, int x, int y, std::span<double> out) const {
   const int n = sh_count(order_);
+  if (out.size() < static_cast<std::size_t>(n) || x < 0 || y < 0 || x >= size_ || y >= size_)
+    detail::precondition_failed("texel_integrals: texel outside the face or fewer than N^2 outputs");
   // The nodes are summed row of nodes by row of nodes (fewer roundings per sum).
   std::array<double, kMaxEnvOrder * kMaxEnvOrder> y_values, node_row;
   const double half = 1.0 / size_;  // half a texel's width in face coordinates
@@ -369,6 +380,11 @@ void CubemapProjector::texel_integrals(CubeFace face, int x, int y, std::span<do
 
 Result<Ok> CubemapProjector::accumulate_block(std::span<const FloatImageView, 6> faces, int block,
                                               std::span<double> partial) const {
+  for (const FloatImageView& f : faces)
+    if (!valid_view(f, size_, size_) || f.channels != faces[0].channels)
+      return Error{"cubemap block: six faces of the projector's size and one channel count (1..4)"};
+  if (block < 0 || block >= block_count() || partial.size() < partial_size(faces[0].channels))
+    return Error{"cubemap block: block out of range or partial smaller than partial_size(channels)"};
   const int blocks_per_face = (size_ + kRowsPerBlock - 1) / kRowsPerBlock;
   const int f = block / blocks_per_face;
   const FloatImageView& image = faces[static_cast<std::size_t>(f)];

@@ -4,6 +4,7 @@
 #include <numbers>
 #include <vector>
 
+#include "lighting/coefficient_layout.h"
 #include "shtool/sh.h"
 
 namespace shtool {
@@ -22,6 +23,8 @@ double clamped_cosine_band(int l) {
 }
 
 void scale_bands(std::span<const double> factors, int channels, std::span<double> coefficients) {
+  const int order = detail::order_of_layout(coefficients.size(), channels, "scale_bands");
+  if (factors.size() < static_cast<std::size_t>(order)) detail::precondition_failed("scale_bands: fewer factors than bands");
   const std::size_t count = coefficients.size() / channels;
   for (std::size_t i = 0; i < count; ++i) {
     const double f = factors[static_cast<std::size_t>(sh_band(static_cast<int>(i)))];
@@ -30,7 +33,7 @@ void scale_bands(std::span<const double> factors, int channels, std::span<double
 }
 
 void radiance_to_irradiance(int channels, std::span<double> coefficients) {
-  const int order = static_cast<int>(std::lround(std::sqrt(static_cast<double>(coefficients.size() / channels))));
+  const int order = detail::order_of_layout(coefficients.size(), channels, "radiance_to_irradiance");
   std::vector<double> a(order);
   for (int l = 0; l < order; ++l) a[l] = clamped_cosine_band(l);
   scale_bands(a, channels, coefficients);

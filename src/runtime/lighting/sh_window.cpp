@@ -5,6 +5,7 @@
 #include <numbers>
 #include <utility>
 
+#include "lighting/coefficient_layout.h"
 #include "shtool/sh.h"
 
 namespace shtool {
@@ -13,9 +14,7 @@ namespace {
 constexpr std::pair<std::string_view, ShWindow> kNames[] = {
     {"none", ShWindow::none}, {"hann", ShWindow::hann}, {"lanczos", ShWindow::lanczos}, {"sinc4", ShWindow::sinc4}};
 
-int order_of(std::size_t count, int channels) {
-  return static_cast<int>(std::lround(std::sqrt(static_cast<double>(count / channels))));
-}
+int order_of(std::size_t count, int channels) { return detail::order_of_layout(count, channels, "sh window"); }
 
 // Spherical Fibonacci points: near-uniform, no poles favoured.
 std::vector<Eigen::Vector3d> fibonacci_points(int count) {
@@ -123,6 +122,7 @@ std::vector<double> sh_window_factors(ShWindow window, double cutoff, int order)
 
 ShMinimum sh_minimum(std::span<const double> coefficients, int channels, int channel) {
   const int order = order_of(coefficients.size(), channels);
+  if (channel < 0 || channel >= channels) detail::precondition_failed("sh_minimum: channel out of range");
   std::vector<double> f(sh_count(order));
   for (int i = 0; i < sh_count(order); ++i) f[i] = coefficients[static_cast<std::size_t>(i) * channels + channel];
   const std::vector<Eigen::Vector3d> points = fibonacci_points(dense_count(order));

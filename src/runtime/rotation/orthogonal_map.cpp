@@ -13,7 +13,11 @@ namespace shtool {
 Result<Ok> apply_orthogonal_map(const Eigen::Matrix3d& q, int channels, std::span<double> coefficients) {
   if (!q.allFinite() || !(q.transpose() * q).isApprox(Eigen::Matrix3d::Identity(), 1e-9))
     return Error{"the frame map is not an orthogonal matrix"};
+  if (channels < 1 || coefficients.size() % static_cast<std::size_t>(channels) != 0)
+    return Error{"the coefficients are not a whole number of channels"};
   const int order = static_cast<int>(std::lround(std::sqrt(static_cast<double>(coefficients.size() / channels))));
+  if (static_cast<std::size_t>(sh_count(order)) * channels != coefficients.size() || !is_supported_order(order))
+    return Error{"the coefficient count is not channels x N^2 for a supported order N"};
   const bool reflection = q.determinant() < 0;
   const Eigen::Matrix3d p = reflection ? Eigen::Matrix3d(-q) : q;
   ShRotation<double> rotation(order, nullptr);
