@@ -77,7 +77,7 @@ void setup_import_light(CLI::App& app) {
     const std::string text = read_input_file(*in, "file");
     check_output_path(*json, "--json");
     check_not_an_input(*json, "--json", *in);
-    const lighting::Lighting l = interop::import_light(text, *in, o->format, frame_of(*o), *quantity, o->raw);
+    const lighting::Lighting l = interop::import_light(text, *in, o->format, frame_of(*o), *quantity);
     write_file_atomically(*json, lighting::lighting_json(l));
     std::cerr << "import-light: order " << l.order << ", " << lighting::quantity_name(l.quantity) << ", wrote "
               << json->string() << '\n';

@@ -9,10 +9,12 @@
 #include <nlohmann/json.hpp>
 
 #include "common/atomic_file.h"
+#include "common/enum_names.h"
 #include "common/generator_record.h"
 #include "common/input_error.h"
 #include "common/input_file.h"
 #include "common/parallel_for.h"
+#include "common/stopwatch.h"
 #include "common/table_writer.h"
 #include "fit/zh_fit.h"
 #include "fit/zh_fit_table.h"
@@ -24,18 +26,6 @@ namespace {
 // Transfer coefficients are O(1) (radiance transfer of a unit light); far larger inputs
 // would overflow the squared norms of the fit (about 1e154).
 constexpr double kMaxTransferMagnitude = 1e100;
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-
-template <class E>
-const std::string& name_of(E value, const std::vector<std::pair<std::string, E>>& names) {
-  for (const auto& n : names)
-    if (n.second == value) return n.first;
-  static const std::string unknown = "?";
-  return unknown;
-}
 
 std::string ply_text(const Mesh& mesh, const std::vector<double>& transfer, int order,
                      const std::vector<ZhFit>& fits) {

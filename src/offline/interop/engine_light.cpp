@@ -8,6 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "common/enum_names.h"
 #include "common/input_error.h"
 #include "common/input_file.h"
 #include "shtool/irradiance.h"
@@ -354,9 +355,7 @@ ExportedLight export_light(const Lighting& light, LightFormat format, const Fram
       }
       nlohmann::json rows = nlohmann::json::array();
       for (int i = 0; i < sh_count(light.order); ++i) rows.push_back({g[3 * i], g[3 * i + 1], g[3 * i + 2]});
-      std::string norm;
-      for (const auto& [n, v] : raw_normalization_names())
-        if (v == raw.normalization) norm = n;
+      const std::string& norm = name_of(raw.normalization, raw_normalization_names());
       out.text = rows_text({{"order", light.order},
                             {"quantity", lighting::quantity_name(light.quantity)},
                             {"condon_shortley", raw.condon_shortley},
@@ -371,8 +370,7 @@ ExportedLight export_light(const Lighting& light, LightFormat format, const Fram
 }
 
 Lighting import_light(std::string_view text, const std::filesystem::path& name, LightFormat format,
-                      const FrameMap& frame, Quantity quantity, const RawOptions& raw) {
-  (void)raw;
+                      const FrameMap& frame, Quantity quantity) {
   if (format == LightFormat::filament || format == LightFormat::filament_radiance) {
     const bool irradiance = format == LightFormat::filament;
     // Lines "( r, g, b); // comment": scanned by hand (a regex engine that recurses per

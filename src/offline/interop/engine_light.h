@@ -51,9 +51,10 @@ ExportedLight export_light(const lighting::Lighting& light, LightFormat format, 
 
 // The inverse: shtool coefficients of the file's light (its intensity applied), in the
 // quantity asked for (the formats that hold E/pi give irradiance back, then converted).
-// InputError naming `name` on a malformed file.
+// A raw file says its own phase, normalisation and frame. InputError naming `name` on a
+// malformed file.
 lighting::Lighting import_light(std::string_view text, const std::filesystem::path& name, LightFormat format,
-                                const FrameMap& frame, lighting::Quantity quantity, const RawOptions& raw);
+                                const FrameMap& frame, lighting::Quantity quantity);
 
 // The engine-frame coefficients in shtool's basis formula applied to engine coordinates:
 // g(e) = f(Q^-1 e) (rotation or reflection, any order).

@@ -11,6 +11,7 @@
 #include "common/input_error.h"
 #include "common/input_file.h"
 #include "common/parallel_for.h"
+#include "common/stopwatch.h"
 #include "interop/ply.h"
 #include "shtool/euler.h"
 #include "shtool/rotation.h"
@@ -75,10 +76,6 @@ SplatLayout find_layout(const PlyElement& v, const std::filesystem::path& name) 
   if (!l.rest.empty() && !l.dc) throw fail("f_rest properties without f_dc_0..2");
   l.degree = per_channel == 0 ? 0 : per_channel == 3 ? 1 : per_channel == 8 ? 2 : 3;
   return l;
-}
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
 }  // namespace

@@ -4,6 +4,7 @@
 #include <numbers>
 
 #include "common/atomic_file.h"
+#include "common/enum_names.h"
 #include "common/generator_record.h"
 #include "common/input_error.h"
 #include "common/input_file.h"
@@ -16,11 +17,7 @@
 namespace shtool::lighting {
 namespace {
 
-std::string type_name(LightType t) {
-  for (const auto& [n, v] : light_type_names())
-    if (v == t) return n;
-  return "?";
-}
+std::string type_name(LightType t) { return name_of(t, light_type_names()); }
 
 nlohmann::json spec_json(const LightSpec& s) {
   nlohmann::json j = {{"type", type_name(s.type)}, {"color", s.color}};

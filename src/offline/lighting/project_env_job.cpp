@@ -6,9 +6,11 @@
 #include <numbers>
 
 #include "common/atomic_file.h"
+#include "common/enum_names.h"
 #include "common/generator_record.h"
 #include "common/input_error.h"
 #include "common/parallel_for.h"
+#include "common/stopwatch.h"
 #include "common/table_writer.h"
 #include "shtool/env_projection.h"
 #include "shtool/irradiance.h"
@@ -17,17 +19,6 @@
 
 namespace shtool::lighting {
 namespace {
-
-template <class E>
-std::string name_of(E value, const std::vector<std::pair<std::string, E>>& names) {
-  for (const auto& [n, v] : names)
-    if (v == value) return n;
-  return "?";
-}
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 // The direction an equirect preset gives a texel, as Q times shtool's own direction of
 // that texel (docs/lighting.md, "Equirect mappings"):
