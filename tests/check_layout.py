@@ -15,7 +15,8 @@ import re
 import sys
 
 INCLUDE = re.compile(r'^\s*#\s*include\s*[<"]([^>"]+)[>"]', re.M)
-OFFLINE_ROOTS = ("common/", "fit/", "lobes/", "tensors/")
+# src/runtime has a lighting/ folder of its own, so the offline lighting/ cannot be told apart by prefix.
+OFFLINE_ROOTS = ("common/", "fit/", "lobes/", "tensors/", "interop/", "shaders/")
 FORBIDDEN_IN_ENGINE = ("nlohmann/", "fftw3")
 
 

@@ -62,6 +62,7 @@ void print_json(const nlohmann::json& value);
 void setup_eval(CLI::App& app);
 void setup_inspect(CLI::App& app);
 void setup_gen_tensors(CLI::App& app);
+void setup_gen_shader(CLI::App& app);
 void setup_rotate(CLI::App& app);
 void setup_product(CLI::App& app);
 void setup_fit_zh(CLI::App& app);

@@ -118,4 +118,13 @@ Table to_table(const RotationHelpers& h, const nlohmann::json& generator) {
   return t;
 }
 
+std::vector<std::vector<double>> x90_band_block(const RotationHelpers& h, int l) {
+  const int size = 2 * l + 1, first = l * l;
+  std::vector<std::vector<double>> b(size, std::vector<double>(size, 0.0));
+  for (int i = 0; i < size; ++i)
+    for (int k = h.x90_row[first + i]; k < h.x90_row[first + i + 1]; ++k)
+      b[i][h.x90_col[k] - first] = h.x90_val[k];
+  return b;
+}
+
 }  // namespace shtool

@@ -1,6 +1,8 @@
 // gen-tensors: the sparse helper matrices of the zxzxz and Taylor rotations.
 #pragma once
 
+#include <vector>
+
 #include <nlohmann/json.hpp>
 
 #include "shtool/rotation_helpers.h"
@@ -17,6 +19,10 @@ namespace shtool {
 // are dropped. Throws std::logic_error if the closed form and the X90 table disagree,
 // which would mean a convention error.
 RotationHelpers compute_rotation_helpers(int order);
+
+// Band l of X90 as a dense (2l+1) x (2l+1) block, [row][column], from the compressed rows:
+// what the kernel generators (C++ and shaders) write out as literals.
+std::vector<std::vector<double>> x90_band_block(const RotationHelpers& h, int l);
 
 // The "rotation-helpers" table of `h` (schemas/rotation-helpers.schema.json), with the
 // generator record the caller made (common/generator_record.h).

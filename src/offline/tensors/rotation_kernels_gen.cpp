@@ -62,19 +62,9 @@ void z_rotation(std::ostream& o, int l, const std::string& angle, const std::str
   }
 }
 
-// Dense band block of X90 from the compressed rows.
-std::vector<std::vector<double>> x90_block(const RotationHelpers& h, int l) {
-  const int size = 2 * l + 1, first = l * l;
-  std::vector<std::vector<double>> b(size, std::vector<double>(size, 0.0));
-  for (int i = 0; i < size; ++i)
-    for (int k = h.x90_row[first + i]; k < h.x90_row[first + i + 1]; ++k)
-      b[i][h.x90_col[k] - first] = h.x90_val[k];
-  return b;
-}
-
 void zxzxz_band(std::ostream& o, const RotationHelpers& h, int l) {
   const int size = 2 * l + 1;
-  const auto x = x90_block(h, l);
+  const auto x = x90_band_block(h, l);
   // S: KernelState<T>, or BatchState<T> (a rotation per lane).
   o << "// Band " << l << " of Z(a) X90^T Z(b) X90 Z(g), Ry(b) = Rx(-90) Rz(b) Rx(+90).\n"
     << "template <class T, class P, class S>\n"

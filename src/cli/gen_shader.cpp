@@ -1,0 +1,48 @@
+// shtool gen-shader: writes one GLSL or HLSL include with an SH operation (docs/shaders.md).
+#include <iostream>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "cli_common.h"
+#include "shaders/gen_shader_job.h"
+
+namespace shtool::cli {
+
+void setup_gen_shader(CLI::App& app) {
+  auto req = std::make_shared<GenShaderRequest>();
+  auto lobes_given = std::make_shared<bool>(false);
+  CLI::App* sub = app.add_subcommand("gen-shader", "Generate a GLSL or HLSL include file of an SH operation");
+  add_enum_option(sub, "--lang", req->shader.language,
+                  {{"glsl", ShaderLanguage::glsl}, {"hlsl", ShaderLanguage::hlsl}}, "shader language", "glsl")
+      ->required();
+  std::vector<std::pair<std::string, ShaderOperation>> names;
+  for (ShaderOperation op : shader_operations()) names.emplace_back(std::string(shader_operation_name(op)), op);
+  add_enum_option(sub, "--what", req->shader.operation, names,
+                  "operation: sh-eval, sh-irradiance, zxzxz-rotate, triple-product, zh-shade", "sh-eval")
+      ->required();
+  sub->add_option("--order", req->shader.order, "SH order N (bands 0..N-1)")->required();
+  add_enum_option(sub, "--precision", req->shader.precision,
+                  {{"float", ShaderPrecision::float32}, {"half", ShaderPrecision::half}},
+                  "float, or half (relaxed: GLSL mediump, HLSL min16float)", "float");
+  sub->add_option_function<int>(
+      "--zh-lobes",
+      [req, lobes_given](int k) {
+        req->shader.zh_lobes = k;
+        *lobes_given = true;
+      },
+      "zh-shade: ZH lobes per point (default 4)");
+  sub->add_option("--out", req->out, "output include file")->required();
+  sub->callback([req, lobes_given]() {
+    if (*lobes_given && req->shader.operation != ShaderOperation::zh_shade)
+      throw InputError("--zh-lobes applies to --what zh-shade only");
+    const ShaderSource s = run_gen_shader(*req);
+    std::cerr << "gen-shader: wrote " << req->out.string() << " (" << s.multiplications << " multiplications, "
+              << s.additions << " additions)\n";
+  });
+}
+
+}  // namespace shtool::cli

@@ -1,0 +1,476 @@
+#include "shaders/shader_source.h"
+
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <map>
+#include <numbers>
+#include <sstream>
+#include <utility>
+
+#include "shtool/irradiance.h"
+#include "shtool/table.h"
+#include "shtool/version.h"
+#include "tensors/rotation_helpers_gen.h"
+#include "tensors/tripling.h"
+
+namespace shtool {
+namespace {
+
+// The two languages differ in type names and in how a 3x3 matrix is indexed; the rest
+// of what is generated (declarations, arithmetic, arrays, loops) is common syntax.
+struct Syntax {
+  ShaderLanguage language;
+  bool half;
+
+  bool glsl() const { return language == ShaderLanguage::glsl; }
+  std::string real() const { return half ? (glsl() ? "mediump float" : "min16float") : "float"; }
+  std::string vec3() const { return half ? (glsl() ? "mediump vec3" : "min16float3") : (glsl() ? "vec3" : "float3"); }
+  // The rotation matrix stays float at both precisions (glslang has no min16float3x3).
+  std::string mat3() const { return glsl() ? "mat3" : "float3x3"; }
+  // R(i, j), row i and column j of the mathematical matrix. GLSL's mat3 is a list of
+  // columns (R[c][r]); HLSL's float3x3 a list of rows (R[r][c]).
+  std::string r(int i, int j) const {
+    return "R[" + std::to_string(glsl() ? j : i) + "][" + std::to_string(glsl() ? i : j) + "]";
+  }
+};
+
+// A constant as the shader's float: rounded once from long double, then 9 significant
+// digits, which read back to the same float.
+std::string literal(long double v) {
+  char buf[48];
+  std::snprintf(buf, sizeof buf, "%.9g", static_cast<double>(static_cast<float>(v)));
+  std::string s = buf;
+  if (s.find_first_of(".e") == std::string::npos) s += ".0";
+  return s;
+}
+
+// c1 * t1 + c2 * t2 + ... with exact zeros dropped and unit factors without a
+// multiplication; "" if every coefficient is zero.
+std::string linear_sum(const std::vector<std::pair<long double, std::string>>& terms) {
+  std::string s;
+  for (const auto& [c, name] : terms) {
+    if (static_cast<float>(c) == 0.0f) continue;
+    const long double a = std::fabs(c);
+    const std::string term = static_cast<float>(a) == 1.0f ? name : literal(a) + " * " + name;
+    if (s.empty()) s = c < 0 ? "-" + term : term;
+    else s += (c < 0 ? " - " : " + ") + term;
+  }
+  return s;
+}
+
+// Binary operations written in code (comments skipped): what the generated function
+// asks the compiler for, before its own folding.
+void count_ops(std::string_view code, long times, ShaderSource& out) {
+  std::size_t start = 0;
+  while (start < code.size()) {
+    std::size_t end = code.find('\n', start);
+    if (end == std::string_view::npos) end = code.size();
+    std::string_view line = code.substr(start, end - start);
+    if (const std::size_t c = line.find("//"); c != std::string_view::npos) line = line.substr(0, c);
+    for (std::size_t i = 0; i + 3 <= line.size(); ++i) {
+      const std::string_view op = line.substr(i, 3);
+      if (op == " * ") out.multiplications += times;
+      else if (op == " + " || op == " - ") out.additions += times;
+    }
+    start = end + 1;
+  }
+}
+
+// Normalisation of the associated Legendre recurrence with the azimuthal factor
+// (x + i y)^m taken out: y_l^m = q_l^m(z) Re (x + i y)^m for m > 0 (Im for m < 0), with
+//   q_m^m     = (-1)^m sqrt2 K_m^m (2m - 1)!!   (no sqrt2 at m = 0),
+//   q_m+1^m   = sqrt(2m + 3) z q_m^m,
+//   q_l^m     = a_lm z q_l-1^m + b_lm q_l-2^m,
+//   a_lm = sqrt((4l^2 - 1) / (l^2 - m^2)),  b_lm = -sqrt(((l-1)^2 - m^2)(2l + 1) / ((2l - 3)(l^2 - m^2))),
+// the orthonormal recurrence ([1] Sec. 2) with K_l^m folded in.
+long double sectoral_constant(int m) {
+  long double q = std::sqrt(1.0L / (4.0L * std::numbers::pi_v<long double>));
+  for (int k = 1; k <= m; ++k) q *= -std::sqrt((2.0L * k + 1.0L) / (2.0L * k));
+  return m > 0 ? q * std::numbers::sqrt2_v<long double> : q;
+}
+
+// (append: GCC 12 warns, wrongly, -Wrestrict about "literal" + std::string at -O3)
+std::string basis_name(int i) { return std::string("b").append(std::to_string(i)); }
+
+// Statements that compute the basis at the unit direction `dir`: y_i into `out[i]` when
+// `out` is an array name, else into locals b<i>. Bands with wanted[l] false are not
+// formed (their Legendre factors still are, as the recurrence needs them).
+std::string basis_code(const Syntax& s, int n, const std::string& dir, const std::string& out,
+                       const std::vector<bool>& wanted, const std::string& indent) {
+  std::ostringstream o;
+  const std::string real = s.real();
+  auto assign = [&](int l, int m, const std::string& expr) {
+    if (!wanted[l]) return;
+    const int i = l * (l + 1) + m;
+    if (out.empty()) o << indent << real << " " << basis_name(i) << " = " << expr << ";\n";
+    else o << indent << out << "[" << i << "] = " << expr << ";\n";
+  };
+  if (n > 1) o << indent << real << " px = " << dir << ".x;\n" << indent << real << " py = " << dir << ".y;\n"
+               << indent << real << " pz = " << dir << ".z;\n";
+  // Re and Im of (x + i y)^m, m >= 1.
+  for (int m = 1; m < n; ++m) {
+    const std::string c = "c" + std::to_string(m), sn = "s" + std::to_string(m);
+    if (m == 1) {
+      o << indent << real << " c1 = px;\n" << indent << real << " s1 = py;\n";
+      continue;
+    }
+    const std::string pc = "c" + std::to_string(m - 1), ps = "s" + std::to_string(m - 1);
+    o << indent << real << " " << c << " = px * " << pc << " - py * " << ps << ";\n"
+      << indent << real << " " << sn << " = px * " << ps << " + py * " << pc << ";\n";
+  }
+  for (int m = 0; m < n; ++m) {
+    const long double qmm = sectoral_constant(m);
+    auto q = [m](int l) { return "q" + std::to_string(l) + "_" + std::to_string(m); };
+    auto with_azimuth = [&](int l, const std::string& factor) {
+      if (m == 0) {
+        assign(l, 0, factor);
+        return;
+      }
+      assign(l, m, factor + " * c" + std::to_string(m));
+      assign(l, -m, factor + " * s" + std::to_string(m));
+    };
+    with_azimuth(m, literal(qmm));
+    if (m + 1 >= n) continue;
+    o << indent << real << " " << q(m + 1) << " = " << literal(std::sqrt(2.0L * m + 3.0L) * qmm) << " * pz;\n";
+    with_azimuth(m + 1, q(m + 1));
+    for (int l = m + 2; l < n; ++l) {
+      const long double ll = l, mm = m;
+      const long double a = std::sqrt((4 * ll * ll - 1) / (ll * ll - mm * mm));
+      const long double b =
+          -std::sqrt(((ll - 1) * (ll - 1) - mm * mm) * (2 * ll + 1) / ((2 * ll - 3) * (ll * ll - mm * mm)));
+      o << indent << real << " " << q(l) << " = " << literal(a) << " * pz * " << q(l - 1);
+      if (l - 2 == m) o << (b * qmm < 0 ? " - " : " + ") << literal(std::fabs(b * qmm)) << ";\n";
+      else o << " - " << literal(-b) << " * " << q(l - 2) << ";\n";
+      with_azimuth(l, q(l));
+    }
+  }
+  return o.str();
+}
+
+// The band sums of a dot product with the basis locals, each scaled by factor[l]
+// (bands whose factor is 0 are left out): factor_l * (c[l^2] * b_l^2 + ...).
+std::string band_dot(int n, const std::string& coeffs, const std::vector<long double>& factor,
+                     const std::vector<std::string>& band_weight) {
+  std::string sum;
+  for (int l = 0; l < n; ++l) {
+    if (factor[l] == 0) continue;
+    std::string band;
+    for (int m = -l; m <= l; ++m) {
+      const int i = l * (l + 1) + m;
+      if (!band.empty()) band += " + ";
+      band += coeffs + "[" + std::to_string(i) + "] * " + basis_name(i);
+    }
+    std::string term = "(" + band + ")";
+    if (!band_weight.empty()) term = band_weight[l] + " * " + term;
+    if (static_cast<float>(factor[l]) != 1.0f) term = literal(factor[l]) + " * " + term;
+    sum += (sum.empty() ? "" : " + ") + term;
+  }
+  return sum.empty() ? "0.0" : sum;
+}
+
+std::string array(const std::string& type, const std::string& name, const std::string& size) {
+  return type + " " + name + "[" + size + "]";
+}
+
+const char* kCount = "SHTOOL_ORDER * SHTOOL_ORDER";
+
+// y_l^m(dir) for every l < N.
+void sh_eval(const Syntax& s, int n, std::ostringstream& o, ShaderSource& out) {
+  const std::string head = "void shtool_sh_eval(" + s.vec3() + " dir, out " + array(s.real(), "y", kCount) + ")";
+  const std::string body = basis_code(s, n, "dir", "y", std::vector<bool>(n, true), "  ");
+  count_ops(body, 1, out);
+  out.signature = head + ";";
+  o << "// y[l * (l + 1) + m] = y_l^m(dir) for l < SHTOOL_ORDER, dir a unit vector (not normalised here).\n"
+    << head << " {\n" << body << "}\n";
+}
+
+// E(n) = sum_l A_l sum_m L_lm y_l^m(n), the clamped-cosine kernel A_l folded in.
+void sh_irradiance(const Syntax& s, int n, std::ostringstream& o, ShaderSource& out) {
+  std::vector<long double> a(n);
+  std::vector<bool> wanted(n);
+  for (int l = 0; l < n; ++l) {
+    a[l] = clamped_cosine_band(l);
+    wanted[l] = a[l] != 0;
+  }
+  const std::string basis = basis_code(s, n, "n", "", wanted, "  ");
+  const std::string scalar = "  return " + band_dot(n, "L", a, {}) + ";\n";
+  const std::string rgb = "  return " + band_dot(n, "L", a, {}) + ";\n";
+  const std::string head1 = s.real() + " shtool_sh_irradiance(" + s.vec3() + " n, " + array(s.real(), "L", kCount) + ")";
+  const std::string head3 = s.vec3() + " shtool_sh_irradiance_rgb(" + s.vec3() + " n, " + array(s.vec3(), "L", kCount) + ")";
+  count_ops(basis + scalar, 1, out);
+  out.signature = head1 + ";\n" + head3 + ";";
+  o << "// Irradiance E(n) = integral L(w) max(n . w, 0) dw of radiance coefficients L (no 1/pi folded\n"
+       "// in: divide by pi for the exit radiance of a white Lambertian surface); n a unit vector.\n"
+    << head1 << " {\n" << basis << scalar << "}\n\n"
+    << "// The same for RGB radiance coefficients.\n"
+    << head3 << " {\n" << basis << rgb << "}\n";
+}
+
+// Exit radiance of ZH lobes under SH lighting, Eq. 13 of [4].
+void zh_shade(const Syntax& s, int n, int lobes, std::ostringstream& o, ShaderSource& out) {
+  const std::string head = s.real() + " shtool_zh_shade(" + array(s.vec3(), "axes", "SHTOOL_ZH_LOBES") + ", " +
+                           array(s.real(), "g", "SHTOOL_ZH_LOBES * SHTOOL_ORDER") + ", " +
+                           array(s.real(), "e", kCount) + ")";
+  const std::string basis = basis_code(s, n, "axes[i]", "", std::vector<bool>(n, true), "    ");
+  std::vector<std::string> weight(n);
+  for (int l = 0; l < n; ++l) weight[l] = "g[i * SHTOOL_ORDER + " + std::to_string(l) + "]";
+  const std::string dot = "    r += " + band_dot(n, "e", std::vector<long double>(n, 1), weight) + ";\n";
+  count_ops(basis + dot, lobes, out);
+  out.signature = head + ";";
+  o << "#define SHTOOL_ZH_LOBES " << lobes << "\n\n"
+    << "// r = sum_i sum_l g[i * SHTOOL_ORDER + l] sum_m y_l^m(axes[i]) e[l * (l + 1) + m]: lobe i has unit\n"
+       "// axis axes[i] and convolved ZH coefficients g_il (a lobe adds g_il y_l^m(axis) to coefficient\n"
+       "// (l, m)); e is the SH lighting.\n"
+    << head << " {\n  " << s.real() << " r = 0.0;\n  for (int i = 0; i < SHTOOL_ZH_LOBES; ++i) {\n"
+    << basis << dot << "  }\n  return r;\n}\n";
+}
+
+// z-rotation of band l by the angle whose multiple-angle cosines and sines are
+// <angle>c<m>, <angle>s<m>: (f_m, f_-m) turns by m times the angle.
+std::string z_rotation(const Syntax& s, int l, const std::string& angle, const std::string& src,
+                       const std::string& dst) {
+  std::ostringstream o;
+  const std::string real = s.real();
+  o << "  " << real << " " << dst << l << " = " << src << l << ";\n";
+  for (int m = 1; m <= l; ++m) {
+    const std::string c = angle + "c" + std::to_string(m), sn = angle + "s" + std::to_string(m);
+    const std::string p = src + std::to_string(l + m), q = src + std::to_string(l - m);
+    o << "  " << real << " " << dst << l + m << " = " << c << " * " << p << " - " << sn << " * " << q << ";\n"
+      << "  " << real << " " << dst << l - m << " = " << sn << " * " << p << " + " << c << " * " << q << ";\n";
+  }
+  return o.str();
+}
+
+// g = M(R) f by zxzxz ([2] Sec. 2.2, App. C): band 1 is R itself, band 2 at order 3 the
+// rotated quadratic form, the other bands Z(a) X90^T Z(b) X90 Z(g) with the zyz angles
+// of R taken from its entries (no trigonometric call).
+void zxzxz_rotate(const Syntax& s, int n, std::ostringstream& o, ShaderSource& out, std::uint32_t& crc) {
+  const std::string real = s.real();
+  std::ostringstream b;
+  auto r = [&](int i, int j) { return s.r(i, j); };
+  b << "  g[0] = f[0];\n";
+  // Band 1: y_1^-1 = -c y, y_1^0 = c z, y_1^1 = -c x, so the band is R in (y, z, x) order with signs.
+  b << "  " << real << " fx = -f[3];\n  " << real << " fy = -f[1];\n  " << real << " fz = f[2];\n"
+    << "  g[1] = -(" << r(1, 0) << " * fx + " << r(1, 1) << " * fy + " << r(1, 2) << " * fz);\n"
+    << "  g[2] = " << r(2, 0) << " * fx + " << r(2, 1) << " * fy + " << r(2, 2) << " * fz;\n"
+    << "  g[3] = -(" << r(0, 0) << " * fx + " << r(0, 1) << " * fy + " << r(0, 2) << " * fz);\n";
+  if (n == 3) {
+    // Band 2 as w^T A w rotated to w^T (R A R^T) w (docs/shaders.md).
+    b << "  " << real << " kf0 = " << literal(1.0L / std::sqrt(3.0L)) << " * f[6];\n"
+      << "  " << real << " a00 = f[8] - kf0;\n  " << real << " a11 = -f[8] - kf0;\n  " << real
+      << " a22 = kf0 + kf0;\n  " << real << " a01 = f[4];\n  " << real << " a12 = -f[5];\n  " << real
+      << " a02 = -f[7];\n";
+    const char* a[3][3] = {{"a00", "a01", "a02"}, {"a01", "a11", "a12"}, {"a02", "a12", "a22"}};
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        b << "  " << real << " c" << i << j << " = " << r(i, 0) << " * " << a[0][j] << " + " << r(i, 1) << " * "
+          << a[1][j] << " + " << r(i, 2) << " * " << a[2][j] << ";\n";
+    auto bij = [&](int i, int j) {
+      return "c" + std::to_string(i) + "0 * " + r(j, 0) + " + c" + std::to_string(i) + "1 * " + r(j, 1) + " + c" +
+             std::to_string(i) + "2 * " + r(j, 2);
+    };
+    b << "  g[4] = " << bij(0, 1) << ";\n  g[5] = -(" << bij(1, 2) << ");\n  g[6] = "
+      << literal(std::sqrt(3.0L) / 2) << " * (" << bij(2, 2) << ");\n  g[7] = -(" << bij(0, 2) << ");\n  g[8] = 0.5 * ("
+      << bij(0, 0) << " - (" << bij(1, 1) << "));\n";
+  }
+  if (n >= 4) {
+    // R = Rz(a) Ry(b) Rz(g): (R02, R12) = sin b (cos a, sin a), R22 = cos b, and the
+    // well-conditioned a + g (b < pi/2) or a - g combination gives g, exact at the locks.
+    b << "  " << real << " cb = " << r(2, 2) << ";\n  " << real << " sb = sqrt(" << r(0, 2) << " * " << r(0, 2)
+      << " + " << r(1, 2) << " * " << r(1, 2) << ");\n"
+      << "  " << real << " ac1 = 1.0;\n  " << real << " as1 = 0.0;\n"
+      << "  if (sb > 0.0) {\n    ac1 = " << r(0, 2) << " / sb;\n    as1 = " << r(1, 2) << " / sb;\n  }\n"
+      << "  " << real << " gc1;\n  " << real << " gs1;\n"
+      << "  if (cb >= 0.0) {\n"
+      << "    " << real << " cs = " << r(0, 0) << " + " << r(1, 1) << ";\n"
+      << "    " << real << " ss = " << r(1, 0) << " - " << r(0, 1) << ";\n"
+      << "    " << real << " inv = 1.0 / sqrt(cs * cs + ss * ss);\n"
+      << "    cs = cs * inv;\n    ss = ss * inv;\n"
+      << "    gc1 = cs * ac1 + ss * as1;\n    gs1 = ss * ac1 - cs * as1;\n"
+      << "  } else {\n"
+      << "    " << real << " cd = " << r(1, 1) << " - " << r(0, 0) << ";\n"
+      << "    " << real << " sd = -(" << r(1, 0) << " + " << r(0, 1) << ");\n"
+      << "    " << real << " inv = 1.0 / sqrt(cd * cd + sd * sd);\n"
+      << "    cd = cd * inv;\n    sd = sd * inv;\n"
+      << "    gc1 = ac1 * cd + as1 * sd;\n    gs1 = as1 * cd - ac1 * sd;\n"
+      << "  }\n"
+      << "  " << real << " bc1 = cb;\n  " << real << " bs1 = sb;\n";
+    for (const char* angle : {"a", "b", "g"})
+      for (int m = 2; m < n; ++m) {
+        const std::string c = angle + std::string("c"), sn = angle + std::string("s");
+        const std::string pm = std::to_string(m - 1), m1 = "1";
+        b << "  " << real << " " << c << m << " = " << c << pm << " * " << c << m1 << " - " << sn << pm << " * "
+          << sn << m1 << ";\n  " << real << " " << sn << m << " = " << sn << pm << " * " << c << m1 << " + " << c
+          << pm << " * " << sn << m1 << ";\n";
+      }
+    const RotationHelpers h = compute_rotation_helpers(n);
+    for (int l = 2; l < n; ++l) {
+      const int size = 2 * l + 1, first = l * l;
+      const auto x = x90_band_block(h, l);
+      for (const auto& row : x)
+        crc = table_crc32(std::as_bytes(std::span(row)), crc);
+      const std::string p = "l" + std::to_string(l) + "_";
+      b << "  // band " << l << "\n";
+      for (int j = 0; j < size; ++j) b << "  " << real << " " << p << "x" << j << " = f[" << first + j << "];\n";
+      b << z_rotation(s, l, "g", p + "x", p + "t");
+      for (int i = 0; i < size; ++i) {
+        std::vector<std::pair<long double, std::string>> terms;
+        for (int j = 0; j < size; ++j) terms.emplace_back(x[i][j], p + "t" + std::to_string(j));
+        b << "  " << real << " " << p << "u" << i << " = " << linear_sum(terms) << ";\n";
+      }
+      b << z_rotation(s, l, "b", p + "u", p + "w");
+      for (int i = 0; i < size; ++i) {
+        std::vector<std::pair<long double, std::string>> terms;
+        for (int j = 0; j < size; ++j) terms.emplace_back(x[j][i], p + "w" + std::to_string(j));
+        b << "  " << real << " " << p << "v" << i << " = " << linear_sum(terms) << ";\n";
+      }
+      b << z_rotation(s, l, "a", p + "v", p + "y");
+      for (int j = 0; j < size; ++j) b << "  g[" << first + j << "] = " << p << "y" << j << ";\n";
+    }
+  }
+  const std::string head = "void shtool_rotate(" + s.mat3() + " R, " + array(s.real(), "f", kCount) + ", out " +
+                           array(s.real(), "g", kCount) + ")";
+  count_ops(b.str(), 1, out);
+  out.signature = head + ";";
+  o << "// g = M(R) f: g(w) = f(R^-1 w), so a lobe along d ends up along R d. R is the rotation matrix\n"
+       "// acting on column vectors (orthonormal, det +1; "
+    << (s.glsl() ? "GLSL mat3 is column-major: R[c][r] = R_rc" : "HLSL float3x3 is indexed R[r][c] = R_rc")
+    << ").\n" << head << " {\n" << b.str() << "}\n";
+}
+
+// c_k = sum_ij C_ijk a_i b_j with the tripling tensor C_ijk = integral y_i y_j y_k ([3] Eq. 5):
+// each pair product a_i b_j + a_j b_i is formed once and shared by every output it feeds.
+void triple_product(const Syntax& s, int n, std::ostringstream& o, ShaderSource& out, std::uint32_t& crc) {
+  const TriplingTensor t = compute_tripling_tensor_exact(n);
+  crc = table_crc32(std::as_bytes(std::span(t.value)), crc);
+  // output k -> (coefficient, pair (p, q) with p <= q)
+  std::map<int, std::vector<std::pair<double, std::pair<int, int>>>> terms;
+  for (std::size_t e = 0; e < t.size(); ++e) {
+    const int i = static_cast<int>(t.index[3 * e]), j = static_cast<int>(t.index[3 * e + 1]),
+              k = static_cast<int>(t.index[3 * e + 2]);
+    const double c = t.value[e];
+    // Each distinct value of {i, j, k} as the output, the other two as the input pair.
+    terms[k].push_back({c, {i, j}});
+    if (j != k) terms[j].push_back({c, {i, k}});
+    if (i != j) terms[i].push_back({c, {j, k}});
+  }
+  std::map<std::pair<int, int>, bool> used;
+  for (const auto& [k, list] : terms)
+    for (const auto& term : list) used[term.second] = true;
+  std::ostringstream b;
+  auto pair_name = [](std::pair<int, int> pq) {
+    return std::string("p").append(std::to_string(pq.first)).append("_").append(std::to_string(pq.second));
+  };
+  for (const auto& [pq, u] : used) {
+    const std::string p = std::to_string(pq.first), q = std::to_string(pq.second);
+    b << "  " << s.real() << " " << pair_name(pq) << " = a[" << p << "] * b[" << q << "]";
+    if (pq.first != pq.second) b << " + a[" << q << "] * b[" << p << "]";
+    b << ";\n";
+  }
+  for (int k = 0; k < n * n; ++k) {
+    std::vector<std::pair<long double, std::string>> list;
+    for (const auto& [c, pq] : terms[k]) list.emplace_back(c, pair_name(pq));
+    const std::string sum = linear_sum(list);
+    b << "  c[" << k << "] = " << (sum.empty() ? "0.0" : sum) << ";\n";
+  }
+  const std::string head = "void shtool_triple_product(" + array(s.real(), "a", kCount) + ", " +
+                           array(s.real(), "b", kCount) + ", out " + array(s.real(), "c", kCount) + ")";
+  count_ops(b.str(), 1, out);
+  out.signature = head + ";";
+  o << "// c = projection of the product of the functions a and b onto the order-SHTOOL_ORDER basis:\n"
+       "// c_k = sum_ij C_ijk a_i b_j, C_ijk = integral y_i y_j y_k.\n"
+    << head << " {\n" << b.str() << "}\n";
+}
+
+std::string guard_name(ShaderOperation op) {
+  std::string name = "SHTOOL_" + std::string(shader_operation_name(op)) + "_INCLUDED";
+  for (char& c : name) c = c == '-' ? '_' : static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  return name;
+}
+
+}  // namespace
+
+const std::vector<ShaderOperation>& shader_operations() {
+  static const std::vector<ShaderOperation> all = {ShaderOperation::sh_eval, ShaderOperation::sh_irradiance,
+                                                   ShaderOperation::zxzxz_rotate, ShaderOperation::triple_product,
+                                                   ShaderOperation::zh_shade};
+  return all;
+}
+
+std::string_view shader_operation_name(ShaderOperation operation) {
+  switch (operation) {
+    case ShaderOperation::sh_eval: return "sh-eval";
+    case ShaderOperation::sh_irradiance: return "sh-irradiance";
+    case ShaderOperation::zxzxz_rotate: return "zxzxz-rotate";
+    case ShaderOperation::triple_product: return "triple-product";
+    case ShaderOperation::zh_shade: return "zh-shade";
+  }
+  return "?";
+}
+
+int shader_min_order(ShaderOperation operation) {
+  return operation == ShaderOperation::zxzxz_rotate || operation == ShaderOperation::triple_product ? 2 : 1;
+}
+
+int shader_max_order(ShaderOperation operation) {
+  switch (operation) {
+    case ShaderOperation::zxzxz_rotate: return 8;
+    case ShaderOperation::triple_product: return 6;
+    default: return 10;
+  }
+}
+
+ShaderSource shader_source(const ShaderRequest& request) {
+  const Syntax s{request.language, request.precision == ShaderPrecision::half};
+  const int n = request.order;
+  ShaderSource out;
+  std::ostringstream body;
+  std::uint32_t crc = 0;
+  std::string constants;
+  switch (request.operation) {
+    case ShaderOperation::sh_eval:
+      sh_eval(s, n, body, out);
+      constants = "K_l^m and the Legendre recurrence, from their closed forms";
+      break;
+    case ShaderOperation::sh_irradiance:
+      sh_irradiance(s, n, body, out);
+      constants = "the basis as sh-eval; A_l of the clamped-cosine kernel (A_0 = pi, A_1 = 2 pi / 3, A_2 = pi / 4)";
+      break;
+    case ShaderOperation::zh_shade:
+      zh_shade(s, n, request.zh_lobes, body, out);
+      constants = "the basis as sh-eval";
+      break;
+    case ShaderOperation::zxzxz_rotate:
+      zxzxz_rotate(s, n, body, out, crc);
+      constants = n >= 4 ? "X90 = M(Rx(+90 deg)) of bands 2.." + std::to_string(n - 1) +
+                               " (computed by projection, as in rotation-helpers tables)"
+                         : "none (bands 1 and 2 by closed forms in R)";
+      break;
+    case ShaderOperation::triple_product:
+      triple_product(s, n, body, out, crc);
+      constants = "the tripling tensor of order " + std::to_string(n) + " (Wigner 3j construction)";
+      break;
+  }
+  const std::string_view name = shader_operation_name(request.operation);
+  const std::string guard = guard_name(request.operation);
+  char crc_text[16];
+  std::snprintf(crc_text, sizeof crc_text, "%08x", crc);
+  std::ostringstream o;
+  o << "// " << name << ", order " << n << ", " << (s.glsl() ? "GLSL" : "HLSL") << ", "
+    << (s.half ? "half (relaxed) precision" : "float") << ": generated by shtool " << kVersion << "\n"
+    << "//   " << request.command << "\n"
+    << "// Constants: " << constants << ".\n";
+  if (crc != 0)
+    o << "// CRC-32 of those constants (float64, little-endian, in generation order): " << crc_text << "\n";
+  o << "// Real orthonormal SH with the Condon-Shortley phase, flat index l * (l + 1) + m, order N = bands\n"
+       "// 0..N-1. An include file: it declares no shader version, entry point or resource. Do not edit;\n"
+       "// regenerate.\n"
+    << "#ifndef " << guard << "\n#define " << guard << "\n\n"
+    << "#define SHTOOL_ORDER " << n << "\n\n"
+    << body.str() << "\n#endif  // " << guard << "\n";
+  out.text = o.str();
+  return out;
+}
+
+}  // namespace shtool

@@ -1,0 +1,55 @@
+// gen-shader: GLSL and HLSL source of the runtime's SH operations, generated from the
+// same closed forms and tables as the C++ kernels (docs/shaders.md).
+//
+// Every file is an include: no #version line, no main, no resource bindings. It defines
+// SHTOOL_ORDER (a macro, usable as an array size) and one documented function per
+// operation, with constants rounded once from long double to the shader's float and
+// written with 9 significant digits (which read back to the same float), exact zeros
+// and unit factors left out.
+#pragma once
+
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace shtool {
+
+enum class ShaderLanguage { glsl, hlsl };
+// float: 32-bit throughout. half: locals and arguments declared relaxed (GLSL `mediump
+// float`, RelaxedPrecision in SPIR-V; HLSL `min16float`), which a GPU may evaluate in 16
+// bits; the constants are the same.
+enum class ShaderPrecision { float32, half };
+enum class ShaderOperation { sh_eval, sh_irradiance, zxzxz_rotate, triple_product, zh_shade };
+
+struct ShaderRequest {
+  ShaderLanguage language = ShaderLanguage::glsl;
+  ShaderOperation operation = ShaderOperation::sh_eval;
+  int order = 3;                                    // SH order N (bands 0..N-1)
+  ShaderPrecision precision = ShaderPrecision::float32;
+  int zh_lobes = 4;                                 // zh-shade: lobes per point
+  std::string command;                              // recorded in the provenance header
+};
+
+struct ShaderSource {
+  std::string text;
+  std::string signature;  // the function(s) the file defines, one per line
+  // Arithmetic of the generated function bodies as written (binary * and +/-, before
+  // the compiler's own folding; loops counted per iteration they run).
+  long multiplications = 0;
+  long additions = 0;
+};
+
+// Largest order each operation is generated for (sh-eval, sh-irradiance, zh-shade 10;
+// zxzxz-rotate 8; triple-product 6). Orders start at 1 (triple-product and zxzxz 2).
+int shader_min_order(ShaderOperation operation);
+int shader_max_order(ShaderOperation operation);
+
+// Names used on the command line ("sh-eval", ...), in the order of ShaderOperation.
+std::string_view shader_operation_name(ShaderOperation operation);
+const std::vector<ShaderOperation>& shader_operations();
+
+// The complete file. Precondition: the order is inside the operation's range and
+// zh_lobes is 1..16 (the job checks both and names the option).
+ShaderSource shader_source(const ShaderRequest& request);
+
+}  // namespace shtool

@@ -1,0 +1,153 @@
+// shtool gen-shader end to end: the include-file contract that engines and outside
+// checks rely on (no #version, no main, no bindings; SHTOOL_ORDER; the documented
+// signatures), constants at full float precision, the same bytes on every run, and
+// bad requests refused by name with nothing written. That the code computes the right
+// values is tests/gpu/test_shaders.cpp, on a Vulkan device.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <regex>
+#include <string>
+#include <vector>
+
+#include "run_command.h"
+#include "scratch_files.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using shtool::test::run_command;
+const std::string kExe = SHTOOL_EXE;
+
+fs::path scratch(const std::string& name) { return shtool::test::scratch_path("gen_shader", name); }
+
+shtool::test::CommandResult gen(const std::vector<std::string>& args) {
+  std::vector<std::string> argv = {kExe, "gen-shader"};
+  argv.insert(argv.end(), args.begin(), args.end());
+  return run_command(argv);
+}
+
+const char* kOperations[] = {"sh-eval", "sh-irradiance", "zxzxz-rotate", "triple-product", "zh-shade"};
+
+TEST(GenShader, EveryOperationIsAnIncludeWithTheContract) {
+  for (const char* lang : {"glsl", "hlsl"})
+    for (const char* what : kOperations) {
+      const fs::path out = scratch(std::string(what) + "." + lang);
+      const auto r = gen({"--lang", lang, "--what", what, "--order", "3", "--out", out.string()});
+      ASSERT_EQ(r.exit_code, 0) << r.err;
+      EXPECT_NE(r.err.find("multiplications"), std::string::npos) << r.err;
+      const std::string text = shtool::test::read_file(out);
+      SCOPED_TRACE(std::string(lang) + " " + what);
+      EXPECT_EQ(text.find("#version"), std::string::npos);
+      EXPECT_EQ(text.find("main("), std::string::npos);
+      EXPECT_EQ(text.find("binding"), std::string::npos);
+      EXPECT_EQ(text.find("register("), std::string::npos);
+      EXPECT_EQ(text.find("#include"), std::string::npos);
+      EXPECT_NE(text.find("\n#define SHTOOL_ORDER 3\n"), std::string::npos);
+      // The provenance header records the command.
+      EXPECT_NE(text.find(std::string("shtool gen-shader --lang ") + lang + " --what " + what + " --order 3"),
+                std::string::npos);
+    }
+}
+
+TEST(GenShader, SignaturesAsDocumented) {
+  struct Expect {
+    const char *lang, *what, *signature;
+  } expects[] = {
+      {"glsl", "sh-eval", "void shtool_sh_eval(vec3 dir, out float y[SHTOOL_ORDER * SHTOOL_ORDER])"},
+      {"hlsl", "sh-eval", "void shtool_sh_eval(float3 dir, out float y[SHTOOL_ORDER * SHTOOL_ORDER])"},
+      {"glsl", "zxzxz-rotate",
+       "void shtool_rotate(mat3 R, float f[SHTOOL_ORDER * SHTOOL_ORDER], out float g[SHTOOL_ORDER * SHTOOL_ORDER])"},
+      {"hlsl", "zxzxz-rotate",
+       "void shtool_rotate(float3x3 R, float f[SHTOOL_ORDER * SHTOOL_ORDER], out float g[SHTOOL_ORDER * "
+       "SHTOOL_ORDER])"},
+      {"glsl", "sh-irradiance", "float shtool_sh_irradiance(vec3 n, float L[SHTOOL_ORDER * SHTOOL_ORDER])"},
+      {"hlsl", "sh-irradiance",
+       "float3 shtool_sh_irradiance_rgb(float3 n, float3 L[SHTOOL_ORDER * SHTOOL_ORDER])"},
+      {"glsl", "triple-product",
+       "void shtool_triple_product(float a[SHTOOL_ORDER * SHTOOL_ORDER], float b[SHTOOL_ORDER * SHTOOL_ORDER], out "
+       "float c[SHTOOL_ORDER * SHTOOL_ORDER])"},
+      {"glsl", "zh-shade",
+       "float shtool_zh_shade(vec3 axes[SHTOOL_ZH_LOBES], float g[SHTOOL_ZH_LOBES * SHTOOL_ORDER], float "
+       "e[SHTOOL_ORDER * SHTOOL_ORDER])"},
+  };
+  for (const Expect& e : expects) {
+    const fs::path out = scratch("sig.txt");
+    const auto r = gen({"--lang", e.lang, "--what", e.what, "--order", "4", "--out", out.string()});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE(shtool::test::read_file(out).find(e.signature), std::string::npos) << e.lang << " " << e.what;
+  }
+}
+
+// Every literal reads back to the float it stands for and carries 9 significant digits
+// unless fewer say the same float: no 6-digit constants.
+TEST(GenShader, ConstantsAtFullFloatPrecision) {
+  const fs::path out = scratch("eval10.glsl");
+  ASSERT_EQ(gen({"--lang", "glsl", "--what", "sh-eval", "--order", "10", "--out", out.string()}).exit_code, 0);
+  const std::string text = shtool::test::read_file(out);
+  // y_0^0 = 1 / (2 sqrt(pi)) = 0.28209479177387814, whose float is 0.282094806432724.
+  EXPECT_NE(text.find("y[0] = 0.282094806;"), std::string::npos);
+  const std::regex number(R"((\d+\.\d*(e[-+]?\d+)?))");
+  int checked = 0;
+  for (auto it = std::sregex_iterator(text.begin(), text.end(), number); it != std::sregex_iterator(); ++it) {
+    const std::string s = it->str();
+    const float f = std::strtof(s.c_str(), nullptr);
+    char shorter[32];
+    std::snprintf(shorter, sizeof shorter, "%.8g", static_cast<double>(f));
+    const bool eight_suffice = std::strtof(shorter, nullptr) == f;
+    const std::size_t digits = std::count_if(s.begin(), s.begin() + std::min(s.find('e'), s.size()),
+                                             [](char c) { return std::isdigit(static_cast<unsigned char>(c)); });
+    if (!eight_suffice) EXPECT_GE(digits, 9u) << s;
+    ++checked;
+  }
+  EXPECT_GT(checked, 100);
+}
+
+TEST(GenShader, SameBytesOnEveryRun) {
+  for (const char* what : kOperations) {
+    const fs::path a = scratch("a.hlsl"), b = scratch("sub/a.hlsl");
+    fs::create_directories(b.parent_path());
+    ASSERT_EQ(gen({"--lang", "hlsl", "--what", what, "--order", "5", "--out", a.string()}).exit_code, 0);
+    ASSERT_EQ(gen({"--lang", "hlsl", "--what", what, "--order", "5", "--out", b.string()}).exit_code, 0);
+    EXPECT_EQ(shtool::test::read_file(a), shtool::test::read_file(b)) << what;
+  }
+}
+
+TEST(GenShader, BadRequestsAreRefusedByName) {
+  struct Bad {
+    std::vector<std::string> args;
+    const char* message;
+  } bad[] = {
+      {{"--lang", "glsl", "--what", "sh-eval", "--order", "11"}, "--order 11"},
+      {{"--lang", "glsl", "--what", "sh-eval", "--order", "0"}, "--order 0"},
+      {{"--lang", "glsl", "--what", "zxzxz-rotate", "--order", "9"}, "--order 9"},
+      {{"--lang", "glsl", "--what", "zxzxz-rotate", "--order", "1"}, "--order 1"},
+      {{"--lang", "glsl", "--what", "triple-product", "--order", "7"}, "--order 7"},
+      {{"--lang", "glsl", "--what", "sh-eval", "--order", "3", "--zh-lobes", "2"}, "--zh-lobes"},
+      {{"--lang", "glsl", "--what", "zh-shade", "--order", "3", "--zh-lobes", "0"}, "--zh-lobes"},
+      {{"--lang", "glsl", "--what", "zh-shade", "--order", "3", "--zh-lobes", "17"}, "--zh-lobes"},
+      {{"--lang", "glsl", "--what", "zhf-nothing", "--order", "3"}, "--what"},
+      {{"--lang", "msl", "--what", "sh-eval", "--order", "3"}, "--lang"},
+      {{"--lang", "glsl", "--what", "sh-eval", "--order", "3", "--precision", "double"}, "--precision"},
+      {{"--what", "sh-eval", "--order", "3"}, "--lang"},
+  };
+  for (const Bad& b : bad) {
+    const fs::path out = scratch("bad.glsl");
+    fs::remove(out);
+    std::vector<std::string> args = b.args;
+    args.insert(args.end(), {"--out", out.string()});
+    const auto r = gen(args);
+    EXPECT_EQ(r.exit_code, 1) << b.message;
+    EXPECT_NE(r.err.find(b.message), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out)) << b.message;
+  }
+  const auto r = gen({"--lang", "glsl", "--what", "sh-eval", "--order", "3", "--out", scratch("").string()});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("is a folder"), std::string::npos) << r.err;
+}
+
+}  // namespace

@@ -1,0 +1,441 @@
+// The generated GLSL and HLSL run on a real Vulkan device (lavapipe in CI): each
+// operation is wrapped in a compute shader, fed thousands of random inputs from a
+// storage buffer, and its outputs are compared with the C++ runtime in double. Both
+// languages go through glslang to SPIR-V, spirv-val and the same harness; the GLSL is
+// also compiled as OpenGL ES 3.00 (WebGL2's language).
+//
+// Tolerances are float rounding times the operation's size: sh-eval at 4e-6 of the band's
+// scale sqrt((2l+1)/4pi) (the recurrence adds a rounding per band: 1.9e-6 measured at
+// N = 10), zh-shade at 2e-6 of the sum of absolute terms,
+// rotations at 1e-5 of |f| (the bound docs/shaders.md states for N <= 8; measured errors are printed),
+// products and irradiance at 1e-6 of the sum of absolute terms.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <numbers>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "run_command.h"
+#include "scratch_files.h"
+#include "shaders/shader_source.h"
+#include "shtool/irradiance.h"
+#include "shtool/rotation.h"
+#include "shtool/sh.h"
+#include "shtool/tripling_product.h"
+#include "shtool/zh_shading.h"
+#include "vulkan_compute.h"
+
+namespace {
+
+using shtool::ShaderLanguage;
+using shtool::ShaderOperation;
+using shtool::ShaderPrecision;
+namespace gpu = shtool::gpu;
+
+constexpr int kInputs = 4096;
+
+// One invocation's inputs and outputs, as float arrays of fixed strides, and the
+// statements of main() that call the generated function on them.
+struct Wrapper {
+  int in_stride = 0, out_stride = 0;
+  std::string body;  // uses ib, ob (first input and output float of this invocation)
+};
+
+std::string vec3_of(ShaderLanguage lang, const std::string& at) {
+  return std::string(lang == ShaderLanguage::glsl ? "vec3" : "float3") + "(inp[" + at + "], inp[" + at +
+         " + 1], inp[" + at + " + 2])";
+}
+
+std::string load_array(const std::string& type, const std::string& name, int size, const std::string& from) {
+  return "  " + type + " " + name + "[" + std::to_string(size) + "];\n  for (int k = 0; k < " + std::to_string(size) +
+         "; ++k) " + name + "[k] = inp[" + from + " + k];\n";
+}
+
+Wrapper wrapper(ShaderLanguage lang, ShaderOperation op, int n, int lobes) {
+  const int nn = n * n;
+  const bool glsl = lang == ShaderLanguage::glsl;
+  const std::string v3 = glsl ? "vec3" : "float3";
+  Wrapper w;
+  switch (op) {
+    case ShaderOperation::sh_eval:
+      w.in_stride = 3;
+      w.out_stride = nn;
+      w.body = "  float y[SHTOOL_ORDER * SHTOOL_ORDER];\n  shtool_sh_eval(" + vec3_of(lang, "ib") +
+               ", y);\n  for (int k = 0; k < " + std::to_string(nn) + "; ++k) outp[ob + k] = y[k];\n";
+      break;
+    case ShaderOperation::sh_irradiance:
+      // n, L (scalar), then L as RGB (interleaved)
+      w.in_stride = 3 + nn + 3 * nn;
+      w.out_stride = 4;
+      w.body = load_array("float", "L", nn, "ib + 3") + "  " + v3 + " Lc[" + std::to_string(nn) +
+               "];\n  for (int k = 0; k < " + std::to_string(nn) + "; ++k) Lc[k] = " +
+               vec3_of(lang, "ib + 3 + " + std::to_string(nn) + " + 3 * k") +
+               ";\n  outp[ob] = shtool_sh_irradiance(" + vec3_of(lang, "ib") + ", L);\n  " + v3 +
+               " e = shtool_sh_irradiance_rgb(" + vec3_of(lang, "ib") +
+               ", Lc);\n  outp[ob + 1] = e.x;\n  outp[ob + 2] = e.y;\n  outp[ob + 3] = e.z;\n";
+      break;
+    case ShaderOperation::zxzxz_rotate: {
+      // R row-major, then f
+      w.in_stride = 9 + nn;
+      w.out_stride = nn;
+      std::string m = glsl ? "mat3(" : "float3x3(";
+      for (int k = 0; k < 9; ++k) {
+        // GLSL's constructor takes columns, HLSL's rows.
+        const int i = glsl ? k % 3 : k / 3, j = glsl ? k / 3 : k % 3;
+        m += (k ? ", " : "") + std::string("inp[ib + ") + std::to_string(3 * i + j) + "]";
+      }
+      m += ")";
+      w.body = load_array("float", "f", nn, "ib + 9") + "  float g[" + std::to_string(nn) + "];\n  shtool_rotate(" +
+               m + ", f, g);\n  for (int k = 0; k < " + std::to_string(nn) + "; ++k) outp[ob + k] = g[k];\n";
+      break;
+    }
+    case ShaderOperation::triple_product:
+      w.in_stride = 2 * nn;
+      w.out_stride = nn;
+      w.body = load_array("float", "a", nn, "ib") + load_array("float", "b", nn, "ib + " + std::to_string(nn)) +
+               "  float c[" + std::to_string(nn) + "];\n  shtool_triple_product(a, b, c);\n  for (int k = 0; k < " +
+               std::to_string(nn) + "; ++k) outp[ob + k] = c[k];\n";
+      break;
+    case ShaderOperation::zh_shade:
+      // axes (3 per lobe), g (N per lobe), e
+      w.in_stride = 3 * lobes + lobes * n + nn;
+      w.out_stride = 1;
+      w.body = "  " + v3 + " axes[" + std::to_string(lobes) + "];\n  for (int k = 0; k < " + std::to_string(lobes) +
+               "; ++k) axes[k] = " + vec3_of(lang, "ib + 3 * k") + ";\n" +
+               load_array("float", "g", lobes * n, "ib + " + std::to_string(3 * lobes)) +
+               load_array("float", "e", nn, "ib + " + std::to_string(3 * lobes + lobes * n)) +
+               "  outp[ob] = shtool_zh_shade(axes, g, e);\n";
+      break;
+  }
+  return w;
+}
+
+std::string compute_shader(ShaderLanguage lang, const std::string& generated, const Wrapper& w) {
+  const std::string index = "  uint ib = id * " + std::to_string(w.in_stride) + "u;\n  uint ob = id * " +
+                            std::to_string(w.out_stride) + "u;\n";
+  if (lang == ShaderLanguage::glsl)
+    return "#version 450\nlayout(local_size_x = 64) in;\n"
+           "layout(std430, set = 0, binding = 0) readonly buffer Inputs { float inp[]; };\n"
+           "layout(std430, set = 0, binding = 1) writeonly buffer Outputs { float outp[]; };\n"
+           "layout(push_constant) uniform Params { uint count; } params;\n\n" +
+           generated +
+           "\nvoid main() {\n  uint id = gl_GlobalInvocationID.x;\n  if (id >= params.count) return;\n" + index +
+           w.body + "}\n";
+  return "[[vk::binding(0, 0)]] RWStructuredBuffer<float> inp : register(u0);\n"
+         "[[vk::binding(1, 0)]] RWStructuredBuffer<float> outp : register(u1);\n"
+         "struct Params { uint count; };\n[[vk::push_constant]] ConstantBuffer<Params> params;\n\n" +
+         generated + "\n[numthreads(64, 1, 1)]\nvoid main(uint3 tid : SV_DispatchThreadID) {\n  uint id = tid.x;\n"
+         "  if (id >= params.count) return;\n" + index + w.body + "}\n";
+}
+
+Eigen::Vector3d random_unit(std::mt19937_64& rng) {
+  std::normal_distribution<double> g;
+  Eigen::Vector3d v;
+  do v = Eigen::Vector3d(g(rng), g(rng), g(rng));
+  while (v.norm() < 1e-3);
+  return v.normalized();
+}
+
+double band_scale(int l) { return std::sqrt((2.0 * l + 1.0) / (4.0 * std::numbers::pi)); }
+
+struct Outcome {
+  double worst = 0;  // largest error / tolerance unit over every output
+};
+
+// Inputs (float, as the shader sees them) and the check of its outputs against the
+// runtime in double, for one operation.
+struct Problem {
+  std::vector<float> in;
+  std::function<double(const std::vector<float>& out)> worst_error;  // in units of the tolerance
+};
+
+Problem make_problem(ShaderOperation op, int n, int lobes, const Wrapper& w, std::mt19937_64& rng) {
+  const int nn = n * n;
+  std::uniform_real_distribution<double> u(-1, 1);
+  Problem p;
+  p.in.resize(static_cast<std::size_t>(kInputs) * w.in_stride);
+  auto at = [&](int inv, int k) -> float& { return p.in[static_cast<std::size_t>(inv) * w.in_stride + k]; };
+  auto dvec = [&](int inv, int k) { return Eigen::Vector3d(at(inv, k), at(inv, k + 1), at(inv, k + 2)); };
+  auto put_dir = [&](int inv, int k, int case_index) {
+    // The poles and the axes first, then random directions.
+    static const double special[6][3] = {{0, 0, 1}, {0, 0, -1}, {1, 0, 0}, {0, 1, 0}, {-1, 0, 0}, {0, -1, 0}};
+    Eigen::Vector3d d = case_index < 6 ? Eigen::Vector3d(special[case_index][0], special[case_index][1],
+                                                         special[case_index][2])
+                                       : random_unit(rng);
+    for (int c = 0; c < 3; ++c) at(inv, k + c) = static_cast<float>(d[c]);
+  };
+  for (int inv = 0; inv < kInputs; ++inv)
+    for (int k = 0; k < w.in_stride; ++k) at(inv, k) = static_cast<float>(u(rng));
+  switch (op) {
+    case ShaderOperation::sh_eval:
+    case ShaderOperation::sh_irradiance:
+      for (int inv = 0; inv < kInputs; ++inv) put_dir(inv, 0, inv);
+      break;
+    case ShaderOperation::zxzxz_rotate:
+      for (int inv = 0; inv < kInputs; ++inv) {
+        Eigen::Matrix3d r;
+        if (inv == 0) r.setIdentity();
+        else if (inv == 1) r = Eigen::AngleAxisd(std::numbers::pi, Eigen::Vector3d::UnitX()).toRotationMatrix();
+        else if (inv == 2) r = Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+        else if (inv == 3) r = Eigen::AngleAxisd(1e-4, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+        else if (inv == 4) r = Eigen::AngleAxisd(std::numbers::pi, Eigen::Vector3d(1, 1, 0).normalized()).toRotationMatrix();
+        else {
+          std::normal_distribution<double> g;
+          r = Eigen::Quaterniond(g(rng), g(rng), g(rng), g(rng)).normalized().toRotationMatrix();
+        }
+        for (int k = 0; k < 9; ++k) at(inv, k) = static_cast<float>(r(k / 3, k % 3));
+      }
+      break;
+    case ShaderOperation::zh_shade:
+      for (int inv = 0; inv < kInputs; ++inv)
+        for (int i = 0; i < lobes; ++i) put_dir(inv, 3 * i, inv < 6 ? inv : 6 + i);
+      break;
+    case ShaderOperation::triple_product: break;
+  }
+  const std::vector<float> in = p.in;  // the float values are the problem
+  const int in_stride = w.in_stride, out_stride = w.out_stride;
+  auto in_at = [in, in_stride](int inv, int k) { return static_cast<double>(in[std::size_t(inv) * in_stride + k]); };
+  switch (op) {
+    case ShaderOperation::sh_eval:
+      p.worst_error = [=](const std::vector<float>& out) {
+        double worst = 0;
+        std::vector<double> y(nn);
+        for (int inv = 0; inv < kInputs; ++inv) {
+          // The shader takes the float direction as unit; so does the reference.
+          const Eigen::Vector3d d(in_at(inv, 0), in_at(inv, 1), in_at(inv, 2));
+          shtool::eval_sh<double>(n, d / d.norm(), y);
+          for (int i = 0; i < nn; ++i) {
+            const int l = shtool::sh_band(i);
+            const double e = std::abs(out[std::size_t(inv) * out_stride + i] - y[i]) / (4e-6 * band_scale(l));
+            worst = std::max(worst, e);
+          }
+        }
+        return worst;
+      };
+      break;
+    case ShaderOperation::sh_irradiance:
+      p.worst_error = [=](const std::vector<float>& out) {
+        double worst = 0;
+        std::vector<double> y(nn);
+        for (int inv = 0; inv < kInputs; ++inv) {
+          const Eigen::Vector3d d(in_at(inv, 0), in_at(inv, 1), in_at(inv, 2));
+          shtool::eval_sh<double>(n, d / d.norm(), y);
+          for (int c = 0; c < 4; ++c) {
+            double e = 0, scale = 0;
+            for (int i = 0; i < nn; ++i) {
+              const double a = shtool::clamped_cosine_band(shtool::sh_band(i));
+              const double li = c == 0 ? in_at(inv, 3 + i) : in_at(inv, 3 + nn + 3 * i + (c - 1));
+              e += a * li * y[i];
+              scale += std::abs(a * li * y[i]);
+            }
+            worst = std::max(worst, std::abs(out[std::size_t(inv) * out_stride + c] - e) / (1e-6 * scale + 1e-30));
+          }
+        }
+        return worst;
+      };
+      break;
+    case ShaderOperation::zxzxz_rotate:
+      p.worst_error = [=](const std::vector<float>& out) {
+        double worst = 0;
+        shtool::ShRotation<double> rot(n, nullptr);  // the reference method: no tables
+        std::vector<double> f(nn), g(nn);
+        for (int inv = 0; inv < kInputs; ++inv) {
+          Eigen::Matrix3d r;
+          for (int k = 0; k < 9; ++k) r(k / 3, k % 3) = in_at(inv, k);
+          // The float matrix, made orthonormal again in double: what it stands for.
+          const Eigen::JacobiSVD<Eigen::Matrix3d> svd(r, Eigen::ComputeFullU | Eigen::ComputeFullV);
+          rot.set(svd.matrixU() * svd.matrixV().transpose(), shtool::RotationMethod::reference);
+          for (int i = 0; i < nn; ++i) f[i] = in_at(inv, 9 + i);
+          rot.apply(f, g);
+          double fn = 0, err = 0;
+          for (int i = 0; i < nn; ++i) {
+            fn += f[i] * f[i];
+            err = std::max(err, std::abs(out[std::size_t(inv) * out_stride + i] - g[i]));
+          }
+          worst = std::max(worst, err / (1e-5 * std::sqrt(fn)));
+        }
+        return worst;
+      };
+      break;
+    case ShaderOperation::triple_product:
+      p.worst_error = [=](const std::vector<float>& out) {
+        const shtool::TriplingTensor t = shtool::TriplingTensor::compute(n);
+        double worst = 0;
+        std::vector<double> c(nn), scale(nn);
+        for (int inv = 0; inv < kInputs; ++inv) {
+          std::fill(c.begin(), c.end(), 0.0);
+          std::fill(scale.begin(), scale.end(), 0.0);
+          auto add = [&](int i, int j, int k, double v) {
+            c[k] += v * in_at(inv, i) * in_at(inv, nn + j);
+            scale[k] += std::abs(v * in_at(inv, i) * in_at(inv, nn + j));
+          };
+          for (std::size_t e = 0; e < t.size(); ++e) {
+            const int i = t.index[3 * e], j = t.index[3 * e + 1], k = t.index[3 * e + 2];
+            // every distinct permutation (i', j', k') contributes a_i' b_j' to c_k'
+            const int perm[6][3] = {{i, j, k}, {i, k, j}, {j, i, k}, {j, k, i}, {k, i, j}, {k, j, i}};
+            for (int q = 0; q < 6; ++q) {
+              bool repeat = false;
+              for (int r = 0; r < q; ++r)
+                repeat |= perm[r][0] == perm[q][0] && perm[r][1] == perm[q][1] && perm[r][2] == perm[q][2];
+              if (!repeat) add(perm[q][0], perm[q][1], perm[q][2], t.value[e]);
+            }
+          }
+          for (int k = 0; k < nn; ++k)
+            worst = std::max(worst, std::abs(out[std::size_t(inv) * out_stride + k] - c[k]) /
+                                        (1e-6 * scale[k] + 1e-30));
+        }
+        return worst;
+      };
+      break;
+    case ShaderOperation::zh_shade:
+      p.worst_error = [=](const std::vector<float>& out) {
+        double worst = 0;
+        std::vector<Eigen::Vector3d> axes(lobes);
+        std::vector<double> g(lobes * n), e(nn), y(nn);
+        for (int inv = 0; inv < kInputs; ++inv) {
+          double scale = 0;
+          for (int i = 0; i < lobes; ++i) {
+            axes[i] = Eigen::Vector3d(in_at(inv, 3 * i), in_at(inv, 3 * i + 1), in_at(inv, 3 * i + 2));
+            axes[i] /= axes[i].norm();
+          }
+          for (int k = 0; k < lobes * n; ++k) g[k] = in_at(inv, 3 * lobes + k);
+          for (int k = 0; k < nn; ++k) e[k] = in_at(inv, 3 * lobes + lobes * n + k);
+          const double r = shtool::zh_shade_exact<double>(e, std::span<const Eigen::Vector3d>(axes), g);
+          for (int i = 0; i < lobes; ++i) {
+            shtool::eval_sh<double>(n, axes[i], y);
+            for (int k = 0; k < nn; ++k) scale += std::abs(g[i * n + shtool::sh_band(k)] * y[k] * e[k]);
+          }
+          worst = std::max(worst, std::abs(out[inv] - r) / (2e-6 * scale + 1e-30));
+        }
+        return worst;
+      };
+      break;
+  }
+  return p;
+}
+
+struct Case {
+  ShaderLanguage language;
+  ShaderOperation operation;
+  int order;
+  int lobes = 4;
+};
+
+std::string case_name(const testing::TestParamInfo<Case>& info) {
+  std::string name = std::string(info.param.language == ShaderLanguage::glsl ? "glsl_" : "hlsl_") +
+                     std::string(shtool::shader_operation_name(info.param.operation)) + "_N" +
+                     std::to_string(info.param.order);
+  if (info.param.operation == ShaderOperation::zh_shade) name += "_lobes" + std::to_string(info.param.lobes);
+  std::replace(name.begin(), name.end(), '-', '_');
+  return name;
+}
+
+std::vector<Case> all_cases() {
+  std::vector<Case> cases;
+  for (ShaderLanguage lang : {ShaderLanguage::glsl, ShaderLanguage::hlsl}) {
+    for (int n : {1, 2, 3, 4, 5, 6, 8, 10}) cases.push_back({lang, ShaderOperation::sh_eval, n});
+    for (int n : {1, 2, 3, 4, 6, 10}) cases.push_back({lang, ShaderOperation::sh_irradiance, n});
+    for (int n = 2; n <= 8; ++n) cases.push_back({lang, ShaderOperation::zxzxz_rotate, n});
+    for (int n = 2; n <= 6; ++n) cases.push_back({lang, ShaderOperation::triple_product, n});
+    cases.push_back({lang, ShaderOperation::zh_shade, 1, 1});
+    cases.push_back({lang, ShaderOperation::zh_shade, 3, 4});
+    cases.push_back({lang, ShaderOperation::zh_shade, 6, 4});
+    cases.push_back({lang, ShaderOperation::zh_shade, 10, 2});
+  }
+  return cases;
+}
+
+class GeneratedShader : public testing::TestWithParam<Case> {};
+
+TEST_P(GeneratedShader, MatchesTheRuntimeOnVulkan) {
+  SHTOOL_REQUIRE_VULKAN();
+  const Case c = GetParam();
+  shtool::ShaderRequest request;
+  request.language = c.language;
+  request.operation = c.operation;
+  request.order = c.order;
+  request.zh_lobes = c.lobes;
+  request.command = "test";
+  const shtool::ShaderSource source = shtool::shader_source(request);
+  const Wrapper w = wrapper(c.language, c.operation, c.order, c.lobes);
+  const std::string shader = compute_shader(c.language, source.text, w);
+  const gpu::ShaderLanguage lang = c.language == ShaderLanguage::glsl ? gpu::ShaderLanguage::glsl
+                                                                       : gpu::ShaderLanguage::hlsl;
+  const std::vector<uint32_t> spirv = gpu::compile_compute(shader, lang);
+  gpu::validate_spirv(spirv);
+  std::mt19937_64 rng(1234 + c.order);
+  const Problem p = make_problem(c.operation, c.order, c.lobes, w, rng);
+  std::vector<std::vector<float>> buffers = {p.in, std::vector<float>(std::size_t(kInputs) * w.out_stride, NAN)};
+  const uint32_t count = kInputs;
+  gpu::shared_device()->run(spirv, buffers, count, &count, sizeof count);
+  const double worst = p.worst_error(buffers[1]);
+  std::printf("%s: worst error %.3g of the tolerance; %ld multiplications, %ld additions\n",
+              case_name({c, 0}).c_str(), worst, source.multiplications, source.additions);
+  EXPECT_LE(worst, 1.0);  // NaN (an output never written) fails too
+}
+
+INSTANTIATE_TEST_SUITE_P(AllOperations, GeneratedShader, testing::ValuesIn(all_cases()), case_name);
+
+// Relaxed precision compiles, validates and stays within half precision of the result
+// (lavapipe evaluates it in float; a GPU may use 16 bits: 1e-2 relative is what half allows).
+TEST(GeneratedShaderHalf, CompilesAndRunsEveryOperation) {
+  SHTOOL_REQUIRE_VULKAN();
+  for (ShaderLanguage language : {ShaderLanguage::glsl, ShaderLanguage::hlsl})
+    for (ShaderOperation op : shtool::shader_operations()) {
+      shtool::ShaderRequest request;
+      request.language = language;
+      request.operation = op;
+      request.order = 3;
+      request.precision = ShaderPrecision::half;
+      const shtool::ShaderSource source = shtool::shader_source(request);
+      const Wrapper w = wrapper(language, op, 3, request.zh_lobes);
+      const std::vector<uint32_t> spirv =
+          gpu::compile_compute(compute_shader(language, source.text, w),
+                               language == ShaderLanguage::glsl ? gpu::ShaderLanguage::glsl : gpu::ShaderLanguage::hlsl);
+      gpu::validate_spirv(spirv);
+      std::mt19937_64 rng(99);
+      const Problem p = make_problem(op, 3, request.zh_lobes, w, rng);
+      std::vector<std::vector<float>> buffers = {p.in, std::vector<float>(std::size_t(kInputs) * w.out_stride, NAN)};
+      const uint32_t count = kInputs;
+      gpu::shared_device()->run(spirv, buffers, count, &count, sizeof count);
+      // The tolerance units above are 1e-6..1e-5; half allows 1e-2 relative.
+      EXPECT_LE(p.worst_error(buffers[1]), 1e4) << shtool::shader_operation_name(op);
+    }
+}
+
+// The GLSL is also valid OpenGL ES 3.00 (WebGL2): each file inside an ES fragment shader.
+TEST(GeneratedShaderGlslEs, EveryOperationCompilesAsEs300) {
+  for (ShaderOperation op : shtool::shader_operations())
+    for (ShaderPrecision precision : {ShaderPrecision::float32, ShaderPrecision::half}) {
+      shtool::ShaderRequest request;
+      request.operation = op;
+      request.order = shtool::shader_max_order(op);
+      request.precision = precision;
+      const Wrapper w = wrapper(ShaderLanguage::glsl, op, request.order, request.zh_lobes);
+      std::string body = w.body;
+      // ES fragment shader: the inputs come from a uniform array instead of a buffer.
+      const std::string source = "#version 300 es\nprecision highp float;\nprecision highp int;\n"
+                                 "uniform float inp[" + std::to_string(w.in_stride) + "];\nout vec4 color;\n" +
+                                 shtool::shader_source(request).text +
+                                 "void main() {\n  int ib = 0;\n  float outp[" + std::to_string(w.out_stride) +
+                                 "];\n  int ob = 0;\n" + body + "  color = vec4(outp[0]);\n}\n";
+      const auto path = shtool::test::scratch_path("shaders", "es300.frag");
+      {
+        std::FILE* f = std::fopen(path.c_str(), "wb");
+        ASSERT_NE(f, nullptr);
+        std::fwrite(source.data(), 1, source.size(), f);
+        std::fclose(f);
+      }
+      const auto r = shtool::test::run_command({SHTOOL_GLSLANG_VALIDATOR, path.string()});
+      EXPECT_EQ(r.exit_code, 0) << shtool::shader_operation_name(op) << ":\n" << r.out << r.err;
+    }
+}
+
+}  // namespace
