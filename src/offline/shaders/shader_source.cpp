@@ -83,7 +83,8 @@ void count_ops(std::string_view code, long times, ShaderSource& out) {
 //   q_m+1^m   = sqrt(2m + 3) z q_m^m,
 //   q_l^m     = a_lm z q_l-1^m + b_lm q_l-2^m,
 //   a_lm = sqrt((4l^2 - 1) / (l^2 - m^2)),  b_lm = -sqrt(((l-1)^2 - m^2)(2l + 1) / ((2l - 3)(l^2 - m^2))),
-// the orthonormal recurrence ([1] Sec. 2) with K_l^m folded in.
+// the three-term recurrence of the orthonormal associated Legendre functions with K_l^m
+// folded in.
 long double sectoral_constant(int m) {
   long double q = std::sqrt(1.0L / (4.0L * std::numbers::pi_v<long double>));
   for (int k = 1; k <= m; ++k) q *= -std::sqrt((2.0L * k + 1.0L) / (2.0L * k));
