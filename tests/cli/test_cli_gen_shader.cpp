@@ -31,7 +31,7 @@ shtool::test::CommandResult gen(const std::vector<std::string>& args) {
   return run_command(argv);
 }
 
-const char* kOperations[] = {"sh-eval", "sh-irradiance", "zxzxz-rotate", "triple-product", "zh-shade"};
+const char* kOperations[] = {"sh-eval", "sh-irradiance", "zxzxz-rotate", "zhf-rotate", "triple-product", "zh-shade"};
 
 TEST(GenShader, EveryOperationIsAnIncludeWithTheContract) {
   for (const char* lang : {"glsl", "hlsl"})
@@ -71,6 +71,9 @@ TEST(GenShader, SignaturesAsDocumented) {
       {"glsl", "triple-product",
        "void shtool_triple_product(float a[SHTOOL_ORDER * SHTOOL_ORDER], float b[SHTOOL_ORDER * SHTOOL_ORDER], out "
        "float c[SHTOOL_ORDER * SHTOOL_ORDER])"},
+      {"glsl", "zhf-rotate",
+       "void shtool_zhf_rotate(mat3 R, float f[SHTOOL_ORDER * SHTOOL_ORDER], out float g[SHTOOL_ORDER * "
+       "SHTOOL_ORDER])"},
       {"glsl", "zh-shade",
        "float shtool_zh_shade(vec3 axes[SHTOOL_ZH_LOBES], float g[SHTOOL_ZH_LOBES * SHTOOL_ORDER], float "
        "e[SHTOOL_ORDER * SHTOOL_ORDER])"},
@@ -134,6 +137,16 @@ TEST(GenShader, BadRequestsAreRefusedByName) {
       {{"--lang", "msl", "--what", "sh-eval", "--order", "3"}, "--lang"},
       {{"--lang", "glsl", "--what", "sh-eval", "--order", "3", "--precision", "double"}, "--precision"},
       {{"--what", "sh-eval", "--order", "3"}, "--lang"},
+      {{"--lang", "glsl", "--what", "zhf-rotate", "--order", "11"}, "--order 11"},
+      {{"--lang", "glsl", "--what", "zxzxz-rotate", "--order", "3", "--lobes", "x.shtb"}, "--lobes"},
+      {{"--lang", "glsl", "--what", "zhf-rotate", "--order", "3", "--lobes", SHTOOL_SOURCE_DIR "/data/sky.hdr"},
+       "--lobes"},
+      {{"--lang", "glsl", "--what", "zhf-rotate", "--order", "5", "--lobes",
+        SHTOOL_SOURCE_DIR "/tables/zhf-shared-N4.shtb"},
+       "--lobes"},
+      {{"--lang", "glsl", "--what", "zhf-rotate", "--order", "3", "--lobes",
+        SHTOOL_SOURCE_DIR "/tables/tripling-tensor.shtb"},
+       "--lobes"},
   };
   for (const Bad& b : bad) {
     const fs::path out = scratch("bad.glsl");

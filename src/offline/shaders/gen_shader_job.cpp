@@ -1,9 +1,13 @@
 #include "shaders/gen_shader_job.h"
 
+#include <memory>
+#include <span>
 #include <system_error>
 
 #include "common/atomic_file.h"
 #include "common/input_error.h"
+#include "common/input_file.h"
+#include "shtool/table.h"
 
 namespace shtool {
 
@@ -13,6 +17,8 @@ std::string gen_shader_command(const GenShaderRequest& r) {
   c += s.language == ShaderLanguage::glsl ? "glsl" : "hlsl";
   c += " --what " + std::string(shader_operation_name(s.operation)) + " --order " + std::to_string(s.order);
   if (s.operation == ShaderOperation::zh_shade) c += " --zh-lobes " + std::to_string(s.zh_lobes);
+  if (s.operation == ShaderOperation::zhf_rotate && !r.lobes_table.empty())
+    c += " --lobes " + r.lobes_table.filename().string();
   c += " --precision ";
   c += s.precision == ShaderPrecision::half ? "half" : "float";
   c += " --out " + r.out.filename().string();
@@ -33,6 +39,20 @@ ShaderSource run_gen_shader(const GenShaderRequest& r) {
     throw InputError("--out " + r.out.string() + " is a folder, not a file");
   ShaderRequest request = r.shader;
   request.command = gen_shader_command(r);
+  if (op == ShaderOperation::zhf_rotate) {
+    const std::filesystem::path path = r.lobes_table.empty() ? default_zhf_lobes_path(request.order) : r.lobes_table;
+    if (path.empty())
+      throw InputError("--lobes: no shipped zhf-lobes table covers order " + std::to_string(request.order) +
+                       " (set SHTOOL_TABLES or give --lobes TABLE)");
+    const std::string bytes = read_input_file(path, "--lobes");
+    const Result<Table> table =
+        read_table_bytes(std::as_bytes(std::span(bytes.data(), bytes.size())), path.string());
+    if (!table) throw InputError("--lobes: " + table.error().message);
+    Result<ZhfLobes> lobes = zhf_lobes_from_table(table.value(), request.order);
+    if (!lobes) throw InputError("--lobes: " + lobes.error().message);
+    request.lobes = std::make_shared<const ZhfLobes>(std::move(lobes).value());
+    request.lobes_crc = input_crc32(bytes);
+  }
   ShaderSource source = shader_source(request);
   write_file_atomically(r.out, source.text);
   return source;

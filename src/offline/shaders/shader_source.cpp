@@ -340,6 +340,70 @@ void zxzxz_rotate(const Syntax& s, int n, std::ostringstream& o, ShaderSource& o
     << ").\n" << head << " {\n" << b.str() << "}\n";
 }
 
+// g = M(R) f by the standard ZHF rotation ([1] Sec. 7.1, Eq. 10): per band the lobe
+// weights h_l = A^_l^T f_l (the table's sparse rows, zeros never touched), then
+// g_l = sum_d y_l(R w_d) h_ld with the basis evaluated once per rotated lobe direction w_d
+// (shared lobes: one direction serves every band from its own up).
+void zhf_rotate(const Syntax& s, int n, const ZhfLobes& lobes, std::ostringstream& o, ShaderSource& out) {
+  const std::string real = s.real();
+  std::ostringstream b;
+  b << "  g[0] = f[0];\n";
+  for (int i = 1; i < n * n; ++i) b << "  g[" << i << "] = 0.0;\n";
+  auto h = [](int l, int d) {
+    return std::string("h").append(std::to_string(l)).append("_").append(std::to_string(d));
+  };
+  for (int l = 1; l < n; ++l) {
+    std::vector<std::vector<std::pair<long double, std::string>>> columns(2 * l + 1);
+    for (int m = -l; m <= l; ++m) {
+      const int i = l * (l + 1) + m;
+      for (int k = lobes.row_start[i]; k < lobes.row_start[i + 1]; ++k)
+        columns[lobes.col[k]].emplace_back(lobes.val[k], "f[" + std::to_string(i) + "]");
+    }
+    for (int d = 0; d <= 2 * l; ++d) {
+      const std::string sum = linear_sum(columns[d]);
+      b << "  " << real << " " << h(l, d) << " = " << (sum.empty() ? "0.0" : sum) << ";\n";
+    }
+  }
+  long direction_products = 0;
+  for (int d = 0; d < static_cast<int>(lobes.directions.size()); ++d) {
+    std::vector<bool> wanted(n, false);
+    int top = 0;
+    for (int l = 1; l < n; ++l)
+      if (d >= lobes.band_offset[l] && d <= lobes.band_offset[l] + 2 * l) {
+        wanted[l] = true;
+        top = l + 1;
+      }
+    if (top == 0) continue;
+    const Vec3<double>& w = lobes.directions[d];
+    const std::string lit = (s.glsl() ? "vec3(" : "float3(") + literal(w.x()) + ", " + literal(w.y()) + ", " +
+                            literal(w.z()) + ")";
+    b << "  {  // lobe direction " << d << "\n    " << s.vec3() << " w = "
+      << (s.glsl() ? "R * " + lit : "mul(R, " + lit + ")") << ";\n";
+    b << basis_code(s, top, "w", "", wanted, "    ");
+    for (int l = 1; l < top; ++l) {
+      if (!wanted[l]) continue;
+      for (int m = -l; m <= l; ++m) {
+        const int i = l * (l + 1) + m;
+        b << "    g[" << i << "] = g[" << i << "] + " << basis_name(i) << " * " << h(l, d - lobes.band_offset[l])
+          << ";\n";
+      }
+    }
+    b << "  }\n";
+    ++direction_products;
+  }
+  const std::string head = "void shtool_zhf_rotate(" + s.mat3() + " R, " + array(s.real(), "f", kCount) + ", out " +
+                           array(s.real(), "g", kCount) + ")";
+  count_ops(b.str(), 1, out);
+  // R w_d: 9 multiplications and 6 additions per direction, written as one product.
+  out.multiplications += 9 * direction_products - (s.glsl() ? direction_products : 0);
+  out.additions += 6 * direction_products;
+  out.signature = head + ";";
+  o << "// g = M(R) f as shtool_rotate of zxzxz-rotate does (g(w) = f(R^-1 w); R acts on column vectors, "
+    << (s.glsl() ? "GLSL mat3 column-major: R[c][r] = R_rc" : "HLSL float3x3 indexed R[r][c] = R_rc")
+    << "),\n// through " << lobes.directions.size() << " ZH lobe directions.\n"
+    << head << " {\n" << b.str() << "}\n";
+}
+
 // c_k = sum_ij C_ijk a_i b_j with the tripling tensor C_ijk = integral y_i y_j y_k ([3] Eq. 5):
 // each pair product a_i b_j + a_j b_i is formed once and shared by every output it feeds.
 void triple_product(const Syntax& s, int n, std::ostringstream& o, ShaderSource& out, std::uint32_t& crc) {
@@ -394,7 +458,8 @@ std::string guard_name(ShaderOperation op) {
 
 const std::vector<ShaderOperation>& shader_operations() {
   static const std::vector<ShaderOperation> all = {ShaderOperation::sh_eval, ShaderOperation::sh_irradiance,
-                                                   ShaderOperation::zxzxz_rotate, ShaderOperation::triple_product,
+                                                   ShaderOperation::zxzxz_rotate, ShaderOperation::zhf_rotate,
+                                                   ShaderOperation::triple_product,
                                                    ShaderOperation::zh_shade};
   return all;
 }
@@ -404,6 +469,7 @@ std::string_view shader_operation_name(ShaderOperation operation) {
     case ShaderOperation::sh_eval: return "sh-eval";
     case ShaderOperation::sh_irradiance: return "sh-irradiance";
     case ShaderOperation::zxzxz_rotate: return "zxzxz-rotate";
+    case ShaderOperation::zhf_rotate: return "zhf-rotate";
     case ShaderOperation::triple_product: return "triple-product";
     case ShaderOperation::zh_shade: return "zh-shade";
   }
@@ -411,7 +477,10 @@ std::string_view shader_operation_name(ShaderOperation operation) {
 }
 
 int shader_min_order(ShaderOperation operation) {
-  return operation == ShaderOperation::zxzxz_rotate || operation == ShaderOperation::triple_product ? 2 : 1;
+  return operation == ShaderOperation::zxzxz_rotate || operation == ShaderOperation::zhf_rotate ||
+                 operation == ShaderOperation::triple_product
+             ? 2
+             : 1;
 }
 
 int shader_max_order(ShaderOperation operation) {
@@ -448,6 +517,12 @@ ShaderSource shader_source(const ShaderRequest& request) {
                                " (computed by projection, as in rotation-helpers tables)"
                          : "none (bands 1 and 2 by closed forms in R)";
       break;
+    case ShaderOperation::zhf_rotate:
+      zhf_rotate(s, n, *request.lobes, body, out);
+      crc = request.lobes_crc;
+      constants = "lobe directions and sparse A^_l rows of bands 1.." + std::to_string(n - 1) +
+                  " from the zhf-lobes table whose file has the CRC-32 below; the basis as sh-eval";
+      break;
     case ShaderOperation::triple_product:
       triple_product(s, n, body, out, crc);
       constants = "the tripling tensor of order " + std::to_string(n) + " (Wigner 3j construction)";
@@ -463,7 +538,10 @@ ShaderSource shader_source(const ShaderRequest& request) {
     << "//   " << request.command << "\n"
     << "// Constants: " << constants << ".\n";
   if (crc != 0)
-    o << "// CRC-32 of those constants (float64, little-endian, in generation order): " << crc_text << "\n";
+    o << "// CRC-32 " << (request.operation == ShaderOperation::zhf_rotate
+                               ? "of the table file"
+                               : "of those constants (float64, little-endian, in generation order)")
+      << ": " << crc_text << "\n";
   o << "// Real orthonormal SH with the Condon-Shortley phase, flat index l * (l + 1) + m, order N = bands\n"
        "// 0..N-1. An include file: it declares no shader version, entry point or resource. Do not edit;\n"
        "// regenerate.\n"
