@@ -22,7 +22,8 @@ void setup_gen_shader(CLI::App& app) {
   std::vector<std::pair<std::string, ShaderOperation>> names;
   for (ShaderOperation op : shader_operations()) names.emplace_back(std::string(shader_operation_name(op)), op);
   add_enum_option(sub, "--what", req->shader.operation, names,
-                  "operation: sh-eval, sh-irradiance, zxzxz-rotate, zhf-rotate, triple-product, zh-shade",
+                  "operation: sh-eval, sh-irradiance, zxzxz-rotate, zhf-rotate, zhf-tailored-rotate, triple-product, "
+                  "zh-shade",
                   "sh-eval")
       ->required();
   sub->add_option("--order", req->shader.order, "SH order N (bands 0..N-1)")->required();
@@ -37,13 +38,15 @@ void setup_gen_shader(CLI::App& app) {
       },
       "zh-shade: ZH lobes per point (default 4)");
   sub->add_option("--lobes", req->lobes_table,
-                  "zhf-rotate: zhf-lobes table of shared lobes (default: the shipped one for the order)");
+                  "zhf-rotate, zhf-tailored-rotate: zhf-lobes table of shared lobes (default: the shipped one for "
+                  "the order)");
   sub->add_option("--out", req->out, "output include file")->required();
   sub->callback([req, lobes_given]() {
     if (*lobes_given && req->shader.operation != ShaderOperation::zh_shade)
       throw InputError("--zh-lobes applies to --what zh-shade only");
-    if (!req->lobes_table.empty() && req->shader.operation != ShaderOperation::zhf_rotate)
-      throw InputError("--lobes applies to --what zhf-rotate only");
+    if (!req->lobes_table.empty() && req->shader.operation != ShaderOperation::zhf_rotate &&
+        req->shader.operation != ShaderOperation::zhf_tailored_rotate)
+      throw InputError("--lobes applies to --what zhf-rotate and zhf-tailored-rotate only");
     const ShaderSource s = run_gen_shader(*req);
     std::cerr << "gen-shader: wrote " << req->out.string() << " (" << s.multiplications << " multiplications, "
               << s.additions << " additions)\n";

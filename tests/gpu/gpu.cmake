@@ -10,7 +10,7 @@ find_program(SHTOOL_SPIRV_VAL spirv-val REQUIRED)
 
 add_library(shtool_gpu_harness STATIC ${CMAKE_CURRENT_LIST_DIR}/vulkan_compute.cpp)
 target_include_directories(shtool_gpu_harness PUBLIC ${CMAKE_CURRENT_LIST_DIR})
-target_link_libraries(shtool_gpu_harness PUBLIC Vulkan::Vulkan GTest::gtest)
+target_link_libraries(shtool_gpu_harness PUBLIC Vulkan::Vulkan GTest::gtest PRIVATE ${CMAKE_DL_LIBS})
 target_compile_definitions(shtool_gpu_harness PUBLIC
   SHTOOL_GLSLANG_VALIDATOR="${SHTOOL_GLSLANG_VALIDATOR}"
   SHTOOL_SPIRV_VAL="${SHTOOL_SPIRV_VAL}")

@@ -344,7 +344,7 @@ shtool::ShaderRequest request_for(ShaderLanguage language, ShaderOperation op, i
   request.zh_lobes = lobes;
   request.precision = precision;
   request.command = "test";
-  if (op == ShaderOperation::zhf_rotate) {
+  if (op == ShaderOperation::zhf_rotate || op == ShaderOperation::zhf_tailored_rotate) {
     auto loaded = shtool::load_zhf_lobes(shtool::default_zhf_lobes_path(order), order);
     if (!loaded) throw std::runtime_error(loaded.error().message);
     request.lobes = std::make_shared<const shtool::ZhfLobes>(std::move(loaded).value());

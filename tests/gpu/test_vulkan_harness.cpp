@@ -165,8 +165,8 @@ TEST(VulkanHarness, BufferKIsBindingK) {
     want_c[i] = a[i] - 2.0f * b[i] + c[i];
     want_d[i] = 3.0f * a[i] + b[i] - d[i];
   }
-  for (auto [source, lang] : {std::pair{kGlslFourBuffers, ShaderLanguage::glsl},
-                              std::pair{kHlslFourBuffers, ShaderLanguage::hlsl}}) {
+  for (auto [source, lang] :
+       {std::pair{kGlslFourBuffers, ShaderLanguage::glsl}, std::pair{kHlslFourBuffers, ShaderLanguage::hlsl}}) {
     SCOPED_TRACE(lang == ShaderLanguage::glsl ? "GLSL" : "HLSL");
     std::vector<std::vector<float>> buffers = {a, b, c, d};
     const uint32_t push = n;
@@ -224,10 +224,10 @@ TEST(VulkanHarness, SpirvValRejectsABrokenModule) {
 // The exception must carry glslang's message and the numbered source, so a failing test
 // of a generated shader shows what went wrong.
 TEST(VulkanHarness, SyntaxErrorThrowsWithCompilerOutput) {
-  const std::string glsl = std::string(kGlslMultiplyAdd).replace(std::string(kGlslMultiplyAdd).find("o[i] = r;"),
-                                                                  9, "o[i] = r +;");
-  const std::string hlsl = std::string(kHlslMultiplyAdd).replace(std::string(kHlslMultiplyAdd).find("o[i] = r;"),
-                                                                  9, "o[i] = undeclared_name;");
+  const std::string glsl =
+      std::string(kGlslMultiplyAdd).replace(std::string(kGlslMultiplyAdd).find("o[i] = r;"), 9, "o[i] = r +;");
+  const std::string hlsl = std::string(kHlslMultiplyAdd)
+                               .replace(std::string(kHlslMultiplyAdd).find("o[i] = r;"), 9, "o[i] = undeclared_name;");
   for (auto [source, lang] : {std::pair{glsl, ShaderLanguage::glsl}, std::pair{hlsl, ShaderLanguage::hlsl}}) {
     SCOPED_TRACE(lang == ShaderLanguage::glsl ? "GLSL" : "HLSL");
     std::string log;

@@ -16,7 +16,9 @@
 #include <stdexcept>
 #include <utility>
 
+#include <dlfcn.h>
 #include <fcntl.h>
+#include <link.h>
 #include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -198,7 +200,7 @@ void check_interface(const std::vector<uint32_t>& code, size_t buffer_count, uin
   std::map<uint32_t, uint32_t> scalars;  // 32-bit (spec) constants: id -> value (default value if spec)
   std::map<uint32_t, std::vector<uint32_t>> composites;
   std::map<uint32_t, std::pair<uint32_t, uint32_t>> pointers;  // pointer type -> (class, pointee)
-  std::vector<std::pair<uint32_t, uint32_t>> variables;       // (result id, pointer type)
+  std::vector<std::pair<uint32_t, uint32_t>> variables;        // (result id, pointer type)
   std::map<uint32_t, uint32_t> binding, set;
   std::set<uint32_t> blocks, buffer_blocks;
   std::map<uint32_t, uint32_t> max_member_offset;
@@ -269,7 +271,8 @@ void check_interface(const std::vector<uint32_t>& code, size_t buffer_count, uin
     }
     const auto b = binding.find(id);
     const std::string at = b == binding.end() ? "" : " (binding " + std::to_string(b->second) + ")";
-    if (storage == spv::ClassUniformConstant) fail(where + at + " is an image or sampler; run() binds storage buffers only");
+    if (storage == spv::ClassUniformConstant)
+      fail(where + at + " is an image or sampler; run() binds storage buffers only");
     const bool storage_buffer =
         (storage == spv::ClassUniform && buffer_blocks.count(pointee)) || (storage == spv::ClassStorageBuffer);
     if (!storage_buffer) {
@@ -323,6 +326,40 @@ class Owned {
   H handle_ = VK_NULL_HANDLE;
 };
 
+// ---------------------------------------------------------------------------------------
+// Sanitizer builds: Mesa's driver still owns heap blocks when the loader unloads it at
+// vkDestroyInstance, and LeakSanitizer, which runs after that, reports them as leaks of an
+// "<unknown module>" (so no suppression can name them). Keeping every library the
+// instance loaded in memory until exit leaves them reachable, so only real leaks remain.
+
+#if defined(__SANITIZE_ADDRESS__)
+#define SHTOOL_PIN_VULKAN_DRIVERS 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define SHTOOL_PIN_VULKAN_DRIVERS 1
+#endif
+#endif
+
+#ifdef SHTOOL_PIN_VULKAN_DRIVERS
+std::set<std::string> loaded_libraries() {
+  std::set<std::string> names;
+  dl_iterate_phdr(
+      [](dl_phdr_info* info, size_t, void* out) {
+        if (info->dlpi_name && info->dlpi_name[0]) static_cast<std::set<std::string>*>(out)->insert(info->dlpi_name);
+        return 0;
+      },
+      &names);
+  return names;
+}
+
+void pin_libraries_loaded_since(const std::set<std::string>& before) {
+  for (const std::string& name : loaded_libraries()) {
+    // RTLD_NOLOAD: only marks the loaded library NODELETE; the handle is left open on purpose.
+    if (!before.count(name)) dlopen(name.c_str(), RTLD_NOW | RTLD_NOLOAD | RTLD_NODELETE);
+  }
+}
+#endif
+
 }  // namespace
 
 // ---------------------------------------------------------------------------------------
@@ -349,13 +386,13 @@ std::vector<uint32_t> compile_compute(const std::string& source, ShaderLanguage 
   } else {
     const std::string bytes = read_text(spv);
     words.resize(bytes.size() / 4);
-    std::memcpy(words.data(), bytes.data(), words.size() * 4);
+    if (!words.empty()) std::memcpy(words.data(), bytes.data(), words.size() * 4);
     if (bytes.size() % 4 != 0 || words.size() < 5 || words[0] != spv::kMagic) problem = "no valid .spv written";
   }
   if (!problem.empty()) {
-    throw std::runtime_error(std::string("glslangValidator failed (") + problem + ") on a " +
-                             (hlsl ? "HLSL" : "GLSL") + " compute shader\n$ " + command_line(argv) + "\n" + output +
-                             "--- source ---\n" + numbered(source));
+    throw std::runtime_error(std::string("glslangValidator failed (") + problem + ") on a " + (hlsl ? "HLSL" : "GLSL") +
+                             " compute shader\n$ " + command_line(argv) + "\n" + output + "--- source ---\n" +
+                             numbered(source));
   }
   return words;
 }
@@ -392,18 +429,26 @@ std::unique_ptr<VulkanCompute> VulkanCompute::create(std::string* why_not) {
   app.apiVersion = VK_API_VERSION_1_0;
   auto ici = vk_struct<VkInstanceCreateInfo>(VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO);
   ici.pApplicationInfo = &app;
+#ifdef SHTOOL_PIN_VULKAN_DRIVERS
+  const std::set<std::string> before = loaded_libraries();
+#endif
   if (VkResult r = vkCreateInstance(&ici, nullptr, &vc->instance_); r != VK_SUCCESS) {
     vc->instance_ = VK_NULL_HANDLE;
     return reason("vkCreateInstance failed: " + describe(r) +
                   (r == VK_ERROR_INCOMPATIBLE_DRIVER ? " (no Vulkan driver (ICD) installed)" : ""));
   }
 
+#ifdef SHTOOL_PIN_VULKAN_DRIVERS
+  pin_libraries_loaded_since(before);
+#endif
+
   uint32_t n = 0;
   if (VkResult r = vkEnumeratePhysicalDevices(vc->instance_, &n, nullptr); r != VK_SUCCESS) {
     return reason("vkEnumeratePhysicalDevices failed: " + describe(r));
   }
   std::vector<VkPhysicalDevice> devices(n);
-  if (VkResult r = vkEnumeratePhysicalDevices(vc->instance_, &n, devices.data()); r != VK_SUCCESS && r != VK_INCOMPLETE) {
+  if (VkResult r = vkEnumeratePhysicalDevices(vc->instance_, &n, devices.data());
+      r != VK_SUCCESS && r != VK_INCOMPLETE) {
     return reason("vkEnumeratePhysicalDevices failed: " + describe(r));
   }
   devices.resize(n);
@@ -412,11 +457,16 @@ std::unique_ptr<VulkanCompute> VulkanCompute::create(std::string* why_not) {
   // Lower is better: the CPU device first, so every machine runs the same implementation.
   auto rank = [](VkPhysicalDeviceType t) {
     switch (t) {
-      case VK_PHYSICAL_DEVICE_TYPE_CPU: return 0;
-      case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU: return 1;
-      case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU: return 2;
-      case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU: return 3;
-      default: return 4;
+      case VK_PHYSICAL_DEVICE_TYPE_CPU:
+        return 0;
+      case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU:
+        return 1;
+      case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU:
+        return 2;
+      case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU:
+        return 3;
+      default:
+        return 4;
     }
   };
   int best_rank = 1 << 30;
@@ -527,7 +577,7 @@ void VulkanCompute::run(const std::vector<uint32_t>& spirv, std::vector<std::vec
     // Freeing the memory unmaps it: no unmap needed on any exit path.
     check(vkMapMemory(device_, memories.back().get(), 0, VK_WHOLE_SIZE, 0, &mapped[k]), "vkMapMemory");
     std::memset(mapped[k], 0, sizes[k]);
-    std::memcpy(mapped[k], buffers[k].data(), buffers[k].size() * sizeof(float));
+    if (!buffers[k].empty()) std::memcpy(mapped[k], buffers[k].data(), buffers[k].size() * sizeof(float));
   }
 
   Owned<VkShaderModule, vkDestroyShaderModule> module(device_);
@@ -642,7 +692,7 @@ void VulkanCompute::run(const std::vector<uint32_t>& spirv, std::vector<std::vec
   check(vkWaitForFences(device_, 1, fences, VK_TRUE, UINT64_MAX), "vkWaitForFences");
 
   for (uint32_t k = 0; k < count; ++k) {
-    std::memcpy(buffers[k].data(), mapped[k], buffers[k].size() * sizeof(float));
+    if (!buffers[k].empty()) std::memcpy(buffers[k].data(), mapped[k], buffers[k].size() * sizeof(float));
   }
 }
 

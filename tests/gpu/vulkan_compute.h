@@ -125,15 +125,15 @@ inline VulkanCompute* shared_device(std::string* why_not = nullptr) {
 // At the top of a GPU test body (or SetUp): fails the test when there is no Vulkan device,
 // so CI without lavapipe cannot pass silently; skips instead only when the developer set
 // SHTOOL_SKIP_GPU_TESTS=1. Afterwards *shtool::gpu::shared_device() is usable.
-#define SHTOOL_REQUIRE_VULKAN()                                                                               \
-  do {                                                                                                        \
-    std::string shtool_vulkan_why_not_;                                                                       \
-    if (!::shtool::gpu::shared_device(&shtool_vulkan_why_not_)) {                                             \
-      if (::shtool::gpu::gpu_tests_skipped_by_request()) {                                                    \
+#define SHTOOL_REQUIRE_VULKAN()                                                                                \
+  do {                                                                                                         \
+    std::string shtool_vulkan_why_not_;                                                                        \
+    if (!::shtool::gpu::shared_device(&shtool_vulkan_why_not_)) {                                              \
+      if (::shtool::gpu::gpu_tests_skipped_by_request()) {                                                     \
         GTEST_SKIP() << "no Vulkan device (" << shtool_vulkan_why_not_ << "); SHTOOL_SKIP_GPU_TESTS=1 is set"; \
-      }                                                                                                       \
-      FAIL() << "no Vulkan device: " << shtool_vulkan_why_not_                                                \
-             << "\ninstall mesa-vulkan-drivers (lavapipe), or set SHTOOL_SKIP_GPU_TESTS=1 to skip on a "     \
-                "machine without Vulkan";                                                                     \
-    }                                                                                                         \
+      }                                                                                                        \
+      FAIL() << "no Vulkan device: " << shtool_vulkan_why_not_                                                 \
+             << "\ninstall mesa-vulkan-drivers (lavapipe), or set SHTOOL_SKIP_GPU_TESTS=1 to skip on a "       \
+                "machine without Vulkan";                                                                      \
+    }                                                                                                          \
   } while (0)

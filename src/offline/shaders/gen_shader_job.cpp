@@ -17,7 +17,8 @@ std::string gen_shader_command(const GenShaderRequest& r) {
   c += s.language == ShaderLanguage::glsl ? "glsl" : "hlsl";
   c += " --what " + std::string(shader_operation_name(s.operation)) + " --order " + std::to_string(s.order);
   if (s.operation == ShaderOperation::zh_shade) c += " --zh-lobes " + std::to_string(s.zh_lobes);
-  if (s.operation == ShaderOperation::zhf_rotate && !r.lobes_table.empty())
+  if ((s.operation == ShaderOperation::zhf_rotate || s.operation == ShaderOperation::zhf_tailored_rotate) &&
+      !r.lobes_table.empty())
     c += " --lobes " + r.lobes_table.filename().string();
   c += " --precision ";
   c += s.precision == ShaderPrecision::half ? "half" : "float";
@@ -39,7 +40,7 @@ ShaderSource run_gen_shader(const GenShaderRequest& r) {
     throw InputError("--out " + r.out.string() + " is a folder, not a file");
   ShaderRequest request = r.shader;
   request.command = gen_shader_command(r);
-  if (op == ShaderOperation::zhf_rotate) {
+  if (op == ShaderOperation::zhf_rotate || op == ShaderOperation::zhf_tailored_rotate) {
     const std::filesystem::path path = r.lobes_table.empty() ? default_zhf_lobes_path(request.order) : r.lobes_table;
     if (path.empty())
       throw InputError("--lobes: no shipped zhf-lobes table covers order " + std::to_string(request.order) +

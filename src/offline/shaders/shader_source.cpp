@@ -208,6 +208,62 @@ void sh_irradiance(const Syntax& s, int n, std::ostringstream& o, ShaderSource& 
     << head3 << " {\n" << basis << rgb << "}\n";
 }
 
+// Band sums as cube-map textures: texture k (RGBA) holds the band sums of bands 4k..4k+3
+// (channel c = band 4k + c) at each texel's direction, as shtool_sh_band_sums computes them.
+int band_textures(int n) { return (n + 3) / 4; }
+
+// The texture parameters of a function: GLSL combined samplers, HLSL textures and one sampler.
+std::string texture_params(const Syntax& s, int n) {
+  std::string p;
+  for (int k = 0; k < band_textures(n); ++k)
+    p += (k ? ", " : "") + std::string(s.glsl() ? "samplerCube bands" : "TextureCube<float4> bands") +
+         std::to_string(k);
+  if (!s.glsl()) p += ", SamplerState bands_sampler";
+  return p;
+}
+
+// Statements fetching every band texture at `dir` (level 0: compute and vertex shaders have
+// no derivatives) into <prefix>0, <prefix>1, ...
+std::string texture_fetches(const Syntax& s, int n, const std::string& dir, const std::string& prefix,
+                            const std::string& indent) {
+  std::string o;
+  const std::string type = s.half ? (s.glsl() ? "mediump vec4" : "min16float4") : (s.glsl() ? "vec4" : "float4");
+  for (int k = 0; k < band_textures(n); ++k) {
+    const std::string t = "bands" + std::to_string(k);
+    o += indent + type + " " + prefix + std::to_string(k) + " = " +
+         (s.glsl() ? "textureLod(" + t + ", " + dir + ", 0.0)" : t + ".SampleLevel(bands_sampler, " + dir + ", 0)") +
+         ";\n";
+  }
+  return o;
+}
+
+// Band l of the fetched texels: <prefix><l / 4>.<xyzw[l % 4]>.
+std::string texel_band(const std::string& prefix, int l) {
+  return prefix + std::to_string(l / 4) + "." + "xyzw"[l % 4];
+}
+
+// shtool_sh_band_sums: the per-band sums sum_m c_lm y_l^m(dir), what the band textures hold.
+// Guarded on its own, as two files of one order may both define it.
+void band_sums(const Syntax& s, int n, std::ostringstream& o, ShaderSource& out, bool count) {
+  const std::string head = "void shtool_sh_band_sums(" + s.vec3() + " dir, " + array(s.real(), "c", kCount) +
+                           ", out " + array(s.real(), "bands", "SHTOOL_ORDER") + ")";
+  std::string body = basis_code(s, n, "dir", "", std::vector<bool>(n, true), "  ");
+  for (int l = 0; l < n; ++l) {
+    std::vector<long double> only(n, 0);
+    only[l] = 1;
+    body += "  bands[" + std::to_string(l) + "] = " + band_dot(n, "c", only, {}) + ";\n";
+  }
+  if (count) count_ops(body, 1, out);
+  out.signature += head + ";\n";
+  o << "#define SHTOOL_BAND_TEXTURES " << band_textures(n) << "\n"
+    << "#ifndef SHTOOL_SH_BAND_SUMS_DEFINED\n#define SHTOOL_SH_BAND_SUMS_DEFINED\n"
+    << "// bands[l] = sum_m c[l * (l + 1) + m] y_l^m(dir), dir a unit vector. Band texture k (cube map,\n"
+       "// RGBA float, SHTOOL_BAND_TEXTURES of them) holds bands 4k..4k+3 in its channels x, y, z, w at\n"
+       "// the direction of each texel centre (the API's cube-map face and texel conventions), with\n"
+       "// linear filtering: error about (pi / 2 R)^2 l (l + 1) / 8 of the band's size at R x R faces.\n"
+    << head << " {\n" << body << "}\n#endif\n\n";
+}
+
 // Exit radiance of ZH lobes under SH lighting, Eq. 13 of [4].
 void zh_shade(const Syntax& s, int n, int lobes, std::ostringstream& o, ShaderSource& out) {
   const std::string head = s.real() + " shtool_zh_shade(" + array(s.vec3(), "axes", "SHTOOL_ZH_LOBES") + ", " +
@@ -218,13 +274,26 @@ void zh_shade(const Syntax& s, int n, int lobes, std::ostringstream& o, ShaderSo
   for (int l = 0; l < n; ++l) weight[l] = "g[i * SHTOOL_ORDER + " + std::to_string(l) + "]";
   const std::string dot = "    r += " + band_dot(n, "e", std::vector<long double>(n, 1), weight) + ";\n";
   count_ops(basis + dot, lobes, out);
-  out.signature = head + ";";
+  out.signature = head + ";\n";
   o << "#define SHTOOL_ZH_LOBES " << lobes << "\n\n"
     << "// r = sum_i sum_l g[i * SHTOOL_ORDER + l] sum_m y_l^m(axes[i]) e[l * (l + 1) + m]: lobe i has unit\n"
        "// axis axes[i] and convolved ZH coefficients g_il (a lobe adds g_il y_l^m(axis) to coefficient\n"
        "// (l, m)); e is the SH lighting.\n"
     << head << " {\n  " << s.real() << " r = 0.0;\n  for (int i = 0; i < SHTOOL_ZH_LOBES; ++i) {\n"
-    << basis << dot << "  }\n  return r;\n}\n";
+    << basis << dot << "  }\n  return r;\n}\n\n";
+  // Eq. 24-25: the band sums of the lighting e^_l(s) tabulated (band textures), then per
+  // lobe one fetch per four bands and an N-term dot product.
+  band_sums(s, n, o, out, false);
+  const std::string head2 = s.real() + " shtool_zh_shade_table(" + array(s.vec3(), "axes", "SHTOOL_ZH_LOBES") +
+                            ", " + array(s.real(), "g", "SHTOOL_ZH_LOBES * SHTOOL_ORDER") + ", " +
+                            texture_params(s, n) + ")";
+  std::string sum;
+  for (int l = 0; l < n; ++l)
+    sum += (l ? " + " : "") + weight[l] + " * " + texel_band("t", l);
+  out.signature += head2 + ";";
+  o << "// The same r from the lighting's band textures (filled by shtool_sh_band_sums with c = e).\n"
+    << head2 << " {\n  " << s.real() << " r = 0.0;\n  for (int i = 0; i < SHTOOL_ZH_LOBES; ++i) {\n"
+    << texture_fetches(s, n, "axes[i]", "t", "    ") << "    r += " << sum << ";\n  }\n  return r;\n}\n";
 }
 
 // z-rotation of band l by the angle whose multiple-angle cosines and sines are
@@ -404,6 +473,83 @@ void zhf_rotate(const Syntax& s, int n, const ZhfLobes& lobes, std::ostringstrea
     << head << " {\n" << b.str() << "}\n";
 }
 
+// g = M(R) f by the signal-tailored ZHF rotation ([1] Sec. 7.1, Eq. 11): the band-l part of
+// f sampled at the inversely rotated lobe directions R^T w_d, then g_l = A^_l s_l (the
+// table's sparse rows). Two forms: the samples from the band textures of f (prepared once
+// per signal with shtool_sh_band_sums), or computed from f's coefficients.
+void zhf_tailored_rotate(const Syntax& s, int n, const ZhfLobes& lobes, std::ostringstream& o, ShaderSource& out) {
+  const std::string real = s.real();
+  auto sample = [](int l, int d) {
+    return std::string("s").append(std::to_string(l)).append("_").append(std::to_string(d));
+  };
+  // One body per form: per direction the samples of the bands that use it, then the rows.
+  auto body = [&](bool textures) {
+    std::ostringstream b;
+    if (!textures) b << "  g[0] = f[0];\n";
+    const int first_band = textures ? 0 : 1;
+    for (int d = 0; d < static_cast<int>(lobes.directions.size()); ++d) {
+      std::vector<bool> wanted(n, false);
+      int top = 0;
+      for (int l = first_band; l < n; ++l)
+        if (d >= lobes.band_offset[l] && d <= lobes.band_offset[l] + 2 * l) {
+          wanted[l] = true;
+          top = l + 1;
+        }
+      if (top == 0) continue;
+      const Vec3<double>& w = lobes.directions[d];
+      const std::string lit = (s.glsl() ? "vec3(" : "float3(") + literal(w.x()) + ", " + literal(w.y()) + ", " +
+                              literal(w.z()) + ")";
+      // R^T w_d: GLSL's row-vector product w * R, HLSL's mul(w, R).
+      const std::string rotated = s.glsl() ? lit + " * R" : "mul(" + lit + ", R)";
+      for (int l = first_band; l < top; ++l)
+        if (wanted[l]) b << "  " << real << " " << sample(l, d - lobes.band_offset[l]) << ";\n";
+      b << "  {  // lobe direction " << d << "\n    " << s.vec3() << " w = " << rotated << ";\n";
+      if (textures) {
+        b << texture_fetches(s, top, "w", "t", "    ");
+        for (int l = 0; l < top; ++l)
+          if (wanted[l]) b << "    " << sample(l, d - lobes.band_offset[l]) << " = " << texel_band("t", l) << ";\n";
+      } else {
+        b << basis_code(s, top, "w", "", wanted, "    ");
+        for (int l = 1; l < top; ++l) {
+          if (!wanted[l]) continue;
+          std::vector<long double> only(top, 0);
+          only[l] = 1;
+          b << "    " << sample(l, d - lobes.band_offset[l]) << " = " << band_dot(top, "f", only, {}) << ";\n";
+        }
+      }
+      b << "  }\n";
+    }
+    for (int i = textures ? 0 : 1; i < n * n; ++i) {
+      const int l = static_cast<int>(std::sqrt(static_cast<double>(i)));
+      std::vector<std::pair<long double, std::string>> terms;
+      for (int k = lobes.row_start[i]; k < lobes.row_start[i + 1]; ++k)
+        terms.emplace_back(lobes.val[k], sample(l, lobes.col[k]));
+      const std::string sum = linear_sum(terms);
+      b << "  g[" << i << "] = " << (sum.empty() ? "0.0" : sum) << ";\n";
+    }
+    return b.str();
+  };
+  const std::string textured = body(true), arithmetic = body(false);
+  long directions = 0;
+  for (std::size_t d = 0; d < lobes.directions.size(); ++d) directions += 1;
+  count_ops(textured, 1, out);  // the texture form is the operation's figure (the paper's GPU path)
+  out.multiplications += 9 * directions - (s.glsl() ? directions : 0);
+  out.additions += 6 * directions;
+  band_sums(s, n, o, out, false);
+  const std::string head1 = "void shtool_zhf_tailored_rotate(" + s.mat3() + " R, " + texture_params(s, n) +
+                            ", out " + array(s.real(), "g", kCount) + ")";
+  const std::string head2 = "void shtool_zhf_tailored_rotate_arithmetic(" + s.mat3() + " R, " +
+                            array(s.real(), "f", kCount) + ", out " + array(s.real(), "g", kCount) + ")";
+  out.signature += head1 + ";\n" + head2 + ";";
+  o << "// g = M(R) f (g(w) = f(R^-1 w); R acts on column vectors, "
+    << (s.glsl() ? "GLSL mat3 column-major: R[c][r] = R_rc" : "HLSL float3x3 indexed R[r][c] = R_rc")
+    << ")\n// through " << lobes.directions.size()
+    << " ZH lobe directions, f given by its band textures (shtool_sh_band_sums with c = f).\n"
+    << head1 << " {\n" << textured << "}\n\n"
+    << "// The same rotation with the samples computed from f's coefficients.\n"
+    << head2 << " {\n" << arithmetic << "}\n";
+}
+
 // c_k = sum_ij C_ijk a_i b_j with the tripling tensor C_ijk = integral y_i y_j y_k ([3] Eq. 5):
 // each pair product a_i b_j + a_j b_i is formed once and shared by every output it feeds.
 void triple_product(const Syntax& s, int n, std::ostringstream& o, ShaderSource& out, std::uint32_t& crc) {
@@ -459,7 +605,7 @@ std::string guard_name(ShaderOperation op) {
 const std::vector<ShaderOperation>& shader_operations() {
   static const std::vector<ShaderOperation> all = {ShaderOperation::sh_eval, ShaderOperation::sh_irradiance,
                                                    ShaderOperation::zxzxz_rotate, ShaderOperation::zhf_rotate,
-                                                   ShaderOperation::triple_product,
+                                                   ShaderOperation::zhf_tailored_rotate, ShaderOperation::triple_product,
                                                    ShaderOperation::zh_shade};
   return all;
 }
@@ -470,6 +616,7 @@ std::string_view shader_operation_name(ShaderOperation operation) {
     case ShaderOperation::sh_irradiance: return "sh-irradiance";
     case ShaderOperation::zxzxz_rotate: return "zxzxz-rotate";
     case ShaderOperation::zhf_rotate: return "zhf-rotate";
+    case ShaderOperation::zhf_tailored_rotate: return "zhf-tailored-rotate";
     case ShaderOperation::triple_product: return "triple-product";
     case ShaderOperation::zh_shade: return "zh-shade";
   }
@@ -478,7 +625,7 @@ std::string_view shader_operation_name(ShaderOperation operation) {
 
 int shader_min_order(ShaderOperation operation) {
   return operation == ShaderOperation::zxzxz_rotate || operation == ShaderOperation::zhf_rotate ||
-                 operation == ShaderOperation::triple_product
+                 operation == ShaderOperation::zhf_tailored_rotate || operation == ShaderOperation::triple_product
              ? 2
              : 1;
 }
@@ -523,6 +670,12 @@ ShaderSource shader_source(const ShaderRequest& request) {
       constants = "lobe directions and sparse A^_l rows of bands 1.." + std::to_string(n - 1) +
                   " from the zhf-lobes table whose file has the CRC-32 below; the basis as sh-eval";
       break;
+    case ShaderOperation::zhf_tailored_rotate:
+      zhf_tailored_rotate(s, n, *request.lobes, body, out);
+      crc = request.lobes_crc;
+      constants = "lobe directions and sparse A^_l rows of bands 0.." + std::to_string(n - 1) +
+                  " from the zhf-lobes table whose file has the CRC-32 below; the basis as sh-eval";
+      break;
     case ShaderOperation::triple_product:
       triple_product(s, n, body, out, crc);
       constants = "the tripling tensor of order " + std::to_string(n) + " (Wigner 3j construction)";
@@ -538,7 +691,8 @@ ShaderSource shader_source(const ShaderRequest& request) {
     << "//   " << request.command << "\n"
     << "// Constants: " << constants << ".\n";
   if (crc != 0)
-    o << "// CRC-32 " << (request.operation == ShaderOperation::zhf_rotate
+    o << "// CRC-32 " << (request.operation == ShaderOperation::zhf_rotate ||
+                                   request.operation == ShaderOperation::zhf_tailored_rotate
                                ? "of the table file"
                                : "of those constants (float64, little-endian, in generation order)")
       << ": " << crc_text << "\n";

@@ -23,7 +23,15 @@ enum class ShaderLanguage { glsl, hlsl };
 // float`, RelaxedPrecision in SPIR-V; HLSL `min16float`), which a GPU may evaluate in 16
 // bits; the constants are the same.
 enum class ShaderPrecision { float32, half };
-enum class ShaderOperation { sh_eval, sh_irradiance, zxzxz_rotate, zhf_rotate, triple_product, zh_shade };
+enum class ShaderOperation {
+  sh_eval,
+  sh_irradiance,
+  zxzxz_rotate,
+  zhf_rotate,
+  zhf_tailored_rotate,
+  triple_product,
+  zh_shade
+};
 
 struct ShaderRequest {
   ShaderLanguage language = ShaderLanguage::glsl;
@@ -32,7 +40,7 @@ struct ShaderRequest {
   ShaderPrecision precision = ShaderPrecision::float32;
   int zh_lobes = 4;                                 // zh-shade: lobes per point
   std::string command;                              // recorded in the provenance header
-  // zhf-rotate: the lobe table (covering the order) and the CRC-32 of its file.
+  // zhf-rotate, zhf-tailored-rotate: the lobe table (covering the order) and the CRC-32 of its file.
   std::shared_ptr<const ZhfLobes> lobes;
   std::uint32_t lobes_crc = 0;
 };
@@ -47,7 +55,7 @@ struct ShaderSource {
 };
 
 // Largest order each operation is generated for (sh-eval, sh-irradiance, zh-shade,
-// zhf-rotate 10; zxzxz-rotate 8; triple-product 6). Orders start at 1 (triple-product and
+// zhf-rotate, zhf-tailored-rotate 10; zxzxz-rotate 8; triple-product 6). Orders start at 1 (triple-product and
 // the rotations 2).
 int shader_min_order(ShaderOperation operation);
 int shader_max_order(ShaderOperation operation);
