@@ -31,7 +31,8 @@ shtool::test::CommandResult gen(const std::vector<std::string>& args) {
   return run_command(argv);
 }
 
-const char* kOperations[] = {"sh-eval", "sh-irradiance", "zxzxz-rotate", "zhf-rotate", "triple-product", "zh-shade"};
+const char* kOperations[] = {"sh-eval",        "sh-irradiance", "zxzxz-rotate", "zhf-rotate", "zhf-tailored-rotate",
+                             "triple-product", "zh-shade"};
 
 TEST(GenShader, EveryOperationIsAnIncludeWithTheContract) {
   for (const char* lang : {"glsl", "hlsl"})
@@ -74,6 +75,19 @@ TEST(GenShader, SignaturesAsDocumented) {
       {"glsl", "zhf-rotate",
        "void shtool_zhf_rotate(mat3 R, float f[SHTOOL_ORDER * SHTOOL_ORDER], out float g[SHTOOL_ORDER * "
        "SHTOOL_ORDER])"},
+      {"glsl", "zhf-tailored-rotate",
+       "void shtool_zhf_tailored_rotate(mat3 R, samplerCube bands0, out float g[SHTOOL_ORDER * SHTOOL_ORDER])"},
+      {"hlsl", "zhf-tailored-rotate",
+       "void shtool_zhf_tailored_rotate(float3x3 R, TextureCube<float4> bands0, SamplerState bands_sampler, out "
+       "float g[SHTOOL_ORDER * SHTOOL_ORDER])"},
+      {"glsl", "zhf-tailored-rotate",
+       "void shtool_zhf_tailored_rotate_arithmetic(mat3 R, float f[SHTOOL_ORDER * SHTOOL_ORDER], out float "
+       "g[SHTOOL_ORDER * SHTOOL_ORDER])"},
+      {"glsl", "zhf-tailored-rotate",
+       "void shtool_sh_band_sums(vec3 dir, float c[SHTOOL_ORDER * SHTOOL_ORDER], out float bands[SHTOOL_ORDER])"},
+      {"glsl", "zh-shade",
+       "float shtool_zh_shade_table(vec3 axes[SHTOOL_ZH_LOBES], float g[SHTOOL_ZH_LOBES * SHTOOL_ORDER], "
+       "samplerCube bands0)"},
       {"glsl", "zh-shade",
        "float shtool_zh_shade(vec3 axes[SHTOOL_ZH_LOBES], float g[SHTOOL_ZH_LOBES * SHTOOL_ORDER], float "
        "e[SHTOOL_ORDER * SHTOOL_ORDER])"},

@@ -33,6 +33,7 @@
 #include "shtool/tripling_product.h"
 #include "shtool/zh_shading.h"
 #include "shtool/zhf_rotation.h"
+#include "shader_wrappers.h"
 #include "vulkan_compute.h"
 
 namespace {
@@ -41,103 +42,15 @@ using shtool::ShaderLanguage;
 using shtool::ShaderOperation;
 using shtool::ShaderPrecision;
 namespace gpu = shtool::gpu;
+using gpu::band_textures;
+using gpu::load_array;
+using gpu::request_for;
+using gpu::texture_arguments;
+using gpu::vec3_of;
+using gpu::wrapper;
+using gpu::Wrapper;
 
 constexpr int kInputs = 4096;
-
-// One invocation's inputs and outputs, as float arrays of fixed strides, and the
-// statements of main() that call the generated function on them.
-struct Wrapper {
-  int in_stride = 0, out_stride = 0;
-  std::string body;  // uses ib, ob (first input and output float of this invocation)
-};
-
-std::string vec3_of(ShaderLanguage lang, const std::string& at) {
-  return std::string(lang == ShaderLanguage::glsl ? "vec3" : "float3") + "(inp[" + at + "], inp[" + at +
-         " + 1], inp[" + at + " + 2])";
-}
-
-std::string load_array(const std::string& type, const std::string& name, int size, const std::string& from) {
-  return "  " + type + " " + name + "[" + std::to_string(size) + "];\n  for (int k = 0; k < " + std::to_string(size) +
-         "; ++k) " + name + "[k] = inp[" + from + " + k];\n";
-}
-
-Wrapper wrapper(ShaderLanguage lang, ShaderOperation op, int n, int lobes) {
-  const int nn = n * n;
-  const bool glsl = lang == ShaderLanguage::glsl;
-  const std::string v3 = glsl ? "vec3" : "float3";
-  Wrapper w;
-  switch (op) {
-    case ShaderOperation::sh_eval:
-      w.in_stride = 3;
-      w.out_stride = nn;
-      w.body = "  float y[SHTOOL_ORDER * SHTOOL_ORDER];\n  shtool_sh_eval(" + vec3_of(lang, "ib") +
-               ", y);\n  for (int k = 0; k < " + std::to_string(nn) + "; ++k) outp[ob + k] = y[k];\n";
-      break;
-    case ShaderOperation::sh_irradiance:
-      // n, L (scalar), then L as RGB (interleaved)
-      w.in_stride = 3 + nn + 3 * nn;
-      w.out_stride = 4;
-      w.body = load_array("float", "L", nn, "ib + 3") + "  " + v3 + " Lc[" + std::to_string(nn) +
-               "];\n  for (int k = 0; k < " + std::to_string(nn) + "; ++k) Lc[k] = " +
-               vec3_of(lang, "ib + 3 + " + std::to_string(nn) + " + 3 * k") +
-               ";\n  outp[ob] = shtool_sh_irradiance(" + vec3_of(lang, "ib") + ", L);\n  " + v3 +
-               " e = shtool_sh_irradiance_rgb(" + vec3_of(lang, "ib") +
-               ", Lc);\n  outp[ob + 1] = e.x;\n  outp[ob + 2] = e.y;\n  outp[ob + 3] = e.z;\n";
-      break;
-    case ShaderOperation::zxzxz_rotate:
-    case ShaderOperation::zhf_rotate: {
-      // R row-major, then f
-      w.in_stride = 9 + nn;
-      w.out_stride = nn;
-      std::string m = glsl ? "mat3(" : "float3x3(";
-      for (int k = 0; k < 9; ++k) {
-        // GLSL's constructor takes columns, HLSL's rows.
-        const int i = glsl ? k % 3 : k / 3, j = glsl ? k / 3 : k % 3;
-        m += (k ? ", " : "") + std::string("inp[ib + ") + std::to_string(3 * i + j) + "]";
-      }
-      m += ")";
-      w.body = load_array("float", "f", nn, "ib + 9") + "  float g[" + std::to_string(nn) + "];\n  " +
-               (op == ShaderOperation::zhf_rotate ? "shtool_zhf_rotate(" : "shtool_rotate(") + m + ", f, g);\n  for (int k = 0; k < " + std::to_string(nn) + "; ++k) outp[ob + k] = g[k];\n";
-      break;
-    }
-    case ShaderOperation::triple_product:
-      w.in_stride = 2 * nn;
-      w.out_stride = nn;
-      w.body = load_array("float", "a", nn, "ib") + load_array("float", "b", nn, "ib + " + std::to_string(nn)) +
-               "  float c[" + std::to_string(nn) + "];\n  shtool_triple_product(a, b, c);\n  for (int k = 0; k < " +
-               std::to_string(nn) + "; ++k) outp[ob + k] = c[k];\n";
-      break;
-    case ShaderOperation::zh_shade:
-      // axes (3 per lobe), g (N per lobe), e
-      w.in_stride = 3 * lobes + lobes * n + nn;
-      w.out_stride = 1;
-      w.body = "  " + v3 + " axes[" + std::to_string(lobes) + "];\n  for (int k = 0; k < " + std::to_string(lobes) +
-               "; ++k) axes[k] = " + vec3_of(lang, "ib + 3 * k") + ";\n" +
-               load_array("float", "g", lobes * n, "ib + " + std::to_string(3 * lobes)) +
-               load_array("float", "e", nn, "ib + " + std::to_string(3 * lobes + lobes * n)) +
-               "  outp[ob] = shtool_zh_shade(axes, g, e);\n";
-      break;
-  }
-  return w;
-}
-
-std::string compute_shader(ShaderLanguage lang, const std::string& generated, const Wrapper& w) {
-  const std::string index = "  uint ib = id * " + std::to_string(w.in_stride) + "u;\n  uint ob = id * " +
-                            std::to_string(w.out_stride) + "u;\n";
-  if (lang == ShaderLanguage::glsl)
-    return "#version 450\nlayout(local_size_x = 64) in;\n"
-           "layout(std430, set = 0, binding = 0) readonly buffer Inputs { float inp[]; };\n"
-           "layout(std430, set = 0, binding = 1) writeonly buffer Outputs { float outp[]; };\n"
-           "layout(push_constant) uniform Params { uint count; } params;\n\n" +
-           generated +
-           "\nvoid main() {\n  uint id = gl_GlobalInvocationID.x;\n  if (id >= params.count) return;\n" + index +
-           w.body + "}\n";
-  return "[[vk::binding(0, 0)]] RWStructuredBuffer<float> inp : register(u0);\n"
-         "[[vk::binding(1, 0)]] RWStructuredBuffer<float> outp : register(u1);\n"
-         "struct Params { uint count; };\n[[vk::push_constant]] ConstantBuffer<Params> params;\n\n" +
-         generated + "\n[numthreads(64, 1, 1)]\nvoid main(uint3 tid : SV_DispatchThreadID) {\n  uint id = tid.x;\n"
-         "  if (id >= params.count) return;\n" + index + w.body + "}\n";
-}
 
 Eigen::Vector3d random_unit(std::mt19937_64& rng) {
   std::normal_distribution<double> g;
@@ -184,6 +97,7 @@ Problem make_problem(ShaderOperation op, int n, int lobes, const Wrapper& w, std
       break;
     case ShaderOperation::zxzxz_rotate:
     case ShaderOperation::zhf_rotate:
+    case ShaderOperation::zhf_tailored_rotate:
       for (int inv = 0; inv < kInputs; ++inv) {
         Eigen::Matrix3d r;
         if (inv == 0) r.setIdentity();
@@ -248,6 +162,7 @@ Problem make_problem(ShaderOperation op, int n, int lobes, const Wrapper& w, std
       break;
     case ShaderOperation::zxzxz_rotate:
     case ShaderOperation::zhf_rotate:
+    case ShaderOperation::zhf_tailored_rotate:
       p.worst_error = [=](const std::vector<float>& out) {
         double worst = 0;
         shtool::ShRotation<double> rot(n, nullptr);  // the reference method: no tables
@@ -334,24 +249,6 @@ struct Case {
   int lobes = 4;
 };
 
-// The request of one case; zhf-rotate takes the shipped shared-lobe table of its order.
-shtool::ShaderRequest request_for(ShaderLanguage language, ShaderOperation op, int order, int lobes,
-                                  ShaderPrecision precision = ShaderPrecision::float32) {
-  shtool::ShaderRequest request;
-  request.language = language;
-  request.operation = op;
-  request.order = order;
-  request.zh_lobes = lobes;
-  request.precision = precision;
-  request.command = "test";
-  if (op == ShaderOperation::zhf_rotate || op == ShaderOperation::zhf_tailored_rotate) {
-    auto loaded = shtool::load_zhf_lobes(shtool::default_zhf_lobes_path(order), order);
-    if (!loaded) throw std::runtime_error(loaded.error().message);
-    request.lobes = std::make_shared<const shtool::ZhfLobes>(std::move(loaded).value());
-  }
-  return request;
-}
-
 std::string case_name(const testing::TestParamInfo<Case>& info) {
   std::string name = std::string(info.param.language == ShaderLanguage::glsl ? "glsl_" : "hlsl_") +
                      std::string(shtool::shader_operation_name(info.param.operation)) + "_N" +
@@ -368,6 +265,7 @@ std::vector<Case> all_cases() {
     for (int n : {1, 2, 3, 4, 6, 10}) cases.push_back({lang, ShaderOperation::sh_irradiance, n});
     for (int n = 2; n <= 8; ++n) cases.push_back({lang, ShaderOperation::zxzxz_rotate, n});
     for (int n = 2; n <= 10; ++n) cases.push_back({lang, ShaderOperation::zhf_rotate, n});
+    for (int n = 2; n <= 10; ++n) cases.push_back({lang, ShaderOperation::zhf_tailored_rotate, n});
     for (int n = 2; n <= 6; ++n) cases.push_back({lang, ShaderOperation::triple_product, n});
     cases.push_back({lang, ShaderOperation::zh_shade, 1, 1});
     cases.push_back({lang, ShaderOperation::zh_shade, 3, 4});
@@ -385,11 +283,7 @@ TEST_P(GeneratedShader, MatchesTheRuntimeOnVulkan) {
   const shtool::ShaderRequest request = request_for(c.language, c.operation, c.order, c.lobes);
   const shtool::ShaderSource source = shtool::shader_source(request);
   const Wrapper w = wrapper(c.language, c.operation, c.order, c.lobes);
-  const std::string shader = compute_shader(c.language, source.text, w);
-  const gpu::ShaderLanguage lang = c.language == ShaderLanguage::glsl ? gpu::ShaderLanguage::glsl
-                                                                       : gpu::ShaderLanguage::hlsl;
-  const std::vector<uint32_t> spirv = gpu::compile_compute(shader, lang);
-  gpu::validate_spirv(spirv);
+  const std::vector<uint32_t> spirv = gpu::compiled_wrapper(c.language, source.text, w);
   std::mt19937_64 rng(1234 + c.order);
   const Problem p = make_problem(c.operation, c.order, c.lobes, w, rng);
   std::vector<std::vector<float>> buffers = {p.in, std::vector<float>(std::size_t(kInputs) * w.out_stride, NAN)};
@@ -417,10 +311,7 @@ TEST(GeneratedShaderHalf, CompilesAndRunsEveryOperation) {
       const shtool::ShaderRequest request = request_for(language, op, 3, 4, ShaderPrecision::half);
       const shtool::ShaderSource source = shtool::shader_source(request);
       const Wrapper w = wrapper(language, op, 3, request.zh_lobes);
-      const std::vector<uint32_t> spirv =
-          gpu::compile_compute(compute_shader(language, source.text, w),
-                               language == ShaderLanguage::glsl ? gpu::ShaderLanguage::glsl : gpu::ShaderLanguage::hlsl);
-      gpu::validate_spirv(spirv);
+      const std::vector<uint32_t> spirv = gpu::compiled_wrapper(language, source.text, w);
       std::mt19937_64 rng(99);
       const Problem p = make_problem(op, 3, request.zh_lobes, w, rng);
       std::vector<std::vector<float>> buffers = {p.in, std::vector<float>(std::size_t(kInputs) * w.out_stride, NAN)};
@@ -454,6 +345,159 @@ TEST(GeneratedShaderGlslEs, EveryOperationCompilesAsEs300) {
       }
       const auto r = shtool::test::run_command({SHTOOL_GLSLANG_VALIDATOR, path.string()});
       EXPECT_EQ(r.exit_code, 0) << shtool::shader_operation_name(op) << ":\n" << r.out << r.err;
+    }
+}
+
+// ---- Band textures (zh-shade's table form, the tailored ZHF rotation's texture form) ----
+
+// Band l's size: sqrt((2l+1)/4pi) |c_l| bounds its band sum everywhere.
+std::vector<double> band_bounds(int n, const std::vector<double>& c) {
+  std::vector<double> b(n);
+  for (int l = 0; l < n; ++l) {
+    double norm = 0;
+    for (int m = -l; m <= l; ++m) norm += c[l * (l + 1) + m] * c[l * (l + 1) + m];
+    b[l] = band_scale(l) * std::sqrt(norm);
+  }
+  return b;
+}
+
+// Node tables read with linear filtering err by about l(l+1) / (2 R^2) of the band's size,
+// R = size - 1 (bilinear interpolation over cells 2/R wide in face coordinates); the tests
+// allow 2 l(l+1) / R^2 and check that the error falls at least 12x from R = 32 to 128 (16x
+// for second-order interpolation; a first-order error, as across a cube's folds, gives 4x).
+double interpolation_allowance(int l, int size) {
+  const double r = size - 1;
+  return 2.0 * l * (l + 1) / (r * r) + 2e-6;
+}
+
+struct TextureRun {
+  double worst = 0;  // largest error / allowance
+  double max_error = 0;  // largest absolute error, for the convergence check
+};
+
+TextureRun run_zh_shade_table(ShaderLanguage lang, int n, int lobes, int size) {
+  shtool::ShaderRequest request = request_for(lang, ShaderOperation::zh_shade, n, lobes);
+  const std::string generated = shtool::shader_source(request).text;
+  const int textures = (n + 3) / 4, in_stride = 3 * lobes + lobes * n;
+  const Wrapper w = gpu::textured_wrapper(lang, ShaderOperation::zh_shade, n, lobes);
+  const std::vector<uint32_t> spirv = gpu::compiled_wrapper(lang, generated, w, textures);
+  std::mt19937_64 rng(77 + n);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::vector<double> e(n * n);
+  for (double& v : e) v = u(rng);
+  std::vector<float> in(std::size_t(kInputs) * in_stride);
+  for (int inv = 0; inv < kInputs; ++inv) {
+    for (int i = 0; i < lobes; ++i) {
+      const Eigen::Vector3d a = random_unit(rng);
+      for (int c = 0; c < 3; ++c) in[std::size_t(inv) * in_stride + 3 * i + c] = static_cast<float>(a[c]);
+    }
+    for (int k = 0; k < lobes * n; ++k) in[std::size_t(inv) * in_stride + 3 * lobes + k] = static_cast<float>(u(rng));
+  }
+  std::vector<std::vector<float>> buffers = {in, std::vector<float>(kInputs, NAN)};
+  const uint32_t count = kInputs;
+  gpu::shared_device()->run(spirv, buffers, count, &count, sizeof count, band_textures(n, e, size));
+  const std::vector<double> bound = band_bounds(n, e);
+  TextureRun result;
+  std::vector<Eigen::Vector3d> axes(lobes);
+  std::vector<double> g(lobes * n);
+  for (int inv = 0; inv < kInputs; ++inv) {
+    double allowance = 0;
+    for (int i = 0; i < lobes; ++i) {
+      for (int c = 0; c < 3; ++c) axes[i][c] = in[std::size_t(inv) * in_stride + 3 * i + c];
+      axes[i] /= axes[i].norm();
+      for (int l = 0; l < n; ++l) {
+        g[i * n + l] = in[std::size_t(inv) * in_stride + 3 * lobes + i * n + l];
+        allowance += std::abs(g[i * n + l]) * bound[l] * interpolation_allowance(l, size);
+      }
+    }
+    const double r = shtool::zh_shade_exact<double>(e, std::span<const Eigen::Vector3d>(axes), g);
+    const double err = std::abs(buffers[1][inv] - r);
+    result.worst = std::max(result.worst, err / allowance);
+    result.max_error = std::max(result.max_error, std::isnan(err) ? INFINITY : err);
+  }
+  return result;
+}
+
+// Eq. 24-25 on the GPU: the lighting's band textures filled as documented, shaded per lobe
+// with one fetch per four bands; converges to Eq. 13 as R grows.
+TEST(GeneratedShaderTextures, ZhShadeTableConvergesToEq13) {
+  SHTOOL_REQUIRE_VULKAN();
+  for (ShaderLanguage lang : {ShaderLanguage::glsl, ShaderLanguage::hlsl})
+    for (int n : {3, 6, 10}) {
+      const TextureRun coarse = run_zh_shade_table(lang, n, 4, 33), fine = run_zh_shade_table(lang, n, 4, 129);
+      std::printf("zh_shade_table %s N=%d: worst %.3g / %.3g of the allowance at 33 / 129 nodes per face side, error ratio %.3g\n",
+                  lang == ShaderLanguage::glsl ? "glsl" : "hlsl", n, coarse.worst, fine.worst,
+                  coarse.max_error / fine.max_error);
+      EXPECT_LE(coarse.worst, 1.0) << n;
+      EXPECT_LE(fine.worst, 1.0) << n;
+      EXPECT_GT(coarse.max_error / fine.max_error, 12.0) << n;
+    }
+}
+
+TextureRun run_tailored(ShaderLanguage lang, int n, int size) {
+  const shtool::ShaderRequest request = request_for(lang, ShaderOperation::zhf_tailored_rotate, n, 4);
+  const std::string generated = shtool::shader_source(request).text;
+  const int textures = (n + 3) / 4, nn = n * n;
+  const Wrapper w = gpu::textured_wrapper(lang, ShaderOperation::zhf_tailored_rotate, n, 4);
+  const std::vector<uint32_t> spirv = gpu::compiled_wrapper(lang, generated, w, textures);
+  std::mt19937_64 rng(5 + n);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::vector<double> f(nn);
+  for (double& v : f) v = u(rng);
+  std::vector<float> in(std::size_t(kInputs) * 9);
+  std::vector<Eigen::Matrix3d> rotations(kInputs);
+  std::normal_distribution<double> gauss;
+  for (int inv = 0; inv < kInputs; ++inv) {
+    rotations[inv] = inv == 0 ? Eigen::Matrix3d::Identity()
+                              : Eigen::Quaterniond(gauss(rng), gauss(rng), gauss(rng), gauss(rng))
+                                    .normalized()
+                                    .toRotationMatrix();
+    for (int k = 0; k < 9; ++k) in[std::size_t(inv) * 9 + k] = static_cast<float>(rotations[inv](k / 3, k % 3));
+  }
+  std::vector<std::vector<float>> buffers = {in, std::vector<float>(std::size_t(kInputs) * nn, NAN)};
+  const uint32_t count = kInputs;
+  gpu::shared_device()->run(spirv, buffers, count, &count, sizeof count, band_textures(n, f, size));
+  // Each g_lm sums A^_l[m][d] times samples that err by the band's allowance.
+  const shtool::ZhfLobes& lobes = *request.lobes;
+  const std::vector<double> bound = band_bounds(n, f);
+  std::vector<double> row_allowance(nn);
+  for (int i = 0; i < nn; ++i) {
+    const int l = shtool::sh_band(i);
+    for (int k = lobes.row_start[i]; k < lobes.row_start[i + 1]; ++k)
+      row_allowance[i] += std::abs(lobes.val[k]) * bound[l] * interpolation_allowance(l, size);
+  }
+  shtool::ShRotation<double> rot(n, nullptr);
+  std::vector<double> g(nn);
+  TextureRun result;
+  for (int inv = 0; inv < kInputs; ++inv) {
+    Eigen::Matrix3d r;
+    for (int k = 0; k < 9; ++k) r(k / 3, k % 3) = in[std::size_t(inv) * 9 + k];
+    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(r, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    rot.set(svd.matrixU() * svd.matrixV().transpose(), shtool::RotationMethod::reference);
+    rot.apply(f, g);
+    for (int i = 0; i < nn; ++i) {
+      const double err = std::abs(buffers[1][std::size_t(inv) * nn + i] - g[i]);
+      result.worst = std::max(result.worst, err / row_allowance[i]);
+      result.max_error = std::max(result.max_error, std::isnan(err) ? INFINITY : err);
+    }
+  }
+  return result;
+}
+
+// The signal-tailored rotation from band textures ([1] Eq. 11 as the paper runs it on the
+// GPU): equal to the exact rotation up to the texture's interpolation error, which falls
+// as R^-2.
+TEST(GeneratedShaderTextures, TailoredZhfRotationFromBandTextures) {
+  SHTOOL_REQUIRE_VULKAN();
+  for (ShaderLanguage lang : {ShaderLanguage::glsl, ShaderLanguage::hlsl})
+    for (int n : {3, 5, 8}) {
+      const TextureRun coarse = run_tailored(lang, n, 33), fine = run_tailored(lang, n, 129);
+      std::printf("zhf_tailored %s N=%d: worst %.3g / %.3g of the allowance at 33 / 129 nodes per face side, error ratio %.3g\n",
+                  lang == ShaderLanguage::glsl ? "glsl" : "hlsl", n, coarse.worst, fine.worst,
+                  coarse.max_error / fine.max_error);
+      EXPECT_LE(coarse.worst, 1.0) << n;
+      EXPECT_LE(fine.worst, 1.0) << n;
+      EXPECT_GT(coarse.max_error / fine.max_error, 12.0) << n;
     }
 }
 

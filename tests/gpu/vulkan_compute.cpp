@@ -1,6 +1,7 @@
 // The Vulkan compute harness of the GPU tests: shader compilation through the glslang and
 // SPIRV-Tools executables, a minimal reflection of the module against run()'s arguments,
-// and one dispatch per run() over host-visible storage buffers.
+// and one dispatch per run() over host-visible storage buffers and cube textures uploaded
+// through a staging buffer.
 #include "vulkan_compute.h"
 
 #include <algorithm>
@@ -10,6 +11,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <set>
 #include <sstream>
@@ -180,19 +182,44 @@ void check(VkResult r, const char* call) {
 
 namespace spv {
 constexpr uint32_t kMagic = 0x07230203;
-constexpr uint32_t OpEntryPoint = 15, OpExecutionMode = 16, OpTypePointer = 32, OpConstant = 43,
-                   OpConstantComposite = 44, OpSpecConstant = 50, OpSpecConstantComposite = 51, OpVariable = 59,
-                   OpDecorate = 71, OpMemberDecorate = 72;
+constexpr uint32_t OpEntryPoint = 15, OpExecutionMode = 16, OpTypeFloat = 22, OpTypeImage = 25, OpTypeSampler = 26,
+                   OpTypeSampledImage = 27, OpTypeArray = 28, OpTypeRuntimeArray = 29, OpTypePointer = 32,
+                   OpConstant = 43, OpConstantComposite = 44, OpSpecConstant = 50, OpSpecConstantComposite = 51,
+                   OpVariable = 59, OpDecorate = 71, OpMemberDecorate = 72;
 constexpr uint32_t ModelGLCompute = 5, ModeLocalSize = 17, ModeLocalSizeId = 38;
 constexpr uint32_t DecBlock = 2, DecBufferBlock = 3, DecBuiltIn = 11, DecBinding = 33, DecDescriptorSet = 34,
                    DecOffset = 35, BuiltInWorkgroupSize = 25;
 constexpr uint32_t ClassUniformConstant = 0, ClassUniform = 2, ClassPushConstant = 9, ClassStorageBuffer = 12;
+constexpr uint32_t DimCube = 3;
 }  // namespace spv
 
-void check_interface(const std::vector<uint32_t>& code, size_t buffer_count, uint32_t push_size) {
+// How the module takes its cube textures, and so which descriptors run() binds.
+enum class TextureForm {
+  none,      // no textures (run() was given no cubes)
+  combined,  // combined image samplers at B..B+C-1 (GLSL's samplerCube)
+  separate,  // sampled images at B..B+C-1 and one sampler at B+C (HLSL's TextureCube + SamplerState)
+};
+
+std::string dim_name(uint32_t dim) {
+  static const char* const names[] = {"1D", "2D", "3D", "cube", "rect", "buffer", "subpass-data"};
+  return dim < std::size(names) ? names[dim] : "Dim " + std::to_string(dim);
+}
+
+std::string counted(size_t n, const std::string& noun) { return std::to_string(n) + " " + noun + (n == 1 ? "" : "s"); }
+
+std::string binding_range(size_t first, size_t count) {
+  if (count == 1) return "binding " + std::to_string(first);
+  return "bindings " + std::to_string(first) + ".." + std::to_string(first + count - 1);
+}
+
+TextureForm check_interface(const std::vector<uint32_t>& code, size_t buffer_count, size_t cube_count,
+                            uint32_t push_size) {
   auto fail = [](const std::string& what) { throw std::runtime_error("VulkanCompute::run: " + what); };
   if (code.size() < 5 || code[0] != spv::kMagic) fail("not a SPIR-V module (bad size or magic number)");
 
+  struct ImageType {
+    uint32_t sampled_type, dim, arrayed, ms, sampled;
+  };
   bool has_main = false;
   uint32_t local[3] = {0, 0, 0};
   std::vector<uint32_t> local_size_ids;  // LocalSizeId operands
@@ -204,6 +231,11 @@ void check_interface(const std::vector<uint32_t>& code, size_t buffer_count, uin
   std::map<uint32_t, uint32_t> binding, set;
   std::set<uint32_t> blocks, buffer_blocks;
   std::map<uint32_t, uint32_t> max_member_offset;
+  std::map<uint32_t, uint32_t> float_width;     // OpTypeFloat id -> width
+  std::map<uint32_t, ImageType> images;         // OpTypeImage
+  std::set<uint32_t> samplers;                  // OpTypeSampler
+  std::map<uint32_t, uint32_t> sampled_images;  // OpTypeSampledImage -> its image type
+  std::set<uint32_t> arrays;                    // OpTypeArray, OpTypeRuntimeArray
   for (size_t i = 5; i < code.size();) {
     const uint32_t count = code[i] >> 16, op = code[i] & 0xffff;
     if (count == 0 || i + count > code.size()) fail("malformed SPIR-V instruction stream");
@@ -218,6 +250,16 @@ void check_interface(const std::vector<uint32_t>& code, size_t buffer_count, uin
       scalars[w[2]] = w[3];
     } else if ((op == spv::OpConstantComposite || op == spv::OpSpecConstantComposite) && count >= 3) {
       composites[w[2]].assign(w + 3, w + count);
+    } else if (op == spv::OpTypeFloat && count >= 3) {
+      float_width[w[1]] = w[2];
+    } else if (op == spv::OpTypeImage && count >= 9) {
+      images[w[1]] = {w[2], w[3], w[5], w[6], w[7]};
+    } else if (op == spv::OpTypeSampler && count >= 2) {
+      samplers.insert(w[1]);
+    } else if (op == spv::OpTypeSampledImage && count >= 3) {
+      sampled_images[w[1]] = w[2];
+    } else if ((op == spv::OpTypeArray || op == spv::OpTypeRuntimeArray) && count >= 3) {
+      arrays.insert(w[1]);
     } else if (op == spv::OpTypePointer && count == 4) {
       pointers[w[1]] = {w[2], w[3]};
     } else if (op == spv::OpVariable && count >= 4) {
@@ -251,7 +293,13 @@ void check_interface(const std::vector<uint32_t>& code, size_t buffer_count, uin
          std::to_string(local[2]) + "); run() dispatches work groups of (64, 1, 1)");
   }
 
-  std::map<uint32_t, uint32_t> used;  // binding -> variable
+  const size_t first_cube = buffer_count, sampler_binding = buffer_count + cube_count;
+  const std::string cubes_given =
+      cube_count == 0 ? std::string("no cube textures")
+                      : counted(cube_count, "cube texture") + " (" + binding_range(first_cube, cube_count) + ")";
+  std::map<uint32_t, uint32_t> used;                        // buffer binding -> variable
+  std::map<uint32_t, uint32_t> combined, separate;          // texture binding -> variable, by form
+  std::vector<std::pair<uint32_t, uint32_t>> sampler_vars;  // (variable, binding)
   for (const auto& [id, type] : variables) {
     const auto ptr = pointers.find(type);
     if (ptr == pointers.end()) continue;
@@ -271,8 +319,60 @@ void check_interface(const std::vector<uint32_t>& code, size_t buffer_count, uin
     }
     const auto b = binding.find(id);
     const std::string at = b == binding.end() ? "" : " (binding " + std::to_string(b->second) + ")";
-    if (storage == spv::ClassUniformConstant)
-      fail(where + at + " is an image or sampler; run() binds storage buffers only");
+    const uint32_t s = set.count(id) ? set[id] : 0;
+
+    if (storage == spv::ClassUniformConstant) {
+      // Images and samplers: cube k at first_cube + k, one sampler at sampler_binding.
+      const bool is_sampler = samplers.count(pointee) > 0;
+      const auto si = sampled_images.find(pointee);
+      const bool is_combined = si != sampled_images.end();
+      const auto image = images.find(is_combined ? si->second : pointee);
+      if (arrays.count(pointee)) {
+        fail(where + at + " is an array of images or samplers; run() binds one cube texture per binding");
+      }
+      if (!is_sampler && image == images.end()) {
+        fail(where + at + " is an opaque resource run() does not bind (only cube textures and their sampler)");
+      }
+      if (b == binding.end()) fail(where + " is an image or sampler without a binding decoration");
+      if (s != 0) fail(where + at + " is in descriptor set " + std::to_string(s) + "; run() binds set 0 only");
+      if (is_sampler) {
+        sampler_vars.emplace_back(id, b->second);
+        continue;
+      }
+      const ImageType& t = image->second;
+      const std::string what = is_combined ? "combined image sampler" : "image";
+      if (t.sampled == 2) {
+        fail(where + at + " is a storage image; run() binds sampled cube textures only");
+      }
+      if (t.dim != spv::DimCube || t.arrayed != 0 || t.ms != 0) {
+        fail(where + at + " is a " + (t.ms ? "multisampled " : "") + dim_name(t.dim) + (t.arrayed ? " array" : "") +
+             " " + what + "; run() binds cube textures (GLSL samplerCube, HLSL TextureCube<float4>) only");
+      }
+      const auto fw = float_width.find(t.sampled_type);
+      if (fw == float_width.end() || fw->second != 32) {
+        fail(where + at + " is a cube " + what + " of non-float texels; run()'s cubes are RGBA float " +
+             "(GLSL samplerCube, HLSL TextureCube<float4>)");
+      }
+      if (cube_count == 0) {
+        fail(where + at + " is a cube texture but run() was given no cube textures");
+      }
+      if (b->second < first_cube) {
+        fail(where + at + " is a cube texture at a storage buffer's binding; run() was given " +
+             std::to_string(buffer_count) + " buffers, so the cubes are at " + binding_range(first_cube, cube_count));
+      }
+      if (b->second >= first_cube + cube_count) {
+        fail(where + at + " is a cube texture beyond the " + cubes_given + " given to run()" +
+             (b->second == sampler_binding && !is_combined
+                  ? " (binding " + std::to_string(sampler_binding) + " is the sampler's)"
+                  : ""));
+      }
+      auto& by_binding = is_combined ? combined : separate;
+      if (!by_binding.emplace(b->second, id).second) {
+        fail("two cube textures at binding " + std::to_string(b->second));
+      }
+      continue;
+    }
+
     const bool storage_buffer =
         (storage == spv::ClassUniform && buffer_blocks.count(pointee)) || (storage == spv::ClassStorageBuffer);
     if (!storage_buffer) {
@@ -282,16 +382,74 @@ void check_interface(const std::vector<uint32_t>& code, size_t buffer_count, uin
            "[[vk::push_constant]] ConstantBuffer<T> or cbuffer");
     }
     if (b == binding.end()) fail(where + " is a buffer without a binding decoration");
-    const uint32_t s = set.count(id) ? set[id] : 0;
     if (s != 0) fail(where + at + " is in descriptor set " + std::to_string(s) + "; run() binds set 0 only");
     if (b->second >= buffer_count) {
-      fail(where + at + " is beyond the " + std::to_string(buffer_count) + " buffers given to run()");
+      fail(where + at + " is beyond the " + std::to_string(buffer_count) + " buffers given to run()" +
+           (b->second < first_cube + cube_count ? " (binding " + std::to_string(b->second) + " is a cube texture's)"
+                                                : ""));
     }
     if (!used.emplace(b->second, id).second) {
       fail("two buffers at binding " + std::to_string(b->second) +
            " (in HLSL, give every buffer its own register number, register(uK) or register(tK))");
     }
   }
+
+  // The textures: one form, every cube present.
+  if (!combined.empty() && !separate.empty()) {
+    fail("the module mixes combined image samplers (" + std::to_string(combined.size()) + ") and separate images (" +
+         std::to_string(separate.size()) +
+         "); run() binds its cubes in one form: all combined (GLSL samplerCube) "
+         "or all separate images with one sampler (HLSL TextureCube + SamplerState)");
+  }
+  const TextureForm form = !combined.empty()   ? TextureForm::combined
+                           : !separate.empty() ? TextureForm::separate
+                                               : TextureForm::none;
+  const auto& textures = form == TextureForm::combined ? combined : separate;
+  if (textures.size() != cube_count) {
+    std::string missing, sampler_there;
+    for (size_t k = 0; k < cube_count; ++k) {
+      const auto b = static_cast<uint32_t>(first_cube + k);
+      if (textures.count(b)) continue;
+      missing += (missing.empty() ? "" : ", ") + std::to_string(b);
+      for (const auto& [var, at] : sampler_vars) {
+        if (at == b) {
+          sampler_there = "; the sampler (variable %" + std::to_string(var) + ") is at binding " + std::to_string(b) +
+                          ", which is a cube's when run() is given " + counted(cube_count, "cube");
+        }
+      }
+    }
+    fail("run() was given " + cubes_given + " but the module declares " +
+         (textures.empty() ? std::string("none") : std::to_string(textures.size())) + ": no cube texture at binding " +
+         missing + sampler_there + " (note: glslang's HLSL front end drops a texture the shader never samples)");
+  }
+  if (form == TextureForm::combined && !sampler_vars.empty()) {
+    fail("variable %" + std::to_string(sampler_vars[0].first) + " (binding " + std::to_string(sampler_vars[0].second) +
+         ") is a separate sampler beside combined image samplers; run() binds a sampler only for separate images");
+  }
+  if (form == TextureForm::none && !sampler_vars.empty()) {
+    fail("variable %" + std::to_string(sampler_vars[0].first) + " (binding " + std::to_string(sampler_vars[0].second) +
+         ") is a sampler but run() was given no cube textures");
+  }
+  if (form == TextureForm::separate) {
+    const std::string declare = "declare one SamplerState at binding " + std::to_string(sampler_binding) +
+                                ", e.g. [[vk::binding(" + std::to_string(sampler_binding) +
+                                ", 0)]] SamplerState bands_sampler;";
+    if (sampler_vars.empty()) {
+      fail("the module's cube textures are separate images (HLSL TextureCube) but it has no sampler: " + declare +
+           " (and sample with it: glslang removes an unused one)");
+    }
+    if (sampler_vars.size() > 1) {
+      fail("the module declares " + std::to_string(sampler_vars.size()) +
+           " samplers; run() binds one, shared by all cubes: " + declare);
+    }
+    if (sampler_vars[0].second != sampler_binding) {
+      fail("variable %" + std::to_string(sampler_vars[0].first) + " (binding " +
+           std::to_string(sampler_vars[0].second) + ") is the sampler, but with " + counted(buffer_count, "buffer") +
+           " and " + counted(cube_count, "cube") + " run() binds it at binding " + std::to_string(sampler_binding) +
+           ": " + declare);
+    }
+  }
+  return form;
 }
 
 // A zeroed create-info with its sType: brace-initialising only the sType trips
@@ -325,6 +483,18 @@ class Owned {
   VkDevice device_;
   H handle_ = VK_NULL_HANDLE;
 };
+
+// The first memory type among `bits` with all of `want`; memory.memoryTypeCount if none.
+uint32_t find_memory_type(const VkPhysicalDeviceMemoryProperties& memory, uint32_t bits, VkMemoryPropertyFlags want) {
+  for (uint32_t t = 0; t < memory.memoryTypeCount; ++t) {
+    if ((bits & (1u << t)) && (memory.memoryTypes[t].propertyFlags & want) == want) return t;
+  }
+  return memory.memoryTypeCount;
+}
+
+// Cube textures: RGBA float, one mip level, six layers.
+constexpr VkFormat kCubeFormat = VK_FORMAT_R32G32B32A32_SFLOAT;
+constexpr VkDeviceSize kCubeTexelBytes = 4 * sizeof(float);
 
 // ---------------------------------------------------------------------------------------
 // Sanitizer builds: Mesa's driver still owns heap blocks when the loader unloads it at
@@ -521,6 +691,12 @@ std::string VulkanCompute::device_name() const { return properties_.deviceName; 
 
 void VulkanCompute::run(const std::vector<uint32_t>& spirv, std::vector<std::vector<float>>& buffers,
                         uint32_t invocations, const void* push_constants, uint32_t push_size) {
+  run(spirv, buffers, invocations, push_constants, push_size, {});
+}
+
+void VulkanCompute::run(const std::vector<uint32_t>& spirv, std::vector<std::vector<float>>& buffers,
+                        uint32_t invocations, const void* push_constants, uint32_t push_size,
+                        const std::vector<CubeTexture>& cubes) {
   const VkPhysicalDeviceLimits& limits = properties_.limits;
   if (push_size > std::min(kMaxPushSize, limits.maxPushConstantsSize) || push_size % 4 != 0) {
     throw std::runtime_error("VulkanCompute::run: push_size " + std::to_string(push_size) +
@@ -534,11 +710,56 @@ void VulkanCompute::run(const std::vector<uint32_t>& spirv, std::vector<std::vec
     throw std::runtime_error("VulkanCompute::run: " + std::to_string(groups) + " work groups exceed the device's " +
                              std::to_string(limits.maxComputeWorkGroupCount[0]));
   }
-  check_interface(spirv, buffers.size(), push_size);
   const auto count = static_cast<uint32_t>(buffers.size());
+  const auto cube_count = static_cast<uint32_t>(cubes.size());
+
+  // The cubes' sizes, and what the device can do with them, before anything is created.
+  std::vector<VkDeviceSize> cube_offsets(cube_count);  // in the staging buffer
+  VkDeviceSize staging_size = 0;
+  for (uint32_t k = 0; k < cube_count; ++k) {
+    const CubeTexture& cube = cubes[k];
+    const std::string which = "VulkanCompute::run: cube " + std::to_string(k);
+    if (cube.size < 1) throw std::runtime_error(which + " has size " + std::to_string(cube.size) + "; at least 1");
+    if (static_cast<uint32_t>(cube.size) > limits.maxImageDimensionCube) {
+      throw std::runtime_error(which + " has size " + std::to_string(cube.size) +
+                               ", more than the device's maxImageDimensionCube " +
+                               std::to_string(limits.maxImageDimensionCube));
+    }
+    const size_t side = static_cast<size_t>(cube.size);
+    const size_t want = 6 * side * side * 4;
+    if (cube.texels.size() != want) {
+      throw std::runtime_error(which + " of size " + std::to_string(cube.size) + " has " +
+                               std::to_string(cube.texels.size()) + " floats; 6 faces x " + std::to_string(side) +
+                               " x " + std::to_string(side) + " texels x 4 channels = " + std::to_string(want));
+    }
+    cube_offsets[k] = staging_size;
+    staging_size += want * sizeof(float);
+  }
+  if (cube_count > 0) {
+    VkFormatProperties fp;
+    vkGetPhysicalDeviceFormatProperties(physical_, kCubeFormat, &fp);
+    const VkFormatFeatureFlags need =
+        VK_FORMAT_FEATURE_SAMPLED_IMAGE_BIT | VK_FORMAT_FEATURE_SAMPLED_IMAGE_FILTER_LINEAR_BIT;
+    if ((fp.optimalTilingFeatures & need) != need) {
+      throw std::runtime_error(std::string("VulkanCompute::run: ") + properties_.deviceName +
+                               " cannot sample VK_FORMAT_R32G32B32A32_SFLOAT images with linear filtering in "
+                               "optimal tiling (VK_FORMAT_FEATURE_SAMPLED_IMAGE_FILTER_LINEAR_BIT missing), which "
+                               "the cube textures need");
+    }
+    if (cube_count > limits.maxPerStageDescriptorSampledImages || cube_count > limits.maxDescriptorSetSampledImages ||
+        cube_count > limits.maxPerStageDescriptorSamplers) {
+      throw std::runtime_error(
+          "VulkanCompute::run: " + std::to_string(cube_count) +
+          " cube textures exceed the device's per-stage limit of " +
+          std::to_string(std::min(limits.maxPerStageDescriptorSampledImages, limits.maxPerStageDescriptorSamplers)));
+    }
+  }
+  const TextureForm form = check_interface(spirv, count, cube_count, push_size);
 
   // Buffers, each in its own host-visible coherent allocation: a test dispatch touches a
   // handful, and coherent memory needs no flushes around the submission.
+  const VkMemoryPropertyFlags host_coherent =
+      VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
   std::vector<Owned<VkBuffer, vkDestroyBuffer>> vk_buffers;
   std::vector<Owned<VkDeviceMemory, vkFreeMemory>> memories;
   std::vector<void*> mapped(count);
@@ -560,11 +781,7 @@ void VulkanCompute::run(const std::vector<uint32_t>& spirv, std::vector<std::vec
 
     VkMemoryRequirements req;
     vkGetBufferMemoryRequirements(device_, vk_buffers.back().get(), &req);
-    const VkMemoryPropertyFlags want = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
-    uint32_t type = memory_.memoryTypeCount;
-    for (uint32_t t = 0; t < memory_.memoryTypeCount && type == memory_.memoryTypeCount; ++t) {
-      if ((req.memoryTypeBits & (1u << t)) && (memory_.memoryTypes[t].propertyFlags & want) == want) type = t;
-    }
+    const uint32_t type = find_memory_type(memory_, req.memoryTypeBits, host_coherent);
     if (type == memory_.memoryTypeCount) {
       throw std::runtime_error("VulkanCompute::run: no host-visible coherent memory type for a storage buffer");
     }
@@ -580,19 +797,131 @@ void VulkanCompute::run(const std::vector<uint32_t>& spirv, std::vector<std::vec
     if (!buffers[k].empty()) std::memcpy(mapped[k], buffers[k].data(), buffers[k].size() * sizeof(float));
   }
 
+  // Cube textures: every cube's texels in one host-visible staging buffer, copied into
+  // device-local optimal-tiling images by the command buffer below, ahead of the dispatch.
+  // Declared memory first, so each image and view is destroyed before its memory is freed.
+  Owned<VkDeviceMemory, vkFreeMemory> staging_memory(device_);
+  Owned<VkBuffer, vkDestroyBuffer> staging(device_);
+  std::vector<Owned<VkDeviceMemory, vkFreeMemory>> image_memories;
+  std::vector<Owned<VkImage, vkDestroyImage>> cube_images;
+  std::vector<Owned<VkImageView, vkDestroyImageView>> cube_views;
+  Owned<VkSampler, vkDestroySampler> sampler(device_);
+  image_memories.reserve(cube_count);
+  cube_images.reserve(cube_count);
+  cube_views.reserve(cube_count);
+  if (cube_count > 0) {
+    auto bci = vk_struct<VkBufferCreateInfo>(VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO);
+    bci.size = staging_size;
+    bci.usage = VK_BUFFER_USAGE_TRANSFER_SRC_BIT;
+    bci.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+    check(vkCreateBuffer(device_, &bci, nullptr, staging.out()), "vkCreateBuffer (staging)");
+    VkMemoryRequirements req;
+    vkGetBufferMemoryRequirements(device_, staging.get(), &req);
+    const uint32_t type = find_memory_type(memory_, req.memoryTypeBits, host_coherent);
+    if (type == memory_.memoryTypeCount) {
+      throw std::runtime_error("VulkanCompute::run: no host-visible coherent memory type for the staging buffer");
+    }
+    auto mai = vk_struct<VkMemoryAllocateInfo>(VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO);
+    mai.allocationSize = req.size;
+    mai.memoryTypeIndex = type;
+    check(vkAllocateMemory(device_, &mai, nullptr, staging_memory.out()), "vkAllocateMemory (staging)");
+    check(vkBindBufferMemory(device_, staging.get(), staging_memory.get(), 0), "vkBindBufferMemory (staging)");
+    void* data = nullptr;
+    check(vkMapMemory(device_, staging_memory.get(), 0, VK_WHOLE_SIZE, 0, &data), "vkMapMemory (staging)");
+    for (uint32_t k = 0; k < cube_count; ++k) {
+      std::memcpy(static_cast<char*>(data) + cube_offsets[k], cubes[k].texels.data(),
+                  cubes[k].texels.size() * sizeof(float));
+    }
+
+    for (uint32_t k = 0; k < cube_count; ++k) {
+      const auto side = static_cast<uint32_t>(cubes[k].size);
+      auto ici = vk_struct<VkImageCreateInfo>(VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO);
+      ici.flags = VK_IMAGE_CREATE_CUBE_COMPATIBLE_BIT;
+      ici.imageType = VK_IMAGE_TYPE_2D;
+      ici.format = kCubeFormat;
+      ici.extent = {side, side, 1};
+      ici.mipLevels = 1;
+      ici.arrayLayers = 6;
+      ici.samples = VK_SAMPLE_COUNT_1_BIT;
+      ici.tiling = VK_IMAGE_TILING_OPTIMAL;
+      ici.usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
+      ici.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+      ici.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+      image_memories.emplace_back(device_);
+      cube_images.emplace_back(device_);
+      check(vkCreateImage(device_, &ici, nullptr, cube_images.back().out()), "vkCreateImage (cube)");
+
+      VkMemoryRequirements ireq;
+      vkGetImageMemoryRequirements(device_, cube_images.back().get(), &ireq);
+      uint32_t itype = find_memory_type(memory_, ireq.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
+      if (itype == memory_.memoryTypeCount) itype = find_memory_type(memory_, ireq.memoryTypeBits, 0);
+      if (itype == memory_.memoryTypeCount) {
+        throw std::runtime_error("VulkanCompute::run: no memory type for a cube image");
+      }
+      auto imai = vk_struct<VkMemoryAllocateInfo>(VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO);
+      imai.allocationSize = ireq.size;
+      imai.memoryTypeIndex = itype;
+      check(vkAllocateMemory(device_, &imai, nullptr, image_memories.back().out()), "vkAllocateMemory (cube)");
+      check(vkBindImageMemory(device_, cube_images.back().get(), image_memories.back().get(), 0),
+            "vkBindImageMemory (cube)");
+
+      auto ivci = vk_struct<VkImageViewCreateInfo>(VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO);
+      ivci.image = cube_images.back().get();
+      ivci.viewType = VK_IMAGE_VIEW_TYPE_CUBE;
+      ivci.format = kCubeFormat;
+      ivci.components = {VK_COMPONENT_SWIZZLE_IDENTITY, VK_COMPONENT_SWIZZLE_IDENTITY, VK_COMPONENT_SWIZZLE_IDENTITY,
+                         VK_COMPONENT_SWIZZLE_IDENTITY};
+      ivci.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 6};
+      cube_views.emplace_back(device_);
+      check(vkCreateImageView(device_, &ivci, nullptr, cube_views.back().out()), "vkCreateImageView (cube)");
+    }
+
+    // Linear filtering within the one mip level, clamped to the edge (which seamless
+    // cube filtering makes moot), normalised coordinates.
+    auto sci = vk_struct<VkSamplerCreateInfo>(VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO);
+    sci.magFilter = VK_FILTER_LINEAR;
+    sci.minFilter = VK_FILTER_LINEAR;
+    sci.mipmapMode = VK_SAMPLER_MIPMAP_MODE_NEAREST;
+    sci.addressModeU = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
+    sci.addressModeV = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
+    sci.addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
+    sci.mipLodBias = 0.0f;
+    sci.anisotropyEnable = VK_FALSE;
+    sci.maxAnisotropy = 1.0f;
+    sci.compareEnable = VK_FALSE;
+    sci.compareOp = VK_COMPARE_OP_ALWAYS;
+    sci.minLod = 0.0f;
+    sci.maxLod = 0.0f;
+    sci.borderColor = VK_BORDER_COLOR_FLOAT_TRANSPARENT_BLACK;
+    sci.unnormalizedCoordinates = VK_FALSE;
+    check(vkCreateSampler(device_, &sci, nullptr, sampler.out()), "vkCreateSampler");
+  }
+
   Owned<VkShaderModule, vkDestroyShaderModule> module(device_);
   auto smci = vk_struct<VkShaderModuleCreateInfo>(VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO);
   smci.codeSize = spirv.size() * sizeof(uint32_t);
   smci.pCode = spirv.data();
   check(vkCreateShaderModule(device_, &smci, nullptr, module.out()), "vkCreateShaderModule");
 
-  std::vector<VkDescriptorSetLayoutBinding> bindings(count);
+  // Set 0: the buffers at 0..B-1, the cubes at B..B+C-1 (combined image samplers or
+  // sampled images, as the module declares them), and for sampled images the sampler at B+C.
+  const VkDescriptorType cube_type =
+      form == TextureForm::separate ? VK_DESCRIPTOR_TYPE_SAMPLED_IMAGE : VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+  const bool separate_sampler = form == TextureForm::separate;
+  std::vector<VkDescriptorSetLayoutBinding> bindings;
   for (uint32_t k = 0; k < count; ++k) {
-    bindings[k] = {k, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr};
+    bindings.push_back({k, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr});
   }
+  for (uint32_t k = 0; k < cube_count; ++k) {
+    bindings.push_back({count + k, cube_type, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr});
+  }
+  if (separate_sampler) {
+    bindings.push_back({count + cube_count, VK_DESCRIPTOR_TYPE_SAMPLER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr});
+  }
+  const auto descriptor_count = static_cast<uint32_t>(bindings.size());
   Owned<VkDescriptorSetLayout, vkDestroyDescriptorSetLayout> set_layout(device_);
   auto dslci = vk_struct<VkDescriptorSetLayoutCreateInfo>(VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO);
-  dslci.bindingCount = count;
+  dslci.bindingCount = descriptor_count;
   dslci.pBindings = bindings.data();
   check(vkCreateDescriptorSetLayout(device_, &dslci, nullptr, set_layout.out()), "vkCreateDescriptorSetLayout");
 
@@ -616,15 +945,18 @@ void VulkanCompute::run(const std::vector<uint32_t>& spirv, std::vector<std::vec
   check(vkCreateComputePipelines(device_, VK_NULL_HANDLE, 1, &cpci, nullptr, pipeline.out()),
         "vkCreateComputePipelines");
 
-  // A descriptor pool needs at least one pool size, so a shader without buffers gets none.
+  // A descriptor pool needs at least one pool size, so a shader without descriptors gets none.
   Owned<VkDescriptorPool, vkDestroyDescriptorPool> pool(device_);
   VkDescriptorSet descriptor_set = VK_NULL_HANDLE;
-  if (count > 0) {
-    const VkDescriptorPoolSize pool_size{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, count};
+  if (descriptor_count > 0) {
+    std::vector<VkDescriptorPoolSize> pool_sizes;
+    if (count > 0) pool_sizes.push_back({VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, count});
+    if (cube_count > 0) pool_sizes.push_back({cube_type, cube_count});
+    if (separate_sampler) pool_sizes.push_back({VK_DESCRIPTOR_TYPE_SAMPLER, 1});
     auto dpci = vk_struct<VkDescriptorPoolCreateInfo>(VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO);
     dpci.maxSets = 1;
-    dpci.poolSizeCount = 1;
-    dpci.pPoolSizes = &pool_size;
+    dpci.poolSizeCount = static_cast<uint32_t>(pool_sizes.size());
+    dpci.pPoolSizes = pool_sizes.data();
     check(vkCreateDescriptorPool(device_, &dpci, nullptr, pool.out()), "vkCreateDescriptorPool");
     auto dsai = vk_struct<VkDescriptorSetAllocateInfo>(VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO);
     dsai.descriptorPool = pool.get();
@@ -632,18 +964,31 @@ void VulkanCompute::run(const std::vector<uint32_t>& spirv, std::vector<std::vec
     dsai.pSetLayouts = set_layouts;
     check(vkAllocateDescriptorSets(device_, &dsai, &descriptor_set), "vkAllocateDescriptorSets");
 
-    std::vector<VkDescriptorBufferInfo> infos(count);
-    std::vector<VkWriteDescriptorSet> writes(count);
-    for (uint32_t k = 0; k < count; ++k) {
-      infos[k] = {vk_buffers[k].get(), 0, sizes[k]};
+    // Sized up front: the writes point into these.
+    std::vector<VkDescriptorBufferInfo> buffer_infos(count);
+    std::vector<VkDescriptorImageInfo> image_infos(cube_count + (separate_sampler ? 1 : 0));
+    std::vector<VkWriteDescriptorSet> writes(descriptor_count);
+    for (uint32_t k = 0; k < descriptor_count; ++k) {
       writes[k] = vk_struct<VkWriteDescriptorSet>(VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET);
       writes[k].dstSet = descriptor_set;
       writes[k].dstBinding = k;
       writes[k].descriptorCount = 1;
-      writes[k].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
-      writes[k].pBufferInfo = &infos[k];
+      writes[k].descriptorType = bindings[k].descriptorType;
     }
-    vkUpdateDescriptorSets(device_, count, writes.data(), 0, nullptr);
+    for (uint32_t k = 0; k < count; ++k) {
+      buffer_infos[k] = {vk_buffers[k].get(), 0, sizes[k]};
+      writes[k].pBufferInfo = &buffer_infos[k];
+    }
+    for (uint32_t k = 0; k < cube_count; ++k) {
+      image_infos[k] = {separate_sampler ? VK_NULL_HANDLE : sampler.get(), cube_views[k].get(),
+                        VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+      writes[count + k].pImageInfo = &image_infos[k];
+    }
+    if (separate_sampler) {
+      image_infos[cube_count] = {sampler.get(), VK_NULL_HANDLE, VK_IMAGE_LAYOUT_UNDEFINED};
+      writes[count + cube_count].pImageInfo = &image_infos[cube_count];
+    }
+    vkUpdateDescriptorSets(device_, descriptor_count, writes.data(), 0, nullptr);
   }
 
   Owned<VkCommandPool, vkDestroyCommandPool> command_pool(device_);
@@ -661,8 +1006,49 @@ void VulkanCompute::run(const std::vector<uint32_t>& spirv, std::vector<std::vec
   auto begin = vk_struct<VkCommandBufferBeginInfo>(VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO);
   begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
   check(vkBeginCommandBuffer(cmd, &begin), "vkBeginCommandBuffer");
+  if (cube_count > 0) {
+    // UNDEFINED -> TRANSFER_DST_OPTIMAL, the copy of all six layers, then
+    // TRANSFER_DST_OPTIMAL -> SHADER_READ_ONLY_OPTIMAL before the compute shader reads.
+    // The submission makes the host's writes to the staging buffer visible to the copy.
+    std::vector<VkImageMemoryBarrier> to_transfer(cube_count), to_shader(cube_count);
+    for (uint32_t k = 0; k < cube_count; ++k) {
+      auto barrier = vk_struct<VkImageMemoryBarrier>(VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER);
+      barrier.srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+      barrier.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+      barrier.image = cube_images[k].get();
+      barrier.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 6};
+      to_transfer[k] = barrier;
+      to_transfer[k].srcAccessMask = 0;
+      to_transfer[k].dstAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+      to_transfer[k].oldLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+      to_transfer[k].newLayout = VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL;
+      to_shader[k] = barrier;
+      to_shader[k].srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+      to_shader[k].dstAccessMask = VK_ACCESS_SHADER_READ_BIT;
+      to_shader[k].oldLayout = VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL;
+      to_shader[k].newLayout = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL;
+    }
+    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT, 0, 0, nullptr, 0,
+                         nullptr, cube_count, to_transfer.data());
+    for (uint32_t k = 0; k < cube_count; ++k) {
+      // Tightly packed (row length and image height 0): layer f starts f * size * size
+      // texels in, which is CubeTexture's face order and row-major layout.
+      const auto side = static_cast<uint32_t>(cubes[k].size);
+      VkBufferImageCopy region{};
+      region.bufferOffset = cube_offsets[k];
+      region.bufferRowLength = 0;
+      region.bufferImageHeight = 0;
+      region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 6};
+      region.imageOffset = {0, 0, 0};
+      region.imageExtent = {side, side, 1};
+      vkCmdCopyBufferToImage(cmd, staging.get(), cube_images[k].get(), VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1,
+                             &region);
+    }
+    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 0, nullptr, 0,
+                         nullptr, cube_count, to_shader.data());
+  }
   vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline.get());
-  if (count > 0) {
+  if (descriptor_count > 0) {
     vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout.get(), 0, 1, &descriptor_set, 0, nullptr);
   }
   if (push_size > 0) vkCmdPushConstants(cmd, layout.get(), VK_SHADER_STAGE_COMPUTE_BIT, 0, push_size, push_constants);

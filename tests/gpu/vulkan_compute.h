@@ -1,12 +1,34 @@
 // A headless Vulkan compute harness for the tests of generated shaders: compiles GLSL or
 // HLSL compute shaders to SPIR-V with glslangValidator, checks them with spirv-val, and
-// runs them over float buffers on a Vulkan device (Mesa's lavapipe on the CI machines).
+// runs them over float buffers and cube-map textures on a Vulkan device (Mesa's lavapipe
+// on the CI machines).
 //
-// What a shader must declare to run under VulkanCompute::run:
+// What a shader must declare to run under VulkanCompute::run, all descriptors in set 0
+// (B = buffers.size(), C = cubes.size()):
 //   - entry point `main`, local size (64, 1, 1): run() dispatches ceil(invocations / 64)
 //     work groups in x, so the shader must bound its index by a count it is given;
-//   - buffer k of `buffers` as a storage buffer at set 0, binding k (no other descriptors);
+//   - buffer k of `buffers` as a storage buffer at binding k, k = 0..B-1;
+//   - cube k of `cubes` at binding B + k, k = 0..C-1, as a float cube texture, in one of
+//     two forms (run() reads which from the SPIR-V and binds descriptors to match):
+//       combined (GLSL's samplerCube): a combined image sampler at B + k;
+//       separate (HLSL's TextureCube<float4> + SamplerState): a sampled image at B + k
+//       and ONE sampler, shared by all cubes, at binding B + C
+//     (it is the SPIR-V that counts: GLSL's textureCube + sampler is the separate form);
+//     every one of the C cubes must be in the module, each at its own binding, and no
+//     other texture, sampler or storage image. glslang's HLSL front end removes
+//     resources the shader never uses, so an HLSL shader must sample every cube it is
+//     given (a GLSL declaration is kept even unused);
 //   - if it takes push constants, one push-constant block at offset 0 that fits push_size.
+// Anything else (uniform buffers, descriptor arrays, other sets, a 2D or arrayed image,
+// the two texture forms mixed, a missing or misplaced sampler) is refused by run() with
+// the reason.
+//
+// The cubes are sampled with linear filtering (mag and min; one mip level, so the
+// shader passes LOD 0: a compute shader has no derivatives for an implicit LOD),
+// clamp-to-edge addressing and normalised coordinates; Vulkan filters cube maps
+// seamlessly across faces. A direction through a texel centre returns that texel: exactly
+// when the centre's face coordinates are exact in float (a power-of-two size and |ma| a
+// power of two), else to within the rounding of the coordinates.
 //
 // GLSL:
 //   #version 450
@@ -17,6 +39,20 @@
 //   void main() {
 //     uint i = gl_GlobalInvocationID.x;
 //     if (i < pc.count) o[i] = 2.0 * a[i];
+//   }
+//
+// GLSL with one cube (B = 2 buffers, so the cube is at binding 2):
+//   #version 450
+//   layout(local_size_x = 64) in;
+//   layout(push_constant) uniform Push { uint count; } pc;
+//   layout(std430, set = 0, binding = 0) readonly buffer Dirs { float dirs[]; };
+//   layout(std430, set = 0, binding = 1) writeonly buffer Out { vec4 o[]; };
+//   layout(set = 0, binding = 2) uniform samplerCube bands0;
+//   void main() {
+//     uint i = gl_GlobalInvocationID.x;
+//     if (i >= pc.count) return;
+//     vec3 dir = vec3(dirs[3 * i], dirs[3 * i + 1], dirs[3 * i + 2]);
+//     o[i] = textureLod(bands0, dir, 0.0);
 //   }
 //
 // HLSL (glslang's front end, no --auto-map-bindings and no binding shifts): the register
@@ -34,6 +70,20 @@
 //   [numthreads(64, 1, 1)]
 //   void main(uint3 id : SV_DispatchThreadID) {
 //     if (id.x < pc.count) o[id.x] = 2.0 * a[id.x];
+//   }
+//
+// HLSL with one cube (B = 2, C = 1: the texture at binding 2, its sampler at 3):
+//   struct Push { uint count; };
+//   [[vk::push_constant]] ConstantBuffer<Push> pc;
+//   StructuredBuffer<float> dirs : register(t0);
+//   RWStructuredBuffer<float4> o : register(u1);
+//   [[vk::binding(2, 0)]] TextureCube<float4> bands0;
+//   [[vk::binding(3, 0)]] SamplerState bands_sampler;
+//   [numthreads(64, 1, 1)]
+//   void main(uint3 id : SV_DispatchThreadID) {
+//     if (id.x >= pc.count) return;
+//     float3 dir = float3(dirs[3 * id.x], dirs[3 * id.x + 1], dirs[3 * id.x + 2]);
+//     o[id.x] = bands0.SampleLevel(bands_sampler, dir, 0);
 //   }
 //
 // Floating point: Vulkan lets a device fuse a * b + c unless the result is marked
@@ -63,6 +113,19 @@ std::vector<uint32_t> compile_compute(const std::string& source, ShaderLanguage 
 // module is rejected.
 void validate_spirv(const std::vector<uint32_t>& spirv);
 
+// One cube map of RGBA float texels: faces in Vulkan layer order +X, -X, +Y, -Y, +Z, -Z, each
+// size x size texels, row-major (row = t from 0, column = s from 0, as Vulkan addresses a
+// face), 4 floats per texel: texels.size() == 6 * size * size * 4. Texel (column i, row j)
+// of face f, channel c, is texels[((f * size + j) * size + i) * 4 + c]. Vulkan picks the
+// face by the major axis ma of the direction and its coordinates (sc, tc) by
+//   +X: sc = -z, tc = -y;  -X: sc = +z, tc = -y;  +Y: sc = +x, tc = +z;
+//   -Y: sc = +x, tc = -z;  +Z: sc = +x, tc = -y;  -Z: sc = -x, tc = -y;
+// s = (sc / |ma| + 1) / 2, t = (tc / |ma| + 1) / 2; texel i's centre is s = (i + 0.5) / size.
+struct CubeTexture {
+  int size = 0;
+  std::vector<float> texels;
+};
+
 // One Vulkan instance, device and compute queue. run() may be called from several
 // threads (it serialises on the queue).
 class VulkanCompute {
@@ -83,9 +146,17 @@ class VulkanCompute {
   // ceil(invocations / 64) work groups, waits, and copies every buffer back into
   // `buffers` (inputs too, so a shader that writes where it should not is seen). Throws
   // std::runtime_error naming the Vulkan call and its VkResult, or the mismatch between
-  // the module's interface and the arguments.
+  // the module's interface and the arguments. The module may not use any texture.
   void run(const std::vector<uint32_t>& spirv, std::vector<std::vector<float>>& buffers, uint32_t invocations,
            const void* push_constants = nullptr, uint32_t push_size = 0);
+
+  // As above, and binds cubes[k] at binding buffers.size() + k (with one sampler after
+  // them if the module uses separate images and samplers; see the top of this file).
+  // Each cube becomes a VK_FORMAT_R32G32B32A32_SFLOAT cube image of one mip level,
+  // filtered linearly. Throws std::runtime_error for a cube of a bad size or texel count,
+  // and when the device cannot filter that format linearly.
+  void run(const std::vector<uint32_t>& spirv, std::vector<std::vector<float>>& buffers, uint32_t invocations,
+           const void* push_constants, uint32_t push_size, const std::vector<CubeTexture>& cubes);
 
  private:
   VulkanCompute() = default;

@@ -209,8 +209,21 @@ void sh_irradiance(const Syntax& s, int n, std::ostringstream& o, ShaderSource& 
 }
 
 // Band sums as cube-map textures: texture k (RGBA) holds the band sums of bands 4k..4k+3
-// (channel c = band 4k + c) at each texel's direction, as shtool_sh_band_sums computes them.
+// (channel c = band 4k + c), as shtool_sh_band_sums computes them, at nodes that include
+// the face edges: texel (i, j) of an S x S face at face coordinates sc = 2i / (S-1) - 1,
+// tc = 2j / (S-1) - 1 (the runtime's ZhLightTable layout). A face's edge nodes are the same
+// points as its neighbour's, so interpolation is continuous across faces and never needs
+// the neighbour's texels; hardware seamless filtering of texel-centre values would instead
+// blend across the fold with a first-order error.
 int band_textures(int n) { return (n + 3) / 4; }
+
+// Preamble of a function that fetches band textures: band_k = (S-1)/S, which maps face
+// coordinates onto the node layout (texture_fetches). Every band texture has bands0's size.
+std::string texture_preamble(const Syntax& s) {
+  if (s.glsl()) return "  float band_k = float(textureSize(bands0, 0).x - 1) / float(textureSize(bands0, 0).x);\n";
+  return "  uint band_w, band_h;\n  bands0.GetDimensions(band_w, band_h);\n"
+         "  float band_k = float(band_w - 1u) / float(band_w);\n";
+}
 
 // The texture parameters of a function: GLSL combined samplers, HLSL textures and one sampler.
 std::string texture_params(const Syntax& s, int n) {
@@ -223,15 +236,25 @@ std::string texture_params(const Syntax& s, int n) {
 }
 
 // Statements fetching every band texture at `dir` (level 0: compute and vertex shaders have
-// no derivatives) into <prefix>0, <prefix>1, ...
+// no derivatives) into <prefix>0, <prefix>1, ... A face coordinate x in [-1, 1] lies at
+// texel position (x + 1) / 2 (S - 1) on the node layout, i.e. at hardware coordinate
+// ((x + 1) / 2 (S - 1) + 1/2) / S, which is the face coordinate x (S - 1) / S: the two
+// minor components of the direction are scaled by band_k = (S - 1) / S and the major one
+// kept, whatever the face's orientation (the map is odd). The scaled direction stays on
+// its face and between the first and last texel centres, so filtering never crosses a fold.
 std::string texture_fetches(const Syntax& s, int n, const std::string& dir, const std::string& prefix,
                             const std::string& indent) {
-  std::string o;
+  const std::string v3 = s.glsl() ? "vec3" : "float3";
+  std::string o = indent + v3 + " " + prefix + "a = abs(" + dir + ");\n" + indent + v3 + " " + prefix + "d = " +
+                  dir + " * (" + prefix + "a.x >= " + prefix + "a.y && " + prefix + "a.x >= " + prefix + "a.z ? " +
+                  v3 + "(1.0, band_k, band_k) : (" + prefix + "a.y >= " + prefix + "a.z ? " + v3 +
+                  "(band_k, 1.0, band_k) : " + v3 + "(band_k, band_k, 1.0)));\n";
   const std::string type = s.half ? (s.glsl() ? "mediump vec4" : "min16float4") : (s.glsl() ? "vec4" : "float4");
+  const std::string at = prefix + "d";
   for (int k = 0; k < band_textures(n); ++k) {
     const std::string t = "bands" + std::to_string(k);
     o += indent + type + " " + prefix + std::to_string(k) + " = " +
-         (s.glsl() ? "textureLod(" + t + ", " + dir + ", 0.0)" : t + ".SampleLevel(bands_sampler, " + dir + ", 0)") +
+         (s.glsl() ? "textureLod(" + t + ", " + at + ", 0.0)" : t + ".SampleLevel(bands_sampler, " + at + ", 0)") +
          ";\n";
   }
   return o;
@@ -258,9 +281,10 @@ void band_sums(const Syntax& s, int n, std::ostringstream& o, ShaderSource& out,
   o << "#define SHTOOL_BAND_TEXTURES " << band_textures(n) << "\n"
     << "#ifndef SHTOOL_SH_BAND_SUMS_DEFINED\n#define SHTOOL_SH_BAND_SUMS_DEFINED\n"
     << "// bands[l] = sum_m c[l * (l + 1) + m] y_l^m(dir), dir a unit vector. Band texture k (cube map,\n"
-       "// RGBA float, SHTOOL_BAND_TEXTURES of them) holds bands 4k..4k+3 in its channels x, y, z, w at\n"
-       "// the direction of each texel centre (the API's cube-map face and texel conventions), with\n"
-       "// linear filtering: error about (pi / 2 R)^2 l (l + 1) / 8 of the band's size at R x R faces.\n"
+       "// RGBA float, SHTOOL_BAND_TEXTURES of them, all S x S, S >= 2, linear filtering) holds bands\n"
+       "// 4k..4k+3 in its channels x, y, z, w; texel (i, j) of a face holds them at the direction of face\n"
+       "// coordinates (sc, tc) = (2i / (S-1) - 1, 2j / (S-1) - 1), edges and corners included (the API's\n"
+       "// face selection rule otherwise). Interpolation error: about l (l + 1) / (2 (S-1)^2) of band l's size.\n"
     << head << " {\n" << body << "}\n#endif\n\n";
 }
 
@@ -292,7 +316,8 @@ void zh_shade(const Syntax& s, int n, int lobes, std::ostringstream& o, ShaderSo
     sum += (l ? " + " : "") + weight[l] + " * " + texel_band("t", l);
   out.signature += head2 + ";";
   o << "// The same r from the lighting's band textures (filled by shtool_sh_band_sums with c = e).\n"
-    << head2 << " {\n  " << s.real() << " r = 0.0;\n  for (int i = 0; i < SHTOOL_ZH_LOBES; ++i) {\n"
+    << head2 << " {\n" << texture_preamble(s) << "  " << s.real()
+    << " r = 0.0;\n  for (int i = 0; i < SHTOOL_ZH_LOBES; ++i) {\n"
     << texture_fetches(s, n, "axes[i]", "t", "    ") << "    r += " << sum << ";\n  }\n  return r;\n}\n";
 }
 
@@ -409,6 +434,26 @@ void zxzxz_rotate(const Syntax& s, int n, std::ostringstream& o, ShaderSource& o
     << ").\n" << head << " {\n" << b.str() << "}\n";
 }
 
+// The bands (from first_band up) whose lobe sets hold shared direction d, and 1 + the
+// highest of them (0: none).
+struct LobeUse {
+  std::vector<bool> wanted;
+  int top = 0;
+};
+LobeUse bands_using(const ZhfLobes& lobes, int n, int d, int first_band) {
+  LobeUse use{std::vector<bool>(n, false), 0};
+  for (int l = first_band; l < n; ++l)
+    if (d >= lobes.band_offset[l] && d <= lobes.band_offset[l] + 2 * l) {
+      use.wanted[l] = true;
+      use.top = l + 1;
+    }
+  return use;
+}
+
+std::string vec3_literal(const Syntax& s, const Vec3<double>& w) {
+  return (s.glsl() ? "vec3(" : "float3(") + literal(w.x()) + ", " + literal(w.y()) + ", " + literal(w.z()) + ")";
+}
+
 // g = M(R) f by the standard ZHF rotation ([1] Sec. 7.1, Eq. 10): per band the lobe
 // weights h_l = A^_l^T f_l (the table's sparse rows, zeros never touched), then
 // g_l = sum_d y_l(R w_d) h_ld with the basis evaluated once per rotated lobe direction w_d
@@ -435,17 +480,9 @@ void zhf_rotate(const Syntax& s, int n, const ZhfLobes& lobes, std::ostringstrea
   }
   long direction_products = 0;
   for (int d = 0; d < static_cast<int>(lobes.directions.size()); ++d) {
-    std::vector<bool> wanted(n, false);
-    int top = 0;
-    for (int l = 1; l < n; ++l)
-      if (d >= lobes.band_offset[l] && d <= lobes.band_offset[l] + 2 * l) {
-        wanted[l] = true;
-        top = l + 1;
-      }
+    const auto [wanted, top] = bands_using(lobes, n, d, 1);
     if (top == 0) continue;
-    const Vec3<double>& w = lobes.directions[d];
-    const std::string lit = (s.glsl() ? "vec3(" : "float3(") + literal(w.x()) + ", " + literal(w.y()) + ", " +
-                            literal(w.z()) + ")";
+    const std::string lit = vec3_literal(s, lobes.directions[d]);
     b << "  {  // lobe direction " << d << "\n    " << s.vec3() << " w = "
       << (s.glsl() ? "R * " + lit : "mul(R, " + lit + ")") << ";\n";
     b << basis_code(s, top, "w", "", wanted, "    ");
@@ -488,17 +525,9 @@ void zhf_tailored_rotate(const Syntax& s, int n, const ZhfLobes& lobes, std::ost
     if (!textures) b << "  g[0] = f[0];\n";
     const int first_band = textures ? 0 : 1;
     for (int d = 0; d < static_cast<int>(lobes.directions.size()); ++d) {
-      std::vector<bool> wanted(n, false);
-      int top = 0;
-      for (int l = first_band; l < n; ++l)
-        if (d >= lobes.band_offset[l] && d <= lobes.band_offset[l] + 2 * l) {
-          wanted[l] = true;
-          top = l + 1;
-        }
+      const auto [wanted, top] = bands_using(lobes, n, d, first_band);
       if (top == 0) continue;
-      const Vec3<double>& w = lobes.directions[d];
-      const std::string lit = (s.glsl() ? "vec3(" : "float3(") + literal(w.x()) + ", " + literal(w.y()) + ", " +
-                              literal(w.z()) + ")";
+      const std::string lit = vec3_literal(s, lobes.directions[d]);
       // R^T w_d: GLSL's row-vector product w * R, HLSL's mul(w, R).
       const std::string rotated = s.glsl() ? lit + " * R" : "mul(" + lit + ", R)";
       for (int l = first_band; l < top; ++l)
@@ -530,8 +559,7 @@ void zhf_tailored_rotate(const Syntax& s, int n, const ZhfLobes& lobes, std::ost
     return b.str();
   };
   const std::string textured = body(true), arithmetic = body(false);
-  long directions = 0;
-  for (std::size_t d = 0; d < lobes.directions.size(); ++d) directions += 1;
+  const long directions = static_cast<long>(lobes.directions.size());
   count_ops(textured, 1, out);  // the texture form is the operation's figure (the paper's GPU path)
   out.multiplications += 9 * directions - (s.glsl() ? directions : 0);
   out.additions += 6 * directions;
@@ -545,7 +573,7 @@ void zhf_tailored_rotate(const Syntax& s, int n, const ZhfLobes& lobes, std::ost
     << (s.glsl() ? "GLSL mat3 column-major: R[c][r] = R_rc" : "HLSL float3x3 indexed R[r][c] = R_rc")
     << ")\n// through " << lobes.directions.size()
     << " ZH lobe directions, f given by its band textures (shtool_sh_band_sums with c = f).\n"
-    << head1 << " {\n" << textured << "}\n\n"
+    << head1 << " {\n" << texture_preamble(s) << textured << "}\n\n"
     << "// The same rotation with the samples computed from f's coefficients.\n"
     << head2 << " {\n" << arithmetic << "}\n";
 }
