@@ -49,7 +49,9 @@ void setup_gen_shader(CLI::App& app) {
       throw InputError("--lobes applies to --what zhf-rotate and zhf-tailored-rotate only");
     const ShaderSource s = run_gen_shader(*req);
     std::cerr << "gen-shader: wrote " << req->out.string() << " (" << s.multiplications << " multiplications, "
-              << s.additions << " additions)\n";
+              << s.additions << " additions";
+    if (s.texture_fetches) std::cerr << ", " << s.texture_fetches << " texture fetches";
+    std::cerr << ")\n";
   });
 }
 

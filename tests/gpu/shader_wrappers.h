@@ -108,20 +108,28 @@ inline Wrapper wrapper(shtool::ShaderLanguage lang, shtool::ShaderOperation op, 
   return w;
 }
 
+// The wrappers' push constants: the number of invocations, and the number of input and
+// output slots they cycle through (invocation id uses slot id % period: a benchmark runs
+// many invocations on a small buffer; the tests give period = count).
+struct WrapperPush {
+  uint32_t count;
+  uint32_t period;
+};
+
 inline std::string compute_shader(shtool::ShaderLanguage lang, const std::string& generated, const Wrapper& w) {
-  const std::string index = "  uint ib = id * " + std::to_string(w.in_stride) + "u;\n  uint ob = id * " +
-                            std::to_string(w.out_stride) + "u;\n";
+  const std::string index = "  uint slot = id % params.period;\n  uint ib = slot * " + std::to_string(w.in_stride) +
+                            "u;\n  uint ob = slot * " + std::to_string(w.out_stride) + "u;\n";
   if (lang == shtool::ShaderLanguage::glsl)
     return "#version 450\nlayout(local_size_x = 64) in;\n"
            "layout(std430, set = 0, binding = 0) readonly buffer Inputs { float inp[]; };\n"
            "layout(std430, set = 0, binding = 1) writeonly buffer Outputs { float outp[]; };\n"
-           "layout(push_constant) uniform Params { uint count; } params;\n\n" +
+           "layout(push_constant) uniform Params { uint count; uint period; } params;\n\n" +
            generated +
            "\nvoid main() {\n  uint id = gl_GlobalInvocationID.x;\n  if (id >= params.count) return;\n" + index +
            w.body + "}\n";
   return "[[vk::binding(0, 0)]] RWStructuredBuffer<float> inp : register(u0);\n"
          "[[vk::binding(1, 0)]] RWStructuredBuffer<float> outp : register(u1);\n"
-         "struct Params { uint count; };\n[[vk::push_constant]] ConstantBuffer<Params> params;\n\n" +
+         "struct Params { uint count; uint period; };\n[[vk::push_constant]] ConstantBuffer<Params> params;\n\n" +
          generated + "\n[numthreads(64, 1, 1)]\nvoid main(uint3 tid : SV_DispatchThreadID) {\n  uint id = tid.x;\n"
          "  if (id >= params.count) return;\n" + index + w.body + "}\n";
 }

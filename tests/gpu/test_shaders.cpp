@@ -288,7 +288,8 @@ TEST_P(GeneratedShader, MatchesTheRuntimeOnVulkan) {
   const Problem p = make_problem(c.operation, c.order, c.lobes, w, rng);
   std::vector<std::vector<float>> buffers = {p.in, std::vector<float>(std::size_t(kInputs) * w.out_stride, NAN)};
   const uint32_t count = kInputs;
-  gpu::shared_device()->run(spirv, buffers, count, &count, sizeof count);
+  const gpu::WrapperPush push{count, count};
+  gpu::shared_device()->run(spirv, buffers, count, &push, sizeof push);
   // ZHF is exact up to rounding amplified by cond(Y_l) of its lobe sets (recorded in the
   // table): its tolerance is 1e-5 |f| times the largest cond(Y_l) / 10 when that exceeds 10.
   double amplification = 1;
@@ -316,7 +317,8 @@ TEST(GeneratedShaderHalf, CompilesAndRunsEveryOperation) {
       const Problem p = make_problem(op, 3, request.zh_lobes, w, rng);
       std::vector<std::vector<float>> buffers = {p.in, std::vector<float>(std::size_t(kInputs) * w.out_stride, NAN)};
       const uint32_t count = kInputs;
-      gpu::shared_device()->run(spirv, buffers, count, &count, sizeof count);
+      const gpu::WrapperPush push{count, count};
+      gpu::shared_device()->run(spirv, buffers, count, &push, sizeof push);
       // The tolerance units above are 1e-6..1e-5; half allows 1e-2 relative.
       EXPECT_LE(p.worst_error(buffers[1]), 1e4) << shtool::shader_operation_name(op);
     }
@@ -395,7 +397,8 @@ TextureRun run_zh_shade_table(ShaderLanguage lang, int n, int lobes, int size) {
   }
   std::vector<std::vector<float>> buffers = {in, std::vector<float>(kInputs, NAN)};
   const uint32_t count = kInputs;
-  gpu::shared_device()->run(spirv, buffers, count, &count, sizeof count, band_textures(n, e, size));
+  const gpu::WrapperPush push{count, count};
+  gpu::shared_device()->run(spirv, buffers, count, &push, sizeof push, band_textures(n, e, size));
   const std::vector<double> bound = band_bounds(n, e);
   TextureRun result;
   std::vector<Eigen::Vector3d> axes(lobes);
@@ -456,7 +459,8 @@ TextureRun run_tailored(ShaderLanguage lang, int n, int size) {
   }
   std::vector<std::vector<float>> buffers = {in, std::vector<float>(std::size_t(kInputs) * nn, NAN)};
   const uint32_t count = kInputs;
-  gpu::shared_device()->run(spirv, buffers, count, &count, sizeof count, band_textures(n, f, size));
+  const gpu::WrapperPush push{count, count};
+  gpu::shared_device()->run(spirv, buffers, count, &push, sizeof push, band_textures(n, f, size));
   // Each g_lm sums A^_l[m][d] times samples that err by the band's allowance.
   const shtool::ZhfLobes& lobes = *request.lobes;
   const std::vector<double> bound = band_bounds(n, f);

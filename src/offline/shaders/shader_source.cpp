@@ -561,8 +561,12 @@ void zhf_tailored_rotate(const Syntax& s, int n, const ZhfLobes& lobes, std::ost
   const std::string textured = body(true), arithmetic = body(false);
   const long directions = static_cast<long>(lobes.directions.size());
   count_ops(textured, 1, out);  // the texture form is the operation's figure (the paper's GPU path)
-  out.multiplications += 9 * directions - (s.glsl() ? directions : 0);
+  // Per direction, written as one product each: R^T w_d (9 multiplications, 6 additions;
+  // HLSL's mul() is not counted at all) and the node-layout scaling (3 multiplications).
+  out.multiplications += 9 * directions - (s.glsl() ? directions : 0) + 2 * directions;
   out.additions += 6 * directions;
+  for (int d = 0; d < static_cast<int>(lobes.directions.size()); ++d)
+    out.texture_fetches += band_textures(bands_using(lobes, n, d, 0).top);
   band_sums(s, n, o, out, false);
   const std::string head1 = "void shtool_zhf_tailored_rotate(" + s.mat3() + " R, " + texture_params(s, n) +
                             ", out " + array(s.real(), "g", kCount) + ")";

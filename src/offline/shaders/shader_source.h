@@ -52,6 +52,7 @@ struct ShaderSource {
   // the compiler's own folding; loops counted per iteration they run).
   long multiplications = 0;
   long additions = 0;
+  long texture_fetches = 0;  // zhf-tailored-rotate's texture form
 };
 
 // Largest order each operation is generated for (sh-eval, sh-irradiance, zh-shade,
