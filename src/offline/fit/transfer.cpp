@@ -15,6 +15,7 @@
 #include "common/input_error.h"
 #include "common/parallel_for.h"
 #include "common/random.h"
+#include "fit/embree_scene.h"
 #include "shtool/sh.h"
 
 namespace shtool::fit {
@@ -28,44 +29,6 @@ void orthonormal_basis(const Eigen::Vector3d& n, Eigen::Vector3d& t, Eigen::Vect
   const double c = n.x() * n.y() * a;
   t = Eigen::Vector3d(1.0 + sign * n.x() * n.x() * a, sign * c, -sign * n.x());
   b = Eigen::Vector3d(c, sign + n.y() * n.y() * a, -n.y());
-}
-
-struct EmbreeScene {
-  RTCDevice device = nullptr;
-  RTCScene scene = nullptr;
-  ~EmbreeScene() {
-    if (scene) rtcReleaseScene(scene);
-    if (device) rtcReleaseDevice(device);
-  }
-};
-
-std::unique_ptr<EmbreeScene> build_scene(const Mesh& mesh) {
-  auto s = std::make_unique<EmbreeScene>();
-  s->device = rtcNewDevice(nullptr);
-  if (!s->device) throw std::runtime_error("Embree: cannot create a device");
-  s->scene = rtcNewScene(s->device);
-  // Robust mode: watertight traversal, so rays grazing a shared edge cannot leak.
-  rtcSetSceneFlags(s->scene, RTC_SCENE_FLAG_ROBUST);
-  rtcSetSceneBuildQuality(s->scene, RTC_BUILD_QUALITY_HIGH);
-  RTCGeometry geom = rtcNewGeometry(s->device, RTC_GEOMETRY_TYPE_TRIANGLE);
-  auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                         3 * sizeof(float), mesh.positions.size()));
-  auto* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                                            3 * sizeof(unsigned), mesh.triangles.size()));
-  if (!vb || !ib) {
-    rtcReleaseGeometry(geom);
-    throw std::runtime_error("Embree: cannot allocate geometry buffers");
-  }
-  for (std::size_t i = 0; i < mesh.positions.size(); ++i)
-    for (int c = 0; c < 3; ++c) vb[3 * i + c] = static_cast<float>(mesh.positions[i][c]);
-  for (std::size_t i = 0; i < mesh.triangles.size(); ++i)
-    for (int c = 0; c < 3; ++c) ib[3 * i + c] = static_cast<unsigned>(mesh.triangles[i][c]);
-  rtcCommitGeometry(geom);
-  rtcAttachGeometry(s->scene, geom);
-  rtcReleaseGeometry(geom);
-  rtcCommitScene(s->scene);
-  if (rtcGetDeviceError(s->device) != RTC_ERROR_NONE) throw std::runtime_error("Embree: scene build failed");
-  return s;
 }
 
 // Runs body(v) for every vertex (common/parallel_for.h: the partition never changes

@@ -312,10 +312,11 @@ std::string encode_png(const Image& image, double exposure) {
   return out;
 }
 
-std::string encode_image_for(const std::filesystem::path& path, const Image& image, std::string_view what) {
+std::string encode_image_for(const std::filesystem::path& path, const Image& image, std::string_view what,
+                             double exposure) {
   switch (format_of_extension(path)) {
     case Format::exr: return encode_exr(image);
-    case Format::png: return encode_png(image);
+    case Format::png: return encode_png(image, exposure);
     default: break;
   }
   throw InputError(std::string(what) + " '" + path.string() + "': write .exr (linear float) or .png (tone-mapped)");

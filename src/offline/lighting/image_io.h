@@ -46,8 +46,10 @@ std::string encode_exr(const Image& image);
 // 8-bit PNG of the tone-mapped image: x -> x / (1 + x) per channel (Reinhard) after
 // scaling by 2^exposure, then the sRGB transfer curve; alpha (4 channels) kept linear.
 std::string encode_png(const Image& image, double exposure = 0);
-// By the extension of `path`: .exr or .png (InputError otherwise, naming `what`).
-std::string encode_image_for(const std::filesystem::path& path, const Image& image, std::string_view what);
+// By the extension of `path`: .exr or .png (InputError otherwise, naming `what`); the
+// exposure applies to PNG only.
+std::string encode_image_for(const std::filesystem::path& path, const Image& image, std::string_view what,
+                             double exposure = 0);
 
 // The IEC 61966-2-1 curves.
 double srgb_to_linear(double v);

@@ -1,0 +1,50 @@
+// shtool render: a mesh shaded by its baked transfer under SH lighting (docs/ldprt.md).
+#include <iostream>
+#include <memory>
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+#include "cli_common.h"
+#include "render/render_job.h"
+
+namespace shtool::cli {
+
+void setup_render(CLI::App& app) {
+  auto req = std::make_shared<render::RenderRequest>();
+  auto camera = std::make_shared<std::string>();
+  CLI::App* sub = app.add_subcommand("render", "Render a mesh shaded by its transfer or ZH fit under SH lighting");
+  sub->add_option("mesh", req->mesh, "OBJ mesh (the one the transfer or fit was baked on)")->required();
+  sub->add_option("--fit", req->fit, "zh-fit table (fit-zh --out)");
+  sub->add_option("--transfer", req->transfer, "transfer vectors JSON (fit-zh --save-transfer)");
+  sub->add_option("--light", req->light, "lighting JSON (project-env --json, light --json), radiance, RGB");
+  sub->add_option("--camera", *camera, "eye,target,up: nine numbers (default: framed on the mesh)");
+  sub->add_option("--fov", req->fov, "vertical field of view, degrees")->capture_default_str();
+  sub->add_option("--width", req->width, "image width")->capture_default_str();
+  sub->add_option("--height", req->height, "image height")->capture_default_str();
+  std::vector<std::pair<std::string, render::Shading>> names = render::shading_names();
+  add_enum_option(sub, "--shading", req->shading, names,
+                  "transfer (t . e), zh (Eq. 13), zh-table (Eq. 24-25), error (|zh - transfer|), normals",
+                  "transfer with --transfer, else zh");
+  sub->add_option("--exposure", req->exposure, "PNG: scale by 2^E before tone mapping")->capture_default_str();
+  sub->add_flag("--compare", req->compare,
+                "one strip: transfer, ZH fits with 1..4 lobes (fitted here), the N = 4 error; normalized RMS under each");
+  sub->add_option("--threads", req->threads, "worker threads (0: all cores)")->capture_default_str();
+  sub->add_option("--out", req->out, "image: .exr (linear RGB, coverage alpha) or .png (tone-mapped sRGB)")
+      ->required();
+  sub->callback([req, camera]() {
+    render::RenderRequest r = *req;
+    if (!camera->empty()) {
+      const std::vector<double> v = parse_number_list(*camera, "--camera");
+      if (v.size() != 9) throw InputError("--camera takes nine numbers: eye,target,up");
+      r.camera = render::Camera{{v[0], v[1], v[2]}, {v[3], v[4], v[5]}, {v[6], v[7], v[8]}};
+    }
+    const render::RenderResult result = render::run_render(r);
+    std::cerr << "render: wrote " << r.out.string() << " (" << r.width << " x " << r.height << ", "
+              << result.covered_pixels << " pixels covered, " << result.seconds << " s)\n";
+    for (std::size_t k = 0; k < result.compare_nrms.size(); ++k)
+      std::cerr << "render: ZH N = " << k + 1 << ", normalized RMS " << result.compare_nrms[k] << "\n";
+  });
+}
+
+}  // namespace shtool::cli

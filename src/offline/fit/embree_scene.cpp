@@ -1,0 +1,36 @@
+#include "fit/embree_scene.h"
+
+#include <stdexcept>
+
+namespace shtool::fit {
+
+std::unique_ptr<EmbreeScene> build_scene(const Mesh& mesh) {
+  auto s = std::make_unique<EmbreeScene>();
+  s->device = rtcNewDevice(nullptr);
+  if (!s->device) throw std::runtime_error("Embree: cannot create a device");
+  s->scene = rtcNewScene(s->device);
+  // Robust mode: watertight traversal, so rays grazing a shared edge cannot leak.
+  rtcSetSceneFlags(s->scene, RTC_SCENE_FLAG_ROBUST);
+  rtcSetSceneBuildQuality(s->scene, RTC_BUILD_QUALITY_HIGH);
+  RTCGeometry geom = rtcNewGeometry(s->device, RTC_GEOMETRY_TYPE_TRIANGLE);
+  auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                         3 * sizeof(float), mesh.positions.size()));
+  auto* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                            3 * sizeof(unsigned), mesh.triangles.size()));
+  if (!vb || !ib) {
+    rtcReleaseGeometry(geom);
+    throw std::runtime_error("Embree: cannot allocate geometry buffers");
+  }
+  for (std::size_t i = 0; i < mesh.positions.size(); ++i)
+    for (int c = 0; c < 3; ++c) vb[3 * i + c] = static_cast<float>(mesh.positions[i][c]);
+  for (std::size_t i = 0; i < mesh.triangles.size(); ++i)
+    for (int c = 0; c < 3; ++c) ib[3 * i + c] = static_cast<unsigned>(mesh.triangles[i][c]);
+  rtcCommitGeometry(geom);
+  rtcAttachGeometry(s->scene, geom);
+  rtcReleaseGeometry(geom);
+  rtcCommitScene(s->scene);
+  if (rtcGetDeviceError(s->device) != RTC_ERROR_NONE) throw std::runtime_error("Embree: scene build failed");
+  return s;
+}
+
+}  // namespace shtool::fit

@@ -1,0 +1,411 @@
+#include "render/render_job.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <string>
+#include <unordered_map>
+
+#include <embree3/rtcore.h>
+
+#include "common/atomic_file.h"
+#include "common/input_error.h"
+#include "common/input_file.h"
+#include "common/parallel_for.h"
+#include "common/stopwatch.h"
+#include "fit/embree_scene.h"
+#include "fit/fit_zh_job.h"
+#include "fit/zh_fit.h"
+#include "fit/mesh.h"
+#include "lighting/image_io.h"
+#include "lighting/lighting_output.h"
+#include "shtool/zh_fit_table.h"
+#include "shtool/zh_shading.h"
+
+namespace shtool::render {
+namespace {
+
+using Vec = Eigen::Vector3d;
+
+// Per-vertex quantities in the mesh's kept-vertex order.
+struct VertexData {
+  int transfer_order = 0;
+  std::vector<double> transfer;                // V * n^2
+  std::optional<ZhFitTable<double>> fit;       // rows reordered to the kept vertices
+};
+
+// The fit table's rows in the mesh's kept-vertex order: rows name their OBJ vertex
+// (vertex_index), or, without one, are the kept vertices in order.
+ZhFitTable<double> fit_for_mesh(ZhFitTable<double> fit, const fit::Mesh& mesh, const std::filesystem::path& path) {
+  const std::size_t v = mesh.positions.size();
+  // fit-zh fits every vertex a triangle uses: one row each.
+  if (fit.vertices != v)
+    throw InputError("--fit " + path.string() + ": " + std::to_string(fit.vertices) + " rows for a mesh of " +
+                     std::to_string(v) + " vertices (was it fitted on another mesh?)");
+  if (fit.vertex_index.empty()) return fit;
+  std::unordered_map<std::uint32_t, std::size_t> row_of;
+  for (std::size_t r = 0; r < fit.vertices; ++r) row_of[fit.vertex_index[r]] = r;
+  ZhFitTable<double> out = fit;
+  const std::size_t n = static_cast<std::size_t>(fit.order), lobes = static_cast<std::size_t>(fit.lobes),
+                    d = static_cast<std::size_t>(fit.direct_count);
+  out.vertices = v;
+  out.axes.resize(v * lobes);
+  out.coeffs.resize(v * lobes * n);
+  out.direct.resize(v * d);
+  out.vertex_index.assign(mesh.source_index.begin(), mesh.source_index.end());
+  for (std::size_t k = 0; k < v; ++k) {
+    const auto it = row_of.find(mesh.source_index[k]);
+    if (it == row_of.end())
+      throw InputError("--fit " + path.string() + ": no row for OBJ vertex " + std::to_string(mesh.source_index[k]) +
+                       " of the mesh (was it fitted on another mesh?)");
+    const std::size_t r = it->second;
+    std::copy_n(fit.axes.begin() + r * lobes, lobes, out.axes.begin() + k * lobes);
+    std::copy_n(fit.coeffs.begin() + r * lobes * n, lobes * n, out.coeffs.begin() + k * lobes * n);
+    std::copy_n(fit.direct.begin() + r * d, d, out.direct.begin() + k * d);
+  }
+  return out;
+}
+
+// One channel of the lighting as an order-n vector: truncated, or padded with zeros
+// (the dot product uses the bands both sides have).
+std::vector<double> light_channel(const lighting::Lighting& light, int c, int n) {
+  std::vector<double> e(static_cast<std::size_t>(n) * n, 0.0);
+  const std::size_t shared = std::min<std::size_t>(e.size(), light.coefficients.size() / 3);
+  for (std::size_t i = 0; i < shared; ++i) e[i] = light.coefficients[i * 3 + c];
+  return e;
+}
+
+// RGB exit radiance per vertex for a transfer- or fit-based shading.
+std::vector<double> vertex_radiance(Shading shading, const VertexData& data, const lighting::Lighting& light,
+                                    const fit::Mesh& mesh, int table_resolution, int threads) {
+  const std::size_t v = mesh.positions.size();
+  std::vector<double> out(v * 3, 0.0);
+  if (shading == Shading::normals) {
+    for (std::size_t k = 0; k < v; ++k)
+      for (int c = 0; c < 3; ++c) out[k * 3 + c] = 0.5 * (mesh.normals[k][c] + 1.0);
+    return out;
+  }
+  std::vector<double> from_transfer, from_fit;
+  if (shading == Shading::transfer || shading == Shading::error) {
+    const int n = data.transfer_order;
+    from_transfer.assign(v * 3, 0.0);
+    const std::size_t n2 = static_cast<std::size_t>(n) * n;
+    for (int c = 0; c < 3; ++c) {
+      const std::vector<double> e = light_channel(light, c, n);
+      for (std::size_t k = 0; k < v; ++k) {
+        double r = 0;
+        for (std::size_t i = 0; i < n2; ++i) r += data.transfer[k * n2 + i] * e[i];
+        from_transfer[k * 3 + c] = r;
+      }
+    }
+  }
+  if (shading == Shading::zh || shading == Shading::zh_table || shading == Shading::error) {
+    const ZhFitTable<double>& fit = *data.fit;
+    from_fit.assign(v * 3, 0.0);
+    for (int c = 0; c < 3; ++c) {
+      const std::vector<double> e = light_channel(light, c, fit.order);
+      std::optional<ZhLightTable<double>> table;
+      if (shading == Shading::zh_table) table.emplace(fit.order, e, table_resolution);
+      parallel_for(v, threads, [&](std::size_t k) {
+        // [4] Eq. 13 (or its tabulated form), plus the coefficients stored directly.
+        double r = table ? table->shade(fit.axes_of(k), fit.coeffs_of(k))
+                         : zh_shade_exact<double>(e, fit.axes_of(k), fit.coeffs_of(k));
+        const auto direct = fit.direct_of(k);
+        for (std::size_t i = 0; i < direct.size(); ++i) r += direct[i] * e[i];
+        from_fit[k * 3 + c] = r;
+      });
+    }
+  }
+  if (shading == Shading::transfer) return from_transfer;
+  if (shading == Shading::error) {  // signed here; the pixel takes |.| after interpolation
+    for (std::size_t i = 0; i < out.size(); ++i) out[i] = from_fit[i] - from_transfer[i];
+    return out;
+  }
+  return from_fit;
+}
+
+Vec vec(const std::array<double, 3>& a) { return Vec(a[0], a[1], a[2]); }
+
+// The default view: the bounding sphere of the mesh filling the field of view, seen from
+// +z tilted up a little, +y up.
+Camera frame_mesh(const fit::Mesh& mesh, double fov_degrees, double aspect) {
+  Vec lo = mesh.positions.front(), hi = lo;
+  for (const Vec& p : mesh.positions) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  const Vec centre = 0.5 * (lo + hi);
+  double radius = 0;
+  for (const Vec& p : mesh.positions) radius = std::max(radius, (p - centre).norm());
+  const double half = 0.5 * fov_degrees * std::numbers::pi / 180.0;
+  const double narrow = aspect < 1 ? std::atan(std::tan(half) * aspect) : half;
+  const double distance = 1.05 * radius / std::sin(narrow);
+  const Vec eye = centre + distance * Vec(0.0, 0.25, 1.0).normalized();
+  return {{eye.x(), eye.y(), eye.z()}, {centre.x(), centre.y(), centre.z()}, {0, 1, 0}};
+}
+
+// What each pixel's primary ray hit: triangle and barycentric weights (triangle -1: none).
+struct Hits {
+  int width = 0, height = 0;
+  std::vector<int> triangle;
+  std::vector<double> w1, w2;
+  std::size_t covered() const {
+    return static_cast<std::size_t>(std::count_if(triangle.begin(), triangle.end(), [](int t) { return t >= 0; }));
+  }
+};
+
+Hits cast_primary_rays(const fit::Mesh& mesh, const RenderRequest& r, int threads) {
+  const double aspect = double(r.width) / r.height;
+  const Camera camera = r.camera ? *r.camera : frame_mesh(mesh, r.fov, aspect);
+  const Vec eye = vec(camera.eye);
+  const Vec forward = (vec(camera.target) - eye).normalized();
+  const Vec right = forward.cross(vec(camera.up)).normalized();
+  const Vec up = right.cross(forward);
+  const double tan_half = std::tan(0.5 * r.fov * std::numbers::pi / 180.0);
+  const std::unique_ptr<fit::EmbreeScene> scene = fit::build_scene(mesh);
+  Hits hits;
+  hits.width = r.width;
+  hits.height = r.height;
+  const std::size_t pixels = std::size_t(r.width) * r.height;
+  hits.triangle.assign(pixels, -1);
+  hits.w1.assign(pixels, 0.0);
+  hits.w2.assign(pixels, 0.0);
+  parallel_for(static_cast<std::size_t>(r.height), threads, [&](std::size_t y) {
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    for (int x = 0; x < r.width; ++x) {
+      // Through the pixel centre; rows top first.
+      const double u = (2.0 * (x + 0.5) / r.width - 1.0) * tan_half * aspect;
+      const double v = (1.0 - 2.0 * (y + 0.5) / r.height) * tan_half;
+      const Vec dir = (forward + u * right + v * up).normalized();
+      RTCRayHit hit{};
+      hit.ray.org_x = static_cast<float>(eye.x());
+      hit.ray.org_y = static_cast<float>(eye.y());
+      hit.ray.org_z = static_cast<float>(eye.z());
+      hit.ray.dir_x = static_cast<float>(dir.x());
+      hit.ray.dir_y = static_cast<float>(dir.y());
+      hit.ray.dir_z = static_cast<float>(dir.z());
+      hit.ray.tnear = 0.0f;
+      hit.ray.tfar = std::numeric_limits<float>::infinity();
+      hit.ray.mask = ~0u;
+      hit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+      rtcIntersect1(scene->scene, &context, &hit);
+      if (hit.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
+      const std::size_t p = y * r.width + x;
+      hits.triangle[p] = static_cast<int>(hit.hit.primID);
+      hits.w1[p] = hit.hit.u;
+      hits.w2[p] = hit.hit.v;
+    }
+  });
+  return hits;
+}
+
+// Per-vertex RGB interpolated over the hit triangles (|.| after interpolation for an error
+// map); alpha is coverage.
+lighting::Image shade_panel(const Hits& hits, const fit::Mesh& mesh, const std::vector<double>& radiance,
+                            bool absolute) {
+  lighting::Image image{hits.width, hits.height, 4,
+                        std::vector<float>(std::size_t(hits.width) * hits.height * 4, 0.0f)};
+  for (std::size_t p = 0; p < hits.triangle.size(); ++p) {
+    if (hits.triangle[p] < 0) continue;
+    const Eigen::Vector3i& tri = mesh.triangles[hits.triangle[p]];
+    const double w1 = hits.w1[p], w2 = hits.w2[p], w0 = 1.0 - w1 - w2;
+    float* px = &image.texels[p * 4];
+    for (int c = 0; c < 3; ++c) {
+      const double value =
+          w0 * radiance[tri[0] * 3 + c] + w1 * radiance[tri[1] * 3 + c] + w2 * radiance[tri[2] * 3 + c];
+      px[c] = static_cast<float>(absolute ? std::abs(value) : value);
+    }
+    px[3] = 1.0f;
+  }
+  return image;
+}
+
+// A 5 x 7 pixel font for the strip's labels: the characters they use.
+const char* glyph(char c) {
+  switch (c) {
+    case '0': return "01110100011001110101110011000101110";
+    case '1': return "00100011000010000100001000010001110";
+    case '2': return "01110100010000100010001000100011111";
+    case '3': return "11111000100010000010000011000101110";
+    case '4': return "00010001100101010010111110001000010";
+    case '5': return "11111100001111000001000011000101110";
+    case '6': return "00110010001000011110100011000101110";
+    case '7': return "11111000010001000100010000100001000";
+    case '8': return "01110100011000101110100011000101110";
+    case '9': return "01110100011000101111000010001001100";
+    case '.': return "00000000000000000000000000110001100";
+    case '=': return "00000000001111100000111110000000000";
+    case 'X': return "10001100010101000100010101000110001";
+    case 'A': return "01110100011000111111100011000110001";
+    case 'E': return "11111100001000011110100001000011111";
+    case 'F': return "11111100001000011110100001000010000";
+    case 'H': return "10001100011000111111100011000110001";
+    case 'M': return "10001110111010110101100011000110001";
+    case 'N': return "10001100011100110101100111000110001";
+    case 'O': return "01110100011000110001100011000101110";
+    case 'R': return "11110100011000111110101001001010001";
+    case 'S': return "01111100001000001110000010000111110";
+    case 'T': return "11111001000010000100001000010000100";
+    case 'Z': return "11111000010001000100010001000011111";
+    default: return "00000000000000000000000000000000000";
+  }
+}
+
+// Draws `text` in white at (x, y) (top left) with 2 x 2 pixels per font pixel.
+void draw_text(lighting::Image& image, int x, int y, const std::string& text) {
+  for (std::size_t k = 0; k < text.size(); ++k) {
+    const char* g = glyph(text[k]);
+    for (int row = 0; row < 7; ++row)
+      for (int col = 0; col < 5; ++col) {
+        if (g[row * 5 + col] != '1') continue;
+        for (int dy = 0; dy < 2; ++dy)
+          for (int dx = 0; dx < 2; ++dx) {
+            const int px = x + static_cast<int>(k) * 12 + col * 2 + dx, py = y + row * 2 + dy;
+            if (px < 0 || py < 0 || px >= image.width || py >= image.height) continue;
+            float* t = &image.texels[(std::size_t(py) * image.width + px) * image.channels];
+            for (int c = 0; c < 3; ++c) t[c] = 1e3f;  // white after any tone mapping
+            t[3] = 1.0f;
+          }
+      }
+  }
+}
+
+// [4] Fig. 3's layout: the transfer (ground truth), ZH fits with N = 1..4 lobes fitted
+// here at default effort, and the error map of N = 4 (8x), side by side, each panel labelled
+// with its normalized RMS over the vertices (sqrt(sum residual^2 / sum |t|^2)).
+lighting::Image compare_strip(const Hits& hits, const fit::Mesh& mesh, VertexData& data,
+                              const lighting::Lighting& light, int threads, std::vector<double>& nrms) {
+  constexpr int kPanels = 6, kLabel = 22;
+  std::vector<lighting::Image> panels;
+  panels.push_back(shade_panel(hits, mesh, vertex_radiance(Shading::transfer, data, light, mesh, 32, threads), false));
+  std::vector<std::string> labels = {"TRANSFER"};
+  const std::vector<double> truth = vertex_radiance(Shading::transfer, data, light, mesh, 32, threads);
+  std::vector<double> last;
+  for (int lobes = 1; lobes <= 4; ++lobes) {
+    fit::ZhFitOptions options;
+    options.order = data.transfer_order;
+    options.lobes = lobes;
+    const std::vector<fit::ZhFit> fits = fit::fit_zh_all(data.transfer, options, threads);
+    ZhFitTable<double> table;
+    table.order = data.transfer_order;
+    table.lobes = lobes;
+    table.vertices = fits.size();
+    double residual2 = 0, norm2 = 0;
+    for (const fit::ZhFit& f : fits) {
+      for (const fit::ZhLobe& lobe : f.lobes) {
+        table.axes.emplace_back(lobe.axis);
+        table.coeffs.insert(table.coeffs.end(), lobe.coeffs.begin(), lobe.coeffs.end());
+      }
+      table.residual.push_back(f.residual);
+      table.norm.push_back(f.norm);
+      residual2 += f.residual * f.residual;
+      norm2 += f.norm * f.norm;
+    }
+    nrms.push_back(norm2 > 0 ? std::sqrt(residual2 / norm2) : 0.0);
+    data.fit = std::move(table);
+    last = vertex_radiance(Shading::zh, data, light, mesh, 32, threads);
+    panels.push_back(shade_panel(hits, mesh, last, false));
+    char text[32];
+    std::snprintf(text, sizeof text, "N=%d %.4f", lobes, nrms.back());
+    labels.push_back(text);
+  }
+  // The error is a few percent of the radiance: shown 8x brighter.
+  for (std::size_t i = 0; i < last.size(); ++i) last[i] = 8.0 * (last[i] - truth[i]);
+  panels.push_back(shade_panel(hits, mesh, last, true));
+  labels.push_back("ERROR N=4 X8");
+  lighting::Image strip{hits.width * kPanels, hits.height + kLabel, 4,
+                        std::vector<float>(std::size_t(hits.width) * kPanels * (hits.height + kLabel) * 4, 0.0f)};
+  for (int k = 0; k < kPanels; ++k) {
+    for (int y = 0; y < hits.height; ++y)
+      std::copy_n(&panels[k].texels[std::size_t(y) * hits.width * 4], std::size_t(hits.width) * 4,
+                  &strip.texels[(std::size_t(y) * strip.width + std::size_t(k) * hits.width) * 4]);
+  }
+  // The label band is opaque black, the labels white.
+  for (std::size_t p = std::size_t(hits.height) * strip.width; p < std::size_t(strip.height) * strip.width; ++p)
+    strip.texels[p * 4 + 3] = 1.0f;
+  for (int k = 0; k < kPanels; ++k) draw_text(strip, k * hits.width + 4, hits.height + 4, labels[k]);
+  return strip;
+}
+
+}  // namespace
+
+const std::vector<std::pair<std::string, Shading>>& shading_names() {
+  static const std::vector<std::pair<std::string, Shading>> names = {
+      {"transfer", Shading::transfer}, {"zh", Shading::zh},         {"zh-table", Shading::zh_table},
+      {"error", Shading::error},       {"normals", Shading::normals}};
+  return names;
+}
+
+RenderResult run_render(const RenderRequest& r) {
+  if (r.width < 1 || r.height < 1 || r.width > 16384 || r.height > 16384)
+    throw InputError("--width and --height must be between 1 and 16384, got " + std::to_string(r.width) + " x " +
+                     std::to_string(r.height));
+  if (!(r.fov > 0 && r.fov < 180)) throw InputError("--fov must be between 0 and 180 degrees");
+  if (!std::isfinite(r.exposure)) throw InputError("--exposure must be finite");
+  Shading shading = r.shading;
+  if (shading == Shading::automatic) shading = r.transfer.empty() ? Shading::zh : Shading::transfer;
+  const bool needs_transfer = shading == Shading::transfer || shading == Shading::error;
+  const bool needs_fit = shading == Shading::zh || shading == Shading::zh_table || shading == Shading::error;
+  if (r.compare && r.transfer.empty()) throw InputError("--compare needs --transfer (the ground truth it fits)");
+  if (r.compare) shading = Shading::transfer;
+  if (needs_transfer && r.transfer.empty()) throw InputError("this shading needs --transfer");
+  if (needs_fit && r.fit.empty()) throw InputError("this shading needs --fit");
+  if (r.fit.empty() && r.transfer.empty()) throw InputError("one of --fit and --transfer is required");
+  if (shading != Shading::normals && r.light.empty()) throw InputError("--light is required");
+  if (r.camera) {
+    const Vec eye = vec(r.camera->eye), target = vec(r.camera->target), up = vec(r.camera->up);
+    if (!eye.allFinite() || !target.allFinite() || !up.allFinite() || (target - eye).norm() == 0 ||
+        (target - eye).normalized().cross(up).norm() < 1e-9)
+      throw InputError("--camera: eye and target must differ and up must not be parallel to the view");
+  }
+  // Checked before any work, so that a bad output name costs nothing.
+  (void)lighting::encode_image_for(r.out, lighting::Image{1, 1, 4, std::vector<float>(4, 0.0f)}, "--out");
+
+  const fit::Mesh mesh = fit::load_obj(r.mesh);
+  VertexData data;
+  if (needs_transfer) {
+    data.transfer = fit::parse_transfer_json(read_input_file(r.transfer, "--transfer"), r.transfer,
+                                             data.transfer_order);
+    const std::size_t rows = data.transfer.size() / (static_cast<std::size_t>(data.transfer_order) *
+                                                     data.transfer_order);
+    if (rows != mesh.positions.size())
+      throw InputError("--transfer " + r.transfer.string() + ": " + std::to_string(rows) +
+                       " vectors for a mesh of " + std::to_string(mesh.positions.size()) + " vertices");
+  }
+  if (needs_fit) {
+    Result<ZhFitTable<double>> loaded = load_zh_fit<double>(r.fit);
+    if (!loaded) throw InputError("--fit: " + loaded.error().message);
+    data.fit = fit_for_mesh(std::move(loaded).value(), mesh, r.fit);
+  }
+  lighting::Lighting light;
+  if (shading != Shading::normals) {
+    light = lighting::read_lighting_json(r.light, "--light");
+    if (light.quantity != lighting::Quantity::radiance)
+      throw InputError("--light " + r.light.string() +
+                       ": irradiance coefficients; render needs radiance (project-env without --quantity irradiance)");
+  }
+  const int threads = resolve_threads(r.threads);
+
+  const auto start = std::chrono::steady_clock::now();
+  const Hits hits = cast_primary_rays(mesh, r, threads);
+  RenderResult result;
+  result.covered_pixels = hits.covered();
+  lighting::Image image;
+  if (!r.compare) {
+    result.shading = shading;
+    image = shade_panel(hits, mesh, vertex_radiance(shading, data, light, mesh, r.zh_table_resolution, threads),
+                        shading == Shading::error);
+  } else {
+    result.shading = Shading::transfer;
+    image = compare_strip(hits, mesh, data, light, threads, result.compare_nrms);
+  }
+  result.seconds = seconds_since(start);
+  write_file_atomically(r.out, lighting::encode_image_for(r.out, image, "--out", r.exposure));
+  return result;
+}
+
+}  // namespace shtool::render

@@ -1,0 +1,53 @@
+// render as a library job: a mesh shaded by its baked transfer under SH lighting, seen
+// through a pinhole camera (docs/ldprt.md). Embree primary rays; the exit radiance of
+// each vertex (transfer . lighting, [4] Eq. 13 for ZH lobes, Eq. 24-25 for the tabulated
+// form) is interpolated across the hit triangle with the hit's barycentric coordinates.
+#pragma once
+
+#include <array>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace shtool::render {
+
+enum class Shading { automatic, transfer, zh, zh_table, error, normals };
+const std::vector<std::pair<std::string, Shading>>& shading_names();
+
+struct Camera {
+  std::array<double, 3> eye{}, target{}, up{0, 1, 0};
+};
+
+struct RenderRequest {
+  std::filesystem::path mesh;      // OBJ
+  std::filesystem::path fit;       // zh-fit table (fit-zh --out)
+  std::filesystem::path transfer;  // transfer JSON (fit-zh --save-transfer)
+  std::filesystem::path light;     // lighting JSON (project-env --json, light --json): radiance, RGB
+  std::filesystem::path out;       // .exr (linear RGB + coverage alpha) or .png (tone-mapped sRGB)
+  std::optional<Camera> camera;    // none: framed on the mesh's bounding sphere
+  double fov = 40;                 // vertical field of view, degrees, in (0, 180)
+  int width = 512, height = 512;
+  Shading shading = Shading::automatic;  // automatic: transfer with --transfer, else zh
+  double exposure = 0;             // PNG: radiance scaled by 2^exposure before tone mapping
+  int zh_table_resolution = 32;    // zh-table: ZhLightTable resolution
+  int threads = 0;                 // 0: every core
+  // One strip instead: transfer, ZH fits of N = 1..4 lobes made from the transfer, and the
+  // N = 4 error map, each labelled with its normalized RMS ([4] Fig. 3's layout).
+  bool compare = false;
+};
+
+struct RenderResult {
+  Shading shading = Shading::transfer;
+  std::size_t covered_pixels = 0;
+  double seconds = 0;  // rays, shading (and the fits of --compare), not reading or writing files
+  std::vector<double> compare_nrms;  // --compare: normalized RMS of the N = 1..4 fits
+};
+
+// Checks the request (InputError naming the option: missing inputs for the shading, a
+// row count that does not match the mesh, an irradiance lighting, a bad size or field of
+// view, an output that is neither .exr nor .png), renders, writes the image atomically.
+RenderResult run_render(const RenderRequest& request);
+
+}  // namespace shtool::render

@@ -1,0 +1,337 @@
+// shtool render end to end, through its invariants: the white furnace (unshadowed
+// transfer under constant radiance 1 is exactly 1 on every covered pixel), a light
+// rotated by ShRotation renders as the light made rotated, ZH and exact transfer shading
+// agree to the fit residual, the PNG is the EXR tone-mapped by its formula, the same
+// bytes on any thread count, bad requests refused with nothing written.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstring>
+#include <cmath>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+#include <Eigen/Geometry>
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfInputFile.h>
+#include <stb_image.h>
+
+#include "lighting/image_io.h"
+#include "run_command.h"
+#include "scratch_files.h"
+#include "shtool/rotation.h"
+#include "shtool/rotation_helpers.h"
+#include "shtool/zh_fit_table.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using shtool::test::run_command;
+const std::string kExe = SHTOOL_EXE;
+const std::string kSpot = std::string(SHTOOL_SOURCE_DIR) + "/data/spot.obj";
+
+fs::path scratch(const std::string& name) { return shtool::test::scratch_path("render", name); }
+
+shtool::test::CommandResult shtool_run(std::vector<std::string> args) {
+  args.insert(args.begin(), kExe);
+  return run_command(args);
+}
+
+void must(const shtool::test::CommandResult& r) { ASSERT_EQ(r.exit_code, 0) << r.err; }
+
+shtool::lighting::Image read_exr(const fs::path& p) {
+  return shtool::lighting::decode_image(shtool::test::read_file(p), p);
+}
+
+// Bakes on data/spot.obj once per test program: unshadowed and shadowed transfer (order
+// 3), their fits with 2 lobes (DC stored directly for the unshadowed one).
+struct Bakes {
+  fs::path unshadowed_t = scratch("unshadowed.json"), unshadowed_fit = scratch("unshadowed.shtb");
+  fs::path shadowed_t = scratch("shadowed.json"), shadowed_fit = scratch("shadowed.shtb");
+  fs::path white = scratch("white.json"), sky = scratch("sky.json");
+  Bakes() {
+    must(shtool_run({"fit-zh", kSpot, "--order", "3", "--lobes", "2", "--rays", "128", "--mode", "unshadowed",
+                     "--direct", "--out", unshadowed_fit.string(), "--save-transfer", unshadowed_t.string()}));
+    must(shtool_run({"fit-zh", kSpot, "--order", "3", "--lobes", "2", "--rays", "128", "--mode", "shadowed", "--out",
+                     shadowed_fit.string(), "--save-transfer", shadowed_t.string()}));
+    must(shtool_run({"light", "--type", "constant", "--color", "1,1,1", "--order", "3", "--json", white.string()}));
+    must(shtool_run({"project-env", std::string(SHTOOL_SOURCE_DIR) + "/data/sky.hdr", "--order", "3", "--json",
+                     sky.string()}));
+  }
+};
+
+const Bakes& bakes() {
+  static const Bakes b;
+  return b;
+}
+
+TEST(Render, WhiteFurnaceIsOneOnEveryCoveredPixel) {
+  for (const std::string& input : {"--transfer", "--fit"}) {
+    const fs::path out = scratch("furnace.exr");
+    const fs::path& baked = input == "--transfer" ? bakes().unshadowed_t : bakes().unshadowed_fit;
+    must(shtool_run({"render", kSpot, input, baked.string(), "--light", bakes().white.string(), "--width", "96",
+                     "--height", "80", "--out", out.string()}));
+    const auto image = read_exr(out);
+    ASSERT_EQ(image.width, 96);
+    ASSERT_EQ(image.height, 80);
+    // decode_image drops alpha (ExrCarriesCoverageAlpha reads it); covered pixels are 1.
+    std::size_t covered = 0;
+    double worst = 0;
+    for (std::size_t p = 0; p < image.texels.size() / 3; ++p) {
+      const float* px = &image.texels[p * 3];
+      if (px[0] == 0 && px[1] == 0 && px[2] == 0) continue;
+      ++covered;
+      for (int c = 0; c < 3; ++c) worst = std::max(worst, std::abs(px[c] - 1.0));
+    }
+    EXPECT_GT(covered, 500u) << input;
+    // The DC term of a cosine-weighted estimate is exact; what is left is float rounding.
+    EXPECT_LT(worst, 2e-6) << input;
+  }
+}
+
+// Coverage alpha in the EXR: 1 on the mesh, 0 (with RGB 0) elsewhere, read by OpenEXR.
+TEST(Render, ExrCarriesCoverageAlpha) {
+  const fs::path out = scratch("alpha.exr");
+  must(shtool_run({"render", kSpot, "--transfer", bakes().shadowed_t.string(), "--light", bakes().sky.string(),
+                   "--width", "64", "--height", "48", "--out", out.string()}));
+  Imf::InputFile file(out.c_str());
+  const Imath::Box2i box = file.header().dataWindow();
+  const int w = box.max.x - box.min.x + 1, h = box.max.y - box.min.y + 1;
+  ASSERT_EQ(w, 64);
+  ASSERT_EQ(h, 48);
+  ASSERT_NE(file.header().channels().findChannel("A"), nullptr);
+  std::vector<float> rgba(std::size_t(w) * h * 4);
+  Imf::FrameBuffer fb;
+  const char* names[4] = {"R", "G", "B", "A"};
+  for (int c = 0; c < 4; ++c)
+    fb.insert(names[c], Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(rgba.data() + c), 4 * sizeof(float),
+                                   std::size_t(w) * 4 * sizeof(float)));
+  file.setFrameBuffer(fb);
+  file.readPixels(box.min.y, box.max.y);
+  int covered = 0, empty = 0;
+  for (int p = 0; p < w * h; ++p) {
+    const float* px = &rgba[std::size_t(p) * 4];
+    if (px[3] == 1.0f) {
+      ++covered;
+      EXPECT_GT(px[0] + px[1] + px[2], 0.0f) << p;  // the sky lights every side of the mesh
+    } else {
+      ++empty;
+      EXPECT_EQ(px[3], 0.0f) << p;
+      EXPECT_EQ(px[0] + px[1] + px[2], 0.0f) << p;
+    }
+  }
+  EXPECT_GT(covered, 100);
+  EXPECT_GT(empty, 100);
+}
+
+std::vector<float> render_rgb(const std::vector<std::string>& extra, int width = 80, int height = 64) {
+  const fs::path out = scratch("view.exr");
+  std::vector<std::string> args = {"render", kSpot, "--width", std::to_string(width), "--height",
+                                   std::to_string(height), "--out", out.string()};
+  args.insert(args.end(), extra.begin(), extra.end());
+  const auto r = shtool_run(args);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  return read_exr(out).texels;
+}
+
+// ZH shading against the exact transfer: per vertex |r_zh - r_t| <= residual ||e|| (Cauchy-
+// Schwarz), and a pixel blends three vertices, so the image difference is bounded by the
+// largest residual times ||e_c||; the error shading is that difference.
+TEST(Render, ZhAgreesWithTransferToTheFitResidual) {
+  const auto fit = shtool::load_zh_fit<double>(bakes().shadowed_fit);
+  ASSERT_TRUE(fit) << fit.error().message;
+  const double worst_residual = *std::max_element(fit.value().residual.begin(), fit.value().residual.end());
+  const nlohmann::json sky = nlohmann::json::parse(shtool::test::read_file(bakes().sky));
+  double light_norm = 0;
+  for (int c = 0; c < 3; ++c) {
+    double n = 0;
+    for (const auto& row : sky["coefficients"]) n += row[c].get<double>() * row[c].get<double>();
+    light_norm = std::max(light_norm, std::sqrt(n));
+  }
+  const std::string light = bakes().sky.string();
+  const auto t = render_rgb({"--transfer", bakes().shadowed_t.string(), "--light", light});
+  const auto z = render_rgb({"--fit", bakes().shadowed_fit.string(), "--light", light});
+  const auto table = render_rgb({"--fit", bakes().shadowed_fit.string(), "--light", light, "--shading", "zh-table"});
+  const auto err = render_rgb({"--fit", bakes().shadowed_fit.string(), "--transfer", bakes().shadowed_t.string(),
+                               "--light", light, "--shading", "error"});
+  ASSERT_EQ(t.size(), z.size());
+  double worst = 0, worst_table = 0, err_mismatch = 0, largest = 0;
+  for (std::size_t i = 0; i < t.size(); ++i) {
+    worst = std::max(worst, double(std::abs(z[i] - t[i])));
+    worst_table = std::max(worst_table, double(std::abs(table[i] - z[i])));
+    err_mismatch = std::max(err_mismatch, std::abs(double(err[i]) - std::abs(double(z[i]) - t[i])));
+    largest = std::max(largest, double(t[i]));
+  }
+  EXPECT_GT(largest, 0.05);
+  EXPECT_GT(worst, 0.0);  // a 2-lobe fit is not exact: the two shadings differ somewhere
+  EXPECT_LE(worst, worst_residual * light_norm + 1e-6);
+  EXPECT_LE(err_mismatch, 1e-6 * std::max(1.0, largest));
+  // The light table (R = 32) errs by under 1e-2 of a band's size at order 3.
+  EXPECT_LE(worst_table, 1e-2 * light_norm);
+}
+
+// A light rotated by ShRotation (coefficients) renders as the same light built rotated.
+TEST(Render, RotatedLightEqualsLightBuiltRotated) {
+  const Eigen::Matrix3d r = Eigen::AngleAxisd(0.9, Eigen::Vector3d(1, 2, -1).normalized()).toRotationMatrix();
+  const Eigen::Vector3d d = Eigen::Vector3d(0.2, 0.9, 0.4).normalized(), rd = r * d;
+  auto dir = [](const Eigen::Vector3d& v) {
+    char buf[128];
+    std::snprintf(buf, sizeof buf, "%.17g,%.17g,%.17g", v.x(), v.y(), v.z());
+    return std::string(buf);
+  };
+  const fs::path a = scratch("cone.json"), b = scratch("cone_rotated_built.json"), c = scratch("cone_rotated.json");
+  must(shtool_run({"light", "--type", "cone", "--dir", dir(d), "--half-angle", "20", "--color", "3,2,1", "--order",
+                   "3", "--json", a.string()}));
+  must(shtool_run({"light", "--type", "cone", "--dir", dir(rd), "--half-angle", "20", "--color", "3,2,1", "--order",
+                   "3", "--json", b.string()}));
+  nlohmann::json light = nlohmann::json::parse(shtool::test::read_file(a));
+  shtool::ShRotation<double> rot(3, nullptr);
+  ASSERT_TRUE(rot.set(r, shtool::RotationMethod::reference));
+  for (int ch = 0; ch < 3; ++ch) {
+    std::vector<double> f(9), g(9);
+    for (int i = 0; i < 9; ++i) f[i] = light["coefficients"][i][ch].get<double>();
+    rot.apply(f, g);
+    for (int i = 0; i < 9; ++i) light["coefficients"][i][ch] = g[i];
+  }
+  {
+    std::FILE* f = std::fopen(c.c_str(), "wb");
+    ASSERT_NE(f, nullptr);
+    const std::string text = light.dump();
+    std::fwrite(text.data(), 1, text.size(), f);
+    std::fclose(f);
+  }
+  const auto built = render_rgb({"--transfer", bakes().shadowed_t.string(), "--light", b.string()});
+  const auto rotated = render_rgb({"--transfer", bakes().shadowed_t.string(), "--light", c.string()});
+  double worst = 0, largest = 0;
+  for (std::size_t i = 0; i < built.size(); ++i) {
+    worst = std::max(worst, double(std::abs(built[i] - rotated[i])));
+    largest = std::max(largest, double(built[i]));
+  }
+  EXPECT_GT(largest, 0.01);
+  EXPECT_LE(worst, 1e-6 * std::max(1.0, largest));
+}
+
+// The PNG is the EXR's radiance scaled by 2^exposure, tone-mapped x / (1 + x) and
+// sRGB-encoded (IEC 61966-2-1), to 8 bits.
+TEST(Render, PngIsTheToneMappedExr) {
+  const fs::path exr = scratch("tm.exr"), png = scratch("tm.png");
+  for (const fs::path& out : {exr, png})
+    must(shtool_run({"render", kSpot, "--transfer", bakes().shadowed_t.string(), "--light", bakes().sky.string(),
+                     "--width", "72", "--height", "60", "--exposure", "1.5", "--out", out.string()}));
+  const auto linear = read_exr(exr);
+  const std::string bytes = shtool::test::read_file(png);
+  int w = 0, h = 0, channels = 0;
+  unsigned char* pixels = stbi_load_from_memory(reinterpret_cast<const unsigned char*>(bytes.data()),
+                                                static_cast<int>(bytes.size()), &w, &h, &channels, 4);
+  ASSERT_NE(pixels, nullptr);
+  ASSERT_EQ(w, 72);
+  ASSERT_EQ(h, 60);
+  auto srgb = [](double v) { return v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1 / 2.4) - 0.055; };
+  double worst = 0;
+  int lit = 0;
+  for (int p = 0; p < w * h; ++p) {
+    for (int c = 0; c < 3; ++c) {
+      const double x = linear.texels[p * 3 + c] * std::pow(2.0, 1.5);
+      const double expected = 255.0 * srgb(x / (1 + x));
+      worst = std::max(worst, std::abs(expected - pixels[p * 4 + c]));
+      lit += x > 0.1;
+    }
+  }
+  stbi_image_free(pixels);
+  EXPECT_GT(lit, 100);
+  EXPECT_LE(worst, 0.5 + 1e-6);
+}
+
+// --compare: one strip of six panels (transfer, N = 1..4, error) over a label band, the
+// fits' normalized RMS falling with N and printed.
+TEST(Render, CompareStripOfFits) {
+  const fs::path out = scratch("compare.exr");
+  const auto r = shtool_run({"render", kSpot, "--transfer", bakes().shadowed_t.string(), "--light",
+                             bakes().sky.string(), "--compare", "--width", "40", "--height", "32", "--out",
+                             out.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto strip = read_exr(out);
+  EXPECT_EQ(strip.width, 6 * 40);
+  EXPECT_EQ(strip.height, 32 + 22);
+  std::vector<double> nrms;
+  for (std::size_t at = r.err.find("normalized RMS "); at != std::string::npos;
+       at = r.err.find("normalized RMS ", at + 1))
+    nrms.push_back(std::stod(r.err.substr(at + 15)));
+  ASSERT_EQ(nrms.size(), 4u) << r.err;
+  // Order 3: three lobes and more fit exactly.
+  EXPECT_LT(nrms[1], nrms[0]);
+  EXPECT_LT(nrms[2], nrms[1]);
+  EXPECT_LT(nrms[2], 1e-6);
+  EXPECT_LT(nrms[3], 1e-6);
+  // The first panel is the transfer shading itself.
+  const auto t = render_rgb({"--transfer", bakes().shadowed_t.string(), "--light", bakes().sky.string()}, 40, 32);
+  double worst = 0;
+  for (int y = 0; y < 32; ++y)
+    for (int x = 0; x < 40; ++x)
+      for (int c = 0; c < 3; ++c)
+        worst = std::max(worst, double(std::abs(strip.texels[(std::size_t(y) * strip.width + x) * 3 + c] -
+                                                t[(std::size_t(y) * 40 + x) * 3 + c])));
+  EXPECT_EQ(worst, 0.0);
+}
+
+TEST(Render, SameBytesOnAnyThreadCount) {
+  const fs::path one = scratch("t1.exr"), two = scratch("t3.exr");
+  must(shtool_run({"render", kSpot, "--fit", bakes().shadowed_fit.string(), "--light", bakes().sky.string(),
+                   "--threads", "1", "--out", one.string(), "--width", "64", "--height", "48"}));
+  must(shtool_run({"render", kSpot, "--fit", bakes().shadowed_fit.string(), "--light", bakes().sky.string(),
+                   "--threads", "3", "--out", two.string(), "--width", "64", "--height", "48"}));
+  EXPECT_EQ(shtool::test::read_file(one), shtool::test::read_file(two));
+}
+
+TEST(Render, BadRequestsAreRefusedByName) {
+  const fs::path irradiance = scratch("irr.json");
+  must(shtool_run({"project-env", std::string(SHTOOL_SOURCE_DIR) + "/data/sky.hdr", "--order", "3", "--quantity",
+                   "irradiance", "--json", irradiance.string()}));
+  const fs::path other_mesh = scratch("tetra.obj");
+  {
+    std::FILE* f = std::fopen(other_mesh.c_str(), "wb");
+    ASSERT_NE(f, nullptr);
+    const char* obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 1 4 3\n";
+    std::fwrite(obj, 1, std::strlen(obj), f);
+    std::fclose(f);
+  }
+  const std::string t = bakes().shadowed_t.string(), fit = bakes().shadowed_fit.string(), sky = bakes().sky.string();
+  struct Bad {
+    std::vector<std::string> args;
+    const char* message;
+  } bad[] = {
+      {{kSpot, "--transfer", t}, "--light"},
+      {{kSpot, "--light", sky}, "--fit"},
+      {{kSpot, "--transfer", t, "--light", sky, "--shading", "zh"}, "--fit"},
+      {{kSpot, "--fit", fit, "--light", sky, "--shading", "error"}, "--transfer"},
+      {{kSpot, "--transfer", t, "--light", irradiance.string()}, "irradiance"},
+      {{other_mesh.string(), "--transfer", t, "--light", sky}, "vertices"},
+      {{other_mesh.string(), "--fit", fit, "--light", sky}, "--fit"},
+      {{kSpot, "--transfer", t, "--light", sky, "--camera", "0,0,5,0,0,0"}, "--camera"},
+      {{kSpot, "--transfer", t, "--light", sky, "--camera", "0,0,5,0,0,0,0,0,1"}, "--camera"},
+      {{kSpot, "--transfer", t, "--light", sky, "--fov", "180"}, "--fov"},
+      {{kSpot, "--transfer", t, "--light", sky, "--width", "0"}, "--width"},
+      {{kSpot, "--transfer", sky, "--light", sky}, "--transfer"},
+  };
+  for (const Bad& b : bad) {
+    const fs::path out = scratch("bad.exr");
+    fs::remove(out);
+    std::vector<std::string> args = {"render"};
+    args.insert(args.end(), b.args.begin(), b.args.end());
+    args.insert(args.end(), {"--out", out.string()});
+    const auto r = shtool_run(args);
+    EXPECT_EQ(r.exit_code, 1) << b.message << "\n" << r.err;
+    EXPECT_NE(r.err.find(b.message), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out)) << b.message;
+  }
+  const auto r = shtool_run({"render", kSpot, "--transfer", t, "--light", sky, "--out", scratch("x.jpg").string()});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("--out"), std::string::npos) << r.err;
+}
+
+}  // namespace
