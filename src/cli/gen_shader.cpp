@@ -17,14 +17,14 @@ void setup_gen_shader(CLI::App& app) {
   auto lobes_given = std::make_shared<bool>(false);
   CLI::App* sub = app.add_subcommand("gen-shader", "Generate a GLSL or HLSL include file of an SH operation");
   add_enum_option(sub, "--lang", req->shader.language,
-                  {{"glsl", ShaderLanguage::glsl}, {"hlsl", ShaderLanguage::hlsl}}, "shader language", "glsl")
+                  {{"glsl", ShaderLanguage::glsl}, {"hlsl", ShaderLanguage::hlsl}}, "shader language", "")
       ->required();
   std::vector<std::pair<std::string, ShaderOperation>> names;
   for (ShaderOperation op : shader_operations()) names.emplace_back(std::string(shader_operation_name(op)), op);
   add_enum_option(sub, "--what", req->shader.operation, names,
                   "operation: sh-eval, sh-irradiance, zxzxz-rotate, zhf-rotate, zhf-tailored-rotate, triple-product, "
                   "zh-shade",
-                  "sh-eval")
+                  "")
       ->required();
   sub->add_option("--order", req->shader.order, "SH order N (bands 0..N-1)")->required();
   add_enum_option(sub, "--precision", req->shader.precision,

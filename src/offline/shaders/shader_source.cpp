@@ -229,7 +229,11 @@ std::string texture_preamble(const Syntax& s) {
 std::string texture_params(const Syntax& s, int n) {
   std::string p;
   for (int k = 0; k < band_textures(n); ++k)
-    p += (k ? ", " : "") + std::string(s.glsl() ? "samplerCube bands" : "TextureCube<float4> bands") +
+    // GLSL ES gives samplers a default precision of lowp: a fetch would come back with an
+    // 8-bit step and a range of (-2, 2). Desktop GLSL accepts the qualifier and ignores it.
+    p += (k ? ", " : "") +
+         std::string(s.glsl() ? (s.half ? "mediump samplerCube bands" : "highp samplerCube bands")
+                              : "TextureCube<float4> bands") +
          std::to_string(k);
   if (!s.glsl()) p += ", SamplerState bands_sampler";
   return p;
