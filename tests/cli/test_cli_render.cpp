@@ -334,4 +334,117 @@ TEST(Render, BadRequestsAreRefusedByName) {
   EXPECT_NE(r.err.find("--out"), std::string::npos) << r.err;
 }
 
+// ---- Deforming meshes: shtool deform and render --pose ----
+
+fs::path posed_mesh(const std::string& name, const std::vector<std::string>& how) {
+  const fs::path out = scratch(name);
+  std::vector<std::string> args = {SHTOOL_PYTHON, std::string(SHTOOL_SOURCE_DIR) + "/scripts/pose_mesh.py", kSpot,
+                                   out.string()};
+  args.insert(args.end(), how.begin(), how.end());
+  const auto r = run_command(args);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  return out;
+}
+
+// A rigid rotation of the whole mesh gives exactly the rest lobes rotated (to the float
+// precision of OBJ coordinates, which perturbs the tangent edges by ~1e-5 rad), the same
+// coefficients and residuals.
+TEST(Deform, RigidRotationRotatesEveryLobe) {
+  const Eigen::Vector3d axis = Eigen::Vector3d(1, 1, 1).normalized();
+  const Eigen::Matrix3d r = Eigen::AngleAxisd(0.9, axis).toRotationMatrix();
+  const fs::path turned = posed_mesh("turned.obj", {"--rotate", "1,1,1,0.9"});
+  const fs::path out = scratch("turned.shtb"), json = scratch("turned_fits.json"), rest_json = scratch("rest.json");
+  must(shtool_run({"fit-zh", kSpot, "--order", "3", "--lobes", "2", "--rays", "64", "--out", scratch("r.shtb").string(),
+                   "--json", rest_json.string()}));
+  const auto d = shtool_run({"deform", scratch("r.shtb").string(), "--rest", kSpot, "--pose", turned.string(), "--out",
+                             out.string(), "--json", json.string()});
+  ASSERT_EQ(d.exit_code, 0) << d.err;
+  EXPECT_NE(d.err.find("largest frame rotation 0.9"), std::string::npos) << d.err;
+  const nlohmann::json a = nlohmann::json::parse(shtool::test::read_file(rest_json));
+  const nlohmann::json b = nlohmann::json::parse(shtool::test::read_file(json));
+  ASSERT_EQ(a["fits"].size(), b["fits"].size());
+  double worst = 0;
+  for (std::size_t v = 0; v < a["fits"].size(); ++v)
+    for (std::size_t k = 0; k < 2; ++k) {
+      const auto& la = a["fits"][v]["lobes"][k];
+      const auto& lb = b["fits"][v]["lobes"][k];
+      const Eigen::Vector3d sa(la["axis"][0].get<double>(), la["axis"][1].get<double>(), la["axis"][2].get<double>());
+      const Eigen::Vector3d sb(lb["axis"][0].get<double>(), lb["axis"][1].get<double>(), lb["axis"][2].get<double>());
+      worst = std::max(worst, (r * sa - sb).norm());
+      EXPECT_EQ(la["coeffs"], lb["coeffs"]);
+    }
+  EXPECT_LT(worst, 1e-4);
+  EXPECT_TRUE(shtool::load_zh_fit<double>(out)) << "the posed table loads";
+}
+
+// Mean absolute difference between two renders, over pixels both cover, relative to the
+// mean radiance.
+double relative_mean_difference(const std::vector<float>& a, const std::vector<float>& b) {
+  double diff = 0, sum = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (a[i] == 0 || b[i] == 0) continue;
+    diff += std::abs(a[i] - b[i]);
+    sum += std::abs(b[i]);
+  }
+  return sum > 0 ? diff / sum : INFINITY;
+}
+
+// A deformed bake renders like a fresh bake of the pose: for a rigid rotation up to the
+// fit residuals and the transfer's sampling error (the rays of a vertex follow its
+// normal's basis, not the rotation); for a bend also up to the shadowing the bend changes.
+TEST(Deform, PosedRenderMatchesAFreshBake) {
+  const std::string sky = bakes().sky.string(), camera = "2.6,0.9,1.6,0,0.2,0.25,0,1,0";
+  // Measured 0.0025 (rigid) and 0.0126 (bend); unrotated lobes would be off by tens of percent.
+  struct Pose {
+    std::string name;
+    std::vector<std::string> how;
+    double allowed;
+  };
+  for (const auto& [name, how, allowed] :
+       std::vector<Pose>{{"turned2.obj", {"--rotate", "0,1,0,1.2"}, 0.01}, {"bent.obj", {"--bend", "0.8"}, 0.03}}) {
+    const fs::path pose = posed_mesh(name, how);
+    const fs::path fresh_fit = scratch("fresh.shtb"), fresh_t = scratch("fresh.json");
+    must(shtool_run({"fit-zh", pose.string(), "--order", "3", "--lobes", "2", "--rays", "128", "--out",
+                     fresh_fit.string(), "--save-transfer", fresh_t.string()}));
+    auto render_on = [&](const std::string& mesh, std::vector<std::string> extra) {
+      const fs::path out = scratch("pose.exr");
+      std::vector<std::string> args = {"render", mesh, "--light", sky, "--camera", camera, "--width", "96",
+                                       "--height", "96", "--out", out.string()};
+      args.insert(args.end(), extra.begin(), extra.end());
+      must(shtool_run(args));
+      return read_exr(out).texels;
+    };
+    const auto deformed = render_on(kSpot, {"--fit", bakes().shadowed_fit.string(), "--pose", pose.string()});
+    const auto fresh = render_on(pose.string(), {"--fit", fresh_fit.string()});
+    const auto deformed_t = render_on(kSpot, {"--transfer", bakes().shadowed_t.string(), "--pose", pose.string()});
+    const auto fresh_transfer = render_on(pose.string(), {"--transfer", fresh_t.string()});
+    const double zh = relative_mean_difference(deformed, fresh), t = relative_mean_difference(deformed_t, fresh_transfer);
+    std::printf("%s: deformed against fresh bake, mean relative difference %.4f (ZH), %.4f (transfer)\n", name.c_str(),
+                zh, t);
+    EXPECT_LT(zh, allowed) << name;
+    EXPECT_LT(t, allowed) << name;
+  }
+}
+
+TEST(Deform, APoseOfAnotherTopologyIsRefused) {
+  const fs::path other = scratch("tetra2.obj");
+  {
+    std::FILE* f = std::fopen(other.c_str(), "wb");
+    ASSERT_NE(f, nullptr);
+    const char* obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 1 4 3\n";
+    std::fwrite(obj, 1, std::strlen(obj), f);
+    std::fclose(f);
+  }
+  const fs::path out = scratch("never.shtb");
+  const auto r = shtool_run({"deform", bakes().shadowed_fit.string(), "--rest", kSpot, "--pose", other.string(),
+                             "--out", out.string()});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("topology"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out));
+  const auto q = shtool_run({"render", kSpot, "--fit", bakes().shadowed_fit.string(), "--pose", other.string(),
+                             "--light", bakes().sky.string(), "--out", scratch("never.exr").string()});
+  EXPECT_EQ(q.exit_code, 1);
+  EXPECT_NE(q.err.find("topology"), std::string::npos) << q.err;
+}
+
 }  // namespace

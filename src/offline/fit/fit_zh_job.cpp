@@ -55,21 +55,6 @@ std::string ply_text(const Mesh& mesh, const std::vector<double>& transfer, int 
   return s.str();
 }
 
-// The --json output: every fit's lobes, residual and norm.
-std::string fits_json(const std::vector<ZhFit>& fits, int order, int lobes, bool direct) {
-  nlohmann::json doc = {{"order", order}, {"lobes", lobes}, {"fits", nlohmann::json::array()}};
-  for (const ZhFit& f : fits) {
-    nlohmann::json jf = {{"lobes", nlohmann::json::array()}};
-    for (const ZhLobe& lobe : f.lobes)
-      jf["lobes"].push_back({{"axis", {lobe.axis.x(), lobe.axis.y(), lobe.axis.z()}}, {"coeffs", lobe.coeffs}});
-    jf["residual"] = f.residual;
-    jf["norm"] = f.norm;
-    if (direct) jf["direct"] = f.direct;
-    doc["fits"].push_back(std::move(jf));
-  }
-  return doc.dump() + "\n";
-}
-
 // The --save-transfer output, in the --transfer format.
 std::string transfer_json(const std::vector<double>& transfer, int order) {
   const std::size_t n2 = sh_count(order);
@@ -100,6 +85,21 @@ void check_request(const FitZhRequest& r) {
 }
 
 }  // namespace
+
+std::string fits_json(const std::vector<ZhFit>& fits, int order, int lobes, bool direct) {
+  nlohmann::json doc = {{"order", order}, {"lobes", lobes}, {"fits", nlohmann::json::array()}};
+  for (const ZhFit& f : fits) {
+    nlohmann::json jf = {{"lobes", nlohmann::json::array()}};
+    for (const ZhLobe& lobe : f.lobes)
+      jf["lobes"].push_back({{"axis", {lobe.axis.x(), lobe.axis.y(), lobe.axis.z()}}, {"coeffs", lobe.coeffs}});
+    jf["residual"] = f.residual;
+    jf["norm"] = f.norm;
+    if (direct) jf["direct"] = f.direct;
+    doc["fits"].push_back(std::move(jf));
+  }
+  return doc.dump() + "\n";
+}
+
 
 // {"order": n, "vectors": [[n^2 numbers], ...]}
 std::vector<double> parse_transfer_json(std::string_view text, const std::filesystem::path& path_in, int& order) {

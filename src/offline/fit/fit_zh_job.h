@@ -13,6 +13,7 @@
 
 #include "fit/mesh.h"
 #include "fit/transfer.h"
+#include "fit/zh_fit.h"
 #include "shtool/table.h"
 
 namespace shtool::fit {
@@ -60,6 +61,10 @@ struct FitZhReport {
 // The vectors of a --transfer document, vertex-major; sets `order`. Throws InputError
 // naming `path` and the problem.
 std::vector<double> parse_transfer_json(std::string_view text, const std::filesystem::path& path, int& order);
+
+// The --json output: every fit's lobes (axis, coefficients), residual and norm, and its
+// direct coefficients when `direct`.
+std::string fits_json(const std::vector<ZhFit>& fits, int order, int lobes, bool direct);
 
 // Checks the request and every output path before any work (InputError), runs the job,
 // writes the outputs.

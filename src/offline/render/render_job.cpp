@@ -16,12 +16,14 @@
 #include "common/input_file.h"
 #include "common/parallel_for.h"
 #include "common/stopwatch.h"
+#include "deform/deform_job.h"
 #include "fit/embree_scene.h"
 #include "fit/fit_zh_job.h"
 #include "fit/zh_fit.h"
 #include "fit/mesh.h"
 #include "lighting/image_io.h"
 #include "lighting/lighting_output.h"
+#include "shtool/rotation.h"
 #include "shtool/zh_fit_table.h"
 #include "shtool/zh_shading.h"
 
@@ -36,38 +38,6 @@ struct VertexData {
   std::vector<double> transfer;                // V * n^2
   std::optional<ZhFitTable<double>> fit;       // rows reordered to the kept vertices
 };
-
-// The fit table's rows in the mesh's kept-vertex order: rows name their OBJ vertex
-// (vertex_index), or, without one, are the kept vertices in order.
-ZhFitTable<double> fit_for_mesh(ZhFitTable<double> fit, const fit::Mesh& mesh, const std::filesystem::path& path) {
-  const std::size_t v = mesh.positions.size();
-  // fit-zh fits every vertex a triangle uses: one row each.
-  if (fit.vertices != v)
-    throw InputError("--fit " + path.string() + ": " + std::to_string(fit.vertices) + " rows for a mesh of " +
-                     std::to_string(v) + " vertices (was it fitted on another mesh?)");
-  if (fit.vertex_index.empty()) return fit;
-  std::unordered_map<std::uint32_t, std::size_t> row_of;
-  for (std::size_t r = 0; r < fit.vertices; ++r) row_of[fit.vertex_index[r]] = r;
-  ZhFitTable<double> out = fit;
-  const std::size_t n = static_cast<std::size_t>(fit.order), lobes = static_cast<std::size_t>(fit.lobes),
-                    d = static_cast<std::size_t>(fit.direct_count);
-  out.vertices = v;
-  out.axes.resize(v * lobes);
-  out.coeffs.resize(v * lobes * n);
-  out.direct.resize(v * d);
-  out.vertex_index.assign(mesh.source_index.begin(), mesh.source_index.end());
-  for (std::size_t k = 0; k < v; ++k) {
-    const auto it = row_of.find(mesh.source_index[k]);
-    if (it == row_of.end())
-      throw InputError("--fit " + path.string() + ": no row for OBJ vertex " + std::to_string(mesh.source_index[k]) +
-                       " of the mesh (was it fitted on another mesh?)");
-    const std::size_t r = it->second;
-    std::copy_n(fit.axes.begin() + r * lobes, lobes, out.axes.begin() + k * lobes);
-    std::copy_n(fit.coeffs.begin() + r * lobes * n, lobes * n, out.coeffs.begin() + k * lobes * n);
-    std::copy_n(fit.direct.begin() + r * d, d, out.direct.begin() + k * d);
-  }
-  return out;
-}
 
 // One channel of the lighting as an order-n vector: truncated, or padded with zeros
 // (the dot product uses the bands both sides have).
@@ -365,7 +335,14 @@ RenderResult run_render(const RenderRequest& r) {
   // Checked before any work, so that a bad output name costs nothing.
   (void)lighting::encode_image_for(r.out, lighting::Image{1, 1, 4, std::vector<float>(4, 0.0f)}, "--out");
 
-  const fit::Mesh mesh = fit::load_obj(r.mesh);
+  const fit::Mesh rest = fit::load_obj(r.mesh);
+  std::vector<Eigen::Matrix3d> rotations;  // rest frame -> posed frame, per vertex (--pose)
+  std::optional<fit::Mesh> posed;
+  if (!r.pose.empty()) {
+    posed = fit::load_obj(r.pose);
+    rotations = deform::rest_to_pose_rotations(rest, *posed);
+  }
+  const fit::Mesh& mesh = posed ? *posed : rest;
   VertexData data;
   if (needs_transfer) {
     data.transfer = fit::parse_transfer_json(read_input_file(r.transfer, "--transfer"), r.transfer,
@@ -375,11 +352,23 @@ RenderResult run_render(const RenderRequest& r) {
     if (rows != mesh.positions.size())
       throw InputError("--transfer " + r.transfer.string() + ": " + std::to_string(rows) +
                        " vectors for a mesh of " + std::to_string(mesh.positions.size()) + " vertices");
+    if (posed) {  // an SH transfer vector rotates exactly, by M(R_p)
+      const int n = data.transfer_order;
+      const std::size_t n2 = static_cast<std::size_t>(n) * n;
+      ShRotation<double> rotation(n, nullptr);
+      std::vector<double> turned(n2);
+      for (std::size_t v = 0; v < rows; ++v) {
+        rotation.set(rotations[v], RotationMethod::reference);
+        rotation.apply(std::span<const double>(data.transfer.data() + v * n2, n2), turned);
+        std::copy(turned.begin(), turned.end(), data.transfer.begin() + v * n2);
+      }
+    }
   }
   if (needs_fit) {
     Result<ZhFitTable<double>> loaded = load_zh_fit<double>(r.fit);
     if (!loaded) throw InputError("--fit: " + loaded.error().message);
-    data.fit = fit_for_mesh(std::move(loaded).value(), mesh, r.fit);
+    data.fit = deform::fit_for_mesh(std::move(loaded).value(), rest, "--fit " + r.fit.string());
+    if (posed) data.fit = deform::deform_fit(*data.fit, rotations);
   }
   lighting::Lighting light;
   if (shading != Shading::normals) {

@@ -22,6 +22,8 @@ struct Camera {
 
 struct RenderRequest {
   std::filesystem::path mesh;      // OBJ
+  std::filesystem::path pose;      // optional: a posed mesh of mesh's topology, rendered with the
+                                   // fit's lobes (or the transfer) rotated into its frames
   std::filesystem::path fit;       // zh-fit table (fit-zh --out)
   std::filesystem::path transfer;  // transfer JSON (fit-zh --save-transfer)
   std::filesystem::path light;     // lighting JSON (project-env --json, light --json): radiance, RGB

@@ -1,0 +1,52 @@
+// deform as a library job: ZH transfer baked on a rest mesh, carried onto a posed mesh of
+// the same topology without re-simulation ([4] Sec. 6 and "LDPRT rendering": rotate each
+// vertex's lobe axes by the rotation R_p from its rest frame to its deformed frame, then
+// shade with Eq. 13 as before). docs/ldprt.md, "Deforming meshes".
+#pragma once
+
+#include <filesystem>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "fit/mesh.h"
+#include "shtool/zh_fit_table.h"
+
+namespace shtool::deform {
+
+// The local frame of vertex v: its unit normal n, and a tangent t from the edge to the
+// next corner of the first triangle that uses v (the same triangle and corner in every
+// pose, since poses share the topology), made orthogonal to n (Gram-Schmidt); b = n x t.
+// When that edge is (nearly) parallel to n, the other corner's edge is used. Returns the
+// columns (t, b, n). Throws InputError if both edges are degenerate.
+Eigen::Matrix3d vertex_frame(const fit::Mesh& mesh, std::size_t v, const std::vector<int>& first_triangle);
+
+// R_p = F_posed F_rest^T for every kept vertex (a proper rotation). Throws InputError when
+// the meshes differ in topology (kept vertices, their OBJ indices, triangles).
+std::vector<Eigen::Matrix3d> rest_to_pose_rotations(const fit::Mesh& rest, const fit::Mesh& posed);
+
+// The fit carried to the pose: axes s_i -> R_p s_i; lobe coefficients unchanged (a ZH lobe
+// is rotation invariant about its axis); a directly stored linear band rotated as band 1
+// (the DC is invariant). Rows must already be in the mesh's kept-vertex order.
+ZhFitTable<double> deform_fit(const ZhFitTable<double>& fit, const std::vector<Eigen::Matrix3d>& rotations);
+
+// The fit's rows in the mesh's kept-vertex order (they name their OBJ vertices, or are in
+// that order already). Throws InputError, naming `what`, when the fit is not of this mesh.
+ZhFitTable<double> fit_for_mesh(ZhFitTable<double> fit, const fit::Mesh& mesh, const std::string& what);
+
+struct DeformRequest {
+  std::filesystem::path fit;   // zh-fit table baked on `rest`
+  std::filesystem::path rest;  // OBJ
+  std::filesystem::path pose;  // OBJ with the rest mesh's topology
+  std::filesystem::path out;   // zh-fit table of the posed mesh
+  std::filesystem::path json;  // optional: the posed fits in fit-zh's JSON layout
+};
+
+struct DeformReport {
+  std::size_t vertices = 0;
+  double largest_angle = 0;  // radians: the largest rotation angle of any R_p
+};
+
+DeformReport run_deform(const DeformRequest& request);
+
+}  // namespace shtool::deform
