@@ -26,8 +26,11 @@ void setup_render(CLI::App& app) {
   sub->add_option("--height", req->height, "image height")->capture_default_str();
   std::vector<std::pair<std::string, render::Shading>> names = render::shading_names();
   add_enum_option(sub, "--shading", req->shading, names,
-                  "transfer (t . e), zh (Eq. 13), zh-table (Eq. 24-25), error (|zh - transfer|), normals",
+                  "transfer (t . e), zh (Eq. 13), zh-table (Eq. 24-25), error (|zh - transfer|), normals, "
+                  "membrane (thin-membrane model, Eq. 22-23)",
                   "transfer with --transfer, else zh");
+  sub->add_option("--alpha", req->alpha, "membrane: transparency in [0, 1]")->capture_default_str();
+  sub->add_option("--alpha-map", req->alpha_map, "membrane: JSON {\"alpha\": [one per vertex]}");
   sub->add_option("--exposure", req->exposure, "PNG: scale by 2^E before tone mapping")->capture_default_str();
   sub->add_flag("--compare", req->compare,
                 "one strip: transfer, ZH fits with 1..4 lobes (fitted here), the N = 4 error; normalized RMS under each");

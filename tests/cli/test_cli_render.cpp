@@ -334,6 +334,52 @@ TEST(Render, BadRequestsAreRefusedByName) {
   EXPECT_NE(r.err.find("--out"), std::string::npos) << r.err;
 }
 
+// The thin-membrane shading under constant radiance 1 is 1 + alpha on every covered pixel
+// (the front cosine lobe gives 1, the back one alpha), with a constant alpha or a map.
+TEST(Render, MembraneUnderConstantLightIsOnePlusAlpha) {
+  const fs::path map = scratch("alpha.json");
+  {
+    const auto fit = shtool::load_zh_fit<double>(bakes().shadowed_fit);
+    ASSERT_TRUE(fit);
+    nlohmann::json doc = {{"alpha", std::vector<double>(fit.value().vertices, 0.5)}};
+    std::FILE* f = std::fopen(map.c_str(), "wb");
+    ASSERT_NE(f, nullptr);
+    const std::string text = doc.dump();
+    std::fwrite(text.data(), 1, text.size(), f);
+    std::fclose(f);
+  }
+  struct Case {
+    std::vector<std::string> args;
+    double expected;
+  } cases[] = {{{"--alpha", "0"}, 1.0}, {{"--alpha", "1"}, 2.0}, {{"--alpha-map", map.string()}, 1.5}};
+  for (const Case& c : cases) {
+    std::vector<std::string> args = {"--shading", "membrane", "--light", bakes().white.string()};
+    args.insert(args.end(), c.args.begin(), c.args.end());
+    const auto image = render_rgb(args, 48, 40);
+    int covered = 0;
+    double worst = 0;
+    for (float v : image) {
+      if (v == 0) continue;
+      ++covered;
+      worst = std::max(worst, std::abs(v - c.expected));
+    }
+    EXPECT_GT(covered, 300) << c.expected;
+    EXPECT_LT(worst, 2e-6) << c.expected;
+  }
+  const fs::path bad = scratch("alpha_bad.json");
+  {
+    std::FILE* f = std::fopen(bad.c_str(), "wb");
+    ASSERT_NE(f, nullptr);
+    std::fputs("{\"alpha\": [0.5, 2]}", f);
+    std::fclose(f);
+  }
+  const auto r = shtool_run({"render", kSpot, "--shading", "membrane", "--light", bakes().white.string(), "--alpha-map",
+                             bad.string(), "--out", scratch("never.png").string()});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("--alpha-map"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(scratch("never.png")));
+}
+
 // ---- Deforming meshes: shtool deform and render --pose ----
 
 fs::path posed_mesh(const std::string& name, const std::vector<std::string>& how) {

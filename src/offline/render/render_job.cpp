@@ -10,6 +10,7 @@
 #include <unordered_map>
 
 #include <embree3/rtcore.h>
+#include <nlohmann/json.hpp>
 
 #include "common/atomic_file.h"
 #include "common/input_error.h"
@@ -23,6 +24,7 @@
 #include "fit/mesh.h"
 #include "lighting/image_io.h"
 #include "lighting/lighting_output.h"
+#include "shtool/membrane.h"
 #include "shtool/rotation.h"
 #include "shtool/zh_fit_table.h"
 #include "shtool/zh_shading.h"
@@ -37,6 +39,7 @@ struct VertexData {
   int transfer_order = 0;
   std::vector<double> transfer;                // V * n^2
   std::optional<ZhFitTable<double>> fit;       // rows reordered to the kept vertices
+  std::vector<double> alpha;                   // membrane: transparency per vertex
 };
 
 // One channel of the lighting as an order-n vector: truncated, or padded with zeros
@@ -56,6 +59,19 @@ std::vector<double> vertex_radiance(Shading shading, const VertexData& data, con
   if (shading == Shading::normals) {
     for (std::size_t k = 0; k < v; ++k)
       for (int c = 0; c < 3; ++c) out[k * 3 + c] = 0.5 * (mesh.normals[k][c] + 1.0);
+    return out;
+  }
+  if (shading == Shading::membrane) {
+    const int n = light.order;
+    std::vector<double> lobe(n);
+    for (int c = 0; c < 3; ++c) {
+      const std::vector<double> e = light_channel(light, c, n);
+      for (std::size_t k = 0; k < v; ++k) {
+        membrane_lobe(data.alpha[k], lobe);
+        const Vec3<double> axis = mesh.normals[k];
+        out[k * 3 + c] = zh_shade_exact<double>(e, std::span<const Vec3<double>>(&axis, 1), lobe);
+      }
+    }
     return out;
   }
   std::vector<double> from_transfer, from_fit;
@@ -306,7 +322,7 @@ lighting::Image compare_strip(const Hits& hits, const fit::Mesh& mesh, VertexDat
 const std::vector<std::pair<std::string, Shading>>& shading_names() {
   static const std::vector<std::pair<std::string, Shading>> names = {
       {"transfer", Shading::transfer}, {"zh", Shading::zh},         {"zh-table", Shading::zh_table},
-      {"error", Shading::error},       {"normals", Shading::normals}};
+      {"error", Shading::error},       {"normals", Shading::normals},   {"membrane", Shading::membrane}};
   return names;
 }
 
@@ -324,7 +340,11 @@ RenderResult run_render(const RenderRequest& r) {
   if (r.compare) shading = Shading::transfer;
   if (needs_transfer && r.transfer.empty()) throw InputError("this shading needs --transfer");
   if (needs_fit && r.fit.empty()) throw InputError("this shading needs --fit");
-  if (r.fit.empty() && r.transfer.empty()) throw InputError("one of --fit and --transfer is required");
+  if (shading != Shading::membrane && shading != Shading::normals && r.fit.empty() && r.transfer.empty())
+    throw InputError("one of --fit and --transfer is required");
+  if (!(r.alpha >= 0 && r.alpha <= 1)) throw InputError("--alpha must be between 0 and 1");
+  if (!r.alpha_map.empty() && shading != Shading::membrane)
+    throw InputError("--alpha-map applies to --shading membrane only");
   if (shading != Shading::normals && r.light.empty()) throw InputError("--light is required");
   if (r.camera) {
     const Vec eye = vec(r.camera->eye), target = vec(r.camera->target), up = vec(r.camera->up);
@@ -369,6 +389,23 @@ RenderResult run_render(const RenderRequest& r) {
     if (!loaded) throw InputError("--fit: " + loaded.error().message);
     data.fit = deform::fit_for_mesh(std::move(loaded).value(), rest, "--fit " + r.fit.string());
     if (posed) data.fit = deform::deform_fit(*data.fit, rotations);
+  }
+  if (shading == Shading::membrane) {
+    data.alpha.assign(mesh.positions.size(), r.alpha);
+    if (!r.alpha_map.empty()) {
+      const nlohmann::json doc = read_json_input(r.alpha_map, "--alpha-map");
+      if (!doc.is_object() || !doc.contains("alpha") || !doc["alpha"].is_array() ||
+          doc["alpha"].size() != mesh.positions.size())
+        throw InputError("--alpha-map " + r.alpha_map.string() + ": expected {\"alpha\": [" +
+                         std::to_string(mesh.positions.size()) + " numbers in [0, 1]]}, one per mesh vertex");
+      for (std::size_t k = 0; k < mesh.positions.size(); ++k) {
+        const nlohmann::json& a = doc["alpha"][k];
+        if (!a.is_number() || !(a.get<double>() >= 0 && a.get<double>() <= 1))
+          throw InputError("--alpha-map " + r.alpha_map.string() + ": alpha[" + std::to_string(k) +
+                           "] is not a number in [0, 1]");
+        data.alpha[k] = a.get<double>();
+      }
+    }
   }
   lighting::Lighting light;
   if (shading != Shading::normals) {

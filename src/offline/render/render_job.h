@@ -13,7 +13,7 @@
 
 namespace shtool::render {
 
-enum class Shading { automatic, transfer, zh, zh_table, error, normals };
+enum class Shading { automatic, transfer, zh, zh_table, error, normals, membrane };
 const std::vector<std::pair<std::string, Shading>>& shading_names();
 
 struct Camera {
@@ -35,6 +35,11 @@ struct RenderRequest {
   double exposure = 0;             // PNG: radiance scaled by 2^exposure before tone mapping
   int zh_table_resolution = 32;    // zh-table: ZhLightTable resolution
   int threads = 0;                 // 0: every core
+  // membrane: [4]'s thin-membrane model (shtool/membrane.h), one lobe along the normal, with
+  // transparency `alpha`, or per vertex from `alpha_map` (JSON {"alpha": [...]}, one value in
+  // [0, 1] per vertex a triangle uses, in file order).
+  double alpha = 0;
+  std::filesystem::path alpha_map;
   // One strip instead: transfer, ZH fits of N = 1..4 lobes made from the transfer, and the
   // N = 4 error map, each labelled with its normalized RMS ([4] Fig. 3's layout).
   bool compare = false;
