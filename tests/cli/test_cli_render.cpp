@@ -198,13 +198,7 @@ TEST(Render, RotatedLightEqualsLightBuiltRotated) {
     rot.apply(f, g);
     for (int i = 0; i < 9; ++i) light["coefficients"][i][ch] = g[i];
   }
-  {
-    std::FILE* f = std::fopen(c.c_str(), "wb");
-    ASSERT_NE(f, nullptr);
-    const std::string text = light.dump();
-    std::fwrite(text.data(), 1, text.size(), f);
-    std::fclose(f);
-  }
+  shtool::test::write_file(c, light.dump());
   const auto built = render_rgb({"--transfer", bakes().shadowed_t.string(), "--light", b.string()});
   const auto rotated = render_rgb({"--transfer", bakes().shadowed_t.string(), "--light", c.string()});
   double worst = 0, largest = 0;
@@ -293,13 +287,7 @@ TEST(Render, BadRequestsAreRefusedByName) {
   must(shtool_run({"project-env", std::string(SHTOOL_SOURCE_DIR) + "/data/sky.hdr", "--order", "3", "--quantity",
                    "irradiance", "--json", irradiance.string()}));
   const fs::path other_mesh = scratch("tetra.obj");
-  {
-    std::FILE* f = std::fopen(other_mesh.c_str(), "wb");
-    ASSERT_NE(f, nullptr);
-    const char* obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 1 4 3\n";
-    std::fwrite(obj, 1, std::strlen(obj), f);
-    std::fclose(f);
-  }
+  shtool::test::write_file(other_mesh, "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 1 4 3\n");
   const std::string t = bakes().shadowed_t.string(), fit = bakes().shadowed_fit.string(), sky = bakes().sky.string();
   struct Bad {
     std::vector<std::string> args;
@@ -341,12 +329,8 @@ TEST(Render, MembraneUnderConstantLightIsOnePlusAlpha) {
   {
     const auto fit = shtool::load_zh_fit<double>(bakes().shadowed_fit);
     ASSERT_TRUE(fit);
-    nlohmann::json doc = {{"alpha", std::vector<double>(fit.value().vertices, 0.5)}};
-    std::FILE* f = std::fopen(map.c_str(), "wb");
-    ASSERT_NE(f, nullptr);
-    const std::string text = doc.dump();
-    std::fwrite(text.data(), 1, text.size(), f);
-    std::fclose(f);
+    const nlohmann::json doc = {{"alpha", std::vector<double>(fit.value().vertices, 0.5)}};
+    shtool::test::write_file(map, doc.dump());
   }
   struct Case {
     std::vector<std::string> args;
@@ -367,12 +351,7 @@ TEST(Render, MembraneUnderConstantLightIsOnePlusAlpha) {
     EXPECT_LT(worst, 2e-6) << c.expected;
   }
   const fs::path bad = scratch("alpha_bad.json");
-  {
-    std::FILE* f = std::fopen(bad.c_str(), "wb");
-    ASSERT_NE(f, nullptr);
-    std::fputs("{\"alpha\": [0.5, 2]}", f);
-    std::fclose(f);
-  }
+  shtool::test::write_file(bad, "{\"alpha\": [0.5, 2]}");
   const auto r = shtool_run({"render", kSpot, "--shading", "membrane", "--light", bakes().white.string(), "--alpha-map",
                              bad.string(), "--out", scratch("never.png").string()});
   EXPECT_EQ(r.exit_code, 1);
@@ -474,13 +453,7 @@ TEST(Deform, PosedRenderMatchesAFreshBake) {
 
 TEST(Deform, APoseOfAnotherTopologyIsRefused) {
   const fs::path other = scratch("tetra2.obj");
-  {
-    std::FILE* f = std::fopen(other.c_str(), "wb");
-    ASSERT_NE(f, nullptr);
-    const char* obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 1 4 3\n";
-    std::fwrite(obj, 1, std::strlen(obj), f);
-    std::fclose(f);
-  }
+  shtool::test::write_file(other, "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 1 4 3\n");
   const fs::path out = scratch("never.shtb");
   const auto r = shtool_run({"deform", bakes().shadowed_fit.string(), "--rest", kSpot, "--pose", other.string(),
                              "--out", out.string()});

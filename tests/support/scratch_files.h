@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 
 #include <unistd.h>
@@ -16,6 +17,12 @@ inline std::string read_file(const std::filesystem::path& p) {
   std::stringstream s;
   s << f.rdbuf();
   return s.str();
+}
+
+inline void write_file(const std::filesystem::path& p, const std::string& bytes) {
+  std::ofstream f(p, std::ios::binary);
+  f << bytes;
+  if (!f) throw std::runtime_error("cannot write " + p.string());
 }
 
 // <temp>/shtool_<suite>_<pid>/<name>, the folder made on first use.

@@ -701,17 +701,17 @@ ShaderSource shader_source(const ShaderRequest& request) {
                          : "none (bands 1 and 2 by closed forms in R)";
       break;
     case ShaderOperation::zhf_rotate:
-      zhf_rotate(s, n, *request.lobes, body, out);
+    case ShaderOperation::zhf_tailored_rotate: {
+      const bool tailored = request.operation == ShaderOperation::zhf_tailored_rotate;
+      if (tailored) zhf_tailored_rotate(s, n, *request.lobes, body, out);
+      else zhf_rotate(s, n, *request.lobes, body, out);
       crc = request.lobes_crc;
-      constants = "lobe directions and sparse A^_l rows of bands 1.." + std::to_string(n - 1) +
+      // The tailored texture form takes band 0 through the table too.
+      constants = "lobe directions and sparse A^_l rows of bands " + std::string(tailored ? "0.." : "1..") +
+                  std::to_string(n - 1) +
                   " from the zhf-lobes table whose file has the CRC-32 below; the basis as sh-eval";
       break;
-    case ShaderOperation::zhf_tailored_rotate:
-      zhf_tailored_rotate(s, n, *request.lobes, body, out);
-      crc = request.lobes_crc;
-      constants = "lobe directions and sparse A^_l rows of bands 0.." + std::to_string(n - 1) +
-                  " from the zhf-lobes table whose file has the CRC-32 below; the basis as sh-eval";
-      break;
+    }
     case ShaderOperation::triple_product:
       triple_product(s, n, body, out, crc);
       constants = "the tripling tensor of order " + std::to_string(n) + " (Wigner 3j construction)";
