@@ -12,6 +12,7 @@ packages=(
   libeigen3-dev libfftw3-dev nlohmann-json3-dev          # runtime library
   libcli11-dev libnlopt-cxx-dev libembree-dev libtinyobjloader-dev  # offline tool
   libopenexr-dev libstb-dev                              # offline tool: images
+  libtinygltf-dev                                        # offline tool: glTF meshes
   libgtest-dev libbenchmark-dev                          # tests and benchmarks
   glslang-tools spirv-tools libvulkan-dev mesa-vulkan-drivers  # shader tests (lavapipe: a CPU Vulkan device)
   clang libclang-rt-14-dev                               # fuzz targets (libFuzzer), sanitizers

@@ -118,8 +118,8 @@ ZhFitTable<double> fit_for_mesh(ZhFitTable<double> fit, const fit::Mesh& mesh, c
 
 DeformReport run_deform(const DeformRequest& r) {
   if (r.out.empty()) throw InputError("--out is required");
-  const fit::Mesh rest = fit::load_obj(r.rest);
-  const fit::Mesh posed = fit::load_obj(r.pose);
+  const fit::Mesh rest = fit::load_mesh(r.rest);
+  const fit::Mesh posed = fit::load_mesh(r.pose);
   Result<ZhFitTable<double>> loaded = load_zh_fit<double>(r.fit);
   if (!loaded) throw InputError(loaded.error().message);
   const ZhFitTable<double> fit = fit_for_mesh(std::move(loaded).value(), rest, r.fit.string());

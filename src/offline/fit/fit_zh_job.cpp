@@ -199,7 +199,7 @@ FitZhReport run_fit_zh(const FitZhRequest& r, const FitZhCallbacks& cb) {
     order = file_order;
     params = {{"transfer", r.transfer.filename().string()}, {"input_crc32", input_crc32(text)}};
   } else {
-    mesh = load_obj(r.mesh, r.normals);
+    mesh = load_mesh(r.mesh, r.normals);
     if (cb.warning) {
       if (mesh.unreferenced_vertices)
         cb.warning("skipped " + std::to_string(mesh.unreferenced_vertices) + " unreferenced vertices");

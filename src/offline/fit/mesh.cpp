@@ -1,6 +1,7 @@
 #include "fit/mesh.h"
 
 #include <array>
+#include <cctype>
 #include <cmath>
 #include <cstdlib>
 #include <limits>
@@ -113,12 +114,93 @@ std::size_t compute_angle_weighted_normals(Mesh& mesh) {
   return zero;
 }
 
+Mesh finish_mesh(Mesh mesh, const std::vector<Eigen::Vector3d>& positions, const std::vector<Eigen::Vector3d>& normals,
+                 const std::vector<std::array<Corner, 3>>& tris, const std::filesystem::path& path,
+                 NormalSource normal_source) {
+  const std::size_t nv = positions.size(), nn = normals.size();
+  auto position = [&](int v) { return positions[v]; };
+  // Degenerate: repeated index or zero area. Zero area is tested exactly (cross product
+  // of edges equal to zero): a sliver with tiny but non-zero area still has a normal.
+  std::vector<std::array<Corner, 3>> kept;
+  kept.reserve(tris.size());
+  for (const auto& t : tris) {
+    const bool repeated = t[0].v == t[1].v || t[1].v == t[2].v || t[0].v == t[2].v;
+    const Eigen::Vector3d p0 = position(t[0].v);
+    const double area2 = (position(t[1].v) - p0).cross(position(t[2].v) - p0).norm();
+    if (repeated || !(area2 > 0)) {
+      ++mesh.degenerate_faces;
+      continue;
+    }
+    kept.push_back(t);
+  }
+  if (kept.empty())
+    fail(path, tris.empty() ? "no faces (need at least one triangle)"
+                            : "no usable triangle (all " + std::to_string(tris.size()) + " are degenerate)");
+
+  // Keep referenced vertices only, in file order (so output order follows the file).
+  std::vector<int> remap(nv, -1);
+  for (const auto& t : kept)
+    for (const Corner& c : t) remap[c.v] = 0;
+  for (std::size_t v = 0; v < nv; ++v) {
+    if (remap[v] < 0) {
+      ++mesh.unreferenced_vertices;
+      continue;
+    }
+    remap[v] = static_cast<int>(mesh.positions.size());
+    mesh.positions.push_back(position(static_cast<int>(v)));
+    mesh.source_index.push_back(static_cast<std::uint32_t>(v));
+  }
+  for (const auto& t : kept) mesh.triangles.emplace_back(remap[t[0].v], remap[t[1].v], remap[t[2].v]);
+
+  bool all_have_normals = nn > 0;
+  for (const auto& t : kept)
+    for (const Corner& c : t) all_have_normals = all_have_normals && c.n >= 0;
+  if (normal_source == NormalSource::file && !all_have_normals)
+    fail(path, "--normals file: not every face corner has a normal in the file");
+  if (normal_source != NormalSource::computed && all_have_normals) {
+    // A vertex may carry different normals on different faces (a crease); average them.
+    std::vector<Eigen::Vector3d> sum(mesh.positions.size(), Eigen::Vector3d::Zero());
+    for (const auto& t : kept)
+      for (const Corner& c : t) {
+        const Eigen::Vector3d n = normals[c.n];
+        const double len = n.norm();
+        if (len > 0) sum[remap[c.v]] += n / len;
+      }
+    mesh.normals.resize(mesh.positions.size());
+    for (std::size_t i = 0; i < sum.size(); ++i) {
+      const double len = sum[i].norm();
+      if (len > 0) {
+        mesh.normals[i] = sum[i] / len;
+      } else {
+        mesh.normals[i] = Eigen::Vector3d::UnitZ();
+        ++mesh.zero_normals;
+      }
+    }
+    mesh.normals_from_file = true;
+  } else {
+    mesh.zero_normals = compute_angle_weighted_normals(mesh);
+  }
+  return mesh;
+}
+
 Mesh load_obj(const std::filesystem::path& path, NormalSource normal_source) {
   // Read once: the same bytes are checked, parsed and hashed.
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) fail(path, "no such file");
   if (std::filesystem::is_directory(path, ec)) fail(path, "is a directory, not an OBJ file");
   return load_obj_text(read_input_file(path, "mesh"), path, normal_source);
+}
+
+Mesh load_mesh(const std::filesystem::path& path, NormalSource normal_source) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) fail(path, "no such file");
+  if (std::filesystem::is_directory(path, ec)) fail(path, "is a directory, not a mesh file");
+  std::string bytes = read_input_file(path, "mesh");
+  std::string ext = path.extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if ((bytes.size() >= 4 && bytes.compare(0, 4, "glTF") == 0) || ext == ".gltf" || ext == ".glb")
+    return load_gltf_bytes(bytes, path, normal_source);
+  return load_obj_text(bytes, path, normal_source);
 }
 
 Mesh load_obj_text(const std::string& text, const std::filesystem::path& path, NormalSource normal_source) {
@@ -151,9 +233,6 @@ Mesh load_obj_text(const std::string& text, const std::filesystem::path& path, N
   if (nv == 0) fail(path, "no vertices");
 
   // Corners of every face, checked, then fanned: (c0, ci, ci+1).
-  struct Corner {
-    int v, n;
-  };
   std::vector<std::array<Corner, 3>> tris;
   std::size_t face_number = 0;
   for (const tinyobj::shape_t& shape : reader.GetShapes()) {
@@ -184,71 +263,12 @@ Mesh load_obj_text(const std::string& text, const std::filesystem::path& path, N
     }
   }
 
-  auto position = [&](int v) {
-    return Eigen::Vector3d(attrib.vertices[3 * v], attrib.vertices[3 * v + 1], attrib.vertices[3 * v + 2]);
-  };
-  // Degenerate: repeated index or zero area. Zero area is tested exactly (cross product
-  // of edges equal to zero): a sliver with tiny but non-zero area still has a normal.
-  std::vector<std::array<Corner, 3>> kept;
-  kept.reserve(tris.size());
-  for (const auto& t : tris) {
-    const bool repeated = t[0].v == t[1].v || t[1].v == t[2].v || t[0].v == t[2].v;
-    const Eigen::Vector3d p0 = position(t[0].v);
-    const double area2 = (position(t[1].v) - p0).cross(position(t[2].v) - p0).norm();
-    if (repeated || !(area2 > 0)) {
-      ++mesh.degenerate_faces;
-      continue;
-    }
-    kept.push_back(t);
-  }
-  if (kept.empty())
-    fail(path, tris.empty() ? "no faces (need at least one triangle)"
-                            : "no usable triangle (all " + std::to_string(tris.size()) + " are degenerate)");
-
-  // Keep referenced vertices only, in OBJ order (so output order follows the file).
-  std::vector<int> remap(nv, -1);
-  for (const auto& t : kept)
-    for (const Corner& c : t) remap[c.v] = 0;
-  for (std::size_t v = 0; v < nv; ++v) {
-    if (remap[v] < 0) {
-      ++mesh.unreferenced_vertices;
-      continue;
-    }
-    remap[v] = static_cast<int>(mesh.positions.size());
-    mesh.positions.push_back(position(static_cast<int>(v)));
-    mesh.source_index.push_back(static_cast<std::uint32_t>(v));
-  }
-  for (const auto& t : kept) mesh.triangles.emplace_back(remap[t[0].v], remap[t[1].v], remap[t[2].v]);
-
-  bool all_have_normals = nn > 0;
-  for (const auto& t : kept)
-    for (const Corner& c : t) all_have_normals = all_have_normals && c.n >= 0;
-  if (normal_source == NormalSource::file && !all_have_normals)
-    fail(path, "--normals file: not every face corner has a normal in the file");
-  if (normal_source != NormalSource::computed && all_have_normals) {
-    // A vertex may carry different normals on different faces (a crease); average them.
-    std::vector<Eigen::Vector3d> sum(mesh.positions.size(), Eigen::Vector3d::Zero());
-    for (const auto& t : kept)
-      for (const Corner& c : t) {
-        Eigen::Vector3d n(attrib.normals[3 * c.n], attrib.normals[3 * c.n + 1], attrib.normals[3 * c.n + 2]);
-        const double len = n.norm();
-        if (len > 0) sum[remap[c.v]] += n / len;
-      }
-    mesh.normals.resize(mesh.positions.size());
-    for (std::size_t i = 0; i < sum.size(); ++i) {
-      const double len = sum[i].norm();
-      if (len > 0) {
-        mesh.normals[i] = sum[i] / len;
-      } else {
-        mesh.normals[i] = Eigen::Vector3d::UnitZ();
-        ++mesh.zero_normals;
-      }
-    }
-    mesh.normals_from_file = true;
-  } else {
-    mesh.zero_normals = compute_angle_weighted_normals(mesh);
-  }
-  return mesh;
+  std::vector<Eigen::Vector3d> positions(nv), normals(nn);
+  for (std::size_t v = 0; v < nv; ++v)
+    positions[v] = Eigen::Vector3d(attrib.vertices[3 * v], attrib.vertices[3 * v + 1], attrib.vertices[3 * v + 2]);
+  for (std::size_t k = 0; k < nn; ++k)
+    normals[k] = Eigen::Vector3d(attrib.normals[3 * k], attrib.normals[3 * k + 1], attrib.normals[3 * k + 2]);
+  return finish_mesh(std::move(mesh), positions, normals, tris, path, normal_source);
 }
 
 }  // namespace shtool::fit

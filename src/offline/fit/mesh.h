@@ -7,6 +7,7 @@
 
 #include "common/input_error.h"
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
@@ -49,9 +50,38 @@ enum class NormalSource { automatic, file, computed };
 // be dereferenced). NormalSource::automatic uses the file's normals when every corner
 // of every kept triangle has one, and computed angle-weighted normals otherwise.
 Mesh load_obj(const std::filesystem::path& path, NormalSource normals = NormalSource::automatic);
+// glTF 2.0, binary (.glb) or JSON (.gltf, its external buffers read beside it): every
+// triangle primitive (strips and fans converted, points and lines skipped) of the default
+// scene, in world space (node matrices or T R S, composed down the hierarchy; normals by
+// the inverse transpose, winding kept under mirroring transforms), indices of any
+// component type, vertices of every primitive instance one after the other (their order
+// is source_index). Normals as for OBJ: the file's when every primitive has NORMAL.
+// Throws MeshError naming the file and the problem: a buffer that cannot be read, an
+// accessor outside its buffer, a sparse or wrongly typed accessor, an index past its
+// primitive's vertices, a node cycle, no triangle primitive, a non-finite position.
+Mesh load_gltf_bytes(const std::string& bytes, const std::filesystem::path& path,
+                     NormalSource normals = NormalSource::automatic);
+
+// The mesh at `path`, glTF (binary magic, or a .gltf / .glb name) or OBJ.
+Mesh load_mesh(const std::filesystem::path& path, NormalSource normals = NormalSource::automatic);
+
 // The same for OBJ text already in memory; `path` names it in messages.
 Mesh load_obj_text(const std::string& text, const std::filesystem::path& path,
                    NormalSource normals = NormalSource::automatic);
+
+// One corner of a triangle: a vertex and the normal it has there (-1: none).
+struct Corner {
+  int v, n;
+};
+
+// The common end of every loader: triangles with a repeated vertex or zero area dropped
+// (counted), unreferenced vertices dropped (counted) with the rest kept in file order
+// (source_index), normals from the file when every corner has one (averaged per vertex)
+// and the source allows, computed angle-weighted otherwise. Throws MeshError when no
+// usable triangle is left. `mesh` brings the counters the loader set.
+Mesh finish_mesh(Mesh mesh, const std::vector<Eigen::Vector3d>& positions, const std::vector<Eigen::Vector3d>& normals,
+                 const std::vector<std::array<Corner, 3>>& tris, const std::filesystem::path& path,
+                 NormalSource normal_source);
 
 // Angle-weighted vertex normals (Thürmer and Wüthrich 1998): each incident triangle
 // contributes its unit normal times the corner angle, which makes the result independent

@@ -355,11 +355,11 @@ RenderResult run_render(const RenderRequest& r) {
   // Checked before any work, so that a bad output name costs nothing.
   (void)lighting::encode_image_for(r.out, lighting::Image{1, 1, 4, std::vector<float>(4, 0.0f)}, "--out");
 
-  const fit::Mesh rest = fit::load_obj(r.mesh);
+  const fit::Mesh rest = fit::load_mesh(r.mesh);
   std::vector<Eigen::Matrix3d> rotations;  // rest frame -> posed frame, per vertex (--pose)
   std::optional<fit::Mesh> posed;
   if (!r.pose.empty()) {
-    posed = fit::load_obj(r.pose);
+    posed = fit::load_mesh(r.pose);
     rotations = deform::rest_to_pose_rotations(rest, *posed);
   }
   const fit::Mesh& mesh = posed ? *posed : rest;

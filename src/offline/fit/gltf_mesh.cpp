@@ -1,0 +1,252 @@
+// glTF 2.0 meshes through tinygltf: every triangle primitive of the default scene in world
+// space. tinygltf parses the file and resolves buffers; every accessor read here is
+// checked against its buffer view and buffer, since tinygltf leaves that to its user.
+#include <tiny_gltf.h>
+
+#include <array>
+#include <cmath>
+#include <cstring>
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "common/input_error.h"
+#include "common/input_file.h"
+#include "fit/mesh.h"
+
+namespace shtool::fit {
+namespace {
+
+[[noreturn]] void fail(const std::filesystem::path& path, const std::string& what) {
+  throw MeshError(path.string() + ": " + what);
+}
+
+// Textures play no part in a mesh's transfer: images are neither decoded nor required.
+bool skip_image(tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int,
+                void*) {
+  return true;
+}
+
+// Where accessor `index` keeps its `count` elements (of `type`, with one of the allowed
+// component types), checked against its buffer view and buffer without overflow.
+struct AccessorView {
+  const unsigned char* data = nullptr;
+  std::size_t count = 0, stride = 0;
+  int component_type = 0;
+};
+
+AccessorView accessor_view(const tinygltf::Model& model, int index, int type, const std::vector<int>& component_types,
+                           const std::string& what, const std::filesystem::path& path) {
+  if (index < 0 || static_cast<std::size_t>(index) >= model.accessors.size())
+    fail(path, what + ": accessor " + std::to_string(index) + " does not exist");
+  const tinygltf::Accessor& a = model.accessors[index];
+  if (a.sparse.isSparse) fail(path, what + ": sparse accessors are not supported");
+  if (a.type != type) fail(path, what + ": accessor " + std::to_string(index) + " has the wrong type");
+  bool allowed = false;
+  for (int t : component_types) allowed = allowed || a.componentType == t;
+  if (!allowed) fail(path, what + ": accessor " + std::to_string(index) + " has an unsupported component type");
+  if (a.bufferView < 0 || static_cast<std::size_t>(a.bufferView) >= model.bufferViews.size())
+    fail(path, what + ": accessor " + std::to_string(index) + " has no buffer view");
+  const tinygltf::BufferView& view = model.bufferViews[a.bufferView];
+  if (view.buffer < 0 || static_cast<std::size_t>(view.buffer) >= model.buffers.size())
+    fail(path, what + ": buffer view " + std::to_string(a.bufferView) + " names no buffer");
+  const std::vector<unsigned char>& buffer = model.buffers[view.buffer].data;
+  const std::size_t element = static_cast<std::size_t>(tinygltf::GetComponentSizeInBytes(a.componentType)) *
+                              static_cast<std::size_t>(tinygltf::GetNumComponentsInType(a.type));
+  const std::size_t stride = view.byteStride ? view.byteStride : element;
+  const auto out_of_range = [&] {
+    fail(path, what + ": accessor " + std::to_string(index) + " reads past the end of its buffer");
+  };
+  if (view.byteOffset > buffer.size() || view.byteLength > buffer.size() - view.byteOffset) out_of_range();
+  if (a.byteOffset > view.byteLength) out_of_range();
+  if (a.count > 0) {
+    const std::size_t available = view.byteLength - a.byteOffset;
+    if (element > available) out_of_range();
+    if ((a.count - 1) > (available - element) / stride) out_of_range();
+  }
+  return {buffer.data() + view.byteOffset + a.byteOffset, a.count, stride, a.componentType};
+}
+
+std::vector<Eigen::Vector3d> read_vec3(const tinygltf::Model& model, int index, const std::string& what,
+                                       const std::filesystem::path& path) {
+  const AccessorView v =
+      accessor_view(model, index, TINYGLTF_TYPE_VEC3, {TINYGLTF_COMPONENT_TYPE_FLOAT}, what, path);
+  std::vector<Eigen::Vector3d> out(v.count);
+  for (std::size_t i = 0; i < v.count; ++i) {
+    float f[3];
+    std::memcpy(f, v.data + i * v.stride, sizeof f);
+    out[i] = Eigen::Vector3d(f[0], f[1], f[2]);
+  }
+  return out;
+}
+
+std::vector<std::uint32_t> read_indices(const tinygltf::Model& model, int index, const std::filesystem::path& path) {
+  const AccessorView v = accessor_view(model, index, TINYGLTF_TYPE_SCALAR,
+                                       {TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT,
+                                        TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT},
+                                       "indices", path);
+  std::vector<std::uint32_t> out(v.count);
+  for (std::size_t i = 0; i < v.count; ++i) {
+    const unsigned char* p = v.data + i * v.stride;
+    if (v.component_type == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE) {
+      out[i] = p[0];
+    } else if (v.component_type == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT) {
+      std::uint16_t s;
+      std::memcpy(&s, p, sizeof s);
+      out[i] = s;
+    } else {
+      std::memcpy(&out[i], p, sizeof(std::uint32_t));
+    }
+  }
+  return out;
+}
+
+// The node's local transform: its matrix, or T R S.
+Eigen::Matrix4d local_transform(const tinygltf::Node& node) {
+  Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
+  if (node.matrix.size() == 16) {
+    for (int c = 0; c < 4; ++c)
+      for (int r = 0; r < 4; ++r) m(r, c) = node.matrix[c * 4 + r];  // column-major
+    return m;
+  }
+  Eigen::Matrix4d t = Eigen::Matrix4d::Identity(), rot = Eigen::Matrix4d::Identity(),
+                  s = Eigen::Matrix4d::Identity();
+  if (node.translation.size() == 3) t.block<3, 1>(0, 3) = Eigen::Vector3d(node.translation[0], node.translation[1],
+                                                                           node.translation[2]);
+  if (node.rotation.size() == 4)  // glTF stores x, y, z, w
+    rot.block<3, 3>(0, 0) =
+        Eigen::Quaterniond(node.rotation[3], node.rotation[0], node.rotation[1], node.rotation[2])
+            .normalized()
+            .toRotationMatrix();
+  if (node.scale.size() == 3) s.diagonal().head<3>() = Eigen::Vector3d(node.scale[0], node.scale[1], node.scale[2]);
+  return t * rot * s;
+}
+
+struct Builder {
+  Builder(const tinygltf::Model& m, const std::filesystem::path& p) : model(m), path(p) {}
+  const tinygltf::Model& model;
+  const std::filesystem::path& path;
+  std::vector<Eigen::Vector3d> positions, normals;
+  std::vector<std::array<Corner, 3>> triangles;
+  std::size_t primitives = 0, skipped_primitives = 0;
+  bool every_vertex_has_normal = true;
+
+  void primitive(const tinygltf::Primitive& p, const Eigen::Matrix4d& world) {
+    const int mode = p.mode < 0 ? TINYGLTF_MODE_TRIANGLES : p.mode;
+    if (mode != TINYGLTF_MODE_TRIANGLES && mode != TINYGLTF_MODE_TRIANGLE_STRIP &&
+        mode != TINYGLTF_MODE_TRIANGLE_FAN) {
+      ++skipped_primitives;  // points and lines have no surface
+      return;
+    }
+    const auto pos = p.attributes.find("POSITION");
+    if (pos == p.attributes.end()) fail(path, "a triangle primitive has no POSITION attribute");
+    const std::vector<Eigen::Vector3d> local = read_vec3(model, pos->second, "POSITION", path);
+    std::vector<Eigen::Vector3d> local_normals;
+    const auto nrm = p.attributes.find("NORMAL");
+    if (nrm != p.attributes.end()) {
+      local_normals = read_vec3(model, nrm->second, "NORMAL", path);
+      if (local_normals.size() != local.size()) fail(path, "NORMAL and POSITION counts differ in a primitive");
+    } else {
+      every_vertex_has_normal = false;
+    }
+    std::vector<std::uint32_t> index;
+    if (p.indices >= 0) {
+      index = read_indices(model, p.indices, path);
+    } else {
+      index.resize(local.size());
+      for (std::size_t i = 0; i < index.size(); ++i) index[i] = static_cast<std::uint32_t>(i);
+    }
+    for (std::uint32_t i : index)
+      if (i >= local.size())
+        fail(path, "an index (" + std::to_string(i) + ") is past the " + std::to_string(local.size()) +
+                       " vertices of its primitive");
+    const Eigen::Matrix3d linear = world.block<3, 3>(0, 0);
+    const Eigen::Matrix3d normal_matrix = linear.inverse().transpose();
+    const bool mirrored = linear.determinant() < 0;
+    const int base = static_cast<int>(positions.size());
+    for (std::size_t v = 0; v < local.size(); ++v) {
+      const Eigen::Vector3d w = linear * local[v] + world.block<3, 1>(0, 3);
+      if (!w.allFinite()) fail(path, "vertex " + std::to_string(base + v) + " is not finite");
+      positions.push_back(w);
+      normals.push_back(local_normals.empty() ? Eigen::Vector3d::Zero() : (normal_matrix * local_normals[v]).eval());
+      if (!normals.back().allFinite()) fail(path, "normal of vertex " + std::to_string(base + v) + " is not finite");
+    }
+    const bool has_normals = !local_normals.empty();
+    auto corner = [&](std::uint32_t i) {
+      const int v = base + static_cast<int>(i);
+      return Corner{v, has_normals ? v : -1};
+    };
+    auto add = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c) {
+      // A mirroring transform turns the winding around; swap to keep the front side.
+      if (mirrored) std::swap(b, c);
+      triangles.push_back({corner(a), corner(b), corner(c)});
+    };
+    if (mode == TINYGLTF_MODE_TRIANGLES) {
+      for (std::size_t k = 0; k + 2 < index.size(); k += 3)
+        add(index[k], index[k + 1], index[k + 2]);
+    } else if (mode == TINYGLTF_MODE_TRIANGLE_STRIP) {
+      for (std::size_t k = 0; k + 2 < index.size(); ++k)
+        if (k % 2 == 0) add(index[k], index[k + 1], index[k + 2]);
+        else add(index[k + 1], index[k], index[k + 2]);
+    } else {
+      for (std::size_t k = 1; k + 1 < index.size(); ++k) add(index[0], index[k], index[k + 1]);
+    }
+    ++primitives;
+  }
+
+  void node(int index, const Eigen::Matrix4d& parent, std::vector<bool>& on_path, int depth) {
+    if (index < 0 || static_cast<std::size_t>(index) >= model.nodes.size())
+      fail(path, "node " + std::to_string(index) + " does not exist");
+    if (on_path[index] || depth > 256) fail(path, "the node hierarchy has a cycle (node " + std::to_string(index) + ")");
+    on_path[index] = true;
+    const tinygltf::Node& n = model.nodes[index];
+    const Eigen::Matrix4d world = parent * local_transform(n);
+    if (n.mesh >= 0) {
+      if (static_cast<std::size_t>(n.mesh) >= model.meshes.size())
+        fail(path, "node " + std::to_string(index) + " names mesh " + std::to_string(n.mesh) + ", which does not exist");
+      for (const tinygltf::Primitive& p : model.meshes[n.mesh].primitives) primitive(p, world);
+    }
+    for (int child : n.children) node(child, world, on_path, depth + 1);
+    on_path[index] = false;
+  }
+};
+
+}  // namespace
+
+Mesh load_gltf_bytes(const std::string& bytes, const std::filesystem::path& path, NormalSource normal_source) {
+  tinygltf::Model model;
+  tinygltf::TinyGLTF loader;
+  loader.SetImageLoader(skip_image, nullptr);
+  std::string err, warn;
+  const std::string base = path.has_parent_path() ? path.parent_path().string() : std::string(".");
+  const bool binary = bytes.size() >= 4 && bytes.compare(0, 4, "glTF") == 0;
+  if (bytes.size() > std::numeric_limits<unsigned int>::max()) fail(path, "file too large");
+  const bool ok =
+      binary ? loader.LoadBinaryFromMemory(&model, &err, &warn, reinterpret_cast<const unsigned char*>(bytes.data()),
+                                           static_cast<unsigned int>(bytes.size()), base)
+             : loader.LoadASCIIFromString(&model, &err, &warn, bytes.data(), static_cast<unsigned int>(bytes.size()),
+                                          base);
+  if (!ok) {
+    while (!err.empty() && (err.back() == '\n' || err.back() == ' ')) err.pop_back();
+    fail(path, "cannot read glTF" + (err.empty() ? std::string() : ": " + err));
+  }
+  if (model.scenes.empty()) fail(path, "no scene (glTF without scenes has nothing to render)");
+  const int scene = model.defaultScene >= 0 ? model.defaultScene : 0;
+  if (static_cast<std::size_t>(scene) >= model.scenes.size()) fail(path, "the default scene does not exist");
+  Builder b(model, path);
+  std::vector<bool> on_path(model.nodes.size(), false);
+  for (int n : model.scenes[scene].nodes) b.node(n, Eigen::Matrix4d::Identity(), on_path, 0);
+  if (b.primitives == 0)
+    fail(path, b.skipped_primitives ? "no triangle primitive (only points or lines)" : "the default scene has no mesh");
+  if (normal_source == NormalSource::file && !b.every_vertex_has_normal)
+    fail(path, "--normals file: not every primitive has NORMAL");
+  Mesh mesh;
+  mesh.input_crc32 = input_crc32(bytes);
+  mesh.obj_vertices = b.positions.size();
+  return finish_mesh(std::move(mesh), b.positions, b.normals, b.triangles, path, normal_source);
+}
+
+}  // namespace shtool::fit
