@@ -23,6 +23,14 @@ echo "-- fit-zh: shadowed PRT transfer on data/spot.obj, order 6, 4 ZH lobes per
 "$shtool" fit-zh "$root/data/spot.obj" --out "$out/spot.zh.shtb" --json "$out/spot.zh.json" \
   --ply "$out/spot.zh.ply"
 
+echo "-- render: spot shaded by its ZH fit under the sky at order 6 (spot.zh.png)"
+"$shtool" project-env "$root/data/sky.hdr" --order 6 --json "$out/sky6.json"
+"$shtool" render "$root/data/spot.obj" --fit "$out/spot.zh.shtb" --light "$out/sky6.json" --out "$out/spot.zh.png"
+
+echo "-- gen-shader: GLSL and HLSL of SH evaluation and zxzxz rotation, order 3"
+"$shtool" gen-shader --lang glsl --what sh-eval --order 3 --out "$out/sh_eval.glsl"
+"$shtool" gen-shader --lang hlsl --what zxzxz-rotate --order 3 --out "$out/zxzxz_rotate.hlsl"
+
 echo "-- search-lobes: sparse ZHF lobes shared across bands, order 4"
 "$shtool" search-lobes --shared --order 4 --seed 1 --quiet --out "$out/zhf-shared-N4.shtb"
 
