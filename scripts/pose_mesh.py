@@ -32,6 +32,8 @@ def main():
     g.add_argument("--rotate", help="ax,ay,az,angle")
     g.add_argument("--bend", type=float, help="curvature k")
     a = p.parse_args()
+    if a.bend is not None and a.bend == 0:
+        p.error("--bend: the curvature must not be 0 (0 is the rest pose)")
     r = rotation(*[float(t) for t in a.rotate.split(",")]) if a.rotate else None
     out = []
     with open(a.input) as f:
@@ -49,6 +51,10 @@ def main():
                     theta = a.bend * z
                     v = [x, radius - (radius - y) * math.cos(theta), (radius - y) * math.sin(theta)]
                 out.append("%s %.9g %.9g %.9g\n" % (tag, v[0], v[1], v[2]))
+            elif line.startswith("f ") and not r:
+                # The normals are dropped with --bend: so are the faces' references to them.
+                out.append("f " + " ".join(c.split("/")[0] + ("/" + c.split("/")[1] if c.count("/") and c.split("/")[1] else "")
+                                           for c in line.split()[1:]) + "\n")
             else:
                 out.append(line)
     with open(a.output, "w") as f:

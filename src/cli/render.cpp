@@ -14,8 +14,8 @@ void setup_render(CLI::App& app) {
   auto req = std::make_shared<render::RenderRequest>();
   auto camera = std::make_shared<std::string>();
   CLI::App* sub = app.add_subcommand("render", "Render a mesh shaded by its transfer or ZH fit under SH lighting");
-  sub->add_option("mesh", req->mesh, "OBJ mesh (the one the transfer or fit was baked on)")->required();
-  sub->add_option("--pose", req->pose, "posed mesh (OBJ, the rest mesh's topology): render it with the fit or "
+  sub->add_option("mesh", req->mesh, "mesh, OBJ or glTF (the one the transfer or fit was baked on)")->required();
+  sub->add_option("--pose", req->pose, "posed mesh (OBJ or glTF, the rest mesh's topology): render it with the fit or "
                                        "transfer rotated into its frames, without re-simulation");
   sub->add_option("--fit", req->fit, "zh-fit table (fit-zh --out)");
   sub->add_option("--transfer", req->transfer, "transfer vectors JSON (fit-zh --save-transfer)");

@@ -273,6 +273,38 @@ TEST(Render, CompareStripOfFits) {
   EXPECT_EQ(worst, 0.0);
 }
 
+// The camera's orientation and the barycentric weights, through the normals shading in
+// the default view (from +z tilted up, +y up, +x to the right): the topmost covered pixel
+// faces up, the leftmost -x, the rightmost +x; a pixel's colour is (n + 1) / 2.
+TEST(Render, NormalsShowTheViewsOrientation) {
+  const int w = 96, h = 96;
+  const auto n = render_rgb({"--transfer", bakes().shadowed_t.string(), "--shading", "normals"}, w, h);
+  int top = -1, left = -1, right = -1;
+  for (int y = 0; y < h && top < 0; ++y)
+    for (int x = 0; x < w; ++x)
+      if (n[(std::size_t(y) * w + x) * 3 + 1] != 0) {
+        top = y * w + x;
+        break;
+      }
+  for (int x = 0; x < w && left < 0; ++x)
+    for (int y = 0; y < h; ++y)
+      if (n[(std::size_t(y) * w + x) * 3 + 1] != 0) {
+        left = y * w + x;
+        break;
+      }
+  for (int x = w - 1; x >= 0 && right < 0; --x)
+    for (int y = 0; y < h; ++y)
+      if (n[(std::size_t(y) * w + x) * 3 + 1] != 0) {
+        right = y * w + x;
+        break;
+      }
+  ASSERT_GE(top, 0);
+  // Silhouette pixels: the normal is about perpendicular to the view, mostly sideways.
+  EXPECT_GT(n[top * 3 + 1], 0.6);   // n_y > 0.2
+  EXPECT_LT(n[left * 3 + 0], 0.4);  // n_x < -0.2
+  EXPECT_GT(n[right * 3 + 0], 0.6); // n_x > 0.2
+}
+
 TEST(Render, SameBytesOnAnyThreadCount) {
   const fs::path one = scratch("t1.exr"), two = scratch("t3.exr");
   must(shtool_run({"render", kSpot, "--fit", bakes().shadowed_fit.string(), "--light", bakes().sky.string(),
@@ -305,6 +337,9 @@ TEST(Render, BadRequestsAreRefusedByName) {
       {{kSpot, "--transfer", t, "--light", sky, "--fov", "180"}, "--fov"},
       {{kSpot, "--transfer", t, "--light", sky, "--width", "0"}, "--width"},
       {{kSpot, "--transfer", sky, "--light", sky}, "--transfer"},
+      {{kSpot, "--transfer", t, "--light", sky, "--compare", "--shading", "zh"}, "--compare"},
+      {{kSpot, "--transfer", t, "--light", sky, "--exposure", "1e3"}, "--exposure"},
+      {{kSpot, "--transfer", t, "--light", sky, "--compare", "--width", "8000", "--height", "8000"}, "2^26"},
   };
   for (const Bad& b : bad) {
     const fs::path out = scratch("bad.exr");

@@ -205,6 +205,19 @@ TEST(GltfMesh, BadFilesAreRefusedByName) {
   m.nodes[0].children = {0};
   EXPECT_NE(load_error(to_bytes(m, true)).find("cycle"), std::string::npos);
 
+  // A node with two parents (each level doubling the instances) is refused.
+  m = good;
+  m.nodes.resize(3);
+  m.nodes[0].mesh = -1;
+  m.nodes[0].children = {1, 2};
+  m.nodes[1].children = {2};
+  m.nodes[2].mesh = 0;
+  EXPECT_NE(load_error(to_bytes(m, true)).find("reached twice"), std::string::npos) << load_error(to_bytes(m, true));
+
+  m = good;
+  m.bufferViews[0].byteStride = 8;  // below the 12 bytes of a float VEC3
+  EXPECT_NE(load_error(to_bytes(m, true)).find("byteStride"), std::string::npos) << load_error(to_bytes(m, true));
+
   m = good;
   m.scenes.clear();
   m.defaultScene = -1;

@@ -137,6 +137,14 @@ TEST_F(ZhFitTableTest, CorruptionsAreRejected) {
   t = good;
   t.arrays.push_back(TableArray::from<std::uint32_t>("vertex_index", {3}, std::vector<std::uint32_t>{1, 2, 3}));
   expect_rejected(t, "vertex_index");
+  // Direct coefficients beyond the table's order (DC and band 1 need order 2).
+  t = good;
+  t.order = 1;
+  for (TableArray& a : t.arrays)
+    if (a.name == "coeffs") a = TableArray::from<double>("coeffs", {2, 3, 1}, std::vector<double>(6, 0.1));
+  ASSERT_TRUE(ZhFitTable<double>::from_table(t).ok());
+  t.arrays.push_back(TableArray::from<double>("direct", {2, 4}, std::vector<double>(8, 0.0)));
+  expect_rejected(t, "more than order 1");
   // float: coefficients beyond float range
   t = good;
   set_f64(t, "coeffs", 0, 1e300);

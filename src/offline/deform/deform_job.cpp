@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 #include <string>
 #include <unordered_map>
 
@@ -31,23 +32,48 @@ std::vector<int> first_triangles(const fit::Mesh& mesh) {
 
 }  // namespace
 
-Eigen::Matrix3d vertex_frame(const fit::Mesh& mesh, std::size_t v, const std::vector<int>& first_triangle) {
-  const Eigen::Vector3d n = mesh.normals[v];
-  const Eigen::Vector3i tri = mesh.triangles[first_triangle[v]];
+namespace {
+
+// The corner (1 or 2 steps from v in its first triangle) whose edge makes the larger angle
+// with the rest normal; refused below sin = 1e-3 (a tangent that ill-conditioned would
+// turn with rounding).
+int tangent_step(const fit::Mesh& rest, std::size_t v, const std::vector<int>& first_triangle) {
+  const Eigen::Vector3d n = rest.normals[v];
+  const Eigen::Vector3i tri = rest.triangles[first_triangle[v]];
   const int corner = tri[0] == int(v) ? 0 : tri[1] == int(v) ? 1 : 2;
+  int best = 0;
+  double best_sine = 0;
   for (int step : {1, 2}) {
-    const Eigen::Vector3d e = mesh.positions[tri[(corner + step) % 3]] - mesh.positions[v];
-    const Eigen::Vector3d t = e - e.dot(n) * n;
-    if (t.norm() > 1e-9 * e.norm() && e.norm() > 0) {
-      Eigen::Matrix3d f;
-      f.col(0) = t.normalized();
-      f.col(1) = n.cross(f.col(0));
-      f.col(2) = n;
-      return f;
+    const Eigen::Vector3d e = rest.positions[tri[(corner + step) % 3]] - rest.positions[v];
+    const double length = e.norm();
+    const double sine = length > 0 ? (e - e.dot(n) * n).norm() / length : 0;
+    if (sine > best_sine) {
+      best_sine = sine;
+      best = step;
     }
   }
-  throw InputError("vertex " + std::to_string(mesh.source_index[v]) +
-                   ": both edges of its first triangle are parallel to its normal; no tangent frame");
+  if (best_sine < 1e-3)
+    throw InputError("vertex " + std::to_string(rest.source_index[v]) +
+                     ": both edges of its first triangle are (nearly) parallel to its normal; no tangent frame");
+  return best;
+}
+
+}  // namespace
+
+Eigen::Matrix3d vertex_frame(const fit::Mesh& mesh, std::size_t v, int first_triangle, int step) {
+  const Eigen::Vector3d n = mesh.normals[v];
+  const Eigen::Vector3i tri = mesh.triangles[first_triangle];
+  const int corner = tri[0] == int(v) ? 0 : tri[1] == int(v) ? 1 : 2;
+  const Eigen::Vector3d e = mesh.positions[tri[(corner + step) % 3]] - mesh.positions[v];
+  const Eigen::Vector3d t = e - e.dot(n) * n;
+  if (!(t.norm() > 1e-6 * e.norm()))
+    throw InputError("vertex " + std::to_string(mesh.source_index[v]) +
+                     ": its tangent edge is parallel to its normal in the pose; no tangent frame");
+  Eigen::Matrix3d f;
+  f.col(0) = t.normalized();
+  f.col(1) = n.cross(f.col(0));
+  f.col(2) = n;
+  return f;
 }
 
 std::vector<Eigen::Matrix3d> rest_to_pose_rotations(const fit::Mesh& rest, const fit::Mesh& posed) {
@@ -62,8 +88,11 @@ std::vector<Eigen::Matrix3d> rest_to_pose_rotations(const fit::Mesh& rest, const
       throw InputError("--pose: triangle " + std::to_string(t) + " differs from the rest mesh's");
   const std::vector<int> first = first_triangles(rest);
   std::vector<Eigen::Matrix3d> r(rest.positions.size());
-  for (std::size_t v = 0; v < r.size(); ++v)
-    r[v] = vertex_frame(posed, v, first) * vertex_frame(rest, v, first).transpose();
+  for (std::size_t v = 0; v < r.size(); ++v) {
+    // One edge per vertex, chosen on the rest mesh, used in both frames.
+    const int step = tangent_step(rest, v, first);
+    r[v] = vertex_frame(posed, v, first[v], step) * vertex_frame(rest, v, first[v], step).transpose();
+  }
   return r;
 }
 
@@ -77,7 +106,8 @@ ZhFitTable<double> deform_fit(const ZhFitTable<double>& fit, const std::vector<E
       out.axes[v * lobes + k] = a.normalized();
     }
     if (fit.direct_count == 4) {
-      band1.set(rotations[v], RotationMethod::reference);
+      if (!band1.set(rotations[v], RotationMethod::reference))
+        throw std::logic_error("the reference rotation needs no table");
       const std::span<const double> in(fit.direct.data() + v * 4, 4);
       band1.apply(in, std::span<double>(out.direct.data() + v * 4, 4));
     }

@@ -14,15 +14,16 @@
 
 namespace shtool::deform {
 
-// The local frame of vertex v: its unit normal n, and a tangent t from the edge to the
-// next corner of the first triangle that uses v (the same triangle and corner in every
-// pose, since poses share the topology), made orthogonal to n (Gram-Schmidt); b = n x t.
-// When that edge is (nearly) parallel to n, the other corner's edge is used. Returns the
-// columns (t, b, n). Throws InputError if both edges are degenerate.
-Eigen::Matrix3d vertex_frame(const fit::Mesh& mesh, std::size_t v, const std::vector<int>& first_triangle);
+// The local frame of vertex v: its unit normal n, and a tangent t from the edge to a corner
+// of the first triangle that uses v (step 1 or 2 around it), made orthogonal to n
+// (Gram-Schmidt); b = n x t. Returns the columns (t, b, n). Throws InputError if the edge
+// is parallel to n.
+Eigen::Matrix3d vertex_frame(const fit::Mesh& mesh, std::size_t v, int first_triangle, int step);
 
-// R_p = F_posed F_rest^T for every kept vertex (a proper rotation). Throws InputError when
-// the meshes differ in topology (kept vertices, their OBJ indices, triangles).
+// R_p = F_posed F_rest^T for every kept vertex (a proper rotation), both frames from the
+// same edge: of the two edges of the vertex's first triangle, the one making the larger
+// angle with the rest normal (refused below 1e-3 rad). Throws InputError when the meshes
+// differ in topology (kept vertices, their file indices, triangles).
 std::vector<Eigen::Matrix3d> rest_to_pose_rotations(const fit::Mesh& rest, const fit::Mesh& posed);
 
 // The fit carried to the pose: axes s_i -> R_p s_i; lobe coefficients unchanged (a ZH lobe
@@ -36,8 +37,8 @@ ZhFitTable<double> fit_for_mesh(ZhFitTable<double> fit, const fit::Mesh& mesh, c
 
 struct DeformRequest {
   std::filesystem::path fit;   // zh-fit table baked on `rest`
-  std::filesystem::path rest;  // OBJ
-  std::filesystem::path pose;  // OBJ with the rest mesh's topology
+  std::filesystem::path rest;  // OBJ or glTF
+  std::filesystem::path pose;  // OBJ or glTF with the rest mesh's topology
   std::filesystem::path out;   // zh-fit table of the posed mesh
   std::filesystem::path json;  // optional: the posed fits in fit-zh's JSON layout
 };

@@ -20,6 +20,9 @@
 namespace shtool::fit {
 namespace {
 
+// Far below the int range of vertex numbers, and beyond any mesh a bake runs on.
+constexpr std::size_t kMaxVertices = std::size_t(1) << 28;
+
 [[noreturn]] void fail(const std::filesystem::path& path, const std::string& what) {
   throw MeshError(path.string() + ": " + what);
 }
@@ -57,6 +60,9 @@ AccessorView accessor_view(const tinygltf::Model& model, int index, int type, co
   const std::size_t element = static_cast<std::size_t>(tinygltf::GetComponentSizeInBytes(a.componentType)) *
                               static_cast<std::size_t>(tinygltf::GetNumComponentsInType(a.type));
   const std::size_t stride = view.byteStride ? view.byteStride : element;
+  if (stride < element)
+    fail(path, what + ": buffer view " + std::to_string(a.bufferView) + " has a byteStride (" +
+                   std::to_string(view.byteStride) + ") below its element size (" + std::to_string(element) + ")");
   const auto out_of_range = [&] {
     fail(path, what + ": accessor " + std::to_string(index) + " reads past the end of its buffer");
   };
@@ -166,6 +172,9 @@ struct Builder {
     const Eigen::Matrix3d linear = world.block<3, 3>(0, 0);
     const Eigen::Matrix3d normal_matrix = linear.inverse().transpose();
     const bool mirrored = linear.determinant() < 0;
+    // Vertex numbers are int (Corner): refused far below that.
+    if (local.size() > kMaxVertices - positions.size())
+      fail(path, "more than " + std::to_string(kMaxVertices) + " vertices in the scene");
     const int base = static_cast<int>(positions.size());
     for (std::size_t v = 0; v < local.size(); ++v) {
       const Eigen::Vector3d w = linear * local[v] + world.block<3, 1>(0, 3);
@@ -197,11 +206,15 @@ struct Builder {
     ++primitives;
   }
 
-  void node(int index, const Eigen::Matrix4d& parent, std::vector<bool>& on_path, int depth) {
+  // glTF nodes form strict trees: a node reached twice (a cycle, a second parent, or listed
+  // twice) is refused, which also bounds the work by the file's size.
+  void node(int index, const Eigen::Matrix4d& parent, std::vector<bool>& visited, int depth) {
     if (index < 0 || static_cast<std::size_t>(index) >= model.nodes.size())
       fail(path, "node " + std::to_string(index) + " does not exist");
-    if (on_path[index] || depth > 256) fail(path, "the node hierarchy has a cycle (node " + std::to_string(index) + ")");
-    on_path[index] = true;
+    if (visited[index])
+      fail(path, "node " + std::to_string(index) + " is reached twice (a cycle or a second parent): glTF nodes form trees");
+    if (depth > 1024) fail(path, "the node hierarchy is deeper than 1024");
+    visited[index] = true;
     const tinygltf::Node& n = model.nodes[index];
     const Eigen::Matrix4d world = parent * local_transform(n);
     if (n.mesh >= 0) {
@@ -209,8 +222,7 @@ struct Builder {
         fail(path, "node " + std::to_string(index) + " names mesh " + std::to_string(n.mesh) + ", which does not exist");
       for (const tinygltf::Primitive& p : model.meshes[n.mesh].primitives) primitive(p, world);
     }
-    for (int child : n.children) node(child, world, on_path, depth + 1);
-    on_path[index] = false;
+    for (int child : n.children) node(child, world, visited, depth + 1);
   }
 };
 
@@ -237,8 +249,8 @@ Mesh load_gltf_bytes(const std::string& bytes, const std::filesystem::path& path
   const int scene = model.defaultScene >= 0 ? model.defaultScene : 0;
   if (static_cast<std::size_t>(scene) >= model.scenes.size()) fail(path, "the default scene does not exist");
   Builder b(model, path);
-  std::vector<bool> on_path(model.nodes.size(), false);
-  for (int n : model.scenes[scene].nodes) b.node(n, Eigen::Matrix4d::Identity(), on_path, 0);
+  std::vector<bool> visited(model.nodes.size(), false);
+  for (int n : model.scenes[scene].nodes) b.node(n, Eigen::Matrix4d::Identity(), visited, 0);
   if (b.primitives == 0)
     fail(path, b.skipped_primitives ? "no triangle primitive (only points or lines)" : "the default scene has no mesh");
   if (normal_source == NormalSource::file && !b.every_vertex_has_normal)

@@ -2,10 +2,12 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdint>
 #include <cstdio>
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <stdexcept>
 #include <string>
 #include <unordered_map>
 
@@ -99,8 +101,8 @@ std::vector<double> vertex_radiance(Shading shading, const VertexData& data, con
         // [4] Eq. 13 (or its tabulated form), plus the coefficients stored directly.
         double r = table ? table->shade(fit.axes_of(k), fit.coeffs_of(k))
                          : zh_shade_exact<double>(e, fit.axes_of(k), fit.coeffs_of(k));
-        const auto direct = fit.direct_of(k);
-        for (std::size_t i = 0; i < direct.size(); ++i) r += direct[i] * e[i];
+        const auto direct = fit.direct_of(k);  // at most order^2 (ZhFitTable::from_table)
+        for (std::size_t i = 0; i < direct.size() && i < e.size(); ++i) r += direct[i] * e[i];
         from_fit[k * 3 + c] = r;
       });
     }
@@ -331,13 +333,18 @@ RenderResult run_render(const RenderRequest& r) {
     throw InputError("--width and --height must be between 1 and 16384, got " + std::to_string(r.width) + " x " +
                      std::to_string(r.height));
   if (!(r.fov > 0 && r.fov < 180)) throw InputError("--fov must be between 0 and 180 degrees");
-  if (!std::isfinite(r.exposure)) throw InputError("--exposure must be finite");
-  Shading shading = r.shading;
+  if (!(std::abs(r.exposure) <= 64)) throw InputError("--exposure must be between -64 and 64");
+  // The image encoders index with int: keep the largest output (the compare strip is six
+  // panels wide) far below that.
+  if (std::int64_t(r.width) * r.height * (r.compare ? 6 : 1) > (std::int64_t(1) << 26))
+    throw InputError("--width x --height: at most 2^26 pixels in the output image");
+  if (r.compare && r.shading != Shading::automatic)
+    throw InputError("--compare makes its own panels (transfer, ZH fits, error): drop --shading");
+  Shading shading = r.compare ? Shading::transfer : r.shading;
   if (shading == Shading::automatic) shading = r.transfer.empty() ? Shading::zh : Shading::transfer;
   const bool needs_transfer = shading == Shading::transfer || shading == Shading::error;
   const bool needs_fit = shading == Shading::zh || shading == Shading::zh_table || shading == Shading::error;
   if (r.compare && r.transfer.empty()) throw InputError("--compare needs --transfer (the ground truth it fits)");
-  if (r.compare) shading = Shading::transfer;
   if (needs_transfer && r.transfer.empty()) throw InputError("this shading needs --transfer");
   if (needs_fit && r.fit.empty()) throw InputError("this shading needs --fit");
   if (shading != Shading::membrane && shading != Shading::normals && r.fit.empty() && r.transfer.empty())
@@ -378,7 +385,8 @@ RenderResult run_render(const RenderRequest& r) {
       ShRotation<double> rotation(n, nullptr);
       std::vector<double> turned(n2);
       for (std::size_t v = 0; v < rows; ++v) {
-        rotation.set(rotations[v], RotationMethod::reference);
+        if (!rotation.set(rotations[v], RotationMethod::reference))
+          throw std::logic_error("the reference rotation needs no table");
         rotation.apply(std::span<const double>(data.transfer.data() + v * n2, n2), turned);
         std::copy(turned.begin(), turned.end(), data.transfer.begin() + v * n2);
       }

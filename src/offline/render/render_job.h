@@ -21,7 +21,7 @@ struct Camera {
 };
 
 struct RenderRequest {
-  std::filesystem::path mesh;      // OBJ
+  std::filesystem::path mesh;      // OBJ or glTF
   std::filesystem::path pose;      // optional: a posed mesh of mesh's topology, rendered with the
                                    // fit's lobes (or the transfer) rotated into its frames
   std::filesystem::path fit;       // zh-fit table (fit-zh --out)

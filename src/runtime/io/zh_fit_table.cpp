@@ -77,6 +77,10 @@ Result<ZhFitTable<T>> ZhFitTable<T>::from_table(const Table& t) {
   if (const TableArray* d = t.find("direct")) {
     if (d->shape.size() != 2 || d->shape[0] != V || (d->shape[1] != 1 && d->shape[1] != 4))
       return zh_fit_error("array 'direct' has shape " + shape_text(d->shape) + ", expected [V, 1] or [V, 4]");
+    // Direct coefficients are SH coefficients of the fit's own order: DC, then band 1.
+    if (d->shape[1] > static_cast<std::int64_t>(z.order) * z.order)
+      return zh_fit_error("array 'direct' holds " + std::to_string(d->shape[1]) + " coefficients, more than order " +
+                          std::to_string(z.order) + " has");
     auto dv = f64_array(t, "direct", d->shape);
     if (!dv) return dv.error();
     z.direct_count = static_cast<int>(d->shape[1]);
