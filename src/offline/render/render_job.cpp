@@ -268,10 +268,10 @@ void draw_text(lighting::Image& image, int x, int y, const std::string& text) {
 lighting::Image compare_strip(const Hits& hits, const fit::Mesh& mesh, VertexData& data,
                               const lighting::Lighting& light, int threads, std::vector<double>& nrms) {
   constexpr int kPanels = 6, kLabel = 22;
-  std::vector<lighting::Image> panels;
-  panels.push_back(shade_panel(hits, mesh, vertex_radiance(Shading::transfer, data, light, mesh, 32, threads), false));
-  std::vector<std::string> labels = {"TRANSFER"};
   const std::vector<double> truth = vertex_radiance(Shading::transfer, data, light, mesh, 32, threads);
+  std::vector<lighting::Image> panels;
+  panels.push_back(shade_panel(hits, mesh, truth, false));
+  std::vector<std::string> labels = {"TRANSFER"};
   std::vector<double> last;
   for (int lobes = 1; lobes <= 4; ++lobes) {
     fit::ZhFitOptions options;

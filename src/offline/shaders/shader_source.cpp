@@ -195,8 +195,8 @@ void sh_irradiance(const Syntax& s, int n, std::ostringstream& o, ShaderSource& 
     wanted[l] = a[l] != 0;
   }
   const std::string basis = basis_code(s, n, "n", "", wanted, "  ");
+  // One body for both: L[i] * b_i is a float or a vec3 product.
   const std::string scalar = "  return " + band_dot(n, "L", a, {}) + ";\n";
-  const std::string rgb = "  return " + band_dot(n, "L", a, {}) + ";\n";
   const std::string head1 = s.real() + " shtool_sh_irradiance(" + s.vec3() + " n, " + array(s.real(), "L", kCount) + ")";
   const std::string head3 = s.vec3() + " shtool_sh_irradiance_rgb(" + s.vec3() + " n, " + array(s.vec3(), "L", kCount) + ")";
   count_ops(basis + scalar, 1, out);
@@ -205,7 +205,7 @@ void sh_irradiance(const Syntax& s, int n, std::ostringstream& o, ShaderSource& 
        "// in: divide by pi for the exit radiance of a white Lambertian surface); n a unit vector.\n"
     << head1 << " {\n" << basis << scalar << "}\n\n"
     << "// The same for RGB radiance coefficients.\n"
-    << head3 << " {\n" << basis << rgb << "}\n";
+    << head3 << " {\n" << basis << scalar << "}\n";
 }
 
 // Band sums as cube-map textures: texture k (RGBA) holds the band sums of bands 4k..4k+3
@@ -271,7 +271,7 @@ std::string texel_band(const std::string& prefix, int l) {
 
 // shtool_sh_band_sums: the per-band sums sum_m c_lm y_l^m(dir), what the band textures hold.
 // Guarded on its own, as two files of one order may both define it.
-void band_sums(const Syntax& s, int n, std::ostringstream& o, ShaderSource& out, bool count) {
+void band_sums(const Syntax& s, int n, std::ostringstream& o, ShaderSource& out) {
   const std::string head = "void shtool_sh_band_sums(" + s.vec3() + " dir, " + array(s.real(), "c", kCount) +
                            ", out " + array(s.real(), "bands", "SHTOOL_ORDER") + ")";
   std::string body = basis_code(s, n, "dir", "", std::vector<bool>(n, true), "  ");
@@ -280,7 +280,6 @@ void band_sums(const Syntax& s, int n, std::ostringstream& o, ShaderSource& out,
     only[l] = 1;
     body += "  bands[" + std::to_string(l) + "] = " + band_dot(n, "c", only, {}) + ";\n";
   }
-  if (count) count_ops(body, 1, out);
   out.signature += head + ";\n";
   o << "#define SHTOOL_BAND_TEXTURES " << band_textures(n) << "\n"
     << "#ifndef SHTOOL_SH_BAND_SUMS_DEFINED\n#define SHTOOL_SH_BAND_SUMS_DEFINED\n"
@@ -311,7 +310,7 @@ void zh_shade(const Syntax& s, int n, int lobes, std::ostringstream& o, ShaderSo
     << basis << dot << "  }\n  return r;\n}\n\n";
   // Eq. 24-25: the band sums of the lighting e^_l(s) tabulated (band textures), then per
   // lobe one fetch per four bands and an N-term dot product.
-  band_sums(s, n, o, out, false);
+  band_sums(s, n, o, out);
   const std::string head2 = s.real() + " shtool_zh_shade_table(" + array(s.vec3(), "axes", "SHTOOL_ZH_LOBES") +
                             ", " + array(s.real(), "g", "SHTOOL_ZH_LOBES * SHTOOL_ORDER") + ", " +
                             texture_params(s, n) + ")";
@@ -571,7 +570,7 @@ void zhf_tailored_rotate(const Syntax& s, int n, const ZhfLobes& lobes, std::ost
   out.additions += 6 * directions;
   for (int d = 0; d < static_cast<int>(lobes.directions.size()); ++d)
     out.texture_fetches += band_textures(bands_using(lobes, n, d, 0).top);
-  band_sums(s, n, o, out, false);
+  band_sums(s, n, o, out);
   const std::string head1 = "void shtool_zhf_tailored_rotate(" + s.mat3() + " R, " + texture_params(s, n) +
                             ", out " + array(s.real(), "g", kCount) + ")";
   const std::string head2 = "void shtool_zhf_tailored_rotate_arithmetic(" + s.mat3() + " R, " +
