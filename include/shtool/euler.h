@@ -56,34 +56,37 @@ template <class T>
 struct ZyzCosSin {
   T ca = 1, sa = 0, cb = 1, sb = 0, cg = 1, sg = 0;
 };
-// Inline: it is on the path of every rotation.
+// Inline: it is on the path of every rotation. Two divisions and one square root, and
+// no branch on the hemisphere of the tilt: the divider's latency and a mispredicted
+// branch each cost as much as a band of a low-order rotation.
 template <class T>
 inline ZyzCosSin<T> zyz_cos_sin_from_matrix(const Mat3<T>& r) {
   // R = Rz(a) Ry(b) Rz(g):
   //   (R02, R12) = sin b (cos a, sin a),  (-R20, R21) = sin b (cos g, sin g),  R22 = cos b
   //   (R00 + R11, R10 - R01) = (1 + cos b) (cos(a + g), sin(a + g))
   //   (R11 - R00, -(R10 + R01)) = (1 - cos b) (cos(a - g), sin(a - g))
+  // With s = +1 for cos b >= +0 (a + g is well conditioned) and -1 otherwise (a - g), one
+  // pair covers both halves: (u, v) = (R11 + s R00, s R10 - R01) = (1 + |cos b|)
+  // (cos(a + s g), sin(a + s g)), and g = s ((a + s g) - a). Dividing by 1 + |cos b|, in
+  // [1, 2], instead of by |(u, v)| takes R's orthonormality as given (its precondition),
+  // as the quaternion route below does.
   ZyzCosSin<T> e;
   e.cb = r(2, 2);
-  e.sb = std::sqrt(r(0, 2) * r(0, 2) + r(1, 2) * r(1, 2));  // not sqrt(1 - cb^2): exact near b = 0
-  if (e.sb > 0) {
-    e.ca = r(0, 2) / e.sb;
-    e.sa = r(1, 2) / e.sb;
-  }
-  if (e.cb >= 0) {
-    T cs = r(0, 0) + r(1, 1), ss = r(1, 0) - r(0, 1);
-    const T norm = std::sqrt(cs * cs + ss * ss);  // = 1 + cos b >= 1
-    cs /= norm;
-    ss /= norm;
-    e.cg = cs * e.ca + ss * e.sa;  // g = (a + g) - a
-    e.sg = ss * e.ca - cs * e.sa;
-  } else {
-    T cd = r(1, 1) - r(0, 0), sd = -(r(1, 0) + r(0, 1));
-    const T norm = std::sqrt(cd * cd + sd * sd);  // = 1 - cos b > 1
-    cd /= norm;
-    sd /= norm;
-    e.cg = e.ca * cd + e.sa * sd;  // g = a - (a - g)
-    e.sg = e.sa * cd - e.ca * sd;
+  const T sb2 = r(0, 2) * r(0, 2) + r(1, 2) * r(1, 2);
+  e.sb = std::sqrt(sb2);  // not sqrt(1 - cb^2): exact near b = 0
+  const T s = std::copysign(T(1), e.cb);  // a sign-bit copy: no branch to mispredict
+  const T u = r(1, 1) + s * r(0, 0), v = s * r(1, 0) - r(0, 1);
+  const T norm = 1 + s * e.cb;
+  if (sb2 >= std::numeric_limits<T>::min()) {
+    const T inv_sb = 1 / e.sb, inv_g = 1 / (e.sb * norm);
+    e.ca = r(0, 2) * inv_sb;
+    e.sa = r(1, 2) * inv_sb;
+    e.cg = (u * r(0, 2) + v * r(1, 2)) * inv_g;
+    e.sg = s * ((v * r(0, 2) - u * r(1, 2)) * inv_g);
+  } else {  // gimbal lock (tilt below 1e-19 in float): a = 0, g = a + s g
+    const T inv_g = 1 / norm;
+    e.cg = u * inv_g;
+    e.sg = s * (v * inv_g);
   }
   return e;
 }

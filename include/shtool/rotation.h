@@ -39,6 +39,11 @@ namespace detail {
 // kernel of a whole rotation inline.
 template <class T>
 struct BatchState;  // src/runtime/rotation_kernels.h
+// Whether new ShRotation objects take the FMA copies of the kernels: true on CPUs with
+// AVX2 and FMA (x86-64 GCC builds), unless use_fma_kernels(false) was called (tests of
+// the baseline copies). Not thread-safe against concurrent construction.
+bool fma_kernels_enabled();
+void use_fma_kernels(bool on);
 
 template <class T>
 struct KernelState {
@@ -53,6 +58,9 @@ struct KernelState {
 // (lanes, src/runtime/rotation_kernels.h); R is T, or P when every lane has its own
 // rotation (rotate_batch). Here because ShRotation::apply runs it inline at order 2.
 template <class T, class P, class R = T>
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
 inline void band1_closed(const R* __restrict r, const P* __restrict x, P* __restrict y) {
   const P fy = -x[0], fz = x[1], fx = -x[2];  // the band as a plain vector (times c)
   y[0] = -(r[1] * fx + r[4] * fy + r[7] * fz);
@@ -236,6 +244,9 @@ class ShRotation {
   std::vector<BatchKernel> batch_kernels_[4];
   Kernel<3> kernel3_[4] = {};
   int kernel_order_ = 0;  // bands [0, kernel_order_) are covered by the kernels
+  // The FMA copies of the kernels (src/runtime/kernels/rotation_kernels.h), chosen once
+  // for the object so that apply, apply_rgb and rotate_batch always run the same copy.
+  bool fused_ = false;
   // Helpers converted to T once (float rotations must not convert in the hot loop), for
   // the bands above the kernels.
   // X90 and X90^T band by band in "strided rows": the non-zeros of a row of band l sit

@@ -17,19 +17,19 @@
 #include <memory>
 #include <numbers>
 #include <random>
-#include <stdexcept>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include <unistd.h>
 
-#include <Eigen/Dense>
 #include <gtest/gtest.h>
+#include <Eigen/Dense>
 
-#include "common/generator_record.h"
 #include "allocation_counter.h"
-#include "test_util.h"
+#include "common/generator_record.h"
+#include "kernel_copies.h"
 #include "shtool/euler.h"
 #include "shtool/quadrature.h"
 #include "shtool/rotation.h"
@@ -38,6 +38,7 @@
 #include "shtool/table.h"
 #include "table_test_util.h"
 #include "tensors/rotation_helpers_gen.h"
+#include "test_util.h"
 
 namespace shtool {
 namespace {
@@ -114,9 +115,8 @@ std::string matrix_text(const Mat3<double>& r) {
 }
 
 template <class T>
-std::vector<T> rotate(int order, const Mat3<double>& r, RotationMethod method,
-                      const std::vector<double>& f, double tol = kDefaultRotationTolerance,
-                      RotationMethod* resolved = nullptr) {
+std::vector<T> rotate(int order, const Mat3<double>& r, RotationMethod method, const std::vector<double>& f,
+                      double tol = kDefaultRotationTolerance, RotationMethod* resolved = nullptr) {
   ShRotation<T> rotation(order, helpers());
   const bool ok = rotation.set(r.cast<T>(), method, tol);
   EXPECT_TRUE(ok) << rotation_method_name(method) << " order " << order;
@@ -188,8 +188,7 @@ TEST(RotationExact, ReferenceAndZxzxzMatchQuadratureDouble) {
       for (RotationMethod m : {RotationMethod::reference, RotationMethod::zxzxz}) {
         const std::vector<double> got = rotate<double>(order, r, m, f);
         const double err = distance(got, want) / norm(f);
-        EXPECT_LE(err, kExactTolDouble) << rotation_method_name(m) << " N " << order << " R "
-                                        << matrix_text(r);
+        EXPECT_LE(err, kExactTolDouble) << rotation_method_name(m) << " N " << order << " R " << matrix_text(r);
       }
     }
   }
@@ -205,8 +204,7 @@ TEST(RotationExact, ReferenceAndZxzxzMatchQuadratureFloat) {
       for (RotationMethod m : {RotationMethod::reference, RotationMethod::zxzxz}) {
         const std::vector<float> got = rotate<float>(order, r, m, f);
         const double err = distance(got, want) / norm(f);
-        EXPECT_LE(err, kExactTolFloat) << rotation_method_name(m) << " N " << order << " R "
-                                       << matrix_text(r);
+        EXPECT_LE(err, kExactTolFloat) << rotation_method_name(m) << " N " << order << " R " << matrix_text(r);
       }
     }
   }
@@ -238,9 +236,7 @@ TEST(RotationExact, ReferenceBlocksAreOrthogonal) {
     const Eigen::MatrixXd m = reference_matrix(kHelperOrder, r);
     for (int l = 0; l < kHelperOrder; ++l) {
       const Eigen::MatrixXd b = m.block(l * l, l * l, 2 * l + 1, 2 * l + 1);
-      const double defect = (b * b.transpose() - Eigen::MatrixXd::Identity(2 * l + 1, 2 * l + 1))
-                                .cwiseAbs()
-                                .maxCoeff();
+      const double defect = (b * b.transpose() - Eigen::MatrixXd::Identity(2 * l + 1, 2 * l + 1)).cwiseAbs().maxCoeff();
       EXPECT_LE(defect, kTol) << "band " << l << " R " << matrix_text(r);
     }
     // Nothing outside the band blocks (a rotation never mixes bands).
@@ -260,8 +256,7 @@ TEST(RotationExact, CompositionApplyTwiceEqualsOnce) {
         const std::vector<double> once = rotate<double>(order, r1 * r2, m, f);
         // g = f(R2^-1 .) then h = g(R1^-1 .) = f((R1 R2)^-1 .)
         const std::vector<double> twice = rotate<double>(order, r1, m, rotate<double>(order, r2, m, f));
-        EXPECT_LE(distance(once, twice) / norm(f), kExactTolDouble)
-            << rotation_method_name(m) << " N " << order;
+        EXPECT_LE(distance(once, twice) / norm(f), kExactTolDouble) << rotation_method_name(m) << " N " << order;
       }
     }
   }
@@ -276,8 +271,8 @@ TEST(RotationExact, IdentityLeavesCoefficientsUnchanged) {
   for (RotationMethod m : {RotationMethod::automatic, RotationMethod::reference, RotationMethod::zxzxz,
                            RotationMethod::taylor1, RotationMethod::taylor15, RotationMethod::taylor2}) {
     RotationMethod resolved;
-    const std::vector<double> got = rotate<double>(order, Mat3<double>::Identity(), m, f,
-                                                   kDefaultRotationTolerance, &resolved);
+    const std::vector<double> got =
+        rotate<double>(order, Mat3<double>::Identity(), m, f, kDefaultRotationTolerance, &resolved);
     EXPECT_LE(distance(got, f) / norm(f), kTol) << rotation_method_name(m);
     if (m == RotationMethod::automatic)
       EXPECT_EQ(resolved, RotationMethod::taylor1) << "no tilt: the cheapest method is exact";
@@ -405,7 +400,8 @@ TEST(Euler, ZyzRoundTripDouble) {
     const EulerZYZ<double> e = zyz_from_matrix<double>(r);
     const double err = (matrix_from_zyz<double>(e) - r).cwiseAbs().maxCoeff();
     worst = std::max(worst, err);
-    EXPECT_LE(err, kTol + orthonormality_defect<double>(r)) << matrix_text(r) << " -> a " << e.alpha << " b " << e.beta << " g " << e.gamma;
+    EXPECT_LE(err, kTol + orthonormality_defect<double>(r))
+        << matrix_text(r) << " -> a " << e.alpha << " b " << e.beta << " g " << e.gamma;
     EXPECT_GE(e.beta, 0.0);
     EXPECT_LE(e.beta, kPi);
     EXPECT_TRUE(std::isfinite(e.alpha) && std::isfinite(e.gamma));
@@ -421,7 +417,8 @@ TEST(Euler, ZyzRoundTripFloat) {
     const Mat3<float> r = rd.cast<float>();
     const EulerZYZ<float> e = zyz_from_matrix<float>(r);
     const float err = (matrix_from_zyz<float>(e) - r).cwiseAbs().maxCoeff();
-    EXPECT_LE(err, kTol + orthonormality_defect<float>(r)) << matrix_text(rd) << " -> a " << e.alpha << " b " << e.beta << " g " << e.gamma;
+    EXPECT_LE(err, kTol + orthonormality_defect<float>(r))
+        << matrix_text(rd) << " -> a " << e.alpha << " b " << e.beta << " g " << e.gamma;
     EXPECT_GE(e.beta, 0.0f);
     EXPECT_LE(e.beta, std::numbers::pi_v<float>);
   }
@@ -509,15 +506,13 @@ void check_set_quaternion(double tol) {
     for (auto& v : in) v = static_cast<T>(n(rng));
     for (int k = 0; k < 20; ++k) {
       Eigen::Vector4d q(n(rng), n(rng), n(rng), n(rng));
-      if (k == 1) q = Eigen::Vector4d(0.6, 0, 0, 0.8);   // b = 0
-      if (k == 2) q = Eigen::Vector4d(0, 0.6, 0.8, 0);   // b = pi
-      if (k == 3) q = Eigen::Vector4d(1, 1e-7, 0, 0);    // tilt 2e-7: automatic takes Taylor
+      if (k == 1) q = Eigen::Vector4d(0.6, 0, 0, 0.8);  // b = 0
+      if (k == 2) q = Eigen::Vector4d(0, 0.6, 0.8, 0);  // b = pi
+      if (k == 3) q = Eigen::Vector4d(1, 1e-7, 0, 0);   // tilt 2e-7: automatic takes Taylor
       q.normalize();
-      const T w = static_cast<T>(q[0]), x = static_cast<T>(q[1]), y = static_cast<T>(q[2]),
-              z = static_cast<T>(q[3]);
-      for (const RotationMethod m : {RotationMethod::automatic, RotationMethod::zxzxz,
-                                     RotationMethod::taylor1, RotationMethod::taylor2,
-                                     RotationMethod::reference}) {
+      const T w = static_cast<T>(q[0]), x = static_cast<T>(q[1]), y = static_cast<T>(q[2]), z = static_cast<T>(q[3]);
+      for (const RotationMethod m : {RotationMethod::automatic, RotationMethod::zxzxz, RotationMethod::taylor1,
+                                     RotationMethod::taylor2, RotationMethod::reference}) {
         // At b = pi only a - g is defined and the two routes split it differently: exact
         // methods agree, a Taylor expansion in b (meaningless at b = pi) does not.
         const bool taylor = m == RotationMethod::taylor1 || m == RotationMethod::taylor2;
@@ -528,8 +523,8 @@ void check_set_quaternion(double tol) {
         by_q.apply(in, a);
         by_r.apply(in, b);
         // relative to the output too: a Taylor step at a large tilt amplifies (b (N-1))^2
-        const double scale = norm(std::vector<double>(in.begin(), in.end())) +
-                             norm(std::vector<double>(b.begin(), b.end()));
+        const double scale =
+            norm(std::vector<double>(in.begin(), in.end())) + norm(std::vector<double>(b.begin(), b.end()));
         EXPECT_LE(distance(a, b), tol * scale)
             << "order " << order << " method " << rotation_method_name(m) << " rotation " << k;
       }
@@ -620,22 +615,21 @@ struct PrintedSub {
   int l, m;
   double value;
 };
-const PrintedSub kPaperD1Sub[] = {
-    {1, 0, 0.0},   {1, 1, 1.0},                                                    // band 1
-    {2, -1, -1.0}, {2, 0, 0.0},   {2, 1, 1.73},  {2, 2, 1.0},                       // band 2
-    {3, -2, -1.22}, {3, -1, -1.58}, {3, 0, 0.0}, {3, 1, 2.45}, {3, 2, 1.58}, {3, 3, 1.22}};
+const PrintedSub kPaperD1Sub[] = {{1, 0, 0.0},    {1, 1, 1.0},                                // band 1
+                                  {2, -1, -1.0},  {2, 0, 0.0},    {2, 1, 1.73}, {2, 2, 1.0},  // band 2
+                                  {3, -2, -1.22}, {3, -1, -1.58}, {3, 0, 0.0},  {3, 1, 2.45},
+                                  {3, 2, 1.58},   {3, 3, 1.22}};
 
 struct PrintedD2 {
   int l, m, mp;
   double value;
 };
-const PrintedD2 kPaperD2[] = {
-    {1, -1, -1, 0.0}, {1, 0, 0, -1.0}, {1, 1, 1, -1.0},                             // band 1
-    {2, -2, -2, -1.0}, {2, -1, -1, -1.0}, {2, 0, 0, -3.0}, {2, 1, 1, -4.0}, {2, 2, 2, -1.0},
-    {2, 0, 2, 1.73},  {2, -2, 0, 0.0},  {2, -1, 1, 0.0},                            // band 2
-    {3, -3, -3, -1.5}, {3, -2, -2, -4.0}, {3, -1, -1, -2.5}, {3, 0, 0, -6.0},
-    {3, 1, 1, -8.5},  {3, 2, 2, -4.0},  {3, 3, 3, -1.5},
-    {3, -3, -1, 1.94}, {3, 0, 2, 3.87}, {3, 1, 3, 1.94}, {3, -2, 0, 0.0}, {3, -1, 1, 0.0}};
+const PrintedD2 kPaperD2[] = {{1, -1, -1, 0.0},  {1, 0, 0, -1.0},   {1, 1, 1, -1.0},  // band 1
+                              {2, -2, -2, -1.0}, {2, -1, -1, -1.0}, {2, 0, 0, -3.0},   {2, 1, 1, -4.0},
+                              {2, 2, 2, -1.0},   {2, 0, 2, 1.73},   {2, -2, 0, 0.0},   {2, -1, 1, 0.0},  // band 2
+                              {3, -3, -3, -1.5}, {3, -2, -2, -4.0}, {3, -1, -1, -2.5}, {3, 0, 0, -6.0},
+                              {3, 1, 1, -8.5},   {3, 2, 2, -4.0},   {3, 3, 3, -1.5},   {3, -3, -1, 1.94},
+                              {3, 0, 2, 3.87},   {3, 1, 3, 1.94},   {3, -2, 0, 0.0},   {3, -1, 1, 0.0}};
 
 // Half a unit in the last of the 3 printed significant digits (values 1..10).
 constexpr double kPrintedHalfUnit = 0.005;
@@ -644,9 +638,8 @@ TEST(TaylorMatrices, BandsOneToThreeMatchPaperFigure2) {
   const RotationHelpers& h = *helpers();
   for (const PrintedSub& p : kPaperD1Sub) {
     const double ours = h.dy_sub[sh_index(p.l, p.m)];
-    EXPECT_NEAR(ours, -p.value, kPrintedHalfUnit)
-        << "D1[" << p.m << "][" << p.m - 1 << "] band " << p.l << ": ours " << ours
-        << ", paper (no Condon-Shortley phase) " << p.value;
+    EXPECT_NEAR(ours, -p.value, kPrintedHalfUnit) << "D1[" << p.m << "][" << p.m - 1 << "] band " << p.l << ": ours "
+                                                  << ours << ", paper (no Condon-Shortley phase) " << p.value;
     if (p.value == 0.0) EXPECT_EQ(ours, 0.0) << "structural zero, band " << p.l << " m " << p.m;
   }
   const Eigen::MatrixXd d2 = dense_d2(h, 4);
@@ -672,10 +665,14 @@ TEST(TaylorMatrices, D1MatchesAngularMomentumClosedForm) {
     EXPECT_EQ(h.dy_sub[sh_index(l, -l)], 0.0) << "first of band " << l;
     for (int m = -l + 1; m <= l; ++m) {
       double want;
-      if (m >= 2) want = -0.5 * std::sqrt(double((l + m) * (l - m + 1)));
-      else if (m == 1) want = -std::sqrt(l * (l + 1) / 2.0);
-      else if (m == 0) want = 0.0;
-      else want = 0.5 * std::sqrt(double((l + m) * (l - m + 1)));
+      if (m >= 2)
+        want = -0.5 * std::sqrt(double((l + m) * (l - m + 1)));
+      else if (m == 1)
+        want = -std::sqrt(l * (l + 1) / 2.0);
+      else if (m == 0)
+        want = 0.0;
+      else
+        want = 0.5 * std::sqrt(double((l + m) * (l - m + 1)));
       EXPECT_NEAR(h.dy_sub[sh_index(l, m)], want, 1e-14 * (l + 1)) << "band " << l << " m " << m;
     }
   }
@@ -765,8 +762,7 @@ TEST(TaylorBounds, FirstAndSecondOrderBoundsAreExactNorms) {
       for (RotationMethod m : {RotationMethod::taylor1, RotationMethod::taylor2}) {
         const double svd = error_singular_values(m, order, b)(0);
         const double bound = taylor_error_bound(m, order, b);
-        EXPECT_NEAR(bound, svd, kRel * svd + kAbs)
-            << rotation_method_name(m) << " N " << order << " b " << b;
+        EXPECT_NEAR(bound, svd, kRel * svd + kAbs) << rotation_method_name(m) << " N " << order << " b " << b;
       }
     }
   }
@@ -807,9 +803,8 @@ TEST(TaylorBounds, AutomaticMethodMeetsToleranceAndPrefersTaylor) {
         RotationMethod chosen;
         const std::vector<double> got = rotate<double>(order, r, RotationMethod::automatic, f, tol, &chosen);
         const std::vector<double> ref = rotate<double>(order, r, RotationMethod::reference, f);
-        const std::string what = "N " + std::to_string(order) + " tol " + std::to_string(tol) +
-                                 " tilt " + std::to_string(tilt) + " chose " +
-                                 std::string(rotation_method_name(chosen));
+        const std::string what = "N " + std::to_string(order) + " tol " + std::to_string(tol) + " tilt " +
+                                 std::to_string(tilt) + " chose " + std::string(rotation_method_name(chosen));
         EXPECT_LE(distance(got, ref), (tol + kRoundingFloor) * norm(f)) << what;
         EXPECT_NE(chosen, RotationMethod::automatic) << what;
         // Cheapest first: 1st order whenever its (exact) bound passes; at orders up to 3
@@ -829,8 +824,8 @@ TEST(TaylorBounds, AutomaticMethodMeetsToleranceAndPrefersTaylor) {
   EXPECT_GT(taylor_picks, 20);
   // A typical case from the paper's use (normal-map perturbations): N = 5, 1 mrad tilt.
   RotationMethod chosen;
-  rotate<double>(5, matrix_from_zyz<double>({0.3, 1e-3, -0.2}), RotationMethod::automatic,
-                 std::vector<double>(25, 0.1), 1e-5, &chosen);
+  rotate<double>(5, matrix_from_zyz<double>({0.3, 1e-3, -0.2}), RotationMethod::automatic, std::vector<double>(25, 0.1),
+                 1e-5, &chosen);
   EXPECT_EQ(chosen, RotationMethod::taylor1);
 }
 
@@ -850,38 +845,40 @@ TEST(TaylorBounds, AutomaticFloatMeetsTolerance) {
 // Batch and API edge cases.
 
 TEST(RotationApi, BatchEqualsIndividualRotations) {
-  std::mt19937_64 rng(601);
-  const int order = 7, n = sh_count(order), count = 6;
-  std::vector<Mat3<double>> rs;
-  std::vector<double> in;
-  for (int k = 0; k < count; ++k) {
-    rs.push_back(k == 0 ? Mat3<double>::Identity() : random_rotation(rng));
-    const std::vector<double> f = random_coeffs(order, rng);
-    in.insert(in.end(), f.begin(), f.end());
-  }
-  for (RotationMethod m : {RotationMethod::automatic, RotationMethod::reference, RotationMethod::zxzxz,
-                           RotationMethod::taylor2}) {
-    ShRotation<double> rotation(order, helpers());
-    std::vector<double> out(in.size());
-    ASSERT_TRUE(rotate_batch<double>(rotation, rs, in, out, m, 1e-6));
+  test::for_each_kernel_copy([] {
+    std::mt19937_64 rng(601);
+    const int order = 7, n = sh_count(order), count = 6;
+    std::vector<Mat3<double>> rs;
+    std::vector<double> in;
     for (int k = 0; k < count; ++k) {
-      const std::vector<double> f(in.begin() + k * n, in.begin() + (k + 1) * n);
-      const std::vector<double> one = rotate<double>(order, rs[k], m, f, 1e-6);
-      for (int i = 0; i < n; ++i)
-        EXPECT_EQ(out[k * n + i], one[i]) << rotation_method_name(m) << " pair " << k << " i " << i;
+      rs.push_back(k == 0 ? Mat3<double>::Identity() : random_rotation(rng));
+      const std::vector<double> f = random_coeffs(order, rng);
+      in.insert(in.end(), f.begin(), f.end());
     }
-    // Float batch against float single rotations.
-    std::vector<Mat3<float>> rsf;
-    for (const auto& r : rs) rsf.push_back(r.cast<float>());
-    std::vector<float> inf(in.begin(), in.end()), outf(in.size());
-    ShRotation<float> rotf(order, helpers());
-    ASSERT_TRUE(rotate_batch<float>(rotf, rsf, inf, outf, m, 1e-6));
-    for (int k = 0; k < count; ++k) {
-      const std::vector<double> f(in.begin() + k * n, in.begin() + (k + 1) * n);
-      const std::vector<float> one = rotate<float>(order, rs[k], m, f, 1e-6);
-      for (int i = 0; i < n; ++i) EXPECT_EQ(outf[k * n + i], one[i]) << "float pair " << k;
+    for (RotationMethod m :
+         {RotationMethod::automatic, RotationMethod::reference, RotationMethod::zxzxz, RotationMethod::taylor2}) {
+      ShRotation<double> rotation(order, helpers());
+      std::vector<double> out(in.size());
+      ASSERT_TRUE(rotate_batch<double>(rotation, rs, in, out, m, 1e-6));
+      for (int k = 0; k < count; ++k) {
+        const std::vector<double> f(in.begin() + k * n, in.begin() + (k + 1) * n);
+        const std::vector<double> one = rotate<double>(order, rs[k], m, f, 1e-6);
+        for (int i = 0; i < n; ++i)
+          EXPECT_EQ(out[k * n + i], one[i]) << rotation_method_name(m) << " pair " << k << " i " << i;
+      }
+      // Float batch against float single rotations.
+      std::vector<Mat3<float>> rsf;
+      for (const auto& r : rs) rsf.push_back(r.cast<float>());
+      std::vector<float> inf(in.begin(), in.end()), outf(in.size());
+      ShRotation<float> rotf(order, helpers());
+      ASSERT_TRUE(rotate_batch<float>(rotf, rsf, inf, outf, m, 1e-6));
+      for (int k = 0; k < count; ++k) {
+        const std::vector<double> f(in.begin() + k * n, in.begin() + (k + 1) * n);
+        const std::vector<float> one = rotate<float>(order, rs[k], m, f, 1e-6);
+        for (int i = 0; i < n; ++i) EXPECT_EQ(outf[k * n + i], one[i]) << "float pair " << k;
+      }
     }
-  }
+  });
 }
 
 // The lane path of rotate_batch (groups of 4 float / 2 double rotations of one method;
@@ -923,8 +920,8 @@ void check_batch_lanes_bitwise() {
             ASSERT_NE(single.method(), RotationMethod::zxzxz) << "order " << order;
           single.apply(std::span<const T>(in.data() + k * n, n), one);
           for (int i = 0; i < n; ++i)
-            ASSERT_EQ(out[k * n + i], one[i]) << "order " << order << " " << rotation_method_name(m) << " pair "
-                                              << k << " (" << rotation_method_name(single.method()) << ") i " << i;
+            ASSERT_EQ(out[k * n + i], one[i]) << "order " << order << " " << rotation_method_name(m) << " pair " << k
+                                              << " (" << rotation_method_name(single.method()) << ") i " << i;
         }
         // The rotation object holds the last rotation afterwards.
         EXPECT_EQ(batch.method(), single.method());
@@ -935,8 +932,12 @@ void check_batch_lanes_bitwise() {
     }
 }
 
-TEST(RotationApi, BatchLanesAreBitIdenticalToSingleRotationsFloat) { check_batch_lanes_bitwise<float>(); }
-TEST(RotationApi, BatchLanesAreBitIdenticalToSingleRotationsDouble) { check_batch_lanes_bitwise<double>(); }
+TEST(RotationApi, BatchLanesAreBitIdenticalToSingleRotationsFloat) {
+  test::for_each_kernel_copy([] { check_batch_lanes_bitwise<float>(); });
+}
+TEST(RotationApi, BatchLanesAreBitIdenticalToSingleRotationsDouble) {
+  test::for_each_kernel_copy([] { check_batch_lanes_bitwise<double>(); });
+}
 
 // apply() and apply_rgb() call the generated kernel of the current rotation directly
 // when it covers every band: one object switched between methods, tilts and orders of
@@ -1084,8 +1085,7 @@ TEST(RotationHelpersTable, WriteReadRoundTripIsExact) {
   const Table t = to_table(h, generator_record("test_rotation", {{"order", 9}}));
   const ScratchDir scratch;
   for (TableEncoding enc : {TableEncoding::binary, TableEncoding::json}) {
-    const std::filesystem::path path =
-        scratch.path / (enc == TableEncoding::binary ? "helpers.shtb" : "helpers.json");
+    const std::filesystem::path path = scratch.path / (enc == TableEncoding::binary ? "helpers.shtb" : "helpers.json");
     const Result<Ok> written = shtool::test::try_write(t, path, enc);
     ASSERT_TRUE(written) << written.error().message;
     const Result<Table> read = read_table(path);
@@ -1098,8 +1098,7 @@ TEST(RotationHelpersTable, WriteReadRoundTripIsExact) {
     expect_same_helpers(h, loaded.value());
     const Result<RotationHelpers> too_small = RotationHelpers::load(path, 10);
     ASSERT_FALSE(too_small);
-    EXPECT_NE(too_small.error().message.find("covers order 9"), std::string::npos)
-        << too_small.error().message;
+    EXPECT_NE(too_small.error().message.find("covers order 9"), std::string::npos) << too_small.error().message;
   }
   // The table is a pure function of the order (byte-identical output).
   const RotationHelpers again = compute_rotation_helpers(9);
@@ -1125,31 +1124,67 @@ TEST(RotationHelpersTable, FromTableRejectsCorruption) {
   };
   const std::vector<Case> cases = {
       {"column in another band",
-       [&](Table& t) { auto c = h.x90_col; c[h.x90_row[5]] = 0; replace_array(t, "x90_col", c); },
+       [&](Table& t) {
+         auto c = h.x90_col;
+         c[h.x90_row[5]] = 0;
+         replace_array(t, "x90_col", c);
+       },
        "outside its band"},
       {"column beyond the matrix",
-       [&](Table& t) { auto c = h.x90_col; c.back() = 1 << 30; replace_array(t, "x90_col", c); },
+       [&](Table& t) {
+         auto c = h.x90_col;
+         c.back() = 1 << 30;
+         replace_array(t, "x90_col", c);
+       },
        "outside its band"},
       {"negative column",
-       [&](Table& t) { auto c = h.x90_col; c[3] = -1; replace_array(t, "x90_col", c); },
+       [&](Table& t) {
+         auto c = h.x90_col;
+         c[3] = -1;
+         replace_array(t, "x90_col", c);
+       },
        "outside its band"},
       {"row starts one short",
-       [&](Table& t) { auto r = h.x90_row; r.pop_back(); replace_array(t, "x90_row", r); },
+       [&](Table& t) {
+         auto r = h.x90_row;
+         r.pop_back();
+         replace_array(t, "x90_row", r);
+       },
        "sizes"},
       {"dy_sub too long",
-       [&](Table& t) { auto d = h.dy_sub; d.push_back(0); replace_array(t, "dy_sub", d); },
+       [&](Table& t) {
+         auto d = h.dy_sub;
+         d.push_back(0);
+         replace_array(t, "dy_sub", d);
+       },
        "sizes"},
       {"ddy_off2 too short",
-       [&](Table& t) { auto d = h.ddy_off2; d.pop_back(); replace_array(t, "ddy_off2", d); },
+       [&](Table& t) {
+         auto d = h.ddy_off2;
+         d.pop_back();
+         replace_array(t, "ddy_off2", d);
+       },
        "sizes"},
       {"last row start is not nnz",
-       [&](Table& t) { auto r = h.x90_row; r.back() = nnz - 1; replace_array(t, "x90_row", r); },
+       [&](Table& t) {
+         auto r = h.x90_row;
+         r.back() = nnz - 1;
+         replace_array(t, "x90_row", r);
+       },
        "inconsistent"},
       {"values shorter than columns",
-       [&](Table& t) { auto v = h.x90_val; v.pop_back(); replace_array(t, "x90_val", v); },
+       [&](Table& t) {
+         auto v = h.x90_val;
+         v.pop_back();
+         replace_array(t, "x90_val", v);
+       },
        "inconsistent"},
       {"row starts decrease",
-       [&](Table& t) { auto r = h.x90_row; std::swap(r[3], r[4]); replace_array(t, "x90_row", r); },
+       [&](Table& t) {
+         auto r = h.x90_row;
+         std::swap(r[3], r[4]);
+         replace_array(t, "x90_row", r);
+       },
        "decrease"},
       // A row start far beyond the data, with the last start still correct: must be
       // caught before any column of that row is read. (With the check done row by row
@@ -1169,10 +1204,7 @@ TEST(RotationHelpersTable, FromTableRejectsCorruption) {
        },
        "dtype"},
       {"missing array",
-       [&](Table& t) {
-         std::erase_if(t.arrays, [](const TableArray& a) { return a.name == "ddy_diag"; });
-       },
-       "missing"},
+       [&](Table& t) { std::erase_if(t.arrays, [](const TableArray& a) { return a.name == "ddy_diag"; }); }, "missing"},
       {"wrong kind", [&](Table& t) { t.kind = "tripling"; }, "wrong kind"},
       // Values that pass every index check but break the class structure the packed
       // rotation loops rely on: ShRotation's constructor used to throw a logic_error on

@@ -20,18 +20,19 @@
 
 #include <unistd.h>
 
-#include <Eigen/Dense>
 #include <gtest/gtest.h>
+#include <Eigen/Dense>
 
 #include "generated_source.h"
-#include "run_command.h"
-#include "test_util.h"
+#include "kernel_copies.h"
 #include "kernels/rotation_kernels.h"
+#include "run_command.h"
 #include "shtool/euler.h"
 #include "shtool/rotation.h"
 #include "shtool/sh.h"
 #include "tensors/rotation_helpers_gen.h"
 #include "tensors/rotation_kernels_gen.h"
+#include "test_util.h"
 
 namespace shtool {
 namespace {
@@ -74,24 +75,25 @@ void expect_rgb_equals_three_applies(int order, const Mat3<double>& r, RotationM
                 {std::span<T>(rgb[0]), std::span<T>(rgb[1]), std::span<T>(rgb[2])});
   for (int k = 0; k < 3; ++k)
     for (int i = 0; i < n; ++i)
-      ASSERT_EQ(rgb[k][i], one[k][i]) << rotation_method_name(m) << " order " << order << " vector " << k
-                                      << " i " << i;
+      ASSERT_EQ(rgb[k][i], one[k][i]) << rotation_method_name(m) << " order " << order << " vector " << k << " i " << i;
 }
 
 TEST(RotationKernels, ApplyRgbEqualsThreeApplies) {
-  std::mt19937_64 rng(11);
-  for (int order = 1; order <= 13; ++order) {
-    const Mat3<double> big = random_rotation(rng);
-    const Mat3<double> small = matrix_from_zyz<double>({0.7, 0.01, -2.1});
-    for (RotationMethod m : {RotationMethod::reference, RotationMethod::zxzxz, RotationMethod::taylor1,
-                             RotationMethod::taylor15, RotationMethod::taylor2, RotationMethod::automatic}) {
-      const Mat3<double>& r = (m == RotationMethod::reference || m == RotationMethod::zxzxz) ? big : small;
-      expect_rgb_equals_three_applies<float>(order, r, m, rng);
-      expect_rgb_equals_three_applies<double>(order, r, m, rng);
+  test::for_each_kernel_copy([] {
+    std::mt19937_64 rng(11);
+    for (int order = 1; order <= 13; ++order) {
+      const Mat3<double> big = random_rotation(rng);
+      const Mat3<double> small = matrix_from_zyz<double>({0.7, 0.01, -2.1});
+      for (RotationMethod m : {RotationMethod::reference, RotationMethod::zxzxz, RotationMethod::taylor1,
+                               RotationMethod::taylor15, RotationMethod::taylor2, RotationMethod::automatic}) {
+        const Mat3<double>& r = (m == RotationMethod::reference || m == RotationMethod::zxzxz) ? big : small;
+        expect_rgb_equals_three_applies<float>(order, r, m, rng);
+        expect_rgb_equals_three_applies<double>(order, r, m, rng);
+      }
     }
-  }
-  // A generic rotation with auto takes zxzxz through apply_rgb too.
-  expect_rgb_equals_three_applies<double>(20, random_rotation(rng), RotationMethod::automatic, rng);
+    // A generic rotation with auto takes zxzxz through apply_rgb too.
+    expect_rgb_equals_three_applies<double>(20, random_rotation(rng), RotationMethod::automatic, rng);
+  });
 }
 
 Mat3<double> rz(double a) {
@@ -153,34 +155,75 @@ TEST(RotationKernels, TaylorAppliesZTZ) {
 TEST(RotationKernels, FloatNearIdentityEveryKernelOrder) {
   // DirectXMath's float XMSHRotate errs by 1e-4..1e-3 for rotations of 1e-3..1e-4 rad;
   // the float kernels stay at rounding level (measured <= 1.1e-6 relative to ||f||).
-  constexpr double kTolFloat = 2e-6;
-  std::mt19937_64 rng(13);
-  std::normal_distribution<double> nd;
-  for (int order = 2; order <= detail::kKernelMaxOrder + 1; ++order) {
-    for (double angle : {1e-2, 1e-3, 1e-4, 1e-5, 1e-7}) {
-      Eigen::Vector3d axis(nd(rng), nd(rng), nd(rng));
-      axis.normalize();
-      const double s = std::sin(angle / 2);
-      const Mat3<double> r =
-          matrix_from_quaternion<double>(std::cos(angle / 2), s * axis.x(), s * axis.y(), s * axis.z());
-      const std::vector<double> f = random_coeffs(order, rng);
-      ShRotation<double> ref(order, nullptr);
-      ASSERT_TRUE(ref.set(r, RotationMethod::reference));
-      std::vector<double> want(f.size());
-      ref.apply(f, want);
-      for (RotationMethod m : {RotationMethod::zxzxz, RotationMethod::automatic}) {
-        ShRotation<float> rot(order, helpers());
-        ASSERT_TRUE(rot.set(r.cast<float>(), m));
-        std::vector<float> ff(f.begin(), f.end()), got(f.size());
-        rot.apply(ff, got);
-        double err = 0;
-        for (std::size_t i = 0; i < f.size(); ++i) err += std::pow(got[i] - want[i], 2);
-        EXPECT_LE(std::sqrt(err) / norm(f), kTolFloat)
-            << rotation_method_name(m) << " (" << rotation_method_name(rot.method()) << ") order " << order
-            << " angle " << angle;
+  test::for_each_kernel_copy([] {
+    constexpr double kTolFloat = 2e-6;
+    std::mt19937_64 rng(13);
+    std::normal_distribution<double> nd;
+    for (int order = 2; order <= detail::kKernelMaxOrder + 1; ++order) {
+      for (double angle : {1e-2, 1e-3, 1e-4, 1e-5, 1e-7}) {
+        Eigen::Vector3d axis(nd(rng), nd(rng), nd(rng));
+        axis.normalize();
+        const double s = std::sin(angle / 2);
+        const Mat3<double> r =
+            matrix_from_quaternion<double>(std::cos(angle / 2), s * axis.x(), s * axis.y(), s * axis.z());
+        const std::vector<double> f = random_coeffs(order, rng);
+        ShRotation<double> ref(order, nullptr);
+        ASSERT_TRUE(ref.set(r, RotationMethod::reference));
+        std::vector<double> want(f.size());
+        ref.apply(f, want);
+        for (RotationMethod m : {RotationMethod::zxzxz, RotationMethod::automatic}) {
+          ShRotation<float> rot(order, helpers());
+          ASSERT_TRUE(rot.set(r.cast<float>(), m));
+          std::vector<float> ff(f.begin(), f.end()), got(f.size());
+          rot.apply(ff, got);
+          double err = 0;
+          for (std::size_t i = 0; i < f.size(); ++i) err += std::pow(got[i] - want[i], 2);
+          EXPECT_LE(std::sqrt(err) / norm(f), kTolFloat)
+              << rotation_method_name(m) << " (" << rotation_method_name(rot.method()) << ") order " << order
+              << " angle " << angle;
+        }
       }
     }
+  });
+}
+
+// The FMA copy is what ShRotation takes on a CPU with AVX2 and FMA; it differs from the
+// baseline copy by rounding only (one rounding fewer per fused a * b + c).
+template <class T>
+void check_fma_copy_agrees_with_baseline(double tol) {
+  std::mt19937_64 rng(14);
+  bool some_bits_differ = false;
+  for (int order = 2; order <= detail::kBandKernelMaxBand + 1; ++order) {
+    const Mat3<double> big = random_rotation(rng);
+    const Mat3<double> small = matrix_from_zyz<double>({0.7, 0.01, -2.1});
+    for (RotationMethod m : {RotationMethod::zxzxz, RotationMethod::taylor1, RotationMethod::taylor2}) {
+      const Mat3<T> r = (m == RotationMethod::zxzxz ? big : small).template cast<T>();
+      const std::vector<double> f = random_coeffs(order, rng);
+      const std::vector<T> ft(f.begin(), f.end());
+      std::vector<T> got[2];
+      for (bool fused : {false, true}) {
+        detail::use_fma_kernels(fused);
+        ShRotation<T> rot(order, helpers());
+        ASSERT_TRUE(rot.set(r, m));
+        got[fused].resize(f.size());
+        rot.apply(ft, got[fused]);
+      }
+      detail::use_fma_kernels(true);
+      double diff = 0;
+      for (std::size_t i = 0; i < f.size(); ++i) {
+        diff = std::max(diff, std::abs(double(got[0][i]) - double(got[1][i])));
+        some_bits_differ |= got[0][i] != got[1][i];
+      }
+      EXPECT_LE(diff, tol * norm(f)) << rotation_method_name(m) << " order " << order;
+    }
   }
+  // Proof that the FMA copy ran: fused and unfused results cannot agree in every bit.
+  EXPECT_EQ(some_bits_differ, detail::fma_kernels_supported());
+}
+
+TEST(RotationKernels, FmaCopyAgreesWithBaselineToRounding) {
+  check_fma_copy_agrees_with_baseline<float>(2e-6);
+  check_fma_copy_agrees_with_baseline<double>(1e-14);
 }
 
 }  // namespace

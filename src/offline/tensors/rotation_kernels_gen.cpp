@@ -27,17 +27,19 @@ std::string literal(double v) {
   return buf;
 }
 
-// Sum of coefficient * variable terms as C++; exact zeros dropped, unit coefficients
-// written without a multiplication. Empty sums give "".
+// Sum of coefficient * variable terms as C++, accumulated left to right, each term after
+// the first through madd<F> (rotation_kernels.h: fused in the FMA kernels, two roundings
+// otherwise); exact zeros dropped, unit coefficients added without a multiplication.
+// Empty sums give "".
 std::string linear_sum(const std::vector<std::pair<double, std::string>>& terms) {
   std::string s;
   for (const auto& [c, name] : terms) {
     if (c == 0.0) continue;
-    const bool neg = c < 0, first = s.empty();
+    const bool neg = c < 0;
     const double a = std::abs(c);
-    std::string term = a == 1.0 ? name : "T(" + literal(a) + ") * " + name;
-    if (first) s = neg ? (a == 1.0 ? "-" + name : "T(" + literal(-a) + ") * " + name) : term;
-    else s += (neg ? " - " : " + ") + term;
+    if (s.empty()) s = a == 1.0 ? (neg ? "-" + name : name) : "T(" + literal(c) + ") * " + name;
+    else if (a == 1.0) s += (neg ? " - " : " + ") + name;
+    else s = "madd<F>(T(" + literal(c) + "), " + name + ", " + s + ")";
   }
   return s;
 }
@@ -57,8 +59,8 @@ void z_rotation(std::ostream& o, int l, const std::string& angle, const std::str
     const std::string cm = "c" + angle + std::to_string(m), sm = "s" + angle + std::to_string(m);
     o << "  const P " << cm << " = splat<P>(s.c" << angle << "[" << m << "]), " << sm << " = splat<P>(s.s"
       << angle << "[" << m << "]);\n";
-    o << out(l + m) << cm << " * " << in(l + m) << " - " << sm << " * " << in(l - m) << ";\n";
-    o << out(l - m) << sm << " * " << in(l + m) << " + " << cm << " * " << in(l - m) << ";\n";
+    o << out(l + m) << "madd<F>(" << cm << ", " << in(l + m) << ", -(" << sm << " * " << in(l - m) << "));\n";
+    o << out(l - m) << "madd<F>(" << sm << ", " << in(l + m) << ", " << cm << " * " << in(l - m) << ");\n";
   }
 }
 
@@ -67,8 +69,8 @@ void zxzxz_band(std::ostream& o, const RotationHelpers& h, int l) {
   const auto x = x90_band_block(h, l);
   // S: KernelState<T>, or BatchState<T> (a rotation per lane).
   o << "// Band " << l << " of Z(a) X90^T Z(b) X90 Z(g), Ry(b) = Rx(-90) Rz(b) Rx(+90).\n"
-    << "template <class T, class P, class S>\n"
-    << "inline void zxzxz_band" << l
+    << "template <bool F, class T, class P, class S>\n"
+    << "SHTOOL_KERNEL_INLINE void zxzxz_band" << l
     << "(const S& s, const P* __restrict x, P* __restrict y) {\n";
   z_rotation(o, l, "g", "x", true, "t", false);
   for (int i = 0; i < size; ++i) {
@@ -94,8 +96,8 @@ void taylor_band(std::ostream& o, const RotationHelpers& h, int l) {
   auto off2 = [&](int j) { return j >= 2 && j < size ? h.ddy_off2[first + j] : 0.0; };
   auto t = [](int j) { return indexed("t", j); };
   o << "// Band " << l << " of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) ([2] Sec. 3).\n"
-    << "template <int Order, class T, class P, class S>\n"
-    << "inline void taylor_band" << l
+    << "template <bool F, int Order, class T, class P, class S>\n"
+    << "SHTOOL_KERNEL_INLINE void taylor_band" << l
     << "(const S& s, const P* __restrict x, P* __restrict y) {\n";
   z_rotation(o, l, "g", "x", true, "t", false);
   o << "  const auto b = s.beta, h = s.half_beta2;\n  (void)h;\n";
@@ -104,96 +106,112 @@ void taylor_band(std::ostream& o, const RotationHelpers& h, int l) {
     if (j > 0) d1.emplace_back(sub(j), t(j - 1));
     if (j + 1 < size) d1.emplace_back(-sub(j + 1), t(j + 1));
     const std::string s1 = linear_sum(d1);
-    o << "  P u" << j << " = " << t(j);
-    if (!s1.empty()) o << " + b * (" << s1 << ")";
-    o << ";\n";
+    if (s1.empty()) o << "  P u" << j << " = " << t(j) << ";\n";
+    else o << "  P u" << j << " = madd<F>(b, " << s1 << ", " << t(j) << ");\n";
     const std::string diag = linear_sum({{h.ddy_diag[first + j], t(j)}});
     std::vector<std::pair<double, std::string>> d2 = {{h.ddy_diag[first + j], t(j)}};
     if (j >= 2) d2.emplace_back(off2(j), t(j - 2));
     if (j + 2 < size) d2.emplace_back(off2(j + 2), t(j + 2));
     const std::string full = linear_sum(d2);
-    if (!diag.empty()) o << "  if constexpr (Order == 15) u" << j << " += h * (" << diag << ");\n";
-    if (!full.empty()) o << "  if constexpr (Order == 2) u" << j << " += h * (" << full << ");\n";
+    if (!diag.empty())
+      o << "  if constexpr (Order == 15) u" << j << " = madd<F>(h, " << diag << ", u" << j << ");\n";
+    if (!full.empty())
+      o << "  if constexpr (Order == 2) u" << j << " = madd<F>(h, " << full << ", u" << j << ");\n";
   }
   z_rotation(o, l, "a", "u", false, "y", true);
   o << "}\n\n";
 }
 
 void order_function(std::ostream& o, bool taylor, int n) {
-  const int count = n * n;
   const std::string name = (taylor ? "taylor_order" : "zxzxz_order") + std::to_string(n);
-  // Bands 0..n-1 on lanes P; then the entry point: one vector works in place on the
-  // caller's arrays, three are gathered into lanes first.
-  // S: KernelState<T>, or BatchState<T> (a rotation per lane).
-  if (taylor) o << "template <int Order, class T, class P, class S>\n";
-  else o << "template <class T, class P, class S>\n";
-  o << "inline void " << name << "_bands(const S& s, const P* __restrict x, P* __restrict y) {\n"
+  // Bands 0..n-1 on lanes P. S: KernelState<T>, or BatchState<T> (a rotation per lane).
+  if (taylor) o << "template <bool F, int Order, class T, class P, class S>\n";
+  else o << "template <bool F, class T, class P, class S>\n";
+  o << "SHTOOL_KERNEL_INLINE void " << name << "_bands(const S& s, const P* __restrict x, P* __restrict y) {\n"
     << "  y[0] = x[0];\n";
   for (int l = 1; l < n; ++l) {
     const std::string args =
         indexed("(s, x + ", l * l).append(", y + ").append(std::to_string(l * l)).append(");\n");
-    if (taylor) o << "  taylor_band" << l << "<Order, T, P>" << args;
+    if (taylor) o << "  taylor_band" << l << "<F, Order, T, P>" << args;
+    // Band 1 is never fused: at order 2 apply() runs it inline, outside the kernels.
     else if (l == 1) o << "  band1_closed<T, P>(s.r, x + 1, y + 1);\n";
     // Band 2 by its closed form only where it saves the Euler angles (order 3); once
     // they are computed anyway, the zxzxz band costs fewer operations.
-    else if (l == 2 && n <= 3) o << "  band2_closed<T, P>(s.r, x + 4, y + 4);\n";
-    else o << "  zxzxz_band" << l << "<T, P>" << args;
+    else if (l == 2 && n <= 3) o << "  band2_closed<F, T, P>(s.r, x + 4, y + 4);\n";
+    else o << "  zxzxz_band" << l << "<F, T, P>" << args;
   }
   if (n == 1) o << "  (void)s;\n";
   o << "}\n\n";
-  const std::string targs = taylor ? "Order, T, " : "T, ";
+}
+
+// The entry points of one function of bands (a whole order, or one band above them):
+// one rotation of V vectors (one vector works in place on the caller's arrays, three are
+// gathered into lanes first), and a batch of rotations in lanes. Fused: the FMA copy,
+// name suffix _fma, compiled for AVX2 + FMA (SHTOOL_FMA_TARGET).
+void entry_functions(std::ostream& o, bool taylor, const std::string& body, int first, int count, bool fused) {
+  const std::string targs = std::string(fused ? "true, " : "false, ") + (taylor ? "Order, T, " : "T, ");
+  const bool whole_order = body.ends_with("_bands");
+  const std::string base = whole_order ? body.substr(0, body.size() - 6) : body;
+  const std::string fma = fused ? "_fma" : "";
+  const std::string entry = base + (whole_order ? "" : "_entry") + fma, batch = base + "_batch" + fma;
+  const char* attr = fused ? "SHTOOL_FMA_TARGET " : "";
   if (taylor) o << "template <int Order, class T, int V>\n";
   else o << "template <class T, int V>\n";
-  o << "void " << name << "(const KernelState<T>& s, const T* const* in, T* const* out) {\n"
-    << "  run_lanes<T, V, 0, " << count << ">(in, out, [&s](const auto* __restrict x, auto* __restrict y) {\n"
-    << "    " << name << "_bands<" << targs << "std::remove_cvref_t<decltype(*y)>>(s, x, y);\n"
+  o << attr << "void " << entry << "(const KernelState<T>& s, const T* const* in, T* const* out) {\n"
+    << "  run_lanes<T, V, " << first << ", " << count
+    << ">(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {\n"
+    << "    " << body << "<" << targs << "std::remove_cvref_t<decltype(*y)>>(s, x, y);\n"
     << "  });\n}\n\n";
-  o << (taylor ? "template <int Order, class T>\n" : "template <class T>\n")
-    << "void " << name << "_batch(const BatchState<T>& s, const T* const* in, T* const* out) {\n"
-    << "  run_batch_lanes<T, 0, " << count << ">(in, out, [&s](const auto* __restrict x, auto* __restrict y) {\n"
-    << "    " << name << "_bands<" << targs << "BatchPack<T>>(s, x, y);\n"
+  o << (taylor ? "template <int Order, class T>\n" : "template <class T>\n") << attr << "void " << batch
+    << "(const BatchState<T>& s, const T* const* in, T* const* out) {\n"
+    << "  run_batch_lanes<T, " << first << ", " << count
+    << ">(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {\n"
+    << "    " << body << "<" << targs << "BatchPack<T>>(s, x, y);\n"
     << "  });\n}\n\n";
 }
 
-// Entry point of one band above the whole-order kernels.
-void band_entry(std::ostream& o, bool taylor, int l) {
-  const int first = l * l, size = 2 * l + 1;
-  const std::string band = (taylor ? "taylor_band" : "zxzxz_band") + std::to_string(l);
-  const std::string targs = taylor ? "Order, T, " : "T, ";
-  if (taylor) o << "template <int Order, class T, int V>\n";
-  else o << "template <class T, int V>\n";
-  o << "void " << band << "_entry(const KernelState<T>& s, const T* const* in, T* const* out) {\n"
-    << "  run_lanes<T, V, " << first << ", " << size
-    << ">(in, out, [&s](const auto* __restrict x, auto* __restrict y) {\n"
-    << "    " << band << "<" << targs << "std::remove_cvref_t<decltype(*y)>>(s, x, y);\n"
-    << "  });\n}\n\n";
-  o << (taylor ? "template <int Order, class T>\n" : "template <class T>\n")
-    << "void " << band << "_batch(const BatchState<T>& s, const T* const* in, T* const* out) {\n"
-    << "  run_batch_lanes<T, " << first << ", " << size
-    << ">(in, out, [&s](const auto* __restrict x, auto* __restrict y) {\n"
-    << "    " << band << "<" << targs << "BatchPack<T>>(s, x, y);\n"
-    << "  });\n}\n\n";
+// Every entry point, baseline or fused.
+void all_entries(std::ostream& o, bool fused) {
+  for (int l = kKernelMaxOrder; l <= kBandKernelMaxBand; ++l)
+    for (bool taylor : {false, true})
+      entry_functions(o, taylor, (taylor ? "taylor_band" : "zxzxz_band") + std::to_string(l), l * l, 2 * l + 1,
+                      fused);
+  for (bool taylor : {false, true})
+    for (int n = 1; n <= kKernelMaxOrder; ++n)
+      entry_functions(o, taylor, (taylor ? "taylor_order" : "zxzxz_order") + std::to_string(n) + "_bands", 0,
+                      n * n, fused);
 }
 
-// A lookup from (method, order) or (method, band l) to the address of a generated
-// function: `signature` opens it, then a switch over the four methods and over the
-// whole orders 1..kKernelMaxOrder (orders) or the bands kKernelMaxOrder..kBandKernelMaxBand
-// returns &<zxzxz|taylor>_<order|band><n><suffix><[Order, ]targs>.
-void lookup_function(std::ostream& o, const std::string& signature, const char* var, bool orders,
-                     const std::string& suffix, const std::string& targs, bool no_double_zxzxz) {
+// The switch of a lookup from (method, order) or (method, band l) to the address of a
+// generated function: over the four methods and over the whole orders
+// 1..kKernelMaxOrder (orders) or the bands kKernelMaxOrder..kBandKernelMaxBand, returning
+// &<zxzxz|taylor>_<order|band><n><suffix><[Order, ]targs>.
+void lookup_switch(std::ostream& o, const char* var, bool orders, const std::string& suffix,
+                   const std::string& targs, bool no_double_zxzxz, const char* indent) {
   const char* methods[4][2] = {{"0", ""}, {"1", "1, "}, {"15", "15, "}, {"2", "2, "}};
   const int lo = orders ? 1 : kKernelMaxOrder, hi = orders ? kKernelMaxOrder : kBandKernelMaxBand;
-  o << signature << "  switch (method) {\n";
+  o << indent << "switch (method) {\n";
   for (int k = 0; k < 4; ++k) {
-    o << "    case " << methods[k][0] << ":\n";
-    if (k == 0 && no_double_zxzxz) o << "      if constexpr (std::is_same_v<T, double>) return nullptr;\n";
-    o << "      switch (" << var << ") {\n";
+    o << indent << "  case " << methods[k][0] << ":\n";
+    if (k == 0 && no_double_zxzxz) o << indent << "    if constexpr (std::is_same_v<T, double>) return nullptr;\n";
+    o << indent << "    switch (" << var << ") {\n";
     for (int n = lo; n <= hi; ++n)
-      o << "        case " << n << ": return &" << (k == 0 ? "zxzxz_" : "taylor_") << (orders ? "order" : "band") << n
-        << suffix << "<" << methods[k][1] << targs << ">;\n";
-    o << "      }\n      break;\n";
+      o << indent << "      case " << n << ": return &" << (k == 0 ? "zxzxz_" : "taylor_") << (orders ? "order" : "band")
+        << n << suffix << "<" << methods[k][1] << targs << ">;\n";
+    o << indent << "    }\n" << indent << "    break;\n";
   }
-  o << "  }\n  return nullptr;\n}\n\n";
+  o << indent << "}\n";
+}
+
+// A lookup function: `signature` opens it; the fused switch first (where built), then the
+// baseline one.
+void lookup_function(std::ostream& o, const std::string& signature, const char* var, bool orders,
+                     const std::string& suffix, const std::string& targs, bool no_double_zxzxz) {
+  o << signature << "#if SHTOOL_FMA_KERNELS\n  if (fused) {\n";
+  lookup_switch(o, var, orders, suffix + "_fma", targs, no_double_zxzxz, "    ");
+  o << "    return nullptr;\n  }\n#else\n  (void)fused;\n#endif\n";
+  lookup_switch(o, var, orders, suffix, targs, no_double_zxzxz, "  ");
+  o << "  return nullptr;\n}\n\n";
 }
 
 }  // namespace
@@ -214,36 +232,36 @@ std::string rotation_kernels_source() {
        "namespace {\n\n";
   for (int l = 2; l <= kBandKernelMaxBand; ++l) zxzxz_band(o, h, l);
   for (int l = 1; l <= kBandKernelMaxBand; ++l) taylor_band(o, h, l);
-  for (int l = kKernelMaxOrder; l <= kBandKernelMaxBand; ++l) {
-    band_entry(o, false, l);
-    band_entry(o, true, l);
-  }
   for (int n = 1; n <= kKernelMaxOrder; ++n) order_function(o, false, n);
   for (int n = 1; n <= kKernelMaxOrder; ++n) order_function(o, true, n);
+  all_entries(o, false);
+  o << "#if SHTOOL_FMA_KERNELS\n\n";
+  all_entries(o, true);
+  o << "#endif  // SHTOOL_FMA_KERNELS\n\n";
   o << "}  // namespace\n\n";
   lookup_function(o,
-                  "template <class T, int V>\nRotationKernel<T, V> rotation_kernel(int method, int order) {\n"
+                  "template <class T, int V>\nRotationKernel<T, V> rotation_kernel(int method, int order, bool fused) {\n"
                   "  if (order < 1) return nullptr;\n"
                   "  if (order > kKernelMaxOrder) order = kKernelMaxOrder;\n",
                   "order", true, "", "T, V", false);
   // Double zxzxz bands above the whole-order kernels run the paired X90 rows of
   // rotation.cpp, so their band kernels would be dead code (and batches running them
   // would not match apply() bit for bit): not instantiated.
-  lookup_function(o, "template <class T, int V>\nRotationKernel<T, V> band_kernel(int method, int l) {\n", "l",
-                  false, "_entry", "T, V", true);
-  lookup_function(o, "template <class T>\nBatchKernel<T> batch_kernel(int method, int order) {\n", "order", true,
-                  "_batch", "T", false);
-  lookup_function(o, "template <class T>\nBatchKernel<T> batch_band_kernel(int method, int l) {\n", "l", false,
-                  "_batch", "T", true);
+  lookup_function(o, "template <class T, int V>\nRotationKernel<T, V> band_kernel(int method, int l, bool fused) {\n",
+                  "l", false, "_entry", "T, V", true);
+  lookup_function(o, "template <class T>\nBatchKernel<T> batch_kernel(int method, int order, bool fused) {\n", "order",
+                  true, "_batch", "T", false);
+  lookup_function(o, "template <class T>\nBatchKernel<T> batch_band_kernel(int method, int l, bool fused) {\n", "l",
+                  false, "_batch", "T", true);
   for (const char* type : {"float", "double"})
-    o << "template BatchKernel<" << type << "> batch_kernel<" << type << ">(int, int);\n"
-      << "template BatchKernel<" << type << "> batch_band_kernel<" << type << ">(int, int);\n";
+    o << "template BatchKernel<" << type << "> batch_kernel<" << type << ">(int, int, bool);\n"
+      << "template BatchKernel<" << type << "> batch_band_kernel<" << type << ">(int, int, bool);\n";
   for (const char* type : {"float", "double"})
     for (int v : {1, 3})
       o << "template RotationKernel<" << type << ", " << v << "> rotation_kernel<" << type << ", " << v
-        << ">(int, int);\n"
+        << ">(int, int, bool);\n"
         << "template RotationKernel<" << type << ", " << v << "> band_kernel<" << type << ", " << v
-        << ">(int, int);\n";
+        << ">(int, int, bool);\n";
   o << "\n}  // namespace shtool::detail\n";
   return o.str();
 }

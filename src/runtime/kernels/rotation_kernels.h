@@ -15,6 +15,17 @@
 
 namespace shtool::detail {
 
+// The helpers and band bodies are forced inline into the entry points: GCC does not
+// inline ordinary functions into the FMA copies (their target differs), and a call per
+// band would cost more than the band.
+#if defined(__GNUC__)
+#define SHTOOL_KERNEL_INLINE __attribute__((always_inline)) inline
+#define SHTOOL_KERNEL_LAMBDA_INLINE __attribute__((always_inline))
+#else
+#define SHTOOL_KERNEL_INLINE inline
+#define SHTOOL_KERNEL_LAMBDA_INLINE
+#endif
+
 // Largest band with a generated kernel; orders up to kKernelMaxBand + 1 run entirely in
 // one generated function.
 inline constexpr int kKernelMaxBand = 9;
@@ -46,9 +57,58 @@ using Pack = typename Lanes<T, V>::type;
 
 // A scalar in every lane.
 template <class P, class T>
-inline P splat(T v) {
+SHTOOL_KERNEL_INLINE P splat(T v) {
   if constexpr (std::is_same_v<P, T>) return v;
   else return P{} + v;
+}
+
+// Every generated kernel exists twice: the baseline copy, and (x86-64 with GCC) an FMA
+// copy compiled for AVX2 + FMA, which ShRotation takes on CPUs that have them. The FMA
+// copy fuses exactly the a * b + c that the source writes as madd<true>: the compiler's
+// own contraction (off for the runtime) fuses differently in scalar and lane code, and
+// apply_rgb must equal three apply() calls, and rotate_batch set() + apply(), bit for bit.
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__linux__) && \
+    !defined(SHTOOL_NO_KERNEL_CLONES)
+#define SHTOOL_FMA_KERNELS 1
+#define SHTOOL_FMA_TARGET __attribute__((target("avx2,fma")))
+#else
+#define SHTOOL_FMA_KERNELS 0
+#define SHTOOL_FMA_TARGET
+#endif
+
+// Whether this CPU runs the FMA copies (false where they are not built).
+bool fma_kernels_supported();
+
+// a * b + c, rounded twice (F = false) or once (F = true; only inlined into the FMA
+// copies). a may be a scalar where b and c are lane vectors.
+template <bool F, class A, class P>
+SHTOOL_KERNEL_INLINE P madd(A a, P b, P c) {
+  if constexpr (!F) {
+    return a * b + c;
+  } else {
+#if SHTOOL_FMA_KERNELS
+    if constexpr (std::is_same_v<P, float>) {
+      return __builtin_fmaf(a, b, c);
+    } else if constexpr (std::is_same_v<P, double>) {
+      return __builtin_fma(a, b, c);
+    } else {
+      P av;
+      if constexpr (std::is_same_v<A, P>) av = a;
+      else av = splat<P>(a);
+      // Lane by lane; the vectorizer turns it into one vector FMA.
+      P r;
+      constexpr int lanes = sizeof(P) / sizeof(c[0]);
+      for (int i = 0; i < lanes; ++i) {
+        if constexpr (sizeof(c[0]) == 4) r[i] = __builtin_fmaf(av[i], b[i], c[i]);
+        else r[i] = __builtin_fma(av[i], b[i], c[i]);
+      }
+      return r;
+    }
+#else
+    static_assert(!F, "no FMA kernels in this build");
+    return c;
+#endif
+  }
 }
 
 // KernelState (what one rotation needs at apply time) is in shtool/rotation.h.
@@ -60,12 +120,13 @@ using RotationKernel = void (*)(const KernelState<T>&, const T* const* in, T* co
 
 // Kernel covering bands 0..min(order, kKernelMaxOrder) - 1. Method: 0 = zxzxz (bands 1
 // and 2 by the closed forms below), 1 / 15 / 2 = taylor1 / taylor1.5 / taylor2.
+// fused: the FMA copy (fma_kernels_supported() must hold), else the baseline one.
 template <class T, int V>
-RotationKernel<T, V> rotation_kernel(int method, int order);
+RotationKernel<T, V> rotation_kernel(int method, int order, bool fused);
 // Kernel of band l alone (kKernelMaxOrder <= l <= kBandKernelMaxBand, else null): same
 // methods, same arguments (it transforms coefficients l^2 .. l^2 + 2l).
 template <class T, int V>
-RotationKernel<T, V> band_kernel(int method, int l);
+RotationKernel<T, V> band_kernel(int method, int l, bool fused);
 
 // Lane vectors wider than 16 bytes (4 doubles) are native only with AVX; without it GCC
 // splits them badly, so three double vectors run as a pair (2 doubles, one SSE2 register)
@@ -81,14 +142,14 @@ struct Lanes<T, 2> {
 };
 
 template <class T, class P>
-inline P load_lane_vector(const T* const* in, int i) {
+SHTOOL_KERNEL_INLINE P load_lane_vector(const T* const* in, int i) {
   if constexpr (std::is_same_v<P, T>) return in[0][i];
   else if constexpr (sizeof(P) == 2 * sizeof(T)) return P{in[0][i], in[1][i]};
   else return P{in[0][i], in[1][i], in[2][i], T(0)};
 }
 
 template <class T, class P>
-inline void store_lane_vector(const P& y, int i, T* const* out) {
+SHTOOL_KERNEL_INLINE void store_lane_vector(const P& y, int i, T* const* out) {
   if constexpr (std::is_same_v<P, T>) {
     out[0][i] = y;
   } else {
@@ -99,19 +160,19 @@ inline void store_lane_vector(const P& y, int i, T* const* out) {
 }
 
 template <class T, class P>
-inline void load_lanes(const T* const* in, int first, int count, P* x) {
+SHTOOL_KERNEL_INLINE void load_lanes(const T* const* in, int first, int count, P* x) {
   for (int i = 0; i < count; ++i) x[i] = load_lane_vector<T, P>(in, first + i);
 }
 
 template <class T, class P>
-inline void store_lanes(const P* y, int first, int count, T* const* out) {
+SHTOOL_KERNEL_INLINE void store_lanes(const P* y, int first, int count, T* const* out) {
   for (int i = 0; i < count; ++i) store_lane_vector<T, P>(y[i], first + i, out);
 }
 
 // Runs bands(x, y) on coefficients first .. first + count - 1 of V vectors: one vector in
 // place on the caller's arrays, three gathered into lane vectors (see Lanes).
 template <class T, int V, int First, int Count, class F>
-inline void run_lanes(const T* const* in, T* const* out, F&& bands) {
+SHTOOL_KERNEL_INLINE void run_lanes(const T* const* in, T* const* out, F&& bands) {
   if constexpr (V == 1) {
     bands(in[0] + First, out[0] + First);
   } else if constexpr (4 * sizeof(T) <= kNativeLaneBytes) {
@@ -156,17 +217,17 @@ using BatchKernel = void (*)(const BatchState<T>&, const T* const* in, T* const*
 // Kernel of a whole order (1..kKernelMaxOrder) for a batch, methods as in
 // rotation_kernel; null above.
 template <class T>
-BatchKernel<T> batch_kernel(int method, int order);
+BatchKernel<T> batch_kernel(int method, int order, bool fused);
 // Kernel of band l alone (kKernelMaxOrder <= l <= kBandKernelMaxBand) for a batch, where
 // apply() runs the same generated band code (all but double zxzxz); null otherwise.
 template <class T>
-BatchKernel<T> batch_band_kernel(int method, int l);
+BatchKernel<T> batch_band_kernel(int method, int l, bool fused);
 
 // x[i] = {src[0][i], .., src[B-1][i]} for i < count, B = kBatchLanes<T>: B x B transposes
 // of register-sized loads (values never pass through memory one lane at a time, which
 // would stall store forwarding). scatter_lanes is the inverse.
 template <class T>
-inline void transpose_lanes(const BatchPack<T>* a, BatchPack<T>* x) {
+SHTOOL_KERNEL_INLINE void transpose_lanes(const BatchPack<T>* a, BatchPack<T>* x) {
   if constexpr (kBatchLanes<T> == 4) {
     const BatchPack<T> t0 = __builtin_shufflevector(a[0], a[1], 0, 4, 1, 5);
     const BatchPack<T> t1 = __builtin_shufflevector(a[2], a[3], 0, 4, 1, 5);
@@ -183,13 +244,13 @@ inline void transpose_lanes(const BatchPack<T>* a, BatchPack<T>* x) {
 }
 
 template <class T>
-inline BatchPack<T> lanes_at(const T* const* src, int i) {
+SHTOOL_KERNEL_INLINE BatchPack<T> lanes_at(const T* const* src, int i) {
   if constexpr (kBatchLanes<T> == 4) return BatchPack<T>{src[0][i], src[1][i], src[2][i], src[3][i]};
   else return BatchPack<T>{src[0][i], src[1][i]};
 }
 
 template <class T>
-inline void gather_lanes(const T* const* src, int count, BatchPack<T>* x) {
+SHTOOL_KERNEL_INLINE void gather_lanes(const T* const* src, int count, BatchPack<T>* x) {
   constexpr int B = kBatchLanes<T>;
   int i = 0;
   for (; i + B <= count; i += B) {
@@ -201,7 +262,7 @@ inline void gather_lanes(const T* const* src, int count, BatchPack<T>* x) {
 }
 
 template <class T>
-inline void scatter_lanes(const BatchPack<T>* y, int count, T* const* dst) {
+SHTOOL_KERNEL_INLINE void scatter_lanes(const BatchPack<T>* y, int count, T* const* dst) {
   constexpr int B = kBatchLanes<T>;
   int i = 0;
   for (; i + B <= count; i += B) {
@@ -216,7 +277,7 @@ inline void scatter_lanes(const BatchPack<T>* y, int count, T* const* dst) {
 // Runs bands(x, y) on coefficients First .. First + Count - 1 of kBatchLanes<T> vectors
 // gathered into lanes.
 template <class T, int First, int Count, class F>
-inline void run_batch_lanes(const T* const* in, T* const* out, F&& bands) {
+SHTOOL_KERNEL_INLINE void run_batch_lanes(const T* const* in, T* const* out, F&& bands) {
   constexpr int B = kBatchLanes<T>;
   const T* src[B];
   T* dst[B];
@@ -243,29 +304,33 @@ inline void run_batch_lanes(const T* const* in, T* const* out, F&& bands) {
 // and projecting B = R A R^T back (integral of (w^T Q w)(w^T B w) = (8 pi / 15) tr(QB)
 // for traceless Q, B) gives g-2 = B01, g-1 = -B12, g0 = (sqrt3 / 2) B22, g1 = -B02,
 // g2 = (B00 - B11) / 2.
-template <class T, class P, class R = T>
-inline void band2_closed(const R* __restrict r, const P* __restrict x, P* __restrict y) {
+template <bool F, class T, class P, class R = T>
+SHTOOL_KERNEL_INLINE void band2_closed(const R* __restrict r, const P* __restrict x, P* __restrict y) {
   const T k = T(0.57735026918962576451);        // 1 / sqrt3
   const T h3 = T(0.86602540378443864676);       // sqrt3 / 2
   const P kf0 = k * x[2];
   const P a00 = x[4] - kf0, a11 = -x[4] - kf0, a22 = kf0 + kf0;
   const P a01 = x[0], a12 = -x[1], a02 = -x[3];
+  // u0 v0 + u1 v1 + u2 v2, left to right.
+  auto dot3 = [](auto u0, auto v0, auto u1, auto v1, auto u2, auto v2) {
+    return madd<F>(u2, v2, madd<F>(u1, v1, u0 * v0));
+  };
   // C = R A (A symmetric), then the needed entries of B = C R^T.
-  const P c00 = r[0] * a00 + r[3] * a01 + r[6] * a02;
-  const P c01 = r[0] * a01 + r[3] * a11 + r[6] * a12;
-  const P c02 = r[0] * a02 + r[3] * a12 + r[6] * a22;
-  const P c10 = r[1] * a00 + r[4] * a01 + r[7] * a02;
-  const P c11 = r[1] * a01 + r[4] * a11 + r[7] * a12;
-  const P c12 = r[1] * a02 + r[4] * a12 + r[7] * a22;
-  const P c20 = r[2] * a00 + r[5] * a01 + r[8] * a02;
-  const P c21 = r[2] * a01 + r[5] * a11 + r[8] * a12;
-  const P c22 = r[2] * a02 + r[5] * a12 + r[8] * a22;
-  const P b00 = c00 * r[0] + c01 * r[3] + c02 * r[6];
-  const P b11 = c10 * r[1] + c11 * r[4] + c12 * r[7];
-  const P b22 = c20 * r[2] + c21 * r[5] + c22 * r[8];
-  const P b01 = c00 * r[1] + c01 * r[4] + c02 * r[7];
-  const P b02 = c00 * r[2] + c01 * r[5] + c02 * r[8];
-  const P b12 = c10 * r[2] + c11 * r[5] + c12 * r[8];
+  const P c00 = dot3(r[0], a00, r[3], a01, r[6], a02);
+  const P c01 = dot3(r[0], a01, r[3], a11, r[6], a12);
+  const P c02 = dot3(r[0], a02, r[3], a12, r[6], a22);
+  const P c10 = dot3(r[1], a00, r[4], a01, r[7], a02);
+  const P c11 = dot3(r[1], a01, r[4], a11, r[7], a12);
+  const P c12 = dot3(r[1], a02, r[4], a12, r[7], a22);
+  const P c20 = dot3(r[2], a00, r[5], a01, r[8], a02);
+  const P c21 = dot3(r[2], a01, r[5], a11, r[8], a12);
+  const P c22 = dot3(r[2], a02, r[5], a12, r[8], a22);
+  const P b00 = dot3(r[0], c00, r[3], c01, r[6], c02);
+  const P b11 = dot3(r[1], c10, r[4], c11, r[7], c12);
+  const P b22 = dot3(r[2], c20, r[5], c21, r[8], c22);
+  const P b01 = dot3(r[1], c00, r[4], c01, r[7], c02);
+  const P b02 = dot3(r[2], c00, r[5], c01, r[8], c02);
+  const P b12 = dot3(r[2], c10, r[5], c11, r[8], c12);
   y[0] = b01;
   y[1] = -b12;
   y[2] = h3 * b22;

@@ -13,5906 +13,6535 @@ static_assert(kKernelMaxBand == 9, "regenerate rotation_kernels_generated.cpp");
 namespace {
 
 // Band 2 of Z(a) X90^T Z(b) X90 Z(g), Ry(b) = Rx(-90) Rz(b) Rx(+90).
-template <class T, class P, class S>
-inline void zxzxz_band2(const S& s, const P* __restrict x, P* __restrict y) {
+template <bool F, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void zxzxz_band2(const S& s, const P* __restrict x, P* __restrict y) {
   const P t2 = x[2];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
-  const P t3 = cg1 * x[3] - sg1 * x[1];
-  const P t1 = sg1 * x[3] + cg1 * x[1];
+  const P t3 = madd<F>(cg1, x[3], -(sg1 * x[1]));
+  const P t1 = madd<F>(sg1, x[3], cg1 * x[1]);
   const P cg2 = splat<P>(s.cg[2]), sg2 = splat<P>(s.sg[2]);
-  const P t4 = cg2 * x[4] - sg2 * x[0];
-  const P t0 = sg2 * x[4] + cg2 * x[0];
+  const P t4 = madd<F>(cg2, x[4], -(sg2 * x[0]));
+  const P t0 = madd<F>(sg2, x[4], cg2 * x[0]);
   const P u0 = T(1.0000000000000002) * t3;
   const P u1 = -t1;
-  const P u2 = T(-0.5) * t2 - T(0.8660254037844386) * t4;
+  const P u2 = madd<F>(T(-0.8660254037844386), t4, T(-0.5) * t2);
   const P u3 = -t0;
-  const P u4 = T(-0.8660254037844386) * t2 + T(0.49999999999999994) * t4;
+  const P u4 = madd<F>(T(0.49999999999999994), t4, T(-0.8660254037844386) * t2);
   const P w2 = u2;
   const P cb1 = splat<P>(s.cb[1]), sb1 = splat<P>(s.sb[1]);
-  const P w3 = cb1 * u3 - sb1 * u1;
-  const P w1 = sb1 * u3 + cb1 * u1;
+  const P w3 = madd<F>(cb1, u3, -(sb1 * u1));
+  const P w1 = madd<F>(sb1, u3, cb1 * u1);
   const P cb2 = splat<P>(s.cb[2]), sb2 = splat<P>(s.sb[2]);
-  const P w4 = cb2 * u4 - sb2 * u0;
-  const P w0 = sb2 * u4 + cb2 * u0;
+  const P w4 = madd<F>(cb2, u4, -(sb2 * u0));
+  const P w0 = madd<F>(sb2, u4, cb2 * u0);
   const P v0 = -w3;
   const P v1 = -w1;
-  const P v2 = T(-0.5) * w2 - T(0.8660254037844386) * w4;
+  const P v2 = madd<F>(T(-0.8660254037844386), w4, T(-0.5) * w2);
   const P v3 = T(1.0000000000000002) * w0;
-  const P v4 = T(-0.8660254037844386) * w2 + T(0.49999999999999994) * w4;
+  const P v4 = madd<F>(T(0.49999999999999994), w4, T(-0.8660254037844386) * w2);
   y[2] = v2;
   const P ca1 = splat<P>(s.ca[1]), sa1 = splat<P>(s.sa[1]);
-  y[3] = ca1 * v3 - sa1 * v1;
-  y[1] = sa1 * v3 + ca1 * v1;
+  y[3] = madd<F>(ca1, v3, -(sa1 * v1));
+  y[1] = madd<F>(sa1, v3, ca1 * v1);
   const P ca2 = splat<P>(s.ca[2]), sa2 = splat<P>(s.sa[2]);
-  y[4] = ca2 * v4 - sa2 * v0;
-  y[0] = sa2 * v4 + ca2 * v0;
+  y[4] = madd<F>(ca2, v4, -(sa2 * v0));
+  y[0] = madd<F>(sa2, v4, ca2 * v0);
 }
 
 // Band 3 of Z(a) X90^T Z(b) X90 Z(g), Ry(b) = Rx(-90) Rz(b) Rx(+90).
-template <class T, class P, class S>
-inline void zxzxz_band3(const S& s, const P* __restrict x, P* __restrict y) {
+template <bool F, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void zxzxz_band3(const S& s, const P* __restrict x, P* __restrict y) {
   const P t3 = x[3];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
-  const P t4 = cg1 * x[4] - sg1 * x[2];
-  const P t2 = sg1 * x[4] + cg1 * x[2];
+  const P t4 = madd<F>(cg1, x[4], -(sg1 * x[2]));
+  const P t2 = madd<F>(sg1, x[4], cg1 * x[2]);
   const P cg2 = splat<P>(s.cg[2]), sg2 = splat<P>(s.sg[2]);
-  const P t5 = cg2 * x[5] - sg2 * x[1];
-  const P t1 = sg2 * x[5] + cg2 * x[1];
+  const P t5 = madd<F>(cg2, x[5], -(sg2 * x[1]));
+  const P t1 = madd<F>(sg2, x[5], cg2 * x[1]);
   const P cg3 = splat<P>(s.cg[3]), sg3 = splat<P>(s.sg[3]);
-  const P t6 = cg3 * x[6] - sg3 * x[0];
-  const P t0 = sg3 * x[6] + cg3 * x[0];
-  const P u0 = T(-0.79056941504209499) * t3 + T(0.61237243569579469) * t5;
+  const P t6 = madd<F>(cg3, x[6], -(sg3 * x[0]));
+  const P t0 = madd<F>(sg3, x[6], cg3 * x[0]);
+  const P u0 = madd<F>(T(0.61237243569579469), t5, T(-0.79056941504209499) * t3);
   const P u1 = T(-1.0000000000000002) * t1;
-  const P u2 = T(-0.61237243569579447) * t3 - T(0.79056941504209488) * t5;
-  const P u3 = T(0.79056941504209477) * t0 + T(0.61237243569579458) * t2;
-  const P u4 = T(-0.25) * t4 - T(0.96824583655185403) * t6;
-  const P u5 = T(-0.61237243569579447) * t0 + T(0.79056941504209488) * t2;
-  const P u6 = T(-0.96824583655185392) * t4 + T(0.24999999999999983) * t6;
+  const P u2 = madd<F>(T(-0.79056941504209488), t5, T(-0.61237243569579447) * t3);
+  const P u3 = madd<F>(T(0.61237243569579458), t2, T(0.79056941504209477) * t0);
+  const P u4 = madd<F>(T(-0.96824583655185403), t6, T(-0.25) * t4);
+  const P u5 = madd<F>(T(0.79056941504209488), t2, T(-0.61237243569579447) * t0);
+  const P u6 = madd<F>(T(0.24999999999999983), t6, T(-0.96824583655185392) * t4);
   const P w3 = u3;
   const P cb1 = splat<P>(s.cb[1]), sb1 = splat<P>(s.sb[1]);
-  const P w4 = cb1 * u4 - sb1 * u2;
-  const P w2 = sb1 * u4 + cb1 * u2;
+  const P w4 = madd<F>(cb1, u4, -(sb1 * u2));
+  const P w2 = madd<F>(sb1, u4, cb1 * u2);
   const P cb2 = splat<P>(s.cb[2]), sb2 = splat<P>(s.sb[2]);
-  const P w5 = cb2 * u5 - sb2 * u1;
-  const P w1 = sb2 * u5 + cb2 * u1;
+  const P w5 = madd<F>(cb2, u5, -(sb2 * u1));
+  const P w1 = madd<F>(sb2, u5, cb2 * u1);
   const P cb3 = splat<P>(s.cb[3]), sb3 = splat<P>(s.sb[3]);
-  const P w6 = cb3 * u6 - sb3 * u0;
-  const P w0 = sb3 * u6 + cb3 * u0;
-  const P v0 = T(0.79056941504209477) * w3 - T(0.61237243569579447) * w5;
+  const P w6 = madd<F>(cb3, u6, -(sb3 * u0));
+  const P w0 = madd<F>(sb3, u6, cb3 * u0);
+  const P v0 = madd<F>(T(-0.61237243569579447), w5, T(0.79056941504209477) * w3);
   const P v1 = T(-1.0000000000000002) * w1;
-  const P v2 = T(0.61237243569579458) * w3 + T(0.79056941504209488) * w5;
-  const P v3 = T(-0.79056941504209499) * w0 - T(0.61237243569579447) * w2;
-  const P v4 = T(-0.25) * w4 - T(0.96824583655185392) * w6;
-  const P v5 = T(0.61237243569579469) * w0 - T(0.79056941504209488) * w2;
-  const P v6 = T(-0.96824583655185403) * w4 + T(0.24999999999999983) * w6;
+  const P v2 = madd<F>(T(0.79056941504209488), w5, T(0.61237243569579458) * w3);
+  const P v3 = madd<F>(T(-0.61237243569579447), w2, T(-0.79056941504209499) * w0);
+  const P v4 = madd<F>(T(-0.96824583655185392), w6, T(-0.25) * w4);
+  const P v5 = madd<F>(T(-0.79056941504209488), w2, T(0.61237243569579469) * w0);
+  const P v6 = madd<F>(T(0.24999999999999983), w6, T(-0.96824583655185403) * w4);
   y[3] = v3;
   const P ca1 = splat<P>(s.ca[1]), sa1 = splat<P>(s.sa[1]);
-  y[4] = ca1 * v4 - sa1 * v2;
-  y[2] = sa1 * v4 + ca1 * v2;
+  y[4] = madd<F>(ca1, v4, -(sa1 * v2));
+  y[2] = madd<F>(sa1, v4, ca1 * v2);
   const P ca2 = splat<P>(s.ca[2]), sa2 = splat<P>(s.sa[2]);
-  y[5] = ca2 * v5 - sa2 * v1;
-  y[1] = sa2 * v5 + ca2 * v1;
+  y[5] = madd<F>(ca2, v5, -(sa2 * v1));
+  y[1] = madd<F>(sa2, v5, ca2 * v1);
   const P ca3 = splat<P>(s.ca[3]), sa3 = splat<P>(s.sa[3]);
-  y[6] = ca3 * v6 - sa3 * v0;
-  y[0] = sa3 * v6 + ca3 * v0;
+  y[6] = madd<F>(ca3, v6, -(sa3 * v0));
+  y[0] = madd<F>(sa3, v6, ca3 * v0);
 }
 
 // Band 4 of Z(a) X90^T Z(b) X90 Z(g), Ry(b) = Rx(-90) Rz(b) Rx(+90).
-template <class T, class P, class S>
-inline void zxzxz_band4(const S& s, const P* __restrict x, P* __restrict y) {
+template <bool F, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void zxzxz_band4(const S& s, const P* __restrict x, P* __restrict y) {
   const P t4 = x[4];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
-  const P t5 = cg1 * x[5] - sg1 * x[3];
-  const P t3 = sg1 * x[5] + cg1 * x[3];
+  const P t5 = madd<F>(cg1, x[5], -(sg1 * x[3]));
+  const P t3 = madd<F>(sg1, x[5], cg1 * x[3]);
   const P cg2 = splat<P>(s.cg[2]), sg2 = splat<P>(s.sg[2]);
-  const P t6 = cg2 * x[6] - sg2 * x[2];
-  const P t2 = sg2 * x[6] + cg2 * x[2];
+  const P t6 = madd<F>(cg2, x[6], -(sg2 * x[2]));
+  const P t2 = madd<F>(sg2, x[6], cg2 * x[2]);
   const P cg3 = splat<P>(s.cg[3]), sg3 = splat<P>(s.sg[3]);
-  const P t7 = cg3 * x[7] - sg3 * x[1];
-  const P t1 = sg3 * x[7] + cg3 * x[1];
+  const P t7 = madd<F>(cg3, x[7], -(sg3 * x[1]));
+  const P t1 = madd<F>(sg3, x[7], cg3 * x[1]);
   const P cg4 = splat<P>(s.cg[4]), sg4 = splat<P>(s.sg[4]);
-  const P t8 = cg4 * x[8] - sg4 * x[0];
-  const P t0 = sg4 * x[8] + cg4 * x[0];
-  const P u0 = T(-0.935414346693485) * t5 + T(0.35355339059327362) * t7;
-  const P u1 = T(-0.75000000000000033) * t1 + T(0.6614378277661479) * t3;
-  const P u2 = T(-0.35355339059327384) * t5 - T(0.93541434669348567) * t7;
-  const P u3 = T(0.66143782776614768) * t1 + T(0.75) * t3;
-  const P u4 = T(0.37500000000000006) * t4 + T(0.55901699437494745) * t6 + T(0.73950997288745191) * t8;
-  const P u5 = T(0.93541434669348522) * t0 + T(0.35355339059327379) * t2;
-  const P u6 = T(0.55901699437494745) * t4 + T(0.5) * t6 - T(0.66143782776614757) * t8;
-  const P u7 = T(-0.35355339059327362) * t0 + T(0.93541434669348522) * t2;
-  const P u8 = T(0.73950997288745235) * t4 - T(0.6614378277661479) * t6 + T(0.12499999999999994) * t8;
+  const P t8 = madd<F>(cg4, x[8], -(sg4 * x[0]));
+  const P t0 = madd<F>(sg4, x[8], cg4 * x[0]);
+  const P u0 = madd<F>(T(0.35355339059327362), t7, T(-0.935414346693485) * t5);
+  const P u1 = madd<F>(T(0.6614378277661479), t3, T(-0.75000000000000033) * t1);
+  const P u2 = madd<F>(T(-0.93541434669348567), t7, T(-0.35355339059327384) * t5);
+  const P u3 = madd<F>(T(0.75), t3, T(0.66143782776614768) * t1);
+  const P u4 = madd<F>(T(0.73950997288745191), t8, madd<F>(T(0.55901699437494745), t6, T(0.37500000000000006) * t4));
+  const P u5 = madd<F>(T(0.35355339059327379), t2, T(0.93541434669348522) * t0);
+  const P u6 = madd<F>(T(-0.66143782776614757), t8, madd<F>(T(0.5), t6, T(0.55901699437494745) * t4));
+  const P u7 = madd<F>(T(0.93541434669348522), t2, T(-0.35355339059327362) * t0);
+  const P u8 = madd<F>(T(0.12499999999999994), t8, madd<F>(T(-0.6614378277661479), t6, T(0.73950997288745235) * t4));
   const P w4 = u4;
   const P cb1 = splat<P>(s.cb[1]), sb1 = splat<P>(s.sb[1]);
-  const P w5 = cb1 * u5 - sb1 * u3;
-  const P w3 = sb1 * u5 + cb1 * u3;
+  const P w5 = madd<F>(cb1, u5, -(sb1 * u3));
+  const P w3 = madd<F>(sb1, u5, cb1 * u3);
   const P cb2 = splat<P>(s.cb[2]), sb2 = splat<P>(s.sb[2]);
-  const P w6 = cb2 * u6 - sb2 * u2;
-  const P w2 = sb2 * u6 + cb2 * u2;
+  const P w6 = madd<F>(cb2, u6, -(sb2 * u2));
+  const P w2 = madd<F>(sb2, u6, cb2 * u2);
   const P cb3 = splat<P>(s.cb[3]), sb3 = splat<P>(s.sb[3]);
-  const P w7 = cb3 * u7 - sb3 * u1;
-  const P w1 = sb3 * u7 + cb3 * u1;
+  const P w7 = madd<F>(cb3, u7, -(sb3 * u1));
+  const P w1 = madd<F>(sb3, u7, cb3 * u1);
   const P cb4 = splat<P>(s.cb[4]), sb4 = splat<P>(s.sb[4]);
-  const P w8 = cb4 * u8 - sb4 * u0;
-  const P w0 = sb4 * u8 + cb4 * u0;
-  const P v0 = T(0.93541434669348522) * w5 - T(0.35355339059327362) * w7;
-  const P v1 = T(-0.75000000000000033) * w1 + T(0.66143782776614768) * w3;
-  const P v2 = T(0.35355339059327379) * w5 + T(0.93541434669348522) * w7;
-  const P v3 = T(0.6614378277661479) * w1 + T(0.75) * w3;
-  const P v4 = T(0.37500000000000006) * w4 + T(0.55901699437494745) * w6 + T(0.73950997288745235) * w8;
-  const P v5 = T(-0.935414346693485) * w0 - T(0.35355339059327384) * w2;
-  const P v6 = T(0.55901699437494745) * w4 + T(0.5) * w6 - T(0.6614378277661479) * w8;
-  const P v7 = T(0.35355339059327362) * w0 - T(0.93541434669348567) * w2;
-  const P v8 = T(0.73950997288745191) * w4 - T(0.66143782776614757) * w6 + T(0.12499999999999994) * w8;
+  const P w8 = madd<F>(cb4, u8, -(sb4 * u0));
+  const P w0 = madd<F>(sb4, u8, cb4 * u0);
+  const P v0 = madd<F>(T(-0.35355339059327362), w7, T(0.93541434669348522) * w5);
+  const P v1 = madd<F>(T(0.66143782776614768), w3, T(-0.75000000000000033) * w1);
+  const P v2 = madd<F>(T(0.93541434669348522), w7, T(0.35355339059327379) * w5);
+  const P v3 = madd<F>(T(0.75), w3, T(0.6614378277661479) * w1);
+  const P v4 = madd<F>(T(0.73950997288745235), w8, madd<F>(T(0.55901699437494745), w6, T(0.37500000000000006) * w4));
+  const P v5 = madd<F>(T(-0.35355339059327384), w2, T(-0.935414346693485) * w0);
+  const P v6 = madd<F>(T(-0.6614378277661479), w8, madd<F>(T(0.5), w6, T(0.55901699437494745) * w4));
+  const P v7 = madd<F>(T(-0.93541434669348567), w2, T(0.35355339059327362) * w0);
+  const P v8 = madd<F>(T(0.12499999999999994), w8, madd<F>(T(-0.66143782776614757), w6, T(0.73950997288745191) * w4));
   y[4] = v4;
   const P ca1 = splat<P>(s.ca[1]), sa1 = splat<P>(s.sa[1]);
-  y[5] = ca1 * v5 - sa1 * v3;
-  y[3] = sa1 * v5 + ca1 * v3;
+  y[5] = madd<F>(ca1, v5, -(sa1 * v3));
+  y[3] = madd<F>(sa1, v5, ca1 * v3);
   const P ca2 = splat<P>(s.ca[2]), sa2 = splat<P>(s.sa[2]);
-  y[6] = ca2 * v6 - sa2 * v2;
-  y[2] = sa2 * v6 + ca2 * v2;
+  y[6] = madd<F>(ca2, v6, -(sa2 * v2));
+  y[2] = madd<F>(sa2, v6, ca2 * v2);
   const P ca3 = splat<P>(s.ca[3]), sa3 = splat<P>(s.sa[3]);
-  y[7] = ca3 * v7 - sa3 * v1;
-  y[1] = sa3 * v7 + ca3 * v1;
+  y[7] = madd<F>(ca3, v7, -(sa3 * v1));
+  y[1] = madd<F>(sa3, v7, ca3 * v1);
   const P ca4 = splat<P>(s.ca[4]), sa4 = splat<P>(s.sa[4]);
-  y[8] = ca4 * v8 - sa4 * v0;
-  y[0] = sa4 * v8 + ca4 * v0;
+  y[8] = madd<F>(ca4, v8, -(sa4 * v0));
+  y[0] = madd<F>(sa4, v8, ca4 * v0);
 }
 
 // Band 5 of Z(a) X90^T Z(b) X90 Z(g), Ry(b) = Rx(-90) Rz(b) Rx(+90).
-template <class T, class P, class S>
-inline void zxzxz_band5(const S& s, const P* __restrict x, P* __restrict y) {
+template <bool F, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void zxzxz_band5(const S& s, const P* __restrict x, P* __restrict y) {
   const P t5 = x[5];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
-  const P t6 = cg1 * x[6] - sg1 * x[4];
-  const P t4 = sg1 * x[6] + cg1 * x[4];
+  const P t6 = madd<F>(cg1, x[6], -(sg1 * x[4]));
+  const P t4 = madd<F>(sg1, x[6], cg1 * x[4]);
   const P cg2 = splat<P>(s.cg[2]), sg2 = splat<P>(s.sg[2]);
-  const P t7 = cg2 * x[7] - sg2 * x[3];
-  const P t3 = sg2 * x[7] + cg2 * x[3];
+  const P t7 = madd<F>(cg2, x[7], -(sg2 * x[3]));
+  const P t3 = madd<F>(sg2, x[7], cg2 * x[3]);
   const P cg3 = splat<P>(s.cg[3]), sg3 = splat<P>(s.sg[3]);
-  const P t8 = cg3 * x[8] - sg3 * x[2];
-  const P t2 = sg3 * x[8] + cg3 * x[2];
+  const P t8 = madd<F>(cg3, x[8], -(sg3 * x[2]));
+  const P t2 = madd<F>(sg3, x[8], cg3 * x[2]);
   const P cg4 = splat<P>(s.cg[4]), sg4 = splat<P>(s.sg[4]);
-  const P t9 = cg4 * x[9] - sg4 * x[1];
-  const P t1 = sg4 * x[9] + cg4 * x[1];
+  const P t9 = madd<F>(cg4, x[9], -(sg4 * x[1]));
+  const P t1 = madd<F>(sg4, x[9], cg4 * x[1]);
   const P cg5 = splat<P>(s.cg[5]), sg5 = splat<P>(s.sg[5]);
-  const P t10 = cg5 * x[10] - sg5 * x[0];
-  const P t0 = sg5 * x[10] + cg5 * x[0];
-  const P u0 = T(0.70156076002011425) * t5 - T(0.68465319688145765) * t7 + T(0.19764235376052361) * t9;
-  const P u1 = T(-0.49999999999999994) * t1 + T(0.86602540378443826) * t3;
-  const P u2 = T(0.52291251658379756) * t5 + T(0.30618621784789735) * t7 - T(0.79549512883486639) * t9;
-  const P u3 = T(0.86602540378443871) * t1 + T(0.49999999999999989) * t3;
-  const P u4 = T(0.48412291827592735) * t5 + T(0.6614378277661479) * t7 + T(0.5728219618694802) * t9;
-  const P u5 = T(-0.70156076002011392) * t0 - T(0.52291251658379723) * t2 - T(0.48412291827592713) * t4;
-  const P u6 = T(0.12500000000000006) * t6 + T(0.4050462936504915) * t8 + T(0.9057110466368401) * t10;
-  const P u7 = T(0.68465319688145743) * t0 - T(0.30618621784789718) * t2 - T(0.66143782776614768) * t4;
-  const P u8 = T(0.40504629365049133) * t6 + T(0.81250000000000022) * t8 - T(0.41926274578121053) * t10;
-  const P u9 = T(-0.19764235376052366) * t0 + T(0.79549512883486628) * t2 - T(0.57282196186948031) * t4;
-  const P u10 = T(0.90571104663683988) * t6 - T(0.41926274578121064) * t8 + T(0.062499999999999958) * t10;
+  const P t10 = madd<F>(cg5, x[10], -(sg5 * x[0]));
+  const P t0 = madd<F>(sg5, x[10], cg5 * x[0]);
+  const P u0 = madd<F>(T(0.19764235376052361), t9, madd<F>(T(-0.68465319688145765), t7, T(0.70156076002011425) * t5));
+  const P u1 = madd<F>(T(0.86602540378443826), t3, T(-0.49999999999999994) * t1);
+  const P u2 = madd<F>(T(-0.79549512883486639), t9, madd<F>(T(0.30618621784789735), t7, T(0.52291251658379756) * t5));
+  const P u3 = madd<F>(T(0.49999999999999989), t3, T(0.86602540378443871) * t1);
+  const P u4 = madd<F>(T(0.5728219618694802), t9, madd<F>(T(0.6614378277661479), t7, T(0.48412291827592735) * t5));
+  const P u5 = madd<F>(T(-0.48412291827592713), t4, madd<F>(T(-0.52291251658379723), t2, T(-0.70156076002011392) * t0));
+  const P u6 = madd<F>(T(0.9057110466368401), t10, madd<F>(T(0.4050462936504915), t8, T(0.12500000000000006) * t6));
+  const P u7 = madd<F>(T(-0.66143782776614768), t4, madd<F>(T(-0.30618621784789718), t2, T(0.68465319688145743) * t0));
+  const P u8 = madd<F>(T(-0.41926274578121053), t10, madd<F>(T(0.81250000000000022), t8, T(0.40504629365049133) * t6));
+  const P u9 = madd<F>(T(-0.57282196186948031), t4, madd<F>(T(0.79549512883486628), t2, T(-0.19764235376052366) * t0));
+  const P u10 = madd<F>(T(0.062499999999999958), t10, madd<F>(T(-0.41926274578121064), t8, T(0.90571104663683988) * t6));
   const P w5 = u5;
   const P cb1 = splat<P>(s.cb[1]), sb1 = splat<P>(s.sb[1]);
-  const P w6 = cb1 * u6 - sb1 * u4;
-  const P w4 = sb1 * u6 + cb1 * u4;
+  const P w6 = madd<F>(cb1, u6, -(sb1 * u4));
+  const P w4 = madd<F>(sb1, u6, cb1 * u4);
   const P cb2 = splat<P>(s.cb[2]), sb2 = splat<P>(s.sb[2]);
-  const P w7 = cb2 * u7 - sb2 * u3;
-  const P w3 = sb2 * u7 + cb2 * u3;
+  const P w7 = madd<F>(cb2, u7, -(sb2 * u3));
+  const P w3 = madd<F>(sb2, u7, cb2 * u3);
   const P cb3 = splat<P>(s.cb[3]), sb3 = splat<P>(s.sb[3]);
-  const P w8 = cb3 * u8 - sb3 * u2;
-  const P w2 = sb3 * u8 + cb3 * u2;
+  const P w8 = madd<F>(cb3, u8, -(sb3 * u2));
+  const P w2 = madd<F>(sb3, u8, cb3 * u2);
   const P cb4 = splat<P>(s.cb[4]), sb4 = splat<P>(s.sb[4]);
-  const P w9 = cb4 * u9 - sb4 * u1;
-  const P w1 = sb4 * u9 + cb4 * u1;
+  const P w9 = madd<F>(cb4, u9, -(sb4 * u1));
+  const P w1 = madd<F>(sb4, u9, cb4 * u1);
   const P cb5 = splat<P>(s.cb[5]), sb5 = splat<P>(s.sb[5]);
-  const P w10 = cb5 * u10 - sb5 * u0;
-  const P w0 = sb5 * u10 + cb5 * u0;
-  const P v0 = T(-0.70156076002011392) * w5 + T(0.68465319688145743) * w7 - T(0.19764235376052366) * w9;
-  const P v1 = T(-0.49999999999999994) * w1 + T(0.86602540378443871) * w3;
-  const P v2 = T(-0.52291251658379723) * w5 - T(0.30618621784789718) * w7 + T(0.79549512883486628) * w9;
-  const P v3 = T(0.86602540378443826) * w1 + T(0.49999999999999989) * w3;
-  const P v4 = T(-0.48412291827592713) * w5 - T(0.66143782776614768) * w7 - T(0.57282196186948031) * w9;
-  const P v5 = T(0.70156076002011425) * w0 + T(0.52291251658379756) * w2 + T(0.48412291827592735) * w4;
-  const P v6 = T(0.12500000000000006) * w6 + T(0.40504629365049133) * w8 + T(0.90571104663683988) * w10;
-  const P v7 = T(-0.68465319688145765) * w0 + T(0.30618621784789735) * w2 + T(0.6614378277661479) * w4;
-  const P v8 = T(0.4050462936504915) * w6 + T(0.81250000000000022) * w8 - T(0.41926274578121064) * w10;
-  const P v9 = T(0.19764235376052361) * w0 - T(0.79549512883486639) * w2 + T(0.5728219618694802) * w4;
-  const P v10 = T(0.9057110466368401) * w6 - T(0.41926274578121053) * w8 + T(0.062499999999999958) * w10;
+  const P w10 = madd<F>(cb5, u10, -(sb5 * u0));
+  const P w0 = madd<F>(sb5, u10, cb5 * u0);
+  const P v0 = madd<F>(T(-0.19764235376052366), w9, madd<F>(T(0.68465319688145743), w7, T(-0.70156076002011392) * w5));
+  const P v1 = madd<F>(T(0.86602540378443871), w3, T(-0.49999999999999994) * w1);
+  const P v2 = madd<F>(T(0.79549512883486628), w9, madd<F>(T(-0.30618621784789718), w7, T(-0.52291251658379723) * w5));
+  const P v3 = madd<F>(T(0.49999999999999989), w3, T(0.86602540378443826) * w1);
+  const P v4 = madd<F>(T(-0.57282196186948031), w9, madd<F>(T(-0.66143782776614768), w7, T(-0.48412291827592713) * w5));
+  const P v5 = madd<F>(T(0.48412291827592735), w4, madd<F>(T(0.52291251658379756), w2, T(0.70156076002011425) * w0));
+  const P v6 = madd<F>(T(0.90571104663683988), w10, madd<F>(T(0.40504629365049133), w8, T(0.12500000000000006) * w6));
+  const P v7 = madd<F>(T(0.6614378277661479), w4, madd<F>(T(0.30618621784789735), w2, T(-0.68465319688145765) * w0));
+  const P v8 = madd<F>(T(-0.41926274578121064), w10, madd<F>(T(0.81250000000000022), w8, T(0.4050462936504915) * w6));
+  const P v9 = madd<F>(T(0.5728219618694802), w4, madd<F>(T(-0.79549512883486639), w2, T(0.19764235376052361) * w0));
+  const P v10 = madd<F>(T(0.062499999999999958), w10, madd<F>(T(-0.41926274578121053), w8, T(0.9057110466368401) * w6));
   y[5] = v5;
   const P ca1 = splat<P>(s.ca[1]), sa1 = splat<P>(s.sa[1]);
-  y[6] = ca1 * v6 - sa1 * v4;
-  y[4] = sa1 * v6 + ca1 * v4;
+  y[6] = madd<F>(ca1, v6, -(sa1 * v4));
+  y[4] = madd<F>(sa1, v6, ca1 * v4);
   const P ca2 = splat<P>(s.ca[2]), sa2 = splat<P>(s.sa[2]);
-  y[7] = ca2 * v7 - sa2 * v3;
-  y[3] = sa2 * v7 + ca2 * v3;
+  y[7] = madd<F>(ca2, v7, -(sa2 * v3));
+  y[3] = madd<F>(sa2, v7, ca2 * v3);
   const P ca3 = splat<P>(s.ca[3]), sa3 = splat<P>(s.sa[3]);
-  y[8] = ca3 * v8 - sa3 * v2;
-  y[2] = sa3 * v8 + ca3 * v2;
+  y[8] = madd<F>(ca3, v8, -(sa3 * v2));
+  y[2] = madd<F>(sa3, v8, ca3 * v2);
   const P ca4 = splat<P>(s.ca[4]), sa4 = splat<P>(s.sa[4]);
-  y[9] = ca4 * v9 - sa4 * v1;
-  y[1] = sa4 * v9 + ca4 * v1;
+  y[9] = madd<F>(ca4, v9, -(sa4 * v1));
+  y[1] = madd<F>(sa4, v9, ca4 * v1);
   const P ca5 = splat<P>(s.ca[5]), sa5 = splat<P>(s.sa[5]);
-  y[10] = ca5 * v10 - sa5 * v0;
-  y[0] = sa5 * v10 + ca5 * v0;
+  y[10] = madd<F>(ca5, v10, -(sa5 * v0));
+  y[0] = madd<F>(sa5, v10, ca5 * v0);
 }
 
 // Band 6 of Z(a) X90^T Z(b) X90 Z(g), Ry(b) = Rx(-90) Rz(b) Rx(+90).
-template <class T, class P, class S>
-inline void zxzxz_band6(const S& s, const P* __restrict x, P* __restrict y) {
+template <bool F, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void zxzxz_band6(const S& s, const P* __restrict x, P* __restrict y) {
   const P t6 = x[6];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
-  const P t7 = cg1 * x[7] - sg1 * x[5];
-  const P t5 = sg1 * x[7] + cg1 * x[5];
+  const P t7 = madd<F>(cg1, x[7], -(sg1 * x[5]));
+  const P t5 = madd<F>(sg1, x[7], cg1 * x[5]);
   const P cg2 = splat<P>(s.cg[2]), sg2 = splat<P>(s.sg[2]);
-  const P t8 = cg2 * x[8] - sg2 * x[4];
-  const P t4 = sg2 * x[8] + cg2 * x[4];
+  const P t8 = madd<F>(cg2, x[8], -(sg2 * x[4]));
+  const P t4 = madd<F>(sg2, x[8], cg2 * x[4]);
   const P cg3 = splat<P>(s.cg[3]), sg3 = splat<P>(s.sg[3]);
-  const P t9 = cg3 * x[9] - sg3 * x[3];
-  const P t3 = sg3 * x[9] + cg3 * x[3];
+  const P t9 = madd<F>(cg3, x[9], -(sg3 * x[3]));
+  const P t3 = madd<F>(sg3, x[9], cg3 * x[3]);
   const P cg4 = splat<P>(s.cg[4]), sg4 = splat<P>(s.sg[4]);
-  const P t10 = cg4 * x[10] - sg4 * x[2];
-  const P t2 = sg4 * x[10] + cg4 * x[2];
+  const P t10 = madd<F>(cg4, x[10], -(sg4 * x[2]));
+  const P t2 = madd<F>(sg4, x[10], cg4 * x[2]);
   const P cg5 = splat<P>(s.cg[5]), sg5 = splat<P>(s.sg[5]);
-  const P t11 = cg5 * x[11] - sg5 * x[1];
-  const P t1 = sg5 * x[11] + cg5 * x[1];
+  const P t11 = madd<F>(cg5, x[11], -(sg5 * x[1]));
+  const P t1 = madd<F>(sg5, x[11], cg5 * x[1]);
   const P cg6 = splat<P>(s.cg[6]), sg6 = splat<P>(s.sg[6]);
-  const P t12 = cg6 * x[12] - sg6 * x[0];
-  const P t0 = sg6 * x[12] + cg6 * x[0];
-  const P u0 = T(0.87945295496689313) * t7 - T(0.46351240544347905) * t9 + T(0.10825317547305474) * t11;
-  const P u1 = T(-0.31249999999999994) * t1 + T(0.8028270361665707) * t3 - T(0.50775240028974766) * t5;
-  const P u2 = T(0.4330127018922193) * t7 + T(0.68465319688145754) * t9 - T(0.58630196997792872) * t11;
-  const P u3 = T(0.80282703616657092) * t1 - T(0.062499999999999944) * t3 - T(0.59292706128157147) * t5;
-  const P u4 = T(0.19764235376052372) * t7 + T(0.56250000000000011) * t9 + T(0.8028270361665707) * t11;
-  const P u5 = T(-0.50775240028974777) * t1 - T(0.59292706128157147) * t3 - T(0.62500000000000022) * t5;
-  const P u6 = T(-0.31250000000000011) * t6 - T(0.45285552331841994) * t8 - T(0.4960783708246107) * t10 - T(0.67169328938139594) * t12;
-  const P u7 = T(-0.87945295496689324) * t0 - T(0.43301270189221958) * t2 - T(0.19764235376052378) * t4;
-  const P u8 = T(-0.45285552331842016) * t6 - T(0.53125) * t8 - T(0.17116329922036427) * t10 + T(0.69526860816521818) * t12;
-  const P u9 = T(0.46351240544347883) * t0 - T(0.68465319688145765) * t2 - T(0.56249999999999989) * t4;
-  const P u10 = T(-0.49607837082461115) * t6 - T(0.1711632992203645) * t8 + T(0.81250000000000044) * t10 - T(0.25387620014487378) * t12;
-  const P u11 = T(-0.10825317547305477) * t0 + T(0.58630196997792872) * t2 - T(0.80282703616657036) * t4;
-  const P u12 = T(-0.67169328938139616) * t6 + T(0.69526860816521829) * t8 - T(0.25387620014487372) * t10 + T(0.031249999999999993) * t12;
+  const P t12 = madd<F>(cg6, x[12], -(sg6 * x[0]));
+  const P t0 = madd<F>(sg6, x[12], cg6 * x[0]);
+  const P u0 = madd<F>(T(0.10825317547305474), t11, madd<F>(T(-0.46351240544347905), t9, T(0.87945295496689313) * t7));
+  const P u1 = madd<F>(T(-0.50775240028974766), t5, madd<F>(T(0.8028270361665707), t3, T(-0.31249999999999994) * t1));
+  const P u2 = madd<F>(T(-0.58630196997792872), t11, madd<F>(T(0.68465319688145754), t9, T(0.4330127018922193) * t7));
+  const P u3 = madd<F>(T(-0.59292706128157147), t5, madd<F>(T(-0.062499999999999944), t3, T(0.80282703616657092) * t1));
+  const P u4 = madd<F>(T(0.8028270361665707), t11, madd<F>(T(0.56250000000000011), t9, T(0.19764235376052372) * t7));
+  const P u5 = madd<F>(T(-0.62500000000000022), t5, madd<F>(T(-0.59292706128157147), t3, T(-0.50775240028974777) * t1));
+  const P u6 = madd<F>(T(-0.67169328938139594), t12, madd<F>(T(-0.4960783708246107), t10, madd<F>(T(-0.45285552331841994), t8, T(-0.31250000000000011) * t6)));
+  const P u7 = madd<F>(T(-0.19764235376052378), t4, madd<F>(T(-0.43301270189221958), t2, T(-0.87945295496689324) * t0));
+  const P u8 = madd<F>(T(0.69526860816521818), t12, madd<F>(T(-0.17116329922036427), t10, madd<F>(T(-0.53125), t8, T(-0.45285552331842016) * t6)));
+  const P u9 = madd<F>(T(-0.56249999999999989), t4, madd<F>(T(-0.68465319688145765), t2, T(0.46351240544347883) * t0));
+  const P u10 = madd<F>(T(-0.25387620014487378), t12, madd<F>(T(0.81250000000000044), t10, madd<F>(T(-0.1711632992203645), t8, T(-0.49607837082461115) * t6)));
+  const P u11 = madd<F>(T(-0.80282703616657036), t4, madd<F>(T(0.58630196997792872), t2, T(-0.10825317547305477) * t0));
+  const P u12 = madd<F>(T(0.031249999999999993), t12, madd<F>(T(-0.25387620014487372), t10, madd<F>(T(0.69526860816521829), t8, T(-0.67169328938139616) * t6)));
   const P w6 = u6;
   const P cb1 = splat<P>(s.cb[1]), sb1 = splat<P>(s.sb[1]);
-  const P w7 = cb1 * u7 - sb1 * u5;
-  const P w5 = sb1 * u7 + cb1 * u5;
+  const P w7 = madd<F>(cb1, u7, -(sb1 * u5));
+  const P w5 = madd<F>(sb1, u7, cb1 * u5);
   const P cb2 = splat<P>(s.cb[2]), sb2 = splat<P>(s.sb[2]);
-  const P w8 = cb2 * u8 - sb2 * u4;
-  const P w4 = sb2 * u8 + cb2 * u4;
+  const P w8 = madd<F>(cb2, u8, -(sb2 * u4));
+  const P w4 = madd<F>(sb2, u8, cb2 * u4);
   const P cb3 = splat<P>(s.cb[3]), sb3 = splat<P>(s.sb[3]);
-  const P w9 = cb3 * u9 - sb3 * u3;
-  const P w3 = sb3 * u9 + cb3 * u3;
+  const P w9 = madd<F>(cb3, u9, -(sb3 * u3));
+  const P w3 = madd<F>(sb3, u9, cb3 * u3);
   const P cb4 = splat<P>(s.cb[4]), sb4 = splat<P>(s.sb[4]);
-  const P w10 = cb4 * u10 - sb4 * u2;
-  const P w2 = sb4 * u10 + cb4 * u2;
+  const P w10 = madd<F>(cb4, u10, -(sb4 * u2));
+  const P w2 = madd<F>(sb4, u10, cb4 * u2);
   const P cb5 = splat<P>(s.cb[5]), sb5 = splat<P>(s.sb[5]);
-  const P w11 = cb5 * u11 - sb5 * u1;
-  const P w1 = sb5 * u11 + cb5 * u1;
+  const P w11 = madd<F>(cb5, u11, -(sb5 * u1));
+  const P w1 = madd<F>(sb5, u11, cb5 * u1);
   const P cb6 = splat<P>(s.cb[6]), sb6 = splat<P>(s.sb[6]);
-  const P w12 = cb6 * u12 - sb6 * u0;
-  const P w0 = sb6 * u12 + cb6 * u0;
-  const P v0 = T(-0.87945295496689324) * w7 + T(0.46351240544347883) * w9 - T(0.10825317547305477) * w11;
-  const P v1 = T(-0.31249999999999994) * w1 + T(0.80282703616657092) * w3 - T(0.50775240028974777) * w5;
-  const P v2 = T(-0.43301270189221958) * w7 - T(0.68465319688145765) * w9 + T(0.58630196997792872) * w11;
-  const P v3 = T(0.8028270361665707) * w1 - T(0.062499999999999944) * w3 - T(0.59292706128157147) * w5;
-  const P v4 = T(-0.19764235376052378) * w7 - T(0.56249999999999989) * w9 - T(0.80282703616657036) * w11;
-  const P v5 = T(-0.50775240028974766) * w1 - T(0.59292706128157147) * w3 - T(0.62500000000000022) * w5;
-  const P v6 = T(-0.31250000000000011) * w6 - T(0.45285552331842016) * w8 - T(0.49607837082461115) * w10 - T(0.67169328938139616) * w12;
-  const P v7 = T(0.87945295496689313) * w0 + T(0.4330127018922193) * w2 + T(0.19764235376052372) * w4;
-  const P v8 = T(-0.45285552331841994) * w6 - T(0.53125) * w8 - T(0.1711632992203645) * w10 + T(0.69526860816521829) * w12;
-  const P v9 = T(-0.46351240544347905) * w0 + T(0.68465319688145754) * w2 + T(0.56250000000000011) * w4;
-  const P v10 = T(-0.4960783708246107) * w6 - T(0.17116329922036427) * w8 + T(0.81250000000000044) * w10 - T(0.25387620014487372) * w12;
-  const P v11 = T(0.10825317547305474) * w0 - T(0.58630196997792872) * w2 + T(0.8028270361665707) * w4;
-  const P v12 = T(-0.67169328938139594) * w6 + T(0.69526860816521818) * w8 - T(0.25387620014487378) * w10 + T(0.031249999999999993) * w12;
+  const P w12 = madd<F>(cb6, u12, -(sb6 * u0));
+  const P w0 = madd<F>(sb6, u12, cb6 * u0);
+  const P v0 = madd<F>(T(-0.10825317547305477), w11, madd<F>(T(0.46351240544347883), w9, T(-0.87945295496689324) * w7));
+  const P v1 = madd<F>(T(-0.50775240028974777), w5, madd<F>(T(0.80282703616657092), w3, T(-0.31249999999999994) * w1));
+  const P v2 = madd<F>(T(0.58630196997792872), w11, madd<F>(T(-0.68465319688145765), w9, T(-0.43301270189221958) * w7));
+  const P v3 = madd<F>(T(-0.59292706128157147), w5, madd<F>(T(-0.062499999999999944), w3, T(0.8028270361665707) * w1));
+  const P v4 = madd<F>(T(-0.80282703616657036), w11, madd<F>(T(-0.56249999999999989), w9, T(-0.19764235376052378) * w7));
+  const P v5 = madd<F>(T(-0.62500000000000022), w5, madd<F>(T(-0.59292706128157147), w3, T(-0.50775240028974766) * w1));
+  const P v6 = madd<F>(T(-0.67169328938139616), w12, madd<F>(T(-0.49607837082461115), w10, madd<F>(T(-0.45285552331842016), w8, T(-0.31250000000000011) * w6)));
+  const P v7 = madd<F>(T(0.19764235376052372), w4, madd<F>(T(0.4330127018922193), w2, T(0.87945295496689313) * w0));
+  const P v8 = madd<F>(T(0.69526860816521829), w12, madd<F>(T(-0.1711632992203645), w10, madd<F>(T(-0.53125), w8, T(-0.45285552331841994) * w6)));
+  const P v9 = madd<F>(T(0.56250000000000011), w4, madd<F>(T(0.68465319688145754), w2, T(-0.46351240544347905) * w0));
+  const P v10 = madd<F>(T(-0.25387620014487372), w12, madd<F>(T(0.81250000000000044), w10, madd<F>(T(-0.17116329922036427), w8, T(-0.4960783708246107) * w6)));
+  const P v11 = madd<F>(T(0.8028270361665707), w4, madd<F>(T(-0.58630196997792872), w2, T(0.10825317547305474) * w0));
+  const P v12 = madd<F>(T(0.031249999999999993), w12, madd<F>(T(-0.25387620014487378), w10, madd<F>(T(0.69526860816521818), w8, T(-0.67169328938139594) * w6)));
   y[6] = v6;
   const P ca1 = splat<P>(s.ca[1]), sa1 = splat<P>(s.sa[1]);
-  y[7] = ca1 * v7 - sa1 * v5;
-  y[5] = sa1 * v7 + ca1 * v5;
+  y[7] = madd<F>(ca1, v7, -(sa1 * v5));
+  y[5] = madd<F>(sa1, v7, ca1 * v5);
   const P ca2 = splat<P>(s.ca[2]), sa2 = splat<P>(s.sa[2]);
-  y[8] = ca2 * v8 - sa2 * v4;
-  y[4] = sa2 * v8 + ca2 * v4;
+  y[8] = madd<F>(ca2, v8, -(sa2 * v4));
+  y[4] = madd<F>(sa2, v8, ca2 * v4);
   const P ca3 = splat<P>(s.ca[3]), sa3 = splat<P>(s.sa[3]);
-  y[9] = ca3 * v9 - sa3 * v3;
-  y[3] = sa3 * v9 + ca3 * v3;
+  y[9] = madd<F>(ca3, v9, -(sa3 * v3));
+  y[3] = madd<F>(sa3, v9, ca3 * v3);
   const P ca4 = splat<P>(s.ca[4]), sa4 = splat<P>(s.sa[4]);
-  y[10] = ca4 * v10 - sa4 * v2;
-  y[2] = sa4 * v10 + ca4 * v2;
+  y[10] = madd<F>(ca4, v10, -(sa4 * v2));
+  y[2] = madd<F>(sa4, v10, ca4 * v2);
   const P ca5 = splat<P>(s.ca[5]), sa5 = splat<P>(s.sa[5]);
-  y[11] = ca5 * v11 - sa5 * v1;
-  y[1] = sa5 * v11 + ca5 * v1;
+  y[11] = madd<F>(ca5, v11, -(sa5 * v1));
+  y[1] = madd<F>(sa5, v11, ca5 * v1);
   const P ca6 = splat<P>(s.ca[6]), sa6 = splat<P>(s.sa[6]);
-  y[12] = ca6 * v12 - sa6 * v0;
-  y[0] = sa6 * v12 + ca6 * v0;
+  y[12] = madd<F>(ca6, v12, -(sa6 * v0));
+  y[0] = madd<F>(sa6, v12, ca6 * v0);
 }
 
 // Band 7 of Z(a) X90^T Z(b) X90 Z(g), Ry(b) = Rx(-90) Rz(b) Rx(+90).
-template <class T, class P, class S>
-inline void zxzxz_band7(const S& s, const P* __restrict x, P* __restrict y) {
+template <bool F, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void zxzxz_band7(const S& s, const P* __restrict x, P* __restrict y) {
   const P t7 = x[7];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
-  const P t8 = cg1 * x[8] - sg1 * x[6];
-  const P t6 = sg1 * x[8] + cg1 * x[6];
+  const P t8 = madd<F>(cg1, x[8], -(sg1 * x[6]));
+  const P t6 = madd<F>(sg1, x[8], cg1 * x[6]);
   const P cg2 = splat<P>(s.cg[2]), sg2 = splat<P>(s.sg[2]);
-  const P t9 = cg2 * x[9] - sg2 * x[5];
-  const P t5 = sg2 * x[9] + cg2 * x[5];
+  const P t9 = madd<F>(cg2, x[9], -(sg2 * x[5]));
+  const P t5 = madd<F>(sg2, x[9], cg2 * x[5]);
   const P cg3 = splat<P>(s.cg[3]), sg3 = splat<P>(s.sg[3]);
-  const P t10 = cg3 * x[10] - sg3 * x[4];
-  const P t4 = sg3 * x[10] + cg3 * x[4];
+  const P t10 = madd<F>(cg3, x[10], -(sg3 * x[4]));
+  const P t4 = madd<F>(sg3, x[10], cg3 * x[4]);
   const P cg4 = splat<P>(s.cg[4]), sg4 = splat<P>(s.sg[4]);
-  const P t11 = cg4 * x[11] - sg4 * x[3];
-  const P t3 = sg4 * x[11] + cg4 * x[3];
+  const P t11 = madd<F>(cg4, x[11], -(sg4 * x[3]));
+  const P t3 = madd<F>(sg4, x[11], cg4 * x[3]);
   const P cg5 = splat<P>(s.cg[5]), sg5 = splat<P>(s.sg[5]);
-  const P t12 = cg5 * x[12] - sg5 * x[2];
-  const P t2 = sg5 * x[12] + cg5 * x[2];
+  const P t12 = madd<F>(cg5, x[12], -(sg5 * x[2]));
+  const P t2 = madd<F>(sg5, x[12], cg5 * x[2]);
   const P cg6 = splat<P>(s.cg[6]), sg6 = splat<P>(s.sg[6]);
-  const P t13 = cg6 * x[13] - sg6 * x[1];
-  const P t1 = sg6 * x[13] + cg6 * x[1];
+  const P t13 = madd<F>(cg6, x[13], -(sg6 * x[1]));
+  const P t1 = madd<F>(sg6, x[13], cg6 * x[1]);
   const P cg7 = splat<P>(s.cg[7]), sg7 = splat<P>(s.sg[7]);
-  const P t14 = cg7 * x[14] - sg7 * x[0];
-  const P t0 = sg7 * x[14] + cg7 * x[0];
-  const P u0 = T(-0.6472598492877496) * t7 + T(0.6991205412874093) * t9 - T(0.2981060004427955) * t11 + T(0.058463396668342764) * t13;
-  const P u1 = T(-0.18749999999999994) * t1 + T(0.63737743919909817) * t3 - T(0.74739129644383728) * t5;
-  const P u2 = T(-0.47495887979908369) * t7 - T(0.07328774624724109) * t9 + T(0.78125000000000022) * t11 - T(0.39836089949943637) * t13;
-  const P u3 = T(0.63737743919909795) * t1 - T(0.49999999999999983) * t3 - T(0.58630196997792838) * t5;
-  const P u4 = T(-0.42961647140211051) * t7 - T(0.41984465132951287) * t9 + T(0.10364452469860649) * t11 + T(0.79272818087286445) * t13;
-  const P u5 = T(-0.74739129644383739) * t1 - T(0.58630196997792872) * t3 - T(0.31249999999999989) * t5;
-  const P u6 = T(-0.41339864235384272) * t7 - T(0.57409915846480775) * t9 - T(0.53855274811294052) * t11 - T(0.45768182862115064) * t13;
-  const P u7 = T(0.64725984928774916) * t0 + T(0.47495887979908308) * t2 + T(0.42961647140211001) * t4 + T(0.41339864235384211) * t6;
-  const P u8 = T(-0.078125000000000042) * t8 - T(0.24356964481437357) * t10 - T(0.44879395676078382) * t12 - T(0.85624429742626651) * t14;
-  const P u9 = T(-0.69912054128740897) * t0 + T(0.073287746247241006) * t2 + T(0.4198446513295126) * t4 + T(0.5740991584648073) * t6;
-  const P u10 = T(-0.24356964481437346) * t8 - T(0.60937500000000022) * t10 - T(0.57004488584233448) * t12 + T(0.49435287561113678) * t14;
-  const P u11 = T(0.2981060004427955) * t0 - T(0.78125000000000022) * t2 - T(0.10364452469860626) * t4 + T(0.5385527481129404) * t6;
-  const P u12 = T(-0.44879395676078354) * t8 - T(0.57004488584233448) * t10 + T(0.67187500000000022) * t12 - T(0.14905300022139772) * t14;
-  const P u13 = T(-0.058463396668342833) * t0 + T(0.39836089949943621) * t2 - T(0.79272818087286401) * t4 + T(0.45768182862115031) * t6;
-  const P u14 = T(-0.85624429742626607) * t8 + T(0.49435287561113689) * t10 - T(0.1490530002213977) * t12 + T(0.015625000000000017) * t14;
+  const P t14 = madd<F>(cg7, x[14], -(sg7 * x[0]));
+  const P t0 = madd<F>(sg7, x[14], cg7 * x[0]);
+  const P u0 = madd<F>(T(0.058463396668342764), t13, madd<F>(T(-0.2981060004427955), t11, madd<F>(T(0.6991205412874093), t9, T(-0.6472598492877496) * t7)));
+  const P u1 = madd<F>(T(-0.74739129644383728), t5, madd<F>(T(0.63737743919909817), t3, T(-0.18749999999999994) * t1));
+  const P u2 = madd<F>(T(-0.39836089949943637), t13, madd<F>(T(0.78125000000000022), t11, madd<F>(T(-0.07328774624724109), t9, T(-0.47495887979908369) * t7)));
+  const P u3 = madd<F>(T(-0.58630196997792838), t5, madd<F>(T(-0.49999999999999983), t3, T(0.63737743919909795) * t1));
+  const P u4 = madd<F>(T(0.79272818087286445), t13, madd<F>(T(0.10364452469860649), t11, madd<F>(T(-0.41984465132951287), t9, T(-0.42961647140211051) * t7)));
+  const P u5 = madd<F>(T(-0.31249999999999989), t5, madd<F>(T(-0.58630196997792872), t3, T(-0.74739129644383739) * t1));
+  const P u6 = madd<F>(T(-0.45768182862115064), t13, madd<F>(T(-0.53855274811294052), t11, madd<F>(T(-0.57409915846480775), t9, T(-0.41339864235384272) * t7)));
+  const P u7 = madd<F>(T(0.41339864235384211), t6, madd<F>(T(0.42961647140211001), t4, madd<F>(T(0.47495887979908308), t2, T(0.64725984928774916) * t0)));
+  const P u8 = madd<F>(T(-0.85624429742626651), t14, madd<F>(T(-0.44879395676078382), t12, madd<F>(T(-0.24356964481437357), t10, T(-0.078125000000000042) * t8)));
+  const P u9 = madd<F>(T(0.5740991584648073), t6, madd<F>(T(0.4198446513295126), t4, madd<F>(T(0.073287746247241006), t2, T(-0.69912054128740897) * t0)));
+  const P u10 = madd<F>(T(0.49435287561113678), t14, madd<F>(T(-0.57004488584233448), t12, madd<F>(T(-0.60937500000000022), t10, T(-0.24356964481437346) * t8)));
+  const P u11 = madd<F>(T(0.5385527481129404), t6, madd<F>(T(-0.10364452469860626), t4, madd<F>(T(-0.78125000000000022), t2, T(0.2981060004427955) * t0)));
+  const P u12 = madd<F>(T(-0.14905300022139772), t14, madd<F>(T(0.67187500000000022), t12, madd<F>(T(-0.57004488584233448), t10, T(-0.44879395676078354) * t8)));
+  const P u13 = madd<F>(T(0.45768182862115031), t6, madd<F>(T(-0.79272818087286401), t4, madd<F>(T(0.39836089949943621), t2, T(-0.058463396668342833) * t0)));
+  const P u14 = madd<F>(T(0.015625000000000017), t14, madd<F>(T(-0.1490530002213977), t12, madd<F>(T(0.49435287561113689), t10, T(-0.85624429742626607) * t8)));
   const P w7 = u7;
   const P cb1 = splat<P>(s.cb[1]), sb1 = splat<P>(s.sb[1]);
-  const P w8 = cb1 * u8 - sb1 * u6;
-  const P w6 = sb1 * u8 + cb1 * u6;
+  const P w8 = madd<F>(cb1, u8, -(sb1 * u6));
+  const P w6 = madd<F>(sb1, u8, cb1 * u6);
   const P cb2 = splat<P>(s.cb[2]), sb2 = splat<P>(s.sb[2]);
-  const P w9 = cb2 * u9 - sb2 * u5;
-  const P w5 = sb2 * u9 + cb2 * u5;
+  const P w9 = madd<F>(cb2, u9, -(sb2 * u5));
+  const P w5 = madd<F>(sb2, u9, cb2 * u5);
   const P cb3 = splat<P>(s.cb[3]), sb3 = splat<P>(s.sb[3]);
-  const P w10 = cb3 * u10 - sb3 * u4;
-  const P w4 = sb3 * u10 + cb3 * u4;
+  const P w10 = madd<F>(cb3, u10, -(sb3 * u4));
+  const P w4 = madd<F>(sb3, u10, cb3 * u4);
   const P cb4 = splat<P>(s.cb[4]), sb4 = splat<P>(s.sb[4]);
-  const P w11 = cb4 * u11 - sb4 * u3;
-  const P w3 = sb4 * u11 + cb4 * u3;
+  const P w11 = madd<F>(cb4, u11, -(sb4 * u3));
+  const P w3 = madd<F>(sb4, u11, cb4 * u3);
   const P cb5 = splat<P>(s.cb[5]), sb5 = splat<P>(s.sb[5]);
-  const P w12 = cb5 * u12 - sb5 * u2;
-  const P w2 = sb5 * u12 + cb5 * u2;
+  const P w12 = madd<F>(cb5, u12, -(sb5 * u2));
+  const P w2 = madd<F>(sb5, u12, cb5 * u2);
   const P cb6 = splat<P>(s.cb[6]), sb6 = splat<P>(s.sb[6]);
-  const P w13 = cb6 * u13 - sb6 * u1;
-  const P w1 = sb6 * u13 + cb6 * u1;
+  const P w13 = madd<F>(cb6, u13, -(sb6 * u1));
+  const P w1 = madd<F>(sb6, u13, cb6 * u1);
   const P cb7 = splat<P>(s.cb[7]), sb7 = splat<P>(s.sb[7]);
-  const P w14 = cb7 * u14 - sb7 * u0;
-  const P w0 = sb7 * u14 + cb7 * u0;
-  const P v0 = T(0.64725984928774916) * w7 - T(0.69912054128740897) * w9 + T(0.2981060004427955) * w11 - T(0.058463396668342833) * w13;
-  const P v1 = T(-0.18749999999999994) * w1 + T(0.63737743919909795) * w3 - T(0.74739129644383739) * w5;
-  const P v2 = T(0.47495887979908308) * w7 + T(0.073287746247241006) * w9 - T(0.78125000000000022) * w11 + T(0.39836089949943621) * w13;
-  const P v3 = T(0.63737743919909817) * w1 - T(0.49999999999999983) * w3 - T(0.58630196997792872) * w5;
-  const P v4 = T(0.42961647140211001) * w7 + T(0.4198446513295126) * w9 - T(0.10364452469860626) * w11 - T(0.79272818087286401) * w13;
-  const P v5 = T(-0.74739129644383728) * w1 - T(0.58630196997792838) * w3 - T(0.31249999999999989) * w5;
-  const P v6 = T(0.41339864235384211) * w7 + T(0.5740991584648073) * w9 + T(0.5385527481129404) * w11 + T(0.45768182862115031) * w13;
-  const P v7 = T(-0.6472598492877496) * w0 - T(0.47495887979908369) * w2 - T(0.42961647140211051) * w4 - T(0.41339864235384272) * w6;
-  const P v8 = T(-0.078125000000000042) * w8 - T(0.24356964481437346) * w10 - T(0.44879395676078354) * w12 - T(0.85624429742626607) * w14;
-  const P v9 = T(0.6991205412874093) * w0 - T(0.07328774624724109) * w2 - T(0.41984465132951287) * w4 - T(0.57409915846480775) * w6;
-  const P v10 = T(-0.24356964481437357) * w8 - T(0.60937500000000022) * w10 - T(0.57004488584233448) * w12 + T(0.49435287561113689) * w14;
-  const P v11 = T(-0.2981060004427955) * w0 + T(0.78125000000000022) * w2 + T(0.10364452469860649) * w4 - T(0.53855274811294052) * w6;
-  const P v12 = T(-0.44879395676078382) * w8 - T(0.57004488584233448) * w10 + T(0.67187500000000022) * w12 - T(0.1490530002213977) * w14;
-  const P v13 = T(0.058463396668342764) * w0 - T(0.39836089949943637) * w2 + T(0.79272818087286445) * w4 - T(0.45768182862115064) * w6;
-  const P v14 = T(-0.85624429742626651) * w8 + T(0.49435287561113678) * w10 - T(0.14905300022139772) * w12 + T(0.015625000000000017) * w14;
+  const P w14 = madd<F>(cb7, u14, -(sb7 * u0));
+  const P w0 = madd<F>(sb7, u14, cb7 * u0);
+  const P v0 = madd<F>(T(-0.058463396668342833), w13, madd<F>(T(0.2981060004427955), w11, madd<F>(T(-0.69912054128740897), w9, T(0.64725984928774916) * w7)));
+  const P v1 = madd<F>(T(-0.74739129644383739), w5, madd<F>(T(0.63737743919909795), w3, T(-0.18749999999999994) * w1));
+  const P v2 = madd<F>(T(0.39836089949943621), w13, madd<F>(T(-0.78125000000000022), w11, madd<F>(T(0.073287746247241006), w9, T(0.47495887979908308) * w7)));
+  const P v3 = madd<F>(T(-0.58630196997792872), w5, madd<F>(T(-0.49999999999999983), w3, T(0.63737743919909817) * w1));
+  const P v4 = madd<F>(T(-0.79272818087286401), w13, madd<F>(T(-0.10364452469860626), w11, madd<F>(T(0.4198446513295126), w9, T(0.42961647140211001) * w7)));
+  const P v5 = madd<F>(T(-0.31249999999999989), w5, madd<F>(T(-0.58630196997792838), w3, T(-0.74739129644383728) * w1));
+  const P v6 = madd<F>(T(0.45768182862115031), w13, madd<F>(T(0.5385527481129404), w11, madd<F>(T(0.5740991584648073), w9, T(0.41339864235384211) * w7)));
+  const P v7 = madd<F>(T(-0.41339864235384272), w6, madd<F>(T(-0.42961647140211051), w4, madd<F>(T(-0.47495887979908369), w2, T(-0.6472598492877496) * w0)));
+  const P v8 = madd<F>(T(-0.85624429742626607), w14, madd<F>(T(-0.44879395676078354), w12, madd<F>(T(-0.24356964481437346), w10, T(-0.078125000000000042) * w8)));
+  const P v9 = madd<F>(T(-0.57409915846480775), w6, madd<F>(T(-0.41984465132951287), w4, madd<F>(T(-0.07328774624724109), w2, T(0.6991205412874093) * w0)));
+  const P v10 = madd<F>(T(0.49435287561113689), w14, madd<F>(T(-0.57004488584233448), w12, madd<F>(T(-0.60937500000000022), w10, T(-0.24356964481437357) * w8)));
+  const P v11 = madd<F>(T(-0.53855274811294052), w6, madd<F>(T(0.10364452469860649), w4, madd<F>(T(0.78125000000000022), w2, T(-0.2981060004427955) * w0)));
+  const P v12 = madd<F>(T(-0.1490530002213977), w14, madd<F>(T(0.67187500000000022), w12, madd<F>(T(-0.57004488584233448), w10, T(-0.44879395676078382) * w8)));
+  const P v13 = madd<F>(T(-0.45768182862115064), w6, madd<F>(T(0.79272818087286445), w4, madd<F>(T(-0.39836089949943637), w2, T(0.058463396668342764) * w0)));
+  const P v14 = madd<F>(T(0.015625000000000017), w14, madd<F>(T(-0.14905300022139772), w12, madd<F>(T(0.49435287561113678), w10, T(-0.85624429742626651) * w8)));
   y[7] = v7;
   const P ca1 = splat<P>(s.ca[1]), sa1 = splat<P>(s.sa[1]);
-  y[8] = ca1 * v8 - sa1 * v6;
-  y[6] = sa1 * v8 + ca1 * v6;
+  y[8] = madd<F>(ca1, v8, -(sa1 * v6));
+  y[6] = madd<F>(sa1, v8, ca1 * v6);
   const P ca2 = splat<P>(s.ca[2]), sa2 = splat<P>(s.sa[2]);
-  y[9] = ca2 * v9 - sa2 * v5;
-  y[5] = sa2 * v9 + ca2 * v5;
+  y[9] = madd<F>(ca2, v9, -(sa2 * v5));
+  y[5] = madd<F>(sa2, v9, ca2 * v5);
   const P ca3 = splat<P>(s.ca[3]), sa3 = splat<P>(s.sa[3]);
-  y[10] = ca3 * v10 - sa3 * v4;
-  y[4] = sa3 * v10 + ca3 * v4;
+  y[10] = madd<F>(ca3, v10, -(sa3 * v4));
+  y[4] = madd<F>(sa3, v10, ca3 * v4);
   const P ca4 = splat<P>(s.ca[4]), sa4 = splat<P>(s.sa[4]);
-  y[11] = ca4 * v11 - sa4 * v3;
-  y[3] = sa4 * v11 + ca4 * v3;
+  y[11] = madd<F>(ca4, v11, -(sa4 * v3));
+  y[3] = madd<F>(sa4, v11, ca4 * v3);
   const P ca5 = splat<P>(s.ca[5]), sa5 = splat<P>(s.sa[5]);
-  y[12] = ca5 * v12 - sa5 * v2;
-  y[2] = sa5 * v12 + ca5 * v2;
+  y[12] = madd<F>(ca5, v12, -(sa5 * v2));
+  y[2] = madd<F>(sa5, v12, ca5 * v2);
   const P ca6 = splat<P>(s.ca[6]), sa6 = splat<P>(s.sa[6]);
-  y[13] = ca6 * v13 - sa6 * v1;
-  y[1] = sa6 * v13 + ca6 * v1;
+  y[13] = madd<F>(ca6, v13, -(sa6 * v1));
+  y[1] = madd<F>(sa6, v13, ca6 * v1);
   const P ca7 = splat<P>(s.ca[7]), sa7 = splat<P>(s.sa[7]);
-  y[14] = ca7 * v14 - sa7 * v0;
-  y[0] = sa7 * v14 + ca7 * v0;
+  y[14] = madd<F>(ca7, v14, -(sa7 * v0));
+  y[0] = madd<F>(sa7, v14, ca7 * v0);
 }
 
 // Band 8 of Z(a) X90^T Z(b) X90 Z(g), Ry(b) = Rx(-90) Rz(b) Rx(+90).
-template <class T, class P, class S>
-inline void zxzxz_band8(const S& s, const P* __restrict x, P* __restrict y) {
+template <bool F, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void zxzxz_band8(const S& s, const P* __restrict x, P* __restrict y) {
   const P t8 = x[8];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
-  const P t9 = cg1 * x[9] - sg1 * x[7];
-  const P t7 = sg1 * x[9] + cg1 * x[7];
+  const P t9 = madd<F>(cg1, x[9], -(sg1 * x[7]));
+  const P t7 = madd<F>(sg1, x[9], cg1 * x[7]);
   const P cg2 = splat<P>(s.cg[2]), sg2 = splat<P>(s.sg[2]);
-  const P t10 = cg2 * x[10] - sg2 * x[6];
-  const P t6 = sg2 * x[10] + cg2 * x[6];
+  const P t10 = madd<F>(cg2, x[10], -(sg2 * x[6]));
+  const P t6 = madd<F>(sg2, x[10], cg2 * x[6]);
   const P cg3 = splat<P>(s.cg[3]), sg3 = splat<P>(s.sg[3]);
-  const P t11 = cg3 * x[11] - sg3 * x[5];
-  const P t5 = sg3 * x[11] + cg3 * x[5];
+  const P t11 = madd<F>(cg3, x[11], -(sg3 * x[5]));
+  const P t5 = madd<F>(sg3, x[11], cg3 * x[5]);
   const P cg4 = splat<P>(s.cg[4]), sg4 = splat<P>(s.sg[4]);
-  const P t12 = cg4 * x[12] - sg4 * x[4];
-  const P t4 = sg4 * x[12] + cg4 * x[4];
+  const P t12 = madd<F>(cg4, x[12], -(sg4 * x[4]));
+  const P t4 = madd<F>(sg4, x[12], cg4 * x[4]);
   const P cg5 = splat<P>(s.cg[5]), sg5 = splat<P>(s.sg[5]);
-  const P t13 = cg5 * x[13] - sg5 * x[3];
-  const P t3 = sg5 * x[13] + cg5 * x[3];
+  const P t13 = madd<F>(cg5, x[13], -(sg5 * x[3]));
+  const P t3 = madd<F>(sg5, x[13], cg5 * x[3]);
   const P cg6 = splat<P>(s.cg[6]), sg6 = splat<P>(s.sg[6]);
-  const P t14 = cg6 * x[14] - sg6 * x[2];
-  const P t2 = sg6 * x[14] + cg6 * x[2];
+  const P t14 = madd<F>(cg6, x[14], -(sg6 * x[2]));
+  const P t2 = madd<F>(sg6, x[14], cg6 * x[2]);
   const P cg7 = splat<P>(s.cg[7]), sg7 = splat<P>(s.sg[7]);
-  const P t15 = cg7 * x[15] - sg7 * x[1];
-  const P t1 = sg7 * x[15] + cg7 * x[1];
+  const P t15 = madd<F>(cg7, x[15], -(sg7 * x[1]));
+  const P t1 = madd<F>(sg7, x[15], cg7 * x[1]);
   const P cg8 = splat<P>(s.cg[8]), sg8 = splat<P>(s.sg[8]);
-  const P t16 = cg8 * x[16] - sg8 * x[0];
-  const P t0 = sg8 * x[16] + cg8 * x[0];
-  const P u0 = T(-0.83560887232005809) * t9 + T(0.51633473880807201) * t11 - T(0.18487749322186284) * t13 + T(0.031249999999999927) * t15;
-  const P u1 = T(-0.10937499999999994) * t1 + T(0.46219373305465744) * t3 - T(0.77450210821210819) * t5 + T(0.41780443616002927) * t7;
-  const P u2 = T(-0.45768182862115053) * t9 - T(0.47134697278119891) * t11 + T(0.70883101388836012) * t13 - T(0.25674494883054677) * t15;
-  const P u3 = T(0.4621937330546575) * t1 - T(0.70312500000000011) * t3 - T(0.21819125068388961) * t5 + T(0.49435287561113689) * t7;
-  const P u4 = T(-0.27421763710600372) * t9 - T(0.60515364784490877) * t11 - T(0.33802043207474874) * t13 + T(0.66658528149067309) * t15;
-  const P u5 = T(-0.77450210821210863) * t1 - T(0.21819125068389) * t3 + T(0.26562500000000022) * t5 + T(0.53102017087395126) * t7;
-  const P u6 = T(-0.13072812914594931) * t9 - T(0.38081430021731072) * t11 - T(0.59086470003715741) * t13 - T(0.69912054128740941) * t15;
-  const P u7 = T(0.41780443616002966) * t1 + T(0.49435287561113694) * t3 + T(0.53102017087395137) * t5 + T(0.54687500000000044) * t7;
-  const P u8 = T(0.27343749999999994) * t8 + T(0.39218438743784767) * t10 + T(0.41132645565900544) * t12 + T(0.45768182862115009) * t14 + T(0.62670665424004357) * t16;
-  const P u9 = T(0.83560887232005909) * t0 + T(0.4576818286211507) * t2 + T(0.27421763710600405) * t4 + T(0.13072812914594933) * t6;
-  const P u10 = T(0.39218438743784806) * t8 + T(0.5) * t10 + T(0.32775276505317225) * t12 - T(0.69912054128740908) * t16;
-  const P u11 = T(-0.51633473880807212) * t0 + T(0.47134697278119886) * t2 + T(0.60515364784490899) * t4 + T(0.38081430021731061) * t6;
-  const P u12 = T(0.41132645565900611) * t8 + T(0.32775276505317247) * t10 - T(0.28125000000000011) * t12 - T(0.73020759034674543) * t14 + T(0.3332926407453366) * t16;
-  const P u13 = T(0.184877493221863) * t0 - T(0.7088310138883599) * t2 + T(0.33802043207474886) * t4 + T(0.5908647000371573) * t6;
-  const P u14 = T(0.45768182862115081) * t8 - T(0.73020759034674532) * t12 + T(0.50000000000000022) * t14 - T(0.085581649610182137) * t16;
-  const P u15 = T(-0.031250000000000056) * t0 + T(0.25674494883054649) * t2 - T(0.66658528149067309) * t4 + T(0.69912054128740919) * t6;
-  const P u16 = T(0.62670665424004457) * t8 - T(0.69912054128740975) * t10 + T(0.33329264074533677) * t12 - T(0.085581649610182262) * t14 + T(0.0078125000000000347) * t16;
+  const P t16 = madd<F>(cg8, x[16], -(sg8 * x[0]));
+  const P t0 = madd<F>(sg8, x[16], cg8 * x[0]);
+  const P u0 = madd<F>(T(0.031249999999999927), t15, madd<F>(T(-0.18487749322186284), t13, madd<F>(T(0.51633473880807201), t11, T(-0.83560887232005809) * t9)));
+  const P u1 = madd<F>(T(0.41780443616002927), t7, madd<F>(T(-0.77450210821210819), t5, madd<F>(T(0.46219373305465744), t3, T(-0.10937499999999994) * t1)));
+  const P u2 = madd<F>(T(-0.25674494883054677), t15, madd<F>(T(0.70883101388836012), t13, madd<F>(T(-0.47134697278119891), t11, T(-0.45768182862115053) * t9)));
+  const P u3 = madd<F>(T(0.49435287561113689), t7, madd<F>(T(-0.21819125068388961), t5, madd<F>(T(-0.70312500000000011), t3, T(0.4621937330546575) * t1)));
+  const P u4 = madd<F>(T(0.66658528149067309), t15, madd<F>(T(-0.33802043207474874), t13, madd<F>(T(-0.60515364784490877), t11, T(-0.27421763710600372) * t9)));
+  const P u5 = madd<F>(T(0.53102017087395126), t7, madd<F>(T(0.26562500000000022), t5, madd<F>(T(-0.21819125068389), t3, T(-0.77450210821210863) * t1)));
+  const P u6 = madd<F>(T(-0.69912054128740941), t15, madd<F>(T(-0.59086470003715741), t13, madd<F>(T(-0.38081430021731072), t11, T(-0.13072812914594931) * t9)));
+  const P u7 = madd<F>(T(0.54687500000000044), t7, madd<F>(T(0.53102017087395137), t5, madd<F>(T(0.49435287561113694), t3, T(0.41780443616002966) * t1)));
+  const P u8 = madd<F>(T(0.62670665424004357), t16, madd<F>(T(0.45768182862115009), t14, madd<F>(T(0.41132645565900544), t12, madd<F>(T(0.39218438743784767), t10, T(0.27343749999999994) * t8))));
+  const P u9 = madd<F>(T(0.13072812914594933), t6, madd<F>(T(0.27421763710600405), t4, madd<F>(T(0.4576818286211507), t2, T(0.83560887232005909) * t0)));
+  const P u10 = madd<F>(T(-0.69912054128740908), t16, madd<F>(T(0.32775276505317225), t12, madd<F>(T(0.5), t10, T(0.39218438743784806) * t8)));
+  const P u11 = madd<F>(T(0.38081430021731061), t6, madd<F>(T(0.60515364784490899), t4, madd<F>(T(0.47134697278119886), t2, T(-0.51633473880807212) * t0)));
+  const P u12 = madd<F>(T(0.3332926407453366), t16, madd<F>(T(-0.73020759034674543), t14, madd<F>(T(-0.28125000000000011), t12, madd<F>(T(0.32775276505317247), t10, T(0.41132645565900611) * t8))));
+  const P u13 = madd<F>(T(0.5908647000371573), t6, madd<F>(T(0.33802043207474886), t4, madd<F>(T(-0.7088310138883599), t2, T(0.184877493221863) * t0)));
+  const P u14 = madd<F>(T(-0.085581649610182137), t16, madd<F>(T(0.50000000000000022), t14, madd<F>(T(-0.73020759034674532), t12, T(0.45768182862115081) * t8)));
+  const P u15 = madd<F>(T(0.69912054128740919), t6, madd<F>(T(-0.66658528149067309), t4, madd<F>(T(0.25674494883054649), t2, T(-0.031250000000000056) * t0)));
+  const P u16 = madd<F>(T(0.0078125000000000347), t16, madd<F>(T(-0.085581649610182262), t14, madd<F>(T(0.33329264074533677), t12, madd<F>(T(-0.69912054128740975), t10, T(0.62670665424004457) * t8))));
   const P w8 = u8;
   const P cb1 = splat<P>(s.cb[1]), sb1 = splat<P>(s.sb[1]);
-  const P w9 = cb1 * u9 - sb1 * u7;
-  const P w7 = sb1 * u9 + cb1 * u7;
+  const P w9 = madd<F>(cb1, u9, -(sb1 * u7));
+  const P w7 = madd<F>(sb1, u9, cb1 * u7);
   const P cb2 = splat<P>(s.cb[2]), sb2 = splat<P>(s.sb[2]);
-  const P w10 = cb2 * u10 - sb2 * u6;
-  const P w6 = sb2 * u10 + cb2 * u6;
+  const P w10 = madd<F>(cb2, u10, -(sb2 * u6));
+  const P w6 = madd<F>(sb2, u10, cb2 * u6);
   const P cb3 = splat<P>(s.cb[3]), sb3 = splat<P>(s.sb[3]);
-  const P w11 = cb3 * u11 - sb3 * u5;
-  const P w5 = sb3 * u11 + cb3 * u5;
+  const P w11 = madd<F>(cb3, u11, -(sb3 * u5));
+  const P w5 = madd<F>(sb3, u11, cb3 * u5);
   const P cb4 = splat<P>(s.cb[4]), sb4 = splat<P>(s.sb[4]);
-  const P w12 = cb4 * u12 - sb4 * u4;
-  const P w4 = sb4 * u12 + cb4 * u4;
+  const P w12 = madd<F>(cb4, u12, -(sb4 * u4));
+  const P w4 = madd<F>(sb4, u12, cb4 * u4);
   const P cb5 = splat<P>(s.cb[5]), sb5 = splat<P>(s.sb[5]);
-  const P w13 = cb5 * u13 - sb5 * u3;
-  const P w3 = sb5 * u13 + cb5 * u3;
+  const P w13 = madd<F>(cb5, u13, -(sb5 * u3));
+  const P w3 = madd<F>(sb5, u13, cb5 * u3);
   const P cb6 = splat<P>(s.cb[6]), sb6 = splat<P>(s.sb[6]);
-  const P w14 = cb6 * u14 - sb6 * u2;
-  const P w2 = sb6 * u14 + cb6 * u2;
+  const P w14 = madd<F>(cb6, u14, -(sb6 * u2));
+  const P w2 = madd<F>(sb6, u14, cb6 * u2);
   const P cb7 = splat<P>(s.cb[7]), sb7 = splat<P>(s.sb[7]);
-  const P w15 = cb7 * u15 - sb7 * u1;
-  const P w1 = sb7 * u15 + cb7 * u1;
+  const P w15 = madd<F>(cb7, u15, -(sb7 * u1));
+  const P w1 = madd<F>(sb7, u15, cb7 * u1);
   const P cb8 = splat<P>(s.cb[8]), sb8 = splat<P>(s.sb[8]);
-  const P w16 = cb8 * u16 - sb8 * u0;
-  const P w0 = sb8 * u16 + cb8 * u0;
-  const P v0 = T(0.83560887232005909) * w9 - T(0.51633473880807212) * w11 + T(0.184877493221863) * w13 - T(0.031250000000000056) * w15;
-  const P v1 = T(-0.10937499999999994) * w1 + T(0.4621937330546575) * w3 - T(0.77450210821210863) * w5 + T(0.41780443616002966) * w7;
-  const P v2 = T(0.4576818286211507) * w9 + T(0.47134697278119886) * w11 - T(0.7088310138883599) * w13 + T(0.25674494883054649) * w15;
-  const P v3 = T(0.46219373305465744) * w1 - T(0.70312500000000011) * w3 - T(0.21819125068389) * w5 + T(0.49435287561113694) * w7;
-  const P v4 = T(0.27421763710600405) * w9 + T(0.60515364784490899) * w11 + T(0.33802043207474886) * w13 - T(0.66658528149067309) * w15;
-  const P v5 = T(-0.77450210821210819) * w1 - T(0.21819125068388961) * w3 + T(0.26562500000000022) * w5 + T(0.53102017087395137) * w7;
-  const P v6 = T(0.13072812914594933) * w9 + T(0.38081430021731061) * w11 + T(0.5908647000371573) * w13 + T(0.69912054128740919) * w15;
-  const P v7 = T(0.41780443616002927) * w1 + T(0.49435287561113689) * w3 + T(0.53102017087395126) * w5 + T(0.54687500000000044) * w7;
-  const P v8 = T(0.27343749999999994) * w8 + T(0.39218438743784806) * w10 + T(0.41132645565900611) * w12 + T(0.45768182862115081) * w14 + T(0.62670665424004457) * w16;
-  const P v9 = T(-0.83560887232005809) * w0 - T(0.45768182862115053) * w2 - T(0.27421763710600372) * w4 - T(0.13072812914594931) * w6;
-  const P v10 = T(0.39218438743784767) * w8 + T(0.5) * w10 + T(0.32775276505317247) * w12 - T(0.69912054128740975) * w16;
-  const P v11 = T(0.51633473880807201) * w0 - T(0.47134697278119891) * w2 - T(0.60515364784490877) * w4 - T(0.38081430021731072) * w6;
-  const P v12 = T(0.41132645565900544) * w8 + T(0.32775276505317225) * w10 - T(0.28125000000000011) * w12 - T(0.73020759034674532) * w14 + T(0.33329264074533677) * w16;
-  const P v13 = T(-0.18487749322186284) * w0 + T(0.70883101388836012) * w2 - T(0.33802043207474874) * w4 - T(0.59086470003715741) * w6;
-  const P v14 = T(0.45768182862115009) * w8 - T(0.73020759034674543) * w12 + T(0.50000000000000022) * w14 - T(0.085581649610182262) * w16;
-  const P v15 = T(0.031249999999999927) * w0 - T(0.25674494883054677) * w2 + T(0.66658528149067309) * w4 - T(0.69912054128740941) * w6;
-  const P v16 = T(0.62670665424004357) * w8 - T(0.69912054128740908) * w10 + T(0.3332926407453366) * w12 - T(0.085581649610182137) * w14 + T(0.0078125000000000347) * w16;
+  const P w16 = madd<F>(cb8, u16, -(sb8 * u0));
+  const P w0 = madd<F>(sb8, u16, cb8 * u0);
+  const P v0 = madd<F>(T(-0.031250000000000056), w15, madd<F>(T(0.184877493221863), w13, madd<F>(T(-0.51633473880807212), w11, T(0.83560887232005909) * w9)));
+  const P v1 = madd<F>(T(0.41780443616002966), w7, madd<F>(T(-0.77450210821210863), w5, madd<F>(T(0.4621937330546575), w3, T(-0.10937499999999994) * w1)));
+  const P v2 = madd<F>(T(0.25674494883054649), w15, madd<F>(T(-0.7088310138883599), w13, madd<F>(T(0.47134697278119886), w11, T(0.4576818286211507) * w9)));
+  const P v3 = madd<F>(T(0.49435287561113694), w7, madd<F>(T(-0.21819125068389), w5, madd<F>(T(-0.70312500000000011), w3, T(0.46219373305465744) * w1)));
+  const P v4 = madd<F>(T(-0.66658528149067309), w15, madd<F>(T(0.33802043207474886), w13, madd<F>(T(0.60515364784490899), w11, T(0.27421763710600405) * w9)));
+  const P v5 = madd<F>(T(0.53102017087395137), w7, madd<F>(T(0.26562500000000022), w5, madd<F>(T(-0.21819125068388961), w3, T(-0.77450210821210819) * w1)));
+  const P v6 = madd<F>(T(0.69912054128740919), w15, madd<F>(T(0.5908647000371573), w13, madd<F>(T(0.38081430021731061), w11, T(0.13072812914594933) * w9)));
+  const P v7 = madd<F>(T(0.54687500000000044), w7, madd<F>(T(0.53102017087395126), w5, madd<F>(T(0.49435287561113689), w3, T(0.41780443616002927) * w1)));
+  const P v8 = madd<F>(T(0.62670665424004457), w16, madd<F>(T(0.45768182862115081), w14, madd<F>(T(0.41132645565900611), w12, madd<F>(T(0.39218438743784806), w10, T(0.27343749999999994) * w8))));
+  const P v9 = madd<F>(T(-0.13072812914594931), w6, madd<F>(T(-0.27421763710600372), w4, madd<F>(T(-0.45768182862115053), w2, T(-0.83560887232005809) * w0)));
+  const P v10 = madd<F>(T(-0.69912054128740975), w16, madd<F>(T(0.32775276505317247), w12, madd<F>(T(0.5), w10, T(0.39218438743784767) * w8)));
+  const P v11 = madd<F>(T(-0.38081430021731072), w6, madd<F>(T(-0.60515364784490877), w4, madd<F>(T(-0.47134697278119891), w2, T(0.51633473880807201) * w0)));
+  const P v12 = madd<F>(T(0.33329264074533677), w16, madd<F>(T(-0.73020759034674532), w14, madd<F>(T(-0.28125000000000011), w12, madd<F>(T(0.32775276505317225), w10, T(0.41132645565900544) * w8))));
+  const P v13 = madd<F>(T(-0.59086470003715741), w6, madd<F>(T(-0.33802043207474874), w4, madd<F>(T(0.70883101388836012), w2, T(-0.18487749322186284) * w0)));
+  const P v14 = madd<F>(T(-0.085581649610182262), w16, madd<F>(T(0.50000000000000022), w14, madd<F>(T(-0.73020759034674543), w12, T(0.45768182862115009) * w8)));
+  const P v15 = madd<F>(T(-0.69912054128740941), w6, madd<F>(T(0.66658528149067309), w4, madd<F>(T(-0.25674494883054677), w2, T(0.031249999999999927) * w0)));
+  const P v16 = madd<F>(T(0.0078125000000000347), w16, madd<F>(T(-0.085581649610182137), w14, madd<F>(T(0.3332926407453366), w12, madd<F>(T(-0.69912054128740908), w10, T(0.62670665424004357) * w8))));
   y[8] = v8;
   const P ca1 = splat<P>(s.ca[1]), sa1 = splat<P>(s.sa[1]);
-  y[9] = ca1 * v9 - sa1 * v7;
-  y[7] = sa1 * v9 + ca1 * v7;
+  y[9] = madd<F>(ca1, v9, -(sa1 * v7));
+  y[7] = madd<F>(sa1, v9, ca1 * v7);
   const P ca2 = splat<P>(s.ca[2]), sa2 = splat<P>(s.sa[2]);
-  y[10] = ca2 * v10 - sa2 * v6;
-  y[6] = sa2 * v10 + ca2 * v6;
+  y[10] = madd<F>(ca2, v10, -(sa2 * v6));
+  y[6] = madd<F>(sa2, v10, ca2 * v6);
   const P ca3 = splat<P>(s.ca[3]), sa3 = splat<P>(s.sa[3]);
-  y[11] = ca3 * v11 - sa3 * v5;
-  y[5] = sa3 * v11 + ca3 * v5;
+  y[11] = madd<F>(ca3, v11, -(sa3 * v5));
+  y[5] = madd<F>(sa3, v11, ca3 * v5);
   const P ca4 = splat<P>(s.ca[4]), sa4 = splat<P>(s.sa[4]);
-  y[12] = ca4 * v12 - sa4 * v4;
-  y[4] = sa4 * v12 + ca4 * v4;
+  y[12] = madd<F>(ca4, v12, -(sa4 * v4));
+  y[4] = madd<F>(sa4, v12, ca4 * v4);
   const P ca5 = splat<P>(s.ca[5]), sa5 = splat<P>(s.sa[5]);
-  y[13] = ca5 * v13 - sa5 * v3;
-  y[3] = sa5 * v13 + ca5 * v3;
+  y[13] = madd<F>(ca5, v13, -(sa5 * v3));
+  y[3] = madd<F>(sa5, v13, ca5 * v3);
   const P ca6 = splat<P>(s.ca[6]), sa6 = splat<P>(s.sa[6]);
-  y[14] = ca6 * v14 - sa6 * v2;
-  y[2] = sa6 * v14 + ca6 * v2;
+  y[14] = madd<F>(ca6, v14, -(sa6 * v2));
+  y[2] = madd<F>(sa6, v14, ca6 * v2);
   const P ca7 = splat<P>(s.ca[7]), sa7 = splat<P>(s.sa[7]);
-  y[15] = ca7 * v15 - sa7 * v1;
-  y[1] = sa7 * v15 + ca7 * v1;
+  y[15] = madd<F>(ca7, v15, -(sa7 * v1));
+  y[1] = madd<F>(sa7, v15, ca7 * v1);
   const P ca8 = splat<P>(s.ca[8]), sa8 = splat<P>(s.sa[8]);
-  y[16] = ca8 * v16 - sa8 * v0;
-  y[0] = sa8 * v16 + ca8 * v0;
+  y[16] = madd<F>(ca8, v16, -(sa8 * v0));
+  y[0] = madd<F>(sa8, v16, ca8 * v0);
 }
 
 // Band 9 of Z(a) X90^T Z(b) X90 Z(g), Ry(b) = Rx(-90) Rz(b) Rx(+90).
-template <class T, class P, class S>
-inline void zxzxz_band9(const S& s, const P* __restrict x, P* __restrict y) {
+template <bool F, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void zxzxz_band9(const S& s, const P* __restrict x, P* __restrict y) {
   const P t9 = x[9];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
-  const P t10 = cg1 * x[10] - sg1 * x[8];
-  const P t8 = sg1 * x[10] + cg1 * x[8];
+  const P t10 = madd<F>(cg1, x[10], -(sg1 * x[8]));
+  const P t8 = madd<F>(sg1, x[10], cg1 * x[8]);
   const P cg2 = splat<P>(s.cg[2]), sg2 = splat<P>(s.sg[2]);
-  const P t11 = cg2 * x[11] - sg2 * x[7];
-  const P t7 = sg2 * x[11] + cg2 * x[7];
+  const P t11 = madd<F>(cg2, x[11], -(sg2 * x[7]));
+  const P t7 = madd<F>(sg2, x[11], cg2 * x[7]);
   const P cg3 = splat<P>(s.cg[3]), sg3 = splat<P>(s.sg[3]);
-  const P t12 = cg3 * x[12] - sg3 * x[6];
-  const P t6 = sg3 * x[12] + cg3 * x[6];
+  const P t12 = madd<F>(cg3, x[12], -(sg3 * x[6]));
+  const P t6 = madd<F>(sg3, x[12], cg3 * x[6]);
   const P cg4 = splat<P>(s.cg[4]), sg4 = splat<P>(s.sg[4]);
-  const P t13 = cg4 * x[13] - sg4 * x[5];
-  const P t5 = sg4 * x[13] + cg4 * x[5];
+  const P t13 = madd<F>(cg4, x[13], -(sg4 * x[5]));
+  const P t5 = madd<F>(sg4, x[13], cg4 * x[5]);
   const P cg5 = splat<P>(s.cg[5]), sg5 = splat<P>(s.sg[5]);
-  const P t14 = cg5 * x[14] - sg5 * x[4];
-  const P t4 = sg5 * x[14] + cg5 * x[4];
+  const P t14 = madd<F>(cg5, x[14], -(sg5 * x[4]));
+  const P t4 = madd<F>(sg5, x[14], cg5 * x[4]);
   const P cg6 = splat<P>(s.cg[6]), sg6 = splat<P>(s.sg[6]);
-  const P t15 = cg6 * x[15] - sg6 * x[3];
-  const P t3 = sg6 * x[15] + cg6 * x[3];
+  const P t15 = madd<F>(cg6, x[15], -(sg6 * x[3]));
+  const P t3 = madd<F>(sg6, x[15], cg6 * x[3]);
   const P cg7 = splat<P>(s.cg[7]), sg7 = splat<P>(s.sg[7]);
-  const P t16 = cg7 * x[16] - sg7 * x[2];
-  const P t2 = sg7 * x[16] + cg7 * x[2];
+  const P t16 = madd<F>(cg7, x[16], -(sg7 * x[2]));
+  const P t2 = madd<F>(sg7, x[16], cg7 * x[2]);
   const P cg8 = splat<P>(s.cg[8]), sg8 = splat<P>(s.sg[8]);
-  const P t17 = cg8 * x[17] - sg8 * x[1];
-  const P t1 = sg8 * x[17] + cg8 * x[1];
+  const P t17 = madd<F>(cg8, x[17], -(sg8 * x[1]));
+  const P t1 = madd<F>(sg8, x[17], cg8 * x[1]);
   const P cg9 = splat<P>(s.cg[9]), sg9 = splat<P>(s.sg[9]);
-  const P t18 = cg9 * x[18] - sg9 * x[0];
-  const P t0 = sg9 * x[18] + cg9 * x[0];
-  const P u0 = T(0.60904939217552401) * t9 - T(0.69684697253055505) * t11 + T(0.36157613954394169) * t13 - T(0.11158481919598202) * t15 + T(0.016572815184059658) * t17;
-  const P u1 = T(-0.062499999999999944) * t1 + T(0.31560952932381481) * t3 - T(0.68179450716473178) * t5 + T(0.65699362630089475) * t7;
-  const P u2 = T(0.44314852502786856) * t9 - T(0.056336738679125004) * t11 - T(0.67232906168594264) * t13 + T(0.56832917123353821) * t15 - T(0.15944009087467625) * t17;
-  const P u3 = T(0.31560952932381503) * t1 - T(0.71875000000000044) * t3 + T(0.20252314682524569) * t5 + T(0.58546856234985001) * t7;
-  const P u4 = T(0.39636409043643239) * t9 + T(0.25194555463432972) * t11 - T(0.39218438743784789) * t13 - T(0.6051536478449091) * t15 + T(0.50931268790645701) * t17;
-  const P u5 = T(-0.68179450716473211) * t1 + T(0.2025231468252455) * t3 + T(0.56249999999999967) * t5 + T(0.42158554885100114) * t7;
-  const P u6 = T(0.37548796377181015) * t9 + T(0.42961647140211007) * t11 + T(0.13799626353637254) * t13 - T(0.29810600044279578) * t15 - T(0.75268075590684558) * t17;
-  const P u7 = T(0.65699362630089553) * t1 + T(0.58546856234985034) * t3 + T(0.42158554885100152) * t5 + T(0.21875000000000011) * t7;
-  const P u8 = T(0.36685490255855935) * t9 + T(0.51301422373068761) * t11 + T(0.49435287561113661) * t13 + T(0.45768182862115037) * t15 + T(0.38519665736315795) * t17;
-  const P u9 = T(-0.60904939217552367) * t0 - T(0.44314852502786806) * t2 - T(0.39636409043643184) * t4 - T(0.37548796377180982) * t6 - T(0.36685490255855918) * t8;
-  const P u10 = T(0.054687499999999986) * t10 + T(0.16792332234534904) * t12 + T(0.2954323500185787) * t14 + T(0.46242477217583744) * t16 + T(0.8171255055356399) * t18;
-  const P u11 = T(0.69684697253055539) * t0 + T(0.056336738679124927) * t2 - T(0.25194555463432966) * t4 - T(0.4296164714021104) * t6 - T(0.51301422373068795) * t8;
-  const P u12 = T(0.16792332234534893) * t10 + T(0.45312499999999994) * t12 + T(0.57727978755972376) * t14 + T(0.38725105410605415) * t16 - T(0.53222566657034676) * t18;
-  const P u13 = T(-0.36157613954394174) * t0 + T(0.67232906168594297) * t2 + T(0.39218438743784806) * t4 - T(0.13799626353637273) * t6 - T(0.49435287561113694) * t8;
-  const P u14 = T(0.29543235001857865) * t10 + T(0.57727978755972398) * t12 + T(0.14062499999999978) * t14 - T(0.71624052404290162) * t16 + T(0.21608307321780204) * t18;
-  const P u15 = T(0.11158481919598207) * t0 - T(0.5683291712335381) * t2 + T(0.60515364784490899) * t4 + T(0.2981060004427955) * t6 - T(0.45768182862115048) * t8;
-  const P u16 = T(0.46242477217583744) * t10 + T(0.38725105410605426) * t12 - T(0.71624052404290162) * t14 + T(0.34765625000000017) * t16 - T(0.048317644050206915) * t18;
-  const P u17 = T(-0.016572815184059824) * t0 + T(0.15944009087467623) * t2 - T(0.50931268790645723) * t4 + T(0.75268075590684602) * t6 - T(0.38519665736315806) * t8;
-  const P u18 = T(0.81712550553564001) * t10 - T(0.53222566657034731) * t12 + T(0.21608307321780207) * t14 - T(0.04831764405020695) * t16 + T(0.0039062500000000113) * t18;
+  const P t18 = madd<F>(cg9, x[18], -(sg9 * x[0]));
+  const P t0 = madd<F>(sg9, x[18], cg9 * x[0]);
+  const P u0 = madd<F>(T(0.016572815184059658), t17, madd<F>(T(-0.11158481919598202), t15, madd<F>(T(0.36157613954394169), t13, madd<F>(T(-0.69684697253055505), t11, T(0.60904939217552401) * t9))));
+  const P u1 = madd<F>(T(0.65699362630089475), t7, madd<F>(T(-0.68179450716473178), t5, madd<F>(T(0.31560952932381481), t3, T(-0.062499999999999944) * t1)));
+  const P u2 = madd<F>(T(-0.15944009087467625), t17, madd<F>(T(0.56832917123353821), t15, madd<F>(T(-0.67232906168594264), t13, madd<F>(T(-0.056336738679125004), t11, T(0.44314852502786856) * t9))));
+  const P u3 = madd<F>(T(0.58546856234985001), t7, madd<F>(T(0.20252314682524569), t5, madd<F>(T(-0.71875000000000044), t3, T(0.31560952932381503) * t1)));
+  const P u4 = madd<F>(T(0.50931268790645701), t17, madd<F>(T(-0.6051536478449091), t15, madd<F>(T(-0.39218438743784789), t13, madd<F>(T(0.25194555463432972), t11, T(0.39636409043643239) * t9))));
+  const P u5 = madd<F>(T(0.42158554885100114), t7, madd<F>(T(0.56249999999999967), t5, madd<F>(T(0.2025231468252455), t3, T(-0.68179450716473211) * t1)));
+  const P u6 = madd<F>(T(-0.75268075590684558), t17, madd<F>(T(-0.29810600044279578), t15, madd<F>(T(0.13799626353637254), t13, madd<F>(T(0.42961647140211007), t11, T(0.37548796377181015) * t9))));
+  const P u7 = madd<F>(T(0.21875000000000011), t7, madd<F>(T(0.42158554885100152), t5, madd<F>(T(0.58546856234985034), t3, T(0.65699362630089553) * t1)));
+  const P u8 = madd<F>(T(0.38519665736315795), t17, madd<F>(T(0.45768182862115037), t15, madd<F>(T(0.49435287561113661), t13, madd<F>(T(0.51301422373068761), t11, T(0.36685490255855935) * t9))));
+  const P u9 = madd<F>(T(-0.36685490255855918), t8, madd<F>(T(-0.37548796377180982), t6, madd<F>(T(-0.39636409043643184), t4, madd<F>(T(-0.44314852502786806), t2, T(-0.60904939217552367) * t0))));
+  const P u10 = madd<F>(T(0.8171255055356399), t18, madd<F>(T(0.46242477217583744), t16, madd<F>(T(0.2954323500185787), t14, madd<F>(T(0.16792332234534904), t12, T(0.054687499999999986) * t10))));
+  const P u11 = madd<F>(T(-0.51301422373068795), t8, madd<F>(T(-0.4296164714021104), t6, madd<F>(T(-0.25194555463432966), t4, madd<F>(T(0.056336738679124927), t2, T(0.69684697253055539) * t0))));
+  const P u12 = madd<F>(T(-0.53222566657034676), t18, madd<F>(T(0.38725105410605415), t16, madd<F>(T(0.57727978755972376), t14, madd<F>(T(0.45312499999999994), t12, T(0.16792332234534893) * t10))));
+  const P u13 = madd<F>(T(-0.49435287561113694), t8, madd<F>(T(-0.13799626353637273), t6, madd<F>(T(0.39218438743784806), t4, madd<F>(T(0.67232906168594297), t2, T(-0.36157613954394174) * t0))));
+  const P u14 = madd<F>(T(0.21608307321780204), t18, madd<F>(T(-0.71624052404290162), t16, madd<F>(T(0.14062499999999978), t14, madd<F>(T(0.57727978755972398), t12, T(0.29543235001857865) * t10))));
+  const P u15 = madd<F>(T(-0.45768182862115048), t8, madd<F>(T(0.2981060004427955), t6, madd<F>(T(0.60515364784490899), t4, madd<F>(T(-0.5683291712335381), t2, T(0.11158481919598207) * t0))));
+  const P u16 = madd<F>(T(-0.048317644050206915), t18, madd<F>(T(0.34765625000000017), t16, madd<F>(T(-0.71624052404290162), t14, madd<F>(T(0.38725105410605426), t12, T(0.46242477217583744) * t10))));
+  const P u17 = madd<F>(T(-0.38519665736315806), t8, madd<F>(T(0.75268075590684602), t6, madd<F>(T(-0.50931268790645723), t4, madd<F>(T(0.15944009087467623), t2, T(-0.016572815184059824) * t0))));
+  const P u18 = madd<F>(T(0.0039062500000000113), t18, madd<F>(T(-0.04831764405020695), t16, madd<F>(T(0.21608307321780207), t14, madd<F>(T(-0.53222566657034731), t12, T(0.81712550553564001) * t10))));
   const P w9 = u9;
   const P cb1 = splat<P>(s.cb[1]), sb1 = splat<P>(s.sb[1]);
-  const P w10 = cb1 * u10 - sb1 * u8;
-  const P w8 = sb1 * u10 + cb1 * u8;
+  const P w10 = madd<F>(cb1, u10, -(sb1 * u8));
+  const P w8 = madd<F>(sb1, u10, cb1 * u8);
   const P cb2 = splat<P>(s.cb[2]), sb2 = splat<P>(s.sb[2]);
-  const P w11 = cb2 * u11 - sb2 * u7;
-  const P w7 = sb2 * u11 + cb2 * u7;
+  const P w11 = madd<F>(cb2, u11, -(sb2 * u7));
+  const P w7 = madd<F>(sb2, u11, cb2 * u7);
   const P cb3 = splat<P>(s.cb[3]), sb3 = splat<P>(s.sb[3]);
-  const P w12 = cb3 * u12 - sb3 * u6;
-  const P w6 = sb3 * u12 + cb3 * u6;
+  const P w12 = madd<F>(cb3, u12, -(sb3 * u6));
+  const P w6 = madd<F>(sb3, u12, cb3 * u6);
   const P cb4 = splat<P>(s.cb[4]), sb4 = splat<P>(s.sb[4]);
-  const P w13 = cb4 * u13 - sb4 * u5;
-  const P w5 = sb4 * u13 + cb4 * u5;
+  const P w13 = madd<F>(cb4, u13, -(sb4 * u5));
+  const P w5 = madd<F>(sb4, u13, cb4 * u5);
   const P cb5 = splat<P>(s.cb[5]), sb5 = splat<P>(s.sb[5]);
-  const P w14 = cb5 * u14 - sb5 * u4;
-  const P w4 = sb5 * u14 + cb5 * u4;
+  const P w14 = madd<F>(cb5, u14, -(sb5 * u4));
+  const P w4 = madd<F>(sb5, u14, cb5 * u4);
   const P cb6 = splat<P>(s.cb[6]), sb6 = splat<P>(s.sb[6]);
-  const P w15 = cb6 * u15 - sb6 * u3;
-  const P w3 = sb6 * u15 + cb6 * u3;
+  const P w15 = madd<F>(cb6, u15, -(sb6 * u3));
+  const P w3 = madd<F>(sb6, u15, cb6 * u3);
   const P cb7 = splat<P>(s.cb[7]), sb7 = splat<P>(s.sb[7]);
-  const P w16 = cb7 * u16 - sb7 * u2;
-  const P w2 = sb7 * u16 + cb7 * u2;
+  const P w16 = madd<F>(cb7, u16, -(sb7 * u2));
+  const P w2 = madd<F>(sb7, u16, cb7 * u2);
   const P cb8 = splat<P>(s.cb[8]), sb8 = splat<P>(s.sb[8]);
-  const P w17 = cb8 * u17 - sb8 * u1;
-  const P w1 = sb8 * u17 + cb8 * u1;
+  const P w17 = madd<F>(cb8, u17, -(sb8 * u1));
+  const P w1 = madd<F>(sb8, u17, cb8 * u1);
   const P cb9 = splat<P>(s.cb[9]), sb9 = splat<P>(s.sb[9]);
-  const P w18 = cb9 * u18 - sb9 * u0;
-  const P w0 = sb9 * u18 + cb9 * u0;
-  const P v0 = T(-0.60904939217552367) * w9 + T(0.69684697253055539) * w11 - T(0.36157613954394174) * w13 + T(0.11158481919598207) * w15 - T(0.016572815184059824) * w17;
-  const P v1 = T(-0.062499999999999944) * w1 + T(0.31560952932381503) * w3 - T(0.68179450716473211) * w5 + T(0.65699362630089553) * w7;
-  const P v2 = T(-0.44314852502786806) * w9 + T(0.056336738679124927) * w11 + T(0.67232906168594297) * w13 - T(0.5683291712335381) * w15 + T(0.15944009087467623) * w17;
-  const P v3 = T(0.31560952932381481) * w1 - T(0.71875000000000044) * w3 + T(0.2025231468252455) * w5 + T(0.58546856234985034) * w7;
-  const P v4 = T(-0.39636409043643184) * w9 - T(0.25194555463432966) * w11 + T(0.39218438743784806) * w13 + T(0.60515364784490899) * w15 - T(0.50931268790645723) * w17;
-  const P v5 = T(-0.68179450716473178) * w1 + T(0.20252314682524569) * w3 + T(0.56249999999999967) * w5 + T(0.42158554885100152) * w7;
-  const P v6 = T(-0.37548796377180982) * w9 - T(0.4296164714021104) * w11 - T(0.13799626353637273) * w13 + T(0.2981060004427955) * w15 + T(0.75268075590684602) * w17;
-  const P v7 = T(0.65699362630089475) * w1 + T(0.58546856234985001) * w3 + T(0.42158554885100114) * w5 + T(0.21875000000000011) * w7;
-  const P v8 = T(-0.36685490255855918) * w9 - T(0.51301422373068795) * w11 - T(0.49435287561113694) * w13 - T(0.45768182862115048) * w15 - T(0.38519665736315806) * w17;
-  const P v9 = T(0.60904939217552401) * w0 + T(0.44314852502786856) * w2 + T(0.39636409043643239) * w4 + T(0.37548796377181015) * w6 + T(0.36685490255855935) * w8;
-  const P v10 = T(0.054687499999999986) * w10 + T(0.16792332234534893) * w12 + T(0.29543235001857865) * w14 + T(0.46242477217583744) * w16 + T(0.81712550553564001) * w18;
-  const P v11 = T(-0.69684697253055505) * w0 - T(0.056336738679125004) * w2 + T(0.25194555463432972) * w4 + T(0.42961647140211007) * w6 + T(0.51301422373068761) * w8;
-  const P v12 = T(0.16792332234534904) * w10 + T(0.45312499999999994) * w12 + T(0.57727978755972398) * w14 + T(0.38725105410605426) * w16 - T(0.53222566657034731) * w18;
-  const P v13 = T(0.36157613954394169) * w0 - T(0.67232906168594264) * w2 - T(0.39218438743784789) * w4 + T(0.13799626353637254) * w6 + T(0.49435287561113661) * w8;
-  const P v14 = T(0.2954323500185787) * w10 + T(0.57727978755972376) * w12 + T(0.14062499999999978) * w14 - T(0.71624052404290162) * w16 + T(0.21608307321780207) * w18;
-  const P v15 = T(-0.11158481919598202) * w0 + T(0.56832917123353821) * w2 - T(0.6051536478449091) * w4 - T(0.29810600044279578) * w6 + T(0.45768182862115037) * w8;
-  const P v16 = T(0.46242477217583744) * w10 + T(0.38725105410605415) * w12 - T(0.71624052404290162) * w14 + T(0.34765625000000017) * w16 - T(0.04831764405020695) * w18;
-  const P v17 = T(0.016572815184059658) * w0 - T(0.15944009087467625) * w2 + T(0.50931268790645701) * w4 - T(0.75268075590684558) * w6 + T(0.38519665736315795) * w8;
-  const P v18 = T(0.8171255055356399) * w10 - T(0.53222566657034676) * w12 + T(0.21608307321780204) * w14 - T(0.048317644050206915) * w16 + T(0.0039062500000000113) * w18;
+  const P w18 = madd<F>(cb9, u18, -(sb9 * u0));
+  const P w0 = madd<F>(sb9, u18, cb9 * u0);
+  const P v0 = madd<F>(T(-0.016572815184059824), w17, madd<F>(T(0.11158481919598207), w15, madd<F>(T(-0.36157613954394174), w13, madd<F>(T(0.69684697253055539), w11, T(-0.60904939217552367) * w9))));
+  const P v1 = madd<F>(T(0.65699362630089553), w7, madd<F>(T(-0.68179450716473211), w5, madd<F>(T(0.31560952932381503), w3, T(-0.062499999999999944) * w1)));
+  const P v2 = madd<F>(T(0.15944009087467623), w17, madd<F>(T(-0.5683291712335381), w15, madd<F>(T(0.67232906168594297), w13, madd<F>(T(0.056336738679124927), w11, T(-0.44314852502786806) * w9))));
+  const P v3 = madd<F>(T(0.58546856234985034), w7, madd<F>(T(0.2025231468252455), w5, madd<F>(T(-0.71875000000000044), w3, T(0.31560952932381481) * w1)));
+  const P v4 = madd<F>(T(-0.50931268790645723), w17, madd<F>(T(0.60515364784490899), w15, madd<F>(T(0.39218438743784806), w13, madd<F>(T(-0.25194555463432966), w11, T(-0.39636409043643184) * w9))));
+  const P v5 = madd<F>(T(0.42158554885100152), w7, madd<F>(T(0.56249999999999967), w5, madd<F>(T(0.20252314682524569), w3, T(-0.68179450716473178) * w1)));
+  const P v6 = madd<F>(T(0.75268075590684602), w17, madd<F>(T(0.2981060004427955), w15, madd<F>(T(-0.13799626353637273), w13, madd<F>(T(-0.4296164714021104), w11, T(-0.37548796377180982) * w9))));
+  const P v7 = madd<F>(T(0.21875000000000011), w7, madd<F>(T(0.42158554885100114), w5, madd<F>(T(0.58546856234985001), w3, T(0.65699362630089475) * w1)));
+  const P v8 = madd<F>(T(-0.38519665736315806), w17, madd<F>(T(-0.45768182862115048), w15, madd<F>(T(-0.49435287561113694), w13, madd<F>(T(-0.51301422373068795), w11, T(-0.36685490255855918) * w9))));
+  const P v9 = madd<F>(T(0.36685490255855935), w8, madd<F>(T(0.37548796377181015), w6, madd<F>(T(0.39636409043643239), w4, madd<F>(T(0.44314852502786856), w2, T(0.60904939217552401) * w0))));
+  const P v10 = madd<F>(T(0.81712550553564001), w18, madd<F>(T(0.46242477217583744), w16, madd<F>(T(0.29543235001857865), w14, madd<F>(T(0.16792332234534893), w12, T(0.054687499999999986) * w10))));
+  const P v11 = madd<F>(T(0.51301422373068761), w8, madd<F>(T(0.42961647140211007), w6, madd<F>(T(0.25194555463432972), w4, madd<F>(T(-0.056336738679125004), w2, T(-0.69684697253055505) * w0))));
+  const P v12 = madd<F>(T(-0.53222566657034731), w18, madd<F>(T(0.38725105410605426), w16, madd<F>(T(0.57727978755972398), w14, madd<F>(T(0.45312499999999994), w12, T(0.16792332234534904) * w10))));
+  const P v13 = madd<F>(T(0.49435287561113661), w8, madd<F>(T(0.13799626353637254), w6, madd<F>(T(-0.39218438743784789), w4, madd<F>(T(-0.67232906168594264), w2, T(0.36157613954394169) * w0))));
+  const P v14 = madd<F>(T(0.21608307321780207), w18, madd<F>(T(-0.71624052404290162), w16, madd<F>(T(0.14062499999999978), w14, madd<F>(T(0.57727978755972376), w12, T(0.2954323500185787) * w10))));
+  const P v15 = madd<F>(T(0.45768182862115037), w8, madd<F>(T(-0.29810600044279578), w6, madd<F>(T(-0.6051536478449091), w4, madd<F>(T(0.56832917123353821), w2, T(-0.11158481919598202) * w0))));
+  const P v16 = madd<F>(T(-0.04831764405020695), w18, madd<F>(T(0.34765625000000017), w16, madd<F>(T(-0.71624052404290162), w14, madd<F>(T(0.38725105410605415), w12, T(0.46242477217583744) * w10))));
+  const P v17 = madd<F>(T(0.38519665736315795), w8, madd<F>(T(-0.75268075590684558), w6, madd<F>(T(0.50931268790645701), w4, madd<F>(T(-0.15944009087467625), w2, T(0.016572815184059658) * w0))));
+  const P v18 = madd<F>(T(0.0039062500000000113), w18, madd<F>(T(-0.048317644050206915), w16, madd<F>(T(0.21608307321780204), w14, madd<F>(T(-0.53222566657034676), w12, T(0.8171255055356399) * w10))));
   y[9] = v9;
   const P ca1 = splat<P>(s.ca[1]), sa1 = splat<P>(s.sa[1]);
-  y[10] = ca1 * v10 - sa1 * v8;
-  y[8] = sa1 * v10 + ca1 * v8;
+  y[10] = madd<F>(ca1, v10, -(sa1 * v8));
+  y[8] = madd<F>(sa1, v10, ca1 * v8);
   const P ca2 = splat<P>(s.ca[2]), sa2 = splat<P>(s.sa[2]);
-  y[11] = ca2 * v11 - sa2 * v7;
-  y[7] = sa2 * v11 + ca2 * v7;
+  y[11] = madd<F>(ca2, v11, -(sa2 * v7));
+  y[7] = madd<F>(sa2, v11, ca2 * v7);
   const P ca3 = splat<P>(s.ca[3]), sa3 = splat<P>(s.sa[3]);
-  y[12] = ca3 * v12 - sa3 * v6;
-  y[6] = sa3 * v12 + ca3 * v6;
+  y[12] = madd<F>(ca3, v12, -(sa3 * v6));
+  y[6] = madd<F>(sa3, v12, ca3 * v6);
   const P ca4 = splat<P>(s.ca[4]), sa4 = splat<P>(s.sa[4]);
-  y[13] = ca4 * v13 - sa4 * v5;
-  y[5] = sa4 * v13 + ca4 * v5;
+  y[13] = madd<F>(ca4, v13, -(sa4 * v5));
+  y[5] = madd<F>(sa4, v13, ca4 * v5);
   const P ca5 = splat<P>(s.ca[5]), sa5 = splat<P>(s.sa[5]);
-  y[14] = ca5 * v14 - sa5 * v4;
-  y[4] = sa5 * v14 + ca5 * v4;
+  y[14] = madd<F>(ca5, v14, -(sa5 * v4));
+  y[4] = madd<F>(sa5, v14, ca5 * v4);
   const P ca6 = splat<P>(s.ca[6]), sa6 = splat<P>(s.sa[6]);
-  y[15] = ca6 * v15 - sa6 * v3;
-  y[3] = sa6 * v15 + ca6 * v3;
+  y[15] = madd<F>(ca6, v15, -(sa6 * v3));
+  y[3] = madd<F>(sa6, v15, ca6 * v3);
   const P ca7 = splat<P>(s.ca[7]), sa7 = splat<P>(s.sa[7]);
-  y[16] = ca7 * v16 - sa7 * v2;
-  y[2] = sa7 * v16 + ca7 * v2;
+  y[16] = madd<F>(ca7, v16, -(sa7 * v2));
+  y[2] = madd<F>(sa7, v16, ca7 * v2);
   const P ca8 = splat<P>(s.ca[8]), sa8 = splat<P>(s.sa[8]);
-  y[17] = ca8 * v17 - sa8 * v1;
-  y[1] = sa8 * v17 + ca8 * v1;
+  y[17] = madd<F>(ca8, v17, -(sa8 * v1));
+  y[1] = madd<F>(sa8, v17, ca8 * v1);
   const P ca9 = splat<P>(s.ca[9]), sa9 = splat<P>(s.sa[9]);
-  y[18] = ca9 * v18 - sa9 * v0;
-  y[0] = sa9 * v18 + ca9 * v0;
+  y[18] = madd<F>(ca9, v18, -(sa9 * v0));
+  y[0] = madd<F>(sa9, v18, ca9 * v0);
 }
 
 // Band 10 of Z(a) X90^T Z(b) X90 Z(g), Ry(b) = Rx(-90) Rz(b) Rx(+90).
-template <class T, class P, class S>
-inline void zxzxz_band10(const S& s, const P* __restrict x, P* __restrict y) {
+template <bool F, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void zxzxz_band10(const S& s, const P* __restrict x, P* __restrict y) {
   const P t10 = x[10];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
-  const P t11 = cg1 * x[11] - sg1 * x[9];
-  const P t9 = sg1 * x[11] + cg1 * x[9];
+  const P t11 = madd<F>(cg1, x[11], -(sg1 * x[9]));
+  const P t9 = madd<F>(sg1, x[11], cg1 * x[9]);
   const P cg2 = splat<P>(s.cg[2]), sg2 = splat<P>(s.sg[2]);
-  const P t12 = cg2 * x[12] - sg2 * x[8];
-  const P t8 = sg2 * x[12] + cg2 * x[8];
+  const P t12 = madd<F>(cg2, x[12], -(sg2 * x[8]));
+  const P t8 = madd<F>(sg2, x[12], cg2 * x[8]);
   const P cg3 = splat<P>(s.cg[3]), sg3 = splat<P>(s.sg[3]);
-  const P t13 = cg3 * x[13] - sg3 * x[7];
-  const P t7 = sg3 * x[13] + cg3 * x[7];
+  const P t13 = madd<F>(cg3, x[13], -(sg3 * x[7]));
+  const P t7 = madd<F>(sg3, x[13], cg3 * x[7]);
   const P cg4 = splat<P>(s.cg[4]), sg4 = splat<P>(s.sg[4]);
-  const P t14 = cg4 * x[14] - sg4 * x[6];
-  const P t6 = sg4 * x[14] + cg4 * x[6];
+  const P t14 = madd<F>(cg4, x[14], -(sg4 * x[6]));
+  const P t6 = madd<F>(sg4, x[14], cg4 * x[6]);
   const P cg5 = splat<P>(s.cg[5]), sg5 = splat<P>(s.sg[5]);
-  const P t15 = cg5 * x[15] - sg5 * x[5];
-  const P t5 = sg5 * x[15] + cg5 * x[5];
+  const P t15 = madd<F>(cg5, x[15], -(sg5 * x[5]));
+  const P t5 = madd<F>(sg5, x[15], cg5 * x[5]);
   const P cg6 = splat<P>(s.cg[6]), sg6 = splat<P>(s.sg[6]);
-  const P t16 = cg6 * x[16] - sg6 * x[4];
-  const P t4 = sg6 * x[16] + cg6 * x[4];
+  const P t16 = madd<F>(cg6, x[16], -(sg6 * x[4]));
+  const P t4 = madd<F>(sg6, x[16], cg6 * x[4]);
   const P cg7 = splat<P>(s.cg[7]), sg7 = splat<P>(s.sg[7]);
-  const P t17 = cg7 * x[17] - sg7 * x[3];
-  const P t3 = sg7 * x[17] + cg7 * x[3];
+  const P t17 = madd<F>(cg7, x[17], -(sg7 * x[3]));
+  const P t3 = madd<F>(sg7, x[17], cg7 * x[3]);
   const P cg8 = splat<P>(s.cg[8]), sg8 = splat<P>(s.sg[8]);
-  const P t18 = cg8 * x[18] - sg8 * x[2];
-  const P t2 = sg8 * x[18] + cg8 * x[2];
+  const P t18 = madd<F>(cg8, x[18], -(sg8 * x[2]));
+  const P t2 = madd<F>(sg8, x[18], cg8 * x[2]);
   const P cg9 = splat<P>(s.cg[9]), sg9 = splat<P>(s.sg[9]);
-  const P t19 = cg9 * x[19] - sg9 * x[1];
-  const P t1 = sg9 * x[19] + cg9 * x[1];
+  const P t19 = madd<F>(cg9, x[19], -(sg9 * x[1]));
+  const P t1 = madd<F>(sg9, x[19], cg9 * x[1]);
   const P cg10 = splat<P>(s.cg[10]), sg10 = splat<P>(s.sg[10]);
-  const P t20 = cg10 * x[20] - sg10 * x[0];
-  const P t0 = sg10 * x[20] + cg10 * x[0];
-  const P u0 = T(0.80044772017563737) * t11 - T(0.54379714235296484) * t13 + T(0.24319347525427157) * t15 - T(0.065945089906773918) * t17 + T(0.0087346405371084949) * t19;
-  const P u1 = T(-0.035156250000000028) * t1 + T(0.2064407853394345) * t3 - T(0.54379714235296406) * t5 + T(0.7295804257628149) * t7 - T(0.35797110294949086) * t9;
-  const P u2 = T(0.46456464835370337) * t11 + T(0.31560952932381492) * t13 - T(0.7057243619147634) * t15 + T(0.4210060495408588) * t17 - T(0.096318968796390209) * t19;
-  const P u3 = T(0.20644078533943463) * t1 - T(0.62890625000000033) * t3 + T(0.5041938375082049) * t5 + T(0.35432938970151789) * t7 - T(0.42672987787577654) * t9;
-  const P u4 = T(0.31049159295683837) * t11 + T(0.53906250000000011) * t13 - T(0.017469281074217215) * t15 - T(0.69255289805296671) * t17 + T(0.36479021288140739) * t19;
-  const P u5 = T(-0.54379714235296439) * t1 + T(0.50419383750820512) * t3 + T(0.48437500000000017) * t5 - T(0.034938562148434202) * t7 - T(0.46285353886245728) * t9;
-  const P u6 = T(0.19515618744994973) * t11 + T(0.48613591206575113) * t13 + T(0.49410588440130881) * t15 + T(0.091108623356957685) * t17 - T(0.68785502197047288) * t19;
-  const P u7 = T(0.72958042576281534) * t1 + T(0.35432938970151812) * t3 - T(0.034938562148434084) * t5 - T(0.32812500000000033) * t7 - T(0.48298692237730451) * t9;
-  const P u8 = T(0.094721528538922919) * t11 + T(0.27885262964960555) * t13 + T(0.44538102542935099) * t15 + T(0.57486942301328359) * t17 + T(0.62002413794998801) * t19;
-  const P u9 = T(-0.35797110294949092) * t1 - T(0.42672987787577632) * t3 - T(0.46285353886245684) * t5 - T(0.48298692237730417) * t7 - T(0.49218749999999989) * t9;
-  const P u10 = T(-0.24609375) * t10 - T(0.35123682832287456) * t12 - T(0.36182925552841899) * t14 - T(0.38377788032373777) * t16 - T(0.43066295528485798) * t18 - T(0.59362791713657326) * t20;
-  const P u11 = T(-0.80044772017563703) * t0 - T(0.46456464835370337) * t2 - T(0.31049159295683837) * t4 - T(0.19515618744994986) * t6 - T(0.094721528538922961) * t8;
-  const P u12 = T(-0.35123682832287495) * t10 - T(0.46484375000000022) * t12 - T(0.36618880141431159) * t14 - T(0.18922142726223223) * t16 + T(0.10058119679362304) * t18 + T(0.69320806007344005) * t20;
-  const P u13 = T(0.5437971423529645) * t0 - T(0.3156095293238152) * t2 - T(0.53906250000000022) * t4 - T(0.48613591206575157) * t6 - T(0.2788526296496055) * t8;
-  const P u14 = T(-0.36182925552841927) * t10 - T(0.36618880141431137) * t12 + T(0.015624999999999932) * t14 + T(0.45851455342565201) * t16 + T(0.61371650557790136) * t18 - T(0.38452264694764732) * t20;
-  const P u15 = T(-0.24319347525427168) * t0 + T(0.70572436191476384) * t2 + T(0.017469281074217333) * t4 - T(0.49410588440130937) * t6 - T(0.44538102542935087) * t8;
-  const P u16 = T(-0.38377788032373811) * t10 - T(0.18922142726223223) * t12 + T(0.45851455342565178) * t14 + T(0.46289062499999994) * t16 - T(0.61149346306489161) * t18 + T(0.13594928558824104) * t20;
-  const P u17 = T(0.06594508990677396) * t0 - T(0.42100604954085896) * t2 + T(0.69255289805296671) * t4 - T(0.091108623356957935) * t6 - T(0.57486942301328314) * t8;
-  const P u18 = T(-0.43066295528485865) * t10 + T(0.10058119679362315) * t12 + T(0.61371650557790181) * t14 - T(0.61149346306489227) * t16 + T(0.23046875000000033) * t18 - T(0.026921970218926242) * t20;
-  const P u19 = T(-0.0087346405371086823) * t0 + T(0.096318968796390209) * t2 - T(0.36479021288140739) * t4 + T(0.68785502197047321) * t6 - T(0.62002413794998745) * t8;
-  const P u20 = T(-0.59362791713657348) * t10 + T(0.6932080600734396) * t12 - T(0.38452264694764754) * t14 + T(0.13594928558824115) * t16 - T(0.0269219702189262) * t18 + T(0.0019531250000000039) * t20;
+  const P t20 = madd<F>(cg10, x[20], -(sg10 * x[0]));
+  const P t0 = madd<F>(sg10, x[20], cg10 * x[0]);
+  const P u0 = madd<F>(T(0.0087346405371084949), t19, madd<F>(T(-0.065945089906773918), t17, madd<F>(T(0.24319347525427157), t15, madd<F>(T(-0.54379714235296484), t13, T(0.80044772017563737) * t11))));
+  const P u1 = madd<F>(T(-0.35797110294949086), t9, madd<F>(T(0.7295804257628149), t7, madd<F>(T(-0.54379714235296406), t5, madd<F>(T(0.2064407853394345), t3, T(-0.035156250000000028) * t1))));
+  const P u2 = madd<F>(T(-0.096318968796390209), t19, madd<F>(T(0.4210060495408588), t17, madd<F>(T(-0.7057243619147634), t15, madd<F>(T(0.31560952932381492), t13, T(0.46456464835370337) * t11))));
+  const P u3 = madd<F>(T(-0.42672987787577654), t9, madd<F>(T(0.35432938970151789), t7, madd<F>(T(0.5041938375082049), t5, madd<F>(T(-0.62890625000000033), t3, T(0.20644078533943463) * t1))));
+  const P u4 = madd<F>(T(0.36479021288140739), t19, madd<F>(T(-0.69255289805296671), t17, madd<F>(T(-0.017469281074217215), t15, madd<F>(T(0.53906250000000011), t13, T(0.31049159295683837) * t11))));
+  const P u5 = madd<F>(T(-0.46285353886245728), t9, madd<F>(T(-0.034938562148434202), t7, madd<F>(T(0.48437500000000017), t5, madd<F>(T(0.50419383750820512), t3, T(-0.54379714235296439) * t1))));
+  const P u6 = madd<F>(T(-0.68785502197047288), t19, madd<F>(T(0.091108623356957685), t17, madd<F>(T(0.49410588440130881), t15, madd<F>(T(0.48613591206575113), t13, T(0.19515618744994973) * t11))));
+  const P u7 = madd<F>(T(-0.48298692237730451), t9, madd<F>(T(-0.32812500000000033), t7, madd<F>(T(-0.034938562148434084), t5, madd<F>(T(0.35432938970151812), t3, T(0.72958042576281534) * t1))));
+  const P u8 = madd<F>(T(0.62002413794998801), t19, madd<F>(T(0.57486942301328359), t17, madd<F>(T(0.44538102542935099), t15, madd<F>(T(0.27885262964960555), t13, T(0.094721528538922919) * t11))));
+  const P u9 = madd<F>(T(-0.49218749999999989), t9, madd<F>(T(-0.48298692237730417), t7, madd<F>(T(-0.46285353886245684), t5, madd<F>(T(-0.42672987787577632), t3, T(-0.35797110294949092) * t1))));
+  const P u10 = madd<F>(T(-0.59362791713657326), t20, madd<F>(T(-0.43066295528485798), t18, madd<F>(T(-0.38377788032373777), t16, madd<F>(T(-0.36182925552841899), t14, madd<F>(T(-0.35123682832287456), t12, T(-0.24609375) * t10)))));
+  const P u11 = madd<F>(T(-0.094721528538922961), t8, madd<F>(T(-0.19515618744994986), t6, madd<F>(T(-0.31049159295683837), t4, madd<F>(T(-0.46456464835370337), t2, T(-0.80044772017563703) * t0))));
+  const P u12 = madd<F>(T(0.69320806007344005), t20, madd<F>(T(0.10058119679362304), t18, madd<F>(T(-0.18922142726223223), t16, madd<F>(T(-0.36618880141431159), t14, madd<F>(T(-0.46484375000000022), t12, T(-0.35123682832287495) * t10)))));
+  const P u13 = madd<F>(T(-0.2788526296496055), t8, madd<F>(T(-0.48613591206575157), t6, madd<F>(T(-0.53906250000000022), t4, madd<F>(T(-0.3156095293238152), t2, T(0.5437971423529645) * t0))));
+  const P u14 = madd<F>(T(-0.38452264694764732), t20, madd<F>(T(0.61371650557790136), t18, madd<F>(T(0.45851455342565201), t16, madd<F>(T(0.015624999999999932), t14, madd<F>(T(-0.36618880141431137), t12, T(-0.36182925552841927) * t10)))));
+  const P u15 = madd<F>(T(-0.44538102542935087), t8, madd<F>(T(-0.49410588440130937), t6, madd<F>(T(0.017469281074217333), t4, madd<F>(T(0.70572436191476384), t2, T(-0.24319347525427168) * t0))));
+  const P u16 = madd<F>(T(0.13594928558824104), t20, madd<F>(T(-0.61149346306489161), t18, madd<F>(T(0.46289062499999994), t16, madd<F>(T(0.45851455342565178), t14, madd<F>(T(-0.18922142726223223), t12, T(-0.38377788032373811) * t10)))));
+  const P u17 = madd<F>(T(-0.57486942301328314), t8, madd<F>(T(-0.091108623356957935), t6, madd<F>(T(0.69255289805296671), t4, madd<F>(T(-0.42100604954085896), t2, T(0.06594508990677396) * t0))));
+  const P u18 = madd<F>(T(-0.026921970218926242), t20, madd<F>(T(0.23046875000000033), t18, madd<F>(T(-0.61149346306489227), t16, madd<F>(T(0.61371650557790181), t14, madd<F>(T(0.10058119679362315), t12, T(-0.43066295528485865) * t10)))));
+  const P u19 = madd<F>(T(-0.62002413794998745), t8, madd<F>(T(0.68785502197047321), t6, madd<F>(T(-0.36479021288140739), t4, madd<F>(T(0.096318968796390209), t2, T(-0.0087346405371086823) * t0))));
+  const P u20 = madd<F>(T(0.0019531250000000039), t20, madd<F>(T(-0.0269219702189262), t18, madd<F>(T(0.13594928558824115), t16, madd<F>(T(-0.38452264694764754), t14, madd<F>(T(0.6932080600734396), t12, T(-0.59362791713657348) * t10)))));
   const P w10 = u10;
   const P cb1 = splat<P>(s.cb[1]), sb1 = splat<P>(s.sb[1]);
-  const P w11 = cb1 * u11 - sb1 * u9;
-  const P w9 = sb1 * u11 + cb1 * u9;
+  const P w11 = madd<F>(cb1, u11, -(sb1 * u9));
+  const P w9 = madd<F>(sb1, u11, cb1 * u9);
   const P cb2 = splat<P>(s.cb[2]), sb2 = splat<P>(s.sb[2]);
-  const P w12 = cb2 * u12 - sb2 * u8;
-  const P w8 = sb2 * u12 + cb2 * u8;
+  const P w12 = madd<F>(cb2, u12, -(sb2 * u8));
+  const P w8 = madd<F>(sb2, u12, cb2 * u8);
   const P cb3 = splat<P>(s.cb[3]), sb3 = splat<P>(s.sb[3]);
-  const P w13 = cb3 * u13 - sb3 * u7;
-  const P w7 = sb3 * u13 + cb3 * u7;
+  const P w13 = madd<F>(cb3, u13, -(sb3 * u7));
+  const P w7 = madd<F>(sb3, u13, cb3 * u7);
   const P cb4 = splat<P>(s.cb[4]), sb4 = splat<P>(s.sb[4]);
-  const P w14 = cb4 * u14 - sb4 * u6;
-  const P w6 = sb4 * u14 + cb4 * u6;
+  const P w14 = madd<F>(cb4, u14, -(sb4 * u6));
+  const P w6 = madd<F>(sb4, u14, cb4 * u6);
   const P cb5 = splat<P>(s.cb[5]), sb5 = splat<P>(s.sb[5]);
-  const P w15 = cb5 * u15 - sb5 * u5;
-  const P w5 = sb5 * u15 + cb5 * u5;
+  const P w15 = madd<F>(cb5, u15, -(sb5 * u5));
+  const P w5 = madd<F>(sb5, u15, cb5 * u5);
   const P cb6 = splat<P>(s.cb[6]), sb6 = splat<P>(s.sb[6]);
-  const P w16 = cb6 * u16 - sb6 * u4;
-  const P w4 = sb6 * u16 + cb6 * u4;
+  const P w16 = madd<F>(cb6, u16, -(sb6 * u4));
+  const P w4 = madd<F>(sb6, u16, cb6 * u4);
   const P cb7 = splat<P>(s.cb[7]), sb7 = splat<P>(s.sb[7]);
-  const P w17 = cb7 * u17 - sb7 * u3;
-  const P w3 = sb7 * u17 + cb7 * u3;
+  const P w17 = madd<F>(cb7, u17, -(sb7 * u3));
+  const P w3 = madd<F>(sb7, u17, cb7 * u3);
   const P cb8 = splat<P>(s.cb[8]), sb8 = splat<P>(s.sb[8]);
-  const P w18 = cb8 * u18 - sb8 * u2;
-  const P w2 = sb8 * u18 + cb8 * u2;
+  const P w18 = madd<F>(cb8, u18, -(sb8 * u2));
+  const P w2 = madd<F>(sb8, u18, cb8 * u2);
   const P cb9 = splat<P>(s.cb[9]), sb9 = splat<P>(s.sb[9]);
-  const P w19 = cb9 * u19 - sb9 * u1;
-  const P w1 = sb9 * u19 + cb9 * u1;
+  const P w19 = madd<F>(cb9, u19, -(sb9 * u1));
+  const P w1 = madd<F>(sb9, u19, cb9 * u1);
   const P cb10 = splat<P>(s.cb[10]), sb10 = splat<P>(s.sb[10]);
-  const P w20 = cb10 * u20 - sb10 * u0;
-  const P w0 = sb10 * u20 + cb10 * u0;
-  const P v0 = T(-0.80044772017563703) * w11 + T(0.5437971423529645) * w13 - T(0.24319347525427168) * w15 + T(0.06594508990677396) * w17 - T(0.0087346405371086823) * w19;
-  const P v1 = T(-0.035156250000000028) * w1 + T(0.20644078533943463) * w3 - T(0.54379714235296439) * w5 + T(0.72958042576281534) * w7 - T(0.35797110294949092) * w9;
-  const P v2 = T(-0.46456464835370337) * w11 - T(0.3156095293238152) * w13 + T(0.70572436191476384) * w15 - T(0.42100604954085896) * w17 + T(0.096318968796390209) * w19;
-  const P v3 = T(0.2064407853394345) * w1 - T(0.62890625000000033) * w3 + T(0.50419383750820512) * w5 + T(0.35432938970151812) * w7 - T(0.42672987787577632) * w9;
-  const P v4 = T(-0.31049159295683837) * w11 - T(0.53906250000000022) * w13 + T(0.017469281074217333) * w15 + T(0.69255289805296671) * w17 - T(0.36479021288140739) * w19;
-  const P v5 = T(-0.54379714235296406) * w1 + T(0.5041938375082049) * w3 + T(0.48437500000000017) * w5 - T(0.034938562148434084) * w7 - T(0.46285353886245684) * w9;
-  const P v6 = T(-0.19515618744994986) * w11 - T(0.48613591206575157) * w13 - T(0.49410588440130937) * w15 - T(0.091108623356957935) * w17 + T(0.68785502197047321) * w19;
-  const P v7 = T(0.7295804257628149) * w1 + T(0.35432938970151789) * w3 - T(0.034938562148434202) * w5 - T(0.32812500000000033) * w7 - T(0.48298692237730417) * w9;
-  const P v8 = T(-0.094721528538922961) * w11 - T(0.2788526296496055) * w13 - T(0.44538102542935087) * w15 - T(0.57486942301328314) * w17 - T(0.62002413794998745) * w19;
-  const P v9 = T(-0.35797110294949086) * w1 - T(0.42672987787577654) * w3 - T(0.46285353886245728) * w5 - T(0.48298692237730451) * w7 - T(0.49218749999999989) * w9;
-  const P v10 = T(-0.24609375) * w10 - T(0.35123682832287495) * w12 - T(0.36182925552841927) * w14 - T(0.38377788032373811) * w16 - T(0.43066295528485865) * w18 - T(0.59362791713657348) * w20;
-  const P v11 = T(0.80044772017563737) * w0 + T(0.46456464835370337) * w2 + T(0.31049159295683837) * w4 + T(0.19515618744994973) * w6 + T(0.094721528538922919) * w8;
-  const P v12 = T(-0.35123682832287456) * w10 - T(0.46484375000000022) * w12 - T(0.36618880141431137) * w14 - T(0.18922142726223223) * w16 + T(0.10058119679362315) * w18 + T(0.6932080600734396) * w20;
-  const P v13 = T(-0.54379714235296484) * w0 + T(0.31560952932381492) * w2 + T(0.53906250000000011) * w4 + T(0.48613591206575113) * w6 + T(0.27885262964960555) * w8;
-  const P v14 = T(-0.36182925552841899) * w10 - T(0.36618880141431159) * w12 + T(0.015624999999999932) * w14 + T(0.45851455342565178) * w16 + T(0.61371650557790181) * w18 - T(0.38452264694764754) * w20;
-  const P v15 = T(0.24319347525427157) * w0 - T(0.7057243619147634) * w2 - T(0.017469281074217215) * w4 + T(0.49410588440130881) * w6 + T(0.44538102542935099) * w8;
-  const P v16 = T(-0.38377788032373777) * w10 - T(0.18922142726223223) * w12 + T(0.45851455342565201) * w14 + T(0.46289062499999994) * w16 - T(0.61149346306489227) * w18 + T(0.13594928558824115) * w20;
-  const P v17 = T(-0.065945089906773918) * w0 + T(0.4210060495408588) * w2 - T(0.69255289805296671) * w4 + T(0.091108623356957685) * w6 + T(0.57486942301328359) * w8;
-  const P v18 = T(-0.43066295528485798) * w10 + T(0.10058119679362304) * w12 + T(0.61371650557790136) * w14 - T(0.61149346306489161) * w16 + T(0.23046875000000033) * w18 - T(0.0269219702189262) * w20;
-  const P v19 = T(0.0087346405371084949) * w0 - T(0.096318968796390209) * w2 + T(0.36479021288140739) * w4 - T(0.68785502197047288) * w6 + T(0.62002413794998801) * w8;
-  const P v20 = T(-0.59362791713657326) * w10 + T(0.69320806007344005) * w12 - T(0.38452264694764732) * w14 + T(0.13594928558824104) * w16 - T(0.026921970218926242) * w18 + T(0.0019531250000000039) * w20;
+  const P w20 = madd<F>(cb10, u20, -(sb10 * u0));
+  const P w0 = madd<F>(sb10, u20, cb10 * u0);
+  const P v0 = madd<F>(T(-0.0087346405371086823), w19, madd<F>(T(0.06594508990677396), w17, madd<F>(T(-0.24319347525427168), w15, madd<F>(T(0.5437971423529645), w13, T(-0.80044772017563703) * w11))));
+  const P v1 = madd<F>(T(-0.35797110294949092), w9, madd<F>(T(0.72958042576281534), w7, madd<F>(T(-0.54379714235296439), w5, madd<F>(T(0.20644078533943463), w3, T(-0.035156250000000028) * w1))));
+  const P v2 = madd<F>(T(0.096318968796390209), w19, madd<F>(T(-0.42100604954085896), w17, madd<F>(T(0.70572436191476384), w15, madd<F>(T(-0.3156095293238152), w13, T(-0.46456464835370337) * w11))));
+  const P v3 = madd<F>(T(-0.42672987787577632), w9, madd<F>(T(0.35432938970151812), w7, madd<F>(T(0.50419383750820512), w5, madd<F>(T(-0.62890625000000033), w3, T(0.2064407853394345) * w1))));
+  const P v4 = madd<F>(T(-0.36479021288140739), w19, madd<F>(T(0.69255289805296671), w17, madd<F>(T(0.017469281074217333), w15, madd<F>(T(-0.53906250000000022), w13, T(-0.31049159295683837) * w11))));
+  const P v5 = madd<F>(T(-0.46285353886245684), w9, madd<F>(T(-0.034938562148434084), w7, madd<F>(T(0.48437500000000017), w5, madd<F>(T(0.5041938375082049), w3, T(-0.54379714235296406) * w1))));
+  const P v6 = madd<F>(T(0.68785502197047321), w19, madd<F>(T(-0.091108623356957935), w17, madd<F>(T(-0.49410588440130937), w15, madd<F>(T(-0.48613591206575157), w13, T(-0.19515618744994986) * w11))));
+  const P v7 = madd<F>(T(-0.48298692237730417), w9, madd<F>(T(-0.32812500000000033), w7, madd<F>(T(-0.034938562148434202), w5, madd<F>(T(0.35432938970151789), w3, T(0.7295804257628149) * w1))));
+  const P v8 = madd<F>(T(-0.62002413794998745), w19, madd<F>(T(-0.57486942301328314), w17, madd<F>(T(-0.44538102542935087), w15, madd<F>(T(-0.2788526296496055), w13, T(-0.094721528538922961) * w11))));
+  const P v9 = madd<F>(T(-0.49218749999999989), w9, madd<F>(T(-0.48298692237730451), w7, madd<F>(T(-0.46285353886245728), w5, madd<F>(T(-0.42672987787577654), w3, T(-0.35797110294949086) * w1))));
+  const P v10 = madd<F>(T(-0.59362791713657348), w20, madd<F>(T(-0.43066295528485865), w18, madd<F>(T(-0.38377788032373811), w16, madd<F>(T(-0.36182925552841927), w14, madd<F>(T(-0.35123682832287495), w12, T(-0.24609375) * w10)))));
+  const P v11 = madd<F>(T(0.094721528538922919), w8, madd<F>(T(0.19515618744994973), w6, madd<F>(T(0.31049159295683837), w4, madd<F>(T(0.46456464835370337), w2, T(0.80044772017563737) * w0))));
+  const P v12 = madd<F>(T(0.6932080600734396), w20, madd<F>(T(0.10058119679362315), w18, madd<F>(T(-0.18922142726223223), w16, madd<F>(T(-0.36618880141431137), w14, madd<F>(T(-0.46484375000000022), w12, T(-0.35123682832287456) * w10)))));
+  const P v13 = madd<F>(T(0.27885262964960555), w8, madd<F>(T(0.48613591206575113), w6, madd<F>(T(0.53906250000000011), w4, madd<F>(T(0.31560952932381492), w2, T(-0.54379714235296484) * w0))));
+  const P v14 = madd<F>(T(-0.38452264694764754), w20, madd<F>(T(0.61371650557790181), w18, madd<F>(T(0.45851455342565178), w16, madd<F>(T(0.015624999999999932), w14, madd<F>(T(-0.36618880141431159), w12, T(-0.36182925552841899) * w10)))));
+  const P v15 = madd<F>(T(0.44538102542935099), w8, madd<F>(T(0.49410588440130881), w6, madd<F>(T(-0.017469281074217215), w4, madd<F>(T(-0.7057243619147634), w2, T(0.24319347525427157) * w0))));
+  const P v16 = madd<F>(T(0.13594928558824115), w20, madd<F>(T(-0.61149346306489227), w18, madd<F>(T(0.46289062499999994), w16, madd<F>(T(0.45851455342565201), w14, madd<F>(T(-0.18922142726223223), w12, T(-0.38377788032373777) * w10)))));
+  const P v17 = madd<F>(T(0.57486942301328359), w8, madd<F>(T(0.091108623356957685), w6, madd<F>(T(-0.69255289805296671), w4, madd<F>(T(0.4210060495408588), w2, T(-0.065945089906773918) * w0))));
+  const P v18 = madd<F>(T(-0.0269219702189262), w20, madd<F>(T(0.23046875000000033), w18, madd<F>(T(-0.61149346306489161), w16, madd<F>(T(0.61371650557790136), w14, madd<F>(T(0.10058119679362304), w12, T(-0.43066295528485798) * w10)))));
+  const P v19 = madd<F>(T(0.62002413794998801), w8, madd<F>(T(-0.68785502197047288), w6, madd<F>(T(0.36479021288140739), w4, madd<F>(T(-0.096318968796390209), w2, T(0.0087346405371084949) * w0))));
+  const P v20 = madd<F>(T(0.0019531250000000039), w20, madd<F>(T(-0.026921970218926242), w18, madd<F>(T(0.13594928558824104), w16, madd<F>(T(-0.38452264694764732), w14, madd<F>(T(0.69320806007344005), w12, T(-0.59362791713657326) * w10)))));
   y[10] = v10;
   const P ca1 = splat<P>(s.ca[1]), sa1 = splat<P>(s.sa[1]);
-  y[11] = ca1 * v11 - sa1 * v9;
-  y[9] = sa1 * v11 + ca1 * v9;
+  y[11] = madd<F>(ca1, v11, -(sa1 * v9));
+  y[9] = madd<F>(sa1, v11, ca1 * v9);
   const P ca2 = splat<P>(s.ca[2]), sa2 = splat<P>(s.sa[2]);
-  y[12] = ca2 * v12 - sa2 * v8;
-  y[8] = sa2 * v12 + ca2 * v8;
+  y[12] = madd<F>(ca2, v12, -(sa2 * v8));
+  y[8] = madd<F>(sa2, v12, ca2 * v8);
   const P ca3 = splat<P>(s.ca[3]), sa3 = splat<P>(s.sa[3]);
-  y[13] = ca3 * v13 - sa3 * v7;
-  y[7] = sa3 * v13 + ca3 * v7;
+  y[13] = madd<F>(ca3, v13, -(sa3 * v7));
+  y[7] = madd<F>(sa3, v13, ca3 * v7);
   const P ca4 = splat<P>(s.ca[4]), sa4 = splat<P>(s.sa[4]);
-  y[14] = ca4 * v14 - sa4 * v6;
-  y[6] = sa4 * v14 + ca4 * v6;
+  y[14] = madd<F>(ca4, v14, -(sa4 * v6));
+  y[6] = madd<F>(sa4, v14, ca4 * v6);
   const P ca5 = splat<P>(s.ca[5]), sa5 = splat<P>(s.sa[5]);
-  y[15] = ca5 * v15 - sa5 * v5;
-  y[5] = sa5 * v15 + ca5 * v5;
+  y[15] = madd<F>(ca5, v15, -(sa5 * v5));
+  y[5] = madd<F>(sa5, v15, ca5 * v5);
   const P ca6 = splat<P>(s.ca[6]), sa6 = splat<P>(s.sa[6]);
-  y[16] = ca6 * v16 - sa6 * v4;
-  y[4] = sa6 * v16 + ca6 * v4;
+  y[16] = madd<F>(ca6, v16, -(sa6 * v4));
+  y[4] = madd<F>(sa6, v16, ca6 * v4);
   const P ca7 = splat<P>(s.ca[7]), sa7 = splat<P>(s.sa[7]);
-  y[17] = ca7 * v17 - sa7 * v3;
-  y[3] = sa7 * v17 + ca7 * v3;
+  y[17] = madd<F>(ca7, v17, -(sa7 * v3));
+  y[3] = madd<F>(sa7, v17, ca7 * v3);
   const P ca8 = splat<P>(s.ca[8]), sa8 = splat<P>(s.sa[8]);
-  y[18] = ca8 * v18 - sa8 * v2;
-  y[2] = sa8 * v18 + ca8 * v2;
+  y[18] = madd<F>(ca8, v18, -(sa8 * v2));
+  y[2] = madd<F>(sa8, v18, ca8 * v2);
   const P ca9 = splat<P>(s.ca[9]), sa9 = splat<P>(s.sa[9]);
-  y[19] = ca9 * v19 - sa9 * v1;
-  y[1] = sa9 * v19 + ca9 * v1;
+  y[19] = madd<F>(ca9, v19, -(sa9 * v1));
+  y[1] = madd<F>(sa9, v19, ca9 * v1);
   const P ca10 = splat<P>(s.ca[10]), sa10 = splat<P>(s.sa[10]);
-  y[20] = ca10 * v20 - sa10 * v0;
-  y[0] = sa10 * v20 + ca10 * v0;
+  y[20] = madd<F>(ca10, v20, -(sa10 * v0));
+  y[0] = madd<F>(sa10, v20, ca10 * v0);
 }
 
 // Band 11 of Z(a) X90^T Z(b) X90 Z(g), Ry(b) = Rx(-90) Rz(b) Rx(+90).
-template <class T, class P, class S>
-inline void zxzxz_band11(const S& s, const P* __restrict x, P* __restrict y) {
+template <bool F, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void zxzxz_band11(const S& s, const P* __restrict x, P* __restrict y) {
   const P t11 = x[11];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
-  const P t12 = cg1 * x[12] - sg1 * x[10];
-  const P t10 = sg1 * x[12] + cg1 * x[10];
+  const P t12 = madd<F>(cg1, x[12], -(sg1 * x[10]));
+  const P t10 = madd<F>(sg1, x[12], cg1 * x[10]);
   const P cg2 = splat<P>(s.cg[2]), sg2 = splat<P>(s.sg[2]);
-  const P t13 = cg2 * x[13] - sg2 * x[9];
-  const P t9 = sg2 * x[13] + cg2 * x[9];
+  const P t13 = madd<F>(cg2, x[13], -(sg2 * x[9]));
+  const P t9 = madd<F>(sg2, x[13], cg2 * x[9]);
   const P cg3 = splat<P>(s.cg[3]), sg3 = splat<P>(s.sg[3]);
-  const P t14 = cg3 * x[14] - sg3 * x[8];
-  const P t8 = sg3 * x[14] + cg3 * x[8];
+  const P t14 = madd<F>(cg3, x[14], -(sg3 * x[8]));
+  const P t8 = madd<F>(sg3, x[14], cg3 * x[8]);
   const P cg4 = splat<P>(s.cg[4]), sg4 = splat<P>(s.sg[4]);
-  const P t15 = cg4 * x[15] - sg4 * x[7];
-  const P t7 = sg4 * x[15] + cg4 * x[7];
+  const P t15 = madd<F>(cg4, x[15], -(sg4 * x[7]));
+  const P t7 = madd<F>(sg4, x[15], cg4 * x[7]);
   const P cg5 = splat<P>(s.cg[5]), sg5 = splat<P>(s.sg[5]);
-  const P t16 = cg5 * x[16] - sg5 * x[6];
-  const P t6 = sg5 * x[16] + cg5 * x[6];
+  const P t16 = madd<F>(cg5, x[16], -(sg5 * x[6]));
+  const P t6 = madd<F>(sg5, x[16], cg5 * x[6]);
   const P cg6 = splat<P>(s.cg[6]), sg6 = splat<P>(s.sg[6]);
-  const P t17 = cg6 * x[17] - sg6 * x[5];
-  const P t5 = sg6 * x[17] + cg6 * x[5];
+  const P t17 = madd<F>(cg6, x[17], -(sg6 * x[5]));
+  const P t5 = madd<F>(sg6, x[17], cg6 * x[5]);
   const P cg7 = splat<P>(s.cg[7]), sg7 = splat<P>(s.sg[7]);
-  const P t18 = cg7 * x[18] - sg7 * x[4];
-  const P t4 = sg7 * x[18] + cg7 * x[4];
+  const P t18 = madd<F>(cg7, x[18], -(sg7 * x[4]));
+  const P t4 = madd<F>(sg7, x[18], cg7 * x[4]);
   const P cg8 = splat<P>(s.cg[8]), sg8 = splat<P>(s.sg[8]);
-  const P t19 = cg8 * x[19] - sg8 * x[3];
-  const P t3 = sg8 * x[19] + cg8 * x[3];
+  const P t19 = madd<F>(cg8, x[19], -(sg8 * x[3]));
+  const P t3 = madd<F>(sg8, x[19], cg8 * x[3]);
   const P cg9 = splat<P>(s.cg[9]), sg9 = splat<P>(s.sg[9]);
-  const P t20 = cg9 * x[20] - sg9 * x[2];
-  const P t2 = sg9 * x[20] + cg9 * x[2];
+  const P t20 = madd<F>(cg9, x[20], -(sg9 * x[2]));
+  const P t2 = madd<F>(sg9, x[20], cg9 * x[2]);
   const P cg10 = splat<P>(s.cg[10]), sg10 = splat<P>(s.sg[10]);
-  const P t21 = cg10 * x[21] - sg10 * x[1];
-  const P t1 = sg10 * x[21] + cg10 * x[1];
+  const P t21 = madd<F>(cg10, x[21], -(sg10 * x[1]));
+  const P t1 = madd<F>(sg10, x[21], cg10 * x[1]);
   const P cg11 = splat<P>(s.cg[11]), sg11 = splat<P>(s.sg[11]);
-  const P t22 = cg11 * x[22] - sg11 * x[0];
-  const P t0 = sg11 * x[22] + cg11 * x[0];
-  const P u0 = T(-0.57997947393467919) * t11 + T(0.68875008418641759) * t13 - T(0.40329075444050017) * t15 + T(0.15847416019099836) * t17 - T(0.038323079824899506) * t19 + T(0.0045804841404524692) * t21;
-  const P u1 = T(-0.019531250000000097) * t1 + T(0.13072812914594928) * t3 - T(0.40544165371889512) * t5 + T(0.68785502197047332) * t7 - T(0.58736804535412479) * t9;
-  const P u2 = T(-0.41975832570891719) * t11 + T(0.13594928558824129) * t13 + T(0.55722625443603491) * t15 - T(0.63603688806045922) * t17 + T(0.29501240332439316) * t19 - T(0.056959635044600318) * t21;
-  const P u3 = T(0.13072812914594928) * t1 - T(0.50000000000000011) * t3 + T(0.64612728525422924) * t5 - T(0.56163127361285714) * t9;
-  const P u4 = T(-0.37296505974556898) * t11 - T(0.13689999147558643) * t13 + T(0.49510851970963154) * t15 + T(0.32425698663835917) * t17 - T(0.65553753643092194) * t19 + T(0.24930093301108069) * t21;
-  const P u5 = T(-0.40544165371889546) * t1 + T(0.6461272852542298) * t3 + T(0.18359375000000033) * t5 - T(0.41751216299648108) * t7 - T(0.45838141911581165) * t9;
-  const P u6 = T(-0.35033967020804896) * t11 - T(0.31014124452051589) * t13 + T(0.13435455876499861) * t15 + T(0.52272828294256857) * t17 + T(0.4078478567647234) * t19 - T(0.56871666443773206) * t21;
-  const P u7 = T(0.68785502197047288) * t1 - T(0.41751216299648042) * t5 - T(0.49999999999999967) * t7 - T(0.32021721143623721) * t9;
-  const P u8 = T(-0.33846027667470674) * t11 - T(0.41655170126194313) * t13 - T(0.23534953642800127) * t15 + T(0.047641839522072321) * t17 + T(0.39401846316690126) * t19 + T(0.70641320967457533) * t21;
-  const P u9 = T(-0.58736804535412523) * t1 - T(0.56163127361285781) * t3 - T(0.45838141911581159) * t5 - T(0.3202172114362376) * t7 - T(0.16406250000000006) * t9;
-  const P u10 = T(-0.33321251269014684) * t11 - T(0.46765007670081832) * t13 - T(0.45637974396671571) * t15 - T(0.4355293578315968) * t17 - T(0.40022386008781874) * t19 - T(0.33485130540064456) * t21;
-  const P u11 = T(0.57997947393467864) * t0 + T(0.4197583257089168) * t2 + T(0.37296505974556859) * t4 + T(0.35033967020804857) * t6 + T(0.3384602766747063) * t8 + T(0.33321251269014673) * t10;
-  const P u12 = T(-0.041015624999999931) * t12 - T(0.12498474027950124) * t14 - T(0.21561916177558216) * t16 - T(0.32136177701094587) * t18 - T(0.46501810346249073) * t20 - T(0.78529592002431536) * t22;
-  const P u13 = T(-0.68875008418641759) * t0 - T(0.13594928558824121) * t2 + T(0.13689999147558637) * t4 + T(0.31014124452051595) * t6 + T(0.41655170126194307) * t8 + T(0.46765007670081876) * t10;
-  const P u14 = T(-0.1249847402795012) * t12 - T(0.34960937500000022) * t14 - T(0.49531072862952202) * t16 - T(0.49716719187292024) * t18 - T(0.25433782432394142) * t20 + T(0.55222860860084655) * t22;
-  const P u15 = T(0.40329075444049967) * t0 - T(0.5572262544360348) * t2 - T(0.49510851970963154) * t4 - T(0.13435455876499877) * t6 + T(0.23534953642800113) * t8 + T(0.45637974396671588) * t10;
-  const P u16 = T(-0.2156191617755821) * t12 - T(0.49531072862952186) * t14 - T(0.38574218749999989) * t16 + T(0.14035007305082228) * t18 + T(0.68448811471566984) * t20 - T(0.26675176057529509) * t22;
-  const P u17 = T(-0.15847416019099836) * t0 + T(0.63603688806045944) * t2 - T(0.32425698663835933) * t4 - T(0.52272828294256879) * t6 - T(0.047641839522072238) * t8 + T(0.43552935783159724) * t10;
-  const P u18 = T(-0.32136177701094576) * t12 - T(0.49716719187291991) * t14 + T(0.14035007305082195) * t16 + T(0.62792968750000022) * t18 - T(0.47810190182411128) * t20 + T(0.083523216080989809) * t22;
-  const P u19 = T(0.038323079824899596) * t0 - T(0.29501240332439349) * t2 + T(0.6555375364309225) * t4 - T(0.40784785676472357) * t6 - T(0.3940184631669012) * t8 + T(0.40022386008781902) * t10;
-  const P u20 = T(-0.46501810346249089) * t12 - T(0.25433782432394114) * t14 + T(0.68448811471566995) * t16 - T(0.47810190182411166) * t18 + T(0.14746093750000011) * t20 - T(0.014842464993721403) * t22;
-  const P u21 = T(-0.0045804841404526531) * t0 + T(0.056959635044600256) * t2 - T(0.24930093301108056) * t4 + T(0.56871666443773172) * t6 - T(0.70641320967457466) * t8 + T(0.33485130540064439) * t10;
-  const P u22 = T(-0.78529592002431525) * t12 + T(0.55222860860084644) * t14 - T(0.26675176057529498) * t16 + T(0.083523216080989851) * t18 - T(0.014842464993721346) * t20 + T(0.00097656249999999718) * t22;
+  const P t22 = madd<F>(cg11, x[22], -(sg11 * x[0]));
+  const P t0 = madd<F>(sg11, x[22], cg11 * x[0]);
+  const P u0 = madd<F>(T(0.0045804841404524692), t21, madd<F>(T(-0.038323079824899506), t19, madd<F>(T(0.15847416019099836), t17, madd<F>(T(-0.40329075444050017), t15, madd<F>(T(0.68875008418641759), t13, T(-0.57997947393467919) * t11)))));
+  const P u1 = madd<F>(T(-0.58736804535412479), t9, madd<F>(T(0.68785502197047332), t7, madd<F>(T(-0.40544165371889512), t5, madd<F>(T(0.13072812914594928), t3, T(-0.019531250000000097) * t1))));
+  const P u2 = madd<F>(T(-0.056959635044600318), t21, madd<F>(T(0.29501240332439316), t19, madd<F>(T(-0.63603688806045922), t17, madd<F>(T(0.55722625443603491), t15, madd<F>(T(0.13594928558824129), t13, T(-0.41975832570891719) * t11)))));
+  const P u3 = madd<F>(T(-0.56163127361285714), t9, madd<F>(T(0.64612728525422924), t5, madd<F>(T(-0.50000000000000011), t3, T(0.13072812914594928) * t1)));
+  const P u4 = madd<F>(T(0.24930093301108069), t21, madd<F>(T(-0.65553753643092194), t19, madd<F>(T(0.32425698663835917), t17, madd<F>(T(0.49510851970963154), t15, madd<F>(T(-0.13689999147558643), t13, T(-0.37296505974556898) * t11)))));
+  const P u5 = madd<F>(T(-0.45838141911581165), t9, madd<F>(T(-0.41751216299648108), t7, madd<F>(T(0.18359375000000033), t5, madd<F>(T(0.6461272852542298), t3, T(-0.40544165371889546) * t1))));
+  const P u6 = madd<F>(T(-0.56871666443773206), t21, madd<F>(T(0.4078478567647234), t19, madd<F>(T(0.52272828294256857), t17, madd<F>(T(0.13435455876499861), t15, madd<F>(T(-0.31014124452051589), t13, T(-0.35033967020804896) * t11)))));
+  const P u7 = madd<F>(T(-0.32021721143623721), t9, madd<F>(T(-0.49999999999999967), t7, madd<F>(T(-0.41751216299648042), t5, T(0.68785502197047288) * t1)));
+  const P u8 = madd<F>(T(0.70641320967457533), t21, madd<F>(T(0.39401846316690126), t19, madd<F>(T(0.047641839522072321), t17, madd<F>(T(-0.23534953642800127), t15, madd<F>(T(-0.41655170126194313), t13, T(-0.33846027667470674) * t11)))));
+  const P u9 = madd<F>(T(-0.16406250000000006), t9, madd<F>(T(-0.3202172114362376), t7, madd<F>(T(-0.45838141911581159), t5, madd<F>(T(-0.56163127361285781), t3, T(-0.58736804535412523) * t1))));
+  const P u10 = madd<F>(T(-0.33485130540064456), t21, madd<F>(T(-0.40022386008781874), t19, madd<F>(T(-0.4355293578315968), t17, madd<F>(T(-0.45637974396671571), t15, madd<F>(T(-0.46765007670081832), t13, T(-0.33321251269014684) * t11)))));
+  const P u11 = madd<F>(T(0.33321251269014673), t10, madd<F>(T(0.3384602766747063), t8, madd<F>(T(0.35033967020804857), t6, madd<F>(T(0.37296505974556859), t4, madd<F>(T(0.4197583257089168), t2, T(0.57997947393467864) * t0)))));
+  const P u12 = madd<F>(T(-0.78529592002431536), t22, madd<F>(T(-0.46501810346249073), t20, madd<F>(T(-0.32136177701094587), t18, madd<F>(T(-0.21561916177558216), t16, madd<F>(T(-0.12498474027950124), t14, T(-0.041015624999999931) * t12)))));
+  const P u13 = madd<F>(T(0.46765007670081876), t10, madd<F>(T(0.41655170126194307), t8, madd<F>(T(0.31014124452051595), t6, madd<F>(T(0.13689999147558637), t4, madd<F>(T(-0.13594928558824121), t2, T(-0.68875008418641759) * t0)))));
+  const P u14 = madd<F>(T(0.55222860860084655), t22, madd<F>(T(-0.25433782432394142), t20, madd<F>(T(-0.49716719187292024), t18, madd<F>(T(-0.49531072862952202), t16, madd<F>(T(-0.34960937500000022), t14, T(-0.1249847402795012) * t12)))));
+  const P u15 = madd<F>(T(0.45637974396671588), t10, madd<F>(T(0.23534953642800113), t8, madd<F>(T(-0.13435455876499877), t6, madd<F>(T(-0.49510851970963154), t4, madd<F>(T(-0.5572262544360348), t2, T(0.40329075444049967) * t0)))));
+  const P u16 = madd<F>(T(-0.26675176057529509), t22, madd<F>(T(0.68448811471566984), t20, madd<F>(T(0.14035007305082228), t18, madd<F>(T(-0.38574218749999989), t16, madd<F>(T(-0.49531072862952186), t14, T(-0.2156191617755821) * t12)))));
+  const P u17 = madd<F>(T(0.43552935783159724), t10, madd<F>(T(-0.047641839522072238), t8, madd<F>(T(-0.52272828294256879), t6, madd<F>(T(-0.32425698663835933), t4, madd<F>(T(0.63603688806045944), t2, T(-0.15847416019099836) * t0)))));
+  const P u18 = madd<F>(T(0.083523216080989809), t22, madd<F>(T(-0.47810190182411128), t20, madd<F>(T(0.62792968750000022), t18, madd<F>(T(0.14035007305082195), t16, madd<F>(T(-0.49716719187291991), t14, T(-0.32136177701094576) * t12)))));
+  const P u19 = madd<F>(T(0.40022386008781902), t10, madd<F>(T(-0.3940184631669012), t8, madd<F>(T(-0.40784785676472357), t6, madd<F>(T(0.6555375364309225), t4, madd<F>(T(-0.29501240332439349), t2, T(0.038323079824899596) * t0)))));
+  const P u20 = madd<F>(T(-0.014842464993721403), t22, madd<F>(T(0.14746093750000011), t20, madd<F>(T(-0.47810190182411166), t18, madd<F>(T(0.68448811471566995), t16, madd<F>(T(-0.25433782432394114), t14, T(-0.46501810346249089) * t12)))));
+  const P u21 = madd<F>(T(0.33485130540064439), t10, madd<F>(T(-0.70641320967457466), t8, madd<F>(T(0.56871666443773172), t6, madd<F>(T(-0.24930093301108056), t4, madd<F>(T(0.056959635044600256), t2, T(-0.0045804841404526531) * t0)))));
+  const P u22 = madd<F>(T(0.00097656249999999718), t22, madd<F>(T(-0.014842464993721346), t20, madd<F>(T(0.083523216080989851), t18, madd<F>(T(-0.26675176057529498), t16, madd<F>(T(0.55222860860084644), t14, T(-0.78529592002431525) * t12)))));
   const P w11 = u11;
   const P cb1 = splat<P>(s.cb[1]), sb1 = splat<P>(s.sb[1]);
-  const P w12 = cb1 * u12 - sb1 * u10;
-  const P w10 = sb1 * u12 + cb1 * u10;
+  const P w12 = madd<F>(cb1, u12, -(sb1 * u10));
+  const P w10 = madd<F>(sb1, u12, cb1 * u10);
   const P cb2 = splat<P>(s.cb[2]), sb2 = splat<P>(s.sb[2]);
-  const P w13 = cb2 * u13 - sb2 * u9;
-  const P w9 = sb2 * u13 + cb2 * u9;
+  const P w13 = madd<F>(cb2, u13, -(sb2 * u9));
+  const P w9 = madd<F>(sb2, u13, cb2 * u9);
   const P cb3 = splat<P>(s.cb[3]), sb3 = splat<P>(s.sb[3]);
-  const P w14 = cb3 * u14 - sb3 * u8;
-  const P w8 = sb3 * u14 + cb3 * u8;
+  const P w14 = madd<F>(cb3, u14, -(sb3 * u8));
+  const P w8 = madd<F>(sb3, u14, cb3 * u8);
   const P cb4 = splat<P>(s.cb[4]), sb4 = splat<P>(s.sb[4]);
-  const P w15 = cb4 * u15 - sb4 * u7;
-  const P w7 = sb4 * u15 + cb4 * u7;
+  const P w15 = madd<F>(cb4, u15, -(sb4 * u7));
+  const P w7 = madd<F>(sb4, u15, cb4 * u7);
   const P cb5 = splat<P>(s.cb[5]), sb5 = splat<P>(s.sb[5]);
-  const P w16 = cb5 * u16 - sb5 * u6;
-  const P w6 = sb5 * u16 + cb5 * u6;
+  const P w16 = madd<F>(cb5, u16, -(sb5 * u6));
+  const P w6 = madd<F>(sb5, u16, cb5 * u6);
   const P cb6 = splat<P>(s.cb[6]), sb6 = splat<P>(s.sb[6]);
-  const P w17 = cb6 * u17 - sb6 * u5;
-  const P w5 = sb6 * u17 + cb6 * u5;
+  const P w17 = madd<F>(cb6, u17, -(sb6 * u5));
+  const P w5 = madd<F>(sb6, u17, cb6 * u5);
   const P cb7 = splat<P>(s.cb[7]), sb7 = splat<P>(s.sb[7]);
-  const P w18 = cb7 * u18 - sb7 * u4;
-  const P w4 = sb7 * u18 + cb7 * u4;
+  const P w18 = madd<F>(cb7, u18, -(sb7 * u4));
+  const P w4 = madd<F>(sb7, u18, cb7 * u4);
   const P cb8 = splat<P>(s.cb[8]), sb8 = splat<P>(s.sb[8]);
-  const P w19 = cb8 * u19 - sb8 * u3;
-  const P w3 = sb8 * u19 + cb8 * u3;
+  const P w19 = madd<F>(cb8, u19, -(sb8 * u3));
+  const P w3 = madd<F>(sb8, u19, cb8 * u3);
   const P cb9 = splat<P>(s.cb[9]), sb9 = splat<P>(s.sb[9]);
-  const P w20 = cb9 * u20 - sb9 * u2;
-  const P w2 = sb9 * u20 + cb9 * u2;
+  const P w20 = madd<F>(cb9, u20, -(sb9 * u2));
+  const P w2 = madd<F>(sb9, u20, cb9 * u2);
   const P cb10 = splat<P>(s.cb[10]), sb10 = splat<P>(s.sb[10]);
-  const P w21 = cb10 * u21 - sb10 * u1;
-  const P w1 = sb10 * u21 + cb10 * u1;
+  const P w21 = madd<F>(cb10, u21, -(sb10 * u1));
+  const P w1 = madd<F>(sb10, u21, cb10 * u1);
   const P cb11 = splat<P>(s.cb[11]), sb11 = splat<P>(s.sb[11]);
-  const P w22 = cb11 * u22 - sb11 * u0;
-  const P w0 = sb11 * u22 + cb11 * u0;
-  const P v0 = T(0.57997947393467864) * w11 - T(0.68875008418641759) * w13 + T(0.40329075444049967) * w15 - T(0.15847416019099836) * w17 + T(0.038323079824899596) * w19 - T(0.0045804841404526531) * w21;
-  const P v1 = T(-0.019531250000000097) * w1 + T(0.13072812914594928) * w3 - T(0.40544165371889546) * w5 + T(0.68785502197047288) * w7 - T(0.58736804535412523) * w9;
-  const P v2 = T(0.4197583257089168) * w11 - T(0.13594928558824121) * w13 - T(0.5572262544360348) * w15 + T(0.63603688806045944) * w17 - T(0.29501240332439349) * w19 + T(0.056959635044600256) * w21;
-  const P v3 = T(0.13072812914594928) * w1 - T(0.50000000000000011) * w3 + T(0.6461272852542298) * w5 - T(0.56163127361285781) * w9;
-  const P v4 = T(0.37296505974556859) * w11 + T(0.13689999147558637) * w13 - T(0.49510851970963154) * w15 - T(0.32425698663835933) * w17 + T(0.6555375364309225) * w19 - T(0.24930093301108056) * w21;
-  const P v5 = T(-0.40544165371889512) * w1 + T(0.64612728525422924) * w3 + T(0.18359375000000033) * w5 - T(0.41751216299648042) * w7 - T(0.45838141911581159) * w9;
-  const P v6 = T(0.35033967020804857) * w11 + T(0.31014124452051595) * w13 - T(0.13435455876499877) * w15 - T(0.52272828294256879) * w17 - T(0.40784785676472357) * w19 + T(0.56871666443773172) * w21;
-  const P v7 = T(0.68785502197047332) * w1 - T(0.41751216299648108) * w5 - T(0.49999999999999967) * w7 - T(0.3202172114362376) * w9;
-  const P v8 = T(0.3384602766747063) * w11 + T(0.41655170126194307) * w13 + T(0.23534953642800113) * w15 - T(0.047641839522072238) * w17 - T(0.3940184631669012) * w19 - T(0.70641320967457466) * w21;
-  const P v9 = T(-0.58736804535412479) * w1 - T(0.56163127361285714) * w3 - T(0.45838141911581165) * w5 - T(0.32021721143623721) * w7 - T(0.16406250000000006) * w9;
-  const P v10 = T(0.33321251269014673) * w11 + T(0.46765007670081876) * w13 + T(0.45637974396671588) * w15 + T(0.43552935783159724) * w17 + T(0.40022386008781902) * w19 + T(0.33485130540064439) * w21;
-  const P v11 = T(-0.57997947393467919) * w0 - T(0.41975832570891719) * w2 - T(0.37296505974556898) * w4 - T(0.35033967020804896) * w6 - T(0.33846027667470674) * w8 - T(0.33321251269014684) * w10;
-  const P v12 = T(-0.041015624999999931) * w12 - T(0.1249847402795012) * w14 - T(0.2156191617755821) * w16 - T(0.32136177701094576) * w18 - T(0.46501810346249089) * w20 - T(0.78529592002431525) * w22;
-  const P v13 = T(0.68875008418641759) * w0 + T(0.13594928558824129) * w2 - T(0.13689999147558643) * w4 - T(0.31014124452051589) * w6 - T(0.41655170126194313) * w8 - T(0.46765007670081832) * w10;
-  const P v14 = T(-0.12498474027950124) * w12 - T(0.34960937500000022) * w14 - T(0.49531072862952186) * w16 - T(0.49716719187291991) * w18 - T(0.25433782432394114) * w20 + T(0.55222860860084644) * w22;
-  const P v15 = T(-0.40329075444050017) * w0 + T(0.55722625443603491) * w2 + T(0.49510851970963154) * w4 + T(0.13435455876499861) * w6 - T(0.23534953642800127) * w8 - T(0.45637974396671571) * w10;
-  const P v16 = T(-0.21561916177558216) * w12 - T(0.49531072862952202) * w14 - T(0.38574218749999989) * w16 + T(0.14035007305082195) * w18 + T(0.68448811471566995) * w20 - T(0.26675176057529498) * w22;
-  const P v17 = T(0.15847416019099836) * w0 - T(0.63603688806045922) * w2 + T(0.32425698663835917) * w4 + T(0.52272828294256857) * w6 + T(0.047641839522072321) * w8 - T(0.4355293578315968) * w10;
-  const P v18 = T(-0.32136177701094587) * w12 - T(0.49716719187292024) * w14 + T(0.14035007305082228) * w16 + T(0.62792968750000022) * w18 - T(0.47810190182411166) * w20 + T(0.083523216080989851) * w22;
-  const P v19 = T(-0.038323079824899506) * w0 + T(0.29501240332439316) * w2 - T(0.65553753643092194) * w4 + T(0.4078478567647234) * w6 + T(0.39401846316690126) * w8 - T(0.40022386008781874) * w10;
-  const P v20 = T(-0.46501810346249073) * w12 - T(0.25433782432394142) * w14 + T(0.68448811471566984) * w16 - T(0.47810190182411128) * w18 + T(0.14746093750000011) * w20 - T(0.014842464993721346) * w22;
-  const P v21 = T(0.0045804841404524692) * w0 - T(0.056959635044600318) * w2 + T(0.24930093301108069) * w4 - T(0.56871666443773206) * w6 + T(0.70641320967457533) * w8 - T(0.33485130540064456) * w10;
-  const P v22 = T(-0.78529592002431536) * w12 + T(0.55222860860084655) * w14 - T(0.26675176057529509) * w16 + T(0.083523216080989809) * w18 - T(0.014842464993721403) * w20 + T(0.00097656249999999718) * w22;
+  const P w22 = madd<F>(cb11, u22, -(sb11 * u0));
+  const P w0 = madd<F>(sb11, u22, cb11 * u0);
+  const P v0 = madd<F>(T(-0.0045804841404526531), w21, madd<F>(T(0.038323079824899596), w19, madd<F>(T(-0.15847416019099836), w17, madd<F>(T(0.40329075444049967), w15, madd<F>(T(-0.68875008418641759), w13, T(0.57997947393467864) * w11)))));
+  const P v1 = madd<F>(T(-0.58736804535412523), w9, madd<F>(T(0.68785502197047288), w7, madd<F>(T(-0.40544165371889546), w5, madd<F>(T(0.13072812914594928), w3, T(-0.019531250000000097) * w1))));
+  const P v2 = madd<F>(T(0.056959635044600256), w21, madd<F>(T(-0.29501240332439349), w19, madd<F>(T(0.63603688806045944), w17, madd<F>(T(-0.5572262544360348), w15, madd<F>(T(-0.13594928558824121), w13, T(0.4197583257089168) * w11)))));
+  const P v3 = madd<F>(T(-0.56163127361285781), w9, madd<F>(T(0.6461272852542298), w5, madd<F>(T(-0.50000000000000011), w3, T(0.13072812914594928) * w1)));
+  const P v4 = madd<F>(T(-0.24930093301108056), w21, madd<F>(T(0.6555375364309225), w19, madd<F>(T(-0.32425698663835933), w17, madd<F>(T(-0.49510851970963154), w15, madd<F>(T(0.13689999147558637), w13, T(0.37296505974556859) * w11)))));
+  const P v5 = madd<F>(T(-0.45838141911581159), w9, madd<F>(T(-0.41751216299648042), w7, madd<F>(T(0.18359375000000033), w5, madd<F>(T(0.64612728525422924), w3, T(-0.40544165371889512) * w1))));
+  const P v6 = madd<F>(T(0.56871666443773172), w21, madd<F>(T(-0.40784785676472357), w19, madd<F>(T(-0.52272828294256879), w17, madd<F>(T(-0.13435455876499877), w15, madd<F>(T(0.31014124452051595), w13, T(0.35033967020804857) * w11)))));
+  const P v7 = madd<F>(T(-0.3202172114362376), w9, madd<F>(T(-0.49999999999999967), w7, madd<F>(T(-0.41751216299648108), w5, T(0.68785502197047332) * w1)));
+  const P v8 = madd<F>(T(-0.70641320967457466), w21, madd<F>(T(-0.3940184631669012), w19, madd<F>(T(-0.047641839522072238), w17, madd<F>(T(0.23534953642800113), w15, madd<F>(T(0.41655170126194307), w13, T(0.3384602766747063) * w11)))));
+  const P v9 = madd<F>(T(-0.16406250000000006), w9, madd<F>(T(-0.32021721143623721), w7, madd<F>(T(-0.45838141911581165), w5, madd<F>(T(-0.56163127361285714), w3, T(-0.58736804535412479) * w1))));
+  const P v10 = madd<F>(T(0.33485130540064439), w21, madd<F>(T(0.40022386008781902), w19, madd<F>(T(0.43552935783159724), w17, madd<F>(T(0.45637974396671588), w15, madd<F>(T(0.46765007670081876), w13, T(0.33321251269014673) * w11)))));
+  const P v11 = madd<F>(T(-0.33321251269014684), w10, madd<F>(T(-0.33846027667470674), w8, madd<F>(T(-0.35033967020804896), w6, madd<F>(T(-0.37296505974556898), w4, madd<F>(T(-0.41975832570891719), w2, T(-0.57997947393467919) * w0)))));
+  const P v12 = madd<F>(T(-0.78529592002431525), w22, madd<F>(T(-0.46501810346249089), w20, madd<F>(T(-0.32136177701094576), w18, madd<F>(T(-0.2156191617755821), w16, madd<F>(T(-0.1249847402795012), w14, T(-0.041015624999999931) * w12)))));
+  const P v13 = madd<F>(T(-0.46765007670081832), w10, madd<F>(T(-0.41655170126194313), w8, madd<F>(T(-0.31014124452051589), w6, madd<F>(T(-0.13689999147558643), w4, madd<F>(T(0.13594928558824129), w2, T(0.68875008418641759) * w0)))));
+  const P v14 = madd<F>(T(0.55222860860084644), w22, madd<F>(T(-0.25433782432394114), w20, madd<F>(T(-0.49716719187291991), w18, madd<F>(T(-0.49531072862952186), w16, madd<F>(T(-0.34960937500000022), w14, T(-0.12498474027950124) * w12)))));
+  const P v15 = madd<F>(T(-0.45637974396671571), w10, madd<F>(T(-0.23534953642800127), w8, madd<F>(T(0.13435455876499861), w6, madd<F>(T(0.49510851970963154), w4, madd<F>(T(0.55722625443603491), w2, T(-0.40329075444050017) * w0)))));
+  const P v16 = madd<F>(T(-0.26675176057529498), w22, madd<F>(T(0.68448811471566995), w20, madd<F>(T(0.14035007305082195), w18, madd<F>(T(-0.38574218749999989), w16, madd<F>(T(-0.49531072862952202), w14, T(-0.21561916177558216) * w12)))));
+  const P v17 = madd<F>(T(-0.4355293578315968), w10, madd<F>(T(0.047641839522072321), w8, madd<F>(T(0.52272828294256857), w6, madd<F>(T(0.32425698663835917), w4, madd<F>(T(-0.63603688806045922), w2, T(0.15847416019099836) * w0)))));
+  const P v18 = madd<F>(T(0.083523216080989851), w22, madd<F>(T(-0.47810190182411166), w20, madd<F>(T(0.62792968750000022), w18, madd<F>(T(0.14035007305082228), w16, madd<F>(T(-0.49716719187292024), w14, T(-0.32136177701094587) * w12)))));
+  const P v19 = madd<F>(T(-0.40022386008781874), w10, madd<F>(T(0.39401846316690126), w8, madd<F>(T(0.4078478567647234), w6, madd<F>(T(-0.65553753643092194), w4, madd<F>(T(0.29501240332439316), w2, T(-0.038323079824899506) * w0)))));
+  const P v20 = madd<F>(T(-0.014842464993721346), w22, madd<F>(T(0.14746093750000011), w20, madd<F>(T(-0.47810190182411128), w18, madd<F>(T(0.68448811471566984), w16, madd<F>(T(-0.25433782432394142), w14, T(-0.46501810346249073) * w12)))));
+  const P v21 = madd<F>(T(-0.33485130540064456), w10, madd<F>(T(0.70641320967457533), w8, madd<F>(T(-0.56871666443773206), w6, madd<F>(T(0.24930093301108069), w4, madd<F>(T(-0.056959635044600318), w2, T(0.0045804841404524692) * w0)))));
+  const P v22 = madd<F>(T(0.00097656249999999718), w22, madd<F>(T(-0.014842464993721403), w20, madd<F>(T(0.083523216080989809), w18, madd<F>(T(-0.26675176057529509), w16, madd<F>(T(0.55222860860084655), w14, T(-0.78529592002431536) * w12)))));
   y[11] = v11;
   const P ca1 = splat<P>(s.ca[1]), sa1 = splat<P>(s.sa[1]);
-  y[12] = ca1 * v12 - sa1 * v10;
-  y[10] = sa1 * v12 + ca1 * v10;
+  y[12] = madd<F>(ca1, v12, -(sa1 * v10));
+  y[10] = madd<F>(sa1, v12, ca1 * v10);
   const P ca2 = splat<P>(s.ca[2]), sa2 = splat<P>(s.sa[2]);
-  y[13] = ca2 * v13 - sa2 * v9;
-  y[9] = sa2 * v13 + ca2 * v9;
+  y[13] = madd<F>(ca2, v13, -(sa2 * v9));
+  y[9] = madd<F>(sa2, v13, ca2 * v9);
   const P ca3 = splat<P>(s.ca[3]), sa3 = splat<P>(s.sa[3]);
-  y[14] = ca3 * v14 - sa3 * v8;
-  y[8] = sa3 * v14 + ca3 * v8;
+  y[14] = madd<F>(ca3, v14, -(sa3 * v8));
+  y[8] = madd<F>(sa3, v14, ca3 * v8);
   const P ca4 = splat<P>(s.ca[4]), sa4 = splat<P>(s.sa[4]);
-  y[15] = ca4 * v15 - sa4 * v7;
-  y[7] = sa4 * v15 + ca4 * v7;
+  y[15] = madd<F>(ca4, v15, -(sa4 * v7));
+  y[7] = madd<F>(sa4, v15, ca4 * v7);
   const P ca5 = splat<P>(s.ca[5]), sa5 = splat<P>(s.sa[5]);
-  y[16] = ca5 * v16 - sa5 * v6;
-  y[6] = sa5 * v16 + ca5 * v6;
+  y[16] = madd<F>(ca5, v16, -(sa5 * v6));
+  y[6] = madd<F>(sa5, v16, ca5 * v6);
   const P ca6 = splat<P>(s.ca[6]), sa6 = splat<P>(s.sa[6]);
-  y[17] = ca6 * v17 - sa6 * v5;
-  y[5] = sa6 * v17 + ca6 * v5;
+  y[17] = madd<F>(ca6, v17, -(sa6 * v5));
+  y[5] = madd<F>(sa6, v17, ca6 * v5);
   const P ca7 = splat<P>(s.ca[7]), sa7 = splat<P>(s.sa[7]);
-  y[18] = ca7 * v18 - sa7 * v4;
-  y[4] = sa7 * v18 + ca7 * v4;
+  y[18] = madd<F>(ca7, v18, -(sa7 * v4));
+  y[4] = madd<F>(sa7, v18, ca7 * v4);
   const P ca8 = splat<P>(s.ca[8]), sa8 = splat<P>(s.sa[8]);
-  y[19] = ca8 * v19 - sa8 * v3;
-  y[3] = sa8 * v19 + ca8 * v3;
+  y[19] = madd<F>(ca8, v19, -(sa8 * v3));
+  y[3] = madd<F>(sa8, v19, ca8 * v3);
   const P ca9 = splat<P>(s.ca[9]), sa9 = splat<P>(s.sa[9]);
-  y[20] = ca9 * v20 - sa9 * v2;
-  y[2] = sa9 * v20 + ca9 * v2;
+  y[20] = madd<F>(ca9, v20, -(sa9 * v2));
+  y[2] = madd<F>(sa9, v20, ca9 * v2);
   const P ca10 = splat<P>(s.ca[10]), sa10 = splat<P>(s.sa[10]);
-  y[21] = ca10 * v21 - sa10 * v1;
-  y[1] = sa10 * v21 + ca10 * v1;
+  y[21] = madd<F>(ca10, v21, -(sa10 * v1));
+  y[1] = madd<F>(sa10, v21, ca10 * v1);
   const P ca11 = splat<P>(s.ca[11]), sa11 = splat<P>(s.sa[11]);
-  y[22] = ca11 * v22 - sa11 * v0;
-  y[0] = sa11 * v22 + ca11 * v0;
+  y[22] = madd<F>(ca11, v22, -(sa11 * v0));
+  y[0] = madd<F>(sa11, v22, ca11 * v0);
 }
 
 // Band 12 of Z(a) X90^T Z(b) X90 Z(g), Ry(b) = Rx(-90) Rz(b) Rx(+90).
-template <class T, class P, class S>
-inline void zxzxz_band12(const S& s, const P* __restrict x, P* __restrict y) {
+template <bool F, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void zxzxz_band12(const S& s, const P* __restrict x, P* __restrict y) {
   const P t12 = x[12];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
-  const P t13 = cg1 * x[13] - sg1 * x[11];
-  const P t11 = sg1 * x[13] + cg1 * x[11];
+  const P t13 = madd<F>(cg1, x[13], -(sg1 * x[11]));
+  const P t11 = madd<F>(sg1, x[13], cg1 * x[11]);
   const P cg2 = splat<P>(s.cg[2]), sg2 = splat<P>(s.sg[2]);
-  const P t14 = cg2 * x[14] - sg2 * x[10];
-  const P t10 = sg2 * x[14] + cg2 * x[10];
+  const P t14 = madd<F>(cg2, x[14], -(sg2 * x[10]));
+  const P t10 = madd<F>(sg2, x[14], cg2 * x[10]);
   const P cg3 = splat<P>(s.cg[3]), sg3 = splat<P>(s.sg[3]);
-  const P t15 = cg3 * x[15] - sg3 * x[9];
-  const P t9 = sg3 * x[15] + cg3 * x[9];
+  const P t15 = madd<F>(cg3, x[15], -(sg3 * x[9]));
+  const P t9 = madd<F>(sg3, x[15], cg3 * x[9]);
   const P cg4 = splat<P>(s.cg[4]), sg4 = splat<P>(s.sg[4]);
-  const P t16 = cg4 * x[16] - sg4 * x[8];
-  const P t8 = sg4 * x[16] + cg4 * x[8];
+  const P t16 = madd<F>(cg4, x[16], -(sg4 * x[8]));
+  const P t8 = madd<F>(sg4, x[16], cg4 * x[8]);
   const P cg5 = splat<P>(s.cg[5]), sg5 = splat<P>(s.sg[5]);
-  const P t17 = cg5 * x[17] - sg5 * x[7];
-  const P t7 = sg5 * x[17] + cg5 * x[7];
+  const P t17 = madd<F>(cg5, x[17], -(sg5 * x[7]));
+  const P t7 = madd<F>(sg5, x[17], cg5 * x[7]);
   const P cg6 = splat<P>(s.cg[6]), sg6 = splat<P>(s.sg[6]);
-  const P t18 = cg6 * x[18] - sg6 * x[6];
-  const P t6 = sg6 * x[18] + cg6 * x[6];
+  const P t18 = madd<F>(cg6, x[18], -(sg6 * x[6]));
+  const P t6 = madd<F>(sg6, x[18], cg6 * x[6]);
   const P cg7 = splat<P>(s.cg[7]), sg7 = splat<P>(s.sg[7]);
-  const P t19 = cg7 * x[19] - sg7 * x[5];
-  const P t5 = sg7 * x[19] + cg7 * x[5];
+  const P t19 = madd<F>(cg7, x[19], -(sg7 * x[5]));
+  const P t5 = madd<F>(sg7, x[19], cg7 * x[5]);
   const P cg8 = splat<P>(s.cg[8]), sg8 = splat<P>(s.sg[8]);
-  const P t20 = cg8 * x[20] - sg8 * x[4];
-  const P t4 = sg8 * x[20] + cg8 * x[4];
+  const P t20 = madd<F>(cg8, x[20], -(sg8 * x[4]));
+  const P t4 = madd<F>(sg8, x[20], cg8 * x[4]);
   const P cg9 = splat<P>(s.cg[9]), sg9 = splat<P>(s.sg[9]);
-  const P t21 = cg9 * x[21] - sg9 * x[3];
-  const P t3 = sg9 * x[21] + cg9 * x[3];
+  const P t21 = madd<F>(cg9, x[21], -(sg9 * x[3]));
+  const P t3 = madd<F>(sg9, x[21], cg9 * x[3]);
   const P cg10 = splat<P>(s.cg[10]), sg10 = splat<P>(s.sg[10]);
-  const P t22 = cg10 * x[22] - sg10 * x[2];
-  const P t2 = sg10 * x[22] + cg10 * x[2];
+  const P t22 = madd<F>(cg10, x[22], -(sg10 * x[2]));
+  const P t2 = madd<F>(sg10, x[22], cg10 * x[2]);
   const P cg11 = splat<P>(s.cg[11]), sg11 = splat<P>(s.sg[11]);
-  const P t23 = cg11 * x[23] - sg11 * x[1];
-  const P t1 = sg11 * x[23] + cg11 * x[1];
+  const P t23 = madd<F>(cg11, x[23], -(sg11 * x[1]));
+  const P t1 = madd<F>(sg11, x[23], cg11 * x[1]);
   const P cg12 = splat<P>(s.cg[12]), sg12 = splat<P>(s.sg[12]);
-  const P t24 = cg12 * x[24] - sg12 * x[0];
-  const P t0 = sg12 * x[24] + cg12 * x[0];
-  const P u0 = T(-0.77144481702380341) * t13 + T(0.55833076742161469) * t15 - T(0.28725880996301417) * t17 + T(0.10066649535040349) * t19 - T(0.021967230232816302) * t21 + T(0.0023920798269365605) * t23;
-  const P u1 = T(-0.010742187500000135) * t1 + T(0.080712757698960413) * t3 - T(0.28767847243653444) * t5 + T(0.58636459044042155) * t7 - T(0.683812743939753) * t9 + T(0.31494102773717575) * t11;
-  const P u2 = T(-0.46435521203002927) * t13 - T(0.20164537722024989) * t15 + T(0.65705604098220671) * t17 - T(0.52110934255625696) * t19 + T(0.19834078136318262) * t21 - T(0.033116845620728877) * t23;
-  const P u3 = T(0.080712757698960386) * t1 - T(0.37207031250000022) * t3 + T(0.65785022183448139) * t5 - T(0.31925529371635814) * t7 - T(0.42195411222921947) * t9 + T(0.37724395759248319) * t11;
-  const P u4 = T(-0.32928552212043111) * t13 - T(0.45497333155018532) * t15 + T(0.23408184791529099) * t17 + T(0.54296874999999978) * t19 - T(0.55492127556105864) * t21 + T(0.16438769853516247) * t23;
-  const P u5 = T(-0.28767847243653466) * t1 + T(0.65785022183448139) * t3 - T(0.15722656249999986) * t5 - T(0.52668415780940525) * t7 - T(0.11374333288754657) * t9 + T(0.41160690265053945) * t11;
-  const P u6 = T(-0.23130311098294948) * t13 - T(0.49003980202465147) * t15 - T(0.27404717188285721) * t17 + T(0.30237819268448085) * t19 + T(0.58930833781357805) * t21 - T(0.43879508023281627) * t23;
-  const P u7 = T(0.58636459044042144) * t1 - T(0.31925529371635802) * t3 - T(0.52668415780940514) * t5 - T(0.25683593749999994) * t7 + T(0.15374580191486642) * t9 + T(0.43272849689657295) * t11;
-  const P u8 = T(-0.14842464993721335) * t13 - T(0.39257812499999989) * t15 - T(0.48401456158383815) * t17 - T(0.34122999866263887) * t19 + T(0.074462490393391673) * t21 + T(0.68381274393975278) * t23;
-  const P u9 = T(-0.68381274393975344) * t1 - T(0.42195411222921964) * t3 - T(0.11374333288754665) * t5 + T(0.15374580191486639) * t7 + T(0.34570312500000028) * t9 + T(0.44527394981164103) * t11;
-  const P u10 = T(-0.072712931519477664) * t13 - T(0.21528718442430292) * t15 - T(0.34870255998744404) * t17 - T(0.46435521203002933) * t19 - T(0.54718531932211167) * t21 - T(0.55833076742161536) * t23;
-  const P u11 = T(0.31494102773717586) * t1 + T(0.37724395759248319) * t3 + T(0.41160690265053906) * t5 + T(0.43272849689657278) * t7 + T(0.4452739498116407) * t9 + T(0.45117187500000022) * t11;
-  const P u12 = T(0.22558593749999989) * t12 + T(0.32109161153484961) * t14 + T(0.32771275372847292) * t16 + T(0.34046896063984972) * t18 + T(0.36352137351394453) * t20 + T(0.41010741896821784) * t22 + T(0.56776801212685624) * t24;
-  const P u13 = T(0.7714448170238043) * t0 + T(0.46435521203002933) * t2 + T(0.32928552212043144) * t4 + T(0.23130311098294951) * t6 + T(0.14842464993721355) * t8 + T(0.072712931519477636) * t10;
-  const P u14 = T(0.32109161153485005) * t12 + T(0.43359375000000033) * t14 + T(0.37077237317518835) * t16 + T(0.26094510187280068) * t18 + T(0.092871042406005799) * t20 - T(0.16464276106021578) * t22 - T(0.68381274393975322) * t24;
-  const P u15 = T(-0.55833076742161503) * t0 + T(0.20164537722025017) * t2 + T(0.45497333155018577) * t4 + T(0.49003980202465136) * t6 + T(0.39257812500000011) * t8 + T(0.21528718442430272) * t10;
-  const P u16 = T(0.32771275372847319) * t12 + T(0.37077237317518824) * t14 + T(0.11669921875000008) * t16 - T(0.22371382266342782) * t18 - T(0.51184499799395899) * t20 - T(0.504113443050625) * t22 + T(0.41874807556621113) * t24;
-  const P u17 = T(0.28725880996301428) * t0 - T(0.6570560409822066) * t2 - T(0.23408184791529135) * t4 + T(0.27404717188285677) * t6 + T(0.48401456158383827) * t8 + T(0.34870255998744376) * t10;
-  const P u18 = T(0.3404689606398501) * t12 + T(0.26094510187280073) * t14 - T(0.22371382266342776) * t16 - T(0.52539062500000022) * t18 - T(0.19810985037948736) * t20 + T(0.64696804980671485) * t22 - T(0.17913734136900084) * t24;
-  const P u19 = T(-0.10066649535040351) * t0 + T(0.52110934255625696) * t2 - T(0.54296875000000033) * t4 - T(0.30237819268448063) * t6 + T(0.34122999866263926) * t8 + T(0.46435521203002922) * t10;
-  const P u20 = T(0.36352137351394492) * t12 + T(0.092871042406005827) * t14 - T(0.51184499799395888) * t16 - T(0.19810985037948739) * t18 + T(0.65722656250000067) * t20 - T(0.35144583567747578) * t22 + T(0.050333247675201774) * t24;
-  const P u21 = T(0.021967230232816423) * t0 - T(0.19834078136318287) * t2 + T(0.5549212755610593) * t4 - T(0.58930833781357783) * t6 - T(0.074462490393391645) * t8 + T(0.54718531932211145) * t10;
-  const P u22 = T(0.41010741896821812) * t12 - T(0.16464276106021591) * t14 - T(0.50411344305062467) * t16 + T(0.64696804980671441) * t18 - T(0.35144583567747567) * t20 + T(0.091796875000000042) * t22 - T(0.0081119373661310053) * t24;
-  const P u23 = T(-0.0023920798269367501) * t0 + T(0.03311684562072878) * t2 - T(0.16438769853516247) * t4 + T(0.43879508023281572) * t6 - T(0.68381274393975278) * t8 + T(0.55833076742161469) * t10;
-  const P u24 = T(0.56776801212685724) * t12 - T(0.68381274393975366) * t14 + T(0.41874807556621174) * t16 - T(0.17913734136900084) * t18 + T(0.050333247675201767) * t20 - T(0.008111937366130955) * t22 + T(0.000488281250000018) * t24;
+  const P t24 = madd<F>(cg12, x[24], -(sg12 * x[0]));
+  const P t0 = madd<F>(sg12, x[24], cg12 * x[0]);
+  const P u0 = madd<F>(T(0.0023920798269365605), t23, madd<F>(T(-0.021967230232816302), t21, madd<F>(T(0.10066649535040349), t19, madd<F>(T(-0.28725880996301417), t17, madd<F>(T(0.55833076742161469), t15, T(-0.77144481702380341) * t13)))));
+  const P u1 = madd<F>(T(0.31494102773717575), t11, madd<F>(T(-0.683812743939753), t9, madd<F>(T(0.58636459044042155), t7, madd<F>(T(-0.28767847243653444), t5, madd<F>(T(0.080712757698960413), t3, T(-0.010742187500000135) * t1)))));
+  const P u2 = madd<F>(T(-0.033116845620728877), t23, madd<F>(T(0.19834078136318262), t21, madd<F>(T(-0.52110934255625696), t19, madd<F>(T(0.65705604098220671), t17, madd<F>(T(-0.20164537722024989), t15, T(-0.46435521203002927) * t13)))));
+  const P u3 = madd<F>(T(0.37724395759248319), t11, madd<F>(T(-0.42195411222921947), t9, madd<F>(T(-0.31925529371635814), t7, madd<F>(T(0.65785022183448139), t5, madd<F>(T(-0.37207031250000022), t3, T(0.080712757698960386) * t1)))));
+  const P u4 = madd<F>(T(0.16438769853516247), t23, madd<F>(T(-0.55492127556105864), t21, madd<F>(T(0.54296874999999978), t19, madd<F>(T(0.23408184791529099), t17, madd<F>(T(-0.45497333155018532), t15, T(-0.32928552212043111) * t13)))));
+  const P u5 = madd<F>(T(0.41160690265053945), t11, madd<F>(T(-0.11374333288754657), t9, madd<F>(T(-0.52668415780940525), t7, madd<F>(T(-0.15722656249999986), t5, madd<F>(T(0.65785022183448139), t3, T(-0.28767847243653466) * t1)))));
+  const P u6 = madd<F>(T(-0.43879508023281627), t23, madd<F>(T(0.58930833781357805), t21, madd<F>(T(0.30237819268448085), t19, madd<F>(T(-0.27404717188285721), t17, madd<F>(T(-0.49003980202465147), t15, T(-0.23130311098294948) * t13)))));
+  const P u7 = madd<F>(T(0.43272849689657295), t11, madd<F>(T(0.15374580191486642), t9, madd<F>(T(-0.25683593749999994), t7, madd<F>(T(-0.52668415780940514), t5, madd<F>(T(-0.31925529371635802), t3, T(0.58636459044042144) * t1)))));
+  const P u8 = madd<F>(T(0.68381274393975278), t23, madd<F>(T(0.074462490393391673), t21, madd<F>(T(-0.34122999866263887), t19, madd<F>(T(-0.48401456158383815), t17, madd<F>(T(-0.39257812499999989), t15, T(-0.14842464993721335) * t13)))));
+  const P u9 = madd<F>(T(0.44527394981164103), t11, madd<F>(T(0.34570312500000028), t9, madd<F>(T(0.15374580191486639), t7, madd<F>(T(-0.11374333288754665), t5, madd<F>(T(-0.42195411222921964), t3, T(-0.68381274393975344) * t1)))));
+  const P u10 = madd<F>(T(-0.55833076742161536), t23, madd<F>(T(-0.54718531932211167), t21, madd<F>(T(-0.46435521203002933), t19, madd<F>(T(-0.34870255998744404), t17, madd<F>(T(-0.21528718442430292), t15, T(-0.072712931519477664) * t13)))));
+  const P u11 = madd<F>(T(0.45117187500000022), t11, madd<F>(T(0.4452739498116407), t9, madd<F>(T(0.43272849689657278), t7, madd<F>(T(0.41160690265053906), t5, madd<F>(T(0.37724395759248319), t3, T(0.31494102773717586) * t1)))));
+  const P u12 = madd<F>(T(0.56776801212685624), t24, madd<F>(T(0.41010741896821784), t22, madd<F>(T(0.36352137351394453), t20, madd<F>(T(0.34046896063984972), t18, madd<F>(T(0.32771275372847292), t16, madd<F>(T(0.32109161153484961), t14, T(0.22558593749999989) * t12))))));
+  const P u13 = madd<F>(T(0.072712931519477636), t10, madd<F>(T(0.14842464993721355), t8, madd<F>(T(0.23130311098294951), t6, madd<F>(T(0.32928552212043144), t4, madd<F>(T(0.46435521203002933), t2, T(0.7714448170238043) * t0)))));
+  const P u14 = madd<F>(T(-0.68381274393975322), t24, madd<F>(T(-0.16464276106021578), t22, madd<F>(T(0.092871042406005799), t20, madd<F>(T(0.26094510187280068), t18, madd<F>(T(0.37077237317518835), t16, madd<F>(T(0.43359375000000033), t14, T(0.32109161153485005) * t12))))));
+  const P u15 = madd<F>(T(0.21528718442430272), t10, madd<F>(T(0.39257812500000011), t8, madd<F>(T(0.49003980202465136), t6, madd<F>(T(0.45497333155018577), t4, madd<F>(T(0.20164537722025017), t2, T(-0.55833076742161503) * t0)))));
+  const P u16 = madd<F>(T(0.41874807556621113), t24, madd<F>(T(-0.504113443050625), t22, madd<F>(T(-0.51184499799395899), t20, madd<F>(T(-0.22371382266342782), t18, madd<F>(T(0.11669921875000008), t16, madd<F>(T(0.37077237317518824), t14, T(0.32771275372847319) * t12))))));
+  const P u17 = madd<F>(T(0.34870255998744376), t10, madd<F>(T(0.48401456158383827), t8, madd<F>(T(0.27404717188285677), t6, madd<F>(T(-0.23408184791529135), t4, madd<F>(T(-0.6570560409822066), t2, T(0.28725880996301428) * t0)))));
+  const P u18 = madd<F>(T(-0.17913734136900084), t24, madd<F>(T(0.64696804980671485), t22, madd<F>(T(-0.19810985037948736), t20, madd<F>(T(-0.52539062500000022), t18, madd<F>(T(-0.22371382266342776), t16, madd<F>(T(0.26094510187280073), t14, T(0.3404689606398501) * t12))))));
+  const P u19 = madd<F>(T(0.46435521203002922), t10, madd<F>(T(0.34122999866263926), t8, madd<F>(T(-0.30237819268448063), t6, madd<F>(T(-0.54296875000000033), t4, madd<F>(T(0.52110934255625696), t2, T(-0.10066649535040351) * t0)))));
+  const P u20 = madd<F>(T(0.050333247675201774), t24, madd<F>(T(-0.35144583567747578), t22, madd<F>(T(0.65722656250000067), t20, madd<F>(T(-0.19810985037948739), t18, madd<F>(T(-0.51184499799395888), t16, madd<F>(T(0.092871042406005827), t14, T(0.36352137351394492) * t12))))));
+  const P u21 = madd<F>(T(0.54718531932211145), t10, madd<F>(T(-0.074462490393391645), t8, madd<F>(T(-0.58930833781357783), t6, madd<F>(T(0.5549212755610593), t4, madd<F>(T(-0.19834078136318287), t2, T(0.021967230232816423) * t0)))));
+  const P u22 = madd<F>(T(-0.0081119373661310053), t24, madd<F>(T(0.091796875000000042), t22, madd<F>(T(-0.35144583567747567), t20, madd<F>(T(0.64696804980671441), t18, madd<F>(T(-0.50411344305062467), t16, madd<F>(T(-0.16464276106021591), t14, T(0.41010741896821812) * t12))))));
+  const P u23 = madd<F>(T(0.55833076742161469), t10, madd<F>(T(-0.68381274393975278), t8, madd<F>(T(0.43879508023281572), t6, madd<F>(T(-0.16438769853516247), t4, madd<F>(T(0.03311684562072878), t2, T(-0.0023920798269367501) * t0)))));
+  const P u24 = madd<F>(T(0.000488281250000018), t24, madd<F>(T(-0.008111937366130955), t22, madd<F>(T(0.050333247675201767), t20, madd<F>(T(-0.17913734136900084), t18, madd<F>(T(0.41874807556621174), t16, madd<F>(T(-0.68381274393975366), t14, T(0.56776801212685724) * t12))))));
   const P w12 = u12;
   const P cb1 = splat<P>(s.cb[1]), sb1 = splat<P>(s.sb[1]);
-  const P w13 = cb1 * u13 - sb1 * u11;
-  const P w11 = sb1 * u13 + cb1 * u11;
+  const P w13 = madd<F>(cb1, u13, -(sb1 * u11));
+  const P w11 = madd<F>(sb1, u13, cb1 * u11);
   const P cb2 = splat<P>(s.cb[2]), sb2 = splat<P>(s.sb[2]);
-  const P w14 = cb2 * u14 - sb2 * u10;
-  const P w10 = sb2 * u14 + cb2 * u10;
+  const P w14 = madd<F>(cb2, u14, -(sb2 * u10));
+  const P w10 = madd<F>(sb2, u14, cb2 * u10);
   const P cb3 = splat<P>(s.cb[3]), sb3 = splat<P>(s.sb[3]);
-  const P w15 = cb3 * u15 - sb3 * u9;
-  const P w9 = sb3 * u15 + cb3 * u9;
+  const P w15 = madd<F>(cb3, u15, -(sb3 * u9));
+  const P w9 = madd<F>(sb3, u15, cb3 * u9);
   const P cb4 = splat<P>(s.cb[4]), sb4 = splat<P>(s.sb[4]);
-  const P w16 = cb4 * u16 - sb4 * u8;
-  const P w8 = sb4 * u16 + cb4 * u8;
+  const P w16 = madd<F>(cb4, u16, -(sb4 * u8));
+  const P w8 = madd<F>(sb4, u16, cb4 * u8);
   const P cb5 = splat<P>(s.cb[5]), sb5 = splat<P>(s.sb[5]);
-  const P w17 = cb5 * u17 - sb5 * u7;
-  const P w7 = sb5 * u17 + cb5 * u7;
+  const P w17 = madd<F>(cb5, u17, -(sb5 * u7));
+  const P w7 = madd<F>(sb5, u17, cb5 * u7);
   const P cb6 = splat<P>(s.cb[6]), sb6 = splat<P>(s.sb[6]);
-  const P w18 = cb6 * u18 - sb6 * u6;
-  const P w6 = sb6 * u18 + cb6 * u6;
+  const P w18 = madd<F>(cb6, u18, -(sb6 * u6));
+  const P w6 = madd<F>(sb6, u18, cb6 * u6);
   const P cb7 = splat<P>(s.cb[7]), sb7 = splat<P>(s.sb[7]);
-  const P w19 = cb7 * u19 - sb7 * u5;
-  const P w5 = sb7 * u19 + cb7 * u5;
+  const P w19 = madd<F>(cb7, u19, -(sb7 * u5));
+  const P w5 = madd<F>(sb7, u19, cb7 * u5);
   const P cb8 = splat<P>(s.cb[8]), sb8 = splat<P>(s.sb[8]);
-  const P w20 = cb8 * u20 - sb8 * u4;
-  const P w4 = sb8 * u20 + cb8 * u4;
+  const P w20 = madd<F>(cb8, u20, -(sb8 * u4));
+  const P w4 = madd<F>(sb8, u20, cb8 * u4);
   const P cb9 = splat<P>(s.cb[9]), sb9 = splat<P>(s.sb[9]);
-  const P w21 = cb9 * u21 - sb9 * u3;
-  const P w3 = sb9 * u21 + cb9 * u3;
+  const P w21 = madd<F>(cb9, u21, -(sb9 * u3));
+  const P w3 = madd<F>(sb9, u21, cb9 * u3);
   const P cb10 = splat<P>(s.cb[10]), sb10 = splat<P>(s.sb[10]);
-  const P w22 = cb10 * u22 - sb10 * u2;
-  const P w2 = sb10 * u22 + cb10 * u2;
+  const P w22 = madd<F>(cb10, u22, -(sb10 * u2));
+  const P w2 = madd<F>(sb10, u22, cb10 * u2);
   const P cb11 = splat<P>(s.cb[11]), sb11 = splat<P>(s.sb[11]);
-  const P w23 = cb11 * u23 - sb11 * u1;
-  const P w1 = sb11 * u23 + cb11 * u1;
+  const P w23 = madd<F>(cb11, u23, -(sb11 * u1));
+  const P w1 = madd<F>(sb11, u23, cb11 * u1);
   const P cb12 = splat<P>(s.cb[12]), sb12 = splat<P>(s.sb[12]);
-  const P w24 = cb12 * u24 - sb12 * u0;
-  const P w0 = sb12 * u24 + cb12 * u0;
-  const P v0 = T(0.7714448170238043) * w13 - T(0.55833076742161503) * w15 + T(0.28725880996301428) * w17 - T(0.10066649535040351) * w19 + T(0.021967230232816423) * w21 - T(0.0023920798269367501) * w23;
-  const P v1 = T(-0.010742187500000135) * w1 + T(0.080712757698960386) * w3 - T(0.28767847243653466) * w5 + T(0.58636459044042144) * w7 - T(0.68381274393975344) * w9 + T(0.31494102773717586) * w11;
-  const P v2 = T(0.46435521203002933) * w13 + T(0.20164537722025017) * w15 - T(0.6570560409822066) * w17 + T(0.52110934255625696) * w19 - T(0.19834078136318287) * w21 + T(0.03311684562072878) * w23;
-  const P v3 = T(0.080712757698960413) * w1 - T(0.37207031250000022) * w3 + T(0.65785022183448139) * w5 - T(0.31925529371635802) * w7 - T(0.42195411222921964) * w9 + T(0.37724395759248319) * w11;
-  const P v4 = T(0.32928552212043144) * w13 + T(0.45497333155018577) * w15 - T(0.23408184791529135) * w17 - T(0.54296875000000033) * w19 + T(0.5549212755610593) * w21 - T(0.16438769853516247) * w23;
-  const P v5 = T(-0.28767847243653444) * w1 + T(0.65785022183448139) * w3 - T(0.15722656249999986) * w5 - T(0.52668415780940514) * w7 - T(0.11374333288754665) * w9 + T(0.41160690265053906) * w11;
-  const P v6 = T(0.23130311098294951) * w13 + T(0.49003980202465136) * w15 + T(0.27404717188285677) * w17 - T(0.30237819268448063) * w19 - T(0.58930833781357783) * w21 + T(0.43879508023281572) * w23;
-  const P v7 = T(0.58636459044042155) * w1 - T(0.31925529371635814) * w3 - T(0.52668415780940525) * w5 - T(0.25683593749999994) * w7 + T(0.15374580191486639) * w9 + T(0.43272849689657278) * w11;
-  const P v8 = T(0.14842464993721355) * w13 + T(0.39257812500000011) * w15 + T(0.48401456158383827) * w17 + T(0.34122999866263926) * w19 - T(0.074462490393391645) * w21 - T(0.68381274393975278) * w23;
-  const P v9 = T(-0.683812743939753) * w1 - T(0.42195411222921947) * w3 - T(0.11374333288754657) * w5 + T(0.15374580191486642) * w7 + T(0.34570312500000028) * w9 + T(0.4452739498116407) * w11;
-  const P v10 = T(0.072712931519477636) * w13 + T(0.21528718442430272) * w15 + T(0.34870255998744376) * w17 + T(0.46435521203002922) * w19 + T(0.54718531932211145) * w21 + T(0.55833076742161469) * w23;
-  const P v11 = T(0.31494102773717575) * w1 + T(0.37724395759248319) * w3 + T(0.41160690265053945) * w5 + T(0.43272849689657295) * w7 + T(0.44527394981164103) * w9 + T(0.45117187500000022) * w11;
-  const P v12 = T(0.22558593749999989) * w12 + T(0.32109161153485005) * w14 + T(0.32771275372847319) * w16 + T(0.3404689606398501) * w18 + T(0.36352137351394492) * w20 + T(0.41010741896821812) * w22 + T(0.56776801212685724) * w24;
-  const P v13 = T(-0.77144481702380341) * w0 - T(0.46435521203002927) * w2 - T(0.32928552212043111) * w4 - T(0.23130311098294948) * w6 - T(0.14842464993721335) * w8 - T(0.072712931519477664) * w10;
-  const P v14 = T(0.32109161153484961) * w12 + T(0.43359375000000033) * w14 + T(0.37077237317518824) * w16 + T(0.26094510187280073) * w18 + T(0.092871042406005827) * w20 - T(0.16464276106021591) * w22 - T(0.68381274393975366) * w24;
-  const P v15 = T(0.55833076742161469) * w0 - T(0.20164537722024989) * w2 - T(0.45497333155018532) * w4 - T(0.49003980202465147) * w6 - T(0.39257812499999989) * w8 - T(0.21528718442430292) * w10;
-  const P v16 = T(0.32771275372847292) * w12 + T(0.37077237317518835) * w14 + T(0.11669921875000008) * w16 - T(0.22371382266342776) * w18 - T(0.51184499799395888) * w20 - T(0.50411344305062467) * w22 + T(0.41874807556621174) * w24;
-  const P v17 = T(-0.28725880996301417) * w0 + T(0.65705604098220671) * w2 + T(0.23408184791529099) * w4 - T(0.27404717188285721) * w6 - T(0.48401456158383815) * w8 - T(0.34870255998744404) * w10;
-  const P v18 = T(0.34046896063984972) * w12 + T(0.26094510187280068) * w14 - T(0.22371382266342782) * w16 - T(0.52539062500000022) * w18 - T(0.19810985037948739) * w20 + T(0.64696804980671441) * w22 - T(0.17913734136900084) * w24;
-  const P v19 = T(0.10066649535040349) * w0 - T(0.52110934255625696) * w2 + T(0.54296874999999978) * w4 + T(0.30237819268448085) * w6 - T(0.34122999866263887) * w8 - T(0.46435521203002933) * w10;
-  const P v20 = T(0.36352137351394453) * w12 + T(0.092871042406005799) * w14 - T(0.51184499799395899) * w16 - T(0.19810985037948736) * w18 + T(0.65722656250000067) * w20 - T(0.35144583567747567) * w22 + T(0.050333247675201767) * w24;
-  const P v21 = T(-0.021967230232816302) * w0 + T(0.19834078136318262) * w2 - T(0.55492127556105864) * w4 + T(0.58930833781357805) * w6 + T(0.074462490393391673) * w8 - T(0.54718531932211167) * w10;
-  const P v22 = T(0.41010741896821784) * w12 - T(0.16464276106021578) * w14 - T(0.504113443050625) * w16 + T(0.64696804980671485) * w18 - T(0.35144583567747578) * w20 + T(0.091796875000000042) * w22 - T(0.008111937366130955) * w24;
-  const P v23 = T(0.0023920798269365605) * w0 - T(0.033116845620728877) * w2 + T(0.16438769853516247) * w4 - T(0.43879508023281627) * w6 + T(0.68381274393975278) * w8 - T(0.55833076742161536) * w10;
-  const P v24 = T(0.56776801212685624) * w12 - T(0.68381274393975322) * w14 + T(0.41874807556621113) * w16 - T(0.17913734136900084) * w18 + T(0.050333247675201774) * w20 - T(0.0081119373661310053) * w22 + T(0.000488281250000018) * w24;
+  const P w24 = madd<F>(cb12, u24, -(sb12 * u0));
+  const P w0 = madd<F>(sb12, u24, cb12 * u0);
+  const P v0 = madd<F>(T(-0.0023920798269367501), w23, madd<F>(T(0.021967230232816423), w21, madd<F>(T(-0.10066649535040351), w19, madd<F>(T(0.28725880996301428), w17, madd<F>(T(-0.55833076742161503), w15, T(0.7714448170238043) * w13)))));
+  const P v1 = madd<F>(T(0.31494102773717586), w11, madd<F>(T(-0.68381274393975344), w9, madd<F>(T(0.58636459044042144), w7, madd<F>(T(-0.28767847243653466), w5, madd<F>(T(0.080712757698960386), w3, T(-0.010742187500000135) * w1)))));
+  const P v2 = madd<F>(T(0.03311684562072878), w23, madd<F>(T(-0.19834078136318287), w21, madd<F>(T(0.52110934255625696), w19, madd<F>(T(-0.6570560409822066), w17, madd<F>(T(0.20164537722025017), w15, T(0.46435521203002933) * w13)))));
+  const P v3 = madd<F>(T(0.37724395759248319), w11, madd<F>(T(-0.42195411222921964), w9, madd<F>(T(-0.31925529371635802), w7, madd<F>(T(0.65785022183448139), w5, madd<F>(T(-0.37207031250000022), w3, T(0.080712757698960413) * w1)))));
+  const P v4 = madd<F>(T(-0.16438769853516247), w23, madd<F>(T(0.5549212755610593), w21, madd<F>(T(-0.54296875000000033), w19, madd<F>(T(-0.23408184791529135), w17, madd<F>(T(0.45497333155018577), w15, T(0.32928552212043144) * w13)))));
+  const P v5 = madd<F>(T(0.41160690265053906), w11, madd<F>(T(-0.11374333288754665), w9, madd<F>(T(-0.52668415780940514), w7, madd<F>(T(-0.15722656249999986), w5, madd<F>(T(0.65785022183448139), w3, T(-0.28767847243653444) * w1)))));
+  const P v6 = madd<F>(T(0.43879508023281572), w23, madd<F>(T(-0.58930833781357783), w21, madd<F>(T(-0.30237819268448063), w19, madd<F>(T(0.27404717188285677), w17, madd<F>(T(0.49003980202465136), w15, T(0.23130311098294951) * w13)))));
+  const P v7 = madd<F>(T(0.43272849689657278), w11, madd<F>(T(0.15374580191486639), w9, madd<F>(T(-0.25683593749999994), w7, madd<F>(T(-0.52668415780940525), w5, madd<F>(T(-0.31925529371635814), w3, T(0.58636459044042155) * w1)))));
+  const P v8 = madd<F>(T(-0.68381274393975278), w23, madd<F>(T(-0.074462490393391645), w21, madd<F>(T(0.34122999866263926), w19, madd<F>(T(0.48401456158383827), w17, madd<F>(T(0.39257812500000011), w15, T(0.14842464993721355) * w13)))));
+  const P v9 = madd<F>(T(0.4452739498116407), w11, madd<F>(T(0.34570312500000028), w9, madd<F>(T(0.15374580191486642), w7, madd<F>(T(-0.11374333288754657), w5, madd<F>(T(-0.42195411222921947), w3, T(-0.683812743939753) * w1)))));
+  const P v10 = madd<F>(T(0.55833076742161469), w23, madd<F>(T(0.54718531932211145), w21, madd<F>(T(0.46435521203002922), w19, madd<F>(T(0.34870255998744376), w17, madd<F>(T(0.21528718442430272), w15, T(0.072712931519477636) * w13)))));
+  const P v11 = madd<F>(T(0.45117187500000022), w11, madd<F>(T(0.44527394981164103), w9, madd<F>(T(0.43272849689657295), w7, madd<F>(T(0.41160690265053945), w5, madd<F>(T(0.37724395759248319), w3, T(0.31494102773717575) * w1)))));
+  const P v12 = madd<F>(T(0.56776801212685724), w24, madd<F>(T(0.41010741896821812), w22, madd<F>(T(0.36352137351394492), w20, madd<F>(T(0.3404689606398501), w18, madd<F>(T(0.32771275372847319), w16, madd<F>(T(0.32109161153485005), w14, T(0.22558593749999989) * w12))))));
+  const P v13 = madd<F>(T(-0.072712931519477664), w10, madd<F>(T(-0.14842464993721335), w8, madd<F>(T(-0.23130311098294948), w6, madd<F>(T(-0.32928552212043111), w4, madd<F>(T(-0.46435521203002927), w2, T(-0.77144481702380341) * w0)))));
+  const P v14 = madd<F>(T(-0.68381274393975366), w24, madd<F>(T(-0.16464276106021591), w22, madd<F>(T(0.092871042406005827), w20, madd<F>(T(0.26094510187280073), w18, madd<F>(T(0.37077237317518824), w16, madd<F>(T(0.43359375000000033), w14, T(0.32109161153484961) * w12))))));
+  const P v15 = madd<F>(T(-0.21528718442430292), w10, madd<F>(T(-0.39257812499999989), w8, madd<F>(T(-0.49003980202465147), w6, madd<F>(T(-0.45497333155018532), w4, madd<F>(T(-0.20164537722024989), w2, T(0.55833076742161469) * w0)))));
+  const P v16 = madd<F>(T(0.41874807556621174), w24, madd<F>(T(-0.50411344305062467), w22, madd<F>(T(-0.51184499799395888), w20, madd<F>(T(-0.22371382266342776), w18, madd<F>(T(0.11669921875000008), w16, madd<F>(T(0.37077237317518835), w14, T(0.32771275372847292) * w12))))));
+  const P v17 = madd<F>(T(-0.34870255998744404), w10, madd<F>(T(-0.48401456158383815), w8, madd<F>(T(-0.27404717188285721), w6, madd<F>(T(0.23408184791529099), w4, madd<F>(T(0.65705604098220671), w2, T(-0.28725880996301417) * w0)))));
+  const P v18 = madd<F>(T(-0.17913734136900084), w24, madd<F>(T(0.64696804980671441), w22, madd<F>(T(-0.19810985037948739), w20, madd<F>(T(-0.52539062500000022), w18, madd<F>(T(-0.22371382266342782), w16, madd<F>(T(0.26094510187280068), w14, T(0.34046896063984972) * w12))))));
+  const P v19 = madd<F>(T(-0.46435521203002933), w10, madd<F>(T(-0.34122999866263887), w8, madd<F>(T(0.30237819268448085), w6, madd<F>(T(0.54296874999999978), w4, madd<F>(T(-0.52110934255625696), w2, T(0.10066649535040349) * w0)))));
+  const P v20 = madd<F>(T(0.050333247675201767), w24, madd<F>(T(-0.35144583567747567), w22, madd<F>(T(0.65722656250000067), w20, madd<F>(T(-0.19810985037948736), w18, madd<F>(T(-0.51184499799395899), w16, madd<F>(T(0.092871042406005799), w14, T(0.36352137351394453) * w12))))));
+  const P v21 = madd<F>(T(-0.54718531932211167), w10, madd<F>(T(0.074462490393391673), w8, madd<F>(T(0.58930833781357805), w6, madd<F>(T(-0.55492127556105864), w4, madd<F>(T(0.19834078136318262), w2, T(-0.021967230232816302) * w0)))));
+  const P v22 = madd<F>(T(-0.008111937366130955), w24, madd<F>(T(0.091796875000000042), w22, madd<F>(T(-0.35144583567747578), w20, madd<F>(T(0.64696804980671485), w18, madd<F>(T(-0.504113443050625), w16, madd<F>(T(-0.16464276106021578), w14, T(0.41010741896821784) * w12))))));
+  const P v23 = madd<F>(T(-0.55833076742161536), w10, madd<F>(T(0.68381274393975278), w8, madd<F>(T(-0.43879508023281627), w6, madd<F>(T(0.16438769853516247), w4, madd<F>(T(-0.033116845620728877), w2, T(0.0023920798269365605) * w0)))));
+  const P v24 = madd<F>(T(0.000488281250000018), w24, madd<F>(T(-0.0081119373661310053), w22, madd<F>(T(0.050333247675201774), w20, madd<F>(T(-0.17913734136900084), w18, madd<F>(T(0.41874807556621113), w16, madd<F>(T(-0.68381274393975322), w14, T(0.56776801212685624) * w12))))));
   y[12] = v12;
   const P ca1 = splat<P>(s.ca[1]), sa1 = splat<P>(s.sa[1]);
-  y[13] = ca1 * v13 - sa1 * v11;
-  y[11] = sa1 * v13 + ca1 * v11;
+  y[13] = madd<F>(ca1, v13, -(sa1 * v11));
+  y[11] = madd<F>(sa1, v13, ca1 * v11);
   const P ca2 = splat<P>(s.ca[2]), sa2 = splat<P>(s.sa[2]);
-  y[14] = ca2 * v14 - sa2 * v10;
-  y[10] = sa2 * v14 + ca2 * v10;
+  y[14] = madd<F>(ca2, v14, -(sa2 * v10));
+  y[10] = madd<F>(sa2, v14, ca2 * v10);
   const P ca3 = splat<P>(s.ca[3]), sa3 = splat<P>(s.sa[3]);
-  y[15] = ca3 * v15 - sa3 * v9;
-  y[9] = sa3 * v15 + ca3 * v9;
+  y[15] = madd<F>(ca3, v15, -(sa3 * v9));
+  y[9] = madd<F>(sa3, v15, ca3 * v9);
   const P ca4 = splat<P>(s.ca[4]), sa4 = splat<P>(s.sa[4]);
-  y[16] = ca4 * v16 - sa4 * v8;
-  y[8] = sa4 * v16 + ca4 * v8;
+  y[16] = madd<F>(ca4, v16, -(sa4 * v8));
+  y[8] = madd<F>(sa4, v16, ca4 * v8);
   const P ca5 = splat<P>(s.ca[5]), sa5 = splat<P>(s.sa[5]);
-  y[17] = ca5 * v17 - sa5 * v7;
-  y[7] = sa5 * v17 + ca5 * v7;
+  y[17] = madd<F>(ca5, v17, -(sa5 * v7));
+  y[7] = madd<F>(sa5, v17, ca5 * v7);
   const P ca6 = splat<P>(s.ca[6]), sa6 = splat<P>(s.sa[6]);
-  y[18] = ca6 * v18 - sa6 * v6;
-  y[6] = sa6 * v18 + ca6 * v6;
+  y[18] = madd<F>(ca6, v18, -(sa6 * v6));
+  y[6] = madd<F>(sa6, v18, ca6 * v6);
   const P ca7 = splat<P>(s.ca[7]), sa7 = splat<P>(s.sa[7]);
-  y[19] = ca7 * v19 - sa7 * v5;
-  y[5] = sa7 * v19 + ca7 * v5;
+  y[19] = madd<F>(ca7, v19, -(sa7 * v5));
+  y[5] = madd<F>(sa7, v19, ca7 * v5);
   const P ca8 = splat<P>(s.ca[8]), sa8 = splat<P>(s.sa[8]);
-  y[20] = ca8 * v20 - sa8 * v4;
-  y[4] = sa8 * v20 + ca8 * v4;
+  y[20] = madd<F>(ca8, v20, -(sa8 * v4));
+  y[4] = madd<F>(sa8, v20, ca8 * v4);
   const P ca9 = splat<P>(s.ca[9]), sa9 = splat<P>(s.sa[9]);
-  y[21] = ca9 * v21 - sa9 * v3;
-  y[3] = sa9 * v21 + ca9 * v3;
+  y[21] = madd<F>(ca9, v21, -(sa9 * v3));
+  y[3] = madd<F>(sa9, v21, ca9 * v3);
   const P ca10 = splat<P>(s.ca[10]), sa10 = splat<P>(s.sa[10]);
-  y[22] = ca10 * v22 - sa10 * v2;
-  y[2] = sa10 * v22 + ca10 * v2;
+  y[22] = madd<F>(ca10, v22, -(sa10 * v2));
+  y[2] = madd<F>(sa10, v22, ca10 * v2);
   const P ca11 = splat<P>(s.ca[11]), sa11 = splat<P>(s.sa[11]);
-  y[23] = ca11 * v23 - sa11 * v1;
-  y[1] = sa11 * v23 + ca11 * v1;
+  y[23] = madd<F>(ca11, v23, -(sa11 * v1));
+  y[1] = madd<F>(sa11, v23, ca11 * v1);
   const P ca12 = splat<P>(s.ca[12]), sa12 = splat<P>(s.sa[12]);
-  y[24] = ca12 * v24 - sa12 * v0;
-  y[0] = sa12 * v24 + ca12 * v0;
+  y[24] = madd<F>(ca12, v24, -(sa12 * v0));
+  y[0] = madd<F>(sa12, v24, ca12 * v0);
 }
 
 // Band 13 of Z(a) X90^T Z(b) X90 Z(g), Ry(b) = Rx(-90) Rz(b) Rx(+90).
-template <class T, class P, class S>
-inline void zxzxz_band13(const S& s, const P* __restrict x, P* __restrict y) {
+template <bool F, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void zxzxz_band13(const S& s, const P* __restrict x, P* __restrict y) {
   const P t13 = x[13];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
-  const P t14 = cg1 * x[14] - sg1 * x[12];
-  const P t12 = sg1 * x[14] + cg1 * x[12];
+  const P t14 = madd<F>(cg1, x[14], -(sg1 * x[12]));
+  const P t12 = madd<F>(sg1, x[14], cg1 * x[12]);
   const P cg2 = splat<P>(s.cg[2]), sg2 = splat<P>(s.sg[2]);
-  const P t15 = cg2 * x[15] - sg2 * x[11];
-  const P t11 = sg2 * x[15] + cg2 * x[11];
+  const P t15 = madd<F>(cg2, x[15], -(sg2 * x[11]));
+  const P t11 = madd<F>(sg2, x[15], cg2 * x[11]);
   const P cg3 = splat<P>(s.cg[3]), sg3 = splat<P>(s.sg[3]);
-  const P t16 = cg3 * x[16] - sg3 * x[10];
-  const P t10 = sg3 * x[16] + cg3 * x[10];
+  const P t16 = madd<F>(cg3, x[16], -(sg3 * x[10]));
+  const P t10 = madd<F>(sg3, x[16], cg3 * x[10]);
   const P cg4 = splat<P>(s.cg[4]), sg4 = splat<P>(s.sg[4]);
-  const P t17 = cg4 * x[17] - sg4 * x[9];
-  const P t9 = sg4 * x[17] + cg4 * x[9];
+  const P t17 = madd<F>(cg4, x[17], -(sg4 * x[9]));
+  const P t9 = madd<F>(sg4, x[17], cg4 * x[9]);
   const P cg5 = splat<P>(s.cg[5]), sg5 = splat<P>(s.sg[5]);
-  const P t18 = cg5 * x[18] - sg5 * x[8];
-  const P t8 = sg5 * x[18] + cg5 * x[8];
+  const P t18 = madd<F>(cg5, x[18], -(sg5 * x[8]));
+  const P t8 = madd<F>(sg5, x[18], cg5 * x[8]);
   const P cg6 = splat<P>(s.cg[6]), sg6 = splat<P>(s.sg[6]);
-  const P t19 = cg6 * x[19] - sg6 * x[7];
-  const P t7 = sg6 * x[19] + cg6 * x[7];
+  const P t19 = madd<F>(cg6, x[19], -(sg6 * x[7]));
+  const P t7 = madd<F>(sg6, x[19], cg6 * x[7]);
   const P cg7 = splat<P>(s.cg[7]), sg7 = splat<P>(s.sg[7]);
-  const P t20 = cg7 * x[20] - sg7 * x[6];
-  const P t6 = sg7 * x[20] + cg7 * x[6];
+  const P t20 = madd<F>(cg7, x[20], -(sg7 * x[6]));
+  const P t6 = madd<F>(sg7, x[20], cg7 * x[6]);
   const P cg8 = splat<P>(s.cg[8]), sg8 = splat<P>(s.sg[8]);
-  const P t21 = cg8 * x[21] - sg8 * x[5];
-  const P t5 = sg8 * x[21] + cg8 * x[5];
+  const P t21 = madd<F>(cg8, x[21], -(sg8 * x[5]));
+  const P t5 = madd<F>(sg8, x[21], cg8 * x[5]);
   const P cg9 = splat<P>(s.cg[9]), sg9 = splat<P>(s.sg[9]);
-  const P t22 = cg9 * x[22] - sg9 * x[4];
-  const P t4 = sg9 * x[22] + cg9 * x[4];
+  const P t22 = madd<F>(cg9, x[22], -(sg9 * x[4]));
+  const P t4 = madd<F>(sg9, x[22], cg9 * x[4]);
   const P cg10 = splat<P>(s.cg[10]), sg10 = splat<P>(s.sg[10]);
-  const P t23 = cg10 * x[23] - sg10 * x[3];
-  const P t3 = sg10 * x[23] + cg10 * x[3];
+  const P t23 = madd<F>(cg10, x[23], -(sg10 * x[3]));
+  const P t3 = madd<F>(sg10, x[23], cg10 * x[3]);
   const P cg11 = splat<P>(s.cg[11]), sg11 = splat<P>(s.sg[11]);
-  const P t24 = cg11 * x[24] - sg11 * x[2];
-  const P t2 = sg11 * x[24] + cg11 * x[2];
+  const P t24 = madd<F>(cg11, x[24], -(sg11 * x[2]));
+  const P t2 = madd<F>(sg11, x[24], cg11 * x[2]);
   const P cg12 = splat<P>(s.cg[12]), sg12 = splat<P>(s.sg[12]);
-  const P t25 = cg12 * x[25] - sg12 * x[1];
-  const P t1 = sg12 * x[25] + cg12 * x[1];
+  const P t25 = madd<F>(cg12, x[25], -(sg12 * x[1]));
+  const P t1 = madd<F>(sg12, x[25], cg12 * x[1]);
   const P cg13 = splat<P>(s.cg[13]), sg13 = splat<P>(s.sg[13]);
-  const P t26 = cg13 * x[26] - sg13 * x[0];
-  const P t0 = sg13 * x[26] + cg13 * x[0];
-  const P u0 = T(0.55674234096704367) * t13 - T(0.67861257155893606) * t15 + T(0.43155265360433936) * t17 - T(0.19800993746085555) * t19 + T(0.062616240172380169) * t21 - T(0.012448778109357307) * t23 + T(0.0012448778109355582) * t25;
-  const P u1 = T(-0.0058593750000000971) * t1 + T(0.048828124999999979) * t3 - T(0.19648088031186373) * t5 + T(0.465995323845318) * t7 - T(0.6770755082680836) * t9 + T(0.53234749916129087) * t11;
-  const P u2 = T(0.40147261151570651) * t13 - T(0.18821326330232496) * t15 - T(0.45482644910810599) * t17 + T(0.64803329186808389) * t19 - T(0.3994322681708119) * t21 + T(0.12912985164246524) * t23 - T(0.018989684065068509) * t25;
-  const P u3 = T(0.048828125000000007) * t1 - T(0.26367187500000022) * t3 + T(0.58944264093559251) * t5 - T(0.52812803369136141) * t7 - T(0.13541510165361689) * t9 + T(0.53234749916129198) * t11;
-  const P u4 = T(0.35516344310694486) * t13 + T(0.055501063431182933) * t15 - T(0.51530701050804206) * t17 - T(0.087450067714449214) * t19 + T(0.62989984533656607) * t21 - T(0.43555891764461241) * t23 + T(0.1053771574946642) * t25;
-  const P u5 = T(-0.19648088031186386) * t1 + T(0.58944264093559195) * t3 - T(0.42187499999999989) * t5 - T(0.38293206041101469) * t7 + T(0.26921970218926211) * t9 + T(0.46568005127581974) * t11;
-  const P u6 = T(0.33184809401474769) * t13 + T(0.21780190046617998) * t15 - T(0.28960676761644094) * t17 - T(0.4910808413705739) * t19 - T(0.012788868021199851) * t21 + T(0.64326862003139129) * t23 - T(0.32163431001569553) * t25;
-  const P u7 = T(0.4659953238453185) * t1 - T(0.52812803369136119) * t3 - T(0.38293206041101502) * t5 + T(0.13476562499999994) * t7 + T(0.45121414845245261) * t9 + T(0.36815240573389746) * t11;
-  const P u8 = T(0.31847955038633535) * t13 + T(0.32847213547974091) * t15 + T(0.014846480269053589) * t17 - T(0.34012635856225309) * t19 - T(0.50923193110085918) * t21 - T(0.2393823416358454) * t23 + T(0.59845585408961322) * t25;
-  const P u9 = T(-0.67707550826808416) * t1 - T(0.13541510165361689) * t3 + T(0.269219702189262) * t5 + T(0.45121414845245233) * t7 + T(0.42773437499999983) * t9 + T(0.2533798630129645) * t11;
-  const P u10 = T(0.3108956160203441) * t13 + T(0.39838364181026831) * t15 + T(0.27693877404913625) * t17 + T(0.083251595146774354) * t19 - T(0.16673428435381735) * t21 - T(0.44139922820051058) * t23 - T(0.66209884230076554) * t25;
-  const P u11 = T(0.53234749916129198) * t1 + T(0.5323474991612922) * t3 + T(0.46568005127582007) * t5 + T(0.36815240573389757) * t7 + T(0.25337986301296478) * t9 + T(0.12890624999999994) * t11;
-  const P u12 = T(0.30742181295663329) * t13 + T(0.43236470658687387) * t15 + T(0.42493094836993067) * t17 + T(0.41160690265053934) * t19 + T(0.39048459390687051) * t21 + T(0.35710955873299843) * t23 + T(0.29759129894416531) * t25;
-  const P u13 = T(-0.55674234096704311) * t0 - T(0.40147261151570607) * t2 - T(0.3551634431069447) * t4 - T(0.33184809401474713) * t6 - T(0.31847955038633491) * t8 - T(0.31089561602034327) * t10 - T(0.30742181295663257) * t12;
-  const P u14 = T(0.032226562499999986) * t14 + T(0.097772148023233904) * t16 + T(0.16692864173800481) * t18 + T(0.24350992753551076) * t20 + T(0.33508120677026265) * t22 + T(0.46294341611217116) * t24 + T(0.75871192019586109) * t26;
-  const P u15 = T(0.67861257155893639) * t0 + T(0.18821326330232474) * t2 - T(0.055501063431182891) * t4 - T(0.21780190046617981) * t6 - T(0.32847213547974075) * t8 - T(0.39838364181026792) * t10 - T(0.43236470658687365) * t12;
-  const P u16 = T(0.097772148023233807) * t14 + T(0.27905273437500017) * t16 + T(0.41641008901347293) * t18 + T(0.47610564299333863) * t20 + T(0.41417145645063502) * t22 + T(0.15605819373554469) * t24 - T(0.56267581946979894) * t26;
-  const P u17 = T(-0.43155265360433931) * t0 + T(0.45482644910810638) * t2 + T(0.51530701050804251) * t4 + T(0.289606767616441) * t6 - T(0.014846480269053539) * t8 - T(0.27693877404913603) * t10 - T(0.42493094836993045) * t12;
-  const P u18 = T(0.16692864173800459) * t14 + T(0.4164100890134726) * t16 + T(0.43823242187499994) * t18 + T(0.16916849025751879) * t20 - T(0.30447947908103368) * t22 - T(0.62629484514797784) * t24 + T(0.30515380780267737) * t26;
-  const P u19 = T(0.1980099374608556) * t0 - T(0.64803329186808367) * t2 + T(0.087450067714449034) * t4 + T(0.49108084137057351) * t6 + T(0.34012635856225304) * t8 - T(0.083251595146774354) * t10 - T(0.41160690265053923) * t12;
-  const P u20 = T(0.24350992753551057) * t14 + T(0.47610564299333841) * t16 + T(0.16916849025751912) * t18 - T(0.40478515625000022) * t20 - T(0.45029618794257043) * t22 + T(0.55232951835200417) * t24 - T(0.11714425878649877) * t26;
-  const P u21 = T(-0.062616240172380155) * t0 + T(0.39943226817081201) * t2 - T(0.62989984533656651) * t4 + T(0.012788868021199886) * t6 + T(0.5092319311008594) * t8 + T(0.16673428435381729) * t10 - T(0.39048459390687074) * t12;
-  const P u22 = T(0.33508120677026237) * t14 + T(0.41417145645063475) * t16 - T(0.30447947908103357) * t18 - T(0.4502961879425702) * t20 + T(0.59912109375000044) * t22 - T(0.24672049987443009) * t24 + T(0.029851121241790762) * t26;
-  const P u23 = T(0.012448778109357418) * t0 - T(0.12912985164246535) * t2 + T(0.43555891764461274) * t4 - T(0.6432686200313914) * t6 + T(0.23938234163584537) * t8 + T(0.44139922820051047) * t10 - T(0.35710955873299838) * t12;
-  const P u24 = T(0.46294341611217094) * t14 + T(0.15605819373554444) * t16 - T(0.62629484514797784) * t18 + T(0.55232951835200383) * t20 - T(0.24672049987442993) * t22 + T(0.055908203124999979) * t24 - T(0.0044013077093066968) * t26;
-  const P u25 = T(-0.0012448778109357772) * t0 + T(0.018989684065068405) * t2 - T(0.10537715749466428) * t4 + T(0.32163431001569542) * t6 - T(0.59845585408961377) * t8 + T(0.66209884230076566) * t10 - T(0.29759129894416547) * t12;
-  const P u26 = T(0.75871192019586087) * t14 - T(0.56267581946979905) * t16 + T(0.30515380780267776) * t18 - T(0.11714425878649878) * t20 + T(0.029851121241790662) * t22 - T(0.0044013077093066049) * t24 + T(0.00024414062500005611) * t26;
+  const P t26 = madd<F>(cg13, x[26], -(sg13 * x[0]));
+  const P t0 = madd<F>(sg13, x[26], cg13 * x[0]);
+  const P u0 = madd<F>(T(0.0012448778109355582), t25, madd<F>(T(-0.012448778109357307), t23, madd<F>(T(0.062616240172380169), t21, madd<F>(T(-0.19800993746085555), t19, madd<F>(T(0.43155265360433936), t17, madd<F>(T(-0.67861257155893606), t15, T(0.55674234096704367) * t13))))));
+  const P u1 = madd<F>(T(0.53234749916129087), t11, madd<F>(T(-0.6770755082680836), t9, madd<F>(T(0.465995323845318), t7, madd<F>(T(-0.19648088031186373), t5, madd<F>(T(0.048828124999999979), t3, T(-0.0058593750000000971) * t1)))));
+  const P u2 = madd<F>(T(-0.018989684065068509), t25, madd<F>(T(0.12912985164246524), t23, madd<F>(T(-0.3994322681708119), t21, madd<F>(T(0.64803329186808389), t19, madd<F>(T(-0.45482644910810599), t17, madd<F>(T(-0.18821326330232496), t15, T(0.40147261151570651) * t13))))));
+  const P u3 = madd<F>(T(0.53234749916129198), t11, madd<F>(T(-0.13541510165361689), t9, madd<F>(T(-0.52812803369136141), t7, madd<F>(T(0.58944264093559251), t5, madd<F>(T(-0.26367187500000022), t3, T(0.048828125000000007) * t1)))));
+  const P u4 = madd<F>(T(0.1053771574946642), t25, madd<F>(T(-0.43555891764461241), t23, madd<F>(T(0.62989984533656607), t21, madd<F>(T(-0.087450067714449214), t19, madd<F>(T(-0.51530701050804206), t17, madd<F>(T(0.055501063431182933), t15, T(0.35516344310694486) * t13))))));
+  const P u5 = madd<F>(T(0.46568005127581974), t11, madd<F>(T(0.26921970218926211), t9, madd<F>(T(-0.38293206041101469), t7, madd<F>(T(-0.42187499999999989), t5, madd<F>(T(0.58944264093559195), t3, T(-0.19648088031186386) * t1)))));
+  const P u6 = madd<F>(T(-0.32163431001569553), t25, madd<F>(T(0.64326862003139129), t23, madd<F>(T(-0.012788868021199851), t21, madd<F>(T(-0.4910808413705739), t19, madd<F>(T(-0.28960676761644094), t17, madd<F>(T(0.21780190046617998), t15, T(0.33184809401474769) * t13))))));
+  const P u7 = madd<F>(T(0.36815240573389746), t11, madd<F>(T(0.45121414845245261), t9, madd<F>(T(0.13476562499999994), t7, madd<F>(T(-0.38293206041101502), t5, madd<F>(T(-0.52812803369136119), t3, T(0.4659953238453185) * t1)))));
+  const P u8 = madd<F>(T(0.59845585408961322), t25, madd<F>(T(-0.2393823416358454), t23, madd<F>(T(-0.50923193110085918), t21, madd<F>(T(-0.34012635856225309), t19, madd<F>(T(0.014846480269053589), t17, madd<F>(T(0.32847213547974091), t15, T(0.31847955038633535) * t13))))));
+  const P u9 = madd<F>(T(0.2533798630129645), t11, madd<F>(T(0.42773437499999983), t9, madd<F>(T(0.45121414845245233), t7, madd<F>(T(0.269219702189262), t5, madd<F>(T(-0.13541510165361689), t3, T(-0.67707550826808416) * t1)))));
+  const P u10 = madd<F>(T(-0.66209884230076554), t25, madd<F>(T(-0.44139922820051058), t23, madd<F>(T(-0.16673428435381735), t21, madd<F>(T(0.083251595146774354), t19, madd<F>(T(0.27693877404913625), t17, madd<F>(T(0.39838364181026831), t15, T(0.3108956160203441) * t13))))));
+  const P u11 = madd<F>(T(0.12890624999999994), t11, madd<F>(T(0.25337986301296478), t9, madd<F>(T(0.36815240573389757), t7, madd<F>(T(0.46568005127582007), t5, madd<F>(T(0.5323474991612922), t3, T(0.53234749916129198) * t1)))));
+  const P u12 = madd<F>(T(0.29759129894416531), t25, madd<F>(T(0.35710955873299843), t23, madd<F>(T(0.39048459390687051), t21, madd<F>(T(0.41160690265053934), t19, madd<F>(T(0.42493094836993067), t17, madd<F>(T(0.43236470658687387), t15, T(0.30742181295663329) * t13))))));
+  const P u13 = madd<F>(T(-0.30742181295663257), t12, madd<F>(T(-0.31089561602034327), t10, madd<F>(T(-0.31847955038633491), t8, madd<F>(T(-0.33184809401474713), t6, madd<F>(T(-0.3551634431069447), t4, madd<F>(T(-0.40147261151570607), t2, T(-0.55674234096704311) * t0))))));
+  const P u14 = madd<F>(T(0.75871192019586109), t26, madd<F>(T(0.46294341611217116), t24, madd<F>(T(0.33508120677026265), t22, madd<F>(T(0.24350992753551076), t20, madd<F>(T(0.16692864173800481), t18, madd<F>(T(0.097772148023233904), t16, T(0.032226562499999986) * t14))))));
+  const P u15 = madd<F>(T(-0.43236470658687365), t12, madd<F>(T(-0.39838364181026792), t10, madd<F>(T(-0.32847213547974075), t8, madd<F>(T(-0.21780190046617981), t6, madd<F>(T(-0.055501063431182891), t4, madd<F>(T(0.18821326330232474), t2, T(0.67861257155893639) * t0))))));
+  const P u16 = madd<F>(T(-0.56267581946979894), t26, madd<F>(T(0.15605819373554469), t24, madd<F>(T(0.41417145645063502), t22, madd<F>(T(0.47610564299333863), t20, madd<F>(T(0.41641008901347293), t18, madd<F>(T(0.27905273437500017), t16, T(0.097772148023233807) * t14))))));
+  const P u17 = madd<F>(T(-0.42493094836993045), t12, madd<F>(T(-0.27693877404913603), t10, madd<F>(T(-0.014846480269053539), t8, madd<F>(T(0.289606767616441), t6, madd<F>(T(0.51530701050804251), t4, madd<F>(T(0.45482644910810638), t2, T(-0.43155265360433931) * t0))))));
+  const P u18 = madd<F>(T(0.30515380780267737), t26, madd<F>(T(-0.62629484514797784), t24, madd<F>(T(-0.30447947908103368), t22, madd<F>(T(0.16916849025751879), t20, madd<F>(T(0.43823242187499994), t18, madd<F>(T(0.4164100890134726), t16, T(0.16692864173800459) * t14))))));
+  const P u19 = madd<F>(T(-0.41160690265053923), t12, madd<F>(T(-0.083251595146774354), t10, madd<F>(T(0.34012635856225304), t8, madd<F>(T(0.49108084137057351), t6, madd<F>(T(0.087450067714449034), t4, madd<F>(T(-0.64803329186808367), t2, T(0.1980099374608556) * t0))))));
+  const P u20 = madd<F>(T(-0.11714425878649877), t26, madd<F>(T(0.55232951835200417), t24, madd<F>(T(-0.45029618794257043), t22, madd<F>(T(-0.40478515625000022), t20, madd<F>(T(0.16916849025751912), t18, madd<F>(T(0.47610564299333841), t16, T(0.24350992753551057) * t14))))));
+  const P u21 = madd<F>(T(-0.39048459390687074), t12, madd<F>(T(0.16673428435381729), t10, madd<F>(T(0.5092319311008594), t8, madd<F>(T(0.012788868021199886), t6, madd<F>(T(-0.62989984533656651), t4, madd<F>(T(0.39943226817081201), t2, T(-0.062616240172380155) * t0))))));
+  const P u22 = madd<F>(T(0.029851121241790762), t26, madd<F>(T(-0.24672049987443009), t24, madd<F>(T(0.59912109375000044), t22, madd<F>(T(-0.4502961879425702), t20, madd<F>(T(-0.30447947908103357), t18, madd<F>(T(0.41417145645063475), t16, T(0.33508120677026237) * t14))))));
+  const P u23 = madd<F>(T(-0.35710955873299838), t12, madd<F>(T(0.44139922820051047), t10, madd<F>(T(0.23938234163584537), t8, madd<F>(T(-0.6432686200313914), t6, madd<F>(T(0.43555891764461274), t4, madd<F>(T(-0.12912985164246535), t2, T(0.012448778109357418) * t0))))));
+  const P u24 = madd<F>(T(-0.0044013077093066968), t26, madd<F>(T(0.055908203124999979), t24, madd<F>(T(-0.24672049987442993), t22, madd<F>(T(0.55232951835200383), t20, madd<F>(T(-0.62629484514797784), t18, madd<F>(T(0.15605819373554444), t16, T(0.46294341611217094) * t14))))));
+  const P u25 = madd<F>(T(-0.29759129894416547), t12, madd<F>(T(0.66209884230076566), t10, madd<F>(T(-0.59845585408961377), t8, madd<F>(T(0.32163431001569542), t6, madd<F>(T(-0.10537715749466428), t4, madd<F>(T(0.018989684065068405), t2, T(-0.0012448778109357772) * t0))))));
+  const P u26 = madd<F>(T(0.00024414062500005611), t26, madd<F>(T(-0.0044013077093066049), t24, madd<F>(T(0.029851121241790662), t22, madd<F>(T(-0.11714425878649878), t20, madd<F>(T(0.30515380780267776), t18, madd<F>(T(-0.56267581946979905), t16, T(0.75871192019586087) * t14))))));
   const P w13 = u13;
   const P cb1 = splat<P>(s.cb[1]), sb1 = splat<P>(s.sb[1]);
-  const P w14 = cb1 * u14 - sb1 * u12;
-  const P w12 = sb1 * u14 + cb1 * u12;
+  const P w14 = madd<F>(cb1, u14, -(sb1 * u12));
+  const P w12 = madd<F>(sb1, u14, cb1 * u12);
   const P cb2 = splat<P>(s.cb[2]), sb2 = splat<P>(s.sb[2]);
-  const P w15 = cb2 * u15 - sb2 * u11;
-  const P w11 = sb2 * u15 + cb2 * u11;
+  const P w15 = madd<F>(cb2, u15, -(sb2 * u11));
+  const P w11 = madd<F>(sb2, u15, cb2 * u11);
   const P cb3 = splat<P>(s.cb[3]), sb3 = splat<P>(s.sb[3]);
-  const P w16 = cb3 * u16 - sb3 * u10;
-  const P w10 = sb3 * u16 + cb3 * u10;
+  const P w16 = madd<F>(cb3, u16, -(sb3 * u10));
+  const P w10 = madd<F>(sb3, u16, cb3 * u10);
   const P cb4 = splat<P>(s.cb[4]), sb4 = splat<P>(s.sb[4]);
-  const P w17 = cb4 * u17 - sb4 * u9;
-  const P w9 = sb4 * u17 + cb4 * u9;
+  const P w17 = madd<F>(cb4, u17, -(sb4 * u9));
+  const P w9 = madd<F>(sb4, u17, cb4 * u9);
   const P cb5 = splat<P>(s.cb[5]), sb5 = splat<P>(s.sb[5]);
-  const P w18 = cb5 * u18 - sb5 * u8;
-  const P w8 = sb5 * u18 + cb5 * u8;
+  const P w18 = madd<F>(cb5, u18, -(sb5 * u8));
+  const P w8 = madd<F>(sb5, u18, cb5 * u8);
   const P cb6 = splat<P>(s.cb[6]), sb6 = splat<P>(s.sb[6]);
-  const P w19 = cb6 * u19 - sb6 * u7;
-  const P w7 = sb6 * u19 + cb6 * u7;
+  const P w19 = madd<F>(cb6, u19, -(sb6 * u7));
+  const P w7 = madd<F>(sb6, u19, cb6 * u7);
   const P cb7 = splat<P>(s.cb[7]), sb7 = splat<P>(s.sb[7]);
-  const P w20 = cb7 * u20 - sb7 * u6;
-  const P w6 = sb7 * u20 + cb7 * u6;
+  const P w20 = madd<F>(cb7, u20, -(sb7 * u6));
+  const P w6 = madd<F>(sb7, u20, cb7 * u6);
   const P cb8 = splat<P>(s.cb[8]), sb8 = splat<P>(s.sb[8]);
-  const P w21 = cb8 * u21 - sb8 * u5;
-  const P w5 = sb8 * u21 + cb8 * u5;
+  const P w21 = madd<F>(cb8, u21, -(sb8 * u5));
+  const P w5 = madd<F>(sb8, u21, cb8 * u5);
   const P cb9 = splat<P>(s.cb[9]), sb9 = splat<P>(s.sb[9]);
-  const P w22 = cb9 * u22 - sb9 * u4;
-  const P w4 = sb9 * u22 + cb9 * u4;
+  const P w22 = madd<F>(cb9, u22, -(sb9 * u4));
+  const P w4 = madd<F>(sb9, u22, cb9 * u4);
   const P cb10 = splat<P>(s.cb[10]), sb10 = splat<P>(s.sb[10]);
-  const P w23 = cb10 * u23 - sb10 * u3;
-  const P w3 = sb10 * u23 + cb10 * u3;
+  const P w23 = madd<F>(cb10, u23, -(sb10 * u3));
+  const P w3 = madd<F>(sb10, u23, cb10 * u3);
   const P cb11 = splat<P>(s.cb[11]), sb11 = splat<P>(s.sb[11]);
-  const P w24 = cb11 * u24 - sb11 * u2;
-  const P w2 = sb11 * u24 + cb11 * u2;
+  const P w24 = madd<F>(cb11, u24, -(sb11 * u2));
+  const P w2 = madd<F>(sb11, u24, cb11 * u2);
   const P cb12 = splat<P>(s.cb[12]), sb12 = splat<P>(s.sb[12]);
-  const P w25 = cb12 * u25 - sb12 * u1;
-  const P w1 = sb12 * u25 + cb12 * u1;
+  const P w25 = madd<F>(cb12, u25, -(sb12 * u1));
+  const P w1 = madd<F>(sb12, u25, cb12 * u1);
   const P cb13 = splat<P>(s.cb[13]), sb13 = splat<P>(s.sb[13]);
-  const P w26 = cb13 * u26 - sb13 * u0;
-  const P w0 = sb13 * u26 + cb13 * u0;
-  const P v0 = T(-0.55674234096704311) * w13 + T(0.67861257155893639) * w15 - T(0.43155265360433931) * w17 + T(0.1980099374608556) * w19 - T(0.062616240172380155) * w21 + T(0.012448778109357418) * w23 - T(0.0012448778109357772) * w25;
-  const P v1 = T(-0.0058593750000000971) * w1 + T(0.048828125000000007) * w3 - T(0.19648088031186386) * w5 + T(0.4659953238453185) * w7 - T(0.67707550826808416) * w9 + T(0.53234749916129198) * w11;
-  const P v2 = T(-0.40147261151570607) * w13 + T(0.18821326330232474) * w15 + T(0.45482644910810638) * w17 - T(0.64803329186808367) * w19 + T(0.39943226817081201) * w21 - T(0.12912985164246535) * w23 + T(0.018989684065068405) * w25;
-  const P v3 = T(0.048828124999999979) * w1 - T(0.26367187500000022) * w3 + T(0.58944264093559195) * w5 - T(0.52812803369136119) * w7 - T(0.13541510165361689) * w9 + T(0.5323474991612922) * w11;
-  const P v4 = T(-0.3551634431069447) * w13 - T(0.055501063431182891) * w15 + T(0.51530701050804251) * w17 + T(0.087450067714449034) * w19 - T(0.62989984533656651) * w21 + T(0.43555891764461274) * w23 - T(0.10537715749466428) * w25;
-  const P v5 = T(-0.19648088031186373) * w1 + T(0.58944264093559251) * w3 - T(0.42187499999999989) * w5 - T(0.38293206041101502) * w7 + T(0.269219702189262) * w9 + T(0.46568005127582007) * w11;
-  const P v6 = T(-0.33184809401474713) * w13 - T(0.21780190046617981) * w15 + T(0.289606767616441) * w17 + T(0.49108084137057351) * w19 + T(0.012788868021199886) * w21 - T(0.6432686200313914) * w23 + T(0.32163431001569542) * w25;
-  const P v7 = T(0.465995323845318) * w1 - T(0.52812803369136141) * w3 - T(0.38293206041101469) * w5 + T(0.13476562499999994) * w7 + T(0.45121414845245233) * w9 + T(0.36815240573389757) * w11;
-  const P v8 = T(-0.31847955038633491) * w13 - T(0.32847213547974075) * w15 - T(0.014846480269053539) * w17 + T(0.34012635856225304) * w19 + T(0.5092319311008594) * w21 + T(0.23938234163584537) * w23 - T(0.59845585408961377) * w25;
-  const P v9 = T(-0.6770755082680836) * w1 - T(0.13541510165361689) * w3 + T(0.26921970218926211) * w5 + T(0.45121414845245261) * w7 + T(0.42773437499999983) * w9 + T(0.25337986301296478) * w11;
-  const P v10 = T(-0.31089561602034327) * w13 - T(0.39838364181026792) * w15 - T(0.27693877404913603) * w17 - T(0.083251595146774354) * w19 + T(0.16673428435381729) * w21 + T(0.44139922820051047) * w23 + T(0.66209884230076566) * w25;
-  const P v11 = T(0.53234749916129087) * w1 + T(0.53234749916129198) * w3 + T(0.46568005127581974) * w5 + T(0.36815240573389746) * w7 + T(0.2533798630129645) * w9 + T(0.12890624999999994) * w11;
-  const P v12 = T(-0.30742181295663257) * w13 - T(0.43236470658687365) * w15 - T(0.42493094836993045) * w17 - T(0.41160690265053923) * w19 - T(0.39048459390687074) * w21 - T(0.35710955873299838) * w23 - T(0.29759129894416547) * w25;
-  const P v13 = T(0.55674234096704367) * w0 + T(0.40147261151570651) * w2 + T(0.35516344310694486) * w4 + T(0.33184809401474769) * w6 + T(0.31847955038633535) * w8 + T(0.3108956160203441) * w10 + T(0.30742181295663329) * w12;
-  const P v14 = T(0.032226562499999986) * w14 + T(0.097772148023233807) * w16 + T(0.16692864173800459) * w18 + T(0.24350992753551057) * w20 + T(0.33508120677026237) * w22 + T(0.46294341611217094) * w24 + T(0.75871192019586087) * w26;
-  const P v15 = T(-0.67861257155893606) * w0 - T(0.18821326330232496) * w2 + T(0.055501063431182933) * w4 + T(0.21780190046617998) * w6 + T(0.32847213547974091) * w8 + T(0.39838364181026831) * w10 + T(0.43236470658687387) * w12;
-  const P v16 = T(0.097772148023233904) * w14 + T(0.27905273437500017) * w16 + T(0.4164100890134726) * w18 + T(0.47610564299333841) * w20 + T(0.41417145645063475) * w22 + T(0.15605819373554444) * w24 - T(0.56267581946979905) * w26;
-  const P v17 = T(0.43155265360433936) * w0 - T(0.45482644910810599) * w2 - T(0.51530701050804206) * w4 - T(0.28960676761644094) * w6 + T(0.014846480269053589) * w8 + T(0.27693877404913625) * w10 + T(0.42493094836993067) * w12;
-  const P v18 = T(0.16692864173800481) * w14 + T(0.41641008901347293) * w16 + T(0.43823242187499994) * w18 + T(0.16916849025751912) * w20 - T(0.30447947908103357) * w22 - T(0.62629484514797784) * w24 + T(0.30515380780267776) * w26;
-  const P v19 = T(-0.19800993746085555) * w0 + T(0.64803329186808389) * w2 - T(0.087450067714449214) * w4 - T(0.4910808413705739) * w6 - T(0.34012635856225309) * w8 + T(0.083251595146774354) * w10 + T(0.41160690265053934) * w12;
-  const P v20 = T(0.24350992753551076) * w14 + T(0.47610564299333863) * w16 + T(0.16916849025751879) * w18 - T(0.40478515625000022) * w20 - T(0.4502961879425702) * w22 + T(0.55232951835200383) * w24 - T(0.11714425878649878) * w26;
-  const P v21 = T(0.062616240172380169) * w0 - T(0.3994322681708119) * w2 + T(0.62989984533656607) * w4 - T(0.012788868021199851) * w6 - T(0.50923193110085918) * w8 - T(0.16673428435381735) * w10 + T(0.39048459390687051) * w12;
-  const P v22 = T(0.33508120677026265) * w14 + T(0.41417145645063502) * w16 - T(0.30447947908103368) * w18 - T(0.45029618794257043) * w20 + T(0.59912109375000044) * w22 - T(0.24672049987442993) * w24 + T(0.029851121241790662) * w26;
-  const P v23 = T(-0.012448778109357307) * w0 + T(0.12912985164246524) * w2 - T(0.43555891764461241) * w4 + T(0.64326862003139129) * w6 - T(0.2393823416358454) * w8 - T(0.44139922820051058) * w10 + T(0.35710955873299843) * w12;
-  const P v24 = T(0.46294341611217116) * w14 + T(0.15605819373554469) * w16 - T(0.62629484514797784) * w18 + T(0.55232951835200417) * w20 - T(0.24672049987443009) * w22 + T(0.055908203124999979) * w24 - T(0.0044013077093066049) * w26;
-  const P v25 = T(0.0012448778109355582) * w0 - T(0.018989684065068509) * w2 + T(0.1053771574946642) * w4 - T(0.32163431001569553) * w6 + T(0.59845585408961322) * w8 - T(0.66209884230076554) * w10 + T(0.29759129894416531) * w12;
-  const P v26 = T(0.75871192019586109) * w14 - T(0.56267581946979894) * w16 + T(0.30515380780267737) * w18 - T(0.11714425878649877) * w20 + T(0.029851121241790762) * w22 - T(0.0044013077093066968) * w24 + T(0.00024414062500005611) * w26;
+  const P w26 = madd<F>(cb13, u26, -(sb13 * u0));
+  const P w0 = madd<F>(sb13, u26, cb13 * u0);
+  const P v0 = madd<F>(T(-0.0012448778109357772), w25, madd<F>(T(0.012448778109357418), w23, madd<F>(T(-0.062616240172380155), w21, madd<F>(T(0.1980099374608556), w19, madd<F>(T(-0.43155265360433931), w17, madd<F>(T(0.67861257155893639), w15, T(-0.55674234096704311) * w13))))));
+  const P v1 = madd<F>(T(0.53234749916129198), w11, madd<F>(T(-0.67707550826808416), w9, madd<F>(T(0.4659953238453185), w7, madd<F>(T(-0.19648088031186386), w5, madd<F>(T(0.048828125000000007), w3, T(-0.0058593750000000971) * w1)))));
+  const P v2 = madd<F>(T(0.018989684065068405), w25, madd<F>(T(-0.12912985164246535), w23, madd<F>(T(0.39943226817081201), w21, madd<F>(T(-0.64803329186808367), w19, madd<F>(T(0.45482644910810638), w17, madd<F>(T(0.18821326330232474), w15, T(-0.40147261151570607) * w13))))));
+  const P v3 = madd<F>(T(0.5323474991612922), w11, madd<F>(T(-0.13541510165361689), w9, madd<F>(T(-0.52812803369136119), w7, madd<F>(T(0.58944264093559195), w5, madd<F>(T(-0.26367187500000022), w3, T(0.048828124999999979) * w1)))));
+  const P v4 = madd<F>(T(-0.10537715749466428), w25, madd<F>(T(0.43555891764461274), w23, madd<F>(T(-0.62989984533656651), w21, madd<F>(T(0.087450067714449034), w19, madd<F>(T(0.51530701050804251), w17, madd<F>(T(-0.055501063431182891), w15, T(-0.3551634431069447) * w13))))));
+  const P v5 = madd<F>(T(0.46568005127582007), w11, madd<F>(T(0.269219702189262), w9, madd<F>(T(-0.38293206041101502), w7, madd<F>(T(-0.42187499999999989), w5, madd<F>(T(0.58944264093559251), w3, T(-0.19648088031186373) * w1)))));
+  const P v6 = madd<F>(T(0.32163431001569542), w25, madd<F>(T(-0.6432686200313914), w23, madd<F>(T(0.012788868021199886), w21, madd<F>(T(0.49108084137057351), w19, madd<F>(T(0.289606767616441), w17, madd<F>(T(-0.21780190046617981), w15, T(-0.33184809401474713) * w13))))));
+  const P v7 = madd<F>(T(0.36815240573389757), w11, madd<F>(T(0.45121414845245233), w9, madd<F>(T(0.13476562499999994), w7, madd<F>(T(-0.38293206041101469), w5, madd<F>(T(-0.52812803369136141), w3, T(0.465995323845318) * w1)))));
+  const P v8 = madd<F>(T(-0.59845585408961377), w25, madd<F>(T(0.23938234163584537), w23, madd<F>(T(0.5092319311008594), w21, madd<F>(T(0.34012635856225304), w19, madd<F>(T(-0.014846480269053539), w17, madd<F>(T(-0.32847213547974075), w15, T(-0.31847955038633491) * w13))))));
+  const P v9 = madd<F>(T(0.25337986301296478), w11, madd<F>(T(0.42773437499999983), w9, madd<F>(T(0.45121414845245261), w7, madd<F>(T(0.26921970218926211), w5, madd<F>(T(-0.13541510165361689), w3, T(-0.6770755082680836) * w1)))));
+  const P v10 = madd<F>(T(0.66209884230076566), w25, madd<F>(T(0.44139922820051047), w23, madd<F>(T(0.16673428435381729), w21, madd<F>(T(-0.083251595146774354), w19, madd<F>(T(-0.27693877404913603), w17, madd<F>(T(-0.39838364181026792), w15, T(-0.31089561602034327) * w13))))));
+  const P v11 = madd<F>(T(0.12890624999999994), w11, madd<F>(T(0.2533798630129645), w9, madd<F>(T(0.36815240573389746), w7, madd<F>(T(0.46568005127581974), w5, madd<F>(T(0.53234749916129198), w3, T(0.53234749916129087) * w1)))));
+  const P v12 = madd<F>(T(-0.29759129894416547), w25, madd<F>(T(-0.35710955873299838), w23, madd<F>(T(-0.39048459390687074), w21, madd<F>(T(-0.41160690265053923), w19, madd<F>(T(-0.42493094836993045), w17, madd<F>(T(-0.43236470658687365), w15, T(-0.30742181295663257) * w13))))));
+  const P v13 = madd<F>(T(0.30742181295663329), w12, madd<F>(T(0.3108956160203441), w10, madd<F>(T(0.31847955038633535), w8, madd<F>(T(0.33184809401474769), w6, madd<F>(T(0.35516344310694486), w4, madd<F>(T(0.40147261151570651), w2, T(0.55674234096704367) * w0))))));
+  const P v14 = madd<F>(T(0.75871192019586087), w26, madd<F>(T(0.46294341611217094), w24, madd<F>(T(0.33508120677026237), w22, madd<F>(T(0.24350992753551057), w20, madd<F>(T(0.16692864173800459), w18, madd<F>(T(0.097772148023233807), w16, T(0.032226562499999986) * w14))))));
+  const P v15 = madd<F>(T(0.43236470658687387), w12, madd<F>(T(0.39838364181026831), w10, madd<F>(T(0.32847213547974091), w8, madd<F>(T(0.21780190046617998), w6, madd<F>(T(0.055501063431182933), w4, madd<F>(T(-0.18821326330232496), w2, T(-0.67861257155893606) * w0))))));
+  const P v16 = madd<F>(T(-0.56267581946979905), w26, madd<F>(T(0.15605819373554444), w24, madd<F>(T(0.41417145645063475), w22, madd<F>(T(0.47610564299333841), w20, madd<F>(T(0.4164100890134726), w18, madd<F>(T(0.27905273437500017), w16, T(0.097772148023233904) * w14))))));
+  const P v17 = madd<F>(T(0.42493094836993067), w12, madd<F>(T(0.27693877404913625), w10, madd<F>(T(0.014846480269053589), w8, madd<F>(T(-0.28960676761644094), w6, madd<F>(T(-0.51530701050804206), w4, madd<F>(T(-0.45482644910810599), w2, T(0.43155265360433936) * w0))))));
+  const P v18 = madd<F>(T(0.30515380780267776), w26, madd<F>(T(-0.62629484514797784), w24, madd<F>(T(-0.30447947908103357), w22, madd<F>(T(0.16916849025751912), w20, madd<F>(T(0.43823242187499994), w18, madd<F>(T(0.41641008901347293), w16, T(0.16692864173800481) * w14))))));
+  const P v19 = madd<F>(T(0.41160690265053934), w12, madd<F>(T(0.083251595146774354), w10, madd<F>(T(-0.34012635856225309), w8, madd<F>(T(-0.4910808413705739), w6, madd<F>(T(-0.087450067714449214), w4, madd<F>(T(0.64803329186808389), w2, T(-0.19800993746085555) * w0))))));
+  const P v20 = madd<F>(T(-0.11714425878649878), w26, madd<F>(T(0.55232951835200383), w24, madd<F>(T(-0.4502961879425702), w22, madd<F>(T(-0.40478515625000022), w20, madd<F>(T(0.16916849025751879), w18, madd<F>(T(0.47610564299333863), w16, T(0.24350992753551076) * w14))))));
+  const P v21 = madd<F>(T(0.39048459390687051), w12, madd<F>(T(-0.16673428435381735), w10, madd<F>(T(-0.50923193110085918), w8, madd<F>(T(-0.012788868021199851), w6, madd<F>(T(0.62989984533656607), w4, madd<F>(T(-0.3994322681708119), w2, T(0.062616240172380169) * w0))))));
+  const P v22 = madd<F>(T(0.029851121241790662), w26, madd<F>(T(-0.24672049987442993), w24, madd<F>(T(0.59912109375000044), w22, madd<F>(T(-0.45029618794257043), w20, madd<F>(T(-0.30447947908103368), w18, madd<F>(T(0.41417145645063502), w16, T(0.33508120677026265) * w14))))));
+  const P v23 = madd<F>(T(0.35710955873299843), w12, madd<F>(T(-0.44139922820051058), w10, madd<F>(T(-0.2393823416358454), w8, madd<F>(T(0.64326862003139129), w6, madd<F>(T(-0.43555891764461241), w4, madd<F>(T(0.12912985164246524), w2, T(-0.012448778109357307) * w0))))));
+  const P v24 = madd<F>(T(-0.0044013077093066049), w26, madd<F>(T(0.055908203124999979), w24, madd<F>(T(-0.24672049987443009), w22, madd<F>(T(0.55232951835200417), w20, madd<F>(T(-0.62629484514797784), w18, madd<F>(T(0.15605819373554469), w16, T(0.46294341611217116) * w14))))));
+  const P v25 = madd<F>(T(0.29759129894416531), w12, madd<F>(T(-0.66209884230076554), w10, madd<F>(T(0.59845585408961322), w8, madd<F>(T(-0.32163431001569553), w6, madd<F>(T(0.1053771574946642), w4, madd<F>(T(-0.018989684065068509), w2, T(0.0012448778109355582) * w0))))));
+  const P v26 = madd<F>(T(0.00024414062500005611), w26, madd<F>(T(-0.0044013077093066968), w24, madd<F>(T(0.029851121241790762), w22, madd<F>(T(-0.11714425878649877), w20, madd<F>(T(0.30515380780267737), w18, madd<F>(T(-0.56267581946979894), w16, T(0.75871192019586109) * w14))))));
   y[13] = v13;
   const P ca1 = splat<P>(s.ca[1]), sa1 = splat<P>(s.sa[1]);
-  y[14] = ca1 * v14 - sa1 * v12;
-  y[12] = sa1 * v14 + ca1 * v12;
+  y[14] = madd<F>(ca1, v14, -(sa1 * v12));
+  y[12] = madd<F>(sa1, v14, ca1 * v12);
   const P ca2 = splat<P>(s.ca[2]), sa2 = splat<P>(s.sa[2]);
-  y[15] = ca2 * v15 - sa2 * v11;
-  y[11] = sa2 * v15 + ca2 * v11;
+  y[15] = madd<F>(ca2, v15, -(sa2 * v11));
+  y[11] = madd<F>(sa2, v15, ca2 * v11);
   const P ca3 = splat<P>(s.ca[3]), sa3 = splat<P>(s.sa[3]);
-  y[16] = ca3 * v16 - sa3 * v10;
-  y[10] = sa3 * v16 + ca3 * v10;
+  y[16] = madd<F>(ca3, v16, -(sa3 * v10));
+  y[10] = madd<F>(sa3, v16, ca3 * v10);
   const P ca4 = splat<P>(s.ca[4]), sa4 = splat<P>(s.sa[4]);
-  y[17] = ca4 * v17 - sa4 * v9;
-  y[9] = sa4 * v17 + ca4 * v9;
+  y[17] = madd<F>(ca4, v17, -(sa4 * v9));
+  y[9] = madd<F>(sa4, v17, ca4 * v9);
   const P ca5 = splat<P>(s.ca[5]), sa5 = splat<P>(s.sa[5]);
-  y[18] = ca5 * v18 - sa5 * v8;
-  y[8] = sa5 * v18 + ca5 * v8;
+  y[18] = madd<F>(ca5, v18, -(sa5 * v8));
+  y[8] = madd<F>(sa5, v18, ca5 * v8);
   const P ca6 = splat<P>(s.ca[6]), sa6 = splat<P>(s.sa[6]);
-  y[19] = ca6 * v19 - sa6 * v7;
-  y[7] = sa6 * v19 + ca6 * v7;
+  y[19] = madd<F>(ca6, v19, -(sa6 * v7));
+  y[7] = madd<F>(sa6, v19, ca6 * v7);
   const P ca7 = splat<P>(s.ca[7]), sa7 = splat<P>(s.sa[7]);
-  y[20] = ca7 * v20 - sa7 * v6;
-  y[6] = sa7 * v20 + ca7 * v6;
+  y[20] = madd<F>(ca7, v20, -(sa7 * v6));
+  y[6] = madd<F>(sa7, v20, ca7 * v6);
   const P ca8 = splat<P>(s.ca[8]), sa8 = splat<P>(s.sa[8]);
-  y[21] = ca8 * v21 - sa8 * v5;
-  y[5] = sa8 * v21 + ca8 * v5;
+  y[21] = madd<F>(ca8, v21, -(sa8 * v5));
+  y[5] = madd<F>(sa8, v21, ca8 * v5);
   const P ca9 = splat<P>(s.ca[9]), sa9 = splat<P>(s.sa[9]);
-  y[22] = ca9 * v22 - sa9 * v4;
-  y[4] = sa9 * v22 + ca9 * v4;
+  y[22] = madd<F>(ca9, v22, -(sa9 * v4));
+  y[4] = madd<F>(sa9, v22, ca9 * v4);
   const P ca10 = splat<P>(s.ca[10]), sa10 = splat<P>(s.sa[10]);
-  y[23] = ca10 * v23 - sa10 * v3;
-  y[3] = sa10 * v23 + ca10 * v3;
+  y[23] = madd<F>(ca10, v23, -(sa10 * v3));
+  y[3] = madd<F>(sa10, v23, ca10 * v3);
   const P ca11 = splat<P>(s.ca[11]), sa11 = splat<P>(s.sa[11]);
-  y[24] = ca11 * v24 - sa11 * v2;
-  y[2] = sa11 * v24 + ca11 * v2;
+  y[24] = madd<F>(ca11, v24, -(sa11 * v2));
+  y[2] = madd<F>(sa11, v24, ca11 * v2);
   const P ca12 = splat<P>(s.ca[12]), sa12 = splat<P>(s.sa[12]);
-  y[25] = ca12 * v25 - sa12 * v1;
-  y[1] = sa12 * v25 + ca12 * v1;
+  y[25] = madd<F>(ca12, v25, -(sa12 * v1));
+  y[1] = madd<F>(sa12, v25, ca12 * v1);
   const P ca13 = splat<P>(s.ca[13]), sa13 = splat<P>(s.sa[13]);
-  y[26] = ca13 * v26 - sa13 * v0;
-  y[0] = sa13 * v26 + ca13 * v0;
+  y[26] = madd<F>(ca13, v26, -(sa13 * v0));
+  y[0] = madd<F>(sa13, v26, ca13 * v0);
 }
 
 // Band 14 of Z(a) X90^T Z(b) X90 Z(g), Ry(b) = Rx(-90) Rz(b) Rx(+90).
-template <class T, class P, class S>
-inline void zxzxz_band14(const S& s, const P* __restrict x, P* __restrict y) {
+template <bool F, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void zxzxz_band14(const S& s, const P* __restrict x, P* __restrict y) {
   const P t14 = x[14];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
-  const P t15 = cg1 * x[15] - sg1 * x[13];
-  const P t13 = sg1 * x[15] + cg1 * x[13];
+  const P t15 = madd<F>(cg1, x[15], -(sg1 * x[13]));
+  const P t13 = madd<F>(sg1, x[15], cg1 * x[13]);
   const P cg2 = splat<P>(s.cg[2]), sg2 = splat<P>(s.sg[2]);
-  const P t16 = cg2 * x[16] - sg2 * x[12];
-  const P t12 = sg2 * x[16] + cg2 * x[12];
+  const P t16 = madd<F>(cg2, x[16], -(sg2 * x[12]));
+  const P t12 = madd<F>(sg2, x[16], cg2 * x[12]);
   const P cg3 = splat<P>(s.cg[3]), sg3 = splat<P>(s.sg[3]);
-  const P t17 = cg3 * x[17] - sg3 * x[11];
-  const P t11 = sg3 * x[17] + cg3 * x[11];
+  const P t17 = madd<F>(cg3, x[17], -(sg3 * x[11]));
+  const P t11 = madd<F>(sg3, x[17], cg3 * x[11]);
   const P cg4 = splat<P>(s.cg[4]), sg4 = splat<P>(s.sg[4]);
-  const P t18 = cg4 * x[18] - sg4 * x[10];
-  const P t10 = sg4 * x[18] + cg4 * x[10];
+  const P t18 = madd<F>(cg4, x[18], -(sg4 * x[10]));
+  const P t10 = madd<F>(sg4, x[18], cg4 * x[10]);
   const P cg5 = splat<P>(s.cg[5]), sg5 = splat<P>(s.sg[5]);
-  const P t19 = cg5 * x[19] - sg5 * x[9];
-  const P t9 = sg5 * x[19] + cg5 * x[9];
+  const P t19 = madd<F>(cg5, x[19], -(sg5 * x[9]));
+  const P t9 = madd<F>(sg5, x[19], cg5 * x[9]);
   const P cg6 = splat<P>(s.cg[6]), sg6 = splat<P>(s.sg[6]);
-  const P t20 = cg6 * x[20] - sg6 * x[8];
-  const P t8 = sg6 * x[20] + cg6 * x[8];
+  const P t20 = madd<F>(cg6, x[20], -(sg6 * x[8]));
+  const P t8 = madd<F>(sg6, x[20], cg6 * x[8]);
   const P cg7 = splat<P>(s.cg[7]), sg7 = splat<P>(s.sg[7]);
-  const P t21 = cg7 * x[21] - sg7 * x[7];
-  const P t7 = sg7 * x[21] + cg7 * x[7];
+  const P t21 = madd<F>(cg7, x[21], -(sg7 * x[7]));
+  const P t7 = madd<F>(sg7, x[21], cg7 * x[7]);
   const P cg8 = splat<P>(s.cg[8]), sg8 = splat<P>(s.sg[8]);
-  const P t22 = cg8 * x[22] - sg8 * x[6];
-  const P t6 = sg8 * x[22] + cg8 * x[6];
+  const P t22 = madd<F>(cg8, x[22], -(sg8 * x[6]));
+  const P t6 = madd<F>(sg8, x[22], cg8 * x[6]);
   const P cg9 = splat<P>(s.cg[9]), sg9 = splat<P>(s.sg[9]);
-  const P t23 = cg9 * x[23] - sg9 * x[5];
-  const P t5 = sg9 * x[23] + cg9 * x[5];
+  const P t23 = madd<F>(cg9, x[23], -(sg9 * x[5]));
+  const P t5 = madd<F>(sg9, x[23], cg9 * x[5]);
   const P cg10 = splat<P>(s.cg[10]), sg10 = splat<P>(s.sg[10]);
-  const P t24 = cg10 * x[24] - sg10 * x[4];
-  const P t4 = sg10 * x[24] + cg10 * x[4];
+  const P t24 = madd<F>(cg10, x[24], -(sg10 * x[4]));
+  const P t4 = madd<F>(sg10, x[24], cg10 * x[4]);
   const P cg11 = splat<P>(s.cg[11]), sg11 = splat<P>(s.sg[11]);
-  const P t25 = cg11 * x[25] - sg11 * x[3];
-  const P t3 = sg11 * x[25] + cg11 * x[3];
+  const P t25 = madd<F>(cg11, x[25], -(sg11 * x[3]));
+  const P t3 = madd<F>(sg11, x[25], cg11 * x[3]);
   const P cg12 = splat<P>(s.cg[12]), sg12 = splat<P>(s.sg[12]);
-  const P t26 = cg12 * x[26] - sg12 * x[2];
-  const P t2 = sg12 * x[26] + cg12 * x[2];
+  const P t26 = madd<F>(cg12, x[26], -(sg12 * x[2]));
+  const P t2 = madd<F>(sg12, x[26], cg12 * x[2]);
   const P cg13 = splat<P>(s.cg[13]), sg13 = splat<P>(s.sg[13]);
-  const P t27 = cg13 * x[27] - sg13 * x[1];
-  const P t1 = sg13 * x[27] + cg13 * x[1];
+  const P t27 = madd<F>(cg13, x[27], -(sg13 * x[1]));
+  const P t1 = madd<F>(sg13, x[27], cg13 * x[1]);
   const P cg14 = splat<P>(s.cg[14]), sg14 = splat<P>(s.sg[14]);
-  const P t28 = cg14 * x[28] - sg14 * x[0];
-  const P t0 = sg14 * x[28] + cg14 * x[0];
-  const P u0 = T(0.74694823221280549) * t15 - T(0.56567677845718545) * t17 + T(0.32081276509794071) * t19 - T(0.13282910411488652) * t21 + T(0.038268604914882182) * t23 - T(0.0069868593853779975) * t25 + T(0.00064593537867772128) * t27;
-  const P u1 = T(-0.0031738281250000191) * t1 + T(0.029048630881423693) * t3 - T(0.1301775578050659) * t5 + T(0.35143277635949577) * t7 - T(0.6062791384743802) * t9 + T(0.64141717638938212) * t11 - T(0.28231989495348708) * t13;
-  const P u2 = T(0.46102645791479369) * t15 + T(0.11638109588227688) * t17 - T(0.59402981238256647) * t19 + T(0.57388732064693349) * t21 - T(0.2913120475459437) * t23 + T(0.081935281474721192) * t25 - T(0.010764359221215266) * t27;
-  const P u3 = T(0.029048630881423794) * t1 - T(0.17993164062500017) * t3 + T(0.48540841888275299) * t5 - T(0.61730946168753442) * t7 + T(0.16815157853950083) * t9 + T(0.45462596516248538) * t11 - T(0.33930628577946848) * t13;
-  const P u4 = T(0.33930628577946825) * t15 + T(0.37556057991683534) * t17 - T(0.35648134650374186) * t19 - T(0.35738968834541468) * t21 + T(0.61645531984834423) * t23 - T(0.32348632812500022) * t25 + T(0.066019615639599405) * t27;
-  const P u5 = T(-0.13017755780506593) * t1 + T(0.48540841888275232) * t3 - T(0.56982421875000033) * t5 - T(0.10677294225083156) * t7 + T(0.47892214576016834) * t9 + T(0.20931182591491235) * t11 - T(0.37169141324941829) * t13;
-  const P u6 = T(0.25312379436441285) * t15 + T(0.4571188818230339) * t17 + T(0.075265034640616027) * t19 - T(0.46051523295669217) * t21 - T(0.29827230784788972) * t23 + T(0.60740303427372033) * t25 - T(0.22655408120134227) * t27;
-  const P u7 = T(0.35143277635949621) * t1 - T(0.61730946168753387) * t3 - T(0.10677294225083182) * t5 + T(0.41845703124999994) * t7 + T(0.39271064912769221) * t9 - T(0.02287377476146811) * t11 - T(0.39264796001215779) * t13;
-  const P u8 = T(0.18176068675697232) * t15 + T(0.4270695087087199) * t17 + T(0.37504362806209857) * t19 + T(0.011075484592005549) * t21 - T(0.43385279709812408) * t23 - T(0.46623796657139144) * t25 + T(0.48804529210874031) * t27;
-  const P u9 = T(-0.60627913847438053) * t1 + T(0.16815157853950097) * t3 + T(0.47892214576016845) * t5 + T(0.39271064912769221) * t7 + T(0.099853515624999847) * t9 - T(0.21308945636308815) * t11 - T(0.40642925122563583) * t13;
-  const P u10 = T(0.11794190764567768) * t15 + T(0.32292413190190605) * t17 + T(0.43748201605755099) * t19 + T(0.40964323385175949) * t21 + T(0.20312265248042508) * t23 - T(0.18542476450635273) * t25 - T(0.66855849616848961) * t27;
-  const P u11 = T(0.64141717638938278) * t1 + T(0.45462596516248516) * t3 + T(0.20931182591491251) * t5 - T(0.022873774761468131) * t7 - T(0.21308945636308829) * t9 - T(0.34643554687500022) * t11 - T(0.41489743677369478) * t13;
-  const P u12 = T(0.058097261762847463) * t15 + T(0.17260776719378482) * t17 + T(0.28180798175816663) * t19 + T(0.38115332581581485) * t21 + T(0.46389892469554139) * t23 + T(0.51758647408139313) * t25 + T(0.5089594286692023) * t27;
-  const P u13 = T(-0.28231989495348714) * t1 - T(0.33930628577946836) * t3 - T(0.37169141324941835) * t5 - T(0.39264796001215785) * t7 - T(0.40642925122563611) * t9 - T(0.41489743677369467) * t11 - T(0.41894531250000022) * t13;
-  const P u14 = T(-0.20947265624999994) * t14 - T(0.29765989046048241) * t16 - T(0.30213623022215297) * t18 - T(0.310415468064283) * t20 - T(0.32421838231812705) * t22 - T(0.3476854804962824) * t24 - T(0.39367628467146926) * t26 - T(0.54671012572894029) * t28;
-  const P u15 = T(-0.74694823221280571) * t0 - T(0.46102645791479407) * t2 - T(0.33930628577946848) * t4 - T(0.25312379436441296) * t6 - T(0.18176068675697241) * t8 - T(0.1179419076456777) * t10 - T(0.058097261762847463) * t12;
-  const P u16 = T(-0.29765989046048308) * t14 - T(0.40686035156250033) * t16 - T(0.36391209618543385) * t18 - T(0.28986522975410933) * t20 - T(0.17989751732911832) * t22 - T(0.023526657912790537) * t24 + T(0.20778181666966627) * t26 + T(0.67329003784011332) * t28;
-  const P u17 = T(0.56567677845718545) * t0 - T(0.11638109588227721) * t2 - T(0.37556057991683556) * t4 - T(0.45711888182303395) * t6 - T(0.42706950870871985) * t8 - T(0.32292413190190605) * t10 - T(0.17260776719378462) * t12;
-  const P u18 = T(-0.30213623022215363) * t14 - T(0.36391209618543408) * t16 - T(0.18579101562500017) * t18 + T(0.069981750766127351) * t20 + T(0.33717349471455366) * t22 + T(0.50991810239247026) * t24 + T(0.4094067947038158) * t26 - T(0.44220987944028822) * t28;
-  const P u19 = T(-0.32081276509794043) * t0 + T(0.59402981238256702) * t2 + T(0.35648134650374202) * t4 - T(0.075265034640615736) * t6 - T(0.37504362806209829) * t8 - T(0.43748201605755072) * t10 - T(0.28180798175816618) * t12;
-  const P u20 = T(-0.3104154680642835) * t14 - T(0.2898652297541095) * t16 + T(0.069981750766127296) * t18 + T(0.40734863281250006) * t20 + T(0.43617162672688647) * t22 - T(0.0075199672027643936) * t24 - T(0.6420073365552853) * t26 + T(0.21520774524260008) * t28;
-  const P u21 = T(0.13282910411488655) * t0 - T(0.57388732064693382) * t2 + T(0.35738968834541451) * t4 + T(0.460515232956692) * t6 - T(0.011075484592005622) * t8 - T(0.40964323385175949) * t10 - T(0.38115332581581446) * t12;
-  const P u22 = T(-0.32421838231812783) * t14 - T(0.17989751732911871) * t16 + T(0.33717349471455377) * t18 + T(0.43617162672688714) * t20 - T(0.13818359375000033) * t22 - T(0.58383998553034411) * t24 + T(0.43932900265328179) * t26 - T(0.074925719670685703) * t28;
-  const P u23 = T(-0.038268604914882202) * t0 + T(0.29131204754594392) * t2 - T(0.61645531984834423) * t4 + T(0.29827230784788955) * t6 + T(0.43385279709812391) * t8 - T(0.20312265248042524) * t10 - T(0.46389892469554128) * t12;
-  const P u24 = T(-0.34768548049628256) * t14 - T(0.023526657912790575) * t16 + T(0.50991810239246982) * t18 - T(0.0075199672027643294) * t20 - T(0.58383998553034344) * t22 + T(0.4993896484375005) * t24 - T(0.16710485037607631) * t26 + T(0.017467148463445093) * t28;
-  const P u25 = T(0.00698685938537806) * t0 - T(0.081935281474721317) * t2 + T(0.32348632812500033) * t4 - T(0.60740303427372055) * t6 + T(0.46623796657139172) * t8 + T(0.1854247645063527) * t10 - T(0.51758647408139291) * t12;
-  const P u26 = T(-0.39367628467147009) * t14 + T(0.20778181666966666) * t16 + T(0.40940679470381575) * t18 - T(0.64200733655528597) * t20 + T(0.43932900265328167) * t22 - T(0.16710485037607639) * t24 + T(0.033447265625000021) * t26 - T(0.002373318126858405) * t28;
-  const P u27 = T(-0.00064593537867792088) * t0 + T(0.010764359221215172) * t2 - T(0.06601961563959946) * t4 + T(0.22655408120134221) * t6 - T(0.48804529210874042) * t8 + T(0.66855849616848972) * t10 - T(0.50895942866920174) * t12;
-  const P u28 = T(-0.54671012572894107) * t14 + T(0.67329003784011321) * t16 - T(0.44220987944028839) * t18 + T(0.21520774524260025) * t20 - T(0.074925719670685689) * t22 + T(0.017467148463444916) * t24 - T(0.0023733181268582775) * t26 + T(0.00012207031250008441) * t28;
+  const P t28 = madd<F>(cg14, x[28], -(sg14 * x[0]));
+  const P t0 = madd<F>(sg14, x[28], cg14 * x[0]);
+  const P u0 = madd<F>(T(0.00064593537867772128), t27, madd<F>(T(-0.0069868593853779975), t25, madd<F>(T(0.038268604914882182), t23, madd<F>(T(-0.13282910411488652), t21, madd<F>(T(0.32081276509794071), t19, madd<F>(T(-0.56567677845718545), t17, T(0.74694823221280549) * t15))))));
+  const P u1 = madd<F>(T(-0.28231989495348708), t13, madd<F>(T(0.64141717638938212), t11, madd<F>(T(-0.6062791384743802), t9, madd<F>(T(0.35143277635949577), t7, madd<F>(T(-0.1301775578050659), t5, madd<F>(T(0.029048630881423693), t3, T(-0.0031738281250000191) * t1))))));
+  const P u2 = madd<F>(T(-0.010764359221215266), t27, madd<F>(T(0.081935281474721192), t25, madd<F>(T(-0.2913120475459437), t23, madd<F>(T(0.57388732064693349), t21, madd<F>(T(-0.59402981238256647), t19, madd<F>(T(0.11638109588227688), t17, T(0.46102645791479369) * t15))))));
+  const P u3 = madd<F>(T(-0.33930628577946848), t13, madd<F>(T(0.45462596516248538), t11, madd<F>(T(0.16815157853950083), t9, madd<F>(T(-0.61730946168753442), t7, madd<F>(T(0.48540841888275299), t5, madd<F>(T(-0.17993164062500017), t3, T(0.029048630881423794) * t1))))));
+  const P u4 = madd<F>(T(0.066019615639599405), t27, madd<F>(T(-0.32348632812500022), t25, madd<F>(T(0.61645531984834423), t23, madd<F>(T(-0.35738968834541468), t21, madd<F>(T(-0.35648134650374186), t19, madd<F>(T(0.37556057991683534), t17, T(0.33930628577946825) * t15))))));
+  const P u5 = madd<F>(T(-0.37169141324941829), t13, madd<F>(T(0.20931182591491235), t11, madd<F>(T(0.47892214576016834), t9, madd<F>(T(-0.10677294225083156), t7, madd<F>(T(-0.56982421875000033), t5, madd<F>(T(0.48540841888275232), t3, T(-0.13017755780506593) * t1))))));
+  const P u6 = madd<F>(T(-0.22655408120134227), t27, madd<F>(T(0.60740303427372033), t25, madd<F>(T(-0.29827230784788972), t23, madd<F>(T(-0.46051523295669217), t21, madd<F>(T(0.075265034640616027), t19, madd<F>(T(0.4571188818230339), t17, T(0.25312379436441285) * t15))))));
+  const P u7 = madd<F>(T(-0.39264796001215779), t13, madd<F>(T(-0.02287377476146811), t11, madd<F>(T(0.39271064912769221), t9, madd<F>(T(0.41845703124999994), t7, madd<F>(T(-0.10677294225083182), t5, madd<F>(T(-0.61730946168753387), t3, T(0.35143277635949621) * t1))))));
+  const P u8 = madd<F>(T(0.48804529210874031), t27, madd<F>(T(-0.46623796657139144), t25, madd<F>(T(-0.43385279709812408), t23, madd<F>(T(0.011075484592005549), t21, madd<F>(T(0.37504362806209857), t19, madd<F>(T(0.4270695087087199), t17, T(0.18176068675697232) * t15))))));
+  const P u9 = madd<F>(T(-0.40642925122563583), t13, madd<F>(T(-0.21308945636308815), t11, madd<F>(T(0.099853515624999847), t9, madd<F>(T(0.39271064912769221), t7, madd<F>(T(0.47892214576016845), t5, madd<F>(T(0.16815157853950097), t3, T(-0.60627913847438053) * t1))))));
+  const P u10 = madd<F>(T(-0.66855849616848961), t27, madd<F>(T(-0.18542476450635273), t25, madd<F>(T(0.20312265248042508), t23, madd<F>(T(0.40964323385175949), t21, madd<F>(T(0.43748201605755099), t19, madd<F>(T(0.32292413190190605), t17, T(0.11794190764567768) * t15))))));
+  const P u11 = madd<F>(T(-0.41489743677369478), t13, madd<F>(T(-0.34643554687500022), t11, madd<F>(T(-0.21308945636308829), t9, madd<F>(T(-0.022873774761468131), t7, madd<F>(T(0.20931182591491251), t5, madd<F>(T(0.45462596516248516), t3, T(0.64141717638938278) * t1))))));
+  const P u12 = madd<F>(T(0.5089594286692023), t27, madd<F>(T(0.51758647408139313), t25, madd<F>(T(0.46389892469554139), t23, madd<F>(T(0.38115332581581485), t21, madd<F>(T(0.28180798175816663), t19, madd<F>(T(0.17260776719378482), t17, T(0.058097261762847463) * t15))))));
+  const P u13 = madd<F>(T(-0.41894531250000022), t13, madd<F>(T(-0.41489743677369467), t11, madd<F>(T(-0.40642925122563611), t9, madd<F>(T(-0.39264796001215785), t7, madd<F>(T(-0.37169141324941835), t5, madd<F>(T(-0.33930628577946836), t3, T(-0.28231989495348714) * t1))))));
+  const P u14 = madd<F>(T(-0.54671012572894029), t28, madd<F>(T(-0.39367628467146926), t26, madd<F>(T(-0.3476854804962824), t24, madd<F>(T(-0.32421838231812705), t22, madd<F>(T(-0.310415468064283), t20, madd<F>(T(-0.30213623022215297), t18, madd<F>(T(-0.29765989046048241), t16, T(-0.20947265624999994) * t14)))))));
+  const P u15 = madd<F>(T(-0.058097261762847463), t12, madd<F>(T(-0.1179419076456777), t10, madd<F>(T(-0.18176068675697241), t8, madd<F>(T(-0.25312379436441296), t6, madd<F>(T(-0.33930628577946848), t4, madd<F>(T(-0.46102645791479407), t2, T(-0.74694823221280571) * t0))))));
+  const P u16 = madd<F>(T(0.67329003784011332), t28, madd<F>(T(0.20778181666966627), t26, madd<F>(T(-0.023526657912790537), t24, madd<F>(T(-0.17989751732911832), t22, madd<F>(T(-0.28986522975410933), t20, madd<F>(T(-0.36391209618543385), t18, madd<F>(T(-0.40686035156250033), t16, T(-0.29765989046048308) * t14)))))));
+  const P u17 = madd<F>(T(-0.17260776719378462), t12, madd<F>(T(-0.32292413190190605), t10, madd<F>(T(-0.42706950870871985), t8, madd<F>(T(-0.45711888182303395), t6, madd<F>(T(-0.37556057991683556), t4, madd<F>(T(-0.11638109588227721), t2, T(0.56567677845718545) * t0))))));
+  const P u18 = madd<F>(T(-0.44220987944028822), t28, madd<F>(T(0.4094067947038158), t26, madd<F>(T(0.50991810239247026), t24, madd<F>(T(0.33717349471455366), t22, madd<F>(T(0.069981750766127351), t20, madd<F>(T(-0.18579101562500017), t18, madd<F>(T(-0.36391209618543408), t16, T(-0.30213623022215363) * t14)))))));
+  const P u19 = madd<F>(T(-0.28180798175816618), t12, madd<F>(T(-0.43748201605755072), t10, madd<F>(T(-0.37504362806209829), t8, madd<F>(T(-0.075265034640615736), t6, madd<F>(T(0.35648134650374202), t4, madd<F>(T(0.59402981238256702), t2, T(-0.32081276509794043) * t0))))));
+  const P u20 = madd<F>(T(0.21520774524260008), t28, madd<F>(T(-0.6420073365552853), t26, madd<F>(T(-0.0075199672027643936), t24, madd<F>(T(0.43617162672688647), t22, madd<F>(T(0.40734863281250006), t20, madd<F>(T(0.069981750766127296), t18, madd<F>(T(-0.2898652297541095), t16, T(-0.3104154680642835) * t14)))))));
+  const P u21 = madd<F>(T(-0.38115332581581446), t12, madd<F>(T(-0.40964323385175949), t10, madd<F>(T(-0.011075484592005622), t8, madd<F>(T(0.460515232956692), t6, madd<F>(T(0.35738968834541451), t4, madd<F>(T(-0.57388732064693382), t2, T(0.13282910411488655) * t0))))));
+  const P u22 = madd<F>(T(-0.074925719670685703), t28, madd<F>(T(0.43932900265328179), t26, madd<F>(T(-0.58383998553034411), t24, madd<F>(T(-0.13818359375000033), t22, madd<F>(T(0.43617162672688714), t20, madd<F>(T(0.33717349471455377), t18, madd<F>(T(-0.17989751732911871), t16, T(-0.32421838231812783) * t14)))))));
+  const P u23 = madd<F>(T(-0.46389892469554128), t12, madd<F>(T(-0.20312265248042524), t10, madd<F>(T(0.43385279709812391), t8, madd<F>(T(0.29827230784788955), t6, madd<F>(T(-0.61645531984834423), t4, madd<F>(T(0.29131204754594392), t2, T(-0.038268604914882202) * t0))))));
+  const P u24 = madd<F>(T(0.017467148463445093), t28, madd<F>(T(-0.16710485037607631), t26, madd<F>(T(0.4993896484375005), t24, madd<F>(T(-0.58383998553034344), t22, madd<F>(T(-0.0075199672027643294), t20, madd<F>(T(0.50991810239246982), t18, madd<F>(T(-0.023526657912790575), t16, T(-0.34768548049628256) * t14)))))));
+  const P u25 = madd<F>(T(-0.51758647408139291), t12, madd<F>(T(0.1854247645063527), t10, madd<F>(T(0.46623796657139172), t8, madd<F>(T(-0.60740303427372055), t6, madd<F>(T(0.32348632812500033), t4, madd<F>(T(-0.081935281474721317), t2, T(0.00698685938537806) * t0))))));
+  const P u26 = madd<F>(T(-0.002373318126858405), t28, madd<F>(T(0.033447265625000021), t26, madd<F>(T(-0.16710485037607639), t24, madd<F>(T(0.43932900265328167), t22, madd<F>(T(-0.64200733655528597), t20, madd<F>(T(0.40940679470381575), t18, madd<F>(T(0.20778181666966666), t16, T(-0.39367628467147009) * t14)))))));
+  const P u27 = madd<F>(T(-0.50895942866920174), t12, madd<F>(T(0.66855849616848972), t10, madd<F>(T(-0.48804529210874042), t8, madd<F>(T(0.22655408120134221), t6, madd<F>(T(-0.06601961563959946), t4, madd<F>(T(0.010764359221215172), t2, T(-0.00064593537867792088) * t0))))));
+  const P u28 = madd<F>(T(0.00012207031250008441), t28, madd<F>(T(-0.0023733181268582775), t26, madd<F>(T(0.017467148463444916), t24, madd<F>(T(-0.074925719670685689), t22, madd<F>(T(0.21520774524260025), t20, madd<F>(T(-0.44220987944028839), t18, madd<F>(T(0.67329003784011321), t16, T(-0.54671012572894107) * t14)))))));
   const P w14 = u14;
   const P cb1 = splat<P>(s.cb[1]), sb1 = splat<P>(s.sb[1]);
-  const P w15 = cb1 * u15 - sb1 * u13;
-  const P w13 = sb1 * u15 + cb1 * u13;
+  const P w15 = madd<F>(cb1, u15, -(sb1 * u13));
+  const P w13 = madd<F>(sb1, u15, cb1 * u13);
   const P cb2 = splat<P>(s.cb[2]), sb2 = splat<P>(s.sb[2]);
-  const P w16 = cb2 * u16 - sb2 * u12;
-  const P w12 = sb2 * u16 + cb2 * u12;
+  const P w16 = madd<F>(cb2, u16, -(sb2 * u12));
+  const P w12 = madd<F>(sb2, u16, cb2 * u12);
   const P cb3 = splat<P>(s.cb[3]), sb3 = splat<P>(s.sb[3]);
-  const P w17 = cb3 * u17 - sb3 * u11;
-  const P w11 = sb3 * u17 + cb3 * u11;
+  const P w17 = madd<F>(cb3, u17, -(sb3 * u11));
+  const P w11 = madd<F>(sb3, u17, cb3 * u11);
   const P cb4 = splat<P>(s.cb[4]), sb4 = splat<P>(s.sb[4]);
-  const P w18 = cb4 * u18 - sb4 * u10;
-  const P w10 = sb4 * u18 + cb4 * u10;
+  const P w18 = madd<F>(cb4, u18, -(sb4 * u10));
+  const P w10 = madd<F>(sb4, u18, cb4 * u10);
   const P cb5 = splat<P>(s.cb[5]), sb5 = splat<P>(s.sb[5]);
-  const P w19 = cb5 * u19 - sb5 * u9;
-  const P w9 = sb5 * u19 + cb5 * u9;
+  const P w19 = madd<F>(cb5, u19, -(sb5 * u9));
+  const P w9 = madd<F>(sb5, u19, cb5 * u9);
   const P cb6 = splat<P>(s.cb[6]), sb6 = splat<P>(s.sb[6]);
-  const P w20 = cb6 * u20 - sb6 * u8;
-  const P w8 = sb6 * u20 + cb6 * u8;
+  const P w20 = madd<F>(cb6, u20, -(sb6 * u8));
+  const P w8 = madd<F>(sb6, u20, cb6 * u8);
   const P cb7 = splat<P>(s.cb[7]), sb7 = splat<P>(s.sb[7]);
-  const P w21 = cb7 * u21 - sb7 * u7;
-  const P w7 = sb7 * u21 + cb7 * u7;
+  const P w21 = madd<F>(cb7, u21, -(sb7 * u7));
+  const P w7 = madd<F>(sb7, u21, cb7 * u7);
   const P cb8 = splat<P>(s.cb[8]), sb8 = splat<P>(s.sb[8]);
-  const P w22 = cb8 * u22 - sb8 * u6;
-  const P w6 = sb8 * u22 + cb8 * u6;
+  const P w22 = madd<F>(cb8, u22, -(sb8 * u6));
+  const P w6 = madd<F>(sb8, u22, cb8 * u6);
   const P cb9 = splat<P>(s.cb[9]), sb9 = splat<P>(s.sb[9]);
-  const P w23 = cb9 * u23 - sb9 * u5;
-  const P w5 = sb9 * u23 + cb9 * u5;
+  const P w23 = madd<F>(cb9, u23, -(sb9 * u5));
+  const P w5 = madd<F>(sb9, u23, cb9 * u5);
   const P cb10 = splat<P>(s.cb[10]), sb10 = splat<P>(s.sb[10]);
-  const P w24 = cb10 * u24 - sb10 * u4;
-  const P w4 = sb10 * u24 + cb10 * u4;
+  const P w24 = madd<F>(cb10, u24, -(sb10 * u4));
+  const P w4 = madd<F>(sb10, u24, cb10 * u4);
   const P cb11 = splat<P>(s.cb[11]), sb11 = splat<P>(s.sb[11]);
-  const P w25 = cb11 * u25 - sb11 * u3;
-  const P w3 = sb11 * u25 + cb11 * u3;
+  const P w25 = madd<F>(cb11, u25, -(sb11 * u3));
+  const P w3 = madd<F>(sb11, u25, cb11 * u3);
   const P cb12 = splat<P>(s.cb[12]), sb12 = splat<P>(s.sb[12]);
-  const P w26 = cb12 * u26 - sb12 * u2;
-  const P w2 = sb12 * u26 + cb12 * u2;
+  const P w26 = madd<F>(cb12, u26, -(sb12 * u2));
+  const P w2 = madd<F>(sb12, u26, cb12 * u2);
   const P cb13 = splat<P>(s.cb[13]), sb13 = splat<P>(s.sb[13]);
-  const P w27 = cb13 * u27 - sb13 * u1;
-  const P w1 = sb13 * u27 + cb13 * u1;
+  const P w27 = madd<F>(cb13, u27, -(sb13 * u1));
+  const P w1 = madd<F>(sb13, u27, cb13 * u1);
   const P cb14 = splat<P>(s.cb[14]), sb14 = splat<P>(s.sb[14]);
-  const P w28 = cb14 * u28 - sb14 * u0;
-  const P w0 = sb14 * u28 + cb14 * u0;
-  const P v0 = T(-0.74694823221280571) * w15 + T(0.56567677845718545) * w17 - T(0.32081276509794043) * w19 + T(0.13282910411488655) * w21 - T(0.038268604914882202) * w23 + T(0.00698685938537806) * w25 - T(0.00064593537867792088) * w27;
-  const P v1 = T(-0.0031738281250000191) * w1 + T(0.029048630881423794) * w3 - T(0.13017755780506593) * w5 + T(0.35143277635949621) * w7 - T(0.60627913847438053) * w9 + T(0.64141717638938278) * w11 - T(0.28231989495348714) * w13;
-  const P v2 = T(-0.46102645791479407) * w15 - T(0.11638109588227721) * w17 + T(0.59402981238256702) * w19 - T(0.57388732064693382) * w21 + T(0.29131204754594392) * w23 - T(0.081935281474721317) * w25 + T(0.010764359221215172) * w27;
-  const P v3 = T(0.029048630881423693) * w1 - T(0.17993164062500017) * w3 + T(0.48540841888275232) * w5 - T(0.61730946168753387) * w7 + T(0.16815157853950097) * w9 + T(0.45462596516248516) * w11 - T(0.33930628577946836) * w13;
-  const P v4 = T(-0.33930628577946848) * w15 - T(0.37556057991683556) * w17 + T(0.35648134650374202) * w19 + T(0.35738968834541451) * w21 - T(0.61645531984834423) * w23 + T(0.32348632812500033) * w25 - T(0.06601961563959946) * w27;
-  const P v5 = T(-0.1301775578050659) * w1 + T(0.48540841888275299) * w3 - T(0.56982421875000033) * w5 - T(0.10677294225083182) * w7 + T(0.47892214576016845) * w9 + T(0.20931182591491251) * w11 - T(0.37169141324941835) * w13;
-  const P v6 = T(-0.25312379436441296) * w15 - T(0.45711888182303395) * w17 - T(0.075265034640615736) * w19 + T(0.460515232956692) * w21 + T(0.29827230784788955) * w23 - T(0.60740303427372055) * w25 + T(0.22655408120134221) * w27;
-  const P v7 = T(0.35143277635949577) * w1 - T(0.61730946168753442) * w3 - T(0.10677294225083156) * w5 + T(0.41845703124999994) * w7 + T(0.39271064912769221) * w9 - T(0.022873774761468131) * w11 - T(0.39264796001215785) * w13;
-  const P v8 = T(-0.18176068675697241) * w15 - T(0.42706950870871985) * w17 - T(0.37504362806209829) * w19 - T(0.011075484592005622) * w21 + T(0.43385279709812391) * w23 + T(0.46623796657139172) * w25 - T(0.48804529210874042) * w27;
-  const P v9 = T(-0.6062791384743802) * w1 + T(0.16815157853950083) * w3 + T(0.47892214576016834) * w5 + T(0.39271064912769221) * w7 + T(0.099853515624999847) * w9 - T(0.21308945636308829) * w11 - T(0.40642925122563611) * w13;
-  const P v10 = T(-0.1179419076456777) * w15 - T(0.32292413190190605) * w17 - T(0.43748201605755072) * w19 - T(0.40964323385175949) * w21 - T(0.20312265248042524) * w23 + T(0.1854247645063527) * w25 + T(0.66855849616848972) * w27;
-  const P v11 = T(0.64141717638938212) * w1 + T(0.45462596516248538) * w3 + T(0.20931182591491235) * w5 - T(0.02287377476146811) * w7 - T(0.21308945636308815) * w9 - T(0.34643554687500022) * w11 - T(0.41489743677369467) * w13;
-  const P v12 = T(-0.058097261762847463) * w15 - T(0.17260776719378462) * w17 - T(0.28180798175816618) * w19 - T(0.38115332581581446) * w21 - T(0.46389892469554128) * w23 - T(0.51758647408139291) * w25 - T(0.50895942866920174) * w27;
-  const P v13 = T(-0.28231989495348708) * w1 - T(0.33930628577946848) * w3 - T(0.37169141324941829) * w5 - T(0.39264796001215779) * w7 - T(0.40642925122563583) * w9 - T(0.41489743677369478) * w11 - T(0.41894531250000022) * w13;
-  const P v14 = T(-0.20947265624999994) * w14 - T(0.29765989046048308) * w16 - T(0.30213623022215363) * w18 - T(0.3104154680642835) * w20 - T(0.32421838231812783) * w22 - T(0.34768548049628256) * w24 - T(0.39367628467147009) * w26 - T(0.54671012572894107) * w28;
-  const P v15 = T(0.74694823221280549) * w0 + T(0.46102645791479369) * w2 + T(0.33930628577946825) * w4 + T(0.25312379436441285) * w6 + T(0.18176068675697232) * w8 + T(0.11794190764567768) * w10 + T(0.058097261762847463) * w12;
-  const P v16 = T(-0.29765989046048241) * w14 - T(0.40686035156250033) * w16 - T(0.36391209618543408) * w18 - T(0.2898652297541095) * w20 - T(0.17989751732911871) * w22 - T(0.023526657912790575) * w24 + T(0.20778181666966666) * w26 + T(0.67329003784011321) * w28;
-  const P v17 = T(-0.56567677845718545) * w0 + T(0.11638109588227688) * w2 + T(0.37556057991683534) * w4 + T(0.4571188818230339) * w6 + T(0.4270695087087199) * w8 + T(0.32292413190190605) * w10 + T(0.17260776719378482) * w12;
-  const P v18 = T(-0.30213623022215297) * w14 - T(0.36391209618543385) * w16 - T(0.18579101562500017) * w18 + T(0.069981750766127296) * w20 + T(0.33717349471455377) * w22 + T(0.50991810239246982) * w24 + T(0.40940679470381575) * w26 - T(0.44220987944028839) * w28;
-  const P v19 = T(0.32081276509794071) * w0 - T(0.59402981238256647) * w2 - T(0.35648134650374186) * w4 + T(0.075265034640616027) * w6 + T(0.37504362806209857) * w8 + T(0.43748201605755099) * w10 + T(0.28180798175816663) * w12;
-  const P v20 = T(-0.310415468064283) * w14 - T(0.28986522975410933) * w16 + T(0.069981750766127351) * w18 + T(0.40734863281250006) * w20 + T(0.43617162672688714) * w22 - T(0.0075199672027643294) * w24 - T(0.64200733655528597) * w26 + T(0.21520774524260025) * w28;
-  const P v21 = T(-0.13282910411488652) * w0 + T(0.57388732064693349) * w2 - T(0.35738968834541468) * w4 - T(0.46051523295669217) * w6 + T(0.011075484592005549) * w8 + T(0.40964323385175949) * w10 + T(0.38115332581581485) * w12;
-  const P v22 = T(-0.32421838231812705) * w14 - T(0.17989751732911832) * w16 + T(0.33717349471455366) * w18 + T(0.43617162672688647) * w20 - T(0.13818359375000033) * w22 - T(0.58383998553034344) * w24 + T(0.43932900265328167) * w26 - T(0.074925719670685689) * w28;
-  const P v23 = T(0.038268604914882182) * w0 - T(0.2913120475459437) * w2 + T(0.61645531984834423) * w4 - T(0.29827230784788972) * w6 - T(0.43385279709812408) * w8 + T(0.20312265248042508) * w10 + T(0.46389892469554139) * w12;
-  const P v24 = T(-0.3476854804962824) * w14 - T(0.023526657912790537) * w16 + T(0.50991810239247026) * w18 - T(0.0075199672027643936) * w20 - T(0.58383998553034411) * w22 + T(0.4993896484375005) * w24 - T(0.16710485037607639) * w26 + T(0.017467148463444916) * w28;
-  const P v25 = T(-0.0069868593853779975) * w0 + T(0.081935281474721192) * w2 - T(0.32348632812500022) * w4 + T(0.60740303427372033) * w6 - T(0.46623796657139144) * w8 - T(0.18542476450635273) * w10 + T(0.51758647408139313) * w12;
-  const P v26 = T(-0.39367628467146926) * w14 + T(0.20778181666966627) * w16 + T(0.4094067947038158) * w18 - T(0.6420073365552853) * w20 + T(0.43932900265328179) * w22 - T(0.16710485037607631) * w24 + T(0.033447265625000021) * w26 - T(0.0023733181268582775) * w28;
-  const P v27 = T(0.00064593537867772128) * w0 - T(0.010764359221215266) * w2 + T(0.066019615639599405) * w4 - T(0.22655408120134227) * w6 + T(0.48804529210874031) * w8 - T(0.66855849616848961) * w10 + T(0.5089594286692023) * w12;
-  const P v28 = T(-0.54671012572894029) * w14 + T(0.67329003784011332) * w16 - T(0.44220987944028822) * w18 + T(0.21520774524260008) * w20 - T(0.074925719670685703) * w22 + T(0.017467148463445093) * w24 - T(0.002373318126858405) * w26 + T(0.00012207031250008441) * w28;
+  const P w28 = madd<F>(cb14, u28, -(sb14 * u0));
+  const P w0 = madd<F>(sb14, u28, cb14 * u0);
+  const P v0 = madd<F>(T(-0.00064593537867792088), w27, madd<F>(T(0.00698685938537806), w25, madd<F>(T(-0.038268604914882202), w23, madd<F>(T(0.13282910411488655), w21, madd<F>(T(-0.32081276509794043), w19, madd<F>(T(0.56567677845718545), w17, T(-0.74694823221280571) * w15))))));
+  const P v1 = madd<F>(T(-0.28231989495348714), w13, madd<F>(T(0.64141717638938278), w11, madd<F>(T(-0.60627913847438053), w9, madd<F>(T(0.35143277635949621), w7, madd<F>(T(-0.13017755780506593), w5, madd<F>(T(0.029048630881423794), w3, T(-0.0031738281250000191) * w1))))));
+  const P v2 = madd<F>(T(0.010764359221215172), w27, madd<F>(T(-0.081935281474721317), w25, madd<F>(T(0.29131204754594392), w23, madd<F>(T(-0.57388732064693382), w21, madd<F>(T(0.59402981238256702), w19, madd<F>(T(-0.11638109588227721), w17, T(-0.46102645791479407) * w15))))));
+  const P v3 = madd<F>(T(-0.33930628577946836), w13, madd<F>(T(0.45462596516248516), w11, madd<F>(T(0.16815157853950097), w9, madd<F>(T(-0.61730946168753387), w7, madd<F>(T(0.48540841888275232), w5, madd<F>(T(-0.17993164062500017), w3, T(0.029048630881423693) * w1))))));
+  const P v4 = madd<F>(T(-0.06601961563959946), w27, madd<F>(T(0.32348632812500033), w25, madd<F>(T(-0.61645531984834423), w23, madd<F>(T(0.35738968834541451), w21, madd<F>(T(0.35648134650374202), w19, madd<F>(T(-0.37556057991683556), w17, T(-0.33930628577946848) * w15))))));
+  const P v5 = madd<F>(T(-0.37169141324941835), w13, madd<F>(T(0.20931182591491251), w11, madd<F>(T(0.47892214576016845), w9, madd<F>(T(-0.10677294225083182), w7, madd<F>(T(-0.56982421875000033), w5, madd<F>(T(0.48540841888275299), w3, T(-0.1301775578050659) * w1))))));
+  const P v6 = madd<F>(T(0.22655408120134221), w27, madd<F>(T(-0.60740303427372055), w25, madd<F>(T(0.29827230784788955), w23, madd<F>(T(0.460515232956692), w21, madd<F>(T(-0.075265034640615736), w19, madd<F>(T(-0.45711888182303395), w17, T(-0.25312379436441296) * w15))))));
+  const P v7 = madd<F>(T(-0.39264796001215785), w13, madd<F>(T(-0.022873774761468131), w11, madd<F>(T(0.39271064912769221), w9, madd<F>(T(0.41845703124999994), w7, madd<F>(T(-0.10677294225083156), w5, madd<F>(T(-0.61730946168753442), w3, T(0.35143277635949577) * w1))))));
+  const P v8 = madd<F>(T(-0.48804529210874042), w27, madd<F>(T(0.46623796657139172), w25, madd<F>(T(0.43385279709812391), w23, madd<F>(T(-0.011075484592005622), w21, madd<F>(T(-0.37504362806209829), w19, madd<F>(T(-0.42706950870871985), w17, T(-0.18176068675697241) * w15))))));
+  const P v9 = madd<F>(T(-0.40642925122563611), w13, madd<F>(T(-0.21308945636308829), w11, madd<F>(T(0.099853515624999847), w9, madd<F>(T(0.39271064912769221), w7, madd<F>(T(0.47892214576016834), w5, madd<F>(T(0.16815157853950083), w3, T(-0.6062791384743802) * w1))))));
+  const P v10 = madd<F>(T(0.66855849616848972), w27, madd<F>(T(0.1854247645063527), w25, madd<F>(T(-0.20312265248042524), w23, madd<F>(T(-0.40964323385175949), w21, madd<F>(T(-0.43748201605755072), w19, madd<F>(T(-0.32292413190190605), w17, T(-0.1179419076456777) * w15))))));
+  const P v11 = madd<F>(T(-0.41489743677369467), w13, madd<F>(T(-0.34643554687500022), w11, madd<F>(T(-0.21308945636308815), w9, madd<F>(T(-0.02287377476146811), w7, madd<F>(T(0.20931182591491235), w5, madd<F>(T(0.45462596516248538), w3, T(0.64141717638938212) * w1))))));
+  const P v12 = madd<F>(T(-0.50895942866920174), w27, madd<F>(T(-0.51758647408139291), w25, madd<F>(T(-0.46389892469554128), w23, madd<F>(T(-0.38115332581581446), w21, madd<F>(T(-0.28180798175816618), w19, madd<F>(T(-0.17260776719378462), w17, T(-0.058097261762847463) * w15))))));
+  const P v13 = madd<F>(T(-0.41894531250000022), w13, madd<F>(T(-0.41489743677369478), w11, madd<F>(T(-0.40642925122563583), w9, madd<F>(T(-0.39264796001215779), w7, madd<F>(T(-0.37169141324941829), w5, madd<F>(T(-0.33930628577946848), w3, T(-0.28231989495348708) * w1))))));
+  const P v14 = madd<F>(T(-0.54671012572894107), w28, madd<F>(T(-0.39367628467147009), w26, madd<F>(T(-0.34768548049628256), w24, madd<F>(T(-0.32421838231812783), w22, madd<F>(T(-0.3104154680642835), w20, madd<F>(T(-0.30213623022215363), w18, madd<F>(T(-0.29765989046048308), w16, T(-0.20947265624999994) * w14)))))));
+  const P v15 = madd<F>(T(0.058097261762847463), w12, madd<F>(T(0.11794190764567768), w10, madd<F>(T(0.18176068675697232), w8, madd<F>(T(0.25312379436441285), w6, madd<F>(T(0.33930628577946825), w4, madd<F>(T(0.46102645791479369), w2, T(0.74694823221280549) * w0))))));
+  const P v16 = madd<F>(T(0.67329003784011321), w28, madd<F>(T(0.20778181666966666), w26, madd<F>(T(-0.023526657912790575), w24, madd<F>(T(-0.17989751732911871), w22, madd<F>(T(-0.2898652297541095), w20, madd<F>(T(-0.36391209618543408), w18, madd<F>(T(-0.40686035156250033), w16, T(-0.29765989046048241) * w14)))))));
+  const P v17 = madd<F>(T(0.17260776719378482), w12, madd<F>(T(0.32292413190190605), w10, madd<F>(T(0.4270695087087199), w8, madd<F>(T(0.4571188818230339), w6, madd<F>(T(0.37556057991683534), w4, madd<F>(T(0.11638109588227688), w2, T(-0.56567677845718545) * w0))))));
+  const P v18 = madd<F>(T(-0.44220987944028839), w28, madd<F>(T(0.40940679470381575), w26, madd<F>(T(0.50991810239246982), w24, madd<F>(T(0.33717349471455377), w22, madd<F>(T(0.069981750766127296), w20, madd<F>(T(-0.18579101562500017), w18, madd<F>(T(-0.36391209618543385), w16, T(-0.30213623022215297) * w14)))))));
+  const P v19 = madd<F>(T(0.28180798175816663), w12, madd<F>(T(0.43748201605755099), w10, madd<F>(T(0.37504362806209857), w8, madd<F>(T(0.075265034640616027), w6, madd<F>(T(-0.35648134650374186), w4, madd<F>(T(-0.59402981238256647), w2, T(0.32081276509794071) * w0))))));
+  const P v20 = madd<F>(T(0.21520774524260025), w28, madd<F>(T(-0.64200733655528597), w26, madd<F>(T(-0.0075199672027643294), w24, madd<F>(T(0.43617162672688714), w22, madd<F>(T(0.40734863281250006), w20, madd<F>(T(0.069981750766127351), w18, madd<F>(T(-0.28986522975410933), w16, T(-0.310415468064283) * w14)))))));
+  const P v21 = madd<F>(T(0.38115332581581485), w12, madd<F>(T(0.40964323385175949), w10, madd<F>(T(0.011075484592005549), w8, madd<F>(T(-0.46051523295669217), w6, madd<F>(T(-0.35738968834541468), w4, madd<F>(T(0.57388732064693349), w2, T(-0.13282910411488652) * w0))))));
+  const P v22 = madd<F>(T(-0.074925719670685689), w28, madd<F>(T(0.43932900265328167), w26, madd<F>(T(-0.58383998553034344), w24, madd<F>(T(-0.13818359375000033), w22, madd<F>(T(0.43617162672688647), w20, madd<F>(T(0.33717349471455366), w18, madd<F>(T(-0.17989751732911832), w16, T(-0.32421838231812705) * w14)))))));
+  const P v23 = madd<F>(T(0.46389892469554139), w12, madd<F>(T(0.20312265248042508), w10, madd<F>(T(-0.43385279709812408), w8, madd<F>(T(-0.29827230784788972), w6, madd<F>(T(0.61645531984834423), w4, madd<F>(T(-0.2913120475459437), w2, T(0.038268604914882182) * w0))))));
+  const P v24 = madd<F>(T(0.017467148463444916), w28, madd<F>(T(-0.16710485037607639), w26, madd<F>(T(0.4993896484375005), w24, madd<F>(T(-0.58383998553034411), w22, madd<F>(T(-0.0075199672027643936), w20, madd<F>(T(0.50991810239247026), w18, madd<F>(T(-0.023526657912790537), w16, T(-0.3476854804962824) * w14)))))));
+  const P v25 = madd<F>(T(0.51758647408139313), w12, madd<F>(T(-0.18542476450635273), w10, madd<F>(T(-0.46623796657139144), w8, madd<F>(T(0.60740303427372033), w6, madd<F>(T(-0.32348632812500022), w4, madd<F>(T(0.081935281474721192), w2, T(-0.0069868593853779975) * w0))))));
+  const P v26 = madd<F>(T(-0.0023733181268582775), w28, madd<F>(T(0.033447265625000021), w26, madd<F>(T(-0.16710485037607631), w24, madd<F>(T(0.43932900265328179), w22, madd<F>(T(-0.6420073365552853), w20, madd<F>(T(0.4094067947038158), w18, madd<F>(T(0.20778181666966627), w16, T(-0.39367628467146926) * w14)))))));
+  const P v27 = madd<F>(T(0.5089594286692023), w12, madd<F>(T(-0.66855849616848961), w10, madd<F>(T(0.48804529210874031), w8, madd<F>(T(-0.22655408120134227), w6, madd<F>(T(0.066019615639599405), w4, madd<F>(T(-0.010764359221215266), w2, T(0.00064593537867772128) * w0))))));
+  const P v28 = madd<F>(T(0.00012207031250008441), w28, madd<F>(T(-0.002373318126858405), w26, madd<F>(T(0.017467148463445093), w24, madd<F>(T(-0.074925719670685703), w22, madd<F>(T(0.21520774524260008), w20, madd<F>(T(-0.44220987944028822), w18, madd<F>(T(0.67329003784011332), w16, T(-0.54671012572894029) * w14)))))));
   y[14] = v14;
   const P ca1 = splat<P>(s.ca[1]), sa1 = splat<P>(s.sa[1]);
-  y[15] = ca1 * v15 - sa1 * v13;
-  y[13] = sa1 * v15 + ca1 * v13;
+  y[15] = madd<F>(ca1, v15, -(sa1 * v13));
+  y[13] = madd<F>(sa1, v15, ca1 * v13);
   const P ca2 = splat<P>(s.ca[2]), sa2 = splat<P>(s.sa[2]);
-  y[16] = ca2 * v16 - sa2 * v12;
-  y[12] = sa2 * v16 + ca2 * v12;
+  y[16] = madd<F>(ca2, v16, -(sa2 * v12));
+  y[12] = madd<F>(sa2, v16, ca2 * v12);
   const P ca3 = splat<P>(s.ca[3]), sa3 = splat<P>(s.sa[3]);
-  y[17] = ca3 * v17 - sa3 * v11;
-  y[11] = sa3 * v17 + ca3 * v11;
+  y[17] = madd<F>(ca3, v17, -(sa3 * v11));
+  y[11] = madd<F>(sa3, v17, ca3 * v11);
   const P ca4 = splat<P>(s.ca[4]), sa4 = splat<P>(s.sa[4]);
-  y[18] = ca4 * v18 - sa4 * v10;
-  y[10] = sa4 * v18 + ca4 * v10;
+  y[18] = madd<F>(ca4, v18, -(sa4 * v10));
+  y[10] = madd<F>(sa4, v18, ca4 * v10);
   const P ca5 = splat<P>(s.ca[5]), sa5 = splat<P>(s.sa[5]);
-  y[19] = ca5 * v19 - sa5 * v9;
-  y[9] = sa5 * v19 + ca5 * v9;
+  y[19] = madd<F>(ca5, v19, -(sa5 * v9));
+  y[9] = madd<F>(sa5, v19, ca5 * v9);
   const P ca6 = splat<P>(s.ca[6]), sa6 = splat<P>(s.sa[6]);
-  y[20] = ca6 * v20 - sa6 * v8;
-  y[8] = sa6 * v20 + ca6 * v8;
+  y[20] = madd<F>(ca6, v20, -(sa6 * v8));
+  y[8] = madd<F>(sa6, v20, ca6 * v8);
   const P ca7 = splat<P>(s.ca[7]), sa7 = splat<P>(s.sa[7]);
-  y[21] = ca7 * v21 - sa7 * v7;
-  y[7] = sa7 * v21 + ca7 * v7;
+  y[21] = madd<F>(ca7, v21, -(sa7 * v7));
+  y[7] = madd<F>(sa7, v21, ca7 * v7);
   const P ca8 = splat<P>(s.ca[8]), sa8 = splat<P>(s.sa[8]);
-  y[22] = ca8 * v22 - sa8 * v6;
-  y[6] = sa8 * v22 + ca8 * v6;
+  y[22] = madd<F>(ca8, v22, -(sa8 * v6));
+  y[6] = madd<F>(sa8, v22, ca8 * v6);
   const P ca9 = splat<P>(s.ca[9]), sa9 = splat<P>(s.sa[9]);
-  y[23] = ca9 * v23 - sa9 * v5;
-  y[5] = sa9 * v23 + ca9 * v5;
+  y[23] = madd<F>(ca9, v23, -(sa9 * v5));
+  y[5] = madd<F>(sa9, v23, ca9 * v5);
   const P ca10 = splat<P>(s.ca[10]), sa10 = splat<P>(s.sa[10]);
-  y[24] = ca10 * v24 - sa10 * v4;
-  y[4] = sa10 * v24 + ca10 * v4;
+  y[24] = madd<F>(ca10, v24, -(sa10 * v4));
+  y[4] = madd<F>(sa10, v24, ca10 * v4);
   const P ca11 = splat<P>(s.ca[11]), sa11 = splat<P>(s.sa[11]);
-  y[25] = ca11 * v25 - sa11 * v3;
-  y[3] = sa11 * v25 + ca11 * v3;
+  y[25] = madd<F>(ca11, v25, -(sa11 * v3));
+  y[3] = madd<F>(sa11, v25, ca11 * v3);
   const P ca12 = splat<P>(s.ca[12]), sa12 = splat<P>(s.sa[12]);
-  y[26] = ca12 * v26 - sa12 * v2;
-  y[2] = sa12 * v26 + ca12 * v2;
+  y[26] = madd<F>(ca12, v26, -(sa12 * v2));
+  y[2] = madd<F>(sa12, v26, ca12 * v2);
   const P ca13 = splat<P>(s.ca[13]), sa13 = splat<P>(s.sa[13]);
-  y[27] = ca13 * v27 - sa13 * v1;
-  y[1] = sa13 * v27 + ca13 * v1;
+  y[27] = madd<F>(ca13, v27, -(sa13 * v1));
+  y[1] = madd<F>(sa13, v27, ca13 * v1);
   const P ca14 = splat<P>(s.ca[14]), sa14 = splat<P>(s.sa[14]);
-  y[28] = ca14 * v28 - sa14 * v0;
-  y[0] = sa14 * v28 + ca14 * v0;
+  y[28] = madd<F>(ca14, v28, -(sa14 * v0));
+  y[0] = madd<F>(sa14, v28, ca14 * v0);
 }
 
 // Band 15 of Z(a) X90^T Z(b) X90 Z(g), Ry(b) = Rx(-90) Rz(b) Rx(+90).
-template <class T, class P, class S>
-inline void zxzxz_band15(const S& s, const P* __restrict x, P* __restrict y) {
+template <bool F, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void zxzxz_band15(const S& s, const P* __restrict x, P* __restrict y) {
   const P t15 = x[15];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
-  const P t16 = cg1 * x[16] - sg1 * x[14];
-  const P t14 = sg1 * x[16] + cg1 * x[14];
+  const P t16 = madd<F>(cg1, x[16], -(sg1 * x[14]));
+  const P t14 = madd<F>(sg1, x[16], cg1 * x[14]);
   const P cg2 = splat<P>(s.cg[2]), sg2 = splat<P>(s.sg[2]);
-  const P t17 = cg2 * x[17] - sg2 * x[13];
-  const P t13 = sg2 * x[17] + cg2 * x[13];
+  const P t17 = madd<F>(cg2, x[17], -(sg2 * x[13]));
+  const P t13 = madd<F>(sg2, x[17], cg2 * x[13]);
   const P cg3 = splat<P>(s.cg[3]), sg3 = splat<P>(s.sg[3]);
-  const P t18 = cg3 * x[18] - sg3 * x[12];
-  const P t12 = sg3 * x[18] + cg3 * x[12];
+  const P t18 = madd<F>(cg3, x[18], -(sg3 * x[12]));
+  const P t12 = madd<F>(sg3, x[18], cg3 * x[12]);
   const P cg4 = splat<P>(s.cg[4]), sg4 = splat<P>(s.sg[4]);
-  const P t19 = cg4 * x[19] - sg4 * x[11];
-  const P t11 = sg4 * x[19] + cg4 * x[11];
+  const P t19 = madd<F>(cg4, x[19], -(sg4 * x[11]));
+  const P t11 = madd<F>(sg4, x[19], cg4 * x[11]);
   const P cg5 = splat<P>(s.cg[5]), sg5 = splat<P>(s.sg[5]);
-  const P t20 = cg5 * x[20] - sg5 * x[10];
-  const P t10 = sg5 * x[20] + cg5 * x[10];
+  const P t20 = madd<F>(cg5, x[20], -(sg5 * x[10]));
+  const P t10 = madd<F>(sg5, x[20], cg5 * x[10]);
   const P cg6 = splat<P>(s.cg[6]), sg6 = splat<P>(s.sg[6]);
-  const P t21 = cg6 * x[21] - sg6 * x[9];
-  const P t9 = sg6 * x[21] + cg6 * x[9];
+  const P t21 = madd<F>(cg6, x[21], -(sg6 * x[9]));
+  const P t9 = madd<F>(sg6, x[21], cg6 * x[9]);
   const P cg7 = splat<P>(s.cg[7]), sg7 = splat<P>(s.sg[7]);
-  const P t22 = cg7 * x[22] - sg7 * x[8];
-  const P t8 = sg7 * x[22] + cg7 * x[8];
+  const P t22 = madd<F>(cg7, x[22], -(sg7 * x[8]));
+  const P t8 = madd<F>(sg7, x[22], cg7 * x[8]);
   const P cg8 = splat<P>(s.cg[8]), sg8 = splat<P>(s.sg[8]);
-  const P t23 = cg8 * x[23] - sg8 * x[7];
-  const P t7 = sg8 * x[23] + cg8 * x[7];
+  const P t23 = madd<F>(cg8, x[23], -(sg8 * x[7]));
+  const P t7 = madd<F>(sg8, x[23], cg8 * x[7]);
   const P cg9 = splat<P>(s.cg[9]), sg9 = splat<P>(s.sg[9]);
-  const P t24 = cg9 * x[24] - sg9 * x[6];
-  const P t6 = sg9 * x[24] + cg9 * x[6];
+  const P t24 = madd<F>(cg9, x[24], -(sg9 * x[6]));
+  const P t6 = madd<F>(sg9, x[24], cg9 * x[6]);
   const P cg10 = splat<P>(s.cg[10]), sg10 = splat<P>(s.sg[10]);
-  const P t25 = cg10 * x[25] - sg10 * x[5];
-  const P t5 = sg10 * x[25] + cg10 * x[5];
+  const P t25 = madd<F>(cg10, x[25], -(sg10 * x[5]));
+  const P t5 = madd<F>(sg10, x[25], cg10 * x[5]);
   const P cg11 = splat<P>(s.cg[11]), sg11 = splat<P>(s.sg[11]);
-  const P t26 = cg11 * x[26] - sg11 * x[4];
-  const P t4 = sg11 * x[26] + cg11 * x[4];
+  const P t26 = madd<F>(cg11, x[26], -(sg11 * x[4]));
+  const P t4 = madd<F>(sg11, x[26], cg11 * x[4]);
   const P cg12 = splat<P>(s.cg[12]), sg12 = splat<P>(s.sg[12]);
-  const P t27 = cg12 * x[27] - sg12 * x[3];
-  const P t3 = sg12 * x[27] + cg12 * x[3];
+  const P t27 = madd<F>(cg12, x[27], -(sg12 * x[3]));
+  const P t3 = madd<F>(sg12, x[27], cg12 * x[3]);
   const P cg13 = splat<P>(s.cg[13]), sg13 = splat<P>(s.sg[13]);
-  const P t28 = cg13 * x[28] - sg13 * x[2];
-  const P t2 = sg13 * x[28] + cg13 * x[2];
+  const P t28 = madd<F>(cg13, x[28], -(sg13 * x[2]));
+  const P t2 = madd<F>(sg13, x[28], cg13 * x[2]);
   const P cg14 = splat<P>(s.cg[14]), sg14 = splat<P>(s.sg[14]);
-  const P t29 = cg14 * x[29] - sg14 * x[1];
-  const P t1 = sg14 * x[29] + cg14 * x[1];
+  const P t29 = madd<F>(cg14, x[29], -(sg14 * x[1]));
+  const P t1 = madd<F>(sg14, x[29], cg14 * x[1]);
   const P cg15 = splat<P>(s.cg[15]), sg15 = splat<P>(s.sg[15]);
-  const P t30 = cg15 * x[30] - sg15 * x[0];
-  const P t0 = sg15 * x[30] + cg15 * x[0];
-  const P u0 = T(-0.53752106580927261) * t15 + T(0.66793727800614244) * t17 - T(0.45111256989932019) * t19 + T(0.23086421787197661) * t21 - T(0.087085854130328072) * t23 + T(0.02304075127404942) * t25 - T(0.0038890459770688384) * t27 + T(0.00033430331878964398) * t29;
-  const P u1 = T(-0.0017089843749999612) * t1 + T(0.017040945670522598) * t3 - T(0.084132928097751997) * t5 + T(0.25439406264952019) * t7 - T(0.50579815939707495) * t9 + T(0.65889208135462229) * t11 - T(0.48779241888341729) * t13;
-  const P u2 = T(-0.38658243724628427) * t15 + T(0.22417598874859018) * t17 + T(0.3676962675793225) * t19 - T(0.63093824454571101) * t21 + T(0.47182552381421833) * t23 - T(0.20437310147934779) * t25 + T(0.050905076689572872) * t27 - T(0.0060427887192524999) * t29;
-  const P u3 = T(0.01704094567052265) * t1 - T(0.11914062500000006) * t3 + T(0.37606850032574668) * t5 - T(0.61229767863811579) * t7 + T(0.40579961606642539) * t9 + T(0.22655408120134238) * t11 - T(0.50316903057893025) * t13;
-  const P u4 = T(-0.34093366339296716) * t15 + T(0.0040347885451753988) * t17 + T(0.49867904036398791) * t19 - T(0.087858194089874136) * t21 - T(0.52658294615399603) * t23 + T(0.54350403259425528) * t25 - T(0.23024942986358754) * t27 + T(0.040584202601753397) * t29;
-  const P u5 = T(-0.0841329280977519) * t1 + T(0.37606850032574651) * t3 - T(0.61059570312500044) * t5 + T(0.18086190602980609) * t7 + T(0.46234040213014488) * t9 - T(0.14340014800379314) * t11 - T(0.46003667446804902) * t13;
-  const P u6 = T(-0.31739196764139443) * t15 - T(0.14649116500376425) * t17 + T(0.37057633718956973) * t19 + T(0.37120770160461325) * t21 - T(0.25394503957384346) * t23 - T(0.49112388946794133) * t25 + T(0.52259019340167645) * t27 - T(0.15456205830431871) * t29;
-  const P u7 = T(0.25439406264952041) * t1 - T(0.61229767863811579) * t3 + T(0.18086190602980604) * t5 + T(0.48437500000000011) * t7 + T(0.093199064769063741) * t9 - T(0.36422508440437618) * t11 - T(0.38948564307572281) * t13;
-  const P u8 = T(-0.30327852628212998) * t15 - T(0.25483020517266392) * t17 + T(0.13928971533740303) * t19 + T(0.43714995515444205) * t21 + T(0.32868469278573376) * t23 - T(0.20261879347603645) * t25 - T(0.58398818968480681) * t27 + T(0.37742785470181972) * t29;
-  const P u9 = T(-0.50579815939707506) * t1 + T(0.40579961606642545) * t3 + T(0.4623404021301451) * t5 + T(0.093199064769063769) * t7 - T(0.28295898437499989) * t9 - T(0.43030351350995671) * t11 - T(0.30302356320529816) * t13;
-  const P u10 = T(-0.29448597000911853) * t15 - T(0.33108469734219809) * t17 - T(0.10229863635764286) * t19 + T(0.19016394045597712) * t21 + T(0.42205711248781669) * t23 + T(0.44134584368013546) * t25 + T(0.10501062714067153) * t27 - T(0.61080930711268278) * t29;
-  const P u11 = T(0.65889208135462263) * t1 + T(0.22655408120134254) * t3 - T(0.14340014800379311) * t5 - T(0.36422508440437629) * t7 - T(0.43030351350995694) * t9 - T(0.36523437499999994) * t11 - T(0.20676967002355626) * t13;
-  const P u12 = T(-0.28927341704999965) * t15 - T(0.37999895178813448) * t17 - T(0.29399379697892697) * t19 - T(0.15517261518701914) * t21 + T(0.028644157129432968) * t23 + T(0.24359565946994113) * t25 + T(0.46324573850344314) * t27 + T(0.62181576561729313) * t29;
-  const P u13 = T(-0.48779241888341834) * t1 - T(0.50316903057893103) * t3 - T(0.46003667446804952) * t5 - T(0.38948564307572342) * t7 - T(0.30302356320529877) * t9 - T(0.20676967002355656) * t11 - T(0.104736328125) * t13;
-  const P u14 = T(-0.28683224752162645) * t15 - T(0.40394834339674734) * t17 - T(0.39873588833009166) * t19 - T(0.38956832062087604) * t21 - T(0.37554324061629174) * t23 - T(0.35485500757928545) * t25 - T(0.32343807220408377) * t27 - T(0.26876053290463608) * t29;
-  const P u15 = T(0.53752106580927184) * t0 + T(0.38658243724628405) * t2 + T(0.34093366339296699) * t4 + T(0.31739196764139399) * t6 + T(0.30327852628212953) * t8 + T(0.29448597000911808) * t10 + T(0.28927341704999915) * t12 + T(0.28683224752162612) * t14;
-  const P u16 = T(-0.026184082031250007) * t16 - T(0.07922078790244208) * t18 - T(0.1344138405356532) * t20 - T(0.19379790506025346) * t22 - T(0.26076411037221198) * t24 - T(0.34235127309753588) * t26 - T(0.45876982929941607) * t28 - T(0.73603103219489308) * t30;
-  const P u17 = T(-0.66793727800614267) * t0 - T(0.22417598874859038) * t2 - T(0.004034788545175476) * t4 + T(0.14649116500376408) * t6 + T(0.25483020517266386) * t8 + T(0.33108469734219814) * t10 + T(0.3799989517881347) * t12 + T(0.40394834339674796) * t14;
-  const P u18 = T(-0.079220787902442094) * t16 - T(0.22894287109375) * t18 - T(0.35199464622911375) * t20 - T(0.42867008179654015) * t22 - T(0.43535910608833495) * t24 - T(0.33946218116365479) * t26 - T(0.081648410079144196) * t28 + T(0.56763753573489439) * t30;
-  const P u19 = T(0.45111256989931986) * t0 - T(0.36769626757932306) * t2 - T(0.49867904036398814) * t4 - T(0.37057633718956984) * t6 - T(0.13928971533740295) * t8 + T(0.10229863635764294) * t10 + T(0.29399379697892719) * t12 + T(0.3987358883300921) * t14;
-  const P u20 = T(-0.13441384053565333) * t16 - T(0.35199464622911392) * t18 - T(0.42730712890625011) * t20 - T(0.30492173874402639) * t22 + T(0.0065124826332200502) * t24 + T(0.39408144000834755) * t26 + T(0.56142233892139615) * t28 - T(0.33455403583971716) * t30;
-  const P u21 = T(-0.23086421787197622) * t0 + T(0.63093824454571135) * t2 + T(0.087858194089874039) * t4 - T(0.37120770160461281) * t6 - T(0.43714995515444177) * t8 - T(0.19016394045597693) * t10 + T(0.15517261518701919) * t12 + T(0.3895683206208761) * t14;
-  const P u22 = T(-0.19379790506025354) * t16 - T(0.42867008179654037) * t18 - T(0.30492173874402662) * t20 + T(0.12091064453125003) * t22 + T(0.481557415180975) * t24 + T(0.26848382881995697) * t26 - T(0.58762464811598147) * t28 + T(0.14766124989354928) * t30;
-  const P u23 = T(0.08708585413032803) * t0 - T(0.47182552381421927) * t2 + T(0.52658294615399626) * t4 + T(0.25394503957384362) * t6 - T(0.32868469278573426) * t8 - T(0.42205711248781674) * t10 - T(0.028644157129432832) * t12 + T(0.3755432406162923) * t14;
-  const P u24 = T(-0.2607641103722122) * t16 - T(0.43535910608833533) * t18 + T(0.0065124826332196538) * t20 + T(0.48155741518097533) * t22 + T(0.15130615234374989) * t24 - T(0.61281058297545654) * t26 + T(0.33148487801281051) * t28 - T(0.047031736593168956) * t30;
-  const P u25 = T(-0.02304075127404951) * t0 + T(0.20437310147934798) * t2 - T(0.54350403259425484) * t4 + T(0.49112388946794078) * t6 + T(0.20261879347603626) * t8 - T(0.44134584368013513) * t10 - T(0.24359565946994111) * t12 + T(0.35485500757928562) * t14;
-  const P u26 = T(-0.34235127309753588) * t16 - T(0.33946218116365467) * t18 + T(0.39408144000834722) * t20 + T(0.26848382881995725) * t22 - T(0.61281058297545632) * t24 + T(0.39044189453125017) * t26 - T(0.10997049821990884) * t28 + T(0.010104037837881922) * t30;
-  const P u27 = T(0.0038890459770688913) * t0 - T(0.050905076689573038) * t2 + T(0.23024942986358765) * t4 - T(0.52259019340167712) * t6 + T(0.5839881896848077) * t8 - T(0.10501062714067146) * t10 - T(0.4632457385034438) * t12 + T(0.32343807220408433) * t14;
-  const P u28 = T(-0.45876982929941645) * t16 - T(0.081648410079143849) * t18 + T(0.56142233892139592) * t20 - T(0.58762464811598181) * t22 + T(0.33148487801281051) * t24 - T(0.1099704982199089) * t26 + T(0.019714355468750056) * t28 - T(0.0012729891122201349) * t30;
-  const P u29 = T(-0.00033430331878983913) * t0 + T(0.006042788719252375) * t2 - T(0.040584202601753293) * t4 + T(0.15456205830431863) * t6 - T(0.37742785470181961) * t8 + T(0.61080930711268266) * t10 - T(0.6218157656172929) * t12 + T(0.26876053290463631) * t14;
-  const P u30 = T(-0.73603103219489308) * t16 + T(0.56763753573489428) * t18 - T(0.33455403583971721) * t20 + T(0.1476612498935492) * t22 - T(0.047031736593168887) * t24 + T(0.010104037837881786) * t26 - T(0.0012729891122199909) * t28 + T(6.103515625009812e-05) * t30;
+  const P t30 = madd<F>(cg15, x[30], -(sg15 * x[0]));
+  const P t0 = madd<F>(sg15, x[30], cg15 * x[0]);
+  const P u0 = madd<F>(T(0.00033430331878964398), t29, madd<F>(T(-0.0038890459770688384), t27, madd<F>(T(0.02304075127404942), t25, madd<F>(T(-0.087085854130328072), t23, madd<F>(T(0.23086421787197661), t21, madd<F>(T(-0.45111256989932019), t19, madd<F>(T(0.66793727800614244), t17, T(-0.53752106580927261) * t15)))))));
+  const P u1 = madd<F>(T(-0.48779241888341729), t13, madd<F>(T(0.65889208135462229), t11, madd<F>(T(-0.50579815939707495), t9, madd<F>(T(0.25439406264952019), t7, madd<F>(T(-0.084132928097751997), t5, madd<F>(T(0.017040945670522598), t3, T(-0.0017089843749999612) * t1))))));
+  const P u2 = madd<F>(T(-0.0060427887192524999), t29, madd<F>(T(0.050905076689572872), t27, madd<F>(T(-0.20437310147934779), t25, madd<F>(T(0.47182552381421833), t23, madd<F>(T(-0.63093824454571101), t21, madd<F>(T(0.3676962675793225), t19, madd<F>(T(0.22417598874859018), t17, T(-0.38658243724628427) * t15)))))));
+  const P u3 = madd<F>(T(-0.50316903057893025), t13, madd<F>(T(0.22655408120134238), t11, madd<F>(T(0.40579961606642539), t9, madd<F>(T(-0.61229767863811579), t7, madd<F>(T(0.37606850032574668), t5, madd<F>(T(-0.11914062500000006), t3, T(0.01704094567052265) * t1))))));
+  const P u4 = madd<F>(T(0.040584202601753397), t29, madd<F>(T(-0.23024942986358754), t27, madd<F>(T(0.54350403259425528), t25, madd<F>(T(-0.52658294615399603), t23, madd<F>(T(-0.087858194089874136), t21, madd<F>(T(0.49867904036398791), t19, madd<F>(T(0.0040347885451753988), t17, T(-0.34093366339296716) * t15)))))));
+  const P u5 = madd<F>(T(-0.46003667446804902), t13, madd<F>(T(-0.14340014800379314), t11, madd<F>(T(0.46234040213014488), t9, madd<F>(T(0.18086190602980609), t7, madd<F>(T(-0.61059570312500044), t5, madd<F>(T(0.37606850032574651), t3, T(-0.0841329280977519) * t1))))));
+  const P u6 = madd<F>(T(-0.15456205830431871), t29, madd<F>(T(0.52259019340167645), t27, madd<F>(T(-0.49112388946794133), t25, madd<F>(T(-0.25394503957384346), t23, madd<F>(T(0.37120770160461325), t21, madd<F>(T(0.37057633718956973), t19, madd<F>(T(-0.14649116500376425), t17, T(-0.31739196764139443) * t15)))))));
+  const P u7 = madd<F>(T(-0.38948564307572281), t13, madd<F>(T(-0.36422508440437618), t11, madd<F>(T(0.093199064769063741), t9, madd<F>(T(0.48437500000000011), t7, madd<F>(T(0.18086190602980604), t5, madd<F>(T(-0.61229767863811579), t3, T(0.25439406264952041) * t1))))));
+  const P u8 = madd<F>(T(0.37742785470181972), t29, madd<F>(T(-0.58398818968480681), t27, madd<F>(T(-0.20261879347603645), t25, madd<F>(T(0.32868469278573376), t23, madd<F>(T(0.43714995515444205), t21, madd<F>(T(0.13928971533740303), t19, madd<F>(T(-0.25483020517266392), t17, T(-0.30327852628212998) * t15)))))));
+  const P u9 = madd<F>(T(-0.30302356320529816), t13, madd<F>(T(-0.43030351350995671), t11, madd<F>(T(-0.28295898437499989), t9, madd<F>(T(0.093199064769063769), t7, madd<F>(T(0.4623404021301451), t5, madd<F>(T(0.40579961606642545), t3, T(-0.50579815939707506) * t1))))));
+  const P u10 = madd<F>(T(-0.61080930711268278), t29, madd<F>(T(0.10501062714067153), t27, madd<F>(T(0.44134584368013546), t25, madd<F>(T(0.42205711248781669), t23, madd<F>(T(0.19016394045597712), t21, madd<F>(T(-0.10229863635764286), t19, madd<F>(T(-0.33108469734219809), t17, T(-0.29448597000911853) * t15)))))));
+  const P u11 = madd<F>(T(-0.20676967002355626), t13, madd<F>(T(-0.36523437499999994), t11, madd<F>(T(-0.43030351350995694), t9, madd<F>(T(-0.36422508440437629), t7, madd<F>(T(-0.14340014800379311), t5, madd<F>(T(0.22655408120134254), t3, T(0.65889208135462263) * t1))))));
+  const P u12 = madd<F>(T(0.62181576561729313), t29, madd<F>(T(0.46324573850344314), t27, madd<F>(T(0.24359565946994113), t25, madd<F>(T(0.028644157129432968), t23, madd<F>(T(-0.15517261518701914), t21, madd<F>(T(-0.29399379697892697), t19, madd<F>(T(-0.37999895178813448), t17, T(-0.28927341704999965) * t15)))))));
+  const P u13 = madd<F>(T(-0.104736328125), t13, madd<F>(T(-0.20676967002355656), t11, madd<F>(T(-0.30302356320529877), t9, madd<F>(T(-0.38948564307572342), t7, madd<F>(T(-0.46003667446804952), t5, madd<F>(T(-0.50316903057893103), t3, T(-0.48779241888341834) * t1))))));
+  const P u14 = madd<F>(T(-0.26876053290463608), t29, madd<F>(T(-0.32343807220408377), t27, madd<F>(T(-0.35485500757928545), t25, madd<F>(T(-0.37554324061629174), t23, madd<F>(T(-0.38956832062087604), t21, madd<F>(T(-0.39873588833009166), t19, madd<F>(T(-0.40394834339674734), t17, T(-0.28683224752162645) * t15)))))));
+  const P u15 = madd<F>(T(0.28683224752162612), t14, madd<F>(T(0.28927341704999915), t12, madd<F>(T(0.29448597000911808), t10, madd<F>(T(0.30327852628212953), t8, madd<F>(T(0.31739196764139399), t6, madd<F>(T(0.34093366339296699), t4, madd<F>(T(0.38658243724628405), t2, T(0.53752106580927184) * t0)))))));
+  const P u16 = madd<F>(T(-0.73603103219489308), t30, madd<F>(T(-0.45876982929941607), t28, madd<F>(T(-0.34235127309753588), t26, madd<F>(T(-0.26076411037221198), t24, madd<F>(T(-0.19379790506025346), t22, madd<F>(T(-0.1344138405356532), t20, madd<F>(T(-0.07922078790244208), t18, T(-0.026184082031250007) * t16)))))));
+  const P u17 = madd<F>(T(0.40394834339674796), t14, madd<F>(T(0.3799989517881347), t12, madd<F>(T(0.33108469734219814), t10, madd<F>(T(0.25483020517266386), t8, madd<F>(T(0.14649116500376408), t6, madd<F>(T(-0.004034788545175476), t4, madd<F>(T(-0.22417598874859038), t2, T(-0.66793727800614267) * t0)))))));
+  const P u18 = madd<F>(T(0.56763753573489439), t30, madd<F>(T(-0.081648410079144196), t28, madd<F>(T(-0.33946218116365479), t26, madd<F>(T(-0.43535910608833495), t24, madd<F>(T(-0.42867008179654015), t22, madd<F>(T(-0.35199464622911375), t20, madd<F>(T(-0.22894287109375), t18, T(-0.079220787902442094) * t16)))))));
+  const P u19 = madd<F>(T(0.3987358883300921), t14, madd<F>(T(0.29399379697892719), t12, madd<F>(T(0.10229863635764294), t10, madd<F>(T(-0.13928971533740295), t8, madd<F>(T(-0.37057633718956984), t6, madd<F>(T(-0.49867904036398814), t4, madd<F>(T(-0.36769626757932306), t2, T(0.45111256989931986) * t0)))))));
+  const P u20 = madd<F>(T(-0.33455403583971716), t30, madd<F>(T(0.56142233892139615), t28, madd<F>(T(0.39408144000834755), t26, madd<F>(T(0.0065124826332200502), t24, madd<F>(T(-0.30492173874402639), t22, madd<F>(T(-0.42730712890625011), t20, madd<F>(T(-0.35199464622911392), t18, T(-0.13441384053565333) * t16)))))));
+  const P u21 = madd<F>(T(0.3895683206208761), t14, madd<F>(T(0.15517261518701919), t12, madd<F>(T(-0.19016394045597693), t10, madd<F>(T(-0.43714995515444177), t8, madd<F>(T(-0.37120770160461281), t6, madd<F>(T(0.087858194089874039), t4, madd<F>(T(0.63093824454571135), t2, T(-0.23086421787197622) * t0)))))));
+  const P u22 = madd<F>(T(0.14766124989354928), t30, madd<F>(T(-0.58762464811598147), t28, madd<F>(T(0.26848382881995697), t26, madd<F>(T(0.481557415180975), t24, madd<F>(T(0.12091064453125003), t22, madd<F>(T(-0.30492173874402662), t20, madd<F>(T(-0.42867008179654037), t18, T(-0.19379790506025354) * t16)))))));
+  const P u23 = madd<F>(T(0.3755432406162923), t14, madd<F>(T(-0.028644157129432832), t12, madd<F>(T(-0.42205711248781674), t10, madd<F>(T(-0.32868469278573426), t8, madd<F>(T(0.25394503957384362), t6, madd<F>(T(0.52658294615399626), t4, madd<F>(T(-0.47182552381421927), t2, T(0.08708585413032803) * t0)))))));
+  const P u24 = madd<F>(T(-0.047031736593168956), t30, madd<F>(T(0.33148487801281051), t28, madd<F>(T(-0.61281058297545654), t26, madd<F>(T(0.15130615234374989), t24, madd<F>(T(0.48155741518097533), t22, madd<F>(T(0.0065124826332196538), t20, madd<F>(T(-0.43535910608833533), t18, T(-0.2607641103722122) * t16)))))));
+  const P u25 = madd<F>(T(0.35485500757928562), t14, madd<F>(T(-0.24359565946994111), t12, madd<F>(T(-0.44134584368013513), t10, madd<F>(T(0.20261879347603626), t8, madd<F>(T(0.49112388946794078), t6, madd<F>(T(-0.54350403259425484), t4, madd<F>(T(0.20437310147934798), t2, T(-0.02304075127404951) * t0)))))));
+  const P u26 = madd<F>(T(0.010104037837881922), t30, madd<F>(T(-0.10997049821990884), t28, madd<F>(T(0.39044189453125017), t26, madd<F>(T(-0.61281058297545632), t24, madd<F>(T(0.26848382881995725), t22, madd<F>(T(0.39408144000834722), t20, madd<F>(T(-0.33946218116365467), t18, T(-0.34235127309753588) * t16)))))));
+  const P u27 = madd<F>(T(0.32343807220408433), t14, madd<F>(T(-0.4632457385034438), t12, madd<F>(T(-0.10501062714067146), t10, madd<F>(T(0.5839881896848077), t8, madd<F>(T(-0.52259019340167712), t6, madd<F>(T(0.23024942986358765), t4, madd<F>(T(-0.050905076689573038), t2, T(0.0038890459770688913) * t0)))))));
+  const P u28 = madd<F>(T(-0.0012729891122201349), t30, madd<F>(T(0.019714355468750056), t28, madd<F>(T(-0.1099704982199089), t26, madd<F>(T(0.33148487801281051), t24, madd<F>(T(-0.58762464811598181), t22, madd<F>(T(0.56142233892139592), t20, madd<F>(T(-0.081648410079143849), t18, T(-0.45876982929941645) * t16)))))));
+  const P u29 = madd<F>(T(0.26876053290463631), t14, madd<F>(T(-0.6218157656172929), t12, madd<F>(T(0.61080930711268266), t10, madd<F>(T(-0.37742785470181961), t8, madd<F>(T(0.15456205830431863), t6, madd<F>(T(-0.040584202601753293), t4, madd<F>(T(0.006042788719252375), t2, T(-0.00033430331878983913) * t0)))))));
+  const P u30 = madd<F>(T(6.103515625009812e-05), t30, madd<F>(T(-0.0012729891122199909), t28, madd<F>(T(0.010104037837881786), t26, madd<F>(T(-0.047031736593168887), t24, madd<F>(T(0.1476612498935492), t22, madd<F>(T(-0.33455403583971721), t20, madd<F>(T(0.56763753573489428), t18, T(-0.73603103219489308) * t16)))))));
   const P w15 = u15;
   const P cb1 = splat<P>(s.cb[1]), sb1 = splat<P>(s.sb[1]);
-  const P w16 = cb1 * u16 - sb1 * u14;
-  const P w14 = sb1 * u16 + cb1 * u14;
+  const P w16 = madd<F>(cb1, u16, -(sb1 * u14));
+  const P w14 = madd<F>(sb1, u16, cb1 * u14);
   const P cb2 = splat<P>(s.cb[2]), sb2 = splat<P>(s.sb[2]);
-  const P w17 = cb2 * u17 - sb2 * u13;
-  const P w13 = sb2 * u17 + cb2 * u13;
+  const P w17 = madd<F>(cb2, u17, -(sb2 * u13));
+  const P w13 = madd<F>(sb2, u17, cb2 * u13);
   const P cb3 = splat<P>(s.cb[3]), sb3 = splat<P>(s.sb[3]);
-  const P w18 = cb3 * u18 - sb3 * u12;
-  const P w12 = sb3 * u18 + cb3 * u12;
+  const P w18 = madd<F>(cb3, u18, -(sb3 * u12));
+  const P w12 = madd<F>(sb3, u18, cb3 * u12);
   const P cb4 = splat<P>(s.cb[4]), sb4 = splat<P>(s.sb[4]);
-  const P w19 = cb4 * u19 - sb4 * u11;
-  const P w11 = sb4 * u19 + cb4 * u11;
+  const P w19 = madd<F>(cb4, u19, -(sb4 * u11));
+  const P w11 = madd<F>(sb4, u19, cb4 * u11);
   const P cb5 = splat<P>(s.cb[5]), sb5 = splat<P>(s.sb[5]);
-  const P w20 = cb5 * u20 - sb5 * u10;
-  const P w10 = sb5 * u20 + cb5 * u10;
+  const P w20 = madd<F>(cb5, u20, -(sb5 * u10));
+  const P w10 = madd<F>(sb5, u20, cb5 * u10);
   const P cb6 = splat<P>(s.cb[6]), sb6 = splat<P>(s.sb[6]);
-  const P w21 = cb6 * u21 - sb6 * u9;
-  const P w9 = sb6 * u21 + cb6 * u9;
+  const P w21 = madd<F>(cb6, u21, -(sb6 * u9));
+  const P w9 = madd<F>(sb6, u21, cb6 * u9);
   const P cb7 = splat<P>(s.cb[7]), sb7 = splat<P>(s.sb[7]);
-  const P w22 = cb7 * u22 - sb7 * u8;
-  const P w8 = sb7 * u22 + cb7 * u8;
+  const P w22 = madd<F>(cb7, u22, -(sb7 * u8));
+  const P w8 = madd<F>(sb7, u22, cb7 * u8);
   const P cb8 = splat<P>(s.cb[8]), sb8 = splat<P>(s.sb[8]);
-  const P w23 = cb8 * u23 - sb8 * u7;
-  const P w7 = sb8 * u23 + cb8 * u7;
+  const P w23 = madd<F>(cb8, u23, -(sb8 * u7));
+  const P w7 = madd<F>(sb8, u23, cb8 * u7);
   const P cb9 = splat<P>(s.cb[9]), sb9 = splat<P>(s.sb[9]);
-  const P w24 = cb9 * u24 - sb9 * u6;
-  const P w6 = sb9 * u24 + cb9 * u6;
+  const P w24 = madd<F>(cb9, u24, -(sb9 * u6));
+  const P w6 = madd<F>(sb9, u24, cb9 * u6);
   const P cb10 = splat<P>(s.cb[10]), sb10 = splat<P>(s.sb[10]);
-  const P w25 = cb10 * u25 - sb10 * u5;
-  const P w5 = sb10 * u25 + cb10 * u5;
+  const P w25 = madd<F>(cb10, u25, -(sb10 * u5));
+  const P w5 = madd<F>(sb10, u25, cb10 * u5);
   const P cb11 = splat<P>(s.cb[11]), sb11 = splat<P>(s.sb[11]);
-  const P w26 = cb11 * u26 - sb11 * u4;
-  const P w4 = sb11 * u26 + cb11 * u4;
+  const P w26 = madd<F>(cb11, u26, -(sb11 * u4));
+  const P w4 = madd<F>(sb11, u26, cb11 * u4);
   const P cb12 = splat<P>(s.cb[12]), sb12 = splat<P>(s.sb[12]);
-  const P w27 = cb12 * u27 - sb12 * u3;
-  const P w3 = sb12 * u27 + cb12 * u3;
+  const P w27 = madd<F>(cb12, u27, -(sb12 * u3));
+  const P w3 = madd<F>(sb12, u27, cb12 * u3);
   const P cb13 = splat<P>(s.cb[13]), sb13 = splat<P>(s.sb[13]);
-  const P w28 = cb13 * u28 - sb13 * u2;
-  const P w2 = sb13 * u28 + cb13 * u2;
+  const P w28 = madd<F>(cb13, u28, -(sb13 * u2));
+  const P w2 = madd<F>(sb13, u28, cb13 * u2);
   const P cb14 = splat<P>(s.cb[14]), sb14 = splat<P>(s.sb[14]);
-  const P w29 = cb14 * u29 - sb14 * u1;
-  const P w1 = sb14 * u29 + cb14 * u1;
+  const P w29 = madd<F>(cb14, u29, -(sb14 * u1));
+  const P w1 = madd<F>(sb14, u29, cb14 * u1);
   const P cb15 = splat<P>(s.cb[15]), sb15 = splat<P>(s.sb[15]);
-  const P w30 = cb15 * u30 - sb15 * u0;
-  const P w0 = sb15 * u30 + cb15 * u0;
-  const P v0 = T(0.53752106580927184) * w15 - T(0.66793727800614267) * w17 + T(0.45111256989931986) * w19 - T(0.23086421787197622) * w21 + T(0.08708585413032803) * w23 - T(0.02304075127404951) * w25 + T(0.0038890459770688913) * w27 - T(0.00033430331878983913) * w29;
-  const P v1 = T(-0.0017089843749999612) * w1 + T(0.01704094567052265) * w3 - T(0.0841329280977519) * w5 + T(0.25439406264952041) * w7 - T(0.50579815939707506) * w9 + T(0.65889208135462263) * w11 - T(0.48779241888341834) * w13;
-  const P v2 = T(0.38658243724628405) * w15 - T(0.22417598874859038) * w17 - T(0.36769626757932306) * w19 + T(0.63093824454571135) * w21 - T(0.47182552381421927) * w23 + T(0.20437310147934798) * w25 - T(0.050905076689573038) * w27 + T(0.006042788719252375) * w29;
-  const P v3 = T(0.017040945670522598) * w1 - T(0.11914062500000006) * w3 + T(0.37606850032574651) * w5 - T(0.61229767863811579) * w7 + T(0.40579961606642545) * w9 + T(0.22655408120134254) * w11 - T(0.50316903057893103) * w13;
-  const P v4 = T(0.34093366339296699) * w15 - T(0.004034788545175476) * w17 - T(0.49867904036398814) * w19 + T(0.087858194089874039) * w21 + T(0.52658294615399626) * w23 - T(0.54350403259425484) * w25 + T(0.23024942986358765) * w27 - T(0.040584202601753293) * w29;
-  const P v5 = T(-0.084132928097751997) * w1 + T(0.37606850032574668) * w3 - T(0.61059570312500044) * w5 + T(0.18086190602980604) * w7 + T(0.4623404021301451) * w9 - T(0.14340014800379311) * w11 - T(0.46003667446804952) * w13;
-  const P v6 = T(0.31739196764139399) * w15 + T(0.14649116500376408) * w17 - T(0.37057633718956984) * w19 - T(0.37120770160461281) * w21 + T(0.25394503957384362) * w23 + T(0.49112388946794078) * w25 - T(0.52259019340167712) * w27 + T(0.15456205830431863) * w29;
-  const P v7 = T(0.25439406264952019) * w1 - T(0.61229767863811579) * w3 + T(0.18086190602980609) * w5 + T(0.48437500000000011) * w7 + T(0.093199064769063769) * w9 - T(0.36422508440437629) * w11 - T(0.38948564307572342) * w13;
-  const P v8 = T(0.30327852628212953) * w15 + T(0.25483020517266386) * w17 - T(0.13928971533740295) * w19 - T(0.43714995515444177) * w21 - T(0.32868469278573426) * w23 + T(0.20261879347603626) * w25 + T(0.5839881896848077) * w27 - T(0.37742785470181961) * w29;
-  const P v9 = T(-0.50579815939707495) * w1 + T(0.40579961606642539) * w3 + T(0.46234040213014488) * w5 + T(0.093199064769063741) * w7 - T(0.28295898437499989) * w9 - T(0.43030351350995694) * w11 - T(0.30302356320529877) * w13;
-  const P v10 = T(0.29448597000911808) * w15 + T(0.33108469734219814) * w17 + T(0.10229863635764294) * w19 - T(0.19016394045597693) * w21 - T(0.42205711248781674) * w23 - T(0.44134584368013513) * w25 - T(0.10501062714067146) * w27 + T(0.61080930711268266) * w29;
-  const P v11 = T(0.65889208135462229) * w1 + T(0.22655408120134238) * w3 - T(0.14340014800379314) * w5 - T(0.36422508440437618) * w7 - T(0.43030351350995671) * w9 - T(0.36523437499999994) * w11 - T(0.20676967002355656) * w13;
-  const P v12 = T(0.28927341704999915) * w15 + T(0.3799989517881347) * w17 + T(0.29399379697892719) * w19 + T(0.15517261518701919) * w21 - T(0.028644157129432832) * w23 - T(0.24359565946994111) * w25 - T(0.4632457385034438) * w27 - T(0.6218157656172929) * w29;
-  const P v13 = T(-0.48779241888341729) * w1 - T(0.50316903057893025) * w3 - T(0.46003667446804902) * w5 - T(0.38948564307572281) * w7 - T(0.30302356320529816) * w9 - T(0.20676967002355626) * w11 - T(0.104736328125) * w13;
-  const P v14 = T(0.28683224752162612) * w15 + T(0.40394834339674796) * w17 + T(0.3987358883300921) * w19 + T(0.3895683206208761) * w21 + T(0.3755432406162923) * w23 + T(0.35485500757928562) * w25 + T(0.32343807220408433) * w27 + T(0.26876053290463631) * w29;
-  const P v15 = T(-0.53752106580927261) * w0 - T(0.38658243724628427) * w2 - T(0.34093366339296716) * w4 - T(0.31739196764139443) * w6 - T(0.30327852628212998) * w8 - T(0.29448597000911853) * w10 - T(0.28927341704999965) * w12 - T(0.28683224752162645) * w14;
-  const P v16 = T(-0.026184082031250007) * w16 - T(0.079220787902442094) * w18 - T(0.13441384053565333) * w20 - T(0.19379790506025354) * w22 - T(0.2607641103722122) * w24 - T(0.34235127309753588) * w26 - T(0.45876982929941645) * w28 - T(0.73603103219489308) * w30;
-  const P v17 = T(0.66793727800614244) * w0 + T(0.22417598874859018) * w2 + T(0.0040347885451753988) * w4 - T(0.14649116500376425) * w6 - T(0.25483020517266392) * w8 - T(0.33108469734219809) * w10 - T(0.37999895178813448) * w12 - T(0.40394834339674734) * w14;
-  const P v18 = T(-0.07922078790244208) * w16 - T(0.22894287109375) * w18 - T(0.35199464622911392) * w20 - T(0.42867008179654037) * w22 - T(0.43535910608833533) * w24 - T(0.33946218116365467) * w26 - T(0.081648410079143849) * w28 + T(0.56763753573489428) * w30;
-  const P v19 = T(-0.45111256989932019) * w0 + T(0.3676962675793225) * w2 + T(0.49867904036398791) * w4 + T(0.37057633718956973) * w6 + T(0.13928971533740303) * w8 - T(0.10229863635764286) * w10 - T(0.29399379697892697) * w12 - T(0.39873588833009166) * w14;
-  const P v20 = T(-0.1344138405356532) * w16 - T(0.35199464622911375) * w18 - T(0.42730712890625011) * w20 - T(0.30492173874402662) * w22 + T(0.0065124826332196538) * w24 + T(0.39408144000834722) * w26 + T(0.56142233892139592) * w28 - T(0.33455403583971721) * w30;
-  const P v21 = T(0.23086421787197661) * w0 - T(0.63093824454571101) * w2 - T(0.087858194089874136) * w4 + T(0.37120770160461325) * w6 + T(0.43714995515444205) * w8 + T(0.19016394045597712) * w10 - T(0.15517261518701914) * w12 - T(0.38956832062087604) * w14;
-  const P v22 = T(-0.19379790506025346) * w16 - T(0.42867008179654015) * w18 - T(0.30492173874402639) * w20 + T(0.12091064453125003) * w22 + T(0.48155741518097533) * w24 + T(0.26848382881995725) * w26 - T(0.58762464811598181) * w28 + T(0.1476612498935492) * w30;
-  const P v23 = T(-0.087085854130328072) * w0 + T(0.47182552381421833) * w2 - T(0.52658294615399603) * w4 - T(0.25394503957384346) * w6 + T(0.32868469278573376) * w8 + T(0.42205711248781669) * w10 + T(0.028644157129432968) * w12 - T(0.37554324061629174) * w14;
-  const P v24 = T(-0.26076411037221198) * w16 - T(0.43535910608833495) * w18 + T(0.0065124826332200502) * w20 + T(0.481557415180975) * w22 + T(0.15130615234374989) * w24 - T(0.61281058297545632) * w26 + T(0.33148487801281051) * w28 - T(0.047031736593168887) * w30;
-  const P v25 = T(0.02304075127404942) * w0 - T(0.20437310147934779) * w2 + T(0.54350403259425528) * w4 - T(0.49112388946794133) * w6 - T(0.20261879347603645) * w8 + T(0.44134584368013546) * w10 + T(0.24359565946994113) * w12 - T(0.35485500757928545) * w14;
-  const P v26 = T(-0.34235127309753588) * w16 - T(0.33946218116365479) * w18 + T(0.39408144000834755) * w20 + T(0.26848382881995697) * w22 - T(0.61281058297545654) * w24 + T(0.39044189453125017) * w26 - T(0.1099704982199089) * w28 + T(0.010104037837881786) * w30;
-  const P v27 = T(-0.0038890459770688384) * w0 + T(0.050905076689572872) * w2 - T(0.23024942986358754) * w4 + T(0.52259019340167645) * w6 - T(0.58398818968480681) * w8 + T(0.10501062714067153) * w10 + T(0.46324573850344314) * w12 - T(0.32343807220408377) * w14;
-  const P v28 = T(-0.45876982929941607) * w16 - T(0.081648410079144196) * w18 + T(0.56142233892139615) * w20 - T(0.58762464811598147) * w22 + T(0.33148487801281051) * w24 - T(0.10997049821990884) * w26 + T(0.019714355468750056) * w28 - T(0.0012729891122199909) * w30;
-  const P v29 = T(0.00033430331878964398) * w0 - T(0.0060427887192524999) * w2 + T(0.040584202601753397) * w4 - T(0.15456205830431871) * w6 + T(0.37742785470181972) * w8 - T(0.61080930711268278) * w10 + T(0.62181576561729313) * w12 - T(0.26876053290463608) * w14;
-  const P v30 = T(-0.73603103219489308) * w16 + T(0.56763753573489439) * w18 - T(0.33455403583971716) * w20 + T(0.14766124989354928) * w22 - T(0.047031736593168956) * w24 + T(0.010104037837881922) * w26 - T(0.0012729891122201349) * w28 + T(6.103515625009812e-05) * w30;
+  const P w30 = madd<F>(cb15, u30, -(sb15 * u0));
+  const P w0 = madd<F>(sb15, u30, cb15 * u0);
+  const P v0 = madd<F>(T(-0.00033430331878983913), w29, madd<F>(T(0.0038890459770688913), w27, madd<F>(T(-0.02304075127404951), w25, madd<F>(T(0.08708585413032803), w23, madd<F>(T(-0.23086421787197622), w21, madd<F>(T(0.45111256989931986), w19, madd<F>(T(-0.66793727800614267), w17, T(0.53752106580927184) * w15)))))));
+  const P v1 = madd<F>(T(-0.48779241888341834), w13, madd<F>(T(0.65889208135462263), w11, madd<F>(T(-0.50579815939707506), w9, madd<F>(T(0.25439406264952041), w7, madd<F>(T(-0.0841329280977519), w5, madd<F>(T(0.01704094567052265), w3, T(-0.0017089843749999612) * w1))))));
+  const P v2 = madd<F>(T(0.006042788719252375), w29, madd<F>(T(-0.050905076689573038), w27, madd<F>(T(0.20437310147934798), w25, madd<F>(T(-0.47182552381421927), w23, madd<F>(T(0.63093824454571135), w21, madd<F>(T(-0.36769626757932306), w19, madd<F>(T(-0.22417598874859038), w17, T(0.38658243724628405) * w15)))))));
+  const P v3 = madd<F>(T(-0.50316903057893103), w13, madd<F>(T(0.22655408120134254), w11, madd<F>(T(0.40579961606642545), w9, madd<F>(T(-0.61229767863811579), w7, madd<F>(T(0.37606850032574651), w5, madd<F>(T(-0.11914062500000006), w3, T(0.017040945670522598) * w1))))));
+  const P v4 = madd<F>(T(-0.040584202601753293), w29, madd<F>(T(0.23024942986358765), w27, madd<F>(T(-0.54350403259425484), w25, madd<F>(T(0.52658294615399626), w23, madd<F>(T(0.087858194089874039), w21, madd<F>(T(-0.49867904036398814), w19, madd<F>(T(-0.004034788545175476), w17, T(0.34093366339296699) * w15)))))));
+  const P v5 = madd<F>(T(-0.46003667446804952), w13, madd<F>(T(-0.14340014800379311), w11, madd<F>(T(0.4623404021301451), w9, madd<F>(T(0.18086190602980604), w7, madd<F>(T(-0.61059570312500044), w5, madd<F>(T(0.37606850032574668), w3, T(-0.084132928097751997) * w1))))));
+  const P v6 = madd<F>(T(0.15456205830431863), w29, madd<F>(T(-0.52259019340167712), w27, madd<F>(T(0.49112388946794078), w25, madd<F>(T(0.25394503957384362), w23, madd<F>(T(-0.37120770160461281), w21, madd<F>(T(-0.37057633718956984), w19, madd<F>(T(0.14649116500376408), w17, T(0.31739196764139399) * w15)))))));
+  const P v7 = madd<F>(T(-0.38948564307572342), w13, madd<F>(T(-0.36422508440437629), w11, madd<F>(T(0.093199064769063769), w9, madd<F>(T(0.48437500000000011), w7, madd<F>(T(0.18086190602980609), w5, madd<F>(T(-0.61229767863811579), w3, T(0.25439406264952019) * w1))))));
+  const P v8 = madd<F>(T(-0.37742785470181961), w29, madd<F>(T(0.5839881896848077), w27, madd<F>(T(0.20261879347603626), w25, madd<F>(T(-0.32868469278573426), w23, madd<F>(T(-0.43714995515444177), w21, madd<F>(T(-0.13928971533740295), w19, madd<F>(T(0.25483020517266386), w17, T(0.30327852628212953) * w15)))))));
+  const P v9 = madd<F>(T(-0.30302356320529877), w13, madd<F>(T(-0.43030351350995694), w11, madd<F>(T(-0.28295898437499989), w9, madd<F>(T(0.093199064769063741), w7, madd<F>(T(0.46234040213014488), w5, madd<F>(T(0.40579961606642539), w3, T(-0.50579815939707495) * w1))))));
+  const P v10 = madd<F>(T(0.61080930711268266), w29, madd<F>(T(-0.10501062714067146), w27, madd<F>(T(-0.44134584368013513), w25, madd<F>(T(-0.42205711248781674), w23, madd<F>(T(-0.19016394045597693), w21, madd<F>(T(0.10229863635764294), w19, madd<F>(T(0.33108469734219814), w17, T(0.29448597000911808) * w15)))))));
+  const P v11 = madd<F>(T(-0.20676967002355656), w13, madd<F>(T(-0.36523437499999994), w11, madd<F>(T(-0.43030351350995671), w9, madd<F>(T(-0.36422508440437618), w7, madd<F>(T(-0.14340014800379314), w5, madd<F>(T(0.22655408120134238), w3, T(0.65889208135462229) * w1))))));
+  const P v12 = madd<F>(T(-0.6218157656172929), w29, madd<F>(T(-0.4632457385034438), w27, madd<F>(T(-0.24359565946994111), w25, madd<F>(T(-0.028644157129432832), w23, madd<F>(T(0.15517261518701919), w21, madd<F>(T(0.29399379697892719), w19, madd<F>(T(0.3799989517881347), w17, T(0.28927341704999915) * w15)))))));
+  const P v13 = madd<F>(T(-0.104736328125), w13, madd<F>(T(-0.20676967002355626), w11, madd<F>(T(-0.30302356320529816), w9, madd<F>(T(-0.38948564307572281), w7, madd<F>(T(-0.46003667446804902), w5, madd<F>(T(-0.50316903057893025), w3, T(-0.48779241888341729) * w1))))));
+  const P v14 = madd<F>(T(0.26876053290463631), w29, madd<F>(T(0.32343807220408433), w27, madd<F>(T(0.35485500757928562), w25, madd<F>(T(0.3755432406162923), w23, madd<F>(T(0.3895683206208761), w21, madd<F>(T(0.3987358883300921), w19, madd<F>(T(0.40394834339674796), w17, T(0.28683224752162612) * w15)))))));
+  const P v15 = madd<F>(T(-0.28683224752162645), w14, madd<F>(T(-0.28927341704999965), w12, madd<F>(T(-0.29448597000911853), w10, madd<F>(T(-0.30327852628212998), w8, madd<F>(T(-0.31739196764139443), w6, madd<F>(T(-0.34093366339296716), w4, madd<F>(T(-0.38658243724628427), w2, T(-0.53752106580927261) * w0)))))));
+  const P v16 = madd<F>(T(-0.73603103219489308), w30, madd<F>(T(-0.45876982929941645), w28, madd<F>(T(-0.34235127309753588), w26, madd<F>(T(-0.2607641103722122), w24, madd<F>(T(-0.19379790506025354), w22, madd<F>(T(-0.13441384053565333), w20, madd<F>(T(-0.079220787902442094), w18, T(-0.026184082031250007) * w16)))))));
+  const P v17 = madd<F>(T(-0.40394834339674734), w14, madd<F>(T(-0.37999895178813448), w12, madd<F>(T(-0.33108469734219809), w10, madd<F>(T(-0.25483020517266392), w8, madd<F>(T(-0.14649116500376425), w6, madd<F>(T(0.0040347885451753988), w4, madd<F>(T(0.22417598874859018), w2, T(0.66793727800614244) * w0)))))));
+  const P v18 = madd<F>(T(0.56763753573489428), w30, madd<F>(T(-0.081648410079143849), w28, madd<F>(T(-0.33946218116365467), w26, madd<F>(T(-0.43535910608833533), w24, madd<F>(T(-0.42867008179654037), w22, madd<F>(T(-0.35199464622911392), w20, madd<F>(T(-0.22894287109375), w18, T(-0.07922078790244208) * w16)))))));
+  const P v19 = madd<F>(T(-0.39873588833009166), w14, madd<F>(T(-0.29399379697892697), w12, madd<F>(T(-0.10229863635764286), w10, madd<F>(T(0.13928971533740303), w8, madd<F>(T(0.37057633718956973), w6, madd<F>(T(0.49867904036398791), w4, madd<F>(T(0.3676962675793225), w2, T(-0.45111256989932019) * w0)))))));
+  const P v20 = madd<F>(T(-0.33455403583971721), w30, madd<F>(T(0.56142233892139592), w28, madd<F>(T(0.39408144000834722), w26, madd<F>(T(0.0065124826332196538), w24, madd<F>(T(-0.30492173874402662), w22, madd<F>(T(-0.42730712890625011), w20, madd<F>(T(-0.35199464622911375), w18, T(-0.1344138405356532) * w16)))))));
+  const P v21 = madd<F>(T(-0.38956832062087604), w14, madd<F>(T(-0.15517261518701914), w12, madd<F>(T(0.19016394045597712), w10, madd<F>(T(0.43714995515444205), w8, madd<F>(T(0.37120770160461325), w6, madd<F>(T(-0.087858194089874136), w4, madd<F>(T(-0.63093824454571101), w2, T(0.23086421787197661) * w0)))))));
+  const P v22 = madd<F>(T(0.1476612498935492), w30, madd<F>(T(-0.58762464811598181), w28, madd<F>(T(0.26848382881995725), w26, madd<F>(T(0.48155741518097533), w24, madd<F>(T(0.12091064453125003), w22, madd<F>(T(-0.30492173874402639), w20, madd<F>(T(-0.42867008179654015), w18, T(-0.19379790506025346) * w16)))))));
+  const P v23 = madd<F>(T(-0.37554324061629174), w14, madd<F>(T(0.028644157129432968), w12, madd<F>(T(0.42205711248781669), w10, madd<F>(T(0.32868469278573376), w8, madd<F>(T(-0.25394503957384346), w6, madd<F>(T(-0.52658294615399603), w4, madd<F>(T(0.47182552381421833), w2, T(-0.087085854130328072) * w0)))))));
+  const P v24 = madd<F>(T(-0.047031736593168887), w30, madd<F>(T(0.33148487801281051), w28, madd<F>(T(-0.61281058297545632), w26, madd<F>(T(0.15130615234374989), w24, madd<F>(T(0.481557415180975), w22, madd<F>(T(0.0065124826332200502), w20, madd<F>(T(-0.43535910608833495), w18, T(-0.26076411037221198) * w16)))))));
+  const P v25 = madd<F>(T(-0.35485500757928545), w14, madd<F>(T(0.24359565946994113), w12, madd<F>(T(0.44134584368013546), w10, madd<F>(T(-0.20261879347603645), w8, madd<F>(T(-0.49112388946794133), w6, madd<F>(T(0.54350403259425528), w4, madd<F>(T(-0.20437310147934779), w2, T(0.02304075127404942) * w0)))))));
+  const P v26 = madd<F>(T(0.010104037837881786), w30, madd<F>(T(-0.1099704982199089), w28, madd<F>(T(0.39044189453125017), w26, madd<F>(T(-0.61281058297545654), w24, madd<F>(T(0.26848382881995697), w22, madd<F>(T(0.39408144000834755), w20, madd<F>(T(-0.33946218116365479), w18, T(-0.34235127309753588) * w16)))))));
+  const P v27 = madd<F>(T(-0.32343807220408377), w14, madd<F>(T(0.46324573850344314), w12, madd<F>(T(0.10501062714067153), w10, madd<F>(T(-0.58398818968480681), w8, madd<F>(T(0.52259019340167645), w6, madd<F>(T(-0.23024942986358754), w4, madd<F>(T(0.050905076689572872), w2, T(-0.0038890459770688384) * w0)))))));
+  const P v28 = madd<F>(T(-0.0012729891122199909), w30, madd<F>(T(0.019714355468750056), w28, madd<F>(T(-0.10997049821990884), w26, madd<F>(T(0.33148487801281051), w24, madd<F>(T(-0.58762464811598147), w22, madd<F>(T(0.56142233892139615), w20, madd<F>(T(-0.081648410079144196), w18, T(-0.45876982929941607) * w16)))))));
+  const P v29 = madd<F>(T(-0.26876053290463608), w14, madd<F>(T(0.62181576561729313), w12, madd<F>(T(-0.61080930711268278), w10, madd<F>(T(0.37742785470181972), w8, madd<F>(T(-0.15456205830431871), w6, madd<F>(T(0.040584202601753397), w4, madd<F>(T(-0.0060427887192524999), w2, T(0.00033430331878964398) * w0)))))));
+  const P v30 = madd<F>(T(6.103515625009812e-05), w30, madd<F>(T(-0.0012729891122201349), w28, madd<F>(T(0.010104037837881922), w26, madd<F>(T(-0.047031736593168956), w24, madd<F>(T(0.14766124989354928), w22, madd<F>(T(-0.33455403583971716), w20, madd<F>(T(0.56763753573489439), w18, T(-0.73603103219489308) * w16)))))));
   y[15] = v15;
   const P ca1 = splat<P>(s.ca[1]), sa1 = splat<P>(s.sa[1]);
-  y[16] = ca1 * v16 - sa1 * v14;
-  y[14] = sa1 * v16 + ca1 * v14;
+  y[16] = madd<F>(ca1, v16, -(sa1 * v14));
+  y[14] = madd<F>(sa1, v16, ca1 * v14);
   const P ca2 = splat<P>(s.ca[2]), sa2 = splat<P>(s.sa[2]);
-  y[17] = ca2 * v17 - sa2 * v13;
-  y[13] = sa2 * v17 + ca2 * v13;
+  y[17] = madd<F>(ca2, v17, -(sa2 * v13));
+  y[13] = madd<F>(sa2, v17, ca2 * v13);
   const P ca3 = splat<P>(s.ca[3]), sa3 = splat<P>(s.sa[3]);
-  y[18] = ca3 * v18 - sa3 * v12;
-  y[12] = sa3 * v18 + ca3 * v12;
+  y[18] = madd<F>(ca3, v18, -(sa3 * v12));
+  y[12] = madd<F>(sa3, v18, ca3 * v12);
   const P ca4 = splat<P>(s.ca[4]), sa4 = splat<P>(s.sa[4]);
-  y[19] = ca4 * v19 - sa4 * v11;
-  y[11] = sa4 * v19 + ca4 * v11;
+  y[19] = madd<F>(ca4, v19, -(sa4 * v11));
+  y[11] = madd<F>(sa4, v19, ca4 * v11);
   const P ca5 = splat<P>(s.ca[5]), sa5 = splat<P>(s.sa[5]);
-  y[20] = ca5 * v20 - sa5 * v10;
-  y[10] = sa5 * v20 + ca5 * v10;
+  y[20] = madd<F>(ca5, v20, -(sa5 * v10));
+  y[10] = madd<F>(sa5, v20, ca5 * v10);
   const P ca6 = splat<P>(s.ca[6]), sa6 = splat<P>(s.sa[6]);
-  y[21] = ca6 * v21 - sa6 * v9;
-  y[9] = sa6 * v21 + ca6 * v9;
+  y[21] = madd<F>(ca6, v21, -(sa6 * v9));
+  y[9] = madd<F>(sa6, v21, ca6 * v9);
   const P ca7 = splat<P>(s.ca[7]), sa7 = splat<P>(s.sa[7]);
-  y[22] = ca7 * v22 - sa7 * v8;
-  y[8] = sa7 * v22 + ca7 * v8;
+  y[22] = madd<F>(ca7, v22, -(sa7 * v8));
+  y[8] = madd<F>(sa7, v22, ca7 * v8);
   const P ca8 = splat<P>(s.ca[8]), sa8 = splat<P>(s.sa[8]);
-  y[23] = ca8 * v23 - sa8 * v7;
-  y[7] = sa8 * v23 + ca8 * v7;
+  y[23] = madd<F>(ca8, v23, -(sa8 * v7));
+  y[7] = madd<F>(sa8, v23, ca8 * v7);
   const P ca9 = splat<P>(s.ca[9]), sa9 = splat<P>(s.sa[9]);
-  y[24] = ca9 * v24 - sa9 * v6;
-  y[6] = sa9 * v24 + ca9 * v6;
+  y[24] = madd<F>(ca9, v24, -(sa9 * v6));
+  y[6] = madd<F>(sa9, v24, ca9 * v6);
   const P ca10 = splat<P>(s.ca[10]), sa10 = splat<P>(s.sa[10]);
-  y[25] = ca10 * v25 - sa10 * v5;
-  y[5] = sa10 * v25 + ca10 * v5;
+  y[25] = madd<F>(ca10, v25, -(sa10 * v5));
+  y[5] = madd<F>(sa10, v25, ca10 * v5);
   const P ca11 = splat<P>(s.ca[11]), sa11 = splat<P>(s.sa[11]);
-  y[26] = ca11 * v26 - sa11 * v4;
-  y[4] = sa11 * v26 + ca11 * v4;
+  y[26] = madd<F>(ca11, v26, -(sa11 * v4));
+  y[4] = madd<F>(sa11, v26, ca11 * v4);
   const P ca12 = splat<P>(s.ca[12]), sa12 = splat<P>(s.sa[12]);
-  y[27] = ca12 * v27 - sa12 * v3;
-  y[3] = sa12 * v27 + ca12 * v3;
+  y[27] = madd<F>(ca12, v27, -(sa12 * v3));
+  y[3] = madd<F>(sa12, v27, ca12 * v3);
   const P ca13 = splat<P>(s.ca[13]), sa13 = splat<P>(s.sa[13]);
-  y[28] = ca13 * v28 - sa13 * v2;
-  y[2] = sa13 * v28 + ca13 * v2;
+  y[28] = madd<F>(ca13, v28, -(sa13 * v2));
+  y[2] = madd<F>(sa13, v28, ca13 * v2);
   const P ca14 = splat<P>(s.ca[14]), sa14 = splat<P>(s.sa[14]);
-  y[29] = ca14 * v29 - sa14 * v1;
-  y[1] = sa14 * v29 + ca14 * v1;
+  y[29] = madd<F>(ca14, v29, -(sa14 * v1));
+  y[1] = madd<F>(sa14, v29, ca14 * v1);
   const P ca15 = splat<P>(s.ca[15]), sa15 = splat<P>(s.sa[15]);
-  y[30] = ca15 * v30 - sa15 * v0;
-  y[0] = sa15 * v30 + ca15 * v0;
+  y[30] = madd<F>(ca15, v30, -(sa15 * v0));
+  y[0] = madd<F>(sa15, v30, ca15 * v0);
 }
 
 // Band 16 of Z(a) X90^T Z(b) X90 Z(g), Ry(b) = Rx(-90) Rz(b) Rx(+90).
-template <class T, class P, class S>
-inline void zxzxz_band16(const S& s, const P* __restrict x, P* __restrict y) {
+template <bool F, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void zxzxz_band16(const S& s, const P* __restrict x, P* __restrict y) {
   const P t16 = x[16];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
-  const P t17 = cg1 * x[17] - sg1 * x[15];
-  const P t15 = sg1 * x[17] + cg1 * x[15];
+  const P t17 = madd<F>(cg1, x[17], -(sg1 * x[15]));
+  const P t15 = madd<F>(sg1, x[17], cg1 * x[15]);
   const P cg2 = splat<P>(s.cg[2]), sg2 = splat<P>(s.sg[2]);
-  const P t18 = cg2 * x[18] - sg2 * x[14];
-  const P t14 = sg2 * x[18] + cg2 * x[14];
+  const P t18 = madd<F>(cg2, x[18], -(sg2 * x[14]));
+  const P t14 = madd<F>(sg2, x[18], cg2 * x[14]);
   const P cg3 = splat<P>(s.cg[3]), sg3 = splat<P>(s.sg[3]);
-  const P t19 = cg3 * x[19] - sg3 * x[13];
-  const P t13 = sg3 * x[19] + cg3 * x[13];
+  const P t19 = madd<F>(cg3, x[19], -(sg3 * x[13]));
+  const P t13 = madd<F>(sg3, x[19], cg3 * x[13]);
   const P cg4 = splat<P>(s.cg[4]), sg4 = splat<P>(s.sg[4]);
-  const P t20 = cg4 * x[20] - sg4 * x[12];
-  const P t12 = sg4 * x[20] + cg4 * x[12];
+  const P t20 = madd<F>(cg4, x[20], -(sg4 * x[12]));
+  const P t12 = madd<F>(sg4, x[20], cg4 * x[12]);
   const P cg5 = splat<P>(s.cg[5]), sg5 = splat<P>(s.sg[5]);
-  const P t21 = cg5 * x[21] - sg5 * x[11];
-  const P t11 = sg5 * x[21] + cg5 * x[11];
+  const P t21 = madd<F>(cg5, x[21], -(sg5 * x[11]));
+  const P t11 = madd<F>(sg5, x[21], cg5 * x[11]);
   const P cg6 = splat<P>(s.cg[6]), sg6 = splat<P>(s.sg[6]);
-  const P t22 = cg6 * x[22] - sg6 * x[10];
-  const P t10 = sg6 * x[22] + cg6 * x[10];
+  const P t22 = madd<F>(cg6, x[22], -(sg6 * x[10]));
+  const P t10 = madd<F>(sg6, x[22], cg6 * x[10]);
   const P cg7 = splat<P>(s.cg[7]), sg7 = splat<P>(s.sg[7]);
-  const P t23 = cg7 * x[23] - sg7 * x[9];
-  const P t9 = sg7 * x[23] + cg7 * x[9];
+  const P t23 = madd<F>(cg7, x[23], -(sg7 * x[9]));
+  const P t9 = madd<F>(sg7, x[23], cg7 * x[9]);
   const P cg8 = splat<P>(s.cg[8]), sg8 = splat<P>(s.sg[8]);
-  const P t24 = cg8 * x[24] - sg8 * x[8];
-  const P t8 = sg8 * x[24] + cg8 * x[8];
+  const P t24 = madd<F>(cg8, x[24], -(sg8 * x[8]));
+  const P t8 = madd<F>(sg8, x[24], cg8 * x[8]);
   const P cg9 = splat<P>(s.cg[9]), sg9 = splat<P>(s.sg[9]);
-  const P t25 = cg9 * x[25] - sg9 * x[7];
-  const P t7 = sg9 * x[25] + cg9 * x[7];
+  const P t25 = madd<F>(cg9, x[25], -(sg9 * x[7]));
+  const P t7 = madd<F>(sg9, x[25], cg9 * x[7]);
   const P cg10 = splat<P>(s.cg[10]), sg10 = splat<P>(s.sg[10]);
-  const P t26 = cg10 * x[26] - sg10 * x[6];
-  const P t6 = sg10 * x[26] + cg10 * x[6];
+  const P t26 = madd<F>(cg10, x[26], -(sg10 * x[6]));
+  const P t6 = madd<F>(sg10, x[26], cg10 * x[6]);
   const P cg11 = splat<P>(s.cg[11]), sg11 = splat<P>(s.sg[11]);
-  const P t27 = cg11 * x[27] - sg11 * x[5];
-  const P t5 = sg11 * x[27] + cg11 * x[5];
+  const P t27 = madd<F>(cg11, x[27], -(sg11 * x[5]));
+  const P t5 = madd<F>(sg11, x[27], cg11 * x[5]);
   const P cg12 = splat<P>(s.cg[12]), sg12 = splat<P>(s.sg[12]);
-  const P t28 = cg12 * x[28] - sg12 * x[4];
-  const P t4 = sg12 * x[28] + cg12 * x[4];
+  const P t28 = madd<F>(cg12, x[28], -(sg12 * x[4]));
+  const P t4 = madd<F>(sg12, x[28], cg12 * x[4]);
   const P cg13 = splat<P>(s.cg[13]), sg13 = splat<P>(s.sg[13]);
-  const P t29 = cg13 * x[29] - sg13 * x[3];
-  const P t3 = sg13 * x[29] + cg13 * x[3];
+  const P t29 = madd<F>(cg13, x[29], -(sg13 * x[3]));
+  const P t3 = madd<F>(sg13, x[29], cg13 * x[3]);
   const P cg14 = splat<P>(s.cg[14]), sg14 = splat<P>(s.sg[14]);
-  const P t30 = cg14 * x[30] - sg14 * x[2];
-  const P t2 = sg14 * x[30] + cg14 * x[2];
+  const P t30 = madd<F>(cg14, x[30], -(sg14 * x[2]));
+  const P t2 = madd<F>(sg14, x[30], cg14 * x[2]);
   const P cg15 = splat<P>(s.cg[15]), sg15 = splat<P>(s.sg[15]);
-  const P t31 = cg15 * x[31] - sg15 * x[1];
-  const P t1 = sg15 * x[31] + cg15 * x[1];
+  const P t31 = madd<F>(cg15, x[31], -(sg15 * x[1]));
+  const P t1 = madd<F>(sg15, x[31], cg15 * x[1]);
   const P cg16 = splat<P>(s.cg[16]), sg16 = splat<P>(s.sg[16]);
-  const P t32 = cg16 * x[32] - sg16 * x[0];
-  const P t0 = sg16 * x[32] + cg16 * x[0];
-  const P u0 = T(-0.7258583471372847) * t17 + T(0.568785438900687) * t19 - T(0.34664594459191861) * t21 + T(0.16162450504448461) * t23 - T(0.055988370897043997) * t25 + T(0.013694744056964496) * t27 - T(0.0021492696364329598) * t29 + T(0.00017263349150053965) * t31;
-  const P u1 = T(-0.00091552734374991868) * t1 + T(0.0098784603743807559) * t3 - T(0.053260055141116001) * t5 + T(0.17815390527999284) * t7 - T(0.40000024233006048) * t9 + T(0.61278924522940437) * t11 - T(0.60328806133026414) * t13 + T(0.25662967972081685) * t15;
-  const P u2 = T(-0.45628802683186709) * t17 - T(0.051078440271094691) * t19 + T(0.52920532138569953) * t21 - T(0.59508666989057468) * t23 + T(0.36703700167069953) * t25 - T(0.13897014830297347) * t27 + T(0.031074627886176064) * t29 - T(0.0033641391063284) * t31;
-  const P u3 = T(0.0098784603743807386) * t1 - T(0.076965332031250028) * t3 + T(0.27806678736042256) * t5 - T(0.54853719758802877) * t7 + T(0.54618947454882028) * t9 - T(0.049220416631183005) * t11 - T(0.46842021069803202) * t13 + T(0.30919487868272666) * t15;
-  const P u4 = T(-0.34449628535760829) * t17 - T(0.30594178766630198) * t19 + T(0.4204400879309747) * t21 + T(0.18580348691049997) * t23 - T(0.59344988064258153) * t25 + T(0.44558364577300591) * t27 - T(0.15842586895988961) * t29 + T(0.024552524841594502) * t31;
-  const P u5 = T(-0.053260055141115897) * t1 + T(0.27806678736042262) * t3 - T(0.57537841796875044) * t5 + T(0.4034911295055808) * t7 + T(0.27732822885199215) * t9 - T(0.40014005589514529) * t11 - T(0.27124290568000348) * t13 + T(0.33967791819284415) * t15;
-  const P u6 = T(-0.26687617708165501) * t17 - T(0.41227542551090568) * t19 + T(0.076470742418330018) * t21 + T(0.47777254446515594) * t23 + T(0.018938413327290928) * t25 - T(0.58030748167934132) * t27 + T(0.42074552975794172) * t29 - T(0.1027105804272344) * t31;
-  const P u7 = T(0.17815390527999289) * t1 - T(0.5485371975880291) * t3 + T(0.4034911295055813) * t5 + T(0.3554077148437505) * t7 - T(0.23416092155548507) * t9 - T(0.43419856340610197) * t11 - T(0.072546516121792678) * t13 + T(0.3600356466887249) * t15;
-  const P u8 = T(-0.20366691779398496) * t17 - T(0.42406457027641187) * t19 - T(0.234076309611609) * t21 + T(0.22395847379694844) * t23 + T(0.47042626433919493) * t25 + T(0.074106834758965026) * t27 - T(0.60710771292661569) * t29 + T(0.27994185448521969) * t31;
-  const P u9 = T(-0.40000024233006054) * t1 + T(0.54618947454882005) * t3 + T(0.27732822885199221) * t5 - T(0.23416092155548474) * t7 - T(0.43865966796875011) * t9 - T(0.25853900704538724) * t11 + T(0.10331571817549369) * t13 + T(0.37416001956047307) * t15;
-  const P u10 = T(-0.14802828649413691) * t17 - T(0.37008102159773787) * t19 - T(0.3973159806886814) * t21 - T(0.18790572694610144) * t23 + T(0.17796212580060691) * t25 + T(0.47411860299364655) * t27 + T(0.3480409037273669) * t29 - T(0.51996891688787739) * t31;
-  const P u11 = T(0.6127892452294047) * t1 - T(0.04922041663118313) * t3 - T(0.40014005589514579) * t5 - T(0.43419856340610224) * t7 - T(0.25853900704538751) * t9 + T(0.003356933593750118) * t11 + T(0.2434598586694455) * t13 + T(0.38379661902057444) * t15;
-  const P u12 = T(-0.096707657900556299) * t17 - T(0.27064463876734629) * t19 - T(0.38723825951738811) * t21 - T(0.41214967141948755) * t23 - T(0.3179395048296863) * t25 - T(0.089925728590227197) * t27 + T(0.26044996366619616) * t29 + T(0.64851517958879101) * t31;
-  const P u13 = T(-0.60328806133026436) * t1 - T(0.46842021069803197) * t3 - T(0.27124290568000348) * t5 - T(0.072546516121792956) * t7 + T(0.10331571817549347) * t9 + T(0.24345985866944525) * t11 + T(0.34039306640625039) * t13 + T(0.38984103211428306) * t15;
-  const P u14 = T(-0.047805374586937809) * t17 - T(0.14234981808672578) * t19 - T(0.23357118414642764) * t21 - T(0.31878915106864858) * t23 - T(0.3943992903947498) * t25 - T(0.45478707530817108) * t27 - T(0.48924202807885248) * t29 - T(0.46853954836139206) * t31;
-  const P u15 = T(0.25662967972081657) * t1 + T(0.30919487868272638) * t3 + T(0.33967791819284382) * t5 + T(0.3600356466887244) * t7 + T(0.37416001956047273) * t9 + T(0.38379661902057383) * t11 + T(0.38984103211428256) * t13 + T(0.39276123046875) * t15;
-  const P u16 = T(0.19638061523437503) * t16 + T(0.27875083953149377) * t18 + T(0.28194885054064972) * t20 + T(0.28771527254123014) * t22 + T(0.29689300005703434) * t24 + T(0.31122843008866891) * t26 + T(0.33479021131218578) * t28 + T(0.3800847906643568) * t30 + T(0.52905563807867872) * t32;
-  const P u17 = T(0.7258583471372847) * t0 + T(0.45628802683186692) * t2 + T(0.34449628535760846) * t4 + T(0.26687617708165473) * t6 + T(0.2036669177939848) * t8 + T(0.14802828649413688) * t10 + T(0.096707657900556229) * t12 + T(0.047805374586937614) * t14;
-  const P u18 = T(0.27875083953149443) * t16 + T(0.38403320312500072) * t18 + T(0.35312643810418293) * t20 + T(0.30029048763583793) * t22 + T(0.22310593018663188) * t24 + T(0.11693928179869252) * t26 - T(0.027953835032162911) * t28 - T(0.23801832858603469) * t30 - T(0.66261498380084516) * t32;
-  const P u19 = T(-0.56878543890068745) * t0 + T(0.051078440271094927) * t2 + T(0.30594178766630231) * t4 + T(0.41227542551090551) * t6 + T(0.42406457027641181) * t8 + T(0.37008102159773815) * t10 + T(0.27064463876734635) * t12 + T(0.14234981808672556) * t14;
-  const P u20 = T(0.28194885054065011) * t16 + T(0.35312643810418276) * t18 + T(0.22290039062500011) * t20 + T(0.028318207761228596) * t22 - T(0.19512434479470875) * t24 - T(0.39308384447925193) * t26 - T(0.48364344081195204) * t28 - T(0.32944604067731148) * t30 + T(0.45856948118964591) * t32;
-  const P u21 = T(0.34664594459191866) * t0 - T(0.52920532138569998) * t2 - T(0.42044008793097543) * t4 - T(0.076470742418330531) * t6 + T(0.23407630961160897) * t8 + T(0.39731598068868174) * t10 + T(0.38723825951738844) * t12 + T(0.23357118414642744) * t14;
-  const P u22 = T(0.28771527254123036) * t16 + T(0.3002904876358376) * t18 + T(0.028318207761228512) * t20 - T(0.27758789062499978) * t22 - T(0.4398669519623169) * t24 - T(0.30280869094767732) * t26 + T(0.15511097596104034) * t28 + T(0.61633710582184464) * t30 - T(0.24511569809176159) * t32;
-  const P u23 = T(-0.16162450504448461) * t0 + T(0.5950866698905749) * t2 - T(0.18580348691050008) * t4 - T(0.47777254446515582) * t6 - T(0.22395847379694828) * t8 + T(0.18790572694610175) * t10 + T(0.41214967141948766) * t12 + T(0.31878915106864797) * t14;
-  const P u24 = T(0.29689300005703501) * t16 + T(0.22310593018663208) * t18 - T(0.195124344794709) * t20 - T(0.43986695196231756) * t22 - T(0.21008300781250019) * t24 + T(0.33769820362660485) * t26 + T(0.46347462958741886) * t28 - T(0.49773711501208495) * t30 + T(0.098974391822218427) * t32;
-  const P u25 = T(0.055988370897043969) * t0 - T(0.36703700167070008) * t2 + T(0.59344988064258219) * t4 - T(0.018938413327290859) * t6 - T(0.47042626433919538) * t8 - T(0.17796212580060683) * t10 + T(0.31793950482968658) * t12 + T(0.39439929039474947) * t14;
-  const P u26 = T(0.31122843008866918) * t16 + T(0.11693928179869253) * t18 - T(0.3930838444792521) * t20 - T(0.30280869094767765) * t22 + T(0.33769820362660463) * t24 + T(0.38208007812500028) * t26 - T(0.56989293799562335) * t28 + T(0.24001432435680567) * t30 - T(0.029050939167881526) * t32;
-  const P u27 = T(-0.013694744056964617) * t0 + T(0.1389701483029735) * t2 - T(0.44558364577300591) * t4 + T(0.58030748167934088) * t6 - T(0.07410683475896529) * t8 - T(0.47411860299364639) * t10 + T(0.089925728590227225) * t12 + T(0.45478707530817025) * t14;
-  const P u28 = T(0.33479021131218606) * t16 - T(0.027953835032162772) * t18 - T(0.48364344081195221) * t20 + T(0.15511097596104045) * t22 + T(0.4634746295874192) * t24 - T(0.5698929379956239) * t26 + T(0.29077148437500044) * t28 - T(0.070678605522643823) * t30 + T(0.0057870856035808597) * t32;
-  const P u29 = T(0.00214926963643305) * t0 - T(0.031074627886176185) * t2 + T(0.1584258689598898) * t4 - T(0.42074552975794227) * t6 + T(0.60710771292661658) * t8 - T(0.34804090372736707) * t10 - T(0.2604499636661966) * t12 + T(0.4892420280788522) * t14;
-  const P u30 = T(0.3800847906643573) * t16 - T(0.23801832858603475) * t18 - T(0.32944604067731093) * t20 + T(0.61633710582184476) * t22 - T(0.49773711501208456) * t24 + T(0.24001432435680567) * t26 - T(0.070678605522643781) * t28 + T(0.01147460937500008) * t30 - T(0.00067965873569703625) * t32;
-  const P u31 = T(-0.00017263349150072803) * t0 + T(0.0033641391063282378) * t2 - T(0.024552524841594325) * t4 + T(0.1027105804272343) * t6 - T(0.27994185448521941) * t8 + T(0.51996891688787739) * t10 - T(0.64851517958879079) * t12 + T(0.46853954836139111) * t14;
-  const P u32 = T(0.52905563807867961) * t16 - T(0.66261498380084527) * t18 + T(0.45856948118964652) * t20 - T(0.24511569809176206) * t22 + T(0.098974391822218358) * t24 - T(0.029050939167881422) * t26 + T(0.0057870856035807808) * t28 - T(0.00067965873569688728) * t30 + T(3.0517578125100431e-05) * t32;
+  const P t32 = madd<F>(cg16, x[32], -(sg16 * x[0]));
+  const P t0 = madd<F>(sg16, x[32], cg16 * x[0]);
+  const P u0 = madd<F>(T(0.00017263349150053965), t31, madd<F>(T(-0.0021492696364329598), t29, madd<F>(T(0.013694744056964496), t27, madd<F>(T(-0.055988370897043997), t25, madd<F>(T(0.16162450504448461), t23, madd<F>(T(-0.34664594459191861), t21, madd<F>(T(0.568785438900687), t19, T(-0.7258583471372847) * t17)))))));
+  const P u1 = madd<F>(T(0.25662967972081685), t15, madd<F>(T(-0.60328806133026414), t13, madd<F>(T(0.61278924522940437), t11, madd<F>(T(-0.40000024233006048), t9, madd<F>(T(0.17815390527999284), t7, madd<F>(T(-0.053260055141116001), t5, madd<F>(T(0.0098784603743807559), t3, T(-0.00091552734374991868) * t1)))))));
+  const P u2 = madd<F>(T(-0.0033641391063284), t31, madd<F>(T(0.031074627886176064), t29, madd<F>(T(-0.13897014830297347), t27, madd<F>(T(0.36703700167069953), t25, madd<F>(T(-0.59508666989057468), t23, madd<F>(T(0.52920532138569953), t21, madd<F>(T(-0.051078440271094691), t19, T(-0.45628802683186709) * t17)))))));
+  const P u3 = madd<F>(T(0.30919487868272666), t15, madd<F>(T(-0.46842021069803202), t13, madd<F>(T(-0.049220416631183005), t11, madd<F>(T(0.54618947454882028), t9, madd<F>(T(-0.54853719758802877), t7, madd<F>(T(0.27806678736042256), t5, madd<F>(T(-0.076965332031250028), t3, T(0.0098784603743807386) * t1)))))));
+  const P u4 = madd<F>(T(0.024552524841594502), t31, madd<F>(T(-0.15842586895988961), t29, madd<F>(T(0.44558364577300591), t27, madd<F>(T(-0.59344988064258153), t25, madd<F>(T(0.18580348691049997), t23, madd<F>(T(0.4204400879309747), t21, madd<F>(T(-0.30594178766630198), t19, T(-0.34449628535760829) * t17)))))));
+  const P u5 = madd<F>(T(0.33967791819284415), t15, madd<F>(T(-0.27124290568000348), t13, madd<F>(T(-0.40014005589514529), t11, madd<F>(T(0.27732822885199215), t9, madd<F>(T(0.4034911295055808), t7, madd<F>(T(-0.57537841796875044), t5, madd<F>(T(0.27806678736042262), t3, T(-0.053260055141115897) * t1)))))));
+  const P u6 = madd<F>(T(-0.1027105804272344), t31, madd<F>(T(0.42074552975794172), t29, madd<F>(T(-0.58030748167934132), t27, madd<F>(T(0.018938413327290928), t25, madd<F>(T(0.47777254446515594), t23, madd<F>(T(0.076470742418330018), t21, madd<F>(T(-0.41227542551090568), t19, T(-0.26687617708165501) * t17)))))));
+  const P u7 = madd<F>(T(0.3600356466887249), t15, madd<F>(T(-0.072546516121792678), t13, madd<F>(T(-0.43419856340610197), t11, madd<F>(T(-0.23416092155548507), t9, madd<F>(T(0.3554077148437505), t7, madd<F>(T(0.4034911295055813), t5, madd<F>(T(-0.5485371975880291), t3, T(0.17815390527999289) * t1)))))));
+  const P u8 = madd<F>(T(0.27994185448521969), t31, madd<F>(T(-0.60710771292661569), t29, madd<F>(T(0.074106834758965026), t27, madd<F>(T(0.47042626433919493), t25, madd<F>(T(0.22395847379694844), t23, madd<F>(T(-0.234076309611609), t21, madd<F>(T(-0.42406457027641187), t19, T(-0.20366691779398496) * t17)))))));
+  const P u9 = madd<F>(T(0.37416001956047307), t15, madd<F>(T(0.10331571817549369), t13, madd<F>(T(-0.25853900704538724), t11, madd<F>(T(-0.43865966796875011), t9, madd<F>(T(-0.23416092155548474), t7, madd<F>(T(0.27732822885199221), t5, madd<F>(T(0.54618947454882005), t3, T(-0.40000024233006054) * t1)))))));
+  const P u10 = madd<F>(T(-0.51996891688787739), t31, madd<F>(T(0.3480409037273669), t29, madd<F>(T(0.47411860299364655), t27, madd<F>(T(0.17796212580060691), t25, madd<F>(T(-0.18790572694610144), t23, madd<F>(T(-0.3973159806886814), t21, madd<F>(T(-0.37008102159773787), t19, T(-0.14802828649413691) * t17)))))));
+  const P u11 = madd<F>(T(0.38379661902057444), t15, madd<F>(T(0.2434598586694455), t13, madd<F>(T(0.003356933593750118), t11, madd<F>(T(-0.25853900704538751), t9, madd<F>(T(-0.43419856340610224), t7, madd<F>(T(-0.40014005589514579), t5, madd<F>(T(-0.04922041663118313), t3, T(0.6127892452294047) * t1)))))));
+  const P u12 = madd<F>(T(0.64851517958879101), t31, madd<F>(T(0.26044996366619616), t29, madd<F>(T(-0.089925728590227197), t27, madd<F>(T(-0.3179395048296863), t25, madd<F>(T(-0.41214967141948755), t23, madd<F>(T(-0.38723825951738811), t21, madd<F>(T(-0.27064463876734629), t19, T(-0.096707657900556299) * t17)))))));
+  const P u13 = madd<F>(T(0.38984103211428306), t15, madd<F>(T(0.34039306640625039), t13, madd<F>(T(0.24345985866944525), t11, madd<F>(T(0.10331571817549347), t9, madd<F>(T(-0.072546516121792956), t7, madd<F>(T(-0.27124290568000348), t5, madd<F>(T(-0.46842021069803197), t3, T(-0.60328806133026436) * t1)))))));
+  const P u14 = madd<F>(T(-0.46853954836139206), t31, madd<F>(T(-0.48924202807885248), t29, madd<F>(T(-0.45478707530817108), t27, madd<F>(T(-0.3943992903947498), t25, madd<F>(T(-0.31878915106864858), t23, madd<F>(T(-0.23357118414642764), t21, madd<F>(T(-0.14234981808672578), t19, T(-0.047805374586937809) * t17)))))));
+  const P u15 = madd<F>(T(0.39276123046875), t15, madd<F>(T(0.38984103211428256), t13, madd<F>(T(0.38379661902057383), t11, madd<F>(T(0.37416001956047273), t9, madd<F>(T(0.3600356466887244), t7, madd<F>(T(0.33967791819284382), t5, madd<F>(T(0.30919487868272638), t3, T(0.25662967972081657) * t1)))))));
+  const P u16 = madd<F>(T(0.52905563807867872), t32, madd<F>(T(0.3800847906643568), t30, madd<F>(T(0.33479021131218578), t28, madd<F>(T(0.31122843008866891), t26, madd<F>(T(0.29689300005703434), t24, madd<F>(T(0.28771527254123014), t22, madd<F>(T(0.28194885054064972), t20, madd<F>(T(0.27875083953149377), t18, T(0.19638061523437503) * t16))))))));
+  const P u17 = madd<F>(T(0.047805374586937614), t14, madd<F>(T(0.096707657900556229), t12, madd<F>(T(0.14802828649413688), t10, madd<F>(T(0.2036669177939848), t8, madd<F>(T(0.26687617708165473), t6, madd<F>(T(0.34449628535760846), t4, madd<F>(T(0.45628802683186692), t2, T(0.7258583471372847) * t0)))))));
+  const P u18 = madd<F>(T(-0.66261498380084516), t32, madd<F>(T(-0.23801832858603469), t30, madd<F>(T(-0.027953835032162911), t28, madd<F>(T(0.11693928179869252), t26, madd<F>(T(0.22310593018663188), t24, madd<F>(T(0.30029048763583793), t22, madd<F>(T(0.35312643810418293), t20, madd<F>(T(0.38403320312500072), t18, T(0.27875083953149443) * t16))))))));
+  const P u19 = madd<F>(T(0.14234981808672556), t14, madd<F>(T(0.27064463876734635), t12, madd<F>(T(0.37008102159773815), t10, madd<F>(T(0.42406457027641181), t8, madd<F>(T(0.41227542551090551), t6, madd<F>(T(0.30594178766630231), t4, madd<F>(T(0.051078440271094927), t2, T(-0.56878543890068745) * t0)))))));
+  const P u20 = madd<F>(T(0.45856948118964591), t32, madd<F>(T(-0.32944604067731148), t30, madd<F>(T(-0.48364344081195204), t28, madd<F>(T(-0.39308384447925193), t26, madd<F>(T(-0.19512434479470875), t24, madd<F>(T(0.028318207761228596), t22, madd<F>(T(0.22290039062500011), t20, madd<F>(T(0.35312643810418276), t18, T(0.28194885054065011) * t16))))))));
+  const P u21 = madd<F>(T(0.23357118414642744), t14, madd<F>(T(0.38723825951738844), t12, madd<F>(T(0.39731598068868174), t10, madd<F>(T(0.23407630961160897), t8, madd<F>(T(-0.076470742418330531), t6, madd<F>(T(-0.42044008793097543), t4, madd<F>(T(-0.52920532138569998), t2, T(0.34664594459191866) * t0)))))));
+  const P u22 = madd<F>(T(-0.24511569809176159), t32, madd<F>(T(0.61633710582184464), t30, madd<F>(T(0.15511097596104034), t28, madd<F>(T(-0.30280869094767732), t26, madd<F>(T(-0.4398669519623169), t24, madd<F>(T(-0.27758789062499978), t22, madd<F>(T(0.028318207761228512), t20, madd<F>(T(0.3002904876358376), t18, T(0.28771527254123036) * t16))))))));
+  const P u23 = madd<F>(T(0.31878915106864797), t14, madd<F>(T(0.41214967141948766), t12, madd<F>(T(0.18790572694610175), t10, madd<F>(T(-0.22395847379694828), t8, madd<F>(T(-0.47777254446515582), t6, madd<F>(T(-0.18580348691050008), t4, madd<F>(T(0.5950866698905749), t2, T(-0.16162450504448461) * t0)))))));
+  const P u24 = madd<F>(T(0.098974391822218427), t32, madd<F>(T(-0.49773711501208495), t30, madd<F>(T(0.46347462958741886), t28, madd<F>(T(0.33769820362660485), t26, madd<F>(T(-0.21008300781250019), t24, madd<F>(T(-0.43986695196231756), t22, madd<F>(T(-0.195124344794709), t20, madd<F>(T(0.22310593018663208), t18, T(0.29689300005703501) * t16))))))));
+  const P u25 = madd<F>(T(0.39439929039474947), t14, madd<F>(T(0.31793950482968658), t12, madd<F>(T(-0.17796212580060683), t10, madd<F>(T(-0.47042626433919538), t8, madd<F>(T(-0.018938413327290859), t6, madd<F>(T(0.59344988064258219), t4, madd<F>(T(-0.36703700167070008), t2, T(0.055988370897043969) * t0)))))));
+  const P u26 = madd<F>(T(-0.029050939167881526), t32, madd<F>(T(0.24001432435680567), t30, madd<F>(T(-0.56989293799562335), t28, madd<F>(T(0.38208007812500028), t26, madd<F>(T(0.33769820362660463), t24, madd<F>(T(-0.30280869094767765), t22, madd<F>(T(-0.3930838444792521), t20, madd<F>(T(0.11693928179869253), t18, T(0.31122843008866918) * t16))))))));
+  const P u27 = madd<F>(T(0.45478707530817025), t14, madd<F>(T(0.089925728590227225), t12, madd<F>(T(-0.47411860299364639), t10, madd<F>(T(-0.07410683475896529), t8, madd<F>(T(0.58030748167934088), t6, madd<F>(T(-0.44558364577300591), t4, madd<F>(T(0.1389701483029735), t2, T(-0.013694744056964617) * t0)))))));
+  const P u28 = madd<F>(T(0.0057870856035808597), t32, madd<F>(T(-0.070678605522643823), t30, madd<F>(T(0.29077148437500044), t28, madd<F>(T(-0.5698929379956239), t26, madd<F>(T(0.4634746295874192), t24, madd<F>(T(0.15511097596104045), t22, madd<F>(T(-0.48364344081195221), t20, madd<F>(T(-0.027953835032162772), t18, T(0.33479021131218606) * t16))))))));
+  const P u29 = madd<F>(T(0.4892420280788522), t14, madd<F>(T(-0.2604499636661966), t12, madd<F>(T(-0.34804090372736707), t10, madd<F>(T(0.60710771292661658), t8, madd<F>(T(-0.42074552975794227), t6, madd<F>(T(0.1584258689598898), t4, madd<F>(T(-0.031074627886176185), t2, T(0.00214926963643305) * t0)))))));
+  const P u30 = madd<F>(T(-0.00067965873569703625), t32, madd<F>(T(0.01147460937500008), t30, madd<F>(T(-0.070678605522643781), t28, madd<F>(T(0.24001432435680567), t26, madd<F>(T(-0.49773711501208456), t24, madd<F>(T(0.61633710582184476), t22, madd<F>(T(-0.32944604067731093), t20, madd<F>(T(-0.23801832858603475), t18, T(0.3800847906643573) * t16))))))));
+  const P u31 = madd<F>(T(0.46853954836139111), t14, madd<F>(T(-0.64851517958879079), t12, madd<F>(T(0.51996891688787739), t10, madd<F>(T(-0.27994185448521941), t8, madd<F>(T(0.1027105804272343), t6, madd<F>(T(-0.024552524841594325), t4, madd<F>(T(0.0033641391063282378), t2, T(-0.00017263349150072803) * t0)))))));
+  const P u32 = madd<F>(T(3.0517578125100431e-05), t32, madd<F>(T(-0.00067965873569688728), t30, madd<F>(T(0.0057870856035807808), t28, madd<F>(T(-0.029050939167881422), t26, madd<F>(T(0.098974391822218358), t24, madd<F>(T(-0.24511569809176206), t22, madd<F>(T(0.45856948118964652), t20, madd<F>(T(-0.66261498380084527), t18, T(0.52905563807867961) * t16))))))));
   const P w16 = u16;
   const P cb1 = splat<P>(s.cb[1]), sb1 = splat<P>(s.sb[1]);
-  const P w17 = cb1 * u17 - sb1 * u15;
-  const P w15 = sb1 * u17 + cb1 * u15;
+  const P w17 = madd<F>(cb1, u17, -(sb1 * u15));
+  const P w15 = madd<F>(sb1, u17, cb1 * u15);
   const P cb2 = splat<P>(s.cb[2]), sb2 = splat<P>(s.sb[2]);
-  const P w18 = cb2 * u18 - sb2 * u14;
-  const P w14 = sb2 * u18 + cb2 * u14;
+  const P w18 = madd<F>(cb2, u18, -(sb2 * u14));
+  const P w14 = madd<F>(sb2, u18, cb2 * u14);
   const P cb3 = splat<P>(s.cb[3]), sb3 = splat<P>(s.sb[3]);
-  const P w19 = cb3 * u19 - sb3 * u13;
-  const P w13 = sb3 * u19 + cb3 * u13;
+  const P w19 = madd<F>(cb3, u19, -(sb3 * u13));
+  const P w13 = madd<F>(sb3, u19, cb3 * u13);
   const P cb4 = splat<P>(s.cb[4]), sb4 = splat<P>(s.sb[4]);
-  const P w20 = cb4 * u20 - sb4 * u12;
-  const P w12 = sb4 * u20 + cb4 * u12;
+  const P w20 = madd<F>(cb4, u20, -(sb4 * u12));
+  const P w12 = madd<F>(sb4, u20, cb4 * u12);
   const P cb5 = splat<P>(s.cb[5]), sb5 = splat<P>(s.sb[5]);
-  const P w21 = cb5 * u21 - sb5 * u11;
-  const P w11 = sb5 * u21 + cb5 * u11;
+  const P w21 = madd<F>(cb5, u21, -(sb5 * u11));
+  const P w11 = madd<F>(sb5, u21, cb5 * u11);
   const P cb6 = splat<P>(s.cb[6]), sb6 = splat<P>(s.sb[6]);
-  const P w22 = cb6 * u22 - sb6 * u10;
-  const P w10 = sb6 * u22 + cb6 * u10;
+  const P w22 = madd<F>(cb6, u22, -(sb6 * u10));
+  const P w10 = madd<F>(sb6, u22, cb6 * u10);
   const P cb7 = splat<P>(s.cb[7]), sb7 = splat<P>(s.sb[7]);
-  const P w23 = cb7 * u23 - sb7 * u9;
-  const P w9 = sb7 * u23 + cb7 * u9;
+  const P w23 = madd<F>(cb7, u23, -(sb7 * u9));
+  const P w9 = madd<F>(sb7, u23, cb7 * u9);
   const P cb8 = splat<P>(s.cb[8]), sb8 = splat<P>(s.sb[8]);
-  const P w24 = cb8 * u24 - sb8 * u8;
-  const P w8 = sb8 * u24 + cb8 * u8;
+  const P w24 = madd<F>(cb8, u24, -(sb8 * u8));
+  const P w8 = madd<F>(sb8, u24, cb8 * u8);
   const P cb9 = splat<P>(s.cb[9]), sb9 = splat<P>(s.sb[9]);
-  const P w25 = cb9 * u25 - sb9 * u7;
-  const P w7 = sb9 * u25 + cb9 * u7;
+  const P w25 = madd<F>(cb9, u25, -(sb9 * u7));
+  const P w7 = madd<F>(sb9, u25, cb9 * u7);
   const P cb10 = splat<P>(s.cb[10]), sb10 = splat<P>(s.sb[10]);
-  const P w26 = cb10 * u26 - sb10 * u6;
-  const P w6 = sb10 * u26 + cb10 * u6;
+  const P w26 = madd<F>(cb10, u26, -(sb10 * u6));
+  const P w6 = madd<F>(sb10, u26, cb10 * u6);
   const P cb11 = splat<P>(s.cb[11]), sb11 = splat<P>(s.sb[11]);
-  const P w27 = cb11 * u27 - sb11 * u5;
-  const P w5 = sb11 * u27 + cb11 * u5;
+  const P w27 = madd<F>(cb11, u27, -(sb11 * u5));
+  const P w5 = madd<F>(sb11, u27, cb11 * u5);
   const P cb12 = splat<P>(s.cb[12]), sb12 = splat<P>(s.sb[12]);
-  const P w28 = cb12 * u28 - sb12 * u4;
-  const P w4 = sb12 * u28 + cb12 * u4;
+  const P w28 = madd<F>(cb12, u28, -(sb12 * u4));
+  const P w4 = madd<F>(sb12, u28, cb12 * u4);
   const P cb13 = splat<P>(s.cb[13]), sb13 = splat<P>(s.sb[13]);
-  const P w29 = cb13 * u29 - sb13 * u3;
-  const P w3 = sb13 * u29 + cb13 * u3;
+  const P w29 = madd<F>(cb13, u29, -(sb13 * u3));
+  const P w3 = madd<F>(sb13, u29, cb13 * u3);
   const P cb14 = splat<P>(s.cb[14]), sb14 = splat<P>(s.sb[14]);
-  const P w30 = cb14 * u30 - sb14 * u2;
-  const P w2 = sb14 * u30 + cb14 * u2;
+  const P w30 = madd<F>(cb14, u30, -(sb14 * u2));
+  const P w2 = madd<F>(sb14, u30, cb14 * u2);
   const P cb15 = splat<P>(s.cb[15]), sb15 = splat<P>(s.sb[15]);
-  const P w31 = cb15 * u31 - sb15 * u1;
-  const P w1 = sb15 * u31 + cb15 * u1;
+  const P w31 = madd<F>(cb15, u31, -(sb15 * u1));
+  const P w1 = madd<F>(sb15, u31, cb15 * u1);
   const P cb16 = splat<P>(s.cb[16]), sb16 = splat<P>(s.sb[16]);
-  const P w32 = cb16 * u32 - sb16 * u0;
-  const P w0 = sb16 * u32 + cb16 * u0;
-  const P v0 = T(0.7258583471372847) * w17 - T(0.56878543890068745) * w19 + T(0.34664594459191866) * w21 - T(0.16162450504448461) * w23 + T(0.055988370897043969) * w25 - T(0.013694744056964617) * w27 + T(0.00214926963643305) * w29 - T(0.00017263349150072803) * w31;
-  const P v1 = T(-0.00091552734374991868) * w1 + T(0.0098784603743807386) * w3 - T(0.053260055141115897) * w5 + T(0.17815390527999289) * w7 - T(0.40000024233006054) * w9 + T(0.6127892452294047) * w11 - T(0.60328806133026436) * w13 + T(0.25662967972081657) * w15;
-  const P v2 = T(0.45628802683186692) * w17 + T(0.051078440271094927) * w19 - T(0.52920532138569998) * w21 + T(0.5950866698905749) * w23 - T(0.36703700167070008) * w25 + T(0.1389701483029735) * w27 - T(0.031074627886176185) * w29 + T(0.0033641391063282378) * w31;
-  const P v3 = T(0.0098784603743807559) * w1 - T(0.076965332031250028) * w3 + T(0.27806678736042262) * w5 - T(0.5485371975880291) * w7 + T(0.54618947454882005) * w9 - T(0.04922041663118313) * w11 - T(0.46842021069803197) * w13 + T(0.30919487868272638) * w15;
-  const P v4 = T(0.34449628535760846) * w17 + T(0.30594178766630231) * w19 - T(0.42044008793097543) * w21 - T(0.18580348691050008) * w23 + T(0.59344988064258219) * w25 - T(0.44558364577300591) * w27 + T(0.1584258689598898) * w29 - T(0.024552524841594325) * w31;
-  const P v5 = T(-0.053260055141116001) * w1 + T(0.27806678736042256) * w3 - T(0.57537841796875044) * w5 + T(0.4034911295055813) * w7 + T(0.27732822885199221) * w9 - T(0.40014005589514579) * w11 - T(0.27124290568000348) * w13 + T(0.33967791819284382) * w15;
-  const P v6 = T(0.26687617708165473) * w17 + T(0.41227542551090551) * w19 - T(0.076470742418330531) * w21 - T(0.47777254446515582) * w23 - T(0.018938413327290859) * w25 + T(0.58030748167934088) * w27 - T(0.42074552975794227) * w29 + T(0.1027105804272343) * w31;
-  const P v7 = T(0.17815390527999284) * w1 - T(0.54853719758802877) * w3 + T(0.4034911295055808) * w5 + T(0.3554077148437505) * w7 - T(0.23416092155548474) * w9 - T(0.43419856340610224) * w11 - T(0.072546516121792956) * w13 + T(0.3600356466887244) * w15;
-  const P v8 = T(0.2036669177939848) * w17 + T(0.42406457027641181) * w19 + T(0.23407630961160897) * w21 - T(0.22395847379694828) * w23 - T(0.47042626433919538) * w25 - T(0.07410683475896529) * w27 + T(0.60710771292661658) * w29 - T(0.27994185448521941) * w31;
-  const P v9 = T(-0.40000024233006048) * w1 + T(0.54618947454882028) * w3 + T(0.27732822885199215) * w5 - T(0.23416092155548507) * w7 - T(0.43865966796875011) * w9 - T(0.25853900704538751) * w11 + T(0.10331571817549347) * w13 + T(0.37416001956047273) * w15;
-  const P v10 = T(0.14802828649413688) * w17 + T(0.37008102159773815) * w19 + T(0.39731598068868174) * w21 + T(0.18790572694610175) * w23 - T(0.17796212580060683) * w25 - T(0.47411860299364639) * w27 - T(0.34804090372736707) * w29 + T(0.51996891688787739) * w31;
-  const P v11 = T(0.61278924522940437) * w1 - T(0.049220416631183005) * w3 - T(0.40014005589514529) * w5 - T(0.43419856340610197) * w7 - T(0.25853900704538724) * w9 + T(0.003356933593750118) * w11 + T(0.24345985866944525) * w13 + T(0.38379661902057383) * w15;
-  const P v12 = T(0.096707657900556229) * w17 + T(0.27064463876734635) * w19 + T(0.38723825951738844) * w21 + T(0.41214967141948766) * w23 + T(0.31793950482968658) * w25 + T(0.089925728590227225) * w27 - T(0.2604499636661966) * w29 - T(0.64851517958879079) * w31;
-  const P v13 = T(-0.60328806133026414) * w1 - T(0.46842021069803202) * w3 - T(0.27124290568000348) * w5 - T(0.072546516121792678) * w7 + T(0.10331571817549369) * w9 + T(0.2434598586694455) * w11 + T(0.34039306640625039) * w13 + T(0.38984103211428256) * w15;
-  const P v14 = T(0.047805374586937614) * w17 + T(0.14234981808672556) * w19 + T(0.23357118414642744) * w21 + T(0.31878915106864797) * w23 + T(0.39439929039474947) * w25 + T(0.45478707530817025) * w27 + T(0.4892420280788522) * w29 + T(0.46853954836139111) * w31;
-  const P v15 = T(0.25662967972081685) * w1 + T(0.30919487868272666) * w3 + T(0.33967791819284415) * w5 + T(0.3600356466887249) * w7 + T(0.37416001956047307) * w9 + T(0.38379661902057444) * w11 + T(0.38984103211428306) * w13 + T(0.39276123046875) * w15;
-  const P v16 = T(0.19638061523437503) * w16 + T(0.27875083953149443) * w18 + T(0.28194885054065011) * w20 + T(0.28771527254123036) * w22 + T(0.29689300005703501) * w24 + T(0.31122843008866918) * w26 + T(0.33479021131218606) * w28 + T(0.3800847906643573) * w30 + T(0.52905563807867961) * w32;
-  const P v17 = T(-0.7258583471372847) * w0 - T(0.45628802683186709) * w2 - T(0.34449628535760829) * w4 - T(0.26687617708165501) * w6 - T(0.20366691779398496) * w8 - T(0.14802828649413691) * w10 - T(0.096707657900556299) * w12 - T(0.047805374586937809) * w14;
-  const P v18 = T(0.27875083953149377) * w16 + T(0.38403320312500072) * w18 + T(0.35312643810418276) * w20 + T(0.3002904876358376) * w22 + T(0.22310593018663208) * w24 + T(0.11693928179869253) * w26 - T(0.027953835032162772) * w28 - T(0.23801832858603475) * w30 - T(0.66261498380084527) * w32;
-  const P v19 = T(0.568785438900687) * w0 - T(0.051078440271094691) * w2 - T(0.30594178766630198) * w4 - T(0.41227542551090568) * w6 - T(0.42406457027641187) * w8 - T(0.37008102159773787) * w10 - T(0.27064463876734629) * w12 - T(0.14234981808672578) * w14;
-  const P v20 = T(0.28194885054064972) * w16 + T(0.35312643810418293) * w18 + T(0.22290039062500011) * w20 + T(0.028318207761228512) * w22 - T(0.195124344794709) * w24 - T(0.3930838444792521) * w26 - T(0.48364344081195221) * w28 - T(0.32944604067731093) * w30 + T(0.45856948118964652) * w32;
-  const P v21 = T(-0.34664594459191861) * w0 + T(0.52920532138569953) * w2 + T(0.4204400879309747) * w4 + T(0.076470742418330018) * w6 - T(0.234076309611609) * w8 - T(0.3973159806886814) * w10 - T(0.38723825951738811) * w12 - T(0.23357118414642764) * w14;
-  const P v22 = T(0.28771527254123014) * w16 + T(0.30029048763583793) * w18 + T(0.028318207761228596) * w20 - T(0.27758789062499978) * w22 - T(0.43986695196231756) * w24 - T(0.30280869094767765) * w26 + T(0.15511097596104045) * w28 + T(0.61633710582184476) * w30 - T(0.24511569809176206) * w32;
-  const P v23 = T(0.16162450504448461) * w0 - T(0.59508666989057468) * w2 + T(0.18580348691049997) * w4 + T(0.47777254446515594) * w6 + T(0.22395847379694844) * w8 - T(0.18790572694610144) * w10 - T(0.41214967141948755) * w12 - T(0.31878915106864858) * w14;
-  const P v24 = T(0.29689300005703434) * w16 + T(0.22310593018663188) * w18 - T(0.19512434479470875) * w20 - T(0.4398669519623169) * w22 - T(0.21008300781250019) * w24 + T(0.33769820362660463) * w26 + T(0.4634746295874192) * w28 - T(0.49773711501208456) * w30 + T(0.098974391822218358) * w32;
-  const P v25 = T(-0.055988370897043997) * w0 + T(0.36703700167069953) * w2 - T(0.59344988064258153) * w4 + T(0.018938413327290928) * w6 + T(0.47042626433919493) * w8 + T(0.17796212580060691) * w10 - T(0.3179395048296863) * w12 - T(0.3943992903947498) * w14;
-  const P v26 = T(0.31122843008866891) * w16 + T(0.11693928179869252) * w18 - T(0.39308384447925193) * w20 - T(0.30280869094767732) * w22 + T(0.33769820362660485) * w24 + T(0.38208007812500028) * w26 - T(0.5698929379956239) * w28 + T(0.24001432435680567) * w30 - T(0.029050939167881422) * w32;
-  const P v27 = T(0.013694744056964496) * w0 - T(0.13897014830297347) * w2 + T(0.44558364577300591) * w4 - T(0.58030748167934132) * w6 + T(0.074106834758965026) * w8 + T(0.47411860299364655) * w10 - T(0.089925728590227197) * w12 - T(0.45478707530817108) * w14;
-  const P v28 = T(0.33479021131218578) * w16 - T(0.027953835032162911) * w18 - T(0.48364344081195204) * w20 + T(0.15511097596104034) * w22 + T(0.46347462958741886) * w24 - T(0.56989293799562335) * w26 + T(0.29077148437500044) * w28 - T(0.070678605522643781) * w30 + T(0.0057870856035807808) * w32;
-  const P v29 = T(-0.0021492696364329598) * w0 + T(0.031074627886176064) * w2 - T(0.15842586895988961) * w4 + T(0.42074552975794172) * w6 - T(0.60710771292661569) * w8 + T(0.3480409037273669) * w10 + T(0.26044996366619616) * w12 - T(0.48924202807885248) * w14;
-  const P v30 = T(0.3800847906643568) * w16 - T(0.23801832858603469) * w18 - T(0.32944604067731148) * w20 + T(0.61633710582184464) * w22 - T(0.49773711501208495) * w24 + T(0.24001432435680567) * w26 - T(0.070678605522643823) * w28 + T(0.01147460937500008) * w30 - T(0.00067965873569688728) * w32;
-  const P v31 = T(0.00017263349150053965) * w0 - T(0.0033641391063284) * w2 + T(0.024552524841594502) * w4 - T(0.1027105804272344) * w6 + T(0.27994185448521969) * w8 - T(0.51996891688787739) * w10 + T(0.64851517958879101) * w12 - T(0.46853954836139206) * w14;
-  const P v32 = T(0.52905563807867872) * w16 - T(0.66261498380084516) * w18 + T(0.45856948118964591) * w20 - T(0.24511569809176159) * w22 + T(0.098974391822218427) * w24 - T(0.029050939167881526) * w26 + T(0.0057870856035808597) * w28 - T(0.00067965873569703625) * w30 + T(3.0517578125100431e-05) * w32;
+  const P w32 = madd<F>(cb16, u32, -(sb16 * u0));
+  const P w0 = madd<F>(sb16, u32, cb16 * u0);
+  const P v0 = madd<F>(T(-0.00017263349150072803), w31, madd<F>(T(0.00214926963643305), w29, madd<F>(T(-0.013694744056964617), w27, madd<F>(T(0.055988370897043969), w25, madd<F>(T(-0.16162450504448461), w23, madd<F>(T(0.34664594459191866), w21, madd<F>(T(-0.56878543890068745), w19, T(0.7258583471372847) * w17)))))));
+  const P v1 = madd<F>(T(0.25662967972081657), w15, madd<F>(T(-0.60328806133026436), w13, madd<F>(T(0.6127892452294047), w11, madd<F>(T(-0.40000024233006054), w9, madd<F>(T(0.17815390527999289), w7, madd<F>(T(-0.053260055141115897), w5, madd<F>(T(0.0098784603743807386), w3, T(-0.00091552734374991868) * w1)))))));
+  const P v2 = madd<F>(T(0.0033641391063282378), w31, madd<F>(T(-0.031074627886176185), w29, madd<F>(T(0.1389701483029735), w27, madd<F>(T(-0.36703700167070008), w25, madd<F>(T(0.5950866698905749), w23, madd<F>(T(-0.52920532138569998), w21, madd<F>(T(0.051078440271094927), w19, T(0.45628802683186692) * w17)))))));
+  const P v3 = madd<F>(T(0.30919487868272638), w15, madd<F>(T(-0.46842021069803197), w13, madd<F>(T(-0.04922041663118313), w11, madd<F>(T(0.54618947454882005), w9, madd<F>(T(-0.5485371975880291), w7, madd<F>(T(0.27806678736042262), w5, madd<F>(T(-0.076965332031250028), w3, T(0.0098784603743807559) * w1)))))));
+  const P v4 = madd<F>(T(-0.024552524841594325), w31, madd<F>(T(0.1584258689598898), w29, madd<F>(T(-0.44558364577300591), w27, madd<F>(T(0.59344988064258219), w25, madd<F>(T(-0.18580348691050008), w23, madd<F>(T(-0.42044008793097543), w21, madd<F>(T(0.30594178766630231), w19, T(0.34449628535760846) * w17)))))));
+  const P v5 = madd<F>(T(0.33967791819284382), w15, madd<F>(T(-0.27124290568000348), w13, madd<F>(T(-0.40014005589514579), w11, madd<F>(T(0.27732822885199221), w9, madd<F>(T(0.4034911295055813), w7, madd<F>(T(-0.57537841796875044), w5, madd<F>(T(0.27806678736042256), w3, T(-0.053260055141116001) * w1)))))));
+  const P v6 = madd<F>(T(0.1027105804272343), w31, madd<F>(T(-0.42074552975794227), w29, madd<F>(T(0.58030748167934088), w27, madd<F>(T(-0.018938413327290859), w25, madd<F>(T(-0.47777254446515582), w23, madd<F>(T(-0.076470742418330531), w21, madd<F>(T(0.41227542551090551), w19, T(0.26687617708165473) * w17)))))));
+  const P v7 = madd<F>(T(0.3600356466887244), w15, madd<F>(T(-0.072546516121792956), w13, madd<F>(T(-0.43419856340610224), w11, madd<F>(T(-0.23416092155548474), w9, madd<F>(T(0.3554077148437505), w7, madd<F>(T(0.4034911295055808), w5, madd<F>(T(-0.54853719758802877), w3, T(0.17815390527999284) * w1)))))));
+  const P v8 = madd<F>(T(-0.27994185448521941), w31, madd<F>(T(0.60710771292661658), w29, madd<F>(T(-0.07410683475896529), w27, madd<F>(T(-0.47042626433919538), w25, madd<F>(T(-0.22395847379694828), w23, madd<F>(T(0.23407630961160897), w21, madd<F>(T(0.42406457027641181), w19, T(0.2036669177939848) * w17)))))));
+  const P v9 = madd<F>(T(0.37416001956047273), w15, madd<F>(T(0.10331571817549347), w13, madd<F>(T(-0.25853900704538751), w11, madd<F>(T(-0.43865966796875011), w9, madd<F>(T(-0.23416092155548507), w7, madd<F>(T(0.27732822885199215), w5, madd<F>(T(0.54618947454882028), w3, T(-0.40000024233006048) * w1)))))));
+  const P v10 = madd<F>(T(0.51996891688787739), w31, madd<F>(T(-0.34804090372736707), w29, madd<F>(T(-0.47411860299364639), w27, madd<F>(T(-0.17796212580060683), w25, madd<F>(T(0.18790572694610175), w23, madd<F>(T(0.39731598068868174), w21, madd<F>(T(0.37008102159773815), w19, T(0.14802828649413688) * w17)))))));
+  const P v11 = madd<F>(T(0.38379661902057383), w15, madd<F>(T(0.24345985866944525), w13, madd<F>(T(0.003356933593750118), w11, madd<F>(T(-0.25853900704538724), w9, madd<F>(T(-0.43419856340610197), w7, madd<F>(T(-0.40014005589514529), w5, madd<F>(T(-0.049220416631183005), w3, T(0.61278924522940437) * w1)))))));
+  const P v12 = madd<F>(T(-0.64851517958879079), w31, madd<F>(T(-0.2604499636661966), w29, madd<F>(T(0.089925728590227225), w27, madd<F>(T(0.31793950482968658), w25, madd<F>(T(0.41214967141948766), w23, madd<F>(T(0.38723825951738844), w21, madd<F>(T(0.27064463876734635), w19, T(0.096707657900556229) * w17)))))));
+  const P v13 = madd<F>(T(0.38984103211428256), w15, madd<F>(T(0.34039306640625039), w13, madd<F>(T(0.2434598586694455), w11, madd<F>(T(0.10331571817549369), w9, madd<F>(T(-0.072546516121792678), w7, madd<F>(T(-0.27124290568000348), w5, madd<F>(T(-0.46842021069803202), w3, T(-0.60328806133026414) * w1)))))));
+  const P v14 = madd<F>(T(0.46853954836139111), w31, madd<F>(T(0.4892420280788522), w29, madd<F>(T(0.45478707530817025), w27, madd<F>(T(0.39439929039474947), w25, madd<F>(T(0.31878915106864797), w23, madd<F>(T(0.23357118414642744), w21, madd<F>(T(0.14234981808672556), w19, T(0.047805374586937614) * w17)))))));
+  const P v15 = madd<F>(T(0.39276123046875), w15, madd<F>(T(0.38984103211428306), w13, madd<F>(T(0.38379661902057444), w11, madd<F>(T(0.37416001956047307), w9, madd<F>(T(0.3600356466887249), w7, madd<F>(T(0.33967791819284415), w5, madd<F>(T(0.30919487868272666), w3, T(0.25662967972081685) * w1)))))));
+  const P v16 = madd<F>(T(0.52905563807867961), w32, madd<F>(T(0.3800847906643573), w30, madd<F>(T(0.33479021131218606), w28, madd<F>(T(0.31122843008866918), w26, madd<F>(T(0.29689300005703501), w24, madd<F>(T(0.28771527254123036), w22, madd<F>(T(0.28194885054065011), w20, madd<F>(T(0.27875083953149443), w18, T(0.19638061523437503) * w16))))))));
+  const P v17 = madd<F>(T(-0.047805374586937809), w14, madd<F>(T(-0.096707657900556299), w12, madd<F>(T(-0.14802828649413691), w10, madd<F>(T(-0.20366691779398496), w8, madd<F>(T(-0.26687617708165501), w6, madd<F>(T(-0.34449628535760829), w4, madd<F>(T(-0.45628802683186709), w2, T(-0.7258583471372847) * w0)))))));
+  const P v18 = madd<F>(T(-0.66261498380084527), w32, madd<F>(T(-0.23801832858603475), w30, madd<F>(T(-0.027953835032162772), w28, madd<F>(T(0.11693928179869253), w26, madd<F>(T(0.22310593018663208), w24, madd<F>(T(0.3002904876358376), w22, madd<F>(T(0.35312643810418276), w20, madd<F>(T(0.38403320312500072), w18, T(0.27875083953149377) * w16))))))));
+  const P v19 = madd<F>(T(-0.14234981808672578), w14, madd<F>(T(-0.27064463876734629), w12, madd<F>(T(-0.37008102159773787), w10, madd<F>(T(-0.42406457027641187), w8, madd<F>(T(-0.41227542551090568), w6, madd<F>(T(-0.30594178766630198), w4, madd<F>(T(-0.051078440271094691), w2, T(0.568785438900687) * w0)))))));
+  const P v20 = madd<F>(T(0.45856948118964652), w32, madd<F>(T(-0.32944604067731093), w30, madd<F>(T(-0.48364344081195221), w28, madd<F>(T(-0.3930838444792521), w26, madd<F>(T(-0.195124344794709), w24, madd<F>(T(0.028318207761228512), w22, madd<F>(T(0.22290039062500011), w20, madd<F>(T(0.35312643810418293), w18, T(0.28194885054064972) * w16))))))));
+  const P v21 = madd<F>(T(-0.23357118414642764), w14, madd<F>(T(-0.38723825951738811), w12, madd<F>(T(-0.3973159806886814), w10, madd<F>(T(-0.234076309611609), w8, madd<F>(T(0.076470742418330018), w6, madd<F>(T(0.4204400879309747), w4, madd<F>(T(0.52920532138569953), w2, T(-0.34664594459191861) * w0)))))));
+  const P v22 = madd<F>(T(-0.24511569809176206), w32, madd<F>(T(0.61633710582184476), w30, madd<F>(T(0.15511097596104045), w28, madd<F>(T(-0.30280869094767765), w26, madd<F>(T(-0.43986695196231756), w24, madd<F>(T(-0.27758789062499978), w22, madd<F>(T(0.028318207761228596), w20, madd<F>(T(0.30029048763583793), w18, T(0.28771527254123014) * w16))))))));
+  const P v23 = madd<F>(T(-0.31878915106864858), w14, madd<F>(T(-0.41214967141948755), w12, madd<F>(T(-0.18790572694610144), w10, madd<F>(T(0.22395847379694844), w8, madd<F>(T(0.47777254446515594), w6, madd<F>(T(0.18580348691049997), w4, madd<F>(T(-0.59508666989057468), w2, T(0.16162450504448461) * w0)))))));
+  const P v24 = madd<F>(T(0.098974391822218358), w32, madd<F>(T(-0.49773711501208456), w30, madd<F>(T(0.4634746295874192), w28, madd<F>(T(0.33769820362660463), w26, madd<F>(T(-0.21008300781250019), w24, madd<F>(T(-0.4398669519623169), w22, madd<F>(T(-0.19512434479470875), w20, madd<F>(T(0.22310593018663188), w18, T(0.29689300005703434) * w16))))))));
+  const P v25 = madd<F>(T(-0.3943992903947498), w14, madd<F>(T(-0.3179395048296863), w12, madd<F>(T(0.17796212580060691), w10, madd<F>(T(0.47042626433919493), w8, madd<F>(T(0.018938413327290928), w6, madd<F>(T(-0.59344988064258153), w4, madd<F>(T(0.36703700167069953), w2, T(-0.055988370897043997) * w0)))))));
+  const P v26 = madd<F>(T(-0.029050939167881422), w32, madd<F>(T(0.24001432435680567), w30, madd<F>(T(-0.5698929379956239), w28, madd<F>(T(0.38208007812500028), w26, madd<F>(T(0.33769820362660485), w24, madd<F>(T(-0.30280869094767732), w22, madd<F>(T(-0.39308384447925193), w20, madd<F>(T(0.11693928179869252), w18, T(0.31122843008866891) * w16))))))));
+  const P v27 = madd<F>(T(-0.45478707530817108), w14, madd<F>(T(-0.089925728590227197), w12, madd<F>(T(0.47411860299364655), w10, madd<F>(T(0.074106834758965026), w8, madd<F>(T(-0.58030748167934132), w6, madd<F>(T(0.44558364577300591), w4, madd<F>(T(-0.13897014830297347), w2, T(0.013694744056964496) * w0)))))));
+  const P v28 = madd<F>(T(0.0057870856035807808), w32, madd<F>(T(-0.070678605522643781), w30, madd<F>(T(0.29077148437500044), w28, madd<F>(T(-0.56989293799562335), w26, madd<F>(T(0.46347462958741886), w24, madd<F>(T(0.15511097596104034), w22, madd<F>(T(-0.48364344081195204), w20, madd<F>(T(-0.027953835032162911), w18, T(0.33479021131218578) * w16))))))));
+  const P v29 = madd<F>(T(-0.48924202807885248), w14, madd<F>(T(0.26044996366619616), w12, madd<F>(T(0.3480409037273669), w10, madd<F>(T(-0.60710771292661569), w8, madd<F>(T(0.42074552975794172), w6, madd<F>(T(-0.15842586895988961), w4, madd<F>(T(0.031074627886176064), w2, T(-0.0021492696364329598) * w0)))))));
+  const P v30 = madd<F>(T(-0.00067965873569688728), w32, madd<F>(T(0.01147460937500008), w30, madd<F>(T(-0.070678605522643823), w28, madd<F>(T(0.24001432435680567), w26, madd<F>(T(-0.49773711501208495), w24, madd<F>(T(0.61633710582184464), w22, madd<F>(T(-0.32944604067731148), w20, madd<F>(T(-0.23801832858603469), w18, T(0.3800847906643568) * w16))))))));
+  const P v31 = madd<F>(T(-0.46853954836139206), w14, madd<F>(T(0.64851517958879101), w12, madd<F>(T(-0.51996891688787739), w10, madd<F>(T(0.27994185448521969), w8, madd<F>(T(-0.1027105804272344), w6, madd<F>(T(0.024552524841594502), w4, madd<F>(T(-0.0033641391063284), w2, T(0.00017263349150053965) * w0)))))));
+  const P v32 = madd<F>(T(3.0517578125100431e-05), w32, madd<F>(T(-0.00067965873569703625), w30, madd<F>(T(0.0057870856035808597), w28, madd<F>(T(-0.029050939167881526), w26, madd<F>(T(0.098974391822218427), w24, madd<F>(T(-0.24511569809176159), w22, madd<F>(T(0.45856948118964591), w20, madd<F>(T(-0.66261498380084516), w18, T(0.52905563807867872) * w16))))))));
   y[16] = v16;
   const P ca1 = splat<P>(s.ca[1]), sa1 = splat<P>(s.sa[1]);
-  y[17] = ca1 * v17 - sa1 * v15;
-  y[15] = sa1 * v17 + ca1 * v15;
+  y[17] = madd<F>(ca1, v17, -(sa1 * v15));
+  y[15] = madd<F>(sa1, v17, ca1 * v15);
   const P ca2 = splat<P>(s.ca[2]), sa2 = splat<P>(s.sa[2]);
-  y[18] = ca2 * v18 - sa2 * v14;
-  y[14] = sa2 * v18 + ca2 * v14;
+  y[18] = madd<F>(ca2, v18, -(sa2 * v14));
+  y[14] = madd<F>(sa2, v18, ca2 * v14);
   const P ca3 = splat<P>(s.ca[3]), sa3 = splat<P>(s.sa[3]);
-  y[19] = ca3 * v19 - sa3 * v13;
-  y[13] = sa3 * v19 + ca3 * v13;
+  y[19] = madd<F>(ca3, v19, -(sa3 * v13));
+  y[13] = madd<F>(sa3, v19, ca3 * v13);
   const P ca4 = splat<P>(s.ca[4]), sa4 = splat<P>(s.sa[4]);
-  y[20] = ca4 * v20 - sa4 * v12;
-  y[12] = sa4 * v20 + ca4 * v12;
+  y[20] = madd<F>(ca4, v20, -(sa4 * v12));
+  y[12] = madd<F>(sa4, v20, ca4 * v12);
   const P ca5 = splat<P>(s.ca[5]), sa5 = splat<P>(s.sa[5]);
-  y[21] = ca5 * v21 - sa5 * v11;
-  y[11] = sa5 * v21 + ca5 * v11;
+  y[21] = madd<F>(ca5, v21, -(sa5 * v11));
+  y[11] = madd<F>(sa5, v21, ca5 * v11);
   const P ca6 = splat<P>(s.ca[6]), sa6 = splat<P>(s.sa[6]);
-  y[22] = ca6 * v22 - sa6 * v10;
-  y[10] = sa6 * v22 + ca6 * v10;
+  y[22] = madd<F>(ca6, v22, -(sa6 * v10));
+  y[10] = madd<F>(sa6, v22, ca6 * v10);
   const P ca7 = splat<P>(s.ca[7]), sa7 = splat<P>(s.sa[7]);
-  y[23] = ca7 * v23 - sa7 * v9;
-  y[9] = sa7 * v23 + ca7 * v9;
+  y[23] = madd<F>(ca7, v23, -(sa7 * v9));
+  y[9] = madd<F>(sa7, v23, ca7 * v9);
   const P ca8 = splat<P>(s.ca[8]), sa8 = splat<P>(s.sa[8]);
-  y[24] = ca8 * v24 - sa8 * v8;
-  y[8] = sa8 * v24 + ca8 * v8;
+  y[24] = madd<F>(ca8, v24, -(sa8 * v8));
+  y[8] = madd<F>(sa8, v24, ca8 * v8);
   const P ca9 = splat<P>(s.ca[9]), sa9 = splat<P>(s.sa[9]);
-  y[25] = ca9 * v25 - sa9 * v7;
-  y[7] = sa9 * v25 + ca9 * v7;
+  y[25] = madd<F>(ca9, v25, -(sa9 * v7));
+  y[7] = madd<F>(sa9, v25, ca9 * v7);
   const P ca10 = splat<P>(s.ca[10]), sa10 = splat<P>(s.sa[10]);
-  y[26] = ca10 * v26 - sa10 * v6;
-  y[6] = sa10 * v26 + ca10 * v6;
+  y[26] = madd<F>(ca10, v26, -(sa10 * v6));
+  y[6] = madd<F>(sa10, v26, ca10 * v6);
   const P ca11 = splat<P>(s.ca[11]), sa11 = splat<P>(s.sa[11]);
-  y[27] = ca11 * v27 - sa11 * v5;
-  y[5] = sa11 * v27 + ca11 * v5;
+  y[27] = madd<F>(ca11, v27, -(sa11 * v5));
+  y[5] = madd<F>(sa11, v27, ca11 * v5);
   const P ca12 = splat<P>(s.ca[12]), sa12 = splat<P>(s.sa[12]);
-  y[28] = ca12 * v28 - sa12 * v4;
-  y[4] = sa12 * v28 + ca12 * v4;
+  y[28] = madd<F>(ca12, v28, -(sa12 * v4));
+  y[4] = madd<F>(sa12, v28, ca12 * v4);
   const P ca13 = splat<P>(s.ca[13]), sa13 = splat<P>(s.sa[13]);
-  y[29] = ca13 * v29 - sa13 * v3;
-  y[3] = sa13 * v29 + ca13 * v3;
+  y[29] = madd<F>(ca13, v29, -(sa13 * v3));
+  y[3] = madd<F>(sa13, v29, ca13 * v3);
   const P ca14 = splat<P>(s.ca[14]), sa14 = splat<P>(s.sa[14]);
-  y[30] = ca14 * v30 - sa14 * v2;
-  y[2] = sa14 * v30 + ca14 * v2;
+  y[30] = madd<F>(ca14, v30, -(sa14 * v2));
+  y[2] = madd<F>(sa14, v30, ca14 * v2);
   const P ca15 = splat<P>(s.ca[15]), sa15 = splat<P>(s.sa[15]);
-  y[31] = ca15 * v31 - sa15 * v1;
-  y[1] = sa15 * v31 + ca15 * v1;
+  y[31] = madd<F>(ca15, v31, -(sa15 * v1));
+  y[1] = madd<F>(sa15, v31, ca15 * v1);
   const P ca16 = splat<P>(s.ca[16]), sa16 = splat<P>(s.sa[16]);
-  y[32] = ca16 * v32 - sa16 * v0;
-  y[0] = sa16 * v32 + ca16 * v0;
+  y[32] = madd<F>(ca16, v32, -(sa16 * v0));
+  y[0] = madd<F>(sa16, v32, ca16 * v0);
 }
 
 // Band 17 of Z(a) X90^T Z(b) X90 Z(g), Ry(b) = Rx(-90) Rz(b) Rx(+90).
-template <class T, class P, class S>
-inline void zxzxz_band17(const S& s, const P* __restrict x, P* __restrict y) {
+template <bool F, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void zxzxz_band17(const S& s, const P* __restrict x, P* __restrict y) {
   const P t17 = x[17];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
-  const P t18 = cg1 * x[18] - sg1 * x[16];
-  const P t16 = sg1 * x[18] + cg1 * x[16];
+  const P t18 = madd<F>(cg1, x[18], -(sg1 * x[16]));
+  const P t16 = madd<F>(sg1, x[18], cg1 * x[16]);
   const P cg2 = splat<P>(s.cg[2]), sg2 = splat<P>(s.sg[2]);
-  const P t19 = cg2 * x[19] - sg2 * x[15];
-  const P t15 = sg2 * x[19] + cg2 * x[15];
+  const P t19 = madd<F>(cg2, x[19], -(sg2 * x[15]));
+  const P t15 = madd<F>(sg2, x[19], cg2 * x[15]);
   const P cg3 = splat<P>(s.cg[3]), sg3 = splat<P>(s.sg[3]);
-  const P t20 = cg3 * x[20] - sg3 * x[14];
-  const P t14 = sg3 * x[20] + cg3 * x[14];
+  const P t20 = madd<F>(cg3, x[20], -(sg3 * x[14]));
+  const P t14 = madd<F>(sg3, x[20], cg3 * x[14]);
   const P cg4 = splat<P>(s.cg[4]), sg4 = splat<P>(s.sg[4]);
-  const P t21 = cg4 * x[21] - sg4 * x[13];
-  const P t13 = sg4 * x[21] + cg4 * x[13];
+  const P t21 = madd<F>(cg4, x[21], -(sg4 * x[13]));
+  const P t13 = madd<F>(sg4, x[21], cg4 * x[13]);
   const P cg5 = splat<P>(s.cg[5]), sg5 = splat<P>(s.sg[5]);
-  const P t22 = cg5 * x[22] - sg5 * x[12];
-  const P t12 = sg5 * x[22] + cg5 * x[12];
+  const P t22 = madd<F>(cg5, x[22], -(sg5 * x[12]));
+  const P t12 = madd<F>(sg5, x[22], cg5 * x[12]);
   const P cg6 = splat<P>(s.cg[6]), sg6 = splat<P>(s.sg[6]);
-  const P t23 = cg6 * x[23] - sg6 * x[11];
-  const P t11 = sg6 * x[23] + cg6 * x[11];
+  const P t23 = madd<F>(cg6, x[23], -(sg6 * x[11]));
+  const P t11 = madd<F>(sg6, x[23], cg6 * x[11]);
   const P cg7 = splat<P>(s.cg[7]), sg7 = splat<P>(s.sg[7]);
-  const P t24 = cg7 * x[24] - sg7 * x[10];
-  const P t10 = sg7 * x[24] + cg7 * x[10];
+  const P t24 = madd<F>(cg7, x[24], -(sg7 * x[10]));
+  const P t10 = madd<F>(sg7, x[24], cg7 * x[10]);
   const P cg8 = splat<P>(s.cg[8]), sg8 = splat<P>(s.sg[8]);
-  const P t25 = cg8 * x[25] - sg8 * x[9];
-  const P t9 = sg8 * x[25] + cg8 * x[9];
+  const P t25 = madd<F>(cg8, x[25], -(sg8 * x[9]));
+  const P t9 = madd<F>(sg8, x[25], cg8 * x[9]);
   const P cg9 = splat<P>(s.cg[9]), sg9 = splat<P>(s.sg[9]);
-  const P t26 = cg9 * x[26] - sg9 * x[8];
-  const P t8 = sg9 * x[26] + cg9 * x[8];
+  const P t26 = madd<F>(cg9, x[26], -(sg9 * x[8]));
+  const P t8 = madd<F>(sg9, x[26], cg9 * x[8]);
   const P cg10 = splat<P>(s.cg[10]), sg10 = splat<P>(s.sg[10]);
-  const P t27 = cg10 * x[27] - sg10 * x[7];
-  const P t7 = sg10 * x[27] + cg10 * x[7];
+  const P t27 = madd<F>(cg10, x[27], -(sg10 * x[7]));
+  const P t7 = madd<F>(sg10, x[27], cg10 * x[7]);
   const P cg11 = splat<P>(s.cg[11]), sg11 = splat<P>(s.sg[11]);
-  const P t28 = cg11 * x[28] - sg11 * x[6];
-  const P t6 = sg11 * x[28] + cg11 * x[6];
+  const P t28 = madd<F>(cg11, x[28], -(sg11 * x[6]));
+  const P t6 = madd<F>(sg11, x[28], cg11 * x[6]);
   const P cg12 = splat<P>(s.cg[12]), sg12 = splat<P>(s.sg[12]);
-  const P t29 = cg12 * x[29] - sg12 * x[5];
-  const P t5 = sg12 * x[29] + cg12 * x[5];
+  const P t29 = madd<F>(cg12, x[29], -(sg12 * x[5]));
+  const P t5 = madd<F>(sg12, x[29], cg12 * x[5]);
   const P cg13 = splat<P>(s.cg[13]), sg13 = splat<P>(s.sg[13]);
-  const P t30 = cg13 * x[30] - sg13 * x[4];
-  const P t4 = sg13 * x[30] + cg13 * x[4];
+  const P t30 = madd<F>(cg13, x[30], -(sg13 * x[4]));
+  const P t4 = madd<F>(sg13, x[30], cg13 * x[4]);
   const P cg14 = splat<P>(s.cg[14]), sg14 = splat<P>(s.sg[14]);
-  const P t31 = cg14 * x[31] - sg14 * x[3];
-  const P t3 = sg14 * x[31] + cg14 * x[3];
+  const P t31 = madd<F>(cg14, x[31], -(sg14 * x[3]));
+  const P t3 = madd<F>(sg14, x[31], cg14 * x[3]);
   const P cg15 = splat<P>(s.cg[15]), sg15 = splat<P>(s.sg[15]);
-  const P t32 = cg15 * x[32] - sg15 * x[2];
-  const P t2 = sg15 * x[32] + cg15 * x[2];
+  const P t32 = madd<F>(cg15, x[32], -(sg15 * x[2]));
+  const P t2 = madd<F>(sg15, x[32], cg15 * x[2]);
   const P cg16 = splat<P>(s.cg[16]), sg16 = splat<P>(s.sg[16]);
-  const P t33 = cg16 * x[33] - sg16 * x[1];
-  const P t1 = sg16 * x[33] + cg16 * x[1];
+  const P t33 = madd<F>(cg16, x[33], -(sg16 * x[1]));
+  const P t1 = madd<F>(sg16, x[33], cg16 * x[1]);
   const P cg17 = splat<P>(s.cg[17]), sg17 = splat<P>(s.sg[17]);
-  const P t34 = cg17 * x[34] - sg17 * x[0];
-  const P t0 = sg17 * x[34] + cg17 * x[0];
-  const P u0 = T(0.52121734345533532) * t17 - T(0.65736299886917604) * t19 + T(0.46482583420151902) * t21 - T(0.25809363728834989) * t23 + T(0.11050909326808311) * t25 - T(0.035391234167384662) * t27 + T(0.0080490076146410884) * t29 - T(0.0011803637454719672) * t31 + T(8.8973264997010179e-05) * t33;
-  const P u1 = T(-0.00048828124999993506) * t1 + T(0.0056680599444550242) * t3 - T(0.03312944202509361) * t5 + T(0.12139093172307365) * t7 - T(0.30323445025372447) * t9 + T(0.53115232355083009) * t11 - T(0.63773578322597491) * t13 + T(0.450947296924401) * t15;
-  const P u2 = T(0.37409882931041027) * t17 - T(0.24978498809186034) * t19 - T(0.29437443153059162) * t21 + T(0.59931970489424624) * t23 - T(0.51789243079765668) * t25 + T(0.27344209122209256) * t27 - T(0.092093758686946831) * t29 + T(0.018688123647942957) * t31 - T(0.0018594448252799356) * t33;
-  const P u3 = T(0.0056680599444550225) * t1 - T(0.048706054687500028) * t3 + T(0.19811323510025858) * t5 - T(0.45750928804214375) * t7 + T(0.59428607431894787) * t9 - T(0.2936054939572596) * t11 - T(0.28842686022872605) * t13 + T(0.47588004040284537) * t15;
-  const P u4 = T(0.32916308430742386) * t17 - T(0.048840330505752552) * t19 - T(0.46622694009613208) * t21 + T(0.21093241367565602) * t23 + T(0.39821085373965465) * t25 - T(0.58111397576988588) * t27 + T(0.34595454497072009) * t29 - T(0.10602676276873577) * t31 + T(0.014652124576663535) * t33;
-  const P u5 = T(-0.033129442025093568) * t1 + T(0.19811323510025841) * t3 - T(0.49780273437500017) * t5 + T(0.53298216213236516) * t7 + T(0.020111616529901302) * t9 - T(0.47362038507576587) * t11 + T(0.042296966947209524) * t13 + T(0.44862708227992859) * t15;
-  const P u6 = T(0.30562025127934273) * t17 + T(0.090694216899446942) * t19 - T(0.40722864822841631) * t21 - T(0.23501499534001669) * t23 + T(0.39412401918603235) * t25 + T(0.26855468750000006) * t27 - T(0.5845091385318697) * t29 + T(0.3220865387816691) * t31 - T(0.066765012447690647) * t33;
-  const P u7 = T(0.12139093172307364) * t1 - T(0.45750928804214364) * t3 + T(0.53298216213236604) * t5 + T(0.11853027343750025) * t7 - T(0.43147813319012412) * t9 - T(0.24480728681251709) * t11 + T(0.27255460708201057) * t13 + T(0.39678719893508008) * t15;
-  const P u8 = T(0.29112753860383184) * t17 + T(0.19438523477182967) * t19 - T(0.239557662224334) * t21 - T(0.4237547428574609) * t23 - T(0.094299494178382223) * t25 + T(0.41711891982208699) * t27 + T(0.31356489416542505) * t29 - T(0.56481481137678169) * t31 + T(0.20070844343272959) * t33;
-  const P u9 = T(-0.30323445025372492) * t1 + T(0.59428607431894742) * t3 + T(0.020111616529901448) * t5 - T(0.43147813319012396) * t7 - T(0.31591796875000033) * t9 + T(0.097217336410795774) * t11 + T(0.38714499054714585) * t13 + T(0.33039136841862421) * t15;
-  const P u10 = T(0.28165743046221897) * t17 + T(0.27164520330029573) * t19 - T(0.035883481435356517) * t21 - T(0.33618762441059435) * t23 - T(0.41091852651968241) * t25 - T(0.14223103537960891) * t27 + T(0.33389220722749574) * t29 + T(0.50596473215291526) * t31 - T(0.41952379342597212) * t33;
-  const P u11 = T(0.53115232355083075) * t1 - T(0.2936054939572596) * t3 - T(0.47362038507576676) * t5 - T(0.24480728681251765) * t7 + T(0.097217336410795635) * t9 + T(0.34289550781250028) * t11 + T(0.39440776289859869) * t13 + T(0.25463723815923989) * t15;
-  const P u12 = T(0.27546640124647703) * t17 + T(0.32698369219417928) * t19 + T(0.15482972282673133) * t21 - T(0.081119373661309183) * t23 - T(0.3082575113057352) * t25 - T(0.4338180374299917) * t27 - T(0.35765330842134652) * t29 + T(0.6127892452294047) * t33;
-  const P u13 = T(-0.63773578322597535) * t1 - T(0.28842686022872566) * t3 + T(0.042296966947209726) * t5 + T(0.27255460708201024) * t7 + T(0.38714499054714568) * t9 + T(0.39440776289859858) * t11 + T(0.31420898437499994) * t13 + T(0.1728061249921225) * t15;
-  const P u14 = T(0.27169271063563188) * t17 + T(0.36281728342141084) * t19 + T(0.2993089883454545) * t21 + T(0.19601983732925346) * t23 + T(0.057225463648326411) * t25 - T(0.10996089413575985) * t27 - T(0.29355029561608359) * t29 - T(0.47099909044894761) * t31 - T(0.58579772235668426) * t33;
-  const P u15 = T(0.45094729692440205) * t1 + T(0.47588004040284576) * t3 + T(0.4486270822799297) * t5 + T(0.39678719893508063) * t7 + T(0.33039136841862471) * t9 + T(0.25463723815924033) * t11 + T(0.17280612499212281) * t13 + T(0.087280273437500069) * t15;
-  const P u16 = T(0.26989933981170283) * t17 + T(0.38044589167865961) * t19 + T(0.37662221783275995) * t21 + T(0.36997932946614137) * t23 + T(0.36003564668872418) * t25 + T(0.34591106044971626) * t27 + T(0.32592001916561925) * t29 + T(0.2963304293377218) * t31 + T(0.24570421201953677) * t33;
-  const P u17 = T(-0.5212173434553351) * t0 - T(0.37409882931040966) * t2 - T(0.32916308430742369) * t4 - T(0.30562025127934228) * t6 - T(0.29112753860383139) * t8 - T(0.28165743046221886) * t10 - T(0.2754664012464767) * t12 - T(0.27169271063563161) * t14 - T(0.26989933981170317) * t16;
-  const P u18 = T(0.021820068359374962) * t18 + T(0.065895161391828314) * t20 + T(0.11135069300470569) * t22 + T(0.1593945755343239) * t24 + T(0.21182639862170796) * t26 + T(0.27178726178192003) * t28 + T(0.34594635569601517) * t30 + T(0.45366146696080301) * t32 + T(0.71634472032339436) * t34;
-  const P u19 = T(0.65736299886917682) * t0 + T(0.24978498809186028) * t2 + T(0.048840330505752573) * t4 - T(0.0906942168994469) * t6 - T(0.19438523477182953) * t8 - T(0.27164520330029607) * t10 - T(0.32698369219417933) * t12 - T(0.36281728342141112) * t14 - T(0.38044589167866077) * t16;
-  const P u20 = T(0.06589516139182848) * t18 + T(0.19201660156249997) * t20 + T(0.30087469556735225) * t22 + T(0.38002189110454887) * t24 + T(0.41524496020141594) * t26 + T(0.38879030426572198) * t28 + T(0.27493028515686346) * t30 + T(0.024035571685727238) * t32 - T(0.56929305652862794) * t34;
-  const P u21 = T(-0.46482583420151913) * t0 + T(0.29437443153059212) * t2 + T(0.46622694009613214) * t4 + T(0.40722864822841587) * t6 + T(0.23955766222433375) * t8 + T(0.03588348143535653) * t10 - T(0.15482972282673127) * t12 - T(0.29930898834545466) * t14 - T(0.37662221783276068) * t16;
-  const P u22 = T(0.11135069300470588) * t18 + T(0.3008746955673523) * t20 + T(0.39660644531250011) * t22 + T(0.35559453939371533) * t24 + T(0.16603638014360816) * t26 - T(0.13556813669687265) * t28 - T(0.43803405522527838) * t30 - T(0.49783233621915673) * t32 + T(0.3573144610611218) * t34;
-  const P u23 = T(0.25809363728835) * t0 - T(0.59931970489424646) * t2 - T(0.21093241367565621) * t4 + T(0.23501499534001652) * t6 + T(0.42375474285746084) * t8 + T(0.3361876244105948) * t10 + T(0.081119373661309307) * t12 - T(0.19601983732925365) * t14 - T(0.36997932946614209) * t16;
-  const P u24 = T(0.15939457553432398) * t18 + T(0.38002189110454854) * t20 + T(0.35559453939371521) * t22 + T(0.073913574218749958) * t24 - T(0.29967742728966151) * t26 - T(0.45682680007518522) * t28 - T(0.11034693750462522) * t30 + T(0.59754636399468408) * t32 - T(0.17473021844356137) * t34;
-  const P u25 = T(-0.11050909326808328) * t0 + T(0.51789243079765723) * t2 - T(0.39821085373965487) * t4 - T(0.39412401918603257) * t6 + T(0.09429949417838232) * t8 + T(0.41091852651968319) * t10 + T(0.30825751130573531) * t12 - T(0.057225463648326765) * t14 - T(0.36003564668872501) * t16;
-  const P u26 = T(0.21182639862170835) * t18 + T(0.41524496020141621) * t20 + T(0.16603638014360841) * t22 - T(0.2996774272896619) * t24 - T(0.42071533203125028) * t26 + T(0.094636658153183464) * t28 + T(0.56277119536332887) * t30 - T(0.39803308059666509) * t32 + T(0.065017848808084769) * t34;
-  const P u27 = T(0.035391234167384669) * t0 - T(0.27344209122209279) * t2 + T(0.58111397576988599) * t4 - T(0.26855468750000011) * t6 - T(0.41711891982208693) * t8 + T(0.14223103537960918) * t10 + T(0.43381803742999137) * t12 + T(0.10996089413575964) * t14 - T(0.34591106044971665) * t16;
-  const P u28 = T(0.27178726178192031) * t18 + T(0.38879030426572209) * t20 - T(0.13556813669687223) * t22 - T(0.45682680007518561) * t24 + T(0.094636658153183145) * t26 + T(0.52136230468750033) * t28 - T(0.48842498189708733) * t30 + T(0.16809964624308973) * t32 - T(0.017695617083692373) * t34;
-  const P u29 = T(-0.0080490076146411925) * t0 + T(0.092093758686946803) * t2 - T(0.34595454497072026) * t4 + T(0.5845091385318697) * t6 - T(0.31356489416542516) * t8 - T(0.33389220722749596) * t10 + T(0.35765330842134629) * t12 + T(0.29355029561608342) * t14 - T(0.32592001916561969) * t16;
-  const P u30 = T(0.34594635569601534) * t18 + T(0.27493028515686341) * t20 - T(0.43803405522527838) * t22 - T(0.11034693750462522) * t24 + T(0.56277119536332931) * t26 - T(0.48842498189708788) * t28 + T(0.20837402343750031) * t30 - T(0.04453385747001621) * t32 + T(0.0032859935986078396) * t34;
-  const P u31 = T(0.0011803637454721224) * t0 - T(0.018688123647943009) * t2 + T(0.10602676276873585) * t4 - T(0.32208653878166932) * t6 + T(0.56481481137678191) * t8 - T(0.50596473215291582) * t10 + T(0.47099909044894778) * t14 - T(0.29633042933772225) * t16;
-  const P u32 = T(0.45366146696080312) * t18 + T(0.024035571685726984) * t20 - T(0.49783233621915612) * t22 + T(0.59754636399468397) * t24 - T(0.39803308059666448) * t26 + T(0.16809964624308962) * t28 - T(0.04453385747001605) * t30 + T(0.0066070556640625833) * t32 - T(0.00036141111091086124) * t34;
-  const P u33 = T(-8.8973264997177403e-05) * t0 + T(0.0018594448252797055) * t2 - T(0.01465212457666336) * t4 + T(0.06676501244769055) * t6 - T(0.20070844343272951) * t8 + T(0.41952379342597246) * t10 - T(0.6127892452294047) * t12 + T(0.58579772235668415) * t14 - T(0.24570421201953713) * t16;
-  const P u34 = T(0.71634472032339536) * t18 - T(0.56929305652862827) * t20 + T(0.35731446106112236) * t22 - T(0.17473021844356176) * t24 + T(0.065017848808084769) * t26 - T(0.017695617083692217) * t28 + T(0.0032859935986078123) * t30 - T(0.00036141111091072186) * t32 + T(1.5258789062586801e-05) * t34;
+  const P t34 = madd<F>(cg17, x[34], -(sg17 * x[0]));
+  const P t0 = madd<F>(sg17, x[34], cg17 * x[0]);
+  const P u0 = madd<F>(T(8.8973264997010179e-05), t33, madd<F>(T(-0.0011803637454719672), t31, madd<F>(T(0.0080490076146410884), t29, madd<F>(T(-0.035391234167384662), t27, madd<F>(T(0.11050909326808311), t25, madd<F>(T(-0.25809363728834989), t23, madd<F>(T(0.46482583420151902), t21, madd<F>(T(-0.65736299886917604), t19, T(0.52121734345533532) * t17))))))));
+  const P u1 = madd<F>(T(0.450947296924401), t15, madd<F>(T(-0.63773578322597491), t13, madd<F>(T(0.53115232355083009), t11, madd<F>(T(-0.30323445025372447), t9, madd<F>(T(0.12139093172307365), t7, madd<F>(T(-0.03312944202509361), t5, madd<F>(T(0.0056680599444550242), t3, T(-0.00048828124999993506) * t1)))))));
+  const P u2 = madd<F>(T(-0.0018594448252799356), t33, madd<F>(T(0.018688123647942957), t31, madd<F>(T(-0.092093758686946831), t29, madd<F>(T(0.27344209122209256), t27, madd<F>(T(-0.51789243079765668), t25, madd<F>(T(0.59931970489424624), t23, madd<F>(T(-0.29437443153059162), t21, madd<F>(T(-0.24978498809186034), t19, T(0.37409882931041027) * t17))))))));
+  const P u3 = madd<F>(T(0.47588004040284537), t15, madd<F>(T(-0.28842686022872605), t13, madd<F>(T(-0.2936054939572596), t11, madd<F>(T(0.59428607431894787), t9, madd<F>(T(-0.45750928804214375), t7, madd<F>(T(0.19811323510025858), t5, madd<F>(T(-0.048706054687500028), t3, T(0.0056680599444550225) * t1)))))));
+  const P u4 = madd<F>(T(0.014652124576663535), t33, madd<F>(T(-0.10602676276873577), t31, madd<F>(T(0.34595454497072009), t29, madd<F>(T(-0.58111397576988588), t27, madd<F>(T(0.39821085373965465), t25, madd<F>(T(0.21093241367565602), t23, madd<F>(T(-0.46622694009613208), t21, madd<F>(T(-0.048840330505752552), t19, T(0.32916308430742386) * t17))))))));
+  const P u5 = madd<F>(T(0.44862708227992859), t15, madd<F>(T(0.042296966947209524), t13, madd<F>(T(-0.47362038507576587), t11, madd<F>(T(0.020111616529901302), t9, madd<F>(T(0.53298216213236516), t7, madd<F>(T(-0.49780273437500017), t5, madd<F>(T(0.19811323510025841), t3, T(-0.033129442025093568) * t1)))))));
+  const P u6 = madd<F>(T(-0.066765012447690647), t33, madd<F>(T(0.3220865387816691), t31, madd<F>(T(-0.5845091385318697), t29, madd<F>(T(0.26855468750000006), t27, madd<F>(T(0.39412401918603235), t25, madd<F>(T(-0.23501499534001669), t23, madd<F>(T(-0.40722864822841631), t21, madd<F>(T(0.090694216899446942), t19, T(0.30562025127934273) * t17))))))));
+  const P u7 = madd<F>(T(0.39678719893508008), t15, madd<F>(T(0.27255460708201057), t13, madd<F>(T(-0.24480728681251709), t11, madd<F>(T(-0.43147813319012412), t9, madd<F>(T(0.11853027343750025), t7, madd<F>(T(0.53298216213236604), t5, madd<F>(T(-0.45750928804214364), t3, T(0.12139093172307364) * t1)))))));
+  const P u8 = madd<F>(T(0.20070844343272959), t33, madd<F>(T(-0.56481481137678169), t31, madd<F>(T(0.31356489416542505), t29, madd<F>(T(0.41711891982208699), t27, madd<F>(T(-0.094299494178382223), t25, madd<F>(T(-0.4237547428574609), t23, madd<F>(T(-0.239557662224334), t21, madd<F>(T(0.19438523477182967), t19, T(0.29112753860383184) * t17))))))));
+  const P u9 = madd<F>(T(0.33039136841862421), t15, madd<F>(T(0.38714499054714585), t13, madd<F>(T(0.097217336410795774), t11, madd<F>(T(-0.31591796875000033), t9, madd<F>(T(-0.43147813319012396), t7, madd<F>(T(0.020111616529901448), t5, madd<F>(T(0.59428607431894742), t3, T(-0.30323445025372492) * t1)))))));
+  const P u10 = madd<F>(T(-0.41952379342597212), t33, madd<F>(T(0.50596473215291526), t31, madd<F>(T(0.33389220722749574), t29, madd<F>(T(-0.14223103537960891), t27, madd<F>(T(-0.41091852651968241), t25, madd<F>(T(-0.33618762441059435), t23, madd<F>(T(-0.035883481435356517), t21, madd<F>(T(0.27164520330029573), t19, T(0.28165743046221897) * t17))))))));
+  const P u11 = madd<F>(T(0.25463723815923989), t15, madd<F>(T(0.39440776289859869), t13, madd<F>(T(0.34289550781250028), t11, madd<F>(T(0.097217336410795635), t9, madd<F>(T(-0.24480728681251765), t7, madd<F>(T(-0.47362038507576676), t5, madd<F>(T(-0.2936054939572596), t3, T(0.53115232355083075) * t1)))))));
+  const P u12 = madd<F>(T(0.6127892452294047), t33, madd<F>(T(-0.35765330842134652), t29, madd<F>(T(-0.4338180374299917), t27, madd<F>(T(-0.3082575113057352), t25, madd<F>(T(-0.081119373661309183), t23, madd<F>(T(0.15482972282673133), t21, madd<F>(T(0.32698369219417928), t19, T(0.27546640124647703) * t17)))))));
+  const P u13 = madd<F>(T(0.1728061249921225), t15, madd<F>(T(0.31420898437499994), t13, madd<F>(T(0.39440776289859858), t11, madd<F>(T(0.38714499054714568), t9, madd<F>(T(0.27255460708201024), t7, madd<F>(T(0.042296966947209726), t5, madd<F>(T(-0.28842686022872566), t3, T(-0.63773578322597535) * t1)))))));
+  const P u14 = madd<F>(T(-0.58579772235668426), t33, madd<F>(T(-0.47099909044894761), t31, madd<F>(T(-0.29355029561608359), t29, madd<F>(T(-0.10996089413575985), t27, madd<F>(T(0.057225463648326411), t25, madd<F>(T(0.19601983732925346), t23, madd<F>(T(0.2993089883454545), t21, madd<F>(T(0.36281728342141084), t19, T(0.27169271063563188) * t17))))))));
+  const P u15 = madd<F>(T(0.087280273437500069), t15, madd<F>(T(0.17280612499212281), t13, madd<F>(T(0.25463723815924033), t11, madd<F>(T(0.33039136841862471), t9, madd<F>(T(0.39678719893508063), t7, madd<F>(T(0.4486270822799297), t5, madd<F>(T(0.47588004040284576), t3, T(0.45094729692440205) * t1)))))));
+  const P u16 = madd<F>(T(0.24570421201953677), t33, madd<F>(T(0.2963304293377218), t31, madd<F>(T(0.32592001916561925), t29, madd<F>(T(0.34591106044971626), t27, madd<F>(T(0.36003564668872418), t25, madd<F>(T(0.36997932946614137), t23, madd<F>(T(0.37662221783275995), t21, madd<F>(T(0.38044589167865961), t19, T(0.26989933981170283) * t17))))))));
+  const P u17 = madd<F>(T(-0.26989933981170317), t16, madd<F>(T(-0.27169271063563161), t14, madd<F>(T(-0.2754664012464767), t12, madd<F>(T(-0.28165743046221886), t10, madd<F>(T(-0.29112753860383139), t8, madd<F>(T(-0.30562025127934228), t6, madd<F>(T(-0.32916308430742369), t4, madd<F>(T(-0.37409882931040966), t2, T(-0.5212173434553351) * t0))))))));
+  const P u18 = madd<F>(T(0.71634472032339436), t34, madd<F>(T(0.45366146696080301), t32, madd<F>(T(0.34594635569601517), t30, madd<F>(T(0.27178726178192003), t28, madd<F>(T(0.21182639862170796), t26, madd<F>(T(0.1593945755343239), t24, madd<F>(T(0.11135069300470569), t22, madd<F>(T(0.065895161391828314), t20, T(0.021820068359374962) * t18))))))));
+  const P u19 = madd<F>(T(-0.38044589167866077), t16, madd<F>(T(-0.36281728342141112), t14, madd<F>(T(-0.32698369219417933), t12, madd<F>(T(-0.27164520330029607), t10, madd<F>(T(-0.19438523477182953), t8, madd<F>(T(-0.0906942168994469), t6, madd<F>(T(0.048840330505752573), t4, madd<F>(T(0.24978498809186028), t2, T(0.65736299886917682) * t0))))))));
+  const P u20 = madd<F>(T(-0.56929305652862794), t34, madd<F>(T(0.024035571685727238), t32, madd<F>(T(0.27493028515686346), t30, madd<F>(T(0.38879030426572198), t28, madd<F>(T(0.41524496020141594), t26, madd<F>(T(0.38002189110454887), t24, madd<F>(T(0.30087469556735225), t22, madd<F>(T(0.19201660156249997), t20, T(0.06589516139182848) * t18))))))));
+  const P u21 = madd<F>(T(-0.37662221783276068), t16, madd<F>(T(-0.29930898834545466), t14, madd<F>(T(-0.15482972282673127), t12, madd<F>(T(0.03588348143535653), t10, madd<F>(T(0.23955766222433375), t8, madd<F>(T(0.40722864822841587), t6, madd<F>(T(0.46622694009613214), t4, madd<F>(T(0.29437443153059212), t2, T(-0.46482583420151913) * t0))))))));
+  const P u22 = madd<F>(T(0.3573144610611218), t34, madd<F>(T(-0.49783233621915673), t32, madd<F>(T(-0.43803405522527838), t30, madd<F>(T(-0.13556813669687265), t28, madd<F>(T(0.16603638014360816), t26, madd<F>(T(0.35559453939371533), t24, madd<F>(T(0.39660644531250011), t22, madd<F>(T(0.3008746955673523), t20, T(0.11135069300470588) * t18))))))));
+  const P u23 = madd<F>(T(-0.36997932946614209), t16, madd<F>(T(-0.19601983732925365), t14, madd<F>(T(0.081119373661309307), t12, madd<F>(T(0.3361876244105948), t10, madd<F>(T(0.42375474285746084), t8, madd<F>(T(0.23501499534001652), t6, madd<F>(T(-0.21093241367565621), t4, madd<F>(T(-0.59931970489424646), t2, T(0.25809363728835) * t0))))))));
+  const P u24 = madd<F>(T(-0.17473021844356137), t34, madd<F>(T(0.59754636399468408), t32, madd<F>(T(-0.11034693750462522), t30, madd<F>(T(-0.45682680007518522), t28, madd<F>(T(-0.29967742728966151), t26, madd<F>(T(0.073913574218749958), t24, madd<F>(T(0.35559453939371521), t22, madd<F>(T(0.38002189110454854), t20, T(0.15939457553432398) * t18))))))));
+  const P u25 = madd<F>(T(-0.36003564668872501), t16, madd<F>(T(-0.057225463648326765), t14, madd<F>(T(0.30825751130573531), t12, madd<F>(T(0.41091852651968319), t10, madd<F>(T(0.09429949417838232), t8, madd<F>(T(-0.39412401918603257), t6, madd<F>(T(-0.39821085373965487), t4, madd<F>(T(0.51789243079765723), t2, T(-0.11050909326808328) * t0))))))));
+  const P u26 = madd<F>(T(0.065017848808084769), t34, madd<F>(T(-0.39803308059666509), t32, madd<F>(T(0.56277119536332887), t30, madd<F>(T(0.094636658153183464), t28, madd<F>(T(-0.42071533203125028), t26, madd<F>(T(-0.2996774272896619), t24, madd<F>(T(0.16603638014360841), t22, madd<F>(T(0.41524496020141621), t20, T(0.21182639862170835) * t18))))))));
+  const P u27 = madd<F>(T(-0.34591106044971665), t16, madd<F>(T(0.10996089413575964), t14, madd<F>(T(0.43381803742999137), t12, madd<F>(T(0.14223103537960918), t10, madd<F>(T(-0.41711891982208693), t8, madd<F>(T(-0.26855468750000011), t6, madd<F>(T(0.58111397576988599), t4, madd<F>(T(-0.27344209122209279), t2, T(0.035391234167384669) * t0))))))));
+  const P u28 = madd<F>(T(-0.017695617083692373), t34, madd<F>(T(0.16809964624308973), t32, madd<F>(T(-0.48842498189708733), t30, madd<F>(T(0.52136230468750033), t28, madd<F>(T(0.094636658153183145), t26, madd<F>(T(-0.45682680007518561), t24, madd<F>(T(-0.13556813669687223), t22, madd<F>(T(0.38879030426572209), t20, T(0.27178726178192031) * t18))))))));
+  const P u29 = madd<F>(T(-0.32592001916561969), t16, madd<F>(T(0.29355029561608342), t14, madd<F>(T(0.35765330842134629), t12, madd<F>(T(-0.33389220722749596), t10, madd<F>(T(-0.31356489416542516), t8, madd<F>(T(0.5845091385318697), t6, madd<F>(T(-0.34595454497072026), t4, madd<F>(T(0.092093758686946803), t2, T(-0.0080490076146411925) * t0))))))));
+  const P u30 = madd<F>(T(0.0032859935986078396), t34, madd<F>(T(-0.04453385747001621), t32, madd<F>(T(0.20837402343750031), t30, madd<F>(T(-0.48842498189708788), t28, madd<F>(T(0.56277119536332931), t26, madd<F>(T(-0.11034693750462522), t24, madd<F>(T(-0.43803405522527838), t22, madd<F>(T(0.27493028515686341), t20, T(0.34594635569601534) * t18))))))));
+  const P u31 = madd<F>(T(-0.29633042933772225), t16, madd<F>(T(0.47099909044894778), t14, madd<F>(T(-0.50596473215291582), t10, madd<F>(T(0.56481481137678191), t8, madd<F>(T(-0.32208653878166932), t6, madd<F>(T(0.10602676276873585), t4, madd<F>(T(-0.018688123647943009), t2, T(0.0011803637454721224) * t0)))))));
+  const P u32 = madd<F>(T(-0.00036141111091086124), t34, madd<F>(T(0.0066070556640625833), t32, madd<F>(T(-0.04453385747001605), t30, madd<F>(T(0.16809964624308962), t28, madd<F>(T(-0.39803308059666448), t26, madd<F>(T(0.59754636399468397), t24, madd<F>(T(-0.49783233621915612), t22, madd<F>(T(0.024035571685726984), t20, T(0.45366146696080312) * t18))))))));
+  const P u33 = madd<F>(T(-0.24570421201953713), t16, madd<F>(T(0.58579772235668415), t14, madd<F>(T(-0.6127892452294047), t12, madd<F>(T(0.41952379342597246), t10, madd<F>(T(-0.20070844343272951), t8, madd<F>(T(0.06676501244769055), t6, madd<F>(T(-0.01465212457666336), t4, madd<F>(T(0.0018594448252797055), t2, T(-8.8973264997177403e-05) * t0))))))));
+  const P u34 = madd<F>(T(1.5258789062586801e-05), t34, madd<F>(T(-0.00036141111091072186), t32, madd<F>(T(0.0032859935986078123), t30, madd<F>(T(-0.017695617083692217), t28, madd<F>(T(0.065017848808084769), t26, madd<F>(T(-0.17473021844356176), t24, madd<F>(T(0.35731446106112236), t22, madd<F>(T(-0.56929305652862827), t20, T(0.71634472032339536) * t18))))))));
   const P w17 = u17;
   const P cb1 = splat<P>(s.cb[1]), sb1 = splat<P>(s.sb[1]);
-  const P w18 = cb1 * u18 - sb1 * u16;
-  const P w16 = sb1 * u18 + cb1 * u16;
+  const P w18 = madd<F>(cb1, u18, -(sb1 * u16));
+  const P w16 = madd<F>(sb1, u18, cb1 * u16);
   const P cb2 = splat<P>(s.cb[2]), sb2 = splat<P>(s.sb[2]);
-  const P w19 = cb2 * u19 - sb2 * u15;
-  const P w15 = sb2 * u19 + cb2 * u15;
+  const P w19 = madd<F>(cb2, u19, -(sb2 * u15));
+  const P w15 = madd<F>(sb2, u19, cb2 * u15);
   const P cb3 = splat<P>(s.cb[3]), sb3 = splat<P>(s.sb[3]);
-  const P w20 = cb3 * u20 - sb3 * u14;
-  const P w14 = sb3 * u20 + cb3 * u14;
+  const P w20 = madd<F>(cb3, u20, -(sb3 * u14));
+  const P w14 = madd<F>(sb3, u20, cb3 * u14);
   const P cb4 = splat<P>(s.cb[4]), sb4 = splat<P>(s.sb[4]);
-  const P w21 = cb4 * u21 - sb4 * u13;
-  const P w13 = sb4 * u21 + cb4 * u13;
+  const P w21 = madd<F>(cb4, u21, -(sb4 * u13));
+  const P w13 = madd<F>(sb4, u21, cb4 * u13);
   const P cb5 = splat<P>(s.cb[5]), sb5 = splat<P>(s.sb[5]);
-  const P w22 = cb5 * u22 - sb5 * u12;
-  const P w12 = sb5 * u22 + cb5 * u12;
+  const P w22 = madd<F>(cb5, u22, -(sb5 * u12));
+  const P w12 = madd<F>(sb5, u22, cb5 * u12);
   const P cb6 = splat<P>(s.cb[6]), sb6 = splat<P>(s.sb[6]);
-  const P w23 = cb6 * u23 - sb6 * u11;
-  const P w11 = sb6 * u23 + cb6 * u11;
+  const P w23 = madd<F>(cb6, u23, -(sb6 * u11));
+  const P w11 = madd<F>(sb6, u23, cb6 * u11);
   const P cb7 = splat<P>(s.cb[7]), sb7 = splat<P>(s.sb[7]);
-  const P w24 = cb7 * u24 - sb7 * u10;
-  const P w10 = sb7 * u24 + cb7 * u10;
+  const P w24 = madd<F>(cb7, u24, -(sb7 * u10));
+  const P w10 = madd<F>(sb7, u24, cb7 * u10);
   const P cb8 = splat<P>(s.cb[8]), sb8 = splat<P>(s.sb[8]);
-  const P w25 = cb8 * u25 - sb8 * u9;
-  const P w9 = sb8 * u25 + cb8 * u9;
+  const P w25 = madd<F>(cb8, u25, -(sb8 * u9));
+  const P w9 = madd<F>(sb8, u25, cb8 * u9);
   const P cb9 = splat<P>(s.cb[9]), sb9 = splat<P>(s.sb[9]);
-  const P w26 = cb9 * u26 - sb9 * u8;
-  const P w8 = sb9 * u26 + cb9 * u8;
+  const P w26 = madd<F>(cb9, u26, -(sb9 * u8));
+  const P w8 = madd<F>(sb9, u26, cb9 * u8);
   const P cb10 = splat<P>(s.cb[10]), sb10 = splat<P>(s.sb[10]);
-  const P w27 = cb10 * u27 - sb10 * u7;
-  const P w7 = sb10 * u27 + cb10 * u7;
+  const P w27 = madd<F>(cb10, u27, -(sb10 * u7));
+  const P w7 = madd<F>(sb10, u27, cb10 * u7);
   const P cb11 = splat<P>(s.cb[11]), sb11 = splat<P>(s.sb[11]);
-  const P w28 = cb11 * u28 - sb11 * u6;
-  const P w6 = sb11 * u28 + cb11 * u6;
+  const P w28 = madd<F>(cb11, u28, -(sb11 * u6));
+  const P w6 = madd<F>(sb11, u28, cb11 * u6);
   const P cb12 = splat<P>(s.cb[12]), sb12 = splat<P>(s.sb[12]);
-  const P w29 = cb12 * u29 - sb12 * u5;
-  const P w5 = sb12 * u29 + cb12 * u5;
+  const P w29 = madd<F>(cb12, u29, -(sb12 * u5));
+  const P w5 = madd<F>(sb12, u29, cb12 * u5);
   const P cb13 = splat<P>(s.cb[13]), sb13 = splat<P>(s.sb[13]);
-  const P w30 = cb13 * u30 - sb13 * u4;
-  const P w4 = sb13 * u30 + cb13 * u4;
+  const P w30 = madd<F>(cb13, u30, -(sb13 * u4));
+  const P w4 = madd<F>(sb13, u30, cb13 * u4);
   const P cb14 = splat<P>(s.cb[14]), sb14 = splat<P>(s.sb[14]);
-  const P w31 = cb14 * u31 - sb14 * u3;
-  const P w3 = sb14 * u31 + cb14 * u3;
+  const P w31 = madd<F>(cb14, u31, -(sb14 * u3));
+  const P w3 = madd<F>(sb14, u31, cb14 * u3);
   const P cb15 = splat<P>(s.cb[15]), sb15 = splat<P>(s.sb[15]);
-  const P w32 = cb15 * u32 - sb15 * u2;
-  const P w2 = sb15 * u32 + cb15 * u2;
+  const P w32 = madd<F>(cb15, u32, -(sb15 * u2));
+  const P w2 = madd<F>(sb15, u32, cb15 * u2);
   const P cb16 = splat<P>(s.cb[16]), sb16 = splat<P>(s.sb[16]);
-  const P w33 = cb16 * u33 - sb16 * u1;
-  const P w1 = sb16 * u33 + cb16 * u1;
+  const P w33 = madd<F>(cb16, u33, -(sb16 * u1));
+  const P w1 = madd<F>(sb16, u33, cb16 * u1);
   const P cb17 = splat<P>(s.cb[17]), sb17 = splat<P>(s.sb[17]);
-  const P w34 = cb17 * u34 - sb17 * u0;
-  const P w0 = sb17 * u34 + cb17 * u0;
-  const P v0 = T(-0.5212173434553351) * w17 + T(0.65736299886917682) * w19 - T(0.46482583420151913) * w21 + T(0.25809363728835) * w23 - T(0.11050909326808328) * w25 + T(0.035391234167384669) * w27 - T(0.0080490076146411925) * w29 + T(0.0011803637454721224) * w31 - T(8.8973264997177403e-05) * w33;
-  const P v1 = T(-0.00048828124999993506) * w1 + T(0.0056680599444550225) * w3 - T(0.033129442025093568) * w5 + T(0.12139093172307364) * w7 - T(0.30323445025372492) * w9 + T(0.53115232355083075) * w11 - T(0.63773578322597535) * w13 + T(0.45094729692440205) * w15;
-  const P v2 = T(-0.37409882931040966) * w17 + T(0.24978498809186028) * w19 + T(0.29437443153059212) * w21 - T(0.59931970489424646) * w23 + T(0.51789243079765723) * w25 - T(0.27344209122209279) * w27 + T(0.092093758686946803) * w29 - T(0.018688123647943009) * w31 + T(0.0018594448252797055) * w33;
-  const P v3 = T(0.0056680599444550242) * w1 - T(0.048706054687500028) * w3 + T(0.19811323510025841) * w5 - T(0.45750928804214364) * w7 + T(0.59428607431894742) * w9 - T(0.2936054939572596) * w11 - T(0.28842686022872566) * w13 + T(0.47588004040284576) * w15;
-  const P v4 = T(-0.32916308430742369) * w17 + T(0.048840330505752573) * w19 + T(0.46622694009613214) * w21 - T(0.21093241367565621) * w23 - T(0.39821085373965487) * w25 + T(0.58111397576988599) * w27 - T(0.34595454497072026) * w29 + T(0.10602676276873585) * w31 - T(0.01465212457666336) * w33;
-  const P v5 = T(-0.03312944202509361) * w1 + T(0.19811323510025858) * w3 - T(0.49780273437500017) * w5 + T(0.53298216213236604) * w7 + T(0.020111616529901448) * w9 - T(0.47362038507576676) * w11 + T(0.042296966947209726) * w13 + T(0.4486270822799297) * w15;
-  const P v6 = T(-0.30562025127934228) * w17 - T(0.0906942168994469) * w19 + T(0.40722864822841587) * w21 + T(0.23501499534001652) * w23 - T(0.39412401918603257) * w25 - T(0.26855468750000011) * w27 + T(0.5845091385318697) * w29 - T(0.32208653878166932) * w31 + T(0.06676501244769055) * w33;
-  const P v7 = T(0.12139093172307365) * w1 - T(0.45750928804214375) * w3 + T(0.53298216213236516) * w5 + T(0.11853027343750025) * w7 - T(0.43147813319012396) * w9 - T(0.24480728681251765) * w11 + T(0.27255460708201024) * w13 + T(0.39678719893508063) * w15;
-  const P v8 = T(-0.29112753860383139) * w17 - T(0.19438523477182953) * w19 + T(0.23955766222433375) * w21 + T(0.42375474285746084) * w23 + T(0.09429949417838232) * w25 - T(0.41711891982208693) * w27 - T(0.31356489416542516) * w29 + T(0.56481481137678191) * w31 - T(0.20070844343272951) * w33;
-  const P v9 = T(-0.30323445025372447) * w1 + T(0.59428607431894787) * w3 + T(0.020111616529901302) * w5 - T(0.43147813319012412) * w7 - T(0.31591796875000033) * w9 + T(0.097217336410795635) * w11 + T(0.38714499054714568) * w13 + T(0.33039136841862471) * w15;
-  const P v10 = T(-0.28165743046221886) * w17 - T(0.27164520330029607) * w19 + T(0.03588348143535653) * w21 + T(0.3361876244105948) * w23 + T(0.41091852651968319) * w25 + T(0.14223103537960918) * w27 - T(0.33389220722749596) * w29 - T(0.50596473215291582) * w31 + T(0.41952379342597246) * w33;
-  const P v11 = T(0.53115232355083009) * w1 - T(0.2936054939572596) * w3 - T(0.47362038507576587) * w5 - T(0.24480728681251709) * w7 + T(0.097217336410795774) * w9 + T(0.34289550781250028) * w11 + T(0.39440776289859858) * w13 + T(0.25463723815924033) * w15;
-  const P v12 = T(-0.2754664012464767) * w17 - T(0.32698369219417933) * w19 - T(0.15482972282673127) * w21 + T(0.081119373661309307) * w23 + T(0.30825751130573531) * w25 + T(0.43381803742999137) * w27 + T(0.35765330842134629) * w29 - T(0.6127892452294047) * w33;
-  const P v13 = T(-0.63773578322597491) * w1 - T(0.28842686022872605) * w3 + T(0.042296966947209524) * w5 + T(0.27255460708201057) * w7 + T(0.38714499054714585) * w9 + T(0.39440776289859869) * w11 + T(0.31420898437499994) * w13 + T(0.17280612499212281) * w15;
-  const P v14 = T(-0.27169271063563161) * w17 - T(0.36281728342141112) * w19 - T(0.29930898834545466) * w21 - T(0.19601983732925365) * w23 - T(0.057225463648326765) * w25 + T(0.10996089413575964) * w27 + T(0.29355029561608342) * w29 + T(0.47099909044894778) * w31 + T(0.58579772235668415) * w33;
-  const P v15 = T(0.450947296924401) * w1 + T(0.47588004040284537) * w3 + T(0.44862708227992859) * w5 + T(0.39678719893508008) * w7 + T(0.33039136841862421) * w9 + T(0.25463723815923989) * w11 + T(0.1728061249921225) * w13 + T(0.087280273437500069) * w15;
-  const P v16 = T(-0.26989933981170317) * w17 - T(0.38044589167866077) * w19 - T(0.37662221783276068) * w21 - T(0.36997932946614209) * w23 - T(0.36003564668872501) * w25 - T(0.34591106044971665) * w27 - T(0.32592001916561969) * w29 - T(0.29633042933772225) * w31 - T(0.24570421201953713) * w33;
-  const P v17 = T(0.52121734345533532) * w0 + T(0.37409882931041027) * w2 + T(0.32916308430742386) * w4 + T(0.30562025127934273) * w6 + T(0.29112753860383184) * w8 + T(0.28165743046221897) * w10 + T(0.27546640124647703) * w12 + T(0.27169271063563188) * w14 + T(0.26989933981170283) * w16;
-  const P v18 = T(0.021820068359374962) * w18 + T(0.06589516139182848) * w20 + T(0.11135069300470588) * w22 + T(0.15939457553432398) * w24 + T(0.21182639862170835) * w26 + T(0.27178726178192031) * w28 + T(0.34594635569601534) * w30 + T(0.45366146696080312) * w32 + T(0.71634472032339536) * w34;
-  const P v19 = T(-0.65736299886917604) * w0 - T(0.24978498809186034) * w2 - T(0.048840330505752552) * w4 + T(0.090694216899446942) * w6 + T(0.19438523477182967) * w8 + T(0.27164520330029573) * w10 + T(0.32698369219417928) * w12 + T(0.36281728342141084) * w14 + T(0.38044589167865961) * w16;
-  const P v20 = T(0.065895161391828314) * w18 + T(0.19201660156249997) * w20 + T(0.3008746955673523) * w22 + T(0.38002189110454854) * w24 + T(0.41524496020141621) * w26 + T(0.38879030426572209) * w28 + T(0.27493028515686341) * w30 + T(0.024035571685726984) * w32 - T(0.56929305652862827) * w34;
-  const P v21 = T(0.46482583420151902) * w0 - T(0.29437443153059162) * w2 - T(0.46622694009613208) * w4 - T(0.40722864822841631) * w6 - T(0.239557662224334) * w8 - T(0.035883481435356517) * w10 + T(0.15482972282673133) * w12 + T(0.2993089883454545) * w14 + T(0.37662221783275995) * w16;
-  const P v22 = T(0.11135069300470569) * w18 + T(0.30087469556735225) * w20 + T(0.39660644531250011) * w22 + T(0.35559453939371521) * w24 + T(0.16603638014360841) * w26 - T(0.13556813669687223) * w28 - T(0.43803405522527838) * w30 - T(0.49783233621915612) * w32 + T(0.35731446106112236) * w34;
-  const P v23 = T(-0.25809363728834989) * w0 + T(0.59931970489424624) * w2 + T(0.21093241367565602) * w4 - T(0.23501499534001669) * w6 - T(0.4237547428574609) * w8 - T(0.33618762441059435) * w10 - T(0.081119373661309183) * w12 + T(0.19601983732925346) * w14 + T(0.36997932946614137) * w16;
-  const P v24 = T(0.1593945755343239) * w18 + T(0.38002189110454887) * w20 + T(0.35559453939371533) * w22 + T(0.073913574218749958) * w24 - T(0.2996774272896619) * w26 - T(0.45682680007518561) * w28 - T(0.11034693750462522) * w30 + T(0.59754636399468397) * w32 - T(0.17473021844356176) * w34;
-  const P v25 = T(0.11050909326808311) * w0 - T(0.51789243079765668) * w2 + T(0.39821085373965465) * w4 + T(0.39412401918603235) * w6 - T(0.094299494178382223) * w8 - T(0.41091852651968241) * w10 - T(0.3082575113057352) * w12 + T(0.057225463648326411) * w14 + T(0.36003564668872418) * w16;
-  const P v26 = T(0.21182639862170796) * w18 + T(0.41524496020141594) * w20 + T(0.16603638014360816) * w22 - T(0.29967742728966151) * w24 - T(0.42071533203125028) * w26 + T(0.094636658153183145) * w28 + T(0.56277119536332931) * w30 - T(0.39803308059666448) * w32 + T(0.065017848808084769) * w34;
-  const P v27 = T(-0.035391234167384662) * w0 + T(0.27344209122209256) * w2 - T(0.58111397576988588) * w4 + T(0.26855468750000006) * w6 + T(0.41711891982208699) * w8 - T(0.14223103537960891) * w10 - T(0.4338180374299917) * w12 - T(0.10996089413575985) * w14 + T(0.34591106044971626) * w16;
-  const P v28 = T(0.27178726178192003) * w18 + T(0.38879030426572198) * w20 - T(0.13556813669687265) * w22 - T(0.45682680007518522) * w24 + T(0.094636658153183464) * w26 + T(0.52136230468750033) * w28 - T(0.48842498189708788) * w30 + T(0.16809964624308962) * w32 - T(0.017695617083692217) * w34;
-  const P v29 = T(0.0080490076146410884) * w0 - T(0.092093758686946831) * w2 + T(0.34595454497072009) * w4 - T(0.5845091385318697) * w6 + T(0.31356489416542505) * w8 + T(0.33389220722749574) * w10 - T(0.35765330842134652) * w12 - T(0.29355029561608359) * w14 + T(0.32592001916561925) * w16;
-  const P v30 = T(0.34594635569601517) * w18 + T(0.27493028515686346) * w20 - T(0.43803405522527838) * w22 - T(0.11034693750462522) * w24 + T(0.56277119536332887) * w26 - T(0.48842498189708733) * w28 + T(0.20837402343750031) * w30 - T(0.04453385747001605) * w32 + T(0.0032859935986078123) * w34;
-  const P v31 = T(-0.0011803637454719672) * w0 + T(0.018688123647942957) * w2 - T(0.10602676276873577) * w4 + T(0.3220865387816691) * w6 - T(0.56481481137678169) * w8 + T(0.50596473215291526) * w10 - T(0.47099909044894761) * w14 + T(0.2963304293377218) * w16;
-  const P v32 = T(0.45366146696080301) * w18 + T(0.024035571685727238) * w20 - T(0.49783233621915673) * w22 + T(0.59754636399468408) * w24 - T(0.39803308059666509) * w26 + T(0.16809964624308973) * w28 - T(0.04453385747001621) * w30 + T(0.0066070556640625833) * w32 - T(0.00036141111091072186) * w34;
-  const P v33 = T(8.8973264997010179e-05) * w0 - T(0.0018594448252799356) * w2 + T(0.014652124576663535) * w4 - T(0.066765012447690647) * w6 + T(0.20070844343272959) * w8 - T(0.41952379342597212) * w10 + T(0.6127892452294047) * w12 - T(0.58579772235668426) * w14 + T(0.24570421201953677) * w16;
-  const P v34 = T(0.71634472032339436) * w18 - T(0.56929305652862794) * w20 + T(0.3573144610611218) * w22 - T(0.17473021844356137) * w24 + T(0.065017848808084769) * w26 - T(0.017695617083692373) * w28 + T(0.0032859935986078396) * w30 - T(0.00036141111091086124) * w32 + T(1.5258789062586801e-05) * w34;
+  const P w34 = madd<F>(cb17, u34, -(sb17 * u0));
+  const P w0 = madd<F>(sb17, u34, cb17 * u0);
+  const P v0 = madd<F>(T(-8.8973264997177403e-05), w33, madd<F>(T(0.0011803637454721224), w31, madd<F>(T(-0.0080490076146411925), w29, madd<F>(T(0.035391234167384669), w27, madd<F>(T(-0.11050909326808328), w25, madd<F>(T(0.25809363728835), w23, madd<F>(T(-0.46482583420151913), w21, madd<F>(T(0.65736299886917682), w19, T(-0.5212173434553351) * w17))))))));
+  const P v1 = madd<F>(T(0.45094729692440205), w15, madd<F>(T(-0.63773578322597535), w13, madd<F>(T(0.53115232355083075), w11, madd<F>(T(-0.30323445025372492), w9, madd<F>(T(0.12139093172307364), w7, madd<F>(T(-0.033129442025093568), w5, madd<F>(T(0.0056680599444550225), w3, T(-0.00048828124999993506) * w1)))))));
+  const P v2 = madd<F>(T(0.0018594448252797055), w33, madd<F>(T(-0.018688123647943009), w31, madd<F>(T(0.092093758686946803), w29, madd<F>(T(-0.27344209122209279), w27, madd<F>(T(0.51789243079765723), w25, madd<F>(T(-0.59931970489424646), w23, madd<F>(T(0.29437443153059212), w21, madd<F>(T(0.24978498809186028), w19, T(-0.37409882931040966) * w17))))))));
+  const P v3 = madd<F>(T(0.47588004040284576), w15, madd<F>(T(-0.28842686022872566), w13, madd<F>(T(-0.2936054939572596), w11, madd<F>(T(0.59428607431894742), w9, madd<F>(T(-0.45750928804214364), w7, madd<F>(T(0.19811323510025841), w5, madd<F>(T(-0.048706054687500028), w3, T(0.0056680599444550242) * w1)))))));
+  const P v4 = madd<F>(T(-0.01465212457666336), w33, madd<F>(T(0.10602676276873585), w31, madd<F>(T(-0.34595454497072026), w29, madd<F>(T(0.58111397576988599), w27, madd<F>(T(-0.39821085373965487), w25, madd<F>(T(-0.21093241367565621), w23, madd<F>(T(0.46622694009613214), w21, madd<F>(T(0.048840330505752573), w19, T(-0.32916308430742369) * w17))))))));
+  const P v5 = madd<F>(T(0.4486270822799297), w15, madd<F>(T(0.042296966947209726), w13, madd<F>(T(-0.47362038507576676), w11, madd<F>(T(0.020111616529901448), w9, madd<F>(T(0.53298216213236604), w7, madd<F>(T(-0.49780273437500017), w5, madd<F>(T(0.19811323510025858), w3, T(-0.03312944202509361) * w1)))))));
+  const P v6 = madd<F>(T(0.06676501244769055), w33, madd<F>(T(-0.32208653878166932), w31, madd<F>(T(0.5845091385318697), w29, madd<F>(T(-0.26855468750000011), w27, madd<F>(T(-0.39412401918603257), w25, madd<F>(T(0.23501499534001652), w23, madd<F>(T(0.40722864822841587), w21, madd<F>(T(-0.0906942168994469), w19, T(-0.30562025127934228) * w17))))))));
+  const P v7 = madd<F>(T(0.39678719893508063), w15, madd<F>(T(0.27255460708201024), w13, madd<F>(T(-0.24480728681251765), w11, madd<F>(T(-0.43147813319012396), w9, madd<F>(T(0.11853027343750025), w7, madd<F>(T(0.53298216213236516), w5, madd<F>(T(-0.45750928804214375), w3, T(0.12139093172307365) * w1)))))));
+  const P v8 = madd<F>(T(-0.20070844343272951), w33, madd<F>(T(0.56481481137678191), w31, madd<F>(T(-0.31356489416542516), w29, madd<F>(T(-0.41711891982208693), w27, madd<F>(T(0.09429949417838232), w25, madd<F>(T(0.42375474285746084), w23, madd<F>(T(0.23955766222433375), w21, madd<F>(T(-0.19438523477182953), w19, T(-0.29112753860383139) * w17))))))));
+  const P v9 = madd<F>(T(0.33039136841862471), w15, madd<F>(T(0.38714499054714568), w13, madd<F>(T(0.097217336410795635), w11, madd<F>(T(-0.31591796875000033), w9, madd<F>(T(-0.43147813319012412), w7, madd<F>(T(0.020111616529901302), w5, madd<F>(T(0.59428607431894787), w3, T(-0.30323445025372447) * w1)))))));
+  const P v10 = madd<F>(T(0.41952379342597246), w33, madd<F>(T(-0.50596473215291582), w31, madd<F>(T(-0.33389220722749596), w29, madd<F>(T(0.14223103537960918), w27, madd<F>(T(0.41091852651968319), w25, madd<F>(T(0.3361876244105948), w23, madd<F>(T(0.03588348143535653), w21, madd<F>(T(-0.27164520330029607), w19, T(-0.28165743046221886) * w17))))))));
+  const P v11 = madd<F>(T(0.25463723815924033), w15, madd<F>(T(0.39440776289859858), w13, madd<F>(T(0.34289550781250028), w11, madd<F>(T(0.097217336410795774), w9, madd<F>(T(-0.24480728681251709), w7, madd<F>(T(-0.47362038507576587), w5, madd<F>(T(-0.2936054939572596), w3, T(0.53115232355083009) * w1)))))));
+  const P v12 = madd<F>(T(-0.6127892452294047), w33, madd<F>(T(0.35765330842134629), w29, madd<F>(T(0.43381803742999137), w27, madd<F>(T(0.30825751130573531), w25, madd<F>(T(0.081119373661309307), w23, madd<F>(T(-0.15482972282673127), w21, madd<F>(T(-0.32698369219417933), w19, T(-0.2754664012464767) * w17)))))));
+  const P v13 = madd<F>(T(0.17280612499212281), w15, madd<F>(T(0.31420898437499994), w13, madd<F>(T(0.39440776289859869), w11, madd<F>(T(0.38714499054714585), w9, madd<F>(T(0.27255460708201057), w7, madd<F>(T(0.042296966947209524), w5, madd<F>(T(-0.28842686022872605), w3, T(-0.63773578322597491) * w1)))))));
+  const P v14 = madd<F>(T(0.58579772235668415), w33, madd<F>(T(0.47099909044894778), w31, madd<F>(T(0.29355029561608342), w29, madd<F>(T(0.10996089413575964), w27, madd<F>(T(-0.057225463648326765), w25, madd<F>(T(-0.19601983732925365), w23, madd<F>(T(-0.29930898834545466), w21, madd<F>(T(-0.36281728342141112), w19, T(-0.27169271063563161) * w17))))))));
+  const P v15 = madd<F>(T(0.087280273437500069), w15, madd<F>(T(0.1728061249921225), w13, madd<F>(T(0.25463723815923989), w11, madd<F>(T(0.33039136841862421), w9, madd<F>(T(0.39678719893508008), w7, madd<F>(T(0.44862708227992859), w5, madd<F>(T(0.47588004040284537), w3, T(0.450947296924401) * w1)))))));
+  const P v16 = madd<F>(T(-0.24570421201953713), w33, madd<F>(T(-0.29633042933772225), w31, madd<F>(T(-0.32592001916561969), w29, madd<F>(T(-0.34591106044971665), w27, madd<F>(T(-0.36003564668872501), w25, madd<F>(T(-0.36997932946614209), w23, madd<F>(T(-0.37662221783276068), w21, madd<F>(T(-0.38044589167866077), w19, T(-0.26989933981170317) * w17))))))));
+  const P v17 = madd<F>(T(0.26989933981170283), w16, madd<F>(T(0.27169271063563188), w14, madd<F>(T(0.27546640124647703), w12, madd<F>(T(0.28165743046221897), w10, madd<F>(T(0.29112753860383184), w8, madd<F>(T(0.30562025127934273), w6, madd<F>(T(0.32916308430742386), w4, madd<F>(T(0.37409882931041027), w2, T(0.52121734345533532) * w0))))))));
+  const P v18 = madd<F>(T(0.71634472032339536), w34, madd<F>(T(0.45366146696080312), w32, madd<F>(T(0.34594635569601534), w30, madd<F>(T(0.27178726178192031), w28, madd<F>(T(0.21182639862170835), w26, madd<F>(T(0.15939457553432398), w24, madd<F>(T(0.11135069300470588), w22, madd<F>(T(0.06589516139182848), w20, T(0.021820068359374962) * w18))))))));
+  const P v19 = madd<F>(T(0.38044589167865961), w16, madd<F>(T(0.36281728342141084), w14, madd<F>(T(0.32698369219417928), w12, madd<F>(T(0.27164520330029573), w10, madd<F>(T(0.19438523477182967), w8, madd<F>(T(0.090694216899446942), w6, madd<F>(T(-0.048840330505752552), w4, madd<F>(T(-0.24978498809186034), w2, T(-0.65736299886917604) * w0))))))));
+  const P v20 = madd<F>(T(-0.56929305652862827), w34, madd<F>(T(0.024035571685726984), w32, madd<F>(T(0.27493028515686341), w30, madd<F>(T(0.38879030426572209), w28, madd<F>(T(0.41524496020141621), w26, madd<F>(T(0.38002189110454854), w24, madd<F>(T(0.3008746955673523), w22, madd<F>(T(0.19201660156249997), w20, T(0.065895161391828314) * w18))))))));
+  const P v21 = madd<F>(T(0.37662221783275995), w16, madd<F>(T(0.2993089883454545), w14, madd<F>(T(0.15482972282673133), w12, madd<F>(T(-0.035883481435356517), w10, madd<F>(T(-0.239557662224334), w8, madd<F>(T(-0.40722864822841631), w6, madd<F>(T(-0.46622694009613208), w4, madd<F>(T(-0.29437443153059162), w2, T(0.46482583420151902) * w0))))))));
+  const P v22 = madd<F>(T(0.35731446106112236), w34, madd<F>(T(-0.49783233621915612), w32, madd<F>(T(-0.43803405522527838), w30, madd<F>(T(-0.13556813669687223), w28, madd<F>(T(0.16603638014360841), w26, madd<F>(T(0.35559453939371521), w24, madd<F>(T(0.39660644531250011), w22, madd<F>(T(0.30087469556735225), w20, T(0.11135069300470569) * w18))))))));
+  const P v23 = madd<F>(T(0.36997932946614137), w16, madd<F>(T(0.19601983732925346), w14, madd<F>(T(-0.081119373661309183), w12, madd<F>(T(-0.33618762441059435), w10, madd<F>(T(-0.4237547428574609), w8, madd<F>(T(-0.23501499534001669), w6, madd<F>(T(0.21093241367565602), w4, madd<F>(T(0.59931970489424624), w2, T(-0.25809363728834989) * w0))))))));
+  const P v24 = madd<F>(T(-0.17473021844356176), w34, madd<F>(T(0.59754636399468397), w32, madd<F>(T(-0.11034693750462522), w30, madd<F>(T(-0.45682680007518561), w28, madd<F>(T(-0.2996774272896619), w26, madd<F>(T(0.073913574218749958), w24, madd<F>(T(0.35559453939371533), w22, madd<F>(T(0.38002189110454887), w20, T(0.1593945755343239) * w18))))))));
+  const P v25 = madd<F>(T(0.36003564668872418), w16, madd<F>(T(0.057225463648326411), w14, madd<F>(T(-0.3082575113057352), w12, madd<F>(T(-0.41091852651968241), w10, madd<F>(T(-0.094299494178382223), w8, madd<F>(T(0.39412401918603235), w6, madd<F>(T(0.39821085373965465), w4, madd<F>(T(-0.51789243079765668), w2, T(0.11050909326808311) * w0))))))));
+  const P v26 = madd<F>(T(0.065017848808084769), w34, madd<F>(T(-0.39803308059666448), w32, madd<F>(T(0.56277119536332931), w30, madd<F>(T(0.094636658153183145), w28, madd<F>(T(-0.42071533203125028), w26, madd<F>(T(-0.29967742728966151), w24, madd<F>(T(0.16603638014360816), w22, madd<F>(T(0.41524496020141594), w20, T(0.21182639862170796) * w18))))))));
+  const P v27 = madd<F>(T(0.34591106044971626), w16, madd<F>(T(-0.10996089413575985), w14, madd<F>(T(-0.4338180374299917), w12, madd<F>(T(-0.14223103537960891), w10, madd<F>(T(0.41711891982208699), w8, madd<F>(T(0.26855468750000006), w6, madd<F>(T(-0.58111397576988588), w4, madd<F>(T(0.27344209122209256), w2, T(-0.035391234167384662) * w0))))))));
+  const P v28 = madd<F>(T(-0.017695617083692217), w34, madd<F>(T(0.16809964624308962), w32, madd<F>(T(-0.48842498189708788), w30, madd<F>(T(0.52136230468750033), w28, madd<F>(T(0.094636658153183464), w26, madd<F>(T(-0.45682680007518522), w24, madd<F>(T(-0.13556813669687265), w22, madd<F>(T(0.38879030426572198), w20, T(0.27178726178192003) * w18))))))));
+  const P v29 = madd<F>(T(0.32592001916561925), w16, madd<F>(T(-0.29355029561608359), w14, madd<F>(T(-0.35765330842134652), w12, madd<F>(T(0.33389220722749574), w10, madd<F>(T(0.31356489416542505), w8, madd<F>(T(-0.5845091385318697), w6, madd<F>(T(0.34595454497072009), w4, madd<F>(T(-0.092093758686946831), w2, T(0.0080490076146410884) * w0))))))));
+  const P v30 = madd<F>(T(0.0032859935986078123), w34, madd<F>(T(-0.04453385747001605), w32, madd<F>(T(0.20837402343750031), w30, madd<F>(T(-0.48842498189708733), w28, madd<F>(T(0.56277119536332887), w26, madd<F>(T(-0.11034693750462522), w24, madd<F>(T(-0.43803405522527838), w22, madd<F>(T(0.27493028515686346), w20, T(0.34594635569601517) * w18))))))));
+  const P v31 = madd<F>(T(0.2963304293377218), w16, madd<F>(T(-0.47099909044894761), w14, madd<F>(T(0.50596473215291526), w10, madd<F>(T(-0.56481481137678169), w8, madd<F>(T(0.3220865387816691), w6, madd<F>(T(-0.10602676276873577), w4, madd<F>(T(0.018688123647942957), w2, T(-0.0011803637454719672) * w0)))))));
+  const P v32 = madd<F>(T(-0.00036141111091072186), w34, madd<F>(T(0.0066070556640625833), w32, madd<F>(T(-0.04453385747001621), w30, madd<F>(T(0.16809964624308973), w28, madd<F>(T(-0.39803308059666509), w26, madd<F>(T(0.59754636399468408), w24, madd<F>(T(-0.49783233621915673), w22, madd<F>(T(0.024035571685727238), w20, T(0.45366146696080301) * w18))))))));
+  const P v33 = madd<F>(T(0.24570421201953677), w16, madd<F>(T(-0.58579772235668426), w14, madd<F>(T(0.6127892452294047), w12, madd<F>(T(-0.41952379342597212), w10, madd<F>(T(0.20070844343272959), w8, madd<F>(T(-0.066765012447690647), w6, madd<F>(T(0.014652124576663535), w4, madd<F>(T(-0.0018594448252799356), w2, T(8.8973264997010179e-05) * w0))))))));
+  const P v34 = madd<F>(T(1.5258789062586801e-05), w34, madd<F>(T(-0.00036141111091086124), w32, madd<F>(T(0.0032859935986078396), w30, madd<F>(T(-0.017695617083692373), w28, madd<F>(T(0.065017848808084769), w26, madd<F>(T(-0.17473021844356137), w24, madd<F>(T(0.3573144610611218), w22, madd<F>(T(-0.56929305652862794), w20, T(0.71634472032339436) * w18))))))));
   y[17] = v17;
   const P ca1 = splat<P>(s.ca[1]), sa1 = splat<P>(s.sa[1]);
-  y[18] = ca1 * v18 - sa1 * v16;
-  y[16] = sa1 * v18 + ca1 * v16;
+  y[18] = madd<F>(ca1, v18, -(sa1 * v16));
+  y[16] = madd<F>(sa1, v18, ca1 * v16);
   const P ca2 = splat<P>(s.ca[2]), sa2 = splat<P>(s.sa[2]);
-  y[19] = ca2 * v19 - sa2 * v15;
-  y[15] = sa2 * v19 + ca2 * v15;
+  y[19] = madd<F>(ca2, v19, -(sa2 * v15));
+  y[15] = madd<F>(sa2, v19, ca2 * v15);
   const P ca3 = splat<P>(s.ca[3]), sa3 = splat<P>(s.sa[3]);
-  y[20] = ca3 * v20 - sa3 * v14;
-  y[14] = sa3 * v20 + ca3 * v14;
+  y[20] = madd<F>(ca3, v20, -(sa3 * v14));
+  y[14] = madd<F>(sa3, v20, ca3 * v14);
   const P ca4 = splat<P>(s.ca[4]), sa4 = splat<P>(s.sa[4]);
-  y[21] = ca4 * v21 - sa4 * v13;
-  y[13] = sa4 * v21 + ca4 * v13;
+  y[21] = madd<F>(ca4, v21, -(sa4 * v13));
+  y[13] = madd<F>(sa4, v21, ca4 * v13);
   const P ca5 = splat<P>(s.ca[5]), sa5 = splat<P>(s.sa[5]);
-  y[22] = ca5 * v22 - sa5 * v12;
-  y[12] = sa5 * v22 + ca5 * v12;
+  y[22] = madd<F>(ca5, v22, -(sa5 * v12));
+  y[12] = madd<F>(sa5, v22, ca5 * v12);
   const P ca6 = splat<P>(s.ca[6]), sa6 = splat<P>(s.sa[6]);
-  y[23] = ca6 * v23 - sa6 * v11;
-  y[11] = sa6 * v23 + ca6 * v11;
+  y[23] = madd<F>(ca6, v23, -(sa6 * v11));
+  y[11] = madd<F>(sa6, v23, ca6 * v11);
   const P ca7 = splat<P>(s.ca[7]), sa7 = splat<P>(s.sa[7]);
-  y[24] = ca7 * v24 - sa7 * v10;
-  y[10] = sa7 * v24 + ca7 * v10;
+  y[24] = madd<F>(ca7, v24, -(sa7 * v10));
+  y[10] = madd<F>(sa7, v24, ca7 * v10);
   const P ca8 = splat<P>(s.ca[8]), sa8 = splat<P>(s.sa[8]);
-  y[25] = ca8 * v25 - sa8 * v9;
-  y[9] = sa8 * v25 + ca8 * v9;
+  y[25] = madd<F>(ca8, v25, -(sa8 * v9));
+  y[9] = madd<F>(sa8, v25, ca8 * v9);
   const P ca9 = splat<P>(s.ca[9]), sa9 = splat<P>(s.sa[9]);
-  y[26] = ca9 * v26 - sa9 * v8;
-  y[8] = sa9 * v26 + ca9 * v8;
+  y[26] = madd<F>(ca9, v26, -(sa9 * v8));
+  y[8] = madd<F>(sa9, v26, ca9 * v8);
   const P ca10 = splat<P>(s.ca[10]), sa10 = splat<P>(s.sa[10]);
-  y[27] = ca10 * v27 - sa10 * v7;
-  y[7] = sa10 * v27 + ca10 * v7;
+  y[27] = madd<F>(ca10, v27, -(sa10 * v7));
+  y[7] = madd<F>(sa10, v27, ca10 * v7);
   const P ca11 = splat<P>(s.ca[11]), sa11 = splat<P>(s.sa[11]);
-  y[28] = ca11 * v28 - sa11 * v6;
-  y[6] = sa11 * v28 + ca11 * v6;
+  y[28] = madd<F>(ca11, v28, -(sa11 * v6));
+  y[6] = madd<F>(sa11, v28, ca11 * v6);
   const P ca12 = splat<P>(s.ca[12]), sa12 = splat<P>(s.sa[12]);
-  y[29] = ca12 * v29 - sa12 * v5;
-  y[5] = sa12 * v29 + ca12 * v5;
+  y[29] = madd<F>(ca12, v29, -(sa12 * v5));
+  y[5] = madd<F>(sa12, v29, ca12 * v5);
   const P ca13 = splat<P>(s.ca[13]), sa13 = splat<P>(s.sa[13]);
-  y[30] = ca13 * v30 - sa13 * v4;
-  y[4] = sa13 * v30 + ca13 * v4;
+  y[30] = madd<F>(ca13, v30, -(sa13 * v4));
+  y[4] = madd<F>(sa13, v30, ca13 * v4);
   const P ca14 = splat<P>(s.ca[14]), sa14 = splat<P>(s.sa[14]);
-  y[31] = ca14 * v31 - sa14 * v3;
-  y[3] = sa14 * v31 + ca14 * v3;
+  y[31] = madd<F>(ca14, v31, -(sa14 * v3));
+  y[3] = madd<F>(sa14, v31, ca14 * v3);
   const P ca15 = splat<P>(s.ca[15]), sa15 = splat<P>(s.sa[15]);
-  y[32] = ca15 * v32 - sa15 * v2;
-  y[2] = sa15 * v32 + ca15 * v2;
+  y[32] = madd<F>(ca15, v32, -(sa15 * v2));
+  y[2] = madd<F>(sa15, v32, ca15 * v2);
   const P ca16 = splat<P>(s.ca[16]), sa16 = splat<P>(s.sa[16]);
-  y[33] = ca16 * v33 - sa16 * v1;
-  y[1] = sa16 * v33 + ca16 * v1;
+  y[33] = madd<F>(ca16, v33, -(sa16 * v1));
+  y[1] = madd<F>(sa16, v33, ca16 * v1);
   const P ca17 = splat<P>(s.ca[17]), sa17 = splat<P>(s.sa[17]);
-  y[34] = ca17 * v34 - sa17 * v0;
-  y[0] = sa17 * v34 + ca17 * v0;
+  y[34] = madd<F>(ca17, v34, -(sa17 * v0));
+  y[0] = madd<F>(sa17, v34, ca17 * v0);
 }
 
 // Band 18 of Z(a) X90^T Z(b) X90 Z(g), Ry(b) = Rx(-90) Rz(b) Rx(+90).
-template <class T, class P, class S>
-inline void zxzxz_band18(const S& s, const P* __restrict x, P* __restrict y) {
+template <bool F, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void zxzxz_band18(const S& s, const P* __restrict x, P* __restrict y) {
   const P t18 = x[18];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
-  const P t19 = cg1 * x[19] - sg1 * x[17];
-  const P t17 = sg1 * x[19] + cg1 * x[17];
+  const P t19 = madd<F>(cg1, x[19], -(sg1 * x[17]));
+  const P t17 = madd<F>(sg1, x[19], cg1 * x[17]);
   const P cg2 = splat<P>(s.cg[2]), sg2 = splat<P>(s.sg[2]);
-  const P t20 = cg2 * x[20] - sg2 * x[16];
-  const P t16 = sg2 * x[20] + cg2 * x[16];
+  const P t20 = madd<F>(cg2, x[20], -(sg2 * x[16]));
+  const P t16 = madd<F>(sg2, x[20], cg2 * x[16]);
   const P cg3 = splat<P>(s.cg[3]), sg3 = splat<P>(s.sg[3]);
-  const P t21 = cg3 * x[21] - sg3 * x[15];
-  const P t15 = sg3 * x[21] + cg3 * x[15];
+  const P t21 = madd<F>(cg3, x[21], -(sg3 * x[15]));
+  const P t15 = madd<F>(sg3, x[21], cg3 * x[15]);
   const P cg4 = splat<P>(s.cg[4]), sg4 = splat<P>(s.sg[4]);
-  const P t22 = cg4 * x[22] - sg4 * x[14];
-  const P t14 = sg4 * x[22] + cg4 * x[14];
+  const P t22 = madd<F>(cg4, x[22], -(sg4 * x[14]));
+  const P t14 = madd<F>(sg4, x[22], cg4 * x[14]);
   const P cg5 = splat<P>(s.cg[5]), sg5 = splat<P>(s.sg[5]);
-  const P t23 = cg5 * x[23] - sg5 * x[13];
-  const P t13 = sg5 * x[23] + cg5 * x[13];
+  const P t23 = madd<F>(cg5, x[23], -(sg5 * x[13]));
+  const P t13 = madd<F>(sg5, x[23], cg5 * x[13]);
   const P cg6 = splat<P>(s.cg[6]), sg6 = splat<P>(s.sg[6]);
-  const P t24 = cg6 * x[24] - sg6 * x[12];
-  const P t12 = sg6 * x[24] + cg6 * x[12];
+  const P t24 = madd<F>(cg6, x[24], -(sg6 * x[12]));
+  const P t12 = madd<F>(sg6, x[24], cg6 * x[12]);
   const P cg7 = splat<P>(s.cg[7]), sg7 = splat<P>(s.sg[7]);
-  const P t25 = cg7 * x[25] - sg7 * x[11];
-  const P t11 = sg7 * x[25] + cg7 * x[11];
+  const P t25 = madd<F>(cg7, x[25], -(sg7 * x[11]));
+  const P t11 = madd<F>(sg7, x[25], cg7 * x[11]);
   const P cg8 = splat<P>(s.cg[8]), sg8 = splat<P>(s.sg[8]);
-  const P t26 = cg8 * x[26] - sg8 * x[10];
-  const P t10 = sg8 * x[26] + cg8 * x[10];
+  const P t26 = madd<F>(cg8, x[26], -(sg8 * x[10]));
+  const P t10 = madd<F>(sg8, x[26], cg8 * x[10]);
   const P cg9 = splat<P>(s.cg[9]), sg9 = splat<P>(s.sg[9]);
-  const P t27 = cg9 * x[27] - sg9 * x[9];
-  const P t9 = sg9 * x[27] + cg9 * x[9];
+  const P t27 = madd<F>(cg9, x[27], -(sg9 * x[9]));
+  const P t9 = madd<F>(sg9, x[27], cg9 * x[9]);
   const P cg10 = splat<P>(s.cg[10]), sg10 = splat<P>(s.sg[10]);
-  const P t28 = cg10 * x[28] - sg10 * x[8];
-  const P t8 = sg10 * x[28] + cg10 * x[8];
+  const P t28 = madd<F>(cg10, x[28], -(sg10 * x[8]));
+  const P t8 = madd<F>(sg10, x[28], cg10 * x[8]);
   const P cg11 = splat<P>(s.cg[11]), sg11 = splat<P>(s.sg[11]);
-  const P t29 = cg11 * x[29] - sg11 * x[7];
-  const P t7 = sg11 * x[29] + cg11 * x[7];
+  const P t29 = madd<F>(cg11, x[29], -(sg11 * x[7]));
+  const P t7 = madd<F>(sg11, x[29], cg11 * x[7]);
   const P cg12 = splat<P>(s.cg[12]), sg12 = splat<P>(s.sg[12]);
-  const P t30 = cg12 * x[30] - sg12 * x[6];
-  const P t6 = sg12 * x[30] + cg12 * x[6];
+  const P t30 = madd<F>(cg12, x[30], -(sg12 * x[6]));
+  const P t6 = madd<F>(sg12, x[30], cg12 * x[6]);
   const P cg13 = splat<P>(s.cg[13]), sg13 = splat<P>(s.sg[13]);
-  const P t31 = cg13 * x[31] - sg13 * x[5];
-  const P t5 = sg13 * x[31] + cg13 * x[5];
+  const P t31 = madd<F>(cg13, x[31], -(sg13 * x[5]));
+  const P t5 = madd<F>(sg13, x[31], cg13 * x[5]);
   const P cg14 = splat<P>(s.cg[14]), sg14 = splat<P>(s.sg[14]);
-  const P t32 = cg14 * x[32] - sg14 * x[4];
-  const P t4 = sg14 * x[32] + cg14 * x[4];
+  const P t32 = madd<F>(cg14, x[32], -(sg14 * x[4]));
+  const P t4 = madd<F>(sg14, x[32], cg14 * x[4]);
   const P cg15 = splat<P>(s.cg[15]), sg15 = splat<P>(s.sg[15]);
-  const P t33 = cg15 * x[33] - sg15 * x[3];
-  const P t3 = sg15 * x[33] + cg15 * x[3];
+  const P t33 = madd<F>(cg15, x[33], -(sg15 * x[3]));
+  const P t3 = madd<F>(sg15, x[33], cg15 * x[3]);
   const P cg16 = splat<P>(s.cg[16]), sg16 = splat<P>(s.sg[16]);
-  const P t34 = cg16 * x[34] - sg16 * x[2];
-  const P t2 = sg16 * x[34] + cg16 * x[2];
+  const P t34 = madd<F>(cg16, x[34], -(sg16 * x[2]));
+  const P t2 = madd<F>(sg16, x[34], cg16 * x[2]);
   const P cg17 = splat<P>(s.cg[17]), sg17 = splat<P>(s.sg[17]);
-  const P t35 = cg17 * x[35] - sg17 * x[1];
-  const P t1 = sg17 * x[35] + cg17 * x[1];
+  const P t35 = madd<F>(cg17, x[35], -(sg17 * x[1]));
+  const P t1 = madd<F>(sg17, x[35], cg17 * x[1]);
   const P cg18 = splat<P>(s.cg[18]), sg18 = splat<P>(s.sg[18]);
-  const P t36 = cg18 * x[36] - sg18 * x[0];
-  const P t0 = sg18 * x[36] + cg18 * x[0];
-  const P u0 = T(0.70741795764419735) * t19 - T(0.56929305652862716) * t21 + T(0.36675012948759383) * t23 - T(0.18700660668699193) * t25 + T(0.074026077293894155) * t27 - T(0.022043115180348915) * t29 + T(0.0046844233906735326) * t31 - T(0.00064467255170518479) * t33 + T(4.5776367187517151e-05) * t35;
-  const P u1 = T(-0.00025939941406248948) * t1 + T(0.0032233627585261898) * t3 - T(0.020299168026252201) * t5 + T(0.080824755661279682) * t7 - T(0.22207823188168269) * t9 + T(0.43634874893631487) * t11 - T(0.61125021581265626) * t13 + T(0.56929305652862761) * t15 - T(0.23580598588139939) * t17;
-  const P u2 = T(0.45094729692440105) * t19 - T(0.46757359705670953) * t23 + T(0.59604172385823317) * t25 - T(0.42469481000861575) * t27 + T(0.19672099553796776) * t29 - T(0.059722206450861896) * t31 + T(0.011095647515290404) * t33 - T(0.001021313508952802) * t35;
-  const P u3 = T(0.0032233627585262483) * t1 - T(0.030288696289062549) * t3 + T(0.13693169631263696) * t5 - T(0.36156559177501157) * t7 + T(0.57294558710378152) * t9 - T(0.46475828310697709) * t11 - T(0.043403142026856696) * t13 + T(0.4716119717627999) * t15 - T(0.28464652826431414) * t17;
-  const P u4 = T(0.34685420291325325) * t19 + T(0.2462913196953388) * t21 - T(0.44879772317375483) * t23 - T(0.042378302742944435) * t25 + T(0.52430564409629721) * t27 - T(0.51941798882909362) * t29 + T(0.25737898314419783) * t31 - T(0.069335160116753905) * t33 + T(0.0086411776728069333) * t35;
-  const P u5 = T(-0.020299168026252219) * t1 + T(0.13693169631263682) * t3 - T(0.40466308593750028) * t5 + T(0.57499088870998227) * t7 - T(0.22569633853965321) * t9 - T(0.37523348811162144) * t11 + T(0.31538289198373232) * t13 + T(0.3115366152663831) * t15 - T(0.31338551348802612) * t17;
-  const P u6 = T(0.27574248865502637) * t19 + T(0.3654875668186589) * t21 - T(0.18499996494602189) * t23 - T(0.42449329407318581) * t25 + T(0.18840238860857583) * t27 + T(0.44577965576656942) * t29 - T(0.53274147253851023) * t31 + T(0.2369027521086283) * t33 - T(0.042591344898411446) * t35;
-  const P u7 = T(0.08082475566127971) * t1 - T(0.36156559177501152) * t3 + T(0.57499088870998316) * t5 - T(0.13562011718749994) * t7 - T(0.44642622861928721) * t9 + T(0.056958261580051045) * t11 + T(0.42447649676023536) * t13 + T(0.14186834000403412) * t15 - T(0.33299069066932152) * t17;
-  const P u8 = T(0.21861909883641945) * t19 + T(0.40361155600263315) * t21 + T(0.10267249009385446) * t23 - T(0.35151234904847228) * t25 - T(0.34832065295204617) * t27 + T(0.22823148162714746) * t29 + T(0.47464686901042819) * t31 - T(0.48674774163942663) * t33 + T(0.1398961364666354) * t35;
-  const P u9 = T(-0.22207823188168316) * t1 + T(0.5729455871037813) * t3 - T(0.22569633853965318) * t5 - T(0.4464262286192871) * t7 - T(0.03338623046875009) * t9 + T(0.36465604658723538) * t11 + T(0.34260643045024142) * t13 - T(0.016428550822381593) * t15 - T(0.34704706042212996) * t17;
-  const P u10 = T(0.16896489200805212) * t19 + T(0.38392694922830045) * t21 + T(0.30769468269898731) * t23 - T(0.028901548260989701) * t25 - T(0.37308250376938812) * t27 - T(0.37721741261425668) * t29 + T(0.10143095447342801) * t31 + T(0.57580774730235185) * t33 - T(0.32436601901989526) * t35;
-  const P u11 = T(0.43634874893631509) * t1 - T(0.46475828310697659) * t3 - T(0.37523348811162172) * t5 + T(0.056958261580050774) * t7 + T(0.36465604658723494) * t9 + T(0.37823486328125011) * t11 + T(0.15094143457595829) * t13 - T(0.15217485602490977) * t15 - T(0.35718195059446167) * t17;
-  const P u12 = T(0.12373145719523283) * t19 + T(0.32214671166287168) * t21 + T(0.38757544329160926) * t23 + T(0.27750447814137613) * t25 + T(0.014688437208750913) * t27 - T(0.29596380890234125) * t29 - T(0.46423104722187253) * t31 - T(0.24277324177802434) * t33 + T(0.53984157355486784) * t35;
-  const P u13 = T(-0.61125021581265682) * t1 - T(0.043403142026856252) * t3 + T(0.31538289198373276) * t5 + T(0.42447649676023508) * t7 + T(0.34260643045024131) * t9 + T(0.15094143457595838) * t11 - T(0.071411132812499986) * t13 - T(0.25864752011639575) * t15 - T(0.36425554719685904) * t17;
-  const P u14 = T(0.081196672105008888) * t19 + T(0.23062180431601964) * t21 + T(0.34171385710553104) * t23 + T(0.39092433904240753) * t25 + T(0.35812733554577797) * t27 + T(0.22908145591916609) * t29 - T(0.31153661526638288) * t33 - T(0.6267710269760518) * t35;
-  const P u15 = T(0.56929305652862816) * t1 + T(0.47161197176279973) * t3 + T(0.31153661526638343) * t5 + T(0.14186834000403434) * t7 - T(0.01642855082238124) * t9 - T(0.15217485602490965) * t11 - T(0.25864752011639558) * t13 - T(0.33166503906250067) * t15 - T(0.3687526995754033) * t17;
-  const P u16 = T(0.04023421806008555) * t19 + T(0.1199905379111362) * t21 + T(0.19754530654099933) * t23 + T(0.27119275423456035) * t25 + T(0.3387828496589616) * t27 + T(0.39729702636935554) * t29 + T(0.44188860894549964) * t31 + T(0.46311376269651566) * t33 + T(0.43480475402586893) * t35;
-  const P u17 = T(-0.23580598588139925) * t1 - T(0.28464652826431364) * t3 - T(0.31338551348802585) * t5 - T(0.33299069066932091) * t7 - T(0.34704706042212924) * t9 - T(0.35718195059446123) * t11 - T(0.36425554719685821) * t13 - T(0.36875269957540235) * t15 - T(0.37094116210937489) * t17;
-  const P u18 = T(-0.18547058105468761) * t18 - T(0.26306533589443798) * t20 - T(0.26544606619315658) * t22 - T(0.26966645902552411) * t24 - T(0.276187833476011) * t26 - T(0.2858815676867647) * t28 - T(0.30048341062191791) * t30 - T(0.32397908970883355) * t32 - T(0.3685563180293055) * t34 - T(0.51392723136949958) * t36;
-  const P u19 = T(-0.70741795764419746) * t0 - T(0.45094729692440078) * t2 - T(0.34685420291325308) * t4 - T(0.27574248865502632) * t6 - T(0.21861909883641917) * t8 - T(0.16896489200805198) * t10 - T(0.12373145719523275) * t12 - T(0.081196672105008819) * t14 - T(0.04023421806008548) * t16;
-  const P u20 = T(-0.26306533589443837) * t18 - T(0.364395141601563) * t20 - T(0.3412718555286367) * t22 - T(0.30196261862922752) * t24 - T(0.2451211598442978) * t26 - T(0.1683592512546272) * t28 - T(0.067294062341989286) * t30 + T(0.067181465209193922) * t32 + T(0.25984554074316124) * t34 + T(0.65220713103880312) * t36;
-  const P u21 = T(0.56929305652862794) * t0 - T(0.24629131969533877) * t4 - T(0.36548756681865918) * t6 - T(0.40361155600263321) * t8 - T(0.38392694922830095) * t10 - T(0.32214671166287184) * t12 - T(0.23062180431601992) * t14 - T(0.11999053791113624) * t16;
-  const P u22 = T(-0.26544606619315675) * t18 - T(0.34127185552863648) * t20 - T(0.2427978515625) * t22 - T(0.091892253754270903) * t24 + T(0.090812231545205763) * t26 + T(0.27447880290089965) * t28 + T(0.41496321041127882) * t30 + T(0.4474104007720382) * t32 + T(0.26219713203028677) * t34 - T(0.47007827023203885) * t36;
-  const P u23 = T(-0.36675012948759406) * t0 + T(0.46757359705671037) * t2 + T(0.44879772317375477) * t4 + T(0.18499996494602217) * t6 - T(0.1026724900938541) * t8 - T(0.30769468269898731) * t10 - T(0.38757544329160915) * t12 - T(0.34171385710553126) * t14 - T(0.19754530654099917) * t16;
-  const P u24 = T(-0.26966645902552455) * t18 - T(0.30196261862922763) * t20 - T(0.091892253754270861) * t22 + T(0.16995239257812492) * t24 + T(0.37097257593315919) * t26 + T(0.39509651202585361) * t28 + T(0.17019535944607292) * t30 - T(0.25690480721260223) * t32 - T(0.58071068389878799) * t34 + T(0.26992078677743381) * t36;
-  const P u25 = T(0.18700660668699218) * t0 - T(0.59604172385823373) * t2 + T(0.042378302742944365) * t4 + T(0.42449329407318592) * t6 + T(0.35151234904847228) * t8 + T(0.028901548260989892) * t10 - T(0.27750447814137591) * t12 - T(0.39092433904240759) * t14 - T(0.27119275423455996) * t16;
-  const P u26 = T(-0.27618783347601139) * t18 - T(0.24512115984429789) * t20 + T(0.090812231545205888) * t22 + T(0.37097257593315913) * t24 + T(0.35260009765625022) * t26 - T(0.011056043049766201) * t28 - T(0.42810833926395697) * t30 - T(0.33328224924731836) * t32 + T(0.53307587551416469) * t34 - T(0.12163725713246078) * t36;
-  const P u27 = T(-0.074026077293894502) * t0 + T(0.42469481000861664) * t2 - T(0.5243056440962971) * t4 - T(0.18840238860857625) * t6 + T(0.34832065295204645) * t8 + T(0.37308250376938873) * t10 - T(0.014688437208751053) * t12 - T(0.35812733554577858) * t14 - T(0.33878284965896149) * t16;
-  const P u28 = T(-0.28588156768676504) * t18 - T(0.16835925125462717) * t20 + T(0.27447880290090004) * t22 + T(0.3950965120258535) * t24 - T(0.011056043049766269) * t26 - T(0.450286865234375) * t28 - T(0.15829659279348282) * t30 + T(0.57980832755896794) * t32 - T(0.30431831364529383) * t34 + T(0.0419688409399906) * t36;
-  const P u29 = T(0.022043115180349085) * t0 - T(0.19672099553796812) * t2 + T(0.51941798882909362) * t4 - T(0.44577965576657025) * t6 - T(0.22823148162714732) * t8 + T(0.37721741261425729) * t10 + T(0.29596380890234059) * t12 - T(0.22908145591916648) * t14 - T(0.39729702636935521) * t16;
-  const P u30 = T(-0.30048341062191852) * t18 - T(0.067294062341989286) * t20 + T(0.41496321041127937) * t22 + T(0.17019535944607306) * t24 - T(0.42810833926395708) * t26 - T(0.15829659279348307) * t28 + T(0.571899414062501) * t30 - T(0.39418796792773025) * t32 + T(0.11453938634837202) * t34 - T(0.01064783622460286) * t36;
-  const P u31 = T(-0.0046844233906736411) * t0 + T(0.059722206450861945) * t2 - T(0.25737898314419799) * t4 + T(0.5327414725385109) * t6 - T(0.47464686901042824) * t8 - T(0.10143095447342818) * t10 + T(0.46423104722187203) * t12 - T(0.44188860894549908) * t16;
-  const P u32 = T(-0.32397908970883388) * t18 + T(0.067181465209193991) * t20 + T(0.44741040077203836) * t22 - T(0.25690480721260217) * t24 - T(0.33328224924731831) * t26 + T(0.57980832755896827) * t28 - T(0.39418796792773036) * t30 + T(0.14472198486328142) * t32 - T(0.027591002550408875) * t34 + T(0.0018516809298871194) * t36;
-  const P u33 = T(0.00064467255170537105) * t0 - T(0.011095647515290357) * t2 + T(0.069335160116753836) * t4 - T(0.23690275210862843) * t6 + T(0.48674774163942658) * t8 - T(0.57580774730235207) * t10 + T(0.24277324177802401) * t12 + T(0.31153661526638327) * t14 - T(0.46311376269651522) * t16;
-  const P u34 = T(-0.368556318029306) * t18 + T(0.25984554074316124) * t20 + T(0.26219713203028655) * t22 - T(0.58071068389878777) * t24 + T(0.53307587551416447) * t26 - T(0.30431831364529371) * t28 + T(0.11453938634837206) * t30 - T(0.027591002550408705) * t32 + T(0.0037689208984375794) * t34 - T(0.00019149628292862637) * t36;
-  const P u35 = T(-4.5776367187666723e-05) * t0 + T(0.0010213135089525531) * t2 - T(0.0086411776728067841) * t4 + T(0.042591344898411321) * t6 - T(0.13989613646663551) * t8 + T(0.32436601901989537) * t10 - T(0.53984157355486773) * t12 + T(0.62677102697605214) * t14 - T(0.4348047540258686) * t16;
-  const P u36 = T(-0.5139272313695008) * t18 + T(0.6522071310388039) * t20 - T(0.47007827023203985) * t22 + T(0.26992078677743453) * t24 - T(0.12163725713246118) * t26 + T(0.041968840939990731) * t28 - T(0.010647836224602749) * t30 + T(0.0018516809298870873) * t32 - T(0.00019149628292852594) * t34 + T(7.6293945313102816e-06) * t36;
+  const P t36 = madd<F>(cg18, x[36], -(sg18 * x[0]));
+  const P t0 = madd<F>(sg18, x[36], cg18 * x[0]);
+  const P u0 = madd<F>(T(4.5776367187517151e-05), t35, madd<F>(T(-0.00064467255170518479), t33, madd<F>(T(0.0046844233906735326), t31, madd<F>(T(-0.022043115180348915), t29, madd<F>(T(0.074026077293894155), t27, madd<F>(T(-0.18700660668699193), t25, madd<F>(T(0.36675012948759383), t23, madd<F>(T(-0.56929305652862716), t21, T(0.70741795764419735) * t19))))))));
+  const P u1 = madd<F>(T(-0.23580598588139939), t17, madd<F>(T(0.56929305652862761), t15, madd<F>(T(-0.61125021581265626), t13, madd<F>(T(0.43634874893631487), t11, madd<F>(T(-0.22207823188168269), t9, madd<F>(T(0.080824755661279682), t7, madd<F>(T(-0.020299168026252201), t5, madd<F>(T(0.0032233627585261898), t3, T(-0.00025939941406248948) * t1))))))));
+  const P u2 = madd<F>(T(-0.001021313508952802), t35, madd<F>(T(0.011095647515290404), t33, madd<F>(T(-0.059722206450861896), t31, madd<F>(T(0.19672099553796776), t29, madd<F>(T(-0.42469481000861575), t27, madd<F>(T(0.59604172385823317), t25, madd<F>(T(-0.46757359705670953), t23, T(0.45094729692440105) * t19)))))));
+  const P u3 = madd<F>(T(-0.28464652826431414), t17, madd<F>(T(0.4716119717627999), t15, madd<F>(T(-0.043403142026856696), t13, madd<F>(T(-0.46475828310697709), t11, madd<F>(T(0.57294558710378152), t9, madd<F>(T(-0.36156559177501157), t7, madd<F>(T(0.13693169631263696), t5, madd<F>(T(-0.030288696289062549), t3, T(0.0032233627585262483) * t1))))))));
+  const P u4 = madd<F>(T(0.0086411776728069333), t35, madd<F>(T(-0.069335160116753905), t33, madd<F>(T(0.25737898314419783), t31, madd<F>(T(-0.51941798882909362), t29, madd<F>(T(0.52430564409629721), t27, madd<F>(T(-0.042378302742944435), t25, madd<F>(T(-0.44879772317375483), t23, madd<F>(T(0.2462913196953388), t21, T(0.34685420291325325) * t19))))))));
+  const P u5 = madd<F>(T(-0.31338551348802612), t17, madd<F>(T(0.3115366152663831), t15, madd<F>(T(0.31538289198373232), t13, madd<F>(T(-0.37523348811162144), t11, madd<F>(T(-0.22569633853965321), t9, madd<F>(T(0.57499088870998227), t7, madd<F>(T(-0.40466308593750028), t5, madd<F>(T(0.13693169631263682), t3, T(-0.020299168026252219) * t1))))))));
+  const P u6 = madd<F>(T(-0.042591344898411446), t35, madd<F>(T(0.2369027521086283), t33, madd<F>(T(-0.53274147253851023), t31, madd<F>(T(0.44577965576656942), t29, madd<F>(T(0.18840238860857583), t27, madd<F>(T(-0.42449329407318581), t25, madd<F>(T(-0.18499996494602189), t23, madd<F>(T(0.3654875668186589), t21, T(0.27574248865502637) * t19))))))));
+  const P u7 = madd<F>(T(-0.33299069066932152), t17, madd<F>(T(0.14186834000403412), t15, madd<F>(T(0.42447649676023536), t13, madd<F>(T(0.056958261580051045), t11, madd<F>(T(-0.44642622861928721), t9, madd<F>(T(-0.13562011718749994), t7, madd<F>(T(0.57499088870998316), t5, madd<F>(T(-0.36156559177501152), t3, T(0.08082475566127971) * t1))))))));
+  const P u8 = madd<F>(T(0.1398961364666354), t35, madd<F>(T(-0.48674774163942663), t33, madd<F>(T(0.47464686901042819), t31, madd<F>(T(0.22823148162714746), t29, madd<F>(T(-0.34832065295204617), t27, madd<F>(T(-0.35151234904847228), t25, madd<F>(T(0.10267249009385446), t23, madd<F>(T(0.40361155600263315), t21, T(0.21861909883641945) * t19))))))));
+  const P u9 = madd<F>(T(-0.34704706042212996), t17, madd<F>(T(-0.016428550822381593), t15, madd<F>(T(0.34260643045024142), t13, madd<F>(T(0.36465604658723538), t11, madd<F>(T(-0.03338623046875009), t9, madd<F>(T(-0.4464262286192871), t7, madd<F>(T(-0.22569633853965318), t5, madd<F>(T(0.5729455871037813), t3, T(-0.22207823188168316) * t1))))))));
+  const P u10 = madd<F>(T(-0.32436601901989526), t35, madd<F>(T(0.57580774730235185), t33, madd<F>(T(0.10143095447342801), t31, madd<F>(T(-0.37721741261425668), t29, madd<F>(T(-0.37308250376938812), t27, madd<F>(T(-0.028901548260989701), t25, madd<F>(T(0.30769468269898731), t23, madd<F>(T(0.38392694922830045), t21, T(0.16896489200805212) * t19))))))));
+  const P u11 = madd<F>(T(-0.35718195059446167), t17, madd<F>(T(-0.15217485602490977), t15, madd<F>(T(0.15094143457595829), t13, madd<F>(T(0.37823486328125011), t11, madd<F>(T(0.36465604658723494), t9, madd<F>(T(0.056958261580050774), t7, madd<F>(T(-0.37523348811162172), t5, madd<F>(T(-0.46475828310697659), t3, T(0.43634874893631509) * t1))))))));
+  const P u12 = madd<F>(T(0.53984157355486784), t35, madd<F>(T(-0.24277324177802434), t33, madd<F>(T(-0.46423104722187253), t31, madd<F>(T(-0.29596380890234125), t29, madd<F>(T(0.014688437208750913), t27, madd<F>(T(0.27750447814137613), t25, madd<F>(T(0.38757544329160926), t23, madd<F>(T(0.32214671166287168), t21, T(0.12373145719523283) * t19))))))));
+  const P u13 = madd<F>(T(-0.36425554719685904), t17, madd<F>(T(-0.25864752011639575), t15, madd<F>(T(-0.071411132812499986), t13, madd<F>(T(0.15094143457595838), t11, madd<F>(T(0.34260643045024131), t9, madd<F>(T(0.42447649676023508), t7, madd<F>(T(0.31538289198373276), t5, madd<F>(T(-0.043403142026856252), t3, T(-0.61125021581265682) * t1))))))));
+  const P u14 = madd<F>(T(-0.6267710269760518), t35, madd<F>(T(-0.31153661526638288), t33, madd<F>(T(0.22908145591916609), t29, madd<F>(T(0.35812733554577797), t27, madd<F>(T(0.39092433904240753), t25, madd<F>(T(0.34171385710553104), t23, madd<F>(T(0.23062180431601964), t21, T(0.081196672105008888) * t19)))))));
+  const P u15 = madd<F>(T(-0.3687526995754033), t17, madd<F>(T(-0.33166503906250067), t15, madd<F>(T(-0.25864752011639558), t13, madd<F>(T(-0.15217485602490965), t11, madd<F>(T(-0.01642855082238124), t9, madd<F>(T(0.14186834000403434), t7, madd<F>(T(0.31153661526638343), t5, madd<F>(T(0.47161197176279973), t3, T(0.56929305652862816) * t1))))))));
+  const P u16 = madd<F>(T(0.43480475402586893), t35, madd<F>(T(0.46311376269651566), t33, madd<F>(T(0.44188860894549964), t31, madd<F>(T(0.39729702636935554), t29, madd<F>(T(0.3387828496589616), t27, madd<F>(T(0.27119275423456035), t25, madd<F>(T(0.19754530654099933), t23, madd<F>(T(0.1199905379111362), t21, T(0.04023421806008555) * t19))))))));
+  const P u17 = madd<F>(T(-0.37094116210937489), t17, madd<F>(T(-0.36875269957540235), t15, madd<F>(T(-0.36425554719685821), t13, madd<F>(T(-0.35718195059446123), t11, madd<F>(T(-0.34704706042212924), t9, madd<F>(T(-0.33299069066932091), t7, madd<F>(T(-0.31338551348802585), t5, madd<F>(T(-0.28464652826431364), t3, T(-0.23580598588139925) * t1))))))));
+  const P u18 = madd<F>(T(-0.51392723136949958), t36, madd<F>(T(-0.3685563180293055), t34, madd<F>(T(-0.32397908970883355), t32, madd<F>(T(-0.30048341062191791), t30, madd<F>(T(-0.2858815676867647), t28, madd<F>(T(-0.276187833476011), t26, madd<F>(T(-0.26966645902552411), t24, madd<F>(T(-0.26544606619315658), t22, madd<F>(T(-0.26306533589443798), t20, T(-0.18547058105468761) * t18)))))))));
+  const P u19 = madd<F>(T(-0.04023421806008548), t16, madd<F>(T(-0.081196672105008819), t14, madd<F>(T(-0.12373145719523275), t12, madd<F>(T(-0.16896489200805198), t10, madd<F>(T(-0.21861909883641917), t8, madd<F>(T(-0.27574248865502632), t6, madd<F>(T(-0.34685420291325308), t4, madd<F>(T(-0.45094729692440078), t2, T(-0.70741795764419746) * t0))))))));
+  const P u20 = madd<F>(T(0.65220713103880312), t36, madd<F>(T(0.25984554074316124), t34, madd<F>(T(0.067181465209193922), t32, madd<F>(T(-0.067294062341989286), t30, madd<F>(T(-0.1683592512546272), t28, madd<F>(T(-0.2451211598442978), t26, madd<F>(T(-0.30196261862922752), t24, madd<F>(T(-0.3412718555286367), t22, madd<F>(T(-0.364395141601563), t20, T(-0.26306533589443837) * t18)))))))));
+  const P u21 = madd<F>(T(-0.11999053791113624), t16, madd<F>(T(-0.23062180431601992), t14, madd<F>(T(-0.32214671166287184), t12, madd<F>(T(-0.38392694922830095), t10, madd<F>(T(-0.40361155600263321), t8, madd<F>(T(-0.36548756681865918), t6, madd<F>(T(-0.24629131969533877), t4, T(0.56929305652862794) * t0)))))));
+  const P u22 = madd<F>(T(-0.47007827023203885), t36, madd<F>(T(0.26219713203028677), t34, madd<F>(T(0.4474104007720382), t32, madd<F>(T(0.41496321041127882), t30, madd<F>(T(0.27447880290089965), t28, madd<F>(T(0.090812231545205763), t26, madd<F>(T(-0.091892253754270903), t24, madd<F>(T(-0.2427978515625), t22, madd<F>(T(-0.34127185552863648), t20, T(-0.26544606619315675) * t18)))))))));
+  const P u23 = madd<F>(T(-0.19754530654099917), t16, madd<F>(T(-0.34171385710553126), t14, madd<F>(T(-0.38757544329160915), t12, madd<F>(T(-0.30769468269898731), t10, madd<F>(T(-0.1026724900938541), t8, madd<F>(T(0.18499996494602217), t6, madd<F>(T(0.44879772317375477), t4, madd<F>(T(0.46757359705671037), t2, T(-0.36675012948759406) * t0))))))));
+  const P u24 = madd<F>(T(0.26992078677743381), t36, madd<F>(T(-0.58071068389878799), t34, madd<F>(T(-0.25690480721260223), t32, madd<F>(T(0.17019535944607292), t30, madd<F>(T(0.39509651202585361), t28, madd<F>(T(0.37097257593315919), t26, madd<F>(T(0.16995239257812492), t24, madd<F>(T(-0.091892253754270861), t22, madd<F>(T(-0.30196261862922763), t20, T(-0.26966645902552455) * t18)))))))));
+  const P u25 = madd<F>(T(-0.27119275423455996), t16, madd<F>(T(-0.39092433904240759), t14, madd<F>(T(-0.27750447814137591), t12, madd<F>(T(0.028901548260989892), t10, madd<F>(T(0.35151234904847228), t8, madd<F>(T(0.42449329407318592), t6, madd<F>(T(0.042378302742944365), t4, madd<F>(T(-0.59604172385823373), t2, T(0.18700660668699218) * t0))))))));
+  const P u26 = madd<F>(T(-0.12163725713246078), t36, madd<F>(T(0.53307587551416469), t34, madd<F>(T(-0.33328224924731836), t32, madd<F>(T(-0.42810833926395697), t30, madd<F>(T(-0.011056043049766201), t28, madd<F>(T(0.35260009765625022), t26, madd<F>(T(0.37097257593315913), t24, madd<F>(T(0.090812231545205888), t22, madd<F>(T(-0.24512115984429789), t20, T(-0.27618783347601139) * t18)))))))));
+  const P u27 = madd<F>(T(-0.33878284965896149), t16, madd<F>(T(-0.35812733554577858), t14, madd<F>(T(-0.014688437208751053), t12, madd<F>(T(0.37308250376938873), t10, madd<F>(T(0.34832065295204645), t8, madd<F>(T(-0.18840238860857625), t6, madd<F>(T(-0.5243056440962971), t4, madd<F>(T(0.42469481000861664), t2, T(-0.074026077293894502) * t0))))))));
+  const P u28 = madd<F>(T(0.0419688409399906), t36, madd<F>(T(-0.30431831364529383), t34, madd<F>(T(0.57980832755896794), t32, madd<F>(T(-0.15829659279348282), t30, madd<F>(T(-0.450286865234375), t28, madd<F>(T(-0.011056043049766269), t26, madd<F>(T(0.3950965120258535), t24, madd<F>(T(0.27447880290090004), t22, madd<F>(T(-0.16835925125462717), t20, T(-0.28588156768676504) * t18)))))))));
+  const P u29 = madd<F>(T(-0.39729702636935521), t16, madd<F>(T(-0.22908145591916648), t14, madd<F>(T(0.29596380890234059), t12, madd<F>(T(0.37721741261425729), t10, madd<F>(T(-0.22823148162714732), t8, madd<F>(T(-0.44577965576657025), t6, madd<F>(T(0.51941798882909362), t4, madd<F>(T(-0.19672099553796812), t2, T(0.022043115180349085) * t0))))))));
+  const P u30 = madd<F>(T(-0.01064783622460286), t36, madd<F>(T(0.11453938634837202), t34, madd<F>(T(-0.39418796792773025), t32, madd<F>(T(0.571899414062501), t30, madd<F>(T(-0.15829659279348307), t28, madd<F>(T(-0.42810833926395708), t26, madd<F>(T(0.17019535944607306), t24, madd<F>(T(0.41496321041127937), t22, madd<F>(T(-0.067294062341989286), t20, T(-0.30048341062191852) * t18)))))))));
+  const P u31 = madd<F>(T(-0.44188860894549908), t16, madd<F>(T(0.46423104722187203), t12, madd<F>(T(-0.10143095447342818), t10, madd<F>(T(-0.47464686901042824), t8, madd<F>(T(0.5327414725385109), t6, madd<F>(T(-0.25737898314419799), t4, madd<F>(T(0.059722206450861945), t2, T(-0.0046844233906736411) * t0)))))));
+  const P u32 = madd<F>(T(0.0018516809298871194), t36, madd<F>(T(-0.027591002550408875), t34, madd<F>(T(0.14472198486328142), t32, madd<F>(T(-0.39418796792773036), t30, madd<F>(T(0.57980832755896827), t28, madd<F>(T(-0.33328224924731831), t26, madd<F>(T(-0.25690480721260217), t24, madd<F>(T(0.44741040077203836), t22, madd<F>(T(0.067181465209193991), t20, T(-0.32397908970883388) * t18)))))))));
+  const P u33 = madd<F>(T(-0.46311376269651522), t16, madd<F>(T(0.31153661526638327), t14, madd<F>(T(0.24277324177802401), t12, madd<F>(T(-0.57580774730235207), t10, madd<F>(T(0.48674774163942658), t8, madd<F>(T(-0.23690275210862843), t6, madd<F>(T(0.069335160116753836), t4, madd<F>(T(-0.011095647515290357), t2, T(0.00064467255170537105) * t0))))))));
+  const P u34 = madd<F>(T(-0.00019149628292862637), t36, madd<F>(T(0.0037689208984375794), t34, madd<F>(T(-0.027591002550408705), t32, madd<F>(T(0.11453938634837206), t30, madd<F>(T(-0.30431831364529371), t28, madd<F>(T(0.53307587551416447), t26, madd<F>(T(-0.58071068389878777), t24, madd<F>(T(0.26219713203028655), t22, madd<F>(T(0.25984554074316124), t20, T(-0.368556318029306) * t18)))))))));
+  const P u35 = madd<F>(T(-0.4348047540258686), t16, madd<F>(T(0.62677102697605214), t14, madd<F>(T(-0.53984157355486773), t12, madd<F>(T(0.32436601901989537), t10, madd<F>(T(-0.13989613646663551), t8, madd<F>(T(0.042591344898411321), t6, madd<F>(T(-0.0086411776728067841), t4, madd<F>(T(0.0010213135089525531), t2, T(-4.5776367187666723e-05) * t0))))))));
+  const P u36 = madd<F>(T(7.6293945313102816e-06), t36, madd<F>(T(-0.00019149628292852594), t34, madd<F>(T(0.0018516809298870873), t32, madd<F>(T(-0.010647836224602749), t30, madd<F>(T(0.041968840939990731), t28, madd<F>(T(-0.12163725713246118), t26, madd<F>(T(0.26992078677743453), t24, madd<F>(T(-0.47007827023203985), t22, madd<F>(T(0.6522071310388039), t20, T(-0.5139272313695008) * t18)))))))));
   const P w18 = u18;
   const P cb1 = splat<P>(s.cb[1]), sb1 = splat<P>(s.sb[1]);
-  const P w19 = cb1 * u19 - sb1 * u17;
-  const P w17 = sb1 * u19 + cb1 * u17;
+  const P w19 = madd<F>(cb1, u19, -(sb1 * u17));
+  const P w17 = madd<F>(sb1, u19, cb1 * u17);
   const P cb2 = splat<P>(s.cb[2]), sb2 = splat<P>(s.sb[2]);
-  const P w20 = cb2 * u20 - sb2 * u16;
-  const P w16 = sb2 * u20 + cb2 * u16;
+  const P w20 = madd<F>(cb2, u20, -(sb2 * u16));
+  const P w16 = madd<F>(sb2, u20, cb2 * u16);
   const P cb3 = splat<P>(s.cb[3]), sb3 = splat<P>(s.sb[3]);
-  const P w21 = cb3 * u21 - sb3 * u15;
-  const P w15 = sb3 * u21 + cb3 * u15;
+  const P w21 = madd<F>(cb3, u21, -(sb3 * u15));
+  const P w15 = madd<F>(sb3, u21, cb3 * u15);
   const P cb4 = splat<P>(s.cb[4]), sb4 = splat<P>(s.sb[4]);
-  const P w22 = cb4 * u22 - sb4 * u14;
-  const P w14 = sb4 * u22 + cb4 * u14;
+  const P w22 = madd<F>(cb4, u22, -(sb4 * u14));
+  const P w14 = madd<F>(sb4, u22, cb4 * u14);
   const P cb5 = splat<P>(s.cb[5]), sb5 = splat<P>(s.sb[5]);
-  const P w23 = cb5 * u23 - sb5 * u13;
-  const P w13 = sb5 * u23 + cb5 * u13;
+  const P w23 = madd<F>(cb5, u23, -(sb5 * u13));
+  const P w13 = madd<F>(sb5, u23, cb5 * u13);
   const P cb6 = splat<P>(s.cb[6]), sb6 = splat<P>(s.sb[6]);
-  const P w24 = cb6 * u24 - sb6 * u12;
-  const P w12 = sb6 * u24 + cb6 * u12;
+  const P w24 = madd<F>(cb6, u24, -(sb6 * u12));
+  const P w12 = madd<F>(sb6, u24, cb6 * u12);
   const P cb7 = splat<P>(s.cb[7]), sb7 = splat<P>(s.sb[7]);
-  const P w25 = cb7 * u25 - sb7 * u11;
-  const P w11 = sb7 * u25 + cb7 * u11;
+  const P w25 = madd<F>(cb7, u25, -(sb7 * u11));
+  const P w11 = madd<F>(sb7, u25, cb7 * u11);
   const P cb8 = splat<P>(s.cb[8]), sb8 = splat<P>(s.sb[8]);
-  const P w26 = cb8 * u26 - sb8 * u10;
-  const P w10 = sb8 * u26 + cb8 * u10;
+  const P w26 = madd<F>(cb8, u26, -(sb8 * u10));
+  const P w10 = madd<F>(sb8, u26, cb8 * u10);
   const P cb9 = splat<P>(s.cb[9]), sb9 = splat<P>(s.sb[9]);
-  const P w27 = cb9 * u27 - sb9 * u9;
-  const P w9 = sb9 * u27 + cb9 * u9;
+  const P w27 = madd<F>(cb9, u27, -(sb9 * u9));
+  const P w9 = madd<F>(sb9, u27, cb9 * u9);
   const P cb10 = splat<P>(s.cb[10]), sb10 = splat<P>(s.sb[10]);
-  const P w28 = cb10 * u28 - sb10 * u8;
-  const P w8 = sb10 * u28 + cb10 * u8;
+  const P w28 = madd<F>(cb10, u28, -(sb10 * u8));
+  const P w8 = madd<F>(sb10, u28, cb10 * u8);
   const P cb11 = splat<P>(s.cb[11]), sb11 = splat<P>(s.sb[11]);
-  const P w29 = cb11 * u29 - sb11 * u7;
-  const P w7 = sb11 * u29 + cb11 * u7;
+  const P w29 = madd<F>(cb11, u29, -(sb11 * u7));
+  const P w7 = madd<F>(sb11, u29, cb11 * u7);
   const P cb12 = splat<P>(s.cb[12]), sb12 = splat<P>(s.sb[12]);
-  const P w30 = cb12 * u30 - sb12 * u6;
-  const P w6 = sb12 * u30 + cb12 * u6;
+  const P w30 = madd<F>(cb12, u30, -(sb12 * u6));
+  const P w6 = madd<F>(sb12, u30, cb12 * u6);
   const P cb13 = splat<P>(s.cb[13]), sb13 = splat<P>(s.sb[13]);
-  const P w31 = cb13 * u31 - sb13 * u5;
-  const P w5 = sb13 * u31 + cb13 * u5;
+  const P w31 = madd<F>(cb13, u31, -(sb13 * u5));
+  const P w5 = madd<F>(sb13, u31, cb13 * u5);
   const P cb14 = splat<P>(s.cb[14]), sb14 = splat<P>(s.sb[14]);
-  const P w32 = cb14 * u32 - sb14 * u4;
-  const P w4 = sb14 * u32 + cb14 * u4;
+  const P w32 = madd<F>(cb14, u32, -(sb14 * u4));
+  const P w4 = madd<F>(sb14, u32, cb14 * u4);
   const P cb15 = splat<P>(s.cb[15]), sb15 = splat<P>(s.sb[15]);
-  const P w33 = cb15 * u33 - sb15 * u3;
-  const P w3 = sb15 * u33 + cb15 * u3;
+  const P w33 = madd<F>(cb15, u33, -(sb15 * u3));
+  const P w3 = madd<F>(sb15, u33, cb15 * u3);
   const P cb16 = splat<P>(s.cb[16]), sb16 = splat<P>(s.sb[16]);
-  const P w34 = cb16 * u34 - sb16 * u2;
-  const P w2 = sb16 * u34 + cb16 * u2;
+  const P w34 = madd<F>(cb16, u34, -(sb16 * u2));
+  const P w2 = madd<F>(sb16, u34, cb16 * u2);
   const P cb17 = splat<P>(s.cb[17]), sb17 = splat<P>(s.sb[17]);
-  const P w35 = cb17 * u35 - sb17 * u1;
-  const P w1 = sb17 * u35 + cb17 * u1;
+  const P w35 = madd<F>(cb17, u35, -(sb17 * u1));
+  const P w1 = madd<F>(sb17, u35, cb17 * u1);
   const P cb18 = splat<P>(s.cb[18]), sb18 = splat<P>(s.sb[18]);
-  const P w36 = cb18 * u36 - sb18 * u0;
-  const P w0 = sb18 * u36 + cb18 * u0;
-  const P v0 = T(-0.70741795764419746) * w19 + T(0.56929305652862794) * w21 - T(0.36675012948759406) * w23 + T(0.18700660668699218) * w25 - T(0.074026077293894502) * w27 + T(0.022043115180349085) * w29 - T(0.0046844233906736411) * w31 + T(0.00064467255170537105) * w33 - T(4.5776367187666723e-05) * w35;
-  const P v1 = T(-0.00025939941406248948) * w1 + T(0.0032233627585262483) * w3 - T(0.020299168026252219) * w5 + T(0.08082475566127971) * w7 - T(0.22207823188168316) * w9 + T(0.43634874893631509) * w11 - T(0.61125021581265682) * w13 + T(0.56929305652862816) * w15 - T(0.23580598588139925) * w17;
-  const P v2 = T(-0.45094729692440078) * w19 + T(0.46757359705671037) * w23 - T(0.59604172385823373) * w25 + T(0.42469481000861664) * w27 - T(0.19672099553796812) * w29 + T(0.059722206450861945) * w31 - T(0.011095647515290357) * w33 + T(0.0010213135089525531) * w35;
-  const P v3 = T(0.0032233627585261898) * w1 - T(0.030288696289062549) * w3 + T(0.13693169631263682) * w5 - T(0.36156559177501152) * w7 + T(0.5729455871037813) * w9 - T(0.46475828310697659) * w11 - T(0.043403142026856252) * w13 + T(0.47161197176279973) * w15 - T(0.28464652826431364) * w17;
-  const P v4 = T(-0.34685420291325308) * w19 - T(0.24629131969533877) * w21 + T(0.44879772317375477) * w23 + T(0.042378302742944365) * w25 - T(0.5243056440962971) * w27 + T(0.51941798882909362) * w29 - T(0.25737898314419799) * w31 + T(0.069335160116753836) * w33 - T(0.0086411776728067841) * w35;
-  const P v5 = T(-0.020299168026252201) * w1 + T(0.13693169631263696) * w3 - T(0.40466308593750028) * w5 + T(0.57499088870998316) * w7 - T(0.22569633853965318) * w9 - T(0.37523348811162172) * w11 + T(0.31538289198373276) * w13 + T(0.31153661526638343) * w15 - T(0.31338551348802585) * w17;
-  const P v6 = T(-0.27574248865502632) * w19 - T(0.36548756681865918) * w21 + T(0.18499996494602217) * w23 + T(0.42449329407318592) * w25 - T(0.18840238860857625) * w27 - T(0.44577965576657025) * w29 + T(0.5327414725385109) * w31 - T(0.23690275210862843) * w33 + T(0.042591344898411321) * w35;
-  const P v7 = T(0.080824755661279682) * w1 - T(0.36156559177501157) * w3 + T(0.57499088870998227) * w5 - T(0.13562011718749994) * w7 - T(0.4464262286192871) * w9 + T(0.056958261580050774) * w11 + T(0.42447649676023508) * w13 + T(0.14186834000403434) * w15 - T(0.33299069066932091) * w17;
-  const P v8 = T(-0.21861909883641917) * w19 - T(0.40361155600263321) * w21 - T(0.1026724900938541) * w23 + T(0.35151234904847228) * w25 + T(0.34832065295204645) * w27 - T(0.22823148162714732) * w29 - T(0.47464686901042824) * w31 + T(0.48674774163942658) * w33 - T(0.13989613646663551) * w35;
-  const P v9 = T(-0.22207823188168269) * w1 + T(0.57294558710378152) * w3 - T(0.22569633853965321) * w5 - T(0.44642622861928721) * w7 - T(0.03338623046875009) * w9 + T(0.36465604658723494) * w11 + T(0.34260643045024131) * w13 - T(0.01642855082238124) * w15 - T(0.34704706042212924) * w17;
-  const P v10 = T(-0.16896489200805198) * w19 - T(0.38392694922830095) * w21 - T(0.30769468269898731) * w23 + T(0.028901548260989892) * w25 + T(0.37308250376938873) * w27 + T(0.37721741261425729) * w29 - T(0.10143095447342818) * w31 - T(0.57580774730235207) * w33 + T(0.32436601901989537) * w35;
-  const P v11 = T(0.43634874893631487) * w1 - T(0.46475828310697709) * w3 - T(0.37523348811162144) * w5 + T(0.056958261580051045) * w7 + T(0.36465604658723538) * w9 + T(0.37823486328125011) * w11 + T(0.15094143457595838) * w13 - T(0.15217485602490965) * w15 - T(0.35718195059446123) * w17;
-  const P v12 = T(-0.12373145719523275) * w19 - T(0.32214671166287184) * w21 - T(0.38757544329160915) * w23 - T(0.27750447814137591) * w25 - T(0.014688437208751053) * w27 + T(0.29596380890234059) * w29 + T(0.46423104722187203) * w31 + T(0.24277324177802401) * w33 - T(0.53984157355486773) * w35;
-  const P v13 = T(-0.61125021581265626) * w1 - T(0.043403142026856696) * w3 + T(0.31538289198373232) * w5 + T(0.42447649676023536) * w7 + T(0.34260643045024142) * w9 + T(0.15094143457595829) * w11 - T(0.071411132812499986) * w13 - T(0.25864752011639558) * w15 - T(0.36425554719685821) * w17;
-  const P v14 = T(-0.081196672105008819) * w19 - T(0.23062180431601992) * w21 - T(0.34171385710553126) * w23 - T(0.39092433904240759) * w25 - T(0.35812733554577858) * w27 - T(0.22908145591916648) * w29 + T(0.31153661526638327) * w33 + T(0.62677102697605214) * w35;
-  const P v15 = T(0.56929305652862761) * w1 + T(0.4716119717627999) * w3 + T(0.3115366152663831) * w5 + T(0.14186834000403412) * w7 - T(0.016428550822381593) * w9 - T(0.15217485602490977) * w11 - T(0.25864752011639575) * w13 - T(0.33166503906250067) * w15 - T(0.36875269957540235) * w17;
-  const P v16 = T(-0.04023421806008548) * w19 - T(0.11999053791113624) * w21 - T(0.19754530654099917) * w23 - T(0.27119275423455996) * w25 - T(0.33878284965896149) * w27 - T(0.39729702636935521) * w29 - T(0.44188860894549908) * w31 - T(0.46311376269651522) * w33 - T(0.4348047540258686) * w35;
-  const P v17 = T(-0.23580598588139939) * w1 - T(0.28464652826431414) * w3 - T(0.31338551348802612) * w5 - T(0.33299069066932152) * w7 - T(0.34704706042212996) * w9 - T(0.35718195059446167) * w11 - T(0.36425554719685904) * w13 - T(0.3687526995754033) * w15 - T(0.37094116210937489) * w17;
-  const P v18 = T(-0.18547058105468761) * w18 - T(0.26306533589443837) * w20 - T(0.26544606619315675) * w22 - T(0.26966645902552455) * w24 - T(0.27618783347601139) * w26 - T(0.28588156768676504) * w28 - T(0.30048341062191852) * w30 - T(0.32397908970883388) * w32 - T(0.368556318029306) * w34 - T(0.5139272313695008) * w36;
-  const P v19 = T(0.70741795764419735) * w0 + T(0.45094729692440105) * w2 + T(0.34685420291325325) * w4 + T(0.27574248865502637) * w6 + T(0.21861909883641945) * w8 + T(0.16896489200805212) * w10 + T(0.12373145719523283) * w12 + T(0.081196672105008888) * w14 + T(0.04023421806008555) * w16;
-  const P v20 = T(-0.26306533589443798) * w18 - T(0.364395141601563) * w20 - T(0.34127185552863648) * w22 - T(0.30196261862922763) * w24 - T(0.24512115984429789) * w26 - T(0.16835925125462717) * w28 - T(0.067294062341989286) * w30 + T(0.067181465209193991) * w32 + T(0.25984554074316124) * w34 + T(0.6522071310388039) * w36;
-  const P v21 = T(-0.56929305652862716) * w0 + T(0.2462913196953388) * w4 + T(0.3654875668186589) * w6 + T(0.40361155600263315) * w8 + T(0.38392694922830045) * w10 + T(0.32214671166287168) * w12 + T(0.23062180431601964) * w14 + T(0.1199905379111362) * w16;
-  const P v22 = T(-0.26544606619315658) * w18 - T(0.3412718555286367) * w20 - T(0.2427978515625) * w22 - T(0.091892253754270861) * w24 + T(0.090812231545205888) * w26 + T(0.27447880290090004) * w28 + T(0.41496321041127937) * w30 + T(0.44741040077203836) * w32 + T(0.26219713203028655) * w34 - T(0.47007827023203985) * w36;
-  const P v23 = T(0.36675012948759383) * w0 - T(0.46757359705670953) * w2 - T(0.44879772317375483) * w4 - T(0.18499996494602189) * w6 + T(0.10267249009385446) * w8 + T(0.30769468269898731) * w10 + T(0.38757544329160926) * w12 + T(0.34171385710553104) * w14 + T(0.19754530654099933) * w16;
-  const P v24 = T(-0.26966645902552411) * w18 - T(0.30196261862922752) * w20 - T(0.091892253754270903) * w22 + T(0.16995239257812492) * w24 + T(0.37097257593315913) * w26 + T(0.3950965120258535) * w28 + T(0.17019535944607306) * w30 - T(0.25690480721260217) * w32 - T(0.58071068389878777) * w34 + T(0.26992078677743453) * w36;
-  const P v25 = T(-0.18700660668699193) * w0 + T(0.59604172385823317) * w2 - T(0.042378302742944435) * w4 - T(0.42449329407318581) * w6 - T(0.35151234904847228) * w8 - T(0.028901548260989701) * w10 + T(0.27750447814137613) * w12 + T(0.39092433904240753) * w14 + T(0.27119275423456035) * w16;
-  const P v26 = T(-0.276187833476011) * w18 - T(0.2451211598442978) * w20 + T(0.090812231545205763) * w22 + T(0.37097257593315919) * w24 + T(0.35260009765625022) * w26 - T(0.011056043049766269) * w28 - T(0.42810833926395708) * w30 - T(0.33328224924731831) * w32 + T(0.53307587551416447) * w34 - T(0.12163725713246118) * w36;
-  const P v27 = T(0.074026077293894155) * w0 - T(0.42469481000861575) * w2 + T(0.52430564409629721) * w4 + T(0.18840238860857583) * w6 - T(0.34832065295204617) * w8 - T(0.37308250376938812) * w10 + T(0.014688437208750913) * w12 + T(0.35812733554577797) * w14 + T(0.3387828496589616) * w16;
-  const P v28 = T(-0.2858815676867647) * w18 - T(0.1683592512546272) * w20 + T(0.27447880290089965) * w22 + T(0.39509651202585361) * w24 - T(0.011056043049766201) * w26 - T(0.450286865234375) * w28 - T(0.15829659279348307) * w30 + T(0.57980832755896827) * w32 - T(0.30431831364529371) * w34 + T(0.041968840939990731) * w36;
-  const P v29 = T(-0.022043115180348915) * w0 + T(0.19672099553796776) * w2 - T(0.51941798882909362) * w4 + T(0.44577965576656942) * w6 + T(0.22823148162714746) * w8 - T(0.37721741261425668) * w10 - T(0.29596380890234125) * w12 + T(0.22908145591916609) * w14 + T(0.39729702636935554) * w16;
-  const P v30 = T(-0.30048341062191791) * w18 - T(0.067294062341989286) * w20 + T(0.41496321041127882) * w22 + T(0.17019535944607292) * w24 - T(0.42810833926395697) * w26 - T(0.15829659279348282) * w28 + T(0.571899414062501) * w30 - T(0.39418796792773036) * w32 + T(0.11453938634837206) * w34 - T(0.010647836224602749) * w36;
-  const P v31 = T(0.0046844233906735326) * w0 - T(0.059722206450861896) * w2 + T(0.25737898314419783) * w4 - T(0.53274147253851023) * w6 + T(0.47464686901042819) * w8 + T(0.10143095447342801) * w10 - T(0.46423104722187253) * w12 + T(0.44188860894549964) * w16;
-  const P v32 = T(-0.32397908970883355) * w18 + T(0.067181465209193922) * w20 + T(0.4474104007720382) * w22 - T(0.25690480721260223) * w24 - T(0.33328224924731836) * w26 + T(0.57980832755896794) * w28 - T(0.39418796792773025) * w30 + T(0.14472198486328142) * w32 - T(0.027591002550408705) * w34 + T(0.0018516809298870873) * w36;
-  const P v33 = T(-0.00064467255170518479) * w0 + T(0.011095647515290404) * w2 - T(0.069335160116753905) * w4 + T(0.2369027521086283) * w6 - T(0.48674774163942663) * w8 + T(0.57580774730235185) * w10 - T(0.24277324177802434) * w12 - T(0.31153661526638288) * w14 + T(0.46311376269651566) * w16;
-  const P v34 = T(-0.3685563180293055) * w18 + T(0.25984554074316124) * w20 + T(0.26219713203028677) * w22 - T(0.58071068389878799) * w24 + T(0.53307587551416469) * w26 - T(0.30431831364529383) * w28 + T(0.11453938634837202) * w30 - T(0.027591002550408875) * w32 + T(0.0037689208984375794) * w34 - T(0.00019149628292852594) * w36;
-  const P v35 = T(4.5776367187517151e-05) * w0 - T(0.001021313508952802) * w2 + T(0.0086411776728069333) * w4 - T(0.042591344898411446) * w6 + T(0.1398961364666354) * w8 - T(0.32436601901989526) * w10 + T(0.53984157355486784) * w12 - T(0.6267710269760518) * w14 + T(0.43480475402586893) * w16;
-  const P v36 = T(-0.51392723136949958) * w18 + T(0.65220713103880312) * w20 - T(0.47007827023203885) * w22 + T(0.26992078677743381) * w24 - T(0.12163725713246078) * w26 + T(0.0419688409399906) * w28 - T(0.01064783622460286) * w30 + T(0.0018516809298871194) * w32 - T(0.00019149628292862637) * w34 + T(7.6293945313102816e-06) * w36;
+  const P w36 = madd<F>(cb18, u36, -(sb18 * u0));
+  const P w0 = madd<F>(sb18, u36, cb18 * u0);
+  const P v0 = madd<F>(T(-4.5776367187666723e-05), w35, madd<F>(T(0.00064467255170537105), w33, madd<F>(T(-0.0046844233906736411), w31, madd<F>(T(0.022043115180349085), w29, madd<F>(T(-0.074026077293894502), w27, madd<F>(T(0.18700660668699218), w25, madd<F>(T(-0.36675012948759406), w23, madd<F>(T(0.56929305652862794), w21, T(-0.70741795764419746) * w19))))))));
+  const P v1 = madd<F>(T(-0.23580598588139925), w17, madd<F>(T(0.56929305652862816), w15, madd<F>(T(-0.61125021581265682), w13, madd<F>(T(0.43634874893631509), w11, madd<F>(T(-0.22207823188168316), w9, madd<F>(T(0.08082475566127971), w7, madd<F>(T(-0.020299168026252219), w5, madd<F>(T(0.0032233627585262483), w3, T(-0.00025939941406248948) * w1))))))));
+  const P v2 = madd<F>(T(0.0010213135089525531), w35, madd<F>(T(-0.011095647515290357), w33, madd<F>(T(0.059722206450861945), w31, madd<F>(T(-0.19672099553796812), w29, madd<F>(T(0.42469481000861664), w27, madd<F>(T(-0.59604172385823373), w25, madd<F>(T(0.46757359705671037), w23, T(-0.45094729692440078) * w19)))))));
+  const P v3 = madd<F>(T(-0.28464652826431364), w17, madd<F>(T(0.47161197176279973), w15, madd<F>(T(-0.043403142026856252), w13, madd<F>(T(-0.46475828310697659), w11, madd<F>(T(0.5729455871037813), w9, madd<F>(T(-0.36156559177501152), w7, madd<F>(T(0.13693169631263682), w5, madd<F>(T(-0.030288696289062549), w3, T(0.0032233627585261898) * w1))))))));
+  const P v4 = madd<F>(T(-0.0086411776728067841), w35, madd<F>(T(0.069335160116753836), w33, madd<F>(T(-0.25737898314419799), w31, madd<F>(T(0.51941798882909362), w29, madd<F>(T(-0.5243056440962971), w27, madd<F>(T(0.042378302742944365), w25, madd<F>(T(0.44879772317375477), w23, madd<F>(T(-0.24629131969533877), w21, T(-0.34685420291325308) * w19))))))));
+  const P v5 = madd<F>(T(-0.31338551348802585), w17, madd<F>(T(0.31153661526638343), w15, madd<F>(T(0.31538289198373276), w13, madd<F>(T(-0.37523348811162172), w11, madd<F>(T(-0.22569633853965318), w9, madd<F>(T(0.57499088870998316), w7, madd<F>(T(-0.40466308593750028), w5, madd<F>(T(0.13693169631263696), w3, T(-0.020299168026252201) * w1))))))));
+  const P v6 = madd<F>(T(0.042591344898411321), w35, madd<F>(T(-0.23690275210862843), w33, madd<F>(T(0.5327414725385109), w31, madd<F>(T(-0.44577965576657025), w29, madd<F>(T(-0.18840238860857625), w27, madd<F>(T(0.42449329407318592), w25, madd<F>(T(0.18499996494602217), w23, madd<F>(T(-0.36548756681865918), w21, T(-0.27574248865502632) * w19))))))));
+  const P v7 = madd<F>(T(-0.33299069066932091), w17, madd<F>(T(0.14186834000403434), w15, madd<F>(T(0.42447649676023508), w13, madd<F>(T(0.056958261580050774), w11, madd<F>(T(-0.4464262286192871), w9, madd<F>(T(-0.13562011718749994), w7, madd<F>(T(0.57499088870998227), w5, madd<F>(T(-0.36156559177501157), w3, T(0.080824755661279682) * w1))))))));
+  const P v8 = madd<F>(T(-0.13989613646663551), w35, madd<F>(T(0.48674774163942658), w33, madd<F>(T(-0.47464686901042824), w31, madd<F>(T(-0.22823148162714732), w29, madd<F>(T(0.34832065295204645), w27, madd<F>(T(0.35151234904847228), w25, madd<F>(T(-0.1026724900938541), w23, madd<F>(T(-0.40361155600263321), w21, T(-0.21861909883641917) * w19))))))));
+  const P v9 = madd<F>(T(-0.34704706042212924), w17, madd<F>(T(-0.01642855082238124), w15, madd<F>(T(0.34260643045024131), w13, madd<F>(T(0.36465604658723494), w11, madd<F>(T(-0.03338623046875009), w9, madd<F>(T(-0.44642622861928721), w7, madd<F>(T(-0.22569633853965321), w5, madd<F>(T(0.57294558710378152), w3, T(-0.22207823188168269) * w1))))))));
+  const P v10 = madd<F>(T(0.32436601901989537), w35, madd<F>(T(-0.57580774730235207), w33, madd<F>(T(-0.10143095447342818), w31, madd<F>(T(0.37721741261425729), w29, madd<F>(T(0.37308250376938873), w27, madd<F>(T(0.028901548260989892), w25, madd<F>(T(-0.30769468269898731), w23, madd<F>(T(-0.38392694922830095), w21, T(-0.16896489200805198) * w19))))))));
+  const P v11 = madd<F>(T(-0.35718195059446123), w17, madd<F>(T(-0.15217485602490965), w15, madd<F>(T(0.15094143457595838), w13, madd<F>(T(0.37823486328125011), w11, madd<F>(T(0.36465604658723538), w9, madd<F>(T(0.056958261580051045), w7, madd<F>(T(-0.37523348811162144), w5, madd<F>(T(-0.46475828310697709), w3, T(0.43634874893631487) * w1))))))));
+  const P v12 = madd<F>(T(-0.53984157355486773), w35, madd<F>(T(0.24277324177802401), w33, madd<F>(T(0.46423104722187203), w31, madd<F>(T(0.29596380890234059), w29, madd<F>(T(-0.014688437208751053), w27, madd<F>(T(-0.27750447814137591), w25, madd<F>(T(-0.38757544329160915), w23, madd<F>(T(-0.32214671166287184), w21, T(-0.12373145719523275) * w19))))))));
+  const P v13 = madd<F>(T(-0.36425554719685821), w17, madd<F>(T(-0.25864752011639558), w15, madd<F>(T(-0.071411132812499986), w13, madd<F>(T(0.15094143457595829), w11, madd<F>(T(0.34260643045024142), w9, madd<F>(T(0.42447649676023536), w7, madd<F>(T(0.31538289198373232), w5, madd<F>(T(-0.043403142026856696), w3, T(-0.61125021581265626) * w1))))))));
+  const P v14 = madd<F>(T(0.62677102697605214), w35, madd<F>(T(0.31153661526638327), w33, madd<F>(T(-0.22908145591916648), w29, madd<F>(T(-0.35812733554577858), w27, madd<F>(T(-0.39092433904240759), w25, madd<F>(T(-0.34171385710553126), w23, madd<F>(T(-0.23062180431601992), w21, T(-0.081196672105008819) * w19)))))));
+  const P v15 = madd<F>(T(-0.36875269957540235), w17, madd<F>(T(-0.33166503906250067), w15, madd<F>(T(-0.25864752011639575), w13, madd<F>(T(-0.15217485602490977), w11, madd<F>(T(-0.016428550822381593), w9, madd<F>(T(0.14186834000403412), w7, madd<F>(T(0.3115366152663831), w5, madd<F>(T(0.4716119717627999), w3, T(0.56929305652862761) * w1))))))));
+  const P v16 = madd<F>(T(-0.4348047540258686), w35, madd<F>(T(-0.46311376269651522), w33, madd<F>(T(-0.44188860894549908), w31, madd<F>(T(-0.39729702636935521), w29, madd<F>(T(-0.33878284965896149), w27, madd<F>(T(-0.27119275423455996), w25, madd<F>(T(-0.19754530654099917), w23, madd<F>(T(-0.11999053791113624), w21, T(-0.04023421806008548) * w19))))))));
+  const P v17 = madd<F>(T(-0.37094116210937489), w17, madd<F>(T(-0.3687526995754033), w15, madd<F>(T(-0.36425554719685904), w13, madd<F>(T(-0.35718195059446167), w11, madd<F>(T(-0.34704706042212996), w9, madd<F>(T(-0.33299069066932152), w7, madd<F>(T(-0.31338551348802612), w5, madd<F>(T(-0.28464652826431414), w3, T(-0.23580598588139939) * w1))))))));
+  const P v18 = madd<F>(T(-0.5139272313695008), w36, madd<F>(T(-0.368556318029306), w34, madd<F>(T(-0.32397908970883388), w32, madd<F>(T(-0.30048341062191852), w30, madd<F>(T(-0.28588156768676504), w28, madd<F>(T(-0.27618783347601139), w26, madd<F>(T(-0.26966645902552455), w24, madd<F>(T(-0.26544606619315675), w22, madd<F>(T(-0.26306533589443837), w20, T(-0.18547058105468761) * w18)))))))));
+  const P v19 = madd<F>(T(0.04023421806008555), w16, madd<F>(T(0.081196672105008888), w14, madd<F>(T(0.12373145719523283), w12, madd<F>(T(0.16896489200805212), w10, madd<F>(T(0.21861909883641945), w8, madd<F>(T(0.27574248865502637), w6, madd<F>(T(0.34685420291325325), w4, madd<F>(T(0.45094729692440105), w2, T(0.70741795764419735) * w0))))))));
+  const P v20 = madd<F>(T(0.6522071310388039), w36, madd<F>(T(0.25984554074316124), w34, madd<F>(T(0.067181465209193991), w32, madd<F>(T(-0.067294062341989286), w30, madd<F>(T(-0.16835925125462717), w28, madd<F>(T(-0.24512115984429789), w26, madd<F>(T(-0.30196261862922763), w24, madd<F>(T(-0.34127185552863648), w22, madd<F>(T(-0.364395141601563), w20, T(-0.26306533589443798) * w18)))))))));
+  const P v21 = madd<F>(T(0.1199905379111362), w16, madd<F>(T(0.23062180431601964), w14, madd<F>(T(0.32214671166287168), w12, madd<F>(T(0.38392694922830045), w10, madd<F>(T(0.40361155600263315), w8, madd<F>(T(0.3654875668186589), w6, madd<F>(T(0.2462913196953388), w4, T(-0.56929305652862716) * w0)))))));
+  const P v22 = madd<F>(T(-0.47007827023203985), w36, madd<F>(T(0.26219713203028655), w34, madd<F>(T(0.44741040077203836), w32, madd<F>(T(0.41496321041127937), w30, madd<F>(T(0.27447880290090004), w28, madd<F>(T(0.090812231545205888), w26, madd<F>(T(-0.091892253754270861), w24, madd<F>(T(-0.2427978515625), w22, madd<F>(T(-0.3412718555286367), w20, T(-0.26544606619315658) * w18)))))))));
+  const P v23 = madd<F>(T(0.19754530654099933), w16, madd<F>(T(0.34171385710553104), w14, madd<F>(T(0.38757544329160926), w12, madd<F>(T(0.30769468269898731), w10, madd<F>(T(0.10267249009385446), w8, madd<F>(T(-0.18499996494602189), w6, madd<F>(T(-0.44879772317375483), w4, madd<F>(T(-0.46757359705670953), w2, T(0.36675012948759383) * w0))))))));
+  const P v24 = madd<F>(T(0.26992078677743453), w36, madd<F>(T(-0.58071068389878777), w34, madd<F>(T(-0.25690480721260217), w32, madd<F>(T(0.17019535944607306), w30, madd<F>(T(0.3950965120258535), w28, madd<F>(T(0.37097257593315913), w26, madd<F>(T(0.16995239257812492), w24, madd<F>(T(-0.091892253754270903), w22, madd<F>(T(-0.30196261862922752), w20, T(-0.26966645902552411) * w18)))))))));
+  const P v25 = madd<F>(T(0.27119275423456035), w16, madd<F>(T(0.39092433904240753), w14, madd<F>(T(0.27750447814137613), w12, madd<F>(T(-0.028901548260989701), w10, madd<F>(T(-0.35151234904847228), w8, madd<F>(T(-0.42449329407318581), w6, madd<F>(T(-0.042378302742944435), w4, madd<F>(T(0.59604172385823317), w2, T(-0.18700660668699193) * w0))))))));
+  const P v26 = madd<F>(T(-0.12163725713246118), w36, madd<F>(T(0.53307587551416447), w34, madd<F>(T(-0.33328224924731831), w32, madd<F>(T(-0.42810833926395708), w30, madd<F>(T(-0.011056043049766269), w28, madd<F>(T(0.35260009765625022), w26, madd<F>(T(0.37097257593315919), w24, madd<F>(T(0.090812231545205763), w22, madd<F>(T(-0.2451211598442978), w20, T(-0.276187833476011) * w18)))))))));
+  const P v27 = madd<F>(T(0.3387828496589616), w16, madd<F>(T(0.35812733554577797), w14, madd<F>(T(0.014688437208750913), w12, madd<F>(T(-0.37308250376938812), w10, madd<F>(T(-0.34832065295204617), w8, madd<F>(T(0.18840238860857583), w6, madd<F>(T(0.52430564409629721), w4, madd<F>(T(-0.42469481000861575), w2, T(0.074026077293894155) * w0))))))));
+  const P v28 = madd<F>(T(0.041968840939990731), w36, madd<F>(T(-0.30431831364529371), w34, madd<F>(T(0.57980832755896827), w32, madd<F>(T(-0.15829659279348307), w30, madd<F>(T(-0.450286865234375), w28, madd<F>(T(-0.011056043049766201), w26, madd<F>(T(0.39509651202585361), w24, madd<F>(T(0.27447880290089965), w22, madd<F>(T(-0.1683592512546272), w20, T(-0.2858815676867647) * w18)))))))));
+  const P v29 = madd<F>(T(0.39729702636935554), w16, madd<F>(T(0.22908145591916609), w14, madd<F>(T(-0.29596380890234125), w12, madd<F>(T(-0.37721741261425668), w10, madd<F>(T(0.22823148162714746), w8, madd<F>(T(0.44577965576656942), w6, madd<F>(T(-0.51941798882909362), w4, madd<F>(T(0.19672099553796776), w2, T(-0.022043115180348915) * w0))))))));
+  const P v30 = madd<F>(T(-0.010647836224602749), w36, madd<F>(T(0.11453938634837206), w34, madd<F>(T(-0.39418796792773036), w32, madd<F>(T(0.571899414062501), w30, madd<F>(T(-0.15829659279348282), w28, madd<F>(T(-0.42810833926395697), w26, madd<F>(T(0.17019535944607292), w24, madd<F>(T(0.41496321041127882), w22, madd<F>(T(-0.067294062341989286), w20, T(-0.30048341062191791) * w18)))))))));
+  const P v31 = madd<F>(T(0.44188860894549964), w16, madd<F>(T(-0.46423104722187253), w12, madd<F>(T(0.10143095447342801), w10, madd<F>(T(0.47464686901042819), w8, madd<F>(T(-0.53274147253851023), w6, madd<F>(T(0.25737898314419783), w4, madd<F>(T(-0.059722206450861896), w2, T(0.0046844233906735326) * w0)))))));
+  const P v32 = madd<F>(T(0.0018516809298870873), w36, madd<F>(T(-0.027591002550408705), w34, madd<F>(T(0.14472198486328142), w32, madd<F>(T(-0.39418796792773025), w30, madd<F>(T(0.57980832755896794), w28, madd<F>(T(-0.33328224924731836), w26, madd<F>(T(-0.25690480721260223), w24, madd<F>(T(0.4474104007720382), w22, madd<F>(T(0.067181465209193922), w20, T(-0.32397908970883355) * w18)))))))));
+  const P v33 = madd<F>(T(0.46311376269651566), w16, madd<F>(T(-0.31153661526638288), w14, madd<F>(T(-0.24277324177802434), w12, madd<F>(T(0.57580774730235185), w10, madd<F>(T(-0.48674774163942663), w8, madd<F>(T(0.2369027521086283), w6, madd<F>(T(-0.069335160116753905), w4, madd<F>(T(0.011095647515290404), w2, T(-0.00064467255170518479) * w0))))))));
+  const P v34 = madd<F>(T(-0.00019149628292852594), w36, madd<F>(T(0.0037689208984375794), w34, madd<F>(T(-0.027591002550408875), w32, madd<F>(T(0.11453938634837202), w30, madd<F>(T(-0.30431831364529383), w28, madd<F>(T(0.53307587551416469), w26, madd<F>(T(-0.58071068389878799), w24, madd<F>(T(0.26219713203028677), w22, madd<F>(T(0.25984554074316124), w20, T(-0.3685563180293055) * w18)))))))));
+  const P v35 = madd<F>(T(0.43480475402586893), w16, madd<F>(T(-0.6267710269760518), w14, madd<F>(T(0.53984157355486784), w12, madd<F>(T(-0.32436601901989526), w10, madd<F>(T(0.1398961364666354), w8, madd<F>(T(-0.042591344898411446), w6, madd<F>(T(0.0086411776728069333), w4, madd<F>(T(-0.001021313508952802), w2, T(4.5776367187517151e-05) * w0))))))));
+  const P v36 = madd<F>(T(7.6293945313102816e-06), w36, madd<F>(T(-0.00019149628292862637), w34, madd<F>(T(0.0018516809298871194), w32, madd<F>(T(-0.01064783622460286), w30, madd<F>(T(0.0419688409399906), w28, madd<F>(T(-0.12163725713246078), w26, madd<F>(T(0.26992078677743381), w24, madd<F>(T(-0.47007827023203885), w22, madd<F>(T(0.65220713103880312), w20, T(-0.51392723136949958) * w18)))))))));
   y[18] = v18;
   const P ca1 = splat<P>(s.ca[1]), sa1 = splat<P>(s.sa[1]);
-  y[19] = ca1 * v19 - sa1 * v17;
-  y[17] = sa1 * v19 + ca1 * v17;
+  y[19] = madd<F>(ca1, v19, -(sa1 * v17));
+  y[17] = madd<F>(sa1, v19, ca1 * v17);
   const P ca2 = splat<P>(s.ca[2]), sa2 = splat<P>(s.sa[2]);
-  y[20] = ca2 * v20 - sa2 * v16;
-  y[16] = sa2 * v20 + ca2 * v16;
+  y[20] = madd<F>(ca2, v20, -(sa2 * v16));
+  y[16] = madd<F>(sa2, v20, ca2 * v16);
   const P ca3 = splat<P>(s.ca[3]), sa3 = splat<P>(s.sa[3]);
-  y[21] = ca3 * v21 - sa3 * v15;
-  y[15] = sa3 * v21 + ca3 * v15;
+  y[21] = madd<F>(ca3, v21, -(sa3 * v15));
+  y[15] = madd<F>(sa3, v21, ca3 * v15);
   const P ca4 = splat<P>(s.ca[4]), sa4 = splat<P>(s.sa[4]);
-  y[22] = ca4 * v22 - sa4 * v14;
-  y[14] = sa4 * v22 + ca4 * v14;
+  y[22] = madd<F>(ca4, v22, -(sa4 * v14));
+  y[14] = madd<F>(sa4, v22, ca4 * v14);
   const P ca5 = splat<P>(s.ca[5]), sa5 = splat<P>(s.sa[5]);
-  y[23] = ca5 * v23 - sa5 * v13;
-  y[13] = sa5 * v23 + ca5 * v13;
+  y[23] = madd<F>(ca5, v23, -(sa5 * v13));
+  y[13] = madd<F>(sa5, v23, ca5 * v13);
   const P ca6 = splat<P>(s.ca[6]), sa6 = splat<P>(s.sa[6]);
-  y[24] = ca6 * v24 - sa6 * v12;
-  y[12] = sa6 * v24 + ca6 * v12;
+  y[24] = madd<F>(ca6, v24, -(sa6 * v12));
+  y[12] = madd<F>(sa6, v24, ca6 * v12);
   const P ca7 = splat<P>(s.ca[7]), sa7 = splat<P>(s.sa[7]);
-  y[25] = ca7 * v25 - sa7 * v11;
-  y[11] = sa7 * v25 + ca7 * v11;
+  y[25] = madd<F>(ca7, v25, -(sa7 * v11));
+  y[11] = madd<F>(sa7, v25, ca7 * v11);
   const P ca8 = splat<P>(s.ca[8]), sa8 = splat<P>(s.sa[8]);
-  y[26] = ca8 * v26 - sa8 * v10;
-  y[10] = sa8 * v26 + ca8 * v10;
+  y[26] = madd<F>(ca8, v26, -(sa8 * v10));
+  y[10] = madd<F>(sa8, v26, ca8 * v10);
   const P ca9 = splat<P>(s.ca[9]), sa9 = splat<P>(s.sa[9]);
-  y[27] = ca9 * v27 - sa9 * v9;
-  y[9] = sa9 * v27 + ca9 * v9;
+  y[27] = madd<F>(ca9, v27, -(sa9 * v9));
+  y[9] = madd<F>(sa9, v27, ca9 * v9);
   const P ca10 = splat<P>(s.ca[10]), sa10 = splat<P>(s.sa[10]);
-  y[28] = ca10 * v28 - sa10 * v8;
-  y[8] = sa10 * v28 + ca10 * v8;
+  y[28] = madd<F>(ca10, v28, -(sa10 * v8));
+  y[8] = madd<F>(sa10, v28, ca10 * v8);
   const P ca11 = splat<P>(s.ca[11]), sa11 = splat<P>(s.sa[11]);
-  y[29] = ca11 * v29 - sa11 * v7;
-  y[7] = sa11 * v29 + ca11 * v7;
+  y[29] = madd<F>(ca11, v29, -(sa11 * v7));
+  y[7] = madd<F>(sa11, v29, ca11 * v7);
   const P ca12 = splat<P>(s.ca[12]), sa12 = splat<P>(s.sa[12]);
-  y[30] = ca12 * v30 - sa12 * v6;
-  y[6] = sa12 * v30 + ca12 * v6;
+  y[30] = madd<F>(ca12, v30, -(sa12 * v6));
+  y[6] = madd<F>(sa12, v30, ca12 * v6);
   const P ca13 = splat<P>(s.ca[13]), sa13 = splat<P>(s.sa[13]);
-  y[31] = ca13 * v31 - sa13 * v5;
-  y[5] = sa13 * v31 + ca13 * v5;
+  y[31] = madd<F>(ca13, v31, -(sa13 * v5));
+  y[5] = madd<F>(sa13, v31, ca13 * v5);
   const P ca14 = splat<P>(s.ca[14]), sa14 = splat<P>(s.sa[14]);
-  y[32] = ca14 * v32 - sa14 * v4;
-  y[4] = sa14 * v32 + ca14 * v4;
+  y[32] = madd<F>(ca14, v32, -(sa14 * v4));
+  y[4] = madd<F>(sa14, v32, ca14 * v4);
   const P ca15 = splat<P>(s.ca[15]), sa15 = splat<P>(s.sa[15]);
-  y[33] = ca15 * v33 - sa15 * v3;
-  y[3] = sa15 * v33 + ca15 * v3;
+  y[33] = madd<F>(ca15, v33, -(sa15 * v3));
+  y[3] = madd<F>(sa15, v33, ca15 * v3);
   const P ca16 = splat<P>(s.ca[16]), sa16 = splat<P>(s.sa[16]);
-  y[34] = ca16 * v34 - sa16 * v2;
-  y[2] = sa16 * v34 + ca16 * v2;
+  y[34] = madd<F>(ca16, v34, -(sa16 * v2));
+  y[2] = madd<F>(sa16, v34, ca16 * v2);
   const P ca17 = splat<P>(s.ca[17]), sa17 = splat<P>(s.sa[17]);
-  y[35] = ca17 * v35 - sa17 * v1;
-  y[1] = sa17 * v35 + ca17 * v1;
+  y[35] = madd<F>(ca17, v35, -(sa17 * v1));
+  y[1] = madd<F>(sa17, v35, ca17 * v1);
   const P ca18 = splat<P>(s.ca[18]), sa18 = splat<P>(s.sa[18]);
-  y[36] = ca18 * v36 - sa18 * v0;
-  y[0] = sa18 * v36 + ca18 * v0;
+  y[36] = madd<F>(ca18, v36, -(sa18 * v0));
+  y[0] = madd<F>(sa18, v36, ca18 * v0);
 }
 
 // Band 19 of Z(a) X90^T Z(b) X90 Z(g), Ry(b) = Rx(-90) Rz(b) Rx(+90).
-template <class T, class P, class S>
-inline void zxzxz_band19(const S& s, const P* __restrict x, P* __restrict y) {
+template <bool F, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void zxzxz_band19(const S& s, const P* __restrict x, P* __restrict y) {
   const P t19 = x[19];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
-  const P t20 = cg1 * x[20] - sg1 * x[18];
-  const P t18 = sg1 * x[20] + cg1 * x[18];
+  const P t20 = madd<F>(cg1, x[20], -(sg1 * x[18]));
+  const P t18 = madd<F>(sg1, x[20], cg1 * x[18]);
   const P cg2 = splat<P>(s.cg[2]), sg2 = splat<P>(s.sg[2]);
-  const P t21 = cg2 * x[21] - sg2 * x[17];
-  const P t17 = sg2 * x[21] + cg2 * x[17];
+  const P t21 = madd<F>(cg2, x[21], -(sg2 * x[17]));
+  const P t17 = madd<F>(sg2, x[21], cg2 * x[17]);
   const P cg3 = splat<P>(s.cg[3]), sg3 = splat<P>(s.sg[3]);
-  const P t22 = cg3 * x[22] - sg3 * x[16];
-  const P t16 = sg3 * x[22] + cg3 * x[16];
+  const P t22 = madd<F>(cg3, x[22], -(sg3 * x[16]));
+  const P t16 = madd<F>(sg3, x[22], cg3 * x[16]);
   const P cg4 = splat<P>(s.cg[4]), sg4 = splat<P>(s.sg[4]);
-  const P t23 = cg4 * x[23] - sg4 * x[15];
-  const P t15 = sg4 * x[23] + cg4 * x[15];
+  const P t23 = madd<F>(cg4, x[23], -(sg4 * x[15]));
+  const P t15 = madd<F>(sg4, x[23], cg4 * x[15]);
   const P cg5 = splat<P>(s.cg[5]), sg5 = splat<P>(s.sg[5]);
-  const P t24 = cg5 * x[24] - sg5 * x[14];
-  const P t14 = sg5 * x[24] + cg5 * x[14];
+  const P t24 = madd<F>(cg5, x[24], -(sg5 * x[14]));
+  const P t14 = madd<F>(sg5, x[24], cg5 * x[14]);
   const P cg6 = splat<P>(s.cg[6]), sg6 = splat<P>(s.sg[6]);
-  const P t25 = cg6 * x[25] - sg6 * x[13];
-  const P t13 = sg6 * x[25] + cg6 * x[13];
+  const P t25 = madd<F>(cg6, x[25], -(sg6 * x[13]));
+  const P t13 = madd<F>(sg6, x[25], cg6 * x[13]);
   const P cg7 = splat<P>(s.cg[7]), sg7 = splat<P>(s.sg[7]);
-  const P t26 = cg7 * x[26] - sg7 * x[12];
-  const P t12 = sg7 * x[26] + cg7 * x[12];
+  const P t26 = madd<F>(cg7, x[26], -(sg7 * x[12]));
+  const P t12 = madd<F>(sg7, x[26], cg7 * x[12]);
   const P cg8 = splat<P>(s.cg[8]), sg8 = splat<P>(s.sg[8]);
-  const P t27 = cg8 * x[27] - sg8 * x[11];
-  const P t11 = sg8 * x[27] + cg8 * x[11];
+  const P t27 = madd<F>(cg8, x[27], -(sg8 * x[11]));
+  const P t11 = madd<F>(sg8, x[27], cg8 * x[11]);
   const P cg9 = splat<P>(s.cg[9]), sg9 = splat<P>(s.sg[9]);
-  const P t28 = cg9 * x[28] - sg9 * x[10];
-  const P t10 = sg9 * x[28] + cg9 * x[10];
+  const P t28 = madd<F>(cg9, x[28], -(sg9 * x[10]));
+  const P t10 = madd<F>(sg9, x[28], cg9 * x[10]);
   const P cg10 = splat<P>(s.cg[10]), sg10 = splat<P>(s.sg[10]);
-  const P t29 = cg10 * x[29] - sg10 * x[9];
-  const P t9 = sg10 * x[29] + cg10 * x[9];
+  const P t29 = madd<F>(cg10, x[29], -(sg10 * x[9]));
+  const P t9 = madd<F>(sg10, x[29], cg10 * x[9]);
   const P cg11 = splat<P>(s.cg[11]), sg11 = splat<P>(s.sg[11]);
-  const P t30 = cg11 * x[30] - sg11 * x[8];
-  const P t8 = sg11 * x[30] + cg11 * x[8];
+  const P t30 = madd<F>(cg11, x[30], -(sg11 * x[8]));
+  const P t8 = madd<F>(sg11, x[30], cg11 * x[8]);
   const P cg12 = splat<P>(s.cg[12]), sg12 = splat<P>(s.sg[12]);
-  const P t31 = cg12 * x[31] - sg12 * x[7];
-  const P t7 = sg12 * x[31] + cg12 * x[7];
+  const P t31 = madd<F>(cg12, x[31], -(sg12 * x[7]));
+  const P t7 = madd<F>(sg12, x[31], cg12 * x[7]);
   const P cg13 = splat<P>(s.cg[13]), sg13 = splat<P>(s.sg[13]);
-  const P t32 = cg13 * x[32] - sg13 * x[6];
-  const P t6 = sg13 * x[32] + cg13 * x[6];
+  const P t32 = madd<F>(cg13, x[32], -(sg13 * x[6]));
+  const P t6 = madd<F>(sg13, x[32], cg13 * x[6]);
   const P cg14 = splat<P>(s.cg[14]), sg14 = splat<P>(s.sg[14]);
-  const P t33 = cg14 * x[33] - sg14 * x[5];
-  const P t5 = sg14 * x[33] + cg14 * x[5];
+  const P t33 = madd<F>(cg14, x[33], -(sg14 * x[5]));
+  const P t5 = madd<F>(sg14, x[33], cg14 * x[5]);
   const P cg15 = splat<P>(s.cg[15]), sg15 = splat<P>(s.sg[15]);
-  const P t34 = cg15 * x[34] - sg15 * x[4];
-  const P t4 = sg15 * x[34] + cg15 * x[4];
+  const P t34 = madd<F>(cg15, x[34], -(sg15 * x[4]));
+  const P t4 = madd<F>(sg15, x[34], cg15 * x[4]);
   const P cg16 = splat<P>(s.cg[16]), sg16 = splat<P>(s.sg[16]);
-  const P t35 = cg16 * x[35] - sg16 * x[3];
-  const P t3 = sg16 * x[35] + cg16 * x[3];
+  const P t35 = madd<F>(cg16, x[35], -(sg16 * x[3]));
+  const P t3 = madd<F>(sg16, x[35], cg16 * x[3]);
   const P cg17 = splat<P>(s.cg[17]), sg17 = splat<P>(s.sg[17]);
-  const P t36 = cg17 * x[36] - sg17 * x[2];
-  const P t2 = sg17 * x[36] + cg17 * x[2];
+  const P t36 = madd<F>(cg17, x[36], -(sg17 * x[2]));
+  const P t2 = madd<F>(sg17, x[36], cg17 * x[2]);
   const P cg18 = splat<P>(s.cg[18]), sg18 = splat<P>(s.sg[18]);
-  const P t37 = cg18 * x[37] - sg18 * x[1];
-  const P t1 = sg18 * x[37] + cg18 * x[1];
+  const P t37 = madd<F>(cg18, x[37], -(sg18 * x[1]));
+  const P t1 = madd<F>(sg18, x[37], cg18 * x[1]);
   const P cg19 = splat<P>(s.cg[19]), sg19 = splat<P>(s.sg[19]);
-  const P t38 = cg19 * x[38] - sg19 * x[0];
-  const P t0 = sg19 * x[38] + cg19 * x[0];
-  const P u0 = T(-0.50711994761686363) * t19 + T(0.64716362586383769) * t21 - T(0.47448588018495369) * t23 + T(0.28070963231284352) * t25 - T(0.13232778970186257) * t27 + T(0.048704533326139471) * t29 - T(0.013551711901906882) * t31 + T(0.0027026315756233841) * t33 - T(0.00035037117014168995) * t35 + T(2.3515373241335243e-05) * t37;
-  const P u1 = T(-0.00013732910156255172) * t1 + T(0.0018188066925964839) * t3 - T(0.01227589257973419) * t5 + T(0.052761071123568343) * t7 - T(0.15801837223353893) * t9 + T(0.34346243360846118) * t11 - T(0.54644538574659951) * t13 + T(0.61577419032067182) * t15 - T(0.41993521236707598) * t17;
-  const P u2 = T(-0.36340143033780115) * t19 + T(0.26849062274681329) * t21 + T(0.23264246077853715) * t23 - T(0.56111970786022991) * t25 + T(0.54400124531958172) * t27 - T(0.33248365397026397) * t29 + T(0.13748926105882248) * t31 - T(0.038020516796310383) * t33 + T(0.0065147479868428232) * t35 - T(0.0005578595334615157) * t37;
-  const P u3 = T(0.001818806692596621) * t1 - T(0.018554687500000003) * t3 + T(0.092277243946110074) * t5 - T(0.2738443889495108) * t7 + T(0.5090639393260975) * t9 - T(0.55324054093167396) * t11 + T(0.19560006906004976) * t13 + T(0.33062446118258659) * t15 - T(0.45094729692440139) * t17;
-  const P u4 = T(-0.31917913413863575) * t19 + T(0.083370005830558508) * t21 + T(0.42787515106886037) * t23 - T(0.29446241074074125) * t25 - T(0.27031598579841098) * t27 + T(0.56845136855322387) * t29 - T(0.43469959918285384) * t31 + T(0.18497401233633942) * t33 - T(0.044459065142464775) * t35 + T(0.0050438463297362394) * t37;
-  const P u5 = T(-0.012275892579734221) * t1 + T(0.092277243946110074) * t3 - T(0.31349182128906267) * t5 + T(0.55164876214684422) * t7 - T(0.40999659768915747) * t9 - T(0.17034097485966423) * t11 + T(0.44851500181218956) * t13 + T(0.037504601196296609) * t15 - T(0.43480475402586832) * t17;
-  const P u6 = T(-0.29575109265586363) * t19 - T(0.046350342516569949) * t21 + T(0.41779140972788048) * t23 + T(0.10964627928269491) * t25 - T(0.44416423954375683) * t27 - T(0.056017272662626315) * t29 + T(0.53810304062415193) * t31 - T(0.4524122714505594) * t33 + T(0.16865573252474531) * t35 - T(0.026733125724446676) * t37;
-  const P u7 = T(0.052761071123568586) * t1 - T(0.2738443889495108) * t3 + T(0.55164876214684433) * t5 - T(0.34423828125000017) * t7 - T(0.31061222180615794) * t9 + T(0.31468126065414975) * t11 + T(0.33376987998132107) * t13 - T(0.18805802277762668) * t15 - T(0.39640480332943234) * t17;
-  const P u8 = T(-0.28107649323913192) * t19 - T(0.14473744855317988) * t21 + T(0.30152783379906201) * t23 + T(0.35853874503052607) * t25 - T(0.10240918517337146) * t27 - T(0.44771571968920548) * t29 - T(0.013216260774860851) * t31 + T(0.55086803376099647) * t33 - T(0.39616499478516121) * t35 + T(0.095205249669813224) * t37;
-  const P u9 = T(-0.15801837223353943) * t1 + T(0.50906393932609773) * t3 - T(0.40999659768915753) * t5 - T(0.31061222180615822) * t7 + T(0.24725341796875025) * t9 + T(0.40130733591347617) * t11 + T(0.058043278342703147) * t13 - T(0.32703682433151432) * t15 - T(0.34467811081878313) * t17;
-  const P u10 = T(-0.27121106848493148) * t19 - T(0.22061813192764199) * t21 + T(0.13731048457794057) * t23 + T(0.38685551847472127) * t25 + T(0.278234497024549) * t27 - T(0.14161705885970907) * t29 - T(0.45050705193148088) * t31 - T(0.14258994623391191) * t33 + T(0.57432433113808223) * t35 - T(0.24218603223117482) * t37;
-  const P u11 = T(0.34346243360846179) * t1 - T(0.55324054093167374) * t3 - T(0.17034097485966423) * t5 + T(0.31468126065414925) * t7 + T(0.40130733591347562) * t9 + T(0.13574218750000008) * t11 - T(0.20819599074975012) * t13 - T(0.37992862533041505) * t15 - T(0.28417119278943592) * t17;
-  const P u12 = T(-0.26442971860242637) * t19 - T(0.2782509596063229) * t21 - T(0.034979987681630971) * t23 + T(0.23838527257592121) * t25 + T(0.391937255859375) * t27 + T(0.30782096788817731) * t29 - T(0.019667578790884675) * t31 - T(0.40399948313755907) * t33 - T(0.42357478915081281) * t35 + T(0.45079444411110647) * t37;
-  const P u13 = T(-0.54644538574660073) * t1 + T(0.1956000690600504) * t3 + T(0.44851500181219039) * t5 + T(0.33376987998132163) * t7 + T(0.058043278342703328) * t9 - T(0.20819599074975031) * t11 - T(0.3594360351562505) * t13 - T(0.35675578770156408) * t15 - T(0.21768432555922015) * t17;
-  const P u14 = T(-0.25985710202281537) * t19 - T(0.31998220756604112) * t21 - T(0.18693029259479227) * t23 + T(0.0037110554525802055) * t25 + T(0.20710303078859479) * t27 + T(0.36454888838167498) * t29 + T(0.40885053291852336) * t31 + T(0.27426241331957507) * t33 - T(0.081681745898664018) * t35 - T(0.60851530179979263) * t37;
-  const P u15 = T(0.61577419032067282) * t1 + T(0.3306244611825862) * t3 + T(0.037504601196296651) * t5 - T(0.18805802277762637) * t7 - T(0.32703682433151388) * t9 - T(0.37992862533041522) * t11 - T(0.3567557877015638) * t13 - T(0.27294921874999983) * t15 - T(0.14718146714726577) * t17;
-  const P u16 = T(-0.25701704842059231) * t19 - T(0.34717448663696099) * t21 - T(0.29871497006473618) * t23 - T(0.21949567585050483) * t25 - T(0.1120428370524969) * t27 + T(0.019605168892664605) * t29 + T(0.16910523634665095) * t31 + T(0.32600666949422941) * t33 + T(0.47073070395370176) * t35 + T(0.55371548872167264) * t37;
-  const P u17 = T(-0.41993521236707698) * t1 - T(0.45094729692440172) * t3 - T(0.43480475402586893) * t5 - T(0.39640480332943268) * t7 - T(0.34467811081878308) * t9 - T(0.28417119278943631) * t11 - T(0.21768432555922021) * t13 - T(0.14718146714726574) * t15 - T(0.074188232421874986) * t17;
-  const P u18 = T(-0.25565355313363125) * t19 - T(0.36059602289953985) * t21 - T(0.35769184657224912) * t23 - T(0.35268891701427546) * t25 - T(0.34530746520480055) * t27 - T(0.33506541909504289) * t29 - T(0.32112459274767668) * t31 - T(0.30191323556535671) * t33 - T(0.27398179687640428) * t35 - T(0.2267909351234883) * t37;
-  const P u19 = T(0.50711994761686474) * t0 + T(0.36340143033780103) * t2 + T(0.31917913413863536) * t4 + T(0.29575109265586325) * t6 + T(0.28107649323913136) * t8 + T(0.27121106848493115) * t10 + T(0.26442971860242631) * t12 + T(0.25985710202281503) * t14 + T(0.25701704842059192) * t16 + T(0.25565355313363153) * t18;
-  const P u20 = T(-0.018547058105468736) * t20 - T(0.05593792935075418) * t22 - T(0.09426007796998323) * t24 - T(0.13428623646853349) * t26 - T(0.17708147005749952) * t28 - T(0.22430575234011663) * t30 - T(0.27892851176568828) * t32 - T(0.34733532202238598) * t34 - T(0.44818648184233989) * t36 - T(0.69901660811082977) * t38;
-  const P u21 = T(-0.64716362586383969) * t0 - T(0.26849062274681346) * t2 - T(0.08337000583055855) * t4 + T(0.046350342516570026) * t6 + T(0.14473744855317985) * t8 + T(0.22061813192764188) * t10 + T(0.27825095960632296) * t12 + T(0.31998220756604101) * t14 + T(0.34717448663696082) * t16 + T(0.36059602289954057) * t18;
-  const P u22 = T(-0.055937929350754319) * t20 - T(0.16394805908203139) * t22 - T(0.26022166250109796) * t24 - T(0.33643463912757943) * t26 - T(0.38336796763975056) * t28 - T(0.39015435461233056) * t30 - T(0.3427308390559079) * t32 - T(0.21985897902195362) * t34 + T(0.021456039366591382) * t36 + T(0.56888858538944798) * t38;
-  const P u23 = T(0.47448588018495491) * t0 - T(0.23264246077853779) * t2 - T(0.42787515106886009) * t4 - T(0.41779140972788043) * t6 - T(0.30152783379906156) * t8 - T(0.13731048457794054) * t10 + T(0.03497998768163104) * t12 + T(0.18693029259479219) * t14 + T(0.29871497006473613) * t16 + T(0.35769184657224995) * t18;
-  const P u24 = T(-0.094260077969983327) * t20 - T(0.26022166250109763) * t22 - T(0.36161804199218739) * t24 - T(0.3659627629821855) * t26 - T(0.2573400430138732) * t28 - T(0.044843514658645826) * t30 + T(0.22599002290401965) * t32 + T(0.45424158202580461) * t34 + T(0.43857849523699244) * t36 - T(0.37511402474355338) * t38;
-  const P u25 = T(-0.28070963231284407) * t0 + T(0.56111970786023091) * t2 + T(0.29446241074074114) * t4 - T(0.10964627928269483) * t6 - T(0.35853874503052602) * t8 - T(0.3868555184747216) * t10 - T(0.2383852725759216) * t12 - T(0.0037110554525803764) * t14 + T(0.21949567585050506) * t16 + T(0.35268891701427657) * t18;
-  const P u26 = T(-0.13428623646853355) * t20 - T(0.33643463912757904) * t22 - T(0.3659627629821855) * t24 - T(0.19087219238281258) * t26 + T(0.11689062362965887) * t28 + T(0.38340999814908466) * t30 + T(0.38502994729680695) * t32 - T(0.018264593635027603) * t34 - T(0.59141419789330729) * t36 + T(0.19849168455279426) * t38;
-  const P u27 = T(0.13232778970186293) * t0 - T(0.54400124531958249) * t2 + T(0.27031598579841098) * t4 + T(0.44416423954375728) * t6 + T(0.10240918517337136) * t8 - T(0.278234497024549) * t10 - T(0.39193725585937533) * t12 - T(0.20710303078859493) * t14 + T(0.11204283705249711) * t16 + T(0.34530746520480132) * t18;
-  const P u28 = T(-0.17708147005749975) * t20 - T(0.3833679676397504) * t22 - T(0.2573400430138737) * t24 + T(0.11689062362965869) * t26 + T(0.40525817871093789) * t28 + T(0.26486591213681471) * t30 - T(0.26311965342160931) * t32 - T(0.48081347609267239) * t34 + T(0.44732869742844794) * t36 - T(0.082940831578297236) * t38;
-  const P u29 = T(-0.048704533326139811) * t0 + T(0.33248365397026469) * t2 - T(0.56845136855322342) * t4 + T(0.056017272662626003) * t6 + T(0.44771571968920554) * t8 + T(0.14161705885970927) * t10 - T(0.30782096788817748) * t12 - T(0.36454888838167526) * t14 - T(0.019605168892664369) * t16 + T(0.33506541909504356) * t18;
-  const P u30 = T(-0.22430575234011682) * t20 - T(0.39015435461233039) * t22 - T(0.044843514658646236) * t24 + T(0.38340999814908439) * t26 + T(0.26486591213681471) * t28 - T(0.32493591308593756) * t30 - T(0.36132741820098768) * t32 + T(0.53954217518765424) * t34 - T(0.22436608725812202) * t36 + T(0.026676571555488807) * t38;
-  const P u31 = T(0.013551711901907102) * t0 - T(0.13748926105882281) * t2 + T(0.43469959918285384) * t4 - T(0.53810304062415304) * t6 + T(0.013216260774861217) * t8 + T(0.45050705193148149) * t10 + T(0.019667578790884373) * t12 - T(0.40885053291852369) * t14 - T(0.16910523634665084) * t16 + T(0.32112459274767757) * t18;
-  const P u32 = T(-0.27892851176568861) * t20 - T(0.34273083905590784) * t22 + T(0.22599002290401976) * t24 + T(0.38502994729680695) * t26 - T(0.26311965342160937) * t28 - T(0.3613274182009874) * t30 + T(0.55459976196289151) * t32 - T(0.30362676443670678) * t34 + T(0.076257262661925743) * t36 - T(0.006338232867650331) * t38;
-  const P u33 = T(-0.002702631575623489) * t0 + T(0.038020516796310459) * t2 - T(0.18497401233633939) * t4 + T(0.45241227145056001) * t6 - T(0.55086803376099636) * t8 + T(0.14258994623391175) * t10 + T(0.40399948313755901) * t12 - T(0.27426241331957468) * t14 - T(0.32600666949422907) * t16 + T(0.30191323556535715) * t18;
-  const P u34 = T(-0.34733532202238621) * t20 - T(0.21985897902195342) * t22 + T(0.45424158202580472) * t24 - T(0.018264593635027443) * t26 - T(0.48081347609267261) * t28 + T(0.53954217518765424) * t30 - T(0.30362676443670655) * t32 + T(0.097927093505859431) * t34 - T(0.016847365494265111) * t36 + T(0.0010364118981282578) * t38;
-  const P u35 = T(0.00035037117014189762) * t0 - T(0.0065147479868427538) * t2 + T(0.044459065142464657) * t4 - T(0.16865573252474569) * t6 + T(0.39616499478516143) * t8 - T(0.57432433113808279) * t10 + T(0.42357478915081348) * t12 + T(0.081681745898664435) * t14 - T(0.47073070395370203) * t16 + T(0.273981796876405) * t18;
-  const P u36 = T(-0.4481864818423405) * t20 + T(0.021456039366591718) * t22 + T(0.43857849523699211) * t24 - T(0.59141419789330729) * t26 + T(0.44732869742844761) * t28 - T(0.2243660872581219) * t30 + T(0.07625726266192577) * t32 - T(0.016847365494264948) * t34 + T(0.0021324157714844179) * t36 - T(0.00010114344469879652) * t38;
-  const P u37 = T(-2.351537324150778e-05) * t0 + T(0.00055785953346128769) * t2 - T(0.0050438463297360911) * t4 + T(0.026733125724446596) * t6 - T(0.095205249669813516) * t8 + T(0.24218603223117507) * t10 - T(0.45079444411110725) * t12 + T(0.60851530179979318) * t14 - T(0.55371548872167309) * t16 + T(0.22679093512348886) * t18;
-  const P u38 = T(-0.69901660811083277) * t20 + T(0.56888858538944964) * t22 - T(0.37511402474355482) * t24 + T(0.19849168455279498) * t26 - T(0.082940831578297541) * t28 + T(0.026676571555488922) * t30 - T(0.006338232867650246) * t32 + T(0.0010364118981281984) * t34 - T(0.00010114344469874504) * t36 + T(3.8146972656579962e-06) * t38;
+  const P t38 = madd<F>(cg19, x[38], -(sg19 * x[0]));
+  const P t0 = madd<F>(sg19, x[38], cg19 * x[0]);
+  const P u0 = madd<F>(T(2.3515373241335243e-05), t37, madd<F>(T(-0.00035037117014168995), t35, madd<F>(T(0.0027026315756233841), t33, madd<F>(T(-0.013551711901906882), t31, madd<F>(T(0.048704533326139471), t29, madd<F>(T(-0.13232778970186257), t27, madd<F>(T(0.28070963231284352), t25, madd<F>(T(-0.47448588018495369), t23, madd<F>(T(0.64716362586383769), t21, T(-0.50711994761686363) * t19)))))))));
+  const P u1 = madd<F>(T(-0.41993521236707598), t17, madd<F>(T(0.61577419032067182), t15, madd<F>(T(-0.54644538574659951), t13, madd<F>(T(0.34346243360846118), t11, madd<F>(T(-0.15801837223353893), t9, madd<F>(T(0.052761071123568343), t7, madd<F>(T(-0.01227589257973419), t5, madd<F>(T(0.0018188066925964839), t3, T(-0.00013732910156255172) * t1))))))));
+  const P u2 = madd<F>(T(-0.0005578595334615157), t37, madd<F>(T(0.0065147479868428232), t35, madd<F>(T(-0.038020516796310383), t33, madd<F>(T(0.13748926105882248), t31, madd<F>(T(-0.33248365397026397), t29, madd<F>(T(0.54400124531958172), t27, madd<F>(T(-0.56111970786022991), t25, madd<F>(T(0.23264246077853715), t23, madd<F>(T(0.26849062274681329), t21, T(-0.36340143033780115) * t19)))))))));
+  const P u3 = madd<F>(T(-0.45094729692440139), t17, madd<F>(T(0.33062446118258659), t15, madd<F>(T(0.19560006906004976), t13, madd<F>(T(-0.55324054093167396), t11, madd<F>(T(0.5090639393260975), t9, madd<F>(T(-0.2738443889495108), t7, madd<F>(T(0.092277243946110074), t5, madd<F>(T(-0.018554687500000003), t3, T(0.001818806692596621) * t1))))))));
+  const P u4 = madd<F>(T(0.0050438463297362394), t37, madd<F>(T(-0.044459065142464775), t35, madd<F>(T(0.18497401233633942), t33, madd<F>(T(-0.43469959918285384), t31, madd<F>(T(0.56845136855322387), t29, madd<F>(T(-0.27031598579841098), t27, madd<F>(T(-0.29446241074074125), t25, madd<F>(T(0.42787515106886037), t23, madd<F>(T(0.083370005830558508), t21, T(-0.31917913413863575) * t19)))))))));
+  const P u5 = madd<F>(T(-0.43480475402586832), t17, madd<F>(T(0.037504601196296609), t15, madd<F>(T(0.44851500181218956), t13, madd<F>(T(-0.17034097485966423), t11, madd<F>(T(-0.40999659768915747), t9, madd<F>(T(0.55164876214684422), t7, madd<F>(T(-0.31349182128906267), t5, madd<F>(T(0.092277243946110074), t3, T(-0.012275892579734221) * t1))))))));
+  const P u6 = madd<F>(T(-0.026733125724446676), t37, madd<F>(T(0.16865573252474531), t35, madd<F>(T(-0.4524122714505594), t33, madd<F>(T(0.53810304062415193), t31, madd<F>(T(-0.056017272662626315), t29, madd<F>(T(-0.44416423954375683), t27, madd<F>(T(0.10964627928269491), t25, madd<F>(T(0.41779140972788048), t23, madd<F>(T(-0.046350342516569949), t21, T(-0.29575109265586363) * t19)))))))));
+  const P u7 = madd<F>(T(-0.39640480332943234), t17, madd<F>(T(-0.18805802277762668), t15, madd<F>(T(0.33376987998132107), t13, madd<F>(T(0.31468126065414975), t11, madd<F>(T(-0.31061222180615794), t9, madd<F>(T(-0.34423828125000017), t7, madd<F>(T(0.55164876214684433), t5, madd<F>(T(-0.2738443889495108), t3, T(0.052761071123568586) * t1))))))));
+  const P u8 = madd<F>(T(0.095205249669813224), t37, madd<F>(T(-0.39616499478516121), t35, madd<F>(T(0.55086803376099647), t33, madd<F>(T(-0.013216260774860851), t31, madd<F>(T(-0.44771571968920548), t29, madd<F>(T(-0.10240918517337146), t27, madd<F>(T(0.35853874503052607), t25, madd<F>(T(0.30152783379906201), t23, madd<F>(T(-0.14473744855317988), t21, T(-0.28107649323913192) * t19)))))))));
+  const P u9 = madd<F>(T(-0.34467811081878313), t17, madd<F>(T(-0.32703682433151432), t15, madd<F>(T(0.058043278342703147), t13, madd<F>(T(0.40130733591347617), t11, madd<F>(T(0.24725341796875025), t9, madd<F>(T(-0.31061222180615822), t7, madd<F>(T(-0.40999659768915753), t5, madd<F>(T(0.50906393932609773), t3, T(-0.15801837223353943) * t1))))))));
+  const P u10 = madd<F>(T(-0.24218603223117482), t37, madd<F>(T(0.57432433113808223), t35, madd<F>(T(-0.14258994623391191), t33, madd<F>(T(-0.45050705193148088), t31, madd<F>(T(-0.14161705885970907), t29, madd<F>(T(0.278234497024549), t27, madd<F>(T(0.38685551847472127), t25, madd<F>(T(0.13731048457794057), t23, madd<F>(T(-0.22061813192764199), t21, T(-0.27121106848493148) * t19)))))))));
+  const P u11 = madd<F>(T(-0.28417119278943592), t17, madd<F>(T(-0.37992862533041505), t15, madd<F>(T(-0.20819599074975012), t13, madd<F>(T(0.13574218750000008), t11, madd<F>(T(0.40130733591347562), t9, madd<F>(T(0.31468126065414925), t7, madd<F>(T(-0.17034097485966423), t5, madd<F>(T(-0.55324054093167374), t3, T(0.34346243360846179) * t1))))))));
+  const P u12 = madd<F>(T(0.45079444411110647), t37, madd<F>(T(-0.42357478915081281), t35, madd<F>(T(-0.40399948313755907), t33, madd<F>(T(-0.019667578790884675), t31, madd<F>(T(0.30782096788817731), t29, madd<F>(T(0.391937255859375), t27, madd<F>(T(0.23838527257592121), t25, madd<F>(T(-0.034979987681630971), t23, madd<F>(T(-0.2782509596063229), t21, T(-0.26442971860242637) * t19)))))))));
+  const P u13 = madd<F>(T(-0.21768432555922015), t17, madd<F>(T(-0.35675578770156408), t15, madd<F>(T(-0.3594360351562505), t13, madd<F>(T(-0.20819599074975031), t11, madd<F>(T(0.058043278342703328), t9, madd<F>(T(0.33376987998132163), t7, madd<F>(T(0.44851500181219039), t5, madd<F>(T(0.1956000690600504), t3, T(-0.54644538574660073) * t1))))))));
+  const P u14 = madd<F>(T(-0.60851530179979263), t37, madd<F>(T(-0.081681745898664018), t35, madd<F>(T(0.27426241331957507), t33, madd<F>(T(0.40885053291852336), t31, madd<F>(T(0.36454888838167498), t29, madd<F>(T(0.20710303078859479), t27, madd<F>(T(0.0037110554525802055), t25, madd<F>(T(-0.18693029259479227), t23, madd<F>(T(-0.31998220756604112), t21, T(-0.25985710202281537) * t19)))))))));
+  const P u15 = madd<F>(T(-0.14718146714726577), t17, madd<F>(T(-0.27294921874999983), t15, madd<F>(T(-0.3567557877015638), t13, madd<F>(T(-0.37992862533041522), t11, madd<F>(T(-0.32703682433151388), t9, madd<F>(T(-0.18805802277762637), t7, madd<F>(T(0.037504601196296651), t5, madd<F>(T(0.3306244611825862), t3, T(0.61577419032067282) * t1))))))));
+  const P u16 = madd<F>(T(0.55371548872167264), t37, madd<F>(T(0.47073070395370176), t35, madd<F>(T(0.32600666949422941), t33, madd<F>(T(0.16910523634665095), t31, madd<F>(T(0.019605168892664605), t29, madd<F>(T(-0.1120428370524969), t27, madd<F>(T(-0.21949567585050483), t25, madd<F>(T(-0.29871497006473618), t23, madd<F>(T(-0.34717448663696099), t21, T(-0.25701704842059231) * t19)))))))));
+  const P u17 = madd<F>(T(-0.074188232421874986), t17, madd<F>(T(-0.14718146714726574), t15, madd<F>(T(-0.21768432555922021), t13, madd<F>(T(-0.28417119278943631), t11, madd<F>(T(-0.34467811081878308), t9, madd<F>(T(-0.39640480332943268), t7, madd<F>(T(-0.43480475402586893), t5, madd<F>(T(-0.45094729692440172), t3, T(-0.41993521236707698) * t1))))))));
+  const P u18 = madd<F>(T(-0.2267909351234883), t37, madd<F>(T(-0.27398179687640428), t35, madd<F>(T(-0.30191323556535671), t33, madd<F>(T(-0.32112459274767668), t31, madd<F>(T(-0.33506541909504289), t29, madd<F>(T(-0.34530746520480055), t27, madd<F>(T(-0.35268891701427546), t25, madd<F>(T(-0.35769184657224912), t23, madd<F>(T(-0.36059602289953985), t21, T(-0.25565355313363125) * t19)))))))));
+  const P u19 = madd<F>(T(0.25565355313363153), t18, madd<F>(T(0.25701704842059192), t16, madd<F>(T(0.25985710202281503), t14, madd<F>(T(0.26442971860242631), t12, madd<F>(T(0.27121106848493115), t10, madd<F>(T(0.28107649323913136), t8, madd<F>(T(0.29575109265586325), t6, madd<F>(T(0.31917913413863536), t4, madd<F>(T(0.36340143033780103), t2, T(0.50711994761686474) * t0)))))))));
+  const P u20 = madd<F>(T(-0.69901660811082977), t38, madd<F>(T(-0.44818648184233989), t36, madd<F>(T(-0.34733532202238598), t34, madd<F>(T(-0.27892851176568828), t32, madd<F>(T(-0.22430575234011663), t30, madd<F>(T(-0.17708147005749952), t28, madd<F>(T(-0.13428623646853349), t26, madd<F>(T(-0.09426007796998323), t24, madd<F>(T(-0.05593792935075418), t22, T(-0.018547058105468736) * t20)))))))));
+  const P u21 = madd<F>(T(0.36059602289954057), t18, madd<F>(T(0.34717448663696082), t16, madd<F>(T(0.31998220756604101), t14, madd<F>(T(0.27825095960632296), t12, madd<F>(T(0.22061813192764188), t10, madd<F>(T(0.14473744855317985), t8, madd<F>(T(0.046350342516570026), t6, madd<F>(T(-0.08337000583055855), t4, madd<F>(T(-0.26849062274681346), t2, T(-0.64716362586383969) * t0)))))))));
+  const P u22 = madd<F>(T(0.56888858538944798), t38, madd<F>(T(0.021456039366591382), t36, madd<F>(T(-0.21985897902195362), t34, madd<F>(T(-0.3427308390559079), t32, madd<F>(T(-0.39015435461233056), t30, madd<F>(T(-0.38336796763975056), t28, madd<F>(T(-0.33643463912757943), t26, madd<F>(T(-0.26022166250109796), t24, madd<F>(T(-0.16394805908203139), t22, T(-0.055937929350754319) * t20)))))))));
+  const P u23 = madd<F>(T(0.35769184657224995), t18, madd<F>(T(0.29871497006473613), t16, madd<F>(T(0.18693029259479219), t14, madd<F>(T(0.03497998768163104), t12, madd<F>(T(-0.13731048457794054), t10, madd<F>(T(-0.30152783379906156), t8, madd<F>(T(-0.41779140972788043), t6, madd<F>(T(-0.42787515106886009), t4, madd<F>(T(-0.23264246077853779), t2, T(0.47448588018495491) * t0)))))))));
+  const P u24 = madd<F>(T(-0.37511402474355338), t38, madd<F>(T(0.43857849523699244), t36, madd<F>(T(0.45424158202580461), t34, madd<F>(T(0.22599002290401965), t32, madd<F>(T(-0.044843514658645826), t30, madd<F>(T(-0.2573400430138732), t28, madd<F>(T(-0.3659627629821855), t26, madd<F>(T(-0.36161804199218739), t24, madd<F>(T(-0.26022166250109763), t22, T(-0.094260077969983327) * t20)))))))));
+  const P u25 = madd<F>(T(0.35268891701427657), t18, madd<F>(T(0.21949567585050506), t16, madd<F>(T(-0.0037110554525803764), t14, madd<F>(T(-0.2383852725759216), t12, madd<F>(T(-0.3868555184747216), t10, madd<F>(T(-0.35853874503052602), t8, madd<F>(T(-0.10964627928269483), t6, madd<F>(T(0.29446241074074114), t4, madd<F>(T(0.56111970786023091), t2, T(-0.28070963231284407) * t0)))))))));
+  const P u26 = madd<F>(T(0.19849168455279426), t38, madd<F>(T(-0.59141419789330729), t36, madd<F>(T(-0.018264593635027603), t34, madd<F>(T(0.38502994729680695), t32, madd<F>(T(0.38340999814908466), t30, madd<F>(T(0.11689062362965887), t28, madd<F>(T(-0.19087219238281258), t26, madd<F>(T(-0.3659627629821855), t24, madd<F>(T(-0.33643463912757904), t22, T(-0.13428623646853355) * t20)))))))));
+  const P u27 = madd<F>(T(0.34530746520480132), t18, madd<F>(T(0.11204283705249711), t16, madd<F>(T(-0.20710303078859493), t14, madd<F>(T(-0.39193725585937533), t12, madd<F>(T(-0.278234497024549), t10, madd<F>(T(0.10240918517337136), t8, madd<F>(T(0.44416423954375728), t6, madd<F>(T(0.27031598579841098), t4, madd<F>(T(-0.54400124531958249), t2, T(0.13232778970186293) * t0)))))))));
+  const P u28 = madd<F>(T(-0.082940831578297236), t38, madd<F>(T(0.44732869742844794), t36, madd<F>(T(-0.48081347609267239), t34, madd<F>(T(-0.26311965342160931), t32, madd<F>(T(0.26486591213681471), t30, madd<F>(T(0.40525817871093789), t28, madd<F>(T(0.11689062362965869), t26, madd<F>(T(-0.2573400430138737), t24, madd<F>(T(-0.3833679676397504), t22, T(-0.17708147005749975) * t20)))))))));
+  const P u29 = madd<F>(T(0.33506541909504356), t18, madd<F>(T(-0.019605168892664369), t16, madd<F>(T(-0.36454888838167526), t14, madd<F>(T(-0.30782096788817748), t12, madd<F>(T(0.14161705885970927), t10, madd<F>(T(0.44771571968920554), t8, madd<F>(T(0.056017272662626003), t6, madd<F>(T(-0.56845136855322342), t4, madd<F>(T(0.33248365397026469), t2, T(-0.048704533326139811) * t0)))))))));
+  const P u30 = madd<F>(T(0.026676571555488807), t38, madd<F>(T(-0.22436608725812202), t36, madd<F>(T(0.53954217518765424), t34, madd<F>(T(-0.36132741820098768), t32, madd<F>(T(-0.32493591308593756), t30, madd<F>(T(0.26486591213681471), t28, madd<F>(T(0.38340999814908439), t26, madd<F>(T(-0.044843514658646236), t24, madd<F>(T(-0.39015435461233039), t22, T(-0.22430575234011682) * t20)))))))));
+  const P u31 = madd<F>(T(0.32112459274767757), t18, madd<F>(T(-0.16910523634665084), t16, madd<F>(T(-0.40885053291852369), t14, madd<F>(T(0.019667578790884373), t12, madd<F>(T(0.45050705193148149), t10, madd<F>(T(0.013216260774861217), t8, madd<F>(T(-0.53810304062415304), t6, madd<F>(T(0.43469959918285384), t4, madd<F>(T(-0.13748926105882281), t2, T(0.013551711901907102) * t0)))))))));
+  const P u32 = madd<F>(T(-0.006338232867650331), t38, madd<F>(T(0.076257262661925743), t36, madd<F>(T(-0.30362676443670678), t34, madd<F>(T(0.55459976196289151), t32, madd<F>(T(-0.3613274182009874), t30, madd<F>(T(-0.26311965342160937), t28, madd<F>(T(0.38502994729680695), t26, madd<F>(T(0.22599002290401976), t24, madd<F>(T(-0.34273083905590784), t22, T(-0.27892851176568861) * t20)))))))));
+  const P u33 = madd<F>(T(0.30191323556535715), t18, madd<F>(T(-0.32600666949422907), t16, madd<F>(T(-0.27426241331957468), t14, madd<F>(T(0.40399948313755901), t12, madd<F>(T(0.14258994623391175), t10, madd<F>(T(-0.55086803376099636), t8, madd<F>(T(0.45241227145056001), t6, madd<F>(T(-0.18497401233633939), t4, madd<F>(T(0.038020516796310459), t2, T(-0.002702631575623489) * t0)))))))));
+  const P u34 = madd<F>(T(0.0010364118981282578), t38, madd<F>(T(-0.016847365494265111), t36, madd<F>(T(0.097927093505859431), t34, madd<F>(T(-0.30362676443670655), t32, madd<F>(T(0.53954217518765424), t30, madd<F>(T(-0.48081347609267261), t28, madd<F>(T(-0.018264593635027443), t26, madd<F>(T(0.45424158202580472), t24, madd<F>(T(-0.21985897902195342), t22, T(-0.34733532202238621) * t20)))))))));
+  const P u35 = madd<F>(T(0.273981796876405), t18, madd<F>(T(-0.47073070395370203), t16, madd<F>(T(0.081681745898664435), t14, madd<F>(T(0.42357478915081348), t12, madd<F>(T(-0.57432433113808279), t10, madd<F>(T(0.39616499478516143), t8, madd<F>(T(-0.16865573252474569), t6, madd<F>(T(0.044459065142464657), t4, madd<F>(T(-0.0065147479868427538), t2, T(0.00035037117014189762) * t0)))))))));
+  const P u36 = madd<F>(T(-0.00010114344469879652), t38, madd<F>(T(0.0021324157714844179), t36, madd<F>(T(-0.016847365494264948), t34, madd<F>(T(0.07625726266192577), t32, madd<F>(T(-0.2243660872581219), t30, madd<F>(T(0.44732869742844761), t28, madd<F>(T(-0.59141419789330729), t26, madd<F>(T(0.43857849523699211), t24, madd<F>(T(0.021456039366591718), t22, T(-0.4481864818423405) * t20)))))))));
+  const P u37 = madd<F>(T(0.22679093512348886), t18, madd<F>(T(-0.55371548872167309), t16, madd<F>(T(0.60851530179979318), t14, madd<F>(T(-0.45079444411110725), t12, madd<F>(T(0.24218603223117507), t10, madd<F>(T(-0.095205249669813516), t8, madd<F>(T(0.026733125724446596), t6, madd<F>(T(-0.0050438463297360911), t4, madd<F>(T(0.00055785953346128769), t2, T(-2.351537324150778e-05) * t0)))))))));
+  const P u38 = madd<F>(T(3.8146972656579962e-06), t38, madd<F>(T(-0.00010114344469874504), t36, madd<F>(T(0.0010364118981281984), t34, madd<F>(T(-0.006338232867650246), t32, madd<F>(T(0.026676571555488922), t30, madd<F>(T(-0.082940831578297541), t28, madd<F>(T(0.19849168455279498), t26, madd<F>(T(-0.37511402474355482), t24, madd<F>(T(0.56888858538944964), t22, T(-0.69901660811083277) * t20)))))))));
   const P w19 = u19;
   const P cb1 = splat<P>(s.cb[1]), sb1 = splat<P>(s.sb[1]);
-  const P w20 = cb1 * u20 - sb1 * u18;
-  const P w18 = sb1 * u20 + cb1 * u18;
+  const P w20 = madd<F>(cb1, u20, -(sb1 * u18));
+  const P w18 = madd<F>(sb1, u20, cb1 * u18);
   const P cb2 = splat<P>(s.cb[2]), sb2 = splat<P>(s.sb[2]);
-  const P w21 = cb2 * u21 - sb2 * u17;
-  const P w17 = sb2 * u21 + cb2 * u17;
+  const P w21 = madd<F>(cb2, u21, -(sb2 * u17));
+  const P w17 = madd<F>(sb2, u21, cb2 * u17);
   const P cb3 = splat<P>(s.cb[3]), sb3 = splat<P>(s.sb[3]);
-  const P w22 = cb3 * u22 - sb3 * u16;
-  const P w16 = sb3 * u22 + cb3 * u16;
+  const P w22 = madd<F>(cb3, u22, -(sb3 * u16));
+  const P w16 = madd<F>(sb3, u22, cb3 * u16);
   const P cb4 = splat<P>(s.cb[4]), sb4 = splat<P>(s.sb[4]);
-  const P w23 = cb4 * u23 - sb4 * u15;
-  const P w15 = sb4 * u23 + cb4 * u15;
+  const P w23 = madd<F>(cb4, u23, -(sb4 * u15));
+  const P w15 = madd<F>(sb4, u23, cb4 * u15);
   const P cb5 = splat<P>(s.cb[5]), sb5 = splat<P>(s.sb[5]);
-  const P w24 = cb5 * u24 - sb5 * u14;
-  const P w14 = sb5 * u24 + cb5 * u14;
+  const P w24 = madd<F>(cb5, u24, -(sb5 * u14));
+  const P w14 = madd<F>(sb5, u24, cb5 * u14);
   const P cb6 = splat<P>(s.cb[6]), sb6 = splat<P>(s.sb[6]);
-  const P w25 = cb6 * u25 - sb6 * u13;
-  const P w13 = sb6 * u25 + cb6 * u13;
+  const P w25 = madd<F>(cb6, u25, -(sb6 * u13));
+  const P w13 = madd<F>(sb6, u25, cb6 * u13);
   const P cb7 = splat<P>(s.cb[7]), sb7 = splat<P>(s.sb[7]);
-  const P w26 = cb7 * u26 - sb7 * u12;
-  const P w12 = sb7 * u26 + cb7 * u12;
+  const P w26 = madd<F>(cb7, u26, -(sb7 * u12));
+  const P w12 = madd<F>(sb7, u26, cb7 * u12);
   const P cb8 = splat<P>(s.cb[8]), sb8 = splat<P>(s.sb[8]);
-  const P w27 = cb8 * u27 - sb8 * u11;
-  const P w11 = sb8 * u27 + cb8 * u11;
+  const P w27 = madd<F>(cb8, u27, -(sb8 * u11));
+  const P w11 = madd<F>(sb8, u27, cb8 * u11);
   const P cb9 = splat<P>(s.cb[9]), sb9 = splat<P>(s.sb[9]);
-  const P w28 = cb9 * u28 - sb9 * u10;
-  const P w10 = sb9 * u28 + cb9 * u10;
+  const P w28 = madd<F>(cb9, u28, -(sb9 * u10));
+  const P w10 = madd<F>(sb9, u28, cb9 * u10);
   const P cb10 = splat<P>(s.cb[10]), sb10 = splat<P>(s.sb[10]);
-  const P w29 = cb10 * u29 - sb10 * u9;
-  const P w9 = sb10 * u29 + cb10 * u9;
+  const P w29 = madd<F>(cb10, u29, -(sb10 * u9));
+  const P w9 = madd<F>(sb10, u29, cb10 * u9);
   const P cb11 = splat<P>(s.cb[11]), sb11 = splat<P>(s.sb[11]);
-  const P w30 = cb11 * u30 - sb11 * u8;
-  const P w8 = sb11 * u30 + cb11 * u8;
+  const P w30 = madd<F>(cb11, u30, -(sb11 * u8));
+  const P w8 = madd<F>(sb11, u30, cb11 * u8);
   const P cb12 = splat<P>(s.cb[12]), sb12 = splat<P>(s.sb[12]);
-  const P w31 = cb12 * u31 - sb12 * u7;
-  const P w7 = sb12 * u31 + cb12 * u7;
+  const P w31 = madd<F>(cb12, u31, -(sb12 * u7));
+  const P w7 = madd<F>(sb12, u31, cb12 * u7);
   const P cb13 = splat<P>(s.cb[13]), sb13 = splat<P>(s.sb[13]);
-  const P w32 = cb13 * u32 - sb13 * u6;
-  const P w6 = sb13 * u32 + cb13 * u6;
+  const P w32 = madd<F>(cb13, u32, -(sb13 * u6));
+  const P w6 = madd<F>(sb13, u32, cb13 * u6);
   const P cb14 = splat<P>(s.cb[14]), sb14 = splat<P>(s.sb[14]);
-  const P w33 = cb14 * u33 - sb14 * u5;
-  const P w5 = sb14 * u33 + cb14 * u5;
+  const P w33 = madd<F>(cb14, u33, -(sb14 * u5));
+  const P w5 = madd<F>(sb14, u33, cb14 * u5);
   const P cb15 = splat<P>(s.cb[15]), sb15 = splat<P>(s.sb[15]);
-  const P w34 = cb15 * u34 - sb15 * u4;
-  const P w4 = sb15 * u34 + cb15 * u4;
+  const P w34 = madd<F>(cb15, u34, -(sb15 * u4));
+  const P w4 = madd<F>(sb15, u34, cb15 * u4);
   const P cb16 = splat<P>(s.cb[16]), sb16 = splat<P>(s.sb[16]);
-  const P w35 = cb16 * u35 - sb16 * u3;
-  const P w3 = sb16 * u35 + cb16 * u3;
+  const P w35 = madd<F>(cb16, u35, -(sb16 * u3));
+  const P w3 = madd<F>(sb16, u35, cb16 * u3);
   const P cb17 = splat<P>(s.cb[17]), sb17 = splat<P>(s.sb[17]);
-  const P w36 = cb17 * u36 - sb17 * u2;
-  const P w2 = sb17 * u36 + cb17 * u2;
+  const P w36 = madd<F>(cb17, u36, -(sb17 * u2));
+  const P w2 = madd<F>(sb17, u36, cb17 * u2);
   const P cb18 = splat<P>(s.cb[18]), sb18 = splat<P>(s.sb[18]);
-  const P w37 = cb18 * u37 - sb18 * u1;
-  const P w1 = sb18 * u37 + cb18 * u1;
+  const P w37 = madd<F>(cb18, u37, -(sb18 * u1));
+  const P w1 = madd<F>(sb18, u37, cb18 * u1);
   const P cb19 = splat<P>(s.cb[19]), sb19 = splat<P>(s.sb[19]);
-  const P w38 = cb19 * u38 - sb19 * u0;
-  const P w0 = sb19 * u38 + cb19 * u0;
-  const P v0 = T(0.50711994761686474) * w19 - T(0.64716362586383969) * w21 + T(0.47448588018495491) * w23 - T(0.28070963231284407) * w25 + T(0.13232778970186293) * w27 - T(0.048704533326139811) * w29 + T(0.013551711901907102) * w31 - T(0.002702631575623489) * w33 + T(0.00035037117014189762) * w35 - T(2.351537324150778e-05) * w37;
-  const P v1 = T(-0.00013732910156255172) * w1 + T(0.001818806692596621) * w3 - T(0.012275892579734221) * w5 + T(0.052761071123568586) * w7 - T(0.15801837223353943) * w9 + T(0.34346243360846179) * w11 - T(0.54644538574660073) * w13 + T(0.61577419032067282) * w15 - T(0.41993521236707698) * w17;
-  const P v2 = T(0.36340143033780103) * w19 - T(0.26849062274681346) * w21 - T(0.23264246077853779) * w23 + T(0.56111970786023091) * w25 - T(0.54400124531958249) * w27 + T(0.33248365397026469) * w29 - T(0.13748926105882281) * w31 + T(0.038020516796310459) * w33 - T(0.0065147479868427538) * w35 + T(0.00055785953346128769) * w37;
-  const P v3 = T(0.0018188066925964839) * w1 - T(0.018554687500000003) * w3 + T(0.092277243946110074) * w5 - T(0.2738443889495108) * w7 + T(0.50906393932609773) * w9 - T(0.55324054093167374) * w11 + T(0.1956000690600504) * w13 + T(0.3306244611825862) * w15 - T(0.45094729692440172) * w17;
-  const P v4 = T(0.31917913413863536) * w19 - T(0.08337000583055855) * w21 - T(0.42787515106886009) * w23 + T(0.29446241074074114) * w25 + T(0.27031598579841098) * w27 - T(0.56845136855322342) * w29 + T(0.43469959918285384) * w31 - T(0.18497401233633939) * w33 + T(0.044459065142464657) * w35 - T(0.0050438463297360911) * w37;
-  const P v5 = T(-0.01227589257973419) * w1 + T(0.092277243946110074) * w3 - T(0.31349182128906267) * w5 + T(0.55164876214684433) * w7 - T(0.40999659768915753) * w9 - T(0.17034097485966423) * w11 + T(0.44851500181219039) * w13 + T(0.037504601196296651) * w15 - T(0.43480475402586893) * w17;
-  const P v6 = T(0.29575109265586325) * w19 + T(0.046350342516570026) * w21 - T(0.41779140972788043) * w23 - T(0.10964627928269483) * w25 + T(0.44416423954375728) * w27 + T(0.056017272662626003) * w29 - T(0.53810304062415304) * w31 + T(0.45241227145056001) * w33 - T(0.16865573252474569) * w35 + T(0.026733125724446596) * w37;
-  const P v7 = T(0.052761071123568343) * w1 - T(0.2738443889495108) * w3 + T(0.55164876214684422) * w5 - T(0.34423828125000017) * w7 - T(0.31061222180615822) * w9 + T(0.31468126065414925) * w11 + T(0.33376987998132163) * w13 - T(0.18805802277762637) * w15 - T(0.39640480332943268) * w17;
-  const P v8 = T(0.28107649323913136) * w19 + T(0.14473744855317985) * w21 - T(0.30152783379906156) * w23 - T(0.35853874503052602) * w25 + T(0.10240918517337136) * w27 + T(0.44771571968920554) * w29 + T(0.013216260774861217) * w31 - T(0.55086803376099636) * w33 + T(0.39616499478516143) * w35 - T(0.095205249669813516) * w37;
-  const P v9 = T(-0.15801837223353893) * w1 + T(0.5090639393260975) * w3 - T(0.40999659768915747) * w5 - T(0.31061222180615794) * w7 + T(0.24725341796875025) * w9 + T(0.40130733591347562) * w11 + T(0.058043278342703328) * w13 - T(0.32703682433151388) * w15 - T(0.34467811081878308) * w17;
-  const P v10 = T(0.27121106848493115) * w19 + T(0.22061813192764188) * w21 - T(0.13731048457794054) * w23 - T(0.3868555184747216) * w25 - T(0.278234497024549) * w27 + T(0.14161705885970927) * w29 + T(0.45050705193148149) * w31 + T(0.14258994623391175) * w33 - T(0.57432433113808279) * w35 + T(0.24218603223117507) * w37;
-  const P v11 = T(0.34346243360846118) * w1 - T(0.55324054093167396) * w3 - T(0.17034097485966423) * w5 + T(0.31468126065414975) * w7 + T(0.40130733591347617) * w9 + T(0.13574218750000008) * w11 - T(0.20819599074975031) * w13 - T(0.37992862533041522) * w15 - T(0.28417119278943631) * w17;
-  const P v12 = T(0.26442971860242631) * w19 + T(0.27825095960632296) * w21 + T(0.03497998768163104) * w23 - T(0.2383852725759216) * w25 - T(0.39193725585937533) * w27 - T(0.30782096788817748) * w29 + T(0.019667578790884373) * w31 + T(0.40399948313755901) * w33 + T(0.42357478915081348) * w35 - T(0.45079444411110725) * w37;
-  const P v13 = T(-0.54644538574659951) * w1 + T(0.19560006906004976) * w3 + T(0.44851500181218956) * w5 + T(0.33376987998132107) * w7 + T(0.058043278342703147) * w9 - T(0.20819599074975012) * w11 - T(0.3594360351562505) * w13 - T(0.3567557877015638) * w15 - T(0.21768432555922021) * w17;
-  const P v14 = T(0.25985710202281503) * w19 + T(0.31998220756604101) * w21 + T(0.18693029259479219) * w23 - T(0.0037110554525803764) * w25 - T(0.20710303078859493) * w27 - T(0.36454888838167526) * w29 - T(0.40885053291852369) * w31 - T(0.27426241331957468) * w33 + T(0.081681745898664435) * w35 + T(0.60851530179979318) * w37;
-  const P v15 = T(0.61577419032067182) * w1 + T(0.33062446118258659) * w3 + T(0.037504601196296609) * w5 - T(0.18805802277762668) * w7 - T(0.32703682433151432) * w9 - T(0.37992862533041505) * w11 - T(0.35675578770156408) * w13 - T(0.27294921874999983) * w15 - T(0.14718146714726574) * w17;
-  const P v16 = T(0.25701704842059192) * w19 + T(0.34717448663696082) * w21 + T(0.29871497006473613) * w23 + T(0.21949567585050506) * w25 + T(0.11204283705249711) * w27 - T(0.019605168892664369) * w29 - T(0.16910523634665084) * w31 - T(0.32600666949422907) * w33 - T(0.47073070395370203) * w35 - T(0.55371548872167309) * w37;
-  const P v17 = T(-0.41993521236707598) * w1 - T(0.45094729692440139) * w3 - T(0.43480475402586832) * w5 - T(0.39640480332943234) * w7 - T(0.34467811081878313) * w9 - T(0.28417119278943592) * w11 - T(0.21768432555922015) * w13 - T(0.14718146714726577) * w15 - T(0.074188232421874986) * w17;
-  const P v18 = T(0.25565355313363153) * w19 + T(0.36059602289954057) * w21 + T(0.35769184657224995) * w23 + T(0.35268891701427657) * w25 + T(0.34530746520480132) * w27 + T(0.33506541909504356) * w29 + T(0.32112459274767757) * w31 + T(0.30191323556535715) * w33 + T(0.273981796876405) * w35 + T(0.22679093512348886) * w37;
-  const P v19 = T(-0.50711994761686363) * w0 - T(0.36340143033780115) * w2 - T(0.31917913413863575) * w4 - T(0.29575109265586363) * w6 - T(0.28107649323913192) * w8 - T(0.27121106848493148) * w10 - T(0.26442971860242637) * w12 - T(0.25985710202281537) * w14 - T(0.25701704842059231) * w16 - T(0.25565355313363125) * w18;
-  const P v20 = T(-0.018547058105468736) * w20 - T(0.055937929350754319) * w22 - T(0.094260077969983327) * w24 - T(0.13428623646853355) * w26 - T(0.17708147005749975) * w28 - T(0.22430575234011682) * w30 - T(0.27892851176568861) * w32 - T(0.34733532202238621) * w34 - T(0.4481864818423405) * w36 - T(0.69901660811083277) * w38;
-  const P v21 = T(0.64716362586383769) * w0 + T(0.26849062274681329) * w2 + T(0.083370005830558508) * w4 - T(0.046350342516569949) * w6 - T(0.14473744855317988) * w8 - T(0.22061813192764199) * w10 - T(0.2782509596063229) * w12 - T(0.31998220756604112) * w14 - T(0.34717448663696099) * w16 - T(0.36059602289953985) * w18;
-  const P v22 = T(-0.05593792935075418) * w20 - T(0.16394805908203139) * w22 - T(0.26022166250109763) * w24 - T(0.33643463912757904) * w26 - T(0.3833679676397504) * w28 - T(0.39015435461233039) * w30 - T(0.34273083905590784) * w32 - T(0.21985897902195342) * w34 + T(0.021456039366591718) * w36 + T(0.56888858538944964) * w38;
-  const P v23 = T(-0.47448588018495369) * w0 + T(0.23264246077853715) * w2 + T(0.42787515106886037) * w4 + T(0.41779140972788048) * w6 + T(0.30152783379906201) * w8 + T(0.13731048457794057) * w10 - T(0.034979987681630971) * w12 - T(0.18693029259479227) * w14 - T(0.29871497006473618) * w16 - T(0.35769184657224912) * w18;
-  const P v24 = T(-0.09426007796998323) * w20 - T(0.26022166250109796) * w22 - T(0.36161804199218739) * w24 - T(0.3659627629821855) * w26 - T(0.2573400430138737) * w28 - T(0.044843514658646236) * w30 + T(0.22599002290401976) * w32 + T(0.45424158202580472) * w34 + T(0.43857849523699211) * w36 - T(0.37511402474355482) * w38;
-  const P v25 = T(0.28070963231284352) * w0 - T(0.56111970786022991) * w2 - T(0.29446241074074125) * w4 + T(0.10964627928269491) * w6 + T(0.35853874503052607) * w8 + T(0.38685551847472127) * w10 + T(0.23838527257592121) * w12 + T(0.0037110554525802055) * w14 - T(0.21949567585050483) * w16 - T(0.35268891701427546) * w18;
-  const P v26 = T(-0.13428623646853349) * w20 - T(0.33643463912757943) * w22 - T(0.3659627629821855) * w24 - T(0.19087219238281258) * w26 + T(0.11689062362965869) * w28 + T(0.38340999814908439) * w30 + T(0.38502994729680695) * w32 - T(0.018264593635027443) * w34 - T(0.59141419789330729) * w36 + T(0.19849168455279498) * w38;
-  const P v27 = T(-0.13232778970186257) * w0 + T(0.54400124531958172) * w2 - T(0.27031598579841098) * w4 - T(0.44416423954375683) * w6 - T(0.10240918517337146) * w8 + T(0.278234497024549) * w10 + T(0.391937255859375) * w12 + T(0.20710303078859479) * w14 - T(0.1120428370524969) * w16 - T(0.34530746520480055) * w18;
-  const P v28 = T(-0.17708147005749952) * w20 - T(0.38336796763975056) * w22 - T(0.2573400430138732) * w24 + T(0.11689062362965887) * w26 + T(0.40525817871093789) * w28 + T(0.26486591213681471) * w30 - T(0.26311965342160937) * w32 - T(0.48081347609267261) * w34 + T(0.44732869742844761) * w36 - T(0.082940831578297541) * w38;
-  const P v29 = T(0.048704533326139471) * w0 - T(0.33248365397026397) * w2 + T(0.56845136855322387) * w4 - T(0.056017272662626315) * w6 - T(0.44771571968920548) * w8 - T(0.14161705885970907) * w10 + T(0.30782096788817731) * w12 + T(0.36454888838167498) * w14 + T(0.019605168892664605) * w16 - T(0.33506541909504289) * w18;
-  const P v30 = T(-0.22430575234011663) * w20 - T(0.39015435461233056) * w22 - T(0.044843514658645826) * w24 + T(0.38340999814908466) * w26 + T(0.26486591213681471) * w28 - T(0.32493591308593756) * w30 - T(0.3613274182009874) * w32 + T(0.53954217518765424) * w34 - T(0.2243660872581219) * w36 + T(0.026676571555488922) * w38;
-  const P v31 = T(-0.013551711901906882) * w0 + T(0.13748926105882248) * w2 - T(0.43469959918285384) * w4 + T(0.53810304062415193) * w6 - T(0.013216260774860851) * w8 - T(0.45050705193148088) * w10 - T(0.019667578790884675) * w12 + T(0.40885053291852336) * w14 + T(0.16910523634665095) * w16 - T(0.32112459274767668) * w18;
-  const P v32 = T(-0.27892851176568828) * w20 - T(0.3427308390559079) * w22 + T(0.22599002290401965) * w24 + T(0.38502994729680695) * w26 - T(0.26311965342160931) * w28 - T(0.36132741820098768) * w30 + T(0.55459976196289151) * w32 - T(0.30362676443670655) * w34 + T(0.07625726266192577) * w36 - T(0.006338232867650246) * w38;
-  const P v33 = T(0.0027026315756233841) * w0 - T(0.038020516796310383) * w2 + T(0.18497401233633942) * w4 - T(0.4524122714505594) * w6 + T(0.55086803376099647) * w8 - T(0.14258994623391191) * w10 - T(0.40399948313755907) * w12 + T(0.27426241331957507) * w14 + T(0.32600666949422941) * w16 - T(0.30191323556535671) * w18;
-  const P v34 = T(-0.34733532202238598) * w20 - T(0.21985897902195362) * w22 + T(0.45424158202580461) * w24 - T(0.018264593635027603) * w26 - T(0.48081347609267239) * w28 + T(0.53954217518765424) * w30 - T(0.30362676443670678) * w32 + T(0.097927093505859431) * w34 - T(0.016847365494264948) * w36 + T(0.0010364118981281984) * w38;
-  const P v35 = T(-0.00035037117014168995) * w0 + T(0.0065147479868428232) * w2 - T(0.044459065142464775) * w4 + T(0.16865573252474531) * w6 - T(0.39616499478516121) * w8 + T(0.57432433113808223) * w10 - T(0.42357478915081281) * w12 - T(0.081681745898664018) * w14 + T(0.47073070395370176) * w16 - T(0.27398179687640428) * w18;
-  const P v36 = T(-0.44818648184233989) * w20 + T(0.021456039366591382) * w22 + T(0.43857849523699244) * w24 - T(0.59141419789330729) * w26 + T(0.44732869742844794) * w28 - T(0.22436608725812202) * w30 + T(0.076257262661925743) * w32 - T(0.016847365494265111) * w34 + T(0.0021324157714844179) * w36 - T(0.00010114344469874504) * w38;
-  const P v37 = T(2.3515373241335243e-05) * w0 - T(0.0005578595334615157) * w2 + T(0.0050438463297362394) * w4 - T(0.026733125724446676) * w6 + T(0.095205249669813224) * w8 - T(0.24218603223117482) * w10 + T(0.45079444411110647) * w12 - T(0.60851530179979263) * w14 + T(0.55371548872167264) * w16 - T(0.2267909351234883) * w18;
-  const P v38 = T(-0.69901660811082977) * w20 + T(0.56888858538944798) * w22 - T(0.37511402474355338) * w24 + T(0.19849168455279426) * w26 - T(0.082940831578297236) * w28 + T(0.026676571555488807) * w30 - T(0.006338232867650331) * w32 + T(0.0010364118981282578) * w34 - T(0.00010114344469879652) * w36 + T(3.8146972656579962e-06) * w38;
+  const P w38 = madd<F>(cb19, u38, -(sb19 * u0));
+  const P w0 = madd<F>(sb19, u38, cb19 * u0);
+  const P v0 = madd<F>(T(-2.351537324150778e-05), w37, madd<F>(T(0.00035037117014189762), w35, madd<F>(T(-0.002702631575623489), w33, madd<F>(T(0.013551711901907102), w31, madd<F>(T(-0.048704533326139811), w29, madd<F>(T(0.13232778970186293), w27, madd<F>(T(-0.28070963231284407), w25, madd<F>(T(0.47448588018495491), w23, madd<F>(T(-0.64716362586383969), w21, T(0.50711994761686474) * w19)))))))));
+  const P v1 = madd<F>(T(-0.41993521236707698), w17, madd<F>(T(0.61577419032067282), w15, madd<F>(T(-0.54644538574660073), w13, madd<F>(T(0.34346243360846179), w11, madd<F>(T(-0.15801837223353943), w9, madd<F>(T(0.052761071123568586), w7, madd<F>(T(-0.012275892579734221), w5, madd<F>(T(0.001818806692596621), w3, T(-0.00013732910156255172) * w1))))))));
+  const P v2 = madd<F>(T(0.00055785953346128769), w37, madd<F>(T(-0.0065147479868427538), w35, madd<F>(T(0.038020516796310459), w33, madd<F>(T(-0.13748926105882281), w31, madd<F>(T(0.33248365397026469), w29, madd<F>(T(-0.54400124531958249), w27, madd<F>(T(0.56111970786023091), w25, madd<F>(T(-0.23264246077853779), w23, madd<F>(T(-0.26849062274681346), w21, T(0.36340143033780103) * w19)))))))));
+  const P v3 = madd<F>(T(-0.45094729692440172), w17, madd<F>(T(0.3306244611825862), w15, madd<F>(T(0.1956000690600504), w13, madd<F>(T(-0.55324054093167374), w11, madd<F>(T(0.50906393932609773), w9, madd<F>(T(-0.2738443889495108), w7, madd<F>(T(0.092277243946110074), w5, madd<F>(T(-0.018554687500000003), w3, T(0.0018188066925964839) * w1))))))));
+  const P v4 = madd<F>(T(-0.0050438463297360911), w37, madd<F>(T(0.044459065142464657), w35, madd<F>(T(-0.18497401233633939), w33, madd<F>(T(0.43469959918285384), w31, madd<F>(T(-0.56845136855322342), w29, madd<F>(T(0.27031598579841098), w27, madd<F>(T(0.29446241074074114), w25, madd<F>(T(-0.42787515106886009), w23, madd<F>(T(-0.08337000583055855), w21, T(0.31917913413863536) * w19)))))))));
+  const P v5 = madd<F>(T(-0.43480475402586893), w17, madd<F>(T(0.037504601196296651), w15, madd<F>(T(0.44851500181219039), w13, madd<F>(T(-0.17034097485966423), w11, madd<F>(T(-0.40999659768915753), w9, madd<F>(T(0.55164876214684433), w7, madd<F>(T(-0.31349182128906267), w5, madd<F>(T(0.092277243946110074), w3, T(-0.01227589257973419) * w1))))))));
+  const P v6 = madd<F>(T(0.026733125724446596), w37, madd<F>(T(-0.16865573252474569), w35, madd<F>(T(0.45241227145056001), w33, madd<F>(T(-0.53810304062415304), w31, madd<F>(T(0.056017272662626003), w29, madd<F>(T(0.44416423954375728), w27, madd<F>(T(-0.10964627928269483), w25, madd<F>(T(-0.41779140972788043), w23, madd<F>(T(0.046350342516570026), w21, T(0.29575109265586325) * w19)))))))));
+  const P v7 = madd<F>(T(-0.39640480332943268), w17, madd<F>(T(-0.18805802277762637), w15, madd<F>(T(0.33376987998132163), w13, madd<F>(T(0.31468126065414925), w11, madd<F>(T(-0.31061222180615822), w9, madd<F>(T(-0.34423828125000017), w7, madd<F>(T(0.55164876214684422), w5, madd<F>(T(-0.2738443889495108), w3, T(0.052761071123568343) * w1))))))));
+  const P v8 = madd<F>(T(-0.095205249669813516), w37, madd<F>(T(0.39616499478516143), w35, madd<F>(T(-0.55086803376099636), w33, madd<F>(T(0.013216260774861217), w31, madd<F>(T(0.44771571968920554), w29, madd<F>(T(0.10240918517337136), w27, madd<F>(T(-0.35853874503052602), w25, madd<F>(T(-0.30152783379906156), w23, madd<F>(T(0.14473744855317985), w21, T(0.28107649323913136) * w19)))))))));
+  const P v9 = madd<F>(T(-0.34467811081878308), w17, madd<F>(T(-0.32703682433151388), w15, madd<F>(T(0.058043278342703328), w13, madd<F>(T(0.40130733591347562), w11, madd<F>(T(0.24725341796875025), w9, madd<F>(T(-0.31061222180615794), w7, madd<F>(T(-0.40999659768915747), w5, madd<F>(T(0.5090639393260975), w3, T(-0.15801837223353893) * w1))))))));
+  const P v10 = madd<F>(T(0.24218603223117507), w37, madd<F>(T(-0.57432433113808279), w35, madd<F>(T(0.14258994623391175), w33, madd<F>(T(0.45050705193148149), w31, madd<F>(T(0.14161705885970927), w29, madd<F>(T(-0.278234497024549), w27, madd<F>(T(-0.3868555184747216), w25, madd<F>(T(-0.13731048457794054), w23, madd<F>(T(0.22061813192764188), w21, T(0.27121106848493115) * w19)))))))));
+  const P v11 = madd<F>(T(-0.28417119278943631), w17, madd<F>(T(-0.37992862533041522), w15, madd<F>(T(-0.20819599074975031), w13, madd<F>(T(0.13574218750000008), w11, madd<F>(T(0.40130733591347617), w9, madd<F>(T(0.31468126065414975), w7, madd<F>(T(-0.17034097485966423), w5, madd<F>(T(-0.55324054093167396), w3, T(0.34346243360846118) * w1))))))));
+  const P v12 = madd<F>(T(-0.45079444411110725), w37, madd<F>(T(0.42357478915081348), w35, madd<F>(T(0.40399948313755901), w33, madd<F>(T(0.019667578790884373), w31, madd<F>(T(-0.30782096788817748), w29, madd<F>(T(-0.39193725585937533), w27, madd<F>(T(-0.2383852725759216), w25, madd<F>(T(0.03497998768163104), w23, madd<F>(T(0.27825095960632296), w21, T(0.26442971860242631) * w19)))))))));
+  const P v13 = madd<F>(T(-0.21768432555922021), w17, madd<F>(T(-0.3567557877015638), w15, madd<F>(T(-0.3594360351562505), w13, madd<F>(T(-0.20819599074975012), w11, madd<F>(T(0.058043278342703147), w9, madd<F>(T(0.33376987998132107), w7, madd<F>(T(0.44851500181218956), w5, madd<F>(T(0.19560006906004976), w3, T(-0.54644538574659951) * w1))))))));
+  const P v14 = madd<F>(T(0.60851530179979318), w37, madd<F>(T(0.081681745898664435), w35, madd<F>(T(-0.27426241331957468), w33, madd<F>(T(-0.40885053291852369), w31, madd<F>(T(-0.36454888838167526), w29, madd<F>(T(-0.20710303078859493), w27, madd<F>(T(-0.0037110554525803764), w25, madd<F>(T(0.18693029259479219), w23, madd<F>(T(0.31998220756604101), w21, T(0.25985710202281503) * w19)))))))));
+  const P v15 = madd<F>(T(-0.14718146714726574), w17, madd<F>(T(-0.27294921874999983), w15, madd<F>(T(-0.35675578770156408), w13, madd<F>(T(-0.37992862533041505), w11, madd<F>(T(-0.32703682433151432), w9, madd<F>(T(-0.18805802277762668), w7, madd<F>(T(0.037504601196296609), w5, madd<F>(T(0.33062446118258659), w3, T(0.61577419032067182) * w1))))))));
+  const P v16 = madd<F>(T(-0.55371548872167309), w37, madd<F>(T(-0.47073070395370203), w35, madd<F>(T(-0.32600666949422907), w33, madd<F>(T(-0.16910523634665084), w31, madd<F>(T(-0.019605168892664369), w29, madd<F>(T(0.11204283705249711), w27, madd<F>(T(0.21949567585050506), w25, madd<F>(T(0.29871497006473613), w23, madd<F>(T(0.34717448663696082), w21, T(0.25701704842059192) * w19)))))))));
+  const P v17 = madd<F>(T(-0.074188232421874986), w17, madd<F>(T(-0.14718146714726577), w15, madd<F>(T(-0.21768432555922015), w13, madd<F>(T(-0.28417119278943592), w11, madd<F>(T(-0.34467811081878313), w9, madd<F>(T(-0.39640480332943234), w7, madd<F>(T(-0.43480475402586832), w5, madd<F>(T(-0.45094729692440139), w3, T(-0.41993521236707598) * w1))))))));
+  const P v18 = madd<F>(T(0.22679093512348886), w37, madd<F>(T(0.273981796876405), w35, madd<F>(T(0.30191323556535715), w33, madd<F>(T(0.32112459274767757), w31, madd<F>(T(0.33506541909504356), w29, madd<F>(T(0.34530746520480132), w27, madd<F>(T(0.35268891701427657), w25, madd<F>(T(0.35769184657224995), w23, madd<F>(T(0.36059602289954057), w21, T(0.25565355313363153) * w19)))))))));
+  const P v19 = madd<F>(T(-0.25565355313363125), w18, madd<F>(T(-0.25701704842059231), w16, madd<F>(T(-0.25985710202281537), w14, madd<F>(T(-0.26442971860242637), w12, madd<F>(T(-0.27121106848493148), w10, madd<F>(T(-0.28107649323913192), w8, madd<F>(T(-0.29575109265586363), w6, madd<F>(T(-0.31917913413863575), w4, madd<F>(T(-0.36340143033780115), w2, T(-0.50711994761686363) * w0)))))))));
+  const P v20 = madd<F>(T(-0.69901660811083277), w38, madd<F>(T(-0.4481864818423405), w36, madd<F>(T(-0.34733532202238621), w34, madd<F>(T(-0.27892851176568861), w32, madd<F>(T(-0.22430575234011682), w30, madd<F>(T(-0.17708147005749975), w28, madd<F>(T(-0.13428623646853355), w26, madd<F>(T(-0.094260077969983327), w24, madd<F>(T(-0.055937929350754319), w22, T(-0.018547058105468736) * w20)))))))));
+  const P v21 = madd<F>(T(-0.36059602289953985), w18, madd<F>(T(-0.34717448663696099), w16, madd<F>(T(-0.31998220756604112), w14, madd<F>(T(-0.2782509596063229), w12, madd<F>(T(-0.22061813192764199), w10, madd<F>(T(-0.14473744855317988), w8, madd<F>(T(-0.046350342516569949), w6, madd<F>(T(0.083370005830558508), w4, madd<F>(T(0.26849062274681329), w2, T(0.64716362586383769) * w0)))))))));
+  const P v22 = madd<F>(T(0.56888858538944964), w38, madd<F>(T(0.021456039366591718), w36, madd<F>(T(-0.21985897902195342), w34, madd<F>(T(-0.34273083905590784), w32, madd<F>(T(-0.39015435461233039), w30, madd<F>(T(-0.3833679676397504), w28, madd<F>(T(-0.33643463912757904), w26, madd<F>(T(-0.26022166250109763), w24, madd<F>(T(-0.16394805908203139), w22, T(-0.05593792935075418) * w20)))))))));
+  const P v23 = madd<F>(T(-0.35769184657224912), w18, madd<F>(T(-0.29871497006473618), w16, madd<F>(T(-0.18693029259479227), w14, madd<F>(T(-0.034979987681630971), w12, madd<F>(T(0.13731048457794057), w10, madd<F>(T(0.30152783379906201), w8, madd<F>(T(0.41779140972788048), w6, madd<F>(T(0.42787515106886037), w4, madd<F>(T(0.23264246077853715), w2, T(-0.47448588018495369) * w0)))))))));
+  const P v24 = madd<F>(T(-0.37511402474355482), w38, madd<F>(T(0.43857849523699211), w36, madd<F>(T(0.45424158202580472), w34, madd<F>(T(0.22599002290401976), w32, madd<F>(T(-0.044843514658646236), w30, madd<F>(T(-0.2573400430138737), w28, madd<F>(T(-0.3659627629821855), w26, madd<F>(T(-0.36161804199218739), w24, madd<F>(T(-0.26022166250109796), w22, T(-0.09426007796998323) * w20)))))))));
+  const P v25 = madd<F>(T(-0.35268891701427546), w18, madd<F>(T(-0.21949567585050483), w16, madd<F>(T(0.0037110554525802055), w14, madd<F>(T(0.23838527257592121), w12, madd<F>(T(0.38685551847472127), w10, madd<F>(T(0.35853874503052607), w8, madd<F>(T(0.10964627928269491), w6, madd<F>(T(-0.29446241074074125), w4, madd<F>(T(-0.56111970786022991), w2, T(0.28070963231284352) * w0)))))))));
+  const P v26 = madd<F>(T(0.19849168455279498), w38, madd<F>(T(-0.59141419789330729), w36, madd<F>(T(-0.018264593635027443), w34, madd<F>(T(0.38502994729680695), w32, madd<F>(T(0.38340999814908439), w30, madd<F>(T(0.11689062362965869), w28, madd<F>(T(-0.19087219238281258), w26, madd<F>(T(-0.3659627629821855), w24, madd<F>(T(-0.33643463912757943), w22, T(-0.13428623646853349) * w20)))))))));
+  const P v27 = madd<F>(T(-0.34530746520480055), w18, madd<F>(T(-0.1120428370524969), w16, madd<F>(T(0.20710303078859479), w14, madd<F>(T(0.391937255859375), w12, madd<F>(T(0.278234497024549), w10, madd<F>(T(-0.10240918517337146), w8, madd<F>(T(-0.44416423954375683), w6, madd<F>(T(-0.27031598579841098), w4, madd<F>(T(0.54400124531958172), w2, T(-0.13232778970186257) * w0)))))))));
+  const P v28 = madd<F>(T(-0.082940831578297541), w38, madd<F>(T(0.44732869742844761), w36, madd<F>(T(-0.48081347609267261), w34, madd<F>(T(-0.26311965342160937), w32, madd<F>(T(0.26486591213681471), w30, madd<F>(T(0.40525817871093789), w28, madd<F>(T(0.11689062362965887), w26, madd<F>(T(-0.2573400430138732), w24, madd<F>(T(-0.38336796763975056), w22, T(-0.17708147005749952) * w20)))))))));
+  const P v29 = madd<F>(T(-0.33506541909504289), w18, madd<F>(T(0.019605168892664605), w16, madd<F>(T(0.36454888838167498), w14, madd<F>(T(0.30782096788817731), w12, madd<F>(T(-0.14161705885970907), w10, madd<F>(T(-0.44771571968920548), w8, madd<F>(T(-0.056017272662626315), w6, madd<F>(T(0.56845136855322387), w4, madd<F>(T(-0.33248365397026397), w2, T(0.048704533326139471) * w0)))))))));
+  const P v30 = madd<F>(T(0.026676571555488922), w38, madd<F>(T(-0.2243660872581219), w36, madd<F>(T(0.53954217518765424), w34, madd<F>(T(-0.3613274182009874), w32, madd<F>(T(-0.32493591308593756), w30, madd<F>(T(0.26486591213681471), w28, madd<F>(T(0.38340999814908466), w26, madd<F>(T(-0.044843514658645826), w24, madd<F>(T(-0.39015435461233056), w22, T(-0.22430575234011663) * w20)))))))));
+  const P v31 = madd<F>(T(-0.32112459274767668), w18, madd<F>(T(0.16910523634665095), w16, madd<F>(T(0.40885053291852336), w14, madd<F>(T(-0.019667578790884675), w12, madd<F>(T(-0.45050705193148088), w10, madd<F>(T(-0.013216260774860851), w8, madd<F>(T(0.53810304062415193), w6, madd<F>(T(-0.43469959918285384), w4, madd<F>(T(0.13748926105882248), w2, T(-0.013551711901906882) * w0)))))))));
+  const P v32 = madd<F>(T(-0.006338232867650246), w38, madd<F>(T(0.07625726266192577), w36, madd<F>(T(-0.30362676443670655), w34, madd<F>(T(0.55459976196289151), w32, madd<F>(T(-0.36132741820098768), w30, madd<F>(T(-0.26311965342160931), w28, madd<F>(T(0.38502994729680695), w26, madd<F>(T(0.22599002290401965), w24, madd<F>(T(-0.3427308390559079), w22, T(-0.27892851176568828) * w20)))))))));
+  const P v33 = madd<F>(T(-0.30191323556535671), w18, madd<F>(T(0.32600666949422941), w16, madd<F>(T(0.27426241331957507), w14, madd<F>(T(-0.40399948313755907), w12, madd<F>(T(-0.14258994623391191), w10, madd<F>(T(0.55086803376099647), w8, madd<F>(T(-0.4524122714505594), w6, madd<F>(T(0.18497401233633942), w4, madd<F>(T(-0.038020516796310383), w2, T(0.0027026315756233841) * w0)))))))));
+  const P v34 = madd<F>(T(0.0010364118981281984), w38, madd<F>(T(-0.016847365494264948), w36, madd<F>(T(0.097927093505859431), w34, madd<F>(T(-0.30362676443670678), w32, madd<F>(T(0.53954217518765424), w30, madd<F>(T(-0.48081347609267239), w28, madd<F>(T(-0.018264593635027603), w26, madd<F>(T(0.45424158202580461), w24, madd<F>(T(-0.21985897902195362), w22, T(-0.34733532202238598) * w20)))))))));
+  const P v35 = madd<F>(T(-0.27398179687640428), w18, madd<F>(T(0.47073070395370176), w16, madd<F>(T(-0.081681745898664018), w14, madd<F>(T(-0.42357478915081281), w12, madd<F>(T(0.57432433113808223), w10, madd<F>(T(-0.39616499478516121), w8, madd<F>(T(0.16865573252474531), w6, madd<F>(T(-0.044459065142464775), w4, madd<F>(T(0.0065147479868428232), w2, T(-0.00035037117014168995) * w0)))))))));
+  const P v36 = madd<F>(T(-0.00010114344469874504), w38, madd<F>(T(0.0021324157714844179), w36, madd<F>(T(-0.016847365494265111), w34, madd<F>(T(0.076257262661925743), w32, madd<F>(T(-0.22436608725812202), w30, madd<F>(T(0.44732869742844794), w28, madd<F>(T(-0.59141419789330729), w26, madd<F>(T(0.43857849523699244), w24, madd<F>(T(0.021456039366591382), w22, T(-0.44818648184233989) * w20)))))))));
+  const P v37 = madd<F>(T(-0.2267909351234883), w18, madd<F>(T(0.55371548872167264), w16, madd<F>(T(-0.60851530179979263), w14, madd<F>(T(0.45079444411110647), w12, madd<F>(T(-0.24218603223117482), w10, madd<F>(T(0.095205249669813224), w8, madd<F>(T(-0.026733125724446676), w6, madd<F>(T(0.0050438463297362394), w4, madd<F>(T(-0.0005578595334615157), w2, T(2.3515373241335243e-05) * w0)))))))));
+  const P v38 = madd<F>(T(3.8146972656579962e-06), w38, madd<F>(T(-0.00010114344469879652), w36, madd<F>(T(0.0010364118981282578), w34, madd<F>(T(-0.006338232867650331), w32, madd<F>(T(0.026676571555488807), w30, madd<F>(T(-0.082940831578297236), w28, madd<F>(T(0.19849168455279426), w26, madd<F>(T(-0.37511402474355338), w24, madd<F>(T(0.56888858538944798), w22, T(-0.69901660811082977) * w20)))))))));
   y[19] = v19;
   const P ca1 = splat<P>(s.ca[1]), sa1 = splat<P>(s.sa[1]);
-  y[20] = ca1 * v20 - sa1 * v18;
-  y[18] = sa1 * v20 + ca1 * v18;
+  y[20] = madd<F>(ca1, v20, -(sa1 * v18));
+  y[18] = madd<F>(sa1, v20, ca1 * v18);
   const P ca2 = splat<P>(s.ca[2]), sa2 = splat<P>(s.sa[2]);
-  y[21] = ca2 * v21 - sa2 * v17;
-  y[17] = sa2 * v21 + ca2 * v17;
+  y[21] = madd<F>(ca2, v21, -(sa2 * v17));
+  y[17] = madd<F>(sa2, v21, ca2 * v17);
   const P ca3 = splat<P>(s.ca[3]), sa3 = splat<P>(s.sa[3]);
-  y[22] = ca3 * v22 - sa3 * v16;
-  y[16] = sa3 * v22 + ca3 * v16;
+  y[22] = madd<F>(ca3, v22, -(sa3 * v16));
+  y[16] = madd<F>(sa3, v22, ca3 * v16);
   const P ca4 = splat<P>(s.ca[4]), sa4 = splat<P>(s.sa[4]);
-  y[23] = ca4 * v23 - sa4 * v15;
-  y[15] = sa4 * v23 + ca4 * v15;
+  y[23] = madd<F>(ca4, v23, -(sa4 * v15));
+  y[15] = madd<F>(sa4, v23, ca4 * v15);
   const P ca5 = splat<P>(s.ca[5]), sa5 = splat<P>(s.sa[5]);
-  y[24] = ca5 * v24 - sa5 * v14;
-  y[14] = sa5 * v24 + ca5 * v14;
+  y[24] = madd<F>(ca5, v24, -(sa5 * v14));
+  y[14] = madd<F>(sa5, v24, ca5 * v14);
   const P ca6 = splat<P>(s.ca[6]), sa6 = splat<P>(s.sa[6]);
-  y[25] = ca6 * v25 - sa6 * v13;
-  y[13] = sa6 * v25 + ca6 * v13;
+  y[25] = madd<F>(ca6, v25, -(sa6 * v13));
+  y[13] = madd<F>(sa6, v25, ca6 * v13);
   const P ca7 = splat<P>(s.ca[7]), sa7 = splat<P>(s.sa[7]);
-  y[26] = ca7 * v26 - sa7 * v12;
-  y[12] = sa7 * v26 + ca7 * v12;
+  y[26] = madd<F>(ca7, v26, -(sa7 * v12));
+  y[12] = madd<F>(sa7, v26, ca7 * v12);
   const P ca8 = splat<P>(s.ca[8]), sa8 = splat<P>(s.sa[8]);
-  y[27] = ca8 * v27 - sa8 * v11;
-  y[11] = sa8 * v27 + ca8 * v11;
+  y[27] = madd<F>(ca8, v27, -(sa8 * v11));
+  y[11] = madd<F>(sa8, v27, ca8 * v11);
   const P ca9 = splat<P>(s.ca[9]), sa9 = splat<P>(s.sa[9]);
-  y[28] = ca9 * v28 - sa9 * v10;
-  y[10] = sa9 * v28 + ca9 * v10;
+  y[28] = madd<F>(ca9, v28, -(sa9 * v10));
+  y[10] = madd<F>(sa9, v28, ca9 * v10);
   const P ca10 = splat<P>(s.ca[10]), sa10 = splat<P>(s.sa[10]);
-  y[29] = ca10 * v29 - sa10 * v9;
-  y[9] = sa10 * v29 + ca10 * v9;
+  y[29] = madd<F>(ca10, v29, -(sa10 * v9));
+  y[9] = madd<F>(sa10, v29, ca10 * v9);
   const P ca11 = splat<P>(s.ca[11]), sa11 = splat<P>(s.sa[11]);
-  y[30] = ca11 * v30 - sa11 * v8;
-  y[8] = sa11 * v30 + ca11 * v8;
+  y[30] = madd<F>(ca11, v30, -(sa11 * v8));
+  y[8] = madd<F>(sa11, v30, ca11 * v8);
   const P ca12 = splat<P>(s.ca[12]), sa12 = splat<P>(s.sa[12]);
-  y[31] = ca12 * v31 - sa12 * v7;
-  y[7] = sa12 * v31 + ca12 * v7;
+  y[31] = madd<F>(ca12, v31, -(sa12 * v7));
+  y[7] = madd<F>(sa12, v31, ca12 * v7);
   const P ca13 = splat<P>(s.ca[13]), sa13 = splat<P>(s.sa[13]);
-  y[32] = ca13 * v32 - sa13 * v6;
-  y[6] = sa13 * v32 + ca13 * v6;
+  y[32] = madd<F>(ca13, v32, -(sa13 * v6));
+  y[6] = madd<F>(sa13, v32, ca13 * v6);
   const P ca14 = splat<P>(s.ca[14]), sa14 = splat<P>(s.sa[14]);
-  y[33] = ca14 * v33 - sa14 * v5;
-  y[5] = sa14 * v33 + ca14 * v5;
+  y[33] = madd<F>(ca14, v33, -(sa14 * v5));
+  y[5] = madd<F>(sa14, v33, ca14 * v5);
   const P ca15 = splat<P>(s.ca[15]), sa15 = splat<P>(s.sa[15]);
-  y[34] = ca15 * v34 - sa15 * v4;
-  y[4] = sa15 * v34 + ca15 * v4;
+  y[34] = madd<F>(ca15, v34, -(sa15 * v4));
+  y[4] = madd<F>(sa15, v34, ca15 * v4);
   const P ca16 = splat<P>(s.ca[16]), sa16 = splat<P>(s.sa[16]);
-  y[35] = ca16 * v35 - sa16 * v3;
-  y[3] = sa16 * v35 + ca16 * v3;
+  y[35] = madd<F>(ca16, v35, -(sa16 * v3));
+  y[3] = madd<F>(sa16, v35, ca16 * v3);
   const P ca17 = splat<P>(s.ca[17]), sa17 = splat<P>(s.sa[17]);
-  y[36] = ca17 * v36 - sa17 * v2;
-  y[2] = sa17 * v36 + ca17 * v2;
+  y[36] = madd<F>(ca17, v36, -(sa17 * v2));
+  y[2] = madd<F>(sa17, v36, ca17 * v2);
   const P ca18 = splat<P>(s.ca[18]), sa18 = splat<P>(s.sa[18]);
-  y[37] = ca18 * v37 - sa18 * v1;
-  y[1] = sa18 * v37 + ca18 * v1;
+  y[37] = madd<F>(ca18, v37, -(sa18 * v1));
+  y[1] = madd<F>(sa18, v37, ca18 * v1);
   const P ca19 = splat<P>(s.ca[19]), sa19 = splat<P>(s.sa[19]);
-  y[38] = ca19 * v38 - sa19 * v0;
-  y[0] = sa19 * v38 + ca19 * v0;
+  y[38] = madd<F>(ca19, v38, -(sa19 * v0));
+  y[0] = madd<F>(sa19, v38, ca19 * v0);
 }
 
 // Band 1 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) ([2] Sec. 3).
-template <int Order, class T, class P, class S>
-inline void taylor_band1(const S& s, const P* __restrict x, P* __restrict y) {
+template <bool F, int Order, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void taylor_band1(const S& s, const P* __restrict x, P* __restrict y) {
   const P t1 = x[1];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
-  const P t2 = cg1 * x[2] - sg1 * x[0];
-  const P t0 = sg1 * x[2] + cg1 * x[0];
+  const P t2 = madd<F>(cg1, x[2], -(sg1 * x[0]));
+  const P t0 = madd<F>(sg1, x[2], cg1 * x[0]);
   const auto b = s.beta, h = s.half_beta2;
   (void)h;
   P u0 = t0;
-  P u1 = t1 + b * (t2);
-  if constexpr (Order == 15) u1 += h * (-t1);
-  if constexpr (Order == 2) u1 += h * (-t1);
-  P u2 = t2 + b * (-t1);
-  if constexpr (Order == 15) u2 += h * (-t2);
-  if constexpr (Order == 2) u2 += h * (-t2);
+  P u1 = madd<F>(b, t2, t1);
+  if constexpr (Order == 15) u1 = madd<F>(h, -t1, u1);
+  if constexpr (Order == 2) u1 = madd<F>(h, -t1, u1);
+  P u2 = madd<F>(b, -t1, t2);
+  if constexpr (Order == 15) u2 = madd<F>(h, -t2, u2);
+  if constexpr (Order == 2) u2 = madd<F>(h, -t2, u2);
   y[1] = u1;
   const P ca1 = splat<P>(s.ca[1]), sa1 = splat<P>(s.sa[1]);
-  y[2] = ca1 * u2 - sa1 * u0;
-  y[0] = sa1 * u2 + ca1 * u0;
+  y[2] = madd<F>(ca1, u2, -(sa1 * u0));
+  y[0] = madd<F>(sa1, u2, ca1 * u0);
 }
 
 // Band 2 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) ([2] Sec. 3).
-template <int Order, class T, class P, class S>
-inline void taylor_band2(const S& s, const P* __restrict x, P* __restrict y) {
+template <bool F, int Order, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void taylor_band2(const S& s, const P* __restrict x, P* __restrict y) {
   const P t2 = x[2];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
-  const P t3 = cg1 * x[3] - sg1 * x[1];
-  const P t1 = sg1 * x[3] + cg1 * x[1];
+  const P t3 = madd<F>(cg1, x[3], -(sg1 * x[1]));
+  const P t1 = madd<F>(sg1, x[3], cg1 * x[1]);
   const P cg2 = splat<P>(s.cg[2]), sg2 = splat<P>(s.sg[2]);
-  const P t4 = cg2 * x[4] - sg2 * x[0];
-  const P t0 = sg2 * x[4] + cg2 * x[0];
+  const P t4 = madd<F>(cg2, x[4], -(sg2 * x[0]));
+  const P t0 = madd<F>(sg2, x[4], cg2 * x[0]);
   const auto b = s.beta, h = s.half_beta2;
   (void)h;
-  P u0 = t0 + b * (-t1);
-  if constexpr (Order == 15) u0 += h * (-t0);
-  if constexpr (Order == 2) u0 += h * (-t0);
-  P u1 = t1 + b * (t0);
-  if constexpr (Order == 15) u1 += h * (-t1);
-  if constexpr (Order == 2) u1 += h * (-t1);
-  P u2 = t2 + b * (T(1.7320508075688772) * t3);
-  if constexpr (Order == 15) u2 += h * (T(-3) * t2);
-  if constexpr (Order == 2) u2 += h * (T(-3) * t2 + T(1.7320508075688772) * t4);
-  P u3 = t3 + b * (T(-1.7320508075688772) * t2 + t4);
-  if constexpr (Order == 15) u3 += h * (T(-4) * t3);
-  if constexpr (Order == 2) u3 += h * (T(-4) * t3);
-  P u4 = t4 + b * (-t3);
-  if constexpr (Order == 15) u4 += h * (-t4);
-  if constexpr (Order == 2) u4 += h * (-t4 + T(1.7320508075688772) * t2);
+  P u0 = madd<F>(b, -t1, t0);
+  if constexpr (Order == 15) u0 = madd<F>(h, -t0, u0);
+  if constexpr (Order == 2) u0 = madd<F>(h, -t0, u0);
+  P u1 = madd<F>(b, t0, t1);
+  if constexpr (Order == 15) u1 = madd<F>(h, -t1, u1);
+  if constexpr (Order == 2) u1 = madd<F>(h, -t1, u1);
+  P u2 = madd<F>(b, T(1.7320508075688772) * t3, t2);
+  if constexpr (Order == 15) u2 = madd<F>(h, T(-3) * t2, u2);
+  if constexpr (Order == 2) u2 = madd<F>(h, madd<F>(T(1.7320508075688772), t4, T(-3) * t2), u2);
+  P u3 = madd<F>(b, T(-1.7320508075688772) * t2 + t4, t3);
+  if constexpr (Order == 15) u3 = madd<F>(h, T(-4) * t3, u3);
+  if constexpr (Order == 2) u3 = madd<F>(h, T(-4) * t3, u3);
+  P u4 = madd<F>(b, -t3, t4);
+  if constexpr (Order == 15) u4 = madd<F>(h, -t4, u4);
+  if constexpr (Order == 2) u4 = madd<F>(h, madd<F>(T(1.7320508075688772), t2, -t4), u4);
   y[2] = u2;
   const P ca1 = splat<P>(s.ca[1]), sa1 = splat<P>(s.sa[1]);
-  y[3] = ca1 * u3 - sa1 * u1;
-  y[1] = sa1 * u3 + ca1 * u1;
+  y[3] = madd<F>(ca1, u3, -(sa1 * u1));
+  y[1] = madd<F>(sa1, u3, ca1 * u1);
   const P ca2 = splat<P>(s.ca[2]), sa2 = splat<P>(s.sa[2]);
-  y[4] = ca2 * u4 - sa2 * u0;
-  y[0] = sa2 * u4 + ca2 * u0;
+  y[4] = madd<F>(ca2, u4, -(sa2 * u0));
+  y[0] = madd<F>(sa2, u4, ca2 * u0);
 }
 
 // Band 3 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) ([2] Sec. 3).
-template <int Order, class T, class P, class S>
-inline void taylor_band3(const S& s, const P* __restrict x, P* __restrict y) {
+template <bool F, int Order, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void taylor_band3(const S& s, const P* __restrict x, P* __restrict y) {
   const P t3 = x[3];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
-  const P t4 = cg1 * x[4] - sg1 * x[2];
-  const P t2 = sg1 * x[4] + cg1 * x[2];
+  const P t4 = madd<F>(cg1, x[4], -(sg1 * x[2]));
+  const P t2 = madd<F>(sg1, x[4], cg1 * x[2]);
   const P cg2 = splat<P>(s.cg[2]), sg2 = splat<P>(s.sg[2]);
-  const P t5 = cg2 * x[5] - sg2 * x[1];
-  const P t1 = sg2 * x[5] + cg2 * x[1];
+  const P t5 = madd<F>(cg2, x[5], -(sg2 * x[1]));
+  const P t1 = madd<F>(sg2, x[5], cg2 * x[1]);
   const P cg3 = splat<P>(s.cg[3]), sg3 = splat<P>(s.sg[3]);
-  const P t6 = cg3 * x[6] - sg3 * x[0];
-  const P t0 = sg3 * x[6] + cg3 * x[0];
+  const P t6 = madd<F>(cg3, x[6], -(sg3 * x[0]));
+  const P t0 = madd<F>(sg3, x[6], cg3 * x[0]);
   const auto b = s.beta, h = s.half_beta2;
   (void)h;
-  P u0 = t0 + b * (T(-1.2247448713915889) * t1);
-  if constexpr (Order == 15) u0 += h * (T(-1.5) * t0);
-  if constexpr (Order == 2) u0 += h * (T(-1.5) * t0 + T(1.9364916731037085) * t2);
-  P u1 = t1 + b * (T(1.2247448713915889) * t0 - T(1.5811388300841898) * t2);
-  if constexpr (Order == 15) u1 += h * (T(-4) * t1);
-  if constexpr (Order == 2) u1 += h * (T(-4) * t1);
-  P u2 = t2 + b * (T(1.5811388300841898) * t1);
-  if constexpr (Order == 15) u2 += h * (T(-2.5) * t2);
-  if constexpr (Order == 2) u2 += h * (T(-2.5) * t2 + T(1.9364916731037085) * t0);
-  P u3 = t3 + b * (T(2.4494897427831779) * t4);
-  if constexpr (Order == 15) u3 += h * (T(-6) * t3);
-  if constexpr (Order == 2) u3 += h * (T(-6) * t3 + T(3.872983346207417) * t5);
-  P u4 = t4 + b * (T(-2.4494897427831779) * t3 + T(1.5811388300841898) * t5);
-  if constexpr (Order == 15) u4 += h * (T(-8.5) * t4);
-  if constexpr (Order == 2) u4 += h * (T(-8.5) * t4 + T(1.9364916731037085) * t6);
-  P u5 = t5 + b * (T(-1.5811388300841898) * t4 + T(1.2247448713915889) * t6);
-  if constexpr (Order == 15) u5 += h * (T(-4) * t5);
-  if constexpr (Order == 2) u5 += h * (T(-4) * t5 + T(3.872983346207417) * t3);
-  P u6 = t6 + b * (T(-1.2247448713915889) * t5);
-  if constexpr (Order == 15) u6 += h * (T(-1.5) * t6);
-  if constexpr (Order == 2) u6 += h * (T(-1.5) * t6 + T(1.9364916731037085) * t4);
+  P u0 = madd<F>(b, T(-1.2247448713915889) * t1, t0);
+  if constexpr (Order == 15) u0 = madd<F>(h, T(-1.5) * t0, u0);
+  if constexpr (Order == 2) u0 = madd<F>(h, madd<F>(T(1.9364916731037085), t2, T(-1.5) * t0), u0);
+  P u1 = madd<F>(b, madd<F>(T(-1.5811388300841898), t2, T(1.2247448713915889) * t0), t1);
+  if constexpr (Order == 15) u1 = madd<F>(h, T(-4) * t1, u1);
+  if constexpr (Order == 2) u1 = madd<F>(h, T(-4) * t1, u1);
+  P u2 = madd<F>(b, T(1.5811388300841898) * t1, t2);
+  if constexpr (Order == 15) u2 = madd<F>(h, T(-2.5) * t2, u2);
+  if constexpr (Order == 2) u2 = madd<F>(h, madd<F>(T(1.9364916731037085), t0, T(-2.5) * t2), u2);
+  P u3 = madd<F>(b, T(2.4494897427831779) * t4, t3);
+  if constexpr (Order == 15) u3 = madd<F>(h, T(-6) * t3, u3);
+  if constexpr (Order == 2) u3 = madd<F>(h, madd<F>(T(3.872983346207417), t5, T(-6) * t3), u3);
+  P u4 = madd<F>(b, madd<F>(T(1.5811388300841898), t5, T(-2.4494897427831779) * t3), t4);
+  if constexpr (Order == 15) u4 = madd<F>(h, T(-8.5) * t4, u4);
+  if constexpr (Order == 2) u4 = madd<F>(h, madd<F>(T(1.9364916731037085), t6, T(-8.5) * t4), u4);
+  P u5 = madd<F>(b, madd<F>(T(1.2247448713915889), t6, T(-1.5811388300841898) * t4), t5);
+  if constexpr (Order == 15) u5 = madd<F>(h, T(-4) * t5, u5);
+  if constexpr (Order == 2) u5 = madd<F>(h, madd<F>(T(3.872983346207417), t3, T(-4) * t5), u5);
+  P u6 = madd<F>(b, T(-1.2247448713915889) * t5, t6);
+  if constexpr (Order == 15) u6 = madd<F>(h, T(-1.5) * t6, u6);
+  if constexpr (Order == 2) u6 = madd<F>(h, madd<F>(T(1.9364916731037085), t4, T(-1.5) * t6), u6);
   y[3] = u3;
   const P ca1 = splat<P>(s.ca[1]), sa1 = splat<P>(s.sa[1]);
-  y[4] = ca1 * u4 - sa1 * u2;
-  y[2] = sa1 * u4 + ca1 * u2;
+  y[4] = madd<F>(ca1, u4, -(sa1 * u2));
+  y[2] = madd<F>(sa1, u4, ca1 * u2);
   const P ca2 = splat<P>(s.ca[2]), sa2 = splat<P>(s.sa[2]);
-  y[5] = ca2 * u5 - sa2 * u1;
-  y[1] = sa2 * u5 + ca2 * u1;
+  y[5] = madd<F>(ca2, u5, -(sa2 * u1));
+  y[1] = madd<F>(sa2, u5, ca2 * u1);
   const P ca3 = splat<P>(s.ca[3]), sa3 = splat<P>(s.sa[3]);
-  y[6] = ca3 * u6 - sa3 * u0;
-  y[0] = sa3 * u6 + ca3 * u0;
+  y[6] = madd<F>(ca3, u6, -(sa3 * u0));
+  y[0] = madd<F>(sa3, u6, ca3 * u0);
 }
 
 // Band 4 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) ([2] Sec. 3).
-template <int Order, class T, class P, class S>
-inline void taylor_band4(const S& s, const P* __restrict x, P* __restrict y) {
+template <bool F, int Order, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void taylor_band4(const S& s, const P* __restrict x, P* __restrict y) {
   const P t4 = x[4];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
-  const P t5 = cg1 * x[5] - sg1 * x[3];
-  const P t3 = sg1 * x[5] + cg1 * x[3];
+  const P t5 = madd<F>(cg1, x[5], -(sg1 * x[3]));
+  const P t3 = madd<F>(sg1, x[5], cg1 * x[3]);
   const P cg2 = splat<P>(s.cg[2]), sg2 = splat<P>(s.sg[2]);
-  const P t6 = cg2 * x[6] - sg2 * x[2];
-  const P t2 = sg2 * x[6] + cg2 * x[2];
+  const P t6 = madd<F>(cg2, x[6], -(sg2 * x[2]));
+  const P t2 = madd<F>(sg2, x[6], cg2 * x[2]);
   const P cg3 = splat<P>(s.cg[3]), sg3 = splat<P>(s.sg[3]);
-  const P t7 = cg3 * x[7] - sg3 * x[1];
-  const P t1 = sg3 * x[7] + cg3 * x[1];
+  const P t7 = madd<F>(cg3, x[7], -(sg3 * x[1]));
+  const P t1 = madd<F>(sg3, x[7], cg3 * x[1]);
   const P cg4 = splat<P>(s.cg[4]), sg4 = splat<P>(s.sg[4]);
-  const P t8 = cg4 * x[8] - sg4 * x[0];
-  const P t0 = sg4 * x[8] + cg4 * x[0];
+  const P t8 = madd<F>(cg4, x[8], -(sg4 * x[0]));
+  const P t0 = madd<F>(sg4, x[8], cg4 * x[0]);
   const auto b = s.beta, h = s.half_beta2;
   (void)h;
-  P u0 = t0 + b * (T(-1.4142135623730951) * t1);
-  if constexpr (Order == 15) u0 += h * (T(-2) * t0);
-  if constexpr (Order == 2) u0 += h * (T(-2) * t0 + T(2.6457513110645907) * t2);
-  P u1 = t1 + b * (T(1.4142135623730951) * t0 - T(1.8708286933869707) * t2);
-  if constexpr (Order == 15) u1 += h * (T(-5.5) * t1);
-  if constexpr (Order == 2) u1 += h * (T(-5.5) * t1 + T(3.9686269665968861) * t3);
-  P u2 = t2 + b * (T(1.8708286933869707) * t1 - T(2.1213203435596424) * t3);
-  if constexpr (Order == 15) u2 += h * (T(-8) * t2);
-  if constexpr (Order == 2) u2 += h * (T(-8) * t2 + T(2.6457513110645907) * t0);
-  P u3 = t3 + b * (T(2.1213203435596424) * t2);
-  if constexpr (Order == 15) u3 += h * (T(-4.5) * t3);
-  if constexpr (Order == 2) u3 += h * (T(-4.5) * t3 + T(3.9686269665968861) * t1);
-  P u4 = t4 + b * (T(3.1622776601683795) * t5);
-  if constexpr (Order == 15) u4 += h * (T(-10) * t4);
-  if constexpr (Order == 2) u4 += h * (T(-10) * t4 + T(6.7082039324993694) * t6);
-  P u5 = t5 + b * (T(-3.1622776601683795) * t4 + T(2.1213203435596424) * t6);
-  if constexpr (Order == 15) u5 += h * (T(-14.5) * t5);
-  if constexpr (Order == 2) u5 += h * (T(-14.5) * t5 + T(3.9686269665968861) * t7);
-  P u6 = t6 + b * (T(-2.1213203435596424) * t5 + T(1.8708286933869707) * t7);
-  if constexpr (Order == 15) u6 += h * (T(-8) * t6);
-  if constexpr (Order == 2) u6 += h * (T(-8) * t6 + T(6.7082039324993694) * t4 + T(2.6457513110645907) * t8);
-  P u7 = t7 + b * (T(-1.8708286933869707) * t6 + T(1.4142135623730951) * t8);
-  if constexpr (Order == 15) u7 += h * (T(-5.5) * t7);
-  if constexpr (Order == 2) u7 += h * (T(-5.5) * t7 + T(3.9686269665968861) * t5);
-  P u8 = t8 + b * (T(-1.4142135623730951) * t7);
-  if constexpr (Order == 15) u8 += h * (T(-2) * t8);
-  if constexpr (Order == 2) u8 += h * (T(-2) * t8 + T(2.6457513110645907) * t6);
+  P u0 = madd<F>(b, T(-1.4142135623730951) * t1, t0);
+  if constexpr (Order == 15) u0 = madd<F>(h, T(-2) * t0, u0);
+  if constexpr (Order == 2) u0 = madd<F>(h, madd<F>(T(2.6457513110645907), t2, T(-2) * t0), u0);
+  P u1 = madd<F>(b, madd<F>(T(-1.8708286933869707), t2, T(1.4142135623730951) * t0), t1);
+  if constexpr (Order == 15) u1 = madd<F>(h, T(-5.5) * t1, u1);
+  if constexpr (Order == 2) u1 = madd<F>(h, madd<F>(T(3.9686269665968861), t3, T(-5.5) * t1), u1);
+  P u2 = madd<F>(b, madd<F>(T(-2.1213203435596424), t3, T(1.8708286933869707) * t1), t2);
+  if constexpr (Order == 15) u2 = madd<F>(h, T(-8) * t2, u2);
+  if constexpr (Order == 2) u2 = madd<F>(h, madd<F>(T(2.6457513110645907), t0, T(-8) * t2), u2);
+  P u3 = madd<F>(b, T(2.1213203435596424) * t2, t3);
+  if constexpr (Order == 15) u3 = madd<F>(h, T(-4.5) * t3, u3);
+  if constexpr (Order == 2) u3 = madd<F>(h, madd<F>(T(3.9686269665968861), t1, T(-4.5) * t3), u3);
+  P u4 = madd<F>(b, T(3.1622776601683795) * t5, t4);
+  if constexpr (Order == 15) u4 = madd<F>(h, T(-10) * t4, u4);
+  if constexpr (Order == 2) u4 = madd<F>(h, madd<F>(T(6.7082039324993694), t6, T(-10) * t4), u4);
+  P u5 = madd<F>(b, madd<F>(T(2.1213203435596424), t6, T(-3.1622776601683795) * t4), t5);
+  if constexpr (Order == 15) u5 = madd<F>(h, T(-14.5) * t5, u5);
+  if constexpr (Order == 2) u5 = madd<F>(h, madd<F>(T(3.9686269665968861), t7, T(-14.5) * t5), u5);
+  P u6 = madd<F>(b, madd<F>(T(1.8708286933869707), t7, T(-2.1213203435596424) * t5), t6);
+  if constexpr (Order == 15) u6 = madd<F>(h, T(-8) * t6, u6);
+  if constexpr (Order == 2) u6 = madd<F>(h, madd<F>(T(2.6457513110645907), t8, madd<F>(T(6.7082039324993694), t4, T(-8) * t6)), u6);
+  P u7 = madd<F>(b, madd<F>(T(1.4142135623730951), t8, T(-1.8708286933869707) * t6), t7);
+  if constexpr (Order == 15) u7 = madd<F>(h, T(-5.5) * t7, u7);
+  if constexpr (Order == 2) u7 = madd<F>(h, madd<F>(T(3.9686269665968861), t5, T(-5.5) * t7), u7);
+  P u8 = madd<F>(b, T(-1.4142135623730951) * t7, t8);
+  if constexpr (Order == 15) u8 = madd<F>(h, T(-2) * t8, u8);
+  if constexpr (Order == 2) u8 = madd<F>(h, madd<F>(T(2.6457513110645907), t6, T(-2) * t8), u8);
   y[4] = u4;
   const P ca1 = splat<P>(s.ca[1]), sa1 = splat<P>(s.sa[1]);
-  y[5] = ca1 * u5 - sa1 * u3;
-  y[3] = sa1 * u5 + ca1 * u3;
+  y[5] = madd<F>(ca1, u5, -(sa1 * u3));
+  y[3] = madd<F>(sa1, u5, ca1 * u3);
   const P ca2 = splat<P>(s.ca[2]), sa2 = splat<P>(s.sa[2]);
-  y[6] = ca2 * u6 - sa2 * u2;
-  y[2] = sa2 * u6 + ca2 * u2;
+  y[6] = madd<F>(ca2, u6, -(sa2 * u2));
+  y[2] = madd<F>(sa2, u6, ca2 * u2);
   const P ca3 = splat<P>(s.ca[3]), sa3 = splat<P>(s.sa[3]);
-  y[7] = ca3 * u7 - sa3 * u1;
-  y[1] = sa3 * u7 + ca3 * u1;
+  y[7] = madd<F>(ca3, u7, -(sa3 * u1));
+  y[1] = madd<F>(sa3, u7, ca3 * u1);
   const P ca4 = splat<P>(s.ca[4]), sa4 = splat<P>(s.sa[4]);
-  y[8] = ca4 * u8 - sa4 * u0;
-  y[0] = sa4 * u8 + ca4 * u0;
+  y[8] = madd<F>(ca4, u8, -(sa4 * u0));
+  y[0] = madd<F>(sa4, u8, ca4 * u0);
 }
 
 // Band 5 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) ([2] Sec. 3).
-template <int Order, class T, class P, class S>
-inline void taylor_band5(const S& s, const P* __restrict x, P* __restrict y) {
+template <bool F, int Order, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void taylor_band5(const S& s, const P* __restrict x, P* __restrict y) {
   const P t5 = x[5];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
-  const P t6 = cg1 * x[6] - sg1 * x[4];
-  const P t4 = sg1 * x[6] + cg1 * x[4];
+  const P t6 = madd<F>(cg1, x[6], -(sg1 * x[4]));
+  const P t4 = madd<F>(sg1, x[6], cg1 * x[4]);
   const P cg2 = splat<P>(s.cg[2]), sg2 = splat<P>(s.sg[2]);
-  const P t7 = cg2 * x[7] - sg2 * x[3];
-  const P t3 = sg2 * x[7] + cg2 * x[3];
+  const P t7 = madd<F>(cg2, x[7], -(sg2 * x[3]));
+  const P t3 = madd<F>(sg2, x[7], cg2 * x[3]);
   const P cg3 = splat<P>(s.cg[3]), sg3 = splat<P>(s.sg[3]);
-  const P t8 = cg3 * x[8] - sg3 * x[2];
-  const P t2 = sg3 * x[8] + cg3 * x[2];
+  const P t8 = madd<F>(cg3, x[8], -(sg3 * x[2]));
+  const P t2 = madd<F>(sg3, x[8], cg3 * x[2]);
   const P cg4 = splat<P>(s.cg[4]), sg4 = splat<P>(s.sg[4]);
-  const P t9 = cg4 * x[9] - sg4 * x[1];
-  const P t1 = sg4 * x[9] + cg4 * x[1];
+  const P t9 = madd<F>(cg4, x[9], -(sg4 * x[1]));
+  const P t1 = madd<F>(sg4, x[9], cg4 * x[1]);
   const P cg5 = splat<P>(s.cg[5]), sg5 = splat<P>(s.sg[5]);
-  const P t10 = cg5 * x[10] - sg5 * x[0];
-  const P t0 = sg5 * x[10] + cg5 * x[0];
+  const P t10 = madd<F>(cg5, x[10], -(sg5 * x[0]));
+  const P t0 = madd<F>(sg5, x[10], cg5 * x[0]);
   const auto b = s.beta, h = s.half_beta2;
   (void)h;
-  P u0 = t0 + b * (T(-1.5811388300841898) * t1);
-  if constexpr (Order == 15) u0 += h * (T(-2.5) * t0);
-  if constexpr (Order == 2) u0 += h * (T(-2.5) * t0 + T(3.3541019662496847) * t2);
-  P u1 = t1 + b * (T(1.5811388300841898) * t0 - T(2.1213203435596424) * t2);
-  if constexpr (Order == 15) u1 += h * (T(-7) * t1);
-  if constexpr (Order == 2) u1 += h * (T(-7) * t1 + T(5.196152422706632) * t3);
-  P u2 = t2 + b * (T(2.1213203435596424) * t1 - T(2.4494897427831779) * t3);
-  if constexpr (Order == 15) u2 += h * (T(-10.5) * t2);
-  if constexpr (Order == 2) u2 += h * (T(-10.5) * t2 + T(3.3541019662496847) * t0 + T(6.4807406984078604) * t4);
-  P u3 = t3 + b * (T(2.4494897427831779) * t2 - T(2.6457513110645907) * t4);
-  if constexpr (Order == 15) u3 += h * (T(-13) * t3);
-  if constexpr (Order == 2) u3 += h * (T(-13) * t3 + T(5.196152422706632) * t1);
-  P u4 = t4 + b * (T(2.6457513110645907) * t3);
-  if constexpr (Order == 15) u4 += h * (T(-7) * t4);
-  if constexpr (Order == 2) u4 += h * (T(-7) * t4 + T(6.4807406984078604) * t2);
-  P u5 = t5 + b * (T(3.872983346207417) * t6);
-  if constexpr (Order == 15) u5 += h * (T(-15) * t5);
-  if constexpr (Order == 2) u5 += h * (T(-15) * t5 + T(10.246950765959598) * t7);
-  P u6 = t6 + b * (T(-3.872983346207417) * t5 + T(2.6457513110645907) * t7);
-  if constexpr (Order == 15) u6 += h * (T(-22) * t6);
-  if constexpr (Order == 2) u6 += h * (T(-22) * t6 + T(6.4807406984078604) * t8);
-  P u7 = t7 + b * (T(-2.6457513110645907) * t6 + T(2.4494897427831779) * t8);
-  if constexpr (Order == 15) u7 += h * (T(-13) * t7);
-  if constexpr (Order == 2) u7 += h * (T(-13) * t7 + T(10.246950765959598) * t5 + T(5.196152422706632) * t9);
-  P u8 = t8 + b * (T(-2.4494897427831779) * t7 + T(2.1213203435596424) * t9);
-  if constexpr (Order == 15) u8 += h * (T(-10.5) * t8);
-  if constexpr (Order == 2) u8 += h * (T(-10.5) * t8 + T(6.4807406984078604) * t6 + T(3.3541019662496847) * t10);
-  P u9 = t9 + b * (T(-2.1213203435596424) * t8 + T(1.5811388300841898) * t10);
-  if constexpr (Order == 15) u9 += h * (T(-7) * t9);
-  if constexpr (Order == 2) u9 += h * (T(-7) * t9 + T(5.196152422706632) * t7);
-  P u10 = t10 + b * (T(-1.5811388300841898) * t9);
-  if constexpr (Order == 15) u10 += h * (T(-2.5) * t10);
-  if constexpr (Order == 2) u10 += h * (T(-2.5) * t10 + T(3.3541019662496847) * t8);
+  P u0 = madd<F>(b, T(-1.5811388300841898) * t1, t0);
+  if constexpr (Order == 15) u0 = madd<F>(h, T(-2.5) * t0, u0);
+  if constexpr (Order == 2) u0 = madd<F>(h, madd<F>(T(3.3541019662496847), t2, T(-2.5) * t0), u0);
+  P u1 = madd<F>(b, madd<F>(T(-2.1213203435596424), t2, T(1.5811388300841898) * t0), t1);
+  if constexpr (Order == 15) u1 = madd<F>(h, T(-7) * t1, u1);
+  if constexpr (Order == 2) u1 = madd<F>(h, madd<F>(T(5.196152422706632), t3, T(-7) * t1), u1);
+  P u2 = madd<F>(b, madd<F>(T(-2.4494897427831779), t3, T(2.1213203435596424) * t1), t2);
+  if constexpr (Order == 15) u2 = madd<F>(h, T(-10.5) * t2, u2);
+  if constexpr (Order == 2) u2 = madd<F>(h, madd<F>(T(6.4807406984078604), t4, madd<F>(T(3.3541019662496847), t0, T(-10.5) * t2)), u2);
+  P u3 = madd<F>(b, madd<F>(T(-2.6457513110645907), t4, T(2.4494897427831779) * t2), t3);
+  if constexpr (Order == 15) u3 = madd<F>(h, T(-13) * t3, u3);
+  if constexpr (Order == 2) u3 = madd<F>(h, madd<F>(T(5.196152422706632), t1, T(-13) * t3), u3);
+  P u4 = madd<F>(b, T(2.6457513110645907) * t3, t4);
+  if constexpr (Order == 15) u4 = madd<F>(h, T(-7) * t4, u4);
+  if constexpr (Order == 2) u4 = madd<F>(h, madd<F>(T(6.4807406984078604), t2, T(-7) * t4), u4);
+  P u5 = madd<F>(b, T(3.872983346207417) * t6, t5);
+  if constexpr (Order == 15) u5 = madd<F>(h, T(-15) * t5, u5);
+  if constexpr (Order == 2) u5 = madd<F>(h, madd<F>(T(10.246950765959598), t7, T(-15) * t5), u5);
+  P u6 = madd<F>(b, madd<F>(T(2.6457513110645907), t7, T(-3.872983346207417) * t5), t6);
+  if constexpr (Order == 15) u6 = madd<F>(h, T(-22) * t6, u6);
+  if constexpr (Order == 2) u6 = madd<F>(h, madd<F>(T(6.4807406984078604), t8, T(-22) * t6), u6);
+  P u7 = madd<F>(b, madd<F>(T(2.4494897427831779), t8, T(-2.6457513110645907) * t6), t7);
+  if constexpr (Order == 15) u7 = madd<F>(h, T(-13) * t7, u7);
+  if constexpr (Order == 2) u7 = madd<F>(h, madd<F>(T(5.196152422706632), t9, madd<F>(T(10.246950765959598), t5, T(-13) * t7)), u7);
+  P u8 = madd<F>(b, madd<F>(T(2.1213203435596424), t9, T(-2.4494897427831779) * t7), t8);
+  if constexpr (Order == 15) u8 = madd<F>(h, T(-10.5) * t8, u8);
+  if constexpr (Order == 2) u8 = madd<F>(h, madd<F>(T(3.3541019662496847), t10, madd<F>(T(6.4807406984078604), t6, T(-10.5) * t8)), u8);
+  P u9 = madd<F>(b, madd<F>(T(1.5811388300841898), t10, T(-2.1213203435596424) * t8), t9);
+  if constexpr (Order == 15) u9 = madd<F>(h, T(-7) * t9, u9);
+  if constexpr (Order == 2) u9 = madd<F>(h, madd<F>(T(5.196152422706632), t7, T(-7) * t9), u9);
+  P u10 = madd<F>(b, T(-1.5811388300841898) * t9, t10);
+  if constexpr (Order == 15) u10 = madd<F>(h, T(-2.5) * t10, u10);
+  if constexpr (Order == 2) u10 = madd<F>(h, madd<F>(T(3.3541019662496847), t8, T(-2.5) * t10), u10);
   y[5] = u5;
   const P ca1 = splat<P>(s.ca[1]), sa1 = splat<P>(s.sa[1]);
-  y[6] = ca1 * u6 - sa1 * u4;
-  y[4] = sa1 * u6 + ca1 * u4;
+  y[6] = madd<F>(ca1, u6, -(sa1 * u4));
+  y[4] = madd<F>(sa1, u6, ca1 * u4);
   const P ca2 = splat<P>(s.ca[2]), sa2 = splat<P>(s.sa[2]);
-  y[7] = ca2 * u7 - sa2 * u3;
-  y[3] = sa2 * u7 + ca2 * u3;
+  y[7] = madd<F>(ca2, u7, -(sa2 * u3));
+  y[3] = madd<F>(sa2, u7, ca2 * u3);
   const P ca3 = splat<P>(s.ca[3]), sa3 = splat<P>(s.sa[3]);
-  y[8] = ca3 * u8 - sa3 * u2;
-  y[2] = sa3 * u8 + ca3 * u2;
+  y[8] = madd<F>(ca3, u8, -(sa3 * u2));
+  y[2] = madd<F>(sa3, u8, ca3 * u2);
   const P ca4 = splat<P>(s.ca[4]), sa4 = splat<P>(s.sa[4]);
-  y[9] = ca4 * u9 - sa4 * u1;
-  y[1] = sa4 * u9 + ca4 * u1;
+  y[9] = madd<F>(ca4, u9, -(sa4 * u1));
+  y[1] = madd<F>(sa4, u9, ca4 * u1);
   const P ca5 = splat<P>(s.ca[5]), sa5 = splat<P>(s.sa[5]);
-  y[10] = ca5 * u10 - sa5 * u0;
-  y[0] = sa5 * u10 + ca5 * u0;
+  y[10] = madd<F>(ca5, u10, -(sa5 * u0));
+  y[0] = madd<F>(sa5, u10, ca5 * u0);
 }
 
 // Band 6 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) ([2] Sec. 3).
-template <int Order, class T, class P, class S>
-inline void taylor_band6(const S& s, const P* __restrict x, P* __restrict y) {
+template <bool F, int Order, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void taylor_band6(const S& s, const P* __restrict x, P* __restrict y) {
   const P t6 = x[6];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
-  const P t7 = cg1 * x[7] - sg1 * x[5];
-  const P t5 = sg1 * x[7] + cg1 * x[5];
+  const P t7 = madd<F>(cg1, x[7], -(sg1 * x[5]));
+  const P t5 = madd<F>(sg1, x[7], cg1 * x[5]);
   const P cg2 = splat<P>(s.cg[2]), sg2 = splat<P>(s.sg[2]);
-  const P t8 = cg2 * x[8] - sg2 * x[4];
-  const P t4 = sg2 * x[8] + cg2 * x[4];
+  const P t8 = madd<F>(cg2, x[8], -(sg2 * x[4]));
+  const P t4 = madd<F>(sg2, x[8], cg2 * x[4]);
   const P cg3 = splat<P>(s.cg[3]), sg3 = splat<P>(s.sg[3]);
-  const P t9 = cg3 * x[9] - sg3 * x[3];
-  const P t3 = sg3 * x[9] + cg3 * x[3];
+  const P t9 = madd<F>(cg3, x[9], -(sg3 * x[3]));
+  const P t3 = madd<F>(sg3, x[9], cg3 * x[3]);
   const P cg4 = splat<P>(s.cg[4]), sg4 = splat<P>(s.sg[4]);
-  const P t10 = cg4 * x[10] - sg4 * x[2];
-  const P t2 = sg4 * x[10] + cg4 * x[2];
+  const P t10 = madd<F>(cg4, x[10], -(sg4 * x[2]));
+  const P t2 = madd<F>(sg4, x[10], cg4 * x[2]);
   const P cg5 = splat<P>(s.cg[5]), sg5 = splat<P>(s.sg[5]);
-  const P t11 = cg5 * x[11] - sg5 * x[1];
-  const P t1 = sg5 * x[11] + cg5 * x[1];
+  const P t11 = madd<F>(cg5, x[11], -(sg5 * x[1]));
+  const P t1 = madd<F>(sg5, x[11], cg5 * x[1]);
   const P cg6 = splat<P>(s.cg[6]), sg6 = splat<P>(s.sg[6]);
-  const P t12 = cg6 * x[12] - sg6 * x[0];
-  const P t0 = sg6 * x[12] + cg6 * x[0];
+  const P t12 = madd<F>(cg6, x[12], -(sg6 * x[0]));
+  const P t0 = madd<F>(sg6, x[12], cg6 * x[0]);
   const auto b = s.beta, h = s.half_beta2;
   (void)h;
-  P u0 = t0 + b * (T(-1.7320508075688772) * t1);
-  if constexpr (Order == 15) u0 += h * (T(-3) * t0);
-  if constexpr (Order == 2) u0 += h * (T(-3) * t0 + T(4.0620192023179804) * t2);
-  P u1 = t1 + b * (T(1.7320508075688772) * t0 - T(2.3452078799117149) * t2);
-  if constexpr (Order == 15) u1 += h * (T(-8.5) * t1);
-  if constexpr (Order == 2) u1 += h * (T(-8.5) * t1 + T(6.4226162893325647) * t3);
-  P u2 = t2 + b * (T(2.3452078799117149) * t1 - T(2.7386127875258306) * t3);
-  if constexpr (Order == 15) u2 += h * (T(-13) * t2);
-  if constexpr (Order == 2) u2 += h * (T(-13) * t2 + T(4.0620192023179804) * t0 + T(8.2158383625774913) * t4);
-  P u3 = t3 + b * (T(2.7386127875258306) * t2 - T(3) * t4);
-  if constexpr (Order == 15) u3 += h * (T(-16.5) * t3);
-  if constexpr (Order == 2) u3 += h * (T(-16.5) * t3 + T(6.4226162893325647) * t1 + T(9.4868329805051381) * t5);
-  P u4 = t4 + b * (T(3) * t3 - T(3.1622776601683795) * t5);
-  if constexpr (Order == 15) u4 += h * (T(-19) * t4);
-  if constexpr (Order == 2) u4 += h * (T(-19) * t4 + T(8.2158383625774913) * t2);
-  P u5 = t5 + b * (T(3.1622776601683795) * t4);
-  if constexpr (Order == 15) u5 += h * (T(-10) * t5);
-  if constexpr (Order == 2) u5 += h * (T(-10) * t5 + T(9.4868329805051381) * t3);
-  P u6 = t6 + b * (T(4.5825756949558398) * t7);
-  if constexpr (Order == 15) u6 += h * (T(-21) * t6);
-  if constexpr (Order == 2) u6 += h * (T(-21) * t6 + T(14.491376746189438) * t8);
-  P u7 = t7 + b * (T(-4.5825756949558398) * t6 + T(3.1622776601683795) * t8);
-  if constexpr (Order == 15) u7 += h * (T(-31) * t7);
-  if constexpr (Order == 2) u7 += h * (T(-31) * t7 + T(9.4868329805051381) * t9);
-  P u8 = t8 + b * (T(-3.1622776601683795) * t7 + T(3) * t9);
-  if constexpr (Order == 15) u8 += h * (T(-19) * t8);
-  if constexpr (Order == 2) u8 += h * (T(-19) * t8 + T(14.491376746189438) * t6 + T(8.2158383625774913) * t10);
-  P u9 = t9 + b * (T(-3) * t8 + T(2.7386127875258306) * t10);
-  if constexpr (Order == 15) u9 += h * (T(-16.5) * t9);
-  if constexpr (Order == 2) u9 += h * (T(-16.5) * t9 + T(9.4868329805051381) * t7 + T(6.4226162893325647) * t11);
-  P u10 = t10 + b * (T(-2.7386127875258306) * t9 + T(2.3452078799117149) * t11);
-  if constexpr (Order == 15) u10 += h * (T(-13) * t10);
-  if constexpr (Order == 2) u10 += h * (T(-13) * t10 + T(8.2158383625774913) * t8 + T(4.0620192023179804) * t12);
-  P u11 = t11 + b * (T(-2.3452078799117149) * t10 + T(1.7320508075688772) * t12);
-  if constexpr (Order == 15) u11 += h * (T(-8.5) * t11);
-  if constexpr (Order == 2) u11 += h * (T(-8.5) * t11 + T(6.4226162893325647) * t9);
-  P u12 = t12 + b * (T(-1.7320508075688772) * t11);
-  if constexpr (Order == 15) u12 += h * (T(-3) * t12);
-  if constexpr (Order == 2) u12 += h * (T(-3) * t12 + T(4.0620192023179804) * t10);
+  P u0 = madd<F>(b, T(-1.7320508075688772) * t1, t0);
+  if constexpr (Order == 15) u0 = madd<F>(h, T(-3) * t0, u0);
+  if constexpr (Order == 2) u0 = madd<F>(h, madd<F>(T(4.0620192023179804), t2, T(-3) * t0), u0);
+  P u1 = madd<F>(b, madd<F>(T(-2.3452078799117149), t2, T(1.7320508075688772) * t0), t1);
+  if constexpr (Order == 15) u1 = madd<F>(h, T(-8.5) * t1, u1);
+  if constexpr (Order == 2) u1 = madd<F>(h, madd<F>(T(6.4226162893325647), t3, T(-8.5) * t1), u1);
+  P u2 = madd<F>(b, madd<F>(T(-2.7386127875258306), t3, T(2.3452078799117149) * t1), t2);
+  if constexpr (Order == 15) u2 = madd<F>(h, T(-13) * t2, u2);
+  if constexpr (Order == 2) u2 = madd<F>(h, madd<F>(T(8.2158383625774913), t4, madd<F>(T(4.0620192023179804), t0, T(-13) * t2)), u2);
+  P u3 = madd<F>(b, madd<F>(T(-3), t4, T(2.7386127875258306) * t2), t3);
+  if constexpr (Order == 15) u3 = madd<F>(h, T(-16.5) * t3, u3);
+  if constexpr (Order == 2) u3 = madd<F>(h, madd<F>(T(9.4868329805051381), t5, madd<F>(T(6.4226162893325647), t1, T(-16.5) * t3)), u3);
+  P u4 = madd<F>(b, madd<F>(T(-3.1622776601683795), t5, T(3) * t3), t4);
+  if constexpr (Order == 15) u4 = madd<F>(h, T(-19) * t4, u4);
+  if constexpr (Order == 2) u4 = madd<F>(h, madd<F>(T(8.2158383625774913), t2, T(-19) * t4), u4);
+  P u5 = madd<F>(b, T(3.1622776601683795) * t4, t5);
+  if constexpr (Order == 15) u5 = madd<F>(h, T(-10) * t5, u5);
+  if constexpr (Order == 2) u5 = madd<F>(h, madd<F>(T(9.4868329805051381), t3, T(-10) * t5), u5);
+  P u6 = madd<F>(b, T(4.5825756949558398) * t7, t6);
+  if constexpr (Order == 15) u6 = madd<F>(h, T(-21) * t6, u6);
+  if constexpr (Order == 2) u6 = madd<F>(h, madd<F>(T(14.491376746189438), t8, T(-21) * t6), u6);
+  P u7 = madd<F>(b, madd<F>(T(3.1622776601683795), t8, T(-4.5825756949558398) * t6), t7);
+  if constexpr (Order == 15) u7 = madd<F>(h, T(-31) * t7, u7);
+  if constexpr (Order == 2) u7 = madd<F>(h, madd<F>(T(9.4868329805051381), t9, T(-31) * t7), u7);
+  P u8 = madd<F>(b, madd<F>(T(3), t9, T(-3.1622776601683795) * t7), t8);
+  if constexpr (Order == 15) u8 = madd<F>(h, T(-19) * t8, u8);
+  if constexpr (Order == 2) u8 = madd<F>(h, madd<F>(T(8.2158383625774913), t10, madd<F>(T(14.491376746189438), t6, T(-19) * t8)), u8);
+  P u9 = madd<F>(b, madd<F>(T(2.7386127875258306), t10, T(-3) * t8), t9);
+  if constexpr (Order == 15) u9 = madd<F>(h, T(-16.5) * t9, u9);
+  if constexpr (Order == 2) u9 = madd<F>(h, madd<F>(T(6.4226162893325647), t11, madd<F>(T(9.4868329805051381), t7, T(-16.5) * t9)), u9);
+  P u10 = madd<F>(b, madd<F>(T(2.3452078799117149), t11, T(-2.7386127875258306) * t9), t10);
+  if constexpr (Order == 15) u10 = madd<F>(h, T(-13) * t10, u10);
+  if constexpr (Order == 2) u10 = madd<F>(h, madd<F>(T(4.0620192023179804), t12, madd<F>(T(8.2158383625774913), t8, T(-13) * t10)), u10);
+  P u11 = madd<F>(b, madd<F>(T(1.7320508075688772), t12, T(-2.3452078799117149) * t10), t11);
+  if constexpr (Order == 15) u11 = madd<F>(h, T(-8.5) * t11, u11);
+  if constexpr (Order == 2) u11 = madd<F>(h, madd<F>(T(6.4226162893325647), t9, T(-8.5) * t11), u11);
+  P u12 = madd<F>(b, T(-1.7320508075688772) * t11, t12);
+  if constexpr (Order == 15) u12 = madd<F>(h, T(-3) * t12, u12);
+  if constexpr (Order == 2) u12 = madd<F>(h, madd<F>(T(4.0620192023179804), t10, T(-3) * t12), u12);
   y[6] = u6;
   const P ca1 = splat<P>(s.ca[1]), sa1 = splat<P>(s.sa[1]);
-  y[7] = ca1 * u7 - sa1 * u5;
-  y[5] = sa1 * u7 + ca1 * u5;
+  y[7] = madd<F>(ca1, u7, -(sa1 * u5));
+  y[5] = madd<F>(sa1, u7, ca1 * u5);
   const P ca2 = splat<P>(s.ca[2]), sa2 = splat<P>(s.sa[2]);
-  y[8] = ca2 * u8 - sa2 * u4;
-  y[4] = sa2 * u8 + ca2 * u4;
+  y[8] = madd<F>(ca2, u8, -(sa2 * u4));
+  y[4] = madd<F>(sa2, u8, ca2 * u4);
   const P ca3 = splat<P>(s.ca[3]), sa3 = splat<P>(s.sa[3]);
-  y[9] = ca3 * u9 - sa3 * u3;
-  y[3] = sa3 * u9 + ca3 * u3;
+  y[9] = madd<F>(ca3, u9, -(sa3 * u3));
+  y[3] = madd<F>(sa3, u9, ca3 * u3);
   const P ca4 = splat<P>(s.ca[4]), sa4 = splat<P>(s.sa[4]);
-  y[10] = ca4 * u10 - sa4 * u2;
-  y[2] = sa4 * u10 + ca4 * u2;
+  y[10] = madd<F>(ca4, u10, -(sa4 * u2));
+  y[2] = madd<F>(sa4, u10, ca4 * u2);
   const P ca5 = splat<P>(s.ca[5]), sa5 = splat<P>(s.sa[5]);
-  y[11] = ca5 * u11 - sa5 * u1;
-  y[1] = sa5 * u11 + ca5 * u1;
+  y[11] = madd<F>(ca5, u11, -(sa5 * u1));
+  y[1] = madd<F>(sa5, u11, ca5 * u1);
   const P ca6 = splat<P>(s.ca[6]), sa6 = splat<P>(s.sa[6]);
-  y[12] = ca6 * u12 - sa6 * u0;
-  y[0] = sa6 * u12 + ca6 * u0;
+  y[12] = madd<F>(ca6, u12, -(sa6 * u0));
+  y[0] = madd<F>(sa6, u12, ca6 * u0);
 }
 
 // Band 7 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) ([2] Sec. 3).
-template <int Order, class T, class P, class S>
-inline void taylor_band7(const S& s, const P* __restrict x, P* __restrict y) {
+template <bool F, int Order, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void taylor_band7(const S& s, const P* __restrict x, P* __restrict y) {
   const P t7 = x[7];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
-  const P t8 = cg1 * x[8] - sg1 * x[6];
-  const P t6 = sg1 * x[8] + cg1 * x[6];
+  const P t8 = madd<F>(cg1, x[8], -(sg1 * x[6]));
+  const P t6 = madd<F>(sg1, x[8], cg1 * x[6]);
   const P cg2 = splat<P>(s.cg[2]), sg2 = splat<P>(s.sg[2]);
-  const P t9 = cg2 * x[9] - sg2 * x[5];
-  const P t5 = sg2 * x[9] + cg2 * x[5];
+  const P t9 = madd<F>(cg2, x[9], -(sg2 * x[5]));
+  const P t5 = madd<F>(sg2, x[9], cg2 * x[5]);
   const P cg3 = splat<P>(s.cg[3]), sg3 = splat<P>(s.sg[3]);
-  const P t10 = cg3 * x[10] - sg3 * x[4];
-  const P t4 = sg3 * x[10] + cg3 * x[4];
+  const P t10 = madd<F>(cg3, x[10], -(sg3 * x[4]));
+  const P t4 = madd<F>(sg3, x[10], cg3 * x[4]);
   const P cg4 = splat<P>(s.cg[4]), sg4 = splat<P>(s.sg[4]);
-  const P t11 = cg4 * x[11] - sg4 * x[3];
-  const P t3 = sg4 * x[11] + cg4 * x[3];
+  const P t11 = madd<F>(cg4, x[11], -(sg4 * x[3]));
+  const P t3 = madd<F>(sg4, x[11], cg4 * x[3]);
   const P cg5 = splat<P>(s.cg[5]), sg5 = splat<P>(s.sg[5]);
-  const P t12 = cg5 * x[12] - sg5 * x[2];
-  const P t2 = sg5 * x[12] + cg5 * x[2];
+  const P t12 = madd<F>(cg5, x[12], -(sg5 * x[2]));
+  const P t2 = madd<F>(sg5, x[12], cg5 * x[2]);
   const P cg6 = splat<P>(s.cg[6]), sg6 = splat<P>(s.sg[6]);
-  const P t13 = cg6 * x[13] - sg6 * x[1];
-  const P t1 = sg6 * x[13] + cg6 * x[1];
+  const P t13 = madd<F>(cg6, x[13], -(sg6 * x[1]));
+  const P t1 = madd<F>(sg6, x[13], cg6 * x[1]);
   const P cg7 = splat<P>(s.cg[7]), sg7 = splat<P>(s.sg[7]);
-  const P t14 = cg7 * x[14] - sg7 * x[0];
-  const P t0 = sg7 * x[14] + cg7 * x[0];
+  const P t14 = madd<F>(cg7, x[14], -(sg7 * x[0]));
+  const P t0 = madd<F>(sg7, x[14], cg7 * x[0]);
   const auto b = s.beta, h = s.half_beta2;
   (void)h;
-  P u0 = t0 + b * (T(-1.8708286933869707) * t1);
-  if constexpr (Order == 15) u0 += h * (T(-3.5) * t0);
-  if constexpr (Order == 2) u0 += h * (T(-3.5) * t0 + T(4.7696960070847281) * t2);
-  P u1 = t1 + b * (T(1.8708286933869707) * t0 - T(2.5495097567963922) * t2);
-  if constexpr (Order == 15) u1 += h * (T(-10) * t1);
-  if constexpr (Order == 2) u1 += h * (T(-10) * t1 + T(7.6485292703891776) * t3);
-  P u2 = t2 + b * (T(2.5495097567963922) * t1 - T(3) * t3);
-  if constexpr (Order == 15) u2 += h * (T(-15.5) * t2);
-  if constexpr (Order == 2) u2 += h * (T(-15.5) * t2 + T(4.7696960070847281) * t0 + T(9.9498743710661994) * t4);
-  P u3 = t3 + b * (T(3) * t2 - T(3.3166247903553998) * t4);
-  if constexpr (Order == 15) u3 += h * (T(-20) * t3);
-  if constexpr (Order == 2) u3 += h * (T(-20) * t3 + T(7.6485292703891776) * t1 + T(11.726039399558575) * t5);
-  P u4 = t4 + b * (T(3.3166247903553998) * t3 - T(3.5355339059327378) * t5);
-  if constexpr (Order == 15) u4 += h * (T(-23.5) * t4);
-  if constexpr (Order == 2) u4 += h * (T(-23.5) * t4 + T(9.9498743710661994) * t2 + T(12.99038105676658) * t6);
-  P u5 = t5 + b * (T(3.5355339059327378) * t4 - T(3.6742346141747673) * t6);
-  if constexpr (Order == 15) u5 += h * (T(-26) * t5);
-  if constexpr (Order == 2) u5 += h * (T(-26) * t5 + T(11.726039399558575) * t3);
-  P u6 = t6 + b * (T(3.6742346141747673) * t5);
-  if constexpr (Order == 15) u6 += h * (T(-13.5) * t6);
-  if constexpr (Order == 2) u6 += h * (T(-13.5) * t6 + T(12.99038105676658) * t4);
-  P u7 = t7 + b * (T(5.2915026221291814) * t8);
-  if constexpr (Order == 15) u7 += h * (T(-28) * t7);
-  if constexpr (Order == 2) u7 += h * (T(-28) * t7 + T(19.442222095223581) * t9);
-  P u8 = t8 + b * (T(-5.2915026221291814) * t7 + T(3.6742346141747673) * t9);
-  if constexpr (Order == 15) u8 += h * (T(-41.5) * t8);
-  if constexpr (Order == 2) u8 += h * (T(-41.5) * t8 + T(12.99038105676658) * t10);
-  P u9 = t9 + b * (T(-3.6742346141747673) * t8 + T(3.5355339059327378) * t10);
-  if constexpr (Order == 15) u9 += h * (T(-26) * t9);
-  if constexpr (Order == 2) u9 += h * (T(-26) * t9 + T(19.442222095223581) * t7 + T(11.726039399558575) * t11);
-  P u10 = t10 + b * (T(-3.5355339059327378) * t9 + T(3.3166247903553998) * t11);
-  if constexpr (Order == 15) u10 += h * (T(-23.5) * t10);
-  if constexpr (Order == 2) u10 += h * (T(-23.5) * t10 + T(12.99038105676658) * t8 + T(9.9498743710661994) * t12);
-  P u11 = t11 + b * (T(-3.3166247903553998) * t10 + T(3) * t12);
-  if constexpr (Order == 15) u11 += h * (T(-20) * t11);
-  if constexpr (Order == 2) u11 += h * (T(-20) * t11 + T(11.726039399558575) * t9 + T(7.6485292703891776) * t13);
-  P u12 = t12 + b * (T(-3) * t11 + T(2.5495097567963922) * t13);
-  if constexpr (Order == 15) u12 += h * (T(-15.5) * t12);
-  if constexpr (Order == 2) u12 += h * (T(-15.5) * t12 + T(9.9498743710661994) * t10 + T(4.7696960070847281) * t14);
-  P u13 = t13 + b * (T(-2.5495097567963922) * t12 + T(1.8708286933869707) * t14);
-  if constexpr (Order == 15) u13 += h * (T(-10) * t13);
-  if constexpr (Order == 2) u13 += h * (T(-10) * t13 + T(7.6485292703891776) * t11);
-  P u14 = t14 + b * (T(-1.8708286933869707) * t13);
-  if constexpr (Order == 15) u14 += h * (T(-3.5) * t14);
-  if constexpr (Order == 2) u14 += h * (T(-3.5) * t14 + T(4.7696960070847281) * t12);
+  P u0 = madd<F>(b, T(-1.8708286933869707) * t1, t0);
+  if constexpr (Order == 15) u0 = madd<F>(h, T(-3.5) * t0, u0);
+  if constexpr (Order == 2) u0 = madd<F>(h, madd<F>(T(4.7696960070847281), t2, T(-3.5) * t0), u0);
+  P u1 = madd<F>(b, madd<F>(T(-2.5495097567963922), t2, T(1.8708286933869707) * t0), t1);
+  if constexpr (Order == 15) u1 = madd<F>(h, T(-10) * t1, u1);
+  if constexpr (Order == 2) u1 = madd<F>(h, madd<F>(T(7.6485292703891776), t3, T(-10) * t1), u1);
+  P u2 = madd<F>(b, madd<F>(T(-3), t3, T(2.5495097567963922) * t1), t2);
+  if constexpr (Order == 15) u2 = madd<F>(h, T(-15.5) * t2, u2);
+  if constexpr (Order == 2) u2 = madd<F>(h, madd<F>(T(9.9498743710661994), t4, madd<F>(T(4.7696960070847281), t0, T(-15.5) * t2)), u2);
+  P u3 = madd<F>(b, madd<F>(T(-3.3166247903553998), t4, T(3) * t2), t3);
+  if constexpr (Order == 15) u3 = madd<F>(h, T(-20) * t3, u3);
+  if constexpr (Order == 2) u3 = madd<F>(h, madd<F>(T(11.726039399558575), t5, madd<F>(T(7.6485292703891776), t1, T(-20) * t3)), u3);
+  P u4 = madd<F>(b, madd<F>(T(-3.5355339059327378), t5, T(3.3166247903553998) * t3), t4);
+  if constexpr (Order == 15) u4 = madd<F>(h, T(-23.5) * t4, u4);
+  if constexpr (Order == 2) u4 = madd<F>(h, madd<F>(T(12.99038105676658), t6, madd<F>(T(9.9498743710661994), t2, T(-23.5) * t4)), u4);
+  P u5 = madd<F>(b, madd<F>(T(-3.6742346141747673), t6, T(3.5355339059327378) * t4), t5);
+  if constexpr (Order == 15) u5 = madd<F>(h, T(-26) * t5, u5);
+  if constexpr (Order == 2) u5 = madd<F>(h, madd<F>(T(11.726039399558575), t3, T(-26) * t5), u5);
+  P u6 = madd<F>(b, T(3.6742346141747673) * t5, t6);
+  if constexpr (Order == 15) u6 = madd<F>(h, T(-13.5) * t6, u6);
+  if constexpr (Order == 2) u6 = madd<F>(h, madd<F>(T(12.99038105676658), t4, T(-13.5) * t6), u6);
+  P u7 = madd<F>(b, T(5.2915026221291814) * t8, t7);
+  if constexpr (Order == 15) u7 = madd<F>(h, T(-28) * t7, u7);
+  if constexpr (Order == 2) u7 = madd<F>(h, madd<F>(T(19.442222095223581), t9, T(-28) * t7), u7);
+  P u8 = madd<F>(b, madd<F>(T(3.6742346141747673), t9, T(-5.2915026221291814) * t7), t8);
+  if constexpr (Order == 15) u8 = madd<F>(h, T(-41.5) * t8, u8);
+  if constexpr (Order == 2) u8 = madd<F>(h, madd<F>(T(12.99038105676658), t10, T(-41.5) * t8), u8);
+  P u9 = madd<F>(b, madd<F>(T(3.5355339059327378), t10, T(-3.6742346141747673) * t8), t9);
+  if constexpr (Order == 15) u9 = madd<F>(h, T(-26) * t9, u9);
+  if constexpr (Order == 2) u9 = madd<F>(h, madd<F>(T(11.726039399558575), t11, madd<F>(T(19.442222095223581), t7, T(-26) * t9)), u9);
+  P u10 = madd<F>(b, madd<F>(T(3.3166247903553998), t11, T(-3.5355339059327378) * t9), t10);
+  if constexpr (Order == 15) u10 = madd<F>(h, T(-23.5) * t10, u10);
+  if constexpr (Order == 2) u10 = madd<F>(h, madd<F>(T(9.9498743710661994), t12, madd<F>(T(12.99038105676658), t8, T(-23.5) * t10)), u10);
+  P u11 = madd<F>(b, madd<F>(T(3), t12, T(-3.3166247903553998) * t10), t11);
+  if constexpr (Order == 15) u11 = madd<F>(h, T(-20) * t11, u11);
+  if constexpr (Order == 2) u11 = madd<F>(h, madd<F>(T(7.6485292703891776), t13, madd<F>(T(11.726039399558575), t9, T(-20) * t11)), u11);
+  P u12 = madd<F>(b, madd<F>(T(2.5495097567963922), t13, T(-3) * t11), t12);
+  if constexpr (Order == 15) u12 = madd<F>(h, T(-15.5) * t12, u12);
+  if constexpr (Order == 2) u12 = madd<F>(h, madd<F>(T(4.7696960070847281), t14, madd<F>(T(9.9498743710661994), t10, T(-15.5) * t12)), u12);
+  P u13 = madd<F>(b, madd<F>(T(1.8708286933869707), t14, T(-2.5495097567963922) * t12), t13);
+  if constexpr (Order == 15) u13 = madd<F>(h, T(-10) * t13, u13);
+  if constexpr (Order == 2) u13 = madd<F>(h, madd<F>(T(7.6485292703891776), t11, T(-10) * t13), u13);
+  P u14 = madd<F>(b, T(-1.8708286933869707) * t13, t14);
+  if constexpr (Order == 15) u14 = madd<F>(h, T(-3.5) * t14, u14);
+  if constexpr (Order == 2) u14 = madd<F>(h, madd<F>(T(4.7696960070847281), t12, T(-3.5) * t14), u14);
   y[7] = u7;
   const P ca1 = splat<P>(s.ca[1]), sa1 = splat<P>(s.sa[1]);
-  y[8] = ca1 * u8 - sa1 * u6;
-  y[6] = sa1 * u8 + ca1 * u6;
+  y[8] = madd<F>(ca1, u8, -(sa1 * u6));
+  y[6] = madd<F>(sa1, u8, ca1 * u6);
   const P ca2 = splat<P>(s.ca[2]), sa2 = splat<P>(s.sa[2]);
-  y[9] = ca2 * u9 - sa2 * u5;
-  y[5] = sa2 * u9 + ca2 * u5;
+  y[9] = madd<F>(ca2, u9, -(sa2 * u5));
+  y[5] = madd<F>(sa2, u9, ca2 * u5);
   const P ca3 = splat<P>(s.ca[3]), sa3 = splat<P>(s.sa[3]);
-  y[10] = ca3 * u10 - sa3 * u4;
-  y[4] = sa3 * u10 + ca3 * u4;
+  y[10] = madd<F>(ca3, u10, -(sa3 * u4));
+  y[4] = madd<F>(sa3, u10, ca3 * u4);
   const P ca4 = splat<P>(s.ca[4]), sa4 = splat<P>(s.sa[4]);
-  y[11] = ca4 * u11 - sa4 * u3;
-  y[3] = sa4 * u11 + ca4 * u3;
+  y[11] = madd<F>(ca4, u11, -(sa4 * u3));
+  y[3] = madd<F>(sa4, u11, ca4 * u3);
   const P ca5 = splat<P>(s.ca[5]), sa5 = splat<P>(s.sa[5]);
-  y[12] = ca5 * u12 - sa5 * u2;
-  y[2] = sa5 * u12 + ca5 * u2;
+  y[12] = madd<F>(ca5, u12, -(sa5 * u2));
+  y[2] = madd<F>(sa5, u12, ca5 * u2);
   const P ca6 = splat<P>(s.ca[6]), sa6 = splat<P>(s.sa[6]);
-  y[13] = ca6 * u13 - sa6 * u1;
-  y[1] = sa6 * u13 + ca6 * u1;
+  y[13] = madd<F>(ca6, u13, -(sa6 * u1));
+  y[1] = madd<F>(sa6, u13, ca6 * u1);
   const P ca7 = splat<P>(s.ca[7]), sa7 = splat<P>(s.sa[7]);
-  y[14] = ca7 * u14 - sa7 * u0;
-  y[0] = sa7 * u14 + ca7 * u0;
+  y[14] = madd<F>(ca7, u14, -(sa7 * u0));
+  y[0] = madd<F>(sa7, u14, ca7 * u0);
 }
 
 // Band 8 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) ([2] Sec. 3).
-template <int Order, class T, class P, class S>
-inline void taylor_band8(const S& s, const P* __restrict x, P* __restrict y) {
+template <bool F, int Order, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void taylor_band8(const S& s, const P* __restrict x, P* __restrict y) {
   const P t8 = x[8];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
-  const P t9 = cg1 * x[9] - sg1 * x[7];
-  const P t7 = sg1 * x[9] + cg1 * x[7];
+  const P t9 = madd<F>(cg1, x[9], -(sg1 * x[7]));
+  const P t7 = madd<F>(sg1, x[9], cg1 * x[7]);
   const P cg2 = splat<P>(s.cg[2]), sg2 = splat<P>(s.sg[2]);
-  const P t10 = cg2 * x[10] - sg2 * x[6];
-  const P t6 = sg2 * x[10] + cg2 * x[6];
+  const P t10 = madd<F>(cg2, x[10], -(sg2 * x[6]));
+  const P t6 = madd<F>(sg2, x[10], cg2 * x[6]);
   const P cg3 = splat<P>(s.cg[3]), sg3 = splat<P>(s.sg[3]);
-  const P t11 = cg3 * x[11] - sg3 * x[5];
-  const P t5 = sg3 * x[11] + cg3 * x[5];
+  const P t11 = madd<F>(cg3, x[11], -(sg3 * x[5]));
+  const P t5 = madd<F>(sg3, x[11], cg3 * x[5]);
   const P cg4 = splat<P>(s.cg[4]), sg4 = splat<P>(s.sg[4]);
-  const P t12 = cg4 * x[12] - sg4 * x[4];
-  const P t4 = sg4 * x[12] + cg4 * x[4];
+  const P t12 = madd<F>(cg4, x[12], -(sg4 * x[4]));
+  const P t4 = madd<F>(sg4, x[12], cg4 * x[4]);
   const P cg5 = splat<P>(s.cg[5]), sg5 = splat<P>(s.sg[5]);
-  const P t13 = cg5 * x[13] - sg5 * x[3];
-  const P t3 = sg5 * x[13] + cg5 * x[3];
+  const P t13 = madd<F>(cg5, x[13], -(sg5 * x[3]));
+  const P t3 = madd<F>(sg5, x[13], cg5 * x[3]);
   const P cg6 = splat<P>(s.cg[6]), sg6 = splat<P>(s.sg[6]);
-  const P t14 = cg6 * x[14] - sg6 * x[2];
-  const P t2 = sg6 * x[14] + cg6 * x[2];
+  const P t14 = madd<F>(cg6, x[14], -(sg6 * x[2]));
+  const P t2 = madd<F>(sg6, x[14], cg6 * x[2]);
   const P cg7 = splat<P>(s.cg[7]), sg7 = splat<P>(s.sg[7]);
-  const P t15 = cg7 * x[15] - sg7 * x[1];
-  const P t1 = sg7 * x[15] + cg7 * x[1];
+  const P t15 = madd<F>(cg7, x[15], -(sg7 * x[1]));
+  const P t1 = madd<F>(sg7, x[15], cg7 * x[1]);
   const P cg8 = splat<P>(s.cg[8]), sg8 = splat<P>(s.sg[8]);
-  const P t16 = cg8 * x[16] - sg8 * x[0];
-  const P t0 = sg8 * x[16] + cg8 * x[0];
+  const P t16 = madd<F>(cg8, x[16], -(sg8 * x[0]));
+  const P t0 = madd<F>(sg8, x[16], cg8 * x[0]);
   const auto b = s.beta, h = s.half_beta2;
   (void)h;
-  P u0 = t0 + b * (T(-2) * t1);
-  if constexpr (Order == 15) u0 += h * (T(-4) * t0);
-  if constexpr (Order == 2) u0 += h * (T(-4) * t0 + T(5.4772255750516612) * t2);
-  P u1 = t1 + b * (T(2) * t0 - T(2.7386127875258306) * t2);
-  if constexpr (Order == 15) u1 += h * (T(-11.5) * t1);
-  if constexpr (Order == 2) u1 += h * (T(-11.5) * t1 + T(8.8741196746494246) * t3);
-  P u2 = t2 + b * (T(2.7386127875258306) * t1 - T(3.2403703492039302) * t3);
-  if constexpr (Order == 15) u2 += h * (T(-18) * t2);
-  if constexpr (Order == 2) u2 += h * (T(-18) * t2 + T(5.4772255750516612) * t0 + T(11.683321445547923) * t4);
-  P u3 = t3 + b * (T(3.2403703492039302) * t2 - T(3.6055512754639891) * t4);
-  if constexpr (Order == 15) u3 += h * (T(-23.5) * t3);
-  if constexpr (Order == 2) u3 += h * (T(-23.5) * t3 + T(8.8741196746494246) * t1 + T(13.964240043768941) * t5);
-  P u4 = t4 + b * (T(3.6055512754639891) * t3 - T(3.872983346207417) * t5);
-  if constexpr (Order == 15) u4 += h * (T(-28) * t4);
-  if constexpr (Order == 2) u4 += h * (T(-28) * t4 + T(11.683321445547923) * t2 + T(15.732132722552274) * t6);
-  P u5 = t5 + b * (T(3.872983346207417) * t4 - T(4.0620192023179804) * t6);
-  if constexpr (Order == 15) u5 += h * (T(-31.5) * t5);
-  if constexpr (Order == 2) u5 += h * (T(-31.5) * t5 + T(13.964240043768941) * t3 + T(16.99264546796643) * t7);
-  P u6 = t6 + b * (T(4.0620192023179804) * t5 - T(4.1833001326703778) * t7);
-  if constexpr (Order == 15) u6 += h * (T(-34) * t6);
-  if constexpr (Order == 2) u6 += h * (T(-34) * t6 + T(15.732132722552274) * t4);
-  P u7 = t7 + b * (T(4.1833001326703778) * t6);
-  if constexpr (Order == 15) u7 += h * (T(-17.5) * t7);
-  if constexpr (Order == 2) u7 += h * (T(-17.5) * t7 + T(16.99264546796643) * t5);
-  P u8 = t8 + b * (T(6) * t9);
-  if constexpr (Order == 15) u8 += h * (T(-36) * t8);
-  if constexpr (Order == 2) u8 += h * (T(-36) * t8 + T(25.099800796022265) * t10);
-  P u9 = t9 + b * (T(-6) * t8 + T(4.1833001326703778) * t10);
-  if constexpr (Order == 15) u9 += h * (T(-53.5) * t9);
-  if constexpr (Order == 2) u9 += h * (T(-53.5) * t9 + T(16.99264546796643) * t11);
-  P u10 = t10 + b * (T(-4.1833001326703778) * t9 + T(4.0620192023179804) * t11);
-  if constexpr (Order == 15) u10 += h * (T(-34) * t10);
-  if constexpr (Order == 2) u10 += h * (T(-34) * t10 + T(25.099800796022265) * t8 + T(15.732132722552274) * t12);
-  P u11 = t11 + b * (T(-4.0620192023179804) * t10 + T(3.872983346207417) * t12);
-  if constexpr (Order == 15) u11 += h * (T(-31.5) * t11);
-  if constexpr (Order == 2) u11 += h * (T(-31.5) * t11 + T(16.99264546796643) * t9 + T(13.964240043768941) * t13);
-  P u12 = t12 + b * (T(-3.872983346207417) * t11 + T(3.6055512754639891) * t13);
-  if constexpr (Order == 15) u12 += h * (T(-28) * t12);
-  if constexpr (Order == 2) u12 += h * (T(-28) * t12 + T(15.732132722552274) * t10 + T(11.683321445547923) * t14);
-  P u13 = t13 + b * (T(-3.6055512754639891) * t12 + T(3.2403703492039302) * t14);
-  if constexpr (Order == 15) u13 += h * (T(-23.5) * t13);
-  if constexpr (Order == 2) u13 += h * (T(-23.5) * t13 + T(13.964240043768941) * t11 + T(8.8741196746494246) * t15);
-  P u14 = t14 + b * (T(-3.2403703492039302) * t13 + T(2.7386127875258306) * t15);
-  if constexpr (Order == 15) u14 += h * (T(-18) * t14);
-  if constexpr (Order == 2) u14 += h * (T(-18) * t14 + T(11.683321445547923) * t12 + T(5.4772255750516612) * t16);
-  P u15 = t15 + b * (T(-2.7386127875258306) * t14 + T(2) * t16);
-  if constexpr (Order == 15) u15 += h * (T(-11.5) * t15);
-  if constexpr (Order == 2) u15 += h * (T(-11.5) * t15 + T(8.8741196746494246) * t13);
-  P u16 = t16 + b * (T(-2) * t15);
-  if constexpr (Order == 15) u16 += h * (T(-4) * t16);
-  if constexpr (Order == 2) u16 += h * (T(-4) * t16 + T(5.4772255750516612) * t14);
+  P u0 = madd<F>(b, T(-2) * t1, t0);
+  if constexpr (Order == 15) u0 = madd<F>(h, T(-4) * t0, u0);
+  if constexpr (Order == 2) u0 = madd<F>(h, madd<F>(T(5.4772255750516612), t2, T(-4) * t0), u0);
+  P u1 = madd<F>(b, madd<F>(T(-2.7386127875258306), t2, T(2) * t0), t1);
+  if constexpr (Order == 15) u1 = madd<F>(h, T(-11.5) * t1, u1);
+  if constexpr (Order == 2) u1 = madd<F>(h, madd<F>(T(8.8741196746494246), t3, T(-11.5) * t1), u1);
+  P u2 = madd<F>(b, madd<F>(T(-3.2403703492039302), t3, T(2.7386127875258306) * t1), t2);
+  if constexpr (Order == 15) u2 = madd<F>(h, T(-18) * t2, u2);
+  if constexpr (Order == 2) u2 = madd<F>(h, madd<F>(T(11.683321445547923), t4, madd<F>(T(5.4772255750516612), t0, T(-18) * t2)), u2);
+  P u3 = madd<F>(b, madd<F>(T(-3.6055512754639891), t4, T(3.2403703492039302) * t2), t3);
+  if constexpr (Order == 15) u3 = madd<F>(h, T(-23.5) * t3, u3);
+  if constexpr (Order == 2) u3 = madd<F>(h, madd<F>(T(13.964240043768941), t5, madd<F>(T(8.8741196746494246), t1, T(-23.5) * t3)), u3);
+  P u4 = madd<F>(b, madd<F>(T(-3.872983346207417), t5, T(3.6055512754639891) * t3), t4);
+  if constexpr (Order == 15) u4 = madd<F>(h, T(-28) * t4, u4);
+  if constexpr (Order == 2) u4 = madd<F>(h, madd<F>(T(15.732132722552274), t6, madd<F>(T(11.683321445547923), t2, T(-28) * t4)), u4);
+  P u5 = madd<F>(b, madd<F>(T(-4.0620192023179804), t6, T(3.872983346207417) * t4), t5);
+  if constexpr (Order == 15) u5 = madd<F>(h, T(-31.5) * t5, u5);
+  if constexpr (Order == 2) u5 = madd<F>(h, madd<F>(T(16.99264546796643), t7, madd<F>(T(13.964240043768941), t3, T(-31.5) * t5)), u5);
+  P u6 = madd<F>(b, madd<F>(T(-4.1833001326703778), t7, T(4.0620192023179804) * t5), t6);
+  if constexpr (Order == 15) u6 = madd<F>(h, T(-34) * t6, u6);
+  if constexpr (Order == 2) u6 = madd<F>(h, madd<F>(T(15.732132722552274), t4, T(-34) * t6), u6);
+  P u7 = madd<F>(b, T(4.1833001326703778) * t6, t7);
+  if constexpr (Order == 15) u7 = madd<F>(h, T(-17.5) * t7, u7);
+  if constexpr (Order == 2) u7 = madd<F>(h, madd<F>(T(16.99264546796643), t5, T(-17.5) * t7), u7);
+  P u8 = madd<F>(b, T(6) * t9, t8);
+  if constexpr (Order == 15) u8 = madd<F>(h, T(-36) * t8, u8);
+  if constexpr (Order == 2) u8 = madd<F>(h, madd<F>(T(25.099800796022265), t10, T(-36) * t8), u8);
+  P u9 = madd<F>(b, madd<F>(T(4.1833001326703778), t10, T(-6) * t8), t9);
+  if constexpr (Order == 15) u9 = madd<F>(h, T(-53.5) * t9, u9);
+  if constexpr (Order == 2) u9 = madd<F>(h, madd<F>(T(16.99264546796643), t11, T(-53.5) * t9), u9);
+  P u10 = madd<F>(b, madd<F>(T(4.0620192023179804), t11, T(-4.1833001326703778) * t9), t10);
+  if constexpr (Order == 15) u10 = madd<F>(h, T(-34) * t10, u10);
+  if constexpr (Order == 2) u10 = madd<F>(h, madd<F>(T(15.732132722552274), t12, madd<F>(T(25.099800796022265), t8, T(-34) * t10)), u10);
+  P u11 = madd<F>(b, madd<F>(T(3.872983346207417), t12, T(-4.0620192023179804) * t10), t11);
+  if constexpr (Order == 15) u11 = madd<F>(h, T(-31.5) * t11, u11);
+  if constexpr (Order == 2) u11 = madd<F>(h, madd<F>(T(13.964240043768941), t13, madd<F>(T(16.99264546796643), t9, T(-31.5) * t11)), u11);
+  P u12 = madd<F>(b, madd<F>(T(3.6055512754639891), t13, T(-3.872983346207417) * t11), t12);
+  if constexpr (Order == 15) u12 = madd<F>(h, T(-28) * t12, u12);
+  if constexpr (Order == 2) u12 = madd<F>(h, madd<F>(T(11.683321445547923), t14, madd<F>(T(15.732132722552274), t10, T(-28) * t12)), u12);
+  P u13 = madd<F>(b, madd<F>(T(3.2403703492039302), t14, T(-3.6055512754639891) * t12), t13);
+  if constexpr (Order == 15) u13 = madd<F>(h, T(-23.5) * t13, u13);
+  if constexpr (Order == 2) u13 = madd<F>(h, madd<F>(T(8.8741196746494246), t15, madd<F>(T(13.964240043768941), t11, T(-23.5) * t13)), u13);
+  P u14 = madd<F>(b, madd<F>(T(2.7386127875258306), t15, T(-3.2403703492039302) * t13), t14);
+  if constexpr (Order == 15) u14 = madd<F>(h, T(-18) * t14, u14);
+  if constexpr (Order == 2) u14 = madd<F>(h, madd<F>(T(5.4772255750516612), t16, madd<F>(T(11.683321445547923), t12, T(-18) * t14)), u14);
+  P u15 = madd<F>(b, madd<F>(T(2), t16, T(-2.7386127875258306) * t14), t15);
+  if constexpr (Order == 15) u15 = madd<F>(h, T(-11.5) * t15, u15);
+  if constexpr (Order == 2) u15 = madd<F>(h, madd<F>(T(8.8741196746494246), t13, T(-11.5) * t15), u15);
+  P u16 = madd<F>(b, T(-2) * t15, t16);
+  if constexpr (Order == 15) u16 = madd<F>(h, T(-4) * t16, u16);
+  if constexpr (Order == 2) u16 = madd<F>(h, madd<F>(T(5.4772255750516612), t14, T(-4) * t16), u16);
   y[8] = u8;
   const P ca1 = splat<P>(s.ca[1]), sa1 = splat<P>(s.sa[1]);
-  y[9] = ca1 * u9 - sa1 * u7;
-  y[7] = sa1 * u9 + ca1 * u7;
+  y[9] = madd<F>(ca1, u9, -(sa1 * u7));
+  y[7] = madd<F>(sa1, u9, ca1 * u7);
   const P ca2 = splat<P>(s.ca[2]), sa2 = splat<P>(s.sa[2]);
-  y[10] = ca2 * u10 - sa2 * u6;
-  y[6] = sa2 * u10 + ca2 * u6;
+  y[10] = madd<F>(ca2, u10, -(sa2 * u6));
+  y[6] = madd<F>(sa2, u10, ca2 * u6);
   const P ca3 = splat<P>(s.ca[3]), sa3 = splat<P>(s.sa[3]);
-  y[11] = ca3 * u11 - sa3 * u5;
-  y[5] = sa3 * u11 + ca3 * u5;
+  y[11] = madd<F>(ca3, u11, -(sa3 * u5));
+  y[5] = madd<F>(sa3, u11, ca3 * u5);
   const P ca4 = splat<P>(s.ca[4]), sa4 = splat<P>(s.sa[4]);
-  y[12] = ca4 * u12 - sa4 * u4;
-  y[4] = sa4 * u12 + ca4 * u4;
+  y[12] = madd<F>(ca4, u12, -(sa4 * u4));
+  y[4] = madd<F>(sa4, u12, ca4 * u4);
   const P ca5 = splat<P>(s.ca[5]), sa5 = splat<P>(s.sa[5]);
-  y[13] = ca5 * u13 - sa5 * u3;
-  y[3] = sa5 * u13 + ca5 * u3;
+  y[13] = madd<F>(ca5, u13, -(sa5 * u3));
+  y[3] = madd<F>(sa5, u13, ca5 * u3);
   const P ca6 = splat<P>(s.ca[6]), sa6 = splat<P>(s.sa[6]);
-  y[14] = ca6 * u14 - sa6 * u2;
-  y[2] = sa6 * u14 + ca6 * u2;
+  y[14] = madd<F>(ca6, u14, -(sa6 * u2));
+  y[2] = madd<F>(sa6, u14, ca6 * u2);
   const P ca7 = splat<P>(s.ca[7]), sa7 = splat<P>(s.sa[7]);
-  y[15] = ca7 * u15 - sa7 * u1;
-  y[1] = sa7 * u15 + ca7 * u1;
+  y[15] = madd<F>(ca7, u15, -(sa7 * u1));
+  y[1] = madd<F>(sa7, u15, ca7 * u1);
   const P ca8 = splat<P>(s.ca[8]), sa8 = splat<P>(s.sa[8]);
-  y[16] = ca8 * u16 - sa8 * u0;
-  y[0] = sa8 * u16 + ca8 * u0;
+  y[16] = madd<F>(ca8, u16, -(sa8 * u0));
+  y[0] = madd<F>(sa8, u16, ca8 * u0);
 }
 
 // Band 9 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) ([2] Sec. 3).
-template <int Order, class T, class P, class S>
-inline void taylor_band9(const S& s, const P* __restrict x, P* __restrict y) {
+template <bool F, int Order, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void taylor_band9(const S& s, const P* __restrict x, P* __restrict y) {
   const P t9 = x[9];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
-  const P t10 = cg1 * x[10] - sg1 * x[8];
-  const P t8 = sg1 * x[10] + cg1 * x[8];
+  const P t10 = madd<F>(cg1, x[10], -(sg1 * x[8]));
+  const P t8 = madd<F>(sg1, x[10], cg1 * x[8]);
   const P cg2 = splat<P>(s.cg[2]), sg2 = splat<P>(s.sg[2]);
-  const P t11 = cg2 * x[11] - sg2 * x[7];
-  const P t7 = sg2 * x[11] + cg2 * x[7];
+  const P t11 = madd<F>(cg2, x[11], -(sg2 * x[7]));
+  const P t7 = madd<F>(sg2, x[11], cg2 * x[7]);
   const P cg3 = splat<P>(s.cg[3]), sg3 = splat<P>(s.sg[3]);
-  const P t12 = cg3 * x[12] - sg3 * x[6];
-  const P t6 = sg3 * x[12] + cg3 * x[6];
+  const P t12 = madd<F>(cg3, x[12], -(sg3 * x[6]));
+  const P t6 = madd<F>(sg3, x[12], cg3 * x[6]);
   const P cg4 = splat<P>(s.cg[4]), sg4 = splat<P>(s.sg[4]);
-  const P t13 = cg4 * x[13] - sg4 * x[5];
-  const P t5 = sg4 * x[13] + cg4 * x[5];
+  const P t13 = madd<F>(cg4, x[13], -(sg4 * x[5]));
+  const P t5 = madd<F>(sg4, x[13], cg4 * x[5]);
   const P cg5 = splat<P>(s.cg[5]), sg5 = splat<P>(s.sg[5]);
-  const P t14 = cg5 * x[14] - sg5 * x[4];
-  const P t4 = sg5 * x[14] + cg5 * x[4];
+  const P t14 = madd<F>(cg5, x[14], -(sg5 * x[4]));
+  const P t4 = madd<F>(sg5, x[14], cg5 * x[4]);
   const P cg6 = splat<P>(s.cg[6]), sg6 = splat<P>(s.sg[6]);
-  const P t15 = cg6 * x[15] - sg6 * x[3];
-  const P t3 = sg6 * x[15] + cg6 * x[3];
+  const P t15 = madd<F>(cg6, x[15], -(sg6 * x[3]));
+  const P t3 = madd<F>(sg6, x[15], cg6 * x[3]);
   const P cg7 = splat<P>(s.cg[7]), sg7 = splat<P>(s.sg[7]);
-  const P t16 = cg7 * x[16] - sg7 * x[2];
-  const P t2 = sg7 * x[16] + cg7 * x[2];
+  const P t16 = madd<F>(cg7, x[16], -(sg7 * x[2]));
+  const P t2 = madd<F>(sg7, x[16], cg7 * x[2]);
   const P cg8 = splat<P>(s.cg[8]), sg8 = splat<P>(s.sg[8]);
-  const P t17 = cg8 * x[17] - sg8 * x[1];
-  const P t1 = sg8 * x[17] + cg8 * x[1];
+  const P t17 = madd<F>(cg8, x[17], -(sg8 * x[1]));
+  const P t1 = madd<F>(sg8, x[17], cg8 * x[1]);
   const P cg9 = splat<P>(s.cg[9]), sg9 = splat<P>(s.sg[9]);
-  const P t18 = cg9 * x[18] - sg9 * x[0];
-  const P t0 = sg9 * x[18] + cg9 * x[0];
+  const P t18 = madd<F>(cg9, x[18], -(sg9 * x[0]));
+  const P t0 = madd<F>(sg9, x[18], cg9 * x[0]);
   const auto b = s.beta, h = s.half_beta2;
   (void)h;
-  P u0 = t0 + b * (T(-2.1213203435596424) * t1);
-  if constexpr (Order == 15) u0 += h * (T(-4.5) * t0);
-  if constexpr (Order == 2) u0 += h * (T(-4.5) * t0 + T(6.1846584384264904) * t2);
-  P u1 = t1 + b * (T(2.1213203435596424) * t0 - T(2.9154759474226504) * t2);
-  if constexpr (Order == 15) u1 += h * (T(-13) * t1);
-  if constexpr (Order == 2) u1 += h * (T(-13) * t1 + T(10.099504938362077) * t3);
-  P u2 = t2 + b * (T(2.9154759474226504) * t1 - T(3.4641016151377544) * t3);
-  if constexpr (Order == 15) u2 += h * (T(-20.5) * t2);
-  if constexpr (Order == 2) u2 += h * (T(-20.5) * t2 + T(6.1846584384264904) * t0 + T(13.416407864998739) * t4);
-  P u3 = t3 + b * (T(3.4641016151377544) * t2 - T(3.872983346207417) * t4);
-  if constexpr (Order == 15) u3 += h * (T(-27) * t3);
-  if constexpr (Order == 2) u3 += h * (T(-27) * t3 + T(10.099504938362077) * t1 + T(16.201851746019649) * t5);
-  P u4 = t4 + b * (T(3.872983346207417) * t3 - T(4.1833001326703778) * t5);
-  if constexpr (Order == 15) u4 += h * (T(-32.5) * t4);
-  if constexpr (Order == 2) u4 += h * (T(-32.5) * t4 + T(13.416407864998739) * t2 + T(18.472953201911167) * t6);
-  P u5 = t5 + b * (T(4.1833001326703778) * t4 - T(4.4158804331639239) * t6);
-  if constexpr (Order == 15) u5 += h * (T(-37) * t5);
-  if constexpr (Order == 2) u5 += h * (T(-37) * t5 + T(16.201851746019649) * t3 + T(20.236106344848061) * t7);
-  P u6 = t6 + b * (T(4.4158804331639239) * t5 - T(4.5825756949558398) * t7);
-  if constexpr (Order == 15) u6 += h * (T(-40.5) * t6);
-  if constexpr (Order == 2) u6 += h * (T(-40.5) * t6 + T(18.472953201911167) * t4 + T(21.494185260204677) * t8);
-  P u7 = t7 + b * (T(4.5825756949558398) * t6 - T(4.6904157598234297) * t8);
-  if constexpr (Order == 15) u7 += h * (T(-43) * t7);
-  if constexpr (Order == 2) u7 += h * (T(-43) * t7 + T(20.236106344848061) * t5);
-  P u8 = t8 + b * (T(4.6904157598234297) * t7);
-  if constexpr (Order == 15) u8 += h * (T(-22) * t8);
-  if constexpr (Order == 2) u8 += h * (T(-22) * t8 + T(21.494185260204677) * t6);
-  P u9 = t9 + b * (T(6.7082039324993694) * t10);
-  if constexpr (Order == 15) u9 += h * (T(-45) * t9);
-  if constexpr (Order == 2) u9 += h * (T(-45) * t9 + T(31.464265445104548) * t11);
-  P u10 = t10 + b * (T(-6.7082039324993694) * t9 + T(4.6904157598234297) * t11);
-  if constexpr (Order == 15) u10 += h * (T(-67) * t10);
-  if constexpr (Order == 2) u10 += h * (T(-67) * t10 + T(21.494185260204677) * t12);
-  P u11 = t11 + b * (T(-4.6904157598234297) * t10 + T(4.5825756949558398) * t12);
-  if constexpr (Order == 15) u11 += h * (T(-43) * t11);
-  if constexpr (Order == 2) u11 += h * (T(-43) * t11 + T(31.464265445104548) * t9 + T(20.236106344848061) * t13);
-  P u12 = t12 + b * (T(-4.5825756949558398) * t11 + T(4.4158804331639239) * t13);
-  if constexpr (Order == 15) u12 += h * (T(-40.5) * t12);
-  if constexpr (Order == 2) u12 += h * (T(-40.5) * t12 + T(21.494185260204677) * t10 + T(18.472953201911167) * t14);
-  P u13 = t13 + b * (T(-4.4158804331639239) * t12 + T(4.1833001326703778) * t14);
-  if constexpr (Order == 15) u13 += h * (T(-37) * t13);
-  if constexpr (Order == 2) u13 += h * (T(-37) * t13 + T(20.236106344848061) * t11 + T(16.201851746019649) * t15);
-  P u14 = t14 + b * (T(-4.1833001326703778) * t13 + T(3.872983346207417) * t15);
-  if constexpr (Order == 15) u14 += h * (T(-32.5) * t14);
-  if constexpr (Order == 2) u14 += h * (T(-32.5) * t14 + T(18.472953201911167) * t12 + T(13.416407864998739) * t16);
-  P u15 = t15 + b * (T(-3.872983346207417) * t14 + T(3.4641016151377544) * t16);
-  if constexpr (Order == 15) u15 += h * (T(-27) * t15);
-  if constexpr (Order == 2) u15 += h * (T(-27) * t15 + T(16.201851746019649) * t13 + T(10.099504938362077) * t17);
-  P u16 = t16 + b * (T(-3.4641016151377544) * t15 + T(2.9154759474226504) * t17);
-  if constexpr (Order == 15) u16 += h * (T(-20.5) * t16);
-  if constexpr (Order == 2) u16 += h * (T(-20.5) * t16 + T(13.416407864998739) * t14 + T(6.1846584384264904) * t18);
-  P u17 = t17 + b * (T(-2.9154759474226504) * t16 + T(2.1213203435596424) * t18);
-  if constexpr (Order == 15) u17 += h * (T(-13) * t17);
-  if constexpr (Order == 2) u17 += h * (T(-13) * t17 + T(10.099504938362077) * t15);
-  P u18 = t18 + b * (T(-2.1213203435596424) * t17);
-  if constexpr (Order == 15) u18 += h * (T(-4.5) * t18);
-  if constexpr (Order == 2) u18 += h * (T(-4.5) * t18 + T(6.1846584384264904) * t16);
+  P u0 = madd<F>(b, T(-2.1213203435596424) * t1, t0);
+  if constexpr (Order == 15) u0 = madd<F>(h, T(-4.5) * t0, u0);
+  if constexpr (Order == 2) u0 = madd<F>(h, madd<F>(T(6.1846584384264904), t2, T(-4.5) * t0), u0);
+  P u1 = madd<F>(b, madd<F>(T(-2.9154759474226504), t2, T(2.1213203435596424) * t0), t1);
+  if constexpr (Order == 15) u1 = madd<F>(h, T(-13) * t1, u1);
+  if constexpr (Order == 2) u1 = madd<F>(h, madd<F>(T(10.099504938362077), t3, T(-13) * t1), u1);
+  P u2 = madd<F>(b, madd<F>(T(-3.4641016151377544), t3, T(2.9154759474226504) * t1), t2);
+  if constexpr (Order == 15) u2 = madd<F>(h, T(-20.5) * t2, u2);
+  if constexpr (Order == 2) u2 = madd<F>(h, madd<F>(T(13.416407864998739), t4, madd<F>(T(6.1846584384264904), t0, T(-20.5) * t2)), u2);
+  P u3 = madd<F>(b, madd<F>(T(-3.872983346207417), t4, T(3.4641016151377544) * t2), t3);
+  if constexpr (Order == 15) u3 = madd<F>(h, T(-27) * t3, u3);
+  if constexpr (Order == 2) u3 = madd<F>(h, madd<F>(T(16.201851746019649), t5, madd<F>(T(10.099504938362077), t1, T(-27) * t3)), u3);
+  P u4 = madd<F>(b, madd<F>(T(-4.1833001326703778), t5, T(3.872983346207417) * t3), t4);
+  if constexpr (Order == 15) u4 = madd<F>(h, T(-32.5) * t4, u4);
+  if constexpr (Order == 2) u4 = madd<F>(h, madd<F>(T(18.472953201911167), t6, madd<F>(T(13.416407864998739), t2, T(-32.5) * t4)), u4);
+  P u5 = madd<F>(b, madd<F>(T(-4.4158804331639239), t6, T(4.1833001326703778) * t4), t5);
+  if constexpr (Order == 15) u5 = madd<F>(h, T(-37) * t5, u5);
+  if constexpr (Order == 2) u5 = madd<F>(h, madd<F>(T(20.236106344848061), t7, madd<F>(T(16.201851746019649), t3, T(-37) * t5)), u5);
+  P u6 = madd<F>(b, madd<F>(T(-4.5825756949558398), t7, T(4.4158804331639239) * t5), t6);
+  if constexpr (Order == 15) u6 = madd<F>(h, T(-40.5) * t6, u6);
+  if constexpr (Order == 2) u6 = madd<F>(h, madd<F>(T(21.494185260204677), t8, madd<F>(T(18.472953201911167), t4, T(-40.5) * t6)), u6);
+  P u7 = madd<F>(b, madd<F>(T(-4.6904157598234297), t8, T(4.5825756949558398) * t6), t7);
+  if constexpr (Order == 15) u7 = madd<F>(h, T(-43) * t7, u7);
+  if constexpr (Order == 2) u7 = madd<F>(h, madd<F>(T(20.236106344848061), t5, T(-43) * t7), u7);
+  P u8 = madd<F>(b, T(4.6904157598234297) * t7, t8);
+  if constexpr (Order == 15) u8 = madd<F>(h, T(-22) * t8, u8);
+  if constexpr (Order == 2) u8 = madd<F>(h, madd<F>(T(21.494185260204677), t6, T(-22) * t8), u8);
+  P u9 = madd<F>(b, T(6.7082039324993694) * t10, t9);
+  if constexpr (Order == 15) u9 = madd<F>(h, T(-45) * t9, u9);
+  if constexpr (Order == 2) u9 = madd<F>(h, madd<F>(T(31.464265445104548), t11, T(-45) * t9), u9);
+  P u10 = madd<F>(b, madd<F>(T(4.6904157598234297), t11, T(-6.7082039324993694) * t9), t10);
+  if constexpr (Order == 15) u10 = madd<F>(h, T(-67) * t10, u10);
+  if constexpr (Order == 2) u10 = madd<F>(h, madd<F>(T(21.494185260204677), t12, T(-67) * t10), u10);
+  P u11 = madd<F>(b, madd<F>(T(4.5825756949558398), t12, T(-4.6904157598234297) * t10), t11);
+  if constexpr (Order == 15) u11 = madd<F>(h, T(-43) * t11, u11);
+  if constexpr (Order == 2) u11 = madd<F>(h, madd<F>(T(20.236106344848061), t13, madd<F>(T(31.464265445104548), t9, T(-43) * t11)), u11);
+  P u12 = madd<F>(b, madd<F>(T(4.4158804331639239), t13, T(-4.5825756949558398) * t11), t12);
+  if constexpr (Order == 15) u12 = madd<F>(h, T(-40.5) * t12, u12);
+  if constexpr (Order == 2) u12 = madd<F>(h, madd<F>(T(18.472953201911167), t14, madd<F>(T(21.494185260204677), t10, T(-40.5) * t12)), u12);
+  P u13 = madd<F>(b, madd<F>(T(4.1833001326703778), t14, T(-4.4158804331639239) * t12), t13);
+  if constexpr (Order == 15) u13 = madd<F>(h, T(-37) * t13, u13);
+  if constexpr (Order == 2) u13 = madd<F>(h, madd<F>(T(16.201851746019649), t15, madd<F>(T(20.236106344848061), t11, T(-37) * t13)), u13);
+  P u14 = madd<F>(b, madd<F>(T(3.872983346207417), t15, T(-4.1833001326703778) * t13), t14);
+  if constexpr (Order == 15) u14 = madd<F>(h, T(-32.5) * t14, u14);
+  if constexpr (Order == 2) u14 = madd<F>(h, madd<F>(T(13.416407864998739), t16, madd<F>(T(18.472953201911167), t12, T(-32.5) * t14)), u14);
+  P u15 = madd<F>(b, madd<F>(T(3.4641016151377544), t16, T(-3.872983346207417) * t14), t15);
+  if constexpr (Order == 15) u15 = madd<F>(h, T(-27) * t15, u15);
+  if constexpr (Order == 2) u15 = madd<F>(h, madd<F>(T(10.099504938362077), t17, madd<F>(T(16.201851746019649), t13, T(-27) * t15)), u15);
+  P u16 = madd<F>(b, madd<F>(T(2.9154759474226504), t17, T(-3.4641016151377544) * t15), t16);
+  if constexpr (Order == 15) u16 = madd<F>(h, T(-20.5) * t16, u16);
+  if constexpr (Order == 2) u16 = madd<F>(h, madd<F>(T(6.1846584384264904), t18, madd<F>(T(13.416407864998739), t14, T(-20.5) * t16)), u16);
+  P u17 = madd<F>(b, madd<F>(T(2.1213203435596424), t18, T(-2.9154759474226504) * t16), t17);
+  if constexpr (Order == 15) u17 = madd<F>(h, T(-13) * t17, u17);
+  if constexpr (Order == 2) u17 = madd<F>(h, madd<F>(T(10.099504938362077), t15, T(-13) * t17), u17);
+  P u18 = madd<F>(b, T(-2.1213203435596424) * t17, t18);
+  if constexpr (Order == 15) u18 = madd<F>(h, T(-4.5) * t18, u18);
+  if constexpr (Order == 2) u18 = madd<F>(h, madd<F>(T(6.1846584384264904), t16, T(-4.5) * t18), u18);
   y[9] = u9;
   const P ca1 = splat<P>(s.ca[1]), sa1 = splat<P>(s.sa[1]);
-  y[10] = ca1 * u10 - sa1 * u8;
-  y[8] = sa1 * u10 + ca1 * u8;
+  y[10] = madd<F>(ca1, u10, -(sa1 * u8));
+  y[8] = madd<F>(sa1, u10, ca1 * u8);
   const P ca2 = splat<P>(s.ca[2]), sa2 = splat<P>(s.sa[2]);
-  y[11] = ca2 * u11 - sa2 * u7;
-  y[7] = sa2 * u11 + ca2 * u7;
+  y[11] = madd<F>(ca2, u11, -(sa2 * u7));
+  y[7] = madd<F>(sa2, u11, ca2 * u7);
   const P ca3 = splat<P>(s.ca[3]), sa3 = splat<P>(s.sa[3]);
-  y[12] = ca3 * u12 - sa3 * u6;
-  y[6] = sa3 * u12 + ca3 * u6;
+  y[12] = madd<F>(ca3, u12, -(sa3 * u6));
+  y[6] = madd<F>(sa3, u12, ca3 * u6);
   const P ca4 = splat<P>(s.ca[4]), sa4 = splat<P>(s.sa[4]);
-  y[13] = ca4 * u13 - sa4 * u5;
-  y[5] = sa4 * u13 + ca4 * u5;
+  y[13] = madd<F>(ca4, u13, -(sa4 * u5));
+  y[5] = madd<F>(sa4, u13, ca4 * u5);
   const P ca5 = splat<P>(s.ca[5]), sa5 = splat<P>(s.sa[5]);
-  y[14] = ca5 * u14 - sa5 * u4;
-  y[4] = sa5 * u14 + ca5 * u4;
+  y[14] = madd<F>(ca5, u14, -(sa5 * u4));
+  y[4] = madd<F>(sa5, u14, ca5 * u4);
   const P ca6 = splat<P>(s.ca[6]), sa6 = splat<P>(s.sa[6]);
-  y[15] = ca6 * u15 - sa6 * u3;
-  y[3] = sa6 * u15 + ca6 * u3;
+  y[15] = madd<F>(ca6, u15, -(sa6 * u3));
+  y[3] = madd<F>(sa6, u15, ca6 * u3);
   const P ca7 = splat<P>(s.ca[7]), sa7 = splat<P>(s.sa[7]);
-  y[16] = ca7 * u16 - sa7 * u2;
-  y[2] = sa7 * u16 + ca7 * u2;
+  y[16] = madd<F>(ca7, u16, -(sa7 * u2));
+  y[2] = madd<F>(sa7, u16, ca7 * u2);
   const P ca8 = splat<P>(s.ca[8]), sa8 = splat<P>(s.sa[8]);
-  y[17] = ca8 * u17 - sa8 * u1;
-  y[1] = sa8 * u17 + ca8 * u1;
+  y[17] = madd<F>(ca8, u17, -(sa8 * u1));
+  y[1] = madd<F>(sa8, u17, ca8 * u1);
   const P ca9 = splat<P>(s.ca[9]), sa9 = splat<P>(s.sa[9]);
-  y[18] = ca9 * u18 - sa9 * u0;
-  y[0] = sa9 * u18 + ca9 * u0;
+  y[18] = madd<F>(ca9, u18, -(sa9 * u0));
+  y[0] = madd<F>(sa9, u18, ca9 * u0);
 }
 
 // Band 10 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) ([2] Sec. 3).
-template <int Order, class T, class P, class S>
-inline void taylor_band10(const S& s, const P* __restrict x, P* __restrict y) {
+template <bool F, int Order, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void taylor_band10(const S& s, const P* __restrict x, P* __restrict y) {
   const P t10 = x[10];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
-  const P t11 = cg1 * x[11] - sg1 * x[9];
-  const P t9 = sg1 * x[11] + cg1 * x[9];
+  const P t11 = madd<F>(cg1, x[11], -(sg1 * x[9]));
+  const P t9 = madd<F>(sg1, x[11], cg1 * x[9]);
   const P cg2 = splat<P>(s.cg[2]), sg2 = splat<P>(s.sg[2]);
-  const P t12 = cg2 * x[12] - sg2 * x[8];
-  const P t8 = sg2 * x[12] + cg2 * x[8];
+  const P t12 = madd<F>(cg2, x[12], -(sg2 * x[8]));
+  const P t8 = madd<F>(sg2, x[12], cg2 * x[8]);
   const P cg3 = splat<P>(s.cg[3]), sg3 = splat<P>(s.sg[3]);
-  const P t13 = cg3 * x[13] - sg3 * x[7];
-  const P t7 = sg3 * x[13] + cg3 * x[7];
+  const P t13 = madd<F>(cg3, x[13], -(sg3 * x[7]));
+  const P t7 = madd<F>(sg3, x[13], cg3 * x[7]);
   const P cg4 = splat<P>(s.cg[4]), sg4 = splat<P>(s.sg[4]);
-  const P t14 = cg4 * x[14] - sg4 * x[6];
-  const P t6 = sg4 * x[14] + cg4 * x[6];
+  const P t14 = madd<F>(cg4, x[14], -(sg4 * x[6]));
+  const P t6 = madd<F>(sg4, x[14], cg4 * x[6]);
   const P cg5 = splat<P>(s.cg[5]), sg5 = splat<P>(s.sg[5]);
-  const P t15 = cg5 * x[15] - sg5 * x[5];
-  const P t5 = sg5 * x[15] + cg5 * x[5];
+  const P t15 = madd<F>(cg5, x[15], -(sg5 * x[5]));
+  const P t5 = madd<F>(sg5, x[15], cg5 * x[5]);
   const P cg6 = splat<P>(s.cg[6]), sg6 = splat<P>(s.sg[6]);
-  const P t16 = cg6 * x[16] - sg6 * x[4];
-  const P t4 = sg6 * x[16] + cg6 * x[4];
+  const P t16 = madd<F>(cg6, x[16], -(sg6 * x[4]));
+  const P t4 = madd<F>(sg6, x[16], cg6 * x[4]);
   const P cg7 = splat<P>(s.cg[7]), sg7 = splat<P>(s.sg[7]);
-  const P t17 = cg7 * x[17] - sg7 * x[3];
-  const P t3 = sg7 * x[17] + cg7 * x[3];
+  const P t17 = madd<F>(cg7, x[17], -(sg7 * x[3]));
+  const P t3 = madd<F>(sg7, x[17], cg7 * x[3]);
   const P cg8 = splat<P>(s.cg[8]), sg8 = splat<P>(s.sg[8]);
-  const P t18 = cg8 * x[18] - sg8 * x[2];
-  const P t2 = sg8 * x[18] + cg8 * x[2];
+  const P t18 = madd<F>(cg8, x[18], -(sg8 * x[2]));
+  const P t2 = madd<F>(sg8, x[18], cg8 * x[2]);
   const P cg9 = splat<P>(s.cg[9]), sg9 = splat<P>(s.sg[9]);
-  const P t19 = cg9 * x[19] - sg9 * x[1];
-  const P t1 = sg9 * x[19] + cg9 * x[1];
+  const P t19 = madd<F>(cg9, x[19], -(sg9 * x[1]));
+  const P t1 = madd<F>(sg9, x[19], cg9 * x[1]);
   const P cg10 = splat<P>(s.cg[10]), sg10 = splat<P>(s.sg[10]);
-  const P t20 = cg10 * x[20] - sg10 * x[0];
-  const P t0 = sg10 * x[20] + cg10 * x[0];
+  const P t20 = madd<F>(cg10, x[20], -(sg10 * x[0]));
+  const P t0 = madd<F>(sg10, x[20], cg10 * x[0]);
   const auto b = s.beta, h = s.half_beta2;
   (void)h;
-  P u0 = t0 + b * (T(-2.2360679774997898) * t1);
-  if constexpr (Order == 15) u0 += h * (T(-5) * t0);
-  if constexpr (Order == 2) u0 += h * (T(-5) * t0 + T(6.8920243760451108) * t2);
-  P u1 = t1 + b * (T(2.2360679774997898) * t0 - T(3.082207001484488) * t2);
-  if constexpr (Order == 15) u1 += h * (T(-14.5) * t1);
-  if constexpr (Order == 2) u1 += h * (T(-14.5) * t1 + T(11.324751652906125) * t3);
-  P u2 = t2 + b * (T(3.082207001484488) * t1 - T(3.6742346141747673) * t3);
-  if constexpr (Order == 15) u2 += h * (T(-23) * t2);
-  if constexpr (Order == 2) u2 += h * (T(-23) * t2 + T(6.8920243760451108) * t0 + T(15.149257407543116) * t4);
-  P u3 = t3 + b * (T(3.6742346141747673) * t2 - T(4.1231056256176606) * t4);
-  if constexpr (Order == 15) u3 += h * (T(-30.5) * t3);
-  if constexpr (Order == 2) u3 += h * (T(-30.5) * t3 + T(11.324751652906125) * t1 + T(18.439088914585774) * t5);
-  P u4 = t4 + b * (T(4.1231056256176606) * t3 - T(4.4721359549995796) * t5);
-  if constexpr (Order == 15) u4 += h * (T(-37) * t4);
-  if constexpr (Order == 2) u4 += h * (T(-37) * t4 + T(15.149257407543116) * t2 + T(21.213203435596427) * t6);
-  P u5 = t5 + b * (T(4.4721359549995796) * t4 - T(4.7434164902525691) * t6);
-  if constexpr (Order == 15) u5 += h * (T(-42.5) * t5);
-  if constexpr (Order == 2) u5 += h * (T(-42.5) * t5 + T(18.439088914585774) * t3 + T(23.478713763747791) * t7);
-  P u6 = t6 + b * (T(4.7434164902525691) * t5 - T(4.9497474683058327) * t7);
-  if constexpr (Order == 15) u6 += h * (T(-47) * t6);
-  if constexpr (Order == 2) u6 += h * (T(-47) * t6 + T(21.213203435596427) * t4 + T(25.238858928247925) * t8);
-  P u7 = t7 + b * (T(4.9497474683058327) * t6 - T(5.0990195135927845) * t8);
-  if constexpr (Order == 15) u7 += h * (T(-50.5) * t7);
-  if constexpr (Order == 2) u7 += h * (T(-50.5) * t7 + T(23.478713763747791) * t5 + T(26.49528259898354) * t9);
-  P u8 = t8 + b * (T(5.0990195135927845) * t7 - T(5.196152422706632) * t9);
-  if constexpr (Order == 15) u8 += h * (T(-53) * t8);
-  if constexpr (Order == 2) u8 += h * (T(-53) * t8 + T(25.238858928247925) * t6);
-  P u9 = t9 + b * (T(5.196152422706632) * t8);
-  if constexpr (Order == 15) u9 += h * (T(-27) * t9);
-  if constexpr (Order == 2) u9 += h * (T(-27) * t9 + T(26.49528259898354) * t7);
-  P u10 = t10 + b * (T(7.416198487095663) * t11);
-  if constexpr (Order == 15) u10 += h * (T(-55) * t10);
-  if constexpr (Order == 2) u10 += h * (T(-55) * t10 + T(38.535697735995385) * t12);
-  P u11 = t11 + b * (T(-7.416198487095663) * t10 + T(5.196152422706632) * t12);
-  if constexpr (Order == 15) u11 += h * (T(-82) * t11);
-  if constexpr (Order == 2) u11 += h * (T(-82) * t11 + T(26.49528259898354) * t13);
-  P u12 = t12 + b * (T(-5.196152422706632) * t11 + T(5.0990195135927845) * t13);
-  if constexpr (Order == 15) u12 += h * (T(-53) * t12);
-  if constexpr (Order == 2) u12 += h * (T(-53) * t12 + T(38.535697735995385) * t10 + T(25.238858928247925) * t14);
-  P u13 = t13 + b * (T(-5.0990195135927845) * t12 + T(4.9497474683058327) * t14);
-  if constexpr (Order == 15) u13 += h * (T(-50.5) * t13);
-  if constexpr (Order == 2) u13 += h * (T(-50.5) * t13 + T(26.49528259898354) * t11 + T(23.478713763747791) * t15);
-  P u14 = t14 + b * (T(-4.9497474683058327) * t13 + T(4.7434164902525691) * t15);
-  if constexpr (Order == 15) u14 += h * (T(-47) * t14);
-  if constexpr (Order == 2) u14 += h * (T(-47) * t14 + T(25.238858928247925) * t12 + T(21.213203435596427) * t16);
-  P u15 = t15 + b * (T(-4.7434164902525691) * t14 + T(4.4721359549995796) * t16);
-  if constexpr (Order == 15) u15 += h * (T(-42.5) * t15);
-  if constexpr (Order == 2) u15 += h * (T(-42.5) * t15 + T(23.478713763747791) * t13 + T(18.439088914585774) * t17);
-  P u16 = t16 + b * (T(-4.4721359549995796) * t15 + T(4.1231056256176606) * t17);
-  if constexpr (Order == 15) u16 += h * (T(-37) * t16);
-  if constexpr (Order == 2) u16 += h * (T(-37) * t16 + T(21.213203435596427) * t14 + T(15.149257407543116) * t18);
-  P u17 = t17 + b * (T(-4.1231056256176606) * t16 + T(3.6742346141747673) * t18);
-  if constexpr (Order == 15) u17 += h * (T(-30.5) * t17);
-  if constexpr (Order == 2) u17 += h * (T(-30.5) * t17 + T(18.439088914585774) * t15 + T(11.324751652906125) * t19);
-  P u18 = t18 + b * (T(-3.6742346141747673) * t17 + T(3.082207001484488) * t19);
-  if constexpr (Order == 15) u18 += h * (T(-23) * t18);
-  if constexpr (Order == 2) u18 += h * (T(-23) * t18 + T(15.149257407543116) * t16 + T(6.8920243760451108) * t20);
-  P u19 = t19 + b * (T(-3.082207001484488) * t18 + T(2.2360679774997898) * t20);
-  if constexpr (Order == 15) u19 += h * (T(-14.5) * t19);
-  if constexpr (Order == 2) u19 += h * (T(-14.5) * t19 + T(11.324751652906125) * t17);
-  P u20 = t20 + b * (T(-2.2360679774997898) * t19);
-  if constexpr (Order == 15) u20 += h * (T(-5) * t20);
-  if constexpr (Order == 2) u20 += h * (T(-5) * t20 + T(6.8920243760451108) * t18);
+  P u0 = madd<F>(b, T(-2.2360679774997898) * t1, t0);
+  if constexpr (Order == 15) u0 = madd<F>(h, T(-5) * t0, u0);
+  if constexpr (Order == 2) u0 = madd<F>(h, madd<F>(T(6.8920243760451108), t2, T(-5) * t0), u0);
+  P u1 = madd<F>(b, madd<F>(T(-3.082207001484488), t2, T(2.2360679774997898) * t0), t1);
+  if constexpr (Order == 15) u1 = madd<F>(h, T(-14.5) * t1, u1);
+  if constexpr (Order == 2) u1 = madd<F>(h, madd<F>(T(11.324751652906125), t3, T(-14.5) * t1), u1);
+  P u2 = madd<F>(b, madd<F>(T(-3.6742346141747673), t3, T(3.082207001484488) * t1), t2);
+  if constexpr (Order == 15) u2 = madd<F>(h, T(-23) * t2, u2);
+  if constexpr (Order == 2) u2 = madd<F>(h, madd<F>(T(15.149257407543116), t4, madd<F>(T(6.8920243760451108), t0, T(-23) * t2)), u2);
+  P u3 = madd<F>(b, madd<F>(T(-4.1231056256176606), t4, T(3.6742346141747673) * t2), t3);
+  if constexpr (Order == 15) u3 = madd<F>(h, T(-30.5) * t3, u3);
+  if constexpr (Order == 2) u3 = madd<F>(h, madd<F>(T(18.439088914585774), t5, madd<F>(T(11.324751652906125), t1, T(-30.5) * t3)), u3);
+  P u4 = madd<F>(b, madd<F>(T(-4.4721359549995796), t5, T(4.1231056256176606) * t3), t4);
+  if constexpr (Order == 15) u4 = madd<F>(h, T(-37) * t4, u4);
+  if constexpr (Order == 2) u4 = madd<F>(h, madd<F>(T(21.213203435596427), t6, madd<F>(T(15.149257407543116), t2, T(-37) * t4)), u4);
+  P u5 = madd<F>(b, madd<F>(T(-4.7434164902525691), t6, T(4.4721359549995796) * t4), t5);
+  if constexpr (Order == 15) u5 = madd<F>(h, T(-42.5) * t5, u5);
+  if constexpr (Order == 2) u5 = madd<F>(h, madd<F>(T(23.478713763747791), t7, madd<F>(T(18.439088914585774), t3, T(-42.5) * t5)), u5);
+  P u6 = madd<F>(b, madd<F>(T(-4.9497474683058327), t7, T(4.7434164902525691) * t5), t6);
+  if constexpr (Order == 15) u6 = madd<F>(h, T(-47) * t6, u6);
+  if constexpr (Order == 2) u6 = madd<F>(h, madd<F>(T(25.238858928247925), t8, madd<F>(T(21.213203435596427), t4, T(-47) * t6)), u6);
+  P u7 = madd<F>(b, madd<F>(T(-5.0990195135927845), t8, T(4.9497474683058327) * t6), t7);
+  if constexpr (Order == 15) u7 = madd<F>(h, T(-50.5) * t7, u7);
+  if constexpr (Order == 2) u7 = madd<F>(h, madd<F>(T(26.49528259898354), t9, madd<F>(T(23.478713763747791), t5, T(-50.5) * t7)), u7);
+  P u8 = madd<F>(b, madd<F>(T(-5.196152422706632), t9, T(5.0990195135927845) * t7), t8);
+  if constexpr (Order == 15) u8 = madd<F>(h, T(-53) * t8, u8);
+  if constexpr (Order == 2) u8 = madd<F>(h, madd<F>(T(25.238858928247925), t6, T(-53) * t8), u8);
+  P u9 = madd<F>(b, T(5.196152422706632) * t8, t9);
+  if constexpr (Order == 15) u9 = madd<F>(h, T(-27) * t9, u9);
+  if constexpr (Order == 2) u9 = madd<F>(h, madd<F>(T(26.49528259898354), t7, T(-27) * t9), u9);
+  P u10 = madd<F>(b, T(7.416198487095663) * t11, t10);
+  if constexpr (Order == 15) u10 = madd<F>(h, T(-55) * t10, u10);
+  if constexpr (Order == 2) u10 = madd<F>(h, madd<F>(T(38.535697735995385), t12, T(-55) * t10), u10);
+  P u11 = madd<F>(b, madd<F>(T(5.196152422706632), t12, T(-7.416198487095663) * t10), t11);
+  if constexpr (Order == 15) u11 = madd<F>(h, T(-82) * t11, u11);
+  if constexpr (Order == 2) u11 = madd<F>(h, madd<F>(T(26.49528259898354), t13, T(-82) * t11), u11);
+  P u12 = madd<F>(b, madd<F>(T(5.0990195135927845), t13, T(-5.196152422706632) * t11), t12);
+  if constexpr (Order == 15) u12 = madd<F>(h, T(-53) * t12, u12);
+  if constexpr (Order == 2) u12 = madd<F>(h, madd<F>(T(25.238858928247925), t14, madd<F>(T(38.535697735995385), t10, T(-53) * t12)), u12);
+  P u13 = madd<F>(b, madd<F>(T(4.9497474683058327), t14, T(-5.0990195135927845) * t12), t13);
+  if constexpr (Order == 15) u13 = madd<F>(h, T(-50.5) * t13, u13);
+  if constexpr (Order == 2) u13 = madd<F>(h, madd<F>(T(23.478713763747791), t15, madd<F>(T(26.49528259898354), t11, T(-50.5) * t13)), u13);
+  P u14 = madd<F>(b, madd<F>(T(4.7434164902525691), t15, T(-4.9497474683058327) * t13), t14);
+  if constexpr (Order == 15) u14 = madd<F>(h, T(-47) * t14, u14);
+  if constexpr (Order == 2) u14 = madd<F>(h, madd<F>(T(21.213203435596427), t16, madd<F>(T(25.238858928247925), t12, T(-47) * t14)), u14);
+  P u15 = madd<F>(b, madd<F>(T(4.4721359549995796), t16, T(-4.7434164902525691) * t14), t15);
+  if constexpr (Order == 15) u15 = madd<F>(h, T(-42.5) * t15, u15);
+  if constexpr (Order == 2) u15 = madd<F>(h, madd<F>(T(18.439088914585774), t17, madd<F>(T(23.478713763747791), t13, T(-42.5) * t15)), u15);
+  P u16 = madd<F>(b, madd<F>(T(4.1231056256176606), t17, T(-4.4721359549995796) * t15), t16);
+  if constexpr (Order == 15) u16 = madd<F>(h, T(-37) * t16, u16);
+  if constexpr (Order == 2) u16 = madd<F>(h, madd<F>(T(15.149257407543116), t18, madd<F>(T(21.213203435596427), t14, T(-37) * t16)), u16);
+  P u17 = madd<F>(b, madd<F>(T(3.6742346141747673), t18, T(-4.1231056256176606) * t16), t17);
+  if constexpr (Order == 15) u17 = madd<F>(h, T(-30.5) * t17, u17);
+  if constexpr (Order == 2) u17 = madd<F>(h, madd<F>(T(11.324751652906125), t19, madd<F>(T(18.439088914585774), t15, T(-30.5) * t17)), u17);
+  P u18 = madd<F>(b, madd<F>(T(3.082207001484488), t19, T(-3.6742346141747673) * t17), t18);
+  if constexpr (Order == 15) u18 = madd<F>(h, T(-23) * t18, u18);
+  if constexpr (Order == 2) u18 = madd<F>(h, madd<F>(T(6.8920243760451108), t20, madd<F>(T(15.149257407543116), t16, T(-23) * t18)), u18);
+  P u19 = madd<F>(b, madd<F>(T(2.2360679774997898), t20, T(-3.082207001484488) * t18), t19);
+  if constexpr (Order == 15) u19 = madd<F>(h, T(-14.5) * t19, u19);
+  if constexpr (Order == 2) u19 = madd<F>(h, madd<F>(T(11.324751652906125), t17, T(-14.5) * t19), u19);
+  P u20 = madd<F>(b, T(-2.2360679774997898) * t19, t20);
+  if constexpr (Order == 15) u20 = madd<F>(h, T(-5) * t20, u20);
+  if constexpr (Order == 2) u20 = madd<F>(h, madd<F>(T(6.8920243760451108), t18, T(-5) * t20), u20);
   y[10] = u10;
   const P ca1 = splat<P>(s.ca[1]), sa1 = splat<P>(s.sa[1]);
-  y[11] = ca1 * u11 - sa1 * u9;
-  y[9] = sa1 * u11 + ca1 * u9;
+  y[11] = madd<F>(ca1, u11, -(sa1 * u9));
+  y[9] = madd<F>(sa1, u11, ca1 * u9);
   const P ca2 = splat<P>(s.ca[2]), sa2 = splat<P>(s.sa[2]);
-  y[12] = ca2 * u12 - sa2 * u8;
-  y[8] = sa2 * u12 + ca2 * u8;
+  y[12] = madd<F>(ca2, u12, -(sa2 * u8));
+  y[8] = madd<F>(sa2, u12, ca2 * u8);
   const P ca3 = splat<P>(s.ca[3]), sa3 = splat<P>(s.sa[3]);
-  y[13] = ca3 * u13 - sa3 * u7;
-  y[7] = sa3 * u13 + ca3 * u7;
+  y[13] = madd<F>(ca3, u13, -(sa3 * u7));
+  y[7] = madd<F>(sa3, u13, ca3 * u7);
   const P ca4 = splat<P>(s.ca[4]), sa4 = splat<P>(s.sa[4]);
-  y[14] = ca4 * u14 - sa4 * u6;
-  y[6] = sa4 * u14 + ca4 * u6;
+  y[14] = madd<F>(ca4, u14, -(sa4 * u6));
+  y[6] = madd<F>(sa4, u14, ca4 * u6);
   const P ca5 = splat<P>(s.ca[5]), sa5 = splat<P>(s.sa[5]);
-  y[15] = ca5 * u15 - sa5 * u5;
-  y[5] = sa5 * u15 + ca5 * u5;
+  y[15] = madd<F>(ca5, u15, -(sa5 * u5));
+  y[5] = madd<F>(sa5, u15, ca5 * u5);
   const P ca6 = splat<P>(s.ca[6]), sa6 = splat<P>(s.sa[6]);
-  y[16] = ca6 * u16 - sa6 * u4;
-  y[4] = sa6 * u16 + ca6 * u4;
+  y[16] = madd<F>(ca6, u16, -(sa6 * u4));
+  y[4] = madd<F>(sa6, u16, ca6 * u4);
   const P ca7 = splat<P>(s.ca[7]), sa7 = splat<P>(s.sa[7]);
-  y[17] = ca7 * u17 - sa7 * u3;
-  y[3] = sa7 * u17 + ca7 * u3;
+  y[17] = madd<F>(ca7, u17, -(sa7 * u3));
+  y[3] = madd<F>(sa7, u17, ca7 * u3);
   const P ca8 = splat<P>(s.ca[8]), sa8 = splat<P>(s.sa[8]);
-  y[18] = ca8 * u18 - sa8 * u2;
-  y[2] = sa8 * u18 + ca8 * u2;
+  y[18] = madd<F>(ca8, u18, -(sa8 * u2));
+  y[2] = madd<F>(sa8, u18, ca8 * u2);
   const P ca9 = splat<P>(s.ca[9]), sa9 = splat<P>(s.sa[9]);
-  y[19] = ca9 * u19 - sa9 * u1;
-  y[1] = sa9 * u19 + ca9 * u1;
+  y[19] = madd<F>(ca9, u19, -(sa9 * u1));
+  y[1] = madd<F>(sa9, u19, ca9 * u1);
   const P ca10 = splat<P>(s.ca[10]), sa10 = splat<P>(s.sa[10]);
-  y[20] = ca10 * u20 - sa10 * u0;
-  y[0] = sa10 * u20 + ca10 * u0;
+  y[20] = madd<F>(ca10, u20, -(sa10 * u0));
+  y[0] = madd<F>(sa10, u20, ca10 * u0);
 }
 
 // Band 11 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) ([2] Sec. 3).
-template <int Order, class T, class P, class S>
-inline void taylor_band11(const S& s, const P* __restrict x, P* __restrict y) {
+template <bool F, int Order, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void taylor_band11(const S& s, const P* __restrict x, P* __restrict y) {
   const P t11 = x[11];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
-  const P t12 = cg1 * x[12] - sg1 * x[10];
-  const P t10 = sg1 * x[12] + cg1 * x[10];
+  const P t12 = madd<F>(cg1, x[12], -(sg1 * x[10]));
+  const P t10 = madd<F>(sg1, x[12], cg1 * x[10]);
   const P cg2 = splat<P>(s.cg[2]), sg2 = splat<P>(s.sg[2]);
-  const P t13 = cg2 * x[13] - sg2 * x[9];
-  const P t9 = sg2 * x[13] + cg2 * x[9];
+  const P t13 = madd<F>(cg2, x[13], -(sg2 * x[9]));
+  const P t9 = madd<F>(sg2, x[13], cg2 * x[9]);
   const P cg3 = splat<P>(s.cg[3]), sg3 = splat<P>(s.sg[3]);
-  const P t14 = cg3 * x[14] - sg3 * x[8];
-  const P t8 = sg3 * x[14] + cg3 * x[8];
+  const P t14 = madd<F>(cg3, x[14], -(sg3 * x[8]));
+  const P t8 = madd<F>(sg3, x[14], cg3 * x[8]);
   const P cg4 = splat<P>(s.cg[4]), sg4 = splat<P>(s.sg[4]);
-  const P t15 = cg4 * x[15] - sg4 * x[7];
-  const P t7 = sg4 * x[15] + cg4 * x[7];
+  const P t15 = madd<F>(cg4, x[15], -(sg4 * x[7]));
+  const P t7 = madd<F>(sg4, x[15], cg4 * x[7]);
   const P cg5 = splat<P>(s.cg[5]), sg5 = splat<P>(s.sg[5]);
-  const P t16 = cg5 * x[16] - sg5 * x[6];
-  const P t6 = sg5 * x[16] + cg5 * x[6];
+  const P t16 = madd<F>(cg5, x[16], -(sg5 * x[6]));
+  const P t6 = madd<F>(sg5, x[16], cg5 * x[6]);
   const P cg6 = splat<P>(s.cg[6]), sg6 = splat<P>(s.sg[6]);
-  const P t17 = cg6 * x[17] - sg6 * x[5];
-  const P t5 = sg6 * x[17] + cg6 * x[5];
+  const P t17 = madd<F>(cg6, x[17], -(sg6 * x[5]));
+  const P t5 = madd<F>(sg6, x[17], cg6 * x[5]);
   const P cg7 = splat<P>(s.cg[7]), sg7 = splat<P>(s.sg[7]);
-  const P t18 = cg7 * x[18] - sg7 * x[4];
-  const P t4 = sg7 * x[18] + cg7 * x[4];
+  const P t18 = madd<F>(cg7, x[18], -(sg7 * x[4]));
+  const P t4 = madd<F>(sg7, x[18], cg7 * x[4]);
   const P cg8 = splat<P>(s.cg[8]), sg8 = splat<P>(s.sg[8]);
-  const P t19 = cg8 * x[19] - sg8 * x[3];
-  const P t3 = sg8 * x[19] + cg8 * x[3];
+  const P t19 = madd<F>(cg8, x[19], -(sg8 * x[3]));
+  const P t3 = madd<F>(sg8, x[19], cg8 * x[3]);
   const P cg9 = splat<P>(s.cg[9]), sg9 = splat<P>(s.sg[9]);
-  const P t20 = cg9 * x[20] - sg9 * x[2];
-  const P t2 = sg9 * x[20] + cg9 * x[2];
+  const P t20 = madd<F>(cg9, x[20], -(sg9 * x[2]));
+  const P t2 = madd<F>(sg9, x[20], cg9 * x[2]);
   const P cg10 = splat<P>(s.cg[10]), sg10 = splat<P>(s.sg[10]);
-  const P t21 = cg10 * x[21] - sg10 * x[1];
-  const P t1 = sg10 * x[21] + cg10 * x[1];
+  const P t21 = madd<F>(cg10, x[21], -(sg10 * x[1]));
+  const P t1 = madd<F>(sg10, x[21], cg10 * x[1]);
   const P cg11 = splat<P>(s.cg[11]), sg11 = splat<P>(s.sg[11]);
-  const P t22 = cg11 * x[22] - sg11 * x[0];
-  const P t0 = sg11 * x[22] + cg11 * x[0];
+  const P t22 = madd<F>(cg11, x[22], -(sg11 * x[0]));
+  const P t0 = madd<F>(sg11, x[22], cg11 * x[0]);
   const auto b = s.beta, h = s.half_beta2;
   (void)h;
-  P u0 = t0 + b * (T(-2.3452078799117149) * t1);
-  if constexpr (Order == 15) u0 += h * (T(-5.5) * t0);
-  if constexpr (Order == 2) u0 += h * (T(-5.5) * t0 + T(7.5993420767853319) * t2);
-  P u1 = t1 + b * (T(2.3452078799117149) * t0 - T(3.2403703492039302) * t2);
-  if constexpr (Order == 15) u1 += h * (T(-16) * t1);
-  if constexpr (Order == 2) u1 += h * (T(-16) * t1 + T(12.549900398011133) * t3);
-  P u2 = t2 + b * (T(3.2403703492039302) * t1 - T(3.872983346207417) * t3);
-  if constexpr (Order == 15) u2 += h * (T(-25.5) * t2);
-  if constexpr (Order == 2) u2 += h * (T(-25.5) * t2 + T(7.5993420767853319) * t0 + T(16.881943016134134) * t4);
-  P u3 = t3 + b * (T(3.872983346207417) * t2 - T(4.358898943540674) * t4);
-  if constexpr (Order == 15) u3 += h * (T(-34) * t3);
-  if constexpr (Order == 2) u3 += h * (T(-34) * t3 + T(12.549900398011133) * t1 + T(20.676073128135332) * t5);
-  P u4 = t4 + b * (T(4.358898943540674) * t3 - T(4.7434164902525691) * t5);
-  if constexpr (Order == 15) u4 += h * (T(-41.5) * t4);
-  if constexpr (Order == 2) u4 += h * (T(-41.5) * t4 + T(16.881943016134134) * t2 + T(23.95307913400697) * t6);
-  P u5 = t5 + b * (T(4.7434164902525691) * t4 - T(5.0497524691810387) * t6);
-  if constexpr (Order == 15) u5 += h * (T(-48) * t5);
-  if constexpr (Order == 2) u5 += h * (T(-48) * t5 + T(20.676073128135332) * t3 + T(26.720778431774775) * t7);
-  P u6 = t6 + b * (T(5.0497524691810387) * t5 - T(5.2915026221291814) * t7);
-  if constexpr (Order == 15) u6 += h * (T(-53.5) * t6);
-  if constexpr (Order == 2) u6 += h * (T(-53.5) * t6 + T(23.95307913400697) * t4 + T(28.982753492378876) * t8);
-  P u7 = t7 + b * (T(5.2915026221291814) * t6 - T(5.4772255750516612) * t8);
-  if constexpr (Order == 15) u7 += h * (T(-58) * t7);
-  if constexpr (Order == 2) u7 += h * (T(-58) * t7 + T(26.720778431774775) * t5 + T(30.740852297878796) * t9);
-  P u8 = t8 + b * (T(5.4772255750516612) * t7 - T(5.6124860801609122) * t9);
-  if constexpr (Order == 15) u8 += h * (T(-61.5) * t8);
-  if constexpr (Order == 2) u8 += h * (T(-61.5) * t8 + T(28.982753492378876) * t6 + T(31.996093511552314) * t10);
-  P u9 = t9 + b * (T(5.6124860801609122) * t8 - T(5.7008771254956896) * t10);
-  if constexpr (Order == 15) u9 += h * (T(-64) * t9);
-  if constexpr (Order == 2) u9 += h * (T(-64) * t9 + T(30.740852297878796) * t7);
-  P u10 = t10 + b * (T(5.7008771254956896) * t9);
-  if constexpr (Order == 15) u10 += h * (T(-32.5) * t10);
-  if constexpr (Order == 2) u10 += h * (T(-32.5) * t10 + T(31.996093511552314) * t8);
-  P u11 = t11 + b * (T(8.1240384046359608) * t12);
-  if constexpr (Order == 15) u11 += h * (T(-66) * t11);
-  if constexpr (Order == 2) u11 += h * (T(-66) * t11 + T(46.314144707637645) * t13);
-  P u12 = t12 + b * (T(-8.1240384046359608) * t11 + T(5.7008771254956896) * t13);
-  if constexpr (Order == 15) u12 += h * (T(-98.5) * t12);
-  if constexpr (Order == 2) u12 += h * (T(-98.5) * t12 + T(31.996093511552314) * t14);
-  P u13 = t13 + b * (T(-5.7008771254956896) * t12 + T(5.6124860801609122) * t14);
-  if constexpr (Order == 15) u13 += h * (T(-64) * t13);
-  if constexpr (Order == 2) u13 += h * (T(-64) * t13 + T(46.314144707637645) * t11 + T(30.740852297878796) * t15);
-  P u14 = t14 + b * (T(-5.6124860801609122) * t13 + T(5.4772255750516612) * t15);
-  if constexpr (Order == 15) u14 += h * (T(-61.5) * t14);
-  if constexpr (Order == 2) u14 += h * (T(-61.5) * t14 + T(31.996093511552314) * t12 + T(28.982753492378876) * t16);
-  P u15 = t15 + b * (T(-5.4772255750516612) * t14 + T(5.2915026221291814) * t16);
-  if constexpr (Order == 15) u15 += h * (T(-58) * t15);
-  if constexpr (Order == 2) u15 += h * (T(-58) * t15 + T(30.740852297878796) * t13 + T(26.720778431774775) * t17);
-  P u16 = t16 + b * (T(-5.2915026221291814) * t15 + T(5.0497524691810387) * t17);
-  if constexpr (Order == 15) u16 += h * (T(-53.5) * t16);
-  if constexpr (Order == 2) u16 += h * (T(-53.5) * t16 + T(28.982753492378876) * t14 + T(23.95307913400697) * t18);
-  P u17 = t17 + b * (T(-5.0497524691810387) * t16 + T(4.7434164902525691) * t18);
-  if constexpr (Order == 15) u17 += h * (T(-48) * t17);
-  if constexpr (Order == 2) u17 += h * (T(-48) * t17 + T(26.720778431774775) * t15 + T(20.676073128135332) * t19);
-  P u18 = t18 + b * (T(-4.7434164902525691) * t17 + T(4.358898943540674) * t19);
-  if constexpr (Order == 15) u18 += h * (T(-41.5) * t18);
-  if constexpr (Order == 2) u18 += h * (T(-41.5) * t18 + T(23.95307913400697) * t16 + T(16.881943016134134) * t20);
-  P u19 = t19 + b * (T(-4.358898943540674) * t18 + T(3.872983346207417) * t20);
-  if constexpr (Order == 15) u19 += h * (T(-34) * t19);
-  if constexpr (Order == 2) u19 += h * (T(-34) * t19 + T(20.676073128135332) * t17 + T(12.549900398011133) * t21);
-  P u20 = t20 + b * (T(-3.872983346207417) * t19 + T(3.2403703492039302) * t21);
-  if constexpr (Order == 15) u20 += h * (T(-25.5) * t20);
-  if constexpr (Order == 2) u20 += h * (T(-25.5) * t20 + T(16.881943016134134) * t18 + T(7.5993420767853319) * t22);
-  P u21 = t21 + b * (T(-3.2403703492039302) * t20 + T(2.3452078799117149) * t22);
-  if constexpr (Order == 15) u21 += h * (T(-16) * t21);
-  if constexpr (Order == 2) u21 += h * (T(-16) * t21 + T(12.549900398011133) * t19);
-  P u22 = t22 + b * (T(-2.3452078799117149) * t21);
-  if constexpr (Order == 15) u22 += h * (T(-5.5) * t22);
-  if constexpr (Order == 2) u22 += h * (T(-5.5) * t22 + T(7.5993420767853319) * t20);
+  P u0 = madd<F>(b, T(-2.3452078799117149) * t1, t0);
+  if constexpr (Order == 15) u0 = madd<F>(h, T(-5.5) * t0, u0);
+  if constexpr (Order == 2) u0 = madd<F>(h, madd<F>(T(7.5993420767853319), t2, T(-5.5) * t0), u0);
+  P u1 = madd<F>(b, madd<F>(T(-3.2403703492039302), t2, T(2.3452078799117149) * t0), t1);
+  if constexpr (Order == 15) u1 = madd<F>(h, T(-16) * t1, u1);
+  if constexpr (Order == 2) u1 = madd<F>(h, madd<F>(T(12.549900398011133), t3, T(-16) * t1), u1);
+  P u2 = madd<F>(b, madd<F>(T(-3.872983346207417), t3, T(3.2403703492039302) * t1), t2);
+  if constexpr (Order == 15) u2 = madd<F>(h, T(-25.5) * t2, u2);
+  if constexpr (Order == 2) u2 = madd<F>(h, madd<F>(T(16.881943016134134), t4, madd<F>(T(7.5993420767853319), t0, T(-25.5) * t2)), u2);
+  P u3 = madd<F>(b, madd<F>(T(-4.358898943540674), t4, T(3.872983346207417) * t2), t3);
+  if constexpr (Order == 15) u3 = madd<F>(h, T(-34) * t3, u3);
+  if constexpr (Order == 2) u3 = madd<F>(h, madd<F>(T(20.676073128135332), t5, madd<F>(T(12.549900398011133), t1, T(-34) * t3)), u3);
+  P u4 = madd<F>(b, madd<F>(T(-4.7434164902525691), t5, T(4.358898943540674) * t3), t4);
+  if constexpr (Order == 15) u4 = madd<F>(h, T(-41.5) * t4, u4);
+  if constexpr (Order == 2) u4 = madd<F>(h, madd<F>(T(23.95307913400697), t6, madd<F>(T(16.881943016134134), t2, T(-41.5) * t4)), u4);
+  P u5 = madd<F>(b, madd<F>(T(-5.0497524691810387), t6, T(4.7434164902525691) * t4), t5);
+  if constexpr (Order == 15) u5 = madd<F>(h, T(-48) * t5, u5);
+  if constexpr (Order == 2) u5 = madd<F>(h, madd<F>(T(26.720778431774775), t7, madd<F>(T(20.676073128135332), t3, T(-48) * t5)), u5);
+  P u6 = madd<F>(b, madd<F>(T(-5.2915026221291814), t7, T(5.0497524691810387) * t5), t6);
+  if constexpr (Order == 15) u6 = madd<F>(h, T(-53.5) * t6, u6);
+  if constexpr (Order == 2) u6 = madd<F>(h, madd<F>(T(28.982753492378876), t8, madd<F>(T(23.95307913400697), t4, T(-53.5) * t6)), u6);
+  P u7 = madd<F>(b, madd<F>(T(-5.4772255750516612), t8, T(5.2915026221291814) * t6), t7);
+  if constexpr (Order == 15) u7 = madd<F>(h, T(-58) * t7, u7);
+  if constexpr (Order == 2) u7 = madd<F>(h, madd<F>(T(30.740852297878796), t9, madd<F>(T(26.720778431774775), t5, T(-58) * t7)), u7);
+  P u8 = madd<F>(b, madd<F>(T(-5.6124860801609122), t9, T(5.4772255750516612) * t7), t8);
+  if constexpr (Order == 15) u8 = madd<F>(h, T(-61.5) * t8, u8);
+  if constexpr (Order == 2) u8 = madd<F>(h, madd<F>(T(31.996093511552314), t10, madd<F>(T(28.982753492378876), t6, T(-61.5) * t8)), u8);
+  P u9 = madd<F>(b, madd<F>(T(-5.7008771254956896), t10, T(5.6124860801609122) * t8), t9);
+  if constexpr (Order == 15) u9 = madd<F>(h, T(-64) * t9, u9);
+  if constexpr (Order == 2) u9 = madd<F>(h, madd<F>(T(30.740852297878796), t7, T(-64) * t9), u9);
+  P u10 = madd<F>(b, T(5.7008771254956896) * t9, t10);
+  if constexpr (Order == 15) u10 = madd<F>(h, T(-32.5) * t10, u10);
+  if constexpr (Order == 2) u10 = madd<F>(h, madd<F>(T(31.996093511552314), t8, T(-32.5) * t10), u10);
+  P u11 = madd<F>(b, T(8.1240384046359608) * t12, t11);
+  if constexpr (Order == 15) u11 = madd<F>(h, T(-66) * t11, u11);
+  if constexpr (Order == 2) u11 = madd<F>(h, madd<F>(T(46.314144707637645), t13, T(-66) * t11), u11);
+  P u12 = madd<F>(b, madd<F>(T(5.7008771254956896), t13, T(-8.1240384046359608) * t11), t12);
+  if constexpr (Order == 15) u12 = madd<F>(h, T(-98.5) * t12, u12);
+  if constexpr (Order == 2) u12 = madd<F>(h, madd<F>(T(31.996093511552314), t14, T(-98.5) * t12), u12);
+  P u13 = madd<F>(b, madd<F>(T(5.6124860801609122), t14, T(-5.7008771254956896) * t12), t13);
+  if constexpr (Order == 15) u13 = madd<F>(h, T(-64) * t13, u13);
+  if constexpr (Order == 2) u13 = madd<F>(h, madd<F>(T(30.740852297878796), t15, madd<F>(T(46.314144707637645), t11, T(-64) * t13)), u13);
+  P u14 = madd<F>(b, madd<F>(T(5.4772255750516612), t15, T(-5.6124860801609122) * t13), t14);
+  if constexpr (Order == 15) u14 = madd<F>(h, T(-61.5) * t14, u14);
+  if constexpr (Order == 2) u14 = madd<F>(h, madd<F>(T(28.982753492378876), t16, madd<F>(T(31.996093511552314), t12, T(-61.5) * t14)), u14);
+  P u15 = madd<F>(b, madd<F>(T(5.2915026221291814), t16, T(-5.4772255750516612) * t14), t15);
+  if constexpr (Order == 15) u15 = madd<F>(h, T(-58) * t15, u15);
+  if constexpr (Order == 2) u15 = madd<F>(h, madd<F>(T(26.720778431774775), t17, madd<F>(T(30.740852297878796), t13, T(-58) * t15)), u15);
+  P u16 = madd<F>(b, madd<F>(T(5.0497524691810387), t17, T(-5.2915026221291814) * t15), t16);
+  if constexpr (Order == 15) u16 = madd<F>(h, T(-53.5) * t16, u16);
+  if constexpr (Order == 2) u16 = madd<F>(h, madd<F>(T(23.95307913400697), t18, madd<F>(T(28.982753492378876), t14, T(-53.5) * t16)), u16);
+  P u17 = madd<F>(b, madd<F>(T(4.7434164902525691), t18, T(-5.0497524691810387) * t16), t17);
+  if constexpr (Order == 15) u17 = madd<F>(h, T(-48) * t17, u17);
+  if constexpr (Order == 2) u17 = madd<F>(h, madd<F>(T(20.676073128135332), t19, madd<F>(T(26.720778431774775), t15, T(-48) * t17)), u17);
+  P u18 = madd<F>(b, madd<F>(T(4.358898943540674), t19, T(-4.7434164902525691) * t17), t18);
+  if constexpr (Order == 15) u18 = madd<F>(h, T(-41.5) * t18, u18);
+  if constexpr (Order == 2) u18 = madd<F>(h, madd<F>(T(16.881943016134134), t20, madd<F>(T(23.95307913400697), t16, T(-41.5) * t18)), u18);
+  P u19 = madd<F>(b, madd<F>(T(3.872983346207417), t20, T(-4.358898943540674) * t18), t19);
+  if constexpr (Order == 15) u19 = madd<F>(h, T(-34) * t19, u19);
+  if constexpr (Order == 2) u19 = madd<F>(h, madd<F>(T(12.549900398011133), t21, madd<F>(T(20.676073128135332), t17, T(-34) * t19)), u19);
+  P u20 = madd<F>(b, madd<F>(T(3.2403703492039302), t21, T(-3.872983346207417) * t19), t20);
+  if constexpr (Order == 15) u20 = madd<F>(h, T(-25.5) * t20, u20);
+  if constexpr (Order == 2) u20 = madd<F>(h, madd<F>(T(7.5993420767853319), t22, madd<F>(T(16.881943016134134), t18, T(-25.5) * t20)), u20);
+  P u21 = madd<F>(b, madd<F>(T(2.3452078799117149), t22, T(-3.2403703492039302) * t20), t21);
+  if constexpr (Order == 15) u21 = madd<F>(h, T(-16) * t21, u21);
+  if constexpr (Order == 2) u21 = madd<F>(h, madd<F>(T(12.549900398011133), t19, T(-16) * t21), u21);
+  P u22 = madd<F>(b, T(-2.3452078799117149) * t21, t22);
+  if constexpr (Order == 15) u22 = madd<F>(h, T(-5.5) * t22, u22);
+  if constexpr (Order == 2) u22 = madd<F>(h, madd<F>(T(7.5993420767853319), t20, T(-5.5) * t22), u22);
   y[11] = u11;
   const P ca1 = splat<P>(s.ca[1]), sa1 = splat<P>(s.sa[1]);
-  y[12] = ca1 * u12 - sa1 * u10;
-  y[10] = sa1 * u12 + ca1 * u10;
+  y[12] = madd<F>(ca1, u12, -(sa1 * u10));
+  y[10] = madd<F>(sa1, u12, ca1 * u10);
   const P ca2 = splat<P>(s.ca[2]), sa2 = splat<P>(s.sa[2]);
-  y[13] = ca2 * u13 - sa2 * u9;
-  y[9] = sa2 * u13 + ca2 * u9;
+  y[13] = madd<F>(ca2, u13, -(sa2 * u9));
+  y[9] = madd<F>(sa2, u13, ca2 * u9);
   const P ca3 = splat<P>(s.ca[3]), sa3 = splat<P>(s.sa[3]);
-  y[14] = ca3 * u14 - sa3 * u8;
-  y[8] = sa3 * u14 + ca3 * u8;
+  y[14] = madd<F>(ca3, u14, -(sa3 * u8));
+  y[8] = madd<F>(sa3, u14, ca3 * u8);
   const P ca4 = splat<P>(s.ca[4]), sa4 = splat<P>(s.sa[4]);
-  y[15] = ca4 * u15 - sa4 * u7;
-  y[7] = sa4 * u15 + ca4 * u7;
+  y[15] = madd<F>(ca4, u15, -(sa4 * u7));
+  y[7] = madd<F>(sa4, u15, ca4 * u7);
   const P ca5 = splat<P>(s.ca[5]), sa5 = splat<P>(s.sa[5]);
-  y[16] = ca5 * u16 - sa5 * u6;
-  y[6] = sa5 * u16 + ca5 * u6;
+  y[16] = madd<F>(ca5, u16, -(sa5 * u6));
+  y[6] = madd<F>(sa5, u16, ca5 * u6);
   const P ca6 = splat<P>(s.ca[6]), sa6 = splat<P>(s.sa[6]);
-  y[17] = ca6 * u17 - sa6 * u5;
-  y[5] = sa6 * u17 + ca6 * u5;
+  y[17] = madd<F>(ca6, u17, -(sa6 * u5));
+  y[5] = madd<F>(sa6, u17, ca6 * u5);
   const P ca7 = splat<P>(s.ca[7]), sa7 = splat<P>(s.sa[7]);
-  y[18] = ca7 * u18 - sa7 * u4;
-  y[4] = sa7 * u18 + ca7 * u4;
+  y[18] = madd<F>(ca7, u18, -(sa7 * u4));
+  y[4] = madd<F>(sa7, u18, ca7 * u4);
   const P ca8 = splat<P>(s.ca[8]), sa8 = splat<P>(s.sa[8]);
-  y[19] = ca8 * u19 - sa8 * u3;
-  y[3] = sa8 * u19 + ca8 * u3;
+  y[19] = madd<F>(ca8, u19, -(sa8 * u3));
+  y[3] = madd<F>(sa8, u19, ca8 * u3);
   const P ca9 = splat<P>(s.ca[9]), sa9 = splat<P>(s.sa[9]);
-  y[20] = ca9 * u20 - sa9 * u2;
-  y[2] = sa9 * u20 + ca9 * u2;
+  y[20] = madd<F>(ca9, u20, -(sa9 * u2));
+  y[2] = madd<F>(sa9, u20, ca9 * u2);
   const P ca10 = splat<P>(s.ca[10]), sa10 = splat<P>(s.sa[10]);
-  y[21] = ca10 * u21 - sa10 * u1;
-  y[1] = sa10 * u21 + ca10 * u1;
+  y[21] = madd<F>(ca10, u21, -(sa10 * u1));
+  y[1] = madd<F>(sa10, u21, ca10 * u1);
   const P ca11 = splat<P>(s.ca[11]), sa11 = splat<P>(s.sa[11]);
-  y[22] = ca11 * u22 - sa11 * u0;
-  y[0] = sa11 * u22 + ca11 * u0;
+  y[22] = madd<F>(ca11, u22, -(sa11 * u0));
+  y[0] = madd<F>(sa11, u22, ca11 * u0);
 }
 
 // Band 12 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) ([2] Sec. 3).
-template <int Order, class T, class P, class S>
-inline void taylor_band12(const S& s, const P* __restrict x, P* __restrict y) {
+template <bool F, int Order, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void taylor_band12(const S& s, const P* __restrict x, P* __restrict y) {
   const P t12 = x[12];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
-  const P t13 = cg1 * x[13] - sg1 * x[11];
-  const P t11 = sg1 * x[13] + cg1 * x[11];
+  const P t13 = madd<F>(cg1, x[13], -(sg1 * x[11]));
+  const P t11 = madd<F>(sg1, x[13], cg1 * x[11]);
   const P cg2 = splat<P>(s.cg[2]), sg2 = splat<P>(s.sg[2]);
-  const P t14 = cg2 * x[14] - sg2 * x[10];
-  const P t10 = sg2 * x[14] + cg2 * x[10];
+  const P t14 = madd<F>(cg2, x[14], -(sg2 * x[10]));
+  const P t10 = madd<F>(sg2, x[14], cg2 * x[10]);
   const P cg3 = splat<P>(s.cg[3]), sg3 = splat<P>(s.sg[3]);
-  const P t15 = cg3 * x[15] - sg3 * x[9];
-  const P t9 = sg3 * x[15] + cg3 * x[9];
+  const P t15 = madd<F>(cg3, x[15], -(sg3 * x[9]));
+  const P t9 = madd<F>(sg3, x[15], cg3 * x[9]);
   const P cg4 = splat<P>(s.cg[4]), sg4 = splat<P>(s.sg[4]);
-  const P t16 = cg4 * x[16] - sg4 * x[8];
-  const P t8 = sg4 * x[16] + cg4 * x[8];
+  const P t16 = madd<F>(cg4, x[16], -(sg4 * x[8]));
+  const P t8 = madd<F>(sg4, x[16], cg4 * x[8]);
   const P cg5 = splat<P>(s.cg[5]), sg5 = splat<P>(s.sg[5]);
-  const P t17 = cg5 * x[17] - sg5 * x[7];
-  const P t7 = sg5 * x[17] + cg5 * x[7];
+  const P t17 = madd<F>(cg5, x[17], -(sg5 * x[7]));
+  const P t7 = madd<F>(sg5, x[17], cg5 * x[7]);
   const P cg6 = splat<P>(s.cg[6]), sg6 = splat<P>(s.sg[6]);
-  const P t18 = cg6 * x[18] - sg6 * x[6];
-  const P t6 = sg6 * x[18] + cg6 * x[6];
+  const P t18 = madd<F>(cg6, x[18], -(sg6 * x[6]));
+  const P t6 = madd<F>(sg6, x[18], cg6 * x[6]);
   const P cg7 = splat<P>(s.cg[7]), sg7 = splat<P>(s.sg[7]);
-  const P t19 = cg7 * x[19] - sg7 * x[5];
-  const P t5 = sg7 * x[19] + cg7 * x[5];
+  const P t19 = madd<F>(cg7, x[19], -(sg7 * x[5]));
+  const P t5 = madd<F>(sg7, x[19], cg7 * x[5]);
   const P cg8 = splat<P>(s.cg[8]), sg8 = splat<P>(s.sg[8]);
-  const P t20 = cg8 * x[20] - sg8 * x[4];
-  const P t4 = sg8 * x[20] + cg8 * x[4];
+  const P t20 = madd<F>(cg8, x[20], -(sg8 * x[4]));
+  const P t4 = madd<F>(sg8, x[20], cg8 * x[4]);
   const P cg9 = splat<P>(s.cg[9]), sg9 = splat<P>(s.sg[9]);
-  const P t21 = cg9 * x[21] - sg9 * x[3];
-  const P t3 = sg9 * x[21] + cg9 * x[3];
+  const P t21 = madd<F>(cg9, x[21], -(sg9 * x[3]));
+  const P t3 = madd<F>(sg9, x[21], cg9 * x[3]);
   const P cg10 = splat<P>(s.cg[10]), sg10 = splat<P>(s.sg[10]);
-  const P t22 = cg10 * x[22] - sg10 * x[2];
-  const P t2 = sg10 * x[22] + cg10 * x[2];
+  const P t22 = madd<F>(cg10, x[22], -(sg10 * x[2]));
+  const P t2 = madd<F>(sg10, x[22], cg10 * x[2]);
   const P cg11 = splat<P>(s.cg[11]), sg11 = splat<P>(s.sg[11]);
-  const P t23 = cg11 * x[23] - sg11 * x[1];
-  const P t1 = sg11 * x[23] + cg11 * x[1];
+  const P t23 = madd<F>(cg11, x[23], -(sg11 * x[1]));
+  const P t1 = madd<F>(sg11, x[23], cg11 * x[1]);
   const P cg12 = splat<P>(s.cg[12]), sg12 = splat<P>(s.sg[12]);
-  const P t24 = cg12 * x[24] - sg12 * x[0];
-  const P t0 = sg12 * x[24] + cg12 * x[0];
+  const P t24 = madd<F>(cg12, x[24], -(sg12 * x[0]));
+  const P t0 = madd<F>(sg12, x[24], cg12 * x[0]);
   const auto b = s.beta, h = s.half_beta2;
   (void)h;
-  P u0 = t0 + b * (T(-2.4494897427831779) * t1);
-  if constexpr (Order == 15) u0 += h * (T(-6) * t0);
-  if constexpr (Order == 2) u0 += h * (T(-6) * t0 + T(8.3066238629180749) * t2);
-  P u1 = t1 + b * (T(2.4494897427831779) * t0 - T(3.3911649915626341) * t2);
-  if constexpr (Order == 15) u1 += h * (T(-17.5) * t1);
-  if constexpr (Order == 2) u1 += h * (T(-17.5) * t1 + T(13.77497731395591) * t3);
-  P u2 = t2 + b * (T(3.3911649915626341) * t1 - T(4.0620192023179804) * t3);
-  if constexpr (Order == 15) u2 += h * (T(-28) * t2);
-  if constexpr (Order == 2) u2 += h * (T(-28) * t2 + T(8.3066238629180749) * t0 + T(18.614510468986285) * t4);
-  P u3 = t3 + b * (T(4.0620192023179804) * t2 - T(4.5825756949558398) * t4);
-  if constexpr (Order == 15) u3 += h * (T(-37.5) * t3);
-  if constexpr (Order == 2) u3 += h * (T(-37.5) * t3 + T(13.77497731395591) * t1 + T(22.912878474779198) * t5);
-  P u4 = t4 + b * (T(4.5825756949558398) * t3 - T(5) * t5);
-  if constexpr (Order == 15) u4 += h * (T(-46) * t4);
-  if constexpr (Order == 2) u4 += h * (T(-46) * t4 + T(18.614510468986285) * t2 + T(26.692695630078276) * t6);
-  P u5 = t5 + b * (T(5) * t4 - T(5.3385391260156556) * t6);
-  if constexpr (Order == 15) u5 += h * (T(-53.5) * t5);
-  if constexpr (Order == 2) u5 += h * (T(-53.5) * t5 + T(22.912878474779198) * t3 + T(29.962476533157268) * t7);
-  P u6 = t6 + b * (T(5.3385391260156556) * t5 - T(5.6124860801609122) * t7);
-  if constexpr (Order == 15) u6 += h * (T(-60) * t6);
-  if constexpr (Order == 2) u6 += h * (T(-60) * t6 + T(26.692695630078276) * t4 + T(32.726136343907143) * t8);
-  P u7 = t7 + b * (T(5.6124860801609122) * t6 - T(5.8309518948453007) * t8);
-  if constexpr (Order == 15) u7 += h * (T(-65.5) * t7);
-  if constexpr (Order == 2) u7 += h * (T(-65.5) * t7 + T(29.962476533157268) * t5 + T(34.985711369071801) * t9);
-  P u8 = t8 + b * (T(5.8309518948453007) * t7 - T(6) * t9);
-  if constexpr (Order == 15) u8 += h * (T(-70) * t8);
-  if constexpr (Order == 2) u8 += h * (T(-70) * t8 + T(32.726136343907143) * t6 + T(36.742346141747674) * t10);
-  P u9 = t9 + b * (T(6) * t8 - T(6.1237243569579451) * t10);
-  if constexpr (Order == 15) u9 += h * (T(-73.5) * t9);
-  if constexpr (Order == 2) u9 += h * (T(-73.5) * t9 + T(34.985711369071801) * t7 + T(37.996710383926661) * t11);
-  P u10 = t10 + b * (T(6.1237243569579451) * t9 - T(6.2048368229954285) * t11);
-  if constexpr (Order == 15) u10 += h * (T(-76) * t10);
-  if constexpr (Order == 2) u10 += h * (T(-76) * t10 + T(36.742346141747674) * t8);
-  P u11 = t11 + b * (T(6.2048368229954285) * t10);
-  if constexpr (Order == 15) u11 += h * (T(-38.5) * t11);
-  if constexpr (Order == 2) u11 += h * (T(-38.5) * t11 + T(37.996710383926661) * t9);
-  P u12 = t12 + b * (T(8.8317608663278477) * t13);
-  if constexpr (Order == 15) u12 += h * (T(-78) * t12);
-  if constexpr (Order == 2) u12 += h * (T(-78) * t12 + T(54.799635035281028) * t14);
-  P u13 = t13 + b * (T(-8.8317608663278477) * t12 + T(6.2048368229954285) * t14);
-  if constexpr (Order == 15) u13 += h * (T(-116.5) * t13);
-  if constexpr (Order == 2) u13 += h * (T(-116.5) * t13 + T(37.996710383926661) * t15);
-  P u14 = t14 + b * (T(-6.2048368229954285) * t13 + T(6.1237243569579451) * t15);
-  if constexpr (Order == 15) u14 += h * (T(-76) * t14);
-  if constexpr (Order == 2) u14 += h * (T(-76) * t14 + T(54.799635035281028) * t12 + T(36.742346141747674) * t16);
-  P u15 = t15 + b * (T(-6.1237243569579451) * t14 + T(6) * t16);
-  if constexpr (Order == 15) u15 += h * (T(-73.5) * t15);
-  if constexpr (Order == 2) u15 += h * (T(-73.5) * t15 + T(37.996710383926661) * t13 + T(34.985711369071801) * t17);
-  P u16 = t16 + b * (T(-6) * t15 + T(5.8309518948453007) * t17);
-  if constexpr (Order == 15) u16 += h * (T(-70) * t16);
-  if constexpr (Order == 2) u16 += h * (T(-70) * t16 + T(36.742346141747674) * t14 + T(32.726136343907143) * t18);
-  P u17 = t17 + b * (T(-5.8309518948453007) * t16 + T(5.6124860801609122) * t18);
-  if constexpr (Order == 15) u17 += h * (T(-65.5) * t17);
-  if constexpr (Order == 2) u17 += h * (T(-65.5) * t17 + T(34.985711369071801) * t15 + T(29.962476533157268) * t19);
-  P u18 = t18 + b * (T(-5.6124860801609122) * t17 + T(5.3385391260156556) * t19);
-  if constexpr (Order == 15) u18 += h * (T(-60) * t18);
-  if constexpr (Order == 2) u18 += h * (T(-60) * t18 + T(32.726136343907143) * t16 + T(26.692695630078276) * t20);
-  P u19 = t19 + b * (T(-5.3385391260156556) * t18 + T(5) * t20);
-  if constexpr (Order == 15) u19 += h * (T(-53.5) * t19);
-  if constexpr (Order == 2) u19 += h * (T(-53.5) * t19 + T(29.962476533157268) * t17 + T(22.912878474779198) * t21);
-  P u20 = t20 + b * (T(-5) * t19 + T(4.5825756949558398) * t21);
-  if constexpr (Order == 15) u20 += h * (T(-46) * t20);
-  if constexpr (Order == 2) u20 += h * (T(-46) * t20 + T(26.692695630078276) * t18 + T(18.614510468986285) * t22);
-  P u21 = t21 + b * (T(-4.5825756949558398) * t20 + T(4.0620192023179804) * t22);
-  if constexpr (Order == 15) u21 += h * (T(-37.5) * t21);
-  if constexpr (Order == 2) u21 += h * (T(-37.5) * t21 + T(22.912878474779198) * t19 + T(13.77497731395591) * t23);
-  P u22 = t22 + b * (T(-4.0620192023179804) * t21 + T(3.3911649915626341) * t23);
-  if constexpr (Order == 15) u22 += h * (T(-28) * t22);
-  if constexpr (Order == 2) u22 += h * (T(-28) * t22 + T(18.614510468986285) * t20 + T(8.3066238629180749) * t24);
-  P u23 = t23 + b * (T(-3.3911649915626341) * t22 + T(2.4494897427831779) * t24);
-  if constexpr (Order == 15) u23 += h * (T(-17.5) * t23);
-  if constexpr (Order == 2) u23 += h * (T(-17.5) * t23 + T(13.77497731395591) * t21);
-  P u24 = t24 + b * (T(-2.4494897427831779) * t23);
-  if constexpr (Order == 15) u24 += h * (T(-6) * t24);
-  if constexpr (Order == 2) u24 += h * (T(-6) * t24 + T(8.3066238629180749) * t22);
+  P u0 = madd<F>(b, T(-2.4494897427831779) * t1, t0);
+  if constexpr (Order == 15) u0 = madd<F>(h, T(-6) * t0, u0);
+  if constexpr (Order == 2) u0 = madd<F>(h, madd<F>(T(8.3066238629180749), t2, T(-6) * t0), u0);
+  P u1 = madd<F>(b, madd<F>(T(-3.3911649915626341), t2, T(2.4494897427831779) * t0), t1);
+  if constexpr (Order == 15) u1 = madd<F>(h, T(-17.5) * t1, u1);
+  if constexpr (Order == 2) u1 = madd<F>(h, madd<F>(T(13.77497731395591), t3, T(-17.5) * t1), u1);
+  P u2 = madd<F>(b, madd<F>(T(-4.0620192023179804), t3, T(3.3911649915626341) * t1), t2);
+  if constexpr (Order == 15) u2 = madd<F>(h, T(-28) * t2, u2);
+  if constexpr (Order == 2) u2 = madd<F>(h, madd<F>(T(18.614510468986285), t4, madd<F>(T(8.3066238629180749), t0, T(-28) * t2)), u2);
+  P u3 = madd<F>(b, madd<F>(T(-4.5825756949558398), t4, T(4.0620192023179804) * t2), t3);
+  if constexpr (Order == 15) u3 = madd<F>(h, T(-37.5) * t3, u3);
+  if constexpr (Order == 2) u3 = madd<F>(h, madd<F>(T(22.912878474779198), t5, madd<F>(T(13.77497731395591), t1, T(-37.5) * t3)), u3);
+  P u4 = madd<F>(b, madd<F>(T(-5), t5, T(4.5825756949558398) * t3), t4);
+  if constexpr (Order == 15) u4 = madd<F>(h, T(-46) * t4, u4);
+  if constexpr (Order == 2) u4 = madd<F>(h, madd<F>(T(26.692695630078276), t6, madd<F>(T(18.614510468986285), t2, T(-46) * t4)), u4);
+  P u5 = madd<F>(b, madd<F>(T(-5.3385391260156556), t6, T(5) * t4), t5);
+  if constexpr (Order == 15) u5 = madd<F>(h, T(-53.5) * t5, u5);
+  if constexpr (Order == 2) u5 = madd<F>(h, madd<F>(T(29.962476533157268), t7, madd<F>(T(22.912878474779198), t3, T(-53.5) * t5)), u5);
+  P u6 = madd<F>(b, madd<F>(T(-5.6124860801609122), t7, T(5.3385391260156556) * t5), t6);
+  if constexpr (Order == 15) u6 = madd<F>(h, T(-60) * t6, u6);
+  if constexpr (Order == 2) u6 = madd<F>(h, madd<F>(T(32.726136343907143), t8, madd<F>(T(26.692695630078276), t4, T(-60) * t6)), u6);
+  P u7 = madd<F>(b, madd<F>(T(-5.8309518948453007), t8, T(5.6124860801609122) * t6), t7);
+  if constexpr (Order == 15) u7 = madd<F>(h, T(-65.5) * t7, u7);
+  if constexpr (Order == 2) u7 = madd<F>(h, madd<F>(T(34.985711369071801), t9, madd<F>(T(29.962476533157268), t5, T(-65.5) * t7)), u7);
+  P u8 = madd<F>(b, madd<F>(T(-6), t9, T(5.8309518948453007) * t7), t8);
+  if constexpr (Order == 15) u8 = madd<F>(h, T(-70) * t8, u8);
+  if constexpr (Order == 2) u8 = madd<F>(h, madd<F>(T(36.742346141747674), t10, madd<F>(T(32.726136343907143), t6, T(-70) * t8)), u8);
+  P u9 = madd<F>(b, madd<F>(T(-6.1237243569579451), t10, T(6) * t8), t9);
+  if constexpr (Order == 15) u9 = madd<F>(h, T(-73.5) * t9, u9);
+  if constexpr (Order == 2) u9 = madd<F>(h, madd<F>(T(37.996710383926661), t11, madd<F>(T(34.985711369071801), t7, T(-73.5) * t9)), u9);
+  P u10 = madd<F>(b, madd<F>(T(-6.2048368229954285), t11, T(6.1237243569579451) * t9), t10);
+  if constexpr (Order == 15) u10 = madd<F>(h, T(-76) * t10, u10);
+  if constexpr (Order == 2) u10 = madd<F>(h, madd<F>(T(36.742346141747674), t8, T(-76) * t10), u10);
+  P u11 = madd<F>(b, T(6.2048368229954285) * t10, t11);
+  if constexpr (Order == 15) u11 = madd<F>(h, T(-38.5) * t11, u11);
+  if constexpr (Order == 2) u11 = madd<F>(h, madd<F>(T(37.996710383926661), t9, T(-38.5) * t11), u11);
+  P u12 = madd<F>(b, T(8.8317608663278477) * t13, t12);
+  if constexpr (Order == 15) u12 = madd<F>(h, T(-78) * t12, u12);
+  if constexpr (Order == 2) u12 = madd<F>(h, madd<F>(T(54.799635035281028), t14, T(-78) * t12), u12);
+  P u13 = madd<F>(b, madd<F>(T(6.2048368229954285), t14, T(-8.8317608663278477) * t12), t13);
+  if constexpr (Order == 15) u13 = madd<F>(h, T(-116.5) * t13, u13);
+  if constexpr (Order == 2) u13 = madd<F>(h, madd<F>(T(37.996710383926661), t15, T(-116.5) * t13), u13);
+  P u14 = madd<F>(b, madd<F>(T(6.1237243569579451), t15, T(-6.2048368229954285) * t13), t14);
+  if constexpr (Order == 15) u14 = madd<F>(h, T(-76) * t14, u14);
+  if constexpr (Order == 2) u14 = madd<F>(h, madd<F>(T(36.742346141747674), t16, madd<F>(T(54.799635035281028), t12, T(-76) * t14)), u14);
+  P u15 = madd<F>(b, madd<F>(T(6), t16, T(-6.1237243569579451) * t14), t15);
+  if constexpr (Order == 15) u15 = madd<F>(h, T(-73.5) * t15, u15);
+  if constexpr (Order == 2) u15 = madd<F>(h, madd<F>(T(34.985711369071801), t17, madd<F>(T(37.996710383926661), t13, T(-73.5) * t15)), u15);
+  P u16 = madd<F>(b, madd<F>(T(5.8309518948453007), t17, T(-6) * t15), t16);
+  if constexpr (Order == 15) u16 = madd<F>(h, T(-70) * t16, u16);
+  if constexpr (Order == 2) u16 = madd<F>(h, madd<F>(T(32.726136343907143), t18, madd<F>(T(36.742346141747674), t14, T(-70) * t16)), u16);
+  P u17 = madd<F>(b, madd<F>(T(5.6124860801609122), t18, T(-5.8309518948453007) * t16), t17);
+  if constexpr (Order == 15) u17 = madd<F>(h, T(-65.5) * t17, u17);
+  if constexpr (Order == 2) u17 = madd<F>(h, madd<F>(T(29.962476533157268), t19, madd<F>(T(34.985711369071801), t15, T(-65.5) * t17)), u17);
+  P u18 = madd<F>(b, madd<F>(T(5.3385391260156556), t19, T(-5.6124860801609122) * t17), t18);
+  if constexpr (Order == 15) u18 = madd<F>(h, T(-60) * t18, u18);
+  if constexpr (Order == 2) u18 = madd<F>(h, madd<F>(T(26.692695630078276), t20, madd<F>(T(32.726136343907143), t16, T(-60) * t18)), u18);
+  P u19 = madd<F>(b, madd<F>(T(5), t20, T(-5.3385391260156556) * t18), t19);
+  if constexpr (Order == 15) u19 = madd<F>(h, T(-53.5) * t19, u19);
+  if constexpr (Order == 2) u19 = madd<F>(h, madd<F>(T(22.912878474779198), t21, madd<F>(T(29.962476533157268), t17, T(-53.5) * t19)), u19);
+  P u20 = madd<F>(b, madd<F>(T(4.5825756949558398), t21, T(-5) * t19), t20);
+  if constexpr (Order == 15) u20 = madd<F>(h, T(-46) * t20, u20);
+  if constexpr (Order == 2) u20 = madd<F>(h, madd<F>(T(18.614510468986285), t22, madd<F>(T(26.692695630078276), t18, T(-46) * t20)), u20);
+  P u21 = madd<F>(b, madd<F>(T(4.0620192023179804), t22, T(-4.5825756949558398) * t20), t21);
+  if constexpr (Order == 15) u21 = madd<F>(h, T(-37.5) * t21, u21);
+  if constexpr (Order == 2) u21 = madd<F>(h, madd<F>(T(13.77497731395591), t23, madd<F>(T(22.912878474779198), t19, T(-37.5) * t21)), u21);
+  P u22 = madd<F>(b, madd<F>(T(3.3911649915626341), t23, T(-4.0620192023179804) * t21), t22);
+  if constexpr (Order == 15) u22 = madd<F>(h, T(-28) * t22, u22);
+  if constexpr (Order == 2) u22 = madd<F>(h, madd<F>(T(8.3066238629180749), t24, madd<F>(T(18.614510468986285), t20, T(-28) * t22)), u22);
+  P u23 = madd<F>(b, madd<F>(T(2.4494897427831779), t24, T(-3.3911649915626341) * t22), t23);
+  if constexpr (Order == 15) u23 = madd<F>(h, T(-17.5) * t23, u23);
+  if constexpr (Order == 2) u23 = madd<F>(h, madd<F>(T(13.77497731395591), t21, T(-17.5) * t23), u23);
+  P u24 = madd<F>(b, T(-2.4494897427831779) * t23, t24);
+  if constexpr (Order == 15) u24 = madd<F>(h, T(-6) * t24, u24);
+  if constexpr (Order == 2) u24 = madd<F>(h, madd<F>(T(8.3066238629180749), t22, T(-6) * t24), u24);
   y[12] = u12;
   const P ca1 = splat<P>(s.ca[1]), sa1 = splat<P>(s.sa[1]);
-  y[13] = ca1 * u13 - sa1 * u11;
-  y[11] = sa1 * u13 + ca1 * u11;
+  y[13] = madd<F>(ca1, u13, -(sa1 * u11));
+  y[11] = madd<F>(sa1, u13, ca1 * u11);
   const P ca2 = splat<P>(s.ca[2]), sa2 = splat<P>(s.sa[2]);
-  y[14] = ca2 * u14 - sa2 * u10;
-  y[10] = sa2 * u14 + ca2 * u10;
+  y[14] = madd<F>(ca2, u14, -(sa2 * u10));
+  y[10] = madd<F>(sa2, u14, ca2 * u10);
   const P ca3 = splat<P>(s.ca[3]), sa3 = splat<P>(s.sa[3]);
-  y[15] = ca3 * u15 - sa3 * u9;
-  y[9] = sa3 * u15 + ca3 * u9;
+  y[15] = madd<F>(ca3, u15, -(sa3 * u9));
+  y[9] = madd<F>(sa3, u15, ca3 * u9);
   const P ca4 = splat<P>(s.ca[4]), sa4 = splat<P>(s.sa[4]);
-  y[16] = ca4 * u16 - sa4 * u8;
-  y[8] = sa4 * u16 + ca4 * u8;
+  y[16] = madd<F>(ca4, u16, -(sa4 * u8));
+  y[8] = madd<F>(sa4, u16, ca4 * u8);
   const P ca5 = splat<P>(s.ca[5]), sa5 = splat<P>(s.sa[5]);
-  y[17] = ca5 * u17 - sa5 * u7;
-  y[7] = sa5 * u17 + ca5 * u7;
+  y[17] = madd<F>(ca5, u17, -(sa5 * u7));
+  y[7] = madd<F>(sa5, u17, ca5 * u7);
   const P ca6 = splat<P>(s.ca[6]), sa6 = splat<P>(s.sa[6]);
-  y[18] = ca6 * u18 - sa6 * u6;
-  y[6] = sa6 * u18 + ca6 * u6;
+  y[18] = madd<F>(ca6, u18, -(sa6 * u6));
+  y[6] = madd<F>(sa6, u18, ca6 * u6);
   const P ca7 = splat<P>(s.ca[7]), sa7 = splat<P>(s.sa[7]);
-  y[19] = ca7 * u19 - sa7 * u5;
-  y[5] = sa7 * u19 + ca7 * u5;
+  y[19] = madd<F>(ca7, u19, -(sa7 * u5));
+  y[5] = madd<F>(sa7, u19, ca7 * u5);
   const P ca8 = splat<P>(s.ca[8]), sa8 = splat<P>(s.sa[8]);
-  y[20] = ca8 * u20 - sa8 * u4;
-  y[4] = sa8 * u20 + ca8 * u4;
+  y[20] = madd<F>(ca8, u20, -(sa8 * u4));
+  y[4] = madd<F>(sa8, u20, ca8 * u4);
   const P ca9 = splat<P>(s.ca[9]), sa9 = splat<P>(s.sa[9]);
-  y[21] = ca9 * u21 - sa9 * u3;
-  y[3] = sa9 * u21 + ca9 * u3;
+  y[21] = madd<F>(ca9, u21, -(sa9 * u3));
+  y[3] = madd<F>(sa9, u21, ca9 * u3);
   const P ca10 = splat<P>(s.ca[10]), sa10 = splat<P>(s.sa[10]);
-  y[22] = ca10 * u22 - sa10 * u2;
-  y[2] = sa10 * u22 + ca10 * u2;
+  y[22] = madd<F>(ca10, u22, -(sa10 * u2));
+  y[2] = madd<F>(sa10, u22, ca10 * u2);
   const P ca11 = splat<P>(s.ca[11]), sa11 = splat<P>(s.sa[11]);
-  y[23] = ca11 * u23 - sa11 * u1;
-  y[1] = sa11 * u23 + ca11 * u1;
+  y[23] = madd<F>(ca11, u23, -(sa11 * u1));
+  y[1] = madd<F>(sa11, u23, ca11 * u1);
   const P ca12 = splat<P>(s.ca[12]), sa12 = splat<P>(s.sa[12]);
-  y[24] = ca12 * u24 - sa12 * u0;
-  y[0] = sa12 * u24 + ca12 * u0;
+  y[24] = madd<F>(ca12, u24, -(sa12 * u0));
+  y[0] = madd<F>(sa12, u24, ca12 * u0);
 }
 
 // Band 13 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) ([2] Sec. 3).
-template <int Order, class T, class P, class S>
-inline void taylor_band13(const S& s, const P* __restrict x, P* __restrict y) {
+template <bool F, int Order, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void taylor_band13(const S& s, const P* __restrict x, P* __restrict y) {
   const P t13 = x[13];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
-  const P t14 = cg1 * x[14] - sg1 * x[12];
-  const P t12 = sg1 * x[14] + cg1 * x[12];
+  const P t14 = madd<F>(cg1, x[14], -(sg1 * x[12]));
+  const P t12 = madd<F>(sg1, x[14], cg1 * x[12]);
   const P cg2 = splat<P>(s.cg[2]), sg2 = splat<P>(s.sg[2]);
-  const P t15 = cg2 * x[15] - sg2 * x[11];
-  const P t11 = sg2 * x[15] + cg2 * x[11];
+  const P t15 = madd<F>(cg2, x[15], -(sg2 * x[11]));
+  const P t11 = madd<F>(sg2, x[15], cg2 * x[11]);
   const P cg3 = splat<P>(s.cg[3]), sg3 = splat<P>(s.sg[3]);
-  const P t16 = cg3 * x[16] - sg3 * x[10];
-  const P t10 = sg3 * x[16] + cg3 * x[10];
+  const P t16 = madd<F>(cg3, x[16], -(sg3 * x[10]));
+  const P t10 = madd<F>(sg3, x[16], cg3 * x[10]);
   const P cg4 = splat<P>(s.cg[4]), sg4 = splat<P>(s.sg[4]);
-  const P t17 = cg4 * x[17] - sg4 * x[9];
-  const P t9 = sg4 * x[17] + cg4 * x[9];
+  const P t17 = madd<F>(cg4, x[17], -(sg4 * x[9]));
+  const P t9 = madd<F>(sg4, x[17], cg4 * x[9]);
   const P cg5 = splat<P>(s.cg[5]), sg5 = splat<P>(s.sg[5]);
-  const P t18 = cg5 * x[18] - sg5 * x[8];
-  const P t8 = sg5 * x[18] + cg5 * x[8];
+  const P t18 = madd<F>(cg5, x[18], -(sg5 * x[8]));
+  const P t8 = madd<F>(sg5, x[18], cg5 * x[8]);
   const P cg6 = splat<P>(s.cg[6]), sg6 = splat<P>(s.sg[6]);
-  const P t19 = cg6 * x[19] - sg6 * x[7];
-  const P t7 = sg6 * x[19] + cg6 * x[7];
+  const P t19 = madd<F>(cg6, x[19], -(sg6 * x[7]));
+  const P t7 = madd<F>(sg6, x[19], cg6 * x[7]);
   const P cg7 = splat<P>(s.cg[7]), sg7 = splat<P>(s.sg[7]);
-  const P t20 = cg7 * x[20] - sg7 * x[6];
-  const P t6 = sg7 * x[20] + cg7 * x[6];
+  const P t20 = madd<F>(cg7, x[20], -(sg7 * x[6]));
+  const P t6 = madd<F>(sg7, x[20], cg7 * x[6]);
   const P cg8 = splat<P>(s.cg[8]), sg8 = splat<P>(s.sg[8]);
-  const P t21 = cg8 * x[21] - sg8 * x[5];
-  const P t5 = sg8 * x[21] + cg8 * x[5];
+  const P t21 = madd<F>(cg8, x[21], -(sg8 * x[5]));
+  const P t5 = madd<F>(sg8, x[21], cg8 * x[5]);
   const P cg9 = splat<P>(s.cg[9]), sg9 = splat<P>(s.sg[9]);
-  const P t22 = cg9 * x[22] - sg9 * x[4];
-  const P t4 = sg9 * x[22] + cg9 * x[4];
+  const P t22 = madd<F>(cg9, x[22], -(sg9 * x[4]));
+  const P t4 = madd<F>(sg9, x[22], cg9 * x[4]);
   const P cg10 = splat<P>(s.cg[10]), sg10 = splat<P>(s.sg[10]);
-  const P t23 = cg10 * x[23] - sg10 * x[3];
-  const P t3 = sg10 * x[23] + cg10 * x[3];
+  const P t23 = madd<F>(cg10, x[23], -(sg10 * x[3]));
+  const P t3 = madd<F>(sg10, x[23], cg10 * x[3]);
   const P cg11 = splat<P>(s.cg[11]), sg11 = splat<P>(s.sg[11]);
-  const P t24 = cg11 * x[24] - sg11 * x[2];
-  const P t2 = sg11 * x[24] + cg11 * x[2];
+  const P t24 = madd<F>(cg11, x[24], -(sg11 * x[2]));
+  const P t2 = madd<F>(sg11, x[24], cg11 * x[2]);
   const P cg12 = splat<P>(s.cg[12]), sg12 = splat<P>(s.sg[12]);
-  const P t25 = cg12 * x[25] - sg12 * x[1];
-  const P t1 = sg12 * x[25] + cg12 * x[1];
+  const P t25 = madd<F>(cg12, x[25], -(sg12 * x[1]));
+  const P t1 = madd<F>(sg12, x[25], cg12 * x[1]);
   const P cg13 = splat<P>(s.cg[13]), sg13 = splat<P>(s.sg[13]);
-  const P t26 = cg13 * x[26] - sg13 * x[0];
-  const P t0 = sg13 * x[26] + cg13 * x[0];
+  const P t26 = madd<F>(cg13, x[26], -(sg13 * x[0]));
+  const P t0 = madd<F>(sg13, x[26], cg13 * x[0]);
   const auto b = s.beta, h = s.half_beta2;
   (void)h;
-  P u0 = t0 + b * (T(-2.5495097567963922) * t1);
-  if constexpr (Order == 15) u0 += h * (T(-6.5) * t0);
-  if constexpr (Order == 2) u0 += h * (T(-6.5) * t0 + T(9.013878188659973) * t2);
-  P u1 = t1 + b * (T(2.5495097567963922) * t0 - T(3.5355339059327378) * t2);
-  if constexpr (Order == 15) u1 += h * (T(-19) * t1);
-  if constexpr (Order == 2) u1 += h * (T(-19) * t1 + T(15) * t3);
-  P u2 = t2 + b * (T(3.5355339059327378) * t1 - T(4.2426406871192848) * t3);
-  if constexpr (Order == 15) u2 += h * (T(-30.5) * t2);
-  if constexpr (Order == 2) u2 += h * (T(-30.5) * t2 + T(9.013878188659973) * t0 + T(20.346989949375804) * t4);
-  P u3 = t3 + b * (T(4.2426406871192848) * t2 - T(4.7958315233127191) * t4);
-  if constexpr (Order == 15) u3 += h * (T(-41) * t3);
-  if constexpr (Order == 2) u3 += h * (T(-41) * t3 + T(15) * t1 + T(25.149552679918582) * t5);
-  P u4 = t4 + b * (T(4.7958315233127191) * t3 - T(5.2440442408507577) * t5);
-  if constexpr (Order == 15) u4 += h * (T(-50.5) * t4);
-  if constexpr (Order == 2) u4 += h * (T(-50.5) * t4 + T(20.346989949375804) * t2 + T(29.432125305522874) * t6);
-  P u5 = t5 + b * (T(5.2440442408507577) * t4 - T(5.6124860801609122) * t6);
-  if constexpr (Order == 15) u5 += h * (T(-59) * t5);
-  if constexpr (Order == 2) u5 += h * (T(-59) * t5 + T(25.149552679918582) * t3 + T(33.203915431767982) * t7);
-  P u6 = t6 + b * (T(5.6124860801609122) * t5 - T(5.9160797830996161) * t7);
-  if constexpr (Order == 15) u6 += h * (T(-66.5) * t6);
-  if constexpr (Order == 2) u6 += h * (T(-66.5) * t6 + T(29.432125305522874) * t4 + T(36.469165057620941) * t8);
-  P u7 = t7 + b * (T(5.9160797830996161) * t6 - T(6.164414002968976) * t8);
-  if constexpr (Order == 15) u7 += h * (T(-73) * t7);
-  if constexpr (Order == 2) u7 += h * (T(-73) * t7 + T(33.203915431767982) * t5 + T(39.230090491866065) * t9);
-  P u8 = t8 + b * (T(6.164414002968976) * t7 - T(6.3639610306789276) * t9);
-  if constexpr (Order == 15) u8 += h * (T(-78.5) * t8);
-  if constexpr (Order == 2) u8 += h * (T(-78.5) * t8 + T(36.469165057620941) * t6 + T(41.48795005781799) * t10);
-  P u9 = t9 + b * (T(6.3639610306789276) * t8 - T(6.5192024052026492) * t10);
-  if constexpr (Order == 15) u9 += h * (T(-83) * t9);
-  if constexpr (Order == 2) u9 += h * (T(-83) * t9 + T(39.230090491866065) * t7 + T(43.243496620879306) * t11);
-  P u10 = t10 + b * (T(6.5192024052026492) * t9 - T(6.6332495807107996) * t11);
-  if constexpr (Order == 15) u10 += h * (T(-86.5) * t10);
-  if constexpr (Order == 2) u10 += h * (T(-86.5) * t10 + T(41.48795005781799) * t8 + T(44.497190922573978) * t12);
-  P u11 = t11 + b * (T(6.6332495807107996) * t10 - T(6.7082039324993694) * t12);
-  if constexpr (Order == 15) u11 += h * (T(-89) * t11);
-  if constexpr (Order == 2) u11 += h * (T(-89) * t11 + T(43.243496620879306) * t9);
-  P u12 = t12 + b * (T(6.7082039324993694) * t11);
-  if constexpr (Order == 15) u12 += h * (T(-45) * t12);
-  if constexpr (Order == 2) u12 += h * (T(-45) * t12 + T(44.497190922573978) * t10);
-  P u13 = t13 + b * (T(9.5393920141694561) * t14);
-  if constexpr (Order == 15) u13 += h * (T(-91) * t13);
-  if constexpr (Order == 2) u13 += h * (T(-91) * t13 + T(63.992187023104627) * t15);
-  P u14 = t14 + b * (T(-9.5393920141694561) * t13 + T(6.7082039324993694) * t15);
-  if constexpr (Order == 15) u14 += h * (T(-136) * t14);
-  if constexpr (Order == 2) u14 += h * (T(-136) * t14 + T(44.497190922573978) * t16);
-  P u15 = t15 + b * (T(-6.7082039324993694) * t14 + T(6.6332495807107996) * t16);
-  if constexpr (Order == 15) u15 += h * (T(-89) * t15);
-  if constexpr (Order == 2) u15 += h * (T(-89) * t15 + T(63.992187023104627) * t13 + T(43.243496620879306) * t17);
-  P u16 = t16 + b * (T(-6.6332495807107996) * t15 + T(6.5192024052026492) * t17);
-  if constexpr (Order == 15) u16 += h * (T(-86.5) * t16);
-  if constexpr (Order == 2) u16 += h * (T(-86.5) * t16 + T(44.497190922573978) * t14 + T(41.48795005781799) * t18);
-  P u17 = t17 + b * (T(-6.5192024052026492) * t16 + T(6.3639610306789276) * t18);
-  if constexpr (Order == 15) u17 += h * (T(-83) * t17);
-  if constexpr (Order == 2) u17 += h * (T(-83) * t17 + T(43.243496620879306) * t15 + T(39.230090491866065) * t19);
-  P u18 = t18 + b * (T(-6.3639610306789276) * t17 + T(6.164414002968976) * t19);
-  if constexpr (Order == 15) u18 += h * (T(-78.5) * t18);
-  if constexpr (Order == 2) u18 += h * (T(-78.5) * t18 + T(41.48795005781799) * t16 + T(36.469165057620941) * t20);
-  P u19 = t19 + b * (T(-6.164414002968976) * t18 + T(5.9160797830996161) * t20);
-  if constexpr (Order == 15) u19 += h * (T(-73) * t19);
-  if constexpr (Order == 2) u19 += h * (T(-73) * t19 + T(39.230090491866065) * t17 + T(33.203915431767982) * t21);
-  P u20 = t20 + b * (T(-5.9160797830996161) * t19 + T(5.6124860801609122) * t21);
-  if constexpr (Order == 15) u20 += h * (T(-66.5) * t20);
-  if constexpr (Order == 2) u20 += h * (T(-66.5) * t20 + T(36.469165057620941) * t18 + T(29.432125305522874) * t22);
-  P u21 = t21 + b * (T(-5.6124860801609122) * t20 + T(5.2440442408507577) * t22);
-  if constexpr (Order == 15) u21 += h * (T(-59) * t21);
-  if constexpr (Order == 2) u21 += h * (T(-59) * t21 + T(33.203915431767982) * t19 + T(25.149552679918582) * t23);
-  P u22 = t22 + b * (T(-5.2440442408507577) * t21 + T(4.7958315233127191) * t23);
-  if constexpr (Order == 15) u22 += h * (T(-50.5) * t22);
-  if constexpr (Order == 2) u22 += h * (T(-50.5) * t22 + T(29.432125305522874) * t20 + T(20.346989949375804) * t24);
-  P u23 = t23 + b * (T(-4.7958315233127191) * t22 + T(4.2426406871192848) * t24);
-  if constexpr (Order == 15) u23 += h * (T(-41) * t23);
-  if constexpr (Order == 2) u23 += h * (T(-41) * t23 + T(25.149552679918582) * t21 + T(15) * t25);
-  P u24 = t24 + b * (T(-4.2426406871192848) * t23 + T(3.5355339059327378) * t25);
-  if constexpr (Order == 15) u24 += h * (T(-30.5) * t24);
-  if constexpr (Order == 2) u24 += h * (T(-30.5) * t24 + T(20.346989949375804) * t22 + T(9.013878188659973) * t26);
-  P u25 = t25 + b * (T(-3.5355339059327378) * t24 + T(2.5495097567963922) * t26);
-  if constexpr (Order == 15) u25 += h * (T(-19) * t25);
-  if constexpr (Order == 2) u25 += h * (T(-19) * t25 + T(15) * t23);
-  P u26 = t26 + b * (T(-2.5495097567963922) * t25);
-  if constexpr (Order == 15) u26 += h * (T(-6.5) * t26);
-  if constexpr (Order == 2) u26 += h * (T(-6.5) * t26 + T(9.013878188659973) * t24);
+  P u0 = madd<F>(b, T(-2.5495097567963922) * t1, t0);
+  if constexpr (Order == 15) u0 = madd<F>(h, T(-6.5) * t0, u0);
+  if constexpr (Order == 2) u0 = madd<F>(h, madd<F>(T(9.013878188659973), t2, T(-6.5) * t0), u0);
+  P u1 = madd<F>(b, madd<F>(T(-3.5355339059327378), t2, T(2.5495097567963922) * t0), t1);
+  if constexpr (Order == 15) u1 = madd<F>(h, T(-19) * t1, u1);
+  if constexpr (Order == 2) u1 = madd<F>(h, madd<F>(T(15), t3, T(-19) * t1), u1);
+  P u2 = madd<F>(b, madd<F>(T(-4.2426406871192848), t3, T(3.5355339059327378) * t1), t2);
+  if constexpr (Order == 15) u2 = madd<F>(h, T(-30.5) * t2, u2);
+  if constexpr (Order == 2) u2 = madd<F>(h, madd<F>(T(20.346989949375804), t4, madd<F>(T(9.013878188659973), t0, T(-30.5) * t2)), u2);
+  P u3 = madd<F>(b, madd<F>(T(-4.7958315233127191), t4, T(4.2426406871192848) * t2), t3);
+  if constexpr (Order == 15) u3 = madd<F>(h, T(-41) * t3, u3);
+  if constexpr (Order == 2) u3 = madd<F>(h, madd<F>(T(25.149552679918582), t5, madd<F>(T(15), t1, T(-41) * t3)), u3);
+  P u4 = madd<F>(b, madd<F>(T(-5.2440442408507577), t5, T(4.7958315233127191) * t3), t4);
+  if constexpr (Order == 15) u4 = madd<F>(h, T(-50.5) * t4, u4);
+  if constexpr (Order == 2) u4 = madd<F>(h, madd<F>(T(29.432125305522874), t6, madd<F>(T(20.346989949375804), t2, T(-50.5) * t4)), u4);
+  P u5 = madd<F>(b, madd<F>(T(-5.6124860801609122), t6, T(5.2440442408507577) * t4), t5);
+  if constexpr (Order == 15) u5 = madd<F>(h, T(-59) * t5, u5);
+  if constexpr (Order == 2) u5 = madd<F>(h, madd<F>(T(33.203915431767982), t7, madd<F>(T(25.149552679918582), t3, T(-59) * t5)), u5);
+  P u6 = madd<F>(b, madd<F>(T(-5.9160797830996161), t7, T(5.6124860801609122) * t5), t6);
+  if constexpr (Order == 15) u6 = madd<F>(h, T(-66.5) * t6, u6);
+  if constexpr (Order == 2) u6 = madd<F>(h, madd<F>(T(36.469165057620941), t8, madd<F>(T(29.432125305522874), t4, T(-66.5) * t6)), u6);
+  P u7 = madd<F>(b, madd<F>(T(-6.164414002968976), t8, T(5.9160797830996161) * t6), t7);
+  if constexpr (Order == 15) u7 = madd<F>(h, T(-73) * t7, u7);
+  if constexpr (Order == 2) u7 = madd<F>(h, madd<F>(T(39.230090491866065), t9, madd<F>(T(33.203915431767982), t5, T(-73) * t7)), u7);
+  P u8 = madd<F>(b, madd<F>(T(-6.3639610306789276), t9, T(6.164414002968976) * t7), t8);
+  if constexpr (Order == 15) u8 = madd<F>(h, T(-78.5) * t8, u8);
+  if constexpr (Order == 2) u8 = madd<F>(h, madd<F>(T(41.48795005781799), t10, madd<F>(T(36.469165057620941), t6, T(-78.5) * t8)), u8);
+  P u9 = madd<F>(b, madd<F>(T(-6.5192024052026492), t10, T(6.3639610306789276) * t8), t9);
+  if constexpr (Order == 15) u9 = madd<F>(h, T(-83) * t9, u9);
+  if constexpr (Order == 2) u9 = madd<F>(h, madd<F>(T(43.243496620879306), t11, madd<F>(T(39.230090491866065), t7, T(-83) * t9)), u9);
+  P u10 = madd<F>(b, madd<F>(T(-6.6332495807107996), t11, T(6.5192024052026492) * t9), t10);
+  if constexpr (Order == 15) u10 = madd<F>(h, T(-86.5) * t10, u10);
+  if constexpr (Order == 2) u10 = madd<F>(h, madd<F>(T(44.497190922573978), t12, madd<F>(T(41.48795005781799), t8, T(-86.5) * t10)), u10);
+  P u11 = madd<F>(b, madd<F>(T(-6.7082039324993694), t12, T(6.6332495807107996) * t10), t11);
+  if constexpr (Order == 15) u11 = madd<F>(h, T(-89) * t11, u11);
+  if constexpr (Order == 2) u11 = madd<F>(h, madd<F>(T(43.243496620879306), t9, T(-89) * t11), u11);
+  P u12 = madd<F>(b, T(6.7082039324993694) * t11, t12);
+  if constexpr (Order == 15) u12 = madd<F>(h, T(-45) * t12, u12);
+  if constexpr (Order == 2) u12 = madd<F>(h, madd<F>(T(44.497190922573978), t10, T(-45) * t12), u12);
+  P u13 = madd<F>(b, T(9.5393920141694561) * t14, t13);
+  if constexpr (Order == 15) u13 = madd<F>(h, T(-91) * t13, u13);
+  if constexpr (Order == 2) u13 = madd<F>(h, madd<F>(T(63.992187023104627), t15, T(-91) * t13), u13);
+  P u14 = madd<F>(b, madd<F>(T(6.7082039324993694), t15, T(-9.5393920141694561) * t13), t14);
+  if constexpr (Order == 15) u14 = madd<F>(h, T(-136) * t14, u14);
+  if constexpr (Order == 2) u14 = madd<F>(h, madd<F>(T(44.497190922573978), t16, T(-136) * t14), u14);
+  P u15 = madd<F>(b, madd<F>(T(6.6332495807107996), t16, T(-6.7082039324993694) * t14), t15);
+  if constexpr (Order == 15) u15 = madd<F>(h, T(-89) * t15, u15);
+  if constexpr (Order == 2) u15 = madd<F>(h, madd<F>(T(43.243496620879306), t17, madd<F>(T(63.992187023104627), t13, T(-89) * t15)), u15);
+  P u16 = madd<F>(b, madd<F>(T(6.5192024052026492), t17, T(-6.6332495807107996) * t15), t16);
+  if constexpr (Order == 15) u16 = madd<F>(h, T(-86.5) * t16, u16);
+  if constexpr (Order == 2) u16 = madd<F>(h, madd<F>(T(41.48795005781799), t18, madd<F>(T(44.497190922573978), t14, T(-86.5) * t16)), u16);
+  P u17 = madd<F>(b, madd<F>(T(6.3639610306789276), t18, T(-6.5192024052026492) * t16), t17);
+  if constexpr (Order == 15) u17 = madd<F>(h, T(-83) * t17, u17);
+  if constexpr (Order == 2) u17 = madd<F>(h, madd<F>(T(39.230090491866065), t19, madd<F>(T(43.243496620879306), t15, T(-83) * t17)), u17);
+  P u18 = madd<F>(b, madd<F>(T(6.164414002968976), t19, T(-6.3639610306789276) * t17), t18);
+  if constexpr (Order == 15) u18 = madd<F>(h, T(-78.5) * t18, u18);
+  if constexpr (Order == 2) u18 = madd<F>(h, madd<F>(T(36.469165057620941), t20, madd<F>(T(41.48795005781799), t16, T(-78.5) * t18)), u18);
+  P u19 = madd<F>(b, madd<F>(T(5.9160797830996161), t20, T(-6.164414002968976) * t18), t19);
+  if constexpr (Order == 15) u19 = madd<F>(h, T(-73) * t19, u19);
+  if constexpr (Order == 2) u19 = madd<F>(h, madd<F>(T(33.203915431767982), t21, madd<F>(T(39.230090491866065), t17, T(-73) * t19)), u19);
+  P u20 = madd<F>(b, madd<F>(T(5.6124860801609122), t21, T(-5.9160797830996161) * t19), t20);
+  if constexpr (Order == 15) u20 = madd<F>(h, T(-66.5) * t20, u20);
+  if constexpr (Order == 2) u20 = madd<F>(h, madd<F>(T(29.432125305522874), t22, madd<F>(T(36.469165057620941), t18, T(-66.5) * t20)), u20);
+  P u21 = madd<F>(b, madd<F>(T(5.2440442408507577), t22, T(-5.6124860801609122) * t20), t21);
+  if constexpr (Order == 15) u21 = madd<F>(h, T(-59) * t21, u21);
+  if constexpr (Order == 2) u21 = madd<F>(h, madd<F>(T(25.149552679918582), t23, madd<F>(T(33.203915431767982), t19, T(-59) * t21)), u21);
+  P u22 = madd<F>(b, madd<F>(T(4.7958315233127191), t23, T(-5.2440442408507577) * t21), t22);
+  if constexpr (Order == 15) u22 = madd<F>(h, T(-50.5) * t22, u22);
+  if constexpr (Order == 2) u22 = madd<F>(h, madd<F>(T(20.346989949375804), t24, madd<F>(T(29.432125305522874), t20, T(-50.5) * t22)), u22);
+  P u23 = madd<F>(b, madd<F>(T(4.2426406871192848), t24, T(-4.7958315233127191) * t22), t23);
+  if constexpr (Order == 15) u23 = madd<F>(h, T(-41) * t23, u23);
+  if constexpr (Order == 2) u23 = madd<F>(h, madd<F>(T(15), t25, madd<F>(T(25.149552679918582), t21, T(-41) * t23)), u23);
+  P u24 = madd<F>(b, madd<F>(T(3.5355339059327378), t25, T(-4.2426406871192848) * t23), t24);
+  if constexpr (Order == 15) u24 = madd<F>(h, T(-30.5) * t24, u24);
+  if constexpr (Order == 2) u24 = madd<F>(h, madd<F>(T(9.013878188659973), t26, madd<F>(T(20.346989949375804), t22, T(-30.5) * t24)), u24);
+  P u25 = madd<F>(b, madd<F>(T(2.5495097567963922), t26, T(-3.5355339059327378) * t24), t25);
+  if constexpr (Order == 15) u25 = madd<F>(h, T(-19) * t25, u25);
+  if constexpr (Order == 2) u25 = madd<F>(h, madd<F>(T(15), t23, T(-19) * t25), u25);
+  P u26 = madd<F>(b, T(-2.5495097567963922) * t25, t26);
+  if constexpr (Order == 15) u26 = madd<F>(h, T(-6.5) * t26, u26);
+  if constexpr (Order == 2) u26 = madd<F>(h, madd<F>(T(9.013878188659973), t24, T(-6.5) * t26), u26);
   y[13] = u13;
   const P ca1 = splat<P>(s.ca[1]), sa1 = splat<P>(s.sa[1]);
-  y[14] = ca1 * u14 - sa1 * u12;
-  y[12] = sa1 * u14 + ca1 * u12;
+  y[14] = madd<F>(ca1, u14, -(sa1 * u12));
+  y[12] = madd<F>(sa1, u14, ca1 * u12);
   const P ca2 = splat<P>(s.ca[2]), sa2 = splat<P>(s.sa[2]);
-  y[15] = ca2 * u15 - sa2 * u11;
-  y[11] = sa2 * u15 + ca2 * u11;
+  y[15] = madd<F>(ca2, u15, -(sa2 * u11));
+  y[11] = madd<F>(sa2, u15, ca2 * u11);
   const P ca3 = splat<P>(s.ca[3]), sa3 = splat<P>(s.sa[3]);
-  y[16] = ca3 * u16 - sa3 * u10;
-  y[10] = sa3 * u16 + ca3 * u10;
+  y[16] = madd<F>(ca3, u16, -(sa3 * u10));
+  y[10] = madd<F>(sa3, u16, ca3 * u10);
   const P ca4 = splat<P>(s.ca[4]), sa4 = splat<P>(s.sa[4]);
-  y[17] = ca4 * u17 - sa4 * u9;
-  y[9] = sa4 * u17 + ca4 * u9;
+  y[17] = madd<F>(ca4, u17, -(sa4 * u9));
+  y[9] = madd<F>(sa4, u17, ca4 * u9);
   const P ca5 = splat<P>(s.ca[5]), sa5 = splat<P>(s.sa[5]);
-  y[18] = ca5 * u18 - sa5 * u8;
-  y[8] = sa5 * u18 + ca5 * u8;
+  y[18] = madd<F>(ca5, u18, -(sa5 * u8));
+  y[8] = madd<F>(sa5, u18, ca5 * u8);
   const P ca6 = splat<P>(s.ca[6]), sa6 = splat<P>(s.sa[6]);
-  y[19] = ca6 * u19 - sa6 * u7;
-  y[7] = sa6 * u19 + ca6 * u7;
+  y[19] = madd<F>(ca6, u19, -(sa6 * u7));
+  y[7] = madd<F>(sa6, u19, ca6 * u7);
   const P ca7 = splat<P>(s.ca[7]), sa7 = splat<P>(s.sa[7]);
-  y[20] = ca7 * u20 - sa7 * u6;
-  y[6] = sa7 * u20 + ca7 * u6;
+  y[20] = madd<F>(ca7, u20, -(sa7 * u6));
+  y[6] = madd<F>(sa7, u20, ca7 * u6);
   const P ca8 = splat<P>(s.ca[8]), sa8 = splat<P>(s.sa[8]);
-  y[21] = ca8 * u21 - sa8 * u5;
-  y[5] = sa8 * u21 + ca8 * u5;
+  y[21] = madd<F>(ca8, u21, -(sa8 * u5));
+  y[5] = madd<F>(sa8, u21, ca8 * u5);
   const P ca9 = splat<P>(s.ca[9]), sa9 = splat<P>(s.sa[9]);
-  y[22] = ca9 * u22 - sa9 * u4;
-  y[4] = sa9 * u22 + ca9 * u4;
+  y[22] = madd<F>(ca9, u22, -(sa9 * u4));
+  y[4] = madd<F>(sa9, u22, ca9 * u4);
   const P ca10 = splat<P>(s.ca[10]), sa10 = splat<P>(s.sa[10]);
-  y[23] = ca10 * u23 - sa10 * u3;
-  y[3] = sa10 * u23 + ca10 * u3;
+  y[23] = madd<F>(ca10, u23, -(sa10 * u3));
+  y[3] = madd<F>(sa10, u23, ca10 * u3);
   const P ca11 = splat<P>(s.ca[11]), sa11 = splat<P>(s.sa[11]);
-  y[24] = ca11 * u24 - sa11 * u2;
-  y[2] = sa11 * u24 + ca11 * u2;
+  y[24] = madd<F>(ca11, u24, -(sa11 * u2));
+  y[2] = madd<F>(sa11, u24, ca11 * u2);
   const P ca12 = splat<P>(s.ca[12]), sa12 = splat<P>(s.sa[12]);
-  y[25] = ca12 * u25 - sa12 * u1;
-  y[1] = sa12 * u25 + ca12 * u1;
+  y[25] = madd<F>(ca12, u25, -(sa12 * u1));
+  y[1] = madd<F>(sa12, u25, ca12 * u1);
   const P ca13 = splat<P>(s.ca[13]), sa13 = splat<P>(s.sa[13]);
-  y[26] = ca13 * u26 - sa13 * u0;
-  y[0] = sa13 * u26 + ca13 * u0;
+  y[26] = madd<F>(ca13, u26, -(sa13 * u0));
+  y[0] = madd<F>(sa13, u26, ca13 * u0);
 }
 
 // Band 14 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) ([2] Sec. 3).
-template <int Order, class T, class P, class S>
-inline void taylor_band14(const S& s, const P* __restrict x, P* __restrict y) {
+template <bool F, int Order, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void taylor_band14(const S& s, const P* __restrict x, P* __restrict y) {
   const P t14 = x[14];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
-  const P t15 = cg1 * x[15] - sg1 * x[13];
-  const P t13 = sg1 * x[15] + cg1 * x[13];
+  const P t15 = madd<F>(cg1, x[15], -(sg1 * x[13]));
+  const P t13 = madd<F>(sg1, x[15], cg1 * x[13]);
   const P cg2 = splat<P>(s.cg[2]), sg2 = splat<P>(s.sg[2]);
-  const P t16 = cg2 * x[16] - sg2 * x[12];
-  const P t12 = sg2 * x[16] + cg2 * x[12];
+  const P t16 = madd<F>(cg2, x[16], -(sg2 * x[12]));
+  const P t12 = madd<F>(sg2, x[16], cg2 * x[12]);
   const P cg3 = splat<P>(s.cg[3]), sg3 = splat<P>(s.sg[3]);
-  const P t17 = cg3 * x[17] - sg3 * x[11];
-  const P t11 = sg3 * x[17] + cg3 * x[11];
+  const P t17 = madd<F>(cg3, x[17], -(sg3 * x[11]));
+  const P t11 = madd<F>(sg3, x[17], cg3 * x[11]);
   const P cg4 = splat<P>(s.cg[4]), sg4 = splat<P>(s.sg[4]);
-  const P t18 = cg4 * x[18] - sg4 * x[10];
-  const P t10 = sg4 * x[18] + cg4 * x[10];
+  const P t18 = madd<F>(cg4, x[18], -(sg4 * x[10]));
+  const P t10 = madd<F>(sg4, x[18], cg4 * x[10]);
   const P cg5 = splat<P>(s.cg[5]), sg5 = splat<P>(s.sg[5]);
-  const P t19 = cg5 * x[19] - sg5 * x[9];
-  const P t9 = sg5 * x[19] + cg5 * x[9];
+  const P t19 = madd<F>(cg5, x[19], -(sg5 * x[9]));
+  const P t9 = madd<F>(sg5, x[19], cg5 * x[9]);
   const P cg6 = splat<P>(s.cg[6]), sg6 = splat<P>(s.sg[6]);
-  const P t20 = cg6 * x[20] - sg6 * x[8];
-  const P t8 = sg6 * x[20] + cg6 * x[8];
+  const P t20 = madd<F>(cg6, x[20], -(sg6 * x[8]));
+  const P t8 = madd<F>(sg6, x[20], cg6 * x[8]);
   const P cg7 = splat<P>(s.cg[7]), sg7 = splat<P>(s.sg[7]);
-  const P t21 = cg7 * x[21] - sg7 * x[7];
-  const P t7 = sg7 * x[21] + cg7 * x[7];
+  const P t21 = madd<F>(cg7, x[21], -(sg7 * x[7]));
+  const P t7 = madd<F>(sg7, x[21], cg7 * x[7]);
   const P cg8 = splat<P>(s.cg[8]), sg8 = splat<P>(s.sg[8]);
-  const P t22 = cg8 * x[22] - sg8 * x[6];
-  const P t6 = sg8 * x[22] + cg8 * x[6];
+  const P t22 = madd<F>(cg8, x[22], -(sg8 * x[6]));
+  const P t6 = madd<F>(sg8, x[22], cg8 * x[6]);
   const P cg9 = splat<P>(s.cg[9]), sg9 = splat<P>(s.sg[9]);
-  const P t23 = cg9 * x[23] - sg9 * x[5];
-  const P t5 = sg9 * x[23] + cg9 * x[5];
+  const P t23 = madd<F>(cg9, x[23], -(sg9 * x[5]));
+  const P t5 = madd<F>(sg9, x[23], cg9 * x[5]);
   const P cg10 = splat<P>(s.cg[10]), sg10 = splat<P>(s.sg[10]);
-  const P t24 = cg10 * x[24] - sg10 * x[4];
-  const P t4 = sg10 * x[24] + cg10 * x[4];
+  const P t24 = madd<F>(cg10, x[24], -(sg10 * x[4]));
+  const P t4 = madd<F>(sg10, x[24], cg10 * x[4]);
   const P cg11 = splat<P>(s.cg[11]), sg11 = splat<P>(s.sg[11]);
-  const P t25 = cg11 * x[25] - sg11 * x[3];
-  const P t3 = sg11 * x[25] + cg11 * x[3];
+  const P t25 = madd<F>(cg11, x[25], -(sg11 * x[3]));
+  const P t3 = madd<F>(sg11, x[25], cg11 * x[3]);
   const P cg12 = splat<P>(s.cg[12]), sg12 = splat<P>(s.sg[12]);
-  const P t26 = cg12 * x[26] - sg12 * x[2];
-  const P t2 = sg12 * x[26] + cg12 * x[2];
+  const P t26 = madd<F>(cg12, x[26], -(sg12 * x[2]));
+  const P t2 = madd<F>(sg12, x[26], cg12 * x[2]);
   const P cg13 = splat<P>(s.cg[13]), sg13 = splat<P>(s.sg[13]);
-  const P t27 = cg13 * x[27] - sg13 * x[1];
-  const P t1 = sg13 * x[27] + cg13 * x[1];
+  const P t27 = madd<F>(cg13, x[27], -(sg13 * x[1]));
+  const P t1 = madd<F>(sg13, x[27], cg13 * x[1]);
   const P cg14 = splat<P>(s.cg[14]), sg14 = splat<P>(s.sg[14]);
-  const P t28 = cg14 * x[28] - sg14 * x[0];
-  const P t0 = sg14 * x[28] + cg14 * x[0];
+  const P t28 = madd<F>(cg14, x[28], -(sg14 * x[0]));
+  const P t0 = madd<F>(sg14, x[28], cg14 * x[0]);
   const auto b = s.beta, h = s.half_beta2;
   (void)h;
-  P u0 = t0 + b * (T(-2.6457513110645907) * t1);
-  if constexpr (Order == 15) u0 += h * (T(-7) * t0);
-  if constexpr (Order == 2) u0 += h * (T(-7) * t0 + T(9.7211110476117906) * t2);
-  P u1 = t1 + b * (T(2.6457513110645907) * t0 - T(3.6742346141747673) * t2);
-  if constexpr (Order == 15) u1 += h * (T(-20.5) * t1);
-  if constexpr (Order == 2) u1 += h * (T(-20.5) * t1 + T(16.224980739587952) * t3);
-  P u2 = t2 + b * (T(3.6742346141747673) * t1 - T(4.4158804331639239) * t3);
-  if constexpr (Order == 15) u2 += h * (T(-33) * t2);
-  if constexpr (Order == 2) u2 += h * (T(-33) * t2 + T(9.7211110476117906) * t0 + T(22.079402165819616) * t4);
-  P u3 = t3 + b * (T(4.4158804331639239) * t2 - T(5) * t4);
-  if constexpr (Order == 15) u3 += h * (T(-44.5) * t3);
-  if constexpr (Order == 2) u3 += h * (T(-44.5) * t3 + T(16.224980739587952) * t1 + T(27.386127875258307) * t5);
-  P u4 = t4 + b * (T(5) * t3 - T(5.4772255750516612) * t5);
-  if constexpr (Order == 15) u4 += h * (T(-55) * t4);
-  if constexpr (Order == 2) u4 += h * (T(-55) * t4 + T(22.079402165819616) * t2 + T(32.171415884290823) * t6);
-  P u5 = t5 + b * (T(5.4772255750516612) * t4 - T(5.873670062235365) * t6);
-  if constexpr (Order == 15) u5 += h * (T(-64.5) * t5);
-  if constexpr (Order == 2) u5 += h * (T(-64.5) * t5 + T(27.386127875258307) * t3 + T(36.445164288283841) * t7);
-  P u6 = t6 + b * (T(5.873670062235365) * t5 - T(6.2048368229954285) * t7);
-  if constexpr (Order == 15) u6 += h * (T(-73) * t6);
-  if constexpr (Order == 2) u6 += h * (T(-73) * t6 + T(32.171415884290823) * t4 + T(40.2119385257662) * t8);
-  P u7 = t7 + b * (T(6.2048368229954285) * t6 - T(6.4807406984078604) * t8);
-  if constexpr (Order == 15) u7 += h * (T(-80.5) * t7);
-  if constexpr (Order == 2) u7 += h * (T(-80.5) * t7 + T(36.445164288283841) * t5 + T(43.474130238568314) * t9);
-  P u8 = t8 + b * (T(6.4807406984078604) * t7 - T(6.7082039324993694) * t9);
-  if constexpr (Order == 15) u8 += h * (T(-87) * t8);
-  if constexpr (Order == 2) u8 += h * (T(-87) * t8 + T(40.2119385257662) * t6 + T(46.233105022267324) * t10);
-  P u9 = t9 + b * (T(6.7082039324993694) * t8 - T(6.8920243760451108) * t10);
-  if constexpr (Order == 15) u9 += h * (T(-92.5) * t9);
-  if constexpr (Order == 2) u9 += h * (T(-92.5) * t9 + T(43.474130238568314) * t7 + T(48.489689625733838) * t11);
-  P u10 = t10 + b * (T(6.8920243760451108) * t9 - T(7.0356236397351442) * t11);
-  if constexpr (Order == 15) u10 += h * (T(-97) * t10);
-  if constexpr (Order == 2) u10 += h * (T(-97) * t10 + T(46.233105022267324) * t8 + T(50.244402673332679) * t12);
-  P u11 = t11 + b * (T(7.0356236397351442) * t10 - T(7.1414284285428504) * t12);
-  if constexpr (Order == 15) u11 += h * (T(-100.5) * t11);
-  if constexpr (Order == 2) u11 += h * (T(-100.5) * t11 + T(48.489689625733838) * t9 + T(51.497572758334933) * t13);
-  P u12 = t12 + b * (T(7.1414284285428504) * t11 - T(7.2111025509279782) * t13);
-  if constexpr (Order == 15) u12 += h * (T(-103) * t12);
-  if constexpr (Order == 2) u12 += h * (T(-103) * t12 + T(50.244402673332679) * t10);
-  P u13 = t13 + b * (T(7.2111025509279782) * t12);
-  if constexpr (Order == 15) u13 += h * (T(-52) * t13);
-  if constexpr (Order == 2) u13 += h * (T(-52) * t13 + T(51.497572758334933) * t11);
-  P u14 = t14 + b * (T(10.246950765959598) * t15);
-  if constexpr (Order == 15) u14 += h * (T(-105) * t14);
-  if constexpr (Order == 2) u14 += h * (T(-105) * t14 + T(73.891812807644669) * t16);
-  P u15 = t15 + b * (T(-10.246950765959598) * t14 + T(7.2111025509279782) * t16);
-  if constexpr (Order == 15) u15 += h * (T(-157) * t15);
-  if constexpr (Order == 2) u15 += h * (T(-157) * t15 + T(51.497572758334933) * t17);
-  P u16 = t16 + b * (T(-7.2111025509279782) * t15 + T(7.1414284285428504) * t17);
-  if constexpr (Order == 15) u16 += h * (T(-103) * t16);
-  if constexpr (Order == 2) u16 += h * (T(-103) * t16 + T(73.891812807644669) * t14 + T(50.244402673332679) * t18);
-  P u17 = t17 + b * (T(-7.1414284285428504) * t16 + T(7.0356236397351442) * t18);
-  if constexpr (Order == 15) u17 += h * (T(-100.5) * t17);
-  if constexpr (Order == 2) u17 += h * (T(-100.5) * t17 + T(51.497572758334933) * t15 + T(48.489689625733838) * t19);
-  P u18 = t18 + b * (T(-7.0356236397351442) * t17 + T(6.8920243760451108) * t19);
-  if constexpr (Order == 15) u18 += h * (T(-97) * t18);
-  if constexpr (Order == 2) u18 += h * (T(-97) * t18 + T(50.244402673332679) * t16 + T(46.233105022267324) * t20);
-  P u19 = t19 + b * (T(-6.8920243760451108) * t18 + T(6.7082039324993694) * t20);
-  if constexpr (Order == 15) u19 += h * (T(-92.5) * t19);
-  if constexpr (Order == 2) u19 += h * (T(-92.5) * t19 + T(48.489689625733838) * t17 + T(43.474130238568314) * t21);
-  P u20 = t20 + b * (T(-6.7082039324993694) * t19 + T(6.4807406984078604) * t21);
-  if constexpr (Order == 15) u20 += h * (T(-87) * t20);
-  if constexpr (Order == 2) u20 += h * (T(-87) * t20 + T(46.233105022267324) * t18 + T(40.2119385257662) * t22);
-  P u21 = t21 + b * (T(-6.4807406984078604) * t20 + T(6.2048368229954285) * t22);
-  if constexpr (Order == 15) u21 += h * (T(-80.5) * t21);
-  if constexpr (Order == 2) u21 += h * (T(-80.5) * t21 + T(43.474130238568314) * t19 + T(36.445164288283841) * t23);
-  P u22 = t22 + b * (T(-6.2048368229954285) * t21 + T(5.873670062235365) * t23);
-  if constexpr (Order == 15) u22 += h * (T(-73) * t22);
-  if constexpr (Order == 2) u22 += h * (T(-73) * t22 + T(40.2119385257662) * t20 + T(32.171415884290823) * t24);
-  P u23 = t23 + b * (T(-5.873670062235365) * t22 + T(5.4772255750516612) * t24);
-  if constexpr (Order == 15) u23 += h * (T(-64.5) * t23);
-  if constexpr (Order == 2) u23 += h * (T(-64.5) * t23 + T(36.445164288283841) * t21 + T(27.386127875258307) * t25);
-  P u24 = t24 + b * (T(-5.4772255750516612) * t23 + T(5) * t25);
-  if constexpr (Order == 15) u24 += h * (T(-55) * t24);
-  if constexpr (Order == 2) u24 += h * (T(-55) * t24 + T(32.171415884290823) * t22 + T(22.079402165819616) * t26);
-  P u25 = t25 + b * (T(-5) * t24 + T(4.4158804331639239) * t26);
-  if constexpr (Order == 15) u25 += h * (T(-44.5) * t25);
-  if constexpr (Order == 2) u25 += h * (T(-44.5) * t25 + T(27.386127875258307) * t23 + T(16.224980739587952) * t27);
-  P u26 = t26 + b * (T(-4.4158804331639239) * t25 + T(3.6742346141747673) * t27);
-  if constexpr (Order == 15) u26 += h * (T(-33) * t26);
-  if constexpr (Order == 2) u26 += h * (T(-33) * t26 + T(22.079402165819616) * t24 + T(9.7211110476117906) * t28);
-  P u27 = t27 + b * (T(-3.6742346141747673) * t26 + T(2.6457513110645907) * t28);
-  if constexpr (Order == 15) u27 += h * (T(-20.5) * t27);
-  if constexpr (Order == 2) u27 += h * (T(-20.5) * t27 + T(16.224980739587952) * t25);
-  P u28 = t28 + b * (T(-2.6457513110645907) * t27);
-  if constexpr (Order == 15) u28 += h * (T(-7) * t28);
-  if constexpr (Order == 2) u28 += h * (T(-7) * t28 + T(9.7211110476117906) * t26);
+  P u0 = madd<F>(b, T(-2.6457513110645907) * t1, t0);
+  if constexpr (Order == 15) u0 = madd<F>(h, T(-7) * t0, u0);
+  if constexpr (Order == 2) u0 = madd<F>(h, madd<F>(T(9.7211110476117906), t2, T(-7) * t0), u0);
+  P u1 = madd<F>(b, madd<F>(T(-3.6742346141747673), t2, T(2.6457513110645907) * t0), t1);
+  if constexpr (Order == 15) u1 = madd<F>(h, T(-20.5) * t1, u1);
+  if constexpr (Order == 2) u1 = madd<F>(h, madd<F>(T(16.224980739587952), t3, T(-20.5) * t1), u1);
+  P u2 = madd<F>(b, madd<F>(T(-4.4158804331639239), t3, T(3.6742346141747673) * t1), t2);
+  if constexpr (Order == 15) u2 = madd<F>(h, T(-33) * t2, u2);
+  if constexpr (Order == 2) u2 = madd<F>(h, madd<F>(T(22.079402165819616), t4, madd<F>(T(9.7211110476117906), t0, T(-33) * t2)), u2);
+  P u3 = madd<F>(b, madd<F>(T(-5), t4, T(4.4158804331639239) * t2), t3);
+  if constexpr (Order == 15) u3 = madd<F>(h, T(-44.5) * t3, u3);
+  if constexpr (Order == 2) u3 = madd<F>(h, madd<F>(T(27.386127875258307), t5, madd<F>(T(16.224980739587952), t1, T(-44.5) * t3)), u3);
+  P u4 = madd<F>(b, madd<F>(T(-5.4772255750516612), t5, T(5) * t3), t4);
+  if constexpr (Order == 15) u4 = madd<F>(h, T(-55) * t4, u4);
+  if constexpr (Order == 2) u4 = madd<F>(h, madd<F>(T(32.171415884290823), t6, madd<F>(T(22.079402165819616), t2, T(-55) * t4)), u4);
+  P u5 = madd<F>(b, madd<F>(T(-5.873670062235365), t6, T(5.4772255750516612) * t4), t5);
+  if constexpr (Order == 15) u5 = madd<F>(h, T(-64.5) * t5, u5);
+  if constexpr (Order == 2) u5 = madd<F>(h, madd<F>(T(36.445164288283841), t7, madd<F>(T(27.386127875258307), t3, T(-64.5) * t5)), u5);
+  P u6 = madd<F>(b, madd<F>(T(-6.2048368229954285), t7, T(5.873670062235365) * t5), t6);
+  if constexpr (Order == 15) u6 = madd<F>(h, T(-73) * t6, u6);
+  if constexpr (Order == 2) u6 = madd<F>(h, madd<F>(T(40.2119385257662), t8, madd<F>(T(32.171415884290823), t4, T(-73) * t6)), u6);
+  P u7 = madd<F>(b, madd<F>(T(-6.4807406984078604), t8, T(6.2048368229954285) * t6), t7);
+  if constexpr (Order == 15) u7 = madd<F>(h, T(-80.5) * t7, u7);
+  if constexpr (Order == 2) u7 = madd<F>(h, madd<F>(T(43.474130238568314), t9, madd<F>(T(36.445164288283841), t5, T(-80.5) * t7)), u7);
+  P u8 = madd<F>(b, madd<F>(T(-6.7082039324993694), t9, T(6.4807406984078604) * t7), t8);
+  if constexpr (Order == 15) u8 = madd<F>(h, T(-87) * t8, u8);
+  if constexpr (Order == 2) u8 = madd<F>(h, madd<F>(T(46.233105022267324), t10, madd<F>(T(40.2119385257662), t6, T(-87) * t8)), u8);
+  P u9 = madd<F>(b, madd<F>(T(-6.8920243760451108), t10, T(6.7082039324993694) * t8), t9);
+  if constexpr (Order == 15) u9 = madd<F>(h, T(-92.5) * t9, u9);
+  if constexpr (Order == 2) u9 = madd<F>(h, madd<F>(T(48.489689625733838), t11, madd<F>(T(43.474130238568314), t7, T(-92.5) * t9)), u9);
+  P u10 = madd<F>(b, madd<F>(T(-7.0356236397351442), t11, T(6.8920243760451108) * t9), t10);
+  if constexpr (Order == 15) u10 = madd<F>(h, T(-97) * t10, u10);
+  if constexpr (Order == 2) u10 = madd<F>(h, madd<F>(T(50.244402673332679), t12, madd<F>(T(46.233105022267324), t8, T(-97) * t10)), u10);
+  P u11 = madd<F>(b, madd<F>(T(-7.1414284285428504), t12, T(7.0356236397351442) * t10), t11);
+  if constexpr (Order == 15) u11 = madd<F>(h, T(-100.5) * t11, u11);
+  if constexpr (Order == 2) u11 = madd<F>(h, madd<F>(T(51.497572758334933), t13, madd<F>(T(48.489689625733838), t9, T(-100.5) * t11)), u11);
+  P u12 = madd<F>(b, madd<F>(T(-7.2111025509279782), t13, T(7.1414284285428504) * t11), t12);
+  if constexpr (Order == 15) u12 = madd<F>(h, T(-103) * t12, u12);
+  if constexpr (Order == 2) u12 = madd<F>(h, madd<F>(T(50.244402673332679), t10, T(-103) * t12), u12);
+  P u13 = madd<F>(b, T(7.2111025509279782) * t12, t13);
+  if constexpr (Order == 15) u13 = madd<F>(h, T(-52) * t13, u13);
+  if constexpr (Order == 2) u13 = madd<F>(h, madd<F>(T(51.497572758334933), t11, T(-52) * t13), u13);
+  P u14 = madd<F>(b, T(10.246950765959598) * t15, t14);
+  if constexpr (Order == 15) u14 = madd<F>(h, T(-105) * t14, u14);
+  if constexpr (Order == 2) u14 = madd<F>(h, madd<F>(T(73.891812807644669), t16, T(-105) * t14), u14);
+  P u15 = madd<F>(b, madd<F>(T(7.2111025509279782), t16, T(-10.246950765959598) * t14), t15);
+  if constexpr (Order == 15) u15 = madd<F>(h, T(-157) * t15, u15);
+  if constexpr (Order == 2) u15 = madd<F>(h, madd<F>(T(51.497572758334933), t17, T(-157) * t15), u15);
+  P u16 = madd<F>(b, madd<F>(T(7.1414284285428504), t17, T(-7.2111025509279782) * t15), t16);
+  if constexpr (Order == 15) u16 = madd<F>(h, T(-103) * t16, u16);
+  if constexpr (Order == 2) u16 = madd<F>(h, madd<F>(T(50.244402673332679), t18, madd<F>(T(73.891812807644669), t14, T(-103) * t16)), u16);
+  P u17 = madd<F>(b, madd<F>(T(7.0356236397351442), t18, T(-7.1414284285428504) * t16), t17);
+  if constexpr (Order == 15) u17 = madd<F>(h, T(-100.5) * t17, u17);
+  if constexpr (Order == 2) u17 = madd<F>(h, madd<F>(T(48.489689625733838), t19, madd<F>(T(51.497572758334933), t15, T(-100.5) * t17)), u17);
+  P u18 = madd<F>(b, madd<F>(T(6.8920243760451108), t19, T(-7.0356236397351442) * t17), t18);
+  if constexpr (Order == 15) u18 = madd<F>(h, T(-97) * t18, u18);
+  if constexpr (Order == 2) u18 = madd<F>(h, madd<F>(T(46.233105022267324), t20, madd<F>(T(50.244402673332679), t16, T(-97) * t18)), u18);
+  P u19 = madd<F>(b, madd<F>(T(6.7082039324993694), t20, T(-6.8920243760451108) * t18), t19);
+  if constexpr (Order == 15) u19 = madd<F>(h, T(-92.5) * t19, u19);
+  if constexpr (Order == 2) u19 = madd<F>(h, madd<F>(T(43.474130238568314), t21, madd<F>(T(48.489689625733838), t17, T(-92.5) * t19)), u19);
+  P u20 = madd<F>(b, madd<F>(T(6.4807406984078604), t21, T(-6.7082039324993694) * t19), t20);
+  if constexpr (Order == 15) u20 = madd<F>(h, T(-87) * t20, u20);
+  if constexpr (Order == 2) u20 = madd<F>(h, madd<F>(T(40.2119385257662), t22, madd<F>(T(46.233105022267324), t18, T(-87) * t20)), u20);
+  P u21 = madd<F>(b, madd<F>(T(6.2048368229954285), t22, T(-6.4807406984078604) * t20), t21);
+  if constexpr (Order == 15) u21 = madd<F>(h, T(-80.5) * t21, u21);
+  if constexpr (Order == 2) u21 = madd<F>(h, madd<F>(T(36.445164288283841), t23, madd<F>(T(43.474130238568314), t19, T(-80.5) * t21)), u21);
+  P u22 = madd<F>(b, madd<F>(T(5.873670062235365), t23, T(-6.2048368229954285) * t21), t22);
+  if constexpr (Order == 15) u22 = madd<F>(h, T(-73) * t22, u22);
+  if constexpr (Order == 2) u22 = madd<F>(h, madd<F>(T(32.171415884290823), t24, madd<F>(T(40.2119385257662), t20, T(-73) * t22)), u22);
+  P u23 = madd<F>(b, madd<F>(T(5.4772255750516612), t24, T(-5.873670062235365) * t22), t23);
+  if constexpr (Order == 15) u23 = madd<F>(h, T(-64.5) * t23, u23);
+  if constexpr (Order == 2) u23 = madd<F>(h, madd<F>(T(27.386127875258307), t25, madd<F>(T(36.445164288283841), t21, T(-64.5) * t23)), u23);
+  P u24 = madd<F>(b, madd<F>(T(5), t25, T(-5.4772255750516612) * t23), t24);
+  if constexpr (Order == 15) u24 = madd<F>(h, T(-55) * t24, u24);
+  if constexpr (Order == 2) u24 = madd<F>(h, madd<F>(T(22.079402165819616), t26, madd<F>(T(32.171415884290823), t22, T(-55) * t24)), u24);
+  P u25 = madd<F>(b, madd<F>(T(4.4158804331639239), t26, T(-5) * t24), t25);
+  if constexpr (Order == 15) u25 = madd<F>(h, T(-44.5) * t25, u25);
+  if constexpr (Order == 2) u25 = madd<F>(h, madd<F>(T(16.224980739587952), t27, madd<F>(T(27.386127875258307), t23, T(-44.5) * t25)), u25);
+  P u26 = madd<F>(b, madd<F>(T(3.6742346141747673), t27, T(-4.4158804331639239) * t25), t26);
+  if constexpr (Order == 15) u26 = madd<F>(h, T(-33) * t26, u26);
+  if constexpr (Order == 2) u26 = madd<F>(h, madd<F>(T(9.7211110476117906), t28, madd<F>(T(22.079402165819616), t24, T(-33) * t26)), u26);
+  P u27 = madd<F>(b, madd<F>(T(2.6457513110645907), t28, T(-3.6742346141747673) * t26), t27);
+  if constexpr (Order == 15) u27 = madd<F>(h, T(-20.5) * t27, u27);
+  if constexpr (Order == 2) u27 = madd<F>(h, madd<F>(T(16.224980739587952), t25, T(-20.5) * t27), u27);
+  P u28 = madd<F>(b, T(-2.6457513110645907) * t27, t28);
+  if constexpr (Order == 15) u28 = madd<F>(h, T(-7) * t28, u28);
+  if constexpr (Order == 2) u28 = madd<F>(h, madd<F>(T(9.7211110476117906), t26, T(-7) * t28), u28);
   y[14] = u14;
   const P ca1 = splat<P>(s.ca[1]), sa1 = splat<P>(s.sa[1]);
-  y[15] = ca1 * u15 - sa1 * u13;
-  y[13] = sa1 * u15 + ca1 * u13;
+  y[15] = madd<F>(ca1, u15, -(sa1 * u13));
+  y[13] = madd<F>(sa1, u15, ca1 * u13);
   const P ca2 = splat<P>(s.ca[2]), sa2 = splat<P>(s.sa[2]);
-  y[16] = ca2 * u16 - sa2 * u12;
-  y[12] = sa2 * u16 + ca2 * u12;
+  y[16] = madd<F>(ca2, u16, -(sa2 * u12));
+  y[12] = madd<F>(sa2, u16, ca2 * u12);
   const P ca3 = splat<P>(s.ca[3]), sa3 = splat<P>(s.sa[3]);
-  y[17] = ca3 * u17 - sa3 * u11;
-  y[11] = sa3 * u17 + ca3 * u11;
+  y[17] = madd<F>(ca3, u17, -(sa3 * u11));
+  y[11] = madd<F>(sa3, u17, ca3 * u11);
   const P ca4 = splat<P>(s.ca[4]), sa4 = splat<P>(s.sa[4]);
-  y[18] = ca4 * u18 - sa4 * u10;
-  y[10] = sa4 * u18 + ca4 * u10;
+  y[18] = madd<F>(ca4, u18, -(sa4 * u10));
+  y[10] = madd<F>(sa4, u18, ca4 * u10);
   const P ca5 = splat<P>(s.ca[5]), sa5 = splat<P>(s.sa[5]);
-  y[19] = ca5 * u19 - sa5 * u9;
-  y[9] = sa5 * u19 + ca5 * u9;
+  y[19] = madd<F>(ca5, u19, -(sa5 * u9));
+  y[9] = madd<F>(sa5, u19, ca5 * u9);
   const P ca6 = splat<P>(s.ca[6]), sa6 = splat<P>(s.sa[6]);
-  y[20] = ca6 * u20 - sa6 * u8;
-  y[8] = sa6 * u20 + ca6 * u8;
+  y[20] = madd<F>(ca6, u20, -(sa6 * u8));
+  y[8] = madd<F>(sa6, u20, ca6 * u8);
   const P ca7 = splat<P>(s.ca[7]), sa7 = splat<P>(s.sa[7]);
-  y[21] = ca7 * u21 - sa7 * u7;
-  y[7] = sa7 * u21 + ca7 * u7;
+  y[21] = madd<F>(ca7, u21, -(sa7 * u7));
+  y[7] = madd<F>(sa7, u21, ca7 * u7);
   const P ca8 = splat<P>(s.ca[8]), sa8 = splat<P>(s.sa[8]);
-  y[22] = ca8 * u22 - sa8 * u6;
-  y[6] = sa8 * u22 + ca8 * u6;
+  y[22] = madd<F>(ca8, u22, -(sa8 * u6));
+  y[6] = madd<F>(sa8, u22, ca8 * u6);
   const P ca9 = splat<P>(s.ca[9]), sa9 = splat<P>(s.sa[9]);
-  y[23] = ca9 * u23 - sa9 * u5;
-  y[5] = sa9 * u23 + ca9 * u5;
+  y[23] = madd<F>(ca9, u23, -(sa9 * u5));
+  y[5] = madd<F>(sa9, u23, ca9 * u5);
   const P ca10 = splat<P>(s.ca[10]), sa10 = splat<P>(s.sa[10]);
-  y[24] = ca10 * u24 - sa10 * u4;
-  y[4] = sa10 * u24 + ca10 * u4;
+  y[24] = madd<F>(ca10, u24, -(sa10 * u4));
+  y[4] = madd<F>(sa10, u24, ca10 * u4);
   const P ca11 = splat<P>(s.ca[11]), sa11 = splat<P>(s.sa[11]);
-  y[25] = ca11 * u25 - sa11 * u3;
-  y[3] = sa11 * u25 + ca11 * u3;
+  y[25] = madd<F>(ca11, u25, -(sa11 * u3));
+  y[3] = madd<F>(sa11, u25, ca11 * u3);
   const P ca12 = splat<P>(s.ca[12]), sa12 = splat<P>(s.sa[12]);
-  y[26] = ca12 * u26 - sa12 * u2;
-  y[2] = sa12 * u26 + ca12 * u2;
+  y[26] = madd<F>(ca12, u26, -(sa12 * u2));
+  y[2] = madd<F>(sa12, u26, ca12 * u2);
   const P ca13 = splat<P>(s.ca[13]), sa13 = splat<P>(s.sa[13]);
-  y[27] = ca13 * u27 - sa13 * u1;
-  y[1] = sa13 * u27 + ca13 * u1;
+  y[27] = madd<F>(ca13, u27, -(sa13 * u1));
+  y[1] = madd<F>(sa13, u27, ca13 * u1);
   const P ca14 = splat<P>(s.ca[14]), sa14 = splat<P>(s.sa[14]);
-  y[28] = ca14 * u28 - sa14 * u0;
-  y[0] = sa14 * u28 + ca14 * u0;
+  y[28] = madd<F>(ca14, u28, -(sa14 * u0));
+  y[0] = madd<F>(sa14, u28, ca14 * u0);
 }
 
 // Band 15 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) ([2] Sec. 3).
-template <int Order, class T, class P, class S>
-inline void taylor_band15(const S& s, const P* __restrict x, P* __restrict y) {
+template <bool F, int Order, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void taylor_band15(const S& s, const P* __restrict x, P* __restrict y) {
   const P t15 = x[15];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
-  const P t16 = cg1 * x[16] - sg1 * x[14];
-  const P t14 = sg1 * x[16] + cg1 * x[14];
+  const P t16 = madd<F>(cg1, x[16], -(sg1 * x[14]));
+  const P t14 = madd<F>(sg1, x[16], cg1 * x[14]);
   const P cg2 = splat<P>(s.cg[2]), sg2 = splat<P>(s.sg[2]);
-  const P t17 = cg2 * x[17] - sg2 * x[13];
-  const P t13 = sg2 * x[17] + cg2 * x[13];
+  const P t17 = madd<F>(cg2, x[17], -(sg2 * x[13]));
+  const P t13 = madd<F>(sg2, x[17], cg2 * x[13]);
   const P cg3 = splat<P>(s.cg[3]), sg3 = splat<P>(s.sg[3]);
-  const P t18 = cg3 * x[18] - sg3 * x[12];
-  const P t12 = sg3 * x[18] + cg3 * x[12];
+  const P t18 = madd<F>(cg3, x[18], -(sg3 * x[12]));
+  const P t12 = madd<F>(sg3, x[18], cg3 * x[12]);
   const P cg4 = splat<P>(s.cg[4]), sg4 = splat<P>(s.sg[4]);
-  const P t19 = cg4 * x[19] - sg4 * x[11];
-  const P t11 = sg4 * x[19] + cg4 * x[11];
+  const P t19 = madd<F>(cg4, x[19], -(sg4 * x[11]));
+  const P t11 = madd<F>(sg4, x[19], cg4 * x[11]);
   const P cg5 = splat<P>(s.cg[5]), sg5 = splat<P>(s.sg[5]);
-  const P t20 = cg5 * x[20] - sg5 * x[10];
-  const P t10 = sg5 * x[20] + cg5 * x[10];
+  const P t20 = madd<F>(cg5, x[20], -(sg5 * x[10]));
+  const P t10 = madd<F>(sg5, x[20], cg5 * x[10]);
   const P cg6 = splat<P>(s.cg[6]), sg6 = splat<P>(s.sg[6]);
-  const P t21 = cg6 * x[21] - sg6 * x[9];
-  const P t9 = sg6 * x[21] + cg6 * x[9];
+  const P t21 = madd<F>(cg6, x[21], -(sg6 * x[9]));
+  const P t9 = madd<F>(sg6, x[21], cg6 * x[9]);
   const P cg7 = splat<P>(s.cg[7]), sg7 = splat<P>(s.sg[7]);
-  const P t22 = cg7 * x[22] - sg7 * x[8];
-  const P t8 = sg7 * x[22] + cg7 * x[8];
+  const P t22 = madd<F>(cg7, x[22], -(sg7 * x[8]));
+  const P t8 = madd<F>(sg7, x[22], cg7 * x[8]);
   const P cg8 = splat<P>(s.cg[8]), sg8 = splat<P>(s.sg[8]);
-  const P t23 = cg8 * x[23] - sg8 * x[7];
-  const P t7 = sg8 * x[23] + cg8 * x[7];
+  const P t23 = madd<F>(cg8, x[23], -(sg8 * x[7]));
+  const P t7 = madd<F>(sg8, x[23], cg8 * x[7]);
   const P cg9 = splat<P>(s.cg[9]), sg9 = splat<P>(s.sg[9]);
-  const P t24 = cg9 * x[24] - sg9 * x[6];
-  const P t6 = sg9 * x[24] + cg9 * x[6];
+  const P t24 = madd<F>(cg9, x[24], -(sg9 * x[6]));
+  const P t6 = madd<F>(sg9, x[24], cg9 * x[6]);
   const P cg10 = splat<P>(s.cg[10]), sg10 = splat<P>(s.sg[10]);
-  const P t25 = cg10 * x[25] - sg10 * x[5];
-  const P t5 = sg10 * x[25] + cg10 * x[5];
+  const P t25 = madd<F>(cg10, x[25], -(sg10 * x[5]));
+  const P t5 = madd<F>(sg10, x[25], cg10 * x[5]);
   const P cg11 = splat<P>(s.cg[11]), sg11 = splat<P>(s.sg[11]);
-  const P t26 = cg11 * x[26] - sg11 * x[4];
-  const P t4 = sg11 * x[26] + cg11 * x[4];
+  const P t26 = madd<F>(cg11, x[26], -(sg11 * x[4]));
+  const P t4 = madd<F>(sg11, x[26], cg11 * x[4]);
   const P cg12 = splat<P>(s.cg[12]), sg12 = splat<P>(s.sg[12]);
-  const P t27 = cg12 * x[27] - sg12 * x[3];
-  const P t3 = sg12 * x[27] + cg12 * x[3];
+  const P t27 = madd<F>(cg12, x[27], -(sg12 * x[3]));
+  const P t3 = madd<F>(sg12, x[27], cg12 * x[3]);
   const P cg13 = splat<P>(s.cg[13]), sg13 = splat<P>(s.sg[13]);
-  const P t28 = cg13 * x[28] - sg13 * x[2];
-  const P t2 = sg13 * x[28] + cg13 * x[2];
+  const P t28 = madd<F>(cg13, x[28], -(sg13 * x[2]));
+  const P t2 = madd<F>(sg13, x[28], cg13 * x[2]);
   const P cg14 = splat<P>(s.cg[14]), sg14 = splat<P>(s.sg[14]);
-  const P t29 = cg14 * x[29] - sg14 * x[1];
-  const P t1 = sg14 * x[29] + cg14 * x[1];
+  const P t29 = madd<F>(cg14, x[29], -(sg14 * x[1]));
+  const P t1 = madd<F>(sg14, x[29], cg14 * x[1]);
   const P cg15 = splat<P>(s.cg[15]), sg15 = splat<P>(s.sg[15]);
-  const P t30 = cg15 * x[30] - sg15 * x[0];
-  const P t0 = sg15 * x[30] + cg15 * x[0];
+  const P t30 = madd<F>(cg15, x[30], -(sg15 * x[0]));
+  const P t0 = madd<F>(sg15, x[30], cg15 * x[0]);
   const auto b = s.beta, h = s.half_beta2;
   (void)h;
-  P u0 = t0 + b * (T(-2.7386127875258306) * t1);
-  if constexpr (Order == 15) u0 += h * (T(-7.5) * t0);
-  if constexpr (Order == 2) u0 += h * (T(-7.5) * t0 + T(10.428326807307105) * t2);
-  P u1 = t1 + b * (T(2.7386127875258306) * t0 - T(3.8078865529319543) * t2);
-  if constexpr (Order == 15) u1 += h * (T(-22) * t1);
-  if constexpr (Order == 2) u1 += h * (T(-22) * t1 + T(17.449928366615147) * t3);
-  P u2 = t2 + b * (T(3.8078865529319543) * t1 - T(4.5825756949558398) * t3);
-  if constexpr (Order == 15) u2 += h * (T(-35.5) * t2);
-  if constexpr (Order == 2) u2 += h * (T(-35.5) * t2 + T(10.428326807307105) * t0 + T(23.811761799581316) * t4);
-  P u3 = t3 + b * (T(4.5825756949558398) * t2 - T(5.196152422706632) * t4);
-  if constexpr (Order == 15) u3 += h * (T(-48) * t3);
-  if constexpr (Order == 2) u3 += h * (T(-48) * t3 + T(17.449928366615147) * t1 + T(29.622626487197248) * t5);
-  P u4 = t4 + b * (T(5.196152422706632) * t3 - T(5.7008771254956896) * t5);
-  if constexpr (Order == 15) u4 += h * (T(-59.5) * t4);
-  if constexpr (Order == 2) u4 += h * (T(-59.5) * t4 + T(23.811761799581316) * t2 + T(34.910600109422354) * t6);
-  P u5 = t5 + b * (T(5.7008771254956896) * t4 - T(6.1237243569579451) * t6);
-  if constexpr (Order == 15) u5 += h * (T(-70) * t5);
-  if constexpr (Order == 2) u5 += h * (T(-70) * t5 + T(29.622626487197248) * t3 + T(39.686269665968858) * t7);
-  P u6 = t6 + b * (T(6.1237243569579451) * t5 - T(6.4807406984078604) * t7);
-  if constexpr (Order == 15) u6 += h * (T(-79.5) * t6);
-  if constexpr (Order == 2) u6 += h * (T(-79.5) * t6 + T(34.910600109422354) * t4 + T(43.954521951671822) * t8);
-  P u7 = t7 + b * (T(6.4807406984078604) * t6 - T(6.7823299831252681) * t8);
-  if constexpr (Order == 15) u7 += h * (T(-88) * t7);
-  if constexpr (Order == 2) u7 += h * (T(-88) * t7 + T(39.686269665968858) * t5 + T(47.7179211617606) * t9);
-  P u8 = t8 + b * (T(6.7823299831252681) * t7 - T(7.0356236397351442) * t9);
-  if constexpr (Order == 15) u8 += h * (T(-95.5) * t8);
-  if constexpr (Order == 2) u8 += h * (T(-95.5) * t8 + T(43.954521951671822) * t6 + T(50.977936403899285) * t10);
-  P u9 = t9 + b * (T(7.0356236397351442) * t8 - T(7.245688373094719) * t10);
-  if constexpr (Order == 15) u9 += h * (T(-102) * t9);
-  if constexpr (Order == 2) u9 += h * (T(-102) * t9 + T(47.7179211617606) * t7 + T(53.735463150511691) * t11);
-  P u10 = t10 + b * (T(7.245688373094719) * t9 - T(7.416198487095663) * t11);
-  if constexpr (Order == 15) u10 += h * (T(-107.5) * t10);
-  if constexpr (Order == 2) u10 += h * (T(-107.5) * t10 + T(50.977936403899285) * t8 + T(55.991070716677676) * t12);
-  P u11 = t11 + b * (T(7.416198487095663) * t10 - T(7.5498344352707498) * t12);
-  if constexpr (Order == 15) u11 += h * (T(-112) * t11);
-  if constexpr (Order == 2) u11 += h * (T(-112) * t11 + T(53.735463150511691) * t9 + T(57.745129664760476) * t13);
-  P u12 = t12 + b * (T(7.5498344352707498) * t11 - T(7.6485292703891776) * t13);
-  if constexpr (Order == 15) u12 += h * (T(-115.5) * t12);
-  if constexpr (Order == 2) u12 += h * (T(-115.5) * t12 + T(55.991070716677676) * t10 + T(58.997881317891405) * t14);
-  P u13 = t13 + b * (T(7.6485292703891776) * t12 - T(7.713624310270756) * t14);
-  if constexpr (Order == 15) u13 += h * (T(-118) * t13);
-  if constexpr (Order == 2) u13 += h * (T(-118) * t13 + T(57.745129664760476) * t11);
-  P u14 = t14 + b * (T(7.713624310270756) * t13);
-  if constexpr (Order == 15) u14 += h * (T(-59.5) * t14);
-  if constexpr (Order == 2) u14 += h * (T(-59.5) * t14 + T(58.997881317891405) * t12);
-  P u15 = t15 + b * (T(10.954451150103322) * t16);
-  if constexpr (Order == 15) u15 += h * (T(-120) * t15);
-  if constexpr (Order == 2) u15 += h * (T(-120) * t15 + T(84.498520697110436) * t17);
-  P u16 = t16 + b * (T(-10.954451150103322) * t15 + T(7.713624310270756) * t17);
-  if constexpr (Order == 15) u16 += h * (T(-179.5) * t16);
-  if constexpr (Order == 2) u16 += h * (T(-179.5) * t16 + T(58.997881317891405) * t18);
-  P u17 = t17 + b * (T(-7.713624310270756) * t16 + T(7.6485292703891776) * t18);
-  if constexpr (Order == 15) u17 += h * (T(-118) * t17);
-  if constexpr (Order == 2) u17 += h * (T(-118) * t17 + T(84.498520697110436) * t15 + T(57.745129664760476) * t19);
-  P u18 = t18 + b * (T(-7.6485292703891776) * t17 + T(7.5498344352707498) * t19);
-  if constexpr (Order == 15) u18 += h * (T(-115.5) * t18);
-  if constexpr (Order == 2) u18 += h * (T(-115.5) * t18 + T(58.997881317891405) * t16 + T(55.991070716677676) * t20);
-  P u19 = t19 + b * (T(-7.5498344352707498) * t18 + T(7.416198487095663) * t20);
-  if constexpr (Order == 15) u19 += h * (T(-112) * t19);
-  if constexpr (Order == 2) u19 += h * (T(-112) * t19 + T(57.745129664760476) * t17 + T(53.735463150511691) * t21);
-  P u20 = t20 + b * (T(-7.416198487095663) * t19 + T(7.245688373094719) * t21);
-  if constexpr (Order == 15) u20 += h * (T(-107.5) * t20);
-  if constexpr (Order == 2) u20 += h * (T(-107.5) * t20 + T(55.991070716677676) * t18 + T(50.977936403899285) * t22);
-  P u21 = t21 + b * (T(-7.245688373094719) * t20 + T(7.0356236397351442) * t22);
-  if constexpr (Order == 15) u21 += h * (T(-102) * t21);
-  if constexpr (Order == 2) u21 += h * (T(-102) * t21 + T(53.735463150511691) * t19 + T(47.7179211617606) * t23);
-  P u22 = t22 + b * (T(-7.0356236397351442) * t21 + T(6.7823299831252681) * t23);
-  if constexpr (Order == 15) u22 += h * (T(-95.5) * t22);
-  if constexpr (Order == 2) u22 += h * (T(-95.5) * t22 + T(50.977936403899285) * t20 + T(43.954521951671822) * t24);
-  P u23 = t23 + b * (T(-6.7823299831252681) * t22 + T(6.4807406984078604) * t24);
-  if constexpr (Order == 15) u23 += h * (T(-88) * t23);
-  if constexpr (Order == 2) u23 += h * (T(-88) * t23 + T(47.7179211617606) * t21 + T(39.686269665968858) * t25);
-  P u24 = t24 + b * (T(-6.4807406984078604) * t23 + T(6.1237243569579451) * t25);
-  if constexpr (Order == 15) u24 += h * (T(-79.5) * t24);
-  if constexpr (Order == 2) u24 += h * (T(-79.5) * t24 + T(43.954521951671822) * t22 + T(34.910600109422354) * t26);
-  P u25 = t25 + b * (T(-6.1237243569579451) * t24 + T(5.7008771254956896) * t26);
-  if constexpr (Order == 15) u25 += h * (T(-70) * t25);
-  if constexpr (Order == 2) u25 += h * (T(-70) * t25 + T(39.686269665968858) * t23 + T(29.622626487197248) * t27);
-  P u26 = t26 + b * (T(-5.7008771254956896) * t25 + T(5.196152422706632) * t27);
-  if constexpr (Order == 15) u26 += h * (T(-59.5) * t26);
-  if constexpr (Order == 2) u26 += h * (T(-59.5) * t26 + T(34.910600109422354) * t24 + T(23.811761799581316) * t28);
-  P u27 = t27 + b * (T(-5.196152422706632) * t26 + T(4.5825756949558398) * t28);
-  if constexpr (Order == 15) u27 += h * (T(-48) * t27);
-  if constexpr (Order == 2) u27 += h * (T(-48) * t27 + T(29.622626487197248) * t25 + T(17.449928366615147) * t29);
-  P u28 = t28 + b * (T(-4.5825756949558398) * t27 + T(3.8078865529319543) * t29);
-  if constexpr (Order == 15) u28 += h * (T(-35.5) * t28);
-  if constexpr (Order == 2) u28 += h * (T(-35.5) * t28 + T(23.811761799581316) * t26 + T(10.428326807307105) * t30);
-  P u29 = t29 + b * (T(-3.8078865529319543) * t28 + T(2.7386127875258306) * t30);
-  if constexpr (Order == 15) u29 += h * (T(-22) * t29);
-  if constexpr (Order == 2) u29 += h * (T(-22) * t29 + T(17.449928366615147) * t27);
-  P u30 = t30 + b * (T(-2.7386127875258306) * t29);
-  if constexpr (Order == 15) u30 += h * (T(-7.5) * t30);
-  if constexpr (Order == 2) u30 += h * (T(-7.5) * t30 + T(10.428326807307105) * t28);
+  P u0 = madd<F>(b, T(-2.7386127875258306) * t1, t0);
+  if constexpr (Order == 15) u0 = madd<F>(h, T(-7.5) * t0, u0);
+  if constexpr (Order == 2) u0 = madd<F>(h, madd<F>(T(10.428326807307105), t2, T(-7.5) * t0), u0);
+  P u1 = madd<F>(b, madd<F>(T(-3.8078865529319543), t2, T(2.7386127875258306) * t0), t1);
+  if constexpr (Order == 15) u1 = madd<F>(h, T(-22) * t1, u1);
+  if constexpr (Order == 2) u1 = madd<F>(h, madd<F>(T(17.449928366615147), t3, T(-22) * t1), u1);
+  P u2 = madd<F>(b, madd<F>(T(-4.5825756949558398), t3, T(3.8078865529319543) * t1), t2);
+  if constexpr (Order == 15) u2 = madd<F>(h, T(-35.5) * t2, u2);
+  if constexpr (Order == 2) u2 = madd<F>(h, madd<F>(T(23.811761799581316), t4, madd<F>(T(10.428326807307105), t0, T(-35.5) * t2)), u2);
+  P u3 = madd<F>(b, madd<F>(T(-5.196152422706632), t4, T(4.5825756949558398) * t2), t3);
+  if constexpr (Order == 15) u3 = madd<F>(h, T(-48) * t3, u3);
+  if constexpr (Order == 2) u3 = madd<F>(h, madd<F>(T(29.622626487197248), t5, madd<F>(T(17.449928366615147), t1, T(-48) * t3)), u3);
+  P u4 = madd<F>(b, madd<F>(T(-5.7008771254956896), t5, T(5.196152422706632) * t3), t4);
+  if constexpr (Order == 15) u4 = madd<F>(h, T(-59.5) * t4, u4);
+  if constexpr (Order == 2) u4 = madd<F>(h, madd<F>(T(34.910600109422354), t6, madd<F>(T(23.811761799581316), t2, T(-59.5) * t4)), u4);
+  P u5 = madd<F>(b, madd<F>(T(-6.1237243569579451), t6, T(5.7008771254956896) * t4), t5);
+  if constexpr (Order == 15) u5 = madd<F>(h, T(-70) * t5, u5);
+  if constexpr (Order == 2) u5 = madd<F>(h, madd<F>(T(39.686269665968858), t7, madd<F>(T(29.622626487197248), t3, T(-70) * t5)), u5);
+  P u6 = madd<F>(b, madd<F>(T(-6.4807406984078604), t7, T(6.1237243569579451) * t5), t6);
+  if constexpr (Order == 15) u6 = madd<F>(h, T(-79.5) * t6, u6);
+  if constexpr (Order == 2) u6 = madd<F>(h, madd<F>(T(43.954521951671822), t8, madd<F>(T(34.910600109422354), t4, T(-79.5) * t6)), u6);
+  P u7 = madd<F>(b, madd<F>(T(-6.7823299831252681), t8, T(6.4807406984078604) * t6), t7);
+  if constexpr (Order == 15) u7 = madd<F>(h, T(-88) * t7, u7);
+  if constexpr (Order == 2) u7 = madd<F>(h, madd<F>(T(47.7179211617606), t9, madd<F>(T(39.686269665968858), t5, T(-88) * t7)), u7);
+  P u8 = madd<F>(b, madd<F>(T(-7.0356236397351442), t9, T(6.7823299831252681) * t7), t8);
+  if constexpr (Order == 15) u8 = madd<F>(h, T(-95.5) * t8, u8);
+  if constexpr (Order == 2) u8 = madd<F>(h, madd<F>(T(50.977936403899285), t10, madd<F>(T(43.954521951671822), t6, T(-95.5) * t8)), u8);
+  P u9 = madd<F>(b, madd<F>(T(-7.245688373094719), t10, T(7.0356236397351442) * t8), t9);
+  if constexpr (Order == 15) u9 = madd<F>(h, T(-102) * t9, u9);
+  if constexpr (Order == 2) u9 = madd<F>(h, madd<F>(T(53.735463150511691), t11, madd<F>(T(47.7179211617606), t7, T(-102) * t9)), u9);
+  P u10 = madd<F>(b, madd<F>(T(-7.416198487095663), t11, T(7.245688373094719) * t9), t10);
+  if constexpr (Order == 15) u10 = madd<F>(h, T(-107.5) * t10, u10);
+  if constexpr (Order == 2) u10 = madd<F>(h, madd<F>(T(55.991070716677676), t12, madd<F>(T(50.977936403899285), t8, T(-107.5) * t10)), u10);
+  P u11 = madd<F>(b, madd<F>(T(-7.5498344352707498), t12, T(7.416198487095663) * t10), t11);
+  if constexpr (Order == 15) u11 = madd<F>(h, T(-112) * t11, u11);
+  if constexpr (Order == 2) u11 = madd<F>(h, madd<F>(T(57.745129664760476), t13, madd<F>(T(53.735463150511691), t9, T(-112) * t11)), u11);
+  P u12 = madd<F>(b, madd<F>(T(-7.6485292703891776), t13, T(7.5498344352707498) * t11), t12);
+  if constexpr (Order == 15) u12 = madd<F>(h, T(-115.5) * t12, u12);
+  if constexpr (Order == 2) u12 = madd<F>(h, madd<F>(T(58.997881317891405), t14, madd<F>(T(55.991070716677676), t10, T(-115.5) * t12)), u12);
+  P u13 = madd<F>(b, madd<F>(T(-7.713624310270756), t14, T(7.6485292703891776) * t12), t13);
+  if constexpr (Order == 15) u13 = madd<F>(h, T(-118) * t13, u13);
+  if constexpr (Order == 2) u13 = madd<F>(h, madd<F>(T(57.745129664760476), t11, T(-118) * t13), u13);
+  P u14 = madd<F>(b, T(7.713624310270756) * t13, t14);
+  if constexpr (Order == 15) u14 = madd<F>(h, T(-59.5) * t14, u14);
+  if constexpr (Order == 2) u14 = madd<F>(h, madd<F>(T(58.997881317891405), t12, T(-59.5) * t14), u14);
+  P u15 = madd<F>(b, T(10.954451150103322) * t16, t15);
+  if constexpr (Order == 15) u15 = madd<F>(h, T(-120) * t15, u15);
+  if constexpr (Order == 2) u15 = madd<F>(h, madd<F>(T(84.498520697110436), t17, T(-120) * t15), u15);
+  P u16 = madd<F>(b, madd<F>(T(7.713624310270756), t17, T(-10.954451150103322) * t15), t16);
+  if constexpr (Order == 15) u16 = madd<F>(h, T(-179.5) * t16, u16);
+  if constexpr (Order == 2) u16 = madd<F>(h, madd<F>(T(58.997881317891405), t18, T(-179.5) * t16), u16);
+  P u17 = madd<F>(b, madd<F>(T(7.6485292703891776), t18, T(-7.713624310270756) * t16), t17);
+  if constexpr (Order == 15) u17 = madd<F>(h, T(-118) * t17, u17);
+  if constexpr (Order == 2) u17 = madd<F>(h, madd<F>(T(57.745129664760476), t19, madd<F>(T(84.498520697110436), t15, T(-118) * t17)), u17);
+  P u18 = madd<F>(b, madd<F>(T(7.5498344352707498), t19, T(-7.6485292703891776) * t17), t18);
+  if constexpr (Order == 15) u18 = madd<F>(h, T(-115.5) * t18, u18);
+  if constexpr (Order == 2) u18 = madd<F>(h, madd<F>(T(55.991070716677676), t20, madd<F>(T(58.997881317891405), t16, T(-115.5) * t18)), u18);
+  P u19 = madd<F>(b, madd<F>(T(7.416198487095663), t20, T(-7.5498344352707498) * t18), t19);
+  if constexpr (Order == 15) u19 = madd<F>(h, T(-112) * t19, u19);
+  if constexpr (Order == 2) u19 = madd<F>(h, madd<F>(T(53.735463150511691), t21, madd<F>(T(57.745129664760476), t17, T(-112) * t19)), u19);
+  P u20 = madd<F>(b, madd<F>(T(7.245688373094719), t21, T(-7.416198487095663) * t19), t20);
+  if constexpr (Order == 15) u20 = madd<F>(h, T(-107.5) * t20, u20);
+  if constexpr (Order == 2) u20 = madd<F>(h, madd<F>(T(50.977936403899285), t22, madd<F>(T(55.991070716677676), t18, T(-107.5) * t20)), u20);
+  P u21 = madd<F>(b, madd<F>(T(7.0356236397351442), t22, T(-7.245688373094719) * t20), t21);
+  if constexpr (Order == 15) u21 = madd<F>(h, T(-102) * t21, u21);
+  if constexpr (Order == 2) u21 = madd<F>(h, madd<F>(T(47.7179211617606), t23, madd<F>(T(53.735463150511691), t19, T(-102) * t21)), u21);
+  P u22 = madd<F>(b, madd<F>(T(6.7823299831252681), t23, T(-7.0356236397351442) * t21), t22);
+  if constexpr (Order == 15) u22 = madd<F>(h, T(-95.5) * t22, u22);
+  if constexpr (Order == 2) u22 = madd<F>(h, madd<F>(T(43.954521951671822), t24, madd<F>(T(50.977936403899285), t20, T(-95.5) * t22)), u22);
+  P u23 = madd<F>(b, madd<F>(T(6.4807406984078604), t24, T(-6.7823299831252681) * t22), t23);
+  if constexpr (Order == 15) u23 = madd<F>(h, T(-88) * t23, u23);
+  if constexpr (Order == 2) u23 = madd<F>(h, madd<F>(T(39.686269665968858), t25, madd<F>(T(47.7179211617606), t21, T(-88) * t23)), u23);
+  P u24 = madd<F>(b, madd<F>(T(6.1237243569579451), t25, T(-6.4807406984078604) * t23), t24);
+  if constexpr (Order == 15) u24 = madd<F>(h, T(-79.5) * t24, u24);
+  if constexpr (Order == 2) u24 = madd<F>(h, madd<F>(T(34.910600109422354), t26, madd<F>(T(43.954521951671822), t22, T(-79.5) * t24)), u24);
+  P u25 = madd<F>(b, madd<F>(T(5.7008771254956896), t26, T(-6.1237243569579451) * t24), t25);
+  if constexpr (Order == 15) u25 = madd<F>(h, T(-70) * t25, u25);
+  if constexpr (Order == 2) u25 = madd<F>(h, madd<F>(T(29.622626487197248), t27, madd<F>(T(39.686269665968858), t23, T(-70) * t25)), u25);
+  P u26 = madd<F>(b, madd<F>(T(5.196152422706632), t27, T(-5.7008771254956896) * t25), t26);
+  if constexpr (Order == 15) u26 = madd<F>(h, T(-59.5) * t26, u26);
+  if constexpr (Order == 2) u26 = madd<F>(h, madd<F>(T(23.811761799581316), t28, madd<F>(T(34.910600109422354), t24, T(-59.5) * t26)), u26);
+  P u27 = madd<F>(b, madd<F>(T(4.5825756949558398), t28, T(-5.196152422706632) * t26), t27);
+  if constexpr (Order == 15) u27 = madd<F>(h, T(-48) * t27, u27);
+  if constexpr (Order == 2) u27 = madd<F>(h, madd<F>(T(17.449928366615147), t29, madd<F>(T(29.622626487197248), t25, T(-48) * t27)), u27);
+  P u28 = madd<F>(b, madd<F>(T(3.8078865529319543), t29, T(-4.5825756949558398) * t27), t28);
+  if constexpr (Order == 15) u28 = madd<F>(h, T(-35.5) * t28, u28);
+  if constexpr (Order == 2) u28 = madd<F>(h, madd<F>(T(10.428326807307105), t30, madd<F>(T(23.811761799581316), t26, T(-35.5) * t28)), u28);
+  P u29 = madd<F>(b, madd<F>(T(2.7386127875258306), t30, T(-3.8078865529319543) * t28), t29);
+  if constexpr (Order == 15) u29 = madd<F>(h, T(-22) * t29, u29);
+  if constexpr (Order == 2) u29 = madd<F>(h, madd<F>(T(17.449928366615147), t27, T(-22) * t29), u29);
+  P u30 = madd<F>(b, T(-2.7386127875258306) * t29, t30);
+  if constexpr (Order == 15) u30 = madd<F>(h, T(-7.5) * t30, u30);
+  if constexpr (Order == 2) u30 = madd<F>(h, madd<F>(T(10.428326807307105), t28, T(-7.5) * t30), u30);
   y[15] = u15;
   const P ca1 = splat<P>(s.ca[1]), sa1 = splat<P>(s.sa[1]);
-  y[16] = ca1 * u16 - sa1 * u14;
-  y[14] = sa1 * u16 + ca1 * u14;
+  y[16] = madd<F>(ca1, u16, -(sa1 * u14));
+  y[14] = madd<F>(sa1, u16, ca1 * u14);
   const P ca2 = splat<P>(s.ca[2]), sa2 = splat<P>(s.sa[2]);
-  y[17] = ca2 * u17 - sa2 * u13;
-  y[13] = sa2 * u17 + ca2 * u13;
+  y[17] = madd<F>(ca2, u17, -(sa2 * u13));
+  y[13] = madd<F>(sa2, u17, ca2 * u13);
   const P ca3 = splat<P>(s.ca[3]), sa3 = splat<P>(s.sa[3]);
-  y[18] = ca3 * u18 - sa3 * u12;
-  y[12] = sa3 * u18 + ca3 * u12;
+  y[18] = madd<F>(ca3, u18, -(sa3 * u12));
+  y[12] = madd<F>(sa3, u18, ca3 * u12);
   const P ca4 = splat<P>(s.ca[4]), sa4 = splat<P>(s.sa[4]);
-  y[19] = ca4 * u19 - sa4 * u11;
-  y[11] = sa4 * u19 + ca4 * u11;
+  y[19] = madd<F>(ca4, u19, -(sa4 * u11));
+  y[11] = madd<F>(sa4, u19, ca4 * u11);
   const P ca5 = splat<P>(s.ca[5]), sa5 = splat<P>(s.sa[5]);
-  y[20] = ca5 * u20 - sa5 * u10;
-  y[10] = sa5 * u20 + ca5 * u10;
+  y[20] = madd<F>(ca5, u20, -(sa5 * u10));
+  y[10] = madd<F>(sa5, u20, ca5 * u10);
   const P ca6 = splat<P>(s.ca[6]), sa6 = splat<P>(s.sa[6]);
-  y[21] = ca6 * u21 - sa6 * u9;
-  y[9] = sa6 * u21 + ca6 * u9;
+  y[21] = madd<F>(ca6, u21, -(sa6 * u9));
+  y[9] = madd<F>(sa6, u21, ca6 * u9);
   const P ca7 = splat<P>(s.ca[7]), sa7 = splat<P>(s.sa[7]);
-  y[22] = ca7 * u22 - sa7 * u8;
-  y[8] = sa7 * u22 + ca7 * u8;
+  y[22] = madd<F>(ca7, u22, -(sa7 * u8));
+  y[8] = madd<F>(sa7, u22, ca7 * u8);
   const P ca8 = splat<P>(s.ca[8]), sa8 = splat<P>(s.sa[8]);
-  y[23] = ca8 * u23 - sa8 * u7;
-  y[7] = sa8 * u23 + ca8 * u7;
+  y[23] = madd<F>(ca8, u23, -(sa8 * u7));
+  y[7] = madd<F>(sa8, u23, ca8 * u7);
   const P ca9 = splat<P>(s.ca[9]), sa9 = splat<P>(s.sa[9]);
-  y[24] = ca9 * u24 - sa9 * u6;
-  y[6] = sa9 * u24 + ca9 * u6;
+  y[24] = madd<F>(ca9, u24, -(sa9 * u6));
+  y[6] = madd<F>(sa9, u24, ca9 * u6);
   const P ca10 = splat<P>(s.ca[10]), sa10 = splat<P>(s.sa[10]);
-  y[25] = ca10 * u25 - sa10 * u5;
-  y[5] = sa10 * u25 + ca10 * u5;
+  y[25] = madd<F>(ca10, u25, -(sa10 * u5));
+  y[5] = madd<F>(sa10, u25, ca10 * u5);
   const P ca11 = splat<P>(s.ca[11]), sa11 = splat<P>(s.sa[11]);
-  y[26] = ca11 * u26 - sa11 * u4;
-  y[4] = sa11 * u26 + ca11 * u4;
+  y[26] = madd<F>(ca11, u26, -(sa11 * u4));
+  y[4] = madd<F>(sa11, u26, ca11 * u4);
   const P ca12 = splat<P>(s.ca[12]), sa12 = splat<P>(s.sa[12]);
-  y[27] = ca12 * u27 - sa12 * u3;
-  y[3] = sa12 * u27 + ca12 * u3;
+  y[27] = madd<F>(ca12, u27, -(sa12 * u3));
+  y[3] = madd<F>(sa12, u27, ca12 * u3);
   const P ca13 = splat<P>(s.ca[13]), sa13 = splat<P>(s.sa[13]);
-  y[28] = ca13 * u28 - sa13 * u2;
-  y[2] = sa13 * u28 + ca13 * u2;
+  y[28] = madd<F>(ca13, u28, -(sa13 * u2));
+  y[2] = madd<F>(sa13, u28, ca13 * u2);
   const P ca14 = splat<P>(s.ca[14]), sa14 = splat<P>(s.sa[14]);
-  y[29] = ca14 * u29 - sa14 * u1;
-  y[1] = sa14 * u29 + ca14 * u1;
+  y[29] = madd<F>(ca14, u29, -(sa14 * u1));
+  y[1] = madd<F>(sa14, u29, ca14 * u1);
   const P ca15 = splat<P>(s.ca[15]), sa15 = splat<P>(s.sa[15]);
-  y[30] = ca15 * u30 - sa15 * u0;
-  y[0] = sa15 * u30 + ca15 * u0;
+  y[30] = madd<F>(ca15, u30, -(sa15 * u0));
+  y[0] = madd<F>(sa15, u30, ca15 * u0);
 }
 
 // Band 16 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) ([2] Sec. 3).
-template <int Order, class T, class P, class S>
-inline void taylor_band16(const S& s, const P* __restrict x, P* __restrict y) {
+template <bool F, int Order, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void taylor_band16(const S& s, const P* __restrict x, P* __restrict y) {
   const P t16 = x[16];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
-  const P t17 = cg1 * x[17] - sg1 * x[15];
-  const P t15 = sg1 * x[17] + cg1 * x[15];
+  const P t17 = madd<F>(cg1, x[17], -(sg1 * x[15]));
+  const P t15 = madd<F>(sg1, x[17], cg1 * x[15]);
   const P cg2 = splat<P>(s.cg[2]), sg2 = splat<P>(s.sg[2]);
-  const P t18 = cg2 * x[18] - sg2 * x[14];
-  const P t14 = sg2 * x[18] + cg2 * x[14];
+  const P t18 = madd<F>(cg2, x[18], -(sg2 * x[14]));
+  const P t14 = madd<F>(sg2, x[18], cg2 * x[14]);
   const P cg3 = splat<P>(s.cg[3]), sg3 = splat<P>(s.sg[3]);
-  const P t19 = cg3 * x[19] - sg3 * x[13];
-  const P t13 = sg3 * x[19] + cg3 * x[13];
+  const P t19 = madd<F>(cg3, x[19], -(sg3 * x[13]));
+  const P t13 = madd<F>(sg3, x[19], cg3 * x[13]);
   const P cg4 = splat<P>(s.cg[4]), sg4 = splat<P>(s.sg[4]);
-  const P t20 = cg4 * x[20] - sg4 * x[12];
-  const P t12 = sg4 * x[20] + cg4 * x[12];
+  const P t20 = madd<F>(cg4, x[20], -(sg4 * x[12]));
+  const P t12 = madd<F>(sg4, x[20], cg4 * x[12]);
   const P cg5 = splat<P>(s.cg[5]), sg5 = splat<P>(s.sg[5]);
-  const P t21 = cg5 * x[21] - sg5 * x[11];
-  const P t11 = sg5 * x[21] + cg5 * x[11];
+  const P t21 = madd<F>(cg5, x[21], -(sg5 * x[11]));
+  const P t11 = madd<F>(sg5, x[21], cg5 * x[11]);
   const P cg6 = splat<P>(s.cg[6]), sg6 = splat<P>(s.sg[6]);
-  const P t22 = cg6 * x[22] - sg6 * x[10];
-  const P t10 = sg6 * x[22] + cg6 * x[10];
+  const P t22 = madd<F>(cg6, x[22], -(sg6 * x[10]));
+  const P t10 = madd<F>(sg6, x[22], cg6 * x[10]);
   const P cg7 = splat<P>(s.cg[7]), sg7 = splat<P>(s.sg[7]);
-  const P t23 = cg7 * x[23] - sg7 * x[9];
-  const P t9 = sg7 * x[23] + cg7 * x[9];
+  const P t23 = madd<F>(cg7, x[23], -(sg7 * x[9]));
+  const P t9 = madd<F>(sg7, x[23], cg7 * x[9]);
   const P cg8 = splat<P>(s.cg[8]), sg8 = splat<P>(s.sg[8]);
-  const P t24 = cg8 * x[24] - sg8 * x[8];
-  const P t8 = sg8 * x[24] + cg8 * x[8];
+  const P t24 = madd<F>(cg8, x[24], -(sg8 * x[8]));
+  const P t8 = madd<F>(sg8, x[24], cg8 * x[8]);
   const P cg9 = splat<P>(s.cg[9]), sg9 = splat<P>(s.sg[9]);
-  const P t25 = cg9 * x[25] - sg9 * x[7];
-  const P t7 = sg9 * x[25] + cg9 * x[7];
+  const P t25 = madd<F>(cg9, x[25], -(sg9 * x[7]));
+  const P t7 = madd<F>(sg9, x[25], cg9 * x[7]);
   const P cg10 = splat<P>(s.cg[10]), sg10 = splat<P>(s.sg[10]);
-  const P t26 = cg10 * x[26] - sg10 * x[6];
-  const P t6 = sg10 * x[26] + cg10 * x[6];
+  const P t26 = madd<F>(cg10, x[26], -(sg10 * x[6]));
+  const P t6 = madd<F>(sg10, x[26], cg10 * x[6]);
   const P cg11 = splat<P>(s.cg[11]), sg11 = splat<P>(s.sg[11]);
-  const P t27 = cg11 * x[27] - sg11 * x[5];
-  const P t5 = sg11 * x[27] + cg11 * x[5];
+  const P t27 = madd<F>(cg11, x[27], -(sg11 * x[5]));
+  const P t5 = madd<F>(sg11, x[27], cg11 * x[5]);
   const P cg12 = splat<P>(s.cg[12]), sg12 = splat<P>(s.sg[12]);
-  const P t28 = cg12 * x[28] - sg12 * x[4];
-  const P t4 = sg12 * x[28] + cg12 * x[4];
+  const P t28 = madd<F>(cg12, x[28], -(sg12 * x[4]));
+  const P t4 = madd<F>(sg12, x[28], cg12 * x[4]);
   const P cg13 = splat<P>(s.cg[13]), sg13 = splat<P>(s.sg[13]);
-  const P t29 = cg13 * x[29] - sg13 * x[3];
-  const P t3 = sg13 * x[29] + cg13 * x[3];
+  const P t29 = madd<F>(cg13, x[29], -(sg13 * x[3]));
+  const P t3 = madd<F>(sg13, x[29], cg13 * x[3]);
   const P cg14 = splat<P>(s.cg[14]), sg14 = splat<P>(s.sg[14]);
-  const P t30 = cg14 * x[30] - sg14 * x[2];
-  const P t2 = sg14 * x[30] + cg14 * x[2];
+  const P t30 = madd<F>(cg14, x[30], -(sg14 * x[2]));
+  const P t2 = madd<F>(sg14, x[30], cg14 * x[2]);
   const P cg15 = splat<P>(s.cg[15]), sg15 = splat<P>(s.sg[15]);
-  const P t31 = cg15 * x[31] - sg15 * x[1];
-  const P t1 = sg15 * x[31] + cg15 * x[1];
+  const P t31 = madd<F>(cg15, x[31], -(sg15 * x[1]));
+  const P t1 = madd<F>(sg15, x[31], cg15 * x[1]);
   const P cg16 = splat<P>(s.cg[16]), sg16 = splat<P>(s.sg[16]);
-  const P t32 = cg16 * x[32] - sg16 * x[0];
-  const P t0 = sg16 * x[32] + cg16 * x[0];
+  const P t32 = madd<F>(cg16, x[32], -(sg16 * x[0]));
+  const P t0 = madd<F>(sg16, x[32], cg16 * x[0]);
   const auto b = s.beta, h = s.half_beta2;
   (void)h;
-  P u0 = t0 + b * (T(-2.8284271247461903) * t1);
-  if constexpr (Order == 15) u0 += h * (T(-8) * t0);
-  if constexpr (Order == 2) u0 += h * (T(-8) * t0 + T(11.135528725660043) * t2);
-  P u1 = t1 + b * (T(2.8284271247461903) * t0 - T(3.9370039370059056) * t2);
-  if constexpr (Order == 15) u1 += h * (T(-23.5) * t1);
-  if constexpr (Order == 2) u1 += h * (T(-23.5) * t1 + T(18.674849396983099) * t3);
-  P u2 = t2 + b * (T(3.9370039370059056) * t1 - T(4.7434164902525691) * t3);
-  if constexpr (Order == 15) u2 += h * (T(-38) * t2);
-  if constexpr (Order == 2) u2 += h * (T(-38) * t2 + T(11.135528725660043) * t0 + T(25.544079548889602) * t4);
-  P u3 = t3 + b * (T(4.7434164902525691) * t2 - T(5.3851648071345037) * t4);
-  if constexpr (Order == 15) u3 += h * (T(-51.5) * t3);
-  if constexpr (Order == 2) u3 += h * (T(-51.5) * t3 + T(18.674849396983099) * t1 + T(31.859064644147981) * t5);
-  P u4 = t4 + b * (T(5.3851648071345037) * t3 - T(5.9160797830996161) * t5);
-  if constexpr (Order == 15) u4 += h * (T(-64) * t4);
-  if constexpr (Order == 2) u4 += h * (T(-64) * t4 + T(25.544079548889602) * t2 + T(37.649701194033398) * t6);
-  P u5 = t5 + b * (T(5.9160797830996161) * t4 - T(6.3639610306789276) * t6);
-  if constexpr (Order == 15) u5 += h * (T(-75.5) * t5);
-  if constexpr (Order == 2) u5 += h * (T(-75.5) * t5 + T(31.859064644147981) * t3 + T(42.927264063762557) * t7);
-  P u6 = t6 + b * (T(6.3639610306789276) * t5 - T(6.7453687816160208) * t7);
-  if constexpr (Order == 15) u6 += h * (T(-86) * t6);
-  if constexpr (Order == 2) u6 += h * (T(-86) * t6 + T(37.649701194033398) * t4 + T(47.696960070847283) * t8);
-  P u7 = t7 + b * (T(6.7453687816160208) * t6 - T(7.0710678118654755) * t8);
-  if constexpr (Order == 15) u7 += h * (T(-95.5) * t7);
-  if constexpr (Order == 2) u7 += h * (T(-95.5) * t7 + T(42.927264063762557) * t5 + T(51.96152422706632) * t9);
-  P u8 = t8 + b * (T(7.0710678118654755) * t7 - T(7.3484692283495345) * t9);
-  if constexpr (Order == 15) u8 += h * (T(-104) * t8);
-  if constexpr (Order == 2) u8 += h * (T(-104) * t8 + T(47.696960070847283) * t6 + T(55.722526863020128) * t10);
-  P u9 = t9 + b * (T(7.3484692283495345) * t8 - T(7.5828754440515507) * t10);
-  if constexpr (Order == 15) u9 += h * (T(-111.5) * t9);
-  if constexpr (Order == 2) u9 += h * (T(-111.5) * t9 + T(51.96152422706632) * t7 + T(58.980929121199843) * t11);
-  P u10 = t10 + b * (T(7.5828754440515507) * t9 - T(7.7781745930520225) * t11);
-  if constexpr (Order == 15) u10 += h * (T(-118) * t10);
-  if constexpr (Order == 2) u10 += h * (T(-118) * t10 + T(55.722526863020128) * t8 + T(61.73734688177003) * t12);
-  P u11 = t11 + b * (T(7.7781745930520225) * t10 - T(7.9372539331937721) * t12);
-  if constexpr (Order == 15) u11 += h * (T(-123.5) * t11);
-  if constexpr (Order == 2) u11 += h * (T(-123.5) * t11 + T(58.980929121199843) * t9 + T(63.992187023104627) * t13);
-  P u12 = t12 + b * (T(7.9372539331937721) * t11 - T(8.0622577482985491) * t13);
-  if constexpr (Order == 15) u12 += h * (T(-128) * t12);
-  if constexpr (Order == 2) u12 += h * (T(-128) * t12 + T(61.73734688177003) * t10 + T(65.745722294305963) * t14);
-  P u13 = t13 + b * (T(8.0622577482985491) * t12 - T(8.1547532151500448) * t14);
-  if constexpr (Order == 15) u13 += h * (T(-131.5) * t13);
-  if constexpr (Order == 2) u13 += h * (T(-131.5) * t13 + T(63.992187023104627) * t11 + T(66.998134302381885) * t15);
-  P u14 = t14 + b * (T(8.1547532151500448) * t13 - T(8.2158383625774913) * t15);
-  if constexpr (Order == 15) u14 += h * (T(-134) * t14);
-  if constexpr (Order == 2) u14 += h * (T(-134) * t14 + T(65.745722294305963) * t12);
-  P u15 = t15 + b * (T(8.2158383625774913) * t14);
-  if constexpr (Order == 15) u15 += h * (T(-67.5) * t15);
-  if constexpr (Order == 2) u15 += h * (T(-67.5) * t15 + T(66.998134302381885) * t13);
-  P u16 = t16 + b * (T(11.661903789690601) * t17);
-  if constexpr (Order == 15) u16 += h * (T(-136) * t16);
-  if constexpr (Order == 2) u16 += h * (T(-136) * t16 + T(95.812316536027879) * t18);
-  P u17 = t17 + b * (T(-11.661903789690601) * t16 + T(8.2158383625774913) * t18);
-  if constexpr (Order == 15) u17 += h * (T(-203.5) * t17);
-  if constexpr (Order == 2) u17 += h * (T(-203.5) * t17 + T(66.998134302381885) * t19);
-  P u18 = t18 + b * (T(-8.2158383625774913) * t17 + T(8.1547532151500448) * t19);
-  if constexpr (Order == 15) u18 += h * (T(-134) * t18);
-  if constexpr (Order == 2) u18 += h * (T(-134) * t18 + T(95.812316536027879) * t16 + T(65.745722294305963) * t20);
-  P u19 = t19 + b * (T(-8.1547532151500448) * t18 + T(8.0622577482985491) * t20);
-  if constexpr (Order == 15) u19 += h * (T(-131.5) * t19);
-  if constexpr (Order == 2) u19 += h * (T(-131.5) * t19 + T(66.998134302381885) * t17 + T(63.992187023104627) * t21);
-  P u20 = t20 + b * (T(-8.0622577482985491) * t19 + T(7.9372539331937721) * t21);
-  if constexpr (Order == 15) u20 += h * (T(-128) * t20);
-  if constexpr (Order == 2) u20 += h * (T(-128) * t20 + T(65.745722294305963) * t18 + T(61.73734688177003) * t22);
-  P u21 = t21 + b * (T(-7.9372539331937721) * t20 + T(7.7781745930520225) * t22);
-  if constexpr (Order == 15) u21 += h * (T(-123.5) * t21);
-  if constexpr (Order == 2) u21 += h * (T(-123.5) * t21 + T(63.992187023104627) * t19 + T(58.980929121199843) * t23);
-  P u22 = t22 + b * (T(-7.7781745930520225) * t21 + T(7.5828754440515507) * t23);
-  if constexpr (Order == 15) u22 += h * (T(-118) * t22);
-  if constexpr (Order == 2) u22 += h * (T(-118) * t22 + T(61.73734688177003) * t20 + T(55.722526863020128) * t24);
-  P u23 = t23 + b * (T(-7.5828754440515507) * t22 + T(7.3484692283495345) * t24);
-  if constexpr (Order == 15) u23 += h * (T(-111.5) * t23);
-  if constexpr (Order == 2) u23 += h * (T(-111.5) * t23 + T(58.980929121199843) * t21 + T(51.96152422706632) * t25);
-  P u24 = t24 + b * (T(-7.3484692283495345) * t23 + T(7.0710678118654755) * t25);
-  if constexpr (Order == 15) u24 += h * (T(-104) * t24);
-  if constexpr (Order == 2) u24 += h * (T(-104) * t24 + T(55.722526863020128) * t22 + T(47.696960070847283) * t26);
-  P u25 = t25 + b * (T(-7.0710678118654755) * t24 + T(6.7453687816160208) * t26);
-  if constexpr (Order == 15) u25 += h * (T(-95.5) * t25);
-  if constexpr (Order == 2) u25 += h * (T(-95.5) * t25 + T(51.96152422706632) * t23 + T(42.927264063762557) * t27);
-  P u26 = t26 + b * (T(-6.7453687816160208) * t25 + T(6.3639610306789276) * t27);
-  if constexpr (Order == 15) u26 += h * (T(-86) * t26);
-  if constexpr (Order == 2) u26 += h * (T(-86) * t26 + T(47.696960070847283) * t24 + T(37.649701194033398) * t28);
-  P u27 = t27 + b * (T(-6.3639610306789276) * t26 + T(5.9160797830996161) * t28);
-  if constexpr (Order == 15) u27 += h * (T(-75.5) * t27);
-  if constexpr (Order == 2) u27 += h * (T(-75.5) * t27 + T(42.927264063762557) * t25 + T(31.859064644147981) * t29);
-  P u28 = t28 + b * (T(-5.9160797830996161) * t27 + T(5.3851648071345037) * t29);
-  if constexpr (Order == 15) u28 += h * (T(-64) * t28);
-  if constexpr (Order == 2) u28 += h * (T(-64) * t28 + T(37.649701194033398) * t26 + T(25.544079548889602) * t30);
-  P u29 = t29 + b * (T(-5.3851648071345037) * t28 + T(4.7434164902525691) * t30);
-  if constexpr (Order == 15) u29 += h * (T(-51.5) * t29);
-  if constexpr (Order == 2) u29 += h * (T(-51.5) * t29 + T(31.859064644147981) * t27 + T(18.674849396983099) * t31);
-  P u30 = t30 + b * (T(-4.7434164902525691) * t29 + T(3.9370039370059056) * t31);
-  if constexpr (Order == 15) u30 += h * (T(-38) * t30);
-  if constexpr (Order == 2) u30 += h * (T(-38) * t30 + T(25.544079548889602) * t28 + T(11.135528725660043) * t32);
-  P u31 = t31 + b * (T(-3.9370039370059056) * t30 + T(2.8284271247461903) * t32);
-  if constexpr (Order == 15) u31 += h * (T(-23.5) * t31);
-  if constexpr (Order == 2) u31 += h * (T(-23.5) * t31 + T(18.674849396983099) * t29);
-  P u32 = t32 + b * (T(-2.8284271247461903) * t31);
-  if constexpr (Order == 15) u32 += h * (T(-8) * t32);
-  if constexpr (Order == 2) u32 += h * (T(-8) * t32 + T(11.135528725660043) * t30);
+  P u0 = madd<F>(b, T(-2.8284271247461903) * t1, t0);
+  if constexpr (Order == 15) u0 = madd<F>(h, T(-8) * t0, u0);
+  if constexpr (Order == 2) u0 = madd<F>(h, madd<F>(T(11.135528725660043), t2, T(-8) * t0), u0);
+  P u1 = madd<F>(b, madd<F>(T(-3.9370039370059056), t2, T(2.8284271247461903) * t0), t1);
+  if constexpr (Order == 15) u1 = madd<F>(h, T(-23.5) * t1, u1);
+  if constexpr (Order == 2) u1 = madd<F>(h, madd<F>(T(18.674849396983099), t3, T(-23.5) * t1), u1);
+  P u2 = madd<F>(b, madd<F>(T(-4.7434164902525691), t3, T(3.9370039370059056) * t1), t2);
+  if constexpr (Order == 15) u2 = madd<F>(h, T(-38) * t2, u2);
+  if constexpr (Order == 2) u2 = madd<F>(h, madd<F>(T(25.544079548889602), t4, madd<F>(T(11.135528725660043), t0, T(-38) * t2)), u2);
+  P u3 = madd<F>(b, madd<F>(T(-5.3851648071345037), t4, T(4.7434164902525691) * t2), t3);
+  if constexpr (Order == 15) u3 = madd<F>(h, T(-51.5) * t3, u3);
+  if constexpr (Order == 2) u3 = madd<F>(h, madd<F>(T(31.859064644147981), t5, madd<F>(T(18.674849396983099), t1, T(-51.5) * t3)), u3);
+  P u4 = madd<F>(b, madd<F>(T(-5.9160797830996161), t5, T(5.3851648071345037) * t3), t4);
+  if constexpr (Order == 15) u4 = madd<F>(h, T(-64) * t4, u4);
+  if constexpr (Order == 2) u4 = madd<F>(h, madd<F>(T(37.649701194033398), t6, madd<F>(T(25.544079548889602), t2, T(-64) * t4)), u4);
+  P u5 = madd<F>(b, madd<F>(T(-6.3639610306789276), t6, T(5.9160797830996161) * t4), t5);
+  if constexpr (Order == 15) u5 = madd<F>(h, T(-75.5) * t5, u5);
+  if constexpr (Order == 2) u5 = madd<F>(h, madd<F>(T(42.927264063762557), t7, madd<F>(T(31.859064644147981), t3, T(-75.5) * t5)), u5);
+  P u6 = madd<F>(b, madd<F>(T(-6.7453687816160208), t7, T(6.3639610306789276) * t5), t6);
+  if constexpr (Order == 15) u6 = madd<F>(h, T(-86) * t6, u6);
+  if constexpr (Order == 2) u6 = madd<F>(h, madd<F>(T(47.696960070847283), t8, madd<F>(T(37.649701194033398), t4, T(-86) * t6)), u6);
+  P u7 = madd<F>(b, madd<F>(T(-7.0710678118654755), t8, T(6.7453687816160208) * t6), t7);
+  if constexpr (Order == 15) u7 = madd<F>(h, T(-95.5) * t7, u7);
+  if constexpr (Order == 2) u7 = madd<F>(h, madd<F>(T(51.96152422706632), t9, madd<F>(T(42.927264063762557), t5, T(-95.5) * t7)), u7);
+  P u8 = madd<F>(b, madd<F>(T(-7.3484692283495345), t9, T(7.0710678118654755) * t7), t8);
+  if constexpr (Order == 15) u8 = madd<F>(h, T(-104) * t8, u8);
+  if constexpr (Order == 2) u8 = madd<F>(h, madd<F>(T(55.722526863020128), t10, madd<F>(T(47.696960070847283), t6, T(-104) * t8)), u8);
+  P u9 = madd<F>(b, madd<F>(T(-7.5828754440515507), t10, T(7.3484692283495345) * t8), t9);
+  if constexpr (Order == 15) u9 = madd<F>(h, T(-111.5) * t9, u9);
+  if constexpr (Order == 2) u9 = madd<F>(h, madd<F>(T(58.980929121199843), t11, madd<F>(T(51.96152422706632), t7, T(-111.5) * t9)), u9);
+  P u10 = madd<F>(b, madd<F>(T(-7.7781745930520225), t11, T(7.5828754440515507) * t9), t10);
+  if constexpr (Order == 15) u10 = madd<F>(h, T(-118) * t10, u10);
+  if constexpr (Order == 2) u10 = madd<F>(h, madd<F>(T(61.73734688177003), t12, madd<F>(T(55.722526863020128), t8, T(-118) * t10)), u10);
+  P u11 = madd<F>(b, madd<F>(T(-7.9372539331937721), t12, T(7.7781745930520225) * t10), t11);
+  if constexpr (Order == 15) u11 = madd<F>(h, T(-123.5) * t11, u11);
+  if constexpr (Order == 2) u11 = madd<F>(h, madd<F>(T(63.992187023104627), t13, madd<F>(T(58.980929121199843), t9, T(-123.5) * t11)), u11);
+  P u12 = madd<F>(b, madd<F>(T(-8.0622577482985491), t13, T(7.9372539331937721) * t11), t12);
+  if constexpr (Order == 15) u12 = madd<F>(h, T(-128) * t12, u12);
+  if constexpr (Order == 2) u12 = madd<F>(h, madd<F>(T(65.745722294305963), t14, madd<F>(T(61.73734688177003), t10, T(-128) * t12)), u12);
+  P u13 = madd<F>(b, madd<F>(T(-8.1547532151500448), t14, T(8.0622577482985491) * t12), t13);
+  if constexpr (Order == 15) u13 = madd<F>(h, T(-131.5) * t13, u13);
+  if constexpr (Order == 2) u13 = madd<F>(h, madd<F>(T(66.998134302381885), t15, madd<F>(T(63.992187023104627), t11, T(-131.5) * t13)), u13);
+  P u14 = madd<F>(b, madd<F>(T(-8.2158383625774913), t15, T(8.1547532151500448) * t13), t14);
+  if constexpr (Order == 15) u14 = madd<F>(h, T(-134) * t14, u14);
+  if constexpr (Order == 2) u14 = madd<F>(h, madd<F>(T(65.745722294305963), t12, T(-134) * t14), u14);
+  P u15 = madd<F>(b, T(8.2158383625774913) * t14, t15);
+  if constexpr (Order == 15) u15 = madd<F>(h, T(-67.5) * t15, u15);
+  if constexpr (Order == 2) u15 = madd<F>(h, madd<F>(T(66.998134302381885), t13, T(-67.5) * t15), u15);
+  P u16 = madd<F>(b, T(11.661903789690601) * t17, t16);
+  if constexpr (Order == 15) u16 = madd<F>(h, T(-136) * t16, u16);
+  if constexpr (Order == 2) u16 = madd<F>(h, madd<F>(T(95.812316536027879), t18, T(-136) * t16), u16);
+  P u17 = madd<F>(b, madd<F>(T(8.2158383625774913), t18, T(-11.661903789690601) * t16), t17);
+  if constexpr (Order == 15) u17 = madd<F>(h, T(-203.5) * t17, u17);
+  if constexpr (Order == 2) u17 = madd<F>(h, madd<F>(T(66.998134302381885), t19, T(-203.5) * t17), u17);
+  P u18 = madd<F>(b, madd<F>(T(8.1547532151500448), t19, T(-8.2158383625774913) * t17), t18);
+  if constexpr (Order == 15) u18 = madd<F>(h, T(-134) * t18, u18);
+  if constexpr (Order == 2) u18 = madd<F>(h, madd<F>(T(65.745722294305963), t20, madd<F>(T(95.812316536027879), t16, T(-134) * t18)), u18);
+  P u19 = madd<F>(b, madd<F>(T(8.0622577482985491), t20, T(-8.1547532151500448) * t18), t19);
+  if constexpr (Order == 15) u19 = madd<F>(h, T(-131.5) * t19, u19);
+  if constexpr (Order == 2) u19 = madd<F>(h, madd<F>(T(63.992187023104627), t21, madd<F>(T(66.998134302381885), t17, T(-131.5) * t19)), u19);
+  P u20 = madd<F>(b, madd<F>(T(7.9372539331937721), t21, T(-8.0622577482985491) * t19), t20);
+  if constexpr (Order == 15) u20 = madd<F>(h, T(-128) * t20, u20);
+  if constexpr (Order == 2) u20 = madd<F>(h, madd<F>(T(61.73734688177003), t22, madd<F>(T(65.745722294305963), t18, T(-128) * t20)), u20);
+  P u21 = madd<F>(b, madd<F>(T(7.7781745930520225), t22, T(-7.9372539331937721) * t20), t21);
+  if constexpr (Order == 15) u21 = madd<F>(h, T(-123.5) * t21, u21);
+  if constexpr (Order == 2) u21 = madd<F>(h, madd<F>(T(58.980929121199843), t23, madd<F>(T(63.992187023104627), t19, T(-123.5) * t21)), u21);
+  P u22 = madd<F>(b, madd<F>(T(7.5828754440515507), t23, T(-7.7781745930520225) * t21), t22);
+  if constexpr (Order == 15) u22 = madd<F>(h, T(-118) * t22, u22);
+  if constexpr (Order == 2) u22 = madd<F>(h, madd<F>(T(55.722526863020128), t24, madd<F>(T(61.73734688177003), t20, T(-118) * t22)), u22);
+  P u23 = madd<F>(b, madd<F>(T(7.3484692283495345), t24, T(-7.5828754440515507) * t22), t23);
+  if constexpr (Order == 15) u23 = madd<F>(h, T(-111.5) * t23, u23);
+  if constexpr (Order == 2) u23 = madd<F>(h, madd<F>(T(51.96152422706632), t25, madd<F>(T(58.980929121199843), t21, T(-111.5) * t23)), u23);
+  P u24 = madd<F>(b, madd<F>(T(7.0710678118654755), t25, T(-7.3484692283495345) * t23), t24);
+  if constexpr (Order == 15) u24 = madd<F>(h, T(-104) * t24, u24);
+  if constexpr (Order == 2) u24 = madd<F>(h, madd<F>(T(47.696960070847283), t26, madd<F>(T(55.722526863020128), t22, T(-104) * t24)), u24);
+  P u25 = madd<F>(b, madd<F>(T(6.7453687816160208), t26, T(-7.0710678118654755) * t24), t25);
+  if constexpr (Order == 15) u25 = madd<F>(h, T(-95.5) * t25, u25);
+  if constexpr (Order == 2) u25 = madd<F>(h, madd<F>(T(42.927264063762557), t27, madd<F>(T(51.96152422706632), t23, T(-95.5) * t25)), u25);
+  P u26 = madd<F>(b, madd<F>(T(6.3639610306789276), t27, T(-6.7453687816160208) * t25), t26);
+  if constexpr (Order == 15) u26 = madd<F>(h, T(-86) * t26, u26);
+  if constexpr (Order == 2) u26 = madd<F>(h, madd<F>(T(37.649701194033398), t28, madd<F>(T(47.696960070847283), t24, T(-86) * t26)), u26);
+  P u27 = madd<F>(b, madd<F>(T(5.9160797830996161), t28, T(-6.3639610306789276) * t26), t27);
+  if constexpr (Order == 15) u27 = madd<F>(h, T(-75.5) * t27, u27);
+  if constexpr (Order == 2) u27 = madd<F>(h, madd<F>(T(31.859064644147981), t29, madd<F>(T(42.927264063762557), t25, T(-75.5) * t27)), u27);
+  P u28 = madd<F>(b, madd<F>(T(5.3851648071345037), t29, T(-5.9160797830996161) * t27), t28);
+  if constexpr (Order == 15) u28 = madd<F>(h, T(-64) * t28, u28);
+  if constexpr (Order == 2) u28 = madd<F>(h, madd<F>(T(25.544079548889602), t30, madd<F>(T(37.649701194033398), t26, T(-64) * t28)), u28);
+  P u29 = madd<F>(b, madd<F>(T(4.7434164902525691), t30, T(-5.3851648071345037) * t28), t29);
+  if constexpr (Order == 15) u29 = madd<F>(h, T(-51.5) * t29, u29);
+  if constexpr (Order == 2) u29 = madd<F>(h, madd<F>(T(18.674849396983099), t31, madd<F>(T(31.859064644147981), t27, T(-51.5) * t29)), u29);
+  P u30 = madd<F>(b, madd<F>(T(3.9370039370059056), t31, T(-4.7434164902525691) * t29), t30);
+  if constexpr (Order == 15) u30 = madd<F>(h, T(-38) * t30, u30);
+  if constexpr (Order == 2) u30 = madd<F>(h, madd<F>(T(11.135528725660043), t32, madd<F>(T(25.544079548889602), t28, T(-38) * t30)), u30);
+  P u31 = madd<F>(b, madd<F>(T(2.8284271247461903), t32, T(-3.9370039370059056) * t30), t31);
+  if constexpr (Order == 15) u31 = madd<F>(h, T(-23.5) * t31, u31);
+  if constexpr (Order == 2) u31 = madd<F>(h, madd<F>(T(18.674849396983099), t29, T(-23.5) * t31), u31);
+  P u32 = madd<F>(b, T(-2.8284271247461903) * t31, t32);
+  if constexpr (Order == 15) u32 = madd<F>(h, T(-8) * t32, u32);
+  if constexpr (Order == 2) u32 = madd<F>(h, madd<F>(T(11.135528725660043), t30, T(-8) * t32), u32);
   y[16] = u16;
   const P ca1 = splat<P>(s.ca[1]), sa1 = splat<P>(s.sa[1]);
-  y[17] = ca1 * u17 - sa1 * u15;
-  y[15] = sa1 * u17 + ca1 * u15;
+  y[17] = madd<F>(ca1, u17, -(sa1 * u15));
+  y[15] = madd<F>(sa1, u17, ca1 * u15);
   const P ca2 = splat<P>(s.ca[2]), sa2 = splat<P>(s.sa[2]);
-  y[18] = ca2 * u18 - sa2 * u14;
-  y[14] = sa2 * u18 + ca2 * u14;
+  y[18] = madd<F>(ca2, u18, -(sa2 * u14));
+  y[14] = madd<F>(sa2, u18, ca2 * u14);
   const P ca3 = splat<P>(s.ca[3]), sa3 = splat<P>(s.sa[3]);
-  y[19] = ca3 * u19 - sa3 * u13;
-  y[13] = sa3 * u19 + ca3 * u13;
+  y[19] = madd<F>(ca3, u19, -(sa3 * u13));
+  y[13] = madd<F>(sa3, u19, ca3 * u13);
   const P ca4 = splat<P>(s.ca[4]), sa4 = splat<P>(s.sa[4]);
-  y[20] = ca4 * u20 - sa4 * u12;
-  y[12] = sa4 * u20 + ca4 * u12;
+  y[20] = madd<F>(ca4, u20, -(sa4 * u12));
+  y[12] = madd<F>(sa4, u20, ca4 * u12);
   const P ca5 = splat<P>(s.ca[5]), sa5 = splat<P>(s.sa[5]);
-  y[21] = ca5 * u21 - sa5 * u11;
-  y[11] = sa5 * u21 + ca5 * u11;
+  y[21] = madd<F>(ca5, u21, -(sa5 * u11));
+  y[11] = madd<F>(sa5, u21, ca5 * u11);
   const P ca6 = splat<P>(s.ca[6]), sa6 = splat<P>(s.sa[6]);
-  y[22] = ca6 * u22 - sa6 * u10;
-  y[10] = sa6 * u22 + ca6 * u10;
+  y[22] = madd<F>(ca6, u22, -(sa6 * u10));
+  y[10] = madd<F>(sa6, u22, ca6 * u10);
   const P ca7 = splat<P>(s.ca[7]), sa7 = splat<P>(s.sa[7]);
-  y[23] = ca7 * u23 - sa7 * u9;
-  y[9] = sa7 * u23 + ca7 * u9;
+  y[23] = madd<F>(ca7, u23, -(sa7 * u9));
+  y[9] = madd<F>(sa7, u23, ca7 * u9);
   const P ca8 = splat<P>(s.ca[8]), sa8 = splat<P>(s.sa[8]);
-  y[24] = ca8 * u24 - sa8 * u8;
-  y[8] = sa8 * u24 + ca8 * u8;
+  y[24] = madd<F>(ca8, u24, -(sa8 * u8));
+  y[8] = madd<F>(sa8, u24, ca8 * u8);
   const P ca9 = splat<P>(s.ca[9]), sa9 = splat<P>(s.sa[9]);
-  y[25] = ca9 * u25 - sa9 * u7;
-  y[7] = sa9 * u25 + ca9 * u7;
+  y[25] = madd<F>(ca9, u25, -(sa9 * u7));
+  y[7] = madd<F>(sa9, u25, ca9 * u7);
   const P ca10 = splat<P>(s.ca[10]), sa10 = splat<P>(s.sa[10]);
-  y[26] = ca10 * u26 - sa10 * u6;
-  y[6] = sa10 * u26 + ca10 * u6;
+  y[26] = madd<F>(ca10, u26, -(sa10 * u6));
+  y[6] = madd<F>(sa10, u26, ca10 * u6);
   const P ca11 = splat<P>(s.ca[11]), sa11 = splat<P>(s.sa[11]);
-  y[27] = ca11 * u27 - sa11 * u5;
-  y[5] = sa11 * u27 + ca11 * u5;
+  y[27] = madd<F>(ca11, u27, -(sa11 * u5));
+  y[5] = madd<F>(sa11, u27, ca11 * u5);
   const P ca12 = splat<P>(s.ca[12]), sa12 = splat<P>(s.sa[12]);
-  y[28] = ca12 * u28 - sa12 * u4;
-  y[4] = sa12 * u28 + ca12 * u4;
+  y[28] = madd<F>(ca12, u28, -(sa12 * u4));
+  y[4] = madd<F>(sa12, u28, ca12 * u4);
   const P ca13 = splat<P>(s.ca[13]), sa13 = splat<P>(s.sa[13]);
-  y[29] = ca13 * u29 - sa13 * u3;
-  y[3] = sa13 * u29 + ca13 * u3;
+  y[29] = madd<F>(ca13, u29, -(sa13 * u3));
+  y[3] = madd<F>(sa13, u29, ca13 * u3);
   const P ca14 = splat<P>(s.ca[14]), sa14 = splat<P>(s.sa[14]);
-  y[30] = ca14 * u30 - sa14 * u2;
-  y[2] = sa14 * u30 + ca14 * u2;
+  y[30] = madd<F>(ca14, u30, -(sa14 * u2));
+  y[2] = madd<F>(sa14, u30, ca14 * u2);
   const P ca15 = splat<P>(s.ca[15]), sa15 = splat<P>(s.sa[15]);
-  y[31] = ca15 * u31 - sa15 * u1;
-  y[1] = sa15 * u31 + ca15 * u1;
+  y[31] = madd<F>(ca15, u31, -(sa15 * u1));
+  y[1] = madd<F>(sa15, u31, ca15 * u1);
   const P ca16 = splat<P>(s.ca[16]), sa16 = splat<P>(s.sa[16]);
-  y[32] = ca16 * u32 - sa16 * u0;
-  y[0] = sa16 * u32 + ca16 * u0;
+  y[32] = madd<F>(ca16, u32, -(sa16 * u0));
+  y[0] = madd<F>(sa16, u32, ca16 * u0);
 }
 
 // Band 17 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) ([2] Sec. 3).
-template <int Order, class T, class P, class S>
-inline void taylor_band17(const S& s, const P* __restrict x, P* __restrict y) {
+template <bool F, int Order, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void taylor_band17(const S& s, const P* __restrict x, P* __restrict y) {
   const P t17 = x[17];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
-  const P t18 = cg1 * x[18] - sg1 * x[16];
-  const P t16 = sg1 * x[18] + cg1 * x[16];
+  const P t18 = madd<F>(cg1, x[18], -(sg1 * x[16]));
+  const P t16 = madd<F>(sg1, x[18], cg1 * x[16]);
   const P cg2 = splat<P>(s.cg[2]), sg2 = splat<P>(s.sg[2]);
-  const P t19 = cg2 * x[19] - sg2 * x[15];
-  const P t15 = sg2 * x[19] + cg2 * x[15];
+  const P t19 = madd<F>(cg2, x[19], -(sg2 * x[15]));
+  const P t15 = madd<F>(sg2, x[19], cg2 * x[15]);
   const P cg3 = splat<P>(s.cg[3]), sg3 = splat<P>(s.sg[3]);
-  const P t20 = cg3 * x[20] - sg3 * x[14];
-  const P t14 = sg3 * x[20] + cg3 * x[14];
+  const P t20 = madd<F>(cg3, x[20], -(sg3 * x[14]));
+  const P t14 = madd<F>(sg3, x[20], cg3 * x[14]);
   const P cg4 = splat<P>(s.cg[4]), sg4 = splat<P>(s.sg[4]);
-  const P t21 = cg4 * x[21] - sg4 * x[13];
-  const P t13 = sg4 * x[21] + cg4 * x[13];
+  const P t21 = madd<F>(cg4, x[21], -(sg4 * x[13]));
+  const P t13 = madd<F>(sg4, x[21], cg4 * x[13]);
   const P cg5 = splat<P>(s.cg[5]), sg5 = splat<P>(s.sg[5]);
-  const P t22 = cg5 * x[22] - sg5 * x[12];
-  const P t12 = sg5 * x[22] + cg5 * x[12];
+  const P t22 = madd<F>(cg5, x[22], -(sg5 * x[12]));
+  const P t12 = madd<F>(sg5, x[22], cg5 * x[12]);
   const P cg6 = splat<P>(s.cg[6]), sg6 = splat<P>(s.sg[6]);
-  const P t23 = cg6 * x[23] - sg6 * x[11];
-  const P t11 = sg6 * x[23] + cg6 * x[11];
+  const P t23 = madd<F>(cg6, x[23], -(sg6 * x[11]));
+  const P t11 = madd<F>(sg6, x[23], cg6 * x[11]);
   const P cg7 = splat<P>(s.cg[7]), sg7 = splat<P>(s.sg[7]);
-  const P t24 = cg7 * x[24] - sg7 * x[10];
-  const P t10 = sg7 * x[24] + cg7 * x[10];
+  const P t24 = madd<F>(cg7, x[24], -(sg7 * x[10]));
+  const P t10 = madd<F>(sg7, x[24], cg7 * x[10]);
   const P cg8 = splat<P>(s.cg[8]), sg8 = splat<P>(s.sg[8]);
-  const P t25 = cg8 * x[25] - sg8 * x[9];
-  const P t9 = sg8 * x[25] + cg8 * x[9];
+  const P t25 = madd<F>(cg8, x[25], -(sg8 * x[9]));
+  const P t9 = madd<F>(sg8, x[25], cg8 * x[9]);
   const P cg9 = splat<P>(s.cg[9]), sg9 = splat<P>(s.sg[9]);
-  const P t26 = cg9 * x[26] - sg9 * x[8];
-  const P t8 = sg9 * x[26] + cg9 * x[8];
+  const P t26 = madd<F>(cg9, x[26], -(sg9 * x[8]));
+  const P t8 = madd<F>(sg9, x[26], cg9 * x[8]);
   const P cg10 = splat<P>(s.cg[10]), sg10 = splat<P>(s.sg[10]);
-  const P t27 = cg10 * x[27] - sg10 * x[7];
-  const P t7 = sg10 * x[27] + cg10 * x[7];
+  const P t27 = madd<F>(cg10, x[27], -(sg10 * x[7]));
+  const P t7 = madd<F>(sg10, x[27], cg10 * x[7]);
   const P cg11 = splat<P>(s.cg[11]), sg11 = splat<P>(s.sg[11]);
-  const P t28 = cg11 * x[28] - sg11 * x[6];
-  const P t6 = sg11 * x[28] + cg11 * x[6];
+  const P t28 = madd<F>(cg11, x[28], -(sg11 * x[6]));
+  const P t6 = madd<F>(sg11, x[28], cg11 * x[6]);
   const P cg12 = splat<P>(s.cg[12]), sg12 = splat<P>(s.sg[12]);
-  const P t29 = cg12 * x[29] - sg12 * x[5];
-  const P t5 = sg12 * x[29] + cg12 * x[5];
+  const P t29 = madd<F>(cg12, x[29], -(sg12 * x[5]));
+  const P t5 = madd<F>(sg12, x[29], cg12 * x[5]);
   const P cg13 = splat<P>(s.cg[13]), sg13 = splat<P>(s.sg[13]);
-  const P t30 = cg13 * x[30] - sg13 * x[4];
-  const P t4 = sg13 * x[30] + cg13 * x[4];
+  const P t30 = madd<F>(cg13, x[30], -(sg13 * x[4]));
+  const P t4 = madd<F>(sg13, x[30], cg13 * x[4]);
   const P cg14 = splat<P>(s.cg[14]), sg14 = splat<P>(s.sg[14]);
-  const P t31 = cg14 * x[31] - sg14 * x[3];
-  const P t3 = sg14 * x[31] + cg14 * x[3];
+  const P t31 = madd<F>(cg14, x[31], -(sg14 * x[3]));
+  const P t3 = madd<F>(sg14, x[31], cg14 * x[3]);
   const P cg15 = splat<P>(s.cg[15]), sg15 = splat<P>(s.sg[15]);
-  const P t32 = cg15 * x[32] - sg15 * x[2];
-  const P t2 = sg15 * x[32] + cg15 * x[2];
+  const P t32 = madd<F>(cg15, x[32], -(sg15 * x[2]));
+  const P t2 = madd<F>(sg15, x[32], cg15 * x[2]);
   const P cg16 = splat<P>(s.cg[16]), sg16 = splat<P>(s.sg[16]);
-  const P t33 = cg16 * x[33] - sg16 * x[1];
-  const P t1 = sg16 * x[33] + cg16 * x[1];
+  const P t33 = madd<F>(cg16, x[33], -(sg16 * x[1]));
+  const P t1 = madd<F>(sg16, x[33], cg16 * x[1]);
   const P cg17 = splat<P>(s.cg[17]), sg17 = splat<P>(s.sg[17]);
-  const P t34 = cg17 * x[34] - sg17 * x[0];
-  const P t0 = sg17 * x[34] + cg17 * x[0];
+  const P t34 = madd<F>(cg17, x[34], -(sg17 * x[0]));
+  const P t0 = madd<F>(sg17, x[34], cg17 * x[0]);
   const auto b = s.beta, h = s.half_beta2;
   (void)h;
-  P u0 = t0 + b * (T(-2.9154759474226504) * t1);
-  if constexpr (Order == 15) u0 += h * (T(-8.5) * t0);
-  if constexpr (Order == 2) u0 += h * (T(-8.5) * t0 + T(11.84271928232701) * t2);
-  P u1 = t1 + b * (T(2.9154759474226504) * t0 - T(4.0620192023179804) * t2);
-  if constexpr (Order == 15) u1 += h * (T(-25) * t1);
-  if constexpr (Order == 2) u1 += h * (T(-25) * t1 + T(19.899748742132399) * t3);
-  P u2 = t2 + b * (T(4.0620192023179804) * t1 - T(4.8989794855663558) * t3);
-  if constexpr (Order == 15) u2 += h * (T(-40.5) * t2);
-  if constexpr (Order == 2) u2 += h * (T(-40.5) * t2 + T(11.84271928232701) * t0 + T(27.27636339397171) * t4);
-  P u3 = t3 + b * (T(4.8989794855663558) * t2 - T(5.5677643628300215) * t4);
-  if constexpr (Order == 15) u3 += h * (T(-55) * t3);
-  if constexpr (Order == 2) u3 += h * (T(-55) * t3 + T(19.899748742132399) * t1 + T(34.095454242464641) * t5);
-  P u4 = t4 + b * (T(5.5677643628300215) * t3 - T(6.1237243569579451) * t5);
-  if constexpr (Order == 15) u4 += h * (T(-68.5) * t4);
-  if constexpr (Order == 2) u4 += h * (T(-68.5) * t4 + T(27.27636339397171) * t2 + T(40.388736053508779) * t6);
-  P u5 = t5 + b * (T(6.1237243569579451) * t4 - T(6.5954529791364598) * t6);
-  if constexpr (Order == 15) u5 += h * (T(-81) * t5);
-  if constexpr (Order == 2) u5 += h * (T(-81) * t5 + T(34.095454242464641) * t3 + T(46.168170853955218) * t7);
-  P u6 = t6 + b * (T(6.5954529791364598) * t5 - T(7) * t7);
-  if constexpr (Order == 15) u6 += h * (T(-92.5) * t6);
-  if constexpr (Order == 2) u6 += h * (T(-92.5) * t6 + T(40.388736053508779) * t4 + T(51.43928459844674) * t8);
-  P u7 = t7 + b * (T(7) * t6 - T(7.3484692283495345) * t8);
-  if constexpr (Order == 15) u7 += h * (T(-103) * t7);
-  if constexpr (Order == 2) u7 += h * (T(-103) * t7 + T(46.168170853955218) * t5 + T(56.204981985585583) * t9);
-  P u8 = t8 + b * (T(7.3484692283495345) * t7 - T(7.6485292703891776) * t9);
-  if constexpr (Order == 15) u8 += h * (T(-112.5) * t8);
-  if constexpr (Order == 2) u8 += h * (T(-112.5) * t8 + T(51.43928459844674) * t6 + T(60.466933112239126) * t10);
-  P u9 = t9 + b * (T(7.6485292703891776) * t8 - T(7.9056941504209481) * t10);
-  if constexpr (Order == 15) u9 += h * (T(-121) * t9);
-  if constexpr (Order == 2) u9 += h * (T(-121) * t9 + T(56.204981985585583) * t7 + T(64.22616289332565) * t11);
-  P u10 = t10 + b * (T(7.9056941504209481) * t9 - T(8.1240384046359608) * t11);
-  if constexpr (Order == 15) u10 += h * (T(-128.5) * t10);
-  if constexpr (Order == 2) u10 += h * (T(-128.5) * t10 + T(60.466933112239126) * t8 + T(67.483331275211953) * t12);
-  P u11 = t11 + b * (T(8.1240384046359608) * t10 - T(8.3066238629180749) * t12);
-  if constexpr (Order == 15) u11 += h * (T(-135) * t11);
-  if constexpr (Order == 2) u11 += h * (T(-135) * t11 + T(64.22616289332565) * t9 + T(70.238878123159111) * t13);
-  P u12 = t12 + b * (T(8.3066238629180749) * t11 - T(8.4557672626438816) * t13);
-  if constexpr (Order == 15) u12 += h * (T(-140.5) * t12);
-  if constexpr (Order == 2) u12 += h * (T(-140.5) * t12 + T(67.483331275211953) * t10 + T(72.493103120227929) * t14);
-  P u13 = t13 + b * (T(8.4557672626438816) * t12 - T(8.5732140997411239) * t14);
-  if constexpr (Order == 15) u13 += h * (T(-145) * t13);
-  if constexpr (Order == 2) u13 += h * (T(-145) * t13 + T(70.238878123159111) * t11 + T(74.246212024587493) * t15);
-  P u14 = t14 + b * (T(8.5732140997411239) * t13 - T(8.6602540378443873) * t15);
-  if constexpr (Order == 15) u14 += h * (T(-148.5) * t14);
-  if constexpr (Order == 2) u14 += h * (T(-148.5) * t14 + T(72.493103120227929) * t12 + T(75.498344352707491) * t16);
-  P u15 = t15 + b * (T(8.6602540378443873) * t14 - T(8.717797887081348) * t16);
-  if constexpr (Order == 15) u15 += h * (T(-151) * t15);
-  if constexpr (Order == 2) u15 += h * (T(-151) * t15 + T(74.246212024587493) * t13);
-  P u16 = t16 + b * (T(8.717797887081348) * t15);
-  if constexpr (Order == 15) u16 += h * (T(-76) * t16);
-  if constexpr (Order == 2) u16 += h * (T(-76) * t16 + T(75.498344352707491) * t14);
-  P u17 = t17 + b * (T(12.369316876852981) * t18);
-  if constexpr (Order == 15) u17 += h * (T(-153) * t17);
-  if constexpr (Order == 2) u17 += h * (T(-153) * t17 + T(107.83320453366856) * t19);
-  P u18 = t18 + b * (T(-12.369316876852981) * t17 + T(8.717797887081348) * t19);
-  if constexpr (Order == 15) u18 += h * (T(-229) * t18);
-  if constexpr (Order == 2) u18 += h * (T(-229) * t18 + T(75.498344352707491) * t20);
-  P u19 = t19 + b * (T(-8.717797887081348) * t18 + T(8.6602540378443873) * t20);
-  if constexpr (Order == 15) u19 += h * (T(-151) * t19);
-  if constexpr (Order == 2) u19 += h * (T(-151) * t19 + T(107.83320453366856) * t17 + T(74.246212024587493) * t21);
-  P u20 = t20 + b * (T(-8.6602540378443873) * t19 + T(8.5732140997411239) * t21);
-  if constexpr (Order == 15) u20 += h * (T(-148.5) * t20);
-  if constexpr (Order == 2) u20 += h * (T(-148.5) * t20 + T(75.498344352707491) * t18 + T(72.493103120227929) * t22);
-  P u21 = t21 + b * (T(-8.5732140997411239) * t20 + T(8.4557672626438816) * t22);
-  if constexpr (Order == 15) u21 += h * (T(-145) * t21);
-  if constexpr (Order == 2) u21 += h * (T(-145) * t21 + T(74.246212024587493) * t19 + T(70.238878123159111) * t23);
-  P u22 = t22 + b * (T(-8.4557672626438816) * t21 + T(8.3066238629180749) * t23);
-  if constexpr (Order == 15) u22 += h * (T(-140.5) * t22);
-  if constexpr (Order == 2) u22 += h * (T(-140.5) * t22 + T(72.493103120227929) * t20 + T(67.483331275211953) * t24);
-  P u23 = t23 + b * (T(-8.3066238629180749) * t22 + T(8.1240384046359608) * t24);
-  if constexpr (Order == 15) u23 += h * (T(-135) * t23);
-  if constexpr (Order == 2) u23 += h * (T(-135) * t23 + T(70.238878123159111) * t21 + T(64.22616289332565) * t25);
-  P u24 = t24 + b * (T(-8.1240384046359608) * t23 + T(7.9056941504209481) * t25);
-  if constexpr (Order == 15) u24 += h * (T(-128.5) * t24);
-  if constexpr (Order == 2) u24 += h * (T(-128.5) * t24 + T(67.483331275211953) * t22 + T(60.466933112239126) * t26);
-  P u25 = t25 + b * (T(-7.9056941504209481) * t24 + T(7.6485292703891776) * t26);
-  if constexpr (Order == 15) u25 += h * (T(-121) * t25);
-  if constexpr (Order == 2) u25 += h * (T(-121) * t25 + T(64.22616289332565) * t23 + T(56.204981985585583) * t27);
-  P u26 = t26 + b * (T(-7.6485292703891776) * t25 + T(7.3484692283495345) * t27);
-  if constexpr (Order == 15) u26 += h * (T(-112.5) * t26);
-  if constexpr (Order == 2) u26 += h * (T(-112.5) * t26 + T(60.466933112239126) * t24 + T(51.43928459844674) * t28);
-  P u27 = t27 + b * (T(-7.3484692283495345) * t26 + T(7) * t28);
-  if constexpr (Order == 15) u27 += h * (T(-103) * t27);
-  if constexpr (Order == 2) u27 += h * (T(-103) * t27 + T(56.204981985585583) * t25 + T(46.168170853955218) * t29);
-  P u28 = t28 + b * (T(-7) * t27 + T(6.5954529791364598) * t29);
-  if constexpr (Order == 15) u28 += h * (T(-92.5) * t28);
-  if constexpr (Order == 2) u28 += h * (T(-92.5) * t28 + T(51.43928459844674) * t26 + T(40.388736053508779) * t30);
-  P u29 = t29 + b * (T(-6.5954529791364598) * t28 + T(6.1237243569579451) * t30);
-  if constexpr (Order == 15) u29 += h * (T(-81) * t29);
-  if constexpr (Order == 2) u29 += h * (T(-81) * t29 + T(46.168170853955218) * t27 + T(34.095454242464641) * t31);
-  P u30 = t30 + b * (T(-6.1237243569579451) * t29 + T(5.5677643628300215) * t31);
-  if constexpr (Order == 15) u30 += h * (T(-68.5) * t30);
-  if constexpr (Order == 2) u30 += h * (T(-68.5) * t30 + T(40.388736053508779) * t28 + T(27.27636339397171) * t32);
-  P u31 = t31 + b * (T(-5.5677643628300215) * t30 + T(4.8989794855663558) * t32);
-  if constexpr (Order == 15) u31 += h * (T(-55) * t31);
-  if constexpr (Order == 2) u31 += h * (T(-55) * t31 + T(34.095454242464641) * t29 + T(19.899748742132399) * t33);
-  P u32 = t32 + b * (T(-4.8989794855663558) * t31 + T(4.0620192023179804) * t33);
-  if constexpr (Order == 15) u32 += h * (T(-40.5) * t32);
-  if constexpr (Order == 2) u32 += h * (T(-40.5) * t32 + T(27.27636339397171) * t30 + T(11.84271928232701) * t34);
-  P u33 = t33 + b * (T(-4.0620192023179804) * t32 + T(2.9154759474226504) * t34);
-  if constexpr (Order == 15) u33 += h * (T(-25) * t33);
-  if constexpr (Order == 2) u33 += h * (T(-25) * t33 + T(19.899748742132399) * t31);
-  P u34 = t34 + b * (T(-2.9154759474226504) * t33);
-  if constexpr (Order == 15) u34 += h * (T(-8.5) * t34);
-  if constexpr (Order == 2) u34 += h * (T(-8.5) * t34 + T(11.84271928232701) * t32);
+  P u0 = madd<F>(b, T(-2.9154759474226504) * t1, t0);
+  if constexpr (Order == 15) u0 = madd<F>(h, T(-8.5) * t0, u0);
+  if constexpr (Order == 2) u0 = madd<F>(h, madd<F>(T(11.84271928232701), t2, T(-8.5) * t0), u0);
+  P u1 = madd<F>(b, madd<F>(T(-4.0620192023179804), t2, T(2.9154759474226504) * t0), t1);
+  if constexpr (Order == 15) u1 = madd<F>(h, T(-25) * t1, u1);
+  if constexpr (Order == 2) u1 = madd<F>(h, madd<F>(T(19.899748742132399), t3, T(-25) * t1), u1);
+  P u2 = madd<F>(b, madd<F>(T(-4.8989794855663558), t3, T(4.0620192023179804) * t1), t2);
+  if constexpr (Order == 15) u2 = madd<F>(h, T(-40.5) * t2, u2);
+  if constexpr (Order == 2) u2 = madd<F>(h, madd<F>(T(27.27636339397171), t4, madd<F>(T(11.84271928232701), t0, T(-40.5) * t2)), u2);
+  P u3 = madd<F>(b, madd<F>(T(-5.5677643628300215), t4, T(4.8989794855663558) * t2), t3);
+  if constexpr (Order == 15) u3 = madd<F>(h, T(-55) * t3, u3);
+  if constexpr (Order == 2) u3 = madd<F>(h, madd<F>(T(34.095454242464641), t5, madd<F>(T(19.899748742132399), t1, T(-55) * t3)), u3);
+  P u4 = madd<F>(b, madd<F>(T(-6.1237243569579451), t5, T(5.5677643628300215) * t3), t4);
+  if constexpr (Order == 15) u4 = madd<F>(h, T(-68.5) * t4, u4);
+  if constexpr (Order == 2) u4 = madd<F>(h, madd<F>(T(40.388736053508779), t6, madd<F>(T(27.27636339397171), t2, T(-68.5) * t4)), u4);
+  P u5 = madd<F>(b, madd<F>(T(-6.5954529791364598), t6, T(6.1237243569579451) * t4), t5);
+  if constexpr (Order == 15) u5 = madd<F>(h, T(-81) * t5, u5);
+  if constexpr (Order == 2) u5 = madd<F>(h, madd<F>(T(46.168170853955218), t7, madd<F>(T(34.095454242464641), t3, T(-81) * t5)), u5);
+  P u6 = madd<F>(b, madd<F>(T(-7), t7, T(6.5954529791364598) * t5), t6);
+  if constexpr (Order == 15) u6 = madd<F>(h, T(-92.5) * t6, u6);
+  if constexpr (Order == 2) u6 = madd<F>(h, madd<F>(T(51.43928459844674), t8, madd<F>(T(40.388736053508779), t4, T(-92.5) * t6)), u6);
+  P u7 = madd<F>(b, madd<F>(T(-7.3484692283495345), t8, T(7) * t6), t7);
+  if constexpr (Order == 15) u7 = madd<F>(h, T(-103) * t7, u7);
+  if constexpr (Order == 2) u7 = madd<F>(h, madd<F>(T(56.204981985585583), t9, madd<F>(T(46.168170853955218), t5, T(-103) * t7)), u7);
+  P u8 = madd<F>(b, madd<F>(T(-7.6485292703891776), t9, T(7.3484692283495345) * t7), t8);
+  if constexpr (Order == 15) u8 = madd<F>(h, T(-112.5) * t8, u8);
+  if constexpr (Order == 2) u8 = madd<F>(h, madd<F>(T(60.466933112239126), t10, madd<F>(T(51.43928459844674), t6, T(-112.5) * t8)), u8);
+  P u9 = madd<F>(b, madd<F>(T(-7.9056941504209481), t10, T(7.6485292703891776) * t8), t9);
+  if constexpr (Order == 15) u9 = madd<F>(h, T(-121) * t9, u9);
+  if constexpr (Order == 2) u9 = madd<F>(h, madd<F>(T(64.22616289332565), t11, madd<F>(T(56.204981985585583), t7, T(-121) * t9)), u9);
+  P u10 = madd<F>(b, madd<F>(T(-8.1240384046359608), t11, T(7.9056941504209481) * t9), t10);
+  if constexpr (Order == 15) u10 = madd<F>(h, T(-128.5) * t10, u10);
+  if constexpr (Order == 2) u10 = madd<F>(h, madd<F>(T(67.483331275211953), t12, madd<F>(T(60.466933112239126), t8, T(-128.5) * t10)), u10);
+  P u11 = madd<F>(b, madd<F>(T(-8.3066238629180749), t12, T(8.1240384046359608) * t10), t11);
+  if constexpr (Order == 15) u11 = madd<F>(h, T(-135) * t11, u11);
+  if constexpr (Order == 2) u11 = madd<F>(h, madd<F>(T(70.238878123159111), t13, madd<F>(T(64.22616289332565), t9, T(-135) * t11)), u11);
+  P u12 = madd<F>(b, madd<F>(T(-8.4557672626438816), t13, T(8.3066238629180749) * t11), t12);
+  if constexpr (Order == 15) u12 = madd<F>(h, T(-140.5) * t12, u12);
+  if constexpr (Order == 2) u12 = madd<F>(h, madd<F>(T(72.493103120227929), t14, madd<F>(T(67.483331275211953), t10, T(-140.5) * t12)), u12);
+  P u13 = madd<F>(b, madd<F>(T(-8.5732140997411239), t14, T(8.4557672626438816) * t12), t13);
+  if constexpr (Order == 15) u13 = madd<F>(h, T(-145) * t13, u13);
+  if constexpr (Order == 2) u13 = madd<F>(h, madd<F>(T(74.246212024587493), t15, madd<F>(T(70.238878123159111), t11, T(-145) * t13)), u13);
+  P u14 = madd<F>(b, madd<F>(T(-8.6602540378443873), t15, T(8.5732140997411239) * t13), t14);
+  if constexpr (Order == 15) u14 = madd<F>(h, T(-148.5) * t14, u14);
+  if constexpr (Order == 2) u14 = madd<F>(h, madd<F>(T(75.498344352707491), t16, madd<F>(T(72.493103120227929), t12, T(-148.5) * t14)), u14);
+  P u15 = madd<F>(b, madd<F>(T(-8.717797887081348), t16, T(8.6602540378443873) * t14), t15);
+  if constexpr (Order == 15) u15 = madd<F>(h, T(-151) * t15, u15);
+  if constexpr (Order == 2) u15 = madd<F>(h, madd<F>(T(74.246212024587493), t13, T(-151) * t15), u15);
+  P u16 = madd<F>(b, T(8.717797887081348) * t15, t16);
+  if constexpr (Order == 15) u16 = madd<F>(h, T(-76) * t16, u16);
+  if constexpr (Order == 2) u16 = madd<F>(h, madd<F>(T(75.498344352707491), t14, T(-76) * t16), u16);
+  P u17 = madd<F>(b, T(12.369316876852981) * t18, t17);
+  if constexpr (Order == 15) u17 = madd<F>(h, T(-153) * t17, u17);
+  if constexpr (Order == 2) u17 = madd<F>(h, madd<F>(T(107.83320453366856), t19, T(-153) * t17), u17);
+  P u18 = madd<F>(b, madd<F>(T(8.717797887081348), t19, T(-12.369316876852981) * t17), t18);
+  if constexpr (Order == 15) u18 = madd<F>(h, T(-229) * t18, u18);
+  if constexpr (Order == 2) u18 = madd<F>(h, madd<F>(T(75.498344352707491), t20, T(-229) * t18), u18);
+  P u19 = madd<F>(b, madd<F>(T(8.6602540378443873), t20, T(-8.717797887081348) * t18), t19);
+  if constexpr (Order == 15) u19 = madd<F>(h, T(-151) * t19, u19);
+  if constexpr (Order == 2) u19 = madd<F>(h, madd<F>(T(74.246212024587493), t21, madd<F>(T(107.83320453366856), t17, T(-151) * t19)), u19);
+  P u20 = madd<F>(b, madd<F>(T(8.5732140997411239), t21, T(-8.6602540378443873) * t19), t20);
+  if constexpr (Order == 15) u20 = madd<F>(h, T(-148.5) * t20, u20);
+  if constexpr (Order == 2) u20 = madd<F>(h, madd<F>(T(72.493103120227929), t22, madd<F>(T(75.498344352707491), t18, T(-148.5) * t20)), u20);
+  P u21 = madd<F>(b, madd<F>(T(8.4557672626438816), t22, T(-8.5732140997411239) * t20), t21);
+  if constexpr (Order == 15) u21 = madd<F>(h, T(-145) * t21, u21);
+  if constexpr (Order == 2) u21 = madd<F>(h, madd<F>(T(70.238878123159111), t23, madd<F>(T(74.246212024587493), t19, T(-145) * t21)), u21);
+  P u22 = madd<F>(b, madd<F>(T(8.3066238629180749), t23, T(-8.4557672626438816) * t21), t22);
+  if constexpr (Order == 15) u22 = madd<F>(h, T(-140.5) * t22, u22);
+  if constexpr (Order == 2) u22 = madd<F>(h, madd<F>(T(67.483331275211953), t24, madd<F>(T(72.493103120227929), t20, T(-140.5) * t22)), u22);
+  P u23 = madd<F>(b, madd<F>(T(8.1240384046359608), t24, T(-8.3066238629180749) * t22), t23);
+  if constexpr (Order == 15) u23 = madd<F>(h, T(-135) * t23, u23);
+  if constexpr (Order == 2) u23 = madd<F>(h, madd<F>(T(64.22616289332565), t25, madd<F>(T(70.238878123159111), t21, T(-135) * t23)), u23);
+  P u24 = madd<F>(b, madd<F>(T(7.9056941504209481), t25, T(-8.1240384046359608) * t23), t24);
+  if constexpr (Order == 15) u24 = madd<F>(h, T(-128.5) * t24, u24);
+  if constexpr (Order == 2) u24 = madd<F>(h, madd<F>(T(60.466933112239126), t26, madd<F>(T(67.483331275211953), t22, T(-128.5) * t24)), u24);
+  P u25 = madd<F>(b, madd<F>(T(7.6485292703891776), t26, T(-7.9056941504209481) * t24), t25);
+  if constexpr (Order == 15) u25 = madd<F>(h, T(-121) * t25, u25);
+  if constexpr (Order == 2) u25 = madd<F>(h, madd<F>(T(56.204981985585583), t27, madd<F>(T(64.22616289332565), t23, T(-121) * t25)), u25);
+  P u26 = madd<F>(b, madd<F>(T(7.3484692283495345), t27, T(-7.6485292703891776) * t25), t26);
+  if constexpr (Order == 15) u26 = madd<F>(h, T(-112.5) * t26, u26);
+  if constexpr (Order == 2) u26 = madd<F>(h, madd<F>(T(51.43928459844674), t28, madd<F>(T(60.466933112239126), t24, T(-112.5) * t26)), u26);
+  P u27 = madd<F>(b, madd<F>(T(7), t28, T(-7.3484692283495345) * t26), t27);
+  if constexpr (Order == 15) u27 = madd<F>(h, T(-103) * t27, u27);
+  if constexpr (Order == 2) u27 = madd<F>(h, madd<F>(T(46.168170853955218), t29, madd<F>(T(56.204981985585583), t25, T(-103) * t27)), u27);
+  P u28 = madd<F>(b, madd<F>(T(6.5954529791364598), t29, T(-7) * t27), t28);
+  if constexpr (Order == 15) u28 = madd<F>(h, T(-92.5) * t28, u28);
+  if constexpr (Order == 2) u28 = madd<F>(h, madd<F>(T(40.388736053508779), t30, madd<F>(T(51.43928459844674), t26, T(-92.5) * t28)), u28);
+  P u29 = madd<F>(b, madd<F>(T(6.1237243569579451), t30, T(-6.5954529791364598) * t28), t29);
+  if constexpr (Order == 15) u29 = madd<F>(h, T(-81) * t29, u29);
+  if constexpr (Order == 2) u29 = madd<F>(h, madd<F>(T(34.095454242464641), t31, madd<F>(T(46.168170853955218), t27, T(-81) * t29)), u29);
+  P u30 = madd<F>(b, madd<F>(T(5.5677643628300215), t31, T(-6.1237243569579451) * t29), t30);
+  if constexpr (Order == 15) u30 = madd<F>(h, T(-68.5) * t30, u30);
+  if constexpr (Order == 2) u30 = madd<F>(h, madd<F>(T(27.27636339397171), t32, madd<F>(T(40.388736053508779), t28, T(-68.5) * t30)), u30);
+  P u31 = madd<F>(b, madd<F>(T(4.8989794855663558), t32, T(-5.5677643628300215) * t30), t31);
+  if constexpr (Order == 15) u31 = madd<F>(h, T(-55) * t31, u31);
+  if constexpr (Order == 2) u31 = madd<F>(h, madd<F>(T(19.899748742132399), t33, madd<F>(T(34.095454242464641), t29, T(-55) * t31)), u31);
+  P u32 = madd<F>(b, madd<F>(T(4.0620192023179804), t33, T(-4.8989794855663558) * t31), t32);
+  if constexpr (Order == 15) u32 = madd<F>(h, T(-40.5) * t32, u32);
+  if constexpr (Order == 2) u32 = madd<F>(h, madd<F>(T(11.84271928232701), t34, madd<F>(T(27.27636339397171), t30, T(-40.5) * t32)), u32);
+  P u33 = madd<F>(b, madd<F>(T(2.9154759474226504), t34, T(-4.0620192023179804) * t32), t33);
+  if constexpr (Order == 15) u33 = madd<F>(h, T(-25) * t33, u33);
+  if constexpr (Order == 2) u33 = madd<F>(h, madd<F>(T(19.899748742132399), t31, T(-25) * t33), u33);
+  P u34 = madd<F>(b, T(-2.9154759474226504) * t33, t34);
+  if constexpr (Order == 15) u34 = madd<F>(h, T(-8.5) * t34, u34);
+  if constexpr (Order == 2) u34 = madd<F>(h, madd<F>(T(11.84271928232701), t32, T(-8.5) * t34), u34);
   y[17] = u17;
   const P ca1 = splat<P>(s.ca[1]), sa1 = splat<P>(s.sa[1]);
-  y[18] = ca1 * u18 - sa1 * u16;
-  y[16] = sa1 * u18 + ca1 * u16;
+  y[18] = madd<F>(ca1, u18, -(sa1 * u16));
+  y[16] = madd<F>(sa1, u18, ca1 * u16);
   const P ca2 = splat<P>(s.ca[2]), sa2 = splat<P>(s.sa[2]);
-  y[19] = ca2 * u19 - sa2 * u15;
-  y[15] = sa2 * u19 + ca2 * u15;
+  y[19] = madd<F>(ca2, u19, -(sa2 * u15));
+  y[15] = madd<F>(sa2, u19, ca2 * u15);
   const P ca3 = splat<P>(s.ca[3]), sa3 = splat<P>(s.sa[3]);
-  y[20] = ca3 * u20 - sa3 * u14;
-  y[14] = sa3 * u20 + ca3 * u14;
+  y[20] = madd<F>(ca3, u20, -(sa3 * u14));
+  y[14] = madd<F>(sa3, u20, ca3 * u14);
   const P ca4 = splat<P>(s.ca[4]), sa4 = splat<P>(s.sa[4]);
-  y[21] = ca4 * u21 - sa4 * u13;
-  y[13] = sa4 * u21 + ca4 * u13;
+  y[21] = madd<F>(ca4, u21, -(sa4 * u13));
+  y[13] = madd<F>(sa4, u21, ca4 * u13);
   const P ca5 = splat<P>(s.ca[5]), sa5 = splat<P>(s.sa[5]);
-  y[22] = ca5 * u22 - sa5 * u12;
-  y[12] = sa5 * u22 + ca5 * u12;
+  y[22] = madd<F>(ca5, u22, -(sa5 * u12));
+  y[12] = madd<F>(sa5, u22, ca5 * u12);
   const P ca6 = splat<P>(s.ca[6]), sa6 = splat<P>(s.sa[6]);
-  y[23] = ca6 * u23 - sa6 * u11;
-  y[11] = sa6 * u23 + ca6 * u11;
+  y[23] = madd<F>(ca6, u23, -(sa6 * u11));
+  y[11] = madd<F>(sa6, u23, ca6 * u11);
   const P ca7 = splat<P>(s.ca[7]), sa7 = splat<P>(s.sa[7]);
-  y[24] = ca7 * u24 - sa7 * u10;
-  y[10] = sa7 * u24 + ca7 * u10;
+  y[24] = madd<F>(ca7, u24, -(sa7 * u10));
+  y[10] = madd<F>(sa7, u24, ca7 * u10);
   const P ca8 = splat<P>(s.ca[8]), sa8 = splat<P>(s.sa[8]);
-  y[25] = ca8 * u25 - sa8 * u9;
-  y[9] = sa8 * u25 + ca8 * u9;
+  y[25] = madd<F>(ca8, u25, -(sa8 * u9));
+  y[9] = madd<F>(sa8, u25, ca8 * u9);
   const P ca9 = splat<P>(s.ca[9]), sa9 = splat<P>(s.sa[9]);
-  y[26] = ca9 * u26 - sa9 * u8;
-  y[8] = sa9 * u26 + ca9 * u8;
+  y[26] = madd<F>(ca9, u26, -(sa9 * u8));
+  y[8] = madd<F>(sa9, u26, ca9 * u8);
   const P ca10 = splat<P>(s.ca[10]), sa10 = splat<P>(s.sa[10]);
-  y[27] = ca10 * u27 - sa10 * u7;
-  y[7] = sa10 * u27 + ca10 * u7;
+  y[27] = madd<F>(ca10, u27, -(sa10 * u7));
+  y[7] = madd<F>(sa10, u27, ca10 * u7);
   const P ca11 = splat<P>(s.ca[11]), sa11 = splat<P>(s.sa[11]);
-  y[28] = ca11 * u28 - sa11 * u6;
-  y[6] = sa11 * u28 + ca11 * u6;
+  y[28] = madd<F>(ca11, u28, -(sa11 * u6));
+  y[6] = madd<F>(sa11, u28, ca11 * u6);
   const P ca12 = splat<P>(s.ca[12]), sa12 = splat<P>(s.sa[12]);
-  y[29] = ca12 * u29 - sa12 * u5;
-  y[5] = sa12 * u29 + ca12 * u5;
+  y[29] = madd<F>(ca12, u29, -(sa12 * u5));
+  y[5] = madd<F>(sa12, u29, ca12 * u5);
   const P ca13 = splat<P>(s.ca[13]), sa13 = splat<P>(s.sa[13]);
-  y[30] = ca13 * u30 - sa13 * u4;
-  y[4] = sa13 * u30 + ca13 * u4;
+  y[30] = madd<F>(ca13, u30, -(sa13 * u4));
+  y[4] = madd<F>(sa13, u30, ca13 * u4);
   const P ca14 = splat<P>(s.ca[14]), sa14 = splat<P>(s.sa[14]);
-  y[31] = ca14 * u31 - sa14 * u3;
-  y[3] = sa14 * u31 + ca14 * u3;
+  y[31] = madd<F>(ca14, u31, -(sa14 * u3));
+  y[3] = madd<F>(sa14, u31, ca14 * u3);
   const P ca15 = splat<P>(s.ca[15]), sa15 = splat<P>(s.sa[15]);
-  y[32] = ca15 * u32 - sa15 * u2;
-  y[2] = sa15 * u32 + ca15 * u2;
+  y[32] = madd<F>(ca15, u32, -(sa15 * u2));
+  y[2] = madd<F>(sa15, u32, ca15 * u2);
   const P ca16 = splat<P>(s.ca[16]), sa16 = splat<P>(s.sa[16]);
-  y[33] = ca16 * u33 - sa16 * u1;
-  y[1] = sa16 * u33 + ca16 * u1;
+  y[33] = madd<F>(ca16, u33, -(sa16 * u1));
+  y[1] = madd<F>(sa16, u33, ca16 * u1);
   const P ca17 = splat<P>(s.ca[17]), sa17 = splat<P>(s.sa[17]);
-  y[34] = ca17 * u34 - sa17 * u0;
-  y[0] = sa17 * u34 + ca17 * u0;
+  y[34] = madd<F>(ca17, u34, -(sa17 * u0));
+  y[0] = madd<F>(sa17, u34, ca17 * u0);
 }
 
 // Band 18 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) ([2] Sec. 3).
-template <int Order, class T, class P, class S>
-inline void taylor_band18(const S& s, const P* __restrict x, P* __restrict y) {
+template <bool F, int Order, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void taylor_band18(const S& s, const P* __restrict x, P* __restrict y) {
   const P t18 = x[18];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
-  const P t19 = cg1 * x[19] - sg1 * x[17];
-  const P t17 = sg1 * x[19] + cg1 * x[17];
+  const P t19 = madd<F>(cg1, x[19], -(sg1 * x[17]));
+  const P t17 = madd<F>(sg1, x[19], cg1 * x[17]);
   const P cg2 = splat<P>(s.cg[2]), sg2 = splat<P>(s.sg[2]);
-  const P t20 = cg2 * x[20] - sg2 * x[16];
-  const P t16 = sg2 * x[20] + cg2 * x[16];
+  const P t20 = madd<F>(cg2, x[20], -(sg2 * x[16]));
+  const P t16 = madd<F>(sg2, x[20], cg2 * x[16]);
   const P cg3 = splat<P>(s.cg[3]), sg3 = splat<P>(s.sg[3]);
-  const P t21 = cg3 * x[21] - sg3 * x[15];
-  const P t15 = sg3 * x[21] + cg3 * x[15];
+  const P t21 = madd<F>(cg3, x[21], -(sg3 * x[15]));
+  const P t15 = madd<F>(sg3, x[21], cg3 * x[15]);
   const P cg4 = splat<P>(s.cg[4]), sg4 = splat<P>(s.sg[4]);
-  const P t22 = cg4 * x[22] - sg4 * x[14];
-  const P t14 = sg4 * x[22] + cg4 * x[14];
+  const P t22 = madd<F>(cg4, x[22], -(sg4 * x[14]));
+  const P t14 = madd<F>(sg4, x[22], cg4 * x[14]);
   const P cg5 = splat<P>(s.cg[5]), sg5 = splat<P>(s.sg[5]);
-  const P t23 = cg5 * x[23] - sg5 * x[13];
-  const P t13 = sg5 * x[23] + cg5 * x[13];
+  const P t23 = madd<F>(cg5, x[23], -(sg5 * x[13]));
+  const P t13 = madd<F>(sg5, x[23], cg5 * x[13]);
   const P cg6 = splat<P>(s.cg[6]), sg6 = splat<P>(s.sg[6]);
-  const P t24 = cg6 * x[24] - sg6 * x[12];
-  const P t12 = sg6 * x[24] + cg6 * x[12];
+  const P t24 = madd<F>(cg6, x[24], -(sg6 * x[12]));
+  const P t12 = madd<F>(sg6, x[24], cg6 * x[12]);
   const P cg7 = splat<P>(s.cg[7]), sg7 = splat<P>(s.sg[7]);
-  const P t25 = cg7 * x[25] - sg7 * x[11];
-  const P t11 = sg7 * x[25] + cg7 * x[11];
+  const P t25 = madd<F>(cg7, x[25], -(sg7 * x[11]));
+  const P t11 = madd<F>(sg7, x[25], cg7 * x[11]);
   const P cg8 = splat<P>(s.cg[8]), sg8 = splat<P>(s.sg[8]);
-  const P t26 = cg8 * x[26] - sg8 * x[10];
-  const P t10 = sg8 * x[26] + cg8 * x[10];
+  const P t26 = madd<F>(cg8, x[26], -(sg8 * x[10]));
+  const P t10 = madd<F>(sg8, x[26], cg8 * x[10]);
   const P cg9 = splat<P>(s.cg[9]), sg9 = splat<P>(s.sg[9]);
-  const P t27 = cg9 * x[27] - sg9 * x[9];
-  const P t9 = sg9 * x[27] + cg9 * x[9];
+  const P t27 = madd<F>(cg9, x[27], -(sg9 * x[9]));
+  const P t9 = madd<F>(sg9, x[27], cg9 * x[9]);
   const P cg10 = splat<P>(s.cg[10]), sg10 = splat<P>(s.sg[10]);
-  const P t28 = cg10 * x[28] - sg10 * x[8];
-  const P t8 = sg10 * x[28] + cg10 * x[8];
+  const P t28 = madd<F>(cg10, x[28], -(sg10 * x[8]));
+  const P t8 = madd<F>(sg10, x[28], cg10 * x[8]);
   const P cg11 = splat<P>(s.cg[11]), sg11 = splat<P>(s.sg[11]);
-  const P t29 = cg11 * x[29] - sg11 * x[7];
-  const P t7 = sg11 * x[29] + cg11 * x[7];
+  const P t29 = madd<F>(cg11, x[29], -(sg11 * x[7]));
+  const P t7 = madd<F>(sg11, x[29], cg11 * x[7]);
   const P cg12 = splat<P>(s.cg[12]), sg12 = splat<P>(s.sg[12]);
-  const P t30 = cg12 * x[30] - sg12 * x[6];
-  const P t6 = sg12 * x[30] + cg12 * x[6];
+  const P t30 = madd<F>(cg12, x[30], -(sg12 * x[6]));
+  const P t6 = madd<F>(sg12, x[30], cg12 * x[6]);
   const P cg13 = splat<P>(s.cg[13]), sg13 = splat<P>(s.sg[13]);
-  const P t31 = cg13 * x[31] - sg13 * x[5];
-  const P t5 = sg13 * x[31] + cg13 * x[5];
+  const P t31 = madd<F>(cg13, x[31], -(sg13 * x[5]));
+  const P t5 = madd<F>(sg13, x[31], cg13 * x[5]);
   const P cg14 = splat<P>(s.cg[14]), sg14 = splat<P>(s.sg[14]);
-  const P t32 = cg14 * x[32] - sg14 * x[4];
-  const P t4 = sg14 * x[32] + cg14 * x[4];
+  const P t32 = madd<F>(cg14, x[32], -(sg14 * x[4]));
+  const P t4 = madd<F>(sg14, x[32], cg14 * x[4]);
   const P cg15 = splat<P>(s.cg[15]), sg15 = splat<P>(s.sg[15]);
-  const P t33 = cg15 * x[33] - sg15 * x[3];
-  const P t3 = sg15 * x[33] + cg15 * x[3];
+  const P t33 = madd<F>(cg15, x[33], -(sg15 * x[3]));
+  const P t3 = madd<F>(sg15, x[33], cg15 * x[3]);
   const P cg16 = splat<P>(s.cg[16]), sg16 = splat<P>(s.sg[16]);
-  const P t34 = cg16 * x[34] - sg16 * x[2];
-  const P t2 = sg16 * x[34] + cg16 * x[2];
+  const P t34 = madd<F>(cg16, x[34], -(sg16 * x[2]));
+  const P t2 = madd<F>(sg16, x[34], cg16 * x[2]);
   const P cg17 = splat<P>(s.cg[17]), sg17 = splat<P>(s.sg[17]);
-  const P t35 = cg17 * x[35] - sg17 * x[1];
-  const P t1 = sg17 * x[35] + cg17 * x[1];
+  const P t35 = madd<F>(cg17, x[35], -(sg17 * x[1]));
+  const P t1 = madd<F>(sg17, x[35], cg17 * x[1]);
   const P cg18 = splat<P>(s.cg[18]), sg18 = splat<P>(s.sg[18]);
-  const P t36 = cg18 * x[36] - sg18 * x[0];
-  const P t0 = sg18 * x[36] + cg18 * x[0];
+  const P t36 = madd<F>(cg18, x[36], -(sg18 * x[0]));
+  const P t0 = madd<F>(sg18, x[36], cg18 * x[0]);
   const auto b = s.beta, h = s.half_beta2;
   (void)h;
-  P u0 = t0 + b * (T(-3) * t1);
-  if constexpr (Order == 15) u0 += h * (T(-9) * t0);
-  if constexpr (Order == 2) u0 += h * (T(-9) * t0 + T(12.549900398011133) * t2);
-  P u1 = t1 + b * (T(3) * t0 - T(4.1833001326703778) * t2);
-  if constexpr (Order == 15) u1 += h * (T(-26.5) * t1);
-  if constexpr (Order == 2) u1 += h * (T(-26.5) * t1 + T(21.124630174277609) * t3);
-  P u2 = t2 + b * (T(4.1833001326703778) * t1 - T(5.0497524691810387) * t3);
-  if constexpr (Order == 15) u2 += h * (T(-43) * t2);
-  if constexpr (Order == 2) u2 += h * (T(-43) * t2 + T(12.549900398011133) * t0 + T(29.008619408720573) * t4);
-  P u3 = t3 + b * (T(5.0497524691810387) * t2 - T(5.7445626465380286) * t4);
-  if constexpr (Order == 15) u3 += h * (T(-58.5) * t3);
-  if constexpr (Order == 2) u3 += h * (T(-58.5) * t3 + T(21.124630174277609) * t1 + T(36.331804249169899) * t5);
-  P u4 = t4 + b * (T(5.7445626465380286) * t3 - T(6.324555320336759) * t5);
-  if constexpr (Order == 15) u4 += h * (T(-73) * t4);
-  if constexpr (Order == 2) u4 += h * (T(-73) * t4 + T(29.008619408720573) * t2 + T(43.127717305695647) * t6);
-  P u5 = t5 + b * (T(6.324555320336759) * t4 - T(6.8190908484929276) * t6);
-  if constexpr (Order == 15) u5 += h * (T(-86.5) * t5);
-  if constexpr (Order == 2) u5 += h * (T(-86.5) * t5 + T(36.331804249169899) * t3 + T(49.409007276001809) * t7);
-  P u6 = t6 + b * (T(6.8190908484929276) * t5 - T(7.245688373094719) * t7);
-  if constexpr (Order == 15) u6 += h * (T(-99) * t6);
-  if constexpr (Order == 2) u6 += h * (T(-99) * t6 + T(43.127717305695647) * t4 + T(55.181518645285578) * t8);
-  P u7 = t7 + b * (T(7.245688373094719) * t6 - T(7.6157731058639087) * t8);
-  if constexpr (Order == 15) u7 += h * (T(-110.5) * t7);
-  if constexpr (Order == 2) u7 += h * (T(-110.5) * t7 + T(49.409007276001809) * t5 + T(60.448325038829651) * t9);
-  P u8 = t8 + b * (T(7.6157731058639087) * t7 - T(7.9372539331937721) * t9);
-  if constexpr (Order == 15) u8 += h * (T(-121) * t8);
-  if constexpr (Order == 2) u8 += h * (T(-121) * t8 + T(55.181518645285578) * t6 + T(65.211195357852475) * t10);
-  P u9 = t9 + b * (T(7.9372539331937721) * t8 - T(8.2158383625774913) * t10);
-  if constexpr (Order == 15) u9 += h * (T(-130.5) * t9);
-  if constexpr (Order == 2) u9 += h * (T(-130.5) * t9 + T(60.448325038829651) * t7 + T(69.471217061456471) * t11);
-  P u10 = t10 + b * (T(8.2158383625774913) * t9 - T(8.4557672626438816) * t11);
-  if constexpr (Order == 15) u10 += h * (T(-139) * t10);
-  if constexpr (Order == 2) u10 += h * (T(-139) * t10 + T(65.211195357852475) * t8 + T(73.229092579384044) * t12);
-  P u11 = t11 + b * (T(8.4557672626438816) * t10 - T(8.6602540378443873) * t12);
-  if constexpr (Order == 15) u11 += h * (T(-146.5) * t11);
-  if constexpr (Order == 2) u11 += h * (T(-146.5) * t11 + T(69.471217061456471) * t9 + T(76.485292703891773) * t13);
-  P u12 = t12 + b * (T(8.6602540378443873) * t11 - T(8.8317608663278477) * t13);
-  if constexpr (Order == 15) u12 += h * (T(-153) * t12);
-  if constexpr (Order == 2) u12 += h * (T(-153) * t12 + T(73.229092579384044) * t10 + T(79.240141342630125) * t14);
-  P u13 = t13 + b * (T(8.8317608663278477) * t12 - T(8.9721792224631809) * t14);
-  if constexpr (Order == 15) u13 += h * (T(-158.5) * t13);
-  if constexpr (Order == 2) u13 += h * (T(-158.5) * t13 + T(76.485292703891773) * t11 + T(81.493864799750412) * t15);
-  P u14 = t14 + b * (T(8.9721792224631809) * t13 - T(9.0829510622924747) * t15);
-  if constexpr (Order == 15) u14 += h * (T(-163) * t14);
-  if constexpr (Order == 2) u14 += h * (T(-163) * t14 + T(79.240141342630125) * t12 + T(83.246621553069645) * t16);
-  P u15 = t15 + b * (T(9.0829510622924747) * t14 - T(9.1651513899116797) * t16);
-  if constexpr (Order == 15) u15 += h * (T(-166.5) * t15);
-  if constexpr (Order == 2) u15 += h * (T(-166.5) * t15 + T(81.493864799750412) * t13 + T(84.498520697110436) * t17);
-  P u16 = t16 + b * (T(9.1651513899116797) * t15 - T(9.2195444572928871) * t17);
-  if constexpr (Order == 15) u16 += h * (T(-169) * t16);
-  if constexpr (Order == 2) u16 += h * (T(-169) * t16 + T(83.246621553069645) * t14);
-  P u17 = t17 + b * (T(9.2195444572928871) * t16);
-  if constexpr (Order == 15) u17 += h * (T(-85) * t17);
-  if constexpr (Order == 2) u17 += h * (T(-85) * t17 + T(84.498520697110436) * t15);
-  P u18 = t18 + b * (T(13.076696830622021) * t19);
-  if constexpr (Order == 15) u18 += h * (T(-171) * t18);
-  if constexpr (Order == 2) u18 += h * (T(-171) * t18 + T(120.56118778446071) * t20);
-  P u19 = t19 + b * (T(-13.076696830622021) * t18 + T(9.2195444572928871) * t20);
-  if constexpr (Order == 15) u19 += h * (T(-256) * t19);
-  if constexpr (Order == 2) u19 += h * (T(-256) * t19 + T(84.498520697110436) * t21);
-  P u20 = t20 + b * (T(-9.2195444572928871) * t19 + T(9.1651513899116797) * t21);
-  if constexpr (Order == 15) u20 += h * (T(-169) * t20);
-  if constexpr (Order == 2) u20 += h * (T(-169) * t20 + T(120.56118778446071) * t18 + T(83.246621553069645) * t22);
-  P u21 = t21 + b * (T(-9.1651513899116797) * t20 + T(9.0829510622924747) * t22);
-  if constexpr (Order == 15) u21 += h * (T(-166.5) * t21);
-  if constexpr (Order == 2) u21 += h * (T(-166.5) * t21 + T(84.498520697110436) * t19 + T(81.493864799750412) * t23);
-  P u22 = t22 + b * (T(-9.0829510622924747) * t21 + T(8.9721792224631809) * t23);
-  if constexpr (Order == 15) u22 += h * (T(-163) * t22);
-  if constexpr (Order == 2) u22 += h * (T(-163) * t22 + T(83.246621553069645) * t20 + T(79.240141342630125) * t24);
-  P u23 = t23 + b * (T(-8.9721792224631809) * t22 + T(8.8317608663278477) * t24);
-  if constexpr (Order == 15) u23 += h * (T(-158.5) * t23);
-  if constexpr (Order == 2) u23 += h * (T(-158.5) * t23 + T(81.493864799750412) * t21 + T(76.485292703891773) * t25);
-  P u24 = t24 + b * (T(-8.8317608663278477) * t23 + T(8.6602540378443873) * t25);
-  if constexpr (Order == 15) u24 += h * (T(-153) * t24);
-  if constexpr (Order == 2) u24 += h * (T(-153) * t24 + T(79.240141342630125) * t22 + T(73.229092579384044) * t26);
-  P u25 = t25 + b * (T(-8.6602540378443873) * t24 + T(8.4557672626438816) * t26);
-  if constexpr (Order == 15) u25 += h * (T(-146.5) * t25);
-  if constexpr (Order == 2) u25 += h * (T(-146.5) * t25 + T(76.485292703891773) * t23 + T(69.471217061456471) * t27);
-  P u26 = t26 + b * (T(-8.4557672626438816) * t25 + T(8.2158383625774913) * t27);
-  if constexpr (Order == 15) u26 += h * (T(-139) * t26);
-  if constexpr (Order == 2) u26 += h * (T(-139) * t26 + T(73.229092579384044) * t24 + T(65.211195357852475) * t28);
-  P u27 = t27 + b * (T(-8.2158383625774913) * t26 + T(7.9372539331937721) * t28);
-  if constexpr (Order == 15) u27 += h * (T(-130.5) * t27);
-  if constexpr (Order == 2) u27 += h * (T(-130.5) * t27 + T(69.471217061456471) * t25 + T(60.448325038829651) * t29);
-  P u28 = t28 + b * (T(-7.9372539331937721) * t27 + T(7.6157731058639087) * t29);
-  if constexpr (Order == 15) u28 += h * (T(-121) * t28);
-  if constexpr (Order == 2) u28 += h * (T(-121) * t28 + T(65.211195357852475) * t26 + T(55.181518645285578) * t30);
-  P u29 = t29 + b * (T(-7.6157731058639087) * t28 + T(7.245688373094719) * t30);
-  if constexpr (Order == 15) u29 += h * (T(-110.5) * t29);
-  if constexpr (Order == 2) u29 += h * (T(-110.5) * t29 + T(60.448325038829651) * t27 + T(49.409007276001809) * t31);
-  P u30 = t30 + b * (T(-7.245688373094719) * t29 + T(6.8190908484929276) * t31);
-  if constexpr (Order == 15) u30 += h * (T(-99) * t30);
-  if constexpr (Order == 2) u30 += h * (T(-99) * t30 + T(55.181518645285578) * t28 + T(43.127717305695647) * t32);
-  P u31 = t31 + b * (T(-6.8190908484929276) * t30 + T(6.324555320336759) * t32);
-  if constexpr (Order == 15) u31 += h * (T(-86.5) * t31);
-  if constexpr (Order == 2) u31 += h * (T(-86.5) * t31 + T(49.409007276001809) * t29 + T(36.331804249169899) * t33);
-  P u32 = t32 + b * (T(-6.324555320336759) * t31 + T(5.7445626465380286) * t33);
-  if constexpr (Order == 15) u32 += h * (T(-73) * t32);
-  if constexpr (Order == 2) u32 += h * (T(-73) * t32 + T(43.127717305695647) * t30 + T(29.008619408720573) * t34);
-  P u33 = t33 + b * (T(-5.7445626465380286) * t32 + T(5.0497524691810387) * t34);
-  if constexpr (Order == 15) u33 += h * (T(-58.5) * t33);
-  if constexpr (Order == 2) u33 += h * (T(-58.5) * t33 + T(36.331804249169899) * t31 + T(21.124630174277609) * t35);
-  P u34 = t34 + b * (T(-5.0497524691810387) * t33 + T(4.1833001326703778) * t35);
-  if constexpr (Order == 15) u34 += h * (T(-43) * t34);
-  if constexpr (Order == 2) u34 += h * (T(-43) * t34 + T(29.008619408720573) * t32 + T(12.549900398011133) * t36);
-  P u35 = t35 + b * (T(-4.1833001326703778) * t34 + T(3) * t36);
-  if constexpr (Order == 15) u35 += h * (T(-26.5) * t35);
-  if constexpr (Order == 2) u35 += h * (T(-26.5) * t35 + T(21.124630174277609) * t33);
-  P u36 = t36 + b * (T(-3) * t35);
-  if constexpr (Order == 15) u36 += h * (T(-9) * t36);
-  if constexpr (Order == 2) u36 += h * (T(-9) * t36 + T(12.549900398011133) * t34);
+  P u0 = madd<F>(b, T(-3) * t1, t0);
+  if constexpr (Order == 15) u0 = madd<F>(h, T(-9) * t0, u0);
+  if constexpr (Order == 2) u0 = madd<F>(h, madd<F>(T(12.549900398011133), t2, T(-9) * t0), u0);
+  P u1 = madd<F>(b, madd<F>(T(-4.1833001326703778), t2, T(3) * t0), t1);
+  if constexpr (Order == 15) u1 = madd<F>(h, T(-26.5) * t1, u1);
+  if constexpr (Order == 2) u1 = madd<F>(h, madd<F>(T(21.124630174277609), t3, T(-26.5) * t1), u1);
+  P u2 = madd<F>(b, madd<F>(T(-5.0497524691810387), t3, T(4.1833001326703778) * t1), t2);
+  if constexpr (Order == 15) u2 = madd<F>(h, T(-43) * t2, u2);
+  if constexpr (Order == 2) u2 = madd<F>(h, madd<F>(T(29.008619408720573), t4, madd<F>(T(12.549900398011133), t0, T(-43) * t2)), u2);
+  P u3 = madd<F>(b, madd<F>(T(-5.7445626465380286), t4, T(5.0497524691810387) * t2), t3);
+  if constexpr (Order == 15) u3 = madd<F>(h, T(-58.5) * t3, u3);
+  if constexpr (Order == 2) u3 = madd<F>(h, madd<F>(T(36.331804249169899), t5, madd<F>(T(21.124630174277609), t1, T(-58.5) * t3)), u3);
+  P u4 = madd<F>(b, madd<F>(T(-6.324555320336759), t5, T(5.7445626465380286) * t3), t4);
+  if constexpr (Order == 15) u4 = madd<F>(h, T(-73) * t4, u4);
+  if constexpr (Order == 2) u4 = madd<F>(h, madd<F>(T(43.127717305695647), t6, madd<F>(T(29.008619408720573), t2, T(-73) * t4)), u4);
+  P u5 = madd<F>(b, madd<F>(T(-6.8190908484929276), t6, T(6.324555320336759) * t4), t5);
+  if constexpr (Order == 15) u5 = madd<F>(h, T(-86.5) * t5, u5);
+  if constexpr (Order == 2) u5 = madd<F>(h, madd<F>(T(49.409007276001809), t7, madd<F>(T(36.331804249169899), t3, T(-86.5) * t5)), u5);
+  P u6 = madd<F>(b, madd<F>(T(-7.245688373094719), t7, T(6.8190908484929276) * t5), t6);
+  if constexpr (Order == 15) u6 = madd<F>(h, T(-99) * t6, u6);
+  if constexpr (Order == 2) u6 = madd<F>(h, madd<F>(T(55.181518645285578), t8, madd<F>(T(43.127717305695647), t4, T(-99) * t6)), u6);
+  P u7 = madd<F>(b, madd<F>(T(-7.6157731058639087), t8, T(7.245688373094719) * t6), t7);
+  if constexpr (Order == 15) u7 = madd<F>(h, T(-110.5) * t7, u7);
+  if constexpr (Order == 2) u7 = madd<F>(h, madd<F>(T(60.448325038829651), t9, madd<F>(T(49.409007276001809), t5, T(-110.5) * t7)), u7);
+  P u8 = madd<F>(b, madd<F>(T(-7.9372539331937721), t9, T(7.6157731058639087) * t7), t8);
+  if constexpr (Order == 15) u8 = madd<F>(h, T(-121) * t8, u8);
+  if constexpr (Order == 2) u8 = madd<F>(h, madd<F>(T(65.211195357852475), t10, madd<F>(T(55.181518645285578), t6, T(-121) * t8)), u8);
+  P u9 = madd<F>(b, madd<F>(T(-8.2158383625774913), t10, T(7.9372539331937721) * t8), t9);
+  if constexpr (Order == 15) u9 = madd<F>(h, T(-130.5) * t9, u9);
+  if constexpr (Order == 2) u9 = madd<F>(h, madd<F>(T(69.471217061456471), t11, madd<F>(T(60.448325038829651), t7, T(-130.5) * t9)), u9);
+  P u10 = madd<F>(b, madd<F>(T(-8.4557672626438816), t11, T(8.2158383625774913) * t9), t10);
+  if constexpr (Order == 15) u10 = madd<F>(h, T(-139) * t10, u10);
+  if constexpr (Order == 2) u10 = madd<F>(h, madd<F>(T(73.229092579384044), t12, madd<F>(T(65.211195357852475), t8, T(-139) * t10)), u10);
+  P u11 = madd<F>(b, madd<F>(T(-8.6602540378443873), t12, T(8.4557672626438816) * t10), t11);
+  if constexpr (Order == 15) u11 = madd<F>(h, T(-146.5) * t11, u11);
+  if constexpr (Order == 2) u11 = madd<F>(h, madd<F>(T(76.485292703891773), t13, madd<F>(T(69.471217061456471), t9, T(-146.5) * t11)), u11);
+  P u12 = madd<F>(b, madd<F>(T(-8.8317608663278477), t13, T(8.6602540378443873) * t11), t12);
+  if constexpr (Order == 15) u12 = madd<F>(h, T(-153) * t12, u12);
+  if constexpr (Order == 2) u12 = madd<F>(h, madd<F>(T(79.240141342630125), t14, madd<F>(T(73.229092579384044), t10, T(-153) * t12)), u12);
+  P u13 = madd<F>(b, madd<F>(T(-8.9721792224631809), t14, T(8.8317608663278477) * t12), t13);
+  if constexpr (Order == 15) u13 = madd<F>(h, T(-158.5) * t13, u13);
+  if constexpr (Order == 2) u13 = madd<F>(h, madd<F>(T(81.493864799750412), t15, madd<F>(T(76.485292703891773), t11, T(-158.5) * t13)), u13);
+  P u14 = madd<F>(b, madd<F>(T(-9.0829510622924747), t15, T(8.9721792224631809) * t13), t14);
+  if constexpr (Order == 15) u14 = madd<F>(h, T(-163) * t14, u14);
+  if constexpr (Order == 2) u14 = madd<F>(h, madd<F>(T(83.246621553069645), t16, madd<F>(T(79.240141342630125), t12, T(-163) * t14)), u14);
+  P u15 = madd<F>(b, madd<F>(T(-9.1651513899116797), t16, T(9.0829510622924747) * t14), t15);
+  if constexpr (Order == 15) u15 = madd<F>(h, T(-166.5) * t15, u15);
+  if constexpr (Order == 2) u15 = madd<F>(h, madd<F>(T(84.498520697110436), t17, madd<F>(T(81.493864799750412), t13, T(-166.5) * t15)), u15);
+  P u16 = madd<F>(b, madd<F>(T(-9.2195444572928871), t17, T(9.1651513899116797) * t15), t16);
+  if constexpr (Order == 15) u16 = madd<F>(h, T(-169) * t16, u16);
+  if constexpr (Order == 2) u16 = madd<F>(h, madd<F>(T(83.246621553069645), t14, T(-169) * t16), u16);
+  P u17 = madd<F>(b, T(9.2195444572928871) * t16, t17);
+  if constexpr (Order == 15) u17 = madd<F>(h, T(-85) * t17, u17);
+  if constexpr (Order == 2) u17 = madd<F>(h, madd<F>(T(84.498520697110436), t15, T(-85) * t17), u17);
+  P u18 = madd<F>(b, T(13.076696830622021) * t19, t18);
+  if constexpr (Order == 15) u18 = madd<F>(h, T(-171) * t18, u18);
+  if constexpr (Order == 2) u18 = madd<F>(h, madd<F>(T(120.56118778446071), t20, T(-171) * t18), u18);
+  P u19 = madd<F>(b, madd<F>(T(9.2195444572928871), t20, T(-13.076696830622021) * t18), t19);
+  if constexpr (Order == 15) u19 = madd<F>(h, T(-256) * t19, u19);
+  if constexpr (Order == 2) u19 = madd<F>(h, madd<F>(T(84.498520697110436), t21, T(-256) * t19), u19);
+  P u20 = madd<F>(b, madd<F>(T(9.1651513899116797), t21, T(-9.2195444572928871) * t19), t20);
+  if constexpr (Order == 15) u20 = madd<F>(h, T(-169) * t20, u20);
+  if constexpr (Order == 2) u20 = madd<F>(h, madd<F>(T(83.246621553069645), t22, madd<F>(T(120.56118778446071), t18, T(-169) * t20)), u20);
+  P u21 = madd<F>(b, madd<F>(T(9.0829510622924747), t22, T(-9.1651513899116797) * t20), t21);
+  if constexpr (Order == 15) u21 = madd<F>(h, T(-166.5) * t21, u21);
+  if constexpr (Order == 2) u21 = madd<F>(h, madd<F>(T(81.493864799750412), t23, madd<F>(T(84.498520697110436), t19, T(-166.5) * t21)), u21);
+  P u22 = madd<F>(b, madd<F>(T(8.9721792224631809), t23, T(-9.0829510622924747) * t21), t22);
+  if constexpr (Order == 15) u22 = madd<F>(h, T(-163) * t22, u22);
+  if constexpr (Order == 2) u22 = madd<F>(h, madd<F>(T(79.240141342630125), t24, madd<F>(T(83.246621553069645), t20, T(-163) * t22)), u22);
+  P u23 = madd<F>(b, madd<F>(T(8.8317608663278477), t24, T(-8.9721792224631809) * t22), t23);
+  if constexpr (Order == 15) u23 = madd<F>(h, T(-158.5) * t23, u23);
+  if constexpr (Order == 2) u23 = madd<F>(h, madd<F>(T(76.485292703891773), t25, madd<F>(T(81.493864799750412), t21, T(-158.5) * t23)), u23);
+  P u24 = madd<F>(b, madd<F>(T(8.6602540378443873), t25, T(-8.8317608663278477) * t23), t24);
+  if constexpr (Order == 15) u24 = madd<F>(h, T(-153) * t24, u24);
+  if constexpr (Order == 2) u24 = madd<F>(h, madd<F>(T(73.229092579384044), t26, madd<F>(T(79.240141342630125), t22, T(-153) * t24)), u24);
+  P u25 = madd<F>(b, madd<F>(T(8.4557672626438816), t26, T(-8.6602540378443873) * t24), t25);
+  if constexpr (Order == 15) u25 = madd<F>(h, T(-146.5) * t25, u25);
+  if constexpr (Order == 2) u25 = madd<F>(h, madd<F>(T(69.471217061456471), t27, madd<F>(T(76.485292703891773), t23, T(-146.5) * t25)), u25);
+  P u26 = madd<F>(b, madd<F>(T(8.2158383625774913), t27, T(-8.4557672626438816) * t25), t26);
+  if constexpr (Order == 15) u26 = madd<F>(h, T(-139) * t26, u26);
+  if constexpr (Order == 2) u26 = madd<F>(h, madd<F>(T(65.211195357852475), t28, madd<F>(T(73.229092579384044), t24, T(-139) * t26)), u26);
+  P u27 = madd<F>(b, madd<F>(T(7.9372539331937721), t28, T(-8.2158383625774913) * t26), t27);
+  if constexpr (Order == 15) u27 = madd<F>(h, T(-130.5) * t27, u27);
+  if constexpr (Order == 2) u27 = madd<F>(h, madd<F>(T(60.448325038829651), t29, madd<F>(T(69.471217061456471), t25, T(-130.5) * t27)), u27);
+  P u28 = madd<F>(b, madd<F>(T(7.6157731058639087), t29, T(-7.9372539331937721) * t27), t28);
+  if constexpr (Order == 15) u28 = madd<F>(h, T(-121) * t28, u28);
+  if constexpr (Order == 2) u28 = madd<F>(h, madd<F>(T(55.181518645285578), t30, madd<F>(T(65.211195357852475), t26, T(-121) * t28)), u28);
+  P u29 = madd<F>(b, madd<F>(T(7.245688373094719), t30, T(-7.6157731058639087) * t28), t29);
+  if constexpr (Order == 15) u29 = madd<F>(h, T(-110.5) * t29, u29);
+  if constexpr (Order == 2) u29 = madd<F>(h, madd<F>(T(49.409007276001809), t31, madd<F>(T(60.448325038829651), t27, T(-110.5) * t29)), u29);
+  P u30 = madd<F>(b, madd<F>(T(6.8190908484929276), t31, T(-7.245688373094719) * t29), t30);
+  if constexpr (Order == 15) u30 = madd<F>(h, T(-99) * t30, u30);
+  if constexpr (Order == 2) u30 = madd<F>(h, madd<F>(T(43.127717305695647), t32, madd<F>(T(55.181518645285578), t28, T(-99) * t30)), u30);
+  P u31 = madd<F>(b, madd<F>(T(6.324555320336759), t32, T(-6.8190908484929276) * t30), t31);
+  if constexpr (Order == 15) u31 = madd<F>(h, T(-86.5) * t31, u31);
+  if constexpr (Order == 2) u31 = madd<F>(h, madd<F>(T(36.331804249169899), t33, madd<F>(T(49.409007276001809), t29, T(-86.5) * t31)), u31);
+  P u32 = madd<F>(b, madd<F>(T(5.7445626465380286), t33, T(-6.324555320336759) * t31), t32);
+  if constexpr (Order == 15) u32 = madd<F>(h, T(-73) * t32, u32);
+  if constexpr (Order == 2) u32 = madd<F>(h, madd<F>(T(29.008619408720573), t34, madd<F>(T(43.127717305695647), t30, T(-73) * t32)), u32);
+  P u33 = madd<F>(b, madd<F>(T(5.0497524691810387), t34, T(-5.7445626465380286) * t32), t33);
+  if constexpr (Order == 15) u33 = madd<F>(h, T(-58.5) * t33, u33);
+  if constexpr (Order == 2) u33 = madd<F>(h, madd<F>(T(21.124630174277609), t35, madd<F>(T(36.331804249169899), t31, T(-58.5) * t33)), u33);
+  P u34 = madd<F>(b, madd<F>(T(4.1833001326703778), t35, T(-5.0497524691810387) * t33), t34);
+  if constexpr (Order == 15) u34 = madd<F>(h, T(-43) * t34, u34);
+  if constexpr (Order == 2) u34 = madd<F>(h, madd<F>(T(12.549900398011133), t36, madd<F>(T(29.008619408720573), t32, T(-43) * t34)), u34);
+  P u35 = madd<F>(b, madd<F>(T(3), t36, T(-4.1833001326703778) * t34), t35);
+  if constexpr (Order == 15) u35 = madd<F>(h, T(-26.5) * t35, u35);
+  if constexpr (Order == 2) u35 = madd<F>(h, madd<F>(T(21.124630174277609), t33, T(-26.5) * t35), u35);
+  P u36 = madd<F>(b, T(-3) * t35, t36);
+  if constexpr (Order == 15) u36 = madd<F>(h, T(-9) * t36, u36);
+  if constexpr (Order == 2) u36 = madd<F>(h, madd<F>(T(12.549900398011133), t34, T(-9) * t36), u36);
   y[18] = u18;
   const P ca1 = splat<P>(s.ca[1]), sa1 = splat<P>(s.sa[1]);
-  y[19] = ca1 * u19 - sa1 * u17;
-  y[17] = sa1 * u19 + ca1 * u17;
+  y[19] = madd<F>(ca1, u19, -(sa1 * u17));
+  y[17] = madd<F>(sa1, u19, ca1 * u17);
   const P ca2 = splat<P>(s.ca[2]), sa2 = splat<P>(s.sa[2]);
-  y[20] = ca2 * u20 - sa2 * u16;
-  y[16] = sa2 * u20 + ca2 * u16;
+  y[20] = madd<F>(ca2, u20, -(sa2 * u16));
+  y[16] = madd<F>(sa2, u20, ca2 * u16);
   const P ca3 = splat<P>(s.ca[3]), sa3 = splat<P>(s.sa[3]);
-  y[21] = ca3 * u21 - sa3 * u15;
-  y[15] = sa3 * u21 + ca3 * u15;
+  y[21] = madd<F>(ca3, u21, -(sa3 * u15));
+  y[15] = madd<F>(sa3, u21, ca3 * u15);
   const P ca4 = splat<P>(s.ca[4]), sa4 = splat<P>(s.sa[4]);
-  y[22] = ca4 * u22 - sa4 * u14;
-  y[14] = sa4 * u22 + ca4 * u14;
+  y[22] = madd<F>(ca4, u22, -(sa4 * u14));
+  y[14] = madd<F>(sa4, u22, ca4 * u14);
   const P ca5 = splat<P>(s.ca[5]), sa5 = splat<P>(s.sa[5]);
-  y[23] = ca5 * u23 - sa5 * u13;
-  y[13] = sa5 * u23 + ca5 * u13;
+  y[23] = madd<F>(ca5, u23, -(sa5 * u13));
+  y[13] = madd<F>(sa5, u23, ca5 * u13);
   const P ca6 = splat<P>(s.ca[6]), sa6 = splat<P>(s.sa[6]);
-  y[24] = ca6 * u24 - sa6 * u12;
-  y[12] = sa6 * u24 + ca6 * u12;
+  y[24] = madd<F>(ca6, u24, -(sa6 * u12));
+  y[12] = madd<F>(sa6, u24, ca6 * u12);
   const P ca7 = splat<P>(s.ca[7]), sa7 = splat<P>(s.sa[7]);
-  y[25] = ca7 * u25 - sa7 * u11;
-  y[11] = sa7 * u25 + ca7 * u11;
+  y[25] = madd<F>(ca7, u25, -(sa7 * u11));
+  y[11] = madd<F>(sa7, u25, ca7 * u11);
   const P ca8 = splat<P>(s.ca[8]), sa8 = splat<P>(s.sa[8]);
-  y[26] = ca8 * u26 - sa8 * u10;
-  y[10] = sa8 * u26 + ca8 * u10;
+  y[26] = madd<F>(ca8, u26, -(sa8 * u10));
+  y[10] = madd<F>(sa8, u26, ca8 * u10);
   const P ca9 = splat<P>(s.ca[9]), sa9 = splat<P>(s.sa[9]);
-  y[27] = ca9 * u27 - sa9 * u9;
-  y[9] = sa9 * u27 + ca9 * u9;
+  y[27] = madd<F>(ca9, u27, -(sa9 * u9));
+  y[9] = madd<F>(sa9, u27, ca9 * u9);
   const P ca10 = splat<P>(s.ca[10]), sa10 = splat<P>(s.sa[10]);
-  y[28] = ca10 * u28 - sa10 * u8;
-  y[8] = sa10 * u28 + ca10 * u8;
+  y[28] = madd<F>(ca10, u28, -(sa10 * u8));
+  y[8] = madd<F>(sa10, u28, ca10 * u8);
   const P ca11 = splat<P>(s.ca[11]), sa11 = splat<P>(s.sa[11]);
-  y[29] = ca11 * u29 - sa11 * u7;
-  y[7] = sa11 * u29 + ca11 * u7;
+  y[29] = madd<F>(ca11, u29, -(sa11 * u7));
+  y[7] = madd<F>(sa11, u29, ca11 * u7);
   const P ca12 = splat<P>(s.ca[12]), sa12 = splat<P>(s.sa[12]);
-  y[30] = ca12 * u30 - sa12 * u6;
-  y[6] = sa12 * u30 + ca12 * u6;
+  y[30] = madd<F>(ca12, u30, -(sa12 * u6));
+  y[6] = madd<F>(sa12, u30, ca12 * u6);
   const P ca13 = splat<P>(s.ca[13]), sa13 = splat<P>(s.sa[13]);
-  y[31] = ca13 * u31 - sa13 * u5;
-  y[5] = sa13 * u31 + ca13 * u5;
+  y[31] = madd<F>(ca13, u31, -(sa13 * u5));
+  y[5] = madd<F>(sa13, u31, ca13 * u5);
   const P ca14 = splat<P>(s.ca[14]), sa14 = splat<P>(s.sa[14]);
-  y[32] = ca14 * u32 - sa14 * u4;
-  y[4] = sa14 * u32 + ca14 * u4;
+  y[32] = madd<F>(ca14, u32, -(sa14 * u4));
+  y[4] = madd<F>(sa14, u32, ca14 * u4);
   const P ca15 = splat<P>(s.ca[15]), sa15 = splat<P>(s.sa[15]);
-  y[33] = ca15 * u33 - sa15 * u3;
-  y[3] = sa15 * u33 + ca15 * u3;
+  y[33] = madd<F>(ca15, u33, -(sa15 * u3));
+  y[3] = madd<F>(sa15, u33, ca15 * u3);
   const P ca16 = splat<P>(s.ca[16]), sa16 = splat<P>(s.sa[16]);
-  y[34] = ca16 * u34 - sa16 * u2;
-  y[2] = sa16 * u34 + ca16 * u2;
+  y[34] = madd<F>(ca16, u34, -(sa16 * u2));
+  y[2] = madd<F>(sa16, u34, ca16 * u2);
   const P ca17 = splat<P>(s.ca[17]), sa17 = splat<P>(s.sa[17]);
-  y[35] = ca17 * u35 - sa17 * u1;
-  y[1] = sa17 * u35 + ca17 * u1;
+  y[35] = madd<F>(ca17, u35, -(sa17 * u1));
+  y[1] = madd<F>(sa17, u35, ca17 * u1);
   const P ca18 = splat<P>(s.ca[18]), sa18 = splat<P>(s.sa[18]);
-  y[36] = ca18 * u36 - sa18 * u0;
-  y[0] = sa18 * u36 + ca18 * u0;
+  y[36] = madd<F>(ca18, u36, -(sa18 * u0));
+  y[0] = madd<F>(sa18, u36, ca18 * u0);
 }
 
 // Band 19 of Z(a) (I + b D1 [+ b^2/2 D2]) Z(g) ([2] Sec. 3).
-template <int Order, class T, class P, class S>
-inline void taylor_band19(const S& s, const P* __restrict x, P* __restrict y) {
+template <bool F, int Order, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void taylor_band19(const S& s, const P* __restrict x, P* __restrict y) {
   const P t19 = x[19];
   const P cg1 = splat<P>(s.cg[1]), sg1 = splat<P>(s.sg[1]);
-  const P t20 = cg1 * x[20] - sg1 * x[18];
-  const P t18 = sg1 * x[20] + cg1 * x[18];
+  const P t20 = madd<F>(cg1, x[20], -(sg1 * x[18]));
+  const P t18 = madd<F>(sg1, x[20], cg1 * x[18]);
   const P cg2 = splat<P>(s.cg[2]), sg2 = splat<P>(s.sg[2]);
-  const P t21 = cg2 * x[21] - sg2 * x[17];
-  const P t17 = sg2 * x[21] + cg2 * x[17];
+  const P t21 = madd<F>(cg2, x[21], -(sg2 * x[17]));
+  const P t17 = madd<F>(sg2, x[21], cg2 * x[17]);
   const P cg3 = splat<P>(s.cg[3]), sg3 = splat<P>(s.sg[3]);
-  const P t22 = cg3 * x[22] - sg3 * x[16];
-  const P t16 = sg3 * x[22] + cg3 * x[16];
+  const P t22 = madd<F>(cg3, x[22], -(sg3 * x[16]));
+  const P t16 = madd<F>(sg3, x[22], cg3 * x[16]);
   const P cg4 = splat<P>(s.cg[4]), sg4 = splat<P>(s.sg[4]);
-  const P t23 = cg4 * x[23] - sg4 * x[15];
-  const P t15 = sg4 * x[23] + cg4 * x[15];
+  const P t23 = madd<F>(cg4, x[23], -(sg4 * x[15]));
+  const P t15 = madd<F>(sg4, x[23], cg4 * x[15]);
   const P cg5 = splat<P>(s.cg[5]), sg5 = splat<P>(s.sg[5]);
-  const P t24 = cg5 * x[24] - sg5 * x[14];
-  const P t14 = sg5 * x[24] + cg5 * x[14];
+  const P t24 = madd<F>(cg5, x[24], -(sg5 * x[14]));
+  const P t14 = madd<F>(sg5, x[24], cg5 * x[14]);
   const P cg6 = splat<P>(s.cg[6]), sg6 = splat<P>(s.sg[6]);
-  const P t25 = cg6 * x[25] - sg6 * x[13];
-  const P t13 = sg6 * x[25] + cg6 * x[13];
+  const P t25 = madd<F>(cg6, x[25], -(sg6 * x[13]));
+  const P t13 = madd<F>(sg6, x[25], cg6 * x[13]);
   const P cg7 = splat<P>(s.cg[7]), sg7 = splat<P>(s.sg[7]);
-  const P t26 = cg7 * x[26] - sg7 * x[12];
-  const P t12 = sg7 * x[26] + cg7 * x[12];
+  const P t26 = madd<F>(cg7, x[26], -(sg7 * x[12]));
+  const P t12 = madd<F>(sg7, x[26], cg7 * x[12]);
   const P cg8 = splat<P>(s.cg[8]), sg8 = splat<P>(s.sg[8]);
-  const P t27 = cg8 * x[27] - sg8 * x[11];
-  const P t11 = sg8 * x[27] + cg8 * x[11];
+  const P t27 = madd<F>(cg8, x[27], -(sg8 * x[11]));
+  const P t11 = madd<F>(sg8, x[27], cg8 * x[11]);
   const P cg9 = splat<P>(s.cg[9]), sg9 = splat<P>(s.sg[9]);
-  const P t28 = cg9 * x[28] - sg9 * x[10];
-  const P t10 = sg9 * x[28] + cg9 * x[10];
+  const P t28 = madd<F>(cg9, x[28], -(sg9 * x[10]));
+  const P t10 = madd<F>(sg9, x[28], cg9 * x[10]);
   const P cg10 = splat<P>(s.cg[10]), sg10 = splat<P>(s.sg[10]);
-  const P t29 = cg10 * x[29] - sg10 * x[9];
-  const P t9 = sg10 * x[29] + cg10 * x[9];
+  const P t29 = madd<F>(cg10, x[29], -(sg10 * x[9]));
+  const P t9 = madd<F>(sg10, x[29], cg10 * x[9]);
   const P cg11 = splat<P>(s.cg[11]), sg11 = splat<P>(s.sg[11]);
-  const P t30 = cg11 * x[30] - sg11 * x[8];
-  const P t8 = sg11 * x[30] + cg11 * x[8];
+  const P t30 = madd<F>(cg11, x[30], -(sg11 * x[8]));
+  const P t8 = madd<F>(sg11, x[30], cg11 * x[8]);
   const P cg12 = splat<P>(s.cg[12]), sg12 = splat<P>(s.sg[12]);
-  const P t31 = cg12 * x[31] - sg12 * x[7];
-  const P t7 = sg12 * x[31] + cg12 * x[7];
+  const P t31 = madd<F>(cg12, x[31], -(sg12 * x[7]));
+  const P t7 = madd<F>(sg12, x[31], cg12 * x[7]);
   const P cg13 = splat<P>(s.cg[13]), sg13 = splat<P>(s.sg[13]);
-  const P t32 = cg13 * x[32] - sg13 * x[6];
-  const P t6 = sg13 * x[32] + cg13 * x[6];
+  const P t32 = madd<F>(cg13, x[32], -(sg13 * x[6]));
+  const P t6 = madd<F>(sg13, x[32], cg13 * x[6]);
   const P cg14 = splat<P>(s.cg[14]), sg14 = splat<P>(s.sg[14]);
-  const P t33 = cg14 * x[33] - sg14 * x[5];
-  const P t5 = sg14 * x[33] + cg14 * x[5];
+  const P t33 = madd<F>(cg14, x[33], -(sg14 * x[5]));
+  const P t5 = madd<F>(sg14, x[33], cg14 * x[5]);
   const P cg15 = splat<P>(s.cg[15]), sg15 = splat<P>(s.sg[15]);
-  const P t34 = cg15 * x[34] - sg15 * x[4];
-  const P t4 = sg15 * x[34] + cg15 * x[4];
+  const P t34 = madd<F>(cg15, x[34], -(sg15 * x[4]));
+  const P t4 = madd<F>(sg15, x[34], cg15 * x[4]);
   const P cg16 = splat<P>(s.cg[16]), sg16 = splat<P>(s.sg[16]);
-  const P t35 = cg16 * x[35] - sg16 * x[3];
-  const P t3 = sg16 * x[35] + cg16 * x[3];
+  const P t35 = madd<F>(cg16, x[35], -(sg16 * x[3]));
+  const P t3 = madd<F>(sg16, x[35], cg16 * x[3]);
   const P cg17 = splat<P>(s.cg[17]), sg17 = splat<P>(s.sg[17]);
-  const P t36 = cg17 * x[36] - sg17 * x[2];
-  const P t2 = sg17 * x[36] + cg17 * x[2];
+  const P t36 = madd<F>(cg17, x[36], -(sg17 * x[2]));
+  const P t2 = madd<F>(sg17, x[36], cg17 * x[2]);
   const P cg18 = splat<P>(s.cg[18]), sg18 = splat<P>(s.sg[18]);
-  const P t37 = cg18 * x[37] - sg18 * x[1];
-  const P t1 = sg18 * x[37] + cg18 * x[1];
+  const P t37 = madd<F>(cg18, x[37], -(sg18 * x[1]));
+  const P t1 = madd<F>(sg18, x[37], cg18 * x[1]);
   const P cg19 = splat<P>(s.cg[19]), sg19 = splat<P>(s.sg[19]);
-  const P t38 = cg19 * x[38] - sg19 * x[0];
-  const P t0 = sg19 * x[38] + cg19 * x[0];
+  const P t38 = madd<F>(cg19, x[38], -(sg19 * x[0]));
+  const P t0 = madd<F>(sg19, x[38], cg19 * x[0]);
   const auto b = s.beta, h = s.half_beta2;
   (void)h;
-  P u0 = t0 + b * (T(-3.082207001484488) * t1);
-  if constexpr (Order == 15) u0 += h * (T(-9.5) * t0);
-  if constexpr (Order == 2) u0 += h * (T(-9.5) * t0 + T(13.257073583562851) * t2);
-  P u1 = t1 + b * (T(3.082207001484488) * t0 - T(4.3011626335213133) * t2);
-  if constexpr (Order == 15) u1 += h * (T(-28) * t1);
-  if constexpr (Order == 2) u1 += h * (T(-28) * t1 + T(22.349496638627009) * t3);
-  P u2 = t2 + b * (T(4.3011626335213133) * t1 - T(5.196152422706632) * t3);
-  if constexpr (Order == 15) u2 += h * (T(-45.5) * t2);
-  if constexpr (Order == 2) u2 += h * (T(-45.5) * t2 + T(13.257073583562851) * t0 + T(30.740852297878796) * t4);
-  P u3 = t3 + b * (T(5.196152422706632) * t2 - T(5.9160797830996161) * t4);
-  if constexpr (Order == 15) u3 += h * (T(-62) * t3);
-  if constexpr (Order == 2) u3 += h * (T(-62) * t3 + T(22.349496638627009) * t1 + T(38.568121551353784) * t5);
-  P u4 = t4 + b * (T(5.9160797830996161) * t3 - T(6.5192024052026492) * t5);
-  if constexpr (Order == 15) u4 += h * (T(-77.5) * t4);
-  if constexpr (Order == 2) u4 += h * (T(-77.5) * t4 + T(30.740852297878796) * t2 + T(45.86665455426197) * t6);
-  P u5 = t5 + b * (T(6.5192024052026492) * t4 - T(7.0356236397351442) * t6);
-  if constexpr (Order == 15) u5 += h * (T(-92) * t5);
-  if constexpr (Order == 2) u5 += h * (T(-92) * t5 + T(38.568121551353784) * t3 + T(52.649786324352732) * t7);
-  P u6 = t6 + b * (T(7.0356236397351442) * t5 - T(7.4833147735478827) * t7);
-  if constexpr (Order == 15) u6 += h * (T(-105.5) * t6);
-  if constexpr (Order == 2) u6 += h * (T(-105.5) * t6 + T(45.86665455426197) * t4 + T(58.923679450624938) * t8);
-  P u7 = t7 + b * (T(7.4833147735478827) * t6 - T(7.8740078740118111) * t8);
-  if constexpr (Order == 15) u7 += h * (T(-118) * t7);
-  if constexpr (Order == 2) u7 += h * (T(-118) * t7 + T(52.649786324352732) * t5 + T(64.691575958543467) * t9);
-  P u8 = t8 + b * (T(7.8740078740118111) * t7 - T(8.2158383625774913) * t9);
-  if constexpr (Order == 15) u8 += h * (T(-129.5) * t8);
-  if constexpr (Order == 2) u8 += h * (T(-129.5) * t8 + T(58.923679450624938) * t6 + T(69.955342898166109) * t10);
-  P u9 = t9 + b * (T(8.2158383625774913) * t8 - T(8.5146931829632013) * t10);
-  if constexpr (Order == 15) u9 += h * (T(-140) * t9);
-  if constexpr (Order == 2) u9 += h * (T(-140) * t9 + T(64.691575958543467) * t7 + T(74.716129450072557) * t11);
-  P u10 = t10 + b * (T(8.5146931829632013) * t9 - T(8.7749643873921226) * t11);
-  if constexpr (Order == 15) u10 += h * (T(-149.5) * t10);
-  if constexpr (Order == 2) u10 += h * (T(-149.5) * t10 + T(69.955342898166109) * t8 + T(78.974679486529098) * t12);
-  P u11 = t11 + b * (T(8.7749643873921226) * t10 - T(9) * t12);
-  if constexpr (Order == 15) u11 += h * (T(-158) * t11);
-  if constexpr (Order == 2) u11 += h * (T(-158) * t11 + T(74.716129450072557) * t9 + T(82.731493398826061) * t13);
-  P u12 = t12 + b * (T(9) * t11 - T(9.1923881554251174) * t13);
-  if constexpr (Order == 15) u12 += h * (T(-165.5) * t12);
-  if constexpr (Order == 2) u12 += h * (T(-165.5) * t12 + T(78.974679486529098) * t10 + T(85.986917609599189) * t14);
-  P u13 = t13 + b * (T(9.1923881554251174) * t12 - T(9.354143466934854) * t14);
-  if constexpr (Order == 15) u13 += h * (T(-172) * t13);
-  if constexpr (Order == 2) u13 += h * (T(-172) * t13 + T(82.731493398826061) * t11 + T(88.741196746494239) * t15);
-  P u14 = t14 + b * (T(9.354143466934854) * t13 - T(9.4868329805051381) * t15);
-  if constexpr (Order == 15) u14 += h * (T(-177.5) * t14);
-  if constexpr (Order == 2) u14 += h * (T(-177.5) * t14 + T(85.986917609599189) * t12 + T(90.994505328618601) * t16);
-  P u15 = t15 + b * (T(9.4868329805051381) * t14 - T(9.5916630466254382) * t16);
-  if constexpr (Order == 15) u15 += h * (T(-182) * t15);
-  if constexpr (Order == 2) u15 += h * (T(-182) * t15 + T(88.741196746494239) * t13 + T(92.746967605415549) * t17);
-  P u16 = t16 + b * (T(9.5916630466254382) * t15 - T(9.6695398029068578) * t17);
-  if constexpr (Order == 15) u16 += h * (T(-185.5) * t16);
-  if constexpr (Order == 2) u16 += h * (T(-185.5) * t16 + T(90.994505328618601) * t14 + T(93.998670203359794) * t18);
-  P u17 = t17 + b * (T(9.6695398029068578) * t16 - T(9.7211110476117906) * t18);
-  if constexpr (Order == 15) u17 += h * (T(-188) * t17);
-  if constexpr (Order == 2) u17 += h * (T(-188) * t17 + T(92.746967605415549) * t15);
-  P u18 = t18 + b * (T(9.7211110476117906) * t17);
-  if constexpr (Order == 15) u18 += h * (T(-94.5) * t18);
-  if constexpr (Order == 2) u18 += h * (T(-94.5) * t18 + T(93.998670203359794) * t16);
-  P u19 = t19 + b * (T(13.784048752090222) * t20);
-  if constexpr (Order == 15) u19 += h * (T(-190) * t19);
-  if constexpr (Order == 2) u19 += h * (T(-190) * t19 + T(133.99626860476377) * t21);
-  P u20 = t20 + b * (T(-13.784048752090222) * t19 + T(9.7211110476117906) * t21);
-  if constexpr (Order == 15) u20 += h * (T(-284.5) * t20);
-  if constexpr (Order == 2) u20 += h * (T(-284.5) * t20 + T(93.998670203359794) * t22);
-  P u21 = t21 + b * (T(-9.7211110476117906) * t20 + T(9.6695398029068578) * t22);
-  if constexpr (Order == 15) u21 += h * (T(-188) * t21);
-  if constexpr (Order == 2) u21 += h * (T(-188) * t21 + T(133.99626860476377) * t19 + T(92.746967605415549) * t23);
-  P u22 = t22 + b * (T(-9.6695398029068578) * t21 + T(9.5916630466254382) * t23);
-  if constexpr (Order == 15) u22 += h * (T(-185.5) * t22);
-  if constexpr (Order == 2) u22 += h * (T(-185.5) * t22 + T(93.998670203359794) * t20 + T(90.994505328618601) * t24);
-  P u23 = t23 + b * (T(-9.5916630466254382) * t22 + T(9.4868329805051381) * t24);
-  if constexpr (Order == 15) u23 += h * (T(-182) * t23);
-  if constexpr (Order == 2) u23 += h * (T(-182) * t23 + T(92.746967605415549) * t21 + T(88.741196746494239) * t25);
-  P u24 = t24 + b * (T(-9.4868329805051381) * t23 + T(9.354143466934854) * t25);
-  if constexpr (Order == 15) u24 += h * (T(-177.5) * t24);
-  if constexpr (Order == 2) u24 += h * (T(-177.5) * t24 + T(90.994505328618601) * t22 + T(85.986917609599189) * t26);
-  P u25 = t25 + b * (T(-9.354143466934854) * t24 + T(9.1923881554251174) * t26);
-  if constexpr (Order == 15) u25 += h * (T(-172) * t25);
-  if constexpr (Order == 2) u25 += h * (T(-172) * t25 + T(88.741196746494239) * t23 + T(82.731493398826061) * t27);
-  P u26 = t26 + b * (T(-9.1923881554251174) * t25 + T(9) * t27);
-  if constexpr (Order == 15) u26 += h * (T(-165.5) * t26);
-  if constexpr (Order == 2) u26 += h * (T(-165.5) * t26 + T(85.986917609599189) * t24 + T(78.974679486529098) * t28);
-  P u27 = t27 + b * (T(-9) * t26 + T(8.7749643873921226) * t28);
-  if constexpr (Order == 15) u27 += h * (T(-158) * t27);
-  if constexpr (Order == 2) u27 += h * (T(-158) * t27 + T(82.731493398826061) * t25 + T(74.716129450072557) * t29);
-  P u28 = t28 + b * (T(-8.7749643873921226) * t27 + T(8.5146931829632013) * t29);
-  if constexpr (Order == 15) u28 += h * (T(-149.5) * t28);
-  if constexpr (Order == 2) u28 += h * (T(-149.5) * t28 + T(78.974679486529098) * t26 + T(69.955342898166109) * t30);
-  P u29 = t29 + b * (T(-8.5146931829632013) * t28 + T(8.2158383625774913) * t30);
-  if constexpr (Order == 15) u29 += h * (T(-140) * t29);
-  if constexpr (Order == 2) u29 += h * (T(-140) * t29 + T(74.716129450072557) * t27 + T(64.691575958543467) * t31);
-  P u30 = t30 + b * (T(-8.2158383625774913) * t29 + T(7.8740078740118111) * t31);
-  if constexpr (Order == 15) u30 += h * (T(-129.5) * t30);
-  if constexpr (Order == 2) u30 += h * (T(-129.5) * t30 + T(69.955342898166109) * t28 + T(58.923679450624938) * t32);
-  P u31 = t31 + b * (T(-7.8740078740118111) * t30 + T(7.4833147735478827) * t32);
-  if constexpr (Order == 15) u31 += h * (T(-118) * t31);
-  if constexpr (Order == 2) u31 += h * (T(-118) * t31 + T(64.691575958543467) * t29 + T(52.649786324352732) * t33);
-  P u32 = t32 + b * (T(-7.4833147735478827) * t31 + T(7.0356236397351442) * t33);
-  if constexpr (Order == 15) u32 += h * (T(-105.5) * t32);
-  if constexpr (Order == 2) u32 += h * (T(-105.5) * t32 + T(58.923679450624938) * t30 + T(45.86665455426197) * t34);
-  P u33 = t33 + b * (T(-7.0356236397351442) * t32 + T(6.5192024052026492) * t34);
-  if constexpr (Order == 15) u33 += h * (T(-92) * t33);
-  if constexpr (Order == 2) u33 += h * (T(-92) * t33 + T(52.649786324352732) * t31 + T(38.568121551353784) * t35);
-  P u34 = t34 + b * (T(-6.5192024052026492) * t33 + T(5.9160797830996161) * t35);
-  if constexpr (Order == 15) u34 += h * (T(-77.5) * t34);
-  if constexpr (Order == 2) u34 += h * (T(-77.5) * t34 + T(45.86665455426197) * t32 + T(30.740852297878796) * t36);
-  P u35 = t35 + b * (T(-5.9160797830996161) * t34 + T(5.196152422706632) * t36);
-  if constexpr (Order == 15) u35 += h * (T(-62) * t35);
-  if constexpr (Order == 2) u35 += h * (T(-62) * t35 + T(38.568121551353784) * t33 + T(22.349496638627009) * t37);
-  P u36 = t36 + b * (T(-5.196152422706632) * t35 + T(4.3011626335213133) * t37);
-  if constexpr (Order == 15) u36 += h * (T(-45.5) * t36);
-  if constexpr (Order == 2) u36 += h * (T(-45.5) * t36 + T(30.740852297878796) * t34 + T(13.257073583562851) * t38);
-  P u37 = t37 + b * (T(-4.3011626335213133) * t36 + T(3.082207001484488) * t38);
-  if constexpr (Order == 15) u37 += h * (T(-28) * t37);
-  if constexpr (Order == 2) u37 += h * (T(-28) * t37 + T(22.349496638627009) * t35);
-  P u38 = t38 + b * (T(-3.082207001484488) * t37);
-  if constexpr (Order == 15) u38 += h * (T(-9.5) * t38);
-  if constexpr (Order == 2) u38 += h * (T(-9.5) * t38 + T(13.257073583562851) * t36);
+  P u0 = madd<F>(b, T(-3.082207001484488) * t1, t0);
+  if constexpr (Order == 15) u0 = madd<F>(h, T(-9.5) * t0, u0);
+  if constexpr (Order == 2) u0 = madd<F>(h, madd<F>(T(13.257073583562851), t2, T(-9.5) * t0), u0);
+  P u1 = madd<F>(b, madd<F>(T(-4.3011626335213133), t2, T(3.082207001484488) * t0), t1);
+  if constexpr (Order == 15) u1 = madd<F>(h, T(-28) * t1, u1);
+  if constexpr (Order == 2) u1 = madd<F>(h, madd<F>(T(22.349496638627009), t3, T(-28) * t1), u1);
+  P u2 = madd<F>(b, madd<F>(T(-5.196152422706632), t3, T(4.3011626335213133) * t1), t2);
+  if constexpr (Order == 15) u2 = madd<F>(h, T(-45.5) * t2, u2);
+  if constexpr (Order == 2) u2 = madd<F>(h, madd<F>(T(30.740852297878796), t4, madd<F>(T(13.257073583562851), t0, T(-45.5) * t2)), u2);
+  P u3 = madd<F>(b, madd<F>(T(-5.9160797830996161), t4, T(5.196152422706632) * t2), t3);
+  if constexpr (Order == 15) u3 = madd<F>(h, T(-62) * t3, u3);
+  if constexpr (Order == 2) u3 = madd<F>(h, madd<F>(T(38.568121551353784), t5, madd<F>(T(22.349496638627009), t1, T(-62) * t3)), u3);
+  P u4 = madd<F>(b, madd<F>(T(-6.5192024052026492), t5, T(5.9160797830996161) * t3), t4);
+  if constexpr (Order == 15) u4 = madd<F>(h, T(-77.5) * t4, u4);
+  if constexpr (Order == 2) u4 = madd<F>(h, madd<F>(T(45.86665455426197), t6, madd<F>(T(30.740852297878796), t2, T(-77.5) * t4)), u4);
+  P u5 = madd<F>(b, madd<F>(T(-7.0356236397351442), t6, T(6.5192024052026492) * t4), t5);
+  if constexpr (Order == 15) u5 = madd<F>(h, T(-92) * t5, u5);
+  if constexpr (Order == 2) u5 = madd<F>(h, madd<F>(T(52.649786324352732), t7, madd<F>(T(38.568121551353784), t3, T(-92) * t5)), u5);
+  P u6 = madd<F>(b, madd<F>(T(-7.4833147735478827), t7, T(7.0356236397351442) * t5), t6);
+  if constexpr (Order == 15) u6 = madd<F>(h, T(-105.5) * t6, u6);
+  if constexpr (Order == 2) u6 = madd<F>(h, madd<F>(T(58.923679450624938), t8, madd<F>(T(45.86665455426197), t4, T(-105.5) * t6)), u6);
+  P u7 = madd<F>(b, madd<F>(T(-7.8740078740118111), t8, T(7.4833147735478827) * t6), t7);
+  if constexpr (Order == 15) u7 = madd<F>(h, T(-118) * t7, u7);
+  if constexpr (Order == 2) u7 = madd<F>(h, madd<F>(T(64.691575958543467), t9, madd<F>(T(52.649786324352732), t5, T(-118) * t7)), u7);
+  P u8 = madd<F>(b, madd<F>(T(-8.2158383625774913), t9, T(7.8740078740118111) * t7), t8);
+  if constexpr (Order == 15) u8 = madd<F>(h, T(-129.5) * t8, u8);
+  if constexpr (Order == 2) u8 = madd<F>(h, madd<F>(T(69.955342898166109), t10, madd<F>(T(58.923679450624938), t6, T(-129.5) * t8)), u8);
+  P u9 = madd<F>(b, madd<F>(T(-8.5146931829632013), t10, T(8.2158383625774913) * t8), t9);
+  if constexpr (Order == 15) u9 = madd<F>(h, T(-140) * t9, u9);
+  if constexpr (Order == 2) u9 = madd<F>(h, madd<F>(T(74.716129450072557), t11, madd<F>(T(64.691575958543467), t7, T(-140) * t9)), u9);
+  P u10 = madd<F>(b, madd<F>(T(-8.7749643873921226), t11, T(8.5146931829632013) * t9), t10);
+  if constexpr (Order == 15) u10 = madd<F>(h, T(-149.5) * t10, u10);
+  if constexpr (Order == 2) u10 = madd<F>(h, madd<F>(T(78.974679486529098), t12, madd<F>(T(69.955342898166109), t8, T(-149.5) * t10)), u10);
+  P u11 = madd<F>(b, madd<F>(T(-9), t12, T(8.7749643873921226) * t10), t11);
+  if constexpr (Order == 15) u11 = madd<F>(h, T(-158) * t11, u11);
+  if constexpr (Order == 2) u11 = madd<F>(h, madd<F>(T(82.731493398826061), t13, madd<F>(T(74.716129450072557), t9, T(-158) * t11)), u11);
+  P u12 = madd<F>(b, madd<F>(T(-9.1923881554251174), t13, T(9) * t11), t12);
+  if constexpr (Order == 15) u12 = madd<F>(h, T(-165.5) * t12, u12);
+  if constexpr (Order == 2) u12 = madd<F>(h, madd<F>(T(85.986917609599189), t14, madd<F>(T(78.974679486529098), t10, T(-165.5) * t12)), u12);
+  P u13 = madd<F>(b, madd<F>(T(-9.354143466934854), t14, T(9.1923881554251174) * t12), t13);
+  if constexpr (Order == 15) u13 = madd<F>(h, T(-172) * t13, u13);
+  if constexpr (Order == 2) u13 = madd<F>(h, madd<F>(T(88.741196746494239), t15, madd<F>(T(82.731493398826061), t11, T(-172) * t13)), u13);
+  P u14 = madd<F>(b, madd<F>(T(-9.4868329805051381), t15, T(9.354143466934854) * t13), t14);
+  if constexpr (Order == 15) u14 = madd<F>(h, T(-177.5) * t14, u14);
+  if constexpr (Order == 2) u14 = madd<F>(h, madd<F>(T(90.994505328618601), t16, madd<F>(T(85.986917609599189), t12, T(-177.5) * t14)), u14);
+  P u15 = madd<F>(b, madd<F>(T(-9.5916630466254382), t16, T(9.4868329805051381) * t14), t15);
+  if constexpr (Order == 15) u15 = madd<F>(h, T(-182) * t15, u15);
+  if constexpr (Order == 2) u15 = madd<F>(h, madd<F>(T(92.746967605415549), t17, madd<F>(T(88.741196746494239), t13, T(-182) * t15)), u15);
+  P u16 = madd<F>(b, madd<F>(T(-9.6695398029068578), t17, T(9.5916630466254382) * t15), t16);
+  if constexpr (Order == 15) u16 = madd<F>(h, T(-185.5) * t16, u16);
+  if constexpr (Order == 2) u16 = madd<F>(h, madd<F>(T(93.998670203359794), t18, madd<F>(T(90.994505328618601), t14, T(-185.5) * t16)), u16);
+  P u17 = madd<F>(b, madd<F>(T(-9.7211110476117906), t18, T(9.6695398029068578) * t16), t17);
+  if constexpr (Order == 15) u17 = madd<F>(h, T(-188) * t17, u17);
+  if constexpr (Order == 2) u17 = madd<F>(h, madd<F>(T(92.746967605415549), t15, T(-188) * t17), u17);
+  P u18 = madd<F>(b, T(9.7211110476117906) * t17, t18);
+  if constexpr (Order == 15) u18 = madd<F>(h, T(-94.5) * t18, u18);
+  if constexpr (Order == 2) u18 = madd<F>(h, madd<F>(T(93.998670203359794), t16, T(-94.5) * t18), u18);
+  P u19 = madd<F>(b, T(13.784048752090222) * t20, t19);
+  if constexpr (Order == 15) u19 = madd<F>(h, T(-190) * t19, u19);
+  if constexpr (Order == 2) u19 = madd<F>(h, madd<F>(T(133.99626860476377), t21, T(-190) * t19), u19);
+  P u20 = madd<F>(b, madd<F>(T(9.7211110476117906), t21, T(-13.784048752090222) * t19), t20);
+  if constexpr (Order == 15) u20 = madd<F>(h, T(-284.5) * t20, u20);
+  if constexpr (Order == 2) u20 = madd<F>(h, madd<F>(T(93.998670203359794), t22, T(-284.5) * t20), u20);
+  P u21 = madd<F>(b, madd<F>(T(9.6695398029068578), t22, T(-9.7211110476117906) * t20), t21);
+  if constexpr (Order == 15) u21 = madd<F>(h, T(-188) * t21, u21);
+  if constexpr (Order == 2) u21 = madd<F>(h, madd<F>(T(92.746967605415549), t23, madd<F>(T(133.99626860476377), t19, T(-188) * t21)), u21);
+  P u22 = madd<F>(b, madd<F>(T(9.5916630466254382), t23, T(-9.6695398029068578) * t21), t22);
+  if constexpr (Order == 15) u22 = madd<F>(h, T(-185.5) * t22, u22);
+  if constexpr (Order == 2) u22 = madd<F>(h, madd<F>(T(90.994505328618601), t24, madd<F>(T(93.998670203359794), t20, T(-185.5) * t22)), u22);
+  P u23 = madd<F>(b, madd<F>(T(9.4868329805051381), t24, T(-9.5916630466254382) * t22), t23);
+  if constexpr (Order == 15) u23 = madd<F>(h, T(-182) * t23, u23);
+  if constexpr (Order == 2) u23 = madd<F>(h, madd<F>(T(88.741196746494239), t25, madd<F>(T(92.746967605415549), t21, T(-182) * t23)), u23);
+  P u24 = madd<F>(b, madd<F>(T(9.354143466934854), t25, T(-9.4868329805051381) * t23), t24);
+  if constexpr (Order == 15) u24 = madd<F>(h, T(-177.5) * t24, u24);
+  if constexpr (Order == 2) u24 = madd<F>(h, madd<F>(T(85.986917609599189), t26, madd<F>(T(90.994505328618601), t22, T(-177.5) * t24)), u24);
+  P u25 = madd<F>(b, madd<F>(T(9.1923881554251174), t26, T(-9.354143466934854) * t24), t25);
+  if constexpr (Order == 15) u25 = madd<F>(h, T(-172) * t25, u25);
+  if constexpr (Order == 2) u25 = madd<F>(h, madd<F>(T(82.731493398826061), t27, madd<F>(T(88.741196746494239), t23, T(-172) * t25)), u25);
+  P u26 = madd<F>(b, madd<F>(T(9), t27, T(-9.1923881554251174) * t25), t26);
+  if constexpr (Order == 15) u26 = madd<F>(h, T(-165.5) * t26, u26);
+  if constexpr (Order == 2) u26 = madd<F>(h, madd<F>(T(78.974679486529098), t28, madd<F>(T(85.986917609599189), t24, T(-165.5) * t26)), u26);
+  P u27 = madd<F>(b, madd<F>(T(8.7749643873921226), t28, T(-9) * t26), t27);
+  if constexpr (Order == 15) u27 = madd<F>(h, T(-158) * t27, u27);
+  if constexpr (Order == 2) u27 = madd<F>(h, madd<F>(T(74.716129450072557), t29, madd<F>(T(82.731493398826061), t25, T(-158) * t27)), u27);
+  P u28 = madd<F>(b, madd<F>(T(8.5146931829632013), t29, T(-8.7749643873921226) * t27), t28);
+  if constexpr (Order == 15) u28 = madd<F>(h, T(-149.5) * t28, u28);
+  if constexpr (Order == 2) u28 = madd<F>(h, madd<F>(T(69.955342898166109), t30, madd<F>(T(78.974679486529098), t26, T(-149.5) * t28)), u28);
+  P u29 = madd<F>(b, madd<F>(T(8.2158383625774913), t30, T(-8.5146931829632013) * t28), t29);
+  if constexpr (Order == 15) u29 = madd<F>(h, T(-140) * t29, u29);
+  if constexpr (Order == 2) u29 = madd<F>(h, madd<F>(T(64.691575958543467), t31, madd<F>(T(74.716129450072557), t27, T(-140) * t29)), u29);
+  P u30 = madd<F>(b, madd<F>(T(7.8740078740118111), t31, T(-8.2158383625774913) * t29), t30);
+  if constexpr (Order == 15) u30 = madd<F>(h, T(-129.5) * t30, u30);
+  if constexpr (Order == 2) u30 = madd<F>(h, madd<F>(T(58.923679450624938), t32, madd<F>(T(69.955342898166109), t28, T(-129.5) * t30)), u30);
+  P u31 = madd<F>(b, madd<F>(T(7.4833147735478827), t32, T(-7.8740078740118111) * t30), t31);
+  if constexpr (Order == 15) u31 = madd<F>(h, T(-118) * t31, u31);
+  if constexpr (Order == 2) u31 = madd<F>(h, madd<F>(T(52.649786324352732), t33, madd<F>(T(64.691575958543467), t29, T(-118) * t31)), u31);
+  P u32 = madd<F>(b, madd<F>(T(7.0356236397351442), t33, T(-7.4833147735478827) * t31), t32);
+  if constexpr (Order == 15) u32 = madd<F>(h, T(-105.5) * t32, u32);
+  if constexpr (Order == 2) u32 = madd<F>(h, madd<F>(T(45.86665455426197), t34, madd<F>(T(58.923679450624938), t30, T(-105.5) * t32)), u32);
+  P u33 = madd<F>(b, madd<F>(T(6.5192024052026492), t34, T(-7.0356236397351442) * t32), t33);
+  if constexpr (Order == 15) u33 = madd<F>(h, T(-92) * t33, u33);
+  if constexpr (Order == 2) u33 = madd<F>(h, madd<F>(T(38.568121551353784), t35, madd<F>(T(52.649786324352732), t31, T(-92) * t33)), u33);
+  P u34 = madd<F>(b, madd<F>(T(5.9160797830996161), t35, T(-6.5192024052026492) * t33), t34);
+  if constexpr (Order == 15) u34 = madd<F>(h, T(-77.5) * t34, u34);
+  if constexpr (Order == 2) u34 = madd<F>(h, madd<F>(T(30.740852297878796), t36, madd<F>(T(45.86665455426197), t32, T(-77.5) * t34)), u34);
+  P u35 = madd<F>(b, madd<F>(T(5.196152422706632), t36, T(-5.9160797830996161) * t34), t35);
+  if constexpr (Order == 15) u35 = madd<F>(h, T(-62) * t35, u35);
+  if constexpr (Order == 2) u35 = madd<F>(h, madd<F>(T(22.349496638627009), t37, madd<F>(T(38.568121551353784), t33, T(-62) * t35)), u35);
+  P u36 = madd<F>(b, madd<F>(T(4.3011626335213133), t37, T(-5.196152422706632) * t35), t36);
+  if constexpr (Order == 15) u36 = madd<F>(h, T(-45.5) * t36, u36);
+  if constexpr (Order == 2) u36 = madd<F>(h, madd<F>(T(13.257073583562851), t38, madd<F>(T(30.740852297878796), t34, T(-45.5) * t36)), u36);
+  P u37 = madd<F>(b, madd<F>(T(3.082207001484488), t38, T(-4.3011626335213133) * t36), t37);
+  if constexpr (Order == 15) u37 = madd<F>(h, T(-28) * t37, u37);
+  if constexpr (Order == 2) u37 = madd<F>(h, madd<F>(T(22.349496638627009), t35, T(-28) * t37), u37);
+  P u38 = madd<F>(b, T(-3.082207001484488) * t37, t38);
+  if constexpr (Order == 15) u38 = madd<F>(h, T(-9.5) * t38, u38);
+  if constexpr (Order == 2) u38 = madd<F>(h, madd<F>(T(13.257073583562851), t36, T(-9.5) * t38), u38);
   y[19] = u19;
   const P ca1 = splat<P>(s.ca[1]), sa1 = splat<P>(s.sa[1]);
-  y[20] = ca1 * u20 - sa1 * u18;
-  y[18] = sa1 * u20 + ca1 * u18;
+  y[20] = madd<F>(ca1, u20, -(sa1 * u18));
+  y[18] = madd<F>(sa1, u20, ca1 * u18);
   const P ca2 = splat<P>(s.ca[2]), sa2 = splat<P>(s.sa[2]);
-  y[21] = ca2 * u21 - sa2 * u17;
-  y[17] = sa2 * u21 + ca2 * u17;
+  y[21] = madd<F>(ca2, u21, -(sa2 * u17));
+  y[17] = madd<F>(sa2, u21, ca2 * u17);
   const P ca3 = splat<P>(s.ca[3]), sa3 = splat<P>(s.sa[3]);
-  y[22] = ca3 * u22 - sa3 * u16;
-  y[16] = sa3 * u22 + ca3 * u16;
+  y[22] = madd<F>(ca3, u22, -(sa3 * u16));
+  y[16] = madd<F>(sa3, u22, ca3 * u16);
   const P ca4 = splat<P>(s.ca[4]), sa4 = splat<P>(s.sa[4]);
-  y[23] = ca4 * u23 - sa4 * u15;
-  y[15] = sa4 * u23 + ca4 * u15;
+  y[23] = madd<F>(ca4, u23, -(sa4 * u15));
+  y[15] = madd<F>(sa4, u23, ca4 * u15);
   const P ca5 = splat<P>(s.ca[5]), sa5 = splat<P>(s.sa[5]);
-  y[24] = ca5 * u24 - sa5 * u14;
-  y[14] = sa5 * u24 + ca5 * u14;
+  y[24] = madd<F>(ca5, u24, -(sa5 * u14));
+  y[14] = madd<F>(sa5, u24, ca5 * u14);
   const P ca6 = splat<P>(s.ca[6]), sa6 = splat<P>(s.sa[6]);
-  y[25] = ca6 * u25 - sa6 * u13;
-  y[13] = sa6 * u25 + ca6 * u13;
+  y[25] = madd<F>(ca6, u25, -(sa6 * u13));
+  y[13] = madd<F>(sa6, u25, ca6 * u13);
   const P ca7 = splat<P>(s.ca[7]), sa7 = splat<P>(s.sa[7]);
-  y[26] = ca7 * u26 - sa7 * u12;
-  y[12] = sa7 * u26 + ca7 * u12;
+  y[26] = madd<F>(ca7, u26, -(sa7 * u12));
+  y[12] = madd<F>(sa7, u26, ca7 * u12);
   const P ca8 = splat<P>(s.ca[8]), sa8 = splat<P>(s.sa[8]);
-  y[27] = ca8 * u27 - sa8 * u11;
-  y[11] = sa8 * u27 + ca8 * u11;
+  y[27] = madd<F>(ca8, u27, -(sa8 * u11));
+  y[11] = madd<F>(sa8, u27, ca8 * u11);
   const P ca9 = splat<P>(s.ca[9]), sa9 = splat<P>(s.sa[9]);
-  y[28] = ca9 * u28 - sa9 * u10;
-  y[10] = sa9 * u28 + ca9 * u10;
+  y[28] = madd<F>(ca9, u28, -(sa9 * u10));
+  y[10] = madd<F>(sa9, u28, ca9 * u10);
   const P ca10 = splat<P>(s.ca[10]), sa10 = splat<P>(s.sa[10]);
-  y[29] = ca10 * u29 - sa10 * u9;
-  y[9] = sa10 * u29 + ca10 * u9;
+  y[29] = madd<F>(ca10, u29, -(sa10 * u9));
+  y[9] = madd<F>(sa10, u29, ca10 * u9);
   const P ca11 = splat<P>(s.ca[11]), sa11 = splat<P>(s.sa[11]);
-  y[30] = ca11 * u30 - sa11 * u8;
-  y[8] = sa11 * u30 + ca11 * u8;
+  y[30] = madd<F>(ca11, u30, -(sa11 * u8));
+  y[8] = madd<F>(sa11, u30, ca11 * u8);
   const P ca12 = splat<P>(s.ca[12]), sa12 = splat<P>(s.sa[12]);
-  y[31] = ca12 * u31 - sa12 * u7;
-  y[7] = sa12 * u31 + ca12 * u7;
+  y[31] = madd<F>(ca12, u31, -(sa12 * u7));
+  y[7] = madd<F>(sa12, u31, ca12 * u7);
   const P ca13 = splat<P>(s.ca[13]), sa13 = splat<P>(s.sa[13]);
-  y[32] = ca13 * u32 - sa13 * u6;
-  y[6] = sa13 * u32 + ca13 * u6;
+  y[32] = madd<F>(ca13, u32, -(sa13 * u6));
+  y[6] = madd<F>(sa13, u32, ca13 * u6);
   const P ca14 = splat<P>(s.ca[14]), sa14 = splat<P>(s.sa[14]);
-  y[33] = ca14 * u33 - sa14 * u5;
-  y[5] = sa14 * u33 + ca14 * u5;
+  y[33] = madd<F>(ca14, u33, -(sa14 * u5));
+  y[5] = madd<F>(sa14, u33, ca14 * u5);
   const P ca15 = splat<P>(s.ca[15]), sa15 = splat<P>(s.sa[15]);
-  y[34] = ca15 * u34 - sa15 * u4;
-  y[4] = sa15 * u34 + ca15 * u4;
+  y[34] = madd<F>(ca15, u34, -(sa15 * u4));
+  y[4] = madd<F>(sa15, u34, ca15 * u4);
   const P ca16 = splat<P>(s.ca[16]), sa16 = splat<P>(s.sa[16]);
-  y[35] = ca16 * u35 - sa16 * u3;
-  y[3] = sa16 * u35 + ca16 * u3;
+  y[35] = madd<F>(ca16, u35, -(sa16 * u3));
+  y[3] = madd<F>(sa16, u35, ca16 * u3);
   const P ca17 = splat<P>(s.ca[17]), sa17 = splat<P>(s.sa[17]);
-  y[36] = ca17 * u36 - sa17 * u2;
-  y[2] = sa17 * u36 + ca17 * u2;
+  y[36] = madd<F>(ca17, u36, -(sa17 * u2));
+  y[2] = madd<F>(sa17, u36, ca17 * u2);
   const P ca18 = splat<P>(s.ca[18]), sa18 = splat<P>(s.sa[18]);
-  y[37] = ca18 * u37 - sa18 * u1;
-  y[1] = sa18 * u37 + ca18 * u1;
+  y[37] = madd<F>(ca18, u37, -(sa18 * u1));
+  y[1] = madd<F>(sa18, u37, ca18 * u1);
   const P ca19 = splat<P>(s.ca[19]), sa19 = splat<P>(s.sa[19]);
-  y[38] = ca19 * u38 - sa19 * u0;
-  y[0] = sa19 * u38 + ca19 * u0;
+  y[38] = madd<F>(ca19, u38, -(sa19 * u0));
+  y[0] = madd<F>(sa19, u38, ca19 * u0);
+}
+
+template <bool F, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void zxzxz_order1_bands(const S& s, const P* __restrict x, P* __restrict y) {
+  y[0] = x[0];
+  (void)s;
+}
+
+template <bool F, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void zxzxz_order2_bands(const S& s, const P* __restrict x, P* __restrict y) {
+  y[0] = x[0];
+  band1_closed<T, P>(s.r, x + 1, y + 1);
+}
+
+template <bool F, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void zxzxz_order3_bands(const S& s, const P* __restrict x, P* __restrict y) {
+  y[0] = x[0];
+  band1_closed<T, P>(s.r, x + 1, y + 1);
+  band2_closed<F, T, P>(s.r, x + 4, y + 4);
+}
+
+template <bool F, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void zxzxz_order4_bands(const S& s, const P* __restrict x, P* __restrict y) {
+  y[0] = x[0];
+  band1_closed<T, P>(s.r, x + 1, y + 1);
+  zxzxz_band2<F, T, P>(s, x + 4, y + 4);
+  zxzxz_band3<F, T, P>(s, x + 9, y + 9);
+}
+
+template <bool F, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void zxzxz_order5_bands(const S& s, const P* __restrict x, P* __restrict y) {
+  y[0] = x[0];
+  band1_closed<T, P>(s.r, x + 1, y + 1);
+  zxzxz_band2<F, T, P>(s, x + 4, y + 4);
+  zxzxz_band3<F, T, P>(s, x + 9, y + 9);
+  zxzxz_band4<F, T, P>(s, x + 16, y + 16);
+}
+
+template <bool F, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void zxzxz_order6_bands(const S& s, const P* __restrict x, P* __restrict y) {
+  y[0] = x[0];
+  band1_closed<T, P>(s.r, x + 1, y + 1);
+  zxzxz_band2<F, T, P>(s, x + 4, y + 4);
+  zxzxz_band3<F, T, P>(s, x + 9, y + 9);
+  zxzxz_band4<F, T, P>(s, x + 16, y + 16);
+  zxzxz_band5<F, T, P>(s, x + 25, y + 25);
+}
+
+template <bool F, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void zxzxz_order7_bands(const S& s, const P* __restrict x, P* __restrict y) {
+  y[0] = x[0];
+  band1_closed<T, P>(s.r, x + 1, y + 1);
+  zxzxz_band2<F, T, P>(s, x + 4, y + 4);
+  zxzxz_band3<F, T, P>(s, x + 9, y + 9);
+  zxzxz_band4<F, T, P>(s, x + 16, y + 16);
+  zxzxz_band5<F, T, P>(s, x + 25, y + 25);
+  zxzxz_band6<F, T, P>(s, x + 36, y + 36);
+}
+
+template <bool F, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void zxzxz_order8_bands(const S& s, const P* __restrict x, P* __restrict y) {
+  y[0] = x[0];
+  band1_closed<T, P>(s.r, x + 1, y + 1);
+  zxzxz_band2<F, T, P>(s, x + 4, y + 4);
+  zxzxz_band3<F, T, P>(s, x + 9, y + 9);
+  zxzxz_band4<F, T, P>(s, x + 16, y + 16);
+  zxzxz_band5<F, T, P>(s, x + 25, y + 25);
+  zxzxz_band6<F, T, P>(s, x + 36, y + 36);
+  zxzxz_band7<F, T, P>(s, x + 49, y + 49);
+}
+
+template <bool F, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void zxzxz_order9_bands(const S& s, const P* __restrict x, P* __restrict y) {
+  y[0] = x[0];
+  band1_closed<T, P>(s.r, x + 1, y + 1);
+  zxzxz_band2<F, T, P>(s, x + 4, y + 4);
+  zxzxz_band3<F, T, P>(s, x + 9, y + 9);
+  zxzxz_band4<F, T, P>(s, x + 16, y + 16);
+  zxzxz_band5<F, T, P>(s, x + 25, y + 25);
+  zxzxz_band6<F, T, P>(s, x + 36, y + 36);
+  zxzxz_band7<F, T, P>(s, x + 49, y + 49);
+  zxzxz_band8<F, T, P>(s, x + 64, y + 64);
+}
+
+template <bool F, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void zxzxz_order10_bands(const S& s, const P* __restrict x, P* __restrict y) {
+  y[0] = x[0];
+  band1_closed<T, P>(s.r, x + 1, y + 1);
+  zxzxz_band2<F, T, P>(s, x + 4, y + 4);
+  zxzxz_band3<F, T, P>(s, x + 9, y + 9);
+  zxzxz_band4<F, T, P>(s, x + 16, y + 16);
+  zxzxz_band5<F, T, P>(s, x + 25, y + 25);
+  zxzxz_band6<F, T, P>(s, x + 36, y + 36);
+  zxzxz_band7<F, T, P>(s, x + 49, y + 49);
+  zxzxz_band8<F, T, P>(s, x + 64, y + 64);
+  zxzxz_band9<F, T, P>(s, x + 81, y + 81);
+}
+
+template <bool F, int Order, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void taylor_order1_bands(const S& s, const P* __restrict x, P* __restrict y) {
+  y[0] = x[0];
+  (void)s;
+}
+
+template <bool F, int Order, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void taylor_order2_bands(const S& s, const P* __restrict x, P* __restrict y) {
+  y[0] = x[0];
+  taylor_band1<F, Order, T, P>(s, x + 1, y + 1);
+}
+
+template <bool F, int Order, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void taylor_order3_bands(const S& s, const P* __restrict x, P* __restrict y) {
+  y[0] = x[0];
+  taylor_band1<F, Order, T, P>(s, x + 1, y + 1);
+  taylor_band2<F, Order, T, P>(s, x + 4, y + 4);
+}
+
+template <bool F, int Order, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void taylor_order4_bands(const S& s, const P* __restrict x, P* __restrict y) {
+  y[0] = x[0];
+  taylor_band1<F, Order, T, P>(s, x + 1, y + 1);
+  taylor_band2<F, Order, T, P>(s, x + 4, y + 4);
+  taylor_band3<F, Order, T, P>(s, x + 9, y + 9);
+}
+
+template <bool F, int Order, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void taylor_order5_bands(const S& s, const P* __restrict x, P* __restrict y) {
+  y[0] = x[0];
+  taylor_band1<F, Order, T, P>(s, x + 1, y + 1);
+  taylor_band2<F, Order, T, P>(s, x + 4, y + 4);
+  taylor_band3<F, Order, T, P>(s, x + 9, y + 9);
+  taylor_band4<F, Order, T, P>(s, x + 16, y + 16);
+}
+
+template <bool F, int Order, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void taylor_order6_bands(const S& s, const P* __restrict x, P* __restrict y) {
+  y[0] = x[0];
+  taylor_band1<F, Order, T, P>(s, x + 1, y + 1);
+  taylor_band2<F, Order, T, P>(s, x + 4, y + 4);
+  taylor_band3<F, Order, T, P>(s, x + 9, y + 9);
+  taylor_band4<F, Order, T, P>(s, x + 16, y + 16);
+  taylor_band5<F, Order, T, P>(s, x + 25, y + 25);
+}
+
+template <bool F, int Order, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void taylor_order7_bands(const S& s, const P* __restrict x, P* __restrict y) {
+  y[0] = x[0];
+  taylor_band1<F, Order, T, P>(s, x + 1, y + 1);
+  taylor_band2<F, Order, T, P>(s, x + 4, y + 4);
+  taylor_band3<F, Order, T, P>(s, x + 9, y + 9);
+  taylor_band4<F, Order, T, P>(s, x + 16, y + 16);
+  taylor_band5<F, Order, T, P>(s, x + 25, y + 25);
+  taylor_band6<F, Order, T, P>(s, x + 36, y + 36);
+}
+
+template <bool F, int Order, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void taylor_order8_bands(const S& s, const P* __restrict x, P* __restrict y) {
+  y[0] = x[0];
+  taylor_band1<F, Order, T, P>(s, x + 1, y + 1);
+  taylor_band2<F, Order, T, P>(s, x + 4, y + 4);
+  taylor_band3<F, Order, T, P>(s, x + 9, y + 9);
+  taylor_band4<F, Order, T, P>(s, x + 16, y + 16);
+  taylor_band5<F, Order, T, P>(s, x + 25, y + 25);
+  taylor_band6<F, Order, T, P>(s, x + 36, y + 36);
+  taylor_band7<F, Order, T, P>(s, x + 49, y + 49);
+}
+
+template <bool F, int Order, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void taylor_order9_bands(const S& s, const P* __restrict x, P* __restrict y) {
+  y[0] = x[0];
+  taylor_band1<F, Order, T, P>(s, x + 1, y + 1);
+  taylor_band2<F, Order, T, P>(s, x + 4, y + 4);
+  taylor_band3<F, Order, T, P>(s, x + 9, y + 9);
+  taylor_band4<F, Order, T, P>(s, x + 16, y + 16);
+  taylor_band5<F, Order, T, P>(s, x + 25, y + 25);
+  taylor_band6<F, Order, T, P>(s, x + 36, y + 36);
+  taylor_band7<F, Order, T, P>(s, x + 49, y + 49);
+  taylor_band8<F, Order, T, P>(s, x + 64, y + 64);
+}
+
+template <bool F, int Order, class T, class P, class S>
+SHTOOL_KERNEL_INLINE void taylor_order10_bands(const S& s, const P* __restrict x, P* __restrict y) {
+  y[0] = x[0];
+  taylor_band1<F, Order, T, P>(s, x + 1, y + 1);
+  taylor_band2<F, Order, T, P>(s, x + 4, y + 4);
+  taylor_band3<F, Order, T, P>(s, x + 9, y + 9);
+  taylor_band4<F, Order, T, P>(s, x + 16, y + 16);
+  taylor_band5<F, Order, T, P>(s, x + 25, y + 25);
+  taylor_band6<F, Order, T, P>(s, x + 36, y + 36);
+  taylor_band7<F, Order, T, P>(s, x + 49, y + 49);
+  taylor_band8<F, Order, T, P>(s, x + 64, y + 64);
+  taylor_band9<F, Order, T, P>(s, x + 81, y + 81);
 }
 
 template <class T, int V>
 void zxzxz_band10_entry(const KernelState<T>& s, const T* const* in, T* const* out) {
-  run_lanes<T, V, 100, 21>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    zxzxz_band10<T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  run_lanes<T, V, 100, 21>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_band10<false, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
   });
 }
 
 template <class T>
 void zxzxz_band10_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
-  run_batch_lanes<T, 100, 21>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    zxzxz_band10<T, BatchPack<T>>(s, x, y);
+  run_batch_lanes<T, 100, 21>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_band10<false, T, BatchPack<T>>(s, x, y);
   });
 }
 
 template <int Order, class T, int V>
 void taylor_band10_entry(const KernelState<T>& s, const T* const* in, T* const* out) {
-  run_lanes<T, V, 100, 21>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    taylor_band10<Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  run_lanes<T, V, 100, 21>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_band10<false, Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
   });
 }
 
 template <int Order, class T>
 void taylor_band10_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
-  run_batch_lanes<T, 100, 21>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    taylor_band10<Order, T, BatchPack<T>>(s, x, y);
+  run_batch_lanes<T, 100, 21>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_band10<false, Order, T, BatchPack<T>>(s, x, y);
   });
 }
 
 template <class T, int V>
 void zxzxz_band11_entry(const KernelState<T>& s, const T* const* in, T* const* out) {
-  run_lanes<T, V, 121, 23>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    zxzxz_band11<T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  run_lanes<T, V, 121, 23>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_band11<false, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
   });
 }
 
 template <class T>
 void zxzxz_band11_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
-  run_batch_lanes<T, 121, 23>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    zxzxz_band11<T, BatchPack<T>>(s, x, y);
+  run_batch_lanes<T, 121, 23>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_band11<false, T, BatchPack<T>>(s, x, y);
   });
 }
 
 template <int Order, class T, int V>
 void taylor_band11_entry(const KernelState<T>& s, const T* const* in, T* const* out) {
-  run_lanes<T, V, 121, 23>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    taylor_band11<Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  run_lanes<T, V, 121, 23>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_band11<false, Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
   });
 }
 
 template <int Order, class T>
 void taylor_band11_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
-  run_batch_lanes<T, 121, 23>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    taylor_band11<Order, T, BatchPack<T>>(s, x, y);
+  run_batch_lanes<T, 121, 23>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_band11<false, Order, T, BatchPack<T>>(s, x, y);
   });
 }
 
 template <class T, int V>
 void zxzxz_band12_entry(const KernelState<T>& s, const T* const* in, T* const* out) {
-  run_lanes<T, V, 144, 25>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    zxzxz_band12<T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  run_lanes<T, V, 144, 25>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_band12<false, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
   });
 }
 
 template <class T>
 void zxzxz_band12_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
-  run_batch_lanes<T, 144, 25>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    zxzxz_band12<T, BatchPack<T>>(s, x, y);
+  run_batch_lanes<T, 144, 25>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_band12<false, T, BatchPack<T>>(s, x, y);
   });
 }
 
 template <int Order, class T, int V>
 void taylor_band12_entry(const KernelState<T>& s, const T* const* in, T* const* out) {
-  run_lanes<T, V, 144, 25>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    taylor_band12<Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  run_lanes<T, V, 144, 25>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_band12<false, Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
   });
 }
 
 template <int Order, class T>
 void taylor_band12_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
-  run_batch_lanes<T, 144, 25>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    taylor_band12<Order, T, BatchPack<T>>(s, x, y);
+  run_batch_lanes<T, 144, 25>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_band12<false, Order, T, BatchPack<T>>(s, x, y);
   });
 }
 
 template <class T, int V>
 void zxzxz_band13_entry(const KernelState<T>& s, const T* const* in, T* const* out) {
-  run_lanes<T, V, 169, 27>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    zxzxz_band13<T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  run_lanes<T, V, 169, 27>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_band13<false, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
   });
 }
 
 template <class T>
 void zxzxz_band13_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
-  run_batch_lanes<T, 169, 27>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    zxzxz_band13<T, BatchPack<T>>(s, x, y);
+  run_batch_lanes<T, 169, 27>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_band13<false, T, BatchPack<T>>(s, x, y);
   });
 }
 
 template <int Order, class T, int V>
 void taylor_band13_entry(const KernelState<T>& s, const T* const* in, T* const* out) {
-  run_lanes<T, V, 169, 27>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    taylor_band13<Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  run_lanes<T, V, 169, 27>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_band13<false, Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
   });
 }
 
 template <int Order, class T>
 void taylor_band13_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
-  run_batch_lanes<T, 169, 27>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    taylor_band13<Order, T, BatchPack<T>>(s, x, y);
+  run_batch_lanes<T, 169, 27>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_band13<false, Order, T, BatchPack<T>>(s, x, y);
   });
 }
 
 template <class T, int V>
 void zxzxz_band14_entry(const KernelState<T>& s, const T* const* in, T* const* out) {
-  run_lanes<T, V, 196, 29>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    zxzxz_band14<T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  run_lanes<T, V, 196, 29>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_band14<false, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
   });
 }
 
 template <class T>
 void zxzxz_band14_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
-  run_batch_lanes<T, 196, 29>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    zxzxz_band14<T, BatchPack<T>>(s, x, y);
+  run_batch_lanes<T, 196, 29>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_band14<false, T, BatchPack<T>>(s, x, y);
   });
 }
 
 template <int Order, class T, int V>
 void taylor_band14_entry(const KernelState<T>& s, const T* const* in, T* const* out) {
-  run_lanes<T, V, 196, 29>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    taylor_band14<Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  run_lanes<T, V, 196, 29>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_band14<false, Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
   });
 }
 
 template <int Order, class T>
 void taylor_band14_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
-  run_batch_lanes<T, 196, 29>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    taylor_band14<Order, T, BatchPack<T>>(s, x, y);
+  run_batch_lanes<T, 196, 29>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_band14<false, Order, T, BatchPack<T>>(s, x, y);
   });
 }
 
 template <class T, int V>
 void zxzxz_band15_entry(const KernelState<T>& s, const T* const* in, T* const* out) {
-  run_lanes<T, V, 225, 31>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    zxzxz_band15<T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  run_lanes<T, V, 225, 31>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_band15<false, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
   });
 }
 
 template <class T>
 void zxzxz_band15_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
-  run_batch_lanes<T, 225, 31>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    zxzxz_band15<T, BatchPack<T>>(s, x, y);
+  run_batch_lanes<T, 225, 31>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_band15<false, T, BatchPack<T>>(s, x, y);
   });
 }
 
 template <int Order, class T, int V>
 void taylor_band15_entry(const KernelState<T>& s, const T* const* in, T* const* out) {
-  run_lanes<T, V, 225, 31>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    taylor_band15<Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  run_lanes<T, V, 225, 31>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_band15<false, Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
   });
 }
 
 template <int Order, class T>
 void taylor_band15_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
-  run_batch_lanes<T, 225, 31>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    taylor_band15<Order, T, BatchPack<T>>(s, x, y);
+  run_batch_lanes<T, 225, 31>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_band15<false, Order, T, BatchPack<T>>(s, x, y);
   });
 }
 
 template <class T, int V>
 void zxzxz_band16_entry(const KernelState<T>& s, const T* const* in, T* const* out) {
-  run_lanes<T, V, 256, 33>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    zxzxz_band16<T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  run_lanes<T, V, 256, 33>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_band16<false, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
   });
 }
 
 template <class T>
 void zxzxz_band16_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
-  run_batch_lanes<T, 256, 33>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    zxzxz_band16<T, BatchPack<T>>(s, x, y);
+  run_batch_lanes<T, 256, 33>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_band16<false, T, BatchPack<T>>(s, x, y);
   });
 }
 
 template <int Order, class T, int V>
 void taylor_band16_entry(const KernelState<T>& s, const T* const* in, T* const* out) {
-  run_lanes<T, V, 256, 33>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    taylor_band16<Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  run_lanes<T, V, 256, 33>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_band16<false, Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
   });
 }
 
 template <int Order, class T>
 void taylor_band16_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
-  run_batch_lanes<T, 256, 33>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    taylor_band16<Order, T, BatchPack<T>>(s, x, y);
+  run_batch_lanes<T, 256, 33>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_band16<false, Order, T, BatchPack<T>>(s, x, y);
   });
 }
 
 template <class T, int V>
 void zxzxz_band17_entry(const KernelState<T>& s, const T* const* in, T* const* out) {
-  run_lanes<T, V, 289, 35>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    zxzxz_band17<T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  run_lanes<T, V, 289, 35>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_band17<false, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
   });
 }
 
 template <class T>
 void zxzxz_band17_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
-  run_batch_lanes<T, 289, 35>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    zxzxz_band17<T, BatchPack<T>>(s, x, y);
+  run_batch_lanes<T, 289, 35>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_band17<false, T, BatchPack<T>>(s, x, y);
   });
 }
 
 template <int Order, class T, int V>
 void taylor_band17_entry(const KernelState<T>& s, const T* const* in, T* const* out) {
-  run_lanes<T, V, 289, 35>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    taylor_band17<Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  run_lanes<T, V, 289, 35>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_band17<false, Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
   });
 }
 
 template <int Order, class T>
 void taylor_band17_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
-  run_batch_lanes<T, 289, 35>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    taylor_band17<Order, T, BatchPack<T>>(s, x, y);
+  run_batch_lanes<T, 289, 35>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_band17<false, Order, T, BatchPack<T>>(s, x, y);
   });
 }
 
 template <class T, int V>
 void zxzxz_band18_entry(const KernelState<T>& s, const T* const* in, T* const* out) {
-  run_lanes<T, V, 324, 37>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    zxzxz_band18<T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  run_lanes<T, V, 324, 37>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_band18<false, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
   });
 }
 
 template <class T>
 void zxzxz_band18_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
-  run_batch_lanes<T, 324, 37>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    zxzxz_band18<T, BatchPack<T>>(s, x, y);
+  run_batch_lanes<T, 324, 37>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_band18<false, T, BatchPack<T>>(s, x, y);
   });
 }
 
 template <int Order, class T, int V>
 void taylor_band18_entry(const KernelState<T>& s, const T* const* in, T* const* out) {
-  run_lanes<T, V, 324, 37>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    taylor_band18<Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  run_lanes<T, V, 324, 37>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_band18<false, Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
   });
 }
 
 template <int Order, class T>
 void taylor_band18_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
-  run_batch_lanes<T, 324, 37>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    taylor_band18<Order, T, BatchPack<T>>(s, x, y);
+  run_batch_lanes<T, 324, 37>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_band18<false, Order, T, BatchPack<T>>(s, x, y);
   });
 }
 
 template <class T, int V>
 void zxzxz_band19_entry(const KernelState<T>& s, const T* const* in, T* const* out) {
-  run_lanes<T, V, 361, 39>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    zxzxz_band19<T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  run_lanes<T, V, 361, 39>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_band19<false, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
   });
 }
 
 template <class T>
 void zxzxz_band19_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
-  run_batch_lanes<T, 361, 39>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    zxzxz_band19<T, BatchPack<T>>(s, x, y);
+  run_batch_lanes<T, 361, 39>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_band19<false, T, BatchPack<T>>(s, x, y);
   });
 }
 
 template <int Order, class T, int V>
 void taylor_band19_entry(const KernelState<T>& s, const T* const* in, T* const* out) {
-  run_lanes<T, V, 361, 39>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    taylor_band19<Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  run_lanes<T, V, 361, 39>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_band19<false, Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
   });
 }
 
 template <int Order, class T>
 void taylor_band19_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
-  run_batch_lanes<T, 361, 39>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    taylor_band19<Order, T, BatchPack<T>>(s, x, y);
+  run_batch_lanes<T, 361, 39>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_band19<false, Order, T, BatchPack<T>>(s, x, y);
   });
-}
-
-template <class T, class P, class S>
-inline void zxzxz_order1_bands(const S& s, const P* __restrict x, P* __restrict y) {
-  y[0] = x[0];
-  (void)s;
 }
 
 template <class T, int V>
 void zxzxz_order1(const KernelState<T>& s, const T* const* in, T* const* out) {
-  run_lanes<T, V, 0, 1>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    zxzxz_order1_bands<T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  run_lanes<T, V, 0, 1>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_order1_bands<false, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
   });
 }
 
 template <class T>
 void zxzxz_order1_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
-  run_batch_lanes<T, 0, 1>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    zxzxz_order1_bands<T, BatchPack<T>>(s, x, y);
+  run_batch_lanes<T, 0, 1>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_order1_bands<false, T, BatchPack<T>>(s, x, y);
   });
-}
-
-template <class T, class P, class S>
-inline void zxzxz_order2_bands(const S& s, const P* __restrict x, P* __restrict y) {
-  y[0] = x[0];
-  band1_closed<T, P>(s.r, x + 1, y + 1);
 }
 
 template <class T, int V>
 void zxzxz_order2(const KernelState<T>& s, const T* const* in, T* const* out) {
-  run_lanes<T, V, 0, 4>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    zxzxz_order2_bands<T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  run_lanes<T, V, 0, 4>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_order2_bands<false, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
   });
 }
 
 template <class T>
 void zxzxz_order2_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
-  run_batch_lanes<T, 0, 4>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    zxzxz_order2_bands<T, BatchPack<T>>(s, x, y);
+  run_batch_lanes<T, 0, 4>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_order2_bands<false, T, BatchPack<T>>(s, x, y);
   });
-}
-
-template <class T, class P, class S>
-inline void zxzxz_order3_bands(const S& s, const P* __restrict x, P* __restrict y) {
-  y[0] = x[0];
-  band1_closed<T, P>(s.r, x + 1, y + 1);
-  band2_closed<T, P>(s.r, x + 4, y + 4);
 }
 
 template <class T, int V>
 void zxzxz_order3(const KernelState<T>& s, const T* const* in, T* const* out) {
-  run_lanes<T, V, 0, 9>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    zxzxz_order3_bands<T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  run_lanes<T, V, 0, 9>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_order3_bands<false, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
   });
 }
 
 template <class T>
 void zxzxz_order3_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
-  run_batch_lanes<T, 0, 9>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    zxzxz_order3_bands<T, BatchPack<T>>(s, x, y);
+  run_batch_lanes<T, 0, 9>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_order3_bands<false, T, BatchPack<T>>(s, x, y);
   });
-}
-
-template <class T, class P, class S>
-inline void zxzxz_order4_bands(const S& s, const P* __restrict x, P* __restrict y) {
-  y[0] = x[0];
-  band1_closed<T, P>(s.r, x + 1, y + 1);
-  zxzxz_band2<T, P>(s, x + 4, y + 4);
-  zxzxz_band3<T, P>(s, x + 9, y + 9);
 }
 
 template <class T, int V>
 void zxzxz_order4(const KernelState<T>& s, const T* const* in, T* const* out) {
-  run_lanes<T, V, 0, 16>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    zxzxz_order4_bands<T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  run_lanes<T, V, 0, 16>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_order4_bands<false, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
   });
 }
 
 template <class T>
 void zxzxz_order4_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
-  run_batch_lanes<T, 0, 16>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    zxzxz_order4_bands<T, BatchPack<T>>(s, x, y);
+  run_batch_lanes<T, 0, 16>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_order4_bands<false, T, BatchPack<T>>(s, x, y);
   });
-}
-
-template <class T, class P, class S>
-inline void zxzxz_order5_bands(const S& s, const P* __restrict x, P* __restrict y) {
-  y[0] = x[0];
-  band1_closed<T, P>(s.r, x + 1, y + 1);
-  zxzxz_band2<T, P>(s, x + 4, y + 4);
-  zxzxz_band3<T, P>(s, x + 9, y + 9);
-  zxzxz_band4<T, P>(s, x + 16, y + 16);
 }
 
 template <class T, int V>
 void zxzxz_order5(const KernelState<T>& s, const T* const* in, T* const* out) {
-  run_lanes<T, V, 0, 25>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    zxzxz_order5_bands<T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  run_lanes<T, V, 0, 25>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_order5_bands<false, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
   });
 }
 
 template <class T>
 void zxzxz_order5_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
-  run_batch_lanes<T, 0, 25>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    zxzxz_order5_bands<T, BatchPack<T>>(s, x, y);
+  run_batch_lanes<T, 0, 25>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_order5_bands<false, T, BatchPack<T>>(s, x, y);
   });
-}
-
-template <class T, class P, class S>
-inline void zxzxz_order6_bands(const S& s, const P* __restrict x, P* __restrict y) {
-  y[0] = x[0];
-  band1_closed<T, P>(s.r, x + 1, y + 1);
-  zxzxz_band2<T, P>(s, x + 4, y + 4);
-  zxzxz_band3<T, P>(s, x + 9, y + 9);
-  zxzxz_band4<T, P>(s, x + 16, y + 16);
-  zxzxz_band5<T, P>(s, x + 25, y + 25);
 }
 
 template <class T, int V>
 void zxzxz_order6(const KernelState<T>& s, const T* const* in, T* const* out) {
-  run_lanes<T, V, 0, 36>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    zxzxz_order6_bands<T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  run_lanes<T, V, 0, 36>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_order6_bands<false, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
   });
 }
 
 template <class T>
 void zxzxz_order6_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
-  run_batch_lanes<T, 0, 36>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    zxzxz_order6_bands<T, BatchPack<T>>(s, x, y);
+  run_batch_lanes<T, 0, 36>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_order6_bands<false, T, BatchPack<T>>(s, x, y);
   });
-}
-
-template <class T, class P, class S>
-inline void zxzxz_order7_bands(const S& s, const P* __restrict x, P* __restrict y) {
-  y[0] = x[0];
-  band1_closed<T, P>(s.r, x + 1, y + 1);
-  zxzxz_band2<T, P>(s, x + 4, y + 4);
-  zxzxz_band3<T, P>(s, x + 9, y + 9);
-  zxzxz_band4<T, P>(s, x + 16, y + 16);
-  zxzxz_band5<T, P>(s, x + 25, y + 25);
-  zxzxz_band6<T, P>(s, x + 36, y + 36);
 }
 
 template <class T, int V>
 void zxzxz_order7(const KernelState<T>& s, const T* const* in, T* const* out) {
-  run_lanes<T, V, 0, 49>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    zxzxz_order7_bands<T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  run_lanes<T, V, 0, 49>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_order7_bands<false, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
   });
 }
 
 template <class T>
 void zxzxz_order7_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
-  run_batch_lanes<T, 0, 49>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    zxzxz_order7_bands<T, BatchPack<T>>(s, x, y);
+  run_batch_lanes<T, 0, 49>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_order7_bands<false, T, BatchPack<T>>(s, x, y);
   });
-}
-
-template <class T, class P, class S>
-inline void zxzxz_order8_bands(const S& s, const P* __restrict x, P* __restrict y) {
-  y[0] = x[0];
-  band1_closed<T, P>(s.r, x + 1, y + 1);
-  zxzxz_band2<T, P>(s, x + 4, y + 4);
-  zxzxz_band3<T, P>(s, x + 9, y + 9);
-  zxzxz_band4<T, P>(s, x + 16, y + 16);
-  zxzxz_band5<T, P>(s, x + 25, y + 25);
-  zxzxz_band6<T, P>(s, x + 36, y + 36);
-  zxzxz_band7<T, P>(s, x + 49, y + 49);
 }
 
 template <class T, int V>
 void zxzxz_order8(const KernelState<T>& s, const T* const* in, T* const* out) {
-  run_lanes<T, V, 0, 64>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    zxzxz_order8_bands<T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  run_lanes<T, V, 0, 64>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_order8_bands<false, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
   });
 }
 
 template <class T>
 void zxzxz_order8_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
-  run_batch_lanes<T, 0, 64>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    zxzxz_order8_bands<T, BatchPack<T>>(s, x, y);
+  run_batch_lanes<T, 0, 64>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_order8_bands<false, T, BatchPack<T>>(s, x, y);
   });
-}
-
-template <class T, class P, class S>
-inline void zxzxz_order9_bands(const S& s, const P* __restrict x, P* __restrict y) {
-  y[0] = x[0];
-  band1_closed<T, P>(s.r, x + 1, y + 1);
-  zxzxz_band2<T, P>(s, x + 4, y + 4);
-  zxzxz_band3<T, P>(s, x + 9, y + 9);
-  zxzxz_band4<T, P>(s, x + 16, y + 16);
-  zxzxz_band5<T, P>(s, x + 25, y + 25);
-  zxzxz_band6<T, P>(s, x + 36, y + 36);
-  zxzxz_band7<T, P>(s, x + 49, y + 49);
-  zxzxz_band8<T, P>(s, x + 64, y + 64);
 }
 
 template <class T, int V>
 void zxzxz_order9(const KernelState<T>& s, const T* const* in, T* const* out) {
-  run_lanes<T, V, 0, 81>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    zxzxz_order9_bands<T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  run_lanes<T, V, 0, 81>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_order9_bands<false, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
   });
 }
 
 template <class T>
 void zxzxz_order9_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
-  run_batch_lanes<T, 0, 81>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    zxzxz_order9_bands<T, BatchPack<T>>(s, x, y);
+  run_batch_lanes<T, 0, 81>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_order9_bands<false, T, BatchPack<T>>(s, x, y);
   });
-}
-
-template <class T, class P, class S>
-inline void zxzxz_order10_bands(const S& s, const P* __restrict x, P* __restrict y) {
-  y[0] = x[0];
-  band1_closed<T, P>(s.r, x + 1, y + 1);
-  zxzxz_band2<T, P>(s, x + 4, y + 4);
-  zxzxz_band3<T, P>(s, x + 9, y + 9);
-  zxzxz_band4<T, P>(s, x + 16, y + 16);
-  zxzxz_band5<T, P>(s, x + 25, y + 25);
-  zxzxz_band6<T, P>(s, x + 36, y + 36);
-  zxzxz_band7<T, P>(s, x + 49, y + 49);
-  zxzxz_band8<T, P>(s, x + 64, y + 64);
-  zxzxz_band9<T, P>(s, x + 81, y + 81);
 }
 
 template <class T, int V>
 void zxzxz_order10(const KernelState<T>& s, const T* const* in, T* const* out) {
-  run_lanes<T, V, 0, 100>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    zxzxz_order10_bands<T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  run_lanes<T, V, 0, 100>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_order10_bands<false, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
   });
 }
 
 template <class T>
 void zxzxz_order10_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
-  run_batch_lanes<T, 0, 100>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    zxzxz_order10_bands<T, BatchPack<T>>(s, x, y);
+  run_batch_lanes<T, 0, 100>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_order10_bands<false, T, BatchPack<T>>(s, x, y);
   });
-}
-
-template <int Order, class T, class P, class S>
-inline void taylor_order1_bands(const S& s, const P* __restrict x, P* __restrict y) {
-  y[0] = x[0];
-  (void)s;
 }
 
 template <int Order, class T, int V>
 void taylor_order1(const KernelState<T>& s, const T* const* in, T* const* out) {
-  run_lanes<T, V, 0, 1>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    taylor_order1_bands<Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  run_lanes<T, V, 0, 1>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_order1_bands<false, Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
   });
 }
 
 template <int Order, class T>
 void taylor_order1_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
-  run_batch_lanes<T, 0, 1>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    taylor_order1_bands<Order, T, BatchPack<T>>(s, x, y);
+  run_batch_lanes<T, 0, 1>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_order1_bands<false, Order, T, BatchPack<T>>(s, x, y);
   });
-}
-
-template <int Order, class T, class P, class S>
-inline void taylor_order2_bands(const S& s, const P* __restrict x, P* __restrict y) {
-  y[0] = x[0];
-  taylor_band1<Order, T, P>(s, x + 1, y + 1);
 }
 
 template <int Order, class T, int V>
 void taylor_order2(const KernelState<T>& s, const T* const* in, T* const* out) {
-  run_lanes<T, V, 0, 4>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    taylor_order2_bands<Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  run_lanes<T, V, 0, 4>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_order2_bands<false, Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
   });
 }
 
 template <int Order, class T>
 void taylor_order2_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
-  run_batch_lanes<T, 0, 4>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    taylor_order2_bands<Order, T, BatchPack<T>>(s, x, y);
+  run_batch_lanes<T, 0, 4>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_order2_bands<false, Order, T, BatchPack<T>>(s, x, y);
   });
-}
-
-template <int Order, class T, class P, class S>
-inline void taylor_order3_bands(const S& s, const P* __restrict x, P* __restrict y) {
-  y[0] = x[0];
-  taylor_band1<Order, T, P>(s, x + 1, y + 1);
-  taylor_band2<Order, T, P>(s, x + 4, y + 4);
 }
 
 template <int Order, class T, int V>
 void taylor_order3(const KernelState<T>& s, const T* const* in, T* const* out) {
-  run_lanes<T, V, 0, 9>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    taylor_order3_bands<Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  run_lanes<T, V, 0, 9>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_order3_bands<false, Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
   });
 }
 
 template <int Order, class T>
 void taylor_order3_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
-  run_batch_lanes<T, 0, 9>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    taylor_order3_bands<Order, T, BatchPack<T>>(s, x, y);
+  run_batch_lanes<T, 0, 9>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_order3_bands<false, Order, T, BatchPack<T>>(s, x, y);
   });
-}
-
-template <int Order, class T, class P, class S>
-inline void taylor_order4_bands(const S& s, const P* __restrict x, P* __restrict y) {
-  y[0] = x[0];
-  taylor_band1<Order, T, P>(s, x + 1, y + 1);
-  taylor_band2<Order, T, P>(s, x + 4, y + 4);
-  taylor_band3<Order, T, P>(s, x + 9, y + 9);
 }
 
 template <int Order, class T, int V>
 void taylor_order4(const KernelState<T>& s, const T* const* in, T* const* out) {
-  run_lanes<T, V, 0, 16>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    taylor_order4_bands<Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  run_lanes<T, V, 0, 16>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_order4_bands<false, Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
   });
 }
 
 template <int Order, class T>
 void taylor_order4_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
-  run_batch_lanes<T, 0, 16>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    taylor_order4_bands<Order, T, BatchPack<T>>(s, x, y);
+  run_batch_lanes<T, 0, 16>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_order4_bands<false, Order, T, BatchPack<T>>(s, x, y);
   });
-}
-
-template <int Order, class T, class P, class S>
-inline void taylor_order5_bands(const S& s, const P* __restrict x, P* __restrict y) {
-  y[0] = x[0];
-  taylor_band1<Order, T, P>(s, x + 1, y + 1);
-  taylor_band2<Order, T, P>(s, x + 4, y + 4);
-  taylor_band3<Order, T, P>(s, x + 9, y + 9);
-  taylor_band4<Order, T, P>(s, x + 16, y + 16);
 }
 
 template <int Order, class T, int V>
 void taylor_order5(const KernelState<T>& s, const T* const* in, T* const* out) {
-  run_lanes<T, V, 0, 25>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    taylor_order5_bands<Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  run_lanes<T, V, 0, 25>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_order5_bands<false, Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
   });
 }
 
 template <int Order, class T>
 void taylor_order5_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
-  run_batch_lanes<T, 0, 25>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    taylor_order5_bands<Order, T, BatchPack<T>>(s, x, y);
+  run_batch_lanes<T, 0, 25>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_order5_bands<false, Order, T, BatchPack<T>>(s, x, y);
   });
-}
-
-template <int Order, class T, class P, class S>
-inline void taylor_order6_bands(const S& s, const P* __restrict x, P* __restrict y) {
-  y[0] = x[0];
-  taylor_band1<Order, T, P>(s, x + 1, y + 1);
-  taylor_band2<Order, T, P>(s, x + 4, y + 4);
-  taylor_band3<Order, T, P>(s, x + 9, y + 9);
-  taylor_band4<Order, T, P>(s, x + 16, y + 16);
-  taylor_band5<Order, T, P>(s, x + 25, y + 25);
 }
 
 template <int Order, class T, int V>
 void taylor_order6(const KernelState<T>& s, const T* const* in, T* const* out) {
-  run_lanes<T, V, 0, 36>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    taylor_order6_bands<Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  run_lanes<T, V, 0, 36>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_order6_bands<false, Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
   });
 }
 
 template <int Order, class T>
 void taylor_order6_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
-  run_batch_lanes<T, 0, 36>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    taylor_order6_bands<Order, T, BatchPack<T>>(s, x, y);
+  run_batch_lanes<T, 0, 36>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_order6_bands<false, Order, T, BatchPack<T>>(s, x, y);
   });
-}
-
-template <int Order, class T, class P, class S>
-inline void taylor_order7_bands(const S& s, const P* __restrict x, P* __restrict y) {
-  y[0] = x[0];
-  taylor_band1<Order, T, P>(s, x + 1, y + 1);
-  taylor_band2<Order, T, P>(s, x + 4, y + 4);
-  taylor_band3<Order, T, P>(s, x + 9, y + 9);
-  taylor_band4<Order, T, P>(s, x + 16, y + 16);
-  taylor_band5<Order, T, P>(s, x + 25, y + 25);
-  taylor_band6<Order, T, P>(s, x + 36, y + 36);
 }
 
 template <int Order, class T, int V>
 void taylor_order7(const KernelState<T>& s, const T* const* in, T* const* out) {
-  run_lanes<T, V, 0, 49>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    taylor_order7_bands<Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  run_lanes<T, V, 0, 49>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_order7_bands<false, Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
   });
 }
 
 template <int Order, class T>
 void taylor_order7_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
-  run_batch_lanes<T, 0, 49>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    taylor_order7_bands<Order, T, BatchPack<T>>(s, x, y);
+  run_batch_lanes<T, 0, 49>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_order7_bands<false, Order, T, BatchPack<T>>(s, x, y);
   });
-}
-
-template <int Order, class T, class P, class S>
-inline void taylor_order8_bands(const S& s, const P* __restrict x, P* __restrict y) {
-  y[0] = x[0];
-  taylor_band1<Order, T, P>(s, x + 1, y + 1);
-  taylor_band2<Order, T, P>(s, x + 4, y + 4);
-  taylor_band3<Order, T, P>(s, x + 9, y + 9);
-  taylor_band4<Order, T, P>(s, x + 16, y + 16);
-  taylor_band5<Order, T, P>(s, x + 25, y + 25);
-  taylor_band6<Order, T, P>(s, x + 36, y + 36);
-  taylor_band7<Order, T, P>(s, x + 49, y + 49);
 }
 
 template <int Order, class T, int V>
 void taylor_order8(const KernelState<T>& s, const T* const* in, T* const* out) {
-  run_lanes<T, V, 0, 64>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    taylor_order8_bands<Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  run_lanes<T, V, 0, 64>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_order8_bands<false, Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
   });
 }
 
 template <int Order, class T>
 void taylor_order8_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
-  run_batch_lanes<T, 0, 64>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    taylor_order8_bands<Order, T, BatchPack<T>>(s, x, y);
+  run_batch_lanes<T, 0, 64>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_order8_bands<false, Order, T, BatchPack<T>>(s, x, y);
   });
-}
-
-template <int Order, class T, class P, class S>
-inline void taylor_order9_bands(const S& s, const P* __restrict x, P* __restrict y) {
-  y[0] = x[0];
-  taylor_band1<Order, T, P>(s, x + 1, y + 1);
-  taylor_band2<Order, T, P>(s, x + 4, y + 4);
-  taylor_band3<Order, T, P>(s, x + 9, y + 9);
-  taylor_band4<Order, T, P>(s, x + 16, y + 16);
-  taylor_band5<Order, T, P>(s, x + 25, y + 25);
-  taylor_band6<Order, T, P>(s, x + 36, y + 36);
-  taylor_band7<Order, T, P>(s, x + 49, y + 49);
-  taylor_band8<Order, T, P>(s, x + 64, y + 64);
 }
 
 template <int Order, class T, int V>
 void taylor_order9(const KernelState<T>& s, const T* const* in, T* const* out) {
-  run_lanes<T, V, 0, 81>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    taylor_order9_bands<Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  run_lanes<T, V, 0, 81>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_order9_bands<false, Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
   });
 }
 
 template <int Order, class T>
 void taylor_order9_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
-  run_batch_lanes<T, 0, 81>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    taylor_order9_bands<Order, T, BatchPack<T>>(s, x, y);
+  run_batch_lanes<T, 0, 81>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_order9_bands<false, Order, T, BatchPack<T>>(s, x, y);
   });
-}
-
-template <int Order, class T, class P, class S>
-inline void taylor_order10_bands(const S& s, const P* __restrict x, P* __restrict y) {
-  y[0] = x[0];
-  taylor_band1<Order, T, P>(s, x + 1, y + 1);
-  taylor_band2<Order, T, P>(s, x + 4, y + 4);
-  taylor_band3<Order, T, P>(s, x + 9, y + 9);
-  taylor_band4<Order, T, P>(s, x + 16, y + 16);
-  taylor_band5<Order, T, P>(s, x + 25, y + 25);
-  taylor_band6<Order, T, P>(s, x + 36, y + 36);
-  taylor_band7<Order, T, P>(s, x + 49, y + 49);
-  taylor_band8<Order, T, P>(s, x + 64, y + 64);
-  taylor_band9<Order, T, P>(s, x + 81, y + 81);
 }
 
 template <int Order, class T, int V>
 void taylor_order10(const KernelState<T>& s, const T* const* in, T* const* out) {
-  run_lanes<T, V, 0, 100>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    taylor_order10_bands<Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  run_lanes<T, V, 0, 100>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_order10_bands<false, Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
   });
 }
 
 template <int Order, class T>
 void taylor_order10_batch(const BatchState<T>& s, const T* const* in, T* const* out) {
-  run_batch_lanes<T, 0, 100>(in, out, [&s](const auto* __restrict x, auto* __restrict y) {
-    taylor_order10_bands<Order, T, BatchPack<T>>(s, x, y);
+  run_batch_lanes<T, 0, 100>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_order10_bands<false, Order, T, BatchPack<T>>(s, x, y);
   });
 }
+
+#if SHTOOL_FMA_KERNELS
+
+template <class T, int V>
+SHTOOL_FMA_TARGET void zxzxz_band10_entry_fma(const KernelState<T>& s, const T* const* in, T* const* out) {
+  run_lanes<T, V, 100, 21>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_band10<true, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <class T>
+SHTOOL_FMA_TARGET void zxzxz_band10_batch_fma(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 100, 21>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_band10<true, T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <int Order, class T, int V>
+SHTOOL_FMA_TARGET void taylor_band10_entry_fma(const KernelState<T>& s, const T* const* in, T* const* out) {
+  run_lanes<T, V, 100, 21>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_band10<true, Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <int Order, class T>
+SHTOOL_FMA_TARGET void taylor_band10_batch_fma(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 100, 21>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_band10<true, Order, T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <class T, int V>
+SHTOOL_FMA_TARGET void zxzxz_band11_entry_fma(const KernelState<T>& s, const T* const* in, T* const* out) {
+  run_lanes<T, V, 121, 23>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_band11<true, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <class T>
+SHTOOL_FMA_TARGET void zxzxz_band11_batch_fma(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 121, 23>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_band11<true, T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <int Order, class T, int V>
+SHTOOL_FMA_TARGET void taylor_band11_entry_fma(const KernelState<T>& s, const T* const* in, T* const* out) {
+  run_lanes<T, V, 121, 23>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_band11<true, Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <int Order, class T>
+SHTOOL_FMA_TARGET void taylor_band11_batch_fma(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 121, 23>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_band11<true, Order, T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <class T, int V>
+SHTOOL_FMA_TARGET void zxzxz_band12_entry_fma(const KernelState<T>& s, const T* const* in, T* const* out) {
+  run_lanes<T, V, 144, 25>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_band12<true, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <class T>
+SHTOOL_FMA_TARGET void zxzxz_band12_batch_fma(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 144, 25>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_band12<true, T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <int Order, class T, int V>
+SHTOOL_FMA_TARGET void taylor_band12_entry_fma(const KernelState<T>& s, const T* const* in, T* const* out) {
+  run_lanes<T, V, 144, 25>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_band12<true, Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <int Order, class T>
+SHTOOL_FMA_TARGET void taylor_band12_batch_fma(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 144, 25>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_band12<true, Order, T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <class T, int V>
+SHTOOL_FMA_TARGET void zxzxz_band13_entry_fma(const KernelState<T>& s, const T* const* in, T* const* out) {
+  run_lanes<T, V, 169, 27>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_band13<true, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <class T>
+SHTOOL_FMA_TARGET void zxzxz_band13_batch_fma(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 169, 27>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_band13<true, T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <int Order, class T, int V>
+SHTOOL_FMA_TARGET void taylor_band13_entry_fma(const KernelState<T>& s, const T* const* in, T* const* out) {
+  run_lanes<T, V, 169, 27>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_band13<true, Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <int Order, class T>
+SHTOOL_FMA_TARGET void taylor_band13_batch_fma(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 169, 27>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_band13<true, Order, T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <class T, int V>
+SHTOOL_FMA_TARGET void zxzxz_band14_entry_fma(const KernelState<T>& s, const T* const* in, T* const* out) {
+  run_lanes<T, V, 196, 29>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_band14<true, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <class T>
+SHTOOL_FMA_TARGET void zxzxz_band14_batch_fma(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 196, 29>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_band14<true, T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <int Order, class T, int V>
+SHTOOL_FMA_TARGET void taylor_band14_entry_fma(const KernelState<T>& s, const T* const* in, T* const* out) {
+  run_lanes<T, V, 196, 29>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_band14<true, Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <int Order, class T>
+SHTOOL_FMA_TARGET void taylor_band14_batch_fma(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 196, 29>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_band14<true, Order, T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <class T, int V>
+SHTOOL_FMA_TARGET void zxzxz_band15_entry_fma(const KernelState<T>& s, const T* const* in, T* const* out) {
+  run_lanes<T, V, 225, 31>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_band15<true, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <class T>
+SHTOOL_FMA_TARGET void zxzxz_band15_batch_fma(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 225, 31>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_band15<true, T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <int Order, class T, int V>
+SHTOOL_FMA_TARGET void taylor_band15_entry_fma(const KernelState<T>& s, const T* const* in, T* const* out) {
+  run_lanes<T, V, 225, 31>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_band15<true, Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <int Order, class T>
+SHTOOL_FMA_TARGET void taylor_band15_batch_fma(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 225, 31>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_band15<true, Order, T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <class T, int V>
+SHTOOL_FMA_TARGET void zxzxz_band16_entry_fma(const KernelState<T>& s, const T* const* in, T* const* out) {
+  run_lanes<T, V, 256, 33>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_band16<true, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <class T>
+SHTOOL_FMA_TARGET void zxzxz_band16_batch_fma(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 256, 33>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_band16<true, T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <int Order, class T, int V>
+SHTOOL_FMA_TARGET void taylor_band16_entry_fma(const KernelState<T>& s, const T* const* in, T* const* out) {
+  run_lanes<T, V, 256, 33>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_band16<true, Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <int Order, class T>
+SHTOOL_FMA_TARGET void taylor_band16_batch_fma(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 256, 33>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_band16<true, Order, T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <class T, int V>
+SHTOOL_FMA_TARGET void zxzxz_band17_entry_fma(const KernelState<T>& s, const T* const* in, T* const* out) {
+  run_lanes<T, V, 289, 35>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_band17<true, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <class T>
+SHTOOL_FMA_TARGET void zxzxz_band17_batch_fma(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 289, 35>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_band17<true, T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <int Order, class T, int V>
+SHTOOL_FMA_TARGET void taylor_band17_entry_fma(const KernelState<T>& s, const T* const* in, T* const* out) {
+  run_lanes<T, V, 289, 35>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_band17<true, Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <int Order, class T>
+SHTOOL_FMA_TARGET void taylor_band17_batch_fma(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 289, 35>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_band17<true, Order, T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <class T, int V>
+SHTOOL_FMA_TARGET void zxzxz_band18_entry_fma(const KernelState<T>& s, const T* const* in, T* const* out) {
+  run_lanes<T, V, 324, 37>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_band18<true, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <class T>
+SHTOOL_FMA_TARGET void zxzxz_band18_batch_fma(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 324, 37>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_band18<true, T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <int Order, class T, int V>
+SHTOOL_FMA_TARGET void taylor_band18_entry_fma(const KernelState<T>& s, const T* const* in, T* const* out) {
+  run_lanes<T, V, 324, 37>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_band18<true, Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <int Order, class T>
+SHTOOL_FMA_TARGET void taylor_band18_batch_fma(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 324, 37>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_band18<true, Order, T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <class T, int V>
+SHTOOL_FMA_TARGET void zxzxz_band19_entry_fma(const KernelState<T>& s, const T* const* in, T* const* out) {
+  run_lanes<T, V, 361, 39>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_band19<true, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <class T>
+SHTOOL_FMA_TARGET void zxzxz_band19_batch_fma(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 361, 39>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_band19<true, T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <int Order, class T, int V>
+SHTOOL_FMA_TARGET void taylor_band19_entry_fma(const KernelState<T>& s, const T* const* in, T* const* out) {
+  run_lanes<T, V, 361, 39>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_band19<true, Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <int Order, class T>
+SHTOOL_FMA_TARGET void taylor_band19_batch_fma(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 361, 39>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_band19<true, Order, T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <class T, int V>
+SHTOOL_FMA_TARGET void zxzxz_order1_fma(const KernelState<T>& s, const T* const* in, T* const* out) {
+  run_lanes<T, V, 0, 1>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_order1_bands<true, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <class T>
+SHTOOL_FMA_TARGET void zxzxz_order1_batch_fma(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 0, 1>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_order1_bands<true, T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <class T, int V>
+SHTOOL_FMA_TARGET void zxzxz_order2_fma(const KernelState<T>& s, const T* const* in, T* const* out) {
+  run_lanes<T, V, 0, 4>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_order2_bands<true, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <class T>
+SHTOOL_FMA_TARGET void zxzxz_order2_batch_fma(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 0, 4>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_order2_bands<true, T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <class T, int V>
+SHTOOL_FMA_TARGET void zxzxz_order3_fma(const KernelState<T>& s, const T* const* in, T* const* out) {
+  run_lanes<T, V, 0, 9>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_order3_bands<true, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <class T>
+SHTOOL_FMA_TARGET void zxzxz_order3_batch_fma(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 0, 9>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_order3_bands<true, T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <class T, int V>
+SHTOOL_FMA_TARGET void zxzxz_order4_fma(const KernelState<T>& s, const T* const* in, T* const* out) {
+  run_lanes<T, V, 0, 16>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_order4_bands<true, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <class T>
+SHTOOL_FMA_TARGET void zxzxz_order4_batch_fma(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 0, 16>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_order4_bands<true, T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <class T, int V>
+SHTOOL_FMA_TARGET void zxzxz_order5_fma(const KernelState<T>& s, const T* const* in, T* const* out) {
+  run_lanes<T, V, 0, 25>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_order5_bands<true, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <class T>
+SHTOOL_FMA_TARGET void zxzxz_order5_batch_fma(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 0, 25>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_order5_bands<true, T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <class T, int V>
+SHTOOL_FMA_TARGET void zxzxz_order6_fma(const KernelState<T>& s, const T* const* in, T* const* out) {
+  run_lanes<T, V, 0, 36>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_order6_bands<true, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <class T>
+SHTOOL_FMA_TARGET void zxzxz_order6_batch_fma(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 0, 36>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_order6_bands<true, T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <class T, int V>
+SHTOOL_FMA_TARGET void zxzxz_order7_fma(const KernelState<T>& s, const T* const* in, T* const* out) {
+  run_lanes<T, V, 0, 49>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_order7_bands<true, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <class T>
+SHTOOL_FMA_TARGET void zxzxz_order7_batch_fma(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 0, 49>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_order7_bands<true, T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <class T, int V>
+SHTOOL_FMA_TARGET void zxzxz_order8_fma(const KernelState<T>& s, const T* const* in, T* const* out) {
+  run_lanes<T, V, 0, 64>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_order8_bands<true, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <class T>
+SHTOOL_FMA_TARGET void zxzxz_order8_batch_fma(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 0, 64>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_order8_bands<true, T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <class T, int V>
+SHTOOL_FMA_TARGET void zxzxz_order9_fma(const KernelState<T>& s, const T* const* in, T* const* out) {
+  run_lanes<T, V, 0, 81>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_order9_bands<true, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <class T>
+SHTOOL_FMA_TARGET void zxzxz_order9_batch_fma(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 0, 81>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_order9_bands<true, T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <class T, int V>
+SHTOOL_FMA_TARGET void zxzxz_order10_fma(const KernelState<T>& s, const T* const* in, T* const* out) {
+  run_lanes<T, V, 0, 100>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_order10_bands<true, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <class T>
+SHTOOL_FMA_TARGET void zxzxz_order10_batch_fma(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 0, 100>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    zxzxz_order10_bands<true, T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <int Order, class T, int V>
+SHTOOL_FMA_TARGET void taylor_order1_fma(const KernelState<T>& s, const T* const* in, T* const* out) {
+  run_lanes<T, V, 0, 1>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_order1_bands<true, Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <int Order, class T>
+SHTOOL_FMA_TARGET void taylor_order1_batch_fma(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 0, 1>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_order1_bands<true, Order, T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <int Order, class T, int V>
+SHTOOL_FMA_TARGET void taylor_order2_fma(const KernelState<T>& s, const T* const* in, T* const* out) {
+  run_lanes<T, V, 0, 4>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_order2_bands<true, Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <int Order, class T>
+SHTOOL_FMA_TARGET void taylor_order2_batch_fma(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 0, 4>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_order2_bands<true, Order, T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <int Order, class T, int V>
+SHTOOL_FMA_TARGET void taylor_order3_fma(const KernelState<T>& s, const T* const* in, T* const* out) {
+  run_lanes<T, V, 0, 9>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_order3_bands<true, Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <int Order, class T>
+SHTOOL_FMA_TARGET void taylor_order3_batch_fma(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 0, 9>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_order3_bands<true, Order, T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <int Order, class T, int V>
+SHTOOL_FMA_TARGET void taylor_order4_fma(const KernelState<T>& s, const T* const* in, T* const* out) {
+  run_lanes<T, V, 0, 16>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_order4_bands<true, Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <int Order, class T>
+SHTOOL_FMA_TARGET void taylor_order4_batch_fma(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 0, 16>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_order4_bands<true, Order, T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <int Order, class T, int V>
+SHTOOL_FMA_TARGET void taylor_order5_fma(const KernelState<T>& s, const T* const* in, T* const* out) {
+  run_lanes<T, V, 0, 25>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_order5_bands<true, Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <int Order, class T>
+SHTOOL_FMA_TARGET void taylor_order5_batch_fma(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 0, 25>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_order5_bands<true, Order, T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <int Order, class T, int V>
+SHTOOL_FMA_TARGET void taylor_order6_fma(const KernelState<T>& s, const T* const* in, T* const* out) {
+  run_lanes<T, V, 0, 36>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_order6_bands<true, Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <int Order, class T>
+SHTOOL_FMA_TARGET void taylor_order6_batch_fma(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 0, 36>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_order6_bands<true, Order, T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <int Order, class T, int V>
+SHTOOL_FMA_TARGET void taylor_order7_fma(const KernelState<T>& s, const T* const* in, T* const* out) {
+  run_lanes<T, V, 0, 49>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_order7_bands<true, Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <int Order, class T>
+SHTOOL_FMA_TARGET void taylor_order7_batch_fma(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 0, 49>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_order7_bands<true, Order, T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <int Order, class T, int V>
+SHTOOL_FMA_TARGET void taylor_order8_fma(const KernelState<T>& s, const T* const* in, T* const* out) {
+  run_lanes<T, V, 0, 64>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_order8_bands<true, Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <int Order, class T>
+SHTOOL_FMA_TARGET void taylor_order8_batch_fma(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 0, 64>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_order8_bands<true, Order, T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <int Order, class T, int V>
+SHTOOL_FMA_TARGET void taylor_order9_fma(const KernelState<T>& s, const T* const* in, T* const* out) {
+  run_lanes<T, V, 0, 81>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_order9_bands<true, Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <int Order, class T>
+SHTOOL_FMA_TARGET void taylor_order9_batch_fma(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 0, 81>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_order9_bands<true, Order, T, BatchPack<T>>(s, x, y);
+  });
+}
+
+template <int Order, class T, int V>
+SHTOOL_FMA_TARGET void taylor_order10_fma(const KernelState<T>& s, const T* const* in, T* const* out) {
+  run_lanes<T, V, 0, 100>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_order10_bands<true, Order, T, std::remove_cvref_t<decltype(*y)>>(s, x, y);
+  });
+}
+
+template <int Order, class T>
+SHTOOL_FMA_TARGET void taylor_order10_batch_fma(const BatchState<T>& s, const T* const* in, T* const* out) {
+  run_batch_lanes<T, 0, 100>(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {
+    taylor_order10_bands<true, Order, T, BatchPack<T>>(s, x, y);
+  });
+}
+
+#endif  // SHTOOL_FMA_KERNELS
 
 }  // namespace
 
 template <class T, int V>
-RotationKernel<T, V> rotation_kernel(int method, int order) {
+RotationKernel<T, V> rotation_kernel(int method, int order, bool fused) {
   if (order < 1) return nullptr;
   if (order > kKernelMaxOrder) order = kKernelMaxOrder;
+#if SHTOOL_FMA_KERNELS
+  if (fused) {
+    switch (method) {
+      case 0:
+        switch (order) {
+          case 1: return &zxzxz_order1_fma<T, V>;
+          case 2: return &zxzxz_order2_fma<T, V>;
+          case 3: return &zxzxz_order3_fma<T, V>;
+          case 4: return &zxzxz_order4_fma<T, V>;
+          case 5: return &zxzxz_order5_fma<T, V>;
+          case 6: return &zxzxz_order6_fma<T, V>;
+          case 7: return &zxzxz_order7_fma<T, V>;
+          case 8: return &zxzxz_order8_fma<T, V>;
+          case 9: return &zxzxz_order9_fma<T, V>;
+          case 10: return &zxzxz_order10_fma<T, V>;
+        }
+        break;
+      case 1:
+        switch (order) {
+          case 1: return &taylor_order1_fma<1, T, V>;
+          case 2: return &taylor_order2_fma<1, T, V>;
+          case 3: return &taylor_order3_fma<1, T, V>;
+          case 4: return &taylor_order4_fma<1, T, V>;
+          case 5: return &taylor_order5_fma<1, T, V>;
+          case 6: return &taylor_order6_fma<1, T, V>;
+          case 7: return &taylor_order7_fma<1, T, V>;
+          case 8: return &taylor_order8_fma<1, T, V>;
+          case 9: return &taylor_order9_fma<1, T, V>;
+          case 10: return &taylor_order10_fma<1, T, V>;
+        }
+        break;
+      case 15:
+        switch (order) {
+          case 1: return &taylor_order1_fma<15, T, V>;
+          case 2: return &taylor_order2_fma<15, T, V>;
+          case 3: return &taylor_order3_fma<15, T, V>;
+          case 4: return &taylor_order4_fma<15, T, V>;
+          case 5: return &taylor_order5_fma<15, T, V>;
+          case 6: return &taylor_order6_fma<15, T, V>;
+          case 7: return &taylor_order7_fma<15, T, V>;
+          case 8: return &taylor_order8_fma<15, T, V>;
+          case 9: return &taylor_order9_fma<15, T, V>;
+          case 10: return &taylor_order10_fma<15, T, V>;
+        }
+        break;
+      case 2:
+        switch (order) {
+          case 1: return &taylor_order1_fma<2, T, V>;
+          case 2: return &taylor_order2_fma<2, T, V>;
+          case 3: return &taylor_order3_fma<2, T, V>;
+          case 4: return &taylor_order4_fma<2, T, V>;
+          case 5: return &taylor_order5_fma<2, T, V>;
+          case 6: return &taylor_order6_fma<2, T, V>;
+          case 7: return &taylor_order7_fma<2, T, V>;
+          case 8: return &taylor_order8_fma<2, T, V>;
+          case 9: return &taylor_order9_fma<2, T, V>;
+          case 10: return &taylor_order10_fma<2, T, V>;
+        }
+        break;
+    }
+    return nullptr;
+  }
+#else
+  (void)fused;
+#endif
   switch (method) {
     case 0:
       switch (order) {
@@ -5975,7 +6604,73 @@ RotationKernel<T, V> rotation_kernel(int method, int order) {
 }
 
 template <class T, int V>
-RotationKernel<T, V> band_kernel(int method, int l) {
+RotationKernel<T, V> band_kernel(int method, int l, bool fused) {
+#if SHTOOL_FMA_KERNELS
+  if (fused) {
+    switch (method) {
+      case 0:
+        if constexpr (std::is_same_v<T, double>) return nullptr;
+        switch (l) {
+          case 10: return &zxzxz_band10_entry_fma<T, V>;
+          case 11: return &zxzxz_band11_entry_fma<T, V>;
+          case 12: return &zxzxz_band12_entry_fma<T, V>;
+          case 13: return &zxzxz_band13_entry_fma<T, V>;
+          case 14: return &zxzxz_band14_entry_fma<T, V>;
+          case 15: return &zxzxz_band15_entry_fma<T, V>;
+          case 16: return &zxzxz_band16_entry_fma<T, V>;
+          case 17: return &zxzxz_band17_entry_fma<T, V>;
+          case 18: return &zxzxz_band18_entry_fma<T, V>;
+          case 19: return &zxzxz_band19_entry_fma<T, V>;
+        }
+        break;
+      case 1:
+        switch (l) {
+          case 10: return &taylor_band10_entry_fma<1, T, V>;
+          case 11: return &taylor_band11_entry_fma<1, T, V>;
+          case 12: return &taylor_band12_entry_fma<1, T, V>;
+          case 13: return &taylor_band13_entry_fma<1, T, V>;
+          case 14: return &taylor_band14_entry_fma<1, T, V>;
+          case 15: return &taylor_band15_entry_fma<1, T, V>;
+          case 16: return &taylor_band16_entry_fma<1, T, V>;
+          case 17: return &taylor_band17_entry_fma<1, T, V>;
+          case 18: return &taylor_band18_entry_fma<1, T, V>;
+          case 19: return &taylor_band19_entry_fma<1, T, V>;
+        }
+        break;
+      case 15:
+        switch (l) {
+          case 10: return &taylor_band10_entry_fma<15, T, V>;
+          case 11: return &taylor_band11_entry_fma<15, T, V>;
+          case 12: return &taylor_band12_entry_fma<15, T, V>;
+          case 13: return &taylor_band13_entry_fma<15, T, V>;
+          case 14: return &taylor_band14_entry_fma<15, T, V>;
+          case 15: return &taylor_band15_entry_fma<15, T, V>;
+          case 16: return &taylor_band16_entry_fma<15, T, V>;
+          case 17: return &taylor_band17_entry_fma<15, T, V>;
+          case 18: return &taylor_band18_entry_fma<15, T, V>;
+          case 19: return &taylor_band19_entry_fma<15, T, V>;
+        }
+        break;
+      case 2:
+        switch (l) {
+          case 10: return &taylor_band10_entry_fma<2, T, V>;
+          case 11: return &taylor_band11_entry_fma<2, T, V>;
+          case 12: return &taylor_band12_entry_fma<2, T, V>;
+          case 13: return &taylor_band13_entry_fma<2, T, V>;
+          case 14: return &taylor_band14_entry_fma<2, T, V>;
+          case 15: return &taylor_band15_entry_fma<2, T, V>;
+          case 16: return &taylor_band16_entry_fma<2, T, V>;
+          case 17: return &taylor_band17_entry_fma<2, T, V>;
+          case 18: return &taylor_band18_entry_fma<2, T, V>;
+          case 19: return &taylor_band19_entry_fma<2, T, V>;
+        }
+        break;
+    }
+    return nullptr;
+  }
+#else
+  (void)fused;
+#endif
   switch (method) {
     case 0:
       if constexpr (std::is_same_v<T, double>) return nullptr;
@@ -6039,7 +6734,72 @@ RotationKernel<T, V> band_kernel(int method, int l) {
 }
 
 template <class T>
-BatchKernel<T> batch_kernel(int method, int order) {
+BatchKernel<T> batch_kernel(int method, int order, bool fused) {
+#if SHTOOL_FMA_KERNELS
+  if (fused) {
+    switch (method) {
+      case 0:
+        switch (order) {
+          case 1: return &zxzxz_order1_batch_fma<T>;
+          case 2: return &zxzxz_order2_batch_fma<T>;
+          case 3: return &zxzxz_order3_batch_fma<T>;
+          case 4: return &zxzxz_order4_batch_fma<T>;
+          case 5: return &zxzxz_order5_batch_fma<T>;
+          case 6: return &zxzxz_order6_batch_fma<T>;
+          case 7: return &zxzxz_order7_batch_fma<T>;
+          case 8: return &zxzxz_order8_batch_fma<T>;
+          case 9: return &zxzxz_order9_batch_fma<T>;
+          case 10: return &zxzxz_order10_batch_fma<T>;
+        }
+        break;
+      case 1:
+        switch (order) {
+          case 1: return &taylor_order1_batch_fma<1, T>;
+          case 2: return &taylor_order2_batch_fma<1, T>;
+          case 3: return &taylor_order3_batch_fma<1, T>;
+          case 4: return &taylor_order4_batch_fma<1, T>;
+          case 5: return &taylor_order5_batch_fma<1, T>;
+          case 6: return &taylor_order6_batch_fma<1, T>;
+          case 7: return &taylor_order7_batch_fma<1, T>;
+          case 8: return &taylor_order8_batch_fma<1, T>;
+          case 9: return &taylor_order9_batch_fma<1, T>;
+          case 10: return &taylor_order10_batch_fma<1, T>;
+        }
+        break;
+      case 15:
+        switch (order) {
+          case 1: return &taylor_order1_batch_fma<15, T>;
+          case 2: return &taylor_order2_batch_fma<15, T>;
+          case 3: return &taylor_order3_batch_fma<15, T>;
+          case 4: return &taylor_order4_batch_fma<15, T>;
+          case 5: return &taylor_order5_batch_fma<15, T>;
+          case 6: return &taylor_order6_batch_fma<15, T>;
+          case 7: return &taylor_order7_batch_fma<15, T>;
+          case 8: return &taylor_order8_batch_fma<15, T>;
+          case 9: return &taylor_order9_batch_fma<15, T>;
+          case 10: return &taylor_order10_batch_fma<15, T>;
+        }
+        break;
+      case 2:
+        switch (order) {
+          case 1: return &taylor_order1_batch_fma<2, T>;
+          case 2: return &taylor_order2_batch_fma<2, T>;
+          case 3: return &taylor_order3_batch_fma<2, T>;
+          case 4: return &taylor_order4_batch_fma<2, T>;
+          case 5: return &taylor_order5_batch_fma<2, T>;
+          case 6: return &taylor_order6_batch_fma<2, T>;
+          case 7: return &taylor_order7_batch_fma<2, T>;
+          case 8: return &taylor_order8_batch_fma<2, T>;
+          case 9: return &taylor_order9_batch_fma<2, T>;
+          case 10: return &taylor_order10_batch_fma<2, T>;
+        }
+        break;
+    }
+    return nullptr;
+  }
+#else
+  (void)fused;
+#endif
   switch (method) {
     case 0:
       switch (order) {
@@ -6102,7 +6862,73 @@ BatchKernel<T> batch_kernel(int method, int order) {
 }
 
 template <class T>
-BatchKernel<T> batch_band_kernel(int method, int l) {
+BatchKernel<T> batch_band_kernel(int method, int l, bool fused) {
+#if SHTOOL_FMA_KERNELS
+  if (fused) {
+    switch (method) {
+      case 0:
+        if constexpr (std::is_same_v<T, double>) return nullptr;
+        switch (l) {
+          case 10: return &zxzxz_band10_batch_fma<T>;
+          case 11: return &zxzxz_band11_batch_fma<T>;
+          case 12: return &zxzxz_band12_batch_fma<T>;
+          case 13: return &zxzxz_band13_batch_fma<T>;
+          case 14: return &zxzxz_band14_batch_fma<T>;
+          case 15: return &zxzxz_band15_batch_fma<T>;
+          case 16: return &zxzxz_band16_batch_fma<T>;
+          case 17: return &zxzxz_band17_batch_fma<T>;
+          case 18: return &zxzxz_band18_batch_fma<T>;
+          case 19: return &zxzxz_band19_batch_fma<T>;
+        }
+        break;
+      case 1:
+        switch (l) {
+          case 10: return &taylor_band10_batch_fma<1, T>;
+          case 11: return &taylor_band11_batch_fma<1, T>;
+          case 12: return &taylor_band12_batch_fma<1, T>;
+          case 13: return &taylor_band13_batch_fma<1, T>;
+          case 14: return &taylor_band14_batch_fma<1, T>;
+          case 15: return &taylor_band15_batch_fma<1, T>;
+          case 16: return &taylor_band16_batch_fma<1, T>;
+          case 17: return &taylor_band17_batch_fma<1, T>;
+          case 18: return &taylor_band18_batch_fma<1, T>;
+          case 19: return &taylor_band19_batch_fma<1, T>;
+        }
+        break;
+      case 15:
+        switch (l) {
+          case 10: return &taylor_band10_batch_fma<15, T>;
+          case 11: return &taylor_band11_batch_fma<15, T>;
+          case 12: return &taylor_band12_batch_fma<15, T>;
+          case 13: return &taylor_band13_batch_fma<15, T>;
+          case 14: return &taylor_band14_batch_fma<15, T>;
+          case 15: return &taylor_band15_batch_fma<15, T>;
+          case 16: return &taylor_band16_batch_fma<15, T>;
+          case 17: return &taylor_band17_batch_fma<15, T>;
+          case 18: return &taylor_band18_batch_fma<15, T>;
+          case 19: return &taylor_band19_batch_fma<15, T>;
+        }
+        break;
+      case 2:
+        switch (l) {
+          case 10: return &taylor_band10_batch_fma<2, T>;
+          case 11: return &taylor_band11_batch_fma<2, T>;
+          case 12: return &taylor_band12_batch_fma<2, T>;
+          case 13: return &taylor_band13_batch_fma<2, T>;
+          case 14: return &taylor_band14_batch_fma<2, T>;
+          case 15: return &taylor_band15_batch_fma<2, T>;
+          case 16: return &taylor_band16_batch_fma<2, T>;
+          case 17: return &taylor_band17_batch_fma<2, T>;
+          case 18: return &taylor_band18_batch_fma<2, T>;
+          case 19: return &taylor_band19_batch_fma<2, T>;
+        }
+        break;
+    }
+    return nullptr;
+  }
+#else
+  (void)fused;
+#endif
   switch (method) {
     case 0:
       if constexpr (std::is_same_v<T, double>) return nullptr;
@@ -6165,17 +6991,17 @@ BatchKernel<T> batch_band_kernel(int method, int l) {
   return nullptr;
 }
 
-template BatchKernel<float> batch_kernel<float>(int, int);
-template BatchKernel<float> batch_band_kernel<float>(int, int);
-template BatchKernel<double> batch_kernel<double>(int, int);
-template BatchKernel<double> batch_band_kernel<double>(int, int);
-template RotationKernel<float, 1> rotation_kernel<float, 1>(int, int);
-template RotationKernel<float, 1> band_kernel<float, 1>(int, int);
-template RotationKernel<float, 3> rotation_kernel<float, 3>(int, int);
-template RotationKernel<float, 3> band_kernel<float, 3>(int, int);
-template RotationKernel<double, 1> rotation_kernel<double, 1>(int, int);
-template RotationKernel<double, 1> band_kernel<double, 1>(int, int);
-template RotationKernel<double, 3> rotation_kernel<double, 3>(int, int);
-template RotationKernel<double, 3> band_kernel<double, 3>(int, int);
+template BatchKernel<float> batch_kernel<float>(int, int, bool);
+template BatchKernel<float> batch_band_kernel<float>(int, int, bool);
+template BatchKernel<double> batch_kernel<double>(int, int, bool);
+template BatchKernel<double> batch_band_kernel<double>(int, int, bool);
+template RotationKernel<float, 1> rotation_kernel<float, 1>(int, int, bool);
+template RotationKernel<float, 1> band_kernel<float, 1>(int, int, bool);
+template RotationKernel<float, 3> rotation_kernel<float, 3>(int, int, bool);
+template RotationKernel<float, 3> band_kernel<float, 3>(int, int, bool);
+template RotationKernel<double, 1> rotation_kernel<double, 1>(int, int, bool);
+template RotationKernel<double, 1> band_kernel<double, 1>(int, int, bool);
+template RotationKernel<double, 3> rotation_kernel<double, 3>(int, int, bool);
+template RotationKernel<double, 3> band_kernel<double, 3>(int, int, bool);
 
 }  // namespace shtool::detail

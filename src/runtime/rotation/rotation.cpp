@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <cstdint>
+#include <limits>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -34,6 +36,26 @@ constexpr int kPairFrom = 10;
 constexpr int pair_count(int l) { return (l / 2 + 2) & ~1; }
 
 }  // namespace
+
+namespace detail {
+
+bool fma_kernels_supported() {
+#if SHTOOL_FMA_KERNELS
+  static const bool supported = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  return supported;
+#else
+  return false;
+#endif
+}
+
+namespace {
+bool fma_kernels_allowed = true;
+}  // namespace
+
+bool fma_kernels_enabled() { return fma_kernels_allowed && fma_kernels_supported(); }
+void use_fma_kernels(bool on) { fma_kernels_allowed = on; }
+
+}  // namespace detail
 
 std::string_view rotation_method_name(RotationMethod method) {
   switch (method) {
@@ -75,7 +97,7 @@ double taylor_error_bound(RotationMethod method, int order, double beta, double 
 
 template <class T>
 ShRotation<T>::ShRotation(int order, std::shared_ptr<const RotationHelpers> helpers)
-    : order_(order), helpers_(std::move(helpers)) {
+    : order_(order), helpers_(std::move(helpers)), fused_(detail::fma_kernels_enabled()) {
   const int n = sh_count(order);
   if (helpers_ && helpers_->order >= order) {
     const RotationHelpers& h = *helpers_;
@@ -140,17 +162,17 @@ ShRotation<T>::ShRotation(int order, std::shared_ptr<const RotationHelpers> help
   dense_.assign(block_offset(order), T(0));
   if (helpers_) {
     for (int k = 0; k < 4; ++k) {
-      kernel1_[k] = detail::rotation_kernel<T, 1>(kKernelMethod[k], order);
-      kernel3_[k] = detail::rotation_kernel<T, 3>(kKernelMethod[k], order);
+      kernel1_[k] = detail::rotation_kernel<T, 1>(kKernelMethod[k], order, fused_);
+      kernel3_[k] = detail::rotation_kernel<T, 3>(kKernelMethod[k], order, fused_);
       if (!kernel1_[k] || !kernel3_[k]) detail::invariant_failed("no rotation kernel for this order");
     }
     kernel_order_ = std::min(order, detail::kKernelMaxOrder);
     if (order <= detail::kBandKernelMaxBand + 1) {
       for (int k = 0; k < 4; ++k) {
         std::vector<BatchKernel>& v = batch_kernels_[k];
-        v.push_back(detail::batch_kernel<T>(kKernelMethod[k], kernel_order_));
+        v.push_back(detail::batch_kernel<T>(kKernelMethod[k], kernel_order_, fused_));
         for (int l = detail::kKernelMaxOrder; l < order; ++l)
-          v.push_back(detail::batch_band_kernel<T>(kKernelMethod[k], l));
+          v.push_back(detail::batch_band_kernel<T>(kKernelMethod[k], l, fused_));
         if (std::find(v.begin(), v.end(), nullptr) != v.end()) v.clear();
       }
     }
@@ -158,8 +180,8 @@ ShRotation<T>::ShRotation(int order, std::shared_ptr<const RotationHelpers> help
     if constexpr (std::is_same_v<T, double>) {
       if (order > detail::kKernelMaxOrder) {
         pair_from_ = kPairFrom;
-        kernel1_[0] = detail::rotation_kernel<T, 1>(0, pair_from_);
-        kernel3_[0] = detail::rotation_kernel<T, 3>(0, pair_from_);
+        kernel1_[0] = detail::rotation_kernel<T, 1>(0, pair_from_, fused_);
+        kernel3_[0] = detail::rotation_kernel<T, 3>(0, pair_from_, fused_);
         build_pairs();
       }
     }
@@ -324,18 +346,21 @@ inline ZyzLanes<detail::BatchPack<T>> zyz_cos_sin_lanes(const detail::BatchPack<
   const P zero = P{}, one = P{} + 1;
   ZyzLanes<P> e;
   e.cb = at(2, 2);
-  e.sb = sqrt_lanes<T>(at(0, 2) * at(0, 2) + at(1, 2) * at(1, 2));
-  const auto tilted = e.sb > zero;
-  e.ca = tilted ? at(0, 2) / e.sb : one;
-  e.sa = tilted ? at(1, 2) / e.sb : zero;
-  const auto near = e.cb >= zero;  // b <= pi / 2: from a + g, else from a - g
-  P u = near ? at(0, 0) + at(1, 1) : at(1, 1) - at(0, 0);
-  P v = near ? at(1, 0) - at(0, 1) : -(at(1, 0) + at(0, 1));
-  const P norm = sqrt_lanes<T>(u * u + v * v);
-  u /= norm;
-  v /= norm;
-  e.cg = u * e.ca + v * e.sa;  // both scalar branches (products commute exactly)
-  e.sg = near ? v * e.ca - u * e.sa : e.sa * u - e.ca * v;
+  const P sb2 = at(0, 2) * at(0, 2) + at(1, 2) * at(1, 2);
+  e.sb = sqrt_lanes<T>(sb2);
+  // copysign(1, cb) lane by lane, as the scalar split takes it.
+  using Bits = std::conditional_t<sizeof(T) == 4, std::int32_t, std::int64_t>;
+  typedef Bits BitsPack __attribute__((vector_size(16)));
+  const BitsPack sign = reinterpret_cast<BitsPack>(e.cb) & (BitsPack{} + std::numeric_limits<Bits>::min());
+  const P s = reinterpret_cast<P>(reinterpret_cast<BitsPack>(one) | sign);
+  const P u = at(1, 1) + s * at(0, 0), v = s * at(1, 0) - at(0, 1);
+  const P norm = one + s * e.cb;
+  const auto tilted = sb2 >= P{} + std::numeric_limits<T>::min();
+  const P inv_sb = one / e.sb, inv_g = one / (e.sb * norm), inv_lock = one / norm;
+  e.ca = tilted ? at(0, 2) * inv_sb : one;
+  e.sa = tilted ? at(1, 2) * inv_sb : zero;
+  e.cg = tilted ? (u * at(0, 2) + v * at(1, 2)) * inv_g : u * inv_lock;
+  e.sg = s * (tilted ? (v * at(0, 2) - u * at(1, 2)) * inv_g : v * inv_lock);
   return e;
 }
 
@@ -348,7 +373,11 @@ RotationMethod ShRotation<T>::choose_method(const Mat3<T>& r, RotationMethod met
   if (tolerance != cached_tolerance_) update_taylor_limits(tolerance);
   // sin^2 b = R02^2 + R12^2, cos b = R22: no square root needed for the choice.
   const double sb2 = static_cast<double>(r(0, 2) * r(0, 2) + r(1, 2) * r(1, 2));
-  if (r(2, 2) > 0) {
+  // One test first, without short-circuit: for generic rotations it is always false, so
+  // predicted, where the sign of R22 alone is a coin toss.
+  const double widest = std::max(std::max(taylor_limit_sin2_[0], taylor_limit_sin2_[1]), taylor_limit_sin2_[2]);
+  const bool taylor_tilt_possible = (r(2, 2) > 0) & (sb2 <= widest);
+  if (taylor_tilt_possible) {
     const RotationMethod taylor[3] = {RotationMethod::taylor1, RotationMethod::taylor15,
                                       RotationMethod::taylor2};
     for (int k = 0; k < 3; ++k)
@@ -572,7 +601,7 @@ void ShRotation<T>::apply_large_bands(const T* const* in, T* const* out) const {
   }
   for (int l = kernel_order_; l < order_; ++l) {
     // Generated kernel of this band, when there is one.
-    if (const auto kernel = detail::band_kernel<T, V>(kKernelMethod[k], l)) {
+    if (const auto kernel = detail::band_kernel<T, V>(kKernelMethod[k], l, fused_)) {
       kernel(state, in, out);
       continue;
     }
