@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <numbers>
+#include <optional>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -16,6 +17,8 @@
 #include "common/parallel_for.h"
 #include "common/stopwatch.h"
 #include "common/table_writer.h"
+#include "fit/embree_scene.h"
+#include "fit/shard.h"
 #include "fit/zh_fit.h"
 #include "fit/zh_fit_table.h"
 #include "shtool/sh.h"
@@ -82,6 +85,19 @@ void check_request(const FitZhRequest& r) {
   if (!r.transfer.empty() && !r.ply.empty()) throw InputError("--ply needs a mesh (not --transfer)");
   if (!r.transfer.empty() && !r.save_transfer.empty())
     throw InputError("--save-transfer needs a mesh (not --transfer)");
+  if (!r.shard.empty()) {
+    if (r.mode == TransferMode::interreflected && !r.mesh.empty())
+      throw InputError("--shard cannot split an interreflected bake: each bounce needs the previous bounce of "
+                       "every vertex; run it in one process");
+    // A shard writes one table; the other outputs describe the whole mesh and come from
+    // the merged run.
+    const std::pair<const std::filesystem::path*, const char*> whole_mesh_outputs[] = {
+        {&r.json, "--json"}, {&r.ply, "--ply"}, {&r.save_transfer, "--save-transfer"}};
+    for (const auto& [path, what] : whole_mesh_outputs)
+      if (!path->empty())
+        throw InputError(std::string(what) + " is not written with --shard: a shard writes its partial table only "
+                         "(shtool merge joins them)");
+  }
 }
 
 }  // namespace
@@ -156,12 +172,17 @@ const std::vector<std::pair<std::string, NormalSource>>& normal_source_names() {
 
 FitZhReport run_fit_zh(const FitZhRequest& r, const FitZhCallbacks& cb) {
   check_request(r);
+  std::optional<Shard> shard;
+  if (!r.shard.empty()) shard = parse_shard(r.shard);
   const int threads = resolve_threads(r.threads);
   const std::filesystem::path input_path = r.mesh.empty() ? r.transfer : r.mesh;
   const bool json_table = r.encoding == TableEncoding::json;
+  const std::string part =
+      shard ? ".part-" + std::to_string(shard->index) + "-of-" + std::to_string(shard->count) : std::string();
   const std::filesystem::path out =
       !r.out.empty() ? r.out
-                     : std::filesystem::path(input_path.stem().string() + (json_table ? ".zh.json" : ".zh.shtb"));
+                     : std::filesystem::path(input_path.stem().string() + ".zh" + part +
+                                             (json_table ? ".json" : ".shtb"));
   // Fail before a long bake, not after it: every output writable, none the input, no two
   // the same file.
   const std::pair<const std::filesystem::path*, const char*> outputs_named[] = {
@@ -185,6 +206,16 @@ FitZhReport run_fit_zh(const FitZhRequest& r, const FitZhCallbacks& cb) {
 
   // ---- transfer vectors
   int order = r.order;
+  std::size_t total = 0;  // vertices or vectors of the whole input
+  VertexRange range;      // the rows this run fits
+  // A shard past the input's last vertex would write an empty table merge cannot check.
+  auto shard_range_of = [&](const Shard& s, std::size_t count) {
+    if (s.count > count)
+      throw InputError("--shard " + r.shard + ": " + std::to_string(s.count) + " shards of " + std::to_string(count) +
+                       (r.mesh.empty() ? " vectors" : " vertices") + " would leave some empty (N must be at most " +
+                       std::to_string(count) + ")");
+    return shard_range(count, s);
+  };
   std::vector<double> transfer;
   Mesh mesh;
   nlohmann::json params;
@@ -198,6 +229,11 @@ FitZhReport run_fit_zh(const FitZhRequest& r, const FitZhCallbacks& cb) {
                        "' has order " + std::to_string(file_order));
     order = file_order;
     params = {{"transfer", r.transfer.filename().string()}, {"input_crc32", input_crc32(text)}};
+    const std::size_t n2 = sh_count(order);
+    total = transfer.size() / n2;
+    range = shard ? shard_range_of(*shard, total) : VertexRange{0, total};
+    transfer.erase(transfer.begin() + range.end * n2, transfer.end());
+    transfer.erase(transfer.begin(), transfer.begin() + range.begin * n2);
   } else {
     mesh = load_mesh(r.mesh, r.normals);
     if (cb.warning) {
@@ -216,11 +252,16 @@ FitZhReport run_fit_zh(const FitZhRequest& r, const FitZhCallbacks& cb) {
     to.albedo = r.albedo;
     to.threads = threads;
     to.progress = cb.simulate_progress;
+    total = mesh.positions.size();
+    range = shard ? shard_range_of(*shard, total) : VertexRange{0, total};
+    to.first_vertex = range.begin;
+    to.end_vertex = range.end;
     const auto t0 = std::chrono::steady_clock::now();
     transfer = compute_transfer(mesh, to);
     report.simulate_seconds = seconds_since(t0);
     params = {{"mesh", r.mesh.filename().string()},
               {"input_crc32", mesh.input_crc32},
+              {"mesh_crc32", loaded_mesh_crc32(mesh)},
               {"mode", name_of(r.mode, transfer_mode_names())},
               {"rays", r.rays},
               {"normals", name_of(r.normals, normal_source_names())}};
@@ -246,7 +287,7 @@ FitZhReport run_fit_zh(const FitZhRequest& r, const FitZhCallbacks& cb) {
   fo.restart_above = r.restart_above;
   fo.seed = r.seed;
   const auto t1 = std::chrono::steady_clock::now();
-  const std::vector<ZhFit> fits = fit_zh_all(transfer, fo, threads, cb.fit_progress);
+  const std::vector<ZhFit> fits = fit_zh_all(transfer, fo, threads, cb.fit_progress, range.begin);
   report.fit_seconds = seconds_since(t1);
 
   params["order"] = order;
@@ -258,8 +299,25 @@ FitZhReport run_fit_zh(const FitZhRequest& r, const FitZhCallbacks& cb) {
 
   // [4] Fig. 3: RMS error normalised by the total L2 length over all vertices.
   report.normalized_rms = normalized_rms(fits);
-  const Table table =
-      zh_fit_table(fits, order, r.lobes, mesh.source_index, meta, generator_record("shtool fit-zh", params));
+  nlohmann::json generator = generator_record("shtool fit-zh", params);
+  if (report.from_mesh && r.mode != TransferMode::unshadowed) {
+    const EmbreeIdentity embree = embree_identity();
+    generator["embree"] = {{"version", embree.version}, {"isa", embree.isa}};
+  }
+  std::vector<std::uint32_t> vertex_index;
+  if (!mesh.source_index.empty())
+    vertex_index.assign(mesh.source_index.begin() + range.begin, mesh.source_index.begin() + range.end);
+  if (shard) {
+    meta["shard"] = {{"index", shard->index}, {"count", shard->count}, {"first_vertex", range.begin},
+                     {"end_vertex", range.end}, {"vertices", total}};
+    report.sharded = true;
+    report.shard_index = shard->index;
+    report.shard_count = shard->count;
+    report.first_vertex = range.begin;
+    report.end_vertex = range.end;
+    report.total = total;
+  }
+  const Table table = zh_fit_table(fits, order, r.lobes, vertex_index, meta, generator);
 
   // ---- outputs: everything is computed, then written as one set.
   std::vector<std::string> bytes;
