@@ -18,6 +18,7 @@
 #include "common/stopwatch.h"
 #include "common/table_writer.h"
 #include "fit/embree_scene.h"
+#include "fit/mpi_job.h"
 #include "fit/shard.h"
 #include "fit/zh_fit.h"
 #include "fit/zh_fit_table.h"
@@ -85,6 +86,15 @@ void check_request(const FitZhRequest& r) {
   if (!r.transfer.empty() && !r.ply.empty()) throw InputError("--ply needs a mesh (not --transfer)");
   if (!r.transfer.empty() && !r.save_transfer.empty())
     throw InputError("--save-transfer needs a mesh (not --transfer)");
+  if (r.mpi) {
+    if (!r.shard.empty()) throw InputError("--mpi and --shard both split the vertices: give one of them");
+    if (r.mode == TransferMode::interreflected && !r.mesh.empty())
+      throw InputError("--mpi cannot run an interreflected bake: each bounce needs the previous bounce of every "
+                       "vertex; run it in one process");
+    if (!r.ply.empty() || !r.save_transfer.empty())
+      throw InputError(std::string(r.ply.empty() ? "--save-transfer" : "--ply") +
+                       " is not written with --mpi: rank 0 gathers the fits, not the transfer vectors");
+  }
   if (!r.shard.empty()) {
     if (r.mode == TransferMode::interreflected && !r.mesh.empty())
       throw InputError("--shard cannot split an interreflected bake: each bounce needs the previous bounce of "
@@ -170,10 +180,41 @@ const std::vector<std::pair<std::string, NormalSource>>& normal_source_names() {
   return names;
 }
 
-FitZhReport run_fit_zh(const FitZhRequest& r, const FitZhCallbacks& cb) {
+namespace {
+
+// One fit row as doubles for the MPI gather: axes, coefficients, residual, norm, direct.
+void append_row(const ZhFit& f, std::vector<double>& out) {
+  for (const ZhLobe& lobe : f.lobes) {
+    out.insert(out.end(), {lobe.axis.x(), lobe.axis.y(), lobe.axis.z()});
+    out.insert(out.end(), lobe.coeffs.begin(), lobe.coeffs.end());
+  }
+  out.push_back(f.residual);
+  out.push_back(f.norm);
+  out.insert(out.end(), f.direct.begin(), f.direct.end());
+}
+
+ZhFit read_row(const double*& p, int order, int lobes, std::size_t direct) {
+  ZhFit f;
+  f.lobes.resize(lobes);
+  for (ZhLobe& lobe : f.lobes) {
+    lobe.axis = Eigen::Vector3d(p[0], p[1], p[2]);
+    lobe.coeffs.assign(p + 3, p + 3 + order);
+    p += 3 + order;
+  }
+  f.residual = *p++;
+  f.norm = *p++;
+  f.direct.assign(p, p + direct);
+  p += direct;
+  return f;
+}
+
+FitZhReport run_fit_zh_on(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJob* mpi) {
   check_request(r);
-  std::optional<Shard> shard;
+  std::optional<Shard> shard;  // --shard: a partial table
   if (!r.shard.empty()) shard = parse_shard(r.shard);
+  // The rows this process fits: its shard, or its rank's share of an MPI job.
+  std::optional<Shard> rows_of = shard;
+  if (mpi) rows_of = Shard{static_cast<std::size_t>(mpi->rank()), static_cast<std::size_t>(mpi->size())};
   const int threads = resolve_threads(r.threads);
   const std::filesystem::path input_path = r.mesh.empty() ? r.transfer : r.mesh;
   const bool json_table = r.encoding == TableEncoding::json;
@@ -210,10 +251,13 @@ FitZhReport run_fit_zh(const FitZhRequest& r, const FitZhCallbacks& cb) {
   VertexRange range;      // the rows this run fits
   // A shard past the input's last vertex would write an empty table merge cannot check.
   auto shard_range_of = [&](const Shard& s, std::size_t count) {
+    const std::string items = std::to_string(count) + (r.mesh.empty() ? " vectors" : " vertices");
+    if (s.count > count && mpi)
+      throw InputError("--mpi: " + std::to_string(s.count) + " ranks for " + items +
+                       " would leave some without work (run at most " + std::to_string(count) + " ranks)");
     if (s.count > count)
-      throw InputError("--shard " + r.shard + ": " + std::to_string(s.count) + " shards of " + std::to_string(count) +
-                       (r.mesh.empty() ? " vectors" : " vertices") + " would leave some empty (N must be at most " +
-                       std::to_string(count) + ")");
+      throw InputError("--shard " + r.shard + ": " + std::to_string(s.count) + " shards of " + items +
+                       " would leave some empty (N must be at most " + std::to_string(count) + ")");
     return shard_range(count, s);
   };
   std::vector<double> transfer;
@@ -231,7 +275,7 @@ FitZhReport run_fit_zh(const FitZhRequest& r, const FitZhCallbacks& cb) {
     params = {{"transfer", r.transfer.filename().string()}, {"input_crc32", input_crc32(text)}};
     const std::size_t n2 = sh_count(order);
     total = transfer.size() / n2;
-    range = shard ? shard_range_of(*shard, total) : VertexRange{0, total};
+    range = rows_of ? shard_range_of(*rows_of, total) : VertexRange{0, total};
     transfer.erase(transfer.begin() + range.end * n2, transfer.end());
     transfer.erase(transfer.begin(), transfer.begin() + range.begin * n2);
   } else {
@@ -253,7 +297,7 @@ FitZhReport run_fit_zh(const FitZhRequest& r, const FitZhCallbacks& cb) {
     to.threads = threads;
     to.progress = cb.simulate_progress;
     total = mesh.positions.size();
-    range = shard ? shard_range_of(*shard, total) : VertexRange{0, total};
+    range = rows_of ? shard_range_of(*rows_of, total) : VertexRange{0, total};
     to.first_vertex = range.begin;
     to.end_vertex = range.end;
     const auto t0 = std::chrono::steady_clock::now();
@@ -287,7 +331,7 @@ FitZhReport run_fit_zh(const FitZhRequest& r, const FitZhCallbacks& cb) {
   fo.restart_above = r.restart_above;
   fo.seed = r.seed;
   const auto t1 = std::chrono::steady_clock::now();
-  const std::vector<ZhFit> fits = fit_zh_all(transfer, fo, threads, cb.fit_progress, range.begin);
+  std::vector<ZhFit> fits = fit_zh_all(transfer, fo, threads, cb.fit_progress, range.begin);
   report.fit_seconds = seconds_since(t1);
 
   params["order"] = order;
@@ -303,6 +347,32 @@ FitZhReport run_fit_zh(const FitZhRequest& r, const FitZhCallbacks& cb) {
   if (report.from_mesh && r.mode != TransferMode::unshadowed) {
     const EmbreeIdentity embree = embree_identity();
     generator["embree"] = {{"version", embree.version}, {"isa", embree.isa}};
+  }
+  if (mpi) {
+    if (!mpi->all_ok(true)) throw InputError("rank " + std::to_string(mpi->rank()) + ": stopped, another rank failed");
+    std::vector<double> rows;
+    for (const ZhFit& f : fits) append_row(f, rows);
+    const std::string record = generator.dump();
+    const std::vector<std::uint32_t> records = mpi->gather(input_crc32(record));
+    const std::vector<double> all = mpi->gather(rows);
+    report.mpi_rank = mpi->rank();
+    report.mpi_ranks = mpi->size();
+    if (mpi->rank() != 0) return report;
+    // Ranks on other machines could run another Embree or ISA, or read another file at
+    // the same path: their rows would not be the one-process bytes.
+    for (std::size_t k = 1; k < records.size(); ++k)
+      if (records[k] != records[0])
+        throw InputError("--mpi: rank " + std::to_string(k) +
+                         " made a different generator record than rank 0 (another input file, shtool or Embree "
+                         "version, or ISA): nothing written");
+    const std::size_t direct = fits.empty() ? 0 : fits[0].direct.size();
+    fits.clear();
+    fits.reserve(total);
+    const double* p = all.data();
+    for (std::size_t v = 0; v < total; ++v) fits.push_back(read_row(p, order, r.lobes, direct));
+    range = {0, total};
+    report.count = total;
+    report.normalized_rms = normalized_rms(fits);
   }
   std::vector<std::uint32_t> vertex_index;
   if (!mesh.source_index.empty())
@@ -333,6 +403,20 @@ FitZhReport run_fit_zh(const FitZhRequest& r, const FitZhCallbacks& cb) {
   if (!r.save_transfer.empty()) add(r.save_transfer, transfer_json(transfer, order));
   write_files_atomically(outputs);
   return report;
+}
+
+}  // namespace
+
+FitZhReport run_fit_zh(const FitZhRequest& r, const FitZhCallbacks& cb) {
+  if (!r.mpi) return run_fit_zh_on(r, cb, nullptr);
+  MpiJob mpi;
+  try {
+    return run_fit_zh_on(r, cb, &mpi);
+  } catch (...) {
+    // The other ranks are waiting for this one's verdict before they gather.
+    if (!mpi.synchronised()) mpi.all_ok(false);
+    throw;
+  }
 }
 
 }  // namespace shtool::fit
