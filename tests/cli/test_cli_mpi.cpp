@@ -1,5 +1,6 @@
 // `shtool fit-zh --mpi`. Built with MPI: 2 and 3 ranks under mpiexec (oversubscribed on
-// a small machine) write the bytes one process writes, and a refusal reaches every rank.
+// a small machine) write the bytes one process writes, a refusal reaches every rank, and
+// rank 0 refuses a rank that read another input.
 // Built without MPI: --mpi is a clear error. A missing mpiexec fails the test.
 #include <cstdlib>
 #include <filesystem>
@@ -89,6 +90,30 @@ TEST(CliFitZhMpi, ARefusalStopsEveryRank) {
   const CommandResult tiny = mpirun(2, {kExe, "fit-zh", "--transfer", one.string(), "--mpi", "--out", out.string()});
   EXPECT_NE(tiny.exit_code, 0);
   EXPECT_NE(tiny.err.find("2 ranks for 1 vectors would leave some without work"), std::string::npos) << tiny.err;
+  EXPECT_FALSE(fs::exists(out));
+}
+
+TEST(CliFitZhMpi, RankZeroRefusesRowsOfAnotherInput) {
+  // Two programs in one job (MPMD): rank 1 reads a mesh whose first vertex moved.
+  std::ifstream in(kSpot, std::ios::binary);
+  std::string text((std::istreambuf_iterator<char>(in)), {});
+  text.replace(text.find("0.348799"), 8, "0.348800");  // spot's first vertex
+  const fs::path moved = scratch("moved.obj"), out = scratch("mixed.shtb");
+  std::ofstream(moved) << text;
+  std::vector<std::string> args = fit_args(kSpot, {"--mpi", "--out", out.string()});
+  args.insert(args.begin(), {"-np", "1"});
+  args.push_back(":");
+  args.insert(args.end(), {"-np", "1"});
+  const std::vector<std::string> other = fit_args(moved.string(), {"--mpi", "--out", out.string()});
+  args.insert(args.end(), other.begin(), other.end());
+  setenv("OMPI_ALLOW_RUN_AS_ROOT", "1", 1);
+  setenv("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1", 1);
+  args.insert(args.begin(), {SHTOOL_MPIEXEC, "--oversubscribe"});
+  const CommandResult r = run(args);
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("'rank 1' and 'rank 0' are not parts of the same bake: generator.parameters.input_crc32"),
+            std::string::npos)
+      << r.err;
   EXPECT_FALSE(fs::exists(out));
 }
 

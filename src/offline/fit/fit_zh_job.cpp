@@ -5,6 +5,7 @@
 #include <cmath>
 #include <numbers>
 #include <optional>
+#include <span>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -21,6 +22,7 @@
 #include "fit/mpi_job.h"
 #include "fit/shard.h"
 #include "fit/zh_fit.h"
+#include "fit/zh_fit_merge.h"
 #include "fit/zh_fit_table.h"
 #include "shtool/sh.h"
 
@@ -182,32 +184,6 @@ const std::vector<std::pair<std::string, NormalSource>>& normal_source_names() {
 
 namespace {
 
-// One fit row as doubles for the MPI gather: axes, coefficients, residual, norm, direct.
-void append_row(const ZhFit& f, std::vector<double>& out) {
-  for (const ZhLobe& lobe : f.lobes) {
-    out.insert(out.end(), {lobe.axis.x(), lobe.axis.y(), lobe.axis.z()});
-    out.insert(out.end(), lobe.coeffs.begin(), lobe.coeffs.end());
-  }
-  out.push_back(f.residual);
-  out.push_back(f.norm);
-  out.insert(out.end(), f.direct.begin(), f.direct.end());
-}
-
-ZhFit read_row(const double*& p, int order, int lobes, std::size_t direct) {
-  ZhFit f;
-  f.lobes.resize(lobes);
-  for (ZhLobe& lobe : f.lobes) {
-    lobe.axis = Eigen::Vector3d(p[0], p[1], p[2]);
-    lobe.coeffs.assign(p + 3, p + 3 + order);
-    p += 3 + order;
-  }
-  f.residual = *p++;
-  f.norm = *p++;
-  f.direct.assign(p, p + direct);
-  p += direct;
-  return f;
-}
-
 FitZhReport run_fit_zh_on(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJob* mpi) {
   check_request(r);
   std::optional<Shard> shard;  // --shard: a partial table
@@ -348,46 +324,47 @@ FitZhReport run_fit_zh_on(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJo
     const EmbreeIdentity embree = embree_identity();
     generator["embree"] = {{"version", embree.version}, {"isa", embree.isa}};
   }
-  if (mpi) {
-    if (!mpi->all_ok(true)) throw InputError("rank " + std::to_string(mpi->rank()) + ": stopped, another rank failed");
-    std::vector<double> rows;
-    for (const ZhFit& f : fits) append_row(f, rows);
-    const std::string record = generator.dump();
-    const std::vector<std::uint32_t> records = mpi->gather(input_crc32(record));
-    const std::vector<double> all = mpi->gather(rows);
-    report.mpi_rank = mpi->rank();
-    report.mpi_ranks = mpi->size();
-    if (mpi->rank() != 0) return report;
-    // Ranks on other machines could run another Embree or ISA, or read another file at
-    // the same path: their rows would not be the one-process bytes.
-    for (std::size_t k = 1; k < records.size(); ++k)
-      if (records[k] != records[0])
-        throw InputError("--mpi: rank " + std::to_string(k) +
-                         " made a different generator record than rank 0 (another input file, shtool or Embree "
-                         "version, or ISA): nothing written");
-    const std::size_t direct = fits.empty() ? 0 : fits[0].direct.size();
-    fits.clear();
-    fits.reserve(total);
-    const double* p = all.data();
-    for (std::size_t v = 0; v < total; ++v) fits.push_back(read_row(p, order, r.lobes, direct));
-    range = {0, total};
-    report.count = total;
-    report.normalized_rms = normalized_rms(fits);
-  }
   std::vector<std::uint32_t> vertex_index;
   if (!mesh.source_index.empty())
     vertex_index.assign(mesh.source_index.begin() + range.begin, mesh.source_index.begin() + range.end);
-  if (shard) {
-    meta["shard"] = {{"index", shard->index}, {"count", shard->count}, {"first_vertex", range.begin},
+  if (rows_of) {
+    meta["shard"] = {{"index", rows_of->index}, {"count", rows_of->count}, {"first_vertex", range.begin},
                      {"end_vertex", range.end}, {"vertices", total}};
-    report.sharded = true;
-    report.shard_index = shard->index;
-    report.shard_count = shard->count;
+    report.sharded = shard.has_value();
+    report.shard_index = rows_of->index;
+    report.shard_count = rows_of->count;
     report.first_vertex = range.begin;
     report.end_vertex = range.end;
     report.total = total;
   }
-  const Table table = zh_fit_table(fits, order, r.lobes, vertex_index, meta, generator);
+  Table table = zh_fit_table(fits, order, r.lobes, vertex_index, meta, generator);
+  if (mpi) {
+    // Every rank's rows reach rank 0 as a partial table and are joined by merge's code:
+    // the same checks (a rank on another Embree, ISA or input is refused) and the same
+    // bytes as shards merged.
+    const std::string mine = encode_table(table);
+    if (!mpi->all_ok(true)) throw InputError("rank " + std::to_string(mpi->rank()) + ": stopped, another rank failed");
+    const std::vector<std::string> parts = mpi->gather(mine);
+    report.mpi_rank = mpi->rank();
+    report.mpi_ranks = mpi->size();
+    if (mpi->rank() != 0) return report;
+    std::vector<NamedTable> tables;
+    for (std::size_t k = 0; k < parts.size(); ++k) {
+      const std::string name = "rank " + std::to_string(k);
+      Result<Table> t = read_table_bytes(std::as_bytes(std::span(parts[k])), name, {"zh-fit", 1});
+      if (!t) throw InputError("--mpi: " + t.error().message);
+      tables.push_back({name, std::move(t).value()});
+    }
+    try {
+      MergedFits merged = merge_zh_fit_tables(std::move(tables));
+      table = std::move(merged.table);
+      fits = std::move(merged.fits);
+    } catch (const InputError& e) {
+      throw InputError(std::string("--mpi: ") + e.what());
+    }
+    report.count = fits.size();
+    report.normalized_rms = normalized_rms(fits);
+  }
 
   // ---- outputs: everything is computed, then written as one set.
   std::vector<std::string> bytes;

@@ -37,36 +37,27 @@ bool MpiJob::all_ok(bool ok) {
   return all == 1;
 }
 
-std::vector<double> MpiJob::gather(std::span<const double> mine) {
-  // Every rank learns whether any part is too large before the gather, so none waits.
-  const bool fits_int = mine.size() <= static_cast<std::size_t>(INT_MAX);
-  int all_fit = 0, mine_fit = fits_int ? 1 : 0;
-  MPI_Allreduce(&mine_fit, &all_fit, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
-  if (!all_fit) throw InputError("--mpi: a rank's rows exceed 2^31 - 1 values; run with more ranks");
-  const int count = static_cast<int>(mine.size());
-  std::vector<int> counts(rank_ == 0 ? size_ : 0), offsets;
-  MPI_Gather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, MPI_COMM_WORLD);
-  std::vector<double> all;
-  if (rank_ == 0) {
-    offsets.resize(size_);
-    long long total = 0;
-    for (int r = 0; r < size_; ++r) {
-      offsets[r] = static_cast<int>(total);
-      total += counts[r];
-    }
-    // MPI_Gatherv's displacements are ints too.
-    if (total > INT_MAX) throw InputError("--mpi: the gathered rows exceed 2^31 - 1 values");
-    all.resize(static_cast<std::size_t>(total));
+std::vector<std::string> MpiJob::gather(std::string_view mine) {
+  const long long count = static_cast<long long>(mine.size());
+  long long total = 0;
+  MPI_Allreduce(&count, &total, 1, MPI_LONG_LONG, MPI_SUM, MPI_COMM_WORLD);
+  // Decided from the sum every rank has, so that all of them stop, none waits.
+  if (total > INT_MAX)
+    throw InputError("--mpi: the partial tables exceed 2^31 - 1 bytes in all (MPI's int counts); use --shard "
+                     "and merge for a bake this large");
+  const int mine_count = static_cast<int>(count);
+  std::vector<int> counts(rank_ == 0 ? size_ : 0), offsets(counts.size());
+  MPI_Gather(&mine_count, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, MPI_COMM_WORLD);
+  std::string all;
+  for (std::size_t r = 0; r < counts.size(); ++r) {
+    offsets[r] = static_cast<int>(all.size());
+    all.resize(all.size() + counts[r]);
   }
-  MPI_Gatherv(mine.data(), count, MPI_DOUBLE, all.data(), counts.data(), offsets.data(), MPI_DOUBLE, 0,
+  MPI_Gatherv(mine.data(), mine_count, MPI_BYTE, all.data(), counts.data(), offsets.data(), MPI_BYTE, 0,
               MPI_COMM_WORLD);
-  return all;
-}
-
-std::vector<std::uint32_t> MpiJob::gather(std::uint32_t mine) {
-  std::vector<std::uint32_t> all(rank_ == 0 ? size_ : 0);
-  MPI_Gather(&mine, 1, MPI_UINT32_T, all.data(), 1, MPI_UINT32_T, 0, MPI_COMM_WORLD);
-  return all;
+  std::vector<std::string> parts;
+  for (std::size_t r = 0; r < counts.size(); ++r) parts.push_back(all.substr(offsets[r], counts[r]));
+  return parts;
 }
 
 #else
@@ -86,9 +77,7 @@ bool MpiJob::all_ok(bool ok) {
   return ok;
 }
 
-std::vector<double> MpiJob::gather(std::span<const double> mine) { return {mine.begin(), mine.end()}; }
-
-std::vector<std::uint32_t> MpiJob::gather(std::uint32_t mine) { return {mine}; }
+std::vector<std::string> MpiJob::gather(std::string_view mine) { return {std::string(mine)}; }
 
 #endif
 

@@ -1,10 +1,11 @@
 // fit-zh --mpi: the ranks of an MPI job split the vertices like shards (rank R of S fits
-// shard R/S) and rank 0 gathers every row and writes the table a one-process run writes.
+// shard R/S), rank 0 gathers their partial tables and merges them into the table a
+// one-process run writes.
 // MPI is optional at build time; without it constructing an MpiJob is refused.
 #pragma once
 
-#include <cstdint>
-#include <span>
+#include <string>
+#include <string_view>
 #include <vector>
 
 namespace shtool::fit {
@@ -30,10 +31,10 @@ class MpiJob {
   bool all_ok(bool ok);
   bool synchronised() const { return synchronised_; }
 
-  // Collective: every rank's values concatenated in rank order, on rank 0 (empty on the
-  // others). Throws InputError above 2^31 - 1 values per rank (MPI's int counts).
-  std::vector<double> gather(std::span<const double> mine);
-  std::vector<std::uint32_t> gather(std::uint32_t mine);
+  // Collective: every rank's bytes, in rank order, on rank 0 (empty on the others).
+  // Throws InputError on every rank when the total passes 2^31 - 1 bytes (MPI's int
+  // counts and displacements).
+  std::vector<std::string> gather(std::string_view mine);
 
  private:
   int rank_ = 0, size_ = 1;

@@ -16,7 +16,7 @@ namespace shtool::fit {
 namespace {
 
 struct Part {
-  std::filesystem::path path;
+  std::string name;
   Table table;
   nlohmann::json generator, meta;  // meta without the shard record and the part's own summaries
   Shard shard;
@@ -28,9 +28,7 @@ struct Part {
   bool vertex_index = false;
 };
 
-[[noreturn]] void fail(const std::filesystem::path& path, const std::string& what) {
-  throw InputError(path.string() + ": " + what);
-}
+[[noreturn]] void fail(const std::string& name, const std::string& what) { throw InputError(name + ": " + what); }
 
 // The first place two JSON values differ, as "a.b.c (x vs y)"; empty when equal.
 std::string first_difference(const nlohmann::json& a, const nlohmann::json& b, const std::string& where) {
@@ -48,17 +46,17 @@ std::string first_difference(const nlohmann::json& a, const nlohmann::json& b, c
 
 std::size_t shard_field(const Part& p, const nlohmann::json& shard, const char* name) {
   if (!shard.contains(name) || !shard.at(name).is_number_unsigned())
-    fail(p.path, std::string("shard record has no non-negative integer '") + name + "'");
+    fail(p.name, std::string("shard record has no non-negative integer '") + name + "'");
   return shard.at(name).get<std::size_t>();
 }
 
 // The part's shape, checked against its own shard record, before any comparison.
-Part read_part(const std::filesystem::path& path) {
+Part read_part(NamedTable named) {
   Part p;
-  p.path = path;
-  Result<Table> t = read_table(path, {"zh-fit", 1});
-  if (!t) throw InputError(t.error().message);
-  p.table = std::move(t).value();
+  p.name = std::move(named.name);
+  p.table = std::move(named.table);
+  const std::string& path = p.name;
+  if (p.table.kind != "zh-fit") fail(path, "a table of kind '" + p.table.kind + "', not zh-fit");
   p.generator = table_generator(p.table);
   p.meta = table_meta(p.table);
   if (!p.meta.is_object() || !p.meta.contains("shard") || !p.meta.at("shard").is_object())
@@ -107,26 +105,16 @@ Part read_part(const std::filesystem::path& path) {
 
 }  // namespace
 
-MergeReport merge_zh_fit_parts(const MergeRequest& r) {
-  if (r.parts.empty()) throw InputError("merge: give the partial tables to join");
-  if (r.out.empty()) throw InputError("merge: give --out TABLE");
-  check_output_path(r.out, "--out");
-  for (std::size_t i = 0; i < r.parts.size(); ++i) {
-    check_not_an_input(r.out, "--out", r.parts[i]);
-    for (std::size_t j = 0; j < i; ++j)
-      if (same_file(r.parts[i], r.parts[j]))
-        throw InputError("merge: '" + r.parts[i].string() + "' is given twice");
-  }
-
+MergedFits merge_zh_fit_tables(std::vector<NamedTable> named) {
+  if (named.empty()) throw InputError("no partial tables to join");
   std::vector<Part> parts;
-  parts.reserve(r.parts.size());
-  for (const std::filesystem::path& path : r.parts) parts.push_back(read_part(path));
+  parts.reserve(named.size());
+  for (NamedTable& t : named) parts.push_back(read_part(std::move(t)));
 
   const Part& first = parts.front();
   for (const Part& p : parts) {
     auto differ = [&](const std::string& what) {
-      throw InputError("merge: '" + p.path.string() + "' and '" + first.path.string() +
-                       "' are not parts of the same bake: " + what);
+      throw InputError("'" + p.name + "' and '" + first.name + "' are not parts of the same bake: " + what);
     };
     if (std::string d = first_difference(first.generator, p.generator, "generator"); !d.empty()) differ(d);
     if (std::string d = first_difference(first.meta, p.meta, "meta"); !d.empty()) differ(d);
@@ -144,9 +132,8 @@ MergeReport merge_zh_fit_parts(const MergeRequest& r) {
   std::vector<const Part*> by_index(count, nullptr);
   for (const Part& p : parts) {
     if (by_index[p.shard.index])
-      throw InputError("merge: shard " + std::to_string(p.shard.index) + " of " + std::to_string(count) +
-                       " is given twice ('" + by_index[p.shard.index]->path.string() + "' and '" + p.path.string() +
-                       "')");
+      throw InputError("shard " + std::to_string(p.shard.index) + " of " + std::to_string(count) +
+                       " is given twice ('" + by_index[p.shard.index]->name + "' and '" + p.name + "')");
     by_index[p.shard.index] = &p;
   }
   std::string missing;
@@ -154,7 +141,7 @@ MergeReport merge_zh_fit_parts(const MergeRequest& r) {
   for (std::size_t k = 0; k < count; ++k)
     if (!by_index[k] && ++missing_count <= 10) missing += (missing.empty() ? "" : ", ") + std::to_string(k);
   if (missing_count)
-    throw InputError("merge: " + std::to_string(missing_count) + " of " + std::to_string(count) +
+    throw InputError(std::to_string(missing_count) + " of " + std::to_string(count) +
                      " shards missing (" + missing + (missing_count > 10 ? ", ..." : "") + ")");
 
   // The rows in vertex order, through the writer a one-process run uses.
@@ -188,9 +175,37 @@ MergeReport merge_zh_fit_parts(const MergeRequest& r) {
       vertex_index.insert(vertex_index.end(), vi.begin(), vi.end());
     }
   }
-  const Table table = zh_fit_table(fits, order, lobes, vertex_index, first.meta, first.generator);
-  write_file_atomically(r.out, encode_table(table, r.encoding));
-  return {parts.size(), fits.size()};
+  MergedFits merged;
+  merged.table = zh_fit_table(fits, order, lobes, vertex_index, first.meta, first.generator);
+  merged.fits = std::move(fits);
+  return merged;
+}
+
+MergeReport merge_zh_fit_parts(const MergeRequest& r) {
+  if (r.parts.empty()) throw InputError("merge: give the partial tables to join");
+  if (r.out.empty()) throw InputError("merge: give --out TABLE");
+  check_output_path(r.out, "--out");
+  for (std::size_t i = 0; i < r.parts.size(); ++i) {
+    check_not_an_input(r.out, "--out", r.parts[i]);
+    for (std::size_t j = 0; j < i; ++j)
+      if (same_file(r.parts[i], r.parts[j]))
+        throw InputError("merge: '" + r.parts[i].string() + "' is given twice");
+  }
+  std::vector<NamedTable> tables;
+  tables.reserve(r.parts.size());
+  for (const std::filesystem::path& path : r.parts) {
+    Result<Table> t = read_table(path, {"zh-fit", 1});
+    if (!t) throw InputError(t.error().message);
+    tables.push_back({path.string(), std::move(t).value()});
+  }
+  MergedFits merged;
+  try {
+    merged = merge_zh_fit_tables(std::move(tables));
+  } catch (const InputError& e) {
+    throw InputError(std::string("merge: ") + e.what());
+  }
+  write_file_atomically(r.out, encode_table(merged.table, r.encoding));
+  return {r.parts.size(), merged.fits.size()};
 }
 
 }  // namespace shtool::fit

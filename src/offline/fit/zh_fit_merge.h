@@ -4,11 +4,28 @@
 
 #include <cstddef>
 #include <filesystem>
+#include <string>
 #include <vector>
 
+#include "fit/zh_fit.h"
 #include "shtool/table.h"
 
 namespace shtool::fit {
+
+// A partial table and what messages call it (its path, or "rank 3").
+struct NamedTable {
+  std::string name;
+  Table table;
+};
+
+struct MergedFits {
+  Table table;              // what a one-process run writes
+  std::vector<ZhFit> fits;  // its rows, for the outputs made from fits (--json)
+};
+
+// The checks and the join of merge_zh_fit_parts on tables already read (the MPI ranks'
+// partial tables reach rank 0 as bytes). Throws InputError naming the part.
+MergedFits merge_zh_fit_tables(std::vector<NamedTable> parts);
 
 struct MergeRequest {
   std::vector<std::filesystem::path> parts;  // in any order
