@@ -369,6 +369,14 @@ TEST(CliFitZh, MergeRefusesPartsThatDoNotMakeOneBake) {
   std::ofstream(corrupt, std::ios::binary) << bytes;
   const fs::path whole = scratch("refuse_whole.shtb");
   ASSERT_EQ(fit(kSpot, {"--out", whole.string()}).exit_code, 0);
+  // A JSON part's header is plain text: its shard record edited to disagree with its rows.
+  const fs::path edited_range = scratch("refuse_range.part");
+  ASSERT_EQ(fit(kSpot, {"--shard", "1/3", "--format", "json", "--out", edited_range.string()}).exit_code, 0);
+  std::string json_part = read_bytes(edited_range);
+  const std::size_t at = json_part.find("\"first_vertex\":976");
+  ASSERT_NE(at, std::string::npos);
+  json_part.replace(at, 18, "\"first_vertex\":975");
+  std::ofstream(edited_range, std::ios::binary | std::ios::trunc) << json_part;
 
   struct Case {
     std::string name;
@@ -385,6 +393,7 @@ TEST(CliFitZh, MergeRefusesPartsThatDoNotMakeOneBake) {
       {"shard count", {parts[0], parts[1], other_count}, "shard 0 of 3 (2930 vertices) vs shard 1 of 2"},
       {"corrupted", {parts[0], parts[1], corrupt}, "CRC"},
       {"whole table", {parts[0], whole}, "not a partial table"},
+      {"edited range", {parts[0], edited_range, parts[2]}, "shard 1 of 3 covers vertices [976, 1953)"},
       {"not a table", {parts[0], kSpot}, "spot.obj"},
   };
   for (const Case& c : cases) {

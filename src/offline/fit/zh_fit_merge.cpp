@@ -66,8 +66,9 @@ Part read_part(NamedTable named) {
   p.shard.count = shard_field(p, shard, "count");
   p.range = {shard_field(p, shard, "first_vertex"), shard_field(p, shard, "end_vertex")};
   p.total = shard_field(p, shard, "vertices");
+  // 2^32 vertices at most: vertex_index is u32 (and keeps the range products in 64 bits).
   if (p.shard.count < 1 || p.shard.count > kMaxShards || p.shard.index >= p.shard.count ||
-      p.shard.count > p.total)
+      p.shard.count > p.total || p.total > (std::size_t{1} << 32))
     fail(path, "shard record " + shard.dump() + " is not a shard K of N of its vertices");
   const VertexRange expected = shard_range(p.total, p.shard);
   if (p.range.begin != expected.begin || p.range.end != expected.end)
