@@ -13,6 +13,7 @@ packages=(
   libcli11-dev libnlopt-cxx-dev libembree-dev libtinyobjloader-dev  # offline tool
   libopenexr-dev libstb-dev                              # offline tool: images
   libtinygltf-dev                                        # offline tool: glTF meshes
+  libopenmpi-dev openmpi-bin                             # fit-zh --mpi (optional at build time)
   libgtest-dev libbenchmark-dev                          # tests and benchmarks
   glslang-tools spirv-tools libvulkan-dev mesa-vulkan-drivers  # shader tests (lavapipe: a CPU Vulkan device)
   clang libclang-rt-14-dev                               # fuzz targets (libFuzzer), sanitizers

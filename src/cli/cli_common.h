@@ -68,6 +68,7 @@ void setup_deform(CLI::App& app);
 void setup_rotate(CLI::App& app);
 void setup_product(CLI::App& app);
 void setup_fit_zh(CLI::App& app);
+void setup_merge(CLI::App& app);
 void setup_search_lobes(CLI::App& app);
 void setup_project_env(CLI::App& app);
 void setup_light(CLI::App& app);

@@ -62,6 +62,9 @@ void setup_fit_zh(CLI::App& app) {
       ->capture_default_str();
   sub->add_flag("--direct", opt->direct, "store DC (and linear when N >= 3) directly; lobes fit the rest");
   sub->add_option("--threads", opt->threads, "worker threads (0: all cores)")->capture_default_str();
+  sub->add_flag("--mpi", opt->mpi, "under mpirun: ranks split the vertices, rank 0 writes the table");
+  sub->add_option("--shard", opt->shard,
+                  "K/N: fit the K-th (0-based) of N vertex ranges into a partial table for shtool merge");
   sub->callback([opt, order]() {
     opt->order_given = order->count() > 0;
     fit::FitZhCallbacks cb;
@@ -69,11 +72,17 @@ void setup_fit_zh(CLI::App& app) {
     cb.fit_progress = progress_bar("fit");
     cb.warning = [](const std::string& w) { std::cerr << "fit-zh: warning: " << w << '\n'; };
     const fit::FitZhReport r = fit::run_fit_zh(*opt, cb);
+    if (r.mpi_rank != 0) return;  // rank 0 reports the job
     std::ostringstream summary;
     summary.precision(4);
     summary << "fit-zh: " << r.count << (r.from_mesh ? " vertices" : " vectors");
+    if (r.sharded)
+      summary << " (shard " << r.shard_index << "/" << r.shard_count << ": [" << r.first_vertex << ", "
+              << r.end_vertex << ") of " << r.total << ")";
     if (r.from_mesh) summary << ", simulation " << r.simulate_seconds << " s";
-    summary << ", fit " << r.fit_seconds << " s (" << r.threads << " threads), order " << r.order << ", " << r.lobes
+    summary << ", fit " << r.fit_seconds << " s (" << r.threads << " threads";
+    if (r.mpi_ranks) summary << " on each of " << r.mpi_ranks << " MPI ranks";
+    summary << "), order " << r.order << ", " << r.lobes
             << " lobes, normalized RMS " << r.normalized_rms << ", wrote " << r.out.string() << '\n';
     std::cerr << summary.str();
   });

@@ -25,6 +25,7 @@ int main(int argc, char** argv) {
   shtool::cli::setup_rotate(app);
   shtool::cli::setup_product(app);
   shtool::cli::setup_fit_zh(app);
+  shtool::cli::setup_merge(app);
   shtool::cli::setup_search_lobes(app);
   shtool::cli::setup_project_env(app);
   shtool::cli::setup_light(app);

@@ -3,6 +3,7 @@
 // The fits are checked against the transfer vectors the same run saved, by rebuilding
 // the SH vector of the lobes with the runtime (an independent path from the fitter's
 // own residual), and the table header against schemas/zh-fit.schema.json.
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <iterator>
@@ -11,9 +12,11 @@
 #include <unistd.h>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
+#include <embree3/rtcore_config.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -21,6 +24,7 @@
 #include "shtool/sh.h"
 #include "shtool/table.h"
 #include "shtool/zh.h"
+#include "shtool/zh_fit_table.h"
 
 namespace {
 
@@ -43,6 +47,18 @@ CommandResult run(std::vector<std::string> args) {
   CommandResult r = shtool::test::run_command(args, options);
   EXPECT_FALSE(r.signaled) << shtool::test::describe_command(args) << " killed by signal " << r.signal;
   return r;
+}
+
+std::string read_bytes(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+// The generator record of a table written by fit-zh.
+nlohmann::json generator_of(const fs::path& table) {
+  const shtool::Result<shtool::Table> t = shtool::read_table(table, {"zh-fit", 1});
+  EXPECT_TRUE(t.ok()) << (t.ok() ? "" : t.error().message);
+  return t.ok() ? nlohmann::json::parse(t.value().generator) : nlohmann::json();
 }
 
 nlohmann::json read_json(const fs::path& path) {
@@ -178,6 +194,263 @@ TEST(CliFitZh, BadInputExitsOneWithAMessageAndNoOutput) {
   const CommandResult mode = run({"fit-zh", kSource + "/data/spot.obj", "--mode", "glossy"});
   EXPECT_EQ(mode.exit_code, 1);
   EXPECT_NE(mode.err.find("--mode"), std::string::npos) << mode.err;
+}
+
+TEST(CliFitZh, HeaderRecordsRayTracerAndLoadedMesh) {
+  const std::string spot = read_bytes(kSource + "/data/spot.obj");
+  const fs::path same = scratch("spot_comment.obj"), moved = scratch("spot_moved.obj");
+  // Same geometry, other bytes: a comment line. Other geometry: the first vertex moved.
+  std::ofstream(same) << spot << "# a comment changes the file, not the mesh\n";
+  std::string edited = spot;
+  const std::size_t v = edited.find("\nv ") + 1, end = edited.find('\n', v);
+  ASSERT_NE(end, std::string::npos);
+  std::istringstream line(edited.substr(v + 2, end - v - 2));
+  double x, y, z;
+  ASSERT_TRUE(line >> x >> y >> z);
+  edited.replace(v, end - v, "v " + std::to_string(x + 1e-3) + " " + std::to_string(y) + " " + std::to_string(z));
+  std::ofstream(moved) << edited;
+  std::vector<nlohmann::json> gens;
+  for (const std::string& mesh : {kSource + "/data/spot.obj", same.string(), moved.string()}) {
+    const fs::path out = scratch("header.shtb");
+    const CommandResult r =
+        run({"fit-zh", mesh, "--rays", "4", "--order", "2", "--lobes", "1", "--starts", "0", "--out", out.string()});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    gens.push_back(generator_of(out));
+  }
+  const nlohmann::json& g = gens[0];
+  EXPECT_EQ(g["tool"], "shtool");
+  EXPECT_EQ(g["embree"]["isa"], "sse4.2");
+  EXPECT_EQ(g["embree"]["version"], std::to_string(RTC_VERSION_MAJOR) + "." + std::to_string(RTC_VERSION_MINOR) + "." +
+                                        std::to_string(RTC_VERSION_PATCH));
+  EXPECT_EQ(g["parameters"]["mode"], "shadowed");
+  EXPECT_EQ(g["parameters"]["rays"], 4);
+  EXPECT_NE(g["parameters"]["input_crc32"], gens[1]["parameters"]["input_crc32"]);
+  EXPECT_EQ(g["parameters"]["mesh_crc32"], gens[1]["parameters"]["mesh_crc32"]);
+  EXPECT_NE(g["parameters"]["mesh_crc32"], gens[2]["parameters"]["mesh_crc32"]);
+
+  // No rays traced, no ray tracer recorded.
+  const fs::path out = scratch("header_unshadowed.shtb");
+  const CommandResult r = run({"fit-zh", kSource + "/data/spot.obj", "--mode", "unshadowed", "--rays", "4", "--order",
+                               "2", "--lobes", "1", "--starts", "0", "--out", out.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_FALSE(generator_of(out).contains("embree"));
+  EXPECT_TRUE(generator_of(out)["parameters"].contains("mesh_crc32"));
+}
+
+// Small settings that still run every random path: rays rotated per vertex and a
+// multi-start on every vertex (--restart-above 0).
+const std::vector<std::string> kQuick = {"--rays", "8", "--order", "2", "--lobes", "2", "--starts", "1",
+                                         "--restart-above", "0"};
+
+CommandResult fit(const std::string& mesh, std::vector<std::string> extra) {
+  std::vector<std::string> args = {"fit-zh", mesh};
+  args.insert(args.end(), kQuick.begin(), kQuick.end());
+  args.insert(args.end(), extra.begin(), extra.end());
+  return run(args);
+}
+
+const std::string kSpot = kSource + "/data/spot.obj";
+
+TEST(CliFitZh, ThreadCountDoesNotChangeABit) {
+  std::vector<std::string> tables;
+  for (const char* threads : {"1", "2", "3"}) {
+    const fs::path out = scratch(std::string("threads") + threads + ".shtb");
+    const CommandResult r = fit(kSpot, {"--threads", threads, "--out", out.string()});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    tables.push_back(read_bytes(out));
+  }
+  ASSERT_GT(tables[0].size(), 2930u * 2 * 2 * 8);
+  EXPECT_EQ(tables[0], tables[1]);
+  EXPECT_EQ(tables[0], tables[2]);
+}
+
+// The parts of an N-way bake, shard K written with K + 1 threads (so threads and shards
+// vary together), in the encoding given.
+std::vector<fs::path> bake_parts(const std::string& name, int n, const std::vector<std::string>& extra = {},
+                                 const std::string& format = "binary") {
+  std::vector<fs::path> parts;
+  for (int k = 0; k < n; ++k) {
+    const fs::path out = scratch(name + "." + std::to_string(k) + "-of-" + std::to_string(n) + ".part");
+    std::vector<std::string> args = {"--shard", std::to_string(k) + "/" + std::to_string(n), "--threads",
+                                     std::to_string(k % 3 + 1), "--format", format, "--out", out.string()};
+    args.insert(args.end(), extra.begin(), extra.end());
+    const CommandResult r = fit(kSpot, args);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE(r.err.find("shard " + std::to_string(k) + "/" + std::to_string(n)), std::string::npos) << r.err;
+    parts.push_back(out);
+  }
+  return parts;
+}
+
+CommandResult merge(const std::vector<fs::path>& parts, const fs::path& out) {
+  std::vector<std::string> args = {"merge"};
+  for (const fs::path& p : parts) args.push_back(p.string());
+  args.insert(args.end(), {"--out", out.string()});
+  return run(args);
+}
+
+TEST(CliFitZh, ShardsMergedInAnyOrderAreTheOneProcessTable) {
+  const fs::path whole = scratch("whole.shtb");
+  ASSERT_EQ(fit(kSpot, {"--out", whole.string()}).exit_code, 0);
+  const std::string expected = read_bytes(whole);
+  fs::path part;  // shard 1 of 3
+  for (int n : {1, 2, 3}) {
+    // JSON parts for N = 2: the encoding of a part does not change the merged bytes.
+    std::vector<fs::path> parts = bake_parts("spot", n, {}, n == 2 ? "json" : "binary");
+    if (n == 3) part = parts[1];
+    std::reverse(parts.begin(), parts.end());
+    if (n == 3) std::swap(parts[0], parts[1]);  // 1, 2, 0
+    const fs::path out = scratch("merged" + std::to_string(n) + ".shtb");
+    const CommandResult r = merge(parts, out);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE(r.err.find(std::to_string(n) + " parts, 2930 vertices"), std::string::npos) << r.err;
+    EXPECT_EQ(read_bytes(out), expected) << n << " shards";
+  }
+
+  // A part says what it is, and the runtime refuses to shade it as a whole mesh.
+  const shtool::Result<shtool::Table> t = shtool::read_table(part, {"zh-fit", 1});
+  ASSERT_TRUE(t.ok());
+  const nlohmann::json shard = nlohmann::json::parse(t.value().meta)["shard"];
+  EXPECT_EQ(shard, (nlohmann::json{{"index", 1}, {"count", 3}, {"first_vertex", 976}, {"end_vertex", 1953},
+                                   {"vertices", 2930}}));
+  EXPECT_EQ(t.value().kind_version, "1.1");
+  EXPECT_EQ(generator_of(part), generator_of(whole));
+  const auto loaded = shtool::load_zh_fit<double>(part);
+  ASSERT_FALSE(loaded.ok());
+  EXPECT_NE(loaded.error().message.find("partial table"), std::string::npos) << loaded.error().message;
+  ASSERT_TRUE(shtool::load_zh_fit<double>(whole).ok());
+  const std::string cmd = std::string(SHTOOL_PYTHON) + " '" + kSource + "/tests/validate_json_schema.py' '" + kSource +
+                          "/schemas/zh-fit.schema.json' '" + part.string() + "' '" + whole.string() + "'";
+  EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
+}
+
+TEST(CliFitZh, ShardsOfTransferVectorsMerge) {
+  // 5 vectors in 2 shards: rows [0, 2) and [2, 5).
+  std::vector<std::vector<double>> vectors;
+  for (int v = 0; v < 5; ++v) {
+    std::vector<double> t(9);
+    for (int i = 0; i < 9; ++i) t[i] = std::sin(1.0 + v * 9 + i);
+    vectors.push_back(t);
+  }
+  const fs::path in = scratch("vectors.json"), whole = scratch("vectors.shtb"), merged = scratch("vectors_m.shtb");
+  std::ofstream(in) << nlohmann::json{{"order", 3}, {"vectors", vectors}}.dump();
+  const std::vector<std::string> opts = {"--lobes", "2", "--starts", "2", "--restart-above", "0"};
+  std::vector<std::string> args = {"fit-zh", "--transfer", in.string(), "--out", whole.string()};
+  args.insert(args.end(), opts.begin(), opts.end());
+  ASSERT_EQ(run(args).exit_code, 0);
+  std::vector<fs::path> parts;
+  for (const char* k : {"1", "0"}) {
+    parts.push_back(scratch(std::string("vectors.part") + k));
+    args = {"fit-zh", "--transfer", in.string(), "--shard", std::string(k) + "/2", "--out", parts.back().string()};
+    args.insert(args.end(), opts.begin(), opts.end());
+    ASSERT_EQ(run(args).exit_code, 0);
+  }
+  ASSERT_EQ(merge(parts, merged).exit_code, 0);
+  EXPECT_EQ(read_bytes(merged), read_bytes(whole));
+}
+
+TEST(CliFitZh, MergeRefusesPartsThatDoNotMakeOneBake) {
+  const std::vector<fs::path> parts = bake_parts("refuse", 3);
+  const fs::path other_seed = bake_parts("refuse_seed", 3, {"--seed", "2"})[2];
+  const fs::path other_option = bake_parts("refuse_direct", 3, {"--direct"})[2];
+  const fs::path other_count = bake_parts("refuse_count", 2)[1];
+  // The same file under another name: the mesh CRC is the same, the file name differs.
+  const std::string spot = read_bytes(kSpot);
+  const fs::path moved = scratch("moved.obj");
+  std::string edited = spot;
+  edited.replace(edited.find("0.348799"), 8, "0.348800");  // spot's first vertex
+  std::ofstream(moved) << edited;
+  const fs::path other_mesh = scratch("refuse_mesh.part");
+  ASSERT_EQ(fit(moved.string(), {"--shard", "2/3", "--out", other_mesh.string()}).exit_code, 0);
+  const fs::path copy = scratch("refuse_copy.part"), corrupt = scratch("refuse_corrupt.part");
+  fs::copy_file(parts[1], copy, fs::copy_options::overwrite_existing);
+  std::string bytes = read_bytes(parts[2]);
+  bytes[bytes.size() - 5] ^= 0x10;  // inside the last array
+  std::ofstream(corrupt, std::ios::binary) << bytes;
+  const fs::path whole = scratch("refuse_whole.shtb");
+  ASSERT_EQ(fit(kSpot, {"--out", whole.string()}).exit_code, 0);
+  // A JSON part's header is plain text: its shard record edited to disagree with its rows.
+  const fs::path edited_range = scratch("refuse_range.part");
+  ASSERT_EQ(fit(kSpot, {"--shard", "1/3", "--format", "json", "--out", edited_range.string()}).exit_code, 0);
+  std::string json_part = read_bytes(edited_range);
+  const std::size_t at = json_part.find("\"first_vertex\":976");
+  ASSERT_NE(at, std::string::npos);
+  json_part.replace(at, 18, "\"first_vertex\":975");
+  std::ofstream(edited_range, std::ios::binary | std::ios::trunc) << json_part;
+
+  struct Case {
+    std::string name;
+    std::vector<fs::path> parts;
+    std::string message;
+  };
+  const std::vector<Case> cases = {
+      {"missing", {parts[2], parts[0]}, "1 of 3 shards missing (1)"},
+      {"duplicate", {parts[0], parts[1], copy, parts[2]}, "shard 1 of 3 is given twice"},
+      {"same file twice", {parts[0], parts[1], parts[1], parts[2]}, "is given twice"},
+      {"seed", {parts[0], parts[1], other_seed}, "generator.parameters.seed (1 vs 2)"},
+      {"options", {parts[0], parts[1], other_option}, "generator.parameters.direct (false vs true)"},
+      {"mesh", {parts[0], parts[1], other_mesh}, "generator.parameters.input_crc32"},
+      {"shard count", {parts[0], parts[1], other_count}, "shard 0 of 3 (2930 vertices) vs shard 1 of 2"},
+      {"corrupted", {parts[0], parts[1], corrupt}, "CRC"},
+      {"whole table", {parts[0], whole}, "not a partial table"},
+      {"edited range", {parts[0], edited_range, parts[2]}, "shard 1 of 3 covers vertices [976, 1953)"},
+      {"not a table", {parts[0], kSpot}, "spot.obj"},
+  };
+  for (const Case& c : cases) {
+    const fs::path out = scratch("refused.shtb");
+    const CommandResult r = merge(c.parts, out);
+    EXPECT_EQ(r.exit_code, 1) << c.name << ": " << r.err;
+    EXPECT_NE(r.err.find(c.message), std::string::npos) << c.name << ": " << r.err;
+    EXPECT_FALSE(fs::exists(out)) << c.name;
+  }
+  // Mesh CRCs are compared too: the mesh_crc32 of the moved vertex differs from spot's.
+  EXPECT_NE(generator_of(other_mesh)["parameters"]["mesh_crc32"], generator_of(parts[0])["parameters"]["mesh_crc32"]);
+  // --out is required, and may not overwrite a part.
+  EXPECT_EQ(run({"merge", parts[0].string()}).exit_code, 1);
+  const CommandResult onto = merge({parts[0], parts[1], parts[2]}, parts[0]);
+  EXPECT_EQ(onto.exit_code, 1);
+  EXPECT_NE(onto.err.find("--out"), std::string::npos) << onto.err;
+}
+
+TEST(CliFitZh, BadShardOptionsAreRefusedBeforeAnyWork) {
+  struct Case {
+    std::vector<std::string> args;
+    std::string message;
+  };
+  const fs::path j = scratch("shard.json");
+  const std::vector<Case> cases = {
+      {{"--shard", "3/3"}, "K must be below N"},
+      {{"--shard", "1/0"}, "N must be in 1.."},
+      {{"--shard", "a/b"}, "expected K/N"},
+      {{"--shard", "-1/2"}, "expected K/N"},
+      {{"--shard", "+1/2"}, "expected K/N"},
+      {{"--shard", "1/2/3"}, "expected K/N"},
+      {{"--shard", "1 /2"}, "expected K/N"},
+      {{"--shard", "2"}, "expected K/N"},
+      {{"--shard", "/2"}, "expected K/N"},
+      {{"--shard", "0/2930"}, ""},  // as many shards as vertices: accepted
+      {{"--shard", "0/2931"}, "N must be at most 2930"},
+      {{"--shard", "0/2", "--mode", "interreflected"}, "cannot split an interreflected bake"},
+      {{"--shard", "0/2", "--json", j.string()}, "--json is not written with --shard"},
+      {{"--shard", "0/2", "--ply", j.string()}, "--ply is not written with --shard"},
+      {{"--shard", "0/2", "--save-transfer", j.string()}, "--save-transfer is not written with --shard"},
+  };
+  for (const Case& c : cases) {
+    const fs::path out = scratch("badshard.shtb");
+    std::vector<std::string> args = c.args;
+    args.insert(args.end(), {"--out", out.string()});
+    const CommandResult r = fit(kSpot, args);
+    const std::string what = c.args[1];
+    if (c.message.empty()) {
+      EXPECT_EQ(r.exit_code, 0) << what << ": " << r.err;
+      fs::remove(out);
+      continue;
+    }
+    EXPECT_EQ(r.exit_code, 1) << what << ": " << r.err;
+    EXPECT_NE(r.err.find(c.message), std::string::npos) << what << ": " << r.err;
+    EXPECT_FALSE(fs::exists(out)) << what;
+    EXPECT_FALSE(fs::exists(j)) << what;
+  }
 }
 
 }  // namespace

@@ -1,13 +1,34 @@
 #include "fit/embree_scene.h"
 
 #include <stdexcept>
+#include <string>
 
 namespace shtool::fit {
 
+RTCDevice new_pinned_device() {
+  const std::string config = std::string("max_isa=") + kEmbreeMaxIsa;
+  RTCDevice device = rtcNewDevice(config.c_str());
+  if (!device) throw std::runtime_error("Embree: cannot create a device with '" + config + "'");
+  return device;
+}
+
+EmbreeIdentity embree_identity() {
+  RTCDevice device = new_pinned_device();
+  const long v = static_cast<long>(rtcGetDeviceProperty(device, RTC_DEVICE_PROPERTY_VERSION));
+  rtcReleaseDevice(device);
+  EmbreeIdentity id;
+  id.version = std::to_string(v / 10000) + "." + std::to_string(v / 100 % 100) + "." + std::to_string(v % 100);
+  // Embree 3 does not report the ISA it chose; below the cap it takes the best the CPU
+  // has, and its SSE4.2 kernels need SSSE3, SSE4.1, SSE4.2 and POPCNT.
+  const bool sse42 = __builtin_cpu_supports("ssse3") && __builtin_cpu_supports("sse4.1") &&
+                     __builtin_cpu_supports("sse4.2") && __builtin_cpu_supports("popcnt");
+  id.isa = sse42 ? kEmbreeMaxIsa : "sse2";
+  return id;
+}
+
 std::unique_ptr<EmbreeScene> build_scene(const Mesh& mesh) {
   auto s = std::make_unique<EmbreeScene>();
-  s->device = rtcNewDevice(nullptr);
-  if (!s->device) throw std::runtime_error("Embree: cannot create a device");
+  s->device = new_pinned_device();
   s->scene = rtcNewScene(s->device);
   // Robust mode: watertight traversal, so rays grazing a shared edge cannot leak.
   rtcSetSceneFlags(s->scene, RTC_SCENE_FLAG_ROBUST);

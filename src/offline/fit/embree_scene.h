@@ -3,12 +3,28 @@
 #pragma once
 
 #include <memory>
+#include <string>
 
 #include <embree3/rtcore.h>
 
 #include "fit/mesh.h"
 
 namespace shtool::fit {
+
+// Embree picks its kernels from the CPU, and its AVX2 and AVX-512 kernels can report
+// different hits for the same ray, so a bake would depend on the machine it ran on.
+// Every device is capped at SSE4.2 (`max_isa=`), which every x86-64 CPU of the last
+// fifteen years has: shards and ranks on mixed hardware then run the same kernels.
+inline constexpr const char* kEmbreeMaxIsa = "sse4.2";
+
+// What a table records of the ray tracer, so that parts made by different kernels are
+// never merged: the Embree library version ("3.13.5") and the ISA its kernels run
+// here ("sse4.2", or "sse2" on a CPU without SSE4.2).
+struct EmbreeIdentity {
+  std::string version;
+  std::string isa;
+};
+EmbreeIdentity embree_identity();
 
 struct EmbreeScene {
   RTCDevice device = nullptr;
@@ -18,6 +34,9 @@ struct EmbreeScene {
     if (device) rtcReleaseDevice(device);
   }
 };
+
+// A device with the pinned ISA. Throws std::runtime_error if Embree refuses it.
+RTCDevice new_pinned_device();
 
 // Throws std::runtime_error if Embree cannot create the device or build the scene.
 std::unique_ptr<EmbreeScene> build_scene(const Mesh& mesh);

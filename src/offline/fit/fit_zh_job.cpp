@@ -4,6 +4,8 @@
 #include <chrono>
 #include <cmath>
 #include <numbers>
+#include <optional>
+#include <span>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -16,7 +18,11 @@
 #include "common/parallel_for.h"
 #include "common/stopwatch.h"
 #include "common/table_writer.h"
+#include "fit/embree_scene.h"
+#include "fit/mpi_job.h"
+#include "fit/shard.h"
 #include "fit/zh_fit.h"
+#include "fit/zh_fit_merge.h"
 #include "fit/zh_fit_table.h"
 #include "shtool/sh.h"
 
@@ -82,6 +88,28 @@ void check_request(const FitZhRequest& r) {
   if (!r.transfer.empty() && !r.ply.empty()) throw InputError("--ply needs a mesh (not --transfer)");
   if (!r.transfer.empty() && !r.save_transfer.empty())
     throw InputError("--save-transfer needs a mesh (not --transfer)");
+  if (r.mpi) {
+    if (!r.shard.empty()) throw InputError("--mpi and --shard both split the vertices: give one of them");
+    if (r.mode == TransferMode::interreflected && !r.mesh.empty())
+      throw InputError("--mpi cannot run an interreflected bake: each bounce needs the previous bounce of every "
+                       "vertex; run it in one process");
+    if (!r.ply.empty() || !r.save_transfer.empty())
+      throw InputError(std::string(r.ply.empty() ? "--save-transfer" : "--ply") +
+                       " is not written with --mpi: rank 0 gathers the fits, not the transfer vectors");
+  }
+  if (!r.shard.empty()) {
+    if (r.mode == TransferMode::interreflected && !r.mesh.empty())
+      throw InputError("--shard cannot split an interreflected bake: each bounce needs the previous bounce of "
+                       "every vertex; run it in one process");
+    // A shard writes one table; the other outputs describe the whole mesh and come from
+    // the merged run.
+    const std::pair<const std::filesystem::path*, const char*> whole_mesh_outputs[] = {
+        {&r.json, "--json"}, {&r.ply, "--ply"}, {&r.save_transfer, "--save-transfer"}};
+    for (const auto& [path, what] : whole_mesh_outputs)
+      if (!path->empty())
+        throw InputError(std::string(what) + " is not written with --shard: a shard writes its partial table only "
+                         "(shtool merge joins them)");
+  }
 }
 
 }  // namespace
@@ -154,14 +182,24 @@ const std::vector<std::pair<std::string, NormalSource>>& normal_source_names() {
   return names;
 }
 
-FitZhReport run_fit_zh(const FitZhRequest& r, const FitZhCallbacks& cb) {
+namespace {
+
+FitZhReport run_fit_zh_on(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJob* mpi) {
   check_request(r);
+  std::optional<Shard> shard;  // --shard: a partial table
+  if (!r.shard.empty()) shard = parse_shard(r.shard);
+  // The rows this process fits: its shard, or its rank's share of an MPI job.
+  std::optional<Shard> rows_of = shard;
+  if (mpi) rows_of = Shard{static_cast<std::size_t>(mpi->rank()), static_cast<std::size_t>(mpi->size())};
   const int threads = resolve_threads(r.threads);
   const std::filesystem::path input_path = r.mesh.empty() ? r.transfer : r.mesh;
   const bool json_table = r.encoding == TableEncoding::json;
+  const std::string part =
+      shard ? ".part-" + std::to_string(shard->index) + "-of-" + std::to_string(shard->count) : std::string();
   const std::filesystem::path out =
       !r.out.empty() ? r.out
-                     : std::filesystem::path(input_path.stem().string() + (json_table ? ".zh.json" : ".zh.shtb"));
+                     : std::filesystem::path(input_path.stem().string() + ".zh" + part +
+                                             (json_table ? ".json" : ".shtb"));
   // Fail before a long bake, not after it: every output writable, none the input, no two
   // the same file.
   const std::pair<const std::filesystem::path*, const char*> outputs_named[] = {
@@ -185,6 +223,19 @@ FitZhReport run_fit_zh(const FitZhRequest& r, const FitZhCallbacks& cb) {
 
   // ---- transfer vectors
   int order = r.order;
+  std::size_t total = 0;  // vertices or vectors of the whole input
+  VertexRange range;      // the rows this run fits
+  // A shard past the input's last vertex would write an empty table merge cannot check.
+  auto shard_range_of = [&](const Shard& s, std::size_t count) {
+    const std::string items = std::to_string(count) + (r.mesh.empty() ? " vectors" : " vertices");
+    if (s.count > count && mpi)
+      throw InputError("--mpi: " + std::to_string(s.count) + " ranks for " + items +
+                       " would leave some without work (run at most " + std::to_string(count) + " ranks)");
+    if (s.count > count)
+      throw InputError("--shard " + r.shard + ": " + std::to_string(s.count) + " shards of " + items +
+                       " would leave some empty (N must be at most " + std::to_string(count) + ")");
+    return shard_range(count, s);
+  };
   std::vector<double> transfer;
   Mesh mesh;
   nlohmann::json params;
@@ -198,6 +249,11 @@ FitZhReport run_fit_zh(const FitZhRequest& r, const FitZhCallbacks& cb) {
                        "' has order " + std::to_string(file_order));
     order = file_order;
     params = {{"transfer", r.transfer.filename().string()}, {"input_crc32", input_crc32(text)}};
+    const std::size_t n2 = sh_count(order);
+    total = transfer.size() / n2;
+    range = rows_of ? shard_range_of(*rows_of, total) : VertexRange{0, total};
+    transfer.erase(transfer.begin() + range.end * n2, transfer.end());
+    transfer.erase(transfer.begin(), transfer.begin() + range.begin * n2);
   } else {
     mesh = load_mesh(r.mesh, r.normals);
     if (cb.warning) {
@@ -216,11 +272,16 @@ FitZhReport run_fit_zh(const FitZhRequest& r, const FitZhCallbacks& cb) {
     to.albedo = r.albedo;
     to.threads = threads;
     to.progress = cb.simulate_progress;
+    total = mesh.positions.size();
+    range = rows_of ? shard_range_of(*rows_of, total) : VertexRange{0, total};
+    to.first_vertex = range.begin;
+    to.end_vertex = range.end;
     const auto t0 = std::chrono::steady_clock::now();
     transfer = compute_transfer(mesh, to);
     report.simulate_seconds = seconds_since(t0);
     params = {{"mesh", r.mesh.filename().string()},
               {"input_crc32", mesh.input_crc32},
+              {"mesh_crc32", loaded_mesh_crc32(mesh)},
               {"mode", name_of(r.mode, transfer_mode_names())},
               {"rays", r.rays},
               {"normals", name_of(r.normals, normal_source_names())}};
@@ -246,7 +307,7 @@ FitZhReport run_fit_zh(const FitZhRequest& r, const FitZhCallbacks& cb) {
   fo.restart_above = r.restart_above;
   fo.seed = r.seed;
   const auto t1 = std::chrono::steady_clock::now();
-  const std::vector<ZhFit> fits = fit_zh_all(transfer, fo, threads, cb.fit_progress);
+  std::vector<ZhFit> fits = fit_zh_all(transfer, fo, threads, cb.fit_progress, range.begin);
   report.fit_seconds = seconds_since(t1);
 
   params["order"] = order;
@@ -258,8 +319,52 @@ FitZhReport run_fit_zh(const FitZhRequest& r, const FitZhCallbacks& cb) {
 
   // [4] Fig. 3: RMS error normalised by the total L2 length over all vertices.
   report.normalized_rms = normalized_rms(fits);
-  const Table table =
-      zh_fit_table(fits, order, r.lobes, mesh.source_index, meta, generator_record("shtool fit-zh", params));
+  nlohmann::json generator = generator_record("shtool fit-zh", params);
+  if (report.from_mesh && r.mode != TransferMode::unshadowed) {
+    const EmbreeIdentity embree = embree_identity();
+    generator["embree"] = {{"version", embree.version}, {"isa", embree.isa}};
+  }
+  std::vector<std::uint32_t> vertex_index;
+  if (!mesh.source_index.empty())
+    vertex_index.assign(mesh.source_index.begin() + range.begin, mesh.source_index.begin() + range.end);
+  if (rows_of) {
+    meta["shard"] = {{"index", rows_of->index}, {"count", rows_of->count}, {"first_vertex", range.begin},
+                     {"end_vertex", range.end}, {"vertices", total}};
+    report.sharded = shard.has_value();
+    report.shard_index = rows_of->index;
+    report.shard_count = rows_of->count;
+    report.first_vertex = range.begin;
+    report.end_vertex = range.end;
+    report.total = total;
+  }
+  Table table = zh_fit_table(fits, order, r.lobes, vertex_index, meta, generator);
+  if (mpi) {
+    // Every rank's rows reach rank 0 as a partial table and are joined by merge's code:
+    // the same checks (a rank on another Embree, ISA or input is refused) and the same
+    // bytes as shards merged.
+    const std::string mine = encode_table(table);
+    if (!mpi->all_ok(true)) throw InputError("rank " + std::to_string(mpi->rank()) + ": stopped, another rank failed");
+    const std::vector<std::string> parts = mpi->gather(mine);
+    report.mpi_rank = mpi->rank();
+    report.mpi_ranks = mpi->size();
+    if (mpi->rank() != 0) return report;
+    std::vector<NamedTable> tables;
+    for (std::size_t k = 0; k < parts.size(); ++k) {
+      const std::string name = "rank " + std::to_string(k);
+      Result<Table> t = read_table_bytes(std::as_bytes(std::span(parts[k])), name, {"zh-fit", 1});
+      if (!t) throw InputError("--mpi: " + t.error().message);
+      tables.push_back({name, std::move(t).value()});
+    }
+    try {
+      MergedFits merged = merge_zh_fit_tables(std::move(tables));
+      table = std::move(merged.table);
+      fits = std::move(merged.fits);
+    } catch (const InputError& e) {
+      throw InputError(std::string("--mpi: ") + e.what());
+    }
+    report.count = fits.size();
+    report.normalized_rms = normalized_rms(fits);
+  }
 
   // ---- outputs: everything is computed, then written as one set.
   std::vector<std::string> bytes;
@@ -275,6 +380,20 @@ FitZhReport run_fit_zh(const FitZhRequest& r, const FitZhCallbacks& cb) {
   if (!r.save_transfer.empty()) add(r.save_transfer, transfer_json(transfer, order));
   write_files_atomically(outputs);
   return report;
+}
+
+}  // namespace
+
+FitZhReport run_fit_zh(const FitZhRequest& r, const FitZhCallbacks& cb) {
+  if (!r.mpi) return run_fit_zh_on(r, cb, nullptr);
+  MpiJob mpi;
+  try {
+    return run_fit_zh_on(r, cb, &mpi);
+  } catch (...) {
+    // The other ranks are waiting for this one's verdict before they gather.
+    if (!mpi.synchronised()) mpi.all_ok(false);
+    throw;
+  }
 }
 
 }  // namespace shtool::fit

@@ -41,6 +41,12 @@ struct FitZhRequest {
   double restart_above = 0.05;
   bool direct = false;
   int threads = 0;  // 0: all cores
+  // "K/N" (fit/shard.h): fit only the K-th of N vertex ranges and write a partial table
+  // for `shtool merge`. Empty: the whole mesh.
+  std::string shard;
+  // Under mpirun: rank R of S fits shard R/S, rank 0 gathers the rows and writes every
+  // output (the other ranks write nothing). Needs a build with MPI.
+  bool mpi = false;
 };
 
 struct FitZhCallbacks {
@@ -56,6 +62,11 @@ struct FitZhReport {
   int order = 0, lobes = 0;
   double normalized_rms = 0;
   std::filesystem::path out;
+  // With a shard: its rows [first_vertex, end_vertex) of `total` vertices or vectors.
+  bool sharded = false;
+  std::size_t shard_index = 0, shard_count = 1, first_vertex = 0, end_vertex = 0, total = 0;
+  // With --mpi: this process's rank and the rank count; only rank 0 wrote.
+  int mpi_rank = 0, mpi_ranks = 0;
 };
 
 // The vectors of a --transfer document, vertex-major; sets `order`. Throws InputError

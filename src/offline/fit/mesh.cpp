@@ -11,6 +11,7 @@
 #include <tiny_obj_loader.h>
 
 #include "common/input_file.h"
+#include "shtool/table.h"
 
 namespace shtool::fit {
 namespace {
@@ -73,6 +74,24 @@ void check_obj_text(const std::filesystem::path& path, const std::string& text) 
 }
 
 }  // namespace
+
+std::uint32_t loaded_mesh_crc32(const Mesh& mesh) {
+  std::uint32_t crc = 0;
+  std::byte buf[3 * sizeof(double)];
+  auto add_vectors = [&](const std::vector<Eigen::Vector3d>& vs) {
+    for (const Eigen::Vector3d& v : vs) {
+      for (int c = 0; c < 3; ++c) table_detail::store_le(v[c], buf + c * sizeof(double));
+      crc = table_crc32(std::span<const std::byte>(buf, 3 * sizeof(double)), crc);
+    }
+  };
+  add_vectors(mesh.positions);
+  add_vectors(mesh.normals);
+  for (const Eigen::Vector3i& t : mesh.triangles) {
+    for (int c = 0; c < 3; ++c) table_detail::store_le(static_cast<std::int32_t>(t[c]), buf + c * sizeof(std::int32_t));
+    crc = table_crc32(std::span<const std::byte>(buf, 3 * sizeof(std::int32_t)), crc);
+  }
+  return crc;
+}
 
 double Mesh::bbox_diagonal() const {
   if (positions.empty()) return 0.0;

@@ -42,6 +42,12 @@ struct Mesh {
   double bbox_diagonal() const;
 };
 
+// CRC-32 (table_crc32) of the mesh as loaded: positions, normals (doubles) and triangles
+// (int32), little-endian. It names the geometry the rays saw, whatever file format or
+// loader version produced it, so bakes of the same mesh can be told apart from others
+// (input_crc32 names the file's bytes).
+std::uint32_t loaded_mesh_crc32(const Mesh& mesh);
+
 enum class NormalSource { automatic, file, computed };
 
 // Loads an OBJ file. Throws MeshError on: missing/unreadable file, parse failure,

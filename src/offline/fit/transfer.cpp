@@ -74,7 +74,14 @@ std::vector<double> compute_transfer(const Mesh& mesh, const TransferOptions& op
                                 std::to_string(mesh.normals.size()) + " normals");
   const int threads = resolve_threads(options.threads);
 
-  const std::size_t nv = mesh.positions.size();
+  const std::size_t first = options.first_vertex;
+  const std::size_t end = std::min(options.end_vertex, mesh.positions.size());
+  if (first >= end)
+    throw InputError("vertex range [" + std::to_string(first) + ", " + std::to_string(end) + ") of a mesh of " +
+                     std::to_string(mesh.positions.size()) + " vertices is empty");
+  if (options.mode == TransferMode::interreflected && (first != 0 || end != mesh.positions.size()))
+    throw InputError("interreflected transfer needs every vertex's previous bounce: it cannot simulate a range");
+  const std::size_t nv = end - first;
   const int n2 = sh_count(options.order);
   const int rays = options.rays;
   const double offset = options.offset_scale * mesh.bbox_diagonal();
@@ -113,7 +120,8 @@ std::vector<double> compute_transfer(const Mesh& mesh, const TransferOptions& op
 
   std::vector<double> result(nv * n2, 0.0);
   // Pass 0: direct transfer.
-  parallel_vertices(nv, threads, 0, progress_total, options, [&](std::size_t v) {
+  parallel_vertices(nv, threads, 0, progress_total, options, [&](std::size_t row) {
+    const std::size_t v = first + row;
     Eigen::Vector3d t, b;
     double ra, rb;
     ray_frame(v, t, b, ra, rb);
@@ -132,7 +140,7 @@ std::vector<double> compute_transfer(const Mesh& mesh, const TransferOptions& op
       eval_sh<double>(options.order, dir, y);
       for (int i = 0; i < n2; ++i) sum[i] += y[i];
     }
-    for (int i = 0; i < n2; ++i) result[v * n2 + i] = sum[i] / rays;
+    for (int i = 0; i < n2; ++i) result[row * n2 + i] = sum[i] / rays;
   });
 
   // Bounces (Sloan et al. 2002, interreflected transfer): light leaving a hit point q

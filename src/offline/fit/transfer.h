@@ -37,13 +37,18 @@ struct TransferOptions {
   // Ray origins move off the surface by offset_scale * bounding-box diagonal along the
   // vertex normal (avoids self-intersection with the vertex's own triangles).
   double offset_scale = 1e-4;
+  // Only vertices [first_vertex, end_vertex) are simulated (a shard of a bake; the scene
+  // is still the whole mesh). end_vertex past the mesh: up to its last vertex.
+  // Interreflected transfer needs every vertex's previous bounce, so it refuses a range.
+  std::size_t first_vertex = 0;
+  std::size_t end_vertex = static_cast<std::size_t>(-1);
   // Called from worker 0 only with (vertices done by all workers, total); may be empty.
   std::function<void(std::size_t, std::size_t)> progress;
 };
 
-// Transfer vectors, vertex-major: result[v * order^2 + i]. Bytes do not depend on the
-// thread count (fixed partition by vertex index, each vertex summed by one thread in a
-// fixed order). Throws InputError on bad options, std::runtime_error if
+// Transfer vectors, vertex-major: result[(v - first_vertex) * order^2 + i]. Bytes do not
+// depend on the thread count or the range (each vertex's rays are drawn from (seed, v)
+// and summed by one thread in a fixed order). Throws InputError on bad options, std::runtime_error if
 // Embree fails.
 std::vector<double> compute_transfer(const Mesh& mesh, const TransferOptions& options);
 

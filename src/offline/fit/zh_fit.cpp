@@ -389,13 +389,14 @@ ZhFit fit_zh(std::span<const double> t_in, const ZhFitOptions& o, std::uint64_t 
 }
 
 std::vector<ZhFit> fit_zh_all(std::span<const double> vectors, const ZhFitOptions& options, int threads,
-                              const std::function<void(std::size_t, std::size_t)>& progress) {
+                              const std::function<void(std::size_t, std::size_t)>& progress,
+                              std::uint64_t first_stream) {
   const std::size_t n2 = sh_count(options.order);
   if (vectors.size() % n2 != 0) throw InputError("fit_zh_all: size is not a multiple of order^2");
   const std::size_t count = vectors.size() / n2;
   std::vector<ZhFit> fits(count);
   parallel_for(count, resolve_threads(threads),
-               [&](std::size_t v) { fits[v] = fit_zh(vectors.subspan(v * n2, n2), options, v); }, progress);
+               [&](std::size_t v) { fits[v] = fit_zh(vectors.subspan(v * n2, n2), options, first_stream + v); }, progress);
   return fits;
 }
 

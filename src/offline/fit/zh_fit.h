@@ -90,9 +90,11 @@ double zh_objective(int order, std::span<const double> t, const std::vector<ZhLo
 ZhFit fit_zh(std::span<const double> t, const ZhFitOptions& options, std::uint64_t stream = 0);
 
 // Fits vectors[v * order^2 ...] for every v on `threads` workers (fixed partition by
-// index; stream = v, so results do not depend on the thread count). progress(done,
-// total) is called from worker 0 only.
+// index; stream = first_stream + v, so results depend on neither the thread count nor,
+// when a shard passes the global index of its first vector, the shard count).
+// progress(done, total) is called from worker 0 only.
 std::vector<ZhFit> fit_zh_all(std::span<const double> vectors, const ZhFitOptions& options, int threads,
-                              const std::function<void(std::size_t, std::size_t)>& progress = {});
+                              const std::function<void(std::size_t, std::size_t)>& progress = {},
+                              std::uint64_t first_stream = 0);
 
 }  // namespace shtool::fit

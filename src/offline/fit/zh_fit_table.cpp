@@ -38,6 +38,8 @@ Table zh_fit_table(const std::vector<ZhFit>& fits, int order, int lobes,
   meta["layout"] = "axes[v][k] unit axis, coeffs[v][k][l] = g*_l (lobe k adds g*_l y_l^m(axis) to SH (l,m)); "
                    "residual[v] = ||fit - t||, norm[v] = ||t||";
   Table table = new_table("zh-fit", order, generator, meta);
+  // 1.1 added meta "shard" (partial tables of a sharded bake, docs/fit-zh.md).
+  table.kind_version = "1.1";
   const auto V = static_cast<std::int64_t>(count), N = static_cast<std::int64_t>(nl);
   table.arrays.push_back(TableArray::from<double>("axes", {V, N, 3}, axes));
   table.arrays.push_back(TableArray::from<double>("coeffs", {V, N, order}, coeffs));

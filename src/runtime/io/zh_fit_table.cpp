@@ -4,6 +4,8 @@
 #include <limits>
 #include <string>
 
+#include <nlohmann/json.hpp>
+
 #include "io/table_format.h"
 
 namespace shtool {
@@ -34,6 +36,11 @@ template <class T>
 Result<ZhFitTable<T>> ZhFitTable<T>::from_table(const Table& t) {
   if (t.kind != kZhFitKind) return zh_fit_error("wrong kind '" + t.kind + "'");
   if (!is_supported_order(t.order)) return zh_fit_error("unsupported order " + std::to_string(t.order));
+  // A shard of a bake holds a range of the vertices only; shading it as the whole mesh
+  // would misplace every row.
+  const nlohmann::json meta = nlohmann::json::parse(t.meta, nullptr, /*allow_exceptions=*/false);
+  if (meta.is_object() && meta.contains("shard"))
+    return zh_fit_error("a partial table (fit-zh --shard): join the parts with shtool merge first");
   const TableArray* axes = t.find("axes");
   if (!axes || axes->shape.size() != 3 || axes->shape[2] != 3)
     return zh_fit_error("array 'axes' is missing or not of shape [V, N, 3]");

@@ -1,0 +1,35 @@
+// shtool merge: the partial tables of fit-zh --shard K/N joined into one table, byte for
+// byte the one a single process writes. The job is fit::merge_zh_fit_parts
+// (src/offline/fit/zh_fit_merge.h); this file parses and prints.
+#include <chrono>
+#include <iostream>
+#include <memory>
+#include <sstream>
+
+#include <CLI/CLI.hpp>
+
+#include "cli_common.h"
+#include "common/stopwatch.h"
+#include "fit/zh_fit_merge.h"
+
+namespace shtool::cli {
+
+void setup_merge(CLI::App& app) {
+  auto opt = std::make_shared<fit::MergeRequest>();
+  CLI::App* sub = app.add_subcommand("merge", "Join the partial tables of fit-zh --shard K/N into one table");
+  sub->add_option("parts", opt->parts, "partial tables, every shard 0..N-1 once, in any order")->required();
+  sub->add_option("--out", opt->out, "the merged table")->required();
+  add_enum_option(sub, "--format", opt->encoding, {{"binary", TableEncoding::binary}, {"json", TableEncoding::json}},
+                  "table encoding: binary or json", "binary");
+  sub->callback([opt]() {
+    const auto t0 = std::chrono::steady_clock::now();
+    const fit::MergeReport r = fit::merge_zh_fit_parts(*opt);
+    std::ostringstream summary;
+    summary.precision(3);
+    summary << "merge: " << r.parts << " parts, " << r.vertices << " vertices, " << seconds_since(t0)
+            << " s, wrote " << opt->out.string() << '\n';
+    std::cerr << summary.str();
+  });
+}
+
+}  // namespace shtool::cli

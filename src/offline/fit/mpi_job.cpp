@@ -1,0 +1,84 @@
+#include "fit/mpi_job.h"
+
+#include <climits>
+#include <string>
+
+#include "common/input_error.h"
+
+#ifdef SHTOOL_HAVE_MPI
+#include <mpi.h>
+#endif
+
+namespace shtool::fit {
+
+#ifdef SHTOOL_HAVE_MPI
+
+bool mpi_built() { return true; }
+
+MpiJob::MpiJob() {
+  int initialised = 0;
+  MPI_Initialized(&initialised);
+  if (!initialised) {
+    if (MPI_Init(nullptr, nullptr) != MPI_SUCCESS) throw InputError("--mpi: MPI_Init failed");
+    finalize_ = true;
+  }
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
+  MPI_Comm_size(MPI_COMM_WORLD, &size_);
+}
+
+MpiJob::~MpiJob() {
+  if (finalize_) MPI_Finalize();
+}
+
+bool MpiJob::all_ok(bool ok) {
+  int mine = ok ? 1 : 0, all = 0;
+  MPI_Allreduce(&mine, &all, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
+  synchronised_ = true;
+  return all == 1;
+}
+
+std::vector<std::string> MpiJob::gather(std::string_view mine) {
+  const long long count = static_cast<long long>(mine.size());
+  long long total = 0;
+  MPI_Allreduce(&count, &total, 1, MPI_LONG_LONG, MPI_SUM, MPI_COMM_WORLD);
+  // Decided from the sum every rank has, so that all of them stop, none waits.
+  if (total > INT_MAX)
+    throw InputError("--mpi: the partial tables exceed 2^31 - 1 bytes in all (MPI's int counts); use --shard "
+                     "and merge for a bake this large");
+  const int mine_count = static_cast<int>(count);
+  std::vector<int> counts(rank_ == 0 ? size_ : 0), offsets(counts.size());
+  MPI_Gather(&mine_count, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, MPI_COMM_WORLD);
+  std::string all;
+  for (std::size_t r = 0; r < counts.size(); ++r) {
+    offsets[r] = static_cast<int>(all.size());
+    all.resize(all.size() + counts[r]);
+  }
+  MPI_Gatherv(mine.data(), mine_count, MPI_BYTE, all.data(), counts.data(), offsets.data(), MPI_BYTE, 0,
+              MPI_COMM_WORLD);
+  std::vector<std::string> parts;
+  for (std::size_t r = 0; r < counts.size(); ++r) parts.push_back(all.substr(offsets[r], counts[r]));
+  return parts;
+}
+
+#else
+
+bool mpi_built() { return false; }
+
+MpiJob::MpiJob() {
+  throw InputError("--mpi: this shtool was built without MPI (install an MPI library, e.g. Debian's "
+                   "libopenmpi-dev, and configure again)");
+}
+
+MpiJob::~MpiJob() = default;
+
+// A one-rank job: what the MPI calls compute when MPI_COMM_WORLD has one process.
+bool MpiJob::all_ok(bool ok) {
+  synchronised_ = true;
+  return ok;
+}
+
+std::vector<std::string> MpiJob::gather(std::string_view mine) { return {std::string(mine)}; }
+
+#endif
+
+}  // namespace shtool::fit

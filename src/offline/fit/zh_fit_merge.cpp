@@ -1,0 +1,212 @@
+#include "fit/zh_fit_merge.h"
+
+#include <algorithm>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "common/atomic_file.h"
+#include "common/input_error.h"
+#include "common/table_writer.h"
+#include "fit/shard.h"
+#include "fit/zh_fit.h"
+#include "fit/zh_fit_table.h"
+
+namespace shtool::fit {
+namespace {
+
+struct Part {
+  std::string name;
+  Table table;
+  nlohmann::json generator, meta;  // meta without the shard record and the part's own summaries
+  Shard shard;
+  VertexRange range;
+  std::size_t total = 0;
+  std::size_t rows = 0;
+  int lobes = 0;
+  std::int64_t direct = -1;  // columns of 'direct', -1: none
+  bool vertex_index = false;
+};
+
+[[noreturn]] void fail(const std::string& name, const std::string& what) { throw InputError(name + ": " + what); }
+
+// The first place two JSON values differ, as "a.b.c (x vs y)"; empty when equal.
+std::string first_difference(const nlohmann::json& a, const nlohmann::json& b, const std::string& where) {
+  if (a.is_object() && b.is_object()) {
+    for (const auto& [key, value] : a.items()) {
+      if (!b.contains(key)) return where + "." + key + " (" + value.dump() + " vs absent)";
+      if (std::string d = first_difference(value, b.at(key), where + "." + key); !d.empty()) return d;
+    }
+    for (const auto& [key, value] : b.items())
+      if (!a.contains(key)) return where + "." + key + " (absent vs " + value.dump() + ")";
+    return {};
+  }
+  return a == b ? std::string() : where + " (" + a.dump() + " vs " + b.dump() + ")";
+}
+
+std::size_t shard_field(const Part& p, const nlohmann::json& shard, const char* name) {
+  if (!shard.contains(name) || !shard.at(name).is_number_unsigned())
+    fail(p.name, std::string("shard record has no non-negative integer '") + name + "'");
+  return shard.at(name).get<std::size_t>();
+}
+
+// The part's shape, checked against its own shard record, before any comparison.
+Part read_part(NamedTable named) {
+  Part p;
+  p.name = std::move(named.name);
+  p.table = std::move(named.table);
+  const std::string& path = p.name;
+  if (p.table.kind != "zh-fit") fail(path, "a table of kind '" + p.table.kind + "', not zh-fit");
+  p.generator = table_generator(p.table);
+  p.meta = table_meta(p.table);
+  if (!p.meta.is_object() || !p.meta.contains("shard") || !p.meta.at("shard").is_object())
+    fail(path, "not a partial table (no shard record): merge joins the outputs of fit-zh --shard K/N");
+  const nlohmann::json shard = p.meta.at("shard");
+  p.shard.index = shard_field(p, shard, "index");
+  p.shard.count = shard_field(p, shard, "count");
+  p.range = {shard_field(p, shard, "first_vertex"), shard_field(p, shard, "end_vertex")};
+  p.total = shard_field(p, shard, "vertices");
+  // 2^32 vertices at most: vertex_index is u32 (and keeps the range products in 64 bits).
+  if (p.shard.count < 1 || p.shard.count > kMaxShards || p.shard.index >= p.shard.count ||
+      p.shard.count > p.total || p.total > (std::size_t{1} << 32))
+    fail(path, "shard record " + shard.dump() + " is not a shard K of N of its vertices");
+  const VertexRange expected = shard_range(p.total, p.shard);
+  if (p.range.begin != expected.begin || p.range.end != expected.end)
+    fail(path, "shard record " + shard.dump() + ": shard " + std::to_string(p.shard.index) + " of " +
+                   std::to_string(p.shard.count) + " covers vertices [" + std::to_string(expected.begin) + ", " +
+                   std::to_string(expected.end) + ")");
+  p.rows = p.range.end - p.range.begin;
+
+  const TableArray* axes = p.table.find("axes");
+  if (!axes || axes->dtype != DType::f64 || axes->shape.size() != 3 || axes->shape[2] != 3 ||
+      axes->shape[0] != static_cast<std::int64_t>(p.rows) || axes->shape[1] < 1)
+    fail(path, "array 'axes' is missing or not of shape [" + std::to_string(p.rows) + ", N, 3]");
+  p.lobes = static_cast<int>(axes->shape[1]);
+  const std::int64_t rows = static_cast<std::int64_t>(p.rows);
+  auto expect_shape = [&](const char* name, DType dtype, const std::vector<std::int64_t>& shape) {
+    const TableArray* a = p.table.find(name);
+    if (!a || a->dtype != dtype || a->shape != shape) fail(path, std::string("array '") + name + "' is missing or misshapen");
+  };
+  expect_shape("coeffs", DType::f64, {rows, p.lobes, p.table.order});
+  expect_shape("residual", DType::f64, {rows});
+  expect_shape("norm", DType::f64, {rows});
+  if (const TableArray* d = p.table.find("direct")) {
+    if (d->shape.size() != 2) fail(path, "array 'direct' is not of shape [V, D]");
+    p.direct = d->shape[1];
+    expect_shape("direct", DType::f64, {rows, p.direct});
+  }
+  if (p.table.find("vertex_index")) {
+    p.vertex_index = true;
+    expect_shape("vertex_index", DType::u32, {rows});
+  }
+  // What describes the whole bake stays; the part's own row count and error go.
+  for (const char* key : {"shard", "vectors", "normalized_rms"}) p.meta.erase(key);
+  return p;
+}
+
+}  // namespace
+
+MergedFits merge_zh_fit_tables(std::vector<NamedTable> named) {
+  if (named.empty()) throw InputError("no partial tables to join");
+  std::vector<Part> parts;
+  parts.reserve(named.size());
+  for (NamedTable& t : named) parts.push_back(read_part(std::move(t)));
+
+  const Part& first = parts.front();
+  for (const Part& p : parts) {
+    auto differ = [&](const std::string& what) {
+      throw InputError("'" + p.name + "' and '" + first.name + "' are not parts of the same bake: " + what);
+    };
+    if (std::string d = first_difference(first.generator, p.generator, "generator"); !d.empty()) differ(d);
+    if (std::string d = first_difference(first.meta, p.meta, "meta"); !d.empty()) differ(d);
+    if (p.table.order != first.table.order)
+      differ("order " + std::to_string(first.table.order) + " vs " + std::to_string(p.table.order));
+    if (p.lobes != first.lobes) differ("lobes " + std::to_string(first.lobes) + " vs " + std::to_string(p.lobes));
+    if (p.direct != first.direct) differ("'direct' columns differ");
+    if (p.vertex_index != first.vertex_index) differ("one has 'vertex_index', the other not");
+    if (p.shard.count != first.shard.count || p.total != first.total)
+      differ("shard " + std::to_string(first.shard.index) + " of " + std::to_string(first.shard.count) + " (" +
+             std::to_string(first.total) + " vertices) vs shard " + std::to_string(p.shard.index) + " of " +
+             std::to_string(p.shard.count) + " (" + std::to_string(p.total) + " vertices)");
+  }
+  const std::size_t count = first.shard.count;
+  std::vector<const Part*> by_index(count, nullptr);
+  for (const Part& p : parts) {
+    if (by_index[p.shard.index])
+      throw InputError("shard " + std::to_string(p.shard.index) + " of " + std::to_string(count) +
+                       " is given twice ('" + by_index[p.shard.index]->name + "' and '" + p.name + "')");
+    by_index[p.shard.index] = &p;
+  }
+  std::string missing;
+  std::size_t missing_count = 0;
+  for (std::size_t k = 0; k < count; ++k)
+    if (!by_index[k] && ++missing_count <= 10) missing += (missing.empty() ? "" : ", ") + std::to_string(k);
+  if (missing_count)
+    throw InputError(std::to_string(missing_count) + " of " + std::to_string(count) +
+                     " shards missing (" + missing + (missing_count > 10 ? ", ..." : "") + ")");
+
+  // The rows in vertex order, through the writer a one-process run uses.
+  const int order = first.table.order, lobes = first.lobes;
+  std::vector<ZhFit> fits;
+  fits.reserve(first.total);
+  std::vector<std::uint32_t> vertex_index;
+  for (const Part* p : by_index) {
+    const std::vector<double> axes = p->table.find("axes")->values<double>();
+    const std::vector<double> coeffs = p->table.find("coeffs")->values<double>();
+    const std::vector<double> residual = p->table.find("residual")->values<double>();
+    const std::vector<double> norm = p->table.find("norm")->values<double>();
+    const std::vector<double> direct =
+        p->direct >= 0 ? p->table.find("direct")->values<double>() : std::vector<double>();
+    for (std::size_t v = 0; v < p->rows; ++v) {
+      ZhFit f;
+      f.lobes.resize(lobes);
+      for (int k = 0; k < lobes; ++k) {
+        const std::size_t a = (v * lobes + k) * 3, c = (v * lobes + k) * order;
+        f.lobes[k].axis = Eigen::Vector3d(axes[a], axes[a + 1], axes[a + 2]);
+        f.lobes[k].coeffs.assign(coeffs.begin() + c, coeffs.begin() + c + order);
+      }
+      if (p->direct > 0)
+        f.direct.assign(direct.begin() + v * p->direct, direct.begin() + (v + 1) * p->direct);
+      f.residual = residual[v];
+      f.norm = norm[v];
+      fits.push_back(std::move(f));
+    }
+    if (p->vertex_index) {
+      const std::vector<std::uint32_t> vi = p->table.find("vertex_index")->values<std::uint32_t>();
+      vertex_index.insert(vertex_index.end(), vi.begin(), vi.end());
+    }
+  }
+  MergedFits merged;
+  merged.table = zh_fit_table(fits, order, lobes, vertex_index, first.meta, first.generator);
+  merged.fits = std::move(fits);
+  return merged;
+}
+
+MergeReport merge_zh_fit_parts(const MergeRequest& r) {
+  if (r.parts.empty()) throw InputError("merge: give the partial tables to join");
+  if (r.out.empty()) throw InputError("merge: give --out TABLE");
+  check_output_path(r.out, "--out");
+  for (std::size_t i = 0; i < r.parts.size(); ++i) {
+    check_not_an_input(r.out, "--out", r.parts[i]);
+    for (std::size_t j = 0; j < i; ++j)
+      if (same_file(r.parts[i], r.parts[j]))
+        throw InputError("merge: '" + r.parts[i].string() + "' is given twice");
+  }
+  std::vector<NamedTable> tables;
+  tables.reserve(r.parts.size());
+  for (const std::filesystem::path& path : r.parts) {
+    Result<Table> t = read_table(path, {"zh-fit", 1});
+    if (!t) throw InputError(t.error().message);
+    tables.push_back({path.string(), std::move(t).value()});
+  }
+  MergedFits merged;
+  try {
+    merged = merge_zh_fit_tables(std::move(tables));
+  } catch (const InputError& e) {
+    throw InputError(std::string("merge: ") + e.what());
+  }
+  write_file_atomically(r.out, encode_table(merged.table, r.encoding));
+  return {r.parts.size(), merged.fits.size()};
+}
+
+}  // namespace shtool::fit

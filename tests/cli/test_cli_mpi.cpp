@@ -1,0 +1,132 @@
+// `shtool fit-zh --mpi`. Built with MPI: 2 and 3 ranks under mpiexec (oversubscribed on
+// a small machine) write the bytes one process writes, a refusal reaches every rank, and
+// rank 0 refuses a rank that read another input.
+// Built without MPI: --mpi is a clear error. A missing mpiexec fails the test.
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <string>
+#include <vector>
+
+#include <unistd.h>
+
+#include <gtest/gtest.h>
+
+#include "run_command.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using shtool::test::CommandResult;
+
+const std::string kExe = SHTOOL_EXE;
+const std::string kSpot = std::string(SHTOOL_SOURCE_DIR) + "/data/spot.obj";
+// Every random path runs: rays rotated per vertex, a multi-start on every vertex.
+const std::vector<std::string> kQuick = {"--rays", "8", "--order", "2", "--lobes", "2", "--starts", "1",
+                                         "--restart-above", "0"};
+
+fs::path scratch(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("shtool_test_cli_mpi_" + std::to_string(getpid()));
+  fs::create_directories(dir);
+  return dir / name;
+}
+
+std::string read_bytes(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+CommandResult run(const std::vector<std::string>& args) {
+  shtool::test::CommandOptions options;
+  options.timeout_seconds = 120;  // only turns a hang (a rank waiting forever) into a failure
+  CommandResult r = shtool::test::run_command(args, options);
+  EXPECT_FALSE(r.signaled) << shtool::test::describe_command(args) << " killed by signal " << r.signal;
+  return r;
+}
+
+std::vector<std::string> fit_args(const std::string& mesh, const std::vector<std::string>& extra) {
+  std::vector<std::string> args = {kExe, "fit-zh", mesh};
+  args.insert(args.end(), kQuick.begin(), kQuick.end());
+  args.insert(args.end(), extra.begin(), extra.end());
+  return args;
+}
+
+#ifdef SHTOOL_MPIEXEC
+
+CommandResult mpirun(int ranks, std::vector<std::string> args) {
+  // OpenMPI refuses to run as root unless told twice; test machines often are root.
+  setenv("OMPI_ALLOW_RUN_AS_ROOT", "1", 1);
+  setenv("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1", 1);
+  args.insert(args.begin(), {SHTOOL_MPIEXEC, "--oversubscribe", "-np", std::to_string(ranks)});
+  return run(args);
+}
+
+TEST(CliFitZhMpi, RanksWriteTheOneProcessTable) {
+  const fs::path whole = scratch("whole.shtb"), whole_json = scratch("whole.json");
+  const CommandResult one = run(fit_args(kSpot, {"--out", whole.string(), "--json", whole_json.string()}));
+  ASSERT_EQ(one.exit_code, 0) << one.err;
+  for (int ranks : {2, 3}) {
+    const fs::path out = scratch("mpi" + std::to_string(ranks) + ".shtb"),
+                   json = scratch("mpi" + std::to_string(ranks) + ".json");
+    const CommandResult r =
+        mpirun(ranks, fit_args(kSpot, {"--mpi", "--threads", "1", "--out", out.string(), "--json", json.string()}));
+    ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+    EXPECT_NE(r.err.find("on each of " + std::to_string(ranks) + " MPI ranks"), std::string::npos) << r.err;
+    EXPECT_EQ(read_bytes(out), read_bytes(whole)) << ranks << " ranks";
+    EXPECT_EQ(read_bytes(json), read_bytes(whole_json)) << ranks << " ranks";
+  }
+}
+
+TEST(CliFitZhMpi, ARefusalStopsEveryRank) {
+  const fs::path out = scratch("refused.shtb");
+  const CommandResult inter = mpirun(2, fit_args(kSpot, {"--mpi", "--mode", "interreflected", "--out", out.string()}));
+  EXPECT_NE(inter.exit_code, 0);
+  EXPECT_NE(inter.err.find("--mpi cannot run an interreflected bake"), std::string::npos) << inter.err;
+  EXPECT_FALSE(fs::exists(out));
+  // One vector for two ranks: both refuse after reading it.
+  const fs::path one = scratch("one.json");
+  std::ofstream(one) << R"({"order": 2, "vectors": [[0.8, 0.1, 0.2, 0.3]]})";
+  const CommandResult tiny = mpirun(2, {kExe, "fit-zh", "--transfer", one.string(), "--mpi", "--out", out.string()});
+  EXPECT_NE(tiny.exit_code, 0);
+  EXPECT_NE(tiny.err.find("2 ranks for 1 vectors would leave some without work"), std::string::npos) << tiny.err;
+  EXPECT_FALSE(fs::exists(out));
+}
+
+TEST(CliFitZhMpi, RankZeroRefusesRowsOfAnotherInput) {
+  // Two programs in one job (MPMD): rank 1 reads a mesh whose first vertex moved.
+  std::ifstream in(kSpot, std::ios::binary);
+  std::string text((std::istreambuf_iterator<char>(in)), {});
+  text.replace(text.find("0.348799"), 8, "0.348800");  // spot's first vertex
+  const fs::path moved = scratch("moved.obj"), out = scratch("mixed.shtb");
+  std::ofstream(moved) << text;
+  std::vector<std::string> args = fit_args(kSpot, {"--mpi", "--out", out.string()});
+  args.insert(args.begin(), {"-np", "1"});
+  args.push_back(":");
+  args.insert(args.end(), {"-np", "1"});
+  const std::vector<std::string> other = fit_args(moved.string(), {"--mpi", "--out", out.string()});
+  args.insert(args.end(), other.begin(), other.end());
+  setenv("OMPI_ALLOW_RUN_AS_ROOT", "1", 1);
+  setenv("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1", 1);
+  args.insert(args.begin(), {SHTOOL_MPIEXEC, "--oversubscribe"});
+  const CommandResult r = run(args);
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("'rank 1' and 'rank 0' are not parts of the same bake: generator.parameters.input_crc32"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(fs::exists(out));
+}
+
+#else
+
+TEST(CliFitZhMpi, WithoutMpiTheOptionIsAClearError) {
+  const fs::path out = scratch("nompi.shtb");
+  const CommandResult r = run(fit_args(kSpot, {"--mpi", "--out", out.string()}));
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("built without MPI"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out));
+}
+
+#endif
+
+}  // namespace
