@@ -56,9 +56,9 @@ template <class T>
 struct ZyzCosSin {
   T ca = 1, sa = 0, cb = 1, sb = 0, cg = 1, sg = 0;
 };
-// Inline: it is on the path of every rotation. Two divisions and one square root, and
-// no branch on the hemisphere of the tilt: the divider's latency and a mispredicted
-// branch each cost as much as a band of a low-order rotation.
+// Inline: it is on the path of every rotation. One square root and two divisions, all
+// three independent, and no branch on the hemisphere of the tilt: the divider's latency
+// and a mispredicted branch each cost as much as a band of a low-order rotation.
 template <class T>
 inline ZyzCosSin<T> zyz_cos_sin_from_matrix(const Mat3<T>& r) {
   // R = Rz(a) Ry(b) Rz(g):
@@ -78,7 +78,9 @@ inline ZyzCosSin<T> zyz_cos_sin_from_matrix(const Mat3<T>& r) {
   const T u = r(1, 1) + s * r(0, 0), v = s * r(1, 0) - r(0, 1);
   const T norm = 1 + s * e.cb;
   if (sb2 >= std::numeric_limits<T>::min()) {
-    const T inv_sb = 1 / e.sb, inv_g = 1 / (e.sb * norm);
+    // 1 / sin b = sin b / sin^2 b: the division runs beside the square root instead of
+    // after it (their latencies dominate a low-order set()).
+    const T inv_sb = e.sb * (1 / sb2), inv_g = inv_sb * (1 / norm);
     e.ca = r(0, 2) * inv_sb;
     e.sa = r(1, 2) * inv_sb;
     e.cg = (u * r(0, 2) + v * r(1, 2)) * inv_g;

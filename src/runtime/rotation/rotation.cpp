@@ -356,11 +356,11 @@ inline ZyzLanes<detail::BatchPack<T>> zyz_cos_sin_lanes(const detail::BatchPack<
   const P u = at(1, 1) + s * at(0, 0), v = s * at(1, 0) - at(0, 1);
   const P norm = one + s * e.cb;
   const auto tilted = sb2 >= P{} + std::numeric_limits<T>::min();
-  const P inv_sb = one / e.sb, inv_g = one / (e.sb * norm), inv_lock = one / norm;
+  const P inv_norm = one / norm, inv_sb = e.sb * (one / sb2), inv_g = inv_sb * inv_norm;
   e.ca = tilted ? at(0, 2) * inv_sb : one;
   e.sa = tilted ? at(1, 2) * inv_sb : zero;
-  e.cg = tilted ? (u * at(0, 2) + v * at(1, 2)) * inv_g : u * inv_lock;
-  e.sg = s * (tilted ? (v * at(0, 2) - u * at(1, 2)) * inv_g : v * inv_lock);
+  e.cg = tilted ? (u * at(0, 2) + v * at(1, 2)) * inv_g : u * inv_norm;
+  e.sg = s * (tilted ? (v * at(0, 2) - u * at(1, 2)) * inv_g : v * inv_norm);
   return e;
 }
 
