@@ -43,6 +43,7 @@ void setup_fit_zh(CLI::App& app) {
   sub->add_option("--json", opt->json, "also write the fits as JSON to this file");
   sub->add_option("--ply", opt->ply, "also write the mesh with per-vertex colours (transfer DC, fit error)");
   sub->add_option("--save-transfer", opt->save_transfer, "also write the simulated transfer vectors (--transfer format)");
+  sub->add_option("--gltf", opt->gltf, "also write the mesh with the fits as vertex attributes (binary glTF, .glb)");
   CLI::Option* order = sub->add_option("--order", opt->order, "SH order n (bands 0..n-1)")->capture_default_str();
   sub->add_option("--lobes", opt->lobes, "ZH lobes N per vertex")->capture_default_str();
   sub->add_option("--rays", opt->rays, "directions per vertex")->capture_default_str();

@@ -72,18 +72,22 @@ CommandResult mpirun(int ranks, std::vector<std::string> args) {
 }
 
 TEST(CliFitZhMpi, RanksWriteTheOneProcessTable) {
-  const fs::path whole = scratch("whole.shtb"), whole_json = scratch("whole.json");
-  const CommandResult one = run(fit_args(kSpot, {"--out", whole.string(), "--json", whole_json.string()}));
+  const fs::path whole = scratch("whole.shtb"), whole_json = scratch("whole.json"), whole_glb = scratch("whole.glb");
+  const CommandResult one = run(
+      fit_args(kSpot, {"--out", whole.string(), "--json", whole_json.string(), "--gltf", whole_glb.string()}));
   ASSERT_EQ(one.exit_code, 0) << one.err;
   for (int ranks : {2, 3}) {
     const fs::path out = scratch("mpi" + std::to_string(ranks) + ".shtb"),
-                   json = scratch("mpi" + std::to_string(ranks) + ".json");
-    const CommandResult r =
-        mpirun(ranks, fit_args(kSpot, {"--mpi", "--threads", "1", "--out", out.string(), "--json", json.string()}));
+                   json = scratch("mpi" + std::to_string(ranks) + ".json"),
+                   glb = scratch("mpi" + std::to_string(ranks) + ".glb");
+    // --gltf: rank 0 gathers the other ranks' transfer DC for the vertex colours.
+    const CommandResult r = mpirun(ranks, fit_args(kSpot, {"--mpi", "--threads", "1", "--out", out.string(), "--json",
+                                                           json.string(), "--gltf", glb.string()}));
     ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
     EXPECT_NE(r.err.find("on each of " + std::to_string(ranks) + " MPI ranks"), std::string::npos) << r.err;
     EXPECT_EQ(read_bytes(out), read_bytes(whole)) << ranks << " ranks";
     EXPECT_EQ(read_bytes(json), read_bytes(whole_json)) << ranks << " ranks";
+    EXPECT_EQ(read_bytes(glb), read_bytes(whole_glb)) << ranks << " ranks";
   }
 }
 

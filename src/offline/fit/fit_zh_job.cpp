@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <numbers>
 #include <optional>
 #include <span>
@@ -22,6 +23,7 @@
 #include "fit/mpi_job.h"
 #include "fit/shard.h"
 #include "fit/zh_fit.h"
+#include "fit/zh_fit_gltf.h"
 #include "fit/zh_fit_merge.h"
 #include "fit/zh_fit_table.h"
 #include "shtool/sh.h"
@@ -44,10 +46,9 @@ std::string ply_text(const Mesh& mesh, const std::vector<double>& transfer, int 
     << "property uchar red\nproperty uchar green\nproperty uchar blue\n"
     << "property float transfer_dc\nproperty float fit_error\n"
     << "element face " << mesh.triangles.size() << "\nproperty list uchar int vertex_indices\nend_header\n";
-  const double y00 = 0.5 / std::sqrt(std::numbers::pi);  // DC of the unshadowed transfer
   const std::size_t n2 = sh_count(order);
   for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
-    const double dc = std::clamp(transfer[v * n2] / y00, 0.0, 1.0);
+    const double dc = transfer_dc_grey(transfer[v * n2]);
     const double err = fits[v].norm > 0 ? fits[v].residual / fits[v].norm : 0.0;
     const double e = std::clamp(4.0 * err, 0.0, 1.0);  // 25% relative error is full red
     auto byte = [](double x) { return static_cast<int>(std::lround(255.0 * x)); };
@@ -88,6 +89,7 @@ void check_request(const FitZhRequest& r) {
   if (!r.transfer.empty() && !r.ply.empty()) throw InputError("--ply needs a mesh (not --transfer)");
   if (!r.transfer.empty() && !r.save_transfer.empty())
     throw InputError("--save-transfer needs a mesh (not --transfer)");
+  if (!r.transfer.empty() && !r.gltf.empty()) throw InputError("--gltf needs a mesh (not --transfer)");
   if (r.mpi) {
     if (!r.shard.empty()) throw InputError("--mpi and --shard both split the vertices: give one of them");
     if (r.mode == TransferMode::interreflected && !r.mesh.empty())
@@ -104,7 +106,7 @@ void check_request(const FitZhRequest& r) {
     // A shard writes one table; the other outputs describe the whole mesh and come from
     // the merged run.
     const std::pair<const std::filesystem::path*, const char*> whole_mesh_outputs[] = {
-        {&r.json, "--json"}, {&r.ply, "--ply"}, {&r.save_transfer, "--save-transfer"}};
+        {&r.json, "--json"}, {&r.ply, "--ply"}, {&r.save_transfer, "--save-transfer"}, {&r.gltf, "--gltf"}};
     for (const auto& [path, what] : whole_mesh_outputs)
       if (!path->empty())
         throw InputError(std::string(what) + " is not written with --shard: a shard writes its partial table only "
@@ -203,7 +205,8 @@ FitZhReport run_fit_zh_on(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJo
   // Fail before a long bake, not after it: every output writable, none the input, no two
   // the same file.
   const std::pair<const std::filesystem::path*, const char*> outputs_named[] = {
-      {&out, "--out"}, {&r.json, "--json"}, {&r.ply, "--ply"}, {&r.save_transfer, "--save-transfer"}};
+      {&out, "--out"}, {&r.json, "--json"}, {&r.ply, "--ply"}, {&r.save_transfer, "--save-transfer"},
+      {&r.gltf, "--gltf"}};
   for (std::size_t i = 0; i < std::size(outputs_named); ++i) {
     const auto& [path, what] = outputs_named[i];
     if (path->empty()) continue;
@@ -338,6 +341,9 @@ FitZhReport run_fit_zh_on(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJo
     report.total = total;
   }
   Table table = zh_fit_table(fits, order, r.lobes, vertex_index, meta, generator);
+  std::vector<double> transfer_dc;  // --gltf colours each vertex by its transfer's t_00
+  if (!r.gltf.empty())
+    for (std::size_t v = 0; v < report.count; ++v) transfer_dc.push_back(transfer[v * sh_count(order)]);
   if (mpi) {
     // Every rank's rows reach rank 0 as a partial table and are joined by merge's code:
     // the same checks (a rank on another Embree, ISA or input is refused) and the same
@@ -345,6 +351,18 @@ FitZhReport run_fit_zh_on(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJo
     const std::string mine = encode_table(table);
     if (!mpi->all_ok(true)) throw InputError("rank " + std::to_string(mpi->rank()) + ": stopped, another rank failed");
     const std::vector<std::string> parts = mpi->gather(mine);
+    // Only the rank that simulated a vertex has its transfer DC: they reach rank 0 beside
+    // the rows, in rank order as the rows are.
+    if (!r.gltf.empty()) {
+      const std::vector<std::string> dc_parts = mpi->gather(
+          std::string_view(reinterpret_cast<const char*>(transfer_dc.data()), transfer_dc.size() * sizeof(double)));
+      transfer_dc.clear();
+      for (const std::string& part : dc_parts) {
+        const std::size_t at = transfer_dc.size();
+        transfer_dc.resize(at + part.size() / sizeof(double));
+        std::memcpy(transfer_dc.data() + at, part.data(), part.size() / sizeof(double) * sizeof(double));
+      }
+    }
     report.mpi_rank = mpi->rank();
     report.mpi_ranks = mpi->size();
     if (mpi->rank() != 0) return report;
@@ -368,7 +386,7 @@ FitZhReport run_fit_zh_on(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJo
 
   // ---- outputs: everything is computed, then written as one set.
   std::vector<std::string> bytes;
-  bytes.reserve(4);  // outputs hold views of these
+  bytes.reserve(5);  // outputs hold views of these
   std::vector<OutputFile> outputs;
   auto add = [&](const std::filesystem::path& path, std::string content) {
     bytes.push_back(std::move(content));
@@ -378,6 +396,9 @@ FitZhReport run_fit_zh_on(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJo
   if (!r.json.empty()) add(r.json, fits_json(fits, order, r.lobes, r.direct));
   if (!r.ply.empty()) add(r.ply, ply_text(mesh, transfer, order, fits));
   if (!r.save_transfer.empty()) add(r.save_transfer, transfer_json(transfer, order));
+  if (!r.gltf.empty())
+    add(r.gltf, zh_fit_glb(mesh, fits, transfer_dc, order, r.lobes, r.direct,
+                           "shtool " + generator["version"].get<std::string>() + " fit-zh"));
   write_files_atomically(outputs);
   return report;
 }

@@ -1,6 +1,7 @@
 // fit-zh as a library job: PRT transfer simulated on a mesh (or SH vectors read from
 // JSON), a multi-lobe ZH fit per vertex ([4] Sec. 4.1), and the outputs (zh-fit table,
-// JSON fits, coloured PLY, the transfer vectors) written all together or not at all.
+// JSON fits, coloured PLY, the transfer vectors, a glTF mesh with the fits) written all
+// together or not at all.
 #pragma once
 
 #include <cstdint>
@@ -27,6 +28,8 @@ struct FitZhRequest {
   std::filesystem::path transfer;  // JSON {"order": n, "vectors": [[n^2 numbers], ...]}
   // Outputs. `out` empty: <input stem>.zh.shtb (or .zh.json) in the current folder.
   std::filesystem::path out, json, ply, save_transfer;
+  // The mesh with its fits as vertex attributes, binary glTF (fit/zh_fit_gltf.h).
+  std::filesystem::path gltf;
   TableEncoding encoding = TableEncoding::binary;
   TransferMode mode = TransferMode::shadowed;
   NormalSource normals = NormalSource::automatic;

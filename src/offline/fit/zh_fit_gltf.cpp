@@ -1,0 +1,177 @@
+#include "fit/zh_fit_gltf.h"
+
+#include <tiny_gltf.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
+#include <numbers>
+#include <sstream>
+#include <stdexcept>
+
+#include "common/input_error.h"
+
+namespace shtool::fit {
+
+double transfer_dc_grey(double t00) {
+  const double y00 = 0.5 / std::sqrt(std::numbers::pi);
+  return std::clamp(t00 / y00, 0.0, 1.0);
+}
+
+namespace {
+
+// One buffer, one buffer view per accessor: no view is shared, so none needs a byteStride,
+// and every view starts on a 4-byte boundary as float accessors require.
+class ModelBuilder {
+ public:
+  explicit ModelBuilder(tinygltf::Model& model) : model_(model) { model_.buffers.emplace_back(); }
+
+  int view(const void* bytes, std::size_t size, int target) {
+    std::vector<unsigned char>& data = model_.buffers[0].data;
+    tinygltf::BufferView v;
+    v.buffer = 0;
+    v.byteOffset = data.size();
+    v.byteLength = size;
+    v.target = target;
+    const auto* p = static_cast<const unsigned char*>(bytes);
+    data.insert(data.end(), p, p + size);
+    data.resize((data.size() + 3) / 4 * 4, 0);
+    model_.bufferViews.push_back(v);
+    return static_cast<int>(model_.bufferViews.size()) - 1;
+  }
+
+  // `values` holds `components` floats per vertex; with `bounds`, min and max per
+  // component (POSITION must have them), taken from the floats as stored.
+  int floats(const std::vector<float>& values, int type, bool bounds = false) {
+    const int components = tinygltf::GetNumComponentsInType(type);
+    tinygltf::Accessor a;
+    a.bufferView = view(values.data(), values.size() * sizeof(float), TINYGLTF_TARGET_ARRAY_BUFFER);
+    a.componentType = TINYGLTF_COMPONENT_TYPE_FLOAT;
+    a.type = type;
+    a.count = values.size() / components;
+    if (bounds) {
+      a.minValues.assign(components, std::numeric_limits<double>::infinity());
+      a.maxValues.assign(components, -std::numeric_limits<double>::infinity());
+      for (std::size_t i = 0; i < values.size(); ++i) {
+        a.minValues[i % components] = std::min<double>(a.minValues[i % components], values[i]);
+        a.maxValues[i % components] = std::max<double>(a.maxValues[i % components], values[i]);
+      }
+    }
+    model_.accessors.push_back(a);
+    return static_cast<int>(model_.accessors.size()) - 1;
+  }
+
+  template <typename Index>
+  int indices(const std::vector<Eigen::Vector3i>& triangles, int component_type) {
+    std::vector<Index> index;
+    index.reserve(triangles.size() * 3);
+    for (const Eigen::Vector3i& t : triangles)
+      for (int c = 0; c < 3; ++c) index.push_back(static_cast<Index>(t[c]));
+    tinygltf::Accessor a;
+    a.bufferView = view(index.data(), index.size() * sizeof(Index), TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER);
+    a.componentType = component_type;
+    a.type = TINYGLTF_TYPE_SCALAR;
+    a.count = index.size();
+    model_.accessors.push_back(a);
+    return static_cast<int>(model_.accessors.size()) - 1;
+  }
+
+ private:
+  tinygltf::Model& model_;
+};
+
+std::vector<float> vec3s(const std::vector<Eigen::Vector3d>& v) {
+  std::vector<float> out;
+  out.reserve(v.size() * 3);
+  for (const Eigen::Vector3d& x : v)
+    for (int c = 0; c < 3; ++c) out.push_back(static_cast<float>(x[c]));
+  return out;
+}
+
+// `count` values starting at `first` of each vertex's `source`, as VEC4 rows, zero past
+// the end of the source.
+template <typename Source>
+std::vector<float> vec4_rows(std::size_t vertices, std::size_t first, const Source& source) {
+  std::vector<float> out(vertices * 4, 0.0f);
+  for (std::size_t v = 0; v < vertices; ++v) {
+    const std::vector<double>& values = source(v);
+    for (std::size_t c = 0; c < 4 && first + c < values.size(); ++c)
+      out[v * 4 + c] = static_cast<float>(values[first + c]);
+  }
+  return out;
+}
+
+}  // namespace
+
+std::string zh_fit_glb(const Mesh& mesh, const std::vector<ZhFit>& fits, std::span<const double> transfer_dc,
+                       int order, int lobes, bool direct, const std::string& generator) {
+  const std::size_t n = mesh.positions.size();
+  if (fits.size() != n || transfer_dc.size() != n)
+    throw InputError("--gltf: " + std::to_string(fits.size()) + " fits and " + std::to_string(transfer_dc.size()) +
+                     " transfer vectors for a mesh of " + std::to_string(n) + " vertices");
+  const std::size_t coeff_groups = (static_cast<std::size_t>(order) + 3) / 4;
+  const std::size_t floats_per_vertex = 9 + lobes * (3 + 4 * coeff_groups) + (direct ? 4 : 0);
+  // GLB lengths are 32-bit; the JSON chunk is far below the 1 MB margin.
+  const double bytes = 4.0 * (double(n) * floats_per_vertex + 3.0 * double(mesh.triangles.size()));
+  if (bytes > double(std::numeric_limits<std::uint32_t>::max()) - (1 << 20))
+    throw InputError("--gltf: the mesh and its fit would take " + std::to_string(bytes / 1e9) +
+                     " GB, past the 4 GB limit of a .glb");
+
+  tinygltf::Model model;
+  ModelBuilder b(model);
+  tinygltf::Primitive p;
+  p.mode = TINYGLTF_MODE_TRIANGLES;
+  p.attributes["POSITION"] = b.floats(vec3s(mesh.positions), TINYGLTF_TYPE_VEC3, true);
+  p.attributes["NORMAL"] = b.floats(vec3s(mesh.normals), TINYGLTF_TYPE_VEC3);
+  std::vector<float> grey(n * 3);
+  for (std::size_t v = 0; v < n; ++v)
+    std::fill_n(grey.begin() + v * 3, 3, static_cast<float>(transfer_dc_grey(transfer_dc[v])));
+  p.attributes["COLOR_0"] = b.floats(grey, TINYGLTF_TYPE_VEC3);
+  for (int k = 0; k < lobes; ++k) {
+    std::vector<float> axis(n * 3);
+    for (std::size_t v = 0; v < n; ++v)
+      for (int c = 0; c < 3; ++c) axis[v * 3 + c] = static_cast<float>(fits[v].lobes.at(k).axis[c]);
+    const std::string lobe = std::to_string(k);
+    p.attributes["_ZH_AXIS_" + lobe] = b.floats(axis, TINYGLTF_TYPE_VEC3);
+    for (std::size_t j = 0; j < coeff_groups; ++j)
+      p.attributes["_ZH_COEFFS_" + lobe + "_" + std::to_string(j)] = b.floats(
+          vec4_rows(n, 4 * j, [&](std::size_t v) -> const std::vector<double>& { return fits[v].lobes.at(k).coeffs; }),
+          TINYGLTF_TYPE_VEC4);
+  }
+  if (direct)
+    p.attributes["_ZH_DIRECT"] = b.floats(
+        vec4_rows(n, 0, [&](std::size_t v) -> const std::vector<double>& { return fits[v].direct; }),
+        TINYGLTF_TYPE_VEC4);
+  // Indices above the type's maximum would be read as primitive restarts.
+  p.indices = n < 0xFFFF ? b.indices<std::uint16_t>(mesh.triangles, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT)
+                         : b.indices<std::uint32_t>(mesh.triangles, TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT);
+
+  tinygltf::Mesh m;
+  m.name = "zh-fit";
+  m.primitives.push_back(std::move(p));
+  // What an engine needs to read the attributes without counting them.
+  tinygltf::Value::Object fit{{"order", tinygltf::Value(order)},
+                              {"lobes", tinygltf::Value(lobes)},
+                              {"direct", tinygltf::Value(direct)}};
+  m.extras = tinygltf::Value(tinygltf::Value::Object{{"shtool_zh_fit", tinygltf::Value(std::move(fit))}});
+  model.meshes.push_back(std::move(m));
+  tinygltf::Node node;
+  node.mesh = 0;
+  model.nodes.push_back(node);
+  tinygltf::Scene scene;
+  scene.nodes = {0};
+  model.scenes.push_back(scene);
+  model.defaultScene = 0;
+  model.asset.version = "2.0";
+  model.asset.generator = generator;
+
+  std::ostringstream out;
+  tinygltf::TinyGLTF writer;
+  if (!writer.WriteGltfSceneToStream(&model, out, false, true) || !out)
+    throw std::runtime_error("tinygltf could not write the model");
+  return out.str();
+}
+
+}  // namespace shtool::fit
