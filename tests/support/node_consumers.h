@@ -1,8 +1,8 @@
 // The consumers' own code for the interop tests: three.js, Babylon.js,
-// @playcanvas/splat-transform and the Khronos glTF validator, installed from npm (tests/consumer/node/package.json, exact
-// versions) into <build>/node_consumers once, with the scripts of tests/consumer/node
-// copied beside them. Returns false with the reason when node or npm cannot do it; the
-// tests then fail under CI and skip elsewhere.
+// @playcanvas/splat-transform and the Khronos glTF validator, installed from npm
+// (tests/consumer/node/package.json, exact versions) into <build>/node_consumers once,
+// with the scripts of tests/consumer/node copied beside them. Returns false with the
+// reason when node or npm cannot do it; the tests then fail under CI and skip elsewhere.
 #pragma once
 
 #include <filesystem>
