@@ -1,10 +1,11 @@
 // `shtool fit-zh --gltf`: the .glb is read back with tinygltf and every attribute compared
 // with what the same run wrote elsewhere (the --json fits, the --save-transfer DC, the
-// mesh as shtool loads it); the Khronos glTF validator checks the file in node; refusals
-// name the problem and write nothing.
+// mesh as shtool loads it); the Khronos glTF validator checks the file and three.js's
+// GLTFLoader reads it, both in node; refusals name the problem and write nothing.
 #include <tiny_gltf.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -236,6 +237,47 @@ TEST(CliFitZhGltf, KhronosValidatorFindsNoError) {
     EXPECT_EQ(report["info"]["drawCallCount"], 1) << report.dump(1);
     std::cout << b.name << ": " << report["validatorVersion"].get<std::string>() << ", " << issues["numInfos"]
               << " infos, " << issues["numHints"] << " hints " << issues["messages"].dump() << '\n';
+  }
+}
+
+// three.js's GLTFLoader, as an engine reads the file: every attribute under its
+// documented three.js name with the floats the file holds, the indices, the extras.
+TEST(CliFitZhGltf, ThreeJsReadsTheAttributes) {
+  std::string why;
+  if (!shtool::test::node_consumers(why)) {
+    if (std::getenv("CI")) FAIL() << why;
+    GTEST_SKIP() << why << " (set CI to make this a failure)";
+  }
+  for (const Bake& b : bakes()) {
+    SCOPED_TRACE(b.name);
+    const CommandResult r = shtool::test::run_command(
+        {"node", (shtool::test::node_consumers_dir() / "read_gltf_three.mjs").string(), b.glb().string()});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const nlohmann::json three = nlohmann::json::parse(r.out);
+    EXPECT_EQ(three["meshes"], 1);
+    EXPECT_EQ(three["vertexColors"], true);  // COLOR_0 turns them on
+    EXPECT_EQ(three["userData"]["shtool_zh_fit"]["order"], b.order);
+    const tinygltf::Model m = load(b.glb());
+    const tinygltf::Primitive& p = m.meshes[0].primitives[0];
+    const std::map<std::string, std::string> standard = {
+        {"POSITION", "position"}, {"NORMAL", "normal"}, {"COLOR_0", "color"}};
+    ASSERT_EQ(three["attributes"].size(), p.attributes.size());
+    for (const auto& [name, index] : p.attributes) {
+      std::string lower = name;
+      std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char c) { return std::tolower(c); });
+      const std::string three_name = standard.count(name) ? standard.at(name) : lower;
+      ASSERT_TRUE(three["attributes"].contains(three_name)) << name << " as " << three_name;
+      const nlohmann::json& a = three["attributes"][three_name];
+      const tinygltf::Accessor& acc = m.accessors[index];
+      const std::vector<float> want = floats(m, index, acc.type, acc.count);
+      EXPECT_EQ(a["itemSize"], tinygltf::GetNumComponentsInType(acc.type)) << name;
+      ASSERT_EQ(a["values"].size(), want.size()) << name;
+      for (std::size_t i = 0; i < want.size(); ++i) ASSERT_EQ(a["values"][i].get<double>(), want[i]) << name << " " << i;
+    }
+    const shtool::fit::Mesh mesh = shtool::fit::load_mesh(kSpot);
+    ASSERT_EQ(three["index"].size(), mesh.triangles.size() * 3);
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+      for (int c = 0; c < 3; ++c) ASSERT_EQ(three["index"][t * 3 + c], mesh.triangles[t][c]);
   }
 }
 
