@@ -76,6 +76,7 @@ TEST(CliFitZhMpi, RanksWriteTheOneProcessTable) {
   const CommandResult one = run(
       fit_args(kSpot, {"--out", whole.string(), "--json", whole_json.string(), "--gltf", whole_glb.string()}));
   ASSERT_EQ(one.exit_code, 0) << one.err;
+  ASSERT_TRUE(fs::exists(whole_glb));
   for (int ranks : {2, 3}) {
     const fs::path out = scratch("mpi" + std::to_string(ranks) + ".shtb"),
                    json = scratch("mpi" + std::to_string(ranks) + ".json"),
