@@ -66,10 +66,14 @@ const std::vector<Bake>& bakes() {
   static bool baked = false;
   if (!baked) {
     for (const Bake& b : list) {
-      std::vector<std::string> args = {"fit-zh", kSpot, "--rays", "64", "--order", std::to_string(b.order),
-                                       "--lobes", std::to_string(b.lobes), "--gltf", b.glb().string(), "--json",
-                                       b.json().string(), "--save-transfer", b.transfer().string(), "--out",
-                                       scratch(b.name + ".shtb").string()};
+      std::vector<std::string> args = {"fit-zh",          kSpot,
+                                       "--rays",          "64",
+                                       "--order",         std::to_string(b.order),
+                                       "--lobes",         std::to_string(b.lobes),
+                                       "--gltf",          b.glb().string(),
+                                       "--json",          b.json().string(),
+                                       "--save-transfer", b.transfer().string(),
+                                       "--out",           scratch(b.name + ".shtb").string()};
       args.insert(args.end(), b.extra.begin(), b.extra.end());
       const CommandResult r = run(args);
       EXPECT_EQ(r.exit_code, 0) << r.err;
@@ -188,7 +192,8 @@ TEST(CliFitZhGltf, AttributesAreTheFitsOfTheSameRun) {
         for (std::size_t v = 0; v < n; ++v)
           for (int c = 0; c < 4; ++c) {
             const int l = 4 * j + c;
-            ASSERT_EQ(g[v * 4 + c], l < b.order ? static_cast<float>(fits[v]["lobes"][k]["coeffs"][l].get<double>()) : 0.0f)
+            ASSERT_EQ(g[v * 4 + c],
+                      l < b.order ? static_cast<float>(fits[v]["lobes"][k]["coeffs"][l].get<double>()) : 0.0f)
                 << "vertex " << v << " lobe " << k << " band " << l;
           }
       }
@@ -272,7 +277,8 @@ TEST(CliFitZhGltf, ThreeJsReadsTheAttributes) {
       const std::vector<float> want = floats(m, index, acc.type, acc.count);
       EXPECT_EQ(a["itemSize"], tinygltf::GetNumComponentsInType(acc.type)) << name;
       ASSERT_EQ(a["values"].size(), want.size()) << name;
-      for (std::size_t i = 0; i < want.size(); ++i) ASSERT_EQ(a["values"][i].get<double>(), want[i]) << name << " " << i;
+      for (std::size_t i = 0; i < want.size(); ++i)
+        ASSERT_EQ(a["values"][i].get<double>(), want[i]) << name << " " << i;
     }
     const shtool::fit::Mesh mesh = shtool::fit::load_mesh(kSpot);
     ASSERT_EQ(three["index"].size(), mesh.triangles.size() * 3);

@@ -105,8 +105,8 @@ std::vector<float> vec4_rows(std::size_t vertices, std::size_t first, const Sour
 
 }  // namespace
 
-std::string zh_fit_glb(const Mesh& mesh, const std::vector<ZhFit>& fits, std::span<const double> transfer_dc,
-                       int order, int lobes, bool direct, const std::string& generator) {
+std::string zh_fit_glb(const Mesh& mesh, const std::vector<ZhFit>& fits, std::span<const double> transfer_dc, int order,
+                       int lobes, bool direct, const std::string& generator) {
   const std::size_t n = mesh.positions.size();
   if (fits.size() != n || transfer_dc.size() != n)
     throw InputError("--gltf: " + std::to_string(fits.size()) + " fits and " + std::to_string(transfer_dc.size()) +
@@ -141,9 +141,9 @@ std::string zh_fit_glb(const Mesh& mesh, const std::vector<ZhFit>& fits, std::sp
           TINYGLTF_TYPE_VEC4);
   }
   if (direct)
-    p.attributes["_ZH_DIRECT"] = b.floats(
-        vec4_rows(n, 0, [&](std::size_t v) -> const std::vector<double>& { return fits[v].direct; }),
-        TINYGLTF_TYPE_VEC4);
+    p.attributes["_ZH_DIRECT"] =
+        b.floats(vec4_rows(n, 0, [&](std::size_t v) -> const std::vector<double>& { return fits[v].direct; }),
+                 TINYGLTF_TYPE_VEC4);
   // Indices above the type's maximum would be read as primitive restarts.
   p.indices = n < 0xFFFF ? b.indices<std::uint16_t>(mesh.triangles, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT)
                          : b.indices<std::uint32_t>(mesh.triangles, TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT);
@@ -152,9 +152,8 @@ std::string zh_fit_glb(const Mesh& mesh, const std::vector<ZhFit>& fits, std::sp
   m.name = "zh-fit";
   m.primitives.push_back(std::move(p));
   // What an engine needs to read the attributes without counting them.
-  tinygltf::Value::Object fit{{"order", tinygltf::Value(order)},
-                              {"lobes", tinygltf::Value(lobes)},
-                              {"direct", tinygltf::Value(direct)}};
+  tinygltf::Value::Object fit{
+      {"order", tinygltf::Value(order)}, {"lobes", tinygltf::Value(lobes)}, {"direct", tinygltf::Value(direct)}};
   m.extras = tinygltf::Value(tinygltf::Value::Object{{"shtool_zh_fit", tinygltf::Value(std::move(fit))}});
   model.meshes.push_back(std::move(m));
   tinygltf::Node node;
