@@ -35,11 +35,16 @@
 //   build/bench/bench_fit --benchmark_counters_tabular=true
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <fstream>
+#include <limits>
+#include <map>
 #include <memory>
 #include <numbers>
 #include <random>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <benchmark/benchmark.h>
@@ -61,7 +66,10 @@ namespace {
 
 constexpr int kOrder = 6;
 constexpr int kPoints = 4096;     // shaded points per iteration
-constexpr int kFitVectors = 16;   // vectors fitted per case (one per iteration)
+constexpr int kFitVectors = 20;   // vectors fitted per case (one per iteration)
+// Starts of the best-known fits (far more than any effort level).
+constexpr int kBestKnownVarProStarts = 512;
+constexpr int kBestKnownJointStarts = 128;
 
 using benchmark::Counter;
 
@@ -106,26 +114,94 @@ std::vector<double> random_unit_vectors(int count, int order, std::uint64_t seed
   return v;
 }
 
-void BM_Fit(benchmark::State& state) {
-  static const std::vector<double> vectors = random_unit_vectors(kFitVectors, kOrder, 2005);
+shtool::fit::ZhFitOptions fit_options(int method, int lobes) {
   shtool::fit::ZhFitOptions options;
   options.order = kOrder;
-  options.lobes = static_cast<int>(state.range(0));
-  options.starts = static_cast<int>(state.range(1));
-  if (state.range(2)) options.restart_above = 0.0;
+  options.lobes = lobes;
+  options.method = method == 0 ? shtool::fit::ZhFitMethod::varpro : shtool::fit::ZhFitMethod::joint;
+  return options;
+}
+
+const std::vector<double>& fit_vectors() {
+  static const std::vector<double> vectors = random_unit_vectors(kFitVectors, kOrder, 2005);
+  return vectors;
+}
+
+// The best fit a long multi-start finds: per vector the lowest residual of both methods
+// with many starts, run whatever the residual (computed once per lobe count, then cached).
+const std::vector<double>& best_known_residuals(int lobes) {
+  static std::map<int, std::vector<double>> cache;
+  std::vector<double>& best = cache[lobes];
+  if (!best.empty()) return best;
   const std::size_t n2 = shtool::sh_count(kOrder);
-  double residual2 = 0, norm2 = 0;
+  for (int v = 0; v < kFitVectors; ++v) {
+    const std::span<const double> t(fit_vectors().data() + v * n2, n2);
+    double r = std::numeric_limits<double>::infinity();
+    for (int method : {0, 1}) {
+      shtool::fit::ZhFitOptions o = fit_options(method, lobes);
+      o.starts = method == 0 ? kBestKnownVarProStarts : kBestKnownJointStarts;
+      o.restart_above = 0;
+      o.polish_ftol_rel = 1e-12;
+      o.max_evaluations = 2000;
+      r = std::min(r, shtool::fit::fit_zh(t, o, v).residual);
+    }
+    best.push_back(r);
+  }
+  return best;
+}
+
+void BM_Fit(benchmark::State& state) {
+  const std::vector<double>& vectors = fit_vectors();
+  shtool::fit::ZhFitOptions options = fit_options(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
+  if (state.range(2) >= 0) shtool::fit::apply_effort(options, static_cast<int>(state.range(2)));
+  if (state.range(3) >= 0) options.starts = static_cast<int>(state.range(3));
+  const std::vector<double>& best = best_known_residuals(options.lobes);
+  const std::size_t n2 = shtool::sh_count(kOrder);
+  double residual2 = 0, norm2 = 0, ratio_sum = 0, ratio_max = 0;
   std::size_t k = 0;
   for (auto _ : state) {
-    const std::span<const double> t(vectors.data() + (k % kFitVectors) * n2, n2);
-    const shtool::fit::ZhFit fit = shtool::fit::fit_zh(t, options, k % kFitVectors);
+    const std::size_t v = k % kFitVectors;
+    const std::span<const double> t(vectors.data() + v * n2, n2);
+    const shtool::fit::ZhFit fit = shtool::fit::fit_zh(t, options, v);
     residual2 += fit.residual * fit.residual;
     norm2 += fit.norm * fit.norm;
+    const double ratio = fit.residual / best[v];
+    ratio_sum += ratio;
+    ratio_max = std::max(ratio_max, ratio);
     ++k;
   }
   state.SetItemsProcessed(state.iterations());
   state.counters["per_vector"] = per_item(static_cast<double>(state.iterations()));
   state.counters["nrms"] = std::sqrt(residual2 / norm2);
+  state.counters["vs_best_mean"] = ratio_sum / static_cast<double>(k);
+  state.counters["vs_best_max"] = ratio_max;
+}
+
+// --write-best-known=PATH: the vectors and their best-known residuals as the JSON the
+// fit-quality test reads (tests/offline/data/zh_fit_best_known.json).
+int write_best_known(const std::string& path) {
+  std::ofstream out(path);
+  out.precision(17);
+  out << "{\"comment\": \"random unit order-6 vectors and the lowest residual of a long multi-start "
+         "(both methods, run always); written by bench_fit --write-best-known\",\n \"order\": "
+      << kOrder << ",\n \"vectors\": [";
+  const std::size_t n2 = shtool::sh_count(kOrder);
+  for (int v = 0; v < kFitVectors; ++v) {
+    out << (v ? ",\n  [" : "\n  [");
+    for (std::size_t i = 0; i < n2; ++i) out << (i ? ", " : "") << fit_vectors()[v * n2 + i];
+    out << "]";
+  }
+  out << "],\n \"best_residual\": {";
+  bool first = true;
+  for (int lobes : {2, 4}) {
+    out << (first ? "" : ",") << "\n  \"" << lobes << "\": [";
+    first = false;
+    const std::vector<double>& best = best_known_residuals(lobes);
+    for (int v = 0; v < kFitVectors; ++v) out << (v ? ", " : "") << best[v];
+    out << "]";
+  }
+  out << "}}\n";
+  return out ? 0 : 1;
 }
 
 // Shading data in type T: one light, kPoints points of N lobes, each point's full SH
@@ -295,17 +371,21 @@ int main(int argc, char** argv) {
       ->Unit(benchmark::kMillisecond)
       ->MinTime(1.0);
   auto* fit = benchmark::RegisterBenchmark("BM_Fit", BM_Fit)
-                  ->ArgNames({"lobes", "starts", "always"})
+                  ->ArgNames({"method", "lobes", "effort", "starts"})
                   ->Unit(benchmark::kMillisecond)
                   ->Iterations(kFitVectors);
-  fit->Args({1, 0, 0});  // a single lobe has no multi-start: one effort level
-  for (long n : {2, 4, 6})
-    for (long s : {0, 4, 16}) fit->Args({n, s, 0});
-  // Random vectors stay above 5% residual for N < 6, so `always` only changes N = 6.
-  for (long s : {4, 16}) fit->Args({6, s, 1});
+  for (long n : {1, 2, 4, 6}) {
+    for (long e : {1, 2, 3, 4}) fit->Args({0, n, e, -1});
+    fit->Args({1, n, 2, -1});  // the reference method at default effort
+  }
+  // The joint method's own multi-start, as long as --starts 128 (the old high-effort figure).
+  fit->Args({1, 4, 2, 128});
   register_shading<float>("float");
   register_shading<double>("double");
 
+  for (int i = 1; i < argc; ++i)
+    if (std::string_view(argv[i]).starts_with("--write-best-known="))
+      return write_best_known(std::string(argv[i] + std::strlen("--write-best-known=")));
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   benchmark::RunSpecifiedBenchmarks();

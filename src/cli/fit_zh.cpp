@@ -56,18 +56,30 @@ void setup_fit_zh(CLI::App& app) {
   sub->add_option("--seed", opt->seed, "seed of the ray rotations and multi-start axes")
       ->check(kUnsignedText)
       ->capture_default_str();
-  sub->add_option("--starts", opt->starts, "random multi-start axis sets per vertex (effort/quality)")
+  sub->add_option("--effort", opt->effort,
+                  "fit effort 1..4: sets --starts and --restart-above (1: 0, 0.05; 2: 4, 0.05; 3: 16, 0; 4: 64, 0)")
       ->capture_default_str();
-  sub->add_option("--restart-above", opt->restart_above,
-                  "multi-start only where residual > this fraction of ||t|| (0: always)")
-      ->capture_default_str();
+  // Plain values here; the request holds them only when given.
+  auto starts = std::make_shared<int>(0);
+  auto restart_above = std::make_shared<double>(0.0);
+  CLI::Option* starts_option =
+      sub->add_option("--starts", *starts, "random multi-start axis sets per vertex (overrides --effort's)");
+  CLI::Option* restart_option =
+      sub->add_option("--restart-above", *restart_above,
+                      "multi-start only where residual > this fraction of ||t|| (0: always; overrides --effort's)");
+  add_enum_option(sub, "--fit-method", opt->fit_method, fit::fit_method_names(),
+                  "varpro (search the axes, coefficients solved) or joint (the reference: axes and coefficients "
+                  "together)",
+                  "varpro");
   sub->add_flag("--direct", opt->direct, "store DC (and linear when N >= 3) directly; lobes fit the rest");
   sub->add_option("--threads", opt->threads, "worker threads (0: all cores)")->capture_default_str();
   sub->add_flag("--mpi", opt->mpi, "under mpirun: ranks split the vertices, rank 0 writes the table");
   sub->add_option("--shard", opt->shard,
                   "K/N: fit the K-th (0-based) of N vertex ranges into a partial table for shtool merge");
-  sub->callback([opt, order]() {
+  sub->callback([opt, order, starts, restart_above, starts_option, restart_option]() {
     opt->order_given = order->count() > 0;
+    if (starts_option->count() > 0) opt->starts = *starts;
+    if (restart_option->count() > 0) opt->restart_above = *restart_above;
     fit::FitZhCallbacks cb;
     cb.simulate_progress = progress_bar("simulate");
     cb.fit_progress = progress_bar("fit");

@@ -78,8 +78,11 @@ void check_request(const FitZhRequest& r) {
   if (!is_supported_order(r.order)) throw InputError("--order " + std::to_string(r.order) + " is not supported");
   if (r.lobes < 1 || r.lobes > 64) throw InputError("--lobes must be in 1..64, got " + std::to_string(r.lobes));
   if (r.rays < 1) throw InputError("--rays must be at least 1, got " + std::to_string(r.rays));
-  if (r.starts < 0) throw InputError("--starts must be >= 0, got " + std::to_string(r.starts));
-  if (!(r.restart_above >= 0)) throw InputError("--restart-above must be >= 0");
+  if (r.effort < kMinEffort || r.effort > kMaxEffort)
+    throw InputError("--effort must be in " + std::to_string(kMinEffort) + ".." + std::to_string(kMaxEffort) +
+                     ", got " + std::to_string(r.effort));
+  if (r.starts && *r.starts < 0) throw InputError("--starts must be >= 0, got " + std::to_string(*r.starts));
+  if (r.restart_above && !(*r.restart_above >= 0)) throw InputError("--restart-above must be >= 0");
   if (r.threads < 0) throw InputError("--threads must be >= 0");
   if (r.mode == TransferMode::interreflected) {
     if (r.bounces < 1 || r.bounces > kMaxBounces)
@@ -175,6 +178,12 @@ const std::vector<std::pair<std::string, TransferMode>>& transfer_mode_names() {
       {"unshadowed", TransferMode::unshadowed},
       {"shadowed", TransferMode::shadowed},
       {"interreflected", TransferMode::interreflected}};
+  return names;
+}
+
+const std::vector<std::pair<std::string, ZhFitMethod>>& fit_method_names() {
+  static const std::vector<std::pair<std::string, ZhFitMethod>> names = {{"varpro", ZhFitMethod::varpro},
+                                                                         {"joint", ZhFitMethod::joint}};
   return names;
 }
 
@@ -306,8 +315,10 @@ FitZhReport run_fit_zh_on(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJo
   fo.order = order;
   fo.lobes = r.lobes;
   fo.direct = r.direct;
-  fo.starts = r.starts;
-  fo.restart_above = r.restart_above;
+  fo.method = r.fit_method;
+  apply_effort(fo, r.effort);
+  if (r.starts) fo.starts = *r.starts;
+  if (r.restart_above) fo.restart_above = *r.restart_above;
   fo.seed = r.seed;
   const auto t1 = std::chrono::steady_clock::now();
   std::vector<ZhFit> fits = fit_zh_all(transfer, fo, threads, cb.fit_progress, range.begin);
@@ -316,8 +327,10 @@ FitZhReport run_fit_zh_on(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJo
   params["order"] = order;
   params["lobes"] = r.lobes;
   params["seed"] = r.seed;
-  params["starts"] = r.starts;
-  params["restart_above"] = r.restart_above;
+  params["fit_method"] = name_of(r.fit_method, fit_method_names());
+  params["effort"] = r.effort;
+  params["starts"] = fo.starts;
+  params["restart_above"] = fo.restart_above;
   params["direct"] = r.direct;
 
   // [4] Fig. 3: RMS error normalised by the total L2 length over all vertices.

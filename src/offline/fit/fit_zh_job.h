@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -21,6 +22,7 @@ namespace shtool::fit {
 
 // The names the command line and the generator record use for the enums.
 const std::vector<std::pair<std::string, TransferMode>>& transfer_mode_names();
+const std::vector<std::pair<std::string, ZhFitMethod>>& fit_method_names();
 const std::vector<std::pair<std::string, NormalSource>>& normal_source_names();
 
 struct FitZhRequest {
@@ -40,8 +42,12 @@ struct FitZhRequest {
   int bounces = 2;
   double albedo = 0.8;
   std::uint64_t seed = 1;
-  int starts = 4;
-  double restart_above = 0.05;
+  // --effort sets the multi-start (fit/zh_fit.h apply_effort); --starts and
+  // --restart-above, when given, override its values.
+  int effort = kDefaultEffort;
+  std::optional<int> starts;
+  std::optional<double> restart_above;
+  ZhFitMethod fit_method = ZhFitMethod::varpro;
   bool direct = false;
   int threads = 0;  // 0: all cores
   // "K/N" (fit/shard.h): fit only the K-th of N vertex ranges and write a partial table

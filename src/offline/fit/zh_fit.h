@@ -2,11 +2,14 @@
 //
 // Model ([4] Eq. 7-11, docs/conventions.md): a lobe with unit axis s and convolved
 // coefficients g*_l contributes g*_l y_l^m(s) to SH coefficient (l, m). The objective is
-// psi = ||t~ - t||^2 (Eq. 17), minimised with NLopt's LD_LBFGS over axes and
-// coefficients together using the analytic gradients of Eq. 19-21. NLopt's L-BFGS is
-// used rather than a hand-written BFGS: the problem is smooth and small (4 (3 + n)
-// variables), L-BFGS with the exact gradient converges on it, and it is a packaged,
-// tested implementation.
+// psi = ||t~ - t||^2 (Eq. 17), minimised with NLopt's LD_LBFGS (a packaged quasi-Newton
+// method; the problem is smooth and small) in one of two ways:
+// - variable projection (the default): for fixed axes the best coefficients solve one
+//   small linear least-squares problem per band, so L-BFGS searches the axes alone (3N
+//   variables instead of N (3 + n)) and every start lands on coefficients that are
+//   optimal for its axes ([16] Golub and Pereyra 1973);
+// - joint: axes and coefficients together with the gradients of Eq. 19-21, as [4]
+//   prints it; kept as the reference the default is tested against.
 #pragma once
 
 #include <cstddef>
@@ -31,15 +34,21 @@ struct ZhFit {
   double norm = 0.0;           // ||t||
 };
 
+enum class ZhFitMethod { varpro, joint };
+
+inline constexpr int kStartsByEffort = -1;
+
 struct ZhFitOptions {
   int order = 6;
   int lobes = 4;
+  ZhFitMethod method = ZhFitMethod::varpro;
   // Store DC (and the linear band when lobes >= 3) directly, fit lobes to the rest
   // ([4] Sec. 3.3).
   bool direct = false;
   // Random axis sets tried after the greedy start (the multi-start of Sec. 4.1); the
-  // effort/quality knob. 0: greedy + coefficient refit + joint BFGS only.
-  int starts = 4;
+  // effort/quality knob. kStartsByEffort: the default level's count for `lobes`
+  // (apply_effort); 0: the greedy start only.
+  int starts = kStartsByEffort;
   // Axes of the dense well-spread set scanned with the closed form of Eq. 18 for each
   // single lobe (a spherical-Fibonacci set on the upper hemisphere: s and -s give the
   // same lobe).
@@ -47,12 +56,24 @@ struct ZhFitOptions {
   // Local refinements started from the best scanned axes (plus the optimal linear lobe).
   int single_lobe_refinements = 2;
   int max_evaluations = 300;  // per BFGS run
+  // varpro: the relative change of psi at which the polish of the best start stops
+  // (starts themselves stop at 1e-3). 1e-4 leaves psi within about 0.1 % of its local
+  // minimum; with lobes >= order (an exact fit exists) 1e-10 is used whatever this says.
+  double polish_ftol_rel = 1e-4;
   std::uint64_t seed = 1;
   // Multi-start runs only while the residual is above this fraction of ||t|| ("we apply
   // further computation when the fit error is high", Sec. 4.1): well-fitted vertices,
   // most of a mesh, stay cheap. 0: always run all starts.
   double restart_above = 0.05;
 };
+
+// The --effort levels: each sets `starts` and `restart_above` for options.lobes (set
+// lobes first). Local minima multiply with the lobe count, so the starts grow as N^2:
+// 1: none (the greedy start only); 2, the default: 5 N^2 where the residual is above 5 %
+// of ||t||; 3: 12 N^2 for every vector; 4: 40 N^2 for every vector. Measured quality and
+// cost per level are in docs/fit-zh.md.
+inline constexpr int kMinEffort = 1, kDefaultEffort = 2, kMaxEffort = 4;
+void apply_effort(ZhFitOptions& options, int effort);
 
 // Relative residual taken as "exact" when lobes >= order: BFGS stops at a relative
 // change of 1e-12 in the squared residual, so fits that are exact in theory land near
@@ -81,6 +102,22 @@ void lobes_to_sh(int order, const std::vector<ZhLobe>& lobes, std::span<double> 
 // [ds_x, ds_y, ds_z, dg*_0 .. dg*_{order-1}].
 double zh_objective(int order, std::span<const double> t, const std::vector<ZhLobe>& lobes,
                     std::span<double> grad);
+
+// Variable projection ([16]): psi(S) = min over coefficients of ||t~ - t||^2 for the lobe
+// axes S (possibly non-unit, evaluated at h(s_k) = s_k/|s_k|). Per band l the
+// coefficients solve (Y_l^T Y_l + lambda_l I) g_l = Y_l^T t_l, Y_l the (2l+1) x N matrix
+// of the axes' band-l values; the ridge lambda_l = kVarProRidge (2l+1)/(4 pi) keeps
+// coincident axes (and band 0, whose columns are always equal) solvable and is included
+// in the returned value so that the gradient is exact. The gradient in s_k is Eq. 20 at
+// those coefficients: they are a minimiser, so their own change adds nothing (the
+// envelope theorem). Writes the coefficients to coeffs[k * order + l] when non-empty and
+// the gradient, packed [ds_x, ds_y, ds_z] per axis, when grad is non-empty. Bands with
+// mask[l] false get coefficient 0 (empty mask: all free). `squared_residual`, when
+// given, receives ||t~ - t||^2 alone (the value without the ridge term).
+inline constexpr double kVarProRidge = 1e-10;
+double zh_varpro_objective(int order, std::span<const double> t, const std::vector<bool>& mask,
+                           std::span<const Eigen::Vector3d> axes, std::span<double> grad,
+                           std::span<double> coeffs = {}, double* squared_residual = nullptr);
 
 // Full fit of one vector (t.size() == order^2): single lobe = dense axis scan + Eq. 18 +
 // BFGS from the best axes and the optimal linear lobe; multi-lobe = greedy, coefficient
