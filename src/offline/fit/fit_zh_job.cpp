@@ -90,9 +90,6 @@ void check_request(const FitZhRequest& r) {
     throw InputError("--save-transfer needs a mesh (not --transfer)");
   if (r.mpi) {
     if (!r.shard.empty()) throw InputError("--mpi and --shard both split the vertices: give one of them");
-    if (r.mode == TransferMode::interreflected && !r.mesh.empty())
-      throw InputError("--mpi cannot run an interreflected bake: each bounce needs the previous bounce of every "
-                       "vertex; run it in one process");
     if (!r.ply.empty() || !r.save_transfer.empty())
       throw InputError(std::string(r.ply.empty() ? "--save-transfer" : "--ply") +
                        " is not written with --mpi: rank 0 gathers the fits, not the transfer vectors");
@@ -100,7 +97,7 @@ void check_request(const FitZhRequest& r) {
   if (!r.shard.empty()) {
     if (r.mode == TransferMode::interreflected && !r.mesh.empty())
       throw InputError("--shard cannot split an interreflected bake: each bounce needs the previous bounce of "
-                       "every vertex; run it in one process");
+                       "every vertex; run it in one process or under MPI (--mpi)");
     // A shard writes one table; the other outputs describe the whole mesh and come from
     // the merged run.
     const std::pair<const std::filesystem::path*, const char*> whole_mesh_outputs[] = {
@@ -276,6 +273,8 @@ FitZhReport run_fit_zh_on(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJo
     range = rows_of ? shard_range_of(*rows_of, total) : VertexRange{0, total};
     to.first_vertex = range.begin;
     to.end_vertex = range.end;
+    // Each rank simulates its rows of every bounce and reads the others' between bounces.
+    if (mpi) to.gather_bounce = [mpi](std::vector<double> rows) { return mpi->allgather(std::move(rows)); };
     const auto t0 = std::chrono::steady_clock::now();
     transfer = compute_transfer(mesh, to);
     report.simulate_seconds = seconds_since(t0);
