@@ -5,7 +5,8 @@
 //                               per vertex.
 //   BM_EmbreeOcclusion/<query>/rays:R
 //                               Embree alone: the occlusion rays a shadowed transfer of the
-//                               Stanford bunny (../shared/meshes, beside the checkout) casts
+//                               Stanford bunny (shared/meshes beside the checkout, CMake's
+//                               SHTOOL_BENCH_MESHES) casts
 //                               with R rays per vertex, every vertex, ONE thread, directions
 //                               made before timing; rays_per_s = occlusion queries per CPU
 //                               second. Queries: single (rtcOccluded1, what compute_transfer
@@ -14,10 +15,12 @@
 //                               pinned to), stream_coherent / stream_incoherent
 //                               (rtcOccluded1M over a vertex's rays with the context flag).
 //                               blocked = fraction occluded (equal for every query).
-//   BM_TransferBunny/rays:R     compute_transfer (shadowed, order 6) on the same bunny and
+//   BM_TransferBunny/rays:R/streams:S
+//                               compute_transfer (shadowed, order 6) on the same bunny and
 //                               rays, ONE thread: the loop Embree's rate bounds, with ray
 //                               making, SH evaluation and accumulation; the scene build is
-//                               inside (BM_EmbreeBuild times it alone).
+//                               inside (BM_EmbreeBuild times it alone). S = 0: one
+//                               rtcOccluded1 per ray; S = 1: a stream per vertex (default).
 //   BM_EmbreeBuild              build_scene of the bunny (Embree's own threads build it).
 //   BM_Fit/lobes:N/starts:S/always:A
 //                               fit_zh of random unit order-6 vectors (coefficients uniform
@@ -75,6 +78,9 @@
 #ifndef SHTOOL_SOURCE_DIR
 #error "bench_fit needs SHTOOL_SOURCE_DIR (set in bench/CMakeLists.txt)"
 #endif
+#ifndef SHTOOL_BENCH_MESHES
+#error "bench_fit needs SHTOOL_BENCH_MESHES (set in bench/CMakeLists.txt)"
+#endif
 
 namespace {
 
@@ -112,7 +118,7 @@ void BM_Transfer(benchmark::State& state) {
 // The medium test mesh; benchmarks that need it skip without it.
 const shtool::fit::Mesh* bunny() {
   static const std::unique_ptr<shtool::fit::Mesh> mesh = []() -> std::unique_ptr<shtool::fit::Mesh> {
-    const char* path = SHTOOL_SOURCE_DIR "/../shared/meshes/stanford-bunny.obj";
+    const char* path = SHTOOL_BENCH_MESHES "/stanford-bunny.obj";
     if (!std::filesystem::exists(path)) return nullptr;
     return std::make_unique<shtool::fit::Mesh>(shtool::fit::load_obj(path));
   }();
@@ -133,7 +139,7 @@ enum class OcclusionQuery { single, packet4, stream_coherent, stream_incoherent 
 
 void BM_EmbreeOcclusion(benchmark::State& state, OcclusionQuery query) {
   const shtool::fit::Mesh* mesh = bunny();
-  if (!mesh) return state.SkipWithError("no ../shared/meshes/stanford-bunny.obj beside the source folder");
+  if (!mesh) return state.SkipWithError("no stanford-bunny.obj in " SHTOOL_BENCH_MESHES);
   const int rays = static_cast<int>(state.range(0));
   const shtool::fit::TransferOptions options = bunny_options(rays);
   const std::size_t vertices = mesh->positions.size();
@@ -195,8 +201,9 @@ void BM_EmbreeOcclusion(benchmark::State& state, OcclusionQuery query) {
 
 void BM_TransferBunny(benchmark::State& state) {
   const shtool::fit::Mesh* mesh = bunny();
-  if (!mesh) return state.SkipWithError("no ../shared/meshes/stanford-bunny.obj beside the source folder");
-  const shtool::fit::TransferOptions options = bunny_options(static_cast<int>(state.range(0)));
+  if (!mesh) return state.SkipWithError("no stanford-bunny.obj in " SHTOOL_BENCH_MESHES);
+  shtool::fit::TransferOptions options = bunny_options(static_cast<int>(state.range(0)));
+  options.ray_streams = state.range(1) != 0;
   for (auto _ : state) {
     std::vector<double> t = shtool::fit::compute_transfer(*mesh, options);
     benchmark::DoNotOptimize(t.data());
@@ -207,7 +214,7 @@ void BM_TransferBunny(benchmark::State& state) {
 
 void BM_EmbreeBuild(benchmark::State& state) {
   const shtool::fit::Mesh* mesh = bunny();
-  if (!mesh) return state.SkipWithError("no ../shared/meshes/stanford-bunny.obj beside the source folder");
+  if (!mesh) return state.SkipWithError("no stanford-bunny.obj in " SHTOOL_BENCH_MESHES);
   for (auto _ : state) {
     std::unique_ptr<shtool::fit::EmbreeScene> scene = shtool::fit::build_scene(*mesh);
     benchmark::DoNotOptimize(scene.get());
@@ -430,8 +437,9 @@ int main(int argc, char** argv) {
         ->Unit(benchmark::kMillisecond)
         ->MinTime(2.0);
   benchmark::RegisterBenchmark("BM_TransferBunny", BM_TransferBunny)
-      ->ArgName("rays")
-      ->Arg(64)
+      ->ArgNames({"rays", "streams"})
+      ->Args({64, 0})
+      ->Args({64, 1})
       ->Unit(benchmark::kMillisecond)
       ->MinTime(2.0);
   benchmark::RegisterBenchmark("BM_EmbreeBuild", BM_EmbreeBuild)->Unit(benchmark::kMillisecond);
