@@ -113,25 +113,19 @@ std::vector<double> compute_transfer(const Mesh& mesh, const TransferOptions& op
     std::vector<double> y(n2), sum(n2, 0.0);
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
-    const bool stream = scene && options.ray_streams;
-    std::vector<Eigen::Vector3d> dirs(stream ? rays : 0);
-    std::vector<RTCRay> traced(dirs.size());
-    if (stream) {
-      for (int k = 0; k < rays; ++k) {
-        dirs[k] = cast.direction(k);
-        traced[k] = embree_ray(cast.origin(), dirs[k]);
-      }
-      rtcOccluded1M(scene->scene, &context, traced.data(), static_cast<unsigned>(rays), sizeof(RTCRay));
-    }
+    std::vector<Eigen::Vector3d> dirs(rays);
+    std::vector<RTCRay> traced(rays);
     for (int k = 0; k < rays; ++k) {
-      const Eigen::Vector3d dir = stream ? dirs[k] : cast.direction(k);
-      if (stream && traced[k].tfar < 0.0f) continue;  // blocked: Embree sets tfar to -inf
-      if (scene && !stream) {
-        RTCRay ray = embree_ray(cast.origin(), dir);
-        rtcOccluded1(scene->scene, &context, &ray);
-        if (ray.tfar < 0.0f) continue;
-      }
-      eval_sh<double>(options.order, dir, y);
+      dirs[k] = cast.direction(k);
+      traced[k] = embree_ray(cast.origin(), dirs[k]);
+    }
+    if (scene && options.ray_streams)
+      rtcOccluded1M(scene->scene, &context, traced.data(), static_cast<unsigned>(rays), sizeof(RTCRay));
+    else if (scene)
+      for (RTCRay& ray : traced) rtcOccluded1(scene->scene, &context, &ray);
+    for (int k = 0; k < rays; ++k) {
+      if (scene && traced[k].tfar < 0.0f) continue;  // blocked: Embree sets tfar to -inf
+      eval_sh<double>(options.order, dirs[k], y);
       for (int i = 0; i < n2; ++i) sum[i] += y[i];
     }
     for (int i = 0; i < n2; ++i) result[row * n2 + i] = sum[i] / rays;
