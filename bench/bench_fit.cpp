@@ -3,6 +3,25 @@
 //   BM_Transfer/rays:R          shadowed order-6 transfer of data/spot.obj on ONE thread
 //                               (compute_transfer, cosine-weighted rays); per_vertex = time
 //                               per vertex.
+//   BM_EmbreeOcclusion/<query>/rays:R
+//                               Embree alone: the occlusion rays a shadowed transfer of the
+//                               Stanford bunny (shared/meshes beside the checkout, CMake's
+//                               SHTOOL_BENCH_MESHES) casts
+//                               with R rays per vertex, every vertex, ONE thread, directions
+//                               made before timing; rays_per_s = occlusion queries per CPU
+//                               second. Queries: single (rtcOccluded1, what compute_transfer
+//                               casts), packet4 (rtcOccluded4: 4 consecutive rays of a
+//                               vertex, native width of the SSE4.2 kernels the device is
+//                               pinned to), stream_coherent / stream_incoherent
+//                               (rtcOccluded1M over a vertex's rays with the context flag).
+//                               blocked = fraction occluded (equal for every query).
+//   BM_TransferBunny/rays:R/streams:S
+//                               compute_transfer (shadowed, order 6) on the same bunny and
+//                               rays, ONE thread: the loop Embree's rate bounds, with ray
+//                               making, SH evaluation and accumulation; the scene build is
+//                               inside (BM_EmbreeBuild times it alone). S = 0: one
+//                               rtcOccluded1 per ray; S = 1: a stream per vertex (default).
+//   BM_EmbreeBuild              build_scene of the bunny (Embree's own threads build it).
 //   BM_Fit/lobes:N/starts:S/always:A
 //                               fit_zh of random unit order-6 vectors (coefficients uniform
 //                               in [-1, 1], normalised), default options except lobes,
@@ -36,6 +55,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <map>
@@ -45,10 +65,12 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include <benchmark/benchmark.h>
 
+#include "fit/embree_scene.h"
 #include "fit/mesh.h"
 #include "fit/transfer.h"
 #include "fit/zh_fit.h"
@@ -60,6 +82,9 @@
 
 #ifndef SHTOOL_SOURCE_DIR
 #error "bench_fit needs SHTOOL_SOURCE_DIR (set in bench/CMakeLists.txt)"
+#endif
+#ifndef SHTOOL_BENCH_MESHES
+#error "bench_fit needs SHTOOL_BENCH_MESHES (set in bench/CMakeLists.txt)"
 #endif
 
 namespace {
@@ -96,6 +121,112 @@ void BM_Transfer(benchmark::State& state) {
   state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations() * vertices));
   state.counters["per_vertex"] = per_item(state.iterations() * vertices);
   state.counters["vertices"] = vertices;
+}
+
+// The medium test mesh; benchmarks that need it skip without it.
+const shtool::fit::Mesh* bunny() {
+  static const std::unique_ptr<shtool::fit::Mesh> mesh = []() -> std::unique_ptr<shtool::fit::Mesh> {
+    const char* path = SHTOOL_BENCH_MESHES "/stanford-bunny.obj";
+    if (!std::filesystem::exists(path)) return nullptr;
+    return std::make_unique<shtool::fit::Mesh>(shtool::fit::load_obj(path));
+  }();
+  return mesh.get();
+}
+
+// compute_transfer's defaults for the bench's order and R rays, one thread.
+shtool::fit::TransferOptions bunny_options(int rays) {
+  shtool::fit::TransferOptions options;
+  options.order = kOrder;
+  options.rays = rays;
+  options.mode = shtool::fit::TransferMode::shadowed;
+  options.threads = 1;
+  return options;
+}
+
+enum class OcclusionQuery { single, packet4, stream_coherent, stream_incoherent };
+
+void BM_EmbreeOcclusion(benchmark::State& state, OcclusionQuery query) {
+  const shtool::fit::Mesh* mesh = bunny();
+  if (!mesh) return state.SkipWithError("no stanford-bunny.obj in " SHTOOL_BENCH_MESHES);
+  const int rays = static_cast<int>(state.range(0));
+  const shtool::fit::TransferOptions options = bunny_options(rays);
+  const std::size_t vertices = mesh->positions.size();
+  // The rays compute_transfer casts, each vertex's in order.
+  std::vector<RTCRay> cast(vertices * rays);
+  const double offset = options.offset_scale * mesh->bbox_diagonal();
+  for (std::size_t v = 0; v < vertices; ++v) {
+    const shtool::fit::VertexRays vr(*mesh, v, options.seed, rays, offset);
+    for (int k = 0; k < rays; ++k) cast[v * rays + k] = shtool::fit::embree_ray(vr.origin(), vr.direction(k));
+  }
+  const std::unique_ptr<shtool::fit::EmbreeScene> scene = shtool::fit::build_scene(*mesh);
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  if (query == OcclusionQuery::stream_coherent) context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  std::vector<RTCRay> batch(rays);
+  std::size_t blocked = 0;
+  for (auto _ : state) {
+    blocked = 0;
+    for (std::size_t v = 0; v < vertices; ++v) {
+      const RTCRay* first = cast.data() + v * rays;
+      switch (query) {
+        case OcclusionQuery::single:
+          for (int k = 0; k < rays; ++k) {
+            RTCRay ray = first[k];
+            rtcOccluded1(scene->scene, &context, &ray);
+            blocked += ray.tfar < 0.0f;
+          }
+          break;
+        case OcclusionQuery::packet4:
+          for (int k = 0; k < rays; k += 4) {
+            alignas(16) int valid[4];
+            alignas(16) RTCRay4 packet;
+            for (int j = 0; j < 4; ++j) {
+              valid[j] = k + j < rays ? -1 : 0;
+              const RTCRay& r = first[std::min(k + j, rays - 1)];
+              packet.org_x[j] = r.org_x, packet.org_y[j] = r.org_y, packet.org_z[j] = r.org_z;
+              packet.dir_x[j] = r.dir_x, packet.dir_y[j] = r.dir_y, packet.dir_z[j] = r.dir_z;
+              packet.tnear[j] = r.tnear, packet.tfar[j] = r.tfar, packet.time[j] = r.time;
+              packet.mask[j] = r.mask, packet.id[j] = 0, packet.flags[j] = 0;
+            }
+            rtcOccluded4(valid, scene->scene, &context, &packet);
+            for (int j = 0; j < 4 && k + j < rays; ++j) blocked += packet.tfar[j] < 0.0f;
+          }
+          break;
+        case OcclusionQuery::stream_coherent:
+        case OcclusionQuery::stream_incoherent:
+          std::copy(first, first + rays, batch.begin());
+          rtcOccluded1M(scene->scene, &context, batch.data(), rays, sizeof(RTCRay));
+          for (const RTCRay& r : batch) blocked += r.tfar < 0.0f;
+          break;
+      }
+    }
+    benchmark::DoNotOptimize(blocked);
+  }
+  const double cast_count = static_cast<double>(cast.size());
+  state.counters["rays_per_s"] = Counter(state.iterations() * cast_count, Counter::kIsRate);
+  state.counters["blocked"] = blocked / cast_count;
+}
+
+void BM_TransferBunny(benchmark::State& state) {
+  const shtool::fit::Mesh* mesh = bunny();
+  if (!mesh) return state.SkipWithError("no stanford-bunny.obj in " SHTOOL_BENCH_MESHES);
+  shtool::fit::TransferOptions options = bunny_options(static_cast<int>(state.range(0)));
+  options.ray_streams = state.range(1) != 0;
+  for (auto _ : state) {
+    std::vector<double> t = shtool::fit::compute_transfer(*mesh, options);
+    benchmark::DoNotOptimize(t.data());
+  }
+  const double cast_count = static_cast<double>(mesh->positions.size()) * options.rays;
+  state.counters["rays_per_s"] = Counter(state.iterations() * cast_count, Counter::kIsRate);
+}
+
+void BM_EmbreeBuild(benchmark::State& state) {
+  const shtool::fit::Mesh* mesh = bunny();
+  if (!mesh) return state.SkipWithError("no stanford-bunny.obj in " SHTOOL_BENCH_MESHES);
+  for (auto _ : state) {
+    std::unique_ptr<shtool::fit::EmbreeScene> scene = shtool::fit::build_scene(*mesh);
+    benchmark::DoNotOptimize(scene.get());
+  }
 }
 
 std::vector<double> random_unit_vectors(int count, int order, std::uint64_t seed) {
@@ -370,6 +501,24 @@ int main(int argc, char** argv) {
       ->Arg(1024)
       ->Unit(benchmark::kMillisecond)
       ->MinTime(1.0);
+  const std::pair<const char*, OcclusionQuery> queries[] = {{"single", OcclusionQuery::single},
+                                                           {"packet4", OcclusionQuery::packet4},
+                                                           {"stream_coherent", OcclusionQuery::stream_coherent},
+                                                           {"stream_incoherent", OcclusionQuery::stream_incoherent}};
+  for (const auto& [name, query] : queries)
+    benchmark::RegisterBenchmark((std::string("BM_EmbreeOcclusion/") + name).c_str(),
+                                 [query](benchmark::State& s) { BM_EmbreeOcclusion(s, query); })
+        ->ArgName("rays")
+        ->Arg(64)
+        ->Unit(benchmark::kMillisecond)
+        ->MinTime(2.0);
+  benchmark::RegisterBenchmark("BM_TransferBunny", BM_TransferBunny)
+      ->ArgNames({"rays", "streams"})
+      ->Args({64, 0})
+      ->Args({64, 1})
+      ->Unit(benchmark::kMillisecond)
+      ->MinTime(2.0);
+  benchmark::RegisterBenchmark("BM_EmbreeBuild", BM_EmbreeBuild)->Unit(benchmark::kMillisecond);
   auto* fit = benchmark::RegisterBenchmark("BM_Fit", BM_Fit)
                   ->ArgNames({"method", "lobes", "effort", "starts"})
                   ->Unit(benchmark::kMillisecond)

@@ -1,5 +1,6 @@
 // `shtool fit-zh --mpi`. Built with MPI: 2 and 3 ranks under mpiexec (oversubscribed on
-// a small machine) write the bytes one process writes, a refusal reaches every rank, and
+// a small machine) write the bytes one process writes, shadowed and interreflected, a
+// refusal reaches every rank, a rank that fails stops the others at the next bounce, and
 // rank 0 refuses a rank that read another input.
 // Built without MPI: --mpi is a clear error. A missing mpiexec fails the test.
 #include <cstdlib>
@@ -92,11 +93,48 @@ TEST(CliFitZhMpi, RanksWriteTheOneProcessTable) {
   }
 }
 
+TEST(CliFitZhMpi, InterreflectedRanksWriteTheOneProcessTable) {
+  // Each rank simulates its rows of every bounce and gathers the whole bounce before the
+  // next one; two bounces make one gather read rows another rank bounced.
+  const std::vector<std::string> inter = {"--mode", "interreflected", "--bounces", "2", "--albedo", "0.7"};
+  std::vector<std::string> whole_args = inter;
+  const fs::path whole = scratch("inter_whole.shtb");
+  whole_args.insert(whole_args.end(), {"--out", whole.string()});
+  const CommandResult one = run(fit_args(kSpot, whole_args));
+  ASSERT_EQ(one.exit_code, 0) << one.err;
+  for (int ranks : {2, 3}) {
+    const fs::path out = scratch("inter_mpi" + std::to_string(ranks) + ".shtb");
+    std::vector<std::string> args = inter;
+    args.insert(args.end(), {"--mpi", "--threads", "1", "--out", out.string()});
+    const CommandResult r = mpirun(ranks, fit_args(kSpot, args));
+    ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+    EXPECT_EQ(read_bytes(out), read_bytes(whole)) << ranks << " ranks";
+  }
+}
+
+TEST(CliFitZhMpi, ARankThatFailsStopsTheOthersAtTheNextBounce) {
+  // Rank 1 cannot read its mesh; rank 0 simulates its direct rows and learns it when it
+  // gathers them, instead of waiting for rank 1's rows forever.
+  const fs::path out = scratch("inter_failed.shtb");
+  const std::vector<std::string> inter = {"--mpi", "--mode", "interreflected", "--out", out.string()};
+  std::vector<std::string> args = {SHTOOL_MPIEXEC, "--oversubscribe", "-np", "1"};
+  const std::vector<std::string> good = fit_args(kSpot, inter);
+  args.insert(args.end(), good.begin(), good.end());
+  args.insert(args.end(), {":", "-np", "1"});
+  const std::vector<std::string> bad = fit_args(scratch("missing.obj").string(), inter);
+  args.insert(args.end(), bad.begin(), bad.end());
+  prepare_mpirun();
+  const CommandResult r = run(args);
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("rank 0: stopped, another rank failed"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out));
+}
+
 TEST(CliFitZhMpi, ARefusalStopsEveryRank) {
   const fs::path out = scratch("refused.shtb");
-  const CommandResult inter = mpirun(2, fit_args(kSpot, {"--mpi", "--mode", "interreflected", "--out", out.string()}));
-  EXPECT_NE(inter.exit_code, 0);
-  EXPECT_NE(inter.err.find("--mpi cannot run an interreflected bake"), std::string::npos) << inter.err;
+  const CommandResult both = mpirun(2, fit_args(kSpot, {"--mpi", "--shard", "0/2", "--out", out.string()}));
+  EXPECT_NE(both.exit_code, 0);
+  EXPECT_NE(both.err.find("--mpi and --shard both split the vertices"), std::string::npos) << both.err;
   EXPECT_FALSE(fs::exists(out));
   // One vector for two ranks: both refuse after reading it.
   const fs::path one = scratch("one.json");

@@ -2,6 +2,7 @@
 // renderer: one triangle geometry, robust (watertight) traversal, high build quality.
 #pragma once
 
+#include <limits>
 #include <memory>
 #include <string>
 
@@ -34,6 +35,22 @@ struct EmbreeScene {
     if (device) rtcReleaseDevice(device);
   }
 };
+
+// An unbounded ray (tnear 0, every mask bit) from origin along dir, in Embree's floats.
+inline RTCRay embree_ray(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir) {
+  RTCRay ray{};
+  ray.org_x = static_cast<float>(origin.x());
+  ray.org_y = static_cast<float>(origin.y());
+  ray.org_z = static_cast<float>(origin.z());
+  ray.dir_x = static_cast<float>(dir.x());
+  ray.dir_y = static_cast<float>(dir.y());
+  ray.dir_z = static_cast<float>(dir.z());
+  ray.tnear = 0.0f;
+  ray.tfar = std::numeric_limits<float>::infinity();
+  ray.mask = 0xFFFFFFFFu;
+  ray.time = 0.0f;
+  return ray;
+}
 
 // A device with the pinned ISA. Throws std::runtime_error if Embree refuses it.
 RTCDevice new_pinned_device();

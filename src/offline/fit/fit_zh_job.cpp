@@ -95,9 +95,6 @@ void check_request(const FitZhRequest& r) {
   if (!r.transfer.empty() && !r.gltf.empty()) throw InputError("--gltf needs a mesh (not --transfer)");
   if (r.mpi) {
     if (!r.shard.empty()) throw InputError("--mpi and --shard both split the vertices: give one of them");
-    if (r.mode == TransferMode::interreflected && !r.mesh.empty())
-      throw InputError("--mpi cannot run an interreflected bake: each bounce needs the previous bounce of every "
-                       "vertex; run it in one process");
     if (!r.ply.empty() || !r.save_transfer.empty())
       throw InputError(std::string(r.ply.empty() ? "--save-transfer" : "--ply") +
                        " is not written with --mpi: rank 0 gathers the fits, not the transfer vectors");
@@ -105,7 +102,7 @@ void check_request(const FitZhRequest& r) {
   if (!r.shard.empty()) {
     if (r.mode == TransferMode::interreflected && !r.mesh.empty())
       throw InputError("--shard cannot split an interreflected bake: each bounce needs the previous bounce of "
-                       "every vertex; run it in one process");
+                       "every vertex; run it in one process or under MPI (--mpi)");
     // A shard writes one table; the other outputs describe the whole mesh and come from
     // the merged run.
     const std::pair<const std::filesystem::path*, const char*> whole_mesh_outputs[] = {
@@ -288,6 +285,8 @@ FitZhReport run_fit_zh_on(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJo
     range = rows_of ? shard_range_of(*rows_of, total) : VertexRange{0, total};
     to.first_vertex = range.begin;
     to.end_vertex = range.end;
+    // Each rank simulates its rows of every bounce and reads the others' between bounces.
+    if (mpi) to.gather_bounce = [mpi](std::vector<double> rows) { return mpi->allgather(std::move(rows)); };
     const auto t0 = std::chrono::steady_clock::now();
     transfer = compute_transfer(mesh, to);
     report.simulate_seconds = seconds_since(t0);
@@ -323,6 +322,12 @@ FitZhReport run_fit_zh_on(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJo
   const auto t1 = std::chrono::steady_clock::now();
   std::vector<ZhFit> fits = fit_zh_all(transfer, fo, threads, cb.fit_progress, range.begin);
   report.fit_seconds = seconds_since(t1);
+  std::vector<double> transfer_dc;  // --gltf colours each vertex by its transfer's t_00
+  if (!r.gltf.empty())
+    for (std::size_t v = 0; v < report.count; ++v) transfer_dc.push_back(transfer[v * sh_count(order)]);
+  // The table and its encoding come next, at the peak of memory: 288 bytes a vertex at
+  // order 6 go back unless an output still reads the vectors.
+  if (r.ply.empty() && r.save_transfer.empty()) std::vector<double>().swap(transfer);
 
   params["order"] = order;
   params["lobes"] = r.lobes;
@@ -354,9 +359,6 @@ FitZhReport run_fit_zh_on(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJo
     report.total = total;
   }
   Table table = zh_fit_table(fits, order, r.lobes, vertex_index, meta, generator);
-  std::vector<double> transfer_dc;  // --gltf colours each vertex by its transfer's t_00
-  if (!r.gltf.empty())
-    for (std::size_t v = 0; v < report.count; ++v) transfer_dc.push_back(transfer[v * sh_count(order)]);
   if (mpi) {
     // Every rank's rows reach rank 0 as a partial table and are joined by merge's code:
     // the same checks (a rank on another Embree, ISA or input is refused) and the same

@@ -2,6 +2,7 @@
 
 #include <climits>
 #include <string>
+#include <vector>
 
 #include "common/input_error.h"
 
@@ -30,11 +31,39 @@ MpiJob::~MpiJob() {
   if (finalize_) MPI_Finalize();
 }
 
-bool MpiJob::all_ok(bool ok) {
+bool MpiJob::agree(bool ok) {
   int mine = ok ? 1 : 0, all = 0;
   MPI_Allreduce(&mine, &all, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
-  synchronised_ = true;
   return all == 1;
+}
+
+bool MpiJob::all_ok(bool ok) {
+  const bool all = agree(ok);
+  synchronised_ = true;
+  return all;
+}
+
+std::vector<double> MpiJob::allgather(std::vector<double> mine) {
+  // The same collective as a failed rank's all_ok(false): it meets this one.
+  if (!agree(true)) {
+    synchronised_ = true;
+    throw InputError("rank " + std::to_string(rank_) + ": stopped, another rank failed");
+  }
+  const long long count = static_cast<long long>(mine.size());
+  long long total = 0;
+  MPI_Allreduce(&count, &total, 1, MPI_LONG_LONG, MPI_SUM, MPI_COMM_WORLD);
+  if (total > INT_MAX)
+    throw InputError("--mpi: one bounce of the transfer vectors is " + std::to_string(total) +
+                     " values, more than MPI's int counts (2^31 - 1) can gather; run this interreflected bake in "
+                     "one process");
+  const int mine_count = static_cast<int>(count);
+  std::vector<int> counts(size_), offsets(size_);
+  MPI_Allgather(&mine_count, 1, MPI_INT, counts.data(), 1, MPI_INT, MPI_COMM_WORLD);
+  for (int r = 1; r < size_; ++r) offsets[r] = offsets[r - 1] + counts[r - 1];
+  std::vector<double> all(static_cast<std::size_t>(total));
+  MPI_Allgatherv(mine.data(), mine_count, MPI_DOUBLE, all.data(), counts.data(), offsets.data(), MPI_DOUBLE,
+                 MPI_COMM_WORLD);
+  return all;
 }
 
 std::vector<std::string> MpiJob::gather(std::string_view mine) {
@@ -78,6 +107,8 @@ bool MpiJob::all_ok(bool ok) {
 }
 
 std::vector<std::string> MpiJob::gather(std::string_view mine) { return {std::string(mine)}; }
+
+std::vector<double> MpiJob::allgather(std::vector<double> mine) { return mine; }
 
 #endif
 

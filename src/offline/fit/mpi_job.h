@@ -1,6 +1,6 @@
 // fit-zh --mpi: the ranks of an MPI job split the vertices like shards (rank R of S fits
 // shard R/S), rank 0 gathers their partial tables and merges them into the table a
-// one-process run writes.
+// one-process run writes. Interreflected bakes also share every bounce among the ranks.
 // MPI is optional at build time; without it constructing an MpiJob is refused.
 #pragma once
 
@@ -27,9 +27,17 @@ class MpiJob {
   int size() const { return size_; }
 
   // Collective: whether every rank passes true. A rank that failed passes false, so that
-  // the others stop here instead of waiting for it in a later collective.
+  // the others stop here (or at the next allgather) instead of waiting for it in a later
+  // collective. After it no rank checks in again: a rank that fails later needs not call
+  // it (synchronised()).
   bool all_ok(bool ok);
   bool synchronised() const { return synchronised_; }
+
+  // Collective: every rank's doubles, in rank order, on every rank. First the ranks check
+  // in as all_ok does, so a rank that failed since the last collective stops the others
+  // here with InputError. Throws InputError on every rank when the total passes 2^31 - 1
+  // values (MPI's int counts and displacements).
+  std::vector<double> allgather(std::vector<double> mine);
 
   // Collective: every rank's bytes, in rank order, on rank 0 (empty on the others).
   // Throws InputError on every rank when the total passes 2^31 - 1 bytes (MPI's int
@@ -37,6 +45,8 @@ class MpiJob {
   std::vector<std::string> gather(std::string_view mine);
 
  private:
+  bool agree(bool ok);
+
   int rank_ = 0, size_ = 1;
   bool finalize_ = false;
   bool synchronised_ = false;

@@ -56,6 +56,19 @@ Eigen::Vector3d cosine_fibonacci_direction(int k, int count, double a, double b)
   return Eigen::Vector3d(r * std::cos(phi), r * std::sin(phi), std::sqrt(std::max(0.0, 1.0 - u)));
 }
 
+VertexRays::VertexRays(const Mesh& mesh, std::size_t v, std::uint64_t seed, int count, double offset)
+    : normal_(mesh.normals[v]), origin_(mesh.positions[v] + offset * mesh.normals[v]), count_(count) {
+  orthonormal_basis(normal_, tangent_, bitangent_);
+  const std::uint64_t h = splitmix64(seed ^ splitmix64(static_cast<std::uint64_t>(v)));
+  rotation_ = unit_double(h);
+  shift_ = unit_double(splitmix64(h));
+}
+
+Eigen::Vector3d VertexRays::direction(int k) const {
+  const Eigen::Vector3d local = cosine_fibonacci_direction(k, count_, rotation_, shift_);
+  return Eigen::Vector3d(local.x() * tangent_ + local.y() * bitangent_ + local.z() * normal_).normalized();
+}
+
 std::vector<double> compute_transfer(const Mesh& mesh, const TransferOptions& options) {
   if (!is_supported_order(options.order))
     throw InputError("order " + std::to_string(options.order) + " is not supported");
@@ -79,8 +92,10 @@ std::vector<double> compute_transfer(const Mesh& mesh, const TransferOptions& op
   if (first >= end)
     throw InputError("vertex range [" + std::to_string(first) + ", " + std::to_string(end) + ") of a mesh of " +
                      std::to_string(mesh.positions.size()) + " vertices is empty");
-  if (options.mode == TransferMode::interreflected && (first != 0 || end != mesh.positions.size()))
-    throw InputError("interreflected transfer needs every vertex's previous bounce: it cannot simulate a range");
+  const bool whole_mesh = first == 0 && end == mesh.positions.size();
+  if (options.mode == TransferMode::interreflected && !whole_mesh && !options.gather_bounce)
+    throw InputError("interreflected transfer needs every vertex's previous bounce: it cannot simulate a range "
+                     "without a gather step");
   const std::size_t nv = end - first;
   const int n2 = sh_count(options.order);
   const int rays = options.rays;
@@ -91,78 +106,57 @@ std::vector<double> compute_transfer(const Mesh& mesh, const TransferOptions& op
   const int passes = options.mode == TransferMode::interreflected ? 1 + options.bounces : 1;
   const std::size_t progress_total = nv * passes;
 
-  // The ray set of vertex v, identical in every pass.
-  auto ray_frame = [&](std::size_t v, Eigen::Vector3d& t, Eigen::Vector3d& b, double& ra, double& rb) {
-    orthonormal_basis(mesh.normals[v], t, b);
-    const std::uint64_t h = splitmix64(options.seed ^ splitmix64(static_cast<std::uint64_t>(v)));
-    ra = unit_double(h);
-    rb = unit_double(splitmix64(h));
-  };
-  auto direction = [&](const Eigen::Vector3d& t, const Eigen::Vector3d& b, const Eigen::Vector3d& n, int k,
-                       double ra, double rb) {
-    const Eigen::Vector3d local = cosine_fibonacci_direction(k, rays, ra, rb);
-    return Eigen::Vector3d(local.x() * t + local.y() * b + local.z() * n).normalized();
-  };
-  auto make_ray = [&](const Eigen::Vector3d& origin, const Eigen::Vector3d& dir) {
-    RTCRay ray{};
-    ray.org_x = static_cast<float>(origin.x());
-    ray.org_y = static_cast<float>(origin.y());
-    ray.org_z = static_cast<float>(origin.z());
-    ray.dir_x = static_cast<float>(dir.x());
-    ray.dir_y = static_cast<float>(dir.y());
-    ray.dir_z = static_cast<float>(dir.z());
-    ray.tnear = 0.0f;
-    ray.tfar = std::numeric_limits<float>::infinity();
-    ray.mask = 0xFFFFFFFFu;
-    ray.time = 0.0f;
-    return ray;
-  };
-
   std::vector<double> result(nv * n2, 0.0);
   // Pass 0: direct transfer.
   parallel_vertices(nv, threads, 0, progress_total, options, [&](std::size_t row) {
-    const std::size_t v = first + row;
-    Eigen::Vector3d t, b;
-    double ra, rb;
-    ray_frame(v, t, b, ra, rb);
-    const Eigen::Vector3d& n = mesh.normals[v];
-    const Eigen::Vector3d origin = mesh.positions[v] + offset * n;
+    const VertexRays cast(mesh, first + row, options.seed, rays, offset);
     std::vector<double> y(n2), sum(n2, 0.0);
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
+    std::vector<Eigen::Vector3d> dirs(rays);
+    std::vector<RTCRay> traced(rays);
     for (int k = 0; k < rays; ++k) {
-      const Eigen::Vector3d dir = direction(t, b, n, k, ra, rb);
-      if (scene) {
-        RTCRay ray = make_ray(origin, dir);
-        rtcOccluded1(scene->scene, &context, &ray);
-        if (ray.tfar < 0.0f) continue;  // blocked: Embree sets tfar to -inf
-      }
-      eval_sh<double>(options.order, dir, y);
+      dirs[k] = cast.direction(k);
+      traced[k] = embree_ray(cast.origin(), dirs[k]);
+    }
+    if (scene && options.ray_streams)
+      rtcOccluded1M(scene->scene, &context, traced.data(), static_cast<unsigned>(rays), sizeof(RTCRay));
+    else if (scene)
+      for (RTCRay& ray : traced) rtcOccluded1(scene->scene, &context, &ray);
+    for (int k = 0; k < rays; ++k) {
+      if (scene && traced[k].tfar < 0.0f) continue;  // blocked: Embree sets tfar to -inf
+      eval_sh<double>(options.order, dirs[k], y);
       for (int i = 0; i < n2; ++i) sum[i] += y[i];
     }
     for (int i = 0; i < n2; ++i) result[row * n2 + i] = sum[i] / rays;
   });
+  if (passes == 1) return result;
 
   // Bounces (Sloan et al. 2002, interreflected transfer): light leaving a hit point q
   // after b-1 bounces is albedo * T_{b-1}(q) . L, so with cosine-weighted rays
   // T_b(p) = albedo * mean over rays of [hit front face] T_{b-1}(q), with T_{b-1}(q)
   // interpolated from the hit triangle's vertices. Back-face hits (inside of the
-  // surface) contribute nothing.
-  std::vector<double> previous = result, current(nv * n2);
+  // surface) contribute nothing. A range reads the whole mesh's previous bounce from
+  // the gather step; its rows are the ones one process computes, so the sums are too.
+  auto whole = [&](std::vector<double> rows) {
+    if (whole_mesh) return rows;
+    std::vector<double> all = options.gather_bounce(std::move(rows));
+    if (all.size() != mesh.positions.size() * n2)
+      throw std::runtime_error("the gather step returned " + std::to_string(all.size()) + " values, not " +
+                               std::to_string(mesh.positions.size() * n2));
+    return all;
+  };
+  std::vector<double> previous = whole(result), current(nv * n2);
   for (int bounce = 1; bounce < passes; ++bounce) {
-    parallel_vertices(nv, threads, nv * bounce, progress_total, options, [&](std::size_t v) {
-      Eigen::Vector3d t, b;
-      double ra, rb;
-      ray_frame(v, t, b, ra, rb);
-      const Eigen::Vector3d& n = mesh.normals[v];
-      const Eigen::Vector3d origin = mesh.positions[v] + offset * n;
+    parallel_vertices(nv, threads, nv * bounce, progress_total, options, [&](std::size_t row) {
+      const VertexRays cast(mesh, first + row, options.seed, rays, offset);
       std::vector<double> sum(n2, 0.0);
       RTCIntersectContext context;
       rtcInitIntersectContext(&context);
       for (int k = 0; k < rays; ++k) {
-        const Eigen::Vector3d dir = direction(t, b, n, k, ra, rb);
+        const Eigen::Vector3d dir = cast.direction(k);
         RTCRayHit hit{};
-        hit.ray = make_ray(origin, dir);
+        hit.ray = embree_ray(cast.origin(), dir);
         hit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
         rtcIntersect1(scene->scene, &context, &hit);
         if (hit.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
@@ -174,10 +168,10 @@ std::vector<double> compute_transfer(const Mesh& mesh, const TransferOptions& op
         for (int i = 0; i < n2; ++i)
           sum[i] += w0 * previous[tri[0] * n2 + i] + w1 * previous[tri[1] * n2 + i] + w2 * previous[tri[2] * n2 + i];
       }
-      for (int i = 0; i < n2; ++i) current[v * n2 + i] = options.albedo * sum[i] / rays;
+      for (int i = 0; i < n2; ++i) current[row * n2 + i] = options.albedo * sum[i] / rays;
     });
     for (std::size_t i = 0; i < result.size(); ++i) result[i] += current[i];
-    std::swap(previous, current);
+    if (bounce + 1 < passes) previous = whole(current);
   }
   return result;
 }
