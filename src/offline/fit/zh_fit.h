@@ -52,14 +52,15 @@ struct ZhFitOptions {
   // Axes of the dense well-spread set scanned with the closed form of Eq. 18 for each
   // single lobe (a spherical-Fibonacci set on the upper hemisphere: s and -s give the
   // same lobe).
-  int axis_samples = 256;
+  int axis_samples = 128;
   // Local refinements started from the best scanned axes (plus the optimal linear lobe).
   int single_lobe_refinements = 2;
   int max_evaluations = 300;  // per BFGS run
   // varpro: the relative change of psi at which the polish of the best start stops
-  // (starts themselves stop at 1e-3). 1e-4 leaves psi within about 0.1 % of its local
-  // minimum; with lobes >= order (an exact fit exists) 1e-10 is used whatever this says.
-  double polish_ftol_rel = 1e-4;
+  // (starts themselves stop at 1e-3). 3e-4 leaves psi within a few tenths of a percent of
+  // its local minimum; with lobes >= order (an exact fit exists) 1e-10 is used whatever
+  // this says.
+  double polish_ftol_rel = 3e-4;
   std::uint64_t seed = 1;
   // Multi-start runs only while the residual is above this fraction of ||t|| ("we apply
   // further computation when the fit error is high", Sec. 4.1): well-fitted vertices,
