@@ -22,14 +22,17 @@
 //                               inside (BM_EmbreeBuild times it alone). S = 0: one
 //                               rtcOccluded1 per ray; S = 1: a stream per vertex (default).
 //   BM_EmbreeBuild              build_scene of the bunny (Embree's own threads build it).
-//   BM_Fit/lobes:N/starts:S/always:A
+//   BM_Fit/method:M/lobes:N/effort:E/starts:S
 //                               fit_zh of random unit order-6 vectors (coefficients uniform
-//                               in [-1, 1], normalised), default options except lobes,
-//                               starts (S = 0, 4 = default, 16: the --starts effort knob) and
-//                               A = 1: --restart-above 0 (multi-start even when the residual
-//                               is already below the default 5% of |t|); the same 16
-//                               vectors for every case; per_vector = time per fit,
-//                               nrms = sqrt(sum residual^2 / sum |t|^2) over them.
+//                               in [-1, 1], normalised; the same 20 for every case):
+//                               M = 0 variable projection (the default), 1 joint (the
+//                               reference); --effort E; S >= 0 overrides the starts.
+//                               per_vector = time per fit, nrms = sqrt(sum residual^2 /
+//                               sum |t|^2); vs_best_mean / vs_best_max = residual over the
+//                               best known fit of the vector (a long multi-start of both
+//                               methods, computed once per lobe count at the first case).
+//   --write-best-known=PATH     writes those vectors and best-known residuals (N = 2, 4)
+//                               as the JSON the fit-quality test reads, then exits.
 //   BM_Shade/<type>/<method>/lobes:N[/res:R]
 //                               one shaded point = N lobes against one order-6 light;
 //                               4096 points with random axes per iteration (random table

@@ -73,10 +73,39 @@ void unpack(const Packing& p, const std::vector<double>& x, std::vector<ZhLobe>&
   }
 }
 
+// s / |s|, or +z where that is undefined (a zero or non-finite axis from a failed step).
+Eigen::Vector3d unit_or_z(const Eigen::Vector3d& s) {
+  const double len = s.norm();
+  return len > 0 && std::isfinite(len) ? Eigen::Vector3d(s / len) : Eigen::Vector3d::UnitZ();
+}
+
 void normalize_axes(std::vector<ZhLobe>& lobes) {
-  for (ZhLobe& lobe : lobes) {
-    const double len = lobe.axis.norm();
-    lobe.axis = len > 0 && std::isfinite(len) ? Eigen::Vector3d(lobe.axis / len) : Eigen::Vector3d::UnitZ();
+  for (ZhLobe& lobe : lobes) lobe.axis = unit_or_z(lobe.axis);
+}
+
+constexpr unsigned kLbfgsMemory = 6;
+
+// Minimises from x with NLopt's L-BFGS until a relative change of the value below
+// ftol_rel or max_evaluations; the objective keeps its own best point, since NLopt may
+// end with an exception (roundoff_limited) after a good step.
+void run_lbfgs(nlopt::vfunc objective, void* data, std::vector<double>& x, double ftol_rel, int max_evaluations) {
+  nlopt::opt opt(nlopt::LD_LBFGS, static_cast<unsigned>(x.size()));
+  opt.set_min_objective(objective, data);
+  opt.set_ftol_rel(ftol_rel);
+  // ftol_abs lets a vector that is exactly representable (N >= order) stop at rounding
+  // level.
+  opt.set_ftol_abs(1e-28);
+  opt.set_xtol_rel(1e-10);
+  opt.set_maxeval(max_evaluations);
+  // NLopt's default L-BFGS memory is sized from available RAM and made its own
+  // bookkeeping 75% of the run time here; a short history converges as well on this
+  // smooth, small problem.
+  opt.set_vector_storage(kLbfgsMemory);
+  double value = 0;
+  try {
+    opt.optimize(x, value);
+  } catch (const std::exception&) {
+    // roundoff_limited and friends: the caller falls back to the best point evaluated.
   }
 }
 
@@ -90,7 +119,6 @@ struct BfgsData {
   std::vector<double> best_x;
 };
 
-constexpr unsigned kLbfgsMemory = 6;
 // Stopping rules of the variable-projection runs, as a relative change of psi. Starts
 // stop at 1e-3: which start wins is settled by then (measured on random vectors: running
 // every start to 1e-10 lowered the mean best residual by 0.1 % at twice the cost). The
@@ -135,25 +163,9 @@ double bfgs(int order, std::span<const double> t, const Packing& packing, std::v
   BfgsData data{order, t, &packing, lobes, {}, std::numeric_limits<double>::infinity(), {}};
   std::vector<double> x;
   pack(packing, lobes, x);
-  nlopt::opt opt(nlopt::LD_LBFGS, static_cast<unsigned>(x.size()));
-  opt.set_min_objective(bfgs_objective, &data);
   // ftol_rel 1e-12: below that the gains are invisible in the normalised RMS, and
-  // the evaluation budget is the cost of the whole job. ftol_abs lets a vector that
-  // is exactly representable (N >= order) stop at rounding level.
-  opt.set_ftol_rel(1e-12);
-  opt.set_ftol_abs(1e-28);
-  opt.set_xtol_rel(1e-10);
-  opt.set_maxeval(max_evaluations);
-  // NLopt's default L-BFGS memory is sized from available RAM and made its own
-  // bookkeeping 75% of the run time here; a short history converges as well on this
-  // smooth, small problem.
-  opt.set_vector_storage(kLbfgsMemory);
-  double value = 0;
-  try {
-    opt.optimize(x, value);
-  } catch (const std::exception&) {
-    // roundoff_limited and friends: fall back to the best point evaluated.
-  }
+  // the evaluation budget is the cost of the whole job.
+  run_lbfgs(bfgs_objective, &data, x, 1e-12, max_evaluations);
   if (!data.best_x.empty()) unpack(packing, data.best_x, lobes);
   normalize_axes(lobes);
   return zh_objective(order, t, lobes, {});
@@ -302,33 +314,16 @@ double varpro_bfgs_objective(const std::vector<double>& x, std::vector<double>& 
 double varpro_bfgs(int order, std::span<const double> t, const std::vector<bool>& mask,
                    std::vector<Eigen::Vector3d>& axes, int max_evaluations, double ftol_rel,
                    double& squared_residual) {
-  for (Eigen::Vector3d& s : axes) {
-    const double len = s.norm();
-    s = len > 0 && std::isfinite(len) ? Eigen::Vector3d(s / len) : Eigen::Vector3d::UnitZ();
-  }
+  for (Eigen::Vector3d& s : axes) s = unit_or_z(s);
   VarProData data{order, t, &mask, axes, std::numeric_limits<double>::infinity(),
                   std::numeric_limits<double>::infinity(), {}};
   std::vector<double> x(3 * axes.size());
   for (std::size_t k = 0; k < axes.size(); ++k)
     for (int c = 0; c < 3; ++c) x[3 * k + c] = axes[k][c];
-  nlopt::opt opt(nlopt::LD_LBFGS, static_cast<unsigned>(x.size()));
-  opt.set_min_objective(varpro_bfgs_objective, &data);
-  opt.set_ftol_rel(ftol_rel);
-  opt.set_ftol_abs(1e-28);
-  opt.set_xtol_rel(1e-10);
-  opt.set_maxeval(max_evaluations);
-  opt.set_vector_storage(kLbfgsMemory);
-  double value = 0;
-  try {
-    opt.optimize(x, value);
-  } catch (const std::exception&) {
-    // roundoff_limited and friends: the best point evaluated is kept below.
-  }
+  run_lbfgs(varpro_bfgs_objective, &data, x, ftol_rel, max_evaluations);
   if (data.best_x.empty()) return zh_varpro_objective(order, t, mask, axes, {}, {}, &squared_residual);
   for (std::size_t k = 0; k < axes.size(); ++k) {
-    const Eigen::Vector3d s(data.best_x[3 * k], data.best_x[3 * k + 1], data.best_x[3 * k + 2]);
-    const double len = s.norm();
-    axes[k] = len > 0 && std::isfinite(len) ? Eigen::Vector3d(s / len) : Eigen::Vector3d::UnitZ();
+    axes[k] = unit_or_z(Eigen::Vector3d(data.best_x[3 * k], data.best_x[3 * k + 1], data.best_x[3 * k + 2]));
   }
   squared_residual = data.best_residual;
   return data.best;
