@@ -225,13 +225,23 @@ TEST_P(ZhFitMethods, DeterministicAcrossThreadCounts) {
   o.lobes = 2;
   o.starts = 1;
   o.restart_above = 0;
-  const std::vector<ZhFit> one = fit_zh_all(vectors, o, 1);
-  const std::vector<ZhFit> two = fit_zh_all(vectors, o, 2);
-  for (std::size_t v = 0; v < one.size(); ++v) {
-    EXPECT_EQ(one[v].residual, two[v].residual) << "vector " << v;
+  const ZhFitTable<double> one = fit_zh_all(vectors, o, 1);
+  const ZhFitTable<double> two = fit_zh_all(vectors, o, 2);
+  ASSERT_EQ(one.vertices, 6u);
+  EXPECT_EQ(one.axes, two.axes);
+  EXPECT_EQ(one.coeffs, two.coeffs);
+  EXPECT_EQ(one.residual, two.residual);
+  EXPECT_EQ(one.norm, two.norm);
+  // Each row is the fit of its vector alone, drawn from stream v.
+  for (std::size_t v = 0; v < one.vertices; ++v) {
+    const ZhFit alone = fit_zh(std::span<const double>(vectors).subspan(v * 16, 16), o, v);
+    const ZhFit row = fit_row(two, v);
+    EXPECT_EQ(row.residual, alone.residual) << "vector " << v;
+    EXPECT_EQ(row.norm, alone.norm);
+    ASSERT_EQ(row.lobes.size(), 2u);
     for (int k = 0; k < 2; ++k) {
-      EXPECT_EQ(one[v].lobes[k].axis, two[v].lobes[k].axis);
-      EXPECT_EQ(one[v].lobes[k].coeffs, two[v].lobes[k].coeffs);
+      EXPECT_EQ(row.lobes[k].axis, alone.lobes[k].axis);
+      EXPECT_EQ(row.lobes[k].coeffs, alone.lobes[k].coeffs);
     }
   }
 }

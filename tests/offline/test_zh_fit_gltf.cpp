@@ -14,7 +14,7 @@
 namespace {
 
 using shtool::fit::Mesh;
-using shtool::fit::ZhFit;
+using shtool::ZhFitTable;
 
 // `vertices` vertices on a line of triangles, each fitted with one lobe of order 2.
 Mesh strip(std::size_t vertices) {
@@ -27,11 +27,16 @@ Mesh strip(std::size_t vertices) {
   return m;
 }
 
-std::vector<ZhFit> fits_of(std::size_t vertices) {
-  ZhFit f;
-  f.lobes.resize(1);
-  f.lobes[0].coeffs = {0.5, 0.25};
-  return std::vector<ZhFit>(vertices, f);
+ZhFitTable<double> fits_of(std::size_t vertices) {
+  ZhFitTable<double> fits;
+  fits.order = 2;
+  fits.lobes = 1;
+  fits.vertices = vertices;
+  fits.axes.assign(vertices, Eigen::Vector3d::UnitZ());
+  for (std::size_t v = 0; v < vertices; ++v) fits.coeffs.insert(fits.coeffs.end(), {0.5, 0.25});
+  fits.residual.assign(vertices, 0.0);
+  fits.norm.assign(vertices, 1.0);
+  return fits;
 }
 
 tinygltf::Model parse(const std::string& glb) {
@@ -48,7 +53,7 @@ TEST(ZhFitGltf, IndicesAreShortBelowTheirRestartValue) {
   for (const auto& [vertices, type] : {std::pair<std::size_t, int>{65534, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT},
                                        std::pair<std::size_t, int>{65535, TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT}}) {
     const std::vector<double> dc(vertices, 0.1);
-    const tinygltf::Model m = parse(zh_fit_glb(strip(vertices), fits_of(vertices), dc, 2, 1, false, "test"));
+    const tinygltf::Model m = parse(zh_fit_glb(strip(vertices), fits_of(vertices), dc, "test"));
     ASSERT_EQ(m.meshes.size(), 1u);
     const tinygltf::Accessor& indices = m.accessors.at(m.meshes[0].primitives.at(0).indices);
     EXPECT_EQ(indices.componentType, type) << vertices << " vertices";
@@ -59,9 +64,9 @@ TEST(ZhFitGltf, IndicesAreShortBelowTheirRestartValue) {
 
 TEST(ZhFitGltf, FitsThatDoNotMatchTheMeshAreRefused) {
   const std::vector<double> dc(4, 0.1), short_dc(3, 0.1);
-  EXPECT_THROW(zh_fit_glb(strip(4), fits_of(3), dc, 2, 1, false, "test"), shtool::InputError);
-  EXPECT_THROW(zh_fit_glb(strip(4), fits_of(4), short_dc, 2, 1, false, "test"), shtool::InputError);
-  EXPECT_NO_THROW(zh_fit_glb(strip(4), fits_of(4), dc, 2, 1, false, "test"));
+  EXPECT_THROW(zh_fit_glb(strip(4), fits_of(3), dc, "test"), shtool::InputError);
+  EXPECT_THROW(zh_fit_glb(strip(4), fits_of(4), short_dc, "test"), shtool::InputError);
+  EXPECT_NO_THROW(zh_fit_glb(strip(4), fits_of(4), dc, "test"));
 }
 
 TEST(ZhFitGltf, GreyIsTheDcOfAnOpenPlaneClamped) {

@@ -27,24 +27,38 @@ namespace fs = std::filesystem;
 
 constexpr int kOrder = 4, kLobes = 3;
 
-std::vector<fit::ZhFit> some_fits(int count, bool direct) {
+fit::ZhFitOptions options(bool direct) {
   fit::ZhFitOptions o;
   o.order = kOrder;
   o.lobes = kLobes;
   o.direct = direct;
   o.starts = 1;
+  return o;
+}
+
+std::vector<double> some_vector(int v) {
+  std::vector<double> t(sh_count(kOrder));
+  for (std::size_t i = 0; i < t.size(); ++i) t[i] = std::cos(0.7 * i + v) / (1 + i);
+  return t;
+}
+
+// The reference: each vector fitted on its own (stream v, as fit_zh_all draws it).
+std::vector<fit::ZhFit> some_fits(int count, bool direct) {
   std::vector<fit::ZhFit> fits;
-  for (int v = 0; v < count; ++v) {
-    std::vector<double> t(sh_count(kOrder));
-    for (std::size_t i = 0; i < t.size(); ++i) t[i] = std::cos(0.7 * i + v) / (1 + i);
-    fits.push_back(fit::fit_zh(t, o, v));
-  }
+  for (int v = 0; v < count; ++v) fits.push_back(fit::fit_zh(some_vector(v), options(direct), v));
   return fits;
 }
 
-Table fit_table(const std::vector<fit::ZhFit>& fits, std::vector<std::uint32_t> index = {}) {
-  return fit::zh_fit_table(fits, kOrder, kLobes, index, nlohmann::json::object(),
-                           generator_record("test", nlohmann::json::object()));
+// The same vectors through the flat set the jobs write (two workers).
+Table fit_table(int count, bool direct, std::vector<std::uint32_t> index = {}) {
+  std::vector<double> vectors;
+  for (int v = 0; v < count; ++v) {
+    const std::vector<double> t = some_vector(v);
+    vectors.insert(vectors.end(), t.begin(), t.end());
+  }
+  ZhFitTable<double> fits = fit::fit_zh_all(vectors, options(direct), 2);
+  fits.vertex_index = std::move(index);
+  return fit::zh_fit_table(fits, nlohmann::json::object(), generator_record("test", nlohmann::json::object()));
 }
 
 class ZhFitTableTest : public ::testing::Test {
@@ -64,7 +78,7 @@ class ZhFitTableTest : public ::testing::Test {
 TEST_F(ZhFitTableTest, RoundTripIsExactAndSpansShade) {
   const std::vector<fit::ZhFit> fits = some_fits(5, false);
   const fs::path p = dir_ / "f.shtb";
-  ASSERT_TRUE(test::try_write(fit_table(fits, {10, 11, 12, 20, 21}), p).ok());
+  ASSERT_TRUE(test::try_write(fit_table(5, false, {10, 11, 12, 20, 21}), p).ok());
   const auto loaded = load_zh_fit<double>(p);
   ASSERT_TRUE(loaded.ok()) << loaded.error().message;
   const ZhFitTable<double>& z = loaded.value();
@@ -94,14 +108,16 @@ TEST_F(ZhFitTableTest, RoundTripIsExactAndSpansShade) {
 
 TEST_F(ZhFitTableTest, DirectCoefficientsLoad) {
   const std::vector<fit::ZhFit> fits = some_fits(3, true);
-  const auto z = ZhFitTable<double>::from_table(fit_table(fits));
+  const auto z = ZhFitTable<double>::from_table(fit_table(3, true));
   ASSERT_TRUE(z.ok()) << z.error().message;
-  EXPECT_EQ(z.value().direct_count, static_cast<int>(fits[0].direct.size()));
-  EXPECT_EQ(z.value().direct_of(2)[0], fits[2].direct[0]);
+  ASSERT_EQ(z.value().direct_count, static_cast<int>(fits[0].direct.size()));
+  EXPECT_EQ(z.value().direct_count, fit::direct_count(options(true)));
+  for (std::size_t v = 0; v < fits.size(); ++v)
+    for (std::size_t i = 0; i < fits[v].direct.size(); ++i) EXPECT_EQ(z.value().direct_of(v)[i], fits[v].direct[i]);
 }
 
 TEST_F(ZhFitTableTest, CorruptionsAreRejected) {
-  const Table good = fit_table(some_fits(2, false));
+  const Table good = fit_table(2, false);
   ASSERT_TRUE(ZhFitTable<double>::from_table(good).ok());
   auto expect_rejected = [](const Table& t, const std::string& fragment) {
     const auto z = ZhFitTable<double>::from_table(t);

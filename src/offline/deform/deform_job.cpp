@@ -160,32 +160,17 @@ DeformReport run_deform(const DeformRequest& r) {
   report.vertices = moved.vertices;
   for (const Eigen::Matrix3d& m : rotations)
     report.largest_angle = std::max(report.largest_angle, std::acos(std::clamp((m.trace() - 1) / 2, -1.0, 1.0)));
-  // Back to fits, to write them as fit-zh does.
-  std::vector<fit::ZhFit> fits(moved.vertices);
-  const std::size_t lobes = moved.lobes, n = moved.order, d = moved.direct_count;
-  for (std::size_t v = 0; v < moved.vertices; ++v) {
-    for (std::size_t k = 0; k < lobes; ++k) {
-      fit::ZhLobe lobe;
-      lobe.axis = moved.axes[v * lobes + k];
-      lobe.coeffs.assign(moved.coeffs.begin() + (v * lobes + k) * n, moved.coeffs.begin() + (v * lobes + k + 1) * n);
-      fits[v].lobes.push_back(std::move(lobe));
-    }
-    fits[v].direct.assign(moved.direct.begin() + v * d, moved.direct.begin() + (v + 1) * d);
-    fits[v].residual = moved.residual[v];
-    fits[v].norm = moved.norm[v];
-  }
   const nlohmann::json params = {{"fit", r.fit.filename().string()},
                                  {"rest", r.rest.filename().string()},
                                  {"rest_crc32", rest.input_crc32},
                                  {"pose", r.pose.filename().string()},
                                  {"pose_crc32", posed.input_crc32}};
-  const nlohmann::json meta = {{"mode", "deformed"}, {"direct", d}};
-  const Table table = fit::zh_fit_table(fits, moved.order, moved.lobes, moved.vertex_index, meta,
-                                        generator_record("shtool deform", params));
+  const nlohmann::json meta = {{"mode", "deformed"}, {"direct", moved.direct_count}};
+  const Table table = fit::zh_fit_table(moved, meta, generator_record("shtool deform", params));
   std::vector<std::string> bytes = {encode_table(table)};
   std::vector<OutputFile> outputs = {{r.out, bytes[0]}};
   if (!r.json.empty()) {
-    bytes.push_back(fit::fits_json(fits, moved.order, moved.lobes, d > 0));
+    bytes.push_back(fit::fits_json(moved));
     outputs.push_back({r.json, bytes[1]});
   }
   write_files_atomically(outputs);

@@ -36,7 +36,7 @@ namespace {
 constexpr double kMaxTransferMagnitude = 1e100;
 
 std::string ply_text(const Mesh& mesh, const std::vector<double>& transfer, int order,
-                     const std::vector<ZhFit>& fits) {
+                     const ZhFitTable<double>& fits) {
   std::ostringstream s;
   s.precision(9);
   s << "ply\nformat ascii 1.0\ncomment shtool fit-zh: colour = transfer DC (grey, 1 = unshadowed), "
@@ -49,7 +49,7 @@ std::string ply_text(const Mesh& mesh, const std::vector<double>& transfer, int 
   const std::size_t n2 = sh_count(order);
   for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
     const double dc = transfer_dc_grey(transfer[v * n2]);
-    const double err = fits[v].norm > 0 ? fits[v].residual / fits[v].norm : 0.0;
+    const double err = fits.norm[v] > 0 ? fits.residual[v] / fits.norm[v] : 0.0;
     const double e = std::clamp(4.0 * err, 0.0, 1.0);  // 25% relative error is full red
     auto byte = [](double x) { return static_cast<int>(std::lround(255.0 * x)); };
     const Eigen::Vector3d& p = mesh.positions[v];
@@ -116,15 +116,19 @@ void check_request(const FitZhRequest& r) {
 
 }  // namespace
 
-std::string fits_json(const std::vector<ZhFit>& fits, int order, int lobes, bool direct) {
-  nlohmann::json doc = {{"order", order}, {"lobes", lobes}, {"fits", nlohmann::json::array()}};
-  for (const ZhFit& f : fits) {
+std::string fits_json(const ZhFitTable<double>& fits) {
+  nlohmann::json doc = {{"order", fits.order}, {"lobes", fits.lobes}, {"fits", nlohmann::json::array()}};
+  for (std::size_t v = 0; v < fits.vertices; ++v) {
     nlohmann::json jf = {{"lobes", nlohmann::json::array()}};
-    for (const ZhLobe& lobe : f.lobes)
-      jf["lobes"].push_back({{"axis", {lobe.axis.x(), lobe.axis.y(), lobe.axis.z()}}, {"coeffs", lobe.coeffs}});
-    jf["residual"] = f.residual;
-    jf["norm"] = f.norm;
-    if (direct) jf["direct"] = f.direct;
+    const std::span<const double> coeffs = fits.coeffs_of(v);
+    for (int k = 0; k < fits.lobes; ++k) {
+      const Eigen::Vector3d& axis = fits.axes_of(v)[k];
+      jf["lobes"].push_back({{"axis", {axis.x(), axis.y(), axis.z()}},
+                             {"coeffs", coeffs.subspan(static_cast<std::size_t>(k) * fits.order, fits.order)}});
+    }
+    jf["residual"] = fits.residual[v];
+    jf["norm"] = fits.norm[v];
+    if (fits.direct_count) jf["direct"] = fits.direct_of(v);
     doc["fits"].push_back(std::move(jf));
   }
   return doc.dump() + "\n";
@@ -320,7 +324,7 @@ FitZhReport run_fit_zh_on(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJo
   if (r.restart_above) fo.restart_above = *r.restart_above;
   fo.seed = r.seed;
   const auto t1 = std::chrono::steady_clock::now();
-  std::vector<ZhFit> fits = fit_zh_all(transfer, fo, threads, cb.fit_progress, range.begin);
+  ZhFitTable<double> fits = fit_zh_all(transfer, fo, threads, cb.fit_progress, range.begin);
   report.fit_seconds = seconds_since(t1);
   std::vector<double> transfer_dc;  // --gltf colours each vertex by its transfer's t_00
   if (!r.gltf.empty())
@@ -345,9 +349,8 @@ FitZhReport run_fit_zh_on(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJo
     const EmbreeIdentity embree = embree_identity();
     generator["embree"] = {{"version", embree.version}, {"isa", embree.isa}};
   }
-  std::vector<std::uint32_t> vertex_index;
   if (!mesh.source_index.empty())
-    vertex_index.assign(mesh.source_index.begin() + range.begin, mesh.source_index.begin() + range.end);
+    fits.vertex_index.assign(mesh.source_index.begin() + range.begin, mesh.source_index.begin() + range.end);
   if (rows_of) {
     meta["shard"] = {{"index", rows_of->index}, {"count", rows_of->count}, {"first_vertex", range.begin},
                      {"end_vertex", range.end}, {"vertices", total}};
@@ -358,7 +361,7 @@ FitZhReport run_fit_zh_on(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJo
     report.end_vertex = range.end;
     report.total = total;
   }
-  Table table = zh_fit_table(fits, order, r.lobes, vertex_index, meta, generator);
+  Table table = zh_fit_table(fits, meta, generator);
   if (mpi) {
     // Every rank's rows reach rank 0 as a partial table and are joined by merge's code:
     // the same checks (a rank on another Embree, ISA or input is refused) and the same
@@ -395,7 +398,7 @@ FitZhReport run_fit_zh_on(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJo
     } catch (const InputError& e) {
       throw InputError(std::string("--mpi: ") + e.what());
     }
-    report.count = fits.size();
+    report.count = fits.vertices;
     report.normalized_rms = normalized_rms(fits);
   }
 
@@ -408,12 +411,11 @@ FitZhReport run_fit_zh_on(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJo
     outputs.push_back({path, bytes.back()});
   };
   add(out, encode_table(table, r.encoding));
-  if (!r.json.empty()) add(r.json, fits_json(fits, order, r.lobes, r.direct));
+  if (!r.json.empty()) add(r.json, fits_json(fits));
   if (!r.ply.empty()) add(r.ply, ply_text(mesh, transfer, order, fits));
   if (!r.save_transfer.empty()) add(r.save_transfer, transfer_json(transfer, order));
   if (!r.gltf.empty())
-    add(r.gltf, zh_fit_glb(mesh, fits, transfer_dc, order, r.lobes, r.direct,
-                           "shtool " + generator["version"].get<std::string>() + " fit-zh"));
+    add(r.gltf, zh_fit_glb(mesh, fits, transfer_dc, "shtool " + generator["version"].get<std::string>() + " fit-zh"));
   write_files_atomically(outputs);
   return report;
 }

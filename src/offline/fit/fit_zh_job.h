@@ -83,8 +83,8 @@ struct FitZhReport {
 std::vector<double> parse_transfer_json(std::string_view text, const std::filesystem::path& path, int& order);
 
 // The --json output: every fit's lobes (axis, coefficients), residual and norm, and its
-// direct coefficients when `direct`.
-std::string fits_json(const std::vector<ZhFit>& fits, int order, int lobes, bool direct);
+// direct coefficients when it stores some.
+std::string fits_json(const ZhFitTable<double>& fits);
 
 // Checks the request and every output path before any work (InputError), runs the job,
 // writes the outputs.

@@ -110,11 +110,16 @@ std::vector<double> compute_transfer(const Mesh& mesh, const TransferOptions& op
   // Pass 0: direct transfer.
   parallel_vertices(nv, threads, 0, progress_total, options, [&](std::size_t row) {
     const VertexRays cast(mesh, first + row, options.seed, rays, offset);
-    std::vector<double> y(n2), sum(n2, 0.0);
+    // Each worker's scratch lives as long as its thread: nothing is allocated per vertex.
+    thread_local std::vector<double> y, sum;
+    thread_local std::vector<Eigen::Vector3d> dirs;
+    thread_local std::vector<RTCRay> traced;
+    y.resize(n2);
+    sum.assign(n2, 0.0);
+    dirs.resize(rays);
+    traced.resize(rays);
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
-    std::vector<Eigen::Vector3d> dirs(rays);
-    std::vector<RTCRay> traced(rays);
     for (int k = 0; k < rays; ++k) {
       dirs[k] = cast.direction(k);
       traced[k] = embree_ray(cast.origin(), dirs[k]);
@@ -150,7 +155,8 @@ std::vector<double> compute_transfer(const Mesh& mesh, const TransferOptions& op
   for (int bounce = 1; bounce < passes; ++bounce) {
     parallel_vertices(nv, threads, nv * bounce, progress_total, options, [&](std::size_t row) {
       const VertexRays cast(mesh, first + row, options.seed, rays, offset);
-      std::vector<double> sum(n2, 0.0);
+      thread_local std::vector<double> sum;
+      sum.assign(n2, 0.0);
       RTCIntersectContext context;
       rtcInitIntersectContext(&context);
       for (int k = 0; k < rays; ++k) {

@@ -39,6 +39,11 @@ double squared_norm(std::span<const double> v) {
   return s;
 }
 
+void check_options(const ZhFitOptions& o) {
+  if (!is_supported_order(o.order)) throw InputError("fit_zh: unsupported order " + std::to_string(o.order));
+  if (o.lobes < 1) throw InputError("fit_zh: need at least one lobe");
+}
+
 std::vector<bool> free_bands(const ZhFitOptions& o) {
   std::vector<bool> mask(o.order, true);
   if (o.direct) {
@@ -661,8 +666,7 @@ double zh_varpro_objective(int order, std::span<const double> t, const std::vect
 }
 
 ZhFit fit_zh(std::span<const double> t_in, const ZhFitOptions& o, std::uint64_t stream) {
-  if (!is_supported_order(o.order)) throw InputError("fit_zh: unsupported order " + std::to_string(o.order));
-  if (o.lobes < 1) throw InputError("fit_zh: need at least one lobe");
+  check_options(o);
   const int order = o.order, n2 = sh_count(order);
   if (static_cast<int>(t_in.size()) != n2)
     throw InputError("fit_zh: vector has " + std::to_string(t_in.size()) + " values, order " +
@@ -709,16 +713,59 @@ ZhFit fit_zh(std::span<const double> t_in, const ZhFitOptions& o, std::uint64_t 
   return fit;
 }
 
-std::vector<ZhFit> fit_zh_all(std::span<const double> vectors, const ZhFitOptions& options, int threads,
+ZhFitTable<double> fit_zh_all(std::span<const double> vectors, const ZhFitOptions& options, int threads,
                               const std::function<void(std::size_t, std::size_t)>& progress,
                               std::uint64_t first_stream) {
+  check_options(options);
   const std::size_t n2 = sh_count(options.order);
   if (vectors.size() % n2 != 0) throw InputError("fit_zh_all: size is not a multiple of order^2");
-  const std::size_t count = vectors.size() / n2;
-  std::vector<ZhFit> fits(count);
-  parallel_for(count, resolve_threads(threads),
-               [&](std::size_t v) { fits[v] = fit_zh(vectors.subspan(v * n2, n2), options, first_stream + v); }, progress);
+  const std::size_t count = vectors.size() / n2, lobes = options.lobes, order = options.order;
+  ZhFitTable<double> fits;
+  fits.order = options.order;
+  fits.lobes = options.lobes;
+  fits.vertices = count;
+  fits.direct_count = direct_count(options);
+  fits.axes.resize(count * lobes);
+  fits.coeffs.resize(count * lobes * order);
+  fits.residual.resize(count);
+  fits.norm.resize(count);
+  fits.direct.resize(count * fits.direct_count);
+  parallel_for(
+      count, resolve_threads(threads),
+      [&](std::size_t v) {
+        const ZhFit f = fit_zh(vectors.subspan(v * n2, n2), options, first_stream + v);
+        for (std::size_t k = 0; k < lobes; ++k) {
+          fits.axes[v * lobes + k] = f.lobes[k].axis;
+          std::copy_n(f.lobes[k].coeffs.begin(), order, fits.coeffs.begin() + (v * lobes + k) * order);
+        }
+        std::copy(f.direct.begin(), f.direct.end(), fits.direct.begin() + v * fits.direct_count);
+        fits.residual[v] = f.residual;
+        fits.norm[v] = f.norm;
+      },
+      progress);
   return fits;
+}
+
+int direct_count(const ZhFitOptions& options) {
+  check_options(options);
+  const std::vector<bool> mask = free_bands(options);
+  int count = 0;
+  for (int l = 0; l < options.order; ++l)
+    if (!mask[l]) count += 2 * l + 1;
+  return count;
+}
+
+ZhFit fit_row(const ZhFitTable<double>& fits, std::size_t v) {
+  ZhFit f;
+  const std::span<const double> coeffs = fits.coeffs_of(v);
+  for (int k = 0; k < fits.lobes; ++k)
+    f.lobes.push_back({fits.axes_of(v)[k], std::vector<double>(coeffs.begin() + k * fits.order,
+                                                                coeffs.begin() + (k + 1) * fits.order)});
+  const std::span<const double> direct = fits.direct_of(v);
+  f.direct.assign(direct.begin(), direct.end());
+  f.residual = fits.residual[v];
+  f.norm = fits.norm[v];
+  return f;
 }
 
 }  // namespace shtool::fit

@@ -20,6 +20,8 @@
 
 #include <Eigen/Core>
 
+#include "shtool/zh_fit_table.h"
+
 namespace shtool::fit {
 
 struct ZhLobe {
@@ -130,9 +132,18 @@ ZhFit fit_zh(std::span<const double> t, const ZhFitOptions& options, std::uint64
 // Fits vectors[v * order^2 ...] for every v on `threads` workers (fixed partition by
 // index; stream = first_stream + v, so results depend on neither the thread count nor,
 // when a shard passes the global index of its first vector, the shard count).
-// progress(done, total) is called from worker 0 only.
-std::vector<ZhFit> fit_zh_all(std::span<const double> vectors, const ZhFitOptions& options, int threads,
+// The fits land in one flat set, the layout the runtime loads (shtool/zh_fit_table.h):
+// a few contiguous arrays whatever the vertex count, no allocation kept per vertex.
+// vertex_index is left empty. progress(done, total) is called from worker 0 only.
+ZhFitTable<double> fit_zh_all(std::span<const double> vectors, const ZhFitOptions& options, int threads,
                               const std::function<void(std::size_t, std::size_t)>& progress = {},
                               std::uint64_t first_stream = 0);
+
+// Coefficients a fit with these options stores directly per vector: 0, 1 (DC) or 4 (DC
+// and the linear band).
+int direct_count(const ZhFitOptions& options);
+
+// Row v of a flat set as a ZhFit (for code that works on one fit at a time).
+ZhFit fit_row(const ZhFitTable<double>& fits, std::size_t v);
 
 }  // namespace shtool::fit

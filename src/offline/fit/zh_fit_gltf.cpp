@@ -96,7 +96,7 @@ template <typename Source>
 std::vector<float> vec4_rows(std::size_t vertices, std::size_t first, const Source& source) {
   std::vector<float> out(vertices * 4, 0.0f);
   for (std::size_t v = 0; v < vertices; ++v) {
-    const std::vector<double>& values = source(v);
+    const std::span<const double> values = source(v);
     for (std::size_t c = 0; c < 4 && first + c < values.size(); ++c)
       out[v * 4 + c] = static_cast<float>(values[first + c]);
   }
@@ -105,11 +105,13 @@ std::vector<float> vec4_rows(std::size_t vertices, std::size_t first, const Sour
 
 }  // namespace
 
-std::string zh_fit_glb(const Mesh& mesh, const std::vector<ZhFit>& fits, std::span<const double> transfer_dc, int order,
-                       int lobes, bool direct, const std::string& generator) {
+std::string zh_fit_glb(const Mesh& mesh, const ZhFitTable<double>& fits, std::span<const double> transfer_dc,
+                       const std::string& generator) {
   const std::size_t n = mesh.positions.size();
-  if (fits.size() != n || transfer_dc.size() != n)
-    throw InputError("--gltf: " + std::to_string(fits.size()) + " fits and " + std::to_string(transfer_dc.size()) +
+  const int order = fits.order, lobes = fits.lobes;
+  const bool direct = fits.direct_count > 0;
+  if (fits.vertices != n || transfer_dc.size() != n)
+    throw InputError("--gltf: " + std::to_string(fits.vertices) + " fits and " + std::to_string(transfer_dc.size()) +
                      " transfer vectors for a mesh of " + std::to_string(n) + " vertices");
   const std::size_t coeff_groups = (static_cast<std::size_t>(order) + 3) / 4;
   const std::size_t floats_per_vertex = 9 + lobes * (3 + 4 * coeff_groups) + (direct ? 4 : 0);
@@ -132,17 +134,17 @@ std::string zh_fit_glb(const Mesh& mesh, const std::vector<ZhFit>& fits, std::sp
   for (int k = 0; k < lobes; ++k) {
     std::vector<float> axis(n * 3);
     for (std::size_t v = 0; v < n; ++v)
-      for (int c = 0; c < 3; ++c) axis[v * 3 + c] = static_cast<float>(fits[v].lobes.at(k).axis[c]);
+      for (int c = 0; c < 3; ++c) axis[v * 3 + c] = static_cast<float>(fits.axes_of(v)[k][c]);
     const std::string lobe = std::to_string(k);
     p.attributes["_ZH_AXIS_" + lobe] = b.floats(axis, TINYGLTF_TYPE_VEC3);
     for (std::size_t j = 0; j < coeff_groups; ++j)
       p.attributes["_ZH_COEFFS_" + lobe + "_" + std::to_string(j)] = b.floats(
-          vec4_rows(n, 4 * j, [&](std::size_t v) -> const std::vector<double>& { return fits[v].lobes.at(k).coeffs; }),
+          vec4_rows(n, 4 * j, [&](std::size_t v) { return fits.coeffs_of(v).subspan(std::size_t(k) * order, order); }),
           TINYGLTF_TYPE_VEC4);
   }
   if (direct)
     p.attributes["_ZH_DIRECT"] =
-        b.floats(vec4_rows(n, 0, [&](std::size_t v) -> const std::vector<double>& { return fits[v].direct; }),
+        b.floats(vec4_rows(n, 0, [&](std::size_t v) { return fits.direct_of(v); }),
                  TINYGLTF_TYPE_VEC4);
   // Indices above the type's maximum would be read as primitive restarts.
   p.indices = n < 0xFFFF ? b.indices<std::uint16_t>(mesh.triangles, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT)

@@ -18,7 +18,7 @@
 #include <vector>
 
 #include "fit/mesh.h"
-#include "fit/zh_fit.h"
+#include "shtool/zh_fit_table.h"
 
 namespace shtool::fit {
 
@@ -27,9 +27,9 @@ namespace shtool::fit {
 double transfer_dc_grey(double t00);
 
 // The .glb bytes. `fits` and `transfer_dc` (the transfer's DC coefficient t_00) have one
-// entry per mesh vertex; `generator` goes to asset.generator. Throws InputError when the
+// row per mesh vertex; `generator` goes to asset.generator. Throws InputError when the
 // sizes disagree or the file would pass the 4 GB (32-bit lengths) of a .glb.
-std::string zh_fit_glb(const Mesh& mesh, const std::vector<ZhFit>& fits, std::span<const double> transfer_dc, int order,
-                       int lobes, bool direct, const std::string& generator);
+std::string zh_fit_glb(const Mesh& mesh, const ZhFitTable<double>& fits, std::span<const double> transfer_dc,
+                       const std::string& generator);
 
 }  // namespace shtool::fit

@@ -146,39 +146,26 @@ MergedFits merge_zh_fit_tables(std::vector<NamedTable> named) {
                      " shards missing (" + missing + (missing_count > 10 ? ", ..." : "") + ")");
 
   // The rows in vertex order, through the writer a one-process run uses.
-  const int order = first.table.order, lobes = first.lobes;
-  std::vector<ZhFit> fits;
-  fits.reserve(first.total);
-  std::vector<std::uint32_t> vertex_index;
-  for (const Part* p : by_index) {
-    const std::vector<double> axes = p->table.find("axes")->values<double>();
-    const std::vector<double> coeffs = p->table.find("coeffs")->values<double>();
-    const std::vector<double> residual = p->table.find("residual")->values<double>();
-    const std::vector<double> norm = p->table.find("norm")->values<double>();
-    const std::vector<double> direct =
-        p->direct >= 0 ? p->table.find("direct")->values<double>() : std::vector<double>();
-    for (std::size_t v = 0; v < p->rows; ++v) {
-      ZhFit f;
-      f.lobes.resize(lobes);
-      for (int k = 0; k < lobes; ++k) {
-        const std::size_t a = (v * lobes + k) * 3, c = (v * lobes + k) * order;
-        f.lobes[k].axis = Eigen::Vector3d(axes[a], axes[a + 1], axes[a + 2]);
-        f.lobes[k].coeffs.assign(coeffs.begin() + c, coeffs.begin() + c + order);
-      }
-      if (p->direct > 0)
-        f.direct.assign(direct.begin() + v * p->direct, direct.begin() + (v + 1) * p->direct);
-      f.residual = residual[v];
-      f.norm = norm[v];
-      fits.push_back(std::move(f));
-    }
-    if (p->vertex_index) {
-      const std::vector<std::uint32_t> vi = p->table.find("vertex_index")->values<std::uint32_t>();
-      vertex_index.insert(vertex_index.end(), vi.begin(), vi.end());
-    }
-  }
   MergedFits merged;
-  merged.table = zh_fit_table(fits, order, lobes, vertex_index, first.meta, first.generator);
-  merged.fits = std::move(fits);
+  ZhFitTable<double>& fits = merged.fits;
+  fits.order = first.table.order;
+  fits.lobes = first.lobes;
+  fits.direct_count = static_cast<int>(std::max<std::int64_t>(first.direct, 0));
+  for (const Part* p : by_index) {
+    fits.vertices += p->rows;
+    const std::vector<double> axes = p->table.find("axes")->values<double>();
+    for (std::size_t a = 0; a < axes.size(); a += 3) fits.axes.emplace_back(axes[a], axes[a + 1], axes[a + 2]);
+    auto append = [&]<class T>(std::vector<T>& to, const char* name) {
+      const std::vector<T> values = p->table.find(name)->values<T>();
+      to.insert(to.end(), values.begin(), values.end());
+    };
+    append(fits.coeffs, "coeffs");
+    append(fits.residual, "residual");
+    append(fits.norm, "norm");
+    if (fits.direct_count) append(fits.direct, "direct");
+    if (p->vertex_index) append(fits.vertex_index, "vertex_index");
+  }
+  merged.table = zh_fit_table(fits, first.meta, first.generator);
   return merged;
 }
 
@@ -206,7 +193,7 @@ MergeReport merge_zh_fit_parts(const MergeRequest& r) {
     throw InputError(std::string("merge: ") + e.what());
   }
   write_file_atomically(r.out, encode_table(merged.table, r.encoding));
-  return {r.parts.size(), merged.fits.size()};
+  return {r.parts.size(), merged.fits.vertices};
 }
 
 }  // namespace shtool::fit

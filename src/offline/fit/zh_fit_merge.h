@@ -7,8 +7,8 @@
 #include <string>
 #include <vector>
 
-#include "fit/zh_fit.h"
 #include "shtool/table.h"
+#include "shtool/zh_fit_table.h"
 
 namespace shtool::fit {
 
@@ -20,7 +20,7 @@ struct NamedTable {
 
 struct MergedFits {
   Table table;              // what a one-process run writes
-  std::vector<ZhFit> fits;  // its rows, for the outputs made from fits (--json)
+  ZhFitTable<double> fits;  // its rows, for the outputs made from fits (--json)
 };
 
 // The checks and the join of merge_zh_fit_parts on tables already read (the MPI ranks'

@@ -23,6 +23,7 @@
 #include "fit/embree_scene.h"
 #include "fit/fit_zh_job.h"
 #include "fit/zh_fit.h"
+#include "fit/zh_fit_table.h"
 #include "fit/mesh.h"
 #include "lighting/image_io.h"
 #include "lighting/lighting_output.h"
@@ -277,23 +278,8 @@ lighting::Image compare_strip(const Hits& hits, const fit::Mesh& mesh, VertexDat
     fit::ZhFitOptions options;
     options.order = data.transfer_order;
     options.lobes = lobes;
-    const std::vector<fit::ZhFit> fits = fit::fit_zh_all(data.transfer, options, threads);
-    ZhFitTable<double> table;
-    table.order = data.transfer_order;
-    table.lobes = lobes;
-    table.vertices = fits.size();
-    double residual2 = 0, norm2 = 0;
-    for (const fit::ZhFit& f : fits) {
-      for (const fit::ZhLobe& lobe : f.lobes) {
-        table.axes.emplace_back(lobe.axis);
-        table.coeffs.insert(table.coeffs.end(), lobe.coeffs.begin(), lobe.coeffs.end());
-      }
-      table.residual.push_back(f.residual);
-      table.norm.push_back(f.norm);
-      residual2 += f.residual * f.residual;
-      norm2 += f.norm * f.norm;
-    }
-    nrms.push_back(norm2 > 0 ? std::sqrt(residual2 / norm2) : 0.0);
+    ZhFitTable<double> table = fit::fit_zh_all(data.transfer, options, threads);
+    nrms.push_back(fit::normalized_rms(table));
     data.fit = std::move(table);
     last = vertex_radiance(Shading::zh, data, light, mesh, 32, threads);
     panels.push_back(shade_panel(hits, mesh, last, false));
