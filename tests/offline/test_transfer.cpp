@@ -168,6 +168,14 @@ TEST(Transfer, RayStreamsGiveTheBytesOfSingleRays) {
   EXPECT_EQ(compute_transfer(spot, o), single);
   o.mode = TransferMode::unshadowed;
   EXPECT_NE(compute_transfer(spot, o), single);  // the occlusion does change the vectors
+  // The bounces' closest hits (barycentric weights included) through rtcIntersect1M.
+  o.mode = TransferMode::interreflected;
+  o.bounces = 2;
+  o.ray_streams = false;
+  const std::vector<double> bounced = compute_transfer(spot, o);
+  EXPECT_NE(bounced, single);
+  o.ray_streams = true;
+  EXPECT_EQ(compute_transfer(spot, o), bounced);
 }
 
 TEST(Transfer, InterreflectedRangesWithAGatherMatchTheWholeMesh) {

@@ -362,6 +362,8 @@ FitZhReport run_fit_zh_on(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJo
     report.total = total;
   }
   Table table = zh_fit_table(fits, meta, generator);
+  // The table holds the fits now; the other outputs made from them keep them.
+  if (r.json.empty() && r.ply.empty() && r.gltf.empty()) fits = ZhFitTable<double>{};
   if (mpi) {
     // Every rank's rows reach rank 0 as a partial table and are joined by merge's code:
     // the same checks (a rank on another Embree, ISA or input is refused) and the same
@@ -411,6 +413,7 @@ FitZhReport run_fit_zh_on(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJo
     outputs.push_back({path, bytes.back()});
   };
   add(out, encode_table(table, r.encoding));
+  table = Table{};  // encoded: its arrays go back before the next output is made
   if (!r.json.empty()) add(r.json, fits_json(fits));
   if (!r.ply.empty()) add(r.ply, ply_text(mesh, transfer, order, fits));
   if (!r.save_transfer.empty()) add(r.save_transfer, transfer_json(transfer, order));

@@ -156,20 +156,30 @@ std::vector<double> compute_transfer(const Mesh& mesh, const TransferOptions& op
     parallel_vertices(nv, threads, nv * bounce, progress_total, options, [&](std::size_t row) {
       const VertexRays cast(mesh, first + row, options.seed, rays, offset);
       thread_local std::vector<double> sum;
+      thread_local std::vector<Eigen::Vector3d> dirs;
+      thread_local std::vector<RTCRayHit> hits;
       sum.assign(n2, 0.0);
+      dirs.resize(rays);
+      hits.resize(rays);
       RTCIntersectContext context;
       rtcInitIntersectContext(&context);
       for (int k = 0; k < rays; ++k) {
-        const Eigen::Vector3d dir = cast.direction(k);
-        RTCRayHit hit{};
-        hit.ray = embree_ray(cast.origin(), dir);
-        hit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-        rtcIntersect1(scene->scene, &context, &hit);
+        dirs[k] = cast.direction(k);
+        hits[k] = RTCRayHit{};
+        hits[k].ray = embree_ray(cast.origin(), dirs[k]);
+        hits[k].hit.geomID = RTC_INVALID_GEOMETRY_ID;
+      }
+      if (options.ray_streams)
+        rtcIntersect1M(scene->scene, &context, hits.data(), static_cast<unsigned>(rays), sizeof(RTCRayHit));
+      else
+        for (RTCRayHit& hit : hits) rtcIntersect1(scene->scene, &context, &hit);
+      for (int k = 0; k < rays; ++k) {
+        const RTCRayHit& hit = hits[k];
         if (hit.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
         const Eigen::Vector3i& tri = mesh.triangles[hit.hit.primID];
         const Eigen::Vector3d ng = (mesh.positions[tri[1]] - mesh.positions[tri[0]])
                                        .cross(mesh.positions[tri[2]] - mesh.positions[tri[0]]);
-        if (ng.dot(dir) >= 0.0) continue;
+        if (ng.dot(dirs[k]) >= 0.0) continue;
         const double w1 = hit.hit.u, w2 = hit.hit.v, w0 = 1.0 - w1 - w2;
         for (int i = 0; i < n2; ++i)
           sum[i] += w0 * previous[tri[0] * n2 + i] + w1 * previous[tri[1] * n2 + i] + w2 * previous[tri[2] * n2 + i];

@@ -34,10 +34,11 @@ struct TransferOptions {
   int bounces = 2;           // interreflected only
   double albedo = 0.8;       // interreflected only; in [0, 1)
   int threads = 0;           // 0: std::thread::hardware_concurrency()
-  // Shadowed rays of a vertex go to Embree as one stream (rtcOccluded1M, incoherent:
-  // 1.4x the rate of single rays on the bunny); false: one rtcOccluded1 per ray, the
-  // reference. Occlusion is a boolean per ray and the SH sums run in ray order either
-  // way, so both give the same bytes.
+  // The rays of a vertex go to Embree as one stream (rtcOccluded1M for the shadow rays,
+  // incoherent: 1.4x the rate of single rays on the bunny; rtcIntersect1M for the
+  // bounces' closest hits); false: one rtcOccluded1 / rtcIntersect1 per ray, the
+  // reference. The SH sums run in ray order either way and the tests hold the two to
+  // the same bytes.
   bool ray_streams = true;
   // Ray origins move off the surface by offset_scale * bounding-box diagonal along the
   // vertex normal (avoids self-intersection with the vertex's own triangles).
