@@ -15,12 +15,14 @@
 //                               pinned to), stream_coherent / stream_incoherent
 //                               (rtcOccluded1M over a vertex's rays with the context flag).
 //                               blocked = fraction occluded (equal for every query).
-//   BM_TransferBunny/rays:R/streams:S
-//                               compute_transfer (shadowed, order 6) on the same bunny and
-//                               rays, ONE thread: the loop Embree's rate bounds, with ray
-//                               making, SH evaluation and accumulation; the scene build is
-//                               inside (BM_EmbreeBuild times it alone). S = 0: one
-//                               rtcOccluded1 per ray; S = 1: a stream per vertex (default).
+//   BM_TransferBunny/rays:R/streams:S/bounces:B
+//                               compute_transfer (order 6) on the same bunny and rays, ONE
+//                               thread: the loop Embree's rate bounds, with ray making, SH
+//                               evaluation and accumulation; the scene build is inside
+//                               (BM_EmbreeBuild times it alone). B = 0: shadowed; B > 0:
+//                               interreflected with B bounces (closest hits, albedo 0.8).
+//                               S = 0: one rtcOccluded1 / rtcIntersect1 per ray; S = 1: a
+//                               stream per vertex (default). rays_per_s counts every pass.
 //   BM_EmbreeBuild              build_scene of the bunny (Embree's own threads build it).
 //   BM_Fit/method:M/lobes:N/effort:E/starts:S
 //                               fit_zh of random unit order-6 vectors (coefficients uniform
@@ -215,11 +217,15 @@ void BM_TransferBunny(benchmark::State& state) {
   if (!mesh) return state.SkipWithError("no stanford-bunny.obj in " SHTOOL_BENCH_MESHES);
   shtool::fit::TransferOptions options = bunny_options(static_cast<int>(state.range(0)));
   options.ray_streams = state.range(1) != 0;
+  if (state.range(2) > 0) {
+    options.mode = shtool::fit::TransferMode::interreflected;
+    options.bounces = static_cast<int>(state.range(2));
+  }
   for (auto _ : state) {
     std::vector<double> t = shtool::fit::compute_transfer(*mesh, options);
     benchmark::DoNotOptimize(t.data());
   }
-  const double cast_count = static_cast<double>(mesh->positions.size()) * options.rays;
+  const double cast_count = static_cast<double>(mesh->positions.size()) * options.rays * (1 + state.range(2));
   state.counters["rays_per_s"] = Counter(state.iterations() * cast_count, Counter::kIsRate);
 }
 
@@ -516,9 +522,11 @@ int main(int argc, char** argv) {
         ->Unit(benchmark::kMillisecond)
         ->MinTime(2.0);
   benchmark::RegisterBenchmark("BM_TransferBunny", BM_TransferBunny)
-      ->ArgNames({"rays", "streams"})
-      ->Args({64, 0})
-      ->Args({64, 1})
+      ->ArgNames({"rays", "streams", "bounces"})
+      ->Args({64, 0, 0})
+      ->Args({64, 1, 0})
+      ->Args({64, 0, 1})
+      ->Args({64, 1, 1})
       ->Unit(benchmark::kMillisecond)
       ->MinTime(2.0);
   benchmark::RegisterBenchmark("BM_EmbreeBuild", BM_EmbreeBuild)->Unit(benchmark::kMillisecond);
