@@ -2,7 +2,8 @@
 // transfer against the closed-form clamped cosine, bilinear interpolation reproducing the
 // node values, the global objective's gradient against central differences and its value
 // against the model's own residuals, the symmetric start recovering a cone it was made
-// from, and the global fit against independent per-point fits.
+// from, no allocation in the optimiser's inner loop, and the global fit against
+// independent per-point fits.
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -10,6 +11,7 @@
 
 #include <gtest/gtest.h>
 
+#include "allocation_counter.h"
 #include "fit/zh_fit.h"
 #include "shtool/irradiance.h"
 #include "shtool/sh.h"
@@ -190,6 +192,23 @@ TEST(Wrinkles, GlobalGradientMatchesCentralDifferences) {
     x[i] = keep;
     EXPECT_NEAR(grad[i], (up - down) / (2 * h), 1e-6 * (1 + std::abs(grad[i]))) << i;
   }
+}
+
+TEST(Wrinkles, GlobalObjectiveAllocatesNothing) {
+  // The optimiser's inner loop: after a first call (thread-local scratch of the per-sample
+  // objective sized on each worker), evaluations allocate nothing.
+  const WrinkleGrid grid{3, 2, 1.0};
+  const std::vector<double> transfer = simulate_transfer(grid, {5, 16, 1, 1});
+  GlobalObjective objective(grid, 5, 3, transfer, 2);
+  std::vector<double> x = objective.pack(random_model(grid, 5, 3, 9)), grad(x.size());
+  objective.value(x, grad);
+  objective.value(x, {});
+  const long before = shtool::test::allocation_count();
+  for (int i = 0; i < 3; ++i) {
+    objective.value(x, grad);
+    objective.value(x, {});
+  }
+  EXPECT_EQ(shtool::test::allocation_count(), before);
 }
 
 TEST(Wrinkles, GlobalObjectiveIsTheModelsResidualAboveBandOne) {

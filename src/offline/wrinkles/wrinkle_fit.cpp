@@ -147,6 +147,31 @@ struct GlobalObjective::Impl {
   ThreadPool pool;
   std::vector<std::vector<fit::ZhLobe>> scratch;  // per worker
   std::vector<double> sample_value, sample_grad;  // per sample
+  std::span<const double> params;                 // of the evaluation under way
+  bool with_grad = false;
+
+  // Samples [begin, end) on one worker: the blended lobes, then Eq. 17 and its gradient
+  // into the samples' own slots.
+  void samples(int worker, std::size_t begin, std::size_t end) {
+    const int n2 = sh_count(order), full = 3 + order, nl = lobes, per = per_lobe;
+    std::vector<fit::ZhLobe>& blended = scratch[worker];
+    for (std::size_t p = begin; p < end; ++p) {
+      const BilinearWeights& w = weights[p];
+      for (int i = 0; i < nl; ++i) {
+        fit::ZhLobe& lobe = blended[i];
+        lobe.axis.setZero();
+        std::fill(lobe.coeffs.begin(), lobe.coeffs.end(), 0.0);
+        for (int c = 0; c < 4; ++c) {
+          const double* q = params.data() + (static_cast<std::size_t>(w.node[c]) * nl + i) * per;
+          for (int a = 0; a < 3; ++a) lobe.axis[a] += w.weight[c] * q[a];
+          for (int l = 2; l < order; ++l) lobe.coeffs[l] += w.weight[c] * q[3 + l - 2];
+        }
+      }
+      std::span<double> g = with_grad ? std::span<double>(sample_grad.data() + p * nl * full, nl * full)
+                                      : std::span<double>();
+      sample_value[p] = fit::zh_objective(order, std::span<const double>(target.data() + p * n2, n2), blended, g);
+    }
+  }
 
   Impl(const WrinkleGrid& g, int n, int nl, std::span<const double> transfer, int threads)
       : grid(g), order(n), lobes(nl), per_lobe(3 + n - 2), pool(threads) {
@@ -176,26 +201,13 @@ std::size_t GlobalObjective::parameter_count() const {
 
 double GlobalObjective::value(std::span<const double> params, std::span<double> grad) {
   Impl& s = *impl_;
-  const int n2 = sh_count(s.order), full = 3 + s.order, nl = s.lobes, per = s.per_lobe;
+  const int full = 3 + s.order, nl = s.lobes, per = s.per_lobe;
   const bool with_grad = !grad.empty();
-  s.pool.run(s.grid.sample_count(), [&](int worker, std::size_t begin, std::size_t end) {
-    std::vector<fit::ZhLobe>& lobes = s.scratch[worker];
-    for (std::size_t p = begin; p < end; ++p) {
-      const BilinearWeights& w = s.weights[p];
-      for (int i = 0; i < nl; ++i) {
-        fit::ZhLobe& lobe = lobes[i];
-        lobe.axis.setZero();
-        std::fill(lobe.coeffs.begin(), lobe.coeffs.end(), 0.0);
-        for (int c = 0; c < 4; ++c) {
-          const double* q = params.data() + (static_cast<std::size_t>(w.node[c]) * nl + i) * per;
-          for (int a = 0; a < 3; ++a) lobe.axis[a] += w.weight[c] * q[a];
-          for (int l = 2; l < s.order; ++l) lobe.coeffs[l] += w.weight[c] * q[3 + l - 2];
-        }
-      }
-      std::span<double> g = with_grad ? std::span<double>(s.sample_grad.data() + p * nl * full, nl * full)
-                                      : std::span<double>();
-      s.sample_value[p] = fit::zh_objective(s.order, std::span<const double>(s.target.data() + p * n2, n2), lobes, g);
-    }
+  s.params = params;
+  s.with_grad = with_grad;
+  // One pointer captured: std::function keeps it without allocating, every evaluation.
+  s.pool.run(s.grid.sample_count(), [impl = &s](int worker, std::size_t begin, std::size_t end) {
+    impl->samples(worker, begin, end);
   });
   double total = 0;
   for (double v : s.sample_value) total += v;
