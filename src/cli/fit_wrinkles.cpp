@@ -25,6 +25,9 @@ void setup_fit_wrinkles(CLI::App& app) {
   sub->add_option("--threads", req->threads, "worker threads (0: all cores)")->capture_default_str();
   sub->add_option("--max-evaluations", req->max_evaluations, "objective evaluations of the global L-BFGS fit")
       ->capture_default_str();
+  add_enum_option(sub, "--optimizer", req->optimizer,
+                  {{"lbfgs", wrinkles::WrinkleOptimizer::lbfgs}, {"cg", wrinkles::WrinkleOptimizer::cg}},
+                  "the global fit's optimiser: L-BFGS, or conjugate gradients (for comparison)", "lbfgs");
   sub->add_option("--out", req->out, "wrinkle-zh table to write")->required();
   sub->add_option("--json", req->json, "also a JSON summary of the fit errors");
   sub->callback([req]() {

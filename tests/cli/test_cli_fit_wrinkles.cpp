@@ -31,8 +31,10 @@ CommandResult run(std::vector<std::string> args) {
   return r;
 }
 
-std::vector<std::string> small(const fs::path& out, const fs::path& json, int threads) {
+std::vector<std::string> small(const fs::path& out, const fs::path& json, int threads,
+                               const std::string& optimizer = "lbfgs") {
   return {"fit-wrinkles", "--grid", "4", "--samples", "2", "--rays", "64", "--order", "4", "--max-evaluations", "200",
+          "--optimizer", optimizer,
           "--threads", std::to_string(threads), "--out", out.string(), "--json", json.string()};
 }
 
@@ -72,11 +74,13 @@ TEST(CliFitWrinkles, WritesTheMapAndTheSummary) {
 }
 
 TEST(CliFitWrinkles, SameBytesOnOneAndTwoThreads) {
-  const fs::path a = scratch("t1.shtb"), aj = scratch("t1.json"), b = scratch("t2.shtb"), bj = scratch("t2.json");
-  ASSERT_EQ(run(small(a, aj, 1)).exit_code, 0);
-  ASSERT_EQ(run(small(b, bj, 2)).exit_code, 0);
-  EXPECT_EQ(shtool::test::read_file(a), shtool::test::read_file(b));
-  EXPECT_EQ(shtool::test::read_file(aj), shtool::test::read_file(bj));
+  for (const std::string optimizer : {"lbfgs", "cg"}) {
+    const fs::path a = scratch("t1.shtb"), aj = scratch("t1.json"), b = scratch("t2.shtb"), bj = scratch("t2.json");
+    ASSERT_EQ(run(small(a, aj, 1, optimizer)).exit_code, 0);
+    ASSERT_EQ(run(small(b, bj, 2, optimizer)).exit_code, 0);
+    EXPECT_EQ(shtool::test::read_file(a), shtool::test::read_file(b)) << optimizer;
+    EXPECT_EQ(shtool::test::read_file(aj), shtool::test::read_file(bj)) << optimizer;
+  }
 }
 
 TEST(CliFitWrinkles, BadOptionsAreRefusedWithoutOutput) {
@@ -98,6 +102,7 @@ TEST(CliFitWrinkles, BadOptionsAreRefusedWithoutOutput) {
       {{"--max-evaluations", "0"}, "--max-evaluations"},
       {{"--seed", "-3"}, "--seed"},
       {{"--json", out.string()}, "--json"},
+      {{"--optimizer", "bfgs"}, "--optimizer"},
   };
   for (const auto& c : cases) {
     fs::remove(out);

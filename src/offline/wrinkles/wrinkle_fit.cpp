@@ -287,6 +287,121 @@ double lbfgs_callback(const std::vector<double>& x, std::vector<double>& grad, v
 
 }  // namespace
 
+namespace {
+
+double dot(std::span<const double> a, std::span<const double> b) {
+  double s = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) s += a[i] * b[i];
+  return s;
+}
+
+}  // namespace
+
+int minimize_conjugate_gradient(GlobalObjective& objective, std::vector<double>& x, int max_evaluations,
+                                double ftol_rel) {
+  constexpr double c1 = 1e-4, c2 = 0.1;
+  const std::size_t n = x.size();
+  std::vector<double> g(n), d(n), trial(n), g_trial(n);
+  int evaluations = 1;
+  double f = objective.value(x, g);
+  for (std::size_t i = 0; i < n; ++i) d[i] = -g[i];
+  double slope0 = dot(g, d);
+  // First step: a move of 1e-2 in the largest parameter change.
+  double step_guess = 0;
+  for (double v : d) step_guess = std::max(step_guess, std::abs(v));
+  step_guess = step_guess > 0 ? 1e-2 / step_guess : 1.0;
+  while (evaluations < max_evaluations && slope0 < 0) {
+    // Line search along d: bracket, then zoom (Nocedal and Wright, Alg. 3.5 and 3.6),
+    // the zoom by the minimiser of a quadratic kept inside the middle 80 % of the bracket.
+    double f_a = 0;
+    const auto eval_at = [&](double a) {
+      for (std::size_t i = 0; i < n; ++i) trial[i] = x[i] + a * d[i];
+      f_a = objective.value(trial, g_trial);
+      ++evaluations;
+      return dot(g_trial, d);
+    };
+    const auto armijo = [&](double a) { return f_a <= f + c1 * a * slope0; };
+    const auto curvature = [&](double slope) { return std::abs(slope) <= -c2 * slope0; };
+    double lo = 0, f_lo = f, slope_lo = slope0, hi = 0, f_hi = 0;
+    double a = step_guess;
+    bool accepted = false, zoom = false;
+    for (int i = 0; evaluations < max_evaluations; ++i) {
+      const double slope_a = eval_at(a);
+      if (!armijo(a) || (i > 0 && f_a >= f_lo)) {
+        hi = a;
+        f_hi = f_a;
+        zoom = true;
+        break;
+      }
+      if (curvature(slope_a)) {
+        accepted = true;
+        break;
+      }
+      if (slope_a >= 0) {
+        hi = lo;
+        f_hi = f_lo;
+        lo = a;
+        f_lo = f_a;
+        slope_lo = slope_a;
+        zoom = true;
+        break;
+      }
+      lo = a;
+      f_lo = f_a;
+      slope_lo = slope_a;
+      a *= 2;
+    }
+    while (zoom && !accepted && evaluations < max_evaluations) {
+      const double w = hi - lo;
+      if (std::abs(w) <= 1e-14 * std::max(1.0, std::abs(lo))) break;
+      const double curv = f_hi - f_lo - slope_lo * w;
+      double frac = curv > 0 ? -slope_lo * w / (2 * curv) : 0.5;
+      frac = std::clamp(frac, 0.1, 0.9);
+      a = lo + frac * w;
+      const double slope_a = eval_at(a);
+      if (!armijo(a) || f_a >= f_lo) {
+        hi = a;
+        f_hi = f_a;
+        continue;
+      }
+      if (curvature(slope_a)) {
+        accepted = true;
+        break;
+      }
+      if (slope_a * w >= 0) {
+        hi = lo;
+        f_hi = f_lo;
+      }
+      lo = a;
+      f_lo = f_a;
+      slope_lo = slope_a;
+    }
+    if (!accepted) {
+      // Out of evaluations or a collapsed bracket: keep the best point found.
+      if (lo > 0 && f_lo < f)
+        for (std::size_t i = 0; i < n; ++i) x[i] += lo * d[i];
+      break;
+    }
+    const double f_old = f;
+    std::copy(trial.begin(), trial.end(), x.begin());
+    // Polak-Ribiere+: beta = max(0, g1 . (g1 - g0) / |g0|^2).
+    const double g0 = dot(g, g);
+    const double beta = std::max(0.0, (dot(g_trial, g_trial) - dot(g_trial, g)) / g0);
+    for (std::size_t i = 0; i < n; ++i) d[i] = -g_trial[i] + beta * d[i];
+    std::copy(g_trial.begin(), g_trial.end(), g.begin());
+    f = f_a;
+    double slope = dot(g, d);
+    if (slope >= 0) {
+      for (std::size_t i = 0; i < n; ++i) d[i] = -g[i];
+      slope = dot(g, d);
+    }
+    step_guess = a * slope0 / slope;  // the same first-order change as the last step
+    slope0 = slope;
+    if (f_old - f <= ftol_rel * std::abs(f)) break;
+  }
+  return evaluations;
+}
+
 WrinkleFit fit_wrinkles(const WrinkleGrid& grid, std::span<const double> transfer, const WrinkleFitOptions& options) {
   const int n2 = sh_count(options.order);
   const int threads = resolve_threads(options.threads);
@@ -325,21 +440,26 @@ WrinkleFit fit_wrinkles(const WrinkleGrid& grid, std::span<const double> transfe
 
   GlobalObjective objective(grid, options.order, options.lobes, transfer, threads);
   std::vector<double> x = objective.pack(model);
-  LbfgsState state{&objective, x};
-  nlopt::opt opt(nlopt::LD_LBFGS, static_cast<unsigned>(x.size()));
-  opt.set_min_objective(lbfgs_callback, &state);
-  opt.set_ftol_rel(options.ftol_rel);
-  opt.set_maxeval(options.max_evaluations);
-  opt.set_vector_storage(kLbfgsMemory);
-  double value = 0;
-  try {
-    opt.optimize(x, value);
-  } catch (const std::exception&) {
-    // roundoff_limited and the like end a run that has made its progress; the best point
-    // evaluated is kept either way.
+  if (options.optimizer == WrinkleOptimizer::cg) {
+    out.evaluations = minimize_conjugate_gradient(objective, x, options.max_evaluations, options.ftol_rel);
+    objective.unpack(x, model);
+  } else {
+    LbfgsState state{&objective, x};
+    nlopt::opt opt(nlopt::LD_LBFGS, static_cast<unsigned>(x.size()));
+    opt.set_min_objective(lbfgs_callback, &state);
+    opt.set_ftol_rel(options.ftol_rel);
+    opt.set_maxeval(options.max_evaluations);
+    opt.set_vector_storage(kLbfgsMemory);
+    double value = 0;
+    try {
+      opt.optimize(x, value);
+    } catch (const std::exception&) {
+      // A failed line search (at the defaults after 645 evaluations; a fresh run from the
+      // best point fails again within 12) or roundoff: the best point evaluated is kept.
+    }
+    objective.unpack(state.best, model);
+    out.evaluations = state.evaluations;
   }
-  objective.unpack(state.best, model);
-  out.evaluations = state.evaluations;
   out.global_residual2 = model_residuals(model, transfer);
   out.errors.global = normalized_rms(out.global_residual2, out.norm2);
   return out;

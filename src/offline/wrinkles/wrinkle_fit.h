@@ -54,13 +54,26 @@ class GlobalObjective {
   std::unique_ptr<Impl> impl_;
 };
 
+// L-BFGS (NLopt LD_LBFGS, the default) or nonlinear conjugate gradients
+// (minimize_conjugate_gradient, [4]'s choice), for the measured comparison.
+enum class WrinkleOptimizer { lbfgs, cg };
+
+// Polak-Ribiere+ conjugate gradients with a line search to the strong Wolfe conditions
+// (c1 = 1e-4, c2 = 0.1: nearly exact, as CG wants), restarting along -g when the
+// direction does not descend. Stops at a relative decrease of the value below ftol_rel
+// in one iteration, or after max_evaluations. x: start in, best point out. Returns the
+// evaluations used.
+int minimize_conjugate_gradient(GlobalObjective& objective, std::vector<double>& x, int max_evaluations,
+                                double ftol_rel);
+
 struct WrinkleFitOptions {
   int order = 6;
   int lobes = 3;
   std::uint64_t seed = 1;
   int threads = 0;
   int max_evaluations = 1000;  // of the global objective
-  double ftol_rel = 1e-8;      // L-BFGS stops at this relative change of the objective
+  double ftol_rel = 1e-8;      // the optimiser stops at this relative change of the objective
+  WrinkleOptimizer optimizer = WrinkleOptimizer::lbfgs;
 };
 
 // Normalised RMS, sqrt(sum residual^2 / sum |t|^2), over the samples.

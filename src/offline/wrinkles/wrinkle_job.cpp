@@ -25,7 +25,8 @@ void check_range(const char* option, long long value, long long lo, long long hi
 nlohmann::json parameters(const WrinkleRequest& r) {
   return {{"order", r.order},         {"lobes", r.lobes}, {"grid", r.grid},
           {"samples", r.samples},     {"max_depth", r.max_depth}, {"rays", r.rays},
-          {"seed", r.seed},           {"max_evaluations", r.max_evaluations}};
+          {"seed", r.seed},           {"max_evaluations", r.max_evaluations},
+          {"optimizer", r.optimizer == WrinkleOptimizer::cg ? "cg" : "lbfgs"}};
 }
 
 }  // namespace
@@ -115,6 +116,7 @@ WrinkleReport run_fit_wrinkles(const WrinkleRequest& r) {
   options.seed = r.seed;
   options.threads = r.threads;
   options.max_evaluations = r.max_evaluations;
+  options.optimizer = r.optimizer;
   const WrinkleFit fit = fit_wrinkles(grid, transfer, options);
   report.fit_seconds = seconds_since(t0);
   report.errors = fit.errors;

@@ -24,6 +24,7 @@ struct WrinkleRequest {
   std::uint64_t seed = 1;
   int threads = 0;
   int max_evaluations = 1000;
+  WrinkleOptimizer optimizer = WrinkleOptimizer::lbfgs;
   std::filesystem::path out;   // the wrinkle-zh table
   std::filesystem::path json;  // optional summary
 };
