@@ -418,7 +418,12 @@ WrinkleFit fit_wrinkles(const WrinkleGrid& grid, std::span<const double> transfe
   zo.lobes = options.lobes;
   zo.direct = true;
   zo.seed = options.seed;
-  const std::vector<fit::ZhFit> per_point = fit::fit_zh_all(transfer, zo, threads);
+  // One fit::fit_zh per sample, stream = sample index: results by index, whatever the
+  // thread count.
+  std::vector<fit::ZhFit> per_point(grid.sample_count());
+  parallel_for(grid.sample_count(), threads, [&](std::size_t p) {
+    per_point[p] = fit::fit_zh(transfer.subspan(p * n2, n2), zo, p);
+  });
   out.norm2.resize(grid.sample_count());
   out.per_point_residual2.resize(grid.sample_count());
   for (std::size_t p = 0; p < grid.sample_count(); ++p) {
