@@ -16,7 +16,7 @@ import sys
 
 INCLUDE = re.compile(r'^\s*#\s*include\s*[<"]([^>"]+)[>"]', re.M)
 # src/runtime has a lighting/ folder of its own, so the offline lighting/ cannot be told apart by prefix.
-OFFLINE_ROOTS = ("common/", "fit/", "lobes/", "tensors/", "interop/", "shaders/", "render/", "deform/")
+OFFLINE_ROOTS = ("common/", "fit/", "lobes/", "tensors/", "interop/", "shaders/", "render/", "deform/", "wrinkles/")
 FORBIDDEN_IN_ENGINE = ("nlohmann/", "fftw3")
 
 

@@ -1,0 +1,127 @@
+// End-to-end tests of `shtool fit-wrinkles`: a small map written and read back (shapes,
+// the summary's figures against the table's), the same bytes on 1 and 2 threads, and bad
+// options refused with a message naming the option, exit 1 and no output.
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "run_command.h"
+#include "scratch_files.h"
+#include "shtool/table.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using shtool::test::CommandResult;
+
+const std::string kExe = SHTOOL_EXE;
+
+fs::path scratch(const std::string& name) { return shtool::test::scratch_path("cli_fit_wrinkles", name); }
+
+CommandResult run(std::vector<std::string> args) {
+  args.insert(args.begin(), kExe);
+  shtool::test::CommandOptions options;
+  options.timeout_seconds = 120;  // only turns a hang into a failure
+  CommandResult r = shtool::test::run_command(args, options);
+  EXPECT_FALSE(r.signaled) << "killed by signal " << r.signal;
+  return r;
+}
+
+std::vector<std::string> small(const fs::path& out, const fs::path& json, int threads,
+                               const std::string& optimizer = "lbfgs") {
+  return {"fit-wrinkles", "--grid", "4", "--samples", "2", "--rays", "64", "--order", "4", "--max-evaluations", "200",
+          "--optimizer", optimizer,
+          "--threads", std::to_string(threads), "--out", out.string(), "--json", json.string()};
+}
+
+TEST(CliFitWrinkles, WritesTheMapAndTheSummary) {
+  const fs::path out = scratch("w.shtb"), json = scratch("w.json");
+  const CommandResult r = run(small(out, json, 2));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("normalized RMS: global"), std::string::npos) << r.err;
+  const shtool::Result<shtool::Table> t = shtool::read_table(out, {"wrinkle-zh", 1, 4});
+  ASSERT_TRUE(t.ok()) << t.error().message;
+  const shtool::Table& table = t.value();
+  const auto shape = [&](const char* name) { return table.find(name)->shape; };
+  ASSERT_NE(table.find("axes"), nullptr);
+  EXPECT_EQ(shape("axes"), (std::vector<std::int64_t>{4, 4, 3, 3}));
+  EXPECT_EQ(shape("coeffs"), (std::vector<std::int64_t>{4, 4, 3, 4}));
+  EXPECT_EQ(shape("direct"), (std::vector<std::int64_t>{4, 4, 4}));
+  EXPECT_EQ(table.find("x")->values<double>(), (std::vector<double>{0.0, 0.25, 0.5, 0.75}));
+  EXPECT_EQ(table.find("depth")->values<double>().back(), 1.0);
+  // Lobe coefficients of bands 0 and 1 are zero: those bands are stored directly.
+  const std::vector<double> coeffs = table.find("coeffs")->values<double>();
+  for (std::size_t i = 0; i < coeffs.size(); i += 4) {
+    EXPECT_EQ(coeffs[i], 0.0);
+    EXPECT_EQ(coeffs[i + 1], 0.0);
+  }
+  const nlohmann::json summary = nlohmann::json::parse(shtool::test::read_file(json));
+  const nlohmann::json meta = nlohmann::json::parse(table.meta);
+  EXPECT_EQ(summary["normalized_rms"]["global"], meta["normalized_rms"]);
+  EXPECT_EQ(summary["normalized_rms"]["per_point"], meta["per_point_normalized_rms"]);
+  EXPECT_GT(summary["normalized_rms"]["global"].get<double>(), 0.0);
+  EXPECT_EQ(summary["samples"], 8 * 7);
+  EXPECT_EQ(summary["by_depth"].size(), 7u);
+  // The header follows schemas/wrinkle-zh.schema.json (python3-jsonschema).
+  const std::string source = SHTOOL_SOURCE_DIR;
+  const std::string cmd = std::string(SHTOOL_PYTHON) + " '" + source + "/tests/validate_json_schema.py' '" + source +
+                          "/schemas/wrinkle-zh.schema.json' '" + out.string() + "'";
+  EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
+}
+
+TEST(CliFitWrinkles, SameBytesOnOneAndTwoThreads) {
+  for (const std::string optimizer : {"lbfgs", "cg"}) {
+    const fs::path a = scratch("t1.shtb"), aj = scratch("t1.json"), b = scratch("t2.shtb"), bj = scratch("t2.json");
+    ASSERT_EQ(run(small(a, aj, 1, optimizer)).exit_code, 0);
+    ASSERT_EQ(run(small(b, bj, 2, optimizer)).exit_code, 0);
+    EXPECT_EQ(shtool::test::read_file(a), shtool::test::read_file(b)) << optimizer;
+    EXPECT_EQ(shtool::test::read_file(aj), shtool::test::read_file(bj)) << optimizer;
+  }
+}
+
+TEST(CliFitWrinkles, BadOptionsAreRefusedWithoutOutput) {
+  const fs::path out = scratch("bad.shtb");
+  const struct {
+    std::vector<std::string> args;
+    std::string names;
+  } cases[] = {
+      {{"--order", "2"}, "--order"},
+      {{"--order", "9"}, "--order"},
+      {{"--lobes", "0"}, "--lobes"},
+      {{"--lobes", "5"}, "--lobes"},
+      {{"--grid", "1"}, "--grid"},
+      {{"--samples", "0"}, "--samples"},
+      {{"--rays", "0"}, "--rays"},
+      {{"--max-depth", "0"}, "--max-depth"},
+      {{"--max-depth", "-1"}, "--max-depth"},
+      {{"--max-depth", "nan"}, "--max-depth"},
+      {{"--max-evaluations", "0"}, "--max-evaluations"},
+      {{"--seed", "-3"}, "--seed"},
+      {{"--json", out.string()}, "--json"},
+      {{"--optimizer", "bfgs"}, "--optimizer"},
+  };
+  for (const auto& c : cases) {
+    fs::remove(out);
+    std::vector<std::string> args = {"fit-wrinkles", "--grid", "3", "--rays", "8", "--out", out.string()};
+    args.insert(args.end(), c.args.begin(), c.args.end());
+    const CommandResult r = run(args);
+    EXPECT_EQ(r.exit_code, 1) << c.names << ": " << r.err;
+    EXPECT_NE(r.err.find(c.names), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out)) << c.names;
+  }
+  // A folder that does not exist, and no --out at all.
+  const fs::path missing = scratch("no-such-folder") / "w.shtb";
+  CommandResult r = run({"fit-wrinkles", "--grid", "3", "--rays", "8", "--out", missing.string()});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("--out"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(missing));
+  r = run({"fit-wrinkles", "--grid", "3"});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("--out"), std::string::npos) << r.err;
+}
+
+}  // namespace
