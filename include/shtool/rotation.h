@@ -11,8 +11,8 @@
 //              of the y-rotation at b = 0 ([2] Sec. 3): approximate, for small tilt b;
 //   automatic  the cheapest method whose error bound for this rotation is within the
 //              tolerance (Taylor when the tilt is small enough, zxzxz otherwise; at
-//              orders up to 3 always zxzxz, whose bands 1 and 2 are closed forms in R
-//              and cost less than any Taylor step, which needs the Euler angles).
+//              orders up to 4 always zxzxz, whose bands 1..3 are closed forms in R
+//              there, with no Euler angles, which every Taylor step needs).
 // The Taylor error bounds are exact operator norms for taylor1/taylor2 (the y-rotation
 // generator is normal with eigenvalues i m, |m| < N) and a rigorous bound for taylor1.5.
 //
@@ -44,6 +44,10 @@ struct BatchState;  // src/runtime/rotation_kernels.h
 // the baseline copies). Not thread-safe against concurrent construction.
 bool fma_kernels_enabled();
 void use_fma_kernels(bool on);
+
+// Orders up to this one rotate by closed forms in R alone (bands 1..3, no Euler angles):
+// zxzxz and the automatic choice there cost a copy of R in set().
+inline constexpr int kClosedMaxOrder = 4;
 
 template <class T>
 struct KernelState {
@@ -119,9 +123,9 @@ class ShRotation {
   // cover fewer bands than the order.
   bool set(const Mat3<T>& r, RotationMethod method = RotationMethod::automatic,
            double tolerance = default_rotation_tolerance<T>()) {
-    // Up to order 3 zxzxz (and the automatic choice, which is zxzxz there) needs R alone,
+    // Up to order 4 zxzxz (and the automatic choice, which is zxzxz there) needs R alone,
     // so set() is a copy, inline: at order 2 a call costs as much as the rotation.
-    if (order_ <= 3 && kernel_order_ > 0 &&
+    if (order_ <= detail::kClosedMaxOrder && kernel_order_ > 0 &&
         (method == RotationMethod::zxzxz || method == RotationMethod::automatic)) {
       store_matrix(r);
       resolved_ = RotationMethod::zxzxz;
@@ -139,7 +143,7 @@ class ShRotation {
   bool set_quaternion(T w, T x, T y, T z, RotationMethod method = RotationMethod::automatic,
                       double tolerance = default_rotation_tolerance<T>()) {
     const Mat3<T> r = matrix_from_quaternion<T>(w, x, y, z);
-    if (order_ <= 3) return set(r, method, tolerance);  // no Euler angles there
+    if (order_ <= detail::kClosedMaxOrder) return set(r, method, tolerance);  // no Euler angles there
     const ZyzCosSin<T> e = zyz_cos_sin_from_quaternion<T>(w, x, y, z);
     return set_general(r, method, tolerance, &e);
   }

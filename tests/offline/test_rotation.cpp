@@ -795,7 +795,7 @@ TEST(TaylorBounds, AutomaticMethodMeetsToleranceAndPrefersTaylor) {
   // Extra allowance for the rounding of the exact methods (~1e-15 relative at N = 20).
   constexpr double kRoundingFloor = 1e-13;
   int taylor_picks = 0;
-  for (int order : {3, 6, 12, 20}) {
+  for (int order : {3, 4, 6, 12, 20}) {
     for (double tol : {1e-3, 1e-5, 1e-8, 1e-10}) {
       for (double tilt : {0.0, 1e-7, 1e-5, 1e-4, 1e-3, 1e-2, 0.1, 0.5, 2.0}) {
         const Mat3<double> r = matrix_from_zyz<double>({ua(rng), tilt, ua(rng)});
@@ -807,9 +807,9 @@ TEST(TaylorBounds, AutomaticMethodMeetsToleranceAndPrefersTaylor) {
                                  std::to_string(tilt) + " chose " + std::string(rotation_method_name(chosen));
         EXPECT_LE(distance(got, ref), (tol + kRoundingFloor) * norm(f)) << what;
         EXPECT_NE(chosen, RotationMethod::automatic) << what;
-        // Cheapest first: 1st order whenever its (exact) bound passes; at orders up to 3
+        // Cheapest first: 1st order whenever its (exact) bound passes; at orders up to 4
         // zxzxz is closed forms in R, cheaper than any Taylor step (rotation.h).
-        if (order <= 3)
+        if (order <= detail::kClosedMaxOrder)
           EXPECT_EQ(chosen, RotationMethod::zxzxz) << what;
         else if (taylor_error_bound(RotationMethod::taylor1, order, tilt) <= tol * (1 - 1e-9))
           EXPECT_EQ(chosen, RotationMethod::taylor1) << what;
@@ -916,7 +916,7 @@ void check_batch_lanes_bitwise() {
         ASSERT_TRUE(rotate_batch<T>(batch, *rs, in, out, m, tol));
         for (int k = 0; k < count; ++k) {
           ASSERT_TRUE(single.set((*rs)[k], m, tol));
-          if (rs == &small && m == RotationMethod::automatic && order > 3)  // zxzxz up to 3
+          if (rs == &small && m == RotationMethod::automatic && order > detail::kClosedMaxOrder)  // else zxzxz
             ASSERT_NE(single.method(), RotationMethod::zxzxz) << "order " << order;
           single.apply(std::span<const T>(in.data() + k * n, n), one);
           for (int i = 0; i < n; ++i)
@@ -1025,10 +1025,10 @@ TEST(RotationApi, MissingOrTooSmallHelpersOnlyAllowReference) {
   // A table for more bands than needed is fine: its first N^2 rows are used.
   ShRotation<double> smaller(3, small);
   EXPECT_TRUE(smaller.set(r, RotationMethod::zxzxz));
-  // Orders up to 3 take the inline set() / apply() path: a refused set() must still keep
+  // Orders up to 4 take the inline set() / apply() path: a refused set() must still keep
   // the previous rotation.
   std::mt19937_64 rng(603);
-  for (int order : {2, 3}) {
+  for (int order : {2, 3, 4}) {
     ShRotation<double> bare(order, nullptr);
     const std::vector<double> f = random_coeffs(order, rng);
     ASSERT_TRUE(bare.set(r, RotationMethod::reference));

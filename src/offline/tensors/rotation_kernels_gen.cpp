@@ -135,9 +135,10 @@ void order_function(std::ostream& o, bool taylor, int n) {
     if (taylor) o << "  taylor_band" << l << "<F, Order, T, P>" << args;
     // Band 1 is never fused: at order 2 apply() runs it inline, outside the kernels.
     else if (l == 1) o << "  band1_closed<T, P>(s.r, x + 1, y + 1);\n";
-    // Band 2 by its closed form only where it saves the Euler angles (order 3); once
-    // they are computed anyway, the zxzxz band costs fewer operations.
-    else if (l == 2 && n <= 3) o << "  band2_closed<F, T, P>(s.r, x + 4, y + 4);\n";
+    // Bands 2 and 3 by their closed forms only where they save the Euler angles (orders
+    // 3 and 4); once the angles are computed anyway, the zxzxz bands cost fewer operations.
+    else if (l == 2 && n <= detail::kClosedMaxOrder) o << "  band2_closed<F, T, P>(s.r, x + 4, y + 4);\n";
+    else if (l == 3 && n <= detail::kClosedMaxOrder) o << "  band3_closed<F, T, P>(s.r, x + 9, y + 9);\n";
     else o << "  zxzxz_band" << l << "<F, T, P>" << args;
   }
   if (n == 1) o << "  (void)s;\n";

@@ -3,10 +3,10 @@
 // literal constants and every loop unrolled, into rotation_kernels_generated.cpp by
 // `shtool gen-tensors --what rotation-kernels --out src/runtime/kernels` (src/offline/tensors/
 // rotation_kernels_gen.cpp); tests/test_rotation_kernels.cpp regenerates it and compares
-// the bytes, so the committed source cannot drift from its generator. Bands 1 and 2 have
-// closed forms in R: band 1 (every order) in shtool/rotation.h, band 2 here (used at
-// order 3 only, where it spares the Euler angles; from order 4 on the angles are needed
-// anyway and the zxzxz band is cheaper).
+// the bytes, so the committed source cannot drift from its generator. Bands 1..3 have
+// closed forms in R: band 1 (every order) in shtool/rotation.h, bands 2 and 3 here (used
+// at orders up to detail::kClosedMaxOrder only, where they spare the Euler angles; from
+// the next order on the angles are needed anyway and the zxzxz bands are cheaper).
 #pragma once
 
 #include <type_traits>
@@ -336,6 +336,84 @@ SHTOOL_KERNEL_INLINE void band2_closed(const R* __restrict r, const P* __restric
   y[2] = h3 * b22;
   y[3] = -b02;
   y[4] = T(0.5) * (b00 - b11);
+}
+
+// Band 3 as a cubic form, as band 2 above is a quadratic one: a band-3 function is the
+// harmonic cubic p(w) = A[w, w, w] with A symmetric (10 entries), and g(w) = p(R^T w) has
+// the tensor B_ijk = sum_abc A_abc R_ia R_jb R_kc, cubic in R's entries, with no Euler
+// angles. A harmonic cubic is fixed by its monomials of degree <= 1 in z (the Laplace
+// equation gives the rest), so only the 7 entries of B with at most one index z are
+// formed, by three contractions with rows of R: C = R_x. A and R_y. A (12 dot products),
+// D_ij = R_j . C_i for ij = xx, xy, yy (9), B_ijk = R_k . D_ij (7): 84 multiplications,
+// and 19 more for the maps in and out (docs/rotation.md).
+// With the Condon-Shortley phase (y_3^m for odd m negated) and k3 = sqrt(35 / (2 pi)) / 4,
+// k2 = sqrt(105 / pi) / 2, k1 = sqrt(21 / (2 pi)) / 4, k0 = sqrt(7 / pi) / 4:
+//   y_3^-3 = -k3 y (3x^2 - y^2), y_3^-2 = k2 xyz, y_3^-1 = -k1 y (4z^2 - x^2 - y^2),
+//   y_3^0 = k0 z (2z^2 - 3x^2 - 3y^2), y_3^1 = -k1 x (4z^2 - x^2 - y^2),
+//   y_3^2 = (k2 / 2) z (x^2 - y^2), y_3^3 = -k3 x (x^2 - 3y^2),
+// and solving those 7 monomials of g for its coefficients gives
+//   g-3 = (B_yyy - 3 B_xxy) / (4 k3), g-1 = 3 (B_xxy + B_yyy) / (4 k1), g-2 = 6 B_xyz / k2,
+//   g0 = -(B_xxz + B_yyz) / (2 k0), g2 = 3 (B_xxz - B_yyz) / k2,
+//   g1 = 3 (B_xxx + B_xyy) / (4 k1), g3 = (3 B_xyy - B_xxx) / (4 k3).
+template <bool F, class T, class P, class R = T>
+SHTOOL_KERNEL_INLINE void band3_closed(const R* __restrict r, const P* __restrict x, P* __restrict y) {
+  const T k3 = T(0.59004358992664351035), k2 = T(2.8906114426405540554);
+  const T k1 = T(0.45704579946446573616), k0 = T(0.37317633259011539141);
+  // Scaled coefficients; then the entries of A (A_abc = coefficient of the monomial over
+  // its multiplicity 3!/(i! j! k!)).
+  const P fm3 = k3 * x[0], fm2 = (k2 / 6) * x[1], fm1 = k1 * x[2], f0 = k0 * x[3];
+  const P f1 = k1 * x[4], f2 = (k2 / 6) * x[5], f3 = k3 * x[6];
+  const P axxx = f1 - f3;
+  const P axxy = (fm1 - T(3) * fm3) * T(1.0 / 3);
+  const P axyy = (f1 + T(3) * f3) * T(1.0 / 3);
+  const P ayyy = fm1 + fm3;
+  const P axxz = f2 - f0, ayyz = -f2 - f0;  // ((k2 / 2) x[5] -+ 3 k0 x[3]) / 3
+  const P axyz = fm2;
+  const P axzz = T(-4.0 / 3) * f1, ayzz = T(-4.0 / 3) * fm1;
+  const P azzz = f0 + f0;
+  auto dot3 = [](auto u0, auto v0, auto u1, auto v1, auto u2, auto v2) {
+    return madd<F>(u2, v2, madd<F>(u1, v1, u0 * v0));
+  };
+  // C_i,bc = sum_a R_ia A_abc for i = x, y.
+  const P cxxx = dot3(r[0], axxx, r[3], axxy, r[6], axxz);
+  const P cxxy = dot3(r[0], axxy, r[3], axyy, r[6], axyz);
+  const P cxxz = dot3(r[0], axxz, r[3], axyz, r[6], axzz);
+  const P cxyy = dot3(r[0], axyy, r[3], ayyy, r[6], ayyz);
+  const P cxyz = dot3(r[0], axyz, r[3], ayyz, r[6], ayzz);
+  const P cxzz = dot3(r[0], axzz, r[3], ayzz, r[6], azzz);
+  const P cyxx = dot3(r[1], axxx, r[4], axxy, r[7], axxz);
+  const P cyxy = dot3(r[1], axxy, r[4], axyy, r[7], axyz);
+  const P cyxz = dot3(r[1], axxz, r[4], axyz, r[7], axzz);
+  const P cyyy = dot3(r[1], axyy, r[4], ayyy, r[7], ayyz);
+  const P cyyz = dot3(r[1], axyz, r[4], ayyz, r[7], ayzz);
+  const P cyzz = dot3(r[1], axzz, r[4], ayzz, r[7], azzz);
+  // D_ij,c = sum_b R_jb C_i,bc.
+  const P dxxx = dot3(r[0], cxxx, r[3], cxxy, r[6], cxxz);
+  const P dxxy = dot3(r[0], cxxy, r[3], cxyy, r[6], cxyz);
+  const P dxxz = dot3(r[0], cxxz, r[3], cxyz, r[6], cxzz);
+  const P dxyx = dot3(r[1], cxxx, r[4], cxxy, r[7], cxxz);
+  const P dxyy = dot3(r[1], cxxy, r[4], cxyy, r[7], cxyz);
+  const P dxyz = dot3(r[1], cxxz, r[4], cxyz, r[7], cxzz);
+  const P dyyx = dot3(r[1], cyxx, r[4], cyxy, r[7], cyxz);
+  const P dyyy = dot3(r[1], cyxy, r[4], cyyy, r[7], cyyz);
+  const P dyyz = dot3(r[1], cyxz, r[4], cyyz, r[7], cyzz);
+  // B_ijk = sum_c R_kc D_ij,c.
+  const P bxxx = dot3(r[0], dxxx, r[3], dxxy, r[6], dxxz);
+  const P bxxy = dot3(r[1], dxxx, r[4], dxxy, r[7], dxxz);
+  const P bxyy = dot3(r[1], dxyx, r[4], dxyy, r[7], dxyz);
+  const P byyy = dot3(r[1], dyyx, r[4], dyyy, r[7], dyyz);
+  const P bxxz = dot3(r[2], dxxx, r[5], dxxy, r[8], dxxz);
+  const P bxyz = dot3(r[2], dxyx, r[5], dxyy, r[8], dxyz);
+  const P byyz = dot3(r[2], dyyx, r[5], dyyy, r[8], dyyz);
+  const T i3 = T(1) / (4 * 0.59004358992664351035), i1 = T(3) / (4 * 0.45704579946446573616);
+  const T i2 = T(6) / 2.8906114426405540554, i0 = T(-1) / (2 * 0.37317633259011539141);
+  y[0] = i3 * madd<F>(T(-3), bxxy, byyy);
+  y[1] = i2 * bxyz;
+  y[2] = i1 * (bxxy + byyy);
+  y[3] = i0 * (bxxz + byyz);
+  y[4] = i1 * (bxxx + bxyy);
+  y[5] = (i2 / 2) * (bxxz - byyz);
+  y[6] = i3 * madd<F>(T(3), bxyy, -bxxx);
 }
 
 #pragma GCC diagnostic pop

@@ -5178,8 +5178,8 @@ template <bool F, class T, class P, class S>
 SHTOOL_KERNEL_INLINE void zxzxz_order4_bands(const S& s, const P* __restrict x, P* __restrict y) {
   y[0] = x[0];
   band1_closed<T, P>(s.r, x + 1, y + 1);
-  zxzxz_band2<F, T, P>(s, x + 4, y + 4);
-  zxzxz_band3<F, T, P>(s, x + 9, y + 9);
+  band2_closed<F, T, P>(s.r, x + 4, y + 4);
+  band3_closed<F, T, P>(s.r, x + 9, y + 9);
 }
 
 template <bool F, class T, class P, class S>

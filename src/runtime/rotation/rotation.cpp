@@ -368,7 +368,8 @@ inline ZyzLanes<detail::BatchPack<T>> zyz_cos_sin_lanes(const detail::BatchPack<
 
 template <class T>
 RotationMethod ShRotation<T>::choose_method(const Mat3<T>& r, RotationMethod method, double tolerance) {
-  if (method == RotationMethod::automatic && order_ <= 3) return RotationMethod::zxzxz;  // see rotation.h
+  if (method == RotationMethod::automatic && order_ <= detail::kClosedMaxOrder)
+    return RotationMethod::zxzxz;  // see rotation.h
   if (method != RotationMethod::automatic) return method;
   if (tolerance != cached_tolerance_) update_taylor_limits(tolerance);
   // sin^2 b = R02^2 + R12^2, cos b = R22: no square root needed for the choice.
@@ -403,9 +404,9 @@ bool ShRotation<T>::set_general(const Mat3<T>& r, RotationMethod method, double 
   switch (method) {
     case RotationMethod::reference: build_reference(r); break;
     case RotationMethod::zxzxz:
-      // Bands 1 and 2 are closed forms in R (rotation_kernels.h): orders up to 3 need no
-      // Euler angles at all.
-      if (order_ <= 3) break;
+      // Bands 1..3 are closed forms in R up to order 4 (rotation_kernels.h): no Euler
+      // angles there.
+      if (order_ <= detail::kClosedMaxOrder) break;
       [[fallthrough]];
     default: {
       const bool zxzxz = method == RotationMethod::zxzxz;
@@ -774,7 +775,7 @@ std::size_t ShRotation<T>::rotate_lanes(std::span<const Mat3<T>> rotations, cons
     for (int j = 0; j < B; ++j) lane_src[j] = group[j].data();
     detail::gather_lanes<T>(lane_src, 9, r);
     const bool zxzxz = k == 0;
-    if (!zxzxz || order_ > 3) {  // zxzxz below order 4: bands 1 and 2 from R alone
+    if (!zxzxz || order_ > detail::kClosedMaxOrder) {  // else zxzxz is closed forms in R alone
       const ZyzLanes<P> e = zyz_cos_sin_lanes<T>(r);
       P* const t[6] = {tables[0], tables[1], tables[2], tables[3], tables[4], tables[5]};
       fill_zyz_tables(order_, e, zxzxz, t);
