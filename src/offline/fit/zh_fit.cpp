@@ -755,17 +755,5 @@ int direct_count(const ZhFitOptions& options) {
   return count;
 }
 
-ZhFit fit_row(const ZhFitTable<double>& fits, std::size_t v) {
-  ZhFit f;
-  const std::span<const double> coeffs = fits.coeffs_of(v);
-  for (int k = 0; k < fits.lobes; ++k)
-    f.lobes.push_back({fits.axes_of(v)[k], std::vector<double>(coeffs.begin() + k * fits.order,
-                                                                coeffs.begin() + (k + 1) * fits.order)});
-  const std::span<const double> direct = fits.direct_of(v);
-  f.direct.assign(direct.begin(), direct.end());
-  f.residual = fits.residual[v];
-  f.norm = fits.norm[v];
-  return f;
-}
 
 }  // namespace shtool::fit

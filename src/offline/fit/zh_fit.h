@@ -143,7 +143,4 @@ ZhFitTable<double> fit_zh_all(std::span<const double> vectors, const ZhFitOption
 // and the linear band).
 int direct_count(const ZhFitOptions& options);
 
-// Row v of a flat set as a ZhFit (for code that works on one fit at a time).
-ZhFit fit_row(const ZhFitTable<double>& fits, std::size_t v);
-
 }  // namespace shtool::fit

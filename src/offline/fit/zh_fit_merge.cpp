@@ -9,7 +9,6 @@
 #include "common/input_error.h"
 #include "common/table_writer.h"
 #include "fit/shard.h"
-#include "fit/zh_fit.h"
 #include "fit/zh_fit_table.h"
 
 namespace shtool::fit {
