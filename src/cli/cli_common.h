@@ -66,6 +66,7 @@ void setup_gen_shader(CLI::App& app);
 void setup_render(CLI::App& app);
 void setup_deform(CLI::App& app);
 void setup_fit_wrinkles(CLI::App& app);
+void setup_fit_glossy(CLI::App& app);
 void setup_rotate(CLI::App& app);
 void setup_product(CLI::App& app);
 void setup_fit_zh(CLI::App& app);

@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
   shtool::cli::setup_render(app);
   shtool::cli::setup_deform(app);
   shtool::cli::setup_fit_wrinkles(app);
+  shtool::cli::setup_fit_glossy(app);
   shtool::cli::setup_rotate(app);
   shtool::cli::setup_product(app);
   shtool::cli::setup_fit_zh(app);

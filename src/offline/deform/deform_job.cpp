@@ -86,14 +86,18 @@ std::vector<Eigen::Matrix3d> rest_to_pose_rotations(const fit::Mesh& rest, const
   for (std::size_t t = 0; t < rest.triangles.size(); ++t)
     if (rest.triangles[t] != posed.triangles[t])
       throw InputError("--pose: triangle " + std::to_string(t) + " differs from the rest mesh's");
-  const std::vector<int> first = first_triangles(rest);
+  const std::vector<Eigen::Matrix3d> from = vertex_frames(rest, rest), to = vertex_frames(rest, posed);
   std::vector<Eigen::Matrix3d> r(rest.positions.size());
-  for (std::size_t v = 0; v < r.size(); ++v) {
-    // One edge per vertex, chosen on the rest mesh, used in both frames.
-    const int step = tangent_step(rest, v, first);
-    r[v] = vertex_frame(posed, v, first[v], step) * vertex_frame(rest, v, first[v], step).transpose();
-  }
+  for (std::size_t v = 0; v < r.size(); ++v) r[v] = to[v] * from[v].transpose();
   return r;
+}
+
+std::vector<Eigen::Matrix3d> vertex_frames(const fit::Mesh& rest, const fit::Mesh& mesh) {
+  const std::vector<int> first = first_triangles(rest);
+  std::vector<Eigen::Matrix3d> f(mesh.positions.size());
+  // One edge per vertex, chosen on the rest mesh, so that a pose's frames follow the rest ones.
+  for (std::size_t v = 0; v < f.size(); ++v) f[v] = vertex_frame(mesh, v, first[v], tangent_step(rest, v, first));
+  return f;
 }
 
 ZhFitTable<double> deform_fit(const ZhFitTable<double>& fit, const std::vector<Eigen::Matrix3d>& rotations) {

@@ -26,6 +26,12 @@ Eigen::Matrix3d vertex_frame(const fit::Mesh& mesh, std::size_t v, int first_tri
 // differ in topology (kept vertices, their file indices, triangles).
 std::vector<Eigen::Matrix3d> rest_to_pose_rotations(const fit::Mesh& rest, const fit::Mesh& posed);
 
+// The frame of every vertex of `mesh` (the rest mesh itself, or a pose of it already
+// checked by rest_to_pose_rotations), each from the edge that function chooses on `rest`:
+// R_p = vertex_frames(rest, posed)[p] vertex_frames(rest, rest)[p]^T. The glossy bake's
+// local frames (docs/ldprt.md). Throws InputError as vertex_frame does.
+std::vector<Eigen::Matrix3d> vertex_frames(const fit::Mesh& rest, const fit::Mesh& mesh);
+
 // The fit carried to the pose: axes s_i -> R_p s_i; lobe coefficients unchanged (a ZH lobe
 // is rotation invariant about its axis); a directly stored linear band rotated as band 1
 // (the DC is invariant). Rows must already be in the mesh's kept-vertex order.

@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "io/table_format.h"
+#include "io/zh_rows.h"
 
 namespace shtool {
 namespace {
@@ -15,32 +16,32 @@ Error zh_fit_error(const std::string& what) { return Error{"zh-fit table: " + wh
 
 using table_format::shape_text;
 
-// The f64 array `name` with exactly `shape`, or an error naming what differs.
-Result<std::vector<double>> f64_array(const Table& t, const char* name, const std::vector<std::int64_t>& shape) {
+}  // namespace
+
+namespace table_format {
+
+Result<std::vector<double>> finite_f64_array(const Table& t, const char* name, const std::vector<std::int64_t>& shape,
+                                             const std::string& prefix) {
   const TableArray* a = t.find(name);
-  if (!a) return zh_fit_error("missing array '" + std::string(name) + "'");
-  if (a->dtype != DType::f64) return zh_fit_error("array '" + std::string(name) + "' is not f64");
+  if (!a) return Error{prefix + "missing array '" + std::string(name) + "'"};
+  if (a->dtype != DType::f64) return Error{prefix + "array '" + std::string(name) + "' is not f64"};
   if (a->shape != shape)
-    return zh_fit_error("array '" + std::string(name) + "' has shape " + shape_text(a->shape) + ", expected " +
-                        shape_text(shape));
+    return Error{prefix + "array '" + std::string(name) + "' has shape " + shape_text(a->shape) + ", expected " +
+                 shape_text(shape)};
   std::vector<double> v = a->values<double>();
   for (std::size_t i = 0; i < v.size(); ++i)
     if (!std::isfinite(v[i]))
-      return zh_fit_error("array '" + std::string(name) + "' element " + std::to_string(i) + " is not finite");
+      return Error{prefix + "array '" + std::string(name) + "' element " + std::to_string(i) + " is not finite"};
   return v;
 }
 
-}  // namespace
-
 template <class T>
-Result<ZhFitTable<T>> ZhFitTable<T>::from_table(const Table& t) {
-  if (t.kind != kZhFitKind) return zh_fit_error("wrong kind '" + t.kind + "'");
+Result<ZhFitTable<T>> zh_rows_from_table(const Table& t, const std::string& prefix) {
+  auto zh_fit_error = [&](const std::string& what) { return Error{prefix + what}; };
+  auto f64_array = [&](const Table& table, const char* name, const std::vector<std::int64_t>& shape) {
+    return finite_f64_array(table, name, shape, prefix);
+  };
   if (!is_supported_order(t.order)) return zh_fit_error("unsupported order " + std::to_string(t.order));
-  // A shard of a bake holds a range of the vertices only; shading it as the whole mesh
-  // would misplace every row.
-  const nlohmann::json meta = nlohmann::json::parse(t.meta, nullptr, /*allow_exceptions=*/false);
-  if (meta.is_object() && meta.contains("shard"))
-    return zh_fit_error("a partial table (fit-zh --shard): join the parts with shtool merge first");
   const TableArray* axes = t.find("axes");
   if (!axes || axes->shape.size() != 3 || axes->shape[2] != 3)
     return zh_fit_error("array 'axes' is missing or not of shape [V, N, 3]");
@@ -54,7 +55,7 @@ Result<ZhFitTable<T>> ZhFitTable<T>::from_table(const Table& t) {
   for (const auto* r : {&ax, &co, &re, &no})
     if (!*r) return r->error();
 
-  ZhFitTable z;
+  ZhFitTable<T> z;
   z.order = static_cast<int>(n);
   z.lobes = static_cast<int>(N);
   z.vertices = static_cast<std::size_t>(V);
@@ -93,6 +94,26 @@ Result<ZhFitTable<T>> ZhFitTable<T>::from_table(const Table& t) {
     z.direct_count = static_cast<int>(d->shape[1]);
     narrow(dv.value(), z.direct);
   }
+  return z;
+}
+
+template Result<ZhFitTable<float>> zh_rows_from_table<float>(const Table&, const std::string&);
+template Result<ZhFitTable<double>> zh_rows_from_table<double>(const Table&, const std::string&);
+
+}  // namespace table_format
+
+template <class T>
+Result<ZhFitTable<T>> ZhFitTable<T>::from_table(const Table& t) {
+  if (t.kind != kZhFitKind) return zh_fit_error("wrong kind '" + t.kind + "'");
+  // A shard of a bake holds a range of the vertices only; shading it as the whole mesh
+  // would misplace every row.
+  const nlohmann::json meta = nlohmann::json::parse(t.meta, nullptr, /*allow_exceptions=*/false);
+  if (meta.is_object() && meta.contains("shard"))
+    return zh_fit_error("a partial table (fit-zh --shard): join the parts with shtool merge first");
+  Result<ZhFitTable> rows = table_format::zh_rows_from_table<T>(t, "zh-fit table: ");
+  if (!rows) return rows.error();
+  ZhFitTable z = std::move(rows).value();
+  const auto V = static_cast<std::int64_t>(z.vertices);
   if (const TableArray* vi = t.find("vertex_index")) {
     if (vi->dtype != DType::u32 || vi->shape != std::vector<std::int64_t>{V})
       return zh_fit_error("array 'vertex_index' is not u32 of shape [V]");
