@@ -29,7 +29,8 @@ void check_range(const char* option, long long value, long long lo, long long hi
 }
 
 nlohmann::json parameters(const GlossyRequest& r) {
-  return {{"brdf", name_of(r.brdf.model, brdf_model_names())},
+  return {{"mesh", r.mesh.filename().string()},
+          {"brdf", name_of(r.brdf.model, brdf_model_names())},
           {"roughness", r.brdf.roughness},
           {"f0", r.brdf.f0},
           {"order", r.order},
@@ -114,7 +115,10 @@ GlossyReport run_fit_glossy(const GlossyRequest& r) {
   report.total_nrms = std::hypot(report.svd_nrms, report.zh_nrms);
   report.rows_nrms = fit::normalized_rms(fits);
 
-  nlohmann::json generator = generator_record("shtool fit-glossy", parameters(r));
+  nlohmann::json params = parameters(r);
+  params["input_crc32"] = mesh.input_crc32;
+  params["mesh_crc32"] = fit::loaded_mesh_crc32(mesh);
+  nlohmann::json generator = generator_record("shtool fit-glossy", params);
   if (r.shadowed) {
     const fit::EmbreeIdentity embree = fit::embree_identity();
     generator["embree"] = {{"version", embree.version}, {"isa", embree.isa}};
@@ -128,8 +132,7 @@ GlossyReport run_fit_glossy(const GlossyRequest& r) {
                          {"svd_normalized_rms", report.svd_nrms},
                          {"zh_normalized_rms", report.zh_nrms},
                          {"total_normalized_rms", report.total_nrms},
-                         {"singular_values", report.singular_values},
-                         {"mesh_crc32", fit::loaded_mesh_crc32(mesh)}};
+                         {"singular_values", report.singular_values}};
   Table table = fit::zh_fit_table(fits, meta, generator);
   table.kind = std::string(kGlossyZhKind);
   table.kind_version = "1.0";

@@ -1,5 +1,6 @@
 #include "lighting/lighting_output.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "common/input_error.h"
@@ -66,6 +67,13 @@ Lighting read_lighting_json(const std::filesystem::path& path, std::string_view 
   }
   if (const auto w = doc.find("window"); w != doc.end()) l.window = *w;
   return l;
+}
+
+std::vector<double> light_channel(const Lighting& lighting, int c, int n) {
+  std::vector<double> e(static_cast<std::size_t>(n) * n, 0.0);
+  const std::size_t shared = std::min<std::size_t>(e.size(), lighting.coefficients.size() / 3);
+  for (std::size_t i = 0; i < shared; ++i) e[i] = lighting.coefficients[i * 3 + c];
+  return e;
 }
 
 }  // namespace shtool::lighting

@@ -32,4 +32,8 @@ Table lighting_table(const Lighting& lighting, const nlohmann::json& generator);
 // Reads the lighting JSON (any order, RGB): InputError naming the file on anything else.
 Lighting read_lighting_json(const std::filesystem::path& path, std::string_view what);
 
+// Channel c of the lighting as an order-n vector: truncated, or padded with zeros (a dot
+// product with an order-n quantity then uses the bands both sides have).
+std::vector<double> light_channel(const Lighting& lighting, int c, int n);
+
 }  // namespace shtool::lighting

@@ -27,6 +27,8 @@
 #include "fit/mesh.h"
 #include "lighting/image_io.h"
 #include "lighting/lighting_output.h"
+#include "render/glossy_shading.h"
+#include "shtool/glossy.h"
 #include "shtool/membrane.h"
 #include "shtool/rotation.h"
 #include "shtool/zh_fit_table.h"
@@ -37,6 +39,8 @@ namespace {
 
 using Vec = Eigen::Vector3d;
 
+using lighting::light_channel;
+
 // Per-vertex quantities in the mesh's kept-vertex order.
 struct VertexData {
   int transfer_order = 0;
@@ -44,15 +48,6 @@ struct VertexData {
   std::optional<ZhFitTable<double>> fit;       // rows reordered to the kept vertices
   std::vector<double> alpha;                   // membrane: transparency per vertex
 };
-
-// One channel of the lighting as an order-n vector: truncated, or padded with zeros
-// (the dot product uses the bands both sides have).
-std::vector<double> light_channel(const lighting::Lighting& light, int c, int n) {
-  std::vector<double> e(static_cast<std::size_t>(n) * n, 0.0);
-  const std::size_t shared = std::min<std::size_t>(e.size(), light.coefficients.size() / 3);
-  for (std::size_t i = 0; i < shared; ++i) e[i] = light.coefficients[i * 3 + c];
-  return e;
-}
 
 // RGB exit radiance per vertex for a transfer- or fit-based shading.
 std::vector<double> vertex_radiance(Shading shading, const VertexData& data, const lighting::Lighting& light,
@@ -146,9 +141,8 @@ struct Hits {
   }
 };
 
-Hits cast_primary_rays(const fit::Mesh& mesh, const RenderRequest& r, int threads) {
+Hits cast_primary_rays(const fit::Mesh& mesh, const RenderRequest& r, const Camera& camera, int threads) {
   const double aspect = double(r.width) / r.height;
-  const Camera camera = r.camera ? *r.camera : frame_mesh(mesh, r.fov, aspect);
   const Vec eye = vec(camera.eye);
   const Vec forward = (vec(camera.target) - eye).normalized();
   const Vec right = forward.cross(vec(camera.up)).normalized();
@@ -310,7 +304,8 @@ lighting::Image compare_strip(const Hits& hits, const fit::Mesh& mesh, VertexDat
 const std::vector<std::pair<std::string, Shading>>& shading_names() {
   static const std::vector<std::pair<std::string, Shading>> names = {
       {"transfer", Shading::transfer}, {"zh", Shading::zh},         {"zh-table", Shading::zh_table},
-      {"error", Shading::error},       {"normals", Shading::normals},   {"membrane", Shading::membrane}};
+      {"error", Shading::error},       {"normals", Shading::normals},   {"membrane", Shading::membrane},
+      {"glossy", Shading::glossy}};
   return names;
 }
 
@@ -329,7 +324,8 @@ RenderResult run_render(const RenderRequest& r) {
   Shading shading = r.compare ? Shading::transfer : r.shading;
   if (shading == Shading::automatic) shading = r.transfer.empty() ? Shading::zh : Shading::transfer;
   const bool needs_transfer = shading == Shading::transfer || shading == Shading::error;
-  const bool needs_fit = shading == Shading::zh || shading == Shading::zh_table || shading == Shading::error;
+  bool needs_fit = shading == Shading::zh || shading == Shading::zh_table || shading == Shading::error;
+  if (shading == Shading::glossy && r.fit.empty()) throw InputError("--shading glossy needs --fit (a fit-glossy table)");
   if (r.compare && r.transfer.empty()) throw InputError("--compare needs --transfer (the ground truth it fits)");
   if (needs_transfer && r.transfer.empty()) throw InputError("this shading needs --transfer");
   if (needs_fit && r.fit.empty()) throw InputError("this shading needs --fit");
@@ -357,6 +353,27 @@ RenderResult run_render(const RenderRequest& r) {
   }
   const fit::Mesh& mesh = posed ? *posed : rest;
   VertexData data;
+  std::optional<GlossyFit<double>> glossy;
+  std::vector<Eigen::Matrix3d> frames;  // glossy: the vertex frames of the mesh rendered
+  if (needs_fit && r.shading == Shading::automatic) {
+    // A fit-glossy table given without --shading is shaded as what it is.
+    Result<GlossyFit<double>> g = load_glossy_fit<double>(r.fit);
+    if (g) {
+      glossy.emplace(std::move(g).value());
+      shading = Shading::glossy;
+      needs_fit = false;
+    }
+  }
+  if (shading == Shading::glossy) {
+    if (!glossy) {
+      Result<GlossyFit<double>> g = load_glossy_fit<double>(r.fit);
+      if (!g) throw InputError("--fit: " + g.error().message);
+      glossy.emplace(std::move(g).value());
+    }
+    glossy = glossy_fit_for_mesh(std::move(*glossy), rest, "--fit " + r.fit.string());
+    if (posed) glossy = deform_glossy_fit(*glossy, rotations);
+    frames = deform::vertex_frames(rest, mesh);
+  }
   if (needs_transfer) {
     data.transfer = fit::parse_transfer_json(read_input_file(r.transfer, "--transfer"), r.transfer,
                                              data.transfer_order);
@@ -411,11 +428,16 @@ RenderResult run_render(const RenderRequest& r) {
   const int threads = resolve_threads(r.threads);
 
   const auto start = std::chrono::steady_clock::now();
-  const Hits hits = cast_primary_rays(mesh, r, threads);
+  const Camera camera = r.camera ? *r.camera : frame_mesh(mesh, r.fov, double(r.width) / r.height);
+  const Hits hits = cast_primary_rays(mesh, r, camera, threads);
   RenderResult result;
   result.covered_pixels = hits.covered();
   lighting::Image image;
-  if (!r.compare) {
+  if (glossy) {
+    result.shading = shading;
+    image = glossy_panel({hits.width, hits.height, hits.triangle, hits.w1, hits.w2}, mesh, frames, *glossy, light,
+                         vec(camera.eye), threads);
+  } else if (!r.compare) {
     result.shading = shading;
     image = shade_panel(hits, mesh, vertex_radiance(shading, data, light, mesh, r.zh_table_resolution, threads),
                         shading == Shading::error);

@@ -13,7 +13,7 @@
 
 namespace shtool::render {
 
-enum class Shading { automatic, transfer, zh, zh_table, error, normals, membrane };
+enum class Shading { automatic, transfer, zh, zh_table, error, normals, membrane, glossy };
 const std::vector<std::pair<std::string, Shading>>& shading_names();
 
 struct Camera {
@@ -24,14 +24,15 @@ struct RenderRequest {
   std::filesystem::path mesh;      // OBJ or glTF
   std::filesystem::path pose;      // optional: a posed mesh of mesh's topology, rendered with the
                                    // fit's lobes (or the transfer) rotated into its frames
-  std::filesystem::path fit;       // zh-fit table (fit-zh --out)
+  std::filesystem::path fit;       // zh-fit table (fit-zh --out), or glossy-zh (fit-glossy --out)
   std::filesystem::path transfer;  // transfer JSON (fit-zh --save-transfer)
   std::filesystem::path light;     // lighting JSON (project-env --json, light --json): radiance, RGB
   std::filesystem::path out;       // .exr (linear RGB + coverage alpha) or .png (tone-mapped sRGB)
   std::optional<Camera> camera;    // none: framed on the mesh's bounding sphere
   double fov = 40;                 // vertical field of view, degrees, in (0, 180)
   int width = 512, height = 512;
-  Shading shading = Shading::automatic;  // automatic: transfer with --transfer, else zh
+  // automatic: transfer with --transfer, else glossy for a glossy-zh --fit, else zh
+  Shading shading = Shading::automatic;
   double exposure = 0;             // PNG: radiance scaled by 2^exposure before tone mapping
   int zh_table_resolution = 32;    // zh-table: ZhLightTable resolution
   int threads = 0;                 // 0: every core

@@ -1,0 +1,183 @@
+// End-to-end tests of `shtool fit-glossy` and `render --shading glossy`: the table and
+// its summary (shapes, the schema, the figures), the same bytes on 1 and 2 threads, the
+// furnace of a flat Phong surface seen along its normal (albedo 1), render picking the
+// glossy shading from the table, and bad requests refused with a message, exit 1 and no
+// output.
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "lighting/image_io.h"
+#include "run_command.h"
+#include "scratch_files.h"
+#include "shtool/glossy.h"
+#include "shtool/table.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using shtool::test::CommandResult;
+
+const std::string kExe = SHTOOL_EXE;
+const std::string kSpot = std::string(SHTOOL_SOURCE_DIR) + "/data/spot.obj";
+
+fs::path scratch(const std::string& name) { return shtool::test::scratch_path("cli_fit_glossy", name); }
+
+CommandResult run(std::vector<std::string> args) {
+  args.insert(args.begin(), kExe);
+  shtool::test::CommandOptions options;
+  options.timeout_seconds = 120;  // only turns a hang into a failure
+  CommandResult r = shtool::test::run_command(args, options);
+  EXPECT_FALSE(r.signaled) << "killed by signal " << r.signal;
+  return r;
+}
+
+std::vector<std::string> small(const fs::path& out, const fs::path& json, int threads) {
+  return {"fit-glossy", kSpot, "--rays", "64", "--view-resolution", "8", "--lobes", "2", "--effort", "1",
+          "--threads", std::to_string(threads), "--out", out.string(), "--json", json.string()};
+}
+
+TEST(CliFitGlossy, WritesTheTableAndTheSummary) {
+  const fs::path out = scratch("g.shtb"), json = scratch("g.json");
+  const CommandResult r = run(small(out, json, 2));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("normalized RMS: SVD"), std::string::npos) << r.err;
+  const shtool::Result<shtool::Table> t = shtool::read_table(out, {"glossy-zh", 1, 4});
+  ASSERT_TRUE(t.ok()) << t.error().message;
+  const shtool::Result<shtool::GlossyFit<double>> fit = shtool::GlossyFit<double>::from_table(t.value());
+  ASSERT_TRUE(fit.ok()) << fit.error().message;
+  EXPECT_EQ(fit.value().vertices, 2930u);
+  EXPECT_EQ(fit.value().terms, 3);
+  EXPECT_EQ(fit.value().view_resolution, 8);
+  EXPECT_EQ(fit.value().rows.lobes, 2);
+  EXPECT_EQ(fit.value().rows.direct_count, 1);  // DC only: the linear band is stored from 3 lobes on
+  const nlohmann::json summary = nlohmann::json::parse(shtool::test::read_file(json));
+  const nlohmann::json meta = nlohmann::json::parse(t.value().meta);
+  EXPECT_EQ(summary["normalized_rms"]["svd"], meta["svd_normalized_rms"]);
+  EXPECT_EQ(summary["normalized_rms"]["zh"], meta["zh_normalized_rms"]);
+  EXPECT_EQ(summary["singular_values"].size(), 16u);
+  // Three of sixteen singular values keep a good part, not all, of B; the fit adds little.
+  const double svd = summary["normalized_rms"]["svd"], zh = summary["normalized_rms"]["zh"];
+  EXPECT_GT(svd, 0.3);
+  EXPECT_LT(svd, 0.9);
+  EXPECT_LT(zh, 0.05);
+  EXPECT_NEAR(summary["normalized_rms"]["total"].get<double>(), std::hypot(svd, zh), 1e-15);
+  const std::string source = SHTOOL_SOURCE_DIR;
+  const std::string cmd = std::string(SHTOOL_PYTHON) + " '" + source + "/tests/validate_json_schema.py' '" + source +
+                          "/schemas/glossy-zh.schema.json' '" + out.string() + "'";
+  EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
+}
+
+TEST(CliFitGlossy, SameBytesOnOneAndTwoThreads) {
+  const fs::path a = scratch("t1.shtb"), aj = scratch("t1.json"), b = scratch("t2.shtb"), bj = scratch("t2.json");
+  ASSERT_EQ(run(small(a, aj, 1)).exit_code, 0);
+  ASSERT_EQ(run(small(b, bj, 2)).exit_code, 0);
+  EXPECT_EQ(shtool::test::read_file(a), shtool::test::read_file(b));
+  EXPECT_EQ(shtool::test::read_file(aj), shtool::test::read_file(bj));
+}
+
+TEST(CliFitGlossy, FlatPhongSurfaceSeenAlongItsNormalHasAlbedoOne) {
+  // A square facing +z under constant radiance 1, seen from 5 units up with a 2 degree
+  // field of view: every pixel's view is within 1.5 degrees of the normal, and the u(v)
+  // texels around the normal within 2.5, where the normalised Phong lobe's albedo is 1 to
+  // 1e-3. With all 16 SVD terms the shading is B's
+  // DC column exactly, up to the bilinear u(v) look-up; with 3 terms the truncation shows.
+  const fs::path mesh = scratch("square.obj");
+  std::ofstream(mesh) << "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nf 1 2 3\nf 1 3 4\n";
+  const fs::path light = scratch("white.json");
+  ASSERT_EQ(run({"light", "--type", "constant", "--color", "1,1,1", "--order", "4", "--json", light.string()}).exit_code,
+            0);
+  for (const std::string terms : {"16", "3"}) {
+    const fs::path table = scratch("square" + terms + ".shtb"), image = scratch("square" + terms + ".exr");
+    CommandResult r = run({"fit-glossy", mesh.string(), "--brdf", "phong", "--roughness", "0.30151134457776363",
+                           "--mode", "unshadowed", "--terms", terms, "--lobes", "1", "--out", table.string()});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    r = run({"render", mesh.string(), "--fit", table.string(), "--light", light.string(), "--camera", "0,0,5,0,0,0,0,1,0",
+             "--fov", "2", "--width", "32", "--height", "32", "--out", image.string()});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const shtool::lighting::Image img = shtool::lighting::decode_image(shtool::test::read_file(image), image);
+    double worst = 0;
+    for (std::size_t p = 0; p < std::size_t(img.width) * img.height; ++p)
+      for (int c = 0; c < 3; ++c) worst = std::max(worst, std::abs(img.texels[p * img.channels + c] - 1.0));
+    if (terms == "16")
+      EXPECT_LT(worst, 2e-3);
+    else
+      EXPECT_GT(worst, 0.05);
+  }
+}
+
+TEST(CliFitGlossy, RenderShadesTheTableAsGlossy) {
+  const fs::path table = scratch("r.shtb"), json = scratch("r.json"), light = scratch("sun.json");
+  ASSERT_EQ(run(small(table, json, 2)).exit_code, 0);
+  ASSERT_EQ(run({"light", "--type", "directional", "--dir", "0,0.25,1", "--order", "4", "--json", light.string()}).exit_code, 0);
+  const fs::path a = scratch("auto.exr"), b = scratch("glossy.exr");
+  CommandResult r = run({"render", kSpot, "--fit", table.string(), "--light", light.string(), "--width", "48",
+                         "--height", "48", "--out", a.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = run({"render", kSpot, "--fit", table.string(), "--light", light.string(), "--width", "48", "--height", "48",
+           "--shading", "glossy", "--threads", "1", "--out", b.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(shtool::test::read_file(a), shtool::test::read_file(b));
+  const shtool::lighting::Image img = shtool::lighting::decode_image(shtool::test::read_file(a), a);
+  double brightest = 0;
+  for (float v : img.texels) brightest = std::max(brightest, double(v));
+  EXPECT_GT(brightest, 0.1);
+  // A diffuse table is not a glossy one; another mesh's table is refused.
+  const fs::path diffuse = scratch("d.shtb");
+  ASSERT_EQ(run({"fit-zh", kSpot, "--order", "4", "--rays", "16", "--lobes", "1", "--out", diffuse.string()}).exit_code,
+            0);
+  const fs::path bad = scratch("bad.exr");
+  r = run({"render", kSpot, "--fit", diffuse.string(), "--light", light.string(), "--shading", "glossy", "--out",
+           bad.string()});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("glossy-zh"), std::string::npos) << r.err;
+  const fs::path square = scratch("other.obj");
+  std::ofstream(square) << "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nf 1 2 3\nf 1 3 4\n";
+  r = run({"render", square.string(), "--fit", table.string(), "--light", light.string(), "--out", bad.string()});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("another mesh"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(bad));
+}
+
+TEST(CliFitGlossy, BadOptionsAreRefusedWithoutOutput) {
+  const fs::path out = scratch("bad.shtb");
+  const struct {
+    std::vector<std::string> args;
+    std::string names;
+  } cases[] = {
+      {{"--order", "1"}, "--order"},         {{"--order", "9"}, "--order"},
+      {{"--terms", "0"}, "--terms"},         {{"--terms", "17"}, "--terms"},
+      {{"--lobes", "0"}, "--lobes"},         {{"--view-resolution", "1"}, "--view-resolution"},
+      {{"--rays", "0"}, "--rays"},           {{"--roughness", "0.01"}, "--roughness"},
+      {{"--roughness", "nan"}, "--roughness"}, {{"--roughness", "1.5"}, "--roughness"},
+      {{"--f0", "-0.1"}, "--f0"},            {{"--brdf", "ward"}, "--brdf"},
+      {{"--effort", "5"}, "--effort"},       {{"--json", out.string()}, "--json"},
+      {{"--mode", "interreflected"}, "--mode"},
+  };
+  for (const auto& c : cases) {
+    fs::remove(out);
+    std::vector<std::string> args = {"fit-glossy", kSpot, "--rays", "8", "--out", out.string()};
+    args.insert(args.end(), c.args.begin(), c.args.end());
+    const CommandResult r = run(args);
+    EXPECT_EQ(r.exit_code, 1) << c.names << ": " << r.err;
+    EXPECT_NE(r.err.find(c.names), std::string::npos) << c.names << ": " << r.err;
+    EXPECT_FALSE(fs::exists(out)) << c.names;
+  }
+  const fs::path missing = scratch("no-such-folder") / "g.shtb";
+  CommandResult r = run({"fit-glossy", kSpot, "--rays", "8", "--out", missing.string()});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("--out"), std::string::npos) << r.err;
+  r = run({"fit-glossy", scratch("no-such-mesh.obj").string(), "--out", out.string()});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_FALSE(fs::exists(out));
+  r = run({"fit-glossy", kSpot, "--out", kSpot});
+  EXPECT_EQ(r.exit_code, 1);
+}
+
+}  // namespace
