@@ -228,6 +228,11 @@ TEST(WrinkleMap, BlendIsTheOfflineModelsBitForBit) {
     WrinkleLobes<float> lf;
     mapf.lobes_at(static_cast<float>(x), static_cast<float>(d), lf);
     for (int i = 0; i < 4; ++i) EXPECT_NEAR(lf.direct[i], lobes.direct[i], 2e-5) << x << " " << d;
+    // Shading in float: within float rounding of double over ~40 terms of size ~1.
+    std::vector<double> e(36, 0.25);
+    const std::vector<float> ef(e.begin(), e.end());
+    EXPECT_NEAR(mapf.shade(ef, Eigen::Matrix3f::Identity(), static_cast<float>(x), static_cast<float>(d)),
+                map.shade(e, Eigen::Matrix3d::Identity(), x, d), 1e-4) << x << " " << d;
   }
 }
 
