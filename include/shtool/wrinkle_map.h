@@ -50,6 +50,19 @@ struct WrinkleWeights {
 template <class T>
 WrinkleWeights<T> wrinkle_weights(int grid, T max_depth, T x, T depth) noexcept;
 
+// The bilinear blend itself: out[i] = sum_c w.weight[c] values[w.node[c] * stride + offset + i]
+// for i < count, summed in corner order from 0, so that every caller (the map, the fit's
+// model and its objective) gets the same bits. Precondition: the reads are in range.
+template <class T>
+inline void blend_wrinkle_values(const WrinkleWeights<T>& w, const T* values, std::size_t stride, std::size_t offset,
+                                 int count, T* out) noexcept {
+  for (int i = 0; i < count; ++i) out[i] = T(0);
+  for (int c = 0; c < 4; ++c) {
+    const T* v = values + static_cast<std::size_t>(w.node[c]) * stride + offset;
+    for (int i = 0; i < count; ++i) out[i] += w.weight[c] * v[i];
+  }
+}
+
 // The lobes at one point: each blended axis normalised (h(s) of [4] Eq. 21: the node
 // axes are not unit, and normalising after the blend is what the fit optimised).
 template <class T>

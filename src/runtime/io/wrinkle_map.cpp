@@ -32,19 +32,13 @@ void blend_wrinkle_lobes(int order, int lobes, std::span<const T> axes, std::spa
                          std::span<const T> direct, const WrinkleWeights<T>& w, WrinkleLobes<T>& out) noexcept {
   out.order = order;
   out.lobes = lobes;
-  for (int i = 0; i < kWrinkleDirect; ++i) {
-    out.direct[i] = 0;
-    for (int c = 0; c < 4; ++c) out.direct[i] += w.weight[c] * direct[static_cast<std::size_t>(w.node[c]) * kWrinkleDirect + i];
-  }
+  blend_wrinkle_values<T>(w, direct.data(), kWrinkleDirect, 0, kWrinkleDirect, out.direct.data());
+  const std::size_t axis_stride = static_cast<std::size_t>(lobes) * 3, coeff_stride = static_cast<std::size_t>(lobes) * order;
   for (int lobe = 0; lobe < lobes; ++lobe) {
-    Vec3<T> axis = Vec3<T>::Zero();
-    T* g = out.coeffs.data() + static_cast<std::size_t>(lobe) * order;
-    std::fill(g, g + order, T(0));
-    for (int c = 0; c < 4; ++c) {
-      const std::size_t base = static_cast<std::size_t>(w.node[c]) * lobes + lobe;
-      for (int a = 0; a < 3; ++a) axis[a] += w.weight[c] * axes[base * 3 + a];
-      for (int l = 0; l < order; ++l) g[l] += w.weight[c] * coeffs[base * order + l];
-    }
+    Vec3<T> axis;
+    blend_wrinkle_values<T>(w, axes.data(), axis_stride, static_cast<std::size_t>(lobe) * 3, 3, axis.data());
+    blend_wrinkle_values<T>(w, coeffs.data(), coeff_stride, static_cast<std::size_t>(lobe) * order, order,
+                            out.coeffs.data() + static_cast<std::size_t>(lobe) * order);
     out.axes[lobe] = axis.normalized();
   }
 }
