@@ -27,10 +27,13 @@ void setup_render(CLI::App& app) {
   std::vector<std::pair<std::string, render::Shading>> names = render::shading_names();
   add_enum_option(sub, "--shading", req->shading, names,
                   "transfer (t . e), zh (Eq. 13), zh-table (Eq. 24-25), error (|zh - transfer|), normals, "
-                  "membrane (thin-membrane model, Eq. 22-23)",
+                  "membrane (thin-membrane model, Eq. 22-23), wrinkle (wrinkle map, Sec. 4.2)",
                   "transfer with --transfer, else zh");
   sub->add_option("--alpha", req->alpha, "membrane: transparency in [0, 1]")->capture_default_str();
   sub->add_option("--alpha-map", req->alpha_map, "membrane: JSON {\"alpha\": [one per vertex]}");
+  sub->add_option("--wrinkle", req->wrinkle, "wrinkle: the map, a wrinkle-zh table (fit-wrinkles --out)");
+  sub->add_option("--wrinkle-map", req->wrinkle_map,
+                  "wrinkle: JSON {\"x\": [...], \"d\": [...]}, groove position (period 1) and depth per vertex");
   sub->add_option("--exposure", req->exposure, "PNG: scale by 2^E before tone mapping")->capture_default_str();
   sub->add_flag("--compare", req->compare,
                 "one strip: transfer, ZH fits with 1..4 lobes (fitted here), the N = 4 error; normalized RMS under each");

@@ -13,6 +13,7 @@
 #include "shtool/rotation_helpers.h"
 #include "shtool/table.h"
 #include "shtool/tripling_product.h"
+#include "shtool/wrinkle_map.h"
 #include "shtool/zh_fit_table.h"
 #include "shtool/zh_shading.h"
 #include "shtool/zhf_rotation.h"
@@ -54,6 +55,13 @@ void exercise_zh_fit(const shtool::ZhFitTable<double>& z) {
     (void)shtool::zh_shade_exact<double>(light, z.axes_of(v), z.coeffs_of(v));
 }
 
+void exercise_wrinkle(const shtool::WrinkleMap<double>& m) {
+  std::vector<double> light(shtool::sh_count(m.order), 0.1);
+  const Eigen::Matrix3d frame = kRotation;
+  for (const double x : {-3.7, 0.0, 0.4999, 1.0})
+    for (const double d : {-1.0, 0.0, 0.5 * m.max_depth, 1e300}) (void)m.shade(light, frame, x, d);
+}
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
@@ -67,5 +75,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   (void)shtool::ShFourierTensors::from_table(table);
   if (auto z = shtool::ZhFitTable<double>::from_table(table)) exercise_zh_fit(z.value());
   (void)shtool::ZhFitTable<float>::from_table(table);
+  if (auto w = shtool::WrinkleMap<double>::from_table(table)) exercise_wrinkle(w.value());
+  (void)shtool::WrinkleMap<float>::from_table(table);
   return 0;
 }

@@ -28,6 +28,7 @@
 #include "lighting/image_io.h"
 #include "lighting/lighting_output.h"
 #include "render/glossy_shading.h"
+#include "render/wrinkle_shading.h"
 #include "shtool/glossy.h"
 #include "shtool/membrane.h"
 #include "shtool/rotation.h"
@@ -47,6 +48,9 @@ struct VertexData {
   std::vector<double> transfer;                // V * n^2
   std::optional<ZhFitTable<double>> fit;       // rows reordered to the kept vertices
   std::vector<double> alpha;                   // membrane: transparency per vertex
+  std::optional<WrinkleMap<double>> wrinkle;   // wrinkle: the map, and per vertex
+  GrooveCoordinates groove;                    // its coordinates
+  std::vector<Eigen::Matrix3d> groove_frames;  // and frame
 };
 
 // RGB exit radiance per vertex for a transfer- or fit-based shading.
@@ -71,6 +75,12 @@ std::vector<double> vertex_radiance(Shading shading, const VertexData& data, con
       }
     }
     return out;
+  }
+  if (shading == Shading::wrinkle) {
+    const int n = data.wrinkle->order;
+    const std::array<std::vector<double>, 3> e = {light_channel(light, 0, n), light_channel(light, 1, n),
+                                                   light_channel(light, 2, n)};
+    return wrinkle_radiance(*data.wrinkle, data.groove_frames, data.groove, e, threads);
   }
   std::vector<double> from_transfer, from_fit;
   if (shading == Shading::transfer || shading == Shading::error) {
@@ -305,7 +315,7 @@ const std::vector<std::pair<std::string, Shading>>& shading_names() {
   static const std::vector<std::pair<std::string, Shading>> names = {
       {"transfer", Shading::transfer}, {"zh", Shading::zh},         {"zh-table", Shading::zh_table},
       {"error", Shading::error},       {"normals", Shading::normals},   {"membrane", Shading::membrane},
-      {"glossy", Shading::glossy}};
+      {"wrinkle", Shading::wrinkle},   {"glossy", Shading::glossy}};
   return names;
 }
 
@@ -329,11 +339,16 @@ RenderResult run_render(const RenderRequest& r) {
   if (r.compare && r.transfer.empty()) throw InputError("--compare needs --transfer (the ground truth it fits)");
   if (needs_transfer && r.transfer.empty()) throw InputError("this shading needs --transfer");
   if (needs_fit && r.fit.empty()) throw InputError("this shading needs --fit");
-  if (shading != Shading::membrane && shading != Shading::normals && r.fit.empty() && r.transfer.empty())
+  const bool no_bake = shading == Shading::membrane || shading == Shading::normals || shading == Shading::wrinkle;
+  if (!no_bake && r.fit.empty() && r.transfer.empty())
     throw InputError("one of --fit and --transfer is required");
   if (!(r.alpha >= 0 && r.alpha <= 1)) throw InputError("--alpha must be between 0 and 1");
   if (!r.alpha_map.empty() && shading != Shading::membrane)
     throw InputError("--alpha-map applies to --shading membrane only");
+  if (shading == Shading::wrinkle && (r.wrinkle.empty() || r.wrinkle_map.empty()))
+    throw InputError("--shading wrinkle needs --wrinkle (a wrinkle-zh table) and --wrinkle-map (groove coordinates)");
+  if (shading != Shading::wrinkle && (!r.wrinkle.empty() || !r.wrinkle_map.empty()))
+    throw InputError("--wrinkle and --wrinkle-map apply to --shading wrinkle only");
   if (shading != Shading::normals && r.light.empty()) throw InputError("--light is required");
   if (r.camera) {
     const Vec eye = vec(r.camera->eye), target = vec(r.camera->target), up = vec(r.camera->up);
@@ -355,13 +370,20 @@ RenderResult run_render(const RenderRequest& r) {
   VertexData data;
   std::optional<GlossyFit<double>> glossy;
   std::vector<Eigen::Matrix3d> frames;  // glossy: the vertex frames of the mesh rendered
-  if (needs_fit && r.shading == Shading::automatic) {
-    // A fit-glossy table given without --shading is shaded as what it is.
-    Result<GlossyFit<double>> g = load_glossy_fit<double>(r.fit);
-    if (g) {
+  std::optional<ZhFitTable<double>> zh_fit;
+  if (needs_fit) {
+    Result<ZhFitTable<double>> loaded = load_zh_fit<double>(r.fit);
+    if (loaded) {
+      zh_fit.emplace(std::move(loaded).value());
+    } else if (r.shading == Shading::automatic) {
+      // A fit-glossy table given without --shading is shaded as what it is.
+      Result<GlossyFit<double>> g = load_glossy_fit<double>(r.fit);
+      if (!g) throw InputError("--fit: " + loaded.error().message);
       glossy.emplace(std::move(g).value());
       shading = Shading::glossy;
       needs_fit = false;
+    } else {
+      throw InputError("--fit: " + loaded.error().message);
     }
   }
   if (shading == Shading::glossy) {
@@ -396,9 +418,7 @@ RenderResult run_render(const RenderRequest& r) {
     }
   }
   if (needs_fit) {
-    Result<ZhFitTable<double>> loaded = load_zh_fit<double>(r.fit);
-    if (!loaded) throw InputError("--fit: " + loaded.error().message);
-    data.fit = deform::fit_for_mesh(std::move(loaded).value(), rest, "--fit " + r.fit.string());
+    data.fit = deform::fit_for_mesh(std::move(*zh_fit), rest, "--fit " + r.fit.string());
     if (posed) data.fit = deform::deform_fit(*data.fit, rotations);
   }
   if (shading == Shading::membrane) {
@@ -417,6 +437,14 @@ RenderResult run_render(const RenderRequest& r) {
         data.alpha[k] = a.get<double>();
       }
     }
+  }
+  if (shading == Shading::wrinkle) {
+    Result<WrinkleMap<double>> loaded = load_wrinkle_map<double>(r.wrinkle);
+    if (!loaded) throw InputError("--wrinkle: " + loaded.error().message);
+    data.wrinkle = std::move(loaded).value();
+    data.groove = read_groove_coordinates(r.wrinkle_map, mesh, data.wrinkle->max_depth);
+    // The frames follow the surface that is drawn: with --pose, the posed one.
+    data.groove_frames = groove_frames(mesh, data.groove.x);
   }
   lighting::Lighting light;
   if (shading != Shading::normals) {

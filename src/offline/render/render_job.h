@@ -13,7 +13,7 @@
 
 namespace shtool::render {
 
-enum class Shading { automatic, transfer, zh, zh_table, error, normals, membrane, glossy };
+enum class Shading { automatic, transfer, zh, zh_table, error, normals, membrane, wrinkle, glossy };
 const std::vector<std::pair<std::string, Shading>>& shading_names();
 
 struct Camera {
@@ -41,6 +41,11 @@ struct RenderRequest {
   // [0, 1] per vertex a triangle uses, in file order).
   double alpha = 0;
   std::filesystem::path alpha_map;
+  // wrinkle: [4] Sec. 4.2's wrinkle map (a wrinkle-zh table, fit-wrinkles --out) placed by
+  // per-vertex groove coordinates (JSON {"x": [...], "d": [...]}, one value each per vertex a
+  // triangle uses, in file order); render/wrinkle_shading.h.
+  std::filesystem::path wrinkle;
+  std::filesystem::path wrinkle_map;
   // One strip instead: transfer, ZH fits of N = 1..4 lobes made from the transfer, and the
   // N = 4 error map, each labelled with its normalized RMS ([4] Fig. 3's layout).
   bool compare = false;

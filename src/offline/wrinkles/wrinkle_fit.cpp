@@ -157,15 +157,16 @@ struct GlobalObjective::Impl {
     std::vector<fit::ZhLobe>& blended = scratch[worker];
     for (std::size_t p = begin; p < end; ++p) {
       const BilinearWeights& w = weights[p];
+      // The map's own blend (shtool/wrinkle_map.h) over the parameter layout: per node and
+      // lobe, the axis then g*_2..g*_{n-1}; the axis stays unnormalised, zh_objective
+      // differentiates through h(s).
+      const std::size_t stride = static_cast<std::size_t>(nl) * per;
       for (int i = 0; i < nl; ++i) {
         fit::ZhLobe& lobe = blended[i];
-        lobe.axis.setZero();
-        std::fill(lobe.coeffs.begin(), lobe.coeffs.end(), 0.0);
-        for (int c = 0; c < 4; ++c) {
-          const double* q = params.data() + (static_cast<std::size_t>(w.node[c]) * nl + i) * per;
-          for (int a = 0; a < 3; ++a) lobe.axis[a] += w.weight[c] * q[a];
-          for (int l = 2; l < order; ++l) lobe.coeffs[l] += w.weight[c] * q[3 + l - 2];
-        }
+        const std::size_t offset = static_cast<std::size_t>(i) * per;
+        blend_wrinkle_values<double>(w, params.data(), stride, offset, 3, lobe.axis.data());
+        lobe.coeffs[0] = lobe.coeffs[1] = 0.0;
+        blend_wrinkle_values<double>(w, params.data(), stride, offset + 3, order - 2, lobe.coeffs.data() + 2);
       }
       std::span<double> g = with_grad ? std::span<double>(sample_grad.data() + p * nl * full, nl * full)
                                       : std::span<double>();

@@ -38,16 +38,7 @@ Eigen::Vector3d groove_normal(double x, double depth) {
 }
 
 BilinearWeights bilinear_weights(const WrinkleGrid& grid, double x, double depth) {
-  const int g = grid.grid;
-  double u = (x - std::floor(x)) * g;
-  int j0 = std::min(static_cast<int>(std::floor(u)), g - 1);
-  const double fx = u - j0;
-  const double v = std::clamp(depth / grid.max_depth, 0.0, 1.0) * (g - 1);
-  const int k0 = std::min(static_cast<int>(std::floor(v)), g - 2);
-  const double fd = v - k0;
-  const int j1 = (j0 + 1) % g;
-  return {{k0 * g + j0, k0 * g + j1, (k0 + 1) * g + j0, (k0 + 1) * g + j1},
-          {(1 - fx) * (1 - fd), fx * (1 - fd), (1 - fx) * fd, fx * fd}};
+  return wrinkle_weights<double>(grid.grid, grid.max_depth, x, depth);
 }
 
 BilinearWeights sample_weights(const WrinkleGrid& grid, int i, int k) {
@@ -63,20 +54,14 @@ BilinearWeights sample_weights(const WrinkleGrid& grid, int i, int k) {
 
 void evaluate_model(const WrinkleModel& m, const BilinearWeights& w, std::span<double> out) {
   const int n2 = sh_count(m.order);
+  WrinkleLobes<double> blended;
+  blend_wrinkle_lobes<double>(m.order, m.lobes, m.axes, m.coeffs, m.direct, w, blended);
   std::fill(out.begin(), out.begin() + n2, 0.0);
-  for (int c = 0; c < 4; ++c)
-    for (int i = 0; i < kDirectCoefficients; ++i)
-      out[i] += w.weight[c] * m.direct[static_cast<std::size_t>(w.node[c]) * kDirectCoefficients + i];
+  for (int i = 0; i < kDirectCoefficients; ++i) out[i] = blended.direct[i];
   std::array<double, kMaxWrinkleOrder * kMaxWrinkleOrder> y{};
   for (int lobe = 0; lobe < m.lobes; ++lobe) {
-    Eigen::Vector3d axis = Eigen::Vector3d::Zero();
-    std::array<double, kMaxWrinkleOrder> g{};
-    for (int c = 0; c < 4; ++c) {
-      const std::size_t base = static_cast<std::size_t>(w.node[c]) * m.lobes + lobe;
-      for (int a = 0; a < 3; ++a) axis[a] += w.weight[c] * m.axes[base * 3 + a];
-      for (int l = 0; l < m.order; ++l) g[l] += w.weight[c] * m.coeffs[base * m.order + l];
-    }
-    eval_sh<double>(m.order, axis.normalized(), std::span<double>(y.data(), n2));
+    const double* g = blended.coeffs.data() + static_cast<std::size_t>(lobe) * m.order;
+    eval_sh<double>(m.order, blended.axes[lobe], std::span<double>(y.data(), n2));
     for (int l = 0; l < m.order; ++l)
       for (int mm = -l; mm <= l; ++mm) out[sh_index(l, mm)] += g[l] * y[sh_index(l, mm)];
   }

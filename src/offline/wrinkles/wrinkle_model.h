@@ -15,6 +15,7 @@
 #include <Eigen/Core>
 
 #include "fit/mesh.h"
+#include "shtool/wrinkle_map.h"
 
 namespace shtool::wrinkles {
 
@@ -24,12 +25,9 @@ double groove_height(double x, double depth);
 // Unit normal of the height field at x: (-h'(x), 0, 1) normalised, h' = -pi d sin 2 pi x.
 Eigen::Vector3d groove_normal(double x, double depth);
 
-// Highest order the model supports (the per-sample scratch is fixed-size so that the
-// fit's inner loop never allocates).
-inline constexpr int kMaxWrinkleOrder = 8;
-inline constexpr int kMaxWrinkleLobes = 4;
-// DC and the linear band are stored directly ([4] Sec. 4.2), so 4 direct coefficients.
-inline constexpr int kDirectCoefficients = 4;
+// The model's bounds (kMaxWrinkleOrder, kMaxWrinkleLobes) and its 4 directly stored
+// coefficients are the runtime's (shtool/wrinkle_map.h), which shades the same map.
+inline constexpr int kDirectCoefficients = kWrinkleDirect;
 
 // Nodes: x_j = j / G (j = 0..G-1, periodic: x = 1 is x = 0 again) and
 // d_k = max_depth k / (G - 1) (k = 0..G-1). Samples, where the transfer is simulated and
@@ -58,11 +56,9 @@ struct WrinkleGrid {
 };
 
 // The four nodes (index k * G + j) around a point and their bilinear weights.
-struct BilinearWeights {
-  int node[4];
-  double weight[4];
-};
-// At any (x, d): x wraps into [0, 1), d is clamped to [0, max_depth].
+using BilinearWeights = WrinkleWeights<double>;
+// At any (x, d): x wraps into [0, 1), d is clamped to [0, max_depth] (the runtime's
+// wrinkle_weights, so that shading blends as the fit did).
 BilinearWeights bilinear_weights(const WrinkleGrid& grid, double x, double depth);
 // At sample (i, k), from integers: fractions are exactly (i mod S) / S and (k mod S) / S.
 BilinearWeights sample_weights(const WrinkleGrid& grid, int i, int k);
@@ -80,7 +76,8 @@ struct WrinkleModel {
   std::vector<double> direct;  // [node][4]
 };
 
-// The SH vector (order^2 values) the model gives at (x, d).
+// The SH vector (order^2 values) the model gives at (x, d): the runtime's blend
+// (blend_wrinkle_lobes), expanded into SH.
 void evaluate_model(const WrinkleModel& model, const BilinearWeights& w, std::span<double> out);
 
 // The height field of depth d as a triangle mesh whose first `sample_columns` vertices
