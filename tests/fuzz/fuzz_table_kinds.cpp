@@ -9,6 +9,7 @@
 
 #include "shtool/euler.h"
 #include "shtool/fourier_tensors.h"
+#include "shtool/glossy.h"
 #include "shtool/rotation.h"
 #include "shtool/rotation_helpers.h"
 #include "shtool/table.h"
@@ -62,6 +63,14 @@ void exercise_wrinkle(const shtool::WrinkleMap<double>& m) {
     for (const double d : {-1.0, 0.0, 0.5 * m.max_depth, 1e300}) (void)m.shade(light, frame, x, d);
 }
 
+void exercise_glossy(const shtool::GlossyFit<double>& g) {
+  std::vector<double> light(shtool::sh_count(g.rows.order), 0.1);
+  for (std::size_t v = 0; v < std::min<std::size_t>(g.vertices, 8); ++v)
+    for (const shtool::Vec3<double>& view : {shtool::Vec3<double>(0, 0, 1), shtool::Vec3<double>(1, 0, 0),
+                                             shtool::Vec3<double>(0.3, -0.4, -0.8), shtool::Vec3<double>(0, 0, 0)})
+      (void)g.shade(light, v, view);
+}
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
@@ -77,5 +86,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   (void)shtool::ZhFitTable<float>::from_table(table);
   if (auto w = shtool::WrinkleMap<double>::from_table(table)) exercise_wrinkle(w.value());
   (void)shtool::WrinkleMap<float>::from_table(table);
+  if (auto g = shtool::GlossyFit<double>::from_table(table)) exercise_glossy(g.value());
+  (void)shtool::GlossyFit<float>::from_table(table);
   return 0;
 }
