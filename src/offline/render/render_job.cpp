@@ -27,6 +27,7 @@
 #include "fit/mesh.h"
 #include "lighting/image_io.h"
 #include "lighting/lighting_output.h"
+#include "render/texture_render.h"
 #include "shtool/membrane.h"
 #include "shtool/rotation.h"
 #include "shtool/zh_fit_table.h"
@@ -378,7 +379,12 @@ RenderResult run_render(const RenderRequest& r) {
       }
     }
   }
-  if (needs_fit) {
+  std::optional<TextureBake> texture;  // a fit-zh --texture table: its maps are sampled per pixel
+  if (needs_fit) texture = read_texture_bake(r.fit);
+  if (texture && (shading == Shading::error || posed))
+    throw InputError("--fit " + r.fit.string() + " is a texture-space bake: it renders with --shading zh or "
+                     "zh-table, without --pose");
+  if (needs_fit && !texture) {
     Result<ZhFitTable<double>> loaded = load_zh_fit<double>(r.fit);
     if (!loaded) throw InputError("--fit: " + loaded.error().message);
     data.fit = deform::fit_for_mesh(std::move(loaded).value(), rest, "--fit " + r.fit.string());
@@ -417,8 +423,11 @@ RenderResult run_render(const RenderRequest& r) {
   lighting::Image image;
   if (!r.compare) {
     result.shading = shading;
-    image = shade_panel(hits, mesh, vertex_radiance(shading, data, light, mesh, r.zh_table_resolution, threads),
-                        shading == Shading::error);
+    image = texture ? shade_texture_bake(*texture, mesh, light, hits.width, hits.height, hits.triangle, hits.w1,
+                                         hits.w2, shading == Shading::zh_table ? r.zh_table_resolution : 0, threads)
+                    : shade_panel(hits, mesh,
+                                  vertex_radiance(shading, data, light, mesh, r.zh_table_resolution, threads),
+                                  shading == Shading::error);
   } else {
     result.shading = Shading::transfer;
     image = compare_strip(hits, mesh, data, light, threads, result.compare_nrms);
