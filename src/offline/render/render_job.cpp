@@ -384,6 +384,9 @@ RenderResult run_render(const RenderRequest& r) {
   if (texture && (shading == Shading::error || posed))
     throw InputError("--fit " + r.fit.string() + " is a texture-space bake: it renders with --shading zh or "
                      "zh-table, without --pose");
+  if (texture && mesh.uvs.empty())
+    throw InputError(r.mesh.string() + ": no texture coordinates, and --fit " + r.fit.string() +
+                     " is a texture-space bake (sampled at the UV of each hit)");
   if (needs_fit && !texture) {
     Result<ZhFitTable<double>> loaded = load_zh_fit<double>(r.fit);
     if (!loaded) throw InputError("--fit: " + loaded.error().message);
