@@ -1,6 +1,7 @@
 #include "fit/texture_bake.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <span>
@@ -26,14 +27,30 @@ TexelSamples rasterize_texels(const Mesh& mesh, int resolution, const std::files
     throw InputError(path.string() + ": no texture coordinates (OBJ 'vt' on every face corner, glTF TEXCOORD_0 on "
                                      "every primitive): --texture bakes per texel of the UV atlas");
   const std::size_t texels = std::size_t(resolution) * resolution;
-  std::vector<std::int64_t> owner(texels, -1);
-  std::vector<Eigen::Vector3d> weights(texels);
   const double res = resolution;
-  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
-    // In texel units with y down: the centre of texel (x, y) is (x + 1/2, y + 1/2).
+  // Triangle t's corners in texel units, y down: the centre of texel (x, y) is
+  // (x + 1/2, y + 1/2).
+  auto corners = [&](std::size_t t) {
     std::array<Eigen::Vector2d, 3> q;
     for (int c = 0; c < 3; ++c) q[c] = Eigen::Vector2d(mesh.uvs[t][c].x() * res, (1.0 - mesh.uvs[t][c].y()) * res);
-    const double area = (q[1] - q[0]).x() * (q[2] - q[0]).y() - (q[1] - q[0]).y() * (q[2] - q[0]).x();
+    return q;
+  };
+  auto signed_area = [](const std::array<Eigen::Vector2d, 3>& q) {
+    return (q[1] - q[0]).x() * (q[2] - q[0]).y() - (q[1] - q[0]).y() * (q[2] - q[0]).x();
+  };
+  // Barycentric weights of texel (x, y)'s centre.
+  auto weights = [](const std::array<Eigen::Vector2d, 3>& q, double area, int x, int y) {
+    const Eigen::Vector2d p(x + 0.5, y + 0.5);
+    auto edge = [&](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+      return ((b - a).x() * (p - a).y() - (b - a).y() * (p - a).x()) / area;
+    };
+    return Eigen::Vector3d(edge(q[1], q[2]), edge(q[2], q[0]), edge(q[0], q[1]));
+  };
+  // The owner only (4 bytes a texel): the weights are recomputed for the covered texels.
+  std::vector<std::int32_t> owner(texels, -1);
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    const std::array<Eigen::Vector2d, 3> q = corners(t);
+    const double area = signed_area(q);
     if (!(std::abs(area) > 0)) continue;  // a UV triangle of no area holds no centre
     const double lo_x = std::min({q[0].x(), q[1].x(), q[2].x()}), hi_x = std::max({q[0].x(), q[1].x(), q[2].x()});
     const double lo_y = std::min({q[0].y(), q[1].y(), q[2].y()}), hi_y = std::max({q[0].y(), q[1].y(), q[2].y()});
@@ -45,22 +62,19 @@ TexelSamples rasterize_texels(const Mesh& mesh, int resolution, const std::files
       for (int x = x0; x <= x1; ++x) {
         const std::size_t index = std::size_t(y) * resolution + x;
         if (owner[index] >= 0) continue;  // overlapping islands: the first triangle keeps it
-        const Eigen::Vector2d p(x + 0.5, y + 0.5);
-        auto edge = [&](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
-          return ((b - a).x() * (p - a).y() - (b - a).y() * (p - a).x()) / area;
-        };
-        const Eigen::Vector3d w(edge(q[1], q[2]), edge(q[2], q[0]), edge(q[0], q[1]));
-        if (w.minCoeff() < -kEdgeSlack) continue;
-        owner[index] = static_cast<std::int64_t>(t);
-        weights[index] = w.cwiseMax(0.0) / w.cwiseMax(0.0).sum();
+        if (weights(q, area, x, y).minCoeff() >= -kEdgeSlack) owner[index] = static_cast<std::int32_t>(t);
       }
   }
   TexelSamples s;
   s.resolution = resolution;
   for (std::size_t index = 0; index < texels; ++index) {
     if (owner[index] < 0) continue;
+    const std::array<Eigen::Vector2d, 3> q = corners(owner[index]);
+    const Eigen::Vector3d raw = weights(q, signed_area(q), static_cast<int>(index % resolution),
+                                        static_cast<int>(index / resolution));
+    // Within the slack of an edge a weight can be a hair below 0: the point stays on the triangle.
+    const Eigen::Vector3d w = raw.cwiseMax(0.0) / raw.cwiseMax(0.0).sum();
     const Eigen::Vector3i& tri = mesh.triangles[owner[index]];
-    const Eigen::Vector3d& w = weights[index];
     const Eigen::Vector3d p =
         w[0] * mesh.positions[tri[0]] + w[1] * mesh.positions[tri[1]] + w[2] * mesh.positions[tri[2]];
     Eigen::Vector3d n = w[0] * mesh.normals[tri[0]] + w[1] * mesh.normals[tri[1]] + w[2] * mesh.normals[tri[2]];
