@@ -1,5 +1,5 @@
 // fit-zh --texture and render end to end: the maps sit beside the table, render finds
-// them from the table's meta, the white furnace is 1 on every covered pixel, the texture
+// them from the table's meta (its header valid against the schema), the white furnace is 1 on every covered pixel, the texture
 // render matches the vertex render of the same bake settings, the bytes do not depend on
 // the thread count, and bad requests are refused by name with nothing written.
 #include <gtest/gtest.h>
@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -66,6 +67,10 @@ TEST(TextureRender, MapsAreWrittenBesideTheTable) {
   EXPECT_TRUE(fs::exists(scratch("spot.tex.dc_linear.exr")));
   EXPECT_TRUE(fs::exists(scratch("spot.tex.lobes.exr")));
   EXPECT_FALSE(fs::exists(scratch("spot.vtx.dc_linear.exr")));  // a vertex bake writes none
+  const std::string source = SHTOOL_SOURCE_DIR;
+  const std::string cmd = std::string(SHTOOL_PYTHON) + " '" + source + "/tests/validate_json_schema.py' '" + source +
+                          "/schemas/zh-fit.schema.json' '" + bakes().texture.string() + "'";
+  EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
 }
 
 TEST(TextureRender, WhiteFurnaceIsOneOnEveryCoveredPixel) {

@@ -6,6 +6,7 @@
 // refused with nothing written.
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <numbers>
 #include <set>
@@ -270,8 +271,12 @@ TEST(TextureBake, TexelBakeAgreesWithVertexBake) {
       scale += std::abs(interpolated);
     }
   }
-  EXPECT_LT(sum / scale, 0.05);
-  EXPECT_LT(worst, 0.25);
+  std::printf("texel vs interpolated vertex transfer: mean |difference| / mean |t| %.4f, worst %.4f\n",
+              sum / scale, worst);
+  // Measured 0.018 and 0.045 (256 rays); texel points with the face normal instead of the
+  // interpolated one, or off their barycentric point, land far above.
+  EXPECT_LT(sum / scale, 0.03);
+  EXPECT_LT(worst, 0.1);
 }
 
 TEST(TextureBake, BadInputIsRefusedAndWritesNothing) {
