@@ -72,12 +72,18 @@ void setup_fit_zh(CLI::App& app) {
                   "together)",
                   "varpro");
   sub->add_flag("--direct", opt->direct, "store DC (and linear when N >= 3) directly; lobes fit the rest");
+  auto texture = std::make_shared<int>(0);
+  CLI::Option* texture_option = sub->add_option(
+      "--texture", *texture,
+      "RES: bake per texel of the mesh's RES x RES UV atlas (OBJ vt, glTF TEXCOORD_0) instead of per vertex; "
+      "writes <out stem>.dc_linear.exr and <out stem>.lobes.exr beside the table");
   sub->add_option("--threads", opt->threads, "worker threads (0: all cores)")->capture_default_str();
   sub->add_flag("--mpi", opt->mpi, "under mpirun: ranks split the vertices, rank 0 writes the table");
   sub->add_option("--shard", opt->shard,
                   "K/N: fit the K-th (0-based) of N vertex ranges into a partial table for shtool merge");
-  sub->callback([opt, order, starts, restart_above, starts_option, restart_option]() {
+  sub->callback([opt, order, starts, restart_above, starts_option, restart_option, texture, texture_option]() {
     opt->order_given = order->count() > 0;
+    if (texture_option->count() > 0) opt->texture = *texture;
     if (starts_option->count() > 0) opt->starts = *starts;
     if (restart_option->count() > 0) opt->restart_above = *restart_above;
     fit::FitZhCallbacks cb;
@@ -88,7 +94,9 @@ void setup_fit_zh(CLI::App& app) {
     if (r.mpi_rank != 0) return;  // rank 0 reports the job
     std::ostringstream summary;
     summary.precision(4);
-    summary << "fit-zh: " << r.count << (r.from_mesh ? " vertices" : " vectors");
+    summary << "fit-zh: " << r.count << (r.texture_resolution ? " texels" : r.from_mesh ? " vertices" : " vectors");
+    if (r.texture_resolution)
+      summary << " of a " << r.texture_resolution << " x " << r.texture_resolution << " atlas";
     if (r.sharded)
       summary << " (shard " << r.shard_index << "/" << r.shard_count << ": [" << r.first_vertex << ", "
               << r.end_vertex << ") of " << r.total << ")";
@@ -96,7 +104,9 @@ void setup_fit_zh(CLI::App& app) {
     summary << ", fit " << r.fit_seconds << " s (" << r.threads << " threads";
     if (r.mpi_ranks) summary << " on each of " << r.mpi_ranks << " MPI ranks";
     summary << "), order " << r.order << ", " << r.lobes
-            << " lobes, normalized RMS " << r.normalized_rms << ", wrote " << r.out.string() << '\n';
+            << " lobes, normalized RMS " << r.normalized_rms << ", wrote " << r.out.string();
+    if (r.texture_resolution) summary << ", " << r.dc_linear_map.string() << ", " << r.lobes_map.string();
+    summary << '\n';
     std::cerr << summary.str();
   });
 }

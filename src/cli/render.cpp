@@ -17,7 +17,8 @@ void setup_render(CLI::App& app) {
   sub->add_option("mesh", req->mesh, "mesh, OBJ or glTF (the one the transfer or fit was baked on)")->required();
   sub->add_option("--pose", req->pose, "posed mesh (OBJ or glTF, the rest mesh's topology): render it with the fit or "
                                        "transfer rotated into its frames, without re-simulation");
-  sub->add_option("--fit", req->fit, "zh-fit table (fit-zh --out)");
+  sub->add_option("--fit", req->fit,
+                  "zh-fit table (fit-zh --out; a --texture bake: its maps beside it are sampled per pixel)");
   sub->add_option("--transfer", req->transfer, "transfer vectors JSON (fit-zh --save-transfer)");
   sub->add_option("--light", req->light, "lighting JSON (project-env --json, light --json), radiance, RGB");
   sub->add_option("--camera", *camera, "eye,target,up: nine numbers (default: framed on the mesh)");

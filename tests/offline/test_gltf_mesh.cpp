@@ -29,6 +29,8 @@ struct Primitive {
   std::vector<float> positions;  // xyz per vertex
   std::vector<float> normals;    // empty, or xyz per vertex
   std::vector<std::uint32_t> indices;
+  std::vector<float> uvs;        // empty, or uv per vertex (glTF's: v down)
+  int uv_type = TINYGLTF_COMPONENT_TYPE_FLOAT;  // or UNSIGNED_SHORT, normalised
   int mode = TINYGLTF_MODE_TRIANGLES;
   int index_type = TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT;
 };
@@ -69,6 +71,15 @@ tinygltf::Model make_model(const Primitive& p, const std::vector<tinygltf::Node>
   if (!p.normals.empty())
     prim.attributes["NORMAL"] = add_accessor(add_view(p.normals.data(), p.normals.size() * 4),
                                              TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, nv);
+  if (!p.uvs.empty()) {
+    std::vector<std::uint16_t> shorts;
+    for (float f : p.uvs) shorts.push_back(static_cast<std::uint16_t>(std::lround(f * 65535.0)));
+    const bool as_short = p.uv_type == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT;
+    prim.attributes["TEXCOORD_0"] =
+        add_accessor(as_short ? add_view(shorts.data(), shorts.size() * 2) : add_view(p.uvs.data(), p.uvs.size() * 4),
+                     p.uv_type, TINYGLTF_TYPE_VEC2, nv);
+    m.accessors.back().normalized = as_short;
+  }
   if (!p.indices.empty()) {
     std::vector<unsigned char> bytes;
     for (std::uint32_t i : p.indices) {
@@ -119,6 +130,26 @@ Primitive spot_primitive(const Mesh& obj) {
   for (const Eigen::Vector3i& t : obj.triangles)
     for (int c = 0; c < 3; ++c) p.indices.push_back(static_cast<std::uint32_t>(t[c]));
   return p;
+}
+
+// TEXCOORD_0, float or normalised unsigned short, kept per triangle corner with v flipped
+// to the bottom-left origin; a primitive without it leaves the mesh without UVs.
+TEST(GltfMesh, TexcoordsArePerCornerWithVUp) {
+  Primitive p;
+  p.positions = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
+  p.indices = {0, 1, 2, 0, 2, 3};
+  p.uvs = {0.25f, 0.5f, 0.75f, 0.5f, 0.75f, 0.0f, 0.25f, 0.0f};
+  for (int type : {TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT}) {
+    p.uv_type = type;
+    const Mesh m = load_gltf_bytes(to_bytes(make_model(p, {tinygltf::Node{}}), true), "quad.glb");
+    ASSERT_EQ(m.uvs.size(), 2u);
+    const double tolerance = type == TINYGLTF_COMPONENT_TYPE_FLOAT ? 0.0 : 1e-5;
+    EXPECT_NEAR((m.uvs[0][1] - Eigen::Vector2d(0.75, 0.5)).norm(), 0.0, tolerance);
+    EXPECT_NEAR((m.uvs[1][1] - Eigen::Vector2d(0.75, 1.0)).norm(), 0.0, tolerance);
+    EXPECT_NEAR((m.uvs[1][2] - Eigen::Vector2d(0.25, 1.0)).norm(), 0.0, tolerance);
+  }
+  p.uvs.clear();
+  EXPECT_TRUE(load_gltf_bytes(to_bytes(make_model(p, {tinygltf::Node{}}), true), "quad.glb").uvs.empty());
 }
 
 // Spot through two nested nodes (a parent translation; a child T R S): every position is

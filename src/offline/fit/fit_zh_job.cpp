@@ -22,6 +22,7 @@
 #include "fit/embree_scene.h"
 #include "fit/mpi_job.h"
 #include "fit/shard.h"
+#include "fit/texture_bake.h"
 #include "fit/zh_fit.h"
 #include "fit/zh_fit_gltf.h"
 #include "fit/zh_fit_merge.h"
@@ -98,6 +99,17 @@ void check_request(const FitZhRequest& r) {
     if (!r.ply.empty() || !r.save_transfer.empty())
       throw InputError(std::string(r.ply.empty() ? "--save-transfer" : "--ply") +
                        " is not written with --mpi: rank 0 gathers the fits, not the transfer vectors");
+  }
+  if (r.texture) {
+    if (*r.texture < 1 || *r.texture > kMaxTextureResolution)
+      throw InputError("--texture " + std::to_string(*r.texture) + ": the resolution must be in 1.." +
+                       std::to_string(kMaxTextureResolution));
+    if (!r.transfer.empty()) throw InputError("--texture needs a mesh with texture coordinates (not --transfer)");
+    // The rows are texels: the per-vertex outputs and the vertex splits have nothing to hold.
+    const std::pair<bool, const char*> vertex_only[] = {
+        {!r.ply.empty(), "--ply"}, {!r.gltf.empty(), "--gltf"}, {!r.shard.empty(), "--shard"}, {r.mpi, "--mpi"}};
+    for (const auto& [given, what] : vertex_only)
+      if (given) throw InputError(std::string(what) + " is per vertex: it does not combine with --texture");
   }
   if (!r.shard.empty()) {
     if (r.mode == TransferMode::interreflected && !r.mesh.empty())
@@ -214,9 +226,14 @@ FitZhReport run_fit_zh_on(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJo
                                              (json_table ? ".json" : ".shtb"));
   // Fail before a long bake, not after it: every output writable, none the input, no two
   // the same file.
+  std::filesystem::path dc_linear_map, lobes_map;  // --texture: beside --out
+  if (r.texture) {
+    dc_linear_map = dc_linear_map_path(out);
+    lobes_map = lobes_map_path(out);
+  }
   const std::pair<const std::filesystem::path*, const char*> outputs_named[] = {
       {&out, "--out"}, {&r.json, "--json"}, {&r.ply, "--ply"}, {&r.save_transfer, "--save-transfer"},
-      {&r.gltf, "--gltf"}};
+      {&r.gltf, "--gltf"}, {&dc_linear_map, "the DC and linear map"}, {&lobes_map, "the lobe map"}};
   for (std::size_t i = 0; i < std::size(outputs_named); ++i) {
     const auto& [path, what] = outputs_named[i];
     if (path->empty()) continue;
@@ -251,6 +268,7 @@ FitZhReport run_fit_zh_on(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJo
   };
   std::vector<double> transfer;
   Mesh mesh;
+  TexelSamples texels;  // --texture
   nlohmann::json params;
   nlohmann::json meta = nlohmann::json::object();
   if (!r.transfer.empty()) {
@@ -285,15 +303,24 @@ FitZhReport run_fit_zh_on(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJo
     to.albedo = r.albedo;
     to.threads = threads;
     to.progress = cb.simulate_progress;
-    total = mesh.positions.size();
-    range = rows_of ? shard_range_of(*rows_of, total) : VertexRange{0, total};
-    to.first_vertex = range.begin;
-    to.end_vertex = range.end;
-    // Each rank simulates its rows of every bounce and reads the others' between bounces.
-    if (mpi) to.gather_bounce = [mpi](std::vector<double> rows) { return mpi->allgather(std::move(rows)); };
-    const auto t0 = std::chrono::steady_clock::now();
-    transfer = compute_transfer(mesh, to);
-    report.simulate_seconds = seconds_since(t0);
+    if (r.texture) {
+      const auto t0 = std::chrono::steady_clock::now();
+      texels = rasterize_texels(mesh, *r.texture, r.mesh);
+      total = texels.texel.size();
+      range = VertexRange{0, total};
+      transfer = compute_transfer_at(mesh, texels.positions, texels.normals, texels.texel, to);
+      report.simulate_seconds = seconds_since(t0);
+    } else {
+      total = mesh.positions.size();
+      range = rows_of ? shard_range_of(*rows_of, total) : VertexRange{0, total};
+      to.first_vertex = range.begin;
+      to.end_vertex = range.end;
+      // Each rank simulates its rows of every bounce and reads the others' between bounces.
+      if (mpi) to.gather_bounce = [mpi](std::vector<double> rows) { return mpi->allgather(std::move(rows)); };
+      const auto t0 = std::chrono::steady_clock::now();
+      transfer = compute_transfer(mesh, to);
+      report.simulate_seconds = seconds_since(t0);
+    }
     params = {{"mesh", r.mesh.filename().string()},
               {"input_crc32", mesh.input_crc32},
               {"mesh_crc32", loaded_mesh_crc32(mesh)},
@@ -309,6 +336,16 @@ FitZhReport run_fit_zh_on(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJo
     meta["degenerate_faces"] = mesh.degenerate_faces;
     meta["triangles"] = mesh.triangles.size();
     meta["normals_from_file"] = mesh.normals_from_file;
+    if (r.texture) {
+      params["texture"] = *r.texture;
+      // What render reads to find and sample the maps; vertex_index holds texel indices.
+      meta["texture"] = {{"resolution", *r.texture},
+                         {"texels", texels.texel.size()},
+                         {"gutter", kGutterTexels},
+                         {"rows", "texel index y * resolution + x, row 0 at v = 1 (UV origin bottom left)"},
+                         {"dc_linear_map", dc_linear_map.filename().string()},
+                         {"lobes_map", lobes_map.filename().string()}};
+    }
   }
   report.order = order;
   report.count = transfer.size() / sh_count(order);
@@ -349,8 +386,11 @@ FitZhReport run_fit_zh_on(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJo
     const EmbreeIdentity embree = embree_identity();
     generator["embree"] = {{"version", embree.version}, {"isa", embree.isa}};
   }
-  if (!mesh.source_index.empty())
+  if (r.texture) {
+    fits.vertex_index.assign(texels.texel.begin(), texels.texel.end());
+  } else if (!mesh.source_index.empty()) {
     fits.vertex_index.assign(mesh.source_index.begin() + range.begin, mesh.source_index.begin() + range.end);
+  }
   if (rows_of) {
     meta["shard"] = {{"index", rows_of->index}, {"count", rows_of->count}, {"first_vertex", range.begin},
                      {"end_vertex", range.end}, {"vertices", total}};
@@ -362,6 +402,13 @@ FitZhReport run_fit_zh_on(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJo
     report.total = total;
   }
   Table table = zh_fit_table(fits, meta, generator);
+  std::optional<TextureMaps> maps;
+  if (r.texture) {
+    maps = texture_maps(texels, fits);
+    report.texture_resolution = *r.texture;
+    report.dc_linear_map = dc_linear_map;
+    report.lobes_map = lobes_map;
+  }
   // The table holds the fits now; the other outputs made from them keep them.
   if (r.json.empty() && r.ply.empty() && r.gltf.empty()) fits = ZhFitTable<double>{};
   if (mpi) {
@@ -406,7 +453,7 @@ FitZhReport run_fit_zh_on(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJo
 
   // ---- outputs: everything is computed, then written as one set.
   std::vector<std::string> bytes;
-  bytes.reserve(5);  // outputs hold views of these
+  bytes.reserve(7);  // outputs hold views of these
   std::vector<OutputFile> outputs;
   auto add = [&](const std::filesystem::path& path, std::string content) {
     bytes.push_back(std::move(content));
@@ -419,6 +466,10 @@ FitZhReport run_fit_zh_on(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJo
   if (!r.save_transfer.empty()) add(r.save_transfer, transfer_json(transfer, order));
   if (!r.gltf.empty())
     add(r.gltf, zh_fit_glb(mesh, fits, transfer_dc, "shtool " + generator["version"].get<std::string>() + " fit-zh"));
+  if (maps) {
+    add(dc_linear_map, lighting::encode_exr_channels(maps->dc_linear));
+    add(lobes_map, lighting::encode_exr_channels(maps->lobes));
+  }
   write_files_atomically(outputs);
   return report;
 }

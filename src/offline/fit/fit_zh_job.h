@@ -53,6 +53,10 @@ struct FitZhRequest {
   // "K/N" (fit/shard.h): fit only the K-th of N vertex ranges and write a partial table
   // for `shtool merge`. Empty: the whole mesh.
   std::string shard;
+  // --texture RES: bake per texel of the mesh's RES x RES UV atlas (fit/texture_bake.h)
+  // instead of per vertex; the table's rows are the covered texels and the maps are
+  // written beside `out`.
+  std::optional<int> texture;
   // Under mpirun: rank R of S fits shard R/S, rank 0 gathers the rows and writes every
   // output (the other ranks write nothing). Needs a build with MPI.
   bool mpi = false;
@@ -74,6 +78,9 @@ struct FitZhReport {
   // With a shard: its rows [first_vertex, end_vertex) of `total` vertices or vectors.
   bool sharded = false;
   std::size_t shard_index = 0, shard_count = 1, first_vertex = 0, end_vertex = 0, total = 0;
+  // With --texture: the atlas resolution and the maps written (count is the texels baked).
+  int texture_resolution = 0;
+  std::filesystem::path dc_linear_map, lobes_map;
   // With --mpi: this process's rank and the rank count; only rank 0 wrote.
   int mpi_rank = 0, mpi_ranks = 0;
 };

@@ -89,6 +89,37 @@ std::vector<Eigen::Vector3d> read_vec3(const tinygltf::Model& model, int index, 
   return out;
 }
 
+// TEXCOORD_0: float, or normalised unsigned byte / short (glTF 2.0, 3.7.2.1), returned
+// with v flipped into Mesh::uvs' bottom-left convention.
+std::vector<Eigen::Vector2d> read_texcoords(const tinygltf::Model& model, int index, const std::filesystem::path& path) {
+  const AccessorView v = accessor_view(model, index, TINYGLTF_TYPE_VEC2,
+                                       {TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE,
+                                        TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT},
+                                       "TEXCOORD_0", path);
+  std::vector<Eigen::Vector2d> out(v.count);
+  for (std::size_t i = 0; i < v.count; ++i) {
+    const unsigned char* p = v.data + i * v.stride;
+    double uv[2];
+    for (int c = 0; c < 2; ++c) {
+      if (v.component_type == TINYGLTF_COMPONENT_TYPE_FLOAT) {
+        float f;
+        std::memcpy(&f, p + c * sizeof f, sizeof f);
+        uv[c] = f;
+      } else if (v.component_type == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE) {
+        uv[c] = p[c] / 255.0;
+      } else {
+        std::uint16_t s;
+        std::memcpy(&s, p + c * sizeof s, sizeof s);
+        uv[c] = s / 65535.0;
+      }
+    }
+    if (!std::isfinite(uv[0]) || !std::isfinite(uv[1]))
+      fail(path, "TEXCOORD_0 of vertex " + std::to_string(i) + " is not finite");
+    out[i] = Eigen::Vector2d(uv[0], 1.0 - uv[1]);
+  }
+  return out;
+}
+
 std::vector<std::uint32_t> read_indices(const tinygltf::Model& model, int index, const std::filesystem::path& path) {
   const AccessorView v = accessor_view(model, index, TINYGLTF_TYPE_SCALAR,
                                        {TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT,
@@ -136,6 +167,7 @@ struct Builder {
   const tinygltf::Model& model;
   const std::filesystem::path& path;
   std::vector<Eigen::Vector3d> positions, normals;
+  std::vector<Eigen::Vector2d> texcoords;  // one per position (zero where a primitive has none)
   std::vector<std::array<Corner, 3>> triangles;
   std::size_t primitives = 0, skipped_primitives = 0;
   bool every_vertex_has_normal = true;
@@ -157,6 +189,12 @@ struct Builder {
       if (local_normals.size() != local.size()) fail(path, "NORMAL and POSITION counts differ in a primitive");
     } else {
       every_vertex_has_normal = false;
+    }
+    std::vector<Eigen::Vector2d> local_uvs;
+    const auto tex = p.attributes.find("TEXCOORD_0");
+    if (tex != p.attributes.end()) {
+      local_uvs = read_texcoords(model, tex->second, path);
+      if (local_uvs.size() != local.size()) fail(path, "TEXCOORD_0 and POSITION counts differ in a primitive");
     }
     std::vector<std::uint32_t> index;
     if (p.indices >= 0) {
@@ -182,11 +220,12 @@ struct Builder {
       positions.push_back(w);
       normals.push_back(local_normals.empty() ? Eigen::Vector3d::Zero() : (normal_matrix * local_normals[v]).eval());
       if (!normals.back().allFinite()) fail(path, "normal of vertex " + std::to_string(base + v) + " is not finite");
+      texcoords.push_back(local_uvs.empty() ? Eigen::Vector2d::Zero() : local_uvs[v]);
     }
-    const bool has_normals = !local_normals.empty();
+    const bool has_normals = !local_normals.empty(), has_uvs = !local_uvs.empty();
     auto corner = [&](std::uint32_t i) {
       const int v = base + static_cast<int>(i);
-      return Corner{v, has_normals ? v : -1};
+      return Corner{v, has_normals ? v : -1, has_uvs ? v : -1};
     };
     auto add = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c) {
       // A mirroring transform turns the winding around; swap to keep the front side.
@@ -258,7 +297,7 @@ Mesh load_gltf_bytes(const std::string& bytes, const std::filesystem::path& path
   Mesh mesh;
   mesh.input_crc32 = input_crc32(bytes);
   mesh.obj_vertices = b.positions.size();
-  return finish_mesh(std::move(mesh), b.positions, b.normals, b.triangles, path, normal_source);
+  return finish_mesh(std::move(mesh), b.positions, b.normals, b.triangles, path, normal_source, b.texcoords);
 }
 
 }  // namespace shtool::fit

@@ -135,7 +135,7 @@ std::size_t compute_angle_weighted_normals(Mesh& mesh) {
 
 Mesh finish_mesh(Mesh mesh, const std::vector<Eigen::Vector3d>& positions, const std::vector<Eigen::Vector3d>& normals,
                  const std::vector<std::array<Corner, 3>>& tris, const std::filesystem::path& path,
-                 NormalSource normal_source) {
+                 NormalSource normal_source, const std::vector<Eigen::Vector2d>& texcoords) {
   const std::size_t nv = positions.size(), nn = normals.size();
   auto position = [&](int v) { return positions[v]; };
   // Degenerate: repeated index or zero area. Zero area is tested exactly (cross product
@@ -170,6 +170,13 @@ Mesh finish_mesh(Mesh mesh, const std::vector<Eigen::Vector3d>& positions, const
     mesh.source_index.push_back(static_cast<std::uint32_t>(v));
   }
   for (const auto& t : kept) mesh.triangles.emplace_back(remap[t[0].v], remap[t[1].v], remap[t[2].v]);
+  bool all_have_uvs = !texcoords.empty();
+  for (const auto& t : kept)
+    for (const Corner& c : t) all_have_uvs = all_have_uvs && c.t >= 0;
+  if (all_have_uvs) {
+    mesh.uvs.reserve(kept.size());
+    for (const auto& t : kept) mesh.uvs.push_back({texcoords[t[0].t], texcoords[t[1].t], texcoords[t[2].t]});
+  }
 
   bool all_have_normals = nn > 0;
   for (const auto& t : kept)
@@ -239,12 +246,16 @@ Mesh load_obj_text(const std::string& text, const std::filesystem::path& path, N
   const tinyobj::attrib_t& attrib = reader.GetAttrib();
   const std::size_t nv = attrib.vertices.size() / 3;
   const std::size_t nn = attrib.normals.size() / 3;
+  const std::size_t nt = attrib.texcoords.size() / 2;
 
   // What tinyobjloader stored, whatever the text said.
   for (std::size_t i = 0; i < attrib.vertices.size(); ++i)
     if (!std::isfinite(attrib.vertices[i])) fail(path, "vertex " + std::to_string(i / 3 + 1) + " is not finite");
   for (std::size_t i = 0; i < attrib.normals.size(); ++i)
     if (!std::isfinite(attrib.normals[i])) fail(path, "normal " + std::to_string(i / 3 + 1) + " is not finite");
+  for (std::size_t i = 0; i < attrib.texcoords.size(); ++i)
+    if (!std::isfinite(attrib.texcoords[i]))
+      fail(path, "texture coordinate " + std::to_string(i / 2 + 1) + " is not finite");
 
   Mesh mesh;
   mesh.input_crc32 = input_crc32(text);
@@ -270,7 +281,11 @@ Mesh load_obj_text(const std::string& text, const std::filesystem::path& path, N
           fail(path, "face " + std::to_string(face_number + 1) + " refers to normal " +
                          std::to_string(static_cast<long long>(idx.normal_index) + 1) +
                          ", but the file has " + std::to_string(nn) + " normals");
-        corners.push_back({idx.vertex_index, idx.normal_index});
+        if (idx.texcoord_index >= 0 && static_cast<std::size_t>(idx.texcoord_index) >= nt)
+          fail(path, "face " + std::to_string(face_number + 1) + " refers to texture coordinate " +
+                         std::to_string(static_cast<long long>(idx.texcoord_index) + 1) +
+                         ", but the file has " + std::to_string(nt) + " of them");
+        corners.push_back({idx.vertex_index, idx.normal_index, idx.texcoord_index});
       }
       offset += count;
       if (count < 3) {
@@ -287,7 +302,9 @@ Mesh load_obj_text(const std::string& text, const std::filesystem::path& path, N
     positions[v] = Eigen::Vector3d(attrib.vertices[3 * v], attrib.vertices[3 * v + 1], attrib.vertices[3 * v + 2]);
   for (std::size_t k = 0; k < nn; ++k)
     normals[k] = Eigen::Vector3d(attrib.normals[3 * k], attrib.normals[3 * k + 1], attrib.normals[3 * k + 2]);
-  return finish_mesh(std::move(mesh), positions, normals, tris, path, normal_source);
+  std::vector<Eigen::Vector2d> texcoords(nt);
+  for (std::size_t k = 0; k < nt; ++k) texcoords[k] = Eigen::Vector2d(attrib.texcoords[2 * k], attrib.texcoords[2 * k + 1]);
+  return finish_mesh(std::move(mesh), positions, normals, tris, path, normal_source, texcoords);
 }
 
 }  // namespace shtool::fit

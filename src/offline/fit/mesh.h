@@ -27,6 +27,11 @@ struct Mesh {
   std::vector<Eigen::Vector3d> normals;    // unit vertex normals, one per position
   std::vector<std::uint32_t> source_index; // OBJ vertex index of each kept vertex
   std::vector<Eigen::Vector3i> triangles;  // indices into positions
+  // Texture coordinates per triangle corner, parallel to `triangles` (a UV seam gives a
+  // vertex several), v up with (0, 0) the bottom-left of the image (OBJ's convention;
+  // glTF's top-left TEXCOORD_0 is flipped on load). Empty unless every corner of every
+  // kept triangle has one.
+  std::vector<std::array<Eigen::Vector2d, 3>> uvs;
 
   std::uint32_t input_crc32 = 0;           // CRC-32 of the file's bytes (provenance)
 
@@ -75,19 +80,23 @@ Mesh load_mesh(const std::filesystem::path& path, NormalSource normals = NormalS
 Mesh load_obj_text(const std::string& text, const std::filesystem::path& path,
                    NormalSource normals = NormalSource::automatic);
 
-// One corner of a triangle: a vertex and the normal it has there (-1: none).
+// One corner of a triangle: a vertex, the normal and the texture coordinate it has
+// there (-1: none).
 struct Corner {
   int v, n;
+  int t = -1;
 };
 
 // The common end of every loader: triangles with a repeated vertex or zero area dropped
 // (counted), unreferenced vertices dropped (counted) with the rest kept in file order
 // (source_index), normals from the file when every corner has one (averaged per vertex)
 // and the source allows, computed angle-weighted otherwise. Throws MeshError when no
-// usable triangle is left. `mesh` brings the counters the loader set.
+// usable triangle is left. `mesh` brings the counters the loader set. Texture
+// coordinates (Corner::t indexes `texcoords`, already in Mesh::uvs' convention) are kept
+// per corner when every kept corner has one.
 Mesh finish_mesh(Mesh mesh, const std::vector<Eigen::Vector3d>& positions, const std::vector<Eigen::Vector3d>& normals,
                  const std::vector<std::array<Corner, 3>>& tris, const std::filesystem::path& path,
-                 NormalSource normal_source);
+                 NormalSource normal_source, const std::vector<Eigen::Vector2d>& texcoords = {});
 
 // Angle-weighted vertex normals (Thürmer and Wüthrich 1998): each incident triangle
 // contributes its unit normal times the corner angle, which makes the result independent

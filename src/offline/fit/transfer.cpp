@@ -6,6 +6,7 @@
 #include <limits>
 #include <memory>
 #include <numbers>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -57,9 +58,13 @@ Eigen::Vector3d cosine_fibonacci_direction(int k, int count, double a, double b)
 }
 
 VertexRays::VertexRays(const Mesh& mesh, std::size_t v, std::uint64_t seed, int count, double offset)
-    : normal_(mesh.normals[v]), origin_(mesh.positions[v] + offset * mesh.normals[v]), count_(count) {
+    : VertexRays(mesh.positions[v], mesh.normals[v], v, seed, count, offset) {}
+
+VertexRays::VertexRays(const Eigen::Vector3d& position, const Eigen::Vector3d& normal, std::uint64_t id,
+                       std::uint64_t seed, int count, double offset)
+    : normal_(normal), origin_(position + offset * normal), count_(count) {
   orthonormal_basis(normal_, tangent_, bitangent_);
-  const std::uint64_t h = splitmix64(seed ^ splitmix64(static_cast<std::uint64_t>(v)));
+  const std::uint64_t h = splitmix64(seed ^ splitmix64(id));
   rotation_ = unit_double(h);
   shift_ = unit_double(splitmix64(h));
 }
@@ -69,7 +74,9 @@ Eigen::Vector3d VertexRays::direction(int k) const {
   return Eigen::Vector3d(local.x() * tangent_ + local.y() * bitangent_ + local.z() * normal_).normalized();
 }
 
-std::vector<double> compute_transfer(const Mesh& mesh, const TransferOptions& options) {
+namespace {
+
+void check_transfer_options(const TransferOptions& options) {
   if (!is_supported_order(options.order))
     throw InputError("order " + std::to_string(options.order) + " is not supported");
   if (options.rays < 1) throw InputError("rays must be at least 1, got " + std::to_string(options.rays));
@@ -82,34 +89,29 @@ std::vector<double> compute_transfer(const Mesh& mesh, const TransferOptions& op
     if (!(options.albedo >= 0.0 && options.albedo < 1.0))
       throw InputError("albedo must be in [0, 1), got " + std::to_string(options.albedo));
   }
-  if (mesh.positions.size() != mesh.normals.size())
-    throw InputError("mesh has " + std::to_string(mesh.positions.size()) + " positions but " +
-                                std::to_string(mesh.normals.size()) + " normals");
-  const int threads = resolve_threads(options.threads);
+}
 
-  const std::size_t first = options.first_vertex;
-  const std::size_t end = std::min(options.end_vertex, mesh.positions.size());
-  if (first >= end)
-    throw InputError("vertex range [" + std::to_string(first) + ", " + std::to_string(end) + ") of a mesh of " +
-                     std::to_string(mesh.positions.size()) + " vertices is empty");
-  const bool whole_mesh = first == 0 && end == mesh.positions.size();
-  if (options.mode == TransferMode::interreflected && !whole_mesh && !options.gather_bounce)
-    throw InputError("interreflected transfer needs every vertex's previous bounce: it cannot simulate a range "
-                     "without a gather step");
-  const std::size_t nv = end - first;
+// Rows [first, first + count) of a set of surface points; row r casts the rays of point
+// first + r, drawn from (seed, id), id the point's index or ids[index].
+struct Points {
+  std::span<const Eigen::Vector3d> positions, normals;
+  std::span<const std::uint64_t> ids;  // empty: the index
+  std::size_t first = 0, count = 0;
+
+  VertexRays rays(std::size_t row, const TransferOptions& options, double offset) const {
+    const std::size_t p = first + row;
+    return VertexRays(positions[p], normals[p], ids.empty() ? p : ids[p], options.seed, options.rays, offset);
+  }
+};
+
+// Pass 0: direct transfer of every row.
+std::vector<double> direct_pass(const EmbreeScene* scene, const Points& points, const TransferOptions& options,
+                                int threads, double offset, std::size_t progress_base, std::size_t progress_total) {
   const int n2 = sh_count(options.order);
   const int rays = options.rays;
-  const double offset = options.offset_scale * mesh.bbox_diagonal();
-  std::unique_ptr<EmbreeScene> scene;
-  if (options.mode != TransferMode::unshadowed) scene = build_scene(mesh);
-
-  const int passes = options.mode == TransferMode::interreflected ? 1 + options.bounces : 1;
-  const std::size_t progress_total = nv * passes;
-
-  std::vector<double> result(nv * n2, 0.0);
-  // Pass 0: direct transfer.
-  parallel_vertices(nv, threads, 0, progress_total, options, [&](std::size_t row) {
-    const VertexRays cast(mesh, first + row, options.seed, rays, offset);
+  std::vector<double> result(points.count * n2, 0.0);
+  parallel_vertices(points.count, threads, progress_base, progress_total, options, [&](std::size_t row) {
+    const VertexRays cast = points.rays(row, options, offset);
     // Each worker's scratch lives as long as its thread: nothing is allocated per vertex.
     thread_local std::vector<double> y, sum;
     thread_local std::vector<Eigen::Vector3d> dirs;
@@ -135,14 +137,89 @@ std::vector<double> compute_transfer(const Mesh& mesh, const TransferOptions& op
     }
     for (int i = 0; i < n2; ++i) result[row * n2 + i] = sum[i] / rays;
   });
+  return result;
+}
+
+// One bounce (Sloan et al. 2002, interreflected transfer): light leaving a hit point q
+// after b-1 bounces is albedo * T_{b-1}(q) . L, so with cosine-weighted rays
+// T_b(p) = albedo * mean over rays of [hit front face] T_{b-1}(q), with T_{b-1}(q)
+// interpolated from the hit triangle's vertices (`previous`, every mesh vertex).
+// Back-face hits (inside of the surface) contribute nothing.
+std::vector<double> bounce_pass(const Mesh& mesh, const EmbreeScene& scene, const Points& points,
+                                const std::vector<double>& previous, const TransferOptions& options, int threads,
+                                double offset, std::size_t progress_base, std::size_t progress_total) {
+  const int n2 = sh_count(options.order);
+  const int rays = options.rays;
+  std::vector<double> current(points.count * n2);
+  parallel_vertices(points.count, threads, progress_base, progress_total, options, [&](std::size_t row) {
+    const VertexRays cast = points.rays(row, options, offset);
+    thread_local std::vector<double> sum;
+    thread_local std::vector<Eigen::Vector3d> dirs;
+    thread_local std::vector<RTCRayHit> hits;
+    sum.assign(n2, 0.0);
+    dirs.resize(rays);
+    hits.resize(rays);
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    for (int k = 0; k < rays; ++k) {
+      dirs[k] = cast.direction(k);
+      hits[k] = RTCRayHit{};
+      hits[k].ray = embree_ray(cast.origin(), dirs[k]);
+      hits[k].hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    }
+    if (options.ray_streams)
+      rtcIntersect1M(scene.scene, &context, hits.data(), static_cast<unsigned>(rays), sizeof(RTCRayHit));
+    else
+      for (RTCRayHit& hit : hits) rtcIntersect1(scene.scene, &context, &hit);
+    for (int k = 0; k < rays; ++k) {
+      const RTCRayHit& hit = hits[k];
+      if (hit.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
+      const Eigen::Vector3i& tri = mesh.triangles[hit.hit.primID];
+      const Eigen::Vector3d ng = (mesh.positions[tri[1]] - mesh.positions[tri[0]])
+                                     .cross(mesh.positions[tri[2]] - mesh.positions[tri[0]]);
+      if (ng.dot(dirs[k]) >= 0.0) continue;
+      const double w1 = hit.hit.u, w2 = hit.hit.v, w0 = 1.0 - w1 - w2;
+      for (int i = 0; i < n2; ++i)
+        sum[i] += w0 * previous[tri[0] * n2 + i] + w1 * previous[tri[1] * n2 + i] + w2 * previous[tri[2] * n2 + i];
+    }
+    for (int i = 0; i < n2; ++i) current[row * n2 + i] = options.albedo * sum[i] / rays;
+  });
+  return current;
+}
+
+}  // namespace
+
+std::vector<double> compute_transfer(const Mesh& mesh, const TransferOptions& options) {
+  check_transfer_options(options);
+  if (mesh.positions.size() != mesh.normals.size())
+    throw InputError("mesh has " + std::to_string(mesh.positions.size()) + " positions but " +
+                                std::to_string(mesh.normals.size()) + " normals");
+  const int threads = resolve_threads(options.threads);
+
+  const std::size_t first = options.first_vertex;
+  const std::size_t end = std::min(options.end_vertex, mesh.positions.size());
+  if (first >= end)
+    throw InputError("vertex range [" + std::to_string(first) + ", " + std::to_string(end) + ") of a mesh of " +
+                     std::to_string(mesh.positions.size()) + " vertices is empty");
+  const bool whole_mesh = first == 0 && end == mesh.positions.size();
+  if (options.mode == TransferMode::interreflected && !whole_mesh && !options.gather_bounce)
+    throw InputError("interreflected transfer needs every vertex's previous bounce: it cannot simulate a range "
+                     "without a gather step");
+  const std::size_t nv = end - first;
+  const int n2 = sh_count(options.order);
+  const double offset = options.offset_scale * mesh.bbox_diagonal();
+  std::unique_ptr<EmbreeScene> scene;
+  if (options.mode != TransferMode::unshadowed) scene = build_scene(mesh);
+  const Points points{mesh.positions, mesh.normals, {}, first, nv};
+
+  const int passes = options.mode == TransferMode::interreflected ? 1 + options.bounces : 1;
+  const std::size_t progress_total = nv * passes;
+
+  std::vector<double> result = direct_pass(scene.get(), points, options, threads, offset, 0, progress_total);
   if (passes == 1) return result;
 
-  // Bounces (Sloan et al. 2002, interreflected transfer): light leaving a hit point q
-  // after b-1 bounces is albedo * T_{b-1}(q) . L, so with cosine-weighted rays
-  // T_b(p) = albedo * mean over rays of [hit front face] T_{b-1}(q), with T_{b-1}(q)
-  // interpolated from the hit triangle's vertices. Back-face hits (inside of the
-  // surface) contribute nothing. A range reads the whole mesh's previous bounce from
-  // the gather step; its rows are the ones one process computes, so the sums are too.
+  // A range reads the whole mesh's previous bounce from the gather step; its rows are the
+  // ones one process computes, so the sums are too.
   auto whole = [&](std::vector<double> rows) {
     if (whole_mesh) return rows;
     std::vector<double> all = options.gather_bounce(std::move(rows));
@@ -151,43 +228,44 @@ std::vector<double> compute_transfer(const Mesh& mesh, const TransferOptions& op
                                std::to_string(mesh.positions.size() * n2));
     return all;
   };
-  std::vector<double> previous = whole(result), current(nv * n2);
+  std::vector<double> previous = whole(result);
   for (int bounce = 1; bounce < passes; ++bounce) {
-    parallel_vertices(nv, threads, nv * bounce, progress_total, options, [&](std::size_t row) {
-      const VertexRays cast(mesh, first + row, options.seed, rays, offset);
-      thread_local std::vector<double> sum;
-      thread_local std::vector<Eigen::Vector3d> dirs;
-      thread_local std::vector<RTCRayHit> hits;
-      sum.assign(n2, 0.0);
-      dirs.resize(rays);
-      hits.resize(rays);
-      RTCIntersectContext context;
-      rtcInitIntersectContext(&context);
-      for (int k = 0; k < rays; ++k) {
-        dirs[k] = cast.direction(k);
-        hits[k] = RTCRayHit{};
-        hits[k].ray = embree_ray(cast.origin(), dirs[k]);
-        hits[k].hit.geomID = RTC_INVALID_GEOMETRY_ID;
-      }
-      if (options.ray_streams)
-        rtcIntersect1M(scene->scene, &context, hits.data(), static_cast<unsigned>(rays), sizeof(RTCRayHit));
-      else
-        for (RTCRayHit& hit : hits) rtcIntersect1(scene->scene, &context, &hit);
-      for (int k = 0; k < rays; ++k) {
-        const RTCRayHit& hit = hits[k];
-        if (hit.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
-        const Eigen::Vector3i& tri = mesh.triangles[hit.hit.primID];
-        const Eigen::Vector3d ng = (mesh.positions[tri[1]] - mesh.positions[tri[0]])
-                                       .cross(mesh.positions[tri[2]] - mesh.positions[tri[0]]);
-        if (ng.dot(dirs[k]) >= 0.0) continue;
-        const double w1 = hit.hit.u, w2 = hit.hit.v, w0 = 1.0 - w1 - w2;
-        for (int i = 0; i < n2; ++i)
-          sum[i] += w0 * previous[tri[0] * n2 + i] + w1 * previous[tri[1] * n2 + i] + w2 * previous[tri[2] * n2 + i];
-      }
-      for (int i = 0; i < n2; ++i) current[row * n2 + i] = options.albedo * sum[i] / rays;
-    });
+    const std::vector<double> current =
+        bounce_pass(mesh, *scene, points, previous, options, threads, offset, nv * bounce, progress_total);
     for (std::size_t i = 0; i < result.size(); ++i) result[i] += current[i];
     if (bounce + 1 < passes) previous = whole(current);
+  }
+  return result;
+}
+
+std::vector<double> compute_transfer_at(const Mesh& mesh, std::span<const Eigen::Vector3d> positions,
+                                        std::span<const Eigen::Vector3d> normals, std::span<const std::uint64_t> ids,
+                                        const TransferOptions& options) {
+  check_transfer_options(options);
+  if (positions.size() != normals.size() || (!ids.empty() && ids.size() != positions.size()))
+    throw InputError("sample points: " + std::to_string(positions.size()) + " positions, " +
+                     std::to_string(normals.size()) + " normals and " + std::to_string(ids.size()) + " ids");
+  if (positions.empty()) throw InputError("no sample points to simulate");
+  const int threads = resolve_threads(options.threads);
+  const double offset = options.offset_scale * mesh.bbox_diagonal();
+  std::unique_ptr<EmbreeScene> scene;
+  if (options.mode != TransferMode::unshadowed) scene = build_scene(mesh);
+  const Points points{positions, normals, ids, 0, positions.size()};
+  const int passes = options.mode == TransferMode::interreflected ? 1 + options.bounces : 1;
+  const std::size_t progress_total = points.count * passes;
+  std::vector<double> result = direct_pass(scene.get(), points, options, threads, offset, 0, progress_total);
+  if (passes == 1) return result;
+  // Bounce b at the points gathers bounce b-1 of the mesh's vertices, which the vertex
+  // passes compute alongside: the same light a vertex bake interpolates at its hits.
+  const Points vertices{mesh.positions, mesh.normals, {}, 0, mesh.positions.size()};
+  TransferOptions quiet = options;
+  quiet.progress = nullptr;
+  std::vector<double> previous = direct_pass(scene.get(), vertices, quiet, threads, offset, 0, 0);
+  for (int bounce = 1; bounce < passes; ++bounce) {
+    const std::vector<double> current = bounce_pass(mesh, *scene, points, previous, options, threads, offset,
+                                                    points.count * bounce, progress_total);
+    for (std::size_t i = 0; i < result.size(); ++i) result[i] += current[i];
+    if (bounce + 1 < passes) previous = bounce_pass(mesh, *scene, vertices, previous, quiet, threads, offset, 0, 0);
   }
   return result;
 }

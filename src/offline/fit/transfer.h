@@ -14,6 +14,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <span>
 #include <vector>
 
 #include "common/input_error.h"
@@ -64,12 +65,25 @@ struct TransferOptions {
 // Embree fails.
 std::vector<double> compute_transfer(const Mesh& mesh, const TransferOptions& options);
 
+// The same at arbitrary surface points of the mesh (e.g. texel centres of its UV atlas):
+// point p casts the rays a vertex would from (positions[p], unit normals[p]), rotated by
+// a hash of (seed, ids[p]) (ids empty: p). The mesh is the scene; interreflected
+// bounces gather the mesh's vertex bounces at their hits, as a vertex bake does. The
+// vertex range options are ignored. compute_transfer is this with the mesh's vertices.
+std::vector<double> compute_transfer_at(const Mesh& mesh, std::span<const Eigen::Vector3d> positions,
+                                        std::span<const Eigen::Vector3d> normals, std::span<const std::uint64_t> ids,
+                                        const TransferOptions& options);
+
 // The rays vertex v casts in every pass: from just off the surface along the normal, in
 // `count` cosine-weighted directions rotated by a hash of (seed, v).
 class VertexRays {
  public:
   // offset: how far the origin moves along the normal.
   VertexRays(const Mesh& mesh, std::size_t v, std::uint64_t seed, int count, double offset);
+  // Any surface point; `id` takes the vertex index's place in the hash. `normal` must
+  // outlive the object.
+  VertexRays(const Eigen::Vector3d& position, const Eigen::Vector3d& normal, std::uint64_t id, std::uint64_t seed,
+             int count, double offset);
   const Eigen::Vector3d& origin() const { return origin_; }
   // Unit direction of ray k in [0, count).
   Eigen::Vector3d direction(int k) const;

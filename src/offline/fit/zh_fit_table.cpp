@@ -28,8 +28,9 @@ Table zh_fit_table(const ZhFitTable<double>& fits, nlohmann::json meta, const nl
   meta["layout"] = "axes[v][k] unit axis, coeffs[v][k][l] = g*_l (lobe k adds g*_l y_l^m(axis) to SH (l,m)); "
                    "residual[v] = ||fit - t||, norm[v] = ||t||";
   Table table = new_table("zh-fit", order, generator, meta);
-  // 1.1 added meta "shard" (partial tables of a sharded bake, docs/fit-zh.md).
-  table.kind_version = "1.1";
+  // 1.1 added meta "shard" (partial tables of a sharded bake, docs/fit-zh.md), 1.2 meta
+  // "texture" (texture-space bakes); other tables keep 1.1 and their bytes.
+  table.kind_version = meta.contains("texture") ? "1.2" : "1.1";
   const auto V = static_cast<std::int64_t>(count), N = static_cast<std::int64_t>(lobes);
   table.arrays.push_back(TableArray::from<double>("axes", {V, N, 3}, axes));
   table.arrays.push_back(TableArray::from<double>("coeffs", {V, N, order}, fits.coeffs));

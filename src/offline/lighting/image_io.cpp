@@ -161,6 +161,44 @@ Image decode_exr(std::string_view bytes, const std::filesystem::path& name, std:
   }
 }
 
+}  // namespace
+
+ChannelImage decode_exr_channels(std::string_view bytes, const std::filesystem::path& name, std::int64_t max_texels) {
+  if (sniff(bytes) != Format::exr) fail(name, "not an OpenEXR file");
+  try {
+    MemoryIStream stream(bytes, name.string());
+    Imf::InputFile file(stream);
+    const Imf::Header& header = file.header();
+    const Imath::Box2i data = header.dataWindow();
+    if (data != header.displayWindow()) fail(name, "the data window differs from the display window");
+    const std::int64_t w = std::int64_t(data.max.x) - data.min.x + 1, h = std::int64_t(data.max.y) - data.min.y + 1;
+    check_size(name, w, h, max_texels);
+    ChannelImage img;
+    img.width = static_cast<int>(w);
+    img.height = static_cast<int>(h);
+    for (auto c = header.channels().begin(); c != header.channels().end(); ++c) {
+      if (c.channel().xSampling != 1 || c.channel().ySampling != 1)
+        fail(name, std::string("channel ") + c.name() + " is subsampled");
+      img.names.push_back(c.name());
+    }
+    const std::size_t k = img.names.size();
+    img.texels.assign(static_cast<std::size_t>(w * h) * k, 0.0f);
+    Imf::FrameBuffer fb;
+    for (std::size_t c = 0; c < k; ++c)
+      fb.insert(img.names[c], Imf::Slice::Make(Imf::FLOAT, img.texels.data() + c, data, k * sizeof(float),
+                                               static_cast<std::size_t>(w) * k * sizeof(float)));
+    file.setFrameBuffer(fb);
+    file.readPixels(data.min.y, data.max.y);
+    return img;
+  } catch (const InputError&) {
+    throw;
+  } catch (const std::exception& e) {
+    fail(name, std::string("OpenEXR: ") + e.what());
+  }
+}
+
+namespace {
+
 // stb_image reads zeros past the end of a Radiance file instead of failing, so a
 // truncated file (or a header that claims more rows than the data holds) would decode as
 // black rows. This walks the scanlines as stb's reader does (new-style run-length
@@ -275,22 +313,28 @@ ImageFile read_image(const std::filesystem::path& path, std::string_view what) {
   return f;
 }
 
-std::string encode_exr(const Image& image) {
+std::string encode_exr_channels(const ChannelImage& image) {
   Imf::Header header(image.width, image.height);
   header.compression() = Imf::ZIP_COMPRESSION;
-  static constexpr const char* kNames[4] = {"R", "G", "B", "A"};
-  for (int c = 0; c < image.channels; ++c) header.channels().insert(kNames[c], Imf::Channel(Imf::FLOAT));
+  for (const std::string& n : image.names) header.channels().insert(n, Imf::Channel(Imf::FLOAT));
   MemoryOStream stream;
   {
     Imf::OutputFile file(stream, header);
     Imf::FrameBuffer fb;
-    const std::size_t xs = image.channels * sizeof(float), ys = xs * image.width;
-    for (int c = 0; c < image.channels; ++c)
-      fb.insert(kNames[c], Imf::Slice(Imf::FLOAT, (char*)(image.texels.data() + c), xs, ys));
+    const std::size_t xs = image.names.size() * sizeof(float), ys = xs * image.width;
+    for (std::size_t c = 0; c < image.names.size(); ++c)
+      fb.insert(image.names[c], Imf::Slice(Imf::FLOAT, (char*)(image.texels.data() + c), xs, ys));
     file.setFrameBuffer(fb);
     file.writePixels(image.height);
   }
   return std::move(stream.data());
+}
+
+std::string encode_exr(const Image& image) {
+  static constexpr const char* kNames[4] = {"R", "G", "B", "A"};
+  ChannelImage named{image.width, image.height, {}, image.texels};
+  for (int c = 0; c < image.channels; ++c) named.names.push_back(kNames[c]);
+  return encode_exr_channels(named);
 }
 
 std::string encode_png(const Image& image, double exposure) {

@@ -43,6 +43,22 @@ ImageFile read_image(const std::filesystem::path& path, std::string_view what);
 
 // Float RGB OpenEXR (ZIP compression); alpha written when the image has 4 channels.
 std::string encode_exr(const Image& image);
+
+// An image of named float channels (OpenEXR allows any names), interleaved per texel in
+// the order of `names`, rows top first.
+struct ChannelImage {
+  int width = 0;
+  int height = 0;
+  std::vector<std::string> names;
+  std::vector<float> texels;  // width * height * names.size()
+};
+// Float OpenEXR, ZIP compression, one channel per name (the file lists them sorted).
+std::string encode_exr_channels(const ChannelImage& image);
+// Every channel of an OpenEXR file as float, in the file's (sorted) order. Throws
+// InputError naming `name`: not OpenEXR, subsampled channels, a data window other than
+// the display window, more than max_texels.
+ChannelImage decode_exr_channels(std::string_view bytes, const std::filesystem::path& name,
+                                 std::int64_t max_texels = kMaxImageTexels);
 // 8-bit PNG of the tone-mapped image: x -> x / (1 + x) per channel (Reinhard) after
 // scaling by 2^exposure, then the sRGB transfer curve; alpha (4 channels) kept linear.
 std::string encode_png(const Image& image, double exposure = 0);

@@ -28,6 +28,7 @@
 #include "lighting/image_io.h"
 #include "lighting/lighting_output.h"
 #include "render/glossy_shading.h"
+#include "render/texture_render.h"
 #include "render/wrinkle_shading.h"
 #include "shtool/glossy.h"
 #include "shtool/membrane.h"
@@ -370,20 +371,27 @@ RenderResult run_render(const RenderRequest& r) {
   VertexData data;
   std::optional<GlossyFit<double>> glossy;
   std::vector<Eigen::Matrix3d> frames;  // glossy: the vertex frames of the mesh rendered
-  std::optional<ZhFitTable<double>> zh_fit;
+  std::optional<ZhFitTable<double>> zh_fit;  // a per-vertex fit-zh bake
+  std::optional<TextureBake> texture;        // a fit-zh --texture bake: its maps are sampled per pixel
   if (needs_fit) {
-    Result<ZhFitTable<double>> loaded = load_zh_fit<double>(r.fit);
-    if (loaded) {
-      zh_fit.emplace(std::move(loaded).value());
-    } else if (r.shading == Shading::automatic) {
+    // Read once; its kind and meta say how it is shaded.
+    Result<Table> read = read_table(r.fit);
+    if (!read) throw InputError("--fit: " + read.error().message);
+    const Table& table = read.value();
+    if (table.kind_version.rfind("1.", 0) != 0)
+      throw InputError("--fit " + r.fit.string() + ": kind_version " + table.kind_version + " is not supported");
+    if (table.kind == kGlossyZhKind && r.shading == Shading::automatic) {
       // A fit-glossy table given without --shading is shaded as what it is.
-      Result<GlossyFit<double>> g = load_glossy_fit<double>(r.fit);
-      if (!g) throw InputError("--fit: " + loaded.error().message);
+      Result<GlossyFit<double>> g = GlossyFit<double>::from_table(table);
+      if (!g) throw InputError("--fit " + r.fit.string() + ": " + g.error().message);
       glossy.emplace(std::move(g).value());
       shading = Shading::glossy;
       needs_fit = false;
     } else {
-      throw InputError("--fit: " + loaded.error().message);
+      Result<ZhFitTable<double>> z = ZhFitTable<double>::from_table(table);
+      if (!z) throw InputError("--fit " + r.fit.string() + ": " + z.error().message);
+      texture = texture_bake_of(r.fit, table);
+      if (!texture) zh_fit.emplace(std::move(z).value());
     }
   }
   if (shading == Shading::glossy) {
@@ -417,7 +425,13 @@ RenderResult run_render(const RenderRequest& r) {
       }
     }
   }
-  if (needs_fit) {
+  if (texture && (shading == Shading::error || posed))
+    throw InputError("--fit " + r.fit.string() + " is a texture-space bake: it renders with --shading zh or "
+                     "zh-table, without --pose");
+  if (texture && mesh.uvs.empty())
+    throw InputError(r.mesh.string() + ": no texture coordinates, and --fit " + r.fit.string() +
+                     " is a texture-space bake (sampled at the UV of each hit)");
+  if (zh_fit) {
     data.fit = deform::fit_for_mesh(std::move(*zh_fit), rest, "--fit " + r.fit.string());
     if (posed) data.fit = deform::deform_fit(*data.fit, rotations);
   }
@@ -467,8 +481,11 @@ RenderResult run_render(const RenderRequest& r) {
                          vec(camera.eye), threads);
   } else if (!r.compare) {
     result.shading = shading;
-    image = shade_panel(hits, mesh, vertex_radiance(shading, data, light, mesh, r.zh_table_resolution, threads),
-                        shading == Shading::error);
+    image = texture ? shade_texture_bake(*texture, mesh, light, hits.width, hits.height, hits.triangle, hits.w1,
+                                         hits.w2, shading == Shading::zh_table ? r.zh_table_resolution : 0, threads)
+                    : shade_panel(hits, mesh,
+                                  vertex_radiance(shading, data, light, mesh, r.zh_table_resolution, threads),
+                                  shading == Shading::error);
   } else {
     result.shading = Shading::transfer;
     image = compare_strip(hits, mesh, data, light, threads, result.compare_nrms);
