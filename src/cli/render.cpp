@@ -18,7 +18,8 @@ void setup_render(CLI::App& app) {
   sub->add_option("--pose", req->pose, "posed mesh (OBJ or glTF, the rest mesh's topology): render it with the fit or "
                                        "transfer rotated into its frames, without re-simulation");
   sub->add_option("--fit", req->fit,
-                  "zh-fit table (fit-zh --out; a --texture bake: its maps beside it are sampled per pixel)");
+                  "zh-fit table (fit-zh --out; a --texture bake: its maps beside it are sampled per pixel), or "
+                  "glossy-zh table (fit-glossy --out)");
   sub->add_option("--transfer", req->transfer, "transfer vectors JSON (fit-zh --save-transfer)");
   sub->add_option("--light", req->light, "lighting JSON (project-env --json, light --json), radiance, RGB");
   sub->add_option("--camera", *camera, "eye,target,up: nine numbers (default: framed on the mesh)");
@@ -28,8 +29,8 @@ void setup_render(CLI::App& app) {
   std::vector<std::pair<std::string, render::Shading>> names = render::shading_names();
   add_enum_option(sub, "--shading", req->shading, names,
                   "transfer (t . e), zh (Eq. 13), zh-table (Eq. 24-25), error (|zh - transfer|), normals, "
-                  "membrane (thin-membrane model, Eq. 22-23), wrinkle (wrinkle map, Sec. 4.2)",
-                  "transfer with --transfer, else zh");
+                  "membrane (thin-membrane model, Eq. 22-23), wrinkle (wrinkle map, Sec. 4.2), glossy (Eq. 16)",
+                  "transfer with --transfer, else glossy for a glossy-zh --fit, else zh");
   sub->add_option("--alpha", req->alpha, "membrane: transparency in [0, 1]")->capture_default_str();
   sub->add_option("--alpha-map", req->alpha_map, "membrane: JSON {\"alpha\": [one per vertex]}");
   sub->add_option("--wrinkle", req->wrinkle, "wrinkle: the map, a wrinkle-zh table (fit-wrinkles --out)");
@@ -38,6 +39,8 @@ void setup_render(CLI::App& app) {
   sub->add_option("--exposure", req->exposure, "PNG: scale by 2^E before tone mapping")->capture_default_str();
   sub->add_flag("--compare", req->compare,
                 "one strip: transfer, ZH fits with 1..4 lobes (fitted here), the N = 4 error; normalized RMS under each");
+  sub->add_option("--reference", req->reference,
+                  "EXR of the same size: print the image's normalized RMS difference from it");
   sub->add_option("--threads", req->threads, "worker threads (0: all cores)")->capture_default_str();
   sub->add_option("--out", req->out, "image: .exr (linear RGB, coverage alpha) or .png (tone-mapped sRGB)")
       ->required();
@@ -51,6 +54,8 @@ void setup_render(CLI::App& app) {
     const render::RenderResult result = render::run_render(r);
     std::cerr << "render: wrote " << r.out.string() << " (" << r.width << " x " << r.height << ", "
               << result.covered_pixels << " pixels covered, " << result.seconds << " s)\n";
+    if (result.reference_nrms)
+      std::cerr << "render: normalized RMS against " << r.reference.string() << ": " << *result.reference_nrms << "\n";
     for (std::size_t k = 0; k < result.compare_nrms.size(); ++k)
       std::cerr << "render: ZH N = " << k + 1 << ", normalized RMS " << result.compare_nrms[k] << "\n";
   });

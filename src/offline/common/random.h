@@ -20,6 +20,17 @@ inline std::uint64_t splitmix64(std::uint64_t x) {
 // A double in [0, 1) from the top 53 bits of a hash.
 inline double unit_double(std::uint64_t x) { return static_cast<double>(x >> 11) * 0x1.0p-53; }
 
+// How a sample point's set of ray directions is turned: a rotation about the normal and
+// a shift of the stratification, each a fraction in [0, 1), hashed from (seed, point
+// index), so that neighbouring points do not share one pattern.
+struct RayTurn {
+  double rotation, shift;
+};
+inline RayTurn ray_turn(std::uint64_t seed, std::uint64_t index) {
+  const std::uint64_t h = splitmix64(seed ^ splitmix64(index));
+  return {unit_double(h), unit_double(splitmix64(h))};
+}
+
 // A stream of doubles in [0, 1): splitmix64 iterated from `state`.
 struct SplitMixStream {
   std::uint64_t state;

@@ -43,15 +43,26 @@ void parallel_vertices(std::size_t count, int threads, std::size_t progress_base
   parallel_for(count, threads, body, progress);
 }
 
-}  // namespace
-
-Eigen::Vector3d cosine_fibonacci_direction(int k, int count, double a, double b) {
-  // 1/phi: consecutive points turn by the golden angle, the most irrational rotation.
+// Azimuth of point k: 1/phi turns, consecutive points apart by the golden angle, the most
+// irrational rotation.
+double fibonacci_azimuth(int k, double a) {
   constexpr double kInvGolden = 0.61803398874989484820;
-  const double u = (k + b) / count;
   double turn = k * kInvGolden + a;
   turn -= std::floor(turn);
-  const double phi = 2.0 * std::numbers::pi * turn;
+  return 2.0 * std::numbers::pi * turn;
+}
+
+}  // namespace
+
+Eigen::Vector3d uniform_fibonacci_direction(int k, int count, double a, double b) {
+  const double z = 1.0 - (k + b) / count, phi = fibonacci_azimuth(k, a);
+  const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
+  return Eigen::Vector3d(r * std::cos(phi), r * std::sin(phi), z);
+}
+
+Eigen::Vector3d cosine_fibonacci_direction(int k, int count, double a, double b) {
+  const double u = (k + b) / count;
+  const double phi = fibonacci_azimuth(k, a);
   const double r = std::sqrt(u);
   // Malley: uniform on the disk, lifted to the hemisphere, is cosine-weighted.
   return Eigen::Vector3d(r * std::cos(phi), r * std::sin(phi), std::sqrt(std::max(0.0, 1.0 - u)));
@@ -64,9 +75,9 @@ VertexRays::VertexRays(const Eigen::Vector3d& position, const Eigen::Vector3d& n
                        std::uint64_t seed, int count, double offset)
     : normal_(normal), origin_(position + offset * normal), count_(count) {
   orthonormal_basis(normal_, tangent_, bitangent_);
-  const std::uint64_t h = splitmix64(seed ^ splitmix64(id));
-  rotation_ = unit_double(h);
-  shift_ = unit_double(splitmix64(h));
+  const RayTurn turn = ray_turn(seed, id);
+  rotation_ = turn.rotation;
+  shift_ = turn.shift;
 }
 
 Eigen::Vector3d VertexRays::direction(int k) const {

@@ -100,4 +100,8 @@ class VertexRays {
 // lifted to the hemisphere. a, b in [0, 1) are the per-vertex rotation and shift.
 Eigen::Vector3d cosine_fibonacci_direction(int k, int count, double a, double b);
 
+// The same set uniform in solid angle on the hemisphere around +z: z = 1 - (k + b) / count
+// and the same azimuths (the glossy transfer's rays, glossy/glossy_transfer.h).
+Eigen::Vector3d uniform_fibonacci_direction(int k, int count, double a, double b);
+
 }  // namespace shtool::fit

@@ -11,6 +11,7 @@
 #include "common/input_error.h"
 #include "common/parallel_for.h"
 #include "common/random.h"
+#include "fit/transfer.h"
 #include "shtool/rotation.h"
 #include "shtool/sh.h"
 
@@ -36,8 +37,8 @@ Eigen::MatrixXd transfer_matrix(const fit::Mesh& mesh, std::size_t v, const Eige
     }
   }
   if (!scene) return t;
-  const std::uint64_t h = splitmix64(options.seed ^ splitmix64(static_cast<std::uint64_t>(v)));
-  const double turn0 = unit_double(h), shift = unit_double(splitmix64(h));
+  const RayTurn turn = ray_turn(options.seed, v);
+  const double turn0 = turn.rotation, shift = turn.shift;
   const Eigen::Vector3d origin = mesh.positions[v] + offset * mesh.normals[v];
   // Scratch per worker thread: nothing is allocated per vertex but the result.
   thread_local std::vector<Eigen::Vector3d> local;
@@ -47,14 +48,8 @@ Eigen::MatrixXd transfer_matrix(const fit::Mesh& mesh, std::size_t v, const Eige
   traced.resize(rays);
   y_local.resize(n2);
   y_scene.resize(n2);
-  constexpr double kInvGolden = 0.61803398874989484820;
   for (int k = 0; k < rays; ++k) {
-    // Uniform on the hemisphere: z uniform in (0, 1], azimuths by the golden angle.
-    const double z = 1.0 - (k + shift) / rays;
-    double turn = k * kInvGolden + turn0;
-    turn -= std::floor(turn);
-    const double phi = 2.0 * std::numbers::pi * turn, r = std::sqrt(std::max(0.0, 1.0 - z * z));
-    local[k] = Eigen::Vector3d(r * std::cos(phi), r * std::sin(phi), z);
+    local[k] = fit::uniform_fibonacci_direction(k, rays, turn0, shift);
     traced[k] = fit::embree_ray(origin, (frame * local[k]).normalized());
   }
   RTCIntersectContext context;

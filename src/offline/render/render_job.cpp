@@ -468,6 +468,14 @@ RenderResult run_render(const RenderRequest& r) {
                        ": irradiance coefficients; render needs radiance (project-env without --quantity irradiance)");
   }
   const int threads = resolve_threads(r.threads);
+  std::optional<lighting::Image> reference;
+  if (!r.reference.empty()) {
+    if (r.compare) throw InputError("--reference measures one image; --compare makes a strip");
+    // A PNG holds tone-mapped, 8-bit values: not radiance to measure against.
+    if (r.reference.extension() != ".exr")
+      throw InputError("--reference " + r.reference.string() + ": an EXR (linear radiance) is needed");
+    reference = lighting::decode_image(read_input_file(r.reference, "--reference"), r.reference);
+  }
 
   const auto start = std::chrono::steady_clock::now();
   const Camera camera = r.camera ? *r.camera : frame_mesh(mesh, r.fov, double(r.width) / r.height);
@@ -491,6 +499,20 @@ RenderResult run_render(const RenderRequest& r) {
     image = compare_strip(hits, mesh, data, light, threads, result.compare_nrms);
   }
   result.seconds = seconds_since(start);
+  if (reference) {
+    if (reference->width != image.width || reference->height != image.height)
+      throw InputError("--reference " + r.reference.string() + ": " + std::to_string(reference->width) + " x " +
+                       std::to_string(reference->height) + " against an image of " + std::to_string(image.width) +
+                       " x " + std::to_string(image.height));
+    double difference = 0, norm = 0;
+    for (std::size_t p = 0; p < std::size_t(image.width) * image.height; ++p)
+      for (int c = 0; c < 3; ++c) {
+        const double a = image.texels[p * image.channels + c], b = reference->texels[p * reference->channels + c];
+        difference += (a - b) * (a - b);
+        norm += b * b;
+      }
+    result.reference_nrms = norm > 0 ? std::sqrt(difference / norm) : std::sqrt(difference);
+  }
   write_file_atomically(r.out, lighting::encode_image_for(r.out, image, "--out", r.exposure));
   return result;
 }

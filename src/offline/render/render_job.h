@@ -49,6 +49,10 @@ struct RenderRequest {
   // One strip instead: transfer, ZH fits of N = 1..4 lobes made from the transfer, and the
   // N = 4 error map, each labelled with its normalized RMS ([4] Fig. 3's layout).
   bool compare = false;
+  // Optional: an EXR of the same size to measure the image against (e.g. a bake with more
+  // lobes or SVD terms): sqrt(sum over pixels and RGB of (image - reference)^2 / sum of
+  // reference^2).
+  std::filesystem::path reference;
 };
 
 struct RenderResult {
@@ -56,6 +60,7 @@ struct RenderResult {
   std::size_t covered_pixels = 0;
   double seconds = 0;  // rays, shading (and the fits of --compare), not reading or writing files
   std::vector<double> compare_nrms;  // --compare: normalized RMS of the N = 1..4 fits
+  std::optional<double> reference_nrms;  // --reference: the image's normalized RMS against it
 };
 
 // Checks the request (InputError naming the option: missing inputs for the shading, a
