@@ -27,6 +27,12 @@ echo "-- render: spot shaded by its ZH fit under the sky at order 6 (spot.zh.png
 "$shtool" project-env "$root/data/sky.hdr" --order 6 --json "$out/sky6.json"
 "$shtool" render "$root/data/spot.obj" --fit "$out/spot.zh.shtb" --light "$out/sky6.json" --out "$out/spot.zh.png"
 
+echo "-- fit-glossy: glossy (Cook-Torrance) transfer on data/spot.obj, order 4, and its render (spot.glossy.png)"
+"$shtool" fit-glossy "$root/data/spot.obj" --out "$out/spot.glossy.shtb" --json "$out/spot.glossy.json"
+"$shtool" project-env "$root/data/sky.hdr" --order 4 --json "$out/sky4.json"
+"$shtool" render "$root/data/spot.obj" --fit "$out/spot.glossy.shtb" --light "$out/sky4.json" --exposure -1 \
+  --out "$out/spot.glossy.png"
+
 echo "-- gen-shader: GLSL and HLSL of SH evaluation and zxzxz rotation, order 3"
 "$shtool" gen-shader --lang glsl --what sh-eval --order 3 --out "$out/sh_eval.glsl"
 "$shtool" gen-shader --lang hlsl --what zxzxz-rotate --order 3 --out "$out/zxzxz_rotate.hlsl"
