@@ -14,4 +14,11 @@ class InputError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// An integer option within [lo, hi], or InputError "<option> must be in lo..hi, got v".
+inline void check_option_range(const char* option, long long value, long long lo, long long hi) {
+  if (value < lo || value > hi)
+    throw InputError(std::string(option) + " must be in " + std::to_string(lo) + ".." + std::to_string(hi) + ", got " +
+                     std::to_string(value));
+}
+
 }  // namespace shtool

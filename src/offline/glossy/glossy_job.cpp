@@ -22,12 +22,6 @@
 namespace shtool::glossy {
 namespace {
 
-void check_range(const char* option, long long value, long long lo, long long hi) {
-  if (value < lo || value > hi)
-    throw InputError(std::string(option) + " must be in " + std::to_string(lo) + ".." + std::to_string(hi) + ", got " +
-                     std::to_string(value));
-}
-
 nlohmann::json parameters(const GlossyRequest& r) {
   return {{"mesh", r.mesh.filename().string()},
           {"brdf", name_of(r.brdf.model, brdf_model_names())},
@@ -48,12 +42,12 @@ nlohmann::json parameters(const GlossyRequest& r) {
 
 void check_request(const GlossyRequest& r) {
   if (r.mesh.empty()) throw InputError("a mesh is required");
-  check_range("--order", r.order, 2, 8);
-  check_range("--terms", r.terms, 1, std::min(kMaxGlossyTerms, r.order * r.order));
-  check_range("--lobes", r.lobes, 1, 16);
-  check_range("--view-resolution", r.view_resolution, 2, 256);
-  check_range("--rays", r.rays, 1, 1 << 20);
-  check_range("--effort", r.effort, fit::kMinEffort, fit::kMaxEffort);
+  check_option_range("--order", r.order, 2, 8);
+  check_option_range("--terms", r.terms, 1, std::min(kMaxGlossyTerms, r.order * r.order));
+  check_option_range("--lobes", r.lobes, 1, 16);
+  check_option_range("--view-resolution", r.view_resolution, 2, 256);
+  check_option_range("--rays", r.rays, 1, 1 << 20);
+  check_option_range("--effort", r.effort, fit::kMinEffort, fit::kMaxEffort);
   // Below 0.05 the lobe is narrower than the BRDF quadrature resolves (and than an order-8
   // expansion could show); above 1 the Phong exponent would be negative.
   if (!(r.brdf.roughness >= 0.05 && r.brdf.roughness <= 1))

@@ -16,12 +16,6 @@ namespace shtool::wrinkles {
 
 namespace {
 
-void check_range(const char* option, long long value, long long lo, long long hi) {
-  if (value < lo || value > hi)
-    throw InputError(std::string(option) + " must be in " + std::to_string(lo) + ".." + std::to_string(hi) + ", got " +
-                     std::to_string(value));
-}
-
 nlohmann::json parameters(const WrinkleRequest& r) {
   return {{"order", r.order},         {"lobes", r.lobes}, {"grid", r.grid},
           {"samples", r.samples},     {"max_depth", r.max_depth}, {"rays", r.rays},
@@ -33,12 +27,12 @@ nlohmann::json parameters(const WrinkleRequest& r) {
 
 void check_request(const WrinkleRequest& r) {
   // Order 3 is the least that leaves a band for the lobes once DC and linear are direct.
-  check_range("--order", r.order, 3, kMaxWrinkleOrder);
-  check_range("--lobes", r.lobes, 1, kMaxWrinkleLobes);
-  check_range("--grid", r.grid, 2, 256);
-  check_range("--samples", r.samples, 1, 16);
-  check_range("--rays", r.rays, 1, 1 << 20);
-  check_range("--max-evaluations", r.max_evaluations, 1, 1000000);
+  check_option_range("--order", r.order, 3, kMaxWrinkleOrder);
+  check_option_range("--lobes", r.lobes, 1, kMaxWrinkleLobes);
+  check_option_range("--grid", r.grid, 2, 256);
+  check_option_range("--samples", r.samples, 1, 16);
+  check_option_range("--rays", r.rays, 1, 1 << 20);
+  check_option_range("--max-evaluations", r.max_evaluations, 1, 1000000);
   if (!std::isfinite(r.max_depth) || r.max_depth <= 0 || r.max_depth > 4)
     throw InputError("--max-depth must be in (0, 4] periods, got " + std::to_string(r.max_depth));
   resolve_threads(r.threads);
