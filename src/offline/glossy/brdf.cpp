@@ -3,12 +3,15 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <stdexcept>
 
+#include <Eigen/Geometry>
 #include <Eigen/SVD>
 
 #include "common/parallel_for.h"
 #include "shtool/glossy.h"
 #include "shtool/quadrature.h"
+#include "shtool/rotation.h"
 #include "shtool/sh.h"
 
 namespace shtool::glossy {
@@ -42,14 +45,19 @@ double brdf_value(const Brdf& brdf, const Eigen::Vector3d& v, const Eigen::Vecto
   return d * g * f / (4.0 * ns * nv);
 }
 
-Eigen::MatrixXd brdf_matrix(const Brdf& brdf, int order, int view_resolution, int threads,
-                            const HemisphereRule& rule) {
+namespace {
+
+// The quadrature's light directions with their SH values times s_z and the weight.
+struct HemispherePoints {
+  std::vector<Eigen::Vector3d> dirs;
+  Eigen::MatrixXd weighted;  // points x order^2
+};
+
+HemispherePoints hemisphere_points(int order, const HemisphereRule& rule) {
   const int n2 = sh_count(order);
-  // Light directions and weights (sum 2 pi) with each one's SH values times s_z.
   const GaussLegendre gl = gauss_legendre(rule.cos_nodes);
   const std::size_t points = std::size_t(rule.cos_nodes) * rule.azimuths;
-  std::vector<Eigen::Vector3d> dirs(points);
-  Eigen::MatrixXd weighted(points, n2);
+  HemispherePoints h{std::vector<Eigen::Vector3d>(points), Eigen::MatrixXd(points, n2)};
   std::vector<double> y(n2);
   for (int i = 0; i < rule.cos_nodes; ++i) {
     const double z = 0.5 * (gl.nodes[i] + 1.0), w = 0.5 * gl.weights[i] * 2.0 * std::numbers::pi / rule.azimuths;
@@ -57,22 +65,72 @@ Eigen::MatrixXd brdf_matrix(const Brdf& brdf, int order, int view_resolution, in
     for (int k = 0; k < rule.azimuths; ++k) {
       const double phi = 2.0 * std::numbers::pi * (k + 0.5) / rule.azimuths;
       const std::size_t p = std::size_t(i) * rule.azimuths + k;
-      dirs[p] = Eigen::Vector3d(r * std::cos(phi), r * std::sin(phi), z);
-      eval_sh<double>(order, dirs[p], y);
-      for (int j = 0; j < n2; ++j) weighted(p, j) = w * z * y[j];
+      h.dirs[p] = Eigen::Vector3d(r * std::cos(phi), r * std::sin(phi), z);
+      eval_sh<double>(order, h.dirs[p], y);
+      for (int j = 0; j < n2; ++j) h.weighted(p, j) = w * z * y[j];
     }
   }
+  return h;
+}
+
+Eigen::RowVectorXd brdf_row(const Brdf& brdf, const Eigen::Vector3d& v, const HemispherePoints& h) {
+  Eigen::RowVectorXd sum = Eigen::RowVectorXd::Zero(h.weighted.cols());
+  for (std::size_t p = 0; p < h.dirs.size(); ++p) {
+    const double f = brdf_value(brdf, v, h.dirs[p]);
+    if (f != 0.0) sum += f * h.weighted.row(p);
+  }
+  return sum;
+}
+
+Eigen::Vector3d texel_view(int a, int b, int g) {
+  return glossy_view_direction<double>((a + 0.5) / g, (b + 0.5) / g);
+}
+
+}  // namespace
+
+Eigen::MatrixXd brdf_matrix_direct(const Brdf& brdf, int order, int view_resolution, int threads,
+                                   const HemisphereRule& rule) {
+  const HemispherePoints h = hemisphere_points(order, rule);
   const int g = view_resolution;
+  Eigen::MatrixXd b(std::size_t(g) * g, sh_count(order));
+  parallel_for(std::size_t(g) * g, threads, [&](std::size_t row) {
+    b.row(row) = brdf_row(brdf, texel_view(static_cast<int>(row % g), static_cast<int>(row / g), g), h);
+  });
+  return b;
+}
+
+Eigen::MatrixXd brdf_matrix(const Brdf& brdf, int order, int view_resolution, int threads,
+                            const HemisphereRule& rule) {
+  const HemispherePoints h = hemisphere_points(order, rule);
+  const int g = view_resolution, n2 = sh_count(order);
+  // Ring k holds the texels with max(|a - c|, |b - c|) = k + 1/2 around the centre
+  // c = (G - 1) / 2 (or k for odd G, ring 0 the centre texel): concentric radius
+  // rho = (2k + 1) / G (2k / G for odd G), polar z = 1 - rho^2.
+  const int rings = (g + 1) / 2;
+  auto ring_of = [g](int a, int b) {
+    const int da = std::abs(2 * a + 1 - g), db = std::abs(2 * b + 1 - g);  // 2 |a + 1/2 - G/2|
+    return std::max(da, db);  // odd G: 0, 2, 4...; even G: 1, 3, 5...
+  };
+  Eigen::MatrixXd base(rings, n2);
+  parallel_for(static_cast<std::size_t>(rings), threads, [&](std::size_t k) {
+    const int twice = static_cast<int>(2 * k) + (g % 2 == 0 ? 1 : 0);
+    const double rho = static_cast<double>(twice) / g, z = 1.0 - rho * rho;
+    base.row(k) = brdf_row(brdf, Eigen::Vector3d(std::sqrt(std::max(0.0, 1.0 - z * z)), 0.0, z), h);
+  });
   Eigen::MatrixXd b(std::size_t(g) * g, n2);
   parallel_for(std::size_t(g) * g, threads, [&](std::size_t row) {
     const int a = static_cast<int>(row % g), bb = static_cast<int>(row / g);
-    const Eigen::Vector3d v = glossy_view_direction<double>((a + 0.5) / g, (bb + 0.5) / g);
-    Eigen::RowVectorXd sum = Eigen::RowVectorXd::Zero(n2);
-    for (std::size_t p = 0; p < points; ++p) {
-      const double f = brdf_value(brdf, v, dirs[p]);
-      if (f != 0.0) sum += f * weighted.row(p);
-    }
-    b.row(row) = sum;
+    const Eigen::Vector3d v = texel_view(a, bb, g);
+    const int k = ring_of(a, bb) / 2;
+    // g_i(s) = b(v_i, s) s_z is g_0 turned by R_z(phi_i): its row is the ring's, rotated.
+    const double phi = std::atan2(v.y(), v.x());
+    const Eigen::Matrix3d turn = Eigen::AngleAxisd(phi, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    ShRotation<double> rotation(order, nullptr);
+    if (!rotation.set(turn, RotationMethod::reference)) throw std::logic_error("the reference rotation needs no table");
+    std::vector<double> in(n2), out(n2);
+    for (int j = 0; j < n2; ++j) in[j] = base(k, j);
+    rotation.apply(in, out);
+    for (int j = 0; j < n2; ++j) b(row, j) = out[j];
   });
   return b;
 }

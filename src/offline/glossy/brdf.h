@@ -46,9 +46,19 @@ struct HemisphereRule {
 
 // [4] Eq. 14: B_ij = integral over z >= 0 of b(v_i, s) y_j(s) s_z ds for the G^2 view
 // samples v_i (i = b * G + a: the centre of texel (a, b) of the u(v) map,
-// shtool/glossy.h) and the order^2 SH basis functions. Rows in parallel on `threads`.
+// shtool/glossy.h) and the order^2 SH basis functions. Both BRDFs are isotropic
+// (b(R v, R s) = b(v, s) for R about the normal), and the concentric map puts the texel
+// centres of each square ring of the map on one circle of the hemisphere: B is
+// integrated once per ring, at azimuth 0, and each texel's row is that row turned to the
+// texel's azimuth by the exact SH rotation about z. G / 2 rings (rounded up) instead of
+// G^2 integrals. Rows in parallel on `threads`.
 Eigen::MatrixXd brdf_matrix(const Brdf& brdf, int order, int view_resolution, int threads,
                             const HemisphereRule& rule = {});
+
+// The reference: every row integrated at its own view direction. Agrees with brdf_matrix
+// to the quadrature's error on the turned integrand (tests/offline/test_glossy.cpp).
+Eigen::MatrixXd brdf_matrix_direct(const Brdf& brdf, int order, int view_resolution, int threads,
+                                   const HemisphereRule& rule = {});
 
 // B ~ U~ Sigma~ V~ with the `terms` largest singular values ([4] Eq. 14-15).
 struct BrdfFactors {
