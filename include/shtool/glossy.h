@@ -47,8 +47,8 @@ template <class T>
 Vec3<T> glossy_view_direction(T a, T b) noexcept;
 
 // The inverse: the square point of a direction, (0.5, 0.5) at the normal. A direction
-// below the horizon (z < 0) is taken at the horizon in its azimuth; the zero vector maps
-// to the centre.
+// below the horizon (z < 0) is taken at the horizon in its azimuth; the zero vector, or
+// one with a NaN or an infinite component, maps to the centre.
 template <class T>
 std::array<T, 2> glossy_view_square(const Vec3<T>& v) noexcept;
 

@@ -46,7 +46,8 @@ struct WrinkleWeights {
 
 // At any finite x (wrapped into [0, 1): x is periodic) and depth (clamped to
 // [0, max_depth]), on a grid of G >= 2 nodes per axis: x_j = j / G, d_k = max_depth k / (G - 1).
-// Preconditions: grid >= 2, max_depth > 0, x finite (depth may be anything but NaN).
+// Preconditions: grid >= 2, max_depth > 0 (a normal T). An infinite or NaN x is taken
+// as x = 0, a NaN depth as 0: never an index outside the map.
 template <class T>
 WrinkleWeights<T> wrinkle_weights(int grid, T max_depth, T x, T depth) noexcept;
 

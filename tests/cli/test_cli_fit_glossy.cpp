@@ -158,7 +158,7 @@ TEST(CliFitGlossy, BadOptionsAreRefusedWithoutOutput) {
       {{"--roughness", "nan"}, "--roughness"}, {{"--roughness", "1.5"}, "--roughness"},
       {{"--f0", "-0.1"}, "--f0"},            {{"--brdf", "ward"}, "--brdf"},
       {{"--effort", "5"}, "--effort"},       {{"--json", out.string()}, "--json"},
-      {{"--mode", "interreflected"}, "--mode"},
+      {{"--mode", "interreflected"}, "--mode"}, {{"--view-resolution", "2", "--terms", "5"}, "--terms"},
   };
   for (const auto& c : cases) {
     fs::remove(out);

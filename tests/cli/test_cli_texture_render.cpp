@@ -140,6 +140,9 @@ TEST(TextureRender, BadRequestsAreRefusedByName) {
   refused({"render", kSpot, "--fit", bakes().texture.string(), "--pose", kSpot, "--light", bakes().sky.string(),
            "--out", out.string()},
           "is a texture-space bake");
+  // Nor does deform carry a texel bake onto a pose.
+  refused({"deform", bakes().texture.string(), "--rest", kSpot, "--pose", kSpot, "--out", out.string()},
+          "texture-space bake");
   // A mesh without texture coordinates cannot be sampled.
   const fs::path bare = scratch("bare.obj");
   shtool::test::write_file(bare, "v -1 -1 0\nv 1 -1 0\nv 0 1 0\nf 1 2 3\n");
@@ -152,6 +155,24 @@ TEST(TextureRender, BadRequestsAreRefusedByName) {
   fs::copy_file(bakes().texture, lonely, fs::copy_options::overwrite_existing);
   refused({"render", kSpot, "--fit", lonely.string(), "--light", bakes().sky.string(), "--out", out.string()},
           "spot.tex.dc_linear.exr");
+  // A map with a NaN, or without a channel the table needs: named.
+  fs::create_directories(scratch("broken"));
+  const fs::path broken = scratch("broken") / "spot.tex.shtb";
+  fs::copy_file(bakes().texture, broken, fs::copy_options::overwrite_existing);
+  const fs::path lobes_map = bakes().texture.parent_path() / "spot.tex.lobes.exr";
+  fs::copy_file(lobes_map, scratch("broken") / "spot.tex.lobes.exr", fs::copy_options::overwrite_existing);
+  const fs::path dc_map = bakes().texture.parent_path() / "spot.tex.dc_linear.exr";
+  shtool::lighting::ChannelImage dc =
+      shtool::lighting::decode_exr_channels(shtool::test::read_file(dc_map), dc_map);
+  dc.texels[5] = NAN;
+  shtool::test::write_file(scratch("broken") / "spot.tex.dc_linear.exr", shtool::lighting::encode_exr_channels(dc));
+  refused({"render", kSpot, "--fit", broken.string(), "--light", bakes().sky.string(), "--out", out.string()},
+          "is not finite");
+  dc = shtool::lighting::decode_exr_channels(shtool::test::read_file(dc_map), dc_map);
+  dc.names.back() = "sh9";  // one channel renamed
+  shtool::test::write_file(scratch("broken") / "spot.tex.dc_linear.exr", shtool::lighting::encode_exr_channels(dc));
+  refused({"render", kSpot, "--fit", broken.string(), "--light", bakes().sky.string(), "--out", out.string()},
+          "no channel");
   refused({"fit-zh", kSpot, "--texture", "0", "--out", scratch("x.shtb").string()}, "--texture 0");
   EXPECT_FALSE(fs::exists(scratch("x.shtb")));
   refused({"fit-zh", bare.string(), "--texture", "16", "--out", scratch("x.shtb").string()},

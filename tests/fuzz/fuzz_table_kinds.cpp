@@ -3,6 +3,7 @@
 // a loader that accepts a table must make every later call safe.
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <span>
 #include <vector>
@@ -56,18 +57,23 @@ void exercise_zh_fit(const shtool::ZhFitTable<double>& z) {
     (void)shtool::zh_shade_exact<double>(light, z.axes_of(v), z.coeffs_of(v));
 }
 
-void exercise_wrinkle(const shtool::WrinkleMap<double>& m) {
-  std::vector<double> light(shtool::sh_count(m.order), 0.1);
-  const Eigen::Matrix3d frame = kRotation;
-  for (const double x : {-3.7, 0.0, 0.4999, 1.0})
-    for (const double d : {-1.0, 0.0, 0.5 * m.max_depth, 1e300}) (void)m.shade(light, frame, x, d);
+template <class T>
+void exercise_wrinkle(const shtool::WrinkleMap<T>& m) {
+  std::vector<T> light(shtool::sh_count(m.order), T(0.1));
+  const Eigen::Matrix<T, 3, 3> frame = kRotation.cast<T>();
+  const T inf = std::numeric_limits<T>::infinity(), nan = std::numeric_limits<T>::quiet_NaN();
+  for (const T x : {T(-3.7), T(0), T(0.4999), T(1), inf, nan})
+    for (const T d : {T(-1), T(0), T(0.5) * m.max_depth, std::numeric_limits<T>::max(), inf, nan})
+      (void)m.shade(light, frame, x, d);
 }
 
-void exercise_glossy(const shtool::GlossyFit<double>& g) {
-  std::vector<double> light(shtool::sh_count(g.rows.order), 0.1);
+template <class T>
+void exercise_glossy(const shtool::GlossyFit<T>& g) {
+  using V = shtool::Vec3<T>;
+  std::vector<T> light(shtool::sh_count(g.rows.order), T(0.1));
+  const T inf = std::numeric_limits<T>::infinity(), nan = std::numeric_limits<T>::quiet_NaN();
   for (std::size_t v = 0; v < std::min<std::size_t>(g.vertices, 8); ++v)
-    for (const shtool::Vec3<double>& view : {shtool::Vec3<double>(0, 0, 1), shtool::Vec3<double>(1, 0, 0),
-                                             shtool::Vec3<double>(0.3, -0.4, -0.8), shtool::Vec3<double>(0, 0, 0)})
+    for (const V& view : {V(0, 0, 1), V(1, 0, 0), V(0.3, -0.4, -0.8), V(0, 0, 0), V(0.1, 0, inf), V(nan, 0, 1)})
       (void)g.shade(light, v, view);
 }
 
@@ -85,8 +91,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (auto z = shtool::ZhFitTable<double>::from_table(table)) exercise_zh_fit(z.value());
   (void)shtool::ZhFitTable<float>::from_table(table);
   if (auto w = shtool::WrinkleMap<double>::from_table(table)) exercise_wrinkle(w.value());
-  (void)shtool::WrinkleMap<float>::from_table(table);
+  if (auto w = shtool::WrinkleMap<float>::from_table(table)) exercise_wrinkle(w.value());
   if (auto g = shtool::GlossyFit<double>::from_table(table)) exercise_glossy(g.value());
-  (void)shtool::GlossyFit<float>::from_table(table);
+  if (auto g = shtool::GlossyFit<float>::from_table(table)) exercise_glossy(g.value());
   return 0;
 }

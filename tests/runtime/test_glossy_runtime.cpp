@@ -2,6 +2,7 @@
 // border), the view-factor look-up (exact at texel centres, bilinear between), Eq. 16 as
 // the sum of the rows' ZH shadings, and a loader that refuses malformed tables.
 #include <cmath>
+#include <array>
 #include <limits>
 #include <numbers>
 #include <string>
@@ -29,6 +30,8 @@ TEST(GlossyViewMap, InverseAndUnitLength) {
       if (i == 0 || i == 40 || j == 0 || j == 40) EXPECT_NEAR(v.z(), 0.0, 1e-15);  // the border is the horizon
     }
   EXPECT_EQ(glossy_view_direction(0.5, 0.5), Vec3<double>(0, 0, 1));
+  for (const Vec3<double>& odd : {Vec3<double>(0, 0, 0), Vec3<double>(0.1, 0, INFINITY), Vec3<double>(NAN, 0, 1)})
+    EXPECT_EQ(glossy_view_square(odd), (std::array<double, 2>{0.5, 0.5}));
   const auto below = glossy_view_square(Vec3<double>(1, 0, -0.5));
   EXPECT_NEAR(below[0], 1.0, 1e-15);  // below the horizon: at the horizon, same azimuth
   EXPECT_NEAR(below[1], 0.5, 1e-15);
@@ -138,6 +141,12 @@ TEST(GlossyFitTable, RefusesMalformedTables) {
   t = small_table();
   t.arrays.erase(t.arrays.begin() + 5);
   refused(t, "view_factors");
+  t = small_table();
+  t.arrays[4] = TableArray::from<double>("direct", {4, 1}, std::vector<double>{0.3, 1e300, 0.2, 0.05});
+  ASSERT_TRUE(GlossyFit<double>::from_table(t));  // fits a double
+  const Result<GlossyFit<float>> narrow = GlossyFit<float>::from_table(t);
+  ASSERT_FALSE(narrow);
+  EXPECT_NE(narrow.error().message.find("precision"), std::string::npos) << narrow.error().message;
   t = small_table();
   t.order = 1;  // two terms are more than order 1 has coefficients
   t.arrays[1] = TableArray::from<double>("coeffs", {4, 1, 1}, std::vector<double>{1, 1, 1, 1});

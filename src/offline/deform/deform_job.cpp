@@ -154,8 +154,14 @@ DeformReport run_deform(const DeformRequest& r) {
   if (r.out.empty()) throw InputError("--out is required");
   const fit::Mesh rest = fit::load_mesh(r.rest);
   const fit::Mesh posed = fit::load_mesh(r.pose);
-  Result<ZhFitTable<double>> loaded = load_zh_fit<double>(r.fit);
-  if (!loaded) throw InputError(loaded.error().message);
+  Result<Table> input = read_table(r.fit, TableExpectation{std::string(kZhFitKind), 1, 0});
+  if (!input) throw InputError(input.error().message);
+  // A texture-space bake's rows are texels, not vertices.
+  const nlohmann::json input_meta = table_meta(input.value());
+  if (input_meta.is_object() && input_meta.contains("texture"))
+    throw InputError(r.fit.string() + ": a texture-space bake (fit-zh --texture); deform takes per-vertex bakes");
+  Result<ZhFitTable<double>> loaded = ZhFitTable<double>::from_table(input.value());
+  if (!loaded) throw InputError(r.fit.string() + ": " + loaded.error().message);
   const ZhFitTable<double> fit = fit_for_mesh(std::move(loaded).value(), rest, r.fit.string());
   const std::vector<Eigen::Matrix3d> rotations = rest_to_pose_rotations(rest, posed);
   const ZhFitTable<double> moved = deform_fit(fit, rotations);

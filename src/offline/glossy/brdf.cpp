@@ -4,6 +4,7 @@
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
+#include <string>
 
 #include <Eigen/Geometry>
 #include <Eigen/SVD>
@@ -136,6 +137,9 @@ Eigen::MatrixXd brdf_matrix(const Brdf& brdf, int order, int view_resolution, in
 }
 
 BrdfFactors factor_brdf(const Eigen::MatrixXd& b, int terms) {
+  if (terms < 1 || terms > std::min(b.rows(), b.cols()))
+    throw std::invalid_argument("factor_brdf: " + std::to_string(terms) + " terms of a " + std::to_string(b.rows()) +
+                                " x " + std::to_string(b.cols()) + " matrix");
   const Eigen::JacobiSVD<Eigen::MatrixXd> svd(b, Eigen::ComputeThinU | Eigen::ComputeThinV);
   BrdfFactors f;
   f.singular_values = svd.singularValues();

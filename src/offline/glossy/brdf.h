@@ -68,7 +68,8 @@ struct BrdfFactors {
 };
 
 // Signs are fixed so that each column of U~ has its largest-magnitude entry positive
-// (the SVD leaves them free).
+// (the SVD leaves them free). Precondition (std::invalid_argument otherwise): 1 <= terms
+// <= min(rows, columns) of b.
 BrdfFactors factor_brdf(const Eigen::MatrixXd& b, int terms);
 
 }  // namespace shtool::glossy

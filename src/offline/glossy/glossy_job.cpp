@@ -43,9 +43,11 @@ nlohmann::json parameters(const GlossyRequest& r) {
 void check_request(const GlossyRequest& r) {
   if (r.mesh.empty()) throw InputError("a mesh is required");
   check_option_range("--order", r.order, 2, 8);
-  check_option_range("--terms", r.terms, 1, std::min(kMaxGlossyTerms, r.order * r.order));
-  check_option_range("--lobes", r.lobes, 1, 16);
   check_option_range("--view-resolution", r.view_resolution, 2, 256);
+  // B has G^2 rows and n^2 columns: its SVD has min(G^2, n^2) singular values to keep.
+  check_option_range("--terms", r.terms, 1,
+                     std::min({kMaxGlossyTerms, r.order * r.order, r.view_resolution * r.view_resolution}));
+  check_option_range("--lobes", r.lobes, 1, 16);
   check_option_range("--rays", r.rays, 1, 1 << 20);
   check_option_range("--effort", r.effort, fit::kMinEffort, fit::kMaxEffort);
   // Below 0.05 the lobe is narrower than the BRDF quadrature resolves (and than an order-8

@@ -163,7 +163,8 @@ Image decode_exr(std::string_view bytes, const std::filesystem::path& name, std:
 
 }  // namespace
 
-ChannelImage decode_exr_channels(std::string_view bytes, const std::filesystem::path& name, std::int64_t max_texels) {
+ChannelImage decode_exr_channels(std::string_view bytes, const std::filesystem::path& name, std::int64_t max_texels,
+                                 const std::vector<std::string>& only) {
   if (sniff(bytes) != Format::exr) fail(name, "not an OpenEXR file");
   try {
     MemoryIStream stream(bytes, name.string());
@@ -179,9 +180,18 @@ ChannelImage decode_exr_channels(std::string_view bytes, const std::filesystem::
     for (auto c = header.channels().begin(); c != header.channels().end(); ++c) {
       if (c.channel().xSampling != 1 || c.channel().ySampling != 1)
         fail(name, std::string("channel ") + c.name() + " is subsampled");
-      img.names.push_back(c.name());
+      if (only.empty()) img.names.push_back(c.name());
+    }
+    if (!only.empty()) {
+      for (const std::string& n : only)
+        if (!header.channels().findChannel(n)) fail(name, "no channel '" + n + "'");
+      img.names = only;
     }
     const std::size_t k = img.names.size();
+    // The texel cap bounds one channel; a header may declare any number of them.
+    if (w * h * static_cast<std::int64_t>(k) > (std::int64_t{1} << 30))
+      fail(name, std::to_string(k) + " channels of " + std::to_string(w) + " x " + std::to_string(h) +
+                     ": more than 2^30 values");
     img.texels.assign(static_cast<std::size_t>(w * h) * k, 0.0f);
     Imf::FrameBuffer fb;
     for (std::size_t c = 0; c < k; ++c)

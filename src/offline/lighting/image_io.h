@@ -54,11 +54,14 @@ struct ChannelImage {
 };
 // Float OpenEXR, ZIP compression, one channel per name (the file lists them sorted).
 std::string encode_exr_channels(const ChannelImage& image);
-// Every channel of an OpenEXR file as float, in the file's (sorted) order. Throws
-// InputError naming `name`: not OpenEXR, subsampled channels, a data window other than
-// the display window, more than max_texels.
+// The channels of an OpenEXR file as float: `only` (in that order; a channel of the file
+// not in it is neither read nor stored), or every channel in the file's (sorted) order
+// when `only` is empty. Throws InputError naming `name`: not OpenEXR, a channel of `only`
+// missing, subsampled channels, a data window other than the display window, more than
+// max_texels, more than 2^30 values in all.
 ChannelImage decode_exr_channels(std::string_view bytes, const std::filesystem::path& name,
-                                 std::int64_t max_texels = kMaxImageTexels);
+                                 std::int64_t max_texels = kMaxImageTexels,
+                                 const std::vector<std::string>& only = {});
 // 8-bit PNG of the tone-mapped image: x -> x / (1 + x) per channel (Reinhard) after
 // scaling by 2^exposure, then the sRGB transfer curve; alpha (4 channels) kept linear.
 std::string encode_png(const Image& image, double exposure = 0);

@@ -17,30 +17,19 @@
 namespace shtool::render {
 namespace {
 
-// The file's channels reordered to `names` (InputError naming the first one missing).
-lighting::ChannelImage in_order(lighting::ChannelImage image, const std::vector<std::string>& names,
-                                const std::filesystem::path& path) {
-  const std::size_t k = image.names.size(), texels = std::size_t(image.width) * image.height;
-  std::vector<std::size_t> from;
-  for (const std::string& n : names) {
-    const auto at = std::find(image.names.begin(), image.names.end(), n);
-    if (at == image.names.end()) throw InputError(path.string() + ": no channel '" + n + "'");
-    from.push_back(static_cast<std::size_t>(at - image.names.begin()));
-  }
-  lighting::ChannelImage out{image.width, image.height, names, std::vector<float>(texels * names.size())};
-  for (std::size_t t = 0; t < texels; ++t)
-    for (std::size_t c = 0; c < names.size(); ++c) out.texels[t * names.size() + c] = image.texels[t * k + from[c]];
-  return out;
-}
-
 lighting::ChannelImage read_map(const std::filesystem::path& path, int resolution,
                                 const std::vector<std::string>& names) {
   lighting::ChannelImage image =
-      lighting::decode_exr_channels(read_input_file(path, "texture map"), path);
+      lighting::decode_exr_channels(read_input_file(path, "texture map"), path, lighting::kMaxImageTexels, names);
   if (image.width != resolution || image.height != resolution)
     throw InputError(path.string() + ": " + std::to_string(image.width) + " x " + std::to_string(image.height) +
                      ", but the table's bake is " + std::to_string(resolution) + " x " + std::to_string(resolution));
-  return in_order(std::move(image), names, path);
+  // A NaN or infinity would shade as NaN pixels without a word.
+  for (std::size_t i = 0; i < image.texels.size(); ++i)
+    if (!std::isfinite(image.texels[i]))
+      throw InputError(path.string() + ": channel '" + names[i % names.size()] + "' of texel " +
+                       std::to_string(i / names.size()) + " is not finite");
+  return image;
 }
 
 }  // namespace
@@ -81,9 +70,8 @@ lighting::Image shade_texture_bake(const TextureBake& bake, const fit::Mesh& mes
   const std::size_t n2 = static_cast<std::size_t>(order) * order;
   const std::size_t kl = bake.lobes_map.names.size();
   // One lighting vector per colour channel, padded or truncated to the bake's order.
-  std::vector<std::vector<double>> e(3, std::vector<double>(n2, 0.0));
-  for (int c = 0; c < 3; ++c)
-    for (std::size_t i = 0; i < n2 && i < light.coefficients.size() / 3; ++i) e[c][i] = light.coefficients[i * 3 + c];
+  std::vector<std::vector<double>> e;
+  for (int c = 0; c < 3; ++c) e.push_back(lighting::light_channel(light, c, order));
   std::vector<std::optional<ZhLightTable<double>>> tables(3);
   if (zh_table_resolution > 0)
     for (int c = 0; c < 3; ++c) tables[c].emplace(order, e[c], zh_table_resolution);

@@ -8,17 +8,21 @@
 #include <nlohmann/json.hpp>
 
 #include "io/table_format.h"
+#include "io/zh_rows.h"
 #include "shtool/zh_shading.h"
 
 namespace shtool {
 
 template <class T>
 WrinkleWeights<T> wrinkle_weights(int g, T max_depth, T x, T depth) noexcept {
-  const T u = (x - std::floor(x)) * static_cast<T>(g);
+  T u = (x - std::floor(x)) * static_cast<T>(g);
+  if (!(u >= 0)) u = 0;  // x infinite or NaN: node 0 rather than an index from a NaN
   // x - floor(x) rounds to 1 for x just below an integer: that is the last cell's end.
   const int j0 = std::min(static_cast<int>(std::floor(u)), g - 1);
   const T fx = u - static_cast<T>(j0);
-  const T v = std::clamp(depth / max_depth, T(0), T(1)) * static_cast<T>(g - 1);
+  T q = depth / max_depth;
+  if (!(q >= 0)) q = 0;  // a NaN, which std::clamp would keep
+  const T v = std::min(q, T(1)) * static_cast<T>(g - 1);
   // d = max_depth lies on the last row of nodes: blended from the cell below it.
   const int k0 = std::min(static_cast<int>(std::floor(v)), g - 2);
   const T fd = v - static_cast<T>(k0);
@@ -74,17 +78,7 @@ Error wrinkle_error(const std::string& what) { return Error{"wrinkle-zh table: "
 using table_format::shape_text;
 
 Result<std::vector<double>> f64_array(const Table& t, const char* name, const std::vector<std::int64_t>& shape) {
-  const TableArray* a = t.find(name);
-  if (!a) return wrinkle_error("missing array '" + std::string(name) + "'");
-  if (a->dtype != DType::f64) return wrinkle_error("array '" + std::string(name) + "' is not f64");
-  if (a->shape != shape)
-    return wrinkle_error("array '" + std::string(name) + "' has shape " + shape_text(a->shape) + ", expected " +
-                         shape_text(shape));
-  std::vector<double> v = a->values<double>();
-  for (std::size_t i = 0; i < v.size(); ++i)
-    if (!std::isfinite(v[i]))
-      return wrinkle_error("array '" + std::string(name) + "' element " + std::to_string(i) + " is not finite");
-  return v;
+  return table_format::finite_f64_array(t, name, shape, "wrinkle-zh table: ");
 }
 
 // meta[key] when it is an integer.
@@ -111,6 +105,10 @@ Result<WrinkleMap<T>> WrinkleMap<T>::from_table(const Table& t) {
     return wrinkle_error("meta 'max_depth' is missing or not a number");
   const double max_depth = meta["max_depth"].get<double>();
   if (!std::isfinite(max_depth) || !(max_depth > 0)) return wrinkle_error("meta 'max_depth' is not a positive number");
+  // Stored as T, it divides every depth: it must stay a normal, finite T.
+  if (!(static_cast<T>(max_depth) >= std::numeric_limits<T>::min()) ||
+      !(static_cast<T>(max_depth) <= std::numeric_limits<T>::max()))
+    return wrinkle_error("meta 'max_depth' does not fit the requested precision");
   const std::int64_t n = t.order;
   auto xs = f64_array(t, "x", {G});
   auto ds = f64_array(t, "depth", {G});
@@ -139,9 +137,12 @@ Result<WrinkleMap<T>> WrinkleMap<T>::from_table(const Table& t) {
     return Vec3<double>(a[i], a[i + 1], a[i + 2]);
   };
   for (std::int64_t node = 0; node < G * G; ++node)
-    for (std::int64_t lobe = 0; lobe < N; ++lobe)
-      if (!(axis(node, lobe).norm() > 0))
+    for (std::int64_t lobe = 0; lobe < N; ++lobe) {
+      // As stored in T too: a tiny axis that a float flushes to zero cannot be normalised.
+      const Vec3<T> stored = axis(node, lobe).template cast<T>();
+      if (!(axis(node, lobe).norm() > 0) || !(stored.squaredNorm() > T(0)))
         return wrinkle_error("axis of lobe " + std::to_string(lobe) + " at node " + std::to_string(node) + " is zero");
+    }
   // Four vectors within 90 degrees of one direction have a blend (positive weights) that
   // is never zero, so its normalisation is defined everywhere in the cell.
   for (std::int64_t k = 0; k + 1 < G; ++k)

@@ -74,10 +74,15 @@ Result<ZhFitTable<T>> zh_rows_from_table(const Table& t, const std::string& pref
     if (r < 0) return zh_fit_error("negative residual");
   for (const double r : no.value())
     if (r < 0) return zh_fit_error("negative norm");
-  // A float table must not overflow on the way in.
-  for (const double c : co.value())
-    if (std::abs(c) > static_cast<double>(std::numeric_limits<T>::max()))
-      return zh_fit_error("a coefficient does not fit the requested precision");
+  // A float table must not overflow on the way in: every value it stores must fit T.
+  auto fits = [](const std::vector<double>& values) {
+    for (const double c : values)
+      if (std::abs(c) > static_cast<double>(std::numeric_limits<T>::max())) return false;
+    return true;
+  };
+  if (!fits(co.value())) return zh_fit_error("a coefficient does not fit the requested precision");
+  if (!fits(re.value()) || !fits(no.value()))
+    return zh_fit_error("a residual or norm does not fit the requested precision");
   narrow(co.value(), z.coeffs);
   narrow(re.value(), z.residual);
   narrow(no.value(), z.norm);
@@ -91,6 +96,7 @@ Result<ZhFitTable<T>> zh_rows_from_table(const Table& t, const std::string& pref
                           std::to_string(z.order) + " has");
     auto dv = f64_array(t, "direct", d->shape);
     if (!dv) return dv.error();
+    if (!fits(dv.value())) return zh_fit_error("a direct coefficient does not fit the requested precision");
     z.direct_count = static_cast<int>(d->shape[1]);
     narrow(dv.value(), z.direct);
   }

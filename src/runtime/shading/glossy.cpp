@@ -45,7 +45,7 @@ template <class T>
 std::array<T, 2> glossy_view_square(const Vec3<T>& v) noexcept {
   constexpr T quarter = std::numbers::pi_v<T> / 4;
   const T length = v.norm();
-  if (!(length > 0)) return {T(0.5), T(0.5)};
+  if (!(length > 0) || !std::isfinite(length)) return {T(0.5), T(0.5)};  // zero, NaN or infinite: the normal
   const T z = std::max<T>(v.z() / length, 0);
   const T planar = std::hypot(v.x(), v.y());
   if (!(planar > 0)) return {T(0.5), T(0.5)};
@@ -76,7 +76,9 @@ void GlossyFit<T>::view_factors_at(const Vec3<T>& view, std::span<T> out) const 
   const int g = view_resolution;
   // Bilinear between texel centres, clamped to the border texels.
   auto axis = [g](T s, int& i0, T& t) {
-    const T f = std::clamp<T>(s * g - T(0.5), 0, static_cast<T>(g - 1));
+    T f = s * g - T(0.5);
+    if (!(f >= 0)) f = 0;  // also a NaN, which std::clamp would keep
+    f = std::min(f, static_cast<T>(g - 1));
     i0 = std::min(static_cast<int>(f), std::max(g - 2, 0));
     t = g > 1 ? f - static_cast<T>(i0) : T(0);
   };
