@@ -367,7 +367,10 @@ inline ZyzLanes<detail::BatchPack<T>> zyz_cos_sin_lanes(const detail::BatchPack<
 }  // namespace
 
 template <class T>
-RotationMethod ShRotation<T>::choose_method(const Mat3<T>& r, RotationMethod method, double tolerance) {
+#if defined(__GNUC__)
+__attribute__((always_inline))  // on every set() from order 5 on: a call costs more than the test
+#endif
+inline RotationMethod ShRotation<T>::choose_method(const Mat3<T>& r, RotationMethod method, double tolerance) {
   if (method == RotationMethod::automatic && order_ <= detail::kClosedMaxOrder)
     return RotationMethod::zxzxz;  // see rotation.h
   if (method != RotationMethod::automatic) return method;
@@ -800,6 +803,20 @@ bool rotate_batch(ShRotation<T>& rotation, std::span<const Mat3<T>> rotations, s
                                 std::to_string(out.size()));
   if (count == 0) return true;
   if (method != RotationMethod::reference && !rotation.helpers_) return false;
+  if (rotation.order_ == 2 && rotation.kernel_order_ > 0 &&
+      (method == RotationMethod::zxzxz || method == RotationMethod::automatic)) {
+    // Band 1 is nine products of R: gathering four rotations into lanes and scattering
+    // them back costs more than it saves, so each rotation reads its matrix in place
+    // (the operations of set() + apply(), so the same bits).
+    const T* src = in.data();
+    T* dst = out.data();
+    for (std::size_t k = 0; k < count; ++k, src += 4, dst += 4) {
+      dst[0] = src[0];
+      detail::band1_closed<T, T>(rotations[k].data(), src + 1, dst + 1);
+    }
+    rotation.set(rotations[count - 1], method, tolerance);
+    return true;
+  }
   const std::size_t done = rotation.rotate_lanes(rotations, in.data(), out.data(), method, tolerance);
   for (std::size_t k = done; k < count; ++k) {
     if (!rotation.set(rotations[k], method, tolerance)) return false;
