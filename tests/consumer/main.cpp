@@ -1,10 +1,12 @@
 // An engine's view of shtool: built against the installed package with -fno-exceptions
 // and -fno-rtti, it loads the shipped tables (found through SHTOOL_TABLES), rotates by
-// three methods, multiplies, and shades a fit-zh output (argv[1], when given) through
+// three methods, multiplies, maps glossy view directions and blends wrinkle weights, and
+// shades a fit-zh output (argv[1], when given) through
 // load_zh_fit. Every result is checked against an independent route (closed forms,
 // evaluation at rotated directions, pointwise products, the lobes summed into SH), so a
 // package whose headers and library disagree, or whose tables do not load, fails here.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -13,12 +15,14 @@
 #include <vector>
 
 #include <shtool/euler.h>
+#include <shtool/glossy.h>
 #include <shtool/product.h>
 #include <shtool/rotation.h>
 #include <shtool/sh.h>
 #include <shtool/table.h>
 #include <shtool/tripling_product.h>
 #include <shtool/version.h>
+#include <shtool/wrinkle_map.h>
 #include <shtool/zh.h>
 #include <shtool/zh_fit_table.h>
 #include <shtool/zh_shading.h>
@@ -184,6 +188,22 @@ void check_zh_fit(const char* path) {
   std::printf("consumer: shaded %zu vertices of %s (%d lobes, order %d)\n", z.vertices, path, z.lobes, z.order);
 }
 
+// The glossy view map: a texel centre's direction maps back to its square point, and the
+// wrinkle blend's weights sum to 1 (the headers an engine includes for glossy and
+// wrinkle shading, compiled without exceptions).
+void check_view_map_and_wrinkle_weights() {
+  for (const double a : {0.05, 0.3, 0.5, 0.93})
+    for (const double b : {0.1, 0.5, 0.71}) {
+      const shtool::Vec3<double> v = shtool::glossy_view_direction(a, b);
+      check("glossy view direction |v|", v.norm(), 1.0, 1e-14);
+      const std::array<double, 2> back = shtool::glossy_view_square(v);
+      check("glossy view square a", back[0], a, 1e-12);
+      check("glossy view square b", back[1], b, 1e-12);
+    }
+  const shtool::WrinkleWeights<double> w = shtool::wrinkle_weights<double>(8, 1.0, 1.37, 0.4);
+  check("wrinkle weights sum", w.weight[0] + w.weight[1] + w.weight[2] + w.weight[3], 1.0, 1e-15);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -196,6 +216,7 @@ int main(int argc, char** argv) {
   const shtool::Mat3<double> r = shtool::matrix_from_zyz<double>({0.7, 1.1, -0.4});
   check_rotations(r);
   check_products();
+  check_view_map_and_wrinkle_weights();
   if (argc > 1) check_zh_fit(argv[1]);
 
   if (failures != 0) {
