@@ -149,6 +149,16 @@ TEST(TextureRender, BadRequestsAreRefusedByName) {
   refused({"render", bare.string(), "--fit", bakes().texture.string(), "--light", bakes().sky.string(), "--out",
            out.string()},
           "no texture coordinates");
+  // Another UV layout: the maps would be sampled at the wrong texels.
+  std::string text = shtool::test::read_file(kSpot);
+  const std::size_t vt = text.find("\nvt ");
+  ASSERT_NE(vt, std::string::npos);
+  text.replace(vt + 1, text.find('\n', vt + 1) - (vt + 1), "vt 0.5 0.5");  // the first texcoord moved
+  const fs::path moved = scratch("moved_uv.obj");
+  shtool::test::write_file(moved, text);
+  refused({"render", moved.string(), "--fit", bakes().texture.string(), "--light", bakes().sky.string(), "--out",
+           out.string()},
+          "UV layout");
   // A map gone: named.
   fs::create_directories(scratch("lonely"));
   const fs::path lonely = scratch("lonely") / "spot.tex.shtb";

@@ -342,6 +342,7 @@ FitZhReport run_fit_zh_on(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJo
       meta["texture"] = {{"resolution", *r.texture},
                          {"texels", texels.texel.size()},
                          {"gutter", kGutterTexels},
+                         {"uv_crc32", uv_layout_crc32(mesh)},
                          {"rows", "texel index y * resolution + x, row 0 at v = 1 (UV origin bottom left)"},
                          {"dc_linear_map", dc_linear_map.filename().string()},
                          {"lobes_map", lobes_map.filename().string()}};

@@ -93,6 +93,17 @@ std::uint32_t loaded_mesh_crc32(const Mesh& mesh) {
   return crc;
 }
 
+std::uint32_t uv_layout_crc32(const Mesh& mesh) {
+  std::uint32_t crc = 0;
+  std::byte buf[6 * sizeof(double)];
+  for (const std::array<Eigen::Vector2d, 3>& corners : mesh.uvs) {
+    for (int c = 0; c < 3; ++c)
+      for (int k = 0; k < 2; ++k) table_detail::store_le(corners[c][k], buf + (c * 2 + k) * sizeof(double));
+    crc = table_crc32(std::span<const std::byte>(buf, sizeof buf), crc);
+  }
+  return crc;
+}
+
 double Mesh::bbox_diagonal() const {
   if (positions.empty()) return 0.0;
   Eigen::Vector3d lo = positions[0], hi = positions[0];

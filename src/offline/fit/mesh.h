@@ -53,6 +53,11 @@ struct Mesh {
 // (input_crc32 names the file's bytes).
 std::uint32_t loaded_mesh_crc32(const Mesh& mesh);
 
+// CRC-32 of the UV layout: every kept triangle's corner UVs (doubles, little-endian, in
+// triangle order). A texture-space bake records it, so that its maps are never sampled
+// through another mesh's UVs. 0 for a mesh without UVs.
+std::uint32_t uv_layout_crc32(const Mesh& mesh);
+
 enum class NormalSource { automatic, file, computed };
 
 // Loads an OBJ file. Throws MeshError on: missing/unreadable file, parse failure,

@@ -431,6 +431,9 @@ RenderResult run_render(const RenderRequest& r) {
   if (texture && mesh.uvs.empty())
     throw InputError(r.mesh.string() + ": no texture coordinates, and --fit " + r.fit.string() +
                      " is a texture-space bake (sampled at the UV of each hit)");
+  if (texture && fit::uv_layout_crc32(mesh) != texture->uv_crc32)
+    throw InputError(r.mesh.string() + ": its UV layout is not the one --fit " + r.fit.string() +
+                     " was baked on (was it baked on another mesh?)");
   if (zh_fit) {
     data.fit = deform::fit_for_mesh(std::move(*zh_fit), rest, "--fit " + r.fit.string());
     if (posed) data.fit = deform::deform_fit(*data.fit, rotations);

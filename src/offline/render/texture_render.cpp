@@ -47,6 +47,9 @@ std::optional<TextureBake> texture_bake_of(const std::filesystem::path& fit, con
   const long long res = number(t, "resolution"), lobes = number(meta, "lobes");
   if (res < 1 || res > fit::kMaxTextureResolution || lobes < 1 || lobes > 64)
     throw InputError("--fit " + fit.string() + ": meta.texture.resolution or meta.lobes out of range");
+  const long long uv_crc = number(t, "uv_crc32");
+  if (uv_crc < 0 || uv_crc > 0xFFFFFFFFll) throw InputError("--fit " + fit.string() + ": meta.texture.uv_crc32 out of range");
+  bake.uv_crc32 = static_cast<std::uint32_t>(uv_crc);
   bake.resolution = static_cast<int>(res);
   bake.lobes = static_cast<int>(lobes);
   bake.order = table.order;

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <optional>
 #include <vector>
@@ -18,6 +19,7 @@ namespace shtool::render {
 
 struct TextureBake {
   int resolution = 0, order = 0, lobes = 0;
+  std::uint32_t uv_crc32 = 0;  // fit/mesh.h uv_layout_crc32 of the mesh it was baked on
   lighting::ChannelImage dc_linear, lobes_map;  // channels in fit/texture_bake.h's order
 };
 
