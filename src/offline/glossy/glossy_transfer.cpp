@@ -40,7 +40,8 @@ Eigen::MatrixXd transfer_matrix(const fit::Mesh& mesh, std::size_t v, const Eige
   const RayTurn turn = ray_turn(options.seed, v);
   const double turn0 = turn.rotation, shift = turn.shift;
   const Eigen::Vector3d origin = mesh.positions[v] + offset * mesh.normals[v];
-  // Scratch per worker thread: nothing is allocated per vertex but the result.
+  // The rays and SH scratch live per worker thread (T, its rotation part and M' are
+  // allocated per vertex: small beside the rays).
   thread_local std::vector<Eigen::Vector3d> local;
   thread_local std::vector<RTCRay> traced;
   thread_local Eigen::VectorXd y_local, y_scene;
