@@ -42,16 +42,18 @@ Eigen::MatrixXd transfer_matrix(const fit::Mesh& mesh, std::size_t v, const Eige
   const Eigen::Vector3d origin = mesh.positions[v] + offset * mesh.normals[v];
   // The rays and SH scratch live per worker thread (T, its rotation part and M' are
   // allocated per vertex: small beside the rays).
-  thread_local std::vector<Eigen::Vector3d> local;
+  thread_local std::vector<Eigen::Vector3d> local, scene_dir;
   thread_local std::vector<RTCRay> traced;
   thread_local Eigen::VectorXd y_local, y_scene;
   local.resize(rays);
+  scene_dir.resize(rays);
   traced.resize(rays);
   y_local.resize(n2);
   y_scene.resize(n2);
   for (int k = 0; k < rays; ++k) {
     local[k] = fit::uniform_fibonacci_direction(k, rays, turn0, shift);
-    traced[k] = fit::embree_ray(origin, (frame * local[k]).normalized());
+    scene_dir[k] = (frame * local[k]).normalized();
+    traced[k] = fit::embree_ray(origin, scene_dir[k]);
   }
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
@@ -60,7 +62,7 @@ Eigen::MatrixXd transfer_matrix(const fit::Mesh& mesh, std::size_t v, const Eige
   for (int k = 0; k < rays; ++k) {
     if (!(traced[k].tfar < 0.0f)) continue;  // not blocked: Embree sets tfar to -inf on a hit
     eval_sh<double>(options.order, local[k], std::span<double>(y_local.data(), n2));
-    eval_sh<double>(options.order, (frame * local[k]).normalized(), std::span<double>(y_scene.data(), n2));
+    eval_sh<double>(options.order, scene_dir[k], std::span<double>(y_scene.data(), n2));
     t.noalias() -= weight * y_local * y_scene.transpose();
   }
   return t;
