@@ -19,7 +19,7 @@ using detail::kTriplingKernelMaxOrder;
 
 // The orders generated in the outer-product form (outer_kernel_source); the others in the
 // factored form (kernel_source).
-constexpr std::array<int, 4> kOuterFormOrders = {3, 4, 5, 6};
+constexpr std::array<int, 5> kOuterFormOrders = {2, 3, 4, 5, 6};
 
 // Round-trip text of a double (17 significant digits), identical on every run.
 std::string literal(double v) {
@@ -228,9 +228,13 @@ std::string outer_kernel_source(int order, const std::vector<Entry>& entries) {
   // scalar, and only rows i <= j < head need them (1 entry at orders 3 and 5). Column j
   // is stored at j + pad, so that every chunk starts on a vector boundary.
   const int head = count % 8, pad = (8 - head) % 8, width = count + pad;
-  s << "  typedef T V __attribute__((vector_size(8 * sizeof(T))));\n";
-  s << "  alignas(sizeof(V)) T s[" << count << "][" << width << "];\n";
-  s << "  V fv[" << chunks << "], hv[" << chunks << "];\n";
+  if (chunks > 0) {
+    s << "  typedef T V __attribute__((vector_size(8 * sizeof(T))));\n";
+    s << "  alignas(sizeof(V)) T s[" << count << "][" << width << "];\n";
+    s << "  V fv[" << chunks << "], hv[" << chunks << "];\n";
+  } else {
+    s << "  T s[" << count << "][" << width << "];\n";
+  }
   for (int c = 0; c < chunks; ++c)
     s << "  __builtin_memcpy(&fv[" << c << "], f + " << head + 8 * c << ", sizeof(V));\n"
       << "  __builtin_memcpy(&hv[" << c << "], h + " << head + 8 * c << ", sizeof(V));\n";
@@ -250,7 +254,7 @@ std::string outer_kernel_source(int order, const std::vector<Entry>& entries) {
   // Without this the compiler keeps the rows in registers and takes the lanes out one
   // by one with shuffles (measured 1.5x slower at order 5): here s goes to memory once
   // and each term below is one load.
-  s << "  asm volatile(\"\" : : \"r\"(&s[0][0]) : \"memory\");\n";
+  if (chunks > 0) s << "  asm volatile(\"\" : : \"r\"(&s[0][0]) : \"memory\");\n";
   for (int k = 0; k < count; ++k) {
     std::sort(terms[k].begin(), terms[k].end());
     // Groups of equal |C'|, in order of first appearance.

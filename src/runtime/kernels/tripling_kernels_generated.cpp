@@ -15,31 +15,24 @@ namespace {
 // t = f_i h_j + f_j h_i feeds every y_k. Orders 5 and 6 use its outer-product form:
 // the rows of s_ij = f_i h_j + f_j h_i as vectors, then y_k = sum C'_ijk s_ij.
 
-// Order 2: 4 canonical entries in 4 blocks, 20 multiplications.
+// Order 2: 4 canonical entries, outer-product form: 0 8-wide rows and 10 scalar entries of s (2 multiplications each), 7 terms in 4 groups (4 multiplications).
 template <class T>
 SHTOOL_KERNEL_CLONES void tripling_kernel_2(const T* f, const T* h, T* y) {
-  T tf, th, t;
-  // [0,0]: 0
-  t = f[0] * h[0];
-  y[0] = T(0.28209479177387814) * t;
-  // [1,1]: 0
-  tf = T(0.28209479177387814) * f[0];
-  th = T(0.28209479177387814) * h[0];
-  y[1] = tf * h[1] + th * f[1];
-  t = f[1] * h[1];
-  y[0] += T(0.28209479177387814) * t;
-  // [2,2]: 0
-  tf = T(0.28209479177387814) * f[0];
-  th = T(0.28209479177387814) * h[0];
-  y[2] = tf * h[2] + th * f[2];
-  t = f[2] * h[2];
-  y[0] += T(0.28209479177387814) * t;
-  // [3,3]: 0
-  tf = T(0.28209479177387814) * f[0];
-  th = T(0.28209479177387814) * h[0];
-  y[3] = tf * h[3] + th * f[3];
-  t = f[3] * h[3];
-  y[0] += T(0.28209479177387814) * t;
+  T s[4][8];
+  s[0][4] = f[0] * h[0] + h[0] * f[0];
+  s[0][5] = f[0] * h[1] + h[0] * f[1];
+  s[0][6] = f[0] * h[2] + h[0] * f[2];
+  s[0][7] = f[0] * h[3] + h[0] * f[3];
+  s[1][5] = f[1] * h[1] + h[1] * f[1];
+  s[1][6] = f[1] * h[2] + h[1] * f[2];
+  s[1][7] = f[1] * h[3] + h[1] * f[3];
+  s[2][6] = f[2] * h[2] + h[2] * f[2];
+  s[2][7] = f[2] * h[3] + h[2] * f[3];
+  s[3][7] = f[3] * h[3] + h[3] * f[3];
+  y[0] = T(0.14104739588693907) * ((s[0][4] + s[1][5]) + (s[2][6] + s[3][7]));
+  y[1] = T(0.28209479177387814) * s[0][5];
+  y[2] = T(0.28209479177387814) * s[0][6];
+  y[3] = T(0.28209479177387814) * s[0][7];
 }
 
 // Order 3: 25 canonical entries, outer-product form: 9 8-wide rows and 1 scalar entries of s (2 multiplications each), 52 terms in 33 groups (33 multiplications).
