@@ -10,10 +10,8 @@ static_assert(kTriplingKernelMaxOrder == 6, "regenerate tripling_kernels_generat
 
 namespace {
 
-// Orders 2..4 use the factored form of tripling_kernels_gen.cpp: per index pair (i, j),
-// tf = sum_k C_ijk f_k and th = sum_k C_ijk h_k feed y_i and y_j, and
-// t = f_i h_j + f_j h_i feeds every y_k. Orders 5 and 6 use its outer-product form:
-// the rows of s_ij = f_i h_j + f_j h_i as vectors, then y_k = sum C'_ijk s_ij.
+// The kernels use the outer-product form of tripling_kernels_gen.cpp: the rows of
+// s_ij = f_i h_j + f_j h_i as 8-wide vectors, then y_k = sum_{i <= j} C'_ijk s_ij.
 
 // Order 2: 4 canonical entries, outer-product form: 0 8-wide rows and 10 scalar entries of s (2 multiplications each), 7 terms in 4 groups (4 multiplications).
 template <class T>
