@@ -88,21 +88,21 @@ std::string kernel_source(int order, const std::vector<Entry>& entries) {
   // is stored at j + pad, so that every chunk starts on a vector boundary.
   const int head = count % 8, pad = (8 - head) % 8, width = count + pad;
   if (chunks > 0) {
-    s << "  typedef T V __attribute__((vector_size(8 * sizeof(T))));\n";
+    s << "  typedef T V __attribute__((vector_size(32)));  // 8 floats or 4 doubles\n";
+    s << "  constexpr int kPer8 = 8 * sizeof(T) / sizeof(V);  // vectors per 8 columns\n";
     s << "  alignas(sizeof(V)) T s[" << count << "][" << width << "];\n";
-    s << "  V fv[" << chunks << "], hv[" << chunks << "];\n";
+    s << "  V fv[" << chunks << " * kPer8], hv[" << chunks << " * kPer8];\n";
+    s << "  load_rows(f, h, " << head << ", " << chunks << " * kPer8, fv, hv);\n";
   } else {
     s << "  T s[" << count << "][" << width << "];\n";
   }
-  for (int c = 0; c < chunks; ++c)
-    s << "  __builtin_memcpy(&fv[" << c << "], f + " << head + 8 * c << ", sizeof(V));\n"
-      << "  __builtin_memcpy(&hv[" << c << "], h + " << head + 8 * c << ", sizeof(V));\n";
   for (int i = 0; i < count; ++i) {
-    for (int c = 0; c < chunks; ++c) {
-      if (head + 8 * c + 7 < i) continue;  // the chunk lies below the diagonal
-      s << "  { const V r = f[" << i << "] * hv[" << c << "] + h[" << i << "] * fv[" << c
-        << "]; __builtin_memcpy(&s[" << i << "][" << head + pad + 8 * c << "], &r, sizeof(V)); }\n";
-      ++vector_rows;
+    int first = 0;  // the first chunk that reaches the diagonal
+    while (first < chunks && head + 8 * first + 7 < i) ++first;
+    if (first < chunks) {
+      s << "  pair_row(f[" << i << "], h[" << i << "], fv + " << first << " * kPer8, hv + " << first
+        << " * kPer8, " << chunks - first << " * kPer8, &s[" << i << "][" << head + pad + 8 * first << "]);\n";
+      vector_rows += chunks - first;
     }
     for (int j = i; j < head; ++j) {
       s << "  s[" << i << "][" << j + pad << "] = f[" << i << "] * h[" << j << "] + h[" << i << "] * f[" << j
@@ -167,6 +167,27 @@ std::string tripling_kernels_source() {
     << kTriplingKernelMaxOrder
     << ", \"regenerate tripling_kernels_generated.cpp\");\n\n"
        "namespace {\n\n"
+       "// Unaligned, aliasing access to 32 bytes of T (one vector load or store; a memcpy\n"
+       "// there compiled to two 16-byte halves that the vector load then waited for).\n"
+       "template <class T>\n"
+       "struct Unaligned32 {\n"
+       "  typedef T type __attribute__((vector_size(32), aligned(alignof(T)), may_alias));\n"
+       "};\n\n"
+       "// fv[q], hv[q] = the q-th vector of f + offset and h + offset, q < n.\n"
+       "template <class T, class V>\n"
+       "inline void load_rows(const T* f, const T* h, int offset, int n, V* fv, V* hv) {\n"
+       "  constexpr int lanes = sizeof(V) / sizeof(T);\n"
+       "  for (int q = 0; q < n; ++q) {\n"
+       "    fv[q] = *reinterpret_cast<const typename Unaligned32<T>::type*>(f + offset + q * lanes);\n"
+       "    hv[q] = *reinterpret_cast<const typename Unaligned32<T>::type*>(h + offset + q * lanes);\n"
+       "  }\n"
+       "}\n\n"
+       "// Columns of one row of s: out = f_i hv + h_i fv, n vectors.\n"
+       "template <class T, class V>\n"
+       "inline void pair_row(T fi, T hi, const V* fv, const V* hv, int n, T* out) {\n"
+       "  constexpr int lanes = sizeof(V) / sizeof(T);\n"
+       "  for (int q = 0; q < n; ++q) *reinterpret_cast<typename Unaligned32<T>::type*>(out + q * lanes) = fi * hv[q] + hi * fv[q];\n"
+       "}\n\n"
        "// The kernels use the outer-product form of tripling_kernels_gen.cpp: the rows of\n"
        "// s_ij = f_i h_j + f_j h_i as 8-wide vectors, then y_k = sum_{i <= j} C'_ijk s_ij.\n\n";
   std::ostringstream tables;

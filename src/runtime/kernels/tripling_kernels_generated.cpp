@@ -10,6 +10,30 @@ static_assert(kTriplingKernelMaxOrder == 6, "regenerate tripling_kernels_generat
 
 namespace {
 
+// Unaligned, aliasing access to 32 bytes of T (one vector load or store; a memcpy
+// there compiled to two 16-byte halves that the vector load then waited for).
+template <class T>
+struct Unaligned32 {
+  typedef T type __attribute__((vector_size(32), aligned(alignof(T)), may_alias));
+};
+
+// fv[q], hv[q] = the q-th vector of f + offset and h + offset, q < n.
+template <class T, class V>
+inline void load_rows(const T* f, const T* h, int offset, int n, V* fv, V* hv) {
+  constexpr int lanes = sizeof(V) / sizeof(T);
+  for (int q = 0; q < n; ++q) {
+    fv[q] = *reinterpret_cast<const typename Unaligned32<T>::type*>(f + offset + q * lanes);
+    hv[q] = *reinterpret_cast<const typename Unaligned32<T>::type*>(h + offset + q * lanes);
+  }
+}
+
+// Columns of one row of s: out = f_i hv + h_i fv, n vectors.
+template <class T, class V>
+inline void pair_row(T fi, T hi, const V* fv, const V* hv, int n, T* out) {
+  constexpr int lanes = sizeof(V) / sizeof(T);
+  for (int q = 0; q < n; ++q) *reinterpret_cast<typename Unaligned32<T>::type*>(out + q * lanes) = fi * hv[q] + hi * fv[q];
+}
+
 // The kernels use the outer-product form of tripling_kernels_gen.cpp: the rows of
 // s_ij = f_i h_j + f_j h_i as 8-wide vectors, then y_k = sum_{i <= j} C'_ijk s_ij.
 
@@ -36,21 +60,21 @@ SHTOOL_KERNEL_CLONES void tripling_kernel_2(const T* f, const T* h, T* y) {
 // Order 3: 25 canonical entries, outer-product form: 9 8-wide rows and 1 scalar entries of s (2 multiplications each), 52 terms in 33 groups (33 multiplications).
 template <class T>
 SHTOOL_KERNEL_CLONES void tripling_kernel_3(const T* f, const T* h, T* y) {
-  typedef T V __attribute__((vector_size(8 * sizeof(T))));
+  typedef T V __attribute__((vector_size(32)));  // 8 floats or 4 doubles
+  constexpr int kPer8 = 8 * sizeof(T) / sizeof(V);  // vectors per 8 columns
   alignas(sizeof(V)) T s[9][16];
-  V fv[1], hv[1];
-  __builtin_memcpy(&fv[0], f + 1, sizeof(V));
-  __builtin_memcpy(&hv[0], h + 1, sizeof(V));
-  { const V r = f[0] * hv[0] + h[0] * fv[0]; __builtin_memcpy(&s[0][8], &r, sizeof(V)); }
+  V fv[1 * kPer8], hv[1 * kPer8];
+  load_rows(f, h, 1, 1 * kPer8, fv, hv);
+  pair_row(f[0], h[0], fv + 0 * kPer8, hv + 0 * kPer8, 1 * kPer8, &s[0][8]);
   s[0][7] = f[0] * h[0] + h[0] * f[0];
-  { const V r = f[1] * hv[0] + h[1] * fv[0]; __builtin_memcpy(&s[1][8], &r, sizeof(V)); }
-  { const V r = f[2] * hv[0] + h[2] * fv[0]; __builtin_memcpy(&s[2][8], &r, sizeof(V)); }
-  { const V r = f[3] * hv[0] + h[3] * fv[0]; __builtin_memcpy(&s[3][8], &r, sizeof(V)); }
-  { const V r = f[4] * hv[0] + h[4] * fv[0]; __builtin_memcpy(&s[4][8], &r, sizeof(V)); }
-  { const V r = f[5] * hv[0] + h[5] * fv[0]; __builtin_memcpy(&s[5][8], &r, sizeof(V)); }
-  { const V r = f[6] * hv[0] + h[6] * fv[0]; __builtin_memcpy(&s[6][8], &r, sizeof(V)); }
-  { const V r = f[7] * hv[0] + h[7] * fv[0]; __builtin_memcpy(&s[7][8], &r, sizeof(V)); }
-  { const V r = f[8] * hv[0] + h[8] * fv[0]; __builtin_memcpy(&s[8][8], &r, sizeof(V)); }
+  pair_row(f[1], h[1], fv + 0 * kPer8, hv + 0 * kPer8, 1 * kPer8, &s[1][8]);
+  pair_row(f[2], h[2], fv + 0 * kPer8, hv + 0 * kPer8, 1 * kPer8, &s[2][8]);
+  pair_row(f[3], h[3], fv + 0 * kPer8, hv + 0 * kPer8, 1 * kPer8, &s[3][8]);
+  pair_row(f[4], h[4], fv + 0 * kPer8, hv + 0 * kPer8, 1 * kPer8, &s[4][8]);
+  pair_row(f[5], h[5], fv + 0 * kPer8, hv + 0 * kPer8, 1 * kPer8, &s[5][8]);
+  pair_row(f[6], h[6], fv + 0 * kPer8, hv + 0 * kPer8, 1 * kPer8, &s[6][8]);
+  pair_row(f[7], h[7], fv + 0 * kPer8, hv + 0 * kPer8, 1 * kPer8, &s[7][8]);
+  pair_row(f[8], h[8], fv + 0 * kPer8, hv + 0 * kPer8, 1 * kPer8, &s[8][8]);
   asm volatile("" : : "r"(&s[0][0]) : "memory");
   y[0] = T(0.14104739588693907) * (((s[0][7] + s[1][8]) + (s[2][9] + s[3][10])) + ((s[4][11] + s[5][12]) + (s[6][13] + (s[7][14] + s[8][15]))));
   y[1] = (T(0.21850968611841581) * (s[3][11] - s[1][15]) + T(-0.126156626101008) * s[1][13]) + (T(0.21850968611841584) * s[2][12] + T(0.28209479177387814) * s[0][8]);
@@ -66,37 +90,27 @@ SHTOOL_KERNEL_CLONES void tripling_kernel_3(const T* f, const T* h, T* y) {
 // Order 4: 77 canonical entries, outer-product form: 24 8-wide rows and 0 scalar entries of s (2 multiplications each), 194 terms in 118 groups (118 multiplications).
 template <class T>
 SHTOOL_KERNEL_CLONES void tripling_kernel_4(const T* f, const T* h, T* y) {
-  typedef T V __attribute__((vector_size(8 * sizeof(T))));
+  typedef T V __attribute__((vector_size(32)));  // 8 floats or 4 doubles
+  constexpr int kPer8 = 8 * sizeof(T) / sizeof(V);  // vectors per 8 columns
   alignas(sizeof(V)) T s[16][16];
-  V fv[2], hv[2];
-  __builtin_memcpy(&fv[0], f + 0, sizeof(V));
-  __builtin_memcpy(&hv[0], h + 0, sizeof(V));
-  __builtin_memcpy(&fv[1], f + 8, sizeof(V));
-  __builtin_memcpy(&hv[1], h + 8, sizeof(V));
-  { const V r = f[0] * hv[0] + h[0] * fv[0]; __builtin_memcpy(&s[0][0], &r, sizeof(V)); }
-  { const V r = f[0] * hv[1] + h[0] * fv[1]; __builtin_memcpy(&s[0][8], &r, sizeof(V)); }
-  { const V r = f[1] * hv[0] + h[1] * fv[0]; __builtin_memcpy(&s[1][0], &r, sizeof(V)); }
-  { const V r = f[1] * hv[1] + h[1] * fv[1]; __builtin_memcpy(&s[1][8], &r, sizeof(V)); }
-  { const V r = f[2] * hv[0] + h[2] * fv[0]; __builtin_memcpy(&s[2][0], &r, sizeof(V)); }
-  { const V r = f[2] * hv[1] + h[2] * fv[1]; __builtin_memcpy(&s[2][8], &r, sizeof(V)); }
-  { const V r = f[3] * hv[0] + h[3] * fv[0]; __builtin_memcpy(&s[3][0], &r, sizeof(V)); }
-  { const V r = f[3] * hv[1] + h[3] * fv[1]; __builtin_memcpy(&s[3][8], &r, sizeof(V)); }
-  { const V r = f[4] * hv[0] + h[4] * fv[0]; __builtin_memcpy(&s[4][0], &r, sizeof(V)); }
-  { const V r = f[4] * hv[1] + h[4] * fv[1]; __builtin_memcpy(&s[4][8], &r, sizeof(V)); }
-  { const V r = f[5] * hv[0] + h[5] * fv[0]; __builtin_memcpy(&s[5][0], &r, sizeof(V)); }
-  { const V r = f[5] * hv[1] + h[5] * fv[1]; __builtin_memcpy(&s[5][8], &r, sizeof(V)); }
-  { const V r = f[6] * hv[0] + h[6] * fv[0]; __builtin_memcpy(&s[6][0], &r, sizeof(V)); }
-  { const V r = f[6] * hv[1] + h[6] * fv[1]; __builtin_memcpy(&s[6][8], &r, sizeof(V)); }
-  { const V r = f[7] * hv[0] + h[7] * fv[0]; __builtin_memcpy(&s[7][0], &r, sizeof(V)); }
-  { const V r = f[7] * hv[1] + h[7] * fv[1]; __builtin_memcpy(&s[7][8], &r, sizeof(V)); }
-  { const V r = f[8] * hv[1] + h[8] * fv[1]; __builtin_memcpy(&s[8][8], &r, sizeof(V)); }
-  { const V r = f[9] * hv[1] + h[9] * fv[1]; __builtin_memcpy(&s[9][8], &r, sizeof(V)); }
-  { const V r = f[10] * hv[1] + h[10] * fv[1]; __builtin_memcpy(&s[10][8], &r, sizeof(V)); }
-  { const V r = f[11] * hv[1] + h[11] * fv[1]; __builtin_memcpy(&s[11][8], &r, sizeof(V)); }
-  { const V r = f[12] * hv[1] + h[12] * fv[1]; __builtin_memcpy(&s[12][8], &r, sizeof(V)); }
-  { const V r = f[13] * hv[1] + h[13] * fv[1]; __builtin_memcpy(&s[13][8], &r, sizeof(V)); }
-  { const V r = f[14] * hv[1] + h[14] * fv[1]; __builtin_memcpy(&s[14][8], &r, sizeof(V)); }
-  { const V r = f[15] * hv[1] + h[15] * fv[1]; __builtin_memcpy(&s[15][8], &r, sizeof(V)); }
+  V fv[2 * kPer8], hv[2 * kPer8];
+  load_rows(f, h, 0, 2 * kPer8, fv, hv);
+  pair_row(f[0], h[0], fv + 0 * kPer8, hv + 0 * kPer8, 2 * kPer8, &s[0][0]);
+  pair_row(f[1], h[1], fv + 0 * kPer8, hv + 0 * kPer8, 2 * kPer8, &s[1][0]);
+  pair_row(f[2], h[2], fv + 0 * kPer8, hv + 0 * kPer8, 2 * kPer8, &s[2][0]);
+  pair_row(f[3], h[3], fv + 0 * kPer8, hv + 0 * kPer8, 2 * kPer8, &s[3][0]);
+  pair_row(f[4], h[4], fv + 0 * kPer8, hv + 0 * kPer8, 2 * kPer8, &s[4][0]);
+  pair_row(f[5], h[5], fv + 0 * kPer8, hv + 0 * kPer8, 2 * kPer8, &s[5][0]);
+  pair_row(f[6], h[6], fv + 0 * kPer8, hv + 0 * kPer8, 2 * kPer8, &s[6][0]);
+  pair_row(f[7], h[7], fv + 0 * kPer8, hv + 0 * kPer8, 2 * kPer8, &s[7][0]);
+  pair_row(f[8], h[8], fv + 1 * kPer8, hv + 1 * kPer8, 1 * kPer8, &s[8][8]);
+  pair_row(f[9], h[9], fv + 1 * kPer8, hv + 1 * kPer8, 1 * kPer8, &s[9][8]);
+  pair_row(f[10], h[10], fv + 1 * kPer8, hv + 1 * kPer8, 1 * kPer8, &s[10][8]);
+  pair_row(f[11], h[11], fv + 1 * kPer8, hv + 1 * kPer8, 1 * kPer8, &s[11][8]);
+  pair_row(f[12], h[12], fv + 1 * kPer8, hv + 1 * kPer8, 1 * kPer8, &s[12][8]);
+  pair_row(f[13], h[13], fv + 1 * kPer8, hv + 1 * kPer8, 1 * kPer8, &s[13][8]);
+  pair_row(f[14], h[14], fv + 1 * kPer8, hv + 1 * kPer8, 1 * kPer8, &s[14][8]);
+  pair_row(f[15], h[15], fv + 1 * kPer8, hv + 1 * kPer8, 1 * kPer8, &s[15][8]);
   asm volatile("" : : "r"(&s[0][0]) : "memory");
   y[0] = T(0.14104739588693907) * ((((s[0][0] + s[1][1]) + (s[2][2] + s[3][3])) + ((s[4][4] + s[5][5]) + (s[6][6] + s[7][7]))) + (((s[8][8] + s[9][9]) + (s[10][10] + s[11][11])) + ((s[12][12] + s[13][13]) + (s[14][14] + s[15][15]))));
   y[1] = ((T(0.22617901315954028) * (s[8][9] - s[4][15]) + T(0.21850968611841581) * (s[3][4] - s[1][8])) + (T(0.18467439092237181) * (s[7][10] - s[5][14]) + T(-0.14304816810266885) * s[5][12])) + ((T(-0.126156626101008) * s[1][6] + T(0.058399170081901847) * (s[8][11] - s[4][13])) + (T(0.20230065940342065) * s[6][11] + (T(0.21850968611841584) * s[2][5] + T(0.28209479177387814) * s[0][1])));
@@ -119,67 +133,37 @@ SHTOOL_KERNEL_CLONES void tripling_kernel_4(const T* f, const T* h, T* y) {
 // Order 5: 238 canonical entries, outer-product form: 51 8-wide rows and 1 scalar entries of s (2 multiplications each), 623 terms in 377 groups (377 multiplications).
 template <class T>
 SHTOOL_KERNEL_CLONES void tripling_kernel_5(const T* f, const T* h, T* y) {
-  typedef T V __attribute__((vector_size(8 * sizeof(T))));
+  typedef T V __attribute__((vector_size(32)));  // 8 floats or 4 doubles
+  constexpr int kPer8 = 8 * sizeof(T) / sizeof(V);  // vectors per 8 columns
   alignas(sizeof(V)) T s[25][32];
-  V fv[3], hv[3];
-  __builtin_memcpy(&fv[0], f + 1, sizeof(V));
-  __builtin_memcpy(&hv[0], h + 1, sizeof(V));
-  __builtin_memcpy(&fv[1], f + 9, sizeof(V));
-  __builtin_memcpy(&hv[1], h + 9, sizeof(V));
-  __builtin_memcpy(&fv[2], f + 17, sizeof(V));
-  __builtin_memcpy(&hv[2], h + 17, sizeof(V));
-  { const V r = f[0] * hv[0] + h[0] * fv[0]; __builtin_memcpy(&s[0][8], &r, sizeof(V)); }
-  { const V r = f[0] * hv[1] + h[0] * fv[1]; __builtin_memcpy(&s[0][16], &r, sizeof(V)); }
-  { const V r = f[0] * hv[2] + h[0] * fv[2]; __builtin_memcpy(&s[0][24], &r, sizeof(V)); }
+  V fv[3 * kPer8], hv[3 * kPer8];
+  load_rows(f, h, 1, 3 * kPer8, fv, hv);
+  pair_row(f[0], h[0], fv + 0 * kPer8, hv + 0 * kPer8, 3 * kPer8, &s[0][8]);
   s[0][7] = f[0] * h[0] + h[0] * f[0];
-  { const V r = f[1] * hv[0] + h[1] * fv[0]; __builtin_memcpy(&s[1][8], &r, sizeof(V)); }
-  { const V r = f[1] * hv[1] + h[1] * fv[1]; __builtin_memcpy(&s[1][16], &r, sizeof(V)); }
-  { const V r = f[1] * hv[2] + h[1] * fv[2]; __builtin_memcpy(&s[1][24], &r, sizeof(V)); }
-  { const V r = f[2] * hv[0] + h[2] * fv[0]; __builtin_memcpy(&s[2][8], &r, sizeof(V)); }
-  { const V r = f[2] * hv[1] + h[2] * fv[1]; __builtin_memcpy(&s[2][16], &r, sizeof(V)); }
-  { const V r = f[2] * hv[2] + h[2] * fv[2]; __builtin_memcpy(&s[2][24], &r, sizeof(V)); }
-  { const V r = f[3] * hv[0] + h[3] * fv[0]; __builtin_memcpy(&s[3][8], &r, sizeof(V)); }
-  { const V r = f[3] * hv[1] + h[3] * fv[1]; __builtin_memcpy(&s[3][16], &r, sizeof(V)); }
-  { const V r = f[3] * hv[2] + h[3] * fv[2]; __builtin_memcpy(&s[3][24], &r, sizeof(V)); }
-  { const V r = f[4] * hv[0] + h[4] * fv[0]; __builtin_memcpy(&s[4][8], &r, sizeof(V)); }
-  { const V r = f[4] * hv[1] + h[4] * fv[1]; __builtin_memcpy(&s[4][16], &r, sizeof(V)); }
-  { const V r = f[4] * hv[2] + h[4] * fv[2]; __builtin_memcpy(&s[4][24], &r, sizeof(V)); }
-  { const V r = f[5] * hv[0] + h[5] * fv[0]; __builtin_memcpy(&s[5][8], &r, sizeof(V)); }
-  { const V r = f[5] * hv[1] + h[5] * fv[1]; __builtin_memcpy(&s[5][16], &r, sizeof(V)); }
-  { const V r = f[5] * hv[2] + h[5] * fv[2]; __builtin_memcpy(&s[5][24], &r, sizeof(V)); }
-  { const V r = f[6] * hv[0] + h[6] * fv[0]; __builtin_memcpy(&s[6][8], &r, sizeof(V)); }
-  { const V r = f[6] * hv[1] + h[6] * fv[1]; __builtin_memcpy(&s[6][16], &r, sizeof(V)); }
-  { const V r = f[6] * hv[2] + h[6] * fv[2]; __builtin_memcpy(&s[6][24], &r, sizeof(V)); }
-  { const V r = f[7] * hv[0] + h[7] * fv[0]; __builtin_memcpy(&s[7][8], &r, sizeof(V)); }
-  { const V r = f[7] * hv[1] + h[7] * fv[1]; __builtin_memcpy(&s[7][16], &r, sizeof(V)); }
-  { const V r = f[7] * hv[2] + h[7] * fv[2]; __builtin_memcpy(&s[7][24], &r, sizeof(V)); }
-  { const V r = f[8] * hv[0] + h[8] * fv[0]; __builtin_memcpy(&s[8][8], &r, sizeof(V)); }
-  { const V r = f[8] * hv[1] + h[8] * fv[1]; __builtin_memcpy(&s[8][16], &r, sizeof(V)); }
-  { const V r = f[8] * hv[2] + h[8] * fv[2]; __builtin_memcpy(&s[8][24], &r, sizeof(V)); }
-  { const V r = f[9] * hv[1] + h[9] * fv[1]; __builtin_memcpy(&s[9][16], &r, sizeof(V)); }
-  { const V r = f[9] * hv[2] + h[9] * fv[2]; __builtin_memcpy(&s[9][24], &r, sizeof(V)); }
-  { const V r = f[10] * hv[1] + h[10] * fv[1]; __builtin_memcpy(&s[10][16], &r, sizeof(V)); }
-  { const V r = f[10] * hv[2] + h[10] * fv[2]; __builtin_memcpy(&s[10][24], &r, sizeof(V)); }
-  { const V r = f[11] * hv[1] + h[11] * fv[1]; __builtin_memcpy(&s[11][16], &r, sizeof(V)); }
-  { const V r = f[11] * hv[2] + h[11] * fv[2]; __builtin_memcpy(&s[11][24], &r, sizeof(V)); }
-  { const V r = f[12] * hv[1] + h[12] * fv[1]; __builtin_memcpy(&s[12][16], &r, sizeof(V)); }
-  { const V r = f[12] * hv[2] + h[12] * fv[2]; __builtin_memcpy(&s[12][24], &r, sizeof(V)); }
-  { const V r = f[13] * hv[1] + h[13] * fv[1]; __builtin_memcpy(&s[13][16], &r, sizeof(V)); }
-  { const V r = f[13] * hv[2] + h[13] * fv[2]; __builtin_memcpy(&s[13][24], &r, sizeof(V)); }
-  { const V r = f[14] * hv[1] + h[14] * fv[1]; __builtin_memcpy(&s[14][16], &r, sizeof(V)); }
-  { const V r = f[14] * hv[2] + h[14] * fv[2]; __builtin_memcpy(&s[14][24], &r, sizeof(V)); }
-  { const V r = f[15] * hv[1] + h[15] * fv[1]; __builtin_memcpy(&s[15][16], &r, sizeof(V)); }
-  { const V r = f[15] * hv[2] + h[15] * fv[2]; __builtin_memcpy(&s[15][24], &r, sizeof(V)); }
-  { const V r = f[16] * hv[1] + h[16] * fv[1]; __builtin_memcpy(&s[16][16], &r, sizeof(V)); }
-  { const V r = f[16] * hv[2] + h[16] * fv[2]; __builtin_memcpy(&s[16][24], &r, sizeof(V)); }
-  { const V r = f[17] * hv[2] + h[17] * fv[2]; __builtin_memcpy(&s[17][24], &r, sizeof(V)); }
-  { const V r = f[18] * hv[2] + h[18] * fv[2]; __builtin_memcpy(&s[18][24], &r, sizeof(V)); }
-  { const V r = f[19] * hv[2] + h[19] * fv[2]; __builtin_memcpy(&s[19][24], &r, sizeof(V)); }
-  { const V r = f[20] * hv[2] + h[20] * fv[2]; __builtin_memcpy(&s[20][24], &r, sizeof(V)); }
-  { const V r = f[21] * hv[2] + h[21] * fv[2]; __builtin_memcpy(&s[21][24], &r, sizeof(V)); }
-  { const V r = f[22] * hv[2] + h[22] * fv[2]; __builtin_memcpy(&s[22][24], &r, sizeof(V)); }
-  { const V r = f[23] * hv[2] + h[23] * fv[2]; __builtin_memcpy(&s[23][24], &r, sizeof(V)); }
-  { const V r = f[24] * hv[2] + h[24] * fv[2]; __builtin_memcpy(&s[24][24], &r, sizeof(V)); }
+  pair_row(f[1], h[1], fv + 0 * kPer8, hv + 0 * kPer8, 3 * kPer8, &s[1][8]);
+  pair_row(f[2], h[2], fv + 0 * kPer8, hv + 0 * kPer8, 3 * kPer8, &s[2][8]);
+  pair_row(f[3], h[3], fv + 0 * kPer8, hv + 0 * kPer8, 3 * kPer8, &s[3][8]);
+  pair_row(f[4], h[4], fv + 0 * kPer8, hv + 0 * kPer8, 3 * kPer8, &s[4][8]);
+  pair_row(f[5], h[5], fv + 0 * kPer8, hv + 0 * kPer8, 3 * kPer8, &s[5][8]);
+  pair_row(f[6], h[6], fv + 0 * kPer8, hv + 0 * kPer8, 3 * kPer8, &s[6][8]);
+  pair_row(f[7], h[7], fv + 0 * kPer8, hv + 0 * kPer8, 3 * kPer8, &s[7][8]);
+  pair_row(f[8], h[8], fv + 0 * kPer8, hv + 0 * kPer8, 3 * kPer8, &s[8][8]);
+  pair_row(f[9], h[9], fv + 1 * kPer8, hv + 1 * kPer8, 2 * kPer8, &s[9][16]);
+  pair_row(f[10], h[10], fv + 1 * kPer8, hv + 1 * kPer8, 2 * kPer8, &s[10][16]);
+  pair_row(f[11], h[11], fv + 1 * kPer8, hv + 1 * kPer8, 2 * kPer8, &s[11][16]);
+  pair_row(f[12], h[12], fv + 1 * kPer8, hv + 1 * kPer8, 2 * kPer8, &s[12][16]);
+  pair_row(f[13], h[13], fv + 1 * kPer8, hv + 1 * kPer8, 2 * kPer8, &s[13][16]);
+  pair_row(f[14], h[14], fv + 1 * kPer8, hv + 1 * kPer8, 2 * kPer8, &s[14][16]);
+  pair_row(f[15], h[15], fv + 1 * kPer8, hv + 1 * kPer8, 2 * kPer8, &s[15][16]);
+  pair_row(f[16], h[16], fv + 1 * kPer8, hv + 1 * kPer8, 2 * kPer8, &s[16][16]);
+  pair_row(f[17], h[17], fv + 2 * kPer8, hv + 2 * kPer8, 1 * kPer8, &s[17][24]);
+  pair_row(f[18], h[18], fv + 2 * kPer8, hv + 2 * kPer8, 1 * kPer8, &s[18][24]);
+  pair_row(f[19], h[19], fv + 2 * kPer8, hv + 2 * kPer8, 1 * kPer8, &s[19][24]);
+  pair_row(f[20], h[20], fv + 2 * kPer8, hv + 2 * kPer8, 1 * kPer8, &s[20][24]);
+  pair_row(f[21], h[21], fv + 2 * kPer8, hv + 2 * kPer8, 1 * kPer8, &s[21][24]);
+  pair_row(f[22], h[22], fv + 2 * kPer8, hv + 2 * kPer8, 1 * kPer8, &s[22][24]);
+  pair_row(f[23], h[23], fv + 2 * kPer8, hv + 2 * kPer8, 1 * kPer8, &s[23][24]);
+  pair_row(f[24], h[24], fv + 2 * kPer8, hv + 2 * kPer8, 1 * kPer8, &s[24][24]);
   asm volatile("" : : "r"(&s[0][0]) : "memory");
   y[0] = T(0.14104739588693907) * ((((s[0][7] + (s[1][8] + s[2][9])) + (s[3][10] + (s[4][11] + s[5][12]))) + ((s[6][13] + (s[7][14] + s[8][15])) + (s[9][16] + (s[10][17] + s[11][18])))) + (((s[12][19] + (s[13][20] + s[14][21])) + (s[15][22] + (s[16][23] + s[17][24]))) + ((s[18][25] + (s[19][26] + s[20][27])) + ((s[21][28] + s[22][29]) + (s[23][30] + s[24][31])))));
   y[1] = (((T(0.23032943298089031) * (s[15][23] - s[9][31]) + T(0.22617901315954028) * (s[8][16] - s[4][22])) + (T(0.21850968611841581) * (s[3][11] - s[1][15]) + T(0.19947114020071632) * (s[14][24] - s[10][30]))) + ((T(0.18467439092237181) * (s[7][17] - s[5][21]) + T(0.16858388283618386) * (s[13][25] - s[11][29])) + (T(-0.15078600877302686) * s[11][27] + T(-0.14304816810266885) * s[5][19]))) + (((T(-0.126156626101008) * s[1][13] + T(0.075393004386513432) * (s[14][26] - s[10][28])) + (T(0.058399170081901847) * (s[8][18] - s[4][20]) + T(0.043528171377568162) * (s[15][25] - s[9][29]))) + ((T(0.19466390027300617) * s[12][26] + T(0.20230065940342065) * s[6][18]) + (T(0.21850968611841584) * s[2][12] + T(0.28209479177387814) * s[0][8])));
@@ -211,123 +195,57 @@ SHTOOL_KERNEL_CLONES void tripling_kernel_5(const T* f, const T* h, T* y) {
 // Order 6: 549 canonical entries, outer-product form: 96 8-wide rows and 10 scalar entries of s (2 multiplications each), 1517 terms in 872 groups (872 multiplications).
 template <class T>
 SHTOOL_KERNEL_CLONES void tripling_kernel_6(const T* f, const T* h, T* y) {
-  typedef T V __attribute__((vector_size(8 * sizeof(T))));
+  typedef T V __attribute__((vector_size(32)));  // 8 floats or 4 doubles
+  constexpr int kPer8 = 8 * sizeof(T) / sizeof(V);  // vectors per 8 columns
   alignas(sizeof(V)) T s[36][40];
-  V fv[4], hv[4];
-  __builtin_memcpy(&fv[0], f + 4, sizeof(V));
-  __builtin_memcpy(&hv[0], h + 4, sizeof(V));
-  __builtin_memcpy(&fv[1], f + 12, sizeof(V));
-  __builtin_memcpy(&hv[1], h + 12, sizeof(V));
-  __builtin_memcpy(&fv[2], f + 20, sizeof(V));
-  __builtin_memcpy(&hv[2], h + 20, sizeof(V));
-  __builtin_memcpy(&fv[3], f + 28, sizeof(V));
-  __builtin_memcpy(&hv[3], h + 28, sizeof(V));
-  { const V r = f[0] * hv[0] + h[0] * fv[0]; __builtin_memcpy(&s[0][8], &r, sizeof(V)); }
-  { const V r = f[0] * hv[1] + h[0] * fv[1]; __builtin_memcpy(&s[0][16], &r, sizeof(V)); }
-  { const V r = f[0] * hv[2] + h[0] * fv[2]; __builtin_memcpy(&s[0][24], &r, sizeof(V)); }
-  { const V r = f[0] * hv[3] + h[0] * fv[3]; __builtin_memcpy(&s[0][32], &r, sizeof(V)); }
+  V fv[4 * kPer8], hv[4 * kPer8];
+  load_rows(f, h, 4, 4 * kPer8, fv, hv);
+  pair_row(f[0], h[0], fv + 0 * kPer8, hv + 0 * kPer8, 4 * kPer8, &s[0][8]);
   s[0][4] = f[0] * h[0] + h[0] * f[0];
   s[0][5] = f[0] * h[1] + h[0] * f[1];
   s[0][6] = f[0] * h[2] + h[0] * f[2];
   s[0][7] = f[0] * h[3] + h[0] * f[3];
-  { const V r = f[1] * hv[0] + h[1] * fv[0]; __builtin_memcpy(&s[1][8], &r, sizeof(V)); }
-  { const V r = f[1] * hv[1] + h[1] * fv[1]; __builtin_memcpy(&s[1][16], &r, sizeof(V)); }
-  { const V r = f[1] * hv[2] + h[1] * fv[2]; __builtin_memcpy(&s[1][24], &r, sizeof(V)); }
-  { const V r = f[1] * hv[3] + h[1] * fv[3]; __builtin_memcpy(&s[1][32], &r, sizeof(V)); }
+  pair_row(f[1], h[1], fv + 0 * kPer8, hv + 0 * kPer8, 4 * kPer8, &s[1][8]);
   s[1][5] = f[1] * h[1] + h[1] * f[1];
   s[1][6] = f[1] * h[2] + h[1] * f[2];
   s[1][7] = f[1] * h[3] + h[1] * f[3];
-  { const V r = f[2] * hv[0] + h[2] * fv[0]; __builtin_memcpy(&s[2][8], &r, sizeof(V)); }
-  { const V r = f[2] * hv[1] + h[2] * fv[1]; __builtin_memcpy(&s[2][16], &r, sizeof(V)); }
-  { const V r = f[2] * hv[2] + h[2] * fv[2]; __builtin_memcpy(&s[2][24], &r, sizeof(V)); }
-  { const V r = f[2] * hv[3] + h[2] * fv[3]; __builtin_memcpy(&s[2][32], &r, sizeof(V)); }
+  pair_row(f[2], h[2], fv + 0 * kPer8, hv + 0 * kPer8, 4 * kPer8, &s[2][8]);
   s[2][6] = f[2] * h[2] + h[2] * f[2];
   s[2][7] = f[2] * h[3] + h[2] * f[3];
-  { const V r = f[3] * hv[0] + h[3] * fv[0]; __builtin_memcpy(&s[3][8], &r, sizeof(V)); }
-  { const V r = f[3] * hv[1] + h[3] * fv[1]; __builtin_memcpy(&s[3][16], &r, sizeof(V)); }
-  { const V r = f[3] * hv[2] + h[3] * fv[2]; __builtin_memcpy(&s[3][24], &r, sizeof(V)); }
-  { const V r = f[3] * hv[3] + h[3] * fv[3]; __builtin_memcpy(&s[3][32], &r, sizeof(V)); }
+  pair_row(f[3], h[3], fv + 0 * kPer8, hv + 0 * kPer8, 4 * kPer8, &s[3][8]);
   s[3][7] = f[3] * h[3] + h[3] * f[3];
-  { const V r = f[4] * hv[0] + h[4] * fv[0]; __builtin_memcpy(&s[4][8], &r, sizeof(V)); }
-  { const V r = f[4] * hv[1] + h[4] * fv[1]; __builtin_memcpy(&s[4][16], &r, sizeof(V)); }
-  { const V r = f[4] * hv[2] + h[4] * fv[2]; __builtin_memcpy(&s[4][24], &r, sizeof(V)); }
-  { const V r = f[4] * hv[3] + h[4] * fv[3]; __builtin_memcpy(&s[4][32], &r, sizeof(V)); }
-  { const V r = f[5] * hv[0] + h[5] * fv[0]; __builtin_memcpy(&s[5][8], &r, sizeof(V)); }
-  { const V r = f[5] * hv[1] + h[5] * fv[1]; __builtin_memcpy(&s[5][16], &r, sizeof(V)); }
-  { const V r = f[5] * hv[2] + h[5] * fv[2]; __builtin_memcpy(&s[5][24], &r, sizeof(V)); }
-  { const V r = f[5] * hv[3] + h[5] * fv[3]; __builtin_memcpy(&s[5][32], &r, sizeof(V)); }
-  { const V r = f[6] * hv[0] + h[6] * fv[0]; __builtin_memcpy(&s[6][8], &r, sizeof(V)); }
-  { const V r = f[6] * hv[1] + h[6] * fv[1]; __builtin_memcpy(&s[6][16], &r, sizeof(V)); }
-  { const V r = f[6] * hv[2] + h[6] * fv[2]; __builtin_memcpy(&s[6][24], &r, sizeof(V)); }
-  { const V r = f[6] * hv[3] + h[6] * fv[3]; __builtin_memcpy(&s[6][32], &r, sizeof(V)); }
-  { const V r = f[7] * hv[0] + h[7] * fv[0]; __builtin_memcpy(&s[7][8], &r, sizeof(V)); }
-  { const V r = f[7] * hv[1] + h[7] * fv[1]; __builtin_memcpy(&s[7][16], &r, sizeof(V)); }
-  { const V r = f[7] * hv[2] + h[7] * fv[2]; __builtin_memcpy(&s[7][24], &r, sizeof(V)); }
-  { const V r = f[7] * hv[3] + h[7] * fv[3]; __builtin_memcpy(&s[7][32], &r, sizeof(V)); }
-  { const V r = f[8] * hv[0] + h[8] * fv[0]; __builtin_memcpy(&s[8][8], &r, sizeof(V)); }
-  { const V r = f[8] * hv[1] + h[8] * fv[1]; __builtin_memcpy(&s[8][16], &r, sizeof(V)); }
-  { const V r = f[8] * hv[2] + h[8] * fv[2]; __builtin_memcpy(&s[8][24], &r, sizeof(V)); }
-  { const V r = f[8] * hv[3] + h[8] * fv[3]; __builtin_memcpy(&s[8][32], &r, sizeof(V)); }
-  { const V r = f[9] * hv[0] + h[9] * fv[0]; __builtin_memcpy(&s[9][8], &r, sizeof(V)); }
-  { const V r = f[9] * hv[1] + h[9] * fv[1]; __builtin_memcpy(&s[9][16], &r, sizeof(V)); }
-  { const V r = f[9] * hv[2] + h[9] * fv[2]; __builtin_memcpy(&s[9][24], &r, sizeof(V)); }
-  { const V r = f[9] * hv[3] + h[9] * fv[3]; __builtin_memcpy(&s[9][32], &r, sizeof(V)); }
-  { const V r = f[10] * hv[0] + h[10] * fv[0]; __builtin_memcpy(&s[10][8], &r, sizeof(V)); }
-  { const V r = f[10] * hv[1] + h[10] * fv[1]; __builtin_memcpy(&s[10][16], &r, sizeof(V)); }
-  { const V r = f[10] * hv[2] + h[10] * fv[2]; __builtin_memcpy(&s[10][24], &r, sizeof(V)); }
-  { const V r = f[10] * hv[3] + h[10] * fv[3]; __builtin_memcpy(&s[10][32], &r, sizeof(V)); }
-  { const V r = f[11] * hv[0] + h[11] * fv[0]; __builtin_memcpy(&s[11][8], &r, sizeof(V)); }
-  { const V r = f[11] * hv[1] + h[11] * fv[1]; __builtin_memcpy(&s[11][16], &r, sizeof(V)); }
-  { const V r = f[11] * hv[2] + h[11] * fv[2]; __builtin_memcpy(&s[11][24], &r, sizeof(V)); }
-  { const V r = f[11] * hv[3] + h[11] * fv[3]; __builtin_memcpy(&s[11][32], &r, sizeof(V)); }
-  { const V r = f[12] * hv[1] + h[12] * fv[1]; __builtin_memcpy(&s[12][16], &r, sizeof(V)); }
-  { const V r = f[12] * hv[2] + h[12] * fv[2]; __builtin_memcpy(&s[12][24], &r, sizeof(V)); }
-  { const V r = f[12] * hv[3] + h[12] * fv[3]; __builtin_memcpy(&s[12][32], &r, sizeof(V)); }
-  { const V r = f[13] * hv[1] + h[13] * fv[1]; __builtin_memcpy(&s[13][16], &r, sizeof(V)); }
-  { const V r = f[13] * hv[2] + h[13] * fv[2]; __builtin_memcpy(&s[13][24], &r, sizeof(V)); }
-  { const V r = f[13] * hv[3] + h[13] * fv[3]; __builtin_memcpy(&s[13][32], &r, sizeof(V)); }
-  { const V r = f[14] * hv[1] + h[14] * fv[1]; __builtin_memcpy(&s[14][16], &r, sizeof(V)); }
-  { const V r = f[14] * hv[2] + h[14] * fv[2]; __builtin_memcpy(&s[14][24], &r, sizeof(V)); }
-  { const V r = f[14] * hv[3] + h[14] * fv[3]; __builtin_memcpy(&s[14][32], &r, sizeof(V)); }
-  { const V r = f[15] * hv[1] + h[15] * fv[1]; __builtin_memcpy(&s[15][16], &r, sizeof(V)); }
-  { const V r = f[15] * hv[2] + h[15] * fv[2]; __builtin_memcpy(&s[15][24], &r, sizeof(V)); }
-  { const V r = f[15] * hv[3] + h[15] * fv[3]; __builtin_memcpy(&s[15][32], &r, sizeof(V)); }
-  { const V r = f[16] * hv[1] + h[16] * fv[1]; __builtin_memcpy(&s[16][16], &r, sizeof(V)); }
-  { const V r = f[16] * hv[2] + h[16] * fv[2]; __builtin_memcpy(&s[16][24], &r, sizeof(V)); }
-  { const V r = f[16] * hv[3] + h[16] * fv[3]; __builtin_memcpy(&s[16][32], &r, sizeof(V)); }
-  { const V r = f[17] * hv[1] + h[17] * fv[1]; __builtin_memcpy(&s[17][16], &r, sizeof(V)); }
-  { const V r = f[17] * hv[2] + h[17] * fv[2]; __builtin_memcpy(&s[17][24], &r, sizeof(V)); }
-  { const V r = f[17] * hv[3] + h[17] * fv[3]; __builtin_memcpy(&s[17][32], &r, sizeof(V)); }
-  { const V r = f[18] * hv[1] + h[18] * fv[1]; __builtin_memcpy(&s[18][16], &r, sizeof(V)); }
-  { const V r = f[18] * hv[2] + h[18] * fv[2]; __builtin_memcpy(&s[18][24], &r, sizeof(V)); }
-  { const V r = f[18] * hv[3] + h[18] * fv[3]; __builtin_memcpy(&s[18][32], &r, sizeof(V)); }
-  { const V r = f[19] * hv[1] + h[19] * fv[1]; __builtin_memcpy(&s[19][16], &r, sizeof(V)); }
-  { const V r = f[19] * hv[2] + h[19] * fv[2]; __builtin_memcpy(&s[19][24], &r, sizeof(V)); }
-  { const V r = f[19] * hv[3] + h[19] * fv[3]; __builtin_memcpy(&s[19][32], &r, sizeof(V)); }
-  { const V r = f[20] * hv[2] + h[20] * fv[2]; __builtin_memcpy(&s[20][24], &r, sizeof(V)); }
-  { const V r = f[20] * hv[3] + h[20] * fv[3]; __builtin_memcpy(&s[20][32], &r, sizeof(V)); }
-  { const V r = f[21] * hv[2] + h[21] * fv[2]; __builtin_memcpy(&s[21][24], &r, sizeof(V)); }
-  { const V r = f[21] * hv[3] + h[21] * fv[3]; __builtin_memcpy(&s[21][32], &r, sizeof(V)); }
-  { const V r = f[22] * hv[2] + h[22] * fv[2]; __builtin_memcpy(&s[22][24], &r, sizeof(V)); }
-  { const V r = f[22] * hv[3] + h[22] * fv[3]; __builtin_memcpy(&s[22][32], &r, sizeof(V)); }
-  { const V r = f[23] * hv[2] + h[23] * fv[2]; __builtin_memcpy(&s[23][24], &r, sizeof(V)); }
-  { const V r = f[23] * hv[3] + h[23] * fv[3]; __builtin_memcpy(&s[23][32], &r, sizeof(V)); }
-  { const V r = f[24] * hv[2] + h[24] * fv[2]; __builtin_memcpy(&s[24][24], &r, sizeof(V)); }
-  { const V r = f[24] * hv[3] + h[24] * fv[3]; __builtin_memcpy(&s[24][32], &r, sizeof(V)); }
-  { const V r = f[25] * hv[2] + h[25] * fv[2]; __builtin_memcpy(&s[25][24], &r, sizeof(V)); }
-  { const V r = f[25] * hv[3] + h[25] * fv[3]; __builtin_memcpy(&s[25][32], &r, sizeof(V)); }
-  { const V r = f[26] * hv[2] + h[26] * fv[2]; __builtin_memcpy(&s[26][24], &r, sizeof(V)); }
-  { const V r = f[26] * hv[3] + h[26] * fv[3]; __builtin_memcpy(&s[26][32], &r, sizeof(V)); }
-  { const V r = f[27] * hv[2] + h[27] * fv[2]; __builtin_memcpy(&s[27][24], &r, sizeof(V)); }
-  { const V r = f[27] * hv[3] + h[27] * fv[3]; __builtin_memcpy(&s[27][32], &r, sizeof(V)); }
-  { const V r = f[28] * hv[3] + h[28] * fv[3]; __builtin_memcpy(&s[28][32], &r, sizeof(V)); }
-  { const V r = f[29] * hv[3] + h[29] * fv[3]; __builtin_memcpy(&s[29][32], &r, sizeof(V)); }
-  { const V r = f[30] * hv[3] + h[30] * fv[3]; __builtin_memcpy(&s[30][32], &r, sizeof(V)); }
-  { const V r = f[31] * hv[3] + h[31] * fv[3]; __builtin_memcpy(&s[31][32], &r, sizeof(V)); }
-  { const V r = f[32] * hv[3] + h[32] * fv[3]; __builtin_memcpy(&s[32][32], &r, sizeof(V)); }
-  { const V r = f[33] * hv[3] + h[33] * fv[3]; __builtin_memcpy(&s[33][32], &r, sizeof(V)); }
-  { const V r = f[34] * hv[3] + h[34] * fv[3]; __builtin_memcpy(&s[34][32], &r, sizeof(V)); }
-  { const V r = f[35] * hv[3] + h[35] * fv[3]; __builtin_memcpy(&s[35][32], &r, sizeof(V)); }
+  pair_row(f[4], h[4], fv + 0 * kPer8, hv + 0 * kPer8, 4 * kPer8, &s[4][8]);
+  pair_row(f[5], h[5], fv + 0 * kPer8, hv + 0 * kPer8, 4 * kPer8, &s[5][8]);
+  pair_row(f[6], h[6], fv + 0 * kPer8, hv + 0 * kPer8, 4 * kPer8, &s[6][8]);
+  pair_row(f[7], h[7], fv + 0 * kPer8, hv + 0 * kPer8, 4 * kPer8, &s[7][8]);
+  pair_row(f[8], h[8], fv + 0 * kPer8, hv + 0 * kPer8, 4 * kPer8, &s[8][8]);
+  pair_row(f[9], h[9], fv + 0 * kPer8, hv + 0 * kPer8, 4 * kPer8, &s[9][8]);
+  pair_row(f[10], h[10], fv + 0 * kPer8, hv + 0 * kPer8, 4 * kPer8, &s[10][8]);
+  pair_row(f[11], h[11], fv + 0 * kPer8, hv + 0 * kPer8, 4 * kPer8, &s[11][8]);
+  pair_row(f[12], h[12], fv + 1 * kPer8, hv + 1 * kPer8, 3 * kPer8, &s[12][16]);
+  pair_row(f[13], h[13], fv + 1 * kPer8, hv + 1 * kPer8, 3 * kPer8, &s[13][16]);
+  pair_row(f[14], h[14], fv + 1 * kPer8, hv + 1 * kPer8, 3 * kPer8, &s[14][16]);
+  pair_row(f[15], h[15], fv + 1 * kPer8, hv + 1 * kPer8, 3 * kPer8, &s[15][16]);
+  pair_row(f[16], h[16], fv + 1 * kPer8, hv + 1 * kPer8, 3 * kPer8, &s[16][16]);
+  pair_row(f[17], h[17], fv + 1 * kPer8, hv + 1 * kPer8, 3 * kPer8, &s[17][16]);
+  pair_row(f[18], h[18], fv + 1 * kPer8, hv + 1 * kPer8, 3 * kPer8, &s[18][16]);
+  pair_row(f[19], h[19], fv + 1 * kPer8, hv + 1 * kPer8, 3 * kPer8, &s[19][16]);
+  pair_row(f[20], h[20], fv + 2 * kPer8, hv + 2 * kPer8, 2 * kPer8, &s[20][24]);
+  pair_row(f[21], h[21], fv + 2 * kPer8, hv + 2 * kPer8, 2 * kPer8, &s[21][24]);
+  pair_row(f[22], h[22], fv + 2 * kPer8, hv + 2 * kPer8, 2 * kPer8, &s[22][24]);
+  pair_row(f[23], h[23], fv + 2 * kPer8, hv + 2 * kPer8, 2 * kPer8, &s[23][24]);
+  pair_row(f[24], h[24], fv + 2 * kPer8, hv + 2 * kPer8, 2 * kPer8, &s[24][24]);
+  pair_row(f[25], h[25], fv + 2 * kPer8, hv + 2 * kPer8, 2 * kPer8, &s[25][24]);
+  pair_row(f[26], h[26], fv + 2 * kPer8, hv + 2 * kPer8, 2 * kPer8, &s[26][24]);
+  pair_row(f[27], h[27], fv + 2 * kPer8, hv + 2 * kPer8, 2 * kPer8, &s[27][24]);
+  pair_row(f[28], h[28], fv + 3 * kPer8, hv + 3 * kPer8, 1 * kPer8, &s[28][32]);
+  pair_row(f[29], h[29], fv + 3 * kPer8, hv + 3 * kPer8, 1 * kPer8, &s[29][32]);
+  pair_row(f[30], h[30], fv + 3 * kPer8, hv + 3 * kPer8, 1 * kPer8, &s[30][32]);
+  pair_row(f[31], h[31], fv + 3 * kPer8, hv + 3 * kPer8, 1 * kPer8, &s[31][32]);
+  pair_row(f[32], h[32], fv + 3 * kPer8, hv + 3 * kPer8, 1 * kPer8, &s[32][32]);
+  pair_row(f[33], h[33], fv + 3 * kPer8, hv + 3 * kPer8, 1 * kPer8, &s[33][32]);
+  pair_row(f[34], h[34], fv + 3 * kPer8, hv + 3 * kPer8, 1 * kPer8, &s[34][32]);
+  pair_row(f[35], h[35], fv + 3 * kPer8, hv + 3 * kPer8, 1 * kPer8, &s[35][32]);
   asm volatile("" : : "r"(&s[0][0]) : "memory");
   y[0] = T(0.14104739588693907) * (((((s[0][4] + s[1][5]) + (s[2][6] + s[3][7])) + ((s[4][8] + s[5][9]) + (s[6][10] + (s[7][11] + s[8][12])))) + (((s[9][13] + s[10][14]) + (s[11][15] + s[12][16])) + ((s[13][17] + s[14][18]) + (s[15][19] + (s[16][20] + s[17][21]))))) + ((((s[18][22] + s[19][23]) + (s[20][24] + s[21][25])) + ((s[22][26] + s[23][27]) + (s[24][28] + (s[25][29] + s[26][30])))) + (((s[27][31] + s[28][32]) + (s[29][33] + s[30][34])) + ((s[31][35] + s[32][36]) + (s[33][37] + (s[34][38] + s[35][39]))))));
   y[1] = (((T(0.23293210805542919) * (s[24][29] - s[16][39]) + (T(0.23032943298089031) * (s[15][20] - s[9][28]) + T(0.22617901315954028) * (s[8][13] - s[4][19]))) + (T(0.21850968611841581) * (s[3][8] - s[1][12]) + (T(0.20834081110170641) * (s[23][30] - s[17][38]) + T(0.19947114020071632) * (s[14][21] - s[10][27])))) + ((T(0.18467439092237181) * (s[7][14] - s[5][18]) + (T(0.18373932470686663) * (s[22][31] - s[18][37]) + T(0.16858388283618386) * (s[13][22] - s[11][26]))) + (T(0.15912292287034427) * (s[21][32] - s[19][36]) + (T(-0.1552880720369528) * s[19][34] + T(-0.15078600877302686) * s[11][24])))) + (((T(-0.14304816810266885) * s[5][16] + (T(-0.126156626101008) * s[1][10] + T(0.085054779966126245) * (s[22][33] - s[18][35]))) + (T(0.075393004386513432) * (s[14][23] - s[10][25]) + (T(0.060142811686377584) * (s[23][32] - s[17][36]) + T(0.058399170081901847) * (s[8][15] - s[4][17])))) + ((T(0.043528171377568162) * (s[15][22] - s[9][26]) + (T(0.034723468516951066) * (s[24][31] - s[16][37]) + T(0.19018826981554557) * s[20][33])) + ((T(0.19466390027300617) * s[12][23] + T(0.20230065940342065) * s[6][15]) + (T(0.21850968611841584) * s[2][9] + T(0.28209479177387814) * s[0][5]))));
