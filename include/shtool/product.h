@@ -30,8 +30,9 @@ enum class ProductMethod { automatic, tripling, fourier, grid };
 
 // From this order on the grid triple product beats the tripling tensor on the reference
 // machine in both float and double (bench/bench_products.cpp, docs/products.md); below
-// it the sparse tensor loop is faster. The grid beats the Fourier method at every order.
-inline constexpr int kGridTripleFromOrder = 6;
+// it the generated tripling kernels (orders 2..6) are faster. The grid beats the Fourier
+// method at every order.
+inline constexpr int kGridTripleFromOrder = 7;
 
 template <class T>
 class ShProduct {
