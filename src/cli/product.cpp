@@ -93,7 +93,7 @@ void setup_product(CLI::App& app) {
       "{\"inputs\": [[N^2 coefficients], ...]}; output: {\"order\": N, \"coefficients\": [...]}");
   sub->add_option("--order", opt->order, "SH order N (bands 0..N-1)")->required();
   sub->add_option("--method", opt->method,
-                  "auto (fastest at this order: tripling below order 6, grid from 6 on), tripling "
+                  "auto (fastest at this order: tripling below order 7, grid from 7 on), tripling "
                   "(sparse tripling tensor; more than 2 inputs are chained at growing orders, up to "
                   "order 32), fourier (the FFT method of [3]) or grid (Gauss-Legendre quadrature)")
       ->capture_default_str();
