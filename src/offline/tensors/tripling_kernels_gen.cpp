@@ -56,8 +56,9 @@ Signed balanced_sum(const std::vector<Signed>& items) {
 // balanced trees. Against the factored form DirectXMath's XMSHMultiplyN use (per index
 // pair (i, j): tf = sum_k C_ijk f_k, th = sum_k C_ijk h_k feed y_i and y_j, and
 // t = f_i h_j + f_j h_i feeds every y_k; 20 / 120 / 399 / 1135 / 2527 multiplications at
-// N = 2..6), this is 1.1-2x faster at N = 2..6 in float (docs/products.md, "Tripling
-// kernels"): at N = 5, 51 vector rows and 623 scalar terms in 377 groups.
+// N = 2..6), this measured 1.1-1.5x the speed of DirectXMath's fused (-march=native)
+// build at N = 3..6 in float, 1.4-2.2x its SSE2 build (docs/products.md, "Product
+// layout"): at N = 5, 51 vector rows and 623 scalar terms in 377 groups.
 std::string kernel_source(int order, const std::vector<Entry>& entries) {
   const int count = order * order;
   const int chunks = count / 8;  // whole 8-wide chunks of columns
