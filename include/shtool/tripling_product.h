@@ -89,7 +89,7 @@ class TriplingProduct {
   std::vector<std::uint32_t> pair_;  // i | (j << 16)
   std::vector<T> weight_;
   // Orders 2..kUnrolledTriplingOrder: a generated straight-line kernel (values as
-  // literals, sub-products shared), used when the tensor holds its entries.
+  // literals, pair products as vector rows), used when the tensor holds its entries.
   Kernel kernel_ = nullptr;
 };
 

@@ -336,10 +336,10 @@ void check_product(double tol) {
 TEST(TriplingProduct, MatchesQuadratureDouble) { check_product<double>(1e-13); }
 TEST(TriplingProduct, MatchesQuadratureFloat) { check_product<float>(2e-5); }
 
-// Orders 2..kUnrolledTriplingOrder run a generated straight-line kernel (blocks that share
-// sub-products, values as literals); order 1 and 7 the gather loop. Reference: every
-// permutation of every canonical entry of the exact (3j) tensor, summed densely in long
-// double, so an entry the kernel's blocks missed or counted twice shows up.
+// Orders 2..kUnrolledTriplingOrder run a generated straight-line kernel (outer-product
+// form, values as literals); order 1 and 7 the gather loop. Reference: every permutation
+// of every canonical entry of the exact (3j) tensor, summed densely in long double, so an
+// entry the kernel missed or counted twice shows up.
 template <class T>
 void check_small_orders(double tol) {
   for (int order = 1; order <= kUnrolledTriplingOrder + 1; ++order) {
