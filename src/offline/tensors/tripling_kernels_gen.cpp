@@ -83,7 +83,7 @@ std::string kernel_source(int order, const std::vector<Entry>& entries) {
     }
   }
   std::ostringstream s;
-  int vector_rows = 0, scalar_entries = 0, scalar_terms = 0, groups = 0;
+  int vector_rows = 0, scalar_entries = 0, scalar_terms = 0, groups = 0, outputs = 0;
   // The chunks cover the last 8 * chunks columns; the first `head` columns (j < head) are
   // scalar, and only rows i <= j < head need them (1 entry at orders 3 and 5). Column j
   // is stored at j + pad, so that every chunk starts on a vector boundary.
@@ -142,11 +142,14 @@ std::string kernel_source(int order, const std::vector<Entry>& entries) {
       ++groups;
     }
     s << "  y[" << k << "] = " << balanced_sum(products).expr << ";\n";
+    ++outputs;
   }
   std::ostringstream out;
   out << "// Order " << order << ": " << entries.size() << " canonical entries, outer-product form: "
       << vector_rows << " 8-wide rows and " << scalar_entries << " scalar entries of s (2 multiplications each), "
-      << scalar_terms << " terms in " << groups << " groups (" << groups << " multiplications).\n";
+      << scalar_terms << " terms in " << groups << " groups (" << groups << " multiplications); "
+      << 2 * scalar_entries + groups << " scalar multiplications, " << scalar_entries + scalar_terms - outputs
+      << " scalar additions.\n";
   out << "template <class T>\n";
   out << "SHTOOL_KERNEL_CLONES void tripling_kernel_" << order << "(const T* f, const T* h, T* y) {\n";
   out << s.str();

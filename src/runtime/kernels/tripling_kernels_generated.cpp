@@ -37,7 +37,7 @@ inline void pair_row(T fi, T hi, const V* fv, const V* hv, int n, T* out) {
 // The kernels use the outer-product form of tripling_kernels_gen.cpp: the rows of
 // s_ij = f_i h_j + f_j h_i as 8-wide vectors, then y_k = sum_{i <= j} C'_ijk s_ij.
 
-// Order 2: 4 canonical entries, outer-product form: 0 8-wide rows and 10 scalar entries of s (2 multiplications each), 7 terms in 4 groups (4 multiplications).
+// Order 2: 4 canonical entries, outer-product form: 0 8-wide rows and 10 scalar entries of s (2 multiplications each), 7 terms in 4 groups (4 multiplications); 24 scalar multiplications, 13 scalar additions.
 template <class T>
 SHTOOL_KERNEL_CLONES void tripling_kernel_2(const T* f, const T* h, T* y) {
   T s[4][8];
@@ -57,7 +57,7 @@ SHTOOL_KERNEL_CLONES void tripling_kernel_2(const T* f, const T* h, T* y) {
   y[3] = T(0.28209479177387814) * s[0][7];
 }
 
-// Order 3: 25 canonical entries, outer-product form: 9 8-wide rows and 1 scalar entries of s (2 multiplications each), 52 terms in 33 groups (33 multiplications).
+// Order 3: 25 canonical entries, outer-product form: 9 8-wide rows and 1 scalar entries of s (2 multiplications each), 52 terms in 33 groups (33 multiplications); 35 scalar multiplications, 44 scalar additions.
 template <class T>
 SHTOOL_KERNEL_CLONES void tripling_kernel_3(const T* f, const T* h, T* y) {
   typedef T V __attribute__((vector_size(32)));  // 8 floats or 4 doubles
@@ -87,7 +87,7 @@ SHTOOL_KERNEL_CLONES void tripling_kernel_3(const T* f, const T* h, T* y) {
   y[8] = (T(-0.18022375157286857) * s[6][15] + T(0.10925484305920791) * (s[3][10] - s[1][8])) + (T(0.078039173613719939) * (s[7][14] - s[5][12]) + T(0.28209479177387814) * s[0][15]);
 }
 
-// Order 4: 77 canonical entries, outer-product form: 24 8-wide rows and 0 scalar entries of s (2 multiplications each), 194 terms in 118 groups (118 multiplications).
+// Order 4: 77 canonical entries, outer-product form: 24 8-wide rows and 0 scalar entries of s (2 multiplications each), 194 terms in 118 groups (118 multiplications); 118 scalar multiplications, 178 scalar additions.
 template <class T>
 SHTOOL_KERNEL_CLONES void tripling_kernel_4(const T* f, const T* h, T* y) {
   typedef T V __attribute__((vector_size(32)));  // 8 floats or 4 doubles
@@ -130,7 +130,7 @@ SHTOOL_KERNEL_CLONES void tripling_kernel_4(const T* f, const T* h, T* y) {
   y[15] = (T(0.22617901315954028) * (s[3][8] - s[1][4]) + T(-0.21026104350168001) * s[6][15]) + (T(0.14867700967939759) * (s[7][14] - s[5][10]) + (T(0.094031597257959385) * (s[4][11] - s[8][13]) + T(0.28209479177387814) * s[0][15]));
 }
 
-// Order 5: 238 canonical entries, outer-product form: 51 8-wide rows and 1 scalar entries of s (2 multiplications each), 623 terms in 377 groups (377 multiplications).
+// Order 5: 238 canonical entries, outer-product form: 51 8-wide rows and 1 scalar entries of s (2 multiplications each), 623 terms in 377 groups (377 multiplications); 379 scalar multiplications, 599 scalar additions.
 template <class T>
 SHTOOL_KERNEL_CLONES void tripling_kernel_5(const T* f, const T* h, T* y) {
   typedef T V __attribute__((vector_size(32)));  // 8 floats or 4 doubles
@@ -192,7 +192,7 @@ SHTOOL_KERNEL_CLONES void tripling_kernel_5(const T* f, const T* h, T* y) {
   y[24] = ((T(0.23032943298089031) * (s[3][22] - s[1][16]) + T(-0.22937568382001455) * s[6][31]) + (T(0.14046334619025075) * (s[7][30] - s[5][24]) + (T(0.11920680675222402) * (s[8][15] - s[4][11]) + T(0.11909891275269986) * (s[17][26] - s[21][30])))) + ((T(0.11752006695060023) * (s[9][18] - s[13][22]) + (T(0.075858877024142554) * (s[14][21] - s[10][17]) + T(0.07508081669196244) * (s[4][25] - s[8][29]))) + (T(0.067522736691819199) * (s[22][29] - s[18][25]) + (T(0.10652530598454141) * s[20][31] + T(0.28209479177387814) * s[0][31])));
 }
 
-// Order 6: 549 canonical entries, outer-product form: 96 8-wide rows and 10 scalar entries of s (2 multiplications each), 1517 terms in 872 groups (872 multiplications).
+// Order 6: 549 canonical entries, outer-product form: 96 8-wide rows and 10 scalar entries of s (2 multiplications each), 1517 terms in 872 groups (872 multiplications); 892 scalar multiplications, 1491 scalar additions.
 template <class T>
 SHTOOL_KERNEL_CLONES void tripling_kernel_6(const T* f, const T* h, T* y) {
   typedef T V __attribute__((vector_size(32)));  // 8 floats or 4 doubles
