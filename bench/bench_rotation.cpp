@@ -76,7 +76,7 @@ void BM_Rotate(benchmark::State& state, RotationMethod method, bool small_tilt, 
   bool ok = true;
   for (auto _ : state) {
     const auto& qk = q[k];
-    k = (k + 1) % q.size();
+    k = shtool::bench::next_index(k, q.size());
     const shtool::Mat3<T> r = shtool::matrix_from_quaternion<T>(qk[0], qk[1], qk[2], qk[3]);
     ok &= rotation.set(r, method);
     if (vectors == 3)  // one pass for the three (ShRotation::apply_rgb)

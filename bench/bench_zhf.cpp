@@ -87,7 +87,7 @@ void BM_Zhf(benchmark::State& state, Method method) {
   std::size_t k = 0;
   auto next = [&]() {
     const auto& qk = q[k];
-    k = (k + 1) % q.size();
+    k = shtool::bench::next_index(k, q.size());
     return shtool::matrix_from_quaternion<T>(qk[0], qk[1], qk[2], qk[3]);
   };
 

@@ -66,10 +66,13 @@ template <class T, class P, class R = T>
 __attribute__((always_inline))
 #endif
 inline void band1_closed(const R* __restrict r, const P* __restrict x, P* __restrict y) {
-  const P fy = -x[0], fz = x[1], fx = -x[2];  // the band as a plain vector (times c)
-  y[0] = -(r[1] * fx + r[4] * fy + r[7] * fz);
-  y[1] = r[2] * fx + r[5] * fy + r[8] * fz;
-  y[2] = -(r[0] * fx + r[3] * fy + r[6] * fz);
+  // With the band as a plain vector v = (vx, vy, vz) = (-x2, -x0, x1) (times c), the
+  // rows are y0 = -(R1 . v), y1 = R2 . v, y2 = -(R0 . v) (R_i: row i). The signs are
+  // folded into the order of operations: rounding is symmetric, so -(-(a + b) + c) is
+  // (a + b) - c to the bit (up to the sign of a zero), with no negation instructions.
+  y[0] = (r[1] * x[2] + r[4] * x[0]) - r[7] * x[1];
+  y[1] = r[8] * x[1] - (r[2] * x[2] + r[5] * x[0]);
+  y[2] = (r[0] * x[2] + r[3] * x[0]) - r[6] * x[1];
 }
 }  // namespace detail
 
@@ -280,6 +283,7 @@ class ShRotation {
   // Squared sine of the largest tilt for taylor1, 1.5, 2: set() compares it with
   // R02^2 + R12^2 = sin^2 b, without a square root or an atan2.
   double taylor_limit_sin2_[3] = {0, 0, 0};
+  double taylor_widest_sin2_ = 0;  // the largest of the three: one test for generic rotations
   std::vector<T> cos_a_, sin_a_, cos_b_, sin_b_, cos_g_, sin_g_;  // cos(m angle), m < N
   std::vector<T> dense_;
 };

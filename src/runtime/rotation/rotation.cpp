@@ -256,6 +256,7 @@ void ShRotation<T>::update_taylor_limits(double tolerance) {
     }
     taylor_limit_sin2_[k] = std::sin(lo) * std::sin(lo);
   }
+  taylor_widest_sin2_ = std::max(std::max(taylor_limit_sin2_[0], taylor_limit_sin2_[1]), taylor_limit_sin2_[2]);
 }
 
 namespace {
@@ -379,8 +380,7 @@ inline RotationMethod ShRotation<T>::choose_method(const Mat3<T>& r, RotationMet
   const double sb2 = static_cast<double>(r(0, 2) * r(0, 2) + r(1, 2) * r(1, 2));
   // One test first, without short-circuit: for generic rotations it is always false, so
   // predicted, where the sign of R22 alone is a coin toss.
-  const double widest = std::max(std::max(taylor_limit_sin2_[0], taylor_limit_sin2_[1]), taylor_limit_sin2_[2]);
-  const bool taylor_tilt_possible = (r(2, 2) > 0) & (sb2 <= widest);
+  const bool taylor_tilt_possible = (r(2, 2) > 0) & (sb2 <= taylor_widest_sin2_);
   if (taylor_tilt_possible) {
     const RotationMethod taylor[3] = {RotationMethod::taylor1, RotationMethod::taylor15,
                                       RotationMethod::taylor2};
