@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <sstream>
+#include <stdexcept>
 #include <tuple>
 #include <utility>
 #include <vector>
@@ -48,26 +49,16 @@ Signed balanced_sum(const std::vector<Signed>& items) {
   return a.positive ? Signed{wrap(a) + " - " + wrap(b), true, true} : Signed{wrap(b) + " - " + wrap(a), true, true};
 }
 
-// The kernel of one order, in outer-product form:
-//   s_ij = f_i h_j + f_j h_i (j >= i),   y_k = sum_{i <= j} C'_ijk s_ij,
-// C' = C_ijk for i < j and C_iik / 2 on the diagonal (s_ii = 2 f_i h_i, the halving exact).
-// The rows of s are 8-wide vector operations (f_i and h_i broadcast against 8 of h and f);
-// each y_k then sums its s entries, those with equal |C'| first and multiplied once, as
-// balanced trees. Against the factored form DirectXMath's XMSHMultiplyN use (per index
-// pair (i, j): tf = sum_k C_ijk f_k, th = sum_k C_ijk h_k feed y_i and y_j, and
-// t = f_i h_j + f_j h_i feeds every y_k; 20 / 120 / 399 / 1135 / 2527 multiplications at
-// N = 2..6), this measured 1.1-1.5x the speed of DirectXMath's fused (-march=native)
-// build at N = 3..6 in float, 1.4-2.2x its SSE2 build (docs/products.md, "Product
-// layout"): at N = 5, 51 vector rows and 623 scalar terms in 377 groups.
-std::string kernel_source(int order, const std::vector<Entry>& entries) {
-  const int count = order * order;
-  const int chunks = count / 8;  // whole 8-wide chunks of columns
-  // The terms C'_ijk s_ij of each output y_k, i <= j.
-  struct Term {
-    double c;
-    int i, j;
-    bool operator<(const Term& o) const { return std::tie(c, i, j) < std::tie(o.c, o.i, o.j); }
-  };
+// One term C'_ijk s_ij of an output y_k (i <= j).
+struct Term {
+  double c;
+  int i, j;
+  bool operator<(const Term& o) const { return std::tie(c, i, j) < std::tie(o.c, o.i, o.j); }
+};
+
+// The terms of each output y_k, k < count: C'_ijk s_ij for i <= j, with C' = C_ijk for
+// i < j and C_iik / 2 on the diagonal (s_ii = 2 f_i h_i, the halving exact).
+std::vector<std::vector<Term>> output_terms(int count, const std::vector<Entry>& entries) {
   std::vector<std::vector<Term>> terms(count);
   auto add = [&](int i, int j, int k, double c) { terms[k].push_back({i == j ? c / 2 : c, i, j}); };
   for (const Entry& e : entries) {
@@ -82,6 +73,108 @@ std::string kernel_source(int order, const std::vector<Entry>& entries) {
       add(t[0], t[1], t[2], e.value);
     }
   }
+  return terms;
+}
+
+// Order 3 in the permutation form. Its 9 coefficients are y_0 and the 8 lanes of one
+// vector, y_1..y_8, and row i of s, (s_i1 .. s_i8) = f_i (h_1..h_8) + h_i (f_1..f_8), is
+// one 8-wide vector too. Within a row, C' sends each s_ij to a few outputs, so the row's
+// part of y_1..y_8 is a sum of "layers": each a permutation of the row's lanes (an output
+// lane takes at most one s_ij per layer, a lane may feed several) times a vector of
+// coefficients. 12 layers cover the 9 rows, so the kernel is 9 row products, 11
+// permutations and 12 multiply-adds (into 4 partial sums), all in registers, no stack
+// array: 99 instructions in the float AVX2 copy against 153 for the scalar-sum form below;
+// measured 9.5-12.3 against 19.8-20.9 ns per float product (AVX2 copy), and in double the
+// baseline copy 37 against 240 ns (the scalar-sum form's 4-double vectors split badly
+// there), the baseline float copy level (18-25 ns both). y_0 = C_000 sum_i f_i h_i
+// (the only nonzero C_ij0 are C_ii0 = C_000). At orders 4..6 the outputs span several
+// vectors and a layer would permute across two (no single AVX2 instruction does).
+std::string permutation_kernel_source(int order, const std::vector<Entry>& entries) {
+  const int count = order * order;
+  if (count != 9) throw std::logic_error("tripling kernels: the permutation form is for order 3");
+  const std::vector<std::vector<Term>> terms = output_terms(count, entries);
+  // y_0: every term diagonal, one coefficient.
+  const double c0 = terms[0].at(0).c;
+  for (const Term& t : terms[0])
+    if (t.i != t.j || t.c != c0) throw std::logic_error("tripling kernels: y_0 is not C_000 f . h");
+  // Layers per row, greedily in (j, k) order: lane k - 1 of a layer takes s_ij (lane j - 1).
+  struct Layer {
+    int row;
+    std::array<int, 8> lane{};  // source lane per output lane (0 where unused)
+    std::array<double, 8> c{};  // coefficient per output lane (0 where unused)
+    std::array<bool, 8> used{};
+  };
+  std::vector<Layer> layers;
+  for (int i = 0; i < count; ++i) {
+    std::vector<std::pair<int, std::pair<int, double>>> row;  // (j, (k, c))
+    for (int k = 1; k < count; ++k)
+      for (const Term& t : terms[k])
+        if (t.i == i) {
+          if (t.j == 0) throw std::logic_error("tripling kernels: s_00 feeds an output above y_0");
+          row.push_back({t.j, {k, t.c}});
+        }
+    std::sort(row.begin(), row.end());
+    const std::size_t first = layers.size();
+    for (const auto& [j, kc] : row) {
+      const int k = kc.first;
+      std::size_t l = first;
+      while (l < layers.size() && layers[l].used[k - 1]) ++l;
+      if (l == layers.size()) layers.push_back({i, {}, {}, {}});
+      layers[l].lane[k - 1] = j - 1;
+      layers[l].c[k - 1] = kc.second;
+      layers[l].used[k - 1] = true;
+    }
+  }
+  std::ostringstream s;
+  s << "// Order " << order << ": " << entries.size() << " canonical entries, permutation form: 9 8-wide rows "
+    << "(2 multiplications each), " << layers.size() << " layers (8-wide multiply-adds) from them, y_0 from "
+    << "one 8-wide product and 8 scalar additions; 2 scalar multiplications, 8 scalar additions.\n";
+  s << "template <class T>\n";
+  s << "SHTOOL_KERNEL_CLONES void tripling_kernel_" << order << "(const T* f, const T* h, T* y) {\n";
+  s << "  typedef T V8 __attribute__((vector_size(8 * sizeof(T))));  // 8 floats or 8 doubles\n";
+  s << "  typedef T U8 __attribute__((vector_size(8 * sizeof(T)), aligned(alignof(T)), may_alias));\n";
+  s << "  const V8 fv = *reinterpret_cast<const U8*>(f + 1), hv = *reinterpret_cast<const U8*>(h + 1);\n";
+  for (int i = 0; i < count; ++i)
+    s << "  const V8 row" << i << " = f[" << i << "] * hv + h[" << i << "] * fv;\n";
+  s << "  V8 acc[4];\n";
+  for (std::size_t n = 0; n < layers.size(); ++n) {
+    const Layer& layer = layers[n];
+    bool identity = true;
+    for (int k = 0; k < 8; ++k) identity &= layer.used[k] && layer.lane[k] == k;
+    const std::string row = "row" + std::to_string(layer.row);
+    std::string source = row;
+    if (!identity) {
+      source = "__builtin_shufflevector(" + row + ", " + row;
+      for (int k = 0; k < 8; ++k) source += ", " + std::to_string(layer.lane[k]);
+      source += ")";
+    }
+    std::string coefficients = "V8{";
+    for (int k = 0; k < 8; ++k) coefficients += (k ? ", T(" : "T(") + literal(layer.c[k]) + ")";
+    coefficients += "}";
+    s << "  acc[" << n % 4 << "] " << (n < 4 ? "= " : "+= ") << coefficients << " * " << source << ";\n";
+  }
+  s << "  const V8 d = fv * hv;\n";
+  s << "  y[0] = T(" << literal(2 * c0) << ") * (f[0] * h[0] + (((d[0] + d[1]) + (d[2] + d[3])) + ((d[4] + d[5]) + (d[6] + d[7]))));\n";
+  s << "  *reinterpret_cast<U8*>(y + 1) = (acc[0] + acc[1]) + (acc[2] + acc[3]);\n";
+  s << "}\n\n";
+  return s.str();
+}
+
+// The kernel of one order (2, 4, 5, 6; order 3: permutation_kernel_source), in
+// outer-product form with scalar sums:
+//   s_ij = f_i h_j + f_j h_i (j >= i),   y_k = sum_{i <= j} C'_ijk s_ij.
+// The rows of s are 8-wide vector operations (f_i and h_i broadcast against 8 of h and f);
+// each y_k then sums its s entries, those with equal |C'| first and multiplied once, as
+// balanced trees. Against the factored form DirectXMath's XMSHMultiplyN use (per index
+// pair (i, j): tf = sum_k C_ijk f_k, th = sum_k C_ijk h_k feed y_i and y_j, and
+// t = f_i h_j + f_j h_i feeds every y_k; 20 / 120 / 399 / 1135 / 2527 multiplications at
+// N = 2..6), this measured 1.2-1.6x the speed of DirectXMath's fused (-march=native)
+// build at N = 4..6 in float, 1.9-2.5x its SSE2 build (docs/benchmarks.md, "Against
+// DirectXMath"): at N = 5, 51 vector rows and 623 scalar terms in 377 groups.
+std::string kernel_source(int order, const std::vector<Entry>& entries) {
+  const int count = order * order;
+  const int chunks = count / 8;  // whole 8-wide chunks of columns
+  std::vector<std::vector<Term>> terms = output_terms(count, entries);
   std::ostringstream s;
   int vector_rows = 0, scalar_entries = 0, scalar_terms = 0, groups = 0, outputs = 0;
   // The chunks cover the last 8 * chunks columns; the first `head` columns (j < head) are
@@ -193,7 +286,8 @@ std::string tripling_kernels_source() {
        "  for (int q = 0; q < n; ++q) *reinterpret_cast<typename Unaligned32<T>::type*>(out + q * lanes) = fi * hv[q] + hi * fv[q];\n"
        "}\n\n"
        "// The kernels use the outer-product form of tripling_kernels_gen.cpp: the rows of\n"
-       "// s_ij = f_i h_j + f_j h_i as 8-wide vectors, then y_k = sum_{i <= j} C'_ijk s_ij.\n\n";
+       "// s_ij = f_i h_j + f_j h_i as 8-wide vectors, then y_k = sum_{i <= j} C'_ijk s_ij,\n"
+       "// order 3 by permutations of the rows, the others by scalar sums.\n\n";
   std::ostringstream tables;
   for (int order = 2; order <= kTriplingKernelMaxOrder; ++order) {
     const TriplingTensor tensor = compute_tripling_tensor_exact(order);
@@ -201,7 +295,7 @@ std::string tripling_kernels_source() {
     for (std::size_t e = 0; e < tensor.size(); ++e)
       entries.push_back({static_cast<int>(tensor.index[3 * e]), static_cast<int>(tensor.index[3 * e + 1]),
                          static_cast<int>(tensor.index[3 * e + 2]), tensor.value[e]});
-    s << kernel_source(order, entries);
+    s << (order == 3 ? permutation_kernel_source(order, entries) : kernel_source(order, entries));
     tables << "constexpr TriplingKernelEntry kEntries" << order << "[] = {\n";
     for (const Entry& e : entries)
       tables << "    {" << e.a << ", " << e.b << ", " << e.c << ", " << literal(e.value) << "},\n";

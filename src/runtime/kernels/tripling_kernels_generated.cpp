@@ -35,7 +35,8 @@ inline void pair_row(T fi, T hi, const V* fv, const V* hv, int n, T* out) {
 }
 
 // The kernels use the outer-product form of tripling_kernels_gen.cpp: the rows of
-// s_ij = f_i h_j + f_j h_i as 8-wide vectors, then y_k = sum_{i <= j} C'_ijk s_ij.
+// s_ij = f_i h_j + f_j h_i as 8-wide vectors, then y_k = sum_{i <= j} C'_ijk s_ij,
+// order 3 by permutations of the rows, the others by scalar sums.
 
 // Order 2: 4 canonical entries, outer-product form: 0 8-wide rows and 10 scalar entries of s (2 multiplications each), 7 terms in 4 groups (4 multiplications); 24 scalar multiplications, 13 scalar additions.
 template <class T>
@@ -57,34 +58,37 @@ SHTOOL_KERNEL_CLONES void tripling_kernel_2(const T* f, const T* h, T* y) {
   y[3] = T(0.28209479177387814) * s[0][7];
 }
 
-// Order 3: 25 canonical entries, outer-product form: 9 8-wide rows and 1 scalar entries of s (2 multiplications each), 52 terms in 33 groups (33 multiplications); 35 scalar multiplications, 44 scalar additions.
+// Order 3: 25 canonical entries, permutation form: 9 8-wide rows (2 multiplications each), 12 layers (8-wide multiply-adds) from them, y_0 from one 8-wide product and 8 scalar additions; 2 scalar multiplications, 8 scalar additions.
 template <class T>
 SHTOOL_KERNEL_CLONES void tripling_kernel_3(const T* f, const T* h, T* y) {
-  typedef T V __attribute__((vector_size(32)));  // 8 floats or 4 doubles
-  constexpr int kPer8 = 8 * sizeof(T) / sizeof(V);  // vectors per 8 columns
-  alignas(sizeof(V)) T s[9][16];
-  V fv[1 * kPer8], hv[1 * kPer8];
-  load_rows(f, h, 1, 1 * kPer8, fv, hv);
-  pair_row(f[0], h[0], fv + 0 * kPer8, hv + 0 * kPer8, 1 * kPer8, &s[0][8]);
-  s[0][7] = f[0] * h[0] + h[0] * f[0];
-  pair_row(f[1], h[1], fv + 0 * kPer8, hv + 0 * kPer8, 1 * kPer8, &s[1][8]);
-  pair_row(f[2], h[2], fv + 0 * kPer8, hv + 0 * kPer8, 1 * kPer8, &s[2][8]);
-  pair_row(f[3], h[3], fv + 0 * kPer8, hv + 0 * kPer8, 1 * kPer8, &s[3][8]);
-  pair_row(f[4], h[4], fv + 0 * kPer8, hv + 0 * kPer8, 1 * kPer8, &s[4][8]);
-  pair_row(f[5], h[5], fv + 0 * kPer8, hv + 0 * kPer8, 1 * kPer8, &s[5][8]);
-  pair_row(f[6], h[6], fv + 0 * kPer8, hv + 0 * kPer8, 1 * kPer8, &s[6][8]);
-  pair_row(f[7], h[7], fv + 0 * kPer8, hv + 0 * kPer8, 1 * kPer8, &s[7][8]);
-  pair_row(f[8], h[8], fv + 0 * kPer8, hv + 0 * kPer8, 1 * kPer8, &s[8][8]);
-  asm volatile("" : : "r"(&s[0][0]) : "memory");
-  y[0] = T(0.14104739588693907) * (((s[0][7] + s[1][8]) + (s[2][9] + s[3][10])) + ((s[4][11] + s[5][12]) + (s[6][13] + (s[7][14] + s[8][15]))));
-  y[1] = (T(0.21850968611841581) * (s[3][11] - s[1][15]) + T(-0.126156626101008) * s[1][13]) + (T(0.21850968611841584) * s[2][12] + T(0.28209479177387814) * s[0][8]);
-  y[2] = T(0.21850968611841584) * (s[1][12] + s[3][14]) + (T(0.252313252202016) * s[2][13] + T(0.28209479177387814) * s[0][9]);
-  y[3] = (T(-0.126156626101008) * s[3][13] + T(0.21850968611841581) * (s[1][11] + s[3][15])) + (T(0.21850968611841584) * s[2][14] + T(0.28209479177387814) * s[0][10]);
-  y[4] = (T(-0.18022375157286857) * s[4][13] + T(0.15607834722743988) * s[5][14]) + (T(0.21850968611841581) * s[1][10] + T(0.28209479177387814) * s[0][11]);
-  y[5] = (T(0.15607834722743988) * (s[4][14] - s[5][15]) + T(0.090111875786434287) * s[5][13]) + (T(0.21850968611841584) * s[1][9] + T(0.28209479177387814) * s[0][12]);
-  y[6] = (T(0.090111875786434287) * ((s[6][13] - s[8][15]) - s[4][11]) + T(-0.063078313050504001) * (s[1][8] + s[3][10])) + (T(0.045055937893217143) * (s[5][12] + s[7][14]) + (T(0.126156626101008) * s[2][9] + T(0.28209479177387814) * s[0][13]));
-  y[7] = (T(0.090111875786434287) * s[6][14] + T(0.15607834722743988) * (s[4][12] + s[7][15])) + (T(0.21850968611841584) * s[2][10] + T(0.28209479177387814) * s[0][14]);
-  y[8] = (T(-0.18022375157286857) * s[6][15] + T(0.10925484305920791) * (s[3][10] - s[1][8])) + (T(0.078039173613719939) * (s[7][14] - s[5][12]) + T(0.28209479177387814) * s[0][15]);
+  typedef T V8 __attribute__((vector_size(8 * sizeof(T))));  // 8 floats or 8 doubles
+  typedef T U8 __attribute__((vector_size(8 * sizeof(T)), aligned(alignof(T)), may_alias));
+  const V8 fv = *reinterpret_cast<const U8*>(f + 1), hv = *reinterpret_cast<const U8*>(h + 1);
+  const V8 row0 = f[0] * hv + h[0] * fv;
+  const V8 row1 = f[1] * hv + h[1] * fv;
+  const V8 row2 = f[2] * hv + h[2] * fv;
+  const V8 row3 = f[3] * hv + h[3] * fv;
+  const V8 row4 = f[4] * hv + h[4] * fv;
+  const V8 row5 = f[5] * hv + h[5] * fv;
+  const V8 row6 = f[6] * hv + h[6] * fv;
+  const V8 row7 = f[7] * hv + h[7] * fv;
+  const V8 row8 = f[8] * hv + h[8] * fv;
+  V8 acc[4];
+  acc[0] = V8{T(0.28209479177387814), T(0.28209479177387814), T(0.28209479177387814), T(0.28209479177387814), T(0.28209479177387814), T(0.28209479177387814), T(0.28209479177387814), T(0.28209479177387814)} * row0;
+  acc[1] = V8{T(-0.126156626101008), T(0.21850968611841584), T(0.21850968611841581), T(0.21850968611841581), T(0.21850968611841584), T(-0.063078313050504001), T(0), T(-0.10925484305920791)} * __builtin_shufflevector(row1, row1, 5, 4, 3, 2, 1, 0, 0, 0);
+  acc[2] = V8{T(-0.21850968611841581), T(0), T(0), T(0), T(0), T(0), T(0), T(0)} * __builtin_shufflevector(row1, row1, 7, 0, 0, 0, 0, 0, 0, 0);
+  acc[3] = V8{T(0.21850968611841584), T(0.252313252202016), T(0.21850968611841584), T(0), T(0), T(0.126156626101008), T(0.21850968611841584), T(0)} * __builtin_shufflevector(row2, row2, 4, 5, 6, 0, 0, 1, 2, 0);
+  acc[0] += V8{T(0.21850968611841581), T(0.21850968611841584), T(-0.126156626101008), T(0), T(0), T(-0.063078313050504001), T(0), T(0.10925484305920791)} * __builtin_shufflevector(row3, row3, 3, 6, 5, 0, 0, 2, 0, 2);
+  acc[1] += V8{T(0), T(0), T(0.21850968611841581), T(0), T(0), T(0), T(0), T(0)} * __builtin_shufflevector(row3, row3, 0, 0, 7, 0, 0, 0, 0, 0);
+  acc[2] += V8{T(0), T(0), T(0), T(-0.18022375157286857), T(0.15607834722743988), T(-0.090111875786434287), T(0.15607834722743988), T(0)} * __builtin_shufflevector(row4, row4, 0, 0, 0, 5, 6, 3, 4, 0);
+  acc[3] += V8{T(0), T(0), T(0), T(0.15607834722743988), T(0.090111875786434287), T(0.045055937893217143), T(0), T(-0.078039173613719939)} * __builtin_shufflevector(row5, row5, 0, 0, 0, 6, 5, 4, 0, 4);
+  acc[0] += V8{T(0), T(0), T(0), T(0), T(-0.15607834722743988), T(0), T(0), T(0)} * __builtin_shufflevector(row5, row5, 0, 0, 0, 0, 7, 0, 0, 0);
+  acc[1] += V8{T(0), T(0), T(0), T(0), T(0), T(0.090111875786434287), T(0.090111875786434287), T(-0.18022375157286857)} * __builtin_shufflevector(row6, row6, 0, 0, 0, 0, 0, 5, 6, 7);
+  acc[2] += V8{T(0), T(0), T(0), T(0), T(0), T(0.045055937893217143), T(0.15607834722743988), T(0.078039173613719939)} * __builtin_shufflevector(row7, row7, 0, 0, 0, 0, 0, 6, 7, 6);
+  acc[3] += V8{T(0), T(0), T(0), T(0), T(0), T(-0.090111875786434287), T(0), T(0)} * __builtin_shufflevector(row8, row8, 0, 0, 0, 0, 0, 7, 0, 0);
+  const V8 d = fv * hv;
+  y[0] = T(0.28209479177387814) * (f[0] * h[0] + (((d[0] + d[1]) + (d[2] + d[3])) + ((d[4] + d[5]) + (d[6] + d[7]))));
+  *reinterpret_cast<U8*>(y + 1) = (acc[0] + acc[1]) + (acc[2] + acc[3]);
 }
 
 // Order 4: 77 canonical entries, outer-product form: 24 8-wide rows and 0 scalar entries of s (2 multiplications each), 194 terms in 118 groups (118 multiplications); 118 scalar multiplications, 178 scalar additions.
