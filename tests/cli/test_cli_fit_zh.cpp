@@ -25,6 +25,7 @@
 #include "shtool/table.h"
 #include "shtool/zh.h"
 #include "shtool/zh_fit_table.h"
+#include "scratch_files.h"
 
 namespace {
 
@@ -34,11 +35,7 @@ namespace fs = std::filesystem;
 const std::string kExe = SHTOOL_EXE;
 const std::string kSource = SHTOOL_SOURCE_DIR;
 
-fs::path scratch(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("shtool_test_cli_fit_zh_" + std::to_string(getpid()));
-  fs::create_directories(dir);
-  return dir / name;
-}
+fs::path scratch(const std::string& name) { return shtool::test::scratch_path("test_cli_fit_zh", name); }
 
 CommandResult run(std::vector<std::string> args) {
   args.insert(args.begin(), kExe);

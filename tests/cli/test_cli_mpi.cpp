@@ -15,6 +15,7 @@
 #include <gtest/gtest.h>
 
 #include "run_command.h"
+#include "scratch_files.h"
 
 namespace {
 
@@ -27,11 +28,7 @@ const std::string kSpot = std::string(SHTOOL_SOURCE_DIR) + "/data/spot.obj";
 const std::vector<std::string> kQuick = {"--rays", "8", "--order", "2", "--lobes", "2", "--starts", "1",
                                          "--restart-above", "0"};
 
-fs::path scratch(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("shtool_test_cli_mpi_" + std::to_string(getpid()));
-  fs::create_directories(dir);
-  return dir / name;
-}
+fs::path scratch(const std::string& name) { return shtool::test::scratch_path("test_cli_mpi", name); }
 
 std::string read_bytes(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);

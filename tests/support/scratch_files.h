@@ -7,7 +7,10 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <system_error>
+#include <vector>
 
+#include <sys/types.h>
 #include <unistd.h>
 
 namespace shtool::test {
@@ -25,11 +28,31 @@ inline void write_file(const std::filesystem::path& p, const std::string& bytes)
   if (!f) throw std::runtime_error("cannot write " + p.string());
 }
 
+// The scratch folders this process made, removed when it exits normally (a test that
+// fails an assertion still exits normally), so that test runs do not fill the temp
+// folder. Only by the process that made them: a forked child that exits must not.
+struct ScratchFolders {
+  std::vector<std::filesystem::path> made;
+  pid_t owner = ::getpid();
+  ~ScratchFolders() {
+    if (::getpid() != owner) return;
+    for (const auto& dir : made) {
+      std::error_code ignored;
+      std::filesystem::remove_all(dir, ignored);
+    }
+  }
+};
+inline ScratchFolders& scratch_folders() {
+  static ScratchFolders folders;
+  return folders;
+}
+
 // <temp>/shtool_<suite>_<pid>/<name>, the folder made on first use.
 inline std::filesystem::path scratch_path(const std::string& suite, const std::string& name) {
   const std::filesystem::path dir =
       std::filesystem::temp_directory_path() / ("shtool_" + suite + "_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
+  ScratchFolders& folders = scratch_folders();  // constructed before the folder exists
+  if (std::filesystem::create_directories(dir)) folders.made.push_back(dir);
   return dir / name;
 }
 

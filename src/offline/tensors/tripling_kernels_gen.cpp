@@ -168,8 +168,8 @@ std::string permutation_kernel_source(int order, const std::vector<Entry>& entri
 // balanced trees. Against the factored form DirectXMath's XMSHMultiplyN use (per index
 // pair (i, j): tf = sum_k C_ijk f_k, th = sum_k C_ijk h_k feed y_i and y_j, and
 // t = f_i h_j + f_j h_i feeds every y_k; 20 / 120 / 399 / 1135 / 2527 multiplications at
-// N = 2..6), this measured 1.2-1.6x the speed of DirectXMath's fused (-march=native)
-// build at N = 4..6 in float, 1.9-2.5x its SSE2 build (docs/benchmarks.md, "Against
+// N = 2..6), this measured 1.2-1.7x the speed of DirectXMath's fused (-march=native)
+// build at N = 4..6 in float, 1.6-2.6x its SSE2 build (docs/benchmarks.md, "Against
 // DirectXMath"): at N = 5, 51 vector rows and 623 scalar terms in 377 groups.
 std::string kernel_source(int order, const std::vector<Entry>& entries) {
   const int count = order * order;
