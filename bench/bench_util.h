@@ -17,9 +17,9 @@ namespace shtool::bench {
 inline constexpr int kRotations = 64;
 
 // The index after k in a cycle of `size` (the rotation a timed loop takes next). A
-// compare, not `(k + 1) % size`: the modulo is an integer division, and its latency
-// chain from one iteration to the next bounded the one-rotation loops at low order
-// (measured: 33 against 37 ns per float rotation at N = 4, 73 against 87 at N = 6).
+// compare, not `(k + 1) % size`: with a run-time size the modulo is a 64-bit integer
+// division, tens of cycles on the chain from one iteration to the next, which a
+// low-order rotation (tens of nanoseconds) would pay on top of its own time.
 inline std::size_t next_index(std::size_t k, std::size_t size) { return k + 1 == size ? 0 : k + 1; }
 
 // Unit quaternions (w, x, y, z) in T, drawn in double so float and double see the same
