@@ -8,8 +8,6 @@
 #include <cstdlib>
 #include <iterator>
 #include <numbers>
-
-#include <unistd.h>
 #include <filesystem>
 #include <fstream>
 #include <sstream>

@@ -83,10 +83,9 @@ std::vector<std::vector<Term>> output_terms(int count, const std::vector<Entry>&
 // lane takes at most one s_ij per layer, a lane may feed several) times a vector of
 // coefficients. 12 layers cover the 9 rows, so the kernel is 9 row products, 11
 // permutations and 12 multiply-adds (into 4 partial sums), all in registers, no stack
-// array: 99 instructions in the float AVX2 copy against 153 for the scalar-sum form below;
-// measured 9.5-12.3 against 19.8-20.9 ns per float product (AVX2 copy), and in double the
-// baseline copy 37 against 240 ns (the scalar-sum form's 4-double vectors split badly
-// there), the baseline float copy level (18-25 ns both). y_0 = C_000 sum_i f_i h_i
+// array: 99 instructions in the float AVX2 copy against 153 for the scalar-sum form below
+// (objdump of the built kernel); times in docs/products.md, "Performance", and
+// docs/benchmarks.md, "Against DirectXMath". y_0 = C_000 sum_i f_i h_i
 // (the only nonzero C_ij0 are C_ii0 = C_000). At orders 4..6 the outputs span several
 // vectors and a layer would permute across two (no single AVX2 instruction does).
 std::string permutation_kernel_source(int order, const std::vector<Entry>& entries) {
