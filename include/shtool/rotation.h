@@ -128,12 +128,15 @@ class ShRotation {
            double tolerance = default_rotation_tolerance<T>()) {
     // Up to order 4 zxzxz (and the automatic choice, which is zxzxz there) needs R alone,
     // so set() is a copy, inline: at order 2 a call costs as much as the rotation.
-    if (order_ <= detail::kClosedMaxOrder && kernel_order_ > 0 &&
-        (method == RotationMethod::zxzxz || method == RotationMethod::automatic)) {
+    if (closed_ && (method == RotationMethod::zxzxz || method == RotationMethod::automatic)) {
       store_matrix(r);
-      resolved_ = RotationMethod::zxzxz;
-      whole_kernel_ = kernel1_[0];
-      whole_kernel3_ = kernel3_[0];
+      // The kernels stay those of zxzxz from one such rotation to the next: one test
+      // here instead of three stores.
+      if (resolved_ != RotationMethod::zxzxz) {
+        resolved_ = RotationMethod::zxzxz;
+        whole_kernel_ = kernel1_[0];
+        whole_kernel3_ = kernel3_[0];
+      }
       return true;
     }
     return set_general(r, method, tolerance);
@@ -251,6 +254,9 @@ class ShRotation {
   std::vector<BatchKernel> batch_kernels_[4];
   Kernel<3> kernel3_[4] = {};
   int kernel_order_ = 0;  // bands [0, kernel_order_) are covered by the kernels
+  // Order <= kClosedMaxOrder with the kernels: zxzxz (and the automatic choice) is
+  // closed forms in R, and set() a copy of R.
+  bool closed_ = false;
   // The FMA copies of the kernels (src/runtime/kernels/rotation_kernels.h), chosen once
   // for the object so that apply, apply_rgb and rotate_batch always run the same copy.
   bool fused_ = false;

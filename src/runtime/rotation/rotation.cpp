@@ -167,6 +167,7 @@ ShRotation<T>::ShRotation(int order, std::shared_ptr<const RotationHelpers> help
       if (!kernel1_[k] || !kernel3_[k]) detail::invariant_failed("no rotation kernel for this order");
     }
     kernel_order_ = std::min(order, detail::kKernelMaxOrder);
+    closed_ = order <= detail::kClosedMaxOrder;
     if (order <= detail::kBandKernelMaxBand + 1) {
       for (int k = 0; k < 4; ++k) {
         std::vector<BatchKernel>& v = batch_kernels_[k];
