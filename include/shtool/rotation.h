@@ -34,11 +34,11 @@ namespace shtool {
 
 namespace detail {
 // What one rotation needs at apply time (set() fills it): R column-major, cos(m x) and
-// sin(m x) of the zyz angles for m < order, and the Taylor tilt b and b^2 / 2. Read by
-// the generated kernels (src/runtime/rotation_kernels.h); here because apply() calls the
-// kernel of a whole rotation inline.
+// sin(m x) of the zyz angles for m < order, and the Taylor tilt b and b^2 / 2. Read
+// by the generated kernels (src/runtime/kernels/rotation_kernels.h); here because
+// apply() calls the kernel of a whole rotation inline.
 template <class T>
-struct BatchState;  // src/runtime/rotation_kernels.h
+struct BatchState;  // src/runtime/kernels/rotation_kernels.h
 // Whether new ShRotation objects take the FMA copies of the kernels: true on CPUs with
 // AVX2 and FMA (x86-64 GCC builds), unless use_fma_kernels(false) was called (tests of
 // the baseline copies). Not thread-safe against concurrent construction.
@@ -59,7 +59,7 @@ struct KernelState {
 // Band 1 of M(R) for R stored column-major (r[i + 3 j] = R(i, j), Eigen's layout). With
 // y_1^-1 = -c y, y_1^0 = c z, y_1^1 = -c x, band 1 is R in (y, z, x) order with the
 // entries that mix z with x or y negated (docs/rotation.md). P is T or a vector of T
-// (lanes, src/runtime/rotation_kernels.h); R is T, or P when every lane has its own
+// (lanes, src/runtime/kernels/rotation_kernels.h); R is T, or P when every lane has its own
 // rotation (rotate_batch). Here because ShRotation::apply runs it inline at order 2.
 template <class T, class P, class R = T>
 #if defined(__GNUC__)
@@ -240,7 +240,7 @@ class ShRotation {
 
   int order_;
   std::shared_ptr<const RotationHelpers> helpers_;
-  // Generated fixed-order kernels (src/runtime/rotation_kernels.h) for the bands below
+  // Generated fixed-order kernels (src/runtime/kernels/rotation_kernels.h) for the bands below
   // detail::kKernelMaxOrder: zxzxz, taylor1, taylor1.5, taylor2; one and three vectors.
   Kernel<1> kernel1_[4] = {};
   // The kernel of the current rotation when it covers every band (orders <= 10, not the
