@@ -25,10 +25,12 @@
 #include <optional>
 #include <span>
 #include <string_view>
+#include <type_traits>
 #include <vector>
 
 #include "shtool/euler.h"
 #include "shtool/rotation_helpers.h"
+
 
 namespace shtool {
 
@@ -73,6 +75,60 @@ inline void band1_closed(const R* __restrict r, const P* __restrict x, P* __rest
   y[0] = (r[1] * x[2] + r[4] * x[0]) - r[7] * x[1];
   y[1] = r[8] * x[1] - (r[2] * x[2] + r[5] * x[0]);
   y[2] = (r[0] * x[2] + r[3] * x[0]) - r[6] * x[1];
+}
+
+// A whole order-2 rotation, out = M(R) in (4 coefficients), R column-major: what apply,
+// apply_rgb and rotate_batch all run there, so they agree bit for bit. The scalar form
+// is the reference of the SSE2 one, which gives its bits (tested).
+template <class T>
+inline void order2_scalar(const T* __restrict r, const T* __restrict in, T* __restrict out) {
+  out[0] = in[0];
+  band1_closed<T, T>(r, in + 1, out + 1);
+}
+
+#if defined(__SSE2__)
+// Band 1 in lanes 1..3 (lane 0 carries in[0]) by band1_closed's products and sums in
+// the same order; one 4-float load of the input and one store of the output, where the
+// scalar code moves 12 floats and stores 4 (docs/rotation.md, "Operation counts").
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
+inline void order2_sse2(const float* __restrict r, const float* __restrict in, float* __restrict out) {
+  const __m128 v = _mm_loadu_ps(in);
+  // R read as set() writes it (two 4-float stores and one float): a load straddling two
+  // stores waits for them to reach the cache instead of taking their values.
+  const __m128 a = _mm_loadu_ps(r);      // r0 r1 r2 r3
+  const __m128 b = _mm_loadu_ps(r + 4);  // r4 r5 r6 r7
+  const __m128 c = _mm_load_ss(r + 8);   // r8
+  // Lanes 1..3: the rows y0, y1, y2 read (r1 r2 r0) x2 + (r4 r5 r3) x0 - (r7 r8 r6) x1.
+  const __m128 r_x2 = lanes<_MM_SHUFFLE(0, 2, 1, 0)>(_mm_castps_si128(a));
+  const __m128 r_x0 = lanes<_MM_SHUFFLE(0, 3, 2, 0)>(_mm_castps_si128(_mm_shuffle_ps(a, b, _MM_SHUFFLE(1, 0, 3, 3))));
+  const __m128 r_x1 = lanes<_MM_SHUFFLE(0, 2, 1, 0)>(_mm_castps_si128(_mm_shuffle_ps(b, c, _MM_SHUFFLE(0, 0, 3, 2))));
+  const __m128i vi = _mm_castps_si128(v);
+  const __m128 x0 = lanes<_MM_SHUFFLE(1, 1, 1, 1)>(vi);
+  const __m128 x1 = lanes<_MM_SHUFFLE(2, 2, 2, 2)>(vi);
+  const __m128 x2 = lanes<_MM_SHUFFLE(3, 3, 3, 3)>(vi);
+  // Lane 2 wants r8 x1 - (r2 x2 + r5 x0) and gets (-(r2 x2 + r5 x0)) - (-(r8 x1)): the
+  // same sum, zeros included (a - b is a + (-b)).
+  const __m128 negate_lane2 = sign_mask(false, false, true, false);
+  const __m128 sum = _mm_xor_ps(_mm_add_ps(_mm_mul_ps(r_x2, x2), _mm_mul_ps(r_x0, x0)), negate_lane2);
+  const __m128 y = _mm_sub_ps(sum, _mm_xor_ps(_mm_mul_ps(r_x1, x1), negate_lane2));
+  _mm_storeu_ps(out, _mm_move_ss(y, v));
+}
+#endif
+
+template <class T>
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
+inline void order2_rotate(const T* __restrict r, const T* __restrict in, T* __restrict out) {
+#if defined(__SSE2__)
+  if constexpr (std::is_same_v<T, float>) {
+    order2_sse2(r, in, out);
+    return;
+  }
+#endif
+  order2_scalar<T>(r, in, out);
 }
 }  // namespace detail
 
@@ -161,8 +217,7 @@ class ShRotation {
   void apply(std::span<const T> in, std::span<T> out) const {
     // Order 2 under zxzxz is band 1 = R itself, inline (see set()).
     if (order_ == 2 && resolved_ == RotationMethod::zxzxz) {
-      out[0] = in[0];
-      detail::band1_closed<T, T>(r_, in.data() + 1, out.data() + 1);
+      detail::order2_rotate<T>(r_, in.data(), out.data());
       return;
     }
     if (whole_kernel_) {  // one generated kernel covers the rotation: call it from here
@@ -182,10 +237,7 @@ class ShRotation {
   // the results are bit-identical to three apply() calls. No in[k] may overlap an out[j].
   void apply_rgb(const std::array<std::span<const T>, 3>& in, const std::array<std::span<T>, 3>& out) const {
     if (order_ == 2 && resolved_ == RotationMethod::zxzxz) {  // inline, as in apply()
-      for (int k = 0; k < 3; ++k) {
-        out[k][0] = in[k][0];
-        detail::band1_closed<T, T>(r_, in[k].data() + 1, out[k].data() + 1);
-      }
+      for (int k = 0; k < 3; ++k) detail::order2_rotate<T>(r_, in[k].data(), out[k].data());
       return;
     }
     if (whole_kernel3_) {  // as in apply()

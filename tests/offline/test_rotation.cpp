@@ -9,8 +9,10 @@
 //  - Eigen's JacobiSVD of the exact error matrices for the Taylor error bounds.
 // Conventions are those of docs/conventions.md; methods are described in docs/rotation.md.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <filesystem>
 #include <functional>
 #include <limits>
@@ -463,6 +465,37 @@ TEST(Euler, QuaternionAndZyzAgree) {
   EXPECT_NEAR(orthonormality_defect<double>(1.001 * Mat3<double>::Identity()), 0.002001, 1e-12);
 }
 
+// In float on x86-64, matrix_from_quaternion runs in SSE2 lanes; it must give the scalar
+// code's bits for every input: random unit quaternions, and every combination of
+// components from a set with signed zeros, exact halves, tiny and huge values (the
+// entries' zero signs and roundings are where a reordered operation would show; a huge
+// component overflows, and then both give NaN, whose sign bit says nothing).
+TEST(Euler, FloatQuaternionMatrixIsTheScalarCodeBitForBit) {
+  auto same = [](float w, float x, float y, float z) {
+    const Mat3<float> fast = matrix_from_quaternion<float>(w, x, y, z);
+    const Mat3<float> slow = detail::matrix_from_quaternion_scalar<float>(w, x, y, z);
+    for (int i = 0; i < 9; ++i) {
+      const float a = fast.data()[i], b = slow.data()[i];
+      if (std::isnan(a) != std::isnan(b)) return false;
+      if (!std::isnan(a) && std::memcmp(&a, &b, sizeof a) != 0) return false;
+    }
+    return true;
+  };
+  std::mt19937_64 rng(205);
+  std::normal_distribution<float> n;
+  for (int k = 0; k < 100000; ++k) {
+    float q[4] = {n(rng), n(rng), n(rng), n(rng)};
+    const float len = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    for (float& c : q) c /= len;
+    ASSERT_TRUE(same(q[0], q[1], q[2], q[3])) << "quaternion " << k;
+  }
+  const float values[] = {0.0f, -0.0f, 1.0f, -1.0f, 0.5f, -0.5f, 0.70710677f, -0.3f, 1e-30f, -3e38f};
+  for (float w : values)
+    for (float x : values)
+      for (float y : values)
+        for (float z : values) ASSERT_TRUE(same(w, x, y, z)) << w << " " << x << " " << y << " " << z;
+}
+
 // zyz_cos_sin_from_quaternion against the matrix route: the same rotation (recomposed
 // matrices agree) for random quaternions of both signs, gimbal locks (b = 0, b = pi),
 // tiny tilts on both sides of the b = 0 threshold, and near the half turn.
@@ -535,6 +568,54 @@ void check_set_quaternion(double tol) {
 // multiple-angle recurrences (the Taylor branches' own error is the same on both).
 TEST(RotationApi, SetQuaternionEqualsSetMatrixDouble) { check_set_quaternion<double>(1e-13); }
 TEST(RotationApi, SetQuaternionEqualsSetMatrixFloat) { check_set_quaternion<float>(2e-5); }
+
+// Order 2 in float runs band 1 in SSE2 lanes (apply, apply_rgb, rotate_batch): the
+// scalar band1_closed's bits for random and edge rotations and inputs with zeros of
+// both signs (an output that cancels to zero keeps the scalar code's sign).
+TEST(RotationApi, Order2FloatIsTheScalarCodeBitForBit) {
+  std::mt19937_64 rng(213);
+  std::vector<Mat3<float>> rs;
+  for (const auto& [name, r] : edge_rotations()) rs.push_back(r.cast<float>());
+  for (int k = 0; k < 2000; ++k) rs.push_back(random_rotation(rng).cast<float>());
+  // Entries 0, -0 and +-1 (quarter turns about each axis, the cyclic permutation), where
+  // outputs cancel to zeros of either sign.
+  for (const Vec3<double>& axis : {Vec3<double>(1, 0, 0), Vec3<double>(0, 1, 0), Vec3<double>(0, 0, 1)})
+    for (const float sign : {1.0f, -1.0f})
+      rs.push_back(matrix_from_quaternion<float>(0.70710677f, sign * 0.70710677f * float(axis.x()),
+                                                 sign * 0.70710677f * float(axis.y()),
+                                                 sign * 0.70710677f * float(axis.z())));
+  Mat3<float> cyclic;
+  cyclic << 0, -0.0f, 1, 1, 0, -0.0f, -0.0f, 1, 0;
+  rs.push_back(cyclic);
+  std::vector<std::array<float, 4>> ins;
+  std::uniform_real_distribution<float> u(-1, 1);
+  for (int k = 0; k < 8; ++k) ins.push_back({u(rng), u(rng), u(rng), u(rng)});
+  ins.push_back({1, 0, 0, 0});
+  ins.push_back({-0.0f, -0.0f, 0.0f, -0.0f});
+  ins.push_back({2, 1, 1, -1});
+  ins.push_back({0, 1, -1, 1});
+  ShRotation<float> rotation(2, helpers());
+  std::vector<float> flat_in, flat_out;
+  for (const Mat3<float>& r : rs)
+    for (const auto& in : ins) {
+      float want[4], fast[4], applied[4];
+      detail::order2_scalar<float>(r.data(), in.data(), want);
+      detail::order2_rotate<float>(r.data(), in.data(), fast);
+      ASSERT_EQ(std::memcmp(want, fast, sizeof want), 0) << "in " << in[0] << " " << in[1] << " " << in[2];
+      ASSERT_TRUE(rotation.set(r));
+      rotation.apply(in, applied);
+      ASSERT_EQ(std::memcmp(want, applied, sizeof want), 0);
+      flat_in.insert(flat_in.end(), in.begin(), in.end());
+      flat_out.insert(flat_out.end(), want, want + 4);
+    }
+  // rotate_batch over the same pairs: each rotation once per input.
+  std::vector<Mat3<float>> pairs;
+  for (const Mat3<float>& r : rs)
+    for (std::size_t k = 0; k < ins.size(); ++k) pairs.push_back(r);
+  std::vector<float> out(flat_in.size());
+  ASSERT_TRUE(rotate_batch<float>(rotation, pairs, flat_in, out));
+  EXPECT_EQ(std::memcmp(out.data(), flat_out.data(), sizeof(float) * out.size()), 0);
+}
 
 // ---------------------------------------------------------------------------
 // Convention: a lobe along d ends up along R d.

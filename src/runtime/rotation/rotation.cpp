@@ -808,13 +808,11 @@ bool rotate_batch(ShRotation<T>& rotation, std::span<const Mat3<T>> rotations, s
       (method == RotationMethod::zxzxz || method == RotationMethod::automatic)) {
     // Band 1 is nine products of R: gathering four rotations into lanes and scattering
     // them back costs more than it saves, so each rotation reads its matrix in place
-    // (the operations of set() + apply(), so the same bits).
+    // (order2_rotate, which apply() runs too: the same bits).
     const T* src = in.data();
     T* dst = out.data();
-    for (std::size_t k = 0; k < count; ++k, src += 4, dst += 4) {
-      dst[0] = src[0];
-      detail::band1_closed<T, T>(rotations[k].data(), src + 1, dst + 1);
-    }
+    for (std::size_t k = 0; k < count; ++k, src += 4, dst += 4)
+      detail::order2_rotate<T>(rotations[k].data(), src, dst);
     rotation.set(rotations[count - 1], method, tolerance);
     return true;
   }
