@@ -31,7 +31,6 @@
 #include "shtool/euler.h"
 #include "shtool/rotation_helpers.h"
 
-
 namespace shtool {
 
 namespace detail {
