@@ -59,8 +59,7 @@ inline __m128 sign_mask(bool l0, bool l1, bool l2, bool l3) {
 // stores. Lane 0's 1 - (s + t) is taken as 1 + ((-s) - t) and a lane's u + v as
 // u - (-v): the same values to the bit, with sign flips (xor) where mixing the sums and
 // differences of two vectors would take shuffles, which compete with the products'
-// shuffles for the same ports. About half the scalar code's instructions; one
-// rotation at order 2 is 20 % faster for it (docs/rotation.md, "Operation counts").
+// shuffles for the same ports. Operation counts: docs/rotation.md, "Operation counts".
 inline Mat3<float> matrix_from_quaternion_sse2(float w, float x, float y, float z) {
   const __m128 q = _mm_setr_ps(w, x, y, z);
   const __m128i qi = _mm_castps_si128(q);
