@@ -968,6 +968,9 @@ TEST(RotationApi, BatchEqualsIndividualRotations) {
 // order 21 (no lane path); every method but the reference; the edge rotations (half
 // turns, gimbal locks, tiny tilts) mixed with generic ones (under `automatic`, groups
 // mixing Taylor and zxzxz run one at a time), and small tilts only (Taylor lanes).
+// The lanes run the scalar form of the kernels and tables, so this also holds apply()'s
+// float paths to them: its z-rotations with four pairs in lanes (from order 5) and the
+// cos / sin tables that set() computes for the three angles in SSE2 lanes.
 template <class T>
 void check_batch_lanes_bitwise() {
   std::mt19937_64 rng(617);

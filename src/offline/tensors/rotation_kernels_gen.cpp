@@ -1,6 +1,7 @@
 #include "tensors/rotation_kernels_gen.h"
 
 #include <cmath>
+#include <algorithm>
 #include <cstdio>
 #include <sstream>
 #include <string>
@@ -47,15 +48,38 @@ std::string linear_sum(const std::vector<std::pair<double, std::string>>& terms)
 // z-rotation of band l by angle x ([2] App. C: (f_m, f_-m) turns by m x), from
 // variables src<j> (or src[j]) into dst<j>. cos(m x), sin(m x) are read from the state's
 // tables (s.c<x>, s.s<x>) where they are used, which keeps few values live at a time.
+// lanes (one float vector, P = float): groups of two to four pairs m run in the lanes of
+// one 4-float vector, each lane doing the scalar pair's operations (so the same bits):
+// 4 vector operations for up to 16 scalar ones; the tables are read four entries at a
+// time (they are padded for it) and a lone last pair stays scalar.
 void z_rotation(std::ostream& o, int l, const std::string& angle, const std::string& src, bool src_array,
-                const std::string& dst, bool dst_array) {
+                const std::string& dst, bool dst_array, bool lanes = false) {
   auto in = [&](int j) { return src_array ? src + "[" + std::to_string(j) + "]" : src + std::to_string(j); };
   auto out = [&](int j) {
     return dst_array ? std::string("  ").append(dst).append("[").append(std::to_string(j)).append("] = ")
                      : std::string("  const P ").append(dst).append(std::to_string(j)).append(" = ");
   };
   o << out(l) << in(l) << ";\n";
-  for (int m = 1; m <= l; ++m) {
+  int m = 1;
+  for (; lanes && l - m + 1 >= 2; m += 4) {
+    const int count = std::min(4, l - m + 1);
+    const std::string id = angle + std::to_string(m);
+    auto lanes_of = [&](int sign) {  // in(l + sign * (m + i)), i = 0..3, zero padded
+      std::string v = "{";
+      for (int i = 0; i < 4; ++i) v.append(i ? ", " : "").append(i < count ? in(l + sign * (m + i)) : "0");
+      return v + "}";
+    };
+    o << "  const Lanes4 zc" << id << " = table_lanes(s.c" << angle << " + " << m << "), zs" << id
+      << " = table_lanes(s.s" << angle << " + " << m << ");\n";
+    o << "  const Lanes4 zp" << id << " = " << lanes_of(1) << ", zq" << id << " = " << lanes_of(-1) << ";\n";
+    o << "  const Lanes4 zh" << id << " = madd<F>(zc" << id << ", zp" << id << ", -(zs" << id << " * zq" << id
+      << "));\n";
+    o << "  const Lanes4 zl" << id << " = madd<F>(zs" << id << ", zp" << id << ", zc" << id << " * zq" << id
+      << ");\n";
+    for (int i = 0; i < count; ++i) o << out(l + m + i) << "zh" << id << "[" << i << "];\n";
+    for (int i = 0; i < count; ++i) o << out(l - m - i) << "zl" << id << "[" << i << "];\n";
+  }
+  for (; m <= l; ++m) {
     const std::string cm = "c" + angle + std::to_string(m), sm = "s" + angle + std::to_string(m);
     o << "  const P " << cm << " = splat<P>(s.c" << angle << "[" << m << "]), " << sm << " = splat<P>(s.s"
       << angle << "[" << m << "]);\n";
@@ -64,15 +88,12 @@ void z_rotation(std::ostream& o, int l, const std::string& angle, const std::str
   }
 }
 
-void zxzxz_band(std::ostream& o, const RotationHelpers& h, int l) {
+// The body of zxzxz_band<l>; lanes: the first and last z-rotations in float lanes
+// (z_rotation). The middle one stays scalar: its input and output are the X90 rows'
+// scalars, which would cost more shuffles into and out of lanes than the lanes save.
+void zxzxz_body(std::ostream& o, const std::vector<std::vector<double>>& x, int l, bool lanes) {
   const int size = 2 * l + 1;
-  const auto x = x90_band_block(h, l);
-  // S: KernelState<T>, or BatchState<T> (a rotation per lane).
-  o << "// Band " << l << " of Z(a) X90^T Z(b) X90 Z(g), Ry(b) = Rx(-90) Rz(b) Rx(+90).\n"
-    << "template <bool F, class T, class P, class S>\n"
-    << "SHTOOL_KERNEL_INLINE void zxzxz_band" << l
-    << "(const S& s, const P* __restrict x, P* __restrict y) {\n";
-  z_rotation(o, l, "g", "x", true, "t", false);
+  z_rotation(o, l, "g", "x", true, "t", false, lanes);
   for (int i = 0; i < size; ++i) {
     std::vector<std::pair<double, std::string>> terms;
     for (int j = 0; j < size; ++j) terms.emplace_back(x[i][j], indexed("t", j));
@@ -84,8 +105,27 @@ void zxzxz_band(std::ostream& o, const RotationHelpers& h, int l) {
     for (int j = 0; j < size; ++j) terms.emplace_back(x[j][i], indexed("w", j));
     o << "  const P v" << i << " = " << linear_sum(terms) << ";\n";
   }
-  z_rotation(o, l, "a", "v", false, "y", true);
-  o << "}\n\n";
+  z_rotation(o, l, "a", "v", false, "y", true, lanes);
+}
+
+void zxzxz_band(std::ostream& o, const RotationHelpers& h, int l) {
+  const auto x = x90_band_block(h, l);
+  // S: KernelState<T>, or BatchState<T> (a rotation per lane).
+  o << "// Band " << l << " of Z(a) X90^T Z(b) X90 Z(g), Ry(b) = Rx(-90) Rz(b) Rx(+90).\n"
+    << "template <bool F, class T, class P, class S>\n"
+    << "SHTOOL_KERNEL_INLINE void zxzxz_band" << l
+    << "(const S& s, const P* __restrict x, P* __restrict y) {\n"
+    << "  if constexpr (std::is_same_v<P, float>) {  // one float vector: z-rotations in lanes\n";
+  std::ostringstream body;
+  zxzxz_body(body, x, l, true);
+  std::istringstream lines(body.str());
+  for (std::string line; std::getline(lines, line);) o << "  " << line << "\n";
+  o << "  } else {\n";
+  body.str("");
+  zxzxz_body(body, x, l, false);
+  lines = std::istringstream(body.str());
+  for (std::string line; std::getline(lines, line);) o << "  " << line << "\n";
+  o << "  }\n}\n\n";
 }
 
 void taylor_band(std::ostream& o, const RotationHelpers& h, int l) {

@@ -111,6 +111,16 @@ SHTOOL_KERNEL_INLINE P madd(A a, P b, P c) {
   }
 }
 
+// Four floats in the lanes of one SSE register: the generated zxzxz bands run the pairs
+// of a z-rotation of one float vector in them (rotation_kernels_gen.cpp, z_rotation).
+using Lanes4 = Pack<float, 3>;
+// Entries p[0..3] of a cos / sin table (ShRotation pads its tables for the last group).
+SHTOOL_KERNEL_INLINE Lanes4 table_lanes(const float* p) {
+  Lanes4 v;
+  __builtin_memcpy(&v, p, sizeof v);
+  return v;
+}
+
 // KernelState (what one rotation needs at apply time) is in shtool/rotation.h.
 
 // in[v] / out[v]: vector v of N^2 coefficients. Transforms the first

@@ -158,7 +158,10 @@ ShRotation<T>::ShRotation(int order, std::shared_ptr<const RotationHelpers> help
   } else {
     helpers_.reset();
   }
-  for (auto* v : {&cos_a_, &sin_a_, &cos_b_, &sin_b_, &cos_g_, &sin_g_}) v->assign(order, T(0));
+  // Three entries of padding: the generated kernels, and zyz_tables_sse2, read and write
+  // the tables four entries at a time. cos(0) = 1 and sin(0) = 0 for good.
+  for (auto* v : {&cos_a_, &sin_a_, &cos_b_, &sin_b_, &cos_g_, &sin_g_}) v->assign(order + 3, T(0));
+  for (auto* v : {&cos_a_, &cos_b_, &cos_g_}) (*v)[0] = T(1);
   dense_.assign(block_offset(order), T(0));
   if (helpers_) {
     for (int k = 0; k < 4; ++k) {
@@ -293,10 +296,58 @@ inline void zyz_tables(int n, const E& e, bool with_beta, T* ca, T* sa, T* cb, T
   multiple_angles<N>(n, e.cg, e.sg, cg, sg);
 }
 
+#if defined(__SSE2__)
+// zyz_tables for one float rotation in SSE2 lanes: the three angles side by side (lanes
+// a, b, g), multiple_angles' products and sums in its order, so every entry has the
+// scalar bits. Each group m = 1..4, 5..8, ... is transposed and stored as one vector per
+// table: the generated kernels load the same groups as vectors (their z-rotations run
+// four pairs in lanes), and a load that matches one pending store takes its value from
+// it, where a vector load over four scalar stores would wait for them to reach the
+// cache. The tables have three entries of padding for the last group, and their m = 0
+// entries (1, 0) are set once by the constructor.
+template <int N>
+inline void zyz_tables_sse2(const ZyzCosSin<float>& e, float* const* t) {
+  static_assert(N >= 2);
+  __m128 c[N + 3], s[N + 3];
+  c[1] = _mm_setr_ps(e.ca, e.cb, e.cg, 0.0f);
+  s[1] = _mm_setr_ps(e.sa, e.sb, e.sg, 0.0f);
+  for (int m = 2; m < N; ++m) {
+    const int h = m / 2, k = m - h;
+    c[m] = _mm_sub_ps(_mm_mul_ps(c[h], c[k]), _mm_mul_ps(s[h], s[k]));
+    s[m] = _mm_add_ps(_mm_mul_ps(s[h], c[k]), _mm_mul_ps(c[h], s[k]));
+  }
+  for (int m = N; m < N + 3; ++m) c[m] = s[m] = _mm_setzero_ps();
+  for (int m = 1; m < N; m += 4) {
+    const __m128* rows[2] = {c + m, s + m};
+    for (int cs = 0; cs < 2; ++cs) {
+      const __m128* x = rows[cs];
+      const __m128 t0 = _mm_unpacklo_ps(x[0], x[1]), t1 = _mm_unpacklo_ps(x[2], x[3]);
+      const __m128 t2 = _mm_unpackhi_ps(x[0], x[1]), t3 = _mm_unpackhi_ps(x[2], x[3]);
+      _mm_storeu_ps(t[cs] + m, _mm_movelh_ps(t0, t1));
+      _mm_storeu_ps(t[2 + cs] + m, _mm_movehl_ps(t1, t0));
+      _mm_storeu_ps(t[4 + cs] + m, _mm_movelh_ps(t2, t3));
+    }
+  }
+}
+#endif
+
 // zyz_tables with the count fixed at compile time where the kernels are generated.
 // t: ca, sa, cb, sb, cg, sg.
 template <class T, class E>
 void fill_zyz_tables(int order, const E& e, bool with_beta, T* const* t) {
+#if defined(__SSE2__)
+  if constexpr (std::is_same_v<T, float> && std::is_same_v<E, ZyzCosSin<float>>) {
+    switch (order) {
+      case 5: zyz_tables_sse2<5>(e, t); return;
+      case 6: zyz_tables_sse2<6>(e, t); return;
+      case 7: zyz_tables_sse2<7>(e, t); return;
+      case 8: zyz_tables_sse2<8>(e, t); return;
+      case 9: zyz_tables_sse2<9>(e, t); return;
+      case 10: zyz_tables_sse2<10>(e, t); return;
+      default: break;
+    }
+  }
+#endif
   switch (order) {
 #define SHTOOL_ZYZ_CASE(N) \
   case N: zyz_tables<N>(N, e, with_beta, t[0], t[1], t[2], t[3], t[4], t[5]); break;
