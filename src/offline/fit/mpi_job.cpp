@@ -1,6 +1,7 @@
 #include "fit/mpi_job.h"
 
 #include <climits>
+#include <cstdlib>
 #include <string>
 #include <vector>
 
@@ -16,19 +17,30 @@ namespace shtool::fit {
 
 bool mpi_built() { return true; }
 
+namespace {
+
+// At process exit, after main has printed this rank's error if it has one: when a rank
+// exits with an error mpirun stops the others, so every rank first waits here until all
+// have reached the end (and printed theirs), then finalizes.
+void finish_mpi() {
+  int finalized = 0;
+  MPI_Finalized(&finalized);
+  if (finalized) return;
+  MPI_Barrier(MPI_COMM_WORLD);
+  MPI_Finalize();
+}
+
+}  // namespace
+
 MpiJob::MpiJob() {
   int initialised = 0;
   MPI_Initialized(&initialised);
   if (!initialised) {
     if (MPI_Init(nullptr, nullptr) != MPI_SUCCESS) throw InputError("--mpi: MPI_Init failed");
-    finalize_ = true;
+    std::atexit(finish_mpi);
   }
   MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
   MPI_Comm_size(MPI_COMM_WORLD, &size_);
-}
-
-MpiJob::~MpiJob() {
-  if (finalize_) MPI_Finalize();
 }
 
 bool MpiJob::agree(bool ok) {
@@ -97,8 +109,6 @@ MpiJob::MpiJob() {
   throw InputError("--mpi: this shtool was built without MPI (install an MPI library, e.g. Debian's "
                    "libopenmpi-dev, and configure again)");
 }
-
-MpiJob::~MpiJob() = default;
 
 // A one-rank job: what the MPI calls compute when MPI_COMM_WORLD has one process.
 bool MpiJob::all_ok(bool ok) {

@@ -14,12 +14,13 @@ namespace shtool::fit {
 bool mpi_built();
 
 // This process's part of the job: MPI_Init on construction (or joins an MPI already
-// initialised), MPI_Finalize on destruction. One per process.
+// initialised); MPI_Finalize at process exit, after a barrier (see mpi_job.cpp). One per
+// process.
 class MpiJob {
  public:
   // Throws InputError when shtool was built without MPI or MPI cannot start.
   MpiJob();
-  ~MpiJob();
+  ~MpiJob() = default;
   MpiJob(const MpiJob&) = delete;
   MpiJob& operator=(const MpiJob&) = delete;
 
@@ -48,7 +49,6 @@ class MpiJob {
   bool agree(bool ok);
 
   int rank_ = 0, size_ = 1;
-  bool finalize_ = false;
   bool synchronised_ = false;
 };
 
