@@ -1,7 +1,7 @@
 #include "tensors/rotation_kernels_gen.h"
 
-#include <cmath>
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <sstream>
 #include <string>
