@@ -337,13 +337,15 @@ template <class T, class E>
 void fill_zyz_tables(int order, const E& e, bool with_beta, T* const* t) {
 #if defined(__SSE2__)
   if constexpr (std::is_same_v<T, float> && std::is_same_v<E, ZyzCosSin<float>>) {
+    // Every order with generated kernels (whole orders to 10, band kernels to band 19).
     switch (order) {
-      case 5: zyz_tables_sse2<5>(e, t); return;
-      case 6: zyz_tables_sse2<6>(e, t); return;
-      case 7: zyz_tables_sse2<7>(e, t); return;
-      case 8: zyz_tables_sse2<8>(e, t); return;
-      case 9: zyz_tables_sse2<9>(e, t); return;
-      case 10: zyz_tables_sse2<10>(e, t); return;
+#define SHTOOL_ZYZ_SSE2_CASE(N) \
+  case N: zyz_tables_sse2<N>(e, t); return;
+      SHTOOL_ZYZ_SSE2_CASE(5) SHTOOL_ZYZ_SSE2_CASE(6) SHTOOL_ZYZ_SSE2_CASE(7) SHTOOL_ZYZ_SSE2_CASE(8)
+      SHTOOL_ZYZ_SSE2_CASE(9) SHTOOL_ZYZ_SSE2_CASE(10) SHTOOL_ZYZ_SSE2_CASE(11) SHTOOL_ZYZ_SSE2_CASE(12)
+      SHTOOL_ZYZ_SSE2_CASE(13) SHTOOL_ZYZ_SSE2_CASE(14) SHTOOL_ZYZ_SSE2_CASE(15) SHTOOL_ZYZ_SSE2_CASE(16)
+      SHTOOL_ZYZ_SSE2_CASE(17) SHTOOL_ZYZ_SSE2_CASE(18) SHTOOL_ZYZ_SSE2_CASE(19) SHTOOL_ZYZ_SSE2_CASE(20)
+#undef SHTOOL_ZYZ_SSE2_CASE
       default: break;
     }
   }
