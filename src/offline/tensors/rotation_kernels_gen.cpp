@@ -51,7 +51,9 @@ std::string linear_sum(const std::vector<std::pair<double, std::string>>& terms)
 // lanes (one float vector, P = float): groups of two to four pairs m run in the lanes of
 // one 4-float vector, each lane doing the scalar pair's operations (so the same bits):
 // 4 vector operations for up to 16 scalar ones; the tables are read four entries at a
-// time (they are padded for it) and a lone last pair stays scalar.
+// time (they are padded for it) and a lone last pair stays scalar. From and to arrays,
+// the +m and the -m side of a group each move in one load or store (pairs_plus,
+// pairs_minus, store_pairs_*), not lane by lane.
 void z_rotation(std::ostream& o, int l, const std::string& angle, const std::string& src, bool src_array,
                 const std::string& dst, bool dst_array, bool lanes = false) {
   auto in = [&](int j) { return src_array ? src + "[" + std::to_string(j) + "]" : src + std::to_string(j); };
@@ -71,13 +73,23 @@ void z_rotation(std::ostream& o, int l, const std::string& angle, const std::str
     };
     o << "  const Lanes4 zc" << id << " = table_lanes(s.c" << angle << " + " << m << "), zs" << id
       << " = table_lanes(s.s" << angle << " + " << m << ");\n";
-    o << "  const Lanes4 zp" << id << " = " << lanes_of(1) << ", zq" << id << " = " << lanes_of(-1) << ";\n";
+    if (src_array) {
+      o << "  const Lanes4 zp" << id << " = pairs_plus<" << count << ">(" << src << " + " << l + m << "), zq" << id
+        << " = pairs_minus<" << count << ">(" << src << " + " << l - m << ");\n";
+    } else {
+      o << "  const Lanes4 zp" << id << " = " << lanes_of(1) << ", zq" << id << " = " << lanes_of(-1) << ";\n";
+    }
     o << "  const Lanes4 zh" << id << " = madd<F>(zc" << id << ", zp" << id << ", -(zs" << id << " * zq" << id
       << "));\n";
     o << "  const Lanes4 zl" << id << " = madd<F>(zs" << id << ", zp" << id << ", zc" << id << " * zq" << id
       << ");\n";
-    for (int i = 0; i < count; ++i) o << out(l + m + i) << "zh" << id << "[" << i << "];\n";
-    for (int i = 0; i < count; ++i) o << out(l - m - i) << "zl" << id << "[" << i << "];\n";
+    if (dst_array) {
+      o << "  store_pairs_plus<" << count << ">(" << dst << " + " << l + m << ", zh" << id << ");\n";
+      o << "  store_pairs_minus<" << count << ">(" << dst << " + " << l - m << ", zl" << id << ");\n";
+    } else {
+      for (int i = 0; i < count; ++i) o << out(l + m + i) << "zh" << id << "[" << i << "];\n";
+      for (int i = 0; i < count; ++i) o << out(l - m - i) << "zl" << id << "[" << i << "];\n";
+    }
   }
   for (; m <= l; ++m) {
     const std::string cm = "c" + angle + std::to_string(m), sm = "s" + angle + std::to_string(m);

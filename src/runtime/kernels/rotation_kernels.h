@@ -11,6 +11,10 @@
 
 #include <type_traits>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "shtool/rotation.h"
 
 namespace shtool::detail {
@@ -119,6 +123,59 @@ SHTOOL_KERNEL_INLINE Lanes4 table_lanes(const float* p) {
   Lanes4 v;
   __builtin_memcpy(&v, p, sizeof v);
   return v;
+}
+
+// The pairs (m, -m), m = m0 .. m0 + Count - 1, of a band in lanes, Count = 2..4, lanes
+// past Count zero: `plus` loads p[0 .. Count - 1] (the +m side, in order), `minus` loads
+// p[-(Count - 1) .. 0] reversed (the -m side, where m runs downwards in memory). One
+// load of Count entries (and one shuffle), where lane-by-lane inserts cost a shuffle
+// each; and nothing outside the band's entries is read.
+template <int Count>
+SHTOOL_KERNEL_INLINE Lanes4 pairs_plus(const float* p) {
+#if defined(__SSE2__)
+  // A memcpy of 8 or 12 bytes into a vector goes through the stack in GCC 12, and the
+  // vector load then waits for the narrower stores: spelled out instead.
+  if constexpr (Count == 4) return reinterpret_cast<Lanes4>(_mm_loadu_ps(p));
+  // p[0], p[1], 0, 0 (through __m128i, which may alias the floats)
+  const __m128 low = _mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p)));
+  if constexpr (Count == 2) return reinterpret_cast<Lanes4>(low);
+  else return reinterpret_cast<Lanes4>(_mm_movelh_ps(low, _mm_load_ss(p + 2)));
+#else
+  Lanes4 v{};
+  __builtin_memcpy(&v, p, Count * sizeof(float));
+  return v;
+#endif
+}
+template <int Count>
+SHTOOL_KERNEL_INLINE Lanes4 pairs_minus(const float* p) {
+  const Lanes4 v = pairs_plus<Count>(p - (Count - 1));
+  if constexpr (Count == 4) return __builtin_shufflevector(v, v, 3, 2, 1, 0);
+  else if constexpr (Count == 3) return __builtin_shufflevector(v, v, 2, 1, 0, 3);
+  else return __builtin_shufflevector(v, v, 1, 0, 2, 3);
+}
+// The stores matching pairs_plus / pairs_minus: lanes 0 .. Count - 1 of v to p[0 ..] or
+// to p[0], p[-1], ...: one store (and one shuffle) where lane-by-lane extracts cost a
+// shuffle and a store each.
+template <int Count>
+SHTOOL_KERNEL_INLINE void store_pairs_plus(float* p, Lanes4 v) {
+#if defined(__SSE2__)
+  const __m128 x = reinterpret_cast<__m128>(v);
+  if constexpr (Count == 4) {
+    _mm_storeu_ps(p, x);
+  } else {
+    _mm_storel_epi64(reinterpret_cast<__m128i*>(p), _mm_castps_si128(x));
+    if constexpr (Count == 3) _mm_store_ss(p + 2, _mm_movehl_ps(x, x));
+  }
+#else
+  __builtin_memcpy(p, &v, Count * sizeof(float));
+#endif
+}
+template <int Count>
+SHTOOL_KERNEL_INLINE void store_pairs_minus(float* p, Lanes4 v) {
+  if constexpr (Count == 4) v = __builtin_shufflevector(v, v, 3, 2, 1, 0);
+  else if constexpr (Count == 3) v = __builtin_shufflevector(v, v, 2, 1, 0, 3);
+  else v = __builtin_shufflevector(v, v, 1, 0, 2, 3);
+  store_pairs_plus<Count>(p - (Count - 1), v);
 }
 
 // KernelState (what one rotation needs at apply time) is in shtool/rotation.h.
