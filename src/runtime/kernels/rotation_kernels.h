@@ -146,12 +146,17 @@ SHTOOL_KERNEL_INLINE Lanes4 pairs_plus(const float* p) {
   return v;
 #endif
 }
+// Lanes 0 .. Count - 1 of v in reverse order, the lanes past Count left where they are:
+// the -m side of a band runs downwards in memory.
 template <int Count>
-SHTOOL_KERNEL_INLINE Lanes4 pairs_minus(const float* p) {
-  const Lanes4 v = pairs_plus<Count>(p - (Count - 1));
+SHTOOL_KERNEL_INLINE Lanes4 reverse_pairs(Lanes4 v) {
   if constexpr (Count == 4) return __builtin_shufflevector(v, v, 3, 2, 1, 0);
   else if constexpr (Count == 3) return __builtin_shufflevector(v, v, 2, 1, 0, 3);
   else return __builtin_shufflevector(v, v, 1, 0, 2, 3);
+}
+template <int Count>
+SHTOOL_KERNEL_INLINE Lanes4 pairs_minus(const float* p) {
+  return reverse_pairs<Count>(pairs_plus<Count>(p - (Count - 1)));
 }
 // The stores matching pairs_plus / pairs_minus: lanes 0 .. Count - 1 of v to p[0 ..] or
 // to p[0], p[-1], ...: one store (and one shuffle) where lane-by-lane extracts cost a
@@ -172,10 +177,7 @@ SHTOOL_KERNEL_INLINE void store_pairs_plus(float* p, Lanes4 v) {
 }
 template <int Count>
 SHTOOL_KERNEL_INLINE void store_pairs_minus(float* p, Lanes4 v) {
-  if constexpr (Count == 4) v = __builtin_shufflevector(v, v, 3, 2, 1, 0);
-  else if constexpr (Count == 3) v = __builtin_shufflevector(v, v, 2, 1, 0, 3);
-  else v = __builtin_shufflevector(v, v, 1, 0, 2, 3);
-  store_pairs_plus<Count>(p - (Count - 1), v);
+  store_pairs_plus<Count>(p - (Count - 1), reverse_pairs<Count>(v));
 }
 
 // KernelState (what one rotation needs at apply time) is in shtool/rotation.h.
