@@ -1,9 +1,11 @@
 #include "tensors/rotation_kernels_gen.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -45,6 +47,15 @@ std::string linear_sum(const std::vector<std::pair<double, std::string>>& terms)
   return s;
 }
 
+// The pairs (m, -m) of band l that run in the lanes of one 4-float vector: groups
+// m = m0 .. m0 + count - 1, count 2..4, from m0 = 1 in steps of 4; a lone last pair
+// (count 1) stays scalar.
+std::vector<std::pair<int, int>> lane_groups(int l) {
+  std::vector<std::pair<int, int>> groups;
+  for (int m = 1; l - m + 1 >= 2; m += 4) groups.emplace_back(m, std::min(4, l - m + 1));
+  return groups;
+}
+
 // z-rotation of band l by angle x ([2] App. C: (f_m, f_-m) turns by m x), from
 // variables src<j> (or src[j]) into dst<j>. cos(m x), sin(m x) are read from the state's
 // tables (s.c<x>, s.s<x>) where they are used, which keeps few values live at a time.
@@ -53,9 +64,13 @@ std::string linear_sum(const std::vector<std::pair<double, std::string>>& terms)
 // 4 vector operations for up to 16 scalar ones; the tables are read four entries at a
 // time (they are padded for it) and a lone last pair stays scalar. From and to arrays,
 // the +m and the -m side of a group each move in one load or store (pairs_plus,
-// pairs_minus, store_pairs_*), not lane by lane.
+// pairs_minus, store_pairs_*), not lane by lane. src_vectors: the groups' inputs are
+// already lane vectors, <src>p<m0> (+m side) and <src>m<m0> (-m side), as x90_lanes
+// writes them; dst_vectors: the groups' results stay in their vectors zh<x><m0> (+m) and
+// zl<x><m0> (-m), for x90_lanes to read. The m = 0 entry and a lone pair are scalars.
 void z_rotation(std::ostream& o, int l, const std::string& angle, const std::string& src, bool src_array,
-                const std::string& dst, bool dst_array, bool lanes = false) {
+                const std::string& dst, bool dst_array, bool lanes = false, bool src_vectors = false,
+                bool dst_vectors = false) {
   auto in = [&](int j) { return src_array ? src + "[" + std::to_string(j) + "]" : src + std::to_string(j); };
   auto out = [&](int j) {
     return dst_array ? std::string("  ").append(dst).append("[").append(std::to_string(j)).append("] = ")
@@ -63,19 +78,21 @@ void z_rotation(std::ostream& o, int l, const std::string& angle, const std::str
   };
   o << out(l) << in(l) << ";\n";
   int m = 1;
-  for (; lanes && l - m + 1 >= 2; m += 4) {
-    const int count = std::min(4, l - m + 1);
-    const std::string id = angle + std::to_string(m);
-    auto lanes_of = [&](int sign) {  // in(l + sign * (m + i)), i = 0..3, zero padded
+  for (const auto& [m0, count] : lanes ? lane_groups(l) : std::vector<std::pair<int, int>>{}) {
+    m = m0 + count;
+    const std::string id = angle + std::to_string(m0);
+    auto lanes_of = [&](int sign) {  // in(l + sign * (m0 + i)), i = 0..3, zero padded
       std::string v = "{";
-      for (int i = 0; i < 4; ++i) v.append(i ? ", " : "").append(i < count ? in(l + sign * (m + i)) : "0");
+      for (int i = 0; i < 4; ++i) v.append(i ? ", " : "").append(i < count ? in(l + sign * (m0 + i)) : "0");
       return v + "}";
     };
-    o << "  const Lanes4 zc" << id << " = table_lanes(s.c" << angle << " + " << m << "), zs" << id
-      << " = table_lanes(s.s" << angle << " + " << m << ");\n";
-    if (src_array) {
-      o << "  const Lanes4 zp" << id << " = pairs_plus<" << count << ">(" << src << " + " << l + m << "), zq" << id
-        << " = pairs_minus<" << count << ">(" << src << " + " << l - m << ");\n";
+    o << "  const Lanes4 zc" << id << " = table_lanes(s.c" << angle << " + " << m0 << "), zs" << id
+      << " = table_lanes(s.s" << angle << " + " << m0 << ");\n";
+    if (src_vectors) {
+      o << "  const Lanes4 zp" << id << " = " << src << "p" << m0 << ", zq" << id << " = " << src << "m" << m0 << ";\n";
+    } else if (src_array) {
+      o << "  const Lanes4 zp" << id << " = pairs_plus<" << count << ">(" << src << " + " << l + m0 << "), zq" << id
+        << " = pairs_minus<" << count << ">(" << src << " + " << l - m0 << ");\n";
     } else {
       o << "  const Lanes4 zp" << id << " = " << lanes_of(1) << ", zq" << id << " = " << lanes_of(-1) << ";\n";
     }
@@ -84,11 +101,11 @@ void z_rotation(std::ostream& o, int l, const std::string& angle, const std::str
     o << "  const Lanes4 zl" << id << " = madd<F>(zs" << id << ", zp" << id << ", zc" << id << " * zq" << id
       << ");\n";
     if (dst_array) {
-      o << "  store_pairs_plus<" << count << ">(" << dst << " + " << l + m << ", zh" << id << ");\n";
-      o << "  store_pairs_minus<" << count << ">(" << dst << " + " << l - m << ", zl" << id << ");\n";
-    } else {
-      for (int i = 0; i < count; ++i) o << out(l + m + i) << "zh" << id << "[" << i << "];\n";
-      for (int i = 0; i < count; ++i) o << out(l - m - i) << "zl" << id << "[" << i << "];\n";
+      o << "  store_pairs_plus<" << count << ">(" << dst << " + " << l + m0 << ", zh" << id << ");\n";
+      o << "  store_pairs_minus<" << count << ">(" << dst << " + " << l - m0 << ", zl" << id << ");\n";
+    } else if (!dst_vectors) {
+      for (int i = 0; i < count; ++i) o << out(l + m0 + i) << "zh" << id << "[" << i << "];\n";
+      for (int i = 0; i < count; ++i) o << out(l - m0 - i) << "zl" << id << "[" << i << "];\n";
     }
   }
   for (; m <= l; ++m) {
@@ -100,11 +117,147 @@ void z_rotation(std::ostream& o, int l, const std::string& angle, const std::str
   }
 }
 
+// Bands up to this one run their X90 products in lanes too (x90_lanes) in the one-float-
+// vector kernels; larger bands read each row's inputs from more lane groups, and the
+// shuffles that gather them would cost more than the lanes save.
+constexpr int kLaneX90MaxBand = 4;
+
+// A lane vector gathered from the lanes of others: lane i of the result is lane
+// lanes[i].second of the vector named lanes[i].first. One __builtin_shufflevector for
+// two sources, one more for each further source (the compiler picks the instructions).
+std::string gather(std::array<std::pair<std::string, int>, 4> lanes) {
+  // A lane whose value is never read (empty name) repeats a neighbour's, which keeps the
+  // pattern within two sources where it can.
+  for (int i = 0; i < 4; ++i)
+    if (lanes[i].first.empty()) lanes[i] = !lanes[i ^ 1].first.empty() ? lanes[i ^ 1] : lanes[i ^ 2];
+  std::vector<std::string> sources;
+  for (const auto& [v, lane] : lanes)
+    if (std::find(sources.begin(), sources.end(), v) == sources.end()) sources.push_back(v);
+  // at[i]: where lane i's value sits in `cur` so far (-1: not yet gathered).
+  std::array<int, 4> at;
+  for (int i = 0; i < 4; ++i) at[i] = lanes[i].first == sources[0] ? lanes[i].second : -1;
+  if (sources.size() == 1 && at == std::array<int, 4>{0, 1, 2, 3}) return sources[0];
+  std::string cur = sources[0];
+  for (std::size_t k = sources.size() == 1 ? 0 : 1; k < sources.size(); ++k) {
+    std::string next = "__builtin_shufflevector(" + cur + ", " + sources[k];
+    for (int i = 0; i < 4; ++i) {
+      if (k > 0 && lanes[i].first == sources[k]) at[i] = 4 + lanes[i].second;
+      next += ", " + std::to_string(std::max(at[i], 0));
+    }
+    cur = next + ")";
+    for (int i = 0; i < 4; ++i)
+      if (at[i] >= 0) at[i] = i;
+  }
+  return cur;
+}
+
+// out_i = sum_j c(i, j) in_j for band l (c: X90's rows, or its columns when transposed),
+// with both sides in lanes (one float vector): in_j is lane i of zh<angle><m0> (j = l +
+// m0 + i) or zl<angle><m0> (j = l - m0 - i) as z_rotation leaves them, or the scalar
+// <src><j> (m = 0, a lone pair); the outputs of each lane group are the vectors
+// <dst>p<m0> and <dst>m<m0> that the next z-rotation takes, the others scalars <dst><j>.
+// Each lane computes its row's linear_sum, term by term in the same order, so each lane
+// has the scalar row's bits: a lane with fewer terms than the longest of its vector
+// starts with padding, -1 times a zero lane (-0, which any sum leaves unchanged, as
+// madd<F>(c, a, -0) = c * a), where the row's first product stands in the others.
+void x90_lanes(std::ostream& o, int l, const std::vector<std::vector<double>>& x, bool transpose,
+               const std::string& src, const std::string& angle, const std::string& dst) {
+  const int size = 2 * l + 1;
+  const auto groups = lane_groups(l);
+  auto coefficient = [&](int i, int j) { return transpose ? x[j][i] : x[i][j]; };
+  // Where each input sits; scalars (and a zero for padding) in the vector <src>s.
+  std::vector<std::pair<std::string, int>> slot(size);
+  std::vector<int> scalars;
+  for (int j = 0; j < size; ++j) slot[j] = {"", -1};
+  for (const auto& [m0, count] : groups)
+    for (int i = 0; i < count; ++i) {
+      slot[l + m0 + i] = {"zh" + angle + std::to_string(m0), i};
+      slot[l - m0 - i] = {"zl" + angle + std::to_string(m0), i};
+    }
+  const std::string scalar_vector = src + "s";
+  for (int j = 0; j < size; ++j)
+    if (slot[j].second < 0) {
+      slot[j] = {scalar_vector, static_cast<int>(scalars.size())};
+      scalars.push_back(j);
+    }
+  const std::pair<std::string, int> zero = {scalar_vector, static_cast<int>(scalars.size())};
+  if (scalars.size() > 3) throw std::logic_error("x90_lanes: more than three scalar entries");
+  std::ostringstream vectors;
+  bool uses_scalar_vector = false;
+  for (const auto& [m0, count] : groups)
+    for (const int sign : {1, -1}) {
+      // Rows l + sign (m0 + i), i < count; their terms in linear_sum's order.
+      std::array<std::vector<std::pair<double, int>>, 4> terms;
+      std::size_t longest = 0;
+      for (int i = 0; i < count; ++i) {
+        const int row = l + sign * (m0 + i);
+        for (int j = 0; j < size; ++j)
+          if (coefficient(row, j) != 0.0) terms[i].emplace_back(coefficient(row, j), j);
+        longest = std::max(longest, terms[i].size());
+      }
+      std::string sum;
+      for (std::size_t k = 0; k < longest; ++k) {
+        std::array<std::pair<std::string, int>, 4> lanes;
+        std::string c = "Lanes4{";
+        for (int i = 0; i < 4; ++i) {
+          const std::size_t pad = longest - terms[i].size();
+          if (i >= count) {  // a lane past the group: its value is never read
+            lanes[i] = {"", -1};
+            c += std::string(i ? ", " : "") + "T(0)";
+          } else if (k < pad) {
+            lanes[i] = zero;
+            c += std::string(i ? ", " : "") + "T(-1)";
+          } else {
+            const auto& [value, j] = terms[i][k - pad];
+            lanes[i] = slot[j];
+            c += std::string(i ? ", " : "") + "T(" + literal(value) + ")";
+          }
+          uses_scalar_vector = uses_scalar_vector || lanes[i].first == scalar_vector;
+        }
+        c += "}";
+        const std::string a = gather(lanes);
+        sum = sum.empty() ? c + " * " + a : "madd<F>(" + c + ", " + a + ", " + sum + ")";
+      }
+      vectors << "  const Lanes4 " << dst << (sign > 0 ? "p" : "m") << m0 << " = " << sum << ";\n";
+    }
+  if (uses_scalar_vector) {
+    o << "  const Lanes4 " << scalar_vector << " = {";
+    for (int k = 0; k < 4; ++k)
+      o << (k ? ", " : "") << (k < static_cast<int>(scalars.size()) ? indexed(src.c_str(), scalars[k]) : "0");
+    o << "};\n";
+  }
+  o << vectors.str();
+  // The scalar rows, from the scalars and lanes of the inputs they read.
+  std::vector<bool> extracted(size, false);
+  for (const int i : scalars) {
+    std::vector<std::pair<double, std::string>> terms;
+    for (int j = 0; j < size; ++j) {
+      if (coefficient(i, j) == 0.0) continue;
+      if (slot[j].first != scalar_vector && !extracted[j]) {
+        o << "  const P " << src << j << " = " << slot[j].first << "[" << slot[j].second << "];\n";
+        extracted[j] = true;
+      }
+      terms.emplace_back(coefficient(i, j), indexed(src.c_str(), j));
+    }
+    o << "  const P " << dst << i << " = " << linear_sum(terms) << ";\n";
+  }
+}
+
 // The body of zxzxz_band<l>; lanes: the first and last z-rotations in float lanes
-// (z_rotation). The middle one stays scalar: its input and output are the X90 rows'
-// scalars, which would cost more shuffles into and out of lanes than the lanes save.
+// (z_rotation), and up to kLaneX90MaxBand the X90 products and the middle z-rotation too
+// (x90_lanes). Above it the middle z-rotation stays scalar: its input and output are the
+// X90 rows' scalars, which would cost more shuffles into and out of lanes than the lanes
+// save.
 void zxzxz_body(std::ostream& o, const std::vector<std::vector<double>>& x, int l, bool lanes) {
   const int size = 2 * l + 1;
+  if (lanes && l <= kLaneX90MaxBand) {
+    z_rotation(o, l, "g", "x", true, "t", false, true, false, true);
+    x90_lanes(o, l, x, false, "t", "g", "u");
+    z_rotation(o, l, "b", "u", false, "w", false, true, true, true);
+    x90_lanes(o, l, x, true, "w", "b", "v");
+    z_rotation(o, l, "a", "v", false, "y", true, true, true, false);
+    return;
+  }
   z_rotation(o, l, "g", "x", true, "t", false, lanes);
   for (int i = 0; i < size; ++i) {
     std::vector<std::pair<double, std::string>> terms;
