@@ -8,7 +8,7 @@ root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="${1:-$root/build}"
 
 packages=(
-  g++ cmake make pkg-config
+  g++ cmake make ninja-build pkg-config
   libeigen3-dev libfftw3-dev nlohmann-json3-dev          # runtime library
   libcli11-dev libnlopt-cxx-dev libembree-dev libtinyobjloader-dev  # offline tool
   libopenexr-dev libstb-dev                              # offline tool: images
@@ -36,5 +36,8 @@ if ((${#missing[@]})); then
 fi
 
 # The Debian interpreter: the one the packages above (jsonschema, numpy) belong to.
+# Ninja, where the tree is new: it compiles a target's objects while the libraries they
+# link are still being built, so both cores stay busy (an existing tree keeps its generator).
+export CMAKE_GENERATOR="${CMAKE_GENERATOR:-Ninja}"
 cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release -DPython3_EXECUTABLE=/usr/bin/python3 >/dev/null
 cmake --build "$build" -j "$(nproc)"

@@ -77,13 +77,13 @@ TEST_F(CliUntrusted, AllOutputsOrNone) {
                       "--json", (dir_ / "nodir" / "l.json").string()}),
                  "does not exist");
   // gen-tensors whose kernel target is a folder: no table, no temporary file.
-  fs::create_directories(dir_ / "k" / "rotation_kernels_generated.cpp");
+  fs::create_directories(dir_ / "k" / "rotation_kernels_generated.inc");
   expect_refused(run({"gen-tensors", "--what", "rotation,rotation-kernels", "--out", (dir_ / "k").string()}),
                  "is a folder");
   EXPECT_FALSE(fs::exists(dir_ / "k" / "rotation-helpers.shtb"));
   EXPECT_EQ(listing(), (std::vector<std::string>{"k", "m.obj", "t.json"}));
   std::size_t in_k = 0;
-  for (const auto& e : fs::directory_iterator(dir_ / "k")) in_k += e.path().filename() != "rotation_kernels_generated.cpp";
+  for (const auto& e : fs::directory_iterator(dir_ / "k")) in_k += e.path().filename() != "rotation_kernels_generated.inc";
   EXPECT_EQ(in_k, 0u);
 }
 

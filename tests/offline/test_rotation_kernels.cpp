@@ -1,5 +1,5 @@
 // The generated fixed-order rotation kernels (src/runtime/kernels/rotation_kernels.h,
-// rotation_kernels_generated.cpp) and the three-vector apply:
+// rotation_kernels_generated.inc) and the three-vector apply:
 //  - the committed generated source is byte-identical to what its generator writes
 //    now, through the library call and through `shtool gen-tensors`;
 //  - apply_rgb gives the bits of three apply() calls, for every method and type;

@@ -1,5 +1,5 @@
 // gen-tensors: the source of the fixed-order rotation kernels
-// (src/runtime/rotation_kernels_generated.cpp, see src/runtime/kernels/rotation_kernels.h).
+// (src/runtime/kernels/rotation_kernels_generated.inc, see src/runtime/kernels/rotation_kernels.h).
 #pragma once
 
 #include <string>
@@ -12,7 +12,7 @@ namespace shtool {
 // entries as literals), one function per whole order up to kKernelMaxOrder and one per
 // band above it, float and double, one vector and three (src/runtime/kernels/rotation_kernels.h). The constants come from compute_rotation_helpers; the text
 // depends on nothing else, so it is byte-identical on every run.
-inline constexpr const char* kRotationKernelsFile = "rotation_kernels_generated.cpp";
+inline constexpr const char* kRotationKernelsFile = "rotation_kernels_generated.inc";
 std::string rotation_kernels_source();
 
 }  // namespace shtool

@@ -1,6 +1,6 @@
 // Internal to the runtime: fixed-order SH rotation kernels. The per-band arithmetic of
 // the zxzxz and Taylor rotations for small bands is generated, with X90, D1 and D2 as
-// literal constants and every loop unrolled, into rotation_kernels_generated.cpp by
+// literal constants and every loop unrolled, into rotation_kernels_generated.inc by
 // `shtool gen-tensors --what rotation-kernels --out src/runtime/kernels` (src/offline/tensors/
 // rotation_kernels_gen.cpp); tests/test_rotation_kernels.cpp regenerates it and compares
 // the bytes, so the committed source cannot drift from its generator. Bands 1..3 have
