@@ -35,9 +35,9 @@ if ((${#missing[@]})); then
   DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >&2
 fi
 
-# The Debian interpreter: the one the packages above (jsonschema, numpy) belong to.
 # Ninja, where the tree is new: it compiles a target's objects while the libraries they
 # link are still being built, so both cores stay busy (an existing tree keeps its generator).
 export CMAKE_GENERATOR="${CMAKE_GENERATOR:-Ninja}"
+# The Debian interpreter: the one the packages above (jsonschema, numpy) belong to.
 cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release -DPython3_EXECUTABLE=/usr/bin/python3 >/dev/null
 cmake --build "$build" -j "$(nproc)"
