@@ -78,7 +78,10 @@ void z_rotation(std::ostream& o, int l, const std::string& angle, const std::str
   };
   o << out(l) << in(l) << ";\n";
   int m = 1;
-  for (const auto& [m0, count] : lanes ? lane_groups(l) : std::vector<std::pair<int, int>>{}) {
+  for (const std::pair<int, int>& group : lanes ? lane_groups(l) : std::vector<std::pair<int, int>>{}) {
+    // Plain names rather than a structured binding: the lambda below captures them, which
+    // clang before 16 rejects for bindings.
+    const int m0 = group.first, count = group.second;
     m = m0 + count;
     const std::string id = angle + std::to_string(m0);
     auto lanes_of = [&](int sign) {  // in(l + sign * (m0 + i)), i = 0..3, zero padded
