@@ -124,37 +124,68 @@ std::string permutation_kernel_source(int order, const std::vector<Entry>& entri
       layers[l].used[k - 1] = true;
     }
   }
+  // Each layer splits into its two 4-wide halves (output lanes 1..4 and 5..8), a half
+  // with no coefficient dropped: one 4-wide operation there is what an 8-wide one costs
+  // on CPUs whose vector units are 128 bits wide, and a permutation into one half reads
+  // the row's two halves with in-lane shuffles where an 8-wide one crosses them (the
+  // integer permutation, 3 operations there). Unused lanes are left to the compiler (-1).
+  struct Half {
+    int row;
+    std::array<int, 4> lane;
+    std::array<double, 4> c;
+  };
+  std::vector<Half> halves[2];
+  for (const Layer& layer : layers)
+    for (int h = 0; h < 2; ++h) {
+      Half half{layer.row, {}, {}};
+      bool any = false;
+      for (int k = 0; k < 4; ++k) {
+        const int lane = 4 * h + k;
+        half.lane[k] = layer.used[lane] ? layer.lane[lane] : -1;
+        half.c[k] = layer.used[lane] ? layer.c[lane] : 0.0;
+        any |= layer.used[lane];
+      }
+      if (any) halves[h].push_back(half);
+    }
   std::ostringstream s;
-  s << "// Order " << order << ": " << entries.size() << " canonical entries, permutation form: 9 8-wide rows "
-    << "(2 multiplications each), " << layers.size() << " layers (8-wide multiply-adds) from them, y_0 from "
-    << "one 8-wide product and 8 scalar additions; 2 scalar multiplications, 8 scalar additions.\n";
+  s << "// Order " << order << ": " << entries.size() << " canonical entries, permutation form: 9 rows "
+    << "of 8 (2 multiplications each, as two 4-wide halves), " << layers.size() << " layers, as "
+    << halves[0].size() << " + " << halves[1].size() << " 4-wide multiply-adds; y_0 from one 8-wide product "
+    << "and 8 scalar additions; 2 scalar multiplications, 8 scalar additions.\n";
   s << "template <class T>\n";
   s << "SHTOOL_KERNEL_CLONES void tripling_kernel_" << order << "(const T* f, const T* h, T* y) {\n";
-  s << "  typedef T V8 __attribute__((vector_size(8 * sizeof(T))));  // 8 floats or 8 doubles\n";
-  s << "  typedef T U8 __attribute__((vector_size(8 * sizeof(T)), aligned(alignof(T)), may_alias));\n";
-  s << "  const V8 fv = *reinterpret_cast<const U8*>(f + 1), hv = *reinterpret_cast<const U8*>(h + 1);\n";
+  s << "  typedef T V4 __attribute__((vector_size(4 * sizeof(T))));  // 4 floats or 4 doubles\n";
+  s << "  typedef T U4 __attribute__((vector_size(4 * sizeof(T)), aligned(alignof(T)), may_alias));\n";
+  s << "  const V4 fl = *reinterpret_cast<const U4*>(f + 1), fh = *reinterpret_cast<const U4*>(f + 5);\n";
+  s << "  const V4 hl = *reinterpret_cast<const U4*>(h + 1), hh = *reinterpret_cast<const U4*>(h + 5);\n";
   for (int i = 0; i < count; ++i)
-    s << "  const V8 row" << i << " = f[" << i << "] * hv + h[" << i << "] * fv;\n";
-  s << "  V8 acc[4];\n";
-  for (std::size_t n = 0; n < layers.size(); ++n) {
-    const Layer& layer = layers[n];
-    bool identity = true;
-    for (int k = 0; k < 8; ++k) identity &= layer.used[k] && layer.lane[k] == k;
-    const std::string row = "row" + std::to_string(layer.row);
-    std::string source = row;
-    if (!identity) {
-      source = "__builtin_shufflevector(" + row + ", " + row;
-      for (int k = 0; k < 8; ++k) source += ", " + std::to_string(layer.lane[k]);
-      source += ")";
+    s << "  const V4 rl" << i << " = f[" << i << "] * hl + h[" << i << "] * fl, rh" << i << " = f[" << i
+      << "] * hh + h[" << i << "] * fh;\n";
+  const char* names[2] = {"lo", "hi"};
+  for (int h = 0; h < 2; ++h) {
+    if (halves[h].size() < 2) throw std::logic_error("tripling kernels: a half of order 3 with fewer than 2 layers");
+    for (std::size_t n = 0; n < halves[h].size(); ++n) {
+      const Half& half = halves[h][n];
+      const std::string row = std::to_string(half.row);
+      std::string source;
+      if (half.lane == std::array<int, 4>{4 * h, 4 * h + 1, 4 * h + 2, 4 * h + 3}) {
+        source = (h ? "rh" : "rl") + row;
+      } else {
+        source = "__builtin_shufflevector(rl" + row + ", rh" + row;
+        for (int k = 0; k < 4; ++k) source += ", " + std::to_string(half.lane[k]);
+        source += ")";
+      }
+      std::string coefficients = "V4{";
+      for (int k = 0; k < 4; ++k) coefficients += (k ? ", T(" : "T(") + literal(half.c[k]) + ")";
+      coefficients += "}";
+      s << "  " << (n < 2 ? "V4 " : "") << names[h] << n % 2 << " " << (n < 2 ? "= " : "+= ") << coefficients
+        << " * " << source << ";\n";
     }
-    std::string coefficients = "V8{";
-    for (int k = 0; k < 8; ++k) coefficients += (k ? ", T(" : "T(") + literal(layer.c[k]) + ")";
-    coefficients += "}";
-    s << "  acc[" << n % 4 << "] " << (n < 4 ? "= " : "+= ") << coefficients << " * " << source << ";\n";
   }
-  s << "  const V8 d = fv * hv;\n";
-  s << "  y[0] = T(" << literal(2 * c0) << ") * (f[0] * h[0] + (((d[0] + d[1]) + (d[2] + d[3])) + ((d[4] + d[5]) + (d[6] + d[7]))));\n";
-  s << "  *reinterpret_cast<U8*>(y + 1) = (acc[0] + acc[1]) + (acc[2] + acc[3]);\n";
+  s << "  const V4 dl = fl * hl, dh = fh * hh;\n";
+  s << "  y[0] = T(" << literal(2 * c0) << ") * (f[0] * h[0] + (((dl[0] + dl[1]) + (dl[2] + dl[3])) + ((dh[0] + dh[1]) + (dh[2] + dh[3]))));\n";
+  s << "  *reinterpret_cast<U4*>(y + 1) = lo0 + lo1;\n";
+  s << "  *reinterpret_cast<U4*>(y + 5) = hi0 + hi1;\n";
   s << "}\n\n";
   return s.str();
 }

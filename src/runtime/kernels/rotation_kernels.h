@@ -360,6 +360,113 @@ SHTOOL_KERNEL_INLINE void run_batch_lanes(const T* const* in, T* const* out, F&&
   scatter_lanes<T>(y, Count, dst);
 }
 
+// Bands 2 and 3 of one float vector (below) run their contractions with R on 4-wide
+// lane vectors (lane 3 unused): each lane takes the products and sums of one entry of
+// the scalar code in the same order, so the results have its bits, which apply_rgb and
+// rotate_batch compute lane by lane. Against the scalar form, 3 operations where it
+// takes 9 per group of three entries, plus lane broadcasts.
+template <int L>
+SHTOOL_KERNEL_INLINE Lanes4 lane_splat(Lanes4 v) {
+  return __builtin_shufflevector(v, v, L, L, L, L);
+}
+
+// The columns of R (r column-major) in lanes 0..2, read as set() stores R (two 4-float
+// stores and one float): a load straddling two stores would wait for them to reach the
+// cache instead of taking their values.
+struct RColumnLanes {
+  Lanes4 col[3];
+};
+SHTOOL_KERNEL_INLINE RColumnLanes r_column_lanes(const float* __restrict r) {
+  const Lanes4 a = table_lanes(r), b = table_lanes(r + 4);  // r0..r3, r4..r7
+  const Lanes4 c = {r[8], 0.0f, 0.0f, 0.0f};
+  return {{a, __builtin_shufflevector(a, b, 3, 4, 5, 6), __builtin_shufflevector(b, c, 2, 3, 4, 5)}};
+}
+
+// sum_a u_a v_a for a = 0, 1, 2, left to right (dot3 in the scalar forms), with a
+// scalar or lane vector u_a and lane vectors v_a.
+template <bool F, class U>
+SHTOOL_KERNEL_INLINE Lanes4 dot3_lanes(U u0, Lanes4 v0, U u1, Lanes4 v1, U u2, Lanes4 v2) {
+  return madd<F>(u2, v2, madd<F>(u1, v1, u0 * v0));
+}
+
+// band2_closed for one float vector. Lanes j of C_i = R_i. A are c_ij; lanes j of
+// B_0 = sum_b C_0b R_.b are b_0j; and (b11, b12, b22) come from one more vector whose
+// lanes pair C_1 and C_2 with the matching column entries.
+template <bool F>
+SHTOOL_KERNEL_INLINE void band2_closed_lanes(const float* __restrict r, const float* __restrict x,
+                                             float* __restrict y) {
+  const float k = 0.57735026918962576451f, h3 = 0.86602540378443864676f;
+  const float kf0 = k * x[2];
+  const float a00 = x[4] - kf0, a11 = -x[4] - kf0, a22 = kf0 + kf0;
+  const float a01 = x[0], a12 = -x[1], a02 = -x[3];
+  const Lanes4 a0 = {a00, a01, a02, 0.0f}, a1 = {a01, a11, a12, 0.0f}, a2 = {a02, a12, a22, 0.0f};
+  const Lanes4 c0 = dot3_lanes<F>(r[0], a0, r[3], a1, r[6], a2);
+  const Lanes4 c1 = dot3_lanes<F>(r[1], a0, r[4], a1, r[7], a2);
+  const Lanes4 c2 = dot3_lanes<F>(r[2], a0, r[5], a1, r[8], a2);
+  const RColumnLanes rc = r_column_lanes(r);
+  const Lanes4 b0 = dot3_lanes<F>(lane_splat<0>(c0), rc.col[0], lane_splat<1>(c0), rc.col[1],
+                                  lane_splat<2>(c0), rc.col[2]);
+  // Lanes (b11, b12, b22): C_1's entries with rows 1, 2 of R, C_2's with row 2.
+  auto pair = [&](auto lane) {
+    constexpr int b = decltype(lane)::value;
+    return __builtin_shufflevector(c1, c2, b, b, 4 + b, 4 + b);
+  };
+  auto rows12 = [&](int b) { return __builtin_shufflevector(rc.col[b], rc.col[b], 1, 2, 2, 2); };
+  const Lanes4 b1 = dot3_lanes<F>(pair(std::integral_constant<int, 0>{}), rows12(0),
+                                  pair(std::integral_constant<int, 1>{}), rows12(1),
+                                  pair(std::integral_constant<int, 2>{}), rows12(2));
+  // (b01, -b12, h3 b22, -b02): products by 1 and -1 are exact.
+  const Lanes4 out = __builtin_shufflevector(b0, b1, 1, 5, 6, 2) * Lanes4{1.0f, -1.0f, h3, -1.0f};
+  __builtin_memcpy(y, &out, sizeof out);
+  y[4] = 0.5f * (b0[0] - b1[0]);
+}
+
+// band3_closed for one float vector: C_i,b. = sum_a R_ia A_ab. (lanes c), D_ij. =
+// sum_b R_jb C_i,b. (lanes c), B_ij. = sum_c D_ij,c R_.c (lanes k).
+template <bool F>
+SHTOOL_KERNEL_INLINE void band3_closed_lanes(const float* __restrict r, const float* __restrict x,
+                                             float* __restrict y) {
+  const float k3 = 0.59004358992664351035f, k2 = 2.8906114426405540554f;
+  const float k1 = 0.45704579946446573616f, k0 = 0.37317633259011539141f;
+  const float fm3 = k3 * x[0], fm2 = (k2 / 6) * x[1], fm1 = k1 * x[2], f0 = k0 * x[3];
+  const float f1 = k1 * x[4], f2 = (k2 / 6) * x[5], f3 = k3 * x[6];
+  const float axxx = f1 - f3;
+  const float axxy = (fm1 - 3.0f * fm3) * float(1.0 / 3);
+  const float axyy = (f1 + 3.0f * f3) * float(1.0 / 3);
+  const float ayyy = fm1 + fm3;
+  const float axxz = f2 - f0, ayyz = -f2 - f0;
+  const float axyz = fm2;
+  const float axzz = float(-4.0 / 3) * f1, ayzz = float(-4.0 / 3) * fm1;
+  const float azzz = f0 + f0;
+  const Lanes4 axx = {axxx, axxy, axxz, 0.0f}, axy = {axxy, axyy, axyz, 0.0f}, axz = {axxz, axyz, axzz, 0.0f};
+  const Lanes4 ayy = {axyy, ayyy, ayyz, 0.0f}, ayz = {axyz, ayyz, ayzz, 0.0f}, azz = {axzz, ayzz, azzz, 0.0f};
+  const Lanes4 cxx = dot3_lanes<F>(r[0], axx, r[3], axy, r[6], axz);
+  const Lanes4 cxy = dot3_lanes<F>(r[0], axy, r[3], ayy, r[6], ayz);
+  const Lanes4 cxz = dot3_lanes<F>(r[0], axz, r[3], ayz, r[6], azz);
+  const Lanes4 cyx = dot3_lanes<F>(r[1], axx, r[4], axy, r[7], axz);
+  const Lanes4 cyy = dot3_lanes<F>(r[1], axy, r[4], ayy, r[7], ayz);
+  const Lanes4 cyz = dot3_lanes<F>(r[1], axz, r[4], ayz, r[7], azz);
+  const Lanes4 dxx = dot3_lanes<F>(r[0], cxx, r[3], cxy, r[6], cxz);
+  const Lanes4 dxy = dot3_lanes<F>(r[1], cxx, r[4], cxy, r[7], cxz);
+  const Lanes4 dyy = dot3_lanes<F>(r[1], cyx, r[4], cyy, r[7], cyz);
+  const RColumnLanes rc = r_column_lanes(r);
+  auto contract = [&](Lanes4 d) {
+    return dot3_lanes<F>(lane_splat<0>(d), rc.col[0], lane_splat<1>(d), rc.col[1], lane_splat<2>(d), rc.col[2]);
+  };
+  const Lanes4 bxx = contract(dxx), bxy = contract(dxy), byy = contract(dyy);
+  const float bxxx = bxx[0], bxxy = bxx[1], bxxz = bxx[2];
+  const float bxyy = bxy[1], bxyz = bxy[2], byyy = byy[1], byyz = byy[2];
+  const float i3 = float(1 / (4 * 0.59004358992664351035)), i1 = float(3 / (4 * 0.45704579946446573616));
+  const float i2 = float(6 / 2.8906114426405540554), i0 = float(-1 / (2 * 0.37317633259011539141));
+  y[0] = i3 * madd<F>(-3.0f, bxxy, byyy);
+  y[1] = i2 * bxyz;
+  y[2] = i1 * (bxxy + byyy);
+  y[3] = i0 * (bxxz + byyz);
+  y[4] = i1 * (bxxx + bxyy);
+  y[5] = (i2 / 2) * (bxxz - byyz);
+  y[6] = i3 * madd<F>(3.0f, bxyy, -bxxx);
+}
+
 // Band 1 is detail::band1_closed (shtool/rotation.h); like band 2 below it reads R
 // column-major, r[i + 3 j] = R(i, j).
 
@@ -375,6 +482,10 @@ SHTOOL_KERNEL_INLINE void run_batch_lanes(const T* const* in, T* const* out, F&&
 // g2 = (B00 - B11) / 2.
 template <bool F, class T, class P, class R = T>
 SHTOOL_KERNEL_INLINE void band2_closed(const R* __restrict r, const P* __restrict x, P* __restrict y) {
+  if constexpr (std::is_same_v<T, float> && std::is_same_v<P, float> && std::is_same_v<R, float>) {
+    band2_closed_lanes<F>(r, x, y);
+    return;
+  }
   const T k = T(0.57735026918962576451);        // 1 / sqrt3
   const T h3 = T(0.86602540378443864676);       // sqrt3 / 2
   const P kf0 = k * x[2];
@@ -426,6 +537,10 @@ SHTOOL_KERNEL_INLINE void band2_closed(const R* __restrict r, const P* __restric
 //   g1 = 3 (B_xxx + B_xyy) / (4 k1), g3 = (3 B_xyy - B_xxx) / (4 k3).
 template <bool F, class T, class P, class R = T>
 SHTOOL_KERNEL_INLINE void band3_closed(const R* __restrict r, const P* __restrict x, P* __restrict y) {
+  if constexpr (std::is_same_v<T, float> && std::is_same_v<P, float> && std::is_same_v<R, float>) {
+    band3_closed_lanes<F>(r, x, y);
+    return;
+  }
   const T k3 = T(0.59004358992664351035), k2 = T(2.8906114426405540554);
   const T k1 = T(0.45704579946446573616), k0 = T(0.37317633259011539141);
   // Scaled coefficients; then the entries of A (A_abc = coefficient of the monomial over

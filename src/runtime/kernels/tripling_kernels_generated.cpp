@@ -58,37 +58,44 @@ SHTOOL_KERNEL_CLONES void tripling_kernel_2(const T* f, const T* h, T* y) {
   y[3] = T(0.28209479177387814) * s[0][7];
 }
 
-// Order 3: 25 canonical entries, permutation form: 9 8-wide rows (2 multiplications each), 12 layers (8-wide multiply-adds) from them, y_0 from one 8-wide product and 8 scalar additions; 2 scalar multiplications, 8 scalar additions.
+// Order 3: 25 canonical entries, permutation form: 9 rows of 8 (2 multiplications each, as two 4-wide halves), 12 layers, as 8 + 10 4-wide multiply-adds; y_0 from one 8-wide product and 8 scalar additions; 2 scalar multiplications, 8 scalar additions.
 template <class T>
 SHTOOL_KERNEL_CLONES void tripling_kernel_3(const T* f, const T* h, T* y) {
-  typedef T V8 __attribute__((vector_size(8 * sizeof(T))));  // 8 floats or 8 doubles
-  typedef T U8 __attribute__((vector_size(8 * sizeof(T)), aligned(alignof(T)), may_alias));
-  const V8 fv = *reinterpret_cast<const U8*>(f + 1), hv = *reinterpret_cast<const U8*>(h + 1);
-  const V8 row0 = f[0] * hv + h[0] * fv;
-  const V8 row1 = f[1] * hv + h[1] * fv;
-  const V8 row2 = f[2] * hv + h[2] * fv;
-  const V8 row3 = f[3] * hv + h[3] * fv;
-  const V8 row4 = f[4] * hv + h[4] * fv;
-  const V8 row5 = f[5] * hv + h[5] * fv;
-  const V8 row6 = f[6] * hv + h[6] * fv;
-  const V8 row7 = f[7] * hv + h[7] * fv;
-  const V8 row8 = f[8] * hv + h[8] * fv;
-  V8 acc[4];
-  acc[0] = V8{T(0.28209479177387814), T(0.28209479177387814), T(0.28209479177387814), T(0.28209479177387814), T(0.28209479177387814), T(0.28209479177387814), T(0.28209479177387814), T(0.28209479177387814)} * row0;
-  acc[1] = V8{T(-0.126156626101008), T(0.21850968611841584), T(0.21850968611841581), T(0.21850968611841581), T(0.21850968611841584), T(-0.063078313050504001), T(0), T(-0.10925484305920791)} * __builtin_shufflevector(row1, row1, 5, 4, 3, 2, 1, 0, 0, 0);
-  acc[2] = V8{T(-0.21850968611841581), T(0), T(0), T(0), T(0), T(0), T(0), T(0)} * __builtin_shufflevector(row1, row1, 7, 0, 0, 0, 0, 0, 0, 0);
-  acc[3] = V8{T(0.21850968611841584), T(0.252313252202016), T(0.21850968611841584), T(0), T(0), T(0.126156626101008), T(0.21850968611841584), T(0)} * __builtin_shufflevector(row2, row2, 4, 5, 6, 0, 0, 1, 2, 0);
-  acc[0] += V8{T(0.21850968611841581), T(0.21850968611841584), T(-0.126156626101008), T(0), T(0), T(-0.063078313050504001), T(0), T(0.10925484305920791)} * __builtin_shufflevector(row3, row3, 3, 6, 5, 0, 0, 2, 0, 2);
-  acc[1] += V8{T(0), T(0), T(0.21850968611841581), T(0), T(0), T(0), T(0), T(0)} * __builtin_shufflevector(row3, row3, 0, 0, 7, 0, 0, 0, 0, 0);
-  acc[2] += V8{T(0), T(0), T(0), T(-0.18022375157286857), T(0.15607834722743988), T(-0.090111875786434287), T(0.15607834722743988), T(0)} * __builtin_shufflevector(row4, row4, 0, 0, 0, 5, 6, 3, 4, 0);
-  acc[3] += V8{T(0), T(0), T(0), T(0.15607834722743988), T(0.090111875786434287), T(0.045055937893217143), T(0), T(-0.078039173613719939)} * __builtin_shufflevector(row5, row5, 0, 0, 0, 6, 5, 4, 0, 4);
-  acc[0] += V8{T(0), T(0), T(0), T(0), T(-0.15607834722743988), T(0), T(0), T(0)} * __builtin_shufflevector(row5, row5, 0, 0, 0, 0, 7, 0, 0, 0);
-  acc[1] += V8{T(0), T(0), T(0), T(0), T(0), T(0.090111875786434287), T(0.090111875786434287), T(-0.18022375157286857)} * __builtin_shufflevector(row6, row6, 0, 0, 0, 0, 0, 5, 6, 7);
-  acc[2] += V8{T(0), T(0), T(0), T(0), T(0), T(0.045055937893217143), T(0.15607834722743988), T(0.078039173613719939)} * __builtin_shufflevector(row7, row7, 0, 0, 0, 0, 0, 6, 7, 6);
-  acc[3] += V8{T(0), T(0), T(0), T(0), T(0), T(-0.090111875786434287), T(0), T(0)} * __builtin_shufflevector(row8, row8, 0, 0, 0, 0, 0, 7, 0, 0);
-  const V8 d = fv * hv;
-  y[0] = T(0.28209479177387814) * (f[0] * h[0] + (((d[0] + d[1]) + (d[2] + d[3])) + ((d[4] + d[5]) + (d[6] + d[7]))));
-  *reinterpret_cast<U8*>(y + 1) = (acc[0] + acc[1]) + (acc[2] + acc[3]);
+  typedef T V4 __attribute__((vector_size(4 * sizeof(T))));  // 4 floats or 4 doubles
+  typedef T U4 __attribute__((vector_size(4 * sizeof(T)), aligned(alignof(T)), may_alias));
+  const V4 fl = *reinterpret_cast<const U4*>(f + 1), fh = *reinterpret_cast<const U4*>(f + 5);
+  const V4 hl = *reinterpret_cast<const U4*>(h + 1), hh = *reinterpret_cast<const U4*>(h + 5);
+  const V4 rl0 = f[0] * hl + h[0] * fl, rh0 = f[0] * hh + h[0] * fh;
+  const V4 rl1 = f[1] * hl + h[1] * fl, rh1 = f[1] * hh + h[1] * fh;
+  const V4 rl2 = f[2] * hl + h[2] * fl, rh2 = f[2] * hh + h[2] * fh;
+  const V4 rl3 = f[3] * hl + h[3] * fl, rh3 = f[3] * hh + h[3] * fh;
+  const V4 rl4 = f[4] * hl + h[4] * fl, rh4 = f[4] * hh + h[4] * fh;
+  const V4 rl5 = f[5] * hl + h[5] * fl, rh5 = f[5] * hh + h[5] * fh;
+  const V4 rl6 = f[6] * hl + h[6] * fl, rh6 = f[6] * hh + h[6] * fh;
+  const V4 rl7 = f[7] * hl + h[7] * fl, rh7 = f[7] * hh + h[7] * fh;
+  const V4 rl8 = f[8] * hl + h[8] * fl, rh8 = f[8] * hh + h[8] * fh;
+  V4 lo0 = V4{T(0.28209479177387814), T(0.28209479177387814), T(0.28209479177387814), T(0.28209479177387814)} * rl0;
+  V4 lo1 = V4{T(-0.126156626101008), T(0.21850968611841584), T(0.21850968611841581), T(0.21850968611841581)} * __builtin_shufflevector(rl1, rh1, 5, 4, 3, 2);
+  lo0 += V4{T(-0.21850968611841581), T(0), T(0), T(0)} * __builtin_shufflevector(rl1, rh1, 7, -1, -1, -1);
+  lo1 += V4{T(0.21850968611841584), T(0.252313252202016), T(0.21850968611841584), T(0)} * __builtin_shufflevector(rl2, rh2, 4, 5, 6, -1);
+  lo0 += V4{T(0.21850968611841581), T(0.21850968611841584), T(-0.126156626101008), T(0)} * __builtin_shufflevector(rl3, rh3, 3, 6, 5, -1);
+  lo1 += V4{T(0), T(0), T(0.21850968611841581), T(0)} * __builtin_shufflevector(rl3, rh3, -1, -1, 7, -1);
+  lo0 += V4{T(0), T(0), T(0), T(-0.18022375157286857)} * __builtin_shufflevector(rl4, rh4, -1, -1, -1, 5);
+  lo1 += V4{T(0), T(0), T(0), T(0.15607834722743988)} * __builtin_shufflevector(rl5, rh5, -1, -1, -1, 6);
+  V4 hi0 = V4{T(0.28209479177387814), T(0.28209479177387814), T(0.28209479177387814), T(0.28209479177387814)} * rh0;
+  V4 hi1 = V4{T(0.21850968611841584), T(-0.063078313050504001), T(0), T(-0.10925484305920791)} * __builtin_shufflevector(rl1, rh1, 1, 0, -1, 0);
+  hi0 += V4{T(0), T(0.126156626101008), T(0.21850968611841584), T(0)} * __builtin_shufflevector(rl2, rh2, -1, 1, 2, -1);
+  hi1 += V4{T(0), T(-0.063078313050504001), T(0), T(0.10925484305920791)} * __builtin_shufflevector(rl3, rh3, -1, 2, -1, 2);
+  hi0 += V4{T(0.15607834722743988), T(-0.090111875786434287), T(0.15607834722743988), T(0)} * __builtin_shufflevector(rl4, rh4, 6, 3, 4, -1);
+  hi1 += V4{T(0.090111875786434287), T(0.045055937893217143), T(0), T(-0.078039173613719939)} * __builtin_shufflevector(rl5, rh5, 5, 4, -1, 4);
+  hi0 += V4{T(-0.15607834722743988), T(0), T(0), T(0)} * __builtin_shufflevector(rl5, rh5, 7, -1, -1, -1);
+  hi1 += V4{T(0), T(0.090111875786434287), T(0.090111875786434287), T(-0.18022375157286857)} * __builtin_shufflevector(rl6, rh6, -1, 5, 6, 7);
+  hi0 += V4{T(0), T(0.045055937893217143), T(0.15607834722743988), T(0.078039173613719939)} * __builtin_shufflevector(rl7, rh7, -1, 6, 7, 6);
+  hi1 += V4{T(0), T(-0.090111875786434287), T(0), T(0)} * __builtin_shufflevector(rl8, rh8, -1, 7, -1, -1);
+  const V4 dl = fl * hl, dh = fh * hh;
+  y[0] = T(0.28209479177387814) * (f[0] * h[0] + (((dl[0] + dl[1]) + (dl[2] + dl[3])) + ((dh[0] + dh[1]) + (dh[2] + dh[3]))));
+  *reinterpret_cast<U4*>(y + 1) = lo0 + lo1;
+  *reinterpret_cast<U4*>(y + 5) = hi0 + hi1;
 }
 
 // Order 4: 77 canonical entries, outer-product form: 24 8-wide rows and 0 scalar entries of s (2 multiplications each), 194 terms in 118 groups (118 multiplications); 118 scalar multiplications, 178 scalar additions.
