@@ -201,11 +201,20 @@ std::string permutation_kernel_source(int order, const std::vector<Entry>& entri
 // N = 2..6), this measured 1.2-1.7x the speed of DirectXMath's fused (-march=native)
 // build at N = 4..6 in float, 1.6-2.6x its SSE2 build (docs/benchmarks.md, "Against
 // DirectXMath"): at N = 5, 51 vector rows and 623 scalar terms in 377 groups.
+// From this order on the outer-product kernel is two functions, the rows and the sums,
+// called one after the other: compiled as one, GCC 12 allocates the sums' registers
+// worse (values moved through general registers, more spills), and the sums took
+// 1.25x / 1.3x as long at orders 5 / 6 in float on AMD Zen 1, measured on the AVX2 copy
+// (no difference at order 4).
+constexpr int kSplitFromOrder = 5;
+
 std::string kernel_source(int order, const std::vector<Entry>& entries) {
   const int count = order * order;
   const int chunks = count / 8;  // whole 8-wide chunks of columns
   std::vector<std::vector<Term>> terms = output_terms(count, entries);
-  std::ostringstream s;
+  // From order 5 on the rows and the sums are two functions (see kSplitFromOrder).
+  const bool split = order >= kSplitFromOrder && count / 8 > 0;
+  std::ostringstream s, sums_out;
   int vector_rows = 0, scalar_entries = 0, scalar_terms = 0, groups = 0, outputs = 0;
   // The chunks cover the last 8 * chunks columns; the first `head` columns (j < head) are
   // scalar, and only rows i <= j < head need them (1 entry at orders 3 and 5). Column j
@@ -214,7 +223,7 @@ std::string kernel_source(int order, const std::vector<Entry>& entries) {
   if (chunks > 0) {
     s << "  typedef T V __attribute__((vector_size(32)));  // 8 floats or 4 doubles\n";
     s << "  constexpr int kPer8 = 8 * sizeof(T) / sizeof(V);  // vectors per 8 columns\n";
-    s << "  alignas(sizeof(V)) T s[" << count << "][" << width << "];\n";
+    if (!split) s << "  alignas(sizeof(V)) T s[" << count << "][" << width << "];\n";
     s << "  V fv[" << chunks << " * kPer8], hv[" << chunks << " * kPer8];\n";
     s << "  load_rows(f, h, " << head << ", " << chunks << " * kPer8, fv, hv);\n";
   } else {
@@ -237,7 +246,9 @@ std::string kernel_source(int order, const std::vector<Entry>& entries) {
   // Without this the compiler keeps the rows in registers and takes the lanes out one
   // by one with shuffles (measured 1.5x slower at order 5): here s goes to memory once
   // and each term below is one load.
-  if (chunks > 0) s << "  asm volatile(\"\" : : \"r\"(&s[0][0]) : \"memory\");\n";
+  // (In the split form the call between the two functions does the same.)
+  if (chunks > 0 && !split) s << "  asm volatile(\"\" : : \"r\"(&s[0][0]) : \"memory\");\n";
+  std::ostringstream& y_out = split ? sums_out : s;
   for (int k = 0; k < count; ++k) {
     std::sort(terms[k].begin(), terms[k].end());
     // Groups of equal |C'|, in order of first appearance.
@@ -249,7 +260,7 @@ std::string kernel_source(int order, const std::vector<Entry>& entries) {
       else it->second.push_back(t);
     }
     if (by_size.empty()) {
-      s << "  y[" << k << "] = T(0);\n";
+      y_out << "  y[" << k << "] = T(0);\n";
       continue;
     }
     std::vector<Signed> products;
@@ -264,7 +275,7 @@ std::string kernel_source(int order, const std::vector<Entry>& entries) {
       products.push_back({"T(" + c + ") * " + (inner.sum ? "(" + inner.expr + ")" : inner.expr), true});
       ++groups;
     }
-    s << "  y[" << k << "] = " << balanced_sum(products).expr << ";\n";
+    y_out << "  y[" << k << "] = " << balanced_sum(products).expr << ";\n";
     ++outputs;
   }
   std::ostringstream out;
@@ -273,9 +284,29 @@ std::string kernel_source(int order, const std::vector<Entry>& entries) {
       << scalar_terms << " terms in " << groups << " groups (" << groups << " multiplications); "
       << 2 * scalar_entries + groups << " scalar multiplications, " << scalar_entries + scalar_terms - outputs
       << " scalar additions.\n";
+  const std::string n = std::to_string(order), shape = "[" + std::to_string(width) + "]";
+  if (!split) {
+    out << "template <class T>\n";
+    out << "SHTOOL_KERNEL_CLONES void tripling_kernel_" << n << "(const T* f, const T* h, T* y) {\n";
+    out << s.str();
+    out << "}\n\n";
+    return out.str();
+  }
   out << "template <class T>\n";
-  out << "SHTOOL_KERNEL_CLONES void tripling_kernel_" << order << "(const T* f, const T* h, T* y) {\n";
+  out << "SHTOOL_KERNEL_CLONES __attribute__((noinline)) void tripling_rows_" << n
+      << "(const T* f, const T* h, T (*s)" << shape << ") {\n";
   out << s.str();
+  out << "}\n\n";
+  out << "template <class T>\n";
+  out << "SHTOOL_KERNEL_CLONES __attribute__((noinline)) void tripling_sums_" << n << "(T (*s)" << shape
+      << ", T* y) {\n";
+  out << sums_out.str();
+  out << "}\n\n";
+  out << "template <class T>\n";
+  out << "void tripling_kernel_" << n << "(const T* f, const T* h, T* y) {\n";
+  out << "  alignas(32) T s[" << count << "]" << shape << ";\n";
+  out << "  tripling_rows_" << n << "(f, h, s);\n";
+  out << "  tripling_sums_" << n << "(s, y);\n";
   out << "}\n\n";
   return out.str();
 }
