@@ -76,18 +76,19 @@ std::vector<std::vector<Term>> output_terms(int count, const std::vector<Entry>&
   return terms;
 }
 
-// Order 3 in the permutation form. Its 9 coefficients are y_0 and the 8 lanes of one
-// vector, y_1..y_8, and row i of s, (s_i1 .. s_i8) = f_i (h_1..h_8) + h_i (f_1..f_8), is
-// one 8-wide vector too. Within a row, C' sends each s_ij to a few outputs, so the row's
-// part of y_1..y_8 is a sum of "layers": each a permutation of the row's lanes (an output
-// lane takes at most one s_ij per layer, a lane may feed several) times a vector of
-// coefficients. 12 layers cover the 9 rows, so the kernel is 9 row products, 11
-// permutations and 12 multiply-adds (into 4 partial sums), all in registers, no stack
-// array: 99 instructions in the float AVX2 copy against 153 for the scalar-sum form below
-// (objdump of the built kernel); times in docs/products.md, "Performance", and
-// docs/benchmarks.md, "Against DirectXMath". y_0 = C_000 sum_i f_i h_i
-// (the only nonzero C_ij0 are C_ii0 = C_000). At orders 4..6 the outputs span several
-// vectors and a layer would permute across two (no single AVX2 instruction does).
+// Order 3 in the permutation form. Its 9 coefficients are y_0 and the 8 lanes y_1..y_8,
+// and row i of s, (s_i1 .. s_i8) = f_i (h_1..h_8) + h_i (f_1..f_8), is 8 lanes too. Within
+// a row, C' sends each s_ij to a few outputs, so the row's part of y_1..y_8 is a sum of
+// "layers": each a permutation of the row's lanes (an output lane takes at most one s_ij
+// per layer, a lane may feed several) times a vector of coefficients. 12 layers cover the
+// 9 rows. Each row and each layer is emitted as two 4-wide halves (outputs y_1..y_4 and
+// y_5..y_8), a half without coefficients left out: 18 row halves and 18 multiply-adds into
+// 4 partial sums, all in registers, no stack array, and every permutation an in-lane
+// shuffle of the row's two halves (146 instructions in the float AVX2 copy, none of them
+// a lane-crossing permutation; the 8-wide form was 99 instructions with 11 `vpermd`,
+// 1.5x slower on AMD Zen 1, whose 256-bit operations are two 128-bit halves anyway).
+// y_0 = C_000 sum_i f_i h_i (the only nonzero C_ij0 are C_ii0 = C_000). At orders 4..6
+// the outputs span several vectors and the rows are not kept in registers.
 std::string permutation_kernel_source(int order, const std::vector<Entry>& entries) {
   const int count = order * order;
   if (count != 9) throw std::logic_error("tripling kernels: the permutation form is for order 3");
@@ -198,8 +199,8 @@ std::string permutation_kernel_source(int order, const std::vector<Entry>& entri
 // balanced trees. Against the factored form DirectXMath's XMSHMultiplyN use (per index
 // pair (i, j): tf = sum_k C_ijk f_k, th = sum_k C_ijk h_k feed y_i and y_j, and
 // t = f_i h_j + f_j h_i feeds every y_k; 20 / 120 / 399 / 1135 / 2527 multiplications at
-// N = 2..6), this measured 1.2-1.7x the speed of DirectXMath's fused (-march=native)
-// build at N = 4..6 in float, 1.6-2.6x its SSE2 build (docs/benchmarks.md, "Against
+// N = 2..6), this measured 1.36-1.58x the speed of DirectXMath's fused (-march=native)
+// build at N = 4..6 in float, 1.85-2.13x its SSE2 build (docs/benchmarks.md, "Against
 // DirectXMath"): at N = 5, 51 vector rows and 623 scalar terms in 377 groups.
 // From this order on the outer-product kernel is two functions, the rows and the sums,
 // called one after the other: compiled as one, GCC 12 allocates the sums' registers
