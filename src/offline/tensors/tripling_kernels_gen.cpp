@@ -204,17 +204,16 @@ std::string permutation_kernel_source(int order, const std::vector<Entry>& entri
 // DirectXMath"): at N = 5, 51 vector rows and 623 scalar terms in 377 groups.
 // From this order on the outer-product kernel is two functions, the rows and the sums,
 // called one after the other: compiled as one, GCC 12 allocates the sums' registers
-// worse (values moved through general registers, more spills), and the sums took
+// worse (values moved through general registers, more spills), and the kernel took
 // 1.25x / 1.3x as long at orders 5 / 6 in float on AMD Zen 1, measured on the AVX2 copy
-// (no difference at order 4).
+// (no difference at order 4). Orders from 5 on have whole 8-wide chunks of columns.
 constexpr int kSplitFromOrder = 5;
 
 std::string kernel_source(int order, const std::vector<Entry>& entries) {
   const int count = order * order;
   const int chunks = count / 8;  // whole 8-wide chunks of columns
   std::vector<std::vector<Term>> terms = output_terms(count, entries);
-  // From order 5 on the rows and the sums are two functions (see kSplitFromOrder).
-  const bool split = order >= kSplitFromOrder && count / 8 > 0;
+  const bool split = order >= kSplitFromOrder;  // rows and sums as two functions
   std::ostringstream s, sums_out;
   int vector_rows = 0, scalar_entries = 0, scalar_terms = 0, groups = 0, outputs = 0;
   // The chunks cover the last 8 * chunks columns; the first `head` columns (j < head) are

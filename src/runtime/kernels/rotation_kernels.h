@@ -360,11 +360,82 @@ SHTOOL_KERNEL_INLINE void run_batch_lanes(const T* const* in, T* const* out, F&&
   scatter_lanes<T>(y, Count, dst);
 }
 
-// Bands 2 and 3 of one float vector (below) run their contractions with R on 4-wide
-// lane vectors (lane 3 unused): each lane takes the products and sums of one entry of
-// the scalar code in the same order, so the results have its bits, which apply_rgb and
-// rotate_batch compute lane by lane. Against the scalar form, 3 operations where it
-// takes 9 per group of three entries, plus lane broadcasts.
+// sum_a u_a v_a for a = 0, 1, 2, left to right: the contraction the closed forms of
+// bands 2 and 3 below are made of. u_a and v_a are scalars or lane vectors.
+template <bool F, class U, class V>
+SHTOOL_KERNEL_INLINE auto dot3(U u0, V v0, U u1, V v1, U u2, V v2) {
+  return madd<F>(u2, v2, madd<F>(u1, v1, u0 * v0));
+}
+
+// The maps in and out of band2_closed (below): the matrix A of the coefficients x, and
+// the coefficients y of the rotated matrix B from its entries.
+template <class P>
+struct Band2Matrix {
+  P a00, a11, a22, a01, a12, a02;
+};
+template <class T, class P>
+SHTOOL_KERNEL_INLINE Band2Matrix<P> band2_matrix(const P* __restrict x) {
+  const T k = T(0.57735026918962576451);  // 1 / sqrt3
+  const P kf0 = k * x[2];
+  return {x[4] - kf0, -x[4] - kf0, kf0 + kf0, x[0], -x[1], -x[3]};
+}
+template <class T, class P>
+SHTOOL_KERNEL_INLINE void band2_coefficients(P b00, P b11, P b22, P b01, P b02, P b12, P* __restrict y) {
+  const T h3 = T(0.86602540378443864676);  // sqrt3 / 2 (also in band2_closed_lanes)
+  y[0] = b01;
+  y[1] = -b12;
+  y[2] = h3 * b22;
+  y[3] = -b02;
+  y[4] = T(0.5) * (b00 - b11);
+}
+
+// The maps in and out of band3_closed (below): the 10 entries of the tensor A of the
+// coefficients x, and the coefficients y from the 7 entries of the rotated tensor B with
+// at most one index z.
+template <class P>
+struct Band3Tensor {
+  P axxx, axxy, axxz, axyy, axyz, axzz, ayyy, ayyz, ayzz, azzz;
+};
+template <class T, class P>
+SHTOOL_KERNEL_INLINE Band3Tensor<P> band3_tensor(const P* __restrict x) {
+  const T k3 = T(0.59004358992664351035), k2 = T(2.8906114426405540554);
+  const T k1 = T(0.45704579946446573616), k0 = T(0.37317633259011539141);
+  // Scaled coefficients; then the entries of A (A_abc = coefficient of the monomial over
+  // its multiplicity 3!/(i! j! k!)).
+  const P fm3 = k3 * x[0], fm2 = (k2 / 6) * x[1], fm1 = k1 * x[2], f0 = k0 * x[3];
+  const P f1 = k1 * x[4], f2 = (k2 / 6) * x[5], f3 = k3 * x[6];
+  Band3Tensor<P> a;
+  a.axxx = f1 - f3;
+  a.axxy = (fm1 - T(3) * fm3) * T(1.0 / 3);
+  a.axyy = (f1 + T(3) * f3) * T(1.0 / 3);
+  a.ayyy = fm1 + fm3;
+  a.axxz = f2 - f0;  // ((k2 / 2) x[5] - 3 k0 x[3]) / 3
+  a.ayyz = -f2 - f0;
+  a.axyz = fm2;
+  a.axzz = T(-4.0 / 3) * f1;
+  a.ayzz = T(-4.0 / 3) * fm1;
+  a.azzz = f0 + f0;
+  return a;
+}
+template <bool F, class T, class P>
+SHTOOL_KERNEL_INLINE void band3_coefficients(P bxxx, P bxxy, P bxyy, P byyy, P bxxz, P bxyz, P byyz,
+                                             P* __restrict y) {
+  const T i3 = T(1) / (4 * 0.59004358992664351035), i1 = T(3) / (4 * 0.45704579946446573616);
+  const T i2 = T(6) / 2.8906114426405540554, i0 = T(-1) / (2 * 0.37317633259011539141);
+  y[0] = i3 * madd<F>(T(-3), bxxy, byyy);
+  y[1] = i2 * bxyz;
+  y[2] = i1 * (bxxy + byyy);
+  y[3] = i0 * (bxxz + byyz);
+  y[4] = i1 * (bxxx + bxyy);
+  y[5] = (i2 / 2) * (bxxz - byyz);
+  y[6] = i3 * madd<F>(T(3), bxyy, -bxxx);
+}
+
+// Bands 2 and 3 of one float vector run their contractions with R on 4-wide lane vectors
+// (lane 3 unused): each lane takes the products and sums of one entry of the scalar code
+// (band2_closed, band3_closed below) in the same order, so the results have its bits,
+// which apply_rgb and rotate_batch compute lane by lane. Against the scalar form, 3
+// operations where it takes 9 per group of three entries, plus lane broadcasts.
 template <int L>
 SHTOOL_KERNEL_INLINE Lanes4 lane_splat(Lanes4 v) {
   return __builtin_shufflevector(v, v, L, L, L, L);
@@ -382,40 +453,29 @@ SHTOOL_KERNEL_INLINE RColumnLanes r_column_lanes(const float* __restrict r) {
   return {{a, __builtin_shufflevector(a, b, 3, 4, 5, 6), __builtin_shufflevector(b, c, 2, 3, 4, 5)}};
 }
 
-// sum_a u_a v_a for a = 0, 1, 2, left to right (dot3 in the scalar forms), with a
-// scalar or lane vector u_a and lane vectors v_a.
-template <bool F, class U>
-SHTOOL_KERNEL_INLINE Lanes4 dot3_lanes(U u0, Lanes4 v0, U u1, Lanes4 v1, U u2, Lanes4 v2) {
-  return madd<F>(u2, v2, madd<F>(u1, v1, u0 * v0));
-}
-
 // band2_closed for one float vector. Lanes j of C_i = R_i. A are c_ij; lanes j of
 // B_0 = sum_b C_0b R_.b are b_0j; and (b11, b12, b22) come from one more vector whose
-// lanes pair C_1 and C_2 with the matching column entries.
+// lanes pair C_1 and C_2 with rows 1, 2 of R.
 template <bool F>
 SHTOOL_KERNEL_INLINE void band2_closed_lanes(const float* __restrict r, const float* __restrict x,
                                              float* __restrict y) {
-  const float k = 0.57735026918962576451f, h3 = 0.86602540378443864676f;
-  const float kf0 = k * x[2];
-  const float a00 = x[4] - kf0, a11 = -x[4] - kf0, a22 = kf0 + kf0;
-  const float a01 = x[0], a12 = -x[1], a02 = -x[3];
-  const Lanes4 a0 = {a00, a01, a02, 0.0f}, a1 = {a01, a11, a12, 0.0f}, a2 = {a02, a12, a22, 0.0f};
-  const Lanes4 c0 = dot3_lanes<F>(r[0], a0, r[3], a1, r[6], a2);
-  const Lanes4 c1 = dot3_lanes<F>(r[1], a0, r[4], a1, r[7], a2);
-  const Lanes4 c2 = dot3_lanes<F>(r[2], a0, r[5], a1, r[8], a2);
+  const Band2Matrix<float> m = band2_matrix<float, float>(x);
+  const Lanes4 a0 = {m.a00, m.a01, m.a02, 0.0f}, a1 = {m.a01, m.a11, m.a12, 0.0f};
+  const Lanes4 a2 = {m.a02, m.a12, m.a22, 0.0f};
+  const Lanes4 c0 = dot3<F>(r[0], a0, r[3], a1, r[6], a2);
+  const Lanes4 c1 = dot3<F>(r[1], a0, r[4], a1, r[7], a2);
+  const Lanes4 c2 = dot3<F>(r[2], a0, r[5], a1, r[8], a2);
   const RColumnLanes rc = r_column_lanes(r);
-  const Lanes4 b0 = dot3_lanes<F>(lane_splat<0>(c0), rc.col[0], lane_splat<1>(c0), rc.col[1],
-                                  lane_splat<2>(c0), rc.col[2]);
-  // Lanes (b11, b12, b22): C_1's entries with rows 1, 2 of R, C_2's with row 2.
-  auto pair = [&](auto lane) {
-    constexpr int b = decltype(lane)::value;
-    return __builtin_shufflevector(c1, c2, b, b, 4 + b, 4 + b);
-  };
+  const Lanes4 b0 = dot3<F>(lane_splat<0>(c0), rc.col[0], lane_splat<1>(c0), rc.col[1], lane_splat<2>(c0), rc.col[2]);
+  // Lanes (b11, b12, b22): entry b of C_1, C_1, C_2 against entries 1, 2, 2 of column b.
   auto rows12 = [&](int b) { return __builtin_shufflevector(rc.col[b], rc.col[b], 1, 2, 2, 2); };
-  const Lanes4 b1 = dot3_lanes<F>(pair(std::integral_constant<int, 0>{}), rows12(0),
-                                  pair(std::integral_constant<int, 1>{}), rows12(1),
-                                  pair(std::integral_constant<int, 2>{}), rows12(2));
-  // (b01, -b12, h3 b22, -b02): products by 1 and -1 are exact.
+  const Lanes4 b1 = dot3<F>(__builtin_shufflevector(c1, c2, 0, 0, 4, 4), rows12(0),
+                            __builtin_shufflevector(c1, c2, 1, 1, 5, 5), rows12(1),
+                            __builtin_shufflevector(c1, c2, 2, 2, 6, 6), rows12(2));
+  // band2_coefficients in lanes: (b01, -b12, h3 b22, -b02) in one store (products by 1
+  // and -1 are exact), where five scalar extracts and stores cost 1 ns a rotation at N = 3
+  // and 4.
+  const float h3 = 0.86602540378443864676f;
   const Lanes4 out = __builtin_shufflevector(b0, b1, 1, 5, 6, 2) * Lanes4{1.0f, -1.0f, h3, -1.0f};
   __builtin_memcpy(y, &out, sizeof out);
   y[4] = 0.5f * (b0[0] - b1[0]);
@@ -426,45 +486,25 @@ SHTOOL_KERNEL_INLINE void band2_closed_lanes(const float* __restrict r, const fl
 template <bool F>
 SHTOOL_KERNEL_INLINE void band3_closed_lanes(const float* __restrict r, const float* __restrict x,
                                              float* __restrict y) {
-  const float k3 = 0.59004358992664351035f, k2 = 2.8906114426405540554f;
-  const float k1 = 0.45704579946446573616f, k0 = 0.37317633259011539141f;
-  const float fm3 = k3 * x[0], fm2 = (k2 / 6) * x[1], fm1 = k1 * x[2], f0 = k0 * x[3];
-  const float f1 = k1 * x[4], f2 = (k2 / 6) * x[5], f3 = k3 * x[6];
-  const float axxx = f1 - f3;
-  const float axxy = (fm1 - 3.0f * fm3) * float(1.0 / 3);
-  const float axyy = (f1 + 3.0f * f3) * float(1.0 / 3);
-  const float ayyy = fm1 + fm3;
-  const float axxz = f2 - f0, ayyz = -f2 - f0;
-  const float axyz = fm2;
-  const float axzz = float(-4.0 / 3) * f1, ayzz = float(-4.0 / 3) * fm1;
-  const float azzz = f0 + f0;
-  const Lanes4 axx = {axxx, axxy, axxz, 0.0f}, axy = {axxy, axyy, axyz, 0.0f}, axz = {axxz, axyz, axzz, 0.0f};
-  const Lanes4 ayy = {axyy, ayyy, ayyz, 0.0f}, ayz = {axyz, ayyz, ayzz, 0.0f}, azz = {axzz, ayzz, azzz, 0.0f};
-  const Lanes4 cxx = dot3_lanes<F>(r[0], axx, r[3], axy, r[6], axz);
-  const Lanes4 cxy = dot3_lanes<F>(r[0], axy, r[3], ayy, r[6], ayz);
-  const Lanes4 cxz = dot3_lanes<F>(r[0], axz, r[3], ayz, r[6], azz);
-  const Lanes4 cyx = dot3_lanes<F>(r[1], axx, r[4], axy, r[7], axz);
-  const Lanes4 cyy = dot3_lanes<F>(r[1], axy, r[4], ayy, r[7], ayz);
-  const Lanes4 cyz = dot3_lanes<F>(r[1], axz, r[4], ayz, r[7], azz);
-  const Lanes4 dxx = dot3_lanes<F>(r[0], cxx, r[3], cxy, r[6], cxz);
-  const Lanes4 dxy = dot3_lanes<F>(r[1], cxx, r[4], cxy, r[7], cxz);
-  const Lanes4 dyy = dot3_lanes<F>(r[1], cyx, r[4], cyy, r[7], cyz);
+  const Band3Tensor<float> a = band3_tensor<float, float>(x);
+  const Lanes4 axx = {a.axxx, a.axxy, a.axxz, 0.0f}, axy = {a.axxy, a.axyy, a.axyz, 0.0f};
+  const Lanes4 axz = {a.axxz, a.axyz, a.axzz, 0.0f}, ayy = {a.axyy, a.ayyy, a.ayyz, 0.0f};
+  const Lanes4 ayz = {a.axyz, a.ayyz, a.ayzz, 0.0f}, azz = {a.axzz, a.ayzz, a.azzz, 0.0f};
+  const Lanes4 cxx = dot3<F>(r[0], axx, r[3], axy, r[6], axz);
+  const Lanes4 cxy = dot3<F>(r[0], axy, r[3], ayy, r[6], ayz);
+  const Lanes4 cxz = dot3<F>(r[0], axz, r[3], ayz, r[6], azz);
+  const Lanes4 cyx = dot3<F>(r[1], axx, r[4], axy, r[7], axz);
+  const Lanes4 cyy = dot3<F>(r[1], axy, r[4], ayy, r[7], ayz);
+  const Lanes4 cyz = dot3<F>(r[1], axz, r[4], ayz, r[7], azz);
+  const Lanes4 dxx = dot3<F>(r[0], cxx, r[3], cxy, r[6], cxz);
+  const Lanes4 dxy = dot3<F>(r[1], cxx, r[4], cxy, r[7], cxz);
+  const Lanes4 dyy = dot3<F>(r[1], cyx, r[4], cyy, r[7], cyz);
   const RColumnLanes rc = r_column_lanes(r);
   auto contract = [&](Lanes4 d) {
-    return dot3_lanes<F>(lane_splat<0>(d), rc.col[0], lane_splat<1>(d), rc.col[1], lane_splat<2>(d), rc.col[2]);
+    return dot3<F>(lane_splat<0>(d), rc.col[0], lane_splat<1>(d), rc.col[1], lane_splat<2>(d), rc.col[2]);
   };
   const Lanes4 bxx = contract(dxx), bxy = contract(dxy), byy = contract(dyy);
-  const float bxxx = bxx[0], bxxy = bxx[1], bxxz = bxx[2];
-  const float bxyy = bxy[1], bxyz = bxy[2], byyy = byy[1], byyz = byy[2];
-  const float i3 = float(1 / (4 * 0.59004358992664351035)), i1 = float(3 / (4 * 0.45704579946446573616));
-  const float i2 = float(6 / 2.8906114426405540554), i0 = float(-1 / (2 * 0.37317633259011539141));
-  y[0] = i3 * madd<F>(-3.0f, bxxy, byyy);
-  y[1] = i2 * bxyz;
-  y[2] = i1 * (bxxy + byyy);
-  y[3] = i0 * (bxxz + byyz);
-  y[4] = i1 * (bxxx + bxyy);
-  y[5] = (i2 / 2) * (bxxz - byyz);
-  y[6] = i3 * madd<F>(3.0f, bxyy, -bxxx);
+  band3_coefficients<F, float, float>(bxx[0], bxx[1], bxy[1], byy[1], bxx[2], bxy[2], byy[2], y);
 }
 
 // Band 1 is detail::band1_closed (shtool/rotation.h); like band 2 below it reads R
@@ -486,36 +526,25 @@ SHTOOL_KERNEL_INLINE void band2_closed(const R* __restrict r, const P* __restric
     band2_closed_lanes<F>(r, x, y);
     return;
   }
-  const T k = T(0.57735026918962576451);        // 1 / sqrt3
-  const T h3 = T(0.86602540378443864676);       // sqrt3 / 2
-  const P kf0 = k * x[2];
-  const P a00 = x[4] - kf0, a11 = -x[4] - kf0, a22 = kf0 + kf0;
-  const P a01 = x[0], a12 = -x[1], a02 = -x[3];
-  // u0 v0 + u1 v1 + u2 v2, left to right.
-  auto dot3 = [](auto u0, auto v0, auto u1, auto v1, auto u2, auto v2) {
-    return madd<F>(u2, v2, madd<F>(u1, v1, u0 * v0));
-  };
+  const Band2Matrix<P> m = band2_matrix<T, P>(x);
+  const P a00 = m.a00, a11 = m.a11, a22 = m.a22, a01 = m.a01, a12 = m.a12, a02 = m.a02;
   // C = R A (A symmetric), then the needed entries of B = C R^T.
-  const P c00 = dot3(r[0], a00, r[3], a01, r[6], a02);
-  const P c01 = dot3(r[0], a01, r[3], a11, r[6], a12);
-  const P c02 = dot3(r[0], a02, r[3], a12, r[6], a22);
-  const P c10 = dot3(r[1], a00, r[4], a01, r[7], a02);
-  const P c11 = dot3(r[1], a01, r[4], a11, r[7], a12);
-  const P c12 = dot3(r[1], a02, r[4], a12, r[7], a22);
-  const P c20 = dot3(r[2], a00, r[5], a01, r[8], a02);
-  const P c21 = dot3(r[2], a01, r[5], a11, r[8], a12);
-  const P c22 = dot3(r[2], a02, r[5], a12, r[8], a22);
-  const P b00 = dot3(r[0], c00, r[3], c01, r[6], c02);
-  const P b11 = dot3(r[1], c10, r[4], c11, r[7], c12);
-  const P b22 = dot3(r[2], c20, r[5], c21, r[8], c22);
-  const P b01 = dot3(r[1], c00, r[4], c01, r[7], c02);
-  const P b02 = dot3(r[2], c00, r[5], c01, r[8], c02);
-  const P b12 = dot3(r[2], c10, r[5], c11, r[8], c12);
-  y[0] = b01;
-  y[1] = -b12;
-  y[2] = h3 * b22;
-  y[3] = -b02;
-  y[4] = T(0.5) * (b00 - b11);
+  const P c00 = dot3<F>(r[0], a00, r[3], a01, r[6], a02);
+  const P c01 = dot3<F>(r[0], a01, r[3], a11, r[6], a12);
+  const P c02 = dot3<F>(r[0], a02, r[3], a12, r[6], a22);
+  const P c10 = dot3<F>(r[1], a00, r[4], a01, r[7], a02);
+  const P c11 = dot3<F>(r[1], a01, r[4], a11, r[7], a12);
+  const P c12 = dot3<F>(r[1], a02, r[4], a12, r[7], a22);
+  const P c20 = dot3<F>(r[2], a00, r[5], a01, r[8], a02);
+  const P c21 = dot3<F>(r[2], a01, r[5], a11, r[8], a12);
+  const P c22 = dot3<F>(r[2], a02, r[5], a12, r[8], a22);
+  const P b00 = dot3<F>(r[0], c00, r[3], c01, r[6], c02);
+  const P b11 = dot3<F>(r[1], c10, r[4], c11, r[7], c12);
+  const P b22 = dot3<F>(r[2], c20, r[5], c21, r[8], c22);
+  const P b01 = dot3<F>(r[1], c00, r[4], c01, r[7], c02);
+  const P b02 = dot3<F>(r[2], c00, r[5], c01, r[8], c02);
+  const P b12 = dot3<F>(r[2], c10, r[5], c11, r[8], c12);
+  band2_coefficients<T, P>(b00, b11, b22, b01, b02, b12, y);
 }
 
 // Band 3 as a cubic form, as band 2 above is a quadratic one: a band-3 function is the
@@ -541,63 +570,41 @@ SHTOOL_KERNEL_INLINE void band3_closed(const R* __restrict r, const P* __restric
     band3_closed_lanes<F>(r, x, y);
     return;
   }
-  const T k3 = T(0.59004358992664351035), k2 = T(2.8906114426405540554);
-  const T k1 = T(0.45704579946446573616), k0 = T(0.37317633259011539141);
-  // Scaled coefficients; then the entries of A (A_abc = coefficient of the monomial over
-  // its multiplicity 3!/(i! j! k!)).
-  const P fm3 = k3 * x[0], fm2 = (k2 / 6) * x[1], fm1 = k1 * x[2], f0 = k0 * x[3];
-  const P f1 = k1 * x[4], f2 = (k2 / 6) * x[5], f3 = k3 * x[6];
-  const P axxx = f1 - f3;
-  const P axxy = (fm1 - T(3) * fm3) * T(1.0 / 3);
-  const P axyy = (f1 + T(3) * f3) * T(1.0 / 3);
-  const P ayyy = fm1 + fm3;
-  const P axxz = f2 - f0, ayyz = -f2 - f0;  // ((k2 / 2) x[5] -+ 3 k0 x[3]) / 3
-  const P axyz = fm2;
-  const P axzz = T(-4.0 / 3) * f1, ayzz = T(-4.0 / 3) * fm1;
-  const P azzz = f0 + f0;
-  auto dot3 = [](auto u0, auto v0, auto u1, auto v1, auto u2, auto v2) {
-    return madd<F>(u2, v2, madd<F>(u1, v1, u0 * v0));
-  };
+  const Band3Tensor<P> a = band3_tensor<T, P>(x);
+  const P axxx = a.axxx, axxy = a.axxy, axxz = a.axxz, axyy = a.axyy, axyz = a.axyz;
+  const P axzz = a.axzz, ayyy = a.ayyy, ayyz = a.ayyz, ayzz = a.ayzz, azzz = a.azzz;
   // C_i,bc = sum_a R_ia A_abc for i = x, y.
-  const P cxxx = dot3(r[0], axxx, r[3], axxy, r[6], axxz);
-  const P cxxy = dot3(r[0], axxy, r[3], axyy, r[6], axyz);
-  const P cxxz = dot3(r[0], axxz, r[3], axyz, r[6], axzz);
-  const P cxyy = dot3(r[0], axyy, r[3], ayyy, r[6], ayyz);
-  const P cxyz = dot3(r[0], axyz, r[3], ayyz, r[6], ayzz);
-  const P cxzz = dot3(r[0], axzz, r[3], ayzz, r[6], azzz);
-  const P cyxx = dot3(r[1], axxx, r[4], axxy, r[7], axxz);
-  const P cyxy = dot3(r[1], axxy, r[4], axyy, r[7], axyz);
-  const P cyxz = dot3(r[1], axxz, r[4], axyz, r[7], axzz);
-  const P cyyy = dot3(r[1], axyy, r[4], ayyy, r[7], ayyz);
-  const P cyyz = dot3(r[1], axyz, r[4], ayyz, r[7], ayzz);
-  const P cyzz = dot3(r[1], axzz, r[4], ayzz, r[7], azzz);
+  const P cxxx = dot3<F>(r[0], axxx, r[3], axxy, r[6], axxz);
+  const P cxxy = dot3<F>(r[0], axxy, r[3], axyy, r[6], axyz);
+  const P cxxz = dot3<F>(r[0], axxz, r[3], axyz, r[6], axzz);
+  const P cxyy = dot3<F>(r[0], axyy, r[3], ayyy, r[6], ayyz);
+  const P cxyz = dot3<F>(r[0], axyz, r[3], ayyz, r[6], ayzz);
+  const P cxzz = dot3<F>(r[0], axzz, r[3], ayzz, r[6], azzz);
+  const P cyxx = dot3<F>(r[1], axxx, r[4], axxy, r[7], axxz);
+  const P cyxy = dot3<F>(r[1], axxy, r[4], axyy, r[7], axyz);
+  const P cyxz = dot3<F>(r[1], axxz, r[4], axyz, r[7], axzz);
+  const P cyyy = dot3<F>(r[1], axyy, r[4], ayyy, r[7], ayyz);
+  const P cyyz = dot3<F>(r[1], axyz, r[4], ayyz, r[7], ayzz);
+  const P cyzz = dot3<F>(r[1], axzz, r[4], ayzz, r[7], azzz);
   // D_ij,c = sum_b R_jb C_i,bc.
-  const P dxxx = dot3(r[0], cxxx, r[3], cxxy, r[6], cxxz);
-  const P dxxy = dot3(r[0], cxxy, r[3], cxyy, r[6], cxyz);
-  const P dxxz = dot3(r[0], cxxz, r[3], cxyz, r[6], cxzz);
-  const P dxyx = dot3(r[1], cxxx, r[4], cxxy, r[7], cxxz);
-  const P dxyy = dot3(r[1], cxxy, r[4], cxyy, r[7], cxyz);
-  const P dxyz = dot3(r[1], cxxz, r[4], cxyz, r[7], cxzz);
-  const P dyyx = dot3(r[1], cyxx, r[4], cyxy, r[7], cyxz);
-  const P dyyy = dot3(r[1], cyxy, r[4], cyyy, r[7], cyyz);
-  const P dyyz = dot3(r[1], cyxz, r[4], cyyz, r[7], cyzz);
+  const P dxxx = dot3<F>(r[0], cxxx, r[3], cxxy, r[6], cxxz);
+  const P dxxy = dot3<F>(r[0], cxxy, r[3], cxyy, r[6], cxyz);
+  const P dxxz = dot3<F>(r[0], cxxz, r[3], cxyz, r[6], cxzz);
+  const P dxyx = dot3<F>(r[1], cxxx, r[4], cxxy, r[7], cxxz);
+  const P dxyy = dot3<F>(r[1], cxxy, r[4], cxyy, r[7], cxyz);
+  const P dxyz = dot3<F>(r[1], cxxz, r[4], cxyz, r[7], cxzz);
+  const P dyyx = dot3<F>(r[1], cyxx, r[4], cyxy, r[7], cyxz);
+  const P dyyy = dot3<F>(r[1], cyxy, r[4], cyyy, r[7], cyyz);
+  const P dyyz = dot3<F>(r[1], cyxz, r[4], cyyz, r[7], cyzz);
   // B_ijk = sum_c R_kc D_ij,c.
-  const P bxxx = dot3(r[0], dxxx, r[3], dxxy, r[6], dxxz);
-  const P bxxy = dot3(r[1], dxxx, r[4], dxxy, r[7], dxxz);
-  const P bxyy = dot3(r[1], dxyx, r[4], dxyy, r[7], dxyz);
-  const P byyy = dot3(r[1], dyyx, r[4], dyyy, r[7], dyyz);
-  const P bxxz = dot3(r[2], dxxx, r[5], dxxy, r[8], dxxz);
-  const P bxyz = dot3(r[2], dxyx, r[5], dxyy, r[8], dxyz);
-  const P byyz = dot3(r[2], dyyx, r[5], dyyy, r[8], dyyz);
-  const T i3 = T(1) / (4 * 0.59004358992664351035), i1 = T(3) / (4 * 0.45704579946446573616);
-  const T i2 = T(6) / 2.8906114426405540554, i0 = T(-1) / (2 * 0.37317633259011539141);
-  y[0] = i3 * madd<F>(T(-3), bxxy, byyy);
-  y[1] = i2 * bxyz;
-  y[2] = i1 * (bxxy + byyy);
-  y[3] = i0 * (bxxz + byyz);
-  y[4] = i1 * (bxxx + bxyy);
-  y[5] = (i2 / 2) * (bxxz - byyz);
-  y[6] = i3 * madd<F>(T(3), bxyy, -bxxx);
+  const P bxxx = dot3<F>(r[0], dxxx, r[3], dxxy, r[6], dxxz);
+  const P bxxy = dot3<F>(r[1], dxxx, r[4], dxxy, r[7], dxxz);
+  const P bxyy = dot3<F>(r[1], dxyx, r[4], dxyy, r[7], dxyz);
+  const P byyy = dot3<F>(r[1], dyyx, r[4], dyyy, r[7], dyyz);
+  const P bxxz = dot3<F>(r[2], dxxx, r[5], dxxy, r[8], dxxz);
+  const P bxyz = dot3<F>(r[2], dxyx, r[5], dxyy, r[8], dxyz);
+  const P byyz = dot3<F>(r[2], dyyx, r[5], dyyy, r[8], dyyz);
+  band3_coefficients<F, T, P>(bxxx, bxxy, bxyy, byyy, bxxz, bxyz, byyz, y);
 }
 
 #pragma GCC diagnostic pop
