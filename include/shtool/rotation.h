@@ -185,13 +185,15 @@ class ShRotation {
     // so set() is a copy, inline: at order 2 a call costs as much as the rotation.
     if (closed_ && (method == RotationMethod::zxzxz || method == RotationMethod::automatic)) {
       store_matrix(r);
-      // The kernels stay those of zxzxz from one such rotation to the next: one test
-      // here instead of three stores.
-      if (resolved_ != RotationMethod::zxzxz) {
-        resolved_ = RotationMethod::zxzxz;
-        whole_kernel_ = kernel1_[0];
-        whole_kernel3_ = kernel3_[0];
-      }
+      use_zxzxz_kernels();
+      return true;
+    }
+    // From order 5 the generic rotation (tilt out of the Taylor methods' reach) takes one
+    // call unrolled for the order: zxzxz_set_.
+    if (zxzxz_set_ && (method == RotationMethod::zxzxz ||
+                       (method == RotationMethod::automatic && tolerance == cached_tolerance_ &&
+                        !taylor_in_reach(r)))) {
+      zxzxz_set_(*this, r);
       return true;
     }
     return set_general(r, method, tolerance);
@@ -265,6 +267,27 @@ class ShRotation {
     Eigen::Map<Mat3<T>> dst(r_);
     dst = r;
   }
+  // The zxzxz kernels. They stay from one zxzxz rotation to the next: one test instead
+  // of three stores.
+  void use_zxzxz_kernels() {
+    if (resolved_ != RotationMethod::zxzxz) {
+      resolved_ = RotationMethod::zxzxz;
+      whole_kernel_ = kernel1_[0];
+      whole_kernel3_ = kernel3_[0];
+    }
+  }
+  // sin^2 b = R02^2 + R12^2 of R = Rz(a) Ry(b) Rz(g): the tilt without a square root.
+  static double tilt_sin2(const Mat3<T>& r) { return static_cast<double>(r(0, 2) * r(0, 2) + r(1, 2) * r(1, 2)); }
+  // Whether one of the Taylor methods may take r under the automatic choice (the limits
+  // of cached_tolerance_). The tilt first: for generic rotations it is too large, so the
+  // branch is predicted, where the sign of R22 alone is a coin toss (GCC turns a
+  // non-short-circuit `&` of the two into two branches, the sign first, mispredicted half
+  // the time: 4 ns a set() at N = 5 in float on AMD Zen 1).
+  bool taylor_in_reach(const Mat3<T>& r) const { return tilt_sin2(r) <= taylor_widest_sin2_ && r(2, 2) > 0; }
+  // set() under zxzxz at the orders of zxzxz_set_: R, the kernels, the zyz split and the
+  // cos / sin tables, unrolled for order N (rotation.cpp).
+  template <int N>
+  static void set_zxzxz(ShRotation& rotation, const Mat3<T>& r);
   // What set() resolves `method` to for r (never automatic).
   RotationMethod choose_method(const Mat3<T>& r, RotationMethod method, double tolerance);
   // rotate_batch's lane path over whole groups of lanes; returns how many rotations it
@@ -298,6 +321,9 @@ class ShRotation {
   // reference method), else null.
   Kernel<1> whole_kernel_ = nullptr;
   Kernel<3> whole_kernel3_ = nullptr;
+  // set_zxzxz<order> at the orders above kClosedMaxOrder whose kernels cover every band
+  // (detail::kKernelMaxOrder), else null.
+  void (*zxzxz_set_)(ShRotation&, const Mat3<T>&) = nullptr;
   // rotate_batch's lane kernels per method (zxzxz, taylor1, taylor1.5, taylor2): the
   // whole-order kernel, then one per band from detail::kKernelMaxOrder on; empty for a
   // method without lanes at this order. Looked up once, here.

@@ -1032,7 +1032,7 @@ void check_reused_rotation() {
   const RotationMethod methods[] = {RotationMethod::zxzxz,   RotationMethod::reference, RotationMethod::taylor1,
                                     RotationMethod::taylor2, RotationMethod::automatic, RotationMethod::taylor15,
                                     RotationMethod::zxzxz};
-  for (int order : {2, 3, 4, 7, 10, 11, 14}) {
+  for (int order : {2, 3, 4, 5, 7, 10, 11, 14}) {
     const int n = sh_count(order);
     ShRotation<T> reused(order, helpers());
     std::vector<T> in(3 * n);
@@ -1057,6 +1057,40 @@ void check_reused_rotation() {
       }
   }
 }
+
+// From order 5 to 10, set() under zxzxz takes a short path of its own once the automatic
+// choice's limits are cached for the tolerance (or zxzxz is asked for); a tolerance not
+// seen before goes through the general path. Both must pick the same method and give the
+// same rotation bit for bit, generic and near-identity (Taylor) tilts alike.
+template <class T>
+void check_short_set_path() {
+  std::mt19937_64 rng(977);
+  const double tolerance = default_rotation_tolerance<T>();
+  for (int order = 5; order <= 11; ++order) {
+    const int n = sh_count(order);
+    std::vector<T> in(n);
+    for (T& v : in) v = static_cast<T>(std::uniform_real_distribution<double>(-1, 1)(rng));
+    ShRotation<T> cached(order, helpers()), general(order, helpers());
+    for (int k = 0; k < 24; ++k) {
+      const Mat3<T> r = (k % 4 == 3 ? axis_angle(random_axis(rng), 1e-4) : random_rotation(rng)).template cast<T>();
+      const RotationMethod method = k % 6 == 5 ? RotationMethod::zxzxz : RotationMethod::automatic;
+      ASSERT_TRUE(cached.set(r, method, tolerance));
+      // Two tolerances in turn, each new to the object: every call derives the limits
+      // again. The second changes the limits by a relative 1e-12: no tilt here is that close.
+      ASSERT_TRUE(general.set(r, method, k % 2 ? tolerance : tolerance * (1 + 1e-12)));
+      ASSERT_EQ(cached.method(), general.method()) << "order " << order << " rotation " << k;
+      if (method == RotationMethod::automatic && k % 4 != 3)
+        ASSERT_EQ(cached.method(), RotationMethod::zxzxz);  // the short path itself
+      std::vector<T> a(n), b(n);
+      cached.apply(in, a);
+      general.apply(in, b);
+      for (int i = 0; i < n; ++i) ASSERT_EQ(a[i], b[i]) << "order " << order << " rotation " << k << " i " << i;
+    }
+  }
+}
+
+TEST(RotationApi, ShortSetPathMatchesGeneralPathFloat) { check_short_set_path<float>(); }
+TEST(RotationApi, ShortSetPathMatchesGeneralPathDouble) { check_short_set_path<double>(); }
 
 TEST(RotationApi, ReusedRotationMatchesFreshOneFloat) { check_reused_rotation<float>(); }
 TEST(RotationApi, ReusedRotationMatchesFreshOneDouble) { check_reused_rotation<double>(); }

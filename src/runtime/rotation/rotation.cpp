@@ -171,6 +171,18 @@ ShRotation<T>::ShRotation(int order, std::shared_ptr<const RotationHelpers> help
     }
     kernel_order_ = std::min(order, detail::kKernelMaxOrder);
     closed_ = order <= detail::kClosedMaxOrder;
+    // The general path's dispatch (method, order, kernels, a stack frame for every order's
+    // tables) costs about 3 ns of a 78 ns rotation at N = 5 in float.
+    switch (order) {
+      case 5: zxzxz_set_ = &set_zxzxz<5>; break;
+      case 6: zxzxz_set_ = &set_zxzxz<6>; break;
+      case 7: zxzxz_set_ = &set_zxzxz<7>; break;
+      case 8: zxzxz_set_ = &set_zxzxz<8>; break;
+      case 9: zxzxz_set_ = &set_zxzxz<9>; break;
+      case 10: zxzxz_set_ = &set_zxzxz<10>; break;
+      default: break;
+    }
+    static_assert(detail::kClosedMaxOrder == 4 && detail::kKernelMaxOrder == 10, "the orders of zxzxz_set_");
     if (order <= detail::kBandKernelMaxBand + 1) {
       for (int k = 0; k < 4; ++k) {
         std::vector<BatchKernel>& v = batch_kernels_[k];
@@ -331,6 +343,18 @@ inline void zyz_tables_sse2(const ZyzCosSin<float>& e, float* const* t) {
 }
 #endif
 
+// The three tables of zxzxz at order N: in SSE2 lanes for float.
+template <int N, class T>
+inline void zxzxz_tables(const ZyzCosSin<T>& e, T* const* t) {
+#if defined(__SSE2__)
+  if constexpr (std::is_same_v<T, float>) {
+    zyz_tables_sse2<N>(e, t);
+    return;
+  }
+#endif
+  zyz_tables<N>(N, e, true, t[0], t[1], t[2], t[3], t[4], t[5]);
+}
+
 // zyz_tables with the count fixed at compile time where the kernels are generated.
 // t: ca, sa, cb, sb, cg, sg.
 template <class T, class E>
@@ -430,19 +454,25 @@ inline RotationMethod ShRotation<T>::choose_method(const Mat3<T>& r, RotationMet
     return RotationMethod::zxzxz;  // see rotation.h
   if (method != RotationMethod::automatic) return method;
   if (tolerance != cached_tolerance_) update_taylor_limits(tolerance);
-  // sin^2 b = R02^2 + R12^2, cos b = R22: no square root needed for the choice.
-  const double sb2 = static_cast<double>(r(0, 2) * r(0, 2) + r(1, 2) * r(1, 2));
-  // The tilt first: for generic rotations it is too large, so the branch is predicted,
-  // where the sign of R22 alone is a coin toss (GCC turns a non-short-circuit `&` of the
-  // two into two branches, the sign first, mispredicted half the time: 4 ns a set() at
-  // N = 5 in float on AMD Zen 1).
-  if (sb2 <= taylor_widest_sin2_ && r(2, 2) > 0) {
+  if (taylor_in_reach(r)) {
     const RotationMethod taylor[3] = {RotationMethod::taylor1, RotationMethod::taylor15,
                                       RotationMethod::taylor2};
+    const double sb2 = tilt_sin2(r);
     for (int k = 0; k < 3; ++k)
       if (sb2 <= taylor_limit_sin2_[k]) return taylor[k];
   }
   return RotationMethod::zxzxz;
+}
+
+template <class T>
+template <int N>
+void ShRotation<T>::set_zxzxz(ShRotation& rotation, const Mat3<T>& r) {
+  rotation.store_matrix(r);
+  rotation.use_zxzxz_kernels();
+  const ZyzCosSin<T> e = zyz_cos_sin_from_matrix<T>(r);
+  T* const t[6] = {rotation.cos_a_.data(), rotation.sin_a_.data(), rotation.cos_b_.data(),
+                   rotation.sin_b_.data(), rotation.cos_g_.data(), rotation.sin_g_.data()};
+  zxzxz_tables<N>(e, t);
 }
 
 template <class T>
