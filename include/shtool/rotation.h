@@ -188,12 +188,8 @@ class ShRotation {
       use_zxzxz_kernels();
       return true;
     }
-    // From order 5 the generic rotation (tilt out of the Taylor methods' reach) takes one
-    // call unrolled for the order: zxzxz_set_.
-    if (zxzxz_set_ && (method == RotationMethod::zxzxz ||
-                       (method == RotationMethod::automatic && tolerance == cached_tolerance_ &&
-                        !taylor_in_reach(r)))) {
-      zxzxz_set_(*this, r);
+    if (short_zxzxz_set(r, method, tolerance)) {
+      zxzxz_set_(*this, r, nullptr);
       return true;
     }
     return set_general(r, method, tolerance);
@@ -208,6 +204,10 @@ class ShRotation {
     const Mat3<T> r = matrix_from_quaternion<T>(w, x, y, z);
     if (order_ <= detail::kClosedMaxOrder) return set(r, method, tolerance);  // no Euler angles there
     const ZyzCosSin<T> e = zyz_cos_sin_from_quaternion<T>(w, x, y, z);
+    if (short_zxzxz_set(r, method, tolerance)) {
+      zxzxz_set_(*this, r, &e);
+      return true;
+    }
     return set_general(r, method, tolerance, &e);
   }
 
@@ -284,10 +284,16 @@ class ShRotation {
   // non-short-circuit `&` of the two into two branches, the sign first, mispredicted half
   // the time: 4 ns a set() at N = 5 in float on AMD Zen 1).
   bool taylor_in_reach(const Mat3<T>& r) const { return tilt_sin2(r) <= taylor_widest_sin2_ && r(2, 2) > 0; }
-  // set() under zxzxz at the orders of zxzxz_set_: R, the kernels, the zyz split and the
-  // cos / sin tables, unrolled for order N (rotation.cpp).
+  // Whether set() of r takes zxzxz_set_: from order 5 the generic rotation (a tilt out of
+  // the Taylor methods' reach) in one call unrolled for the order.
+  bool short_zxzxz_set(const Mat3<T>& r, RotationMethod method, double tolerance) const {
+    return zxzxz_set_ && (method == RotationMethod::zxzxz ||
+                          (method == RotationMethod::automatic && tolerance == cached_tolerance_ && !taylor_in_reach(r)));
+  }
+  // set() under zxzxz at the orders of zxzxz_set_: R, the kernels, the zyz split (e, if
+  // the caller has it) and the cos / sin tables, unrolled for order N (rotation.cpp).
   template <int N>
-  static void set_zxzxz(ShRotation& rotation, const Mat3<T>& r);
+  static void set_zxzxz(ShRotation& rotation, const Mat3<T>& r, const ZyzCosSin<T>* e);
   // What set() resolves `method` to for r (never automatic).
   RotationMethod choose_method(const Mat3<T>& r, RotationMethod method, double tolerance);
   // rotate_batch's lane path over whole groups of lanes; returns how many rotations it
@@ -323,7 +329,7 @@ class ShRotation {
   Kernel<3> whole_kernel3_ = nullptr;
   // set_zxzxz<order> at the orders above kClosedMaxOrder whose kernels cover every band
   // (detail::kKernelMaxOrder), else null.
-  void (*zxzxz_set_)(ShRotation&, const Mat3<T>&) = nullptr;
+  void (*zxzxz_set_)(ShRotation&, const Mat3<T>&, const ZyzCosSin<T>*) = nullptr;
   // rotate_batch's lane kernels per method (zxzxz, taylor1, taylor1.5, taylor2): the
   // whole-order kernel, then one per band from detail::kKernelMaxOrder on; empty for a
   // method without lanes at this order. Looked up once, here.

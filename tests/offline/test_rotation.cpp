@@ -1058,10 +1058,11 @@ void check_reused_rotation() {
   }
 }
 
-// From order 5 to 10, set() under zxzxz takes a short path of its own once the automatic
-// choice's limits are cached for the tolerance (or zxzxz is asked for); a tolerance not
-// seen before goes through the general path. Both must pick the same method and give the
-// same rotation bit for bit, generic and near-identity (Taylor) tilts alike.
+// From order 5 to 10, set() and set_quaternion() under zxzxz take a short path of their
+// own once the automatic choice's limits are cached for the tolerance (or zxzxz is asked
+// for); a tolerance not seen before goes through the general path. Both must pick the
+// same method and give the same rotation bit for bit, generic and near-identity (Taylor)
+// tilts alike.
 template <class T>
 void check_short_set_path() {
   std::mt19937_64 rng(977);
@@ -1072,12 +1073,26 @@ void check_short_set_path() {
     for (T& v : in) v = static_cast<T>(std::uniform_real_distribution<double>(-1, 1)(rng));
     ShRotation<T> cached(order, helpers()), general(order, helpers());
     for (int k = 0; k < 24; ++k) {
-      const Mat3<T> r = (k % 4 == 3 ? axis_angle(random_axis(rng), 1e-4) : random_rotation(rng)).template cast<T>();
+      // Half of the rotations by quaternion (set_quaternion), half by matrix.
+      const bool by_quaternion = k % 8 >= 4;
+      std::normal_distribution<double> normal;
+      Eigen::Vector4d q(normal(rng), normal(rng), normal(rng), normal(rng));
+      if (k % 4 == 3) q = Eigen::Vector4d(1, 5e-5 * q[1], 5e-5 * q[2], 5e-5 * q[3]);  // tilt ~1e-4
+      q.normalize();
+      const Eigen::Vector4<T> qt = q.cast<T>();
+      const Mat3<T> r = matrix_from_quaternion<T>(qt[0], qt[1], qt[2], qt[3]);
       const RotationMethod method = k % 6 == 5 ? RotationMethod::zxzxz : RotationMethod::automatic;
-      ASSERT_TRUE(cached.set(r, method, tolerance));
-      // Two tolerances in turn, each new to the object: every call derives the limits
-      // again. The second changes the limits by a relative 1e-12: no tilt here is that close.
-      ASSERT_TRUE(general.set(r, method, k % 2 ? tolerance : tolerance * (1 + 1e-12)));
+      // Two tolerances in turn for `general`, each new to the object: every call derives
+      // the limits again. The second changes the limits by a relative 1e-12: no tilt here is
+      // that close to one.
+      const double new_tolerance = k % 2 ? tolerance : tolerance * (1 + 1e-12);
+      if (by_quaternion) {
+        ASSERT_TRUE(cached.set_quaternion(qt[0], qt[1], qt[2], qt[3], method, tolerance));
+        ASSERT_TRUE(general.set_quaternion(qt[0], qt[1], qt[2], qt[3], method, new_tolerance));
+      } else {
+        ASSERT_TRUE(cached.set(r, method, tolerance));
+        ASSERT_TRUE(general.set(r, method, new_tolerance));
+      }
       ASSERT_EQ(cached.method(), general.method()) << "order " << order << " rotation " << k;
       if (method == RotationMethod::automatic && k % 4 != 3)
         ASSERT_EQ(cached.method(), RotationMethod::zxzxz);  // the short path itself

@@ -466,10 +466,10 @@ inline RotationMethod ShRotation<T>::choose_method(const Mat3<T>& r, RotationMet
 
 template <class T>
 template <int N>
-void ShRotation<T>::set_zxzxz(ShRotation& rotation, const Mat3<T>& r) {
+void ShRotation<T>::set_zxzxz(ShRotation& rotation, const Mat3<T>& r, const ZyzCosSin<T>* given) {
   rotation.store_matrix(r);
   rotation.use_zxzxz_kernels();
-  const ZyzCosSin<T> e = zyz_cos_sin_from_matrix<T>(r);
+  const ZyzCosSin<T> e = given ? *given : zyz_cos_sin_from_matrix<T>(r);
   T* const t[6] = {rotation.cos_a_.data(), rotation.sin_a_.data(), rotation.cos_b_.data(),
                    rotation.sin_b_.data(), rotation.cos_g_.data(), rotation.sin_g_.data()};
   zxzxz_tables<N>(e, t);
