@@ -189,7 +189,7 @@ class ShRotation {
       return true;
     }
     if (short_zxzxz_set(r, method, tolerance)) {
-      zxzxz_set_(*this, r, nullptr);
+      call_zxzxz_set(r, nullptr);
       return true;
     }
     return set_general(r, method, tolerance);
@@ -205,7 +205,7 @@ class ShRotation {
     if (order_ <= detail::kClosedMaxOrder) return set(r, method, tolerance);  // no Euler angles there
     const ZyzCosSin<T> e = zyz_cos_sin_from_quaternion<T>(w, x, y, z);
     if (short_zxzxz_set(r, method, tolerance)) {
-      zxzxz_set_(*this, r, &e);
+      call_zxzxz_set(r, &e);
       return true;
     }
     return set_general(r, method, tolerance, &e);
@@ -287,13 +287,41 @@ class ShRotation {
   // Whether set() of r takes zxzxz_set_: from order 5 the generic rotation (a tilt out of
   // the Taylor methods' reach) in one call unrolled for the order.
   bool short_zxzxz_set(const Mat3<T>& r, RotationMethod method, double tolerance) const {
-    return zxzxz_set_ && (method == RotationMethod::zxzxz ||
+    return zxzxz_set_[0] && (method == RotationMethod::zxzxz ||
                           (method == RotationMethod::automatic && tolerance == cached_tolerance_ && !taylor_in_reach(r)));
   }
-  // set() under zxzxz at the orders of zxzxz_set_: R, the kernels, the zyz split (e, if
-  // the caller has it) and the cos / sin tables, unrolled for order N (rotation.cpp).
-  template <int N>
+  // set() under zxzxz at the orders of zxzxz_set_: R, the kernels, the zyz split (*e if
+  // Given, from R otherwise) and the cos / sin tables, unrolled for order N (rotation.cpp).
+  // Given is a template argument: as a run-time test, GCC 12 calls the split out of line.
+  template <int N, bool Given>
   static void set_zxzxz(ShRotation& rotation, const Mat3<T>& r, const ZyzCosSin<T>* e);
+#if defined(__SSE2__)
+  // In float R goes to zxzxz_set_ in registers, column-major in two 4-float lanes and
+  // R22: matrix_from_quaternion builds it in lanes, and by reference it would go through
+  // memory on its way to the split (about 2 ns of a 75 ns rotation at N = 5).
+  static constexpr bool kMatrixInLanes = std::is_same_v<T, float>;
+  struct MatrixLanes {  // one register still (x86-64 ABIs); a struct, as __m128's attributes
+    __m128 v;           // would be dropped as a template argument (std::conditional_t below)
+  };
+#else
+  static constexpr bool kMatrixInLanes = false;
+  using MatrixLanes = T;  // unused
+#endif
+  template <int N, bool Given>
+  static void set_zxzxz_lanes(ShRotation& rotation, MatrixLanes r0, MatrixLanes r4, T r8, const ZyzCosSin<T>* e);
+  using ZxzxzSet = std::conditional_t<kMatrixInLanes,
+                                      void (*)(ShRotation&, MatrixLanes, MatrixLanes, T, const ZyzCosSin<T>*),
+                                      void (*)(ShRotation&, const Mat3<T>&, const ZyzCosSin<T>*)>;
+  void call_zxzxz_set(const Mat3<T>& r, const ZyzCosSin<T>* e) {
+    const int k = e ? 1 : 0;
+#if defined(__SSE2__)
+    if constexpr (kMatrixInLanes) {
+      zxzxz_set_[k](*this, {_mm_loadu_ps(r.data())}, {_mm_loadu_ps(r.data() + 4)}, r(2, 2), e);
+      return;
+    }
+#endif
+    if constexpr (!kMatrixInLanes) zxzxz_set_[k](*this, r, e);
+  }
   // What set() resolves `method` to for r (never automatic).
   RotationMethod choose_method(const Mat3<T>& r, RotationMethod method, double tolerance);
   // rotate_batch's lane path over whole groups of lanes; returns how many rotations it
@@ -327,9 +355,9 @@ class ShRotation {
   // reference method), else null.
   Kernel<1> whole_kernel_ = nullptr;
   Kernel<3> whole_kernel3_ = nullptr;
-  // set_zxzxz<order> at the orders above kClosedMaxOrder whose kernels cover every band
-  // (detail::kKernelMaxOrder), else null.
-  void (*zxzxz_set_)(ShRotation&, const Mat3<T>&, const ZyzCosSin<T>*) = nullptr;
+  // set_zxzxz<order, false> and <order, true> at the orders above kClosedMaxOrder whose
+  // kernels cover every band (detail::kKernelMaxOrder), else null.
+  ZxzxzSet zxzxz_set_[2] = {};
   // rotate_batch's lane kernels per method (zxzxz, taylor1, taylor1.5, taylor2): the
   // whole-order kernel, then one per band from detail::kKernelMaxOrder on; empty for a
   // method without lanes at this order. Looked up once, here.
