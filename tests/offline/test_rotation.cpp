@@ -1095,7 +1095,7 @@ void check_short_set_path() {
       }
       ASSERT_EQ(cached.method(), general.method()) << "order " << order << " rotation " << k;
       if (method == RotationMethod::automatic && k % 4 != 3)
-        ASSERT_EQ(cached.method(), RotationMethod::zxzxz);  // the short path itself
+        ASSERT_EQ(cached.method(), RotationMethod::zxzxz);  // a generic tilt: the short path's case
       std::vector<T> a(n), b(n);
       cached.apply(in, a);
       general.apply(in, b);
