@@ -11,9 +11,13 @@ shtool="$root/build/shtool"
 mkdir -p "$out"
 
 echo "== shtool demo -> $out"
-echo "-- project-env: the sky of data/sky.hdr as order-3 radiance and irradiance (exact texel integrals)"
+echo "-- project-env: the sky of data/sky.hdr as order-3 radiance and irradiance (exact texel integrals);"
+echo "   sky.source.png is the image, sky.back.png its order-3 reconstruction (the sun rings), sky.back.auto.png"
+echo "   the same windowed (--window auto), all three with one tone map"
 "$shtool" project-env "$root/data/sky.hdr" --order 3 --json "$out/sky.json" --out "$out/sky.shtb" \
-  --render-back "$out/sky.back.png"
+  --render-back "$out/sky.back.png" --render-source "$out/sky.source.png"
+"$shtool" project-env "$root/data/sky.hdr" --order 3 --window auto --json "$out/sky.auto.json" \
+  --render-back "$out/sky.back.auto.png"
 "$shtool" project-env "$root/data/sky.hdr" --order 3 --quantity irradiance --json "$out/sky.irradiance.json"
 echo "-- light: its sun alone, as a cone of 1.5 degrees (the analytic closed form)"
 "$shtool" light --type cone --dir 0.409576,0.709406,0.573576 --half-angle 1.5 --color 2000,1800,1500 --order 3 \

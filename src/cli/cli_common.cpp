@@ -45,3 +45,14 @@ std::vector<std::string> split_list(const std::string& text) {
 void print_json(const nlohmann::json& value) { std::cout << value.dump() << '\n'; }
 
 }  // namespace shtool::cli
+
+namespace shtool::cli {
+
+CLI::Option* add_up_option(CLI::App* app, UpAxis& target) {
+  return add_enum_option(app, "--up", target, up_axis_names(),
+                         "an OBJ's up axis: y (Blender's OBJ default; turned into shtool's z-up frame) or z "
+                         "(taken as written); a glTF is +Y up by its specification",
+                         "y");
+}
+
+}  // namespace shtool::cli

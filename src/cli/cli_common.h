@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "common/input_error.h"
+#include "common/mesh_frame.h"
 
 #include <CLI/CLI.hpp>
 
@@ -47,6 +48,10 @@ CLI::Option* add_enum_option(CLI::App* app, const std::string& name, E& target,
       ->check(CLI::IsMember(accepted))
       ->default_str(default_name);
 }
+
+// --up y|z: the up axis of an OBJ mesh (default y); a glTF is +Y up by its specification.
+// Every command that reads a mesh takes it.
+CLI::Option* add_up_option(CLI::App* app, UpAxis& target);
 
 // For unsigned options (seeds): CLI11 reads "-1" into a std::uint64_t as 2^64 - 1;
 // this refuses a sign instead.

@@ -17,6 +17,7 @@ void setup_deform(CLI::App& app) {
   sub->add_option("--pose", req->pose, "the posed mesh (OBJ or glTF, the rest mesh's topology)")->required();
   sub->add_option("--out", req->out, "zh-fit table of the posed mesh")->required();
   sub->add_option("--json", req->json, "also the posed fits in fit-zh's JSON layout");
+  add_up_option(sub, req->up);
   sub->callback([req]() {
     const deform::DeformReport report = deform::run_deform(*req);
     std::cerr << "deform: " << report.vertices << " vertices, largest frame rotation " << report.largest_angle

@@ -29,6 +29,7 @@ void setup_fit_glossy(CLI::App& app) {
   sub->add_option("--rays", req->rays, "hemisphere rays per vertex")->capture_default_str();
   add_enum_option(sub, "--mode", req->shadowed, {{"shadowed", true}, {"unshadowed", false}},
                   "shadowed or unshadowed", "shadowed");
+  add_up_option(sub, req->up);
   add_enum_option(sub, "--normals", req->normals, fit::normal_source_names(),
                   "vertex normals: the file's when complete (auto), the file's, or computed", "auto");
   sub->add_option("--seed", req->seed, "seed of the ray directions and of the fits' starts")

@@ -35,7 +35,7 @@ std::function<void(std::size_t, std::size_t)> progress_bar(const std::string& la
 void setup_fit_zh(CLI::App& app) {
   auto opt = std::make_shared<fit::FitZhRequest>();
   CLI::App* sub = app.add_subcommand("fit-zh", "Simulate diffuse PRT transfer on a mesh and fit ZH lobes per vertex");
-  sub->add_option("mesh", opt->mesh, "OBJ mesh (polygons are triangulated)");
+  sub->add_option("mesh", opt->mesh, "OBJ or glTF mesh (OBJ polygons are triangulated)");
   sub->add_option("--transfer", opt->transfer, "fit SH vectors from JSON {\"order\": n, \"vectors\": [[n^2], ...]}");
   sub->add_option("--out", opt->out, "output table (default: <input stem>.zh.shtb in the current folder)");
   add_enum_option(sub, "--format", opt->encoding, {{"binary", TableEncoding::binary}, {"json", TableEncoding::json}},
@@ -51,6 +51,7 @@ void setup_fit_zh(CLI::App& app) {
                   "shadowed");
   sub->add_option("--bounces", opt->bounces, "interreflected: diffuse bounces")->capture_default_str();
   sub->add_option("--albedo", opt->albedo, "interreflected: surface albedo in [0, 1)")->capture_default_str();
+  add_up_option(sub, opt->up);
   add_enum_option(sub, "--normals", opt->normals, fit::normal_source_names(),
                   "auto (file if complete, else computed), file or computed", "auto");
   sub->add_option("--seed", opt->seed, "seed of the ray rotations and multi-start axes")

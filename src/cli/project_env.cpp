@@ -34,6 +34,9 @@ void setup_project_env(CLI::App& app) {
   add_enum_option(sub, "--format", opt->encoding, {{"binary", TableEncoding::binary}, {"json", TableEncoding::json}},
                   "table encoding: binary or json", "binary");
   sub->add_option("--render-back", opt->render_back, "also write the reconstruction as an equirect .exr or .png");
+  sub->add_option("--render-source", opt->render_source,
+                  "also write the source image through the render-back's equirect (same size, mapping and tone "
+                  "map), to set beside it");
   sub->add_option("--threads", opt->threads, "worker threads (0: all cores)")->capture_default_str();
   sub->callback([opt, cutoff, cut]() {
     if (cut->count()) opt->cutoff = *cutoff;

@@ -22,7 +22,9 @@ void setup_render(CLI::App& app) {
                   "glossy-zh table (fit-glossy --out)");
   sub->add_option("--transfer", req->transfer, "transfer vectors JSON (fit-zh --save-transfer)");
   sub->add_option("--light", req->light, "lighting JSON (project-env --json, light --json), radiance, RGB");
-  sub->add_option("--camera", *camera, "eye,target,up: nine numbers (default: framed on the mesh)");
+  add_up_option(sub, req->up);
+  sub->add_option("--camera", *camera, "eye,target,up: nine numbers in shtool's frame, z up (default: the mesh framed in three-quarters "
+                  "from the front, -y, and a little above)");
   sub->add_option("--fov", req->fov, "vertical field of view, degrees")->capture_default_str();
   sub->add_option("--width", req->width, "image width")->capture_default_str();
   sub->add_option("--height", req->height, "image height")->capture_default_str();

@@ -142,14 +142,15 @@ TEST(CliFitZhGltf, AttributesAreTheFitsOfTheSameRun) {
     for (const auto& [name, index] : p.attributes) got.insert(name);
     EXPECT_EQ(got, expected);
 
-    // The mesh shtool baked, as floats; indices the smallest type that holds them.
+    // The mesh shtool baked, as floats in glTF's frame (x, z, -y); indices the smallest
+    // type that holds them.
     const std::vector<float> pos = floats(m, p.attributes.at("POSITION"), TINYGLTF_TYPE_VEC3, n);
     const std::vector<float> nrm = floats(m, p.attributes.at("NORMAL"), TINYGLTF_TYPE_VEC3, n);
     std::vector<double> lo(3, INFINITY), hi(3, -INFINITY);
     for (std::size_t v = 0; v < n; ++v)
       for (int c = 0; c < 3; ++c) {
-        ASSERT_EQ(pos[v * 3 + c], static_cast<float>(mesh.positions[v][c]));
-        ASSERT_EQ(nrm[v * 3 + c], static_cast<float>(mesh.normals[v][c]));
+        ASSERT_EQ(pos[v * 3 + c], static_cast<float>(shtool::to_y_up(mesh.positions[v])[c]));
+        ASSERT_EQ(nrm[v * 3 + c], static_cast<float>(shtool::to_y_up(mesh.normals[v])[c]));
         lo[c] = std::min<double>(lo[c], pos[v * 3 + c]);
         hi[c] = std::max<double>(hi[c], pos[v * 3 + c]);
       }
@@ -183,9 +184,11 @@ TEST(CliFitZhGltf, AttributesAreTheFitsOfTheSameRun) {
     for (int k = 0; k < b.lobes; ++k) {
       const std::string lobe = std::to_string(k);
       const std::vector<float> axis = floats(m, p.attributes.at("_ZH_AXIS_" + lobe), TINYGLTF_TYPE_VEC3, n);
-      for (std::size_t v = 0; v < n; ++v)
-        for (int c = 0; c < 3; ++c)
-          ASSERT_EQ(axis[v * 3 + c], static_cast<float>(fits[v]["lobes"][k]["axis"][c].get<double>())) << v;
+      for (std::size_t v = 0; v < n; ++v) {
+        const std::vector<double> a = fits[v]["lobes"][k]["axis"].get<std::vector<double>>();
+        const Eigen::Vector3d in_gltf = shtool::to_y_up(Eigen::Vector3d(a[0], a[1], a[2]));
+        for (int c = 0; c < 3; ++c) ASSERT_EQ(axis[v * 3 + c], static_cast<float>(in_gltf[c])) << v;
+      }
       for (int j = 0; j < groups; ++j) {
         const std::vector<float> g =
             floats(m, p.attributes.at("_ZH_COEFFS_" + lobe + "_" + std::to_string(j)), TINYGLTF_TYPE_VEC4, n);
@@ -201,8 +204,11 @@ TEST(CliFitZhGltf, AttributesAreTheFitsOfTheSameRun) {
     if (b.direct) {
       const std::vector<float> d = floats(m, p.attributes.at("_ZH_DIRECT"), TINYGLTF_TYPE_VEC4, n);
       for (std::size_t v = 0; v < n; ++v) {
-        const std::vector<double> stored = fits[v]["direct"].get<std::vector<double>>();
+        std::vector<double> stored = fits[v]["direct"].get<std::vector<double>>();
         ASSERT_EQ(stored.size(), b.lobes >= 3 ? 4u : 1u);
+        // Band 1 in glTF coordinates (y = -z', z = y'): (y_1^-1, y_1^0, y_1^1) of shtool's
+        // (f_-1, f_0, f_1) become (-f_0, f_-1, f_1).
+        if (stored.size() == 4) stored = {stored[0], -stored[2], stored[1], stored[3]};
         for (std::size_t c = 0; c < 4; ++c)
           ASSERT_EQ(d[v * 4 + c], c < stored.size() ? static_cast<float>(stored[c]) : 0.0f) << v;
       }

@@ -68,7 +68,8 @@ const Inputs& inputs() {
 const std::vector<std::string> kView = {"--width", "64", "--height", "64", "--camera", "4,0,0,0,0,0,0,0,1"};
 
 std::vector<std::string> wrinkle_args(const fs::path& xd, const fs::path& out, int threads) {
-  std::vector<std::string> a = {"render", inputs().obj.string(), "--shading", "wrinkle", "--wrinkle",
+  // The cylinder is written in shtool's frame, its axis z: --up z.
+  std::vector<std::string> a = {"render", inputs().obj.string(), "--up", "z", "--shading", "wrinkle", "--wrinkle",
                                 inputs().map.string(), "--wrinkle-map", xd.string(), "--light",
                                 inputs().light.string(), "--threads", std::to_string(threads), "--out", out.string()};
   a.insert(a.end(), kView.begin(), kView.end());
@@ -120,7 +121,7 @@ TEST(RenderWrinkle, CylinderCoversPixelsShowsGroovesAndIsThreadIndependent) {
 TEST(RenderWrinkle, FlatGrooveRendersAsTheUnshadowedSurface) {
   const fs::path wr = scratch("flat.exr"), mem = scratch("membrane.exr");
   must(shtool_run(wrinkle_args(inputs().flat, wr, 2)));
-  std::vector<std::string> m = {"render", inputs().obj.string(), "--shading", "membrane", "--alpha", "0",
+  std::vector<std::string> m = {"render", inputs().obj.string(), "--up", "z", "--shading", "membrane", "--alpha", "0",
                                 "--light", inputs().light.string(), "--out", mem.string()};
   m.insert(m.end(), kView.begin(), kView.end());
   must(shtool_run(m));

@@ -11,7 +11,13 @@
 
 namespace {
 
-using shtool::fit::load_obj;
+using shtool::UpAxis;
+using shtool::fit::NormalSource;
+
+// The meshes here are written in shtool's frame (z up): read as written.
+shtool::fit::Mesh load_as_written(const std::filesystem::path& path, NormalSource normals = NormalSource::automatic) {
+  return shtool::fit::load_obj(path, normals, UpAxis::z);
+}
 using shtool::fit::Mesh;
 using shtool::fit::MeshError;
 
@@ -25,7 +31,7 @@ std::filesystem::path write_obj(const std::string& name, const std::string& text
 
 std::string load_error(const std::filesystem::path& path) {
   try {
-    load_obj(path);
+    load_as_written(path);
   } catch (const MeshError& e) {
     return e.what();
   }
@@ -36,15 +42,37 @@ std::string load_error(const std::filesystem::path& path) {
 constexpr double kNormalTol = 1e-14;
 
 TEST(FitMesh, QuadIsTriangulatedWithUpNormals) {
-  const Mesh m = load_obj(write_obj("quad.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n"));
+  const Mesh m = load_as_written(write_obj("quad.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n"));
   ASSERT_EQ(m.triangles.size(), 2u);
   EXPECT_EQ(m.polygons_triangulated, 1u);
   EXPECT_FALSE(m.normals_from_file);
   for (const Eigen::Vector3d& n : m.normals) EXPECT_NEAR((n - Eigen::Vector3d::UnitZ()).norm(), 0.0, kNormalTol) << n.transpose();
 }
 
+// An OBJ is y-up by default (shtool = (X, -Z, Y) of its coordinates): a quad facing +y
+// faces shtool's +z, its positions and file normals turned alike; z keeps it as written.
+TEST(FitMesh, YUpFilesAreTurnedIntoShtoolsFrame) {
+  const auto path = write_obj("quad_y.obj", "v 0 0 0\nv 0 0 -1\nv 1 0 -1\nv 1 0 0\nvn 0 3 0\nf 1//1 4//1 3//1 2//1\n");
+  for (const NormalSource source : {NormalSource::file, NormalSource::computed}) {
+    const Mesh m = shtool::fit::load_obj(path, source);
+    EXPECT_EQ(m.up, UpAxis::y);
+    for (const Eigen::Vector3d& n : m.normals) EXPECT_NEAR((n - Eigen::Vector3d::UnitZ()).norm(), 0.0, kNormalTol);
+    EXPECT_EQ(m.positions[1], Eigen::Vector3d(0, 1, 0));  // the file's (0, 0, -1)
+    EXPECT_EQ(m.positions[2], Eigen::Vector3d(1, 1, 0));
+  }
+  const Mesh z = load_as_written(path);
+  EXPECT_EQ(z.up, UpAxis::z);
+  for (const Eigen::Vector3d& n : z.normals) EXPECT_NEAR((n - Eigen::Vector3d::UnitY()).norm(), 0.0, kNormalTol);
+  EXPECT_EQ(z.positions[1], Eigen::Vector3d(0, 0, -1));
+  // The two maps are each other's inverse, exactly.
+  const Eigen::Vector3d p(0.1, -2.5, 3e-7);
+  EXPECT_EQ(shtool::to_y_up(shtool::from_y_up(p)), p);
+  EXPECT_EQ(shtool::to_y_up_matrix() * p, shtool::to_y_up(p));
+  EXPECT_NEAR(shtool::to_y_up_matrix().determinant(), 1.0, 0.0);
+}
+
 TEST(FitMesh, UnreferencedVerticesAreSkippedAndCounted) {
-  const Mesh m = load_obj(write_obj("unref.obj", "v 9 9 9\nv 0 0 0\nv 1 0 0\nv 5 5 5\nv 0 1 0\nf 2 3 5\n"));
+  const Mesh m = load_as_written(write_obj("unref.obj", "v 9 9 9\nv 0 0 0\nv 1 0 0\nv 5 5 5\nv 0 1 0\nf 2 3 5\n"));
   EXPECT_EQ(m.obj_vertices, 5u);
   EXPECT_EQ(m.unreferenced_vertices, 2u);
   ASSERT_EQ(m.positions.size(), 3u);
@@ -54,7 +82,7 @@ TEST(FitMesh, UnreferencedVerticesAreSkippedAndCounted) {
 
 TEST(FitMesh, DegenerateFacesAreSkippedAndCounted) {
   // A repeated index, a zero-area (collinear) triangle and a good one.
-  const Mesh m = load_obj(write_obj("degen.obj",
+  const Mesh m = load_as_written(write_obj("degen.obj",
                                     "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 1 0\nf 1 2 2\nf 1 2 3\nf 1 2 4\n"));
   EXPECT_EQ(m.degenerate_faces, 2u);
   EXPECT_EQ(m.triangles.size(), 1u);
@@ -69,7 +97,7 @@ TEST(FitMesh, CubeCornerNormalsAreAngleWeighted) {
   const std::string cube =
       "v -1 -1 -1\nv 1 -1 -1\nv 1 1 -1\nv -1 1 -1\nv -1 -1 1\nv 1 -1 1\nv 1 1 1\nv -1 1 1\n"
       "f 1 4 3\nf 1 3 2\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\nf 2 3 7\nf 2 7 6\nf 3 4 8\nf 3 8 7\nf 4 1 5\nf 4 5 8\n";
-  const Mesh m = load_obj(write_obj("cube.obj", cube));
+  const Mesh m = load_as_written(write_obj("cube.obj", cube));
   ASSERT_EQ(m.positions.size(), 8u);
   for (std::size_t i = 0; i < 8; ++i) {
     const Eigen::Vector3d expected = m.positions[i] / std::sqrt(3.0);
@@ -78,11 +106,11 @@ TEST(FitMesh, CubeCornerNormalsAreAngleWeighted) {
 }
 
 TEST(FitMesh, FileNormalsAreUsedWhenComplete) {
-  const Mesh m = load_obj(write_obj("vn.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 2\nvn 1 0 0\nf 1//1 2//2 3//1\n"));
+  const Mesh m = load_as_written(write_obj("vn.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 2\nvn 1 0 0\nf 1//1 2//2 3//1\n"));
   EXPECT_TRUE(m.normals_from_file);
   EXPECT_NEAR((m.normals[0] - Eigen::Vector3d::UnitZ()).norm(), 0.0, kNormalTol);  // normalised from length 2
   EXPECT_NEAR((m.normals[1] - Eigen::Vector3d::UnitX()).norm(), 0.0, kNormalTol);
-  const Mesh c = load_obj(write_obj("vn.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 2\nvn 1 0 0\nf 1//1 2//2 3//1\n"),
+  const Mesh c = load_as_written(write_obj("vn.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 2\nvn 1 0 0\nf 1//1 2//2 3//1\n"),
                           shtool::fit::NormalSource::computed);
   EXPECT_NEAR((c.normals[1] - Eigen::Vector3d::UnitZ()).norm(), 0.0, kNormalTol);
 }

@@ -33,7 +33,7 @@ fit::Mesh from_obj(const std::string& name, const std::string& text) {
   const std::filesystem::path dir = std::filesystem::temp_directory_path() / "shtool_test_glossy";
   std::filesystem::create_directories(dir);
   std::ofstream(dir / name) << text;
-  return fit::load_obj(dir / name);
+  return fit::load_obj(dir / name, fit::NormalSource::automatic, UpAxis::z);  // written in shtool's frame
 }
 
 // P_l(x) by the three-term recurrence.

@@ -153,9 +153,12 @@ TEST(GltfMesh, TexcoordsArePerCornerWithVUp) {
 }
 
 // Spot through two nested nodes (a parent translation; a child T R S): every position is
-// the world transform of the OBJ's, triangles are the same, computed normals rotate.
+// the world transform of the OBJ's, turned from glTF's +Y up into shtool's frame,
+// triangles are the same, computed normals rotate.
 TEST(GltfMesh, NodeTransformsGiveWorldSpace) {
-  const Mesh obj = shtool::fit::load_obj(std::string(SHTOOL_SOURCE_DIR) + "/data/spot.obj");
+  // The file's own coordinates, written into the glTF as they are.
+  const Mesh obj = shtool::fit::load_obj(std::string(SHTOOL_SOURCE_DIR) + "/data/spot.obj",
+                                         shtool::fit::NormalSource::automatic, shtool::UpAxis::z);
   tinygltf::Node parent, child;
   parent.translation = {0.5, -1, 2};
   parent.children = {1};
@@ -171,9 +174,10 @@ TEST(GltfMesh, NodeTransformsGiveWorldSpace) {
     double worst = 0, worst_normal = 0;
     for (std::size_t v = 0; v < m.positions.size(); ++v) {
       const Eigen::Vector3d p = obj.positions[v].cast<float>().cast<double>();
-      const Eigen::Vector3d expected = Eigen::Vector3d(0.5, -1, 2) + (Eigen::Vector3d(1, 0, 0) + q * (2.0 * p));
+      const Eigen::Vector3d expected =
+          shtool::from_y_up(Eigen::Vector3d(0.5, -1, 2) + (Eigen::Vector3d(1, 0, 0) + q * (2.0 * p)));
       worst = std::max(worst, (m.positions[v] - expected).norm());
-      worst_normal = std::max(worst_normal, (m.normals[v] - q * obj.normals[v]).norm());
+      worst_normal = std::max(worst_normal, (m.normals[v] - shtool::from_y_up(q * obj.normals[v])).norm());
     }
     for (std::size_t t = 0; t < m.triangles.size(); ++t) EXPECT_EQ(m.triangles[t], obj.triangles[t]);
     EXPECT_LT(worst, 1e-12) << binary;
@@ -197,7 +201,7 @@ TEST(GltfMesh, StripsFansAndIndexTypes) {
     EXPECT_EQ(m.triangles[0], Eigen::Vector3i(0, 1, 2));
     EXPECT_EQ(m.triangles[1], Eigen::Vector3i(2, 1, 3));
     EXPECT_TRUE(m.normals_from_file);
-    EXPECT_LT((m.normals[3] - Eigen::Vector3d(0, 0, 1)).norm(), 1e-15);
+    EXPECT_LT((m.normals[3] - Eigen::Vector3d(0, -1, 0)).norm(), 1e-15);  // glTF's +Z is shtool's -y
     p.mode = TINYGLTF_MODE_TRIANGLE_FAN;
     p.indices = {0, 1, 3, 2};
     m = load_gltf_bytes(to_bytes(make_model(p, {tinygltf::Node()}), true), "fan.glb");

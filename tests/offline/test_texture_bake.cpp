@@ -37,7 +37,7 @@ fs::path scratch(const std::string& name) { return test::scratch_path("texture_b
 
 Mesh from_obj(const std::string& name, const std::string& text) {
   test::write_file(scratch(name), text);
-  return load_obj(scratch(name));
+  return load_obj(scratch(name), NormalSource::automatic, UpAxis::z);  // written in shtool's frame
 }
 
 // A 2 x 3 rectangle in z = 0 mapped to UV [0.1, 0.6] x [0.1, 0.7]: at 10 x 10 texel

@@ -28,7 +28,7 @@ fit::Mesh from_obj(const std::string& name, const std::string& text) {
   const std::filesystem::path dir = std::filesystem::temp_directory_path() / "shtool_test_transfer";
   std::filesystem::create_directories(dir);
   std::ofstream(dir / name) << text;
-  return load_obj(dir / name);
+  return load_obj(dir / name, NormalSource::automatic, UpAxis::z);  // written in shtool's frame
 }
 
 // 3x3 grid in z = 0 (centre vertex 5 has triangles all around it), normal +z.

@@ -152,14 +152,15 @@ ZhFitTable<double> fit_for_mesh(ZhFitTable<double> fit, const fit::Mesh& mesh, c
 
 DeformReport run_deform(const DeformRequest& r) {
   if (r.out.empty()) throw InputError("--out is required");
-  const fit::Mesh rest = fit::load_mesh(r.rest);
-  const fit::Mesh posed = fit::load_mesh(r.pose);
+  const fit::Mesh rest = fit::load_mesh(r.rest, fit::NormalSource::automatic, r.up);
+  const fit::Mesh posed = fit::load_mesh(r.pose, fit::NormalSource::automatic, r.up);
   Result<Table> input = read_table(r.fit, TableExpectation{std::string(kZhFitKind), 1, 0});
   if (!input) throw InputError(input.error().message);
   // A texture-space bake's rows are texels, not vertices.
   const nlohmann::json input_meta = table_meta(input.value());
   if (input_meta.is_object() && input_meta.contains("texture"))
     throw InputError(r.fit.string() + ": a texture-space bake (fit-zh --texture); deform takes per-vertex bakes");
+  check_same_up(input.value(), rest.up, r.fit.string(), r.rest.string());
   Result<ZhFitTable<double>> loaded = ZhFitTable<double>::from_table(input.value());
   if (!loaded) throw InputError(r.fit.string() + ": " + loaded.error().message);
   const ZhFitTable<double> fit = fit_for_mesh(std::move(loaded).value(), rest, r.fit.string());
@@ -174,8 +175,9 @@ DeformReport run_deform(const DeformRequest& r) {
                                  {"rest", r.rest.filename().string()},
                                  {"rest_crc32", rest.input_crc32},
                                  {"pose", r.pose.filename().string()},
-                                 {"pose_crc32", posed.input_crc32}};
-  const nlohmann::json meta = {{"mode", "deformed"}, {"direct", moved.direct_count}};
+                                 {"pose_crc32", posed.input_crc32},
+                                 {"up", up_axis_name(rest.up)}};
+  const nlohmann::json meta = {{"mode", "deformed"}, {"direct", moved.direct_count}, {kMeshUpKey, up_axis_name(rest.up)}};
   const Table table = fit::zh_fit_table(moved, meta, generator_record("shtool deform", params));
   std::vector<std::string> bytes = {encode_table(table)};
   std::vector<OutputFile> outputs = {{r.out, bytes[0]}};

@@ -47,6 +47,7 @@ struct DeformRequest {
   std::filesystem::path pose;  // OBJ or glTF with the rest mesh's topology
   std::filesystem::path out;   // zh-fit table of the posed mesh
   std::filesystem::path json;  // optional: the posed fits in fit-zh's JSON layout
+  UpAxis up = UpAxis::y;       // both meshes' up axis when OBJ; must be the fit's
 };
 
 struct DeformReport {

@@ -42,7 +42,10 @@ std::string ply_text(const Mesh& mesh, const std::vector<double>& transfer, int 
   s.precision(9);
   s << "ply\nformat ascii 1.0\ncomment shtool fit-zh: colour = transfer DC (grey, 1 = unshadowed), "
        "red where the fit error is high\n"
-    << "element vertex " << mesh.positions.size() << "\nproperty float x\nproperty float y\nproperty float z\n"
+    << "comment frame: shtool's, right-handed, z up"
+    << (mesh.up == UpAxis::y ? " (read from a y-up file: shtool = (X, -Z, Y) of its coordinates)"
+                               : " (read from a z-up file: its coordinates as written)")
+    << "\nelement vertex " << mesh.positions.size() << "\nproperty float x\nproperty float y\nproperty float z\n"
     << "property float nx\nproperty float ny\nproperty float nz\n"
     << "property uchar red\nproperty uchar green\nproperty uchar blue\n"
     << "property float transfer_dc\nproperty float fit_error\n"
@@ -286,7 +289,7 @@ FitZhReport run_fit_zh_on(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJo
     transfer.erase(transfer.begin() + range.end * n2, transfer.end());
     transfer.erase(transfer.begin(), transfer.begin() + range.begin * n2);
   } else {
-    mesh = load_mesh(r.mesh, r.normals);
+    mesh = load_mesh(r.mesh, r.normals, r.up);
     if (cb.warning) {
       if (mesh.unreferenced_vertices)
         cb.warning("skipped " + std::to_string(mesh.unreferenced_vertices) + " unreferenced vertices");
@@ -326,7 +329,8 @@ FitZhReport run_fit_zh_on(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJo
               {"mesh_crc32", loaded_mesh_crc32(mesh)},
               {"mode", name_of(r.mode, transfer_mode_names())},
               {"rays", r.rays},
-              {"normals", name_of(r.normals, normal_source_names())}};
+              {"normals", name_of(r.normals, normal_source_names())},
+              {"up", up_axis_name(mesh.up)}};
     if (r.mode == TransferMode::interreflected) {
       params["bounces"] = r.bounces;
       params["albedo"] = r.albedo;
@@ -336,6 +340,7 @@ FitZhReport run_fit_zh_on(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJo
     meta["degenerate_faces"] = mesh.degenerate_faces;
     meta["triangles"] = mesh.triangles.size();
     meta["normals_from_file"] = mesh.normals_from_file;
+    meta[kMeshUpKey] = up_axis_name(mesh.up);
     if (r.texture) {
       params["texture"] = *r.texture;
       // What render reads to find and sample the maps; vertex_index holds texel indices.

@@ -35,6 +35,7 @@ struct FitZhRequest {
   TableEncoding encoding = TableEncoding::binary;
   TransferMode mode = TransferMode::shadowed;
   NormalSource normals = NormalSource::automatic;
+  UpAxis up = UpAxis::y;  // an OBJ's up axis (a glTF is +Y up); the table records it
   int order = 6;
   bool order_given = false;  // with `transfer`: the file's order must match
   int lobes = 4;

@@ -220,27 +220,30 @@ Mesh finish_mesh(Mesh mesh, const std::vector<Eigen::Vector3d>& positions, const
   return mesh;
 }
 
-Mesh load_obj(const std::filesystem::path& path, NormalSource normal_source) {
+Mesh load_obj(const std::filesystem::path& path, NormalSource normal_source, UpAxis up) {
   // Read once: the same bytes are checked, parsed and hashed.
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) fail(path, "no such file");
   if (std::filesystem::is_directory(path, ec)) fail(path, "is a directory, not an OBJ file");
-  return load_obj_text(read_input_file(path, "mesh"), path, normal_source);
+  return load_obj_text(read_input_file(path, "mesh"), path, normal_source, up);
 }
 
-Mesh load_mesh(const std::filesystem::path& path, NormalSource normal_source) {
+Mesh load_mesh(const std::filesystem::path& path, NormalSource normal_source, UpAxis up) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) fail(path, "no such file");
   if (std::filesystem::is_directory(path, ec)) fail(path, "is a directory, not a mesh file");
   std::string bytes = read_input_file(path, "mesh");
   std::string ext = path.extension().string();
   for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  if ((bytes.size() >= 4 && bytes.compare(0, 4, "glTF") == 0) || ext == ".gltf" || ext == ".glb")
+  if ((bytes.size() >= 4 && bytes.compare(0, 4, "glTF") == 0) || ext == ".gltf" || ext == ".glb") {
+    if (up != UpAxis::y) fail(path, "--up z: glTF is +Y up by its specification (--up applies to OBJ files)");
     return load_gltf_bytes(bytes, path, normal_source);
-  return load_obj_text(bytes, path, normal_source);
+  }
+  return load_obj_text(bytes, path, normal_source, up);
 }
 
-Mesh load_obj_text(const std::string& text, const std::filesystem::path& path, NormalSource normal_source) {
+Mesh load_obj_text(const std::string& text, const std::filesystem::path& path, NormalSource normal_source,
+                   UpAxis up) {
   check_obj_text(path, text);
 
   tinyobj::ObjReaderConfig config;
@@ -315,6 +318,11 @@ Mesh load_obj_text(const std::string& text, const std::filesystem::path& path, N
     normals[k] = Eigen::Vector3d(attrib.normals[3 * k], attrib.normals[3 * k + 1], attrib.normals[3 * k + 2]);
   std::vector<Eigen::Vector2d> texcoords(nt);
   for (std::size_t k = 0; k < nt; ++k) texcoords[k] = Eigen::Vector2d(attrib.texcoords[2 * k], attrib.texcoords[2 * k + 1]);
+  mesh.up = up;
+  if (up == UpAxis::y) {
+    for (Eigen::Vector3d& p : positions) p = from_y_up(p);
+    for (Eigen::Vector3d& n : normals) n = from_y_up(n);
+  }
   return finish_mesh(std::move(mesh), positions, normals, tris, path, normal_source, texcoords);
 }
 

@@ -1,17 +1,24 @@
 // Triangle meshes for the fit-zh job: OBJ loading with validation and vertex normals.
 //
+// Meshes are read in their own frame and turned into shtool's (right-handed, z up) here,
+// at the boundary: glTF is +Y up by its specification, so shtool = (X, -Z, Y) of the
+// file's (X, Y, Z); OBJ states no frame, so the caller says its up axis (y, Blender's
+// importer default, or z: taken as written). Everything past the loader is z-up.
+//
 // Only vertices referenced by a valid triangle are kept (the Stanford bunny has
 // unreferenced vertices; fitting them would produce garbage for points that are not on
 // the surface). `source_index` maps each kept vertex back to its 0-based OBJ index.
 #pragma once
 
 #include "common/input_error.h"
+#include "common/mesh_frame.h"
 
 #include <array>
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -34,6 +41,8 @@ struct Mesh {
   std::vector<std::array<Eigen::Vector2d, 3>> uvs;
 
   std::uint32_t input_crc32 = 0;           // CRC-32 of the file's bytes (provenance)
+  UpAxis up = UpAxis::z;                   // the file's up axis: positions and normals were
+                                           // turned from it into shtool's z-up frame
 
   // Counters for what was skipped while loading (reported as warnings, not errors).
   std::size_t obj_vertices = 0;            // vertices ("v" lines) in the file
@@ -60,15 +69,18 @@ std::uint32_t uv_layout_crc32(const Mesh& mesh);
 
 enum class NormalSource { automatic, file, computed };
 
-// Loads an OBJ file. Throws MeshError on: missing/unreadable file, parse failure,
+// Loads an OBJ file, whose up axis is `up` (positions and normals turned into shtool's
+// frame when it is y). Throws MeshError on: missing/unreadable file, parse failure,
 // non-finite coordinates or normals, face indices out of range, no usable triangle.
 // Polygons are fan-triangulated here (after the index check, so a bad index can never
 // be dereferenced). NormalSource::automatic uses the file's normals when every corner
 // of every kept triangle has one, and computed angle-weighted normals otherwise.
-Mesh load_obj(const std::filesystem::path& path, NormalSource normals = NormalSource::automatic);
+Mesh load_obj(const std::filesystem::path& path, NormalSource normals = NormalSource::automatic,
+              UpAxis up = UpAxis::y);
 // glTF 2.0, binary (.glb) or JSON (.gltf, its external buffers read beside it): every
 // triangle primitive (strips and fans converted, points and lines skipped) of the default
-// scene, in world space (node matrices or T R S, composed down the hierarchy; normals by
+// scene, in world space turned into shtool's frame (from +Y up; node matrices or T R S,
+// composed down the hierarchy; normals by
 // the inverse transpose, winding kept under mirroring transforms), indices of any
 // component type, vertices of every primitive instance one after the other (their order
 // is source_index). Normals as for OBJ: the file's when every primitive has NORMAL.
@@ -78,12 +90,14 @@ Mesh load_obj(const std::filesystem::path& path, NormalSource normals = NormalSo
 Mesh load_gltf_bytes(const std::string& bytes, const std::filesystem::path& path,
                      NormalSource normals = NormalSource::automatic);
 
-// The mesh at `path`, glTF (binary magic, or a .gltf / .glb name) or OBJ.
-Mesh load_mesh(const std::filesystem::path& path, NormalSource normals = NormalSource::automatic);
+// The mesh at `path`, glTF (binary magic, or a .gltf / .glb name) or OBJ with up axis
+// `up`. A glTF with `up` z is refused (InputError): glTF is +Y up by its specification.
+Mesh load_mesh(const std::filesystem::path& path, NormalSource normals = NormalSource::automatic,
+               UpAxis up = UpAxis::y);
 
 // The same for OBJ text already in memory; `path` names it in messages.
 Mesh load_obj_text(const std::string& text, const std::filesystem::path& path,
-                   NormalSource normals = NormalSource::automatic);
+                   NormalSource normals = NormalSource::automatic, UpAxis up = UpAxis::y);
 
 // One corner of a triangle: a vertex, the normal and the texture coordinate it has
 // there (-1: none).

@@ -12,6 +12,8 @@
 #include <stdexcept>
 
 #include "common/input_error.h"
+#include "common/mesh_frame.h"
+#include "shtool/orthogonal_map.h"
 
 namespace shtool::fit {
 
@@ -82,11 +84,14 @@ class ModelBuilder {
   tinygltf::Model& model_;
 };
 
-std::vector<float> vec3s(const std::vector<Eigen::Vector3d>& v) {
+// Directions and points in glTF's frame (to_y_up), as floats.
+std::vector<float> y_up_vec3s(const std::vector<Eigen::Vector3d>& v) {
   std::vector<float> out;
   out.reserve(v.size() * 3);
-  for (const Eigen::Vector3d& x : v)
-    for (int c = 0; c < 3; ++c) out.push_back(static_cast<float>(x[c]));
+  for (const Eigen::Vector3d& x : v) {
+    const Eigen::Vector3d e = to_y_up(x);
+    for (int c = 0; c < 3; ++c) out.push_back(static_cast<float>(e[c]));
+  }
   return out;
 }
 
@@ -125,27 +130,43 @@ std::string zh_fit_glb(const Mesh& mesh, const ZhFitTable<double>& fits, std::sp
   ModelBuilder b(model);
   tinygltf::Primitive p;
   p.mode = TINYGLTF_MODE_TRIANGLES;
-  p.attributes["POSITION"] = b.floats(vec3s(mesh.positions), TINYGLTF_TYPE_VEC3, true);
-  p.attributes["NORMAL"] = b.floats(vec3s(mesh.normals), TINYGLTF_TYPE_VEC3);
+  p.attributes["POSITION"] = b.floats(y_up_vec3s(mesh.positions), TINYGLTF_TYPE_VEC3, true);
+  p.attributes["NORMAL"] = b.floats(y_up_vec3s(mesh.normals), TINYGLTF_TYPE_VEC3);
   std::vector<float> grey(n * 3);
   for (std::size_t v = 0; v < n; ++v)
     std::fill_n(grey.begin() + v * 3, 3, static_cast<float>(transfer_dc_grey(transfer_dc[v])));
   p.attributes["COLOR_0"] = b.floats(grey, TINYGLTF_TYPE_VEC3);
   for (int k = 0; k < lobes; ++k) {
-    std::vector<float> axis(n * 3);
-    for (std::size_t v = 0; v < n; ++v)
-      for (int c = 0; c < 3; ++c) axis[v * 3 + c] = static_cast<float>(fits.axes_of(v)[k][c]);
+    std::vector<Eigen::Vector3d> axis(n);
+    for (std::size_t v = 0; v < n; ++v) {
+      const auto& s = fits.axes_of(v)[k];
+      axis[v] = Eigen::Vector3d(s[0], s[1], s[2]);
+    }
     const std::string lobe = std::to_string(k);
-    p.attributes["_ZH_AXIS_" + lobe] = b.floats(axis, TINYGLTF_TYPE_VEC3);
+    p.attributes["_ZH_AXIS_" + lobe] = b.floats(y_up_vec3s(axis), TINYGLTF_TYPE_VEC3);
     for (std::size_t j = 0; j < coeff_groups; ++j)
       p.attributes["_ZH_COEFFS_" + lobe + "_" + std::to_string(j)] = b.floats(
           vec4_rows(n, 4 * j, [&](std::size_t v) { return fits.coeffs_of(v).subspan(std::size_t(k) * order, order); }),
           TINYGLTF_TYPE_VEC4);
   }
-  if (direct)
-    p.attributes["_ZH_DIRECT"] =
-        b.floats(vec4_rows(n, 0, [&](std::size_t v) { return fits.direct_of(v); }),
-                 TINYGLTF_TYPE_VEC4);
+  if (direct) {
+    // The stored DC and linear terms are SH coefficients of a function of direction:
+    // carried into glTF's frame by the same map as the axes (band 0 is unchanged).
+    // One call for every vertex: coefficient i of vertex v at moved[i * n + v].
+    const std::size_t d = static_cast<std::size_t>(fits.direct_count);
+    std::vector<double> moved(n * d);
+    for (std::size_t v = 0; v < n; ++v)
+      for (std::size_t i = 0; i < d; ++i) moved[i * n + v] = fits.direct_of(v)[i];
+    if (d == 4 && !apply_orthogonal_map(to_y_up_matrix(), static_cast<int>(n), moved))
+      throw std::logic_error("to_y_up_matrix is orthogonal");
+    std::vector<double> row(d);
+    p.attributes["_ZH_DIRECT"] = b.floats(vec4_rows(n, 0,
+                                                    [&](std::size_t v) {
+                                                      for (std::size_t i = 0; i < d; ++i) row[i] = moved[i * n + v];
+                                                      return std::span<const double>(row);
+                                                    }),
+                                          TINYGLTF_TYPE_VEC4);
+  }
   // Indices above the type's maximum would be read as primitive restarts.
   p.indices = n < 0xFFFF ? b.indices<std::uint16_t>(mesh.triangles, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT)
                          : b.indices<std::uint32_t>(mesh.triangles, TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT);

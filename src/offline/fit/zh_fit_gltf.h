@@ -2,13 +2,16 @@
 // ZH fit as custom vertex attributes, so that an engine loads mesh and fit in one file.
 // The attribute names, the packing and the colour mapping are a contract
 // (docs/fit-zh.md, "glTF output"):
-//   POSITION, NORMAL    VEC3 float, the mesh as loaded (no frame change: a .glb read back
-//                       by fit-zh gives the same mesh, rounded to float)
+// Every direction is in glTF's frame, +Y up: engine = (x, z, -y) of shtool's (the inverse
+// of the map the loaders apply), so a .glb read back by fit-zh gives the same mesh,
+// rounded to float, and a glTF input's positions come back exactly.
+//   POSITION, NORMAL    VEC3 float, the mesh as loaded
 //   COLOR_0             VEC3 float, grey = clamp(t_00 / y00, 0, 1), linear
-//   _ZH_AXIS_k          VEC3 float, unit axis s_k of lobe k (z >= 0), k = 0..lobes-1
+//   _ZH_AXIS_k          VEC3 float, unit axis s_k of lobe k (y >= 0), k = 0..lobes-1
 //   _ZH_COEFFS_k_j      VEC4 float, g*_l of lobe k for l = 4j..4j+3 (zero past order-1)
 //   _ZH_DIRECT          VEC4 float, with --direct only: the stored coefficients in SH
-//                       index order (DC, then y_1^-1, y_1^0, y_1^1), zero-padded
+//                       index order (DC, then y_1^-1, y_1^0, y_1^1), zero-padded: the
+//                       basis formula of docs/conventions.md applied to glTF coordinates
 // indices: the smallest unsigned type below its primitive-restart value; one TRIANGLES
 // primitive, one mesh, one node, one scene.
 #pragma once

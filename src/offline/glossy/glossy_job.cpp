@@ -69,7 +69,7 @@ void check_request(const GlossyRequest& r) {
 GlossyReport run_fit_glossy(const GlossyRequest& r) {
   check_request(r);
   const int threads = resolve_threads(r.threads);
-  const fit::Mesh mesh = fit::load_mesh(r.mesh, r.normals);
+  const fit::Mesh mesh = fit::load_mesh(r.mesh, r.normals, r.up);
   const std::vector<Eigen::Matrix3d> frames = deform::vertex_frames(mesh, mesh);
   GlossyReport report;
   report.vertices = mesh.positions.size();
@@ -114,6 +114,7 @@ GlossyReport run_fit_glossy(const GlossyRequest& r) {
   nlohmann::json params = parameters(r);
   params["input_crc32"] = mesh.input_crc32;
   params["mesh_crc32"] = fit::loaded_mesh_crc32(mesh);
+  params["up"] = up_axis_name(mesh.up);
   nlohmann::json generator = generator_record("shtool fit-glossy", params);
   if (r.shadowed) {
     const fit::EmbreeIdentity embree = fit::embree_identity();
@@ -128,7 +129,8 @@ GlossyReport run_fit_glossy(const GlossyRequest& r) {
                          {"svd_normalized_rms", report.svd_nrms},
                          {"zh_normalized_rms", report.zh_nrms},
                          {"total_normalized_rms", report.total_nrms},
-                         {"singular_values", report.singular_values}};
+                         {"singular_values", report.singular_values},
+                         {kMeshUpKey, up_axis_name(mesh.up)}};
   Table table = fit::zh_fit_table(fits, meta, generator);
   table.kind = std::string(kGlossyZhKind);
   table.kind_version = "1.0";

@@ -31,6 +31,7 @@ struct GlossyRequest {
   std::uint64_t seed = 1;
   int effort = fit::kDefaultEffort;
   fit::NormalSource normals = fit::NormalSource::automatic;
+  UpAxis up = UpAxis::y;  // an OBJ's up axis (a glTF is +Y up); the table records it
   int threads = 0;
 };
 

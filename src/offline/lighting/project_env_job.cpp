@@ -1,5 +1,6 @@
 #include "lighting/project_env_job.h"
 
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <cmath>
@@ -138,6 +139,71 @@ Image render_equirect(const Lighting& lighting, int width, int height, int threa
   return img;
 }
 
+namespace {
+
+// The texel of a W x H equirect in shtool's mapping that direction w falls in.
+std::size_t equirect_texel(const Eigen::Vector3d& w, int width, int height) {
+  const double t = std::acos(std::clamp(w.z(), -1.0, 1.0)), p = std::atan2(w.y(), w.x());
+  const int x = std::clamp(static_cast<int>(std::floor((std::numbers::pi - p) * width / (2 * std::numbers::pi))), 0,
+                           width - 1);
+  const int y = std::clamp(static_cast<int>(std::floor(t * height / std::numbers::pi)), 0, height - 1);
+  return static_cast<std::size_t>(y) * width + x;
+}
+
+// The face and texel of an R x R cubemap that direction w (shtool's frame) falls in: the
+// inverse of the face table of shtool/env_projection.h.
+std::pair<int, std::size_t> cube_texel(const Eigen::Vector3d& w, int size, bool mirror_x) {
+  const double X = mirror_x ? -w.x() : w.x(), Y = w.z(), Z = -w.y();  // the y-up cube frame
+  const double ax = std::abs(X), ay = std::abs(Y), az = std::abs(Z);
+  int face;
+  double s, t;
+  if (ax >= ay && ax >= az) {
+    face = X > 0 ? 0 : 1;
+    s = X > 0 ? -Z / ax : Z / ax;
+    t = -Y / ax;
+  } else if (ay >= az) {
+    face = Y > 0 ? 2 : 3;
+    s = X / ay;
+    t = Y > 0 ? Z / ay : -Z / ay;
+  } else {
+    face = Z > 0 ? 4 : 5;
+    s = Z > 0 ? X / az : -X / az;
+    t = -Y / az;
+  }
+  const auto texel = [size](double u) {
+    return std::clamp(static_cast<int>(std::floor((u + 1) / 2 * size)), 0, size - 1);
+  };
+  return {face, static_cast<std::size_t>(texel(t)) * size + texel(s)};
+}
+
+}  // namespace
+
+Image source_equirect(const Image& equirect, const Eigen::Matrix3d& preset, const std::vector<Image>& faces,
+                      bool mirror_x, int width, int height, int threads) {
+  Image img;
+  img.width = width;
+  img.height = height;
+  img.texels.resize(static_cast<std::size_t>(width) * height * 3);
+  parallel_for(static_cast<std::size_t>(height), threads, [&](std::size_t y) {
+    for (int x = 0; x < width; ++x) {
+      const double t = std::numbers::pi * (y + 0.5) / height;
+      const double p = std::numbers::pi - 2 * std::numbers::pi * (x + 0.5) / width;
+      const Eigen::Vector3d w = direction_from_angles(t, p);
+      const float* texel;
+      if (faces.empty()) {
+        // The preset's texel showing w is shtool's texel of Q^T w.
+        texel = &equirect.texels[equirect_texel(preset.transpose() * w, equirect.width, equirect.height) *
+                                 equirect.channels];
+      } else {
+        const auto [face, at] = cube_texel(w, faces[0].width, mirror_x);
+        texel = &faces[face].texels[at * faces[face].channels];
+      }
+      std::copy_n(texel, 3, img.texels.begin() + (y * width + x) * 3);
+    }
+  });
+  return img;
+}
+
 ProjectEnvReport run_project_env(const ProjectEnvRequest& r) {
   if (r.order < 1 || r.order > kMaxEnvOrder)
     throw InputError("--order " + std::to_string(r.order) + " is outside 1.." + std::to_string(kMaxEnvOrder));
@@ -157,11 +223,16 @@ ProjectEnvReport run_project_env(const ProjectEnvRequest& r) {
     check_not_an_input(r.json, "--json", r.image);
     if (!r.out.empty()) check_not_an_input(r.out, "--out", r.image);
     if (!r.render_back.empty()) check_not_an_input(r.render_back, "--render-back", r.image);
+    if (!r.render_source.empty()) check_not_an_input(r.render_source, "--render-source", r.image);
   }
   if (!r.out.empty()) check_output_path(r.out, "--out");
   if (!r.render_back.empty()) {
     check_output_path(r.render_back, "--render-back");
     encode_image_for(r.render_back, Image{1, 1, 3, {0, 0, 0}}, "--render-back");  // the extension, early
+  }
+  if (!r.render_source.empty()) {
+    check_output_path(r.render_source, "--render-source");
+    encode_image_for(r.render_source, Image{1, 1, 3, {0, 0, 0}}, "--render-source");
   }
   const int threads = resolve_threads(r.threads);
   ProjectEnvReport report;
@@ -278,7 +349,7 @@ ProjectEnvReport run_project_env(const ProjectEnvRequest& r) {
   else params["mirror_x"] = r.mirror_x;
   if (r.cutoff) params["cutoff"] = *r.cutoff;
   std::vector<std::string> bytes;
-  bytes.reserve(3);
+  bytes.reserve(4);
   std::vector<OutputFile> outputs;
   auto add = [&](const std::filesystem::path& path, std::string content) {
     bytes.push_back(std::move(content));
@@ -286,10 +357,15 @@ ProjectEnvReport run_project_env(const ProjectEnvRequest& r) {
   };
   add(r.json, lighting_json(out));
   if (!r.out.empty()) add(r.out, encode_table(lighting_table(out, generator_record("shtool project-env", params)), r.encoding));
-  if (!r.render_back.empty()) {
-    const int h = std::clamp(layout == Layout::equirect ? equirect.height : 2 * faces[0].width, 256, 1024);
+  // The render-back and the source share a size, so they can be set side by side.
+  const int h = std::clamp(layout == Layout::equirect ? equirect.height : 2 * faces[0].width, 256, 1024);
+  if (!r.render_back.empty())
     add(r.render_back, encode_image_for(r.render_back, render_equirect(out, 2 * h, h, threads), "--render-back"));
-  }
+  if (!r.render_source.empty())
+    add(r.render_source, encode_image_for(r.render_source,
+                                          source_equirect(equirect, preset_map(r.preset), faces, r.mirror_x, 2 * h, h,
+                                                          threads),
+                                          "--render-source"));
   write_files_atomically(outputs);
   return report;
 }

@@ -9,6 +9,8 @@
 #include <utility>
 #include <vector>
 
+#include <Eigen/Core>
+
 #include "lighting/image_io.h"
 #include "lighting/lighting_output.h"
 #include "shtool/sh_window.h"
@@ -39,7 +41,8 @@ struct ProjectEnvRequest {
   std::filesystem::path json;
   std::filesystem::path out;  // optional table
   TableEncoding encoding = TableEncoding::binary;
-  std::filesystem::path render_back;  // optional equirect image (.exr or .png)
+  std::filesystem::path render_back;    // optional equirect image (.exr or .png)
+  std::filesystem::path render_source;  // optional: the source as the render-back's equirect
   int threads = 0;
 };
 
@@ -55,5 +58,13 @@ ProjectEnvReport run_project_env(const ProjectEnvRequest& request);
 // The render-back: the reconstruction sum_i c_i y_i(w) at the texel centres of a W x H
 // equirect image in shtool's mapping (rows in parallel).
 Image render_equirect(const Lighting& lighting, int width, int height, int threads);
+
+// The source image seen through the same W x H equirect in shtool's mapping, to set
+// beside the render-back: each texel takes the source texel its centre's direction falls
+// in (no filtering). The source is `equirect` in the mapping `preset` (a texel of the
+// preset's mapping shows the direction preset * w of shtool's texel w) when `faces` is
+// empty, else the six faces in CubeFace order.
+Image source_equirect(const Image& equirect, const Eigen::Matrix3d& preset, const std::vector<Image>& faces,
+                      bool mirror_x, int width, int height, int threads);
 
 }  // namespace shtool::lighting

@@ -124,8 +124,10 @@ std::vector<double> vertex_radiance(Shading shading, const VertexData& data, con
 
 Vec vec(const std::array<double, 3>& a) { return Vec(a[0], a[1], a[2]); }
 
-// The default view: the bounding sphere of the mesh filling the field of view, seen from
-// +z tilted up a little, +y up.
+// The default view: the bounding sphere of the mesh filling the field of view, seen in
+// three-quarters from the front and a little above, z up. The front faces -y, as in
+// Blender's front view and as a glTF asset's front (+Z, by its specification) lands in
+// shtool's frame.
 Camera frame_mesh(const fit::Mesh& mesh, double fov_degrees, double aspect) {
   Vec lo = mesh.positions.front(), hi = lo;
   for (const Vec& p : mesh.positions) {
@@ -138,8 +140,12 @@ Camera frame_mesh(const fit::Mesh& mesh, double fov_degrees, double aspect) {
   const double half = 0.5 * fov_degrees * std::numbers::pi / 180.0;
   const double narrow = aspect < 1 ? std::atan(std::tan(half) * aspect) : half;
   const double distance = 1.05 * radius / std::sin(narrow);
-  const Vec eye = centre + distance * Vec(0.0, 0.25, 1.0).normalized();
-  return {{eye.x(), eye.y(), eye.z()}, {centre.x(), centre.y(), centre.z()}, {0, 1, 0}};
+  // 35 degrees round from the front towards +x, 20 degrees up.
+  const double azimuth = 35 * std::numbers::pi / 180, elevation = 20 * std::numbers::pi / 180;
+  const Vec toward_eye(std::sin(azimuth) * std::cos(elevation), -std::cos(azimuth) * std::cos(elevation),
+                       std::sin(elevation));
+  const Vec eye = centre + distance * toward_eye;
+  return {{eye.x(), eye.y(), eye.z()}, {centre.x(), centre.y(), centre.z()}, {0, 0, 1}};
 }
 
 // What each pixel's primary ray hit: triangle and barycentric weights (triangle -1: none).
@@ -360,11 +366,11 @@ RenderResult run_render(const RenderRequest& r) {
   // Checked before any work, so that a bad output name costs nothing.
   (void)lighting::encode_image_for(r.out, lighting::Image{1, 1, 4, std::vector<float>(4, 0.0f)}, "--out");
 
-  const fit::Mesh rest = fit::load_mesh(r.mesh);
+  const fit::Mesh rest = fit::load_mesh(r.mesh, fit::NormalSource::automatic, r.up);
   std::vector<Eigen::Matrix3d> rotations;  // rest frame -> posed frame, per vertex (--pose)
   std::optional<fit::Mesh> posed;
   if (!r.pose.empty()) {
-    posed = fit::load_mesh(r.pose);
+    posed = fit::load_mesh(r.pose, fit::NormalSource::automatic, r.up);
     rotations = deform::rest_to_pose_rotations(rest, *posed);
   }
   const fit::Mesh& mesh = posed ? *posed : rest;
@@ -380,6 +386,7 @@ RenderResult run_render(const RenderRequest& r) {
     const Table& table = read.value();
     if (table.kind_version.rfind("1.", 0) != 0)
       throw InputError("--fit " + r.fit.string() + ": kind_version " + table.kind_version + " is not supported");
+    check_same_up(table, rest.up, "--fit " + r.fit.string(), r.mesh.string());
     if (table.kind == kGlossyZhKind && r.shading == Shading::automatic) {
       // A fit-glossy table given without --shading is shaded as what it is.
       Result<GlossyFit<double>> g = GlossyFit<double>::from_table(table);
@@ -396,8 +403,11 @@ RenderResult run_render(const RenderRequest& r) {
   }
   if (shading == Shading::glossy) {
     if (!glossy) {
-      Result<GlossyFit<double>> g = load_glossy_fit<double>(r.fit);
-      if (!g) throw InputError("--fit: " + g.error().message);
+      Result<Table> read = read_table(r.fit);
+      if (!read) throw InputError("--fit: " + read.error().message);
+      Result<GlossyFit<double>> g = GlossyFit<double>::from_table(read.value());
+      if (!g) throw InputError("--fit " + r.fit.string() + ": " + g.error().message);
+      check_same_up(read.value(), rest.up, "--fit " + r.fit.string(), r.mesh.string());
       glossy.emplace(std::move(g).value());
     }
     glossy = glossy_fit_for_mesh(std::move(*glossy), rest, "--fit " + r.fit.string());

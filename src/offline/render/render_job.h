@@ -11,17 +11,21 @@
 #include <utility>
 #include <vector>
 
+#include "common/mesh_frame.h"
+
 namespace shtool::render {
 
 enum class Shading { automatic, transfer, zh, zh_table, error, normals, membrane, wrinkle, glossy };
 const std::vector<std::pair<std::string, Shading>>& shading_names();
 
+// In shtool's frame (z up), like the meshes once loaded and the lighting.
 struct Camera {
-  std::array<double, 3> eye{}, target{}, up{0, 1, 0};
+  std::array<double, 3> eye{}, target{}, up{0, 0, 1};
 };
 
 struct RenderRequest {
   std::filesystem::path mesh;      // OBJ or glTF
+  UpAxis up = UpAxis::y;           // the OBJ's up axis (mesh and pose); must be the bake's
   std::filesystem::path pose;      // optional: a posed mesh of mesh's topology, rendered with the
                                    // fit's lobes (or the transfer) rotated into its frames
   std::filesystem::path fit;       // zh-fit table (fit-zh --out), or glossy-zh (fit-glossy --out)

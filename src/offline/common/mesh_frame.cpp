@@ -1,0 +1,37 @@
+#include "common/mesh_frame.h"
+
+#include <nlohmann/json.hpp>
+
+#include "common/input_error.h"
+
+namespace shtool {
+
+const std::vector<std::pair<std::string, UpAxis>>& up_axis_names() {
+  static const std::vector<std::pair<std::string, UpAxis>> names = {{"y", UpAxis::y}, {"z", UpAxis::z}};
+  return names;
+}
+
+const char* up_axis_name(UpAxis up) { return up == UpAxis::y ? "y" : "z"; }
+
+Eigen::Matrix3d to_y_up_matrix() {
+  Eigen::Matrix3d q;
+  q << 1, 0, 0, 0, 0, 1, 0, -1, 0;
+  return q;
+}
+
+void check_same_up(const Table& table, UpAxis mesh_up, const std::string& what, const std::string& mesh) {
+  const nlohmann::json meta = nlohmann::json::parse(table.meta, nullptr, false);
+  std::string table_up = "z";
+  if (meta.is_object() && meta.contains(kMeshUpKey)) {
+    const nlohmann::json& up = meta[kMeshUpKey];
+    if (!up.is_string() || (up != "y" && up != "z"))
+      throw InputError(what + ": meta." + kMeshUpKey + " must be \"y\" or \"z\"");
+    table_up = up.get<std::string>();
+  }
+  if (table_up == up_axis_name(mesh_up)) return;
+  throw InputError(what + " was baked on a mesh read " + table_up + "-up, but " + mesh + " is read " +
+                   up_axis_name(mesh_up) + "-up: the lobes would light it from the wrong side (give the " +
+                   "--up the bake was made with, " + table_up + ")");
+}
+
+}  // namespace shtool

@@ -1,0 +1,283 @@
+// Meshes in their own frame, end to end: a glTF is +Y up (its specification), an OBJ is
+// y-up unless --up z says it is written in shtool's z-up frame; both are baked, rendered
+// and written back in the frame they came in. The references are geometric: a quad
+// facing up has the unshadowed transfer of a cosine lobe about +z (only y_0^0 and y_1^0),
+// one facing glTF -Z about +y; a quad facing up is lit by the zenith and dark under the
+// nadir; a glTF written from a glTF input has the input's positions bit for bit.
+#include <tiny_gltf.h>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "lighting/image_io.h"
+#include "run_command.h"
+#include "scratch_files.h"
+#include "shtool/table.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using shtool::test::CommandResult;
+
+const std::string kExe = SHTOOL_EXE;
+
+fs::path scratch(const std::string& name) { return shtool::test::scratch_path("mesh_frames", name); }
+
+CommandResult run(std::vector<std::string> args) {
+  args.insert(args.begin(), kExe);
+  CommandResult r = shtool::test::run_command(args);
+  EXPECT_FALSE(r.signaled) << shtool::test::describe_command(args);
+  return r;
+}
+
+void must(const CommandResult& r) { ASSERT_EQ(r.exit_code, 0) << r.err; }
+
+// A 2 x 2 quad in the plane through the origin spanned by `a` and `b`, as two triangles
+// counter-clockwise seen from a x b (its front). Coordinates are small integers, exact
+// in float, so the OBJ and the glTF hold the same numbers.
+struct Quad {
+  std::vector<float> positions;  // xyz per corner
+  std::vector<std::uint32_t> indices = {0, 1, 2, 0, 2, 3};
+};
+
+Quad quad(const std::array<float, 3>& a, const std::array<float, 3>& b) {
+  Quad q;
+  const float s[4][2] = {{-1, -1}, {1, -1}, {1, 1}, {-1, 1}};
+  for (const auto& c : s)
+    for (int k = 0; k < 3; ++k) q.positions.push_back(c[0] * a[k] + c[1] * b[k]);
+  return q;
+}
+
+fs::path write_obj(const Quad& q, const std::string& name) {
+  std::ostringstream s;
+  for (std::size_t v = 0; v < q.positions.size() / 3; ++v)
+    s << "v " << q.positions[3 * v] << ' ' << q.positions[3 * v + 1] << ' ' << q.positions[3 * v + 2] << '\n';
+  for (std::size_t t = 0; t < q.indices.size(); t += 3)
+    s << "f " << q.indices[t] + 1 << ' ' << q.indices[t + 1] + 1 << ' ' << q.indices[t + 2] + 1 << '\n';
+  const fs::path p = scratch(name);
+  shtool::test::write_file(p, s.str());
+  return p;
+}
+
+// The quad as a .glb written by tinygltf, no node transform.
+fs::path write_glb(const Quad& q, const std::string& name) {
+  tinygltf::Model m;
+  m.asset.version = "2.0";
+  tinygltf::Buffer buffer;
+  const auto* p = reinterpret_cast<const unsigned char*>(q.positions.data());
+  buffer.data.assign(p, p + q.positions.size() * 4);
+  const auto* i = reinterpret_cast<const unsigned char*>(q.indices.data());
+  buffer.data.insert(buffer.data.end(), i, i + q.indices.size() * 4);
+  m.buffers.push_back(buffer);
+  m.bufferViews.resize(2);
+  m.bufferViews[0].buffer = 0;
+  m.bufferViews[0].byteLength = q.positions.size() * 4;
+  m.bufferViews[1].buffer = 0;
+  m.bufferViews[1].byteOffset = q.positions.size() * 4;
+  m.bufferViews[1].byteLength = q.indices.size() * 4;
+  m.accessors.resize(2);
+  m.accessors[0].bufferView = 0;
+  m.accessors[0].componentType = TINYGLTF_COMPONENT_TYPE_FLOAT;
+  m.accessors[0].type = TINYGLTF_TYPE_VEC3;
+  m.accessors[0].count = q.positions.size() / 3;
+  m.accessors[0].minValues = {-1, -1, -1};
+  m.accessors[0].maxValues = {1, 1, 1};
+  m.accessors[1].bufferView = 1;
+  m.accessors[1].componentType = TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT;
+  m.accessors[1].type = TINYGLTF_TYPE_SCALAR;
+  m.accessors[1].count = q.indices.size();
+  tinygltf::Primitive prim;
+  prim.attributes["POSITION"] = 0;
+  prim.indices = 1;
+  prim.mode = TINYGLTF_MODE_TRIANGLES;
+  tinygltf::Mesh mesh;
+  mesh.primitives.push_back(prim);
+  m.meshes.push_back(mesh);
+  tinygltf::Node node;
+  node.mesh = 0;
+  m.nodes.push_back(node);
+  tinygltf::Scene scene;
+  scene.nodes = {0};
+  m.scenes.push_back(scene);
+  m.defaultScene = 0;
+  std::ostringstream s;
+  tinygltf::TinyGLTF writer;
+  EXPECT_TRUE(writer.WriteGltfSceneToStream(&m, s, false, true));
+  const fs::path path = scratch(name);
+  shtool::test::write_file(path, s.str());
+  return path;
+}
+
+// The POSITION floats of the first primitive of a .glb.
+std::vector<float> glb_positions(const fs::path& path) {
+  tinygltf::Model m;
+  tinygltf::TinyGLTF loader;
+  std::string err, warn;
+  EXPECT_TRUE(loader.LoadBinaryFromFile(&m, &err, &warn, path.string())) << err;
+  const tinygltf::Accessor& a = m.accessors.at(m.meshes.at(0).primitives.at(0).attributes.at("POSITION"));
+  const tinygltf::BufferView& v = m.bufferViews.at(a.bufferView);
+  std::vector<float> out(a.count * 3);
+  std::memcpy(out.data(), m.buffers.at(v.buffer).data.data() + v.byteOffset + a.byteOffset, out.size() * 4);
+  return out;
+}
+
+// fit-zh of `mesh`, unshadowed, order 2, one lobe: the transfer vectors (4 per vertex).
+std::vector<double> bake(const fs::path& mesh, const std::string& name, std::vector<std::string> extra = {}) {
+  std::vector<std::string> args = {"fit-zh", mesh.string(), "--order", "2", "--lobes", "1", "--mode", "unshadowed",
+                                   "--rays", "256", "--out", scratch(name + ".shtb").string(), "--save-transfer",
+                                   scratch(name + ".t.json").string()};
+  args.insert(args.end(), extra.begin(), extra.end());
+  const CommandResult r = run(args);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  std::vector<double> t;
+  const nlohmann::json doc = nlohmann::json::parse(shtool::test::read_file(scratch(name + ".t.json")));
+  for (const auto& row : doc["vectors"])
+    for (double x : row) t.push_back(x);
+  return t;
+}
+
+// Every vertex's transfer is a cosine lobe about `axis` (shtool's frame): band 1 is
+// c (-a_y, a_z, -a_x) times |band 1| (y_1^-1 = -c y, y_1^0 = c z, y_1^1 = -c x).
+void expect_lobe_along(const std::vector<double>& t, const Eigen::Vector3d& axis, const std::string& what) {
+  ASSERT_EQ(t.size() % 4, 0u);
+  ASSERT_FALSE(t.empty());
+  const Eigen::Vector3d expected_band1(-axis.y(), axis.z(), -axis.x());
+  for (std::size_t v = 0; v < t.size(); v += 4) {
+    const Eigen::Vector3d band1(t[v + 1], t[v + 2], t[v + 3]);
+    ASSERT_GT(band1.norm(), 0.1) << what;
+    // 256 cosine-weighted rays: the direction is right to about 3e-3.
+    EXPECT_LT((band1.normalized() - expected_band1).norm(), 1e-2) << what << " vertex " << v / 4 << ": "
+                                                                   << band1.transpose();
+  }
+}
+
+// The arrays of a table, by name, as bytes.
+std::vector<std::pair<std::string, std::vector<std::byte>>> arrays_of(const fs::path& path) {
+  shtool::Result<shtool::Table> t = shtool::read_table(path);
+  EXPECT_TRUE(t) << t.error().message;
+  std::vector<std::pair<std::string, std::vector<std::byte>>> out;
+  if (t)
+    for (const shtool::TableArray& a : t.value().arrays) out.emplace_back(a.name, a.data);
+  return out;
+}
+
+nlohmann::json meta_of(const fs::path& path) { return nlohmann::json::parse(shtool::read_table(path).value().meta); }
+
+// glTF's +Y and an OBJ's +y (the default --up y) are shtool's +z; glTF's -Z is shtool's
+// +y; --up z takes an OBJ as written. The y-up OBJ and the glTF of the same quad give
+// the same arrays, and each table records the frame it was read in.
+TEST(MeshFrames, UpFacingQuadsBakeAlongZ) {
+  const Quad up = quad({1, 0, 0}, {0, 0, -1});    // x cross -z = +y
+  const Quad back = quad({1, 0, 0}, {0, -1, 0});  // x cross -y = -z (a glTF asset's front is +Z)
+  const std::vector<double> obj_y = bake(write_obj(up, "up.obj"), "obj_y");
+  const std::vector<double> gltf_y = bake(write_glb(up, "up.glb"), "gltf_y");
+  expect_lobe_along(obj_y, Eigen::Vector3d::UnitZ(), "OBJ facing +y, --up y");
+  expect_lobe_along(gltf_y, Eigen::Vector3d::UnitZ(), "glTF facing +Y");
+  EXPECT_EQ(obj_y, gltf_y);
+  EXPECT_EQ(arrays_of(scratch("obj_y.shtb")), arrays_of(scratch("gltf_y.shtb")));
+  EXPECT_EQ(meta_of(scratch("obj_y.shtb"))["mesh_up"], "y");
+  EXPECT_EQ(meta_of(scratch("gltf_y.shtb"))["mesh_up"], "y");
+
+  expect_lobe_along(bake(write_glb(back, "minus_z.glb"), "gltf_minus_z"), Eigen::Vector3d::UnitY(),
+                    "glTF facing -Z");
+  // --up z: as written, the +y-facing quad faces shtool's +y.
+  expect_lobe_along(bake(write_obj(up, "up_as_z.obj"), "obj_z", {"--up", "z"}), Eigen::Vector3d::UnitY(),
+                    "OBJ facing +y, --up z");
+  EXPECT_EQ(meta_of(scratch("obj_z.shtb"))["mesh_up"], "z");
+  const nlohmann::json gen = nlohmann::json::parse(shtool::read_table(scratch("obj_z.shtb")).value().generator);
+  EXPECT_EQ(gen["parameters"]["up"], "z") << gen.dump();
+
+  // A glTF has no other frame.
+  const CommandResult r = run({"fit-zh", write_glb(up, "up2.glb").string(), "--up", "z", "--out",
+                               scratch("refused.shtb").string()});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("+Y up"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(scratch("refused.shtb")));
+}
+
+// --gltf writes glTF's frame: a glTF input comes back with its positions bit for bit, a
+// y-up OBJ with its own coordinates, a z-up OBJ turned to y up.
+TEST(MeshFrames, GltfOutputIsInGltfsFrame) {
+  const Quad q = quad({1, 0, 0}, {0, 0.5f, -1});
+  for (const std::string& kind : {"glb", "obj_y", "obj_z"}) {
+    const fs::path in = kind == "glb" ? write_glb(q, "tilted.glb") : write_obj(q, "tilted_" + kind + ".obj");
+    const fs::path out = scratch("tilted_" + kind + ".out.glb");
+    std::vector<std::string> args = {"fit-zh", in.string(), "--order", "2", "--lobes", "1", "--rays", "16",
+                                     "--out", scratch("tilted_" + kind + ".shtb").string(), "--gltf", out.string()};
+    if (kind == "obj_z") args.insert(args.end(), {"--up", "z"});
+    must(run(args));
+    const std::vector<float> p = glb_positions(out);
+    ASSERT_EQ(p.size(), q.positions.size()) << kind;
+    for (std::size_t v = 0; v < p.size() / 3; ++v) {
+      const float* in_p = &q.positions[3 * v];
+      // --up z: the file's (x, y, z) is shtool's, written as glTF's (x, z, -y).
+      const std::array<float, 3> expected =
+          kind == "obj_z" ? std::array<float, 3>{in_p[0], in_p[2], -in_p[1]} : std::array<float, 3>{in_p[0], in_p[1], in_p[2]};
+      for (int c = 0; c < 3; ++c) EXPECT_EQ(p[3 * v + c], expected[c]) << kind << " vertex " << v;
+    }
+  }
+}
+
+// The zenith (+z, shtool's frame) lights a quad facing up; the nadir leaves it dark
+// (order 2: the clamped cosine truncated to bands 0 and 1 is 1/4 - 1/2 < 0 there).
+TEST(MeshFrames, ZenithLightsAnUpFacingQuad) {
+  const fs::path mesh = write_obj(quad({1, 0, 0}, {0, 0, -1}), "lit.obj");
+  bake(mesh, "lit");
+  for (const std::string& dir : {"0,0,1", "0,0,-1"}) {
+    const fs::path light = scratch("light" + dir + ".json");
+    must(run({"light", "--type", "directional", "--dir", dir, "--color", "1,1,1", "--order", "2", "--json",
+              light.string()}));
+    const fs::path out = scratch("lit" + dir + ".exr");
+    must(run({"render", mesh.string(), "--transfer", scratch("lit.t.json").string(), "--light", light.string(),
+              "--width", "64", "--height", "64", "--out", out.string()}));
+    const shtool::lighting::Image image =
+        shtool::lighting::decode_image(shtool::test::read_file(out), out);
+    // The background is 0; the quad is uniformly lit (one transfer vector, one light), so
+    // every covered pixel has the same sign.
+    int positive = 0, negative = 0;
+    for (std::size_t i = 0; i < image.texels.size(); i += image.channels)
+      positive += image.texels[i] > 0.1f, negative += image.texels[i] < 0;
+    if (dir == "0,0,1") {
+      EXPECT_GT(positive, 100) << "lit from the zenith";
+      EXPECT_EQ(negative, 0);
+    } else {
+      EXPECT_GT(negative, 100) << "dark from the nadir";
+      EXPECT_EQ(positive, 0);
+    }
+  }
+}
+
+// A bake read y-up is not put on the mesh read z-up (nor the other way): render and
+// deform refuse, naming --up, and write nothing.
+TEST(MeshFrames, RenderAndDeformRefuseToMixFrames) {
+  const fs::path mesh = write_obj(quad({1, 0, 0}, {0, 0, -1}), "mix.obj");
+  bake(mesh, "mix");
+  must(run({"light", "--type", "constant", "--color", "1,1,1", "--order", "2", "--json",
+            scratch("white.json").string()}));
+  const fs::path image = scratch("mix.png");
+  CommandResult r = run({"render", mesh.string(), "--up", "z", "--fit", scratch("mix.shtb").string(), "--light",
+                         scratch("white.json").string(), "--out", image.string()});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("--up"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(image));
+  must(run({"render", mesh.string(), "--fit", scratch("mix.shtb").string(), "--light", scratch("white.json").string(),
+            "--width", "16", "--height", "16", "--out", image.string()}));
+  const fs::path posed = scratch("mix.posed.shtb");
+  r = run({"deform", scratch("mix.shtb").string(), "--rest", mesh.string(), "--pose", mesh.string(), "--up", "z",
+           "--out", posed.string()});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("--up"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(posed));
+  must(run({"deform", scratch("mix.shtb").string(), "--rest", mesh.string(), "--pose", mesh.string(), "--out",
+            posed.string()}));
+  EXPECT_EQ(meta_of(posed)["mesh_up"], "y");
+}
+
+}  // namespace
