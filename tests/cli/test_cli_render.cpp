@@ -21,6 +21,7 @@
 #include <ImfInputFile.h>
 #include <stb_image.h>
 
+#include "common/mesh_frame.h"
 #include "lighting/image_io.h"
 #include "run_command.h"
 #include "scratch_files.h"
@@ -230,7 +231,8 @@ TEST(Render, PngIsTheToneMappedExr) {
   int lit = 0;
   for (int p = 0; p < w * h; ++p) {
     for (int c = 0; c < 3; ++c) {
-      const double x = linear.texels[p * 3 + c] * std::pow(2.0, 1.5);
+      // Negative radiance (the truncated sky rings) is black.
+      const double x = std::max(0.0, double(linear.texels[p * 3 + c])) * std::pow(2.0, 1.5);
       const double expected = 255.0 * srgb(x / (1 + x));
       worst = std::max(worst, std::abs(expected - pixels[p * 4 + c]));
       lit += x > 0.1;
@@ -412,7 +414,10 @@ fs::path posed_mesh(const std::string& name, const std::vector<std::string>& how
 // coefficients and residuals.
 TEST(Deform, RigidRotationRotatesEveryLobe) {
   const Eigen::Vector3d axis = Eigen::Vector3d(1, 1, 1).normalized();
-  const Eigen::Matrix3d r = Eigen::AngleAxisd(0.9, axis).toRotationMatrix();
+  // pose_mesh.py turns the file's (y-up) coordinates; in shtool's frame that is F r F^T,
+  // F the map from y-up coordinates to shtool's.
+  const Eigen::Matrix3d f = shtool::to_y_up_matrix().transpose();
+  const Eigen::Matrix3d r = f * Eigen::AngleAxisd(0.9, axis).toRotationMatrix() * f.transpose();
   const fs::path turned = posed_mesh("turned.obj", {"--rotate", "1,1,1,0.9"});
   const fs::path out = scratch("turned.shtb"), json = scratch("turned_fits.json"), rest_json = scratch("rest.json");
   must(shtool_run({"fit-zh", kSpot, "--order", "3", "--lobes", "2", "--rays", "64", "--out", scratch("r.shtb").string(),
@@ -455,14 +460,15 @@ double relative_mean_difference(const std::vector<float>& a, const std::vector<f
 // normal's basis, not the rotation); for a bend also up to the shadowing the bend changes.
 TEST(Deform, PosedRenderMatchesAFreshBake) {
   const std::string sky = bakes().sky.string(), camera = "2.6,-1.6,0.9,0,-0.25,0.2,0,0,1";
-  // Measured 0.0025 (rigid) and 0.0124 (bend); unrotated lobes would be off by tens of percent.
+  // Measured 0.0073 (rigid) and 0.035 (bend: the sun, from above, shadows the bent back
+  // otherwise); unrotated lobes would be off by tens of percent.
   struct Pose {
     std::string name;
     std::vector<std::string> how;
     double allowed;
   };
   for (const auto& [name, how, allowed] :
-       std::vector<Pose>{{"turned2.obj", {"--rotate", "0,1,0,1.2"}, 0.01}, {"bent.obj", {"--bend", "0.8"}, 0.03}}) {
+       std::vector<Pose>{{"turned2.obj", {"--rotate", "0,1,0,1.2"}, 0.01}, {"bent.obj", {"--bend", "0.8"}, 0.045}}) {
     const fs::path pose = posed_mesh(name, how);
     const fs::path fresh_fit = scratch("fresh.shtb"), fresh_t = scratch("fresh.json");
     must(shtool_run({"fit-zh", pose.string(), "--order", "3", "--lobes", "2", "--rays", "128", "--out",

@@ -145,6 +145,7 @@ TEST(TextureBake, PlaneGivesTheClampedCosineAtEveryTexel) {
   test::write_file(scratch("plane.obj"), kQuad);
   FitZhRequest r;
   r.mesh = scratch("plane.obj");
+  r.up = UpAxis::z;  // written in shtool's frame
   r.out = scratch("plane.zh.shtb");
   r.texture = 10;
   r.mode = TransferMode::unshadowed;
