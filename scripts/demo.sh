@@ -27,13 +27,13 @@ echo "-- fit-zh: shadowed PRT transfer on data/spot.obj, order 6, 4 ZH lobes per
 "$shtool" fit-zh "$root/data/spot.obj" --out "$out/spot.zh.shtb" --json "$out/spot.zh.json" \
   --ply "$out/spot.zh.ply"
 
-echo "-- render: spot shaded by its ZH fit under the sky at order 6 (spot.zh.png)"
-"$shtool" project-env "$root/data/sky.hdr" --order 6 --json "$out/sky6.json"
+echo "-- render: spot from the front, shaded by its ZH fit under the sky at order 6, windowed (spot.zh.png)"
+"$shtool" project-env "$root/data/sky.hdr" --order 6 --window auto --json "$out/sky6.json"
 "$shtool" render "$root/data/spot.obj" --fit "$out/spot.zh.shtb" --light "$out/sky6.json" --out "$out/spot.zh.png"
 
 echo "-- fit-glossy: glossy (Cook-Torrance) transfer on data/spot.obj, order 4, and its render (spot.glossy.png)"
 "$shtool" fit-glossy "$root/data/spot.obj" --out "$out/spot.glossy.shtb" --json "$out/spot.glossy.json"
-"$shtool" project-env "$root/data/sky.hdr" --order 4 --json "$out/sky4.json"
+"$shtool" project-env "$root/data/sky.hdr" --order 4 --window auto --json "$out/sky4.json"
 "$shtool" render "$root/data/spot.obj" --fit "$out/spot.glossy.shtb" --light "$out/sky4.json" --exposure -1 \
   --out "$out/spot.glossy.png"
 

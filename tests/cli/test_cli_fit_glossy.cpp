@@ -53,7 +53,7 @@ TEST(CliFitGlossy, WritesTheTableAndTheSummary) {
   const shtool::Result<shtool::GlossyFit<double>> fit = shtool::GlossyFit<double>::from_table(t.value());
   ASSERT_TRUE(fit.ok()) << fit.error().message;
   EXPECT_EQ(fit.value().vertices, 2930u);
-  EXPECT_EQ(fit.value().terms, 3);
+  EXPECT_EQ(fit.value().terms, 6);
   EXPECT_EQ(fit.value().view_resolution, 8);
   EXPECT_EQ(fit.value().rows.lobes, 2);
   EXPECT_EQ(fit.value().rows.direct_count, 1);  // DC only: the linear band is stored from 3 lobes on

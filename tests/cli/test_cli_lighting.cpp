@@ -5,6 +5,7 @@
 // a non-zero exit, no output).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <filesystem>
@@ -312,6 +313,50 @@ TEST(CliProjectEnv, RenderBackRoundTripAndOutputs) {
   EXPECT_EQ(first["quantity"], "radiance");
   EXPECT_EQ(first["channels"], nlohmann::json({"r", "g", "b"}));
   EXPECT_EQ(first["window"]["type"], "none");
+}
+
+// --render-source: the source through the render-back's equirect. An equirect of the
+// render-back's size comes back texel for texel; six constant faces come back as the face
+// each texel centre's direction hits (the cube frame's major axis, docs/lighting.md).
+TEST(CliProjectEnv, RenderSourceIsTheSourceInTheRenderBacksMapping) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(0, 4);
+  Texels image(512 * 256 * 3);
+  for (float& v : image) v = u(rng);
+  const fs::path in = scratch("source_in.exr"), out = scratch("source_out.exr"), back = scratch("source_back.exr");
+  write_exr(in, 512, 256, image, false);
+  project({in.string(), "--order", "2", "--render-source", out.string(), "--render-back", back.string()});
+  const lighting::Image same = lighting::decode_image(read_text(out), out);
+  ASSERT_EQ(same.width, 512);
+  ASSERT_EQ(same.height, 256);
+  EXPECT_EQ(same.texels, image);
+  EXPECT_EQ(lighting::decode_image(read_text(back), back).width, 512);
+
+  Cube cube{4, {}};
+  for (int f = 0; f < 6; ++f) cube.faces[f].assign(4 * 4 * 3, float(f + 1));
+  const char* suffix[6] = {"px", "nx", "py", "ny", "pz", "nz"};
+  for (int f = 0; f < 6; ++f) write_exr(scratch(std::string("cface_") + suffix[f] + ".exr"), 4, 4, cube.faces[f], false);
+  const fs::path faces_out = scratch("faces_source.exr");
+  project({scratch("cface_%s.exr").string(), "--order", "2", "--render-source", faces_out.string()});
+  const lighting::Image seen = lighting::decode_image(read_text(faces_out), faces_out);
+  ASSERT_EQ(seen.width, 512);  // 2 x 4 texels, raised to the smallest render-back of 256 rows
+  ASSERT_EQ(seen.height, 256);
+  int wrong = 0;
+  for (int y = 0; y < seen.height; ++y)
+    for (int x = 0; x < seen.width; ++x) {
+      const double t = kPi * (y + 0.5) / seen.height, p = kPi - 2 * kPi * (x + 0.5) / seen.width;
+      const Eigen::Vector3d w(std::sin(t) * std::cos(p), std::sin(t) * std::sin(p), std::cos(t));
+      const Eigen::Vector3d cube_dir(w.x(), w.z(), -w.y());  // the y-up cube frame
+      int axis = 0;
+      cube_dir.cwiseAbs().maxCoeff(&axis);
+      const int face = 2 * axis + (cube_dir[axis] < 0);
+      // Directions within a hair of a cube edge may land on either face.
+      Eigen::Vector3d a = cube_dir.cwiseAbs();
+      std::sort(a.data(), a.data() + 3);
+      if (a[2] - a[1] < 1e-9) continue;
+      wrong += seen.texels[(std::size_t(y) * seen.width + x) * 3] != float(face + 1);
+    }
+  EXPECT_EQ(wrong, 0);
 }
 
 TEST(CliProjectEnv, SameBytesWhateverTheThreadCount) {

@@ -19,6 +19,9 @@ Eigen::Matrix3d to_y_up_matrix() {
   return q;
 }
 
+Eigen::Vector3d gltf_front() { return from_y_up(Eigen::Vector3d(0, 0, 1)); }
+Eigen::Vector3d obj_front() { return Eigen::Vector3d(0, 1, 0); }
+
 void check_same_up(const Table& table, UpAxis mesh_up, const std::string& what, const std::string& mesh) {
   const nlohmann::json meta = nlohmann::json::parse(table.meta, nullptr, false);
   std::string table_up = "z";

@@ -28,6 +28,13 @@ inline Eigen::Vector3d to_y_up(const Eigen::Vector3d& v) { return {v.x(), v.z(),
 // (shtool/orthogonal_map.h).
 Eigen::Matrix3d to_y_up_matrix();
 
+// The side a mesh file's model faces, in shtool's frame, by each format's own word:
+// glTF's front is +Z (its specification), shtool's -y; an OBJ's is the forward axis of
+// Blender's OBJ importer and exporter, -Z of a y-up file and +Y of Blender's (z-up) world,
+// shtool's +y either way. render's default view looks at it.
+Eigen::Vector3d gltf_front();
+Eigen::Vector3d obj_front();
+
 // A table baked on a mesh records the up axis of the file the mesh was read from, as
 // meta "mesh_up" ("y" or "z"); its rows (lobe axes, SH vectors) are in shtool's frame of
 // that reading. A command that puts such rows back on a mesh reads the mesh the same way

@@ -298,6 +298,7 @@ Mesh load_gltf_bytes(const std::string& bytes, const std::filesystem::path& path
   mesh.input_crc32 = input_crc32(bytes);
   mesh.obj_vertices = b.positions.size();
   mesh.up = UpAxis::y;
+  mesh.front = gltf_front();
   for (Eigen::Vector3d& p : b.positions) p = from_y_up(p);
   for (Eigen::Vector3d& n : b.normals) n = from_y_up(n);
   return finish_mesh(std::move(mesh), b.positions, b.normals, b.triangles, path, normal_source, b.texcoords);

@@ -319,6 +319,7 @@ Mesh load_obj_text(const std::string& text, const std::filesystem::path& path, N
   std::vector<Eigen::Vector2d> texcoords(nt);
   for (std::size_t k = 0; k < nt; ++k) texcoords[k] = Eigen::Vector2d(attrib.texcoords[2 * k], attrib.texcoords[2 * k + 1]);
   mesh.up = up;
+  mesh.front = obj_front();
   if (up == UpAxis::y) {
     for (Eigen::Vector3d& p : positions) p = from_y_up(p);
     for (Eigen::Vector3d& n : normals) n = from_y_up(n);

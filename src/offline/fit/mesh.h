@@ -43,6 +43,7 @@ struct Mesh {
   std::uint32_t input_crc32 = 0;           // CRC-32 of the file's bytes (provenance)
   UpAxis up = UpAxis::z;                   // the file's up axis: positions and normals were
                                            // turned from it into shtool's z-up frame
+  Eigen::Vector3d front{0, 1, 0};          // the side the model faces (common/mesh_frame.h)
 
   // Counters for what was skipped while loading (reported as warnings, not errors).
   std::size_t obj_vertices = 0;            // vertices ("v" lines) in the file
