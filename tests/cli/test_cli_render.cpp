@@ -276,9 +276,10 @@ TEST(Render, CompareStripOfFits) {
 }
 
 // The camera's orientation and the barycentric weights, through the normals shading in
-// the default view (three-quarters from the front, -y, turned towards +x; z up; the
-// right of the image along about (0.82, 0.57, 0)): the topmost covered pixel faces up
-// (+z), the leftmost towards -x, the rightmost towards +x; a pixel's colour is (n + 1) / 2.
+// the default view (three-quarters from spot's front, +y for an OBJ, turned towards its
+// left, -x; z up; the right of the image along (-cos 35, -sin 35, 0)): the topmost
+// covered pixel faces up (+z), the leftmost against the image's right, the rightmost
+// along it; a pixel's colour is (n + 1) / 2.
 TEST(Render, NormalsShowTheViewsOrientation) {
   const int w = 96, h = 96;
   const auto n = render_rgb({"--transfer", bakes().shadowed_t.string(), "--shading", "normals"}, w, h);
@@ -303,9 +304,13 @@ TEST(Render, NormalsShowTheViewsOrientation) {
       }
   ASSERT_GE(top, 0);
   // Silhouette pixels: the normal is about perpendicular to the view, mostly sideways.
-  EXPECT_GT(n[top * 3 + 2], 0.6);   // n_z > 0.2
-  EXPECT_LT(n[left * 3 + 0], 0.4);  // n_x < -0.2
-  EXPECT_GT(n[right * 3 + 0], 0.6); // n_x > 0.2
+  const Eigen::Vector3d image_right(-std::cos(35 * M_PI / 180), -std::sin(35 * M_PI / 180), 0);
+  auto normal = [&](int pixel) {
+    return Eigen::Vector3d(2 * n[pixel * 3] - 1, 2 * n[pixel * 3 + 1] - 1, 2 * n[pixel * 3 + 2] - 1);
+  };
+  EXPECT_GT(n[top * 3 + 2], 0.6);                     // n_z > 0.2
+  EXPECT_LT(normal(left).dot(image_right), -0.2);     // facing left
+  EXPECT_GT(normal(right).dot(image_right), 0.2);     // facing right
 }
 
 TEST(Render, SameBytesOnAnyThreadCount) {
