@@ -24,17 +24,18 @@
 //                               S = 0: one rtcOccluded1 / rtcIntersect1 per ray; S = 1: a
 //                               stream per vertex (default). rays_per_s counts every pass.
 //   BM_EmbreeBuild              build_scene of the bunny (Embree's own threads build it).
-//   BM_Fit/method:M/lobes:N/effort:E/starts:S
-//                               fit_zh of random unit order-6 vectors (coefficients uniform
-//                               in [-1, 1], normalised; the same 20 for every case):
-//                               M = 0 variable projection (the default), 1 joint (the
-//                               reference); --effort E; S >= 0 overrides the starts.
-//                               per_vector = time per fit, nrms = sqrt(sum residual^2 /
-//                               sum |t|^2); vs_best_mean / vs_best_max = residual over the
-//                               best known fit of the vector (a long multi-start of both
-//                               methods, computed once per lobe count at the first case).
-//   --write-best-known=PATH     writes those vectors and best-known residuals (N = 2, 4)
-//                               as the JSON the fit-quality test reads, then exits.
+//   BM_Fit/method:M/lobes:N/effort:E/starts:S/set:X
+//                               fit_zh of the vectors of the fit fixture
+//                               (tests/offline/data/zh_fit_best_known.json): X = 0 the 20
+//                               random unit order-6 vectors (coefficients uniform in
+//                               [-1, 1], normalised), X = 1 40 shadowed transfer vectors of
+//                               data/spot.obj; M = 0 variable projection (the default),
+//                               1 joint (the reference); --effort E; S >= 0 overrides the
+//                               starts. per_vector = time per fit, nrms = sqrt(sum
+//                               residual^2 / sum |t|^2); vs_best_mean / vs_best_max =
+//                               residual over the fixture's best known fit of the vector.
+//   --write-best-known=PATH     computes that fixture (vectors, best-known residuals for
+//                               N = 1, 2, 4; minutes on 2 cores) and writes it, then exits.
 //   BM_Shade/<type>/<method>/lobes:N[/res:R]
 //                               one shaded point = N lobes against one order-6 light;
 //                               4096 points with random axes per iteration (random table
@@ -74,6 +75,7 @@
 #include <vector>
 
 #include <benchmark/benchmark.h>
+#include <nlohmann/json.hpp>
 
 #include "fit/embree_scene.h"
 #include "fit/mesh.h"
@@ -96,10 +98,7 @@ namespace {
 
 constexpr int kOrder = 6;
 constexpr int kPoints = 4096;     // shaded points per iteration
-constexpr int kFitVectors = 20;   // vectors fitted per case (one per iteration)
-// Starts of the best-known fits (far more than any effort level).
-constexpr int kBestKnownVarProStarts = 512;
-constexpr int kBestKnownJointStarts = 128;
+constexpr int kFitVectors = 20;   // random vectors of the fit fixture
 
 using benchmark::Counter;
 
@@ -262,83 +261,154 @@ shtool::fit::ZhFitOptions fit_options(int method, int lobes) {
   return options;
 }
 
-const std::vector<double>& fit_vectors() {
-  static const std::vector<double> vectors = random_unit_vectors(kFitVectors, kOrder, 2005);
-  return vectors;
+// The fit-quality fixture: two sets of order-6 vectors with the best residual known for
+// each lobe count, read by the quality test and by BM_Fit, written by --write-best-known.
+const char* const kBestKnownPath = SHTOOL_SOURCE_DIR "/tests/offline/data/zh_fit_best_known.json";
+constexpr int kBestKnownLobes[] = {1, 2, 4};
+
+struct FitSet {
+  std::string name;
+  std::vector<double> vectors;                // count x order^2
+  std::map<int, std::vector<double>> best;    // by lobe count
+  std::size_t count() const { return vectors.size() / shtool::sh_count(kOrder); }
+};
+
+// "random": random unit vectors (coefficients uniform in [-1, 1], normalised; no few
+// lobes fit them well); "spot": shadowed transfer of data/spot.obj at 256 rays, every
+// kSpotStride-th vertex (smooth, mostly well fitted).
+constexpr int kSpotStride = 74;  // 40 vectors
+std::vector<FitSet> make_fit_sets() {
+  std::vector<FitSet> sets(2);
+  sets[0].name = "random";
+  sets[0].vectors = random_unit_vectors(kFitVectors, kOrder, 2005);
+  sets[1].name = "spot";
+  shtool::fit::TransferOptions to;
+  to.order = kOrder;
+  to.rays = 256;
+  to.threads = 1;
+  const std::vector<double> transfer = shtool::fit::compute_transfer(spot(), to);
+  const std::size_t n2 = shtool::sh_count(kOrder);
+  for (std::size_t v = 0; v < spot().positions.size(); v += kSpotStride)
+    sets[1].vectors.insert(sets[1].vectors.end(), transfer.begin() + v * n2, transfer.begin() + (v + 1) * n2);
+  return sets;
 }
 
-// The best fit a long multi-start finds: per vector the lowest residual of both methods
-// with many starts, run whatever the residual (computed once per lobe count, then cached).
-const std::vector<double>& best_known_residuals(int lobes) {
-  static std::map<int, std::vector<double>> cache;
-  std::vector<double>& best = cache[lobes];
-  if (!best.empty()) return best;
-  const std::size_t n2 = shtool::sh_count(kOrder);
-  for (int v = 0; v < kFitVectors; ++v) {
-    const std::span<const double> t(fit_vectors().data() + v * n2, n2);
-    double r = std::numeric_limits<double>::infinity();
-    for (int method : {0, 1}) {
-      shtool::fit::ZhFitOptions o = fit_options(method, lobes);
-      o.starts = method == 0 ? kBestKnownVarProStarts : kBestKnownJointStarts;
-      o.restart_above = 0;
-      o.polish_ftol_rel = 1e-12;
-      o.max_evaluations = 2000;
-      r = std::min(r, shtool::fit::fit_zh(t, o, v).residual);
-    }
-    best.push_back(r);
+// Far more search than any effort level. N = 1: every grid maximum of 65,536 axes
+// refined; N >= 2: the lowest residual of variable projection with 4096 random starts,
+// the joint method with 256 (each run whatever the residual, the winner polished to
+// 1e-12) and the default method at --effort 3 and 4 (whose winners, polished from
+// other starts, are sometimes lower).
+constexpr int kReferenceSingleLobeAxes = 65536;
+constexpr int kBestKnownVarProStarts = 4096;
+constexpr int kBestKnownJointStarts = 256;
+std::vector<double> best_known_residuals(const std::vector<double>& vectors, int lobes) {
+  const std::size_t n2 = shtool::sh_count(kOrder), count = vectors.size() / n2;
+  std::vector<double> best(count, std::numeric_limits<double>::infinity());
+  std::vector<shtool::fit::ZhFitOptions> searches;
+  for (int method : {0, 1}) {
+    shtool::fit::ZhFitOptions o = fit_options(method, lobes);
+    o.single_lobe_axes = kReferenceSingleLobeAxes;
+    o.single_lobe_maxima = 0;
+    o.starts = method == 0 ? kBestKnownVarProStarts : kBestKnownJointStarts;
+    o.restart_above = 0;
+    o.polish_ftol_rel = 1e-12;
+    o.max_evaluations = 2000;
+    searches.push_back(o);
+  }
+  for (int effort : {3, 4}) {
+    searches.push_back(fit_options(0, lobes));
+    shtool::fit::apply_effort(searches.back(), effort);
+  }
+  // Both methods take the same single-lobe search.
+  if (lobes == 1) searches.resize(1);
+  for (const shtool::fit::ZhFitOptions& o : searches) {
+    const shtool::ZhFitTable<double> fits = shtool::fit::fit_zh_all(vectors, o, 0);
+    for (std::size_t v = 0; v < count; ++v) best[v] = std::min(best[v], fits.residual[v]);
   }
   return best;
 }
 
+const std::vector<FitSet>& fit_sets() {
+  static const std::vector<FitSet> sets = [] {
+    std::ifstream in(kBestKnownPath);
+    if (!in) throw std::runtime_error(std::string("bench_fit: cannot read ") + kBestKnownPath);
+    const nlohmann::json doc = nlohmann::json::parse(in);
+    std::vector<FitSet> out;
+    for (const auto& [name, set] : doc.at("sets").items()) {
+      FitSet s;
+      s.name = name;
+      for (const auto& v : set.at("vectors")) {
+        const std::vector<double> t = v.get<std::vector<double>>();
+        s.vectors.insert(s.vectors.end(), t.begin(), t.end());
+      }
+      for (const auto& [lobes, r] : set.at("best_residual").items()) s.best[std::stoi(lobes)] = r.get<std::vector<double>>();
+      out.push_back(std::move(s));
+    }
+    return out;
+  }();
+  return sets;
+}
+
 void BM_Fit(benchmark::State& state) {
-  const std::vector<double>& vectors = fit_vectors();
+  const FitSet& set = fit_sets().at(static_cast<std::size_t>(state.range(4)));
   shtool::fit::ZhFitOptions options = fit_options(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
   if (state.range(2) >= 0) shtool::fit::apply_effort(options, static_cast<int>(state.range(2)));
   if (state.range(3) >= 0) options.starts = static_cast<int>(state.range(3));
-  const std::vector<double>& best = best_known_residuals(options.lobes);
+  const auto best = set.best.find(options.lobes);
   const std::size_t n2 = shtool::sh_count(kOrder);
   double residual2 = 0, norm2 = 0, ratio_sum = 0, ratio_max = 0;
   std::size_t k = 0;
   for (auto _ : state) {
-    const std::size_t v = k % kFitVectors;
-    const std::span<const double> t(vectors.data() + v * n2, n2);
+    const std::size_t v = k % set.count();
+    const std::span<const double> t(set.vectors.data() + v * n2, n2);
     const shtool::fit::ZhFit fit = shtool::fit::fit_zh(t, options, v);
     residual2 += fit.residual * fit.residual;
     norm2 += fit.norm * fit.norm;
-    const double ratio = fit.residual / best[v];
-    ratio_sum += ratio;
-    ratio_max = std::max(ratio_max, ratio);
+    if (best != set.best.end()) {
+      const double ratio = fit.residual / best->second[v];
+      ratio_sum += ratio;
+      ratio_max = std::max(ratio_max, ratio);
+    }
     ++k;
   }
+  state.SetLabel(set.name);
   state.SetItemsProcessed(state.iterations());
   state.counters["per_vector"] = per_item(static_cast<double>(state.iterations()));
   state.counters["nrms"] = std::sqrt(residual2 / norm2);
-  state.counters["vs_best_mean"] = ratio_sum / static_cast<double>(k);
-  state.counters["vs_best_max"] = ratio_max;
+  if (best != set.best.end()) {
+    state.counters["vs_best_mean"] = ratio_sum / static_cast<double>(k);
+    state.counters["vs_best_max"] = ratio_max;
+  }
 }
 
-// --write-best-known=PATH: the vectors and their best-known residuals as the JSON the
-// fit-quality test reads (tests/offline/data/zh_fit_best_known.json).
+// --write-best-known=PATH: the fixture above, vectors and best-known residuals.
 int write_best_known(const std::string& path) {
   std::ofstream out(path);
   out.precision(17);
-  out << "{\"comment\": \"random unit order-6 vectors and the lowest residual of a long multi-start "
-         "(both methods, run always); written by bench_fit --write-best-known\",\n \"order\": "
-      << kOrder << ",\n \"vectors\": [";
+  out << "{\"comment\": \"order-6 vectors (random unit; shadowed transfer of data/spot.obj) and the best residual "
+         "known per lobe count (a search far longer than any effort level); written by bench_fit "
+         "--write-best-known\",\n \"order\": "
+      << kOrder << ",\n \"sets\": {";
   const std::size_t n2 = shtool::sh_count(kOrder);
-  for (int v = 0; v < kFitVectors; ++v) {
-    out << (v ? ",\n  [" : "\n  [");
-    for (std::size_t i = 0; i < n2; ++i) out << (i ? ", " : "") << fit_vectors()[v * n2 + i];
-    out << "]";
-  }
-  out << "],\n \"best_residual\": {";
-  bool first = true;
-  for (int lobes : {2, 4}) {
-    out << (first ? "" : ",") << "\n  \"" << lobes << "\": [";
-    first = false;
-    const std::vector<double>& best = best_known_residuals(lobes);
-    for (int v = 0; v < kFitVectors; ++v) out << (v ? ", " : "") << best[v];
-    out << "]";
+  const std::vector<FitSet> sets = make_fit_sets();
+  for (std::size_t s = 0; s < sets.size(); ++s) {
+    const FitSet& set = sets[s];
+    out << (s ? ",\n" : "\n") << "  \"" << set.name << "\": {\"vectors\": [";
+    for (std::size_t v = 0; v < set.count(); ++v) {
+      out << (v ? ",\n   [" : "\n   [");
+      for (std::size_t i = 0; i < n2; ++i) out << (i ? ", " : "") << set.vectors[v * n2 + i];
+      out << "]";
+    }
+    out << "],\n   \"best_residual\": {";
+    bool first = true;
+    for (int lobes : kBestKnownLobes) {
+      out << (first ? "" : ",") << "\n    \"" << lobes << "\": [";
+      first = false;
+      const std::vector<double> best = best_known_residuals(set.vectors, lobes);
+      for (std::size_t v = 0; v < best.size(); ++v) out << (v ? ", " : "") << best[v];
+      out << "]";
+    }
+    out << "}}";
   }
   out << "}}\n";
   return out ? 0 : 1;
@@ -530,16 +600,16 @@ int main(int argc, char** argv) {
       ->Unit(benchmark::kMillisecond)
       ->MinTime(2.0);
   benchmark::RegisterBenchmark("BM_EmbreeBuild", BM_EmbreeBuild)->Unit(benchmark::kMillisecond);
-  auto* fit = benchmark::RegisterBenchmark("BM_Fit", BM_Fit)
-                  ->ArgNames({"method", "lobes", "effort", "starts"})
-                  ->Unit(benchmark::kMillisecond)
-                  ->Iterations(kFitVectors);
-  for (long n : {1, 2, 4, 6}) {
-    for (long e : {1, 2, 3, 4}) fit->Args({0, n, e, -1});
-    fit->Args({1, n, 2, -1});  // the reference method at default effort
+  for (long set = 0; set < 2; ++set) {
+    auto* fit = benchmark::RegisterBenchmark("BM_Fit", BM_Fit)
+                    ->ArgNames({"method", "lobes", "effort", "starts", "set"})
+                    ->Unit(benchmark::kMillisecond)
+                    ->Iterations(set == 0 ? kFitVectors : 2 * kFitVectors);
+    for (long n : {1, 2, 4, 6}) {
+      for (long e : {1, 2, 3, 4}) fit->Args({0, n, e, -1, set});
+      fit->Args({1, n, 2, -1, set});  // the reference method at default effort
+    }
   }
-  // The joint method's own multi-start, as long as --starts 128 (the old high-effort figure).
-  fit->Args({1, 4, 2, 128});
   register_shading<float>("float");
   register_shading<double>("double");
 

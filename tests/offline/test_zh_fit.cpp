@@ -335,58 +335,137 @@ TEST(ZhFit, VarProFitsMeshTransferAtLeastAsWellAsTheReference) {
   }
 }
 
-// The vectors and best-known residuals that `bench_fit --write-best-known` computed
-// (a long multi-start of both methods): the quality targets of the effort levels.
+// The fit fixture `bench_fit --write-best-known` computed: random unit order-6 vectors
+// and shadowed transfer vectors of data/spot.obj, each with the best residual known for
+// N = 1, 2, 4 (N = 1 from every grid maximum of 65,536 axes refined; N = 2, 4 the lowest
+// of thousands of starts of both methods).
 struct BestKnown {
-  int order = 0;
   std::vector<std::vector<double>> vectors;
   std::map<int, std::vector<double>> residual;  // by lobe count
 };
 
-BestKnown load_best_known() {
+std::map<std::string, BestKnown> load_best_known(int& order) {
   std::ifstream in(SHTOOL_SOURCE_DIR "/tests/offline/data/zh_fit_best_known.json");
   std::stringstream text;
   text << in.rdbuf();
   const nlohmann::json doc = nlohmann::json::parse(text.str());
-  BestKnown b;
-  b.order = doc.at("order").get<int>();
-  b.vectors = doc.at("vectors").get<std::vector<std::vector<double>>>();
-  for (const auto& [lobes, r] : doc.at("best_residual").items()) b.residual[std::stoi(lobes)] = r.get<std::vector<double>>();
-  return b;
+  order = doc.at("order").get<int>();
+  std::map<std::string, BestKnown> sets;
+  for (const auto& [name, set] : doc.at("sets").items()) {
+    BestKnown& b = sets[name];
+    b.vectors = set.at("vectors").get<std::vector<std::vector<double>>>();
+    for (const auto& [lobes, r] : set.at("best_residual").items())
+      b.residual[std::stoi(lobes)] = r.get<std::vector<double>>();
+  }
+  return sets;
 }
 
 // Mean over the vectors of residual / best-known residual.
-double mean_ratio_to_best(const BestKnown& b, const ZhFitOptions& o) {
+double mean_ratio_to_best(const BestKnown& b, const ZhFitOptions& o, const std::string& name) {
   double sum = 0;
   const std::vector<double>& best = b.residual.at(o.lobes);
   for (std::size_t v = 0; v < b.vectors.size(); ++v) {
     const ZhFit fit = fit_zh(b.vectors[v], o, v);
     // Never below the best known by more than rounding: that would make the reference stale.
-    EXPECT_GE(fit.residual, best[v] * (1 - 1e-6)) << "vector " << v << " lobes " << o.lobes;
+    EXPECT_GE(fit.residual, best[v] * (1 - 1e-6)) << name << " vector " << v << " lobes " << o.lobes;
     sum += fit.residual / best[v];
   }
   return sum / static_cast<double>(b.vectors.size());
 }
 
-TEST(ZhFit, EffortLevelsReachTheirQualityTargets) {
-  const BestKnown b = load_best_known();
-  ASSERT_EQ(b.vectors.size(), 20u);
-  ZhFitOptions o;
-  o.order = b.order;
-  // Default effort: N = 2 within 2 % and N = 4 within 10 % of the best known fit.
-  o.lobes = 2;
-  EXPECT_LE(mean_ratio_to_best(b, o), 1.02);
-  o.lobes = 4;
-  const double varpro = mean_ratio_to_best(b, o);
-  EXPECT_LE(varpro, 1.10);
-  // Effort 3: N = 4 within 3 %.
-  ZhFitOptions high = o;
-  apply_effort(high, 3);
-  EXPECT_LE(mean_ratio_to_best(b, high), 1.03);
-  // The reference method at the same effort stays behind (the reason for the default).
-  ZhFitOptions joint = o;
-  joint.method = ZhFitMethod::joint;
-  EXPECT_LT(varpro, mean_ratio_to_best(b, joint));
+TEST(ZhFit, FixtureHasBothSets) {
+  int order = 0;
+  const std::map<std::string, BestKnown> sets = load_best_known(order);
+  EXPECT_EQ(order, 6);
+  ASSERT_EQ(sets.size(), 2u);
+  EXPECT_EQ(sets.at("random").vectors.size(), 20u);
+  EXPECT_EQ(sets.at("spot").vectors.size(), 40u);
+  for (const auto& [name, b] : sets)
+    for (int n : {1, 2, 4}) EXPECT_EQ(b.residual.at(n).size(), b.vectors.size()) << name << " N " << n;
+}
+
+TEST(ZhFit, SingleLobeIsTheBestKnownAtEveryEffortAndMethod) {
+  int order = 0;
+  for (const auto& [name, b] : load_best_known(order)) {
+    for (const ZhFitMethod method : {ZhFitMethod::varpro, ZhFitMethod::joint})
+      for (int effort = kMinEffort; effort <= kMaxEffort; ++effort) {
+        ZhFitOptions o;
+        o.order = order;
+        o.lobes = 1;
+        o.method = method;
+        apply_effort(o, effort);
+        for (std::size_t v = 0; v < b.vectors.size(); ++v) {
+          const ZhFit fit = fit_zh(b.vectors[v], o, v);
+          // Both stop at a relative change of 1e-10 in psi at the same maximum.
+          EXPECT_NEAR(fit.residual, b.residual.at(1)[v], 1e-9 * b.residual.at(1)[v])
+              << name << " vector " << v << " effort " << effort << " joint " << (method == ZhFitMethod::joint);
+        }
+      }
+  }
+}
+
+TEST(ZhFit, SingleLobeSearchFindsTheOptimumOfADenserGrid) {
+  // The exhaustive check of the default density: on 400 more vectors (random unit ones,
+  // and sums of two or three random lobes with a little noise, whose energy has several
+  // comparable maxima), the default search equals the reference that refines every grid
+  // maximum of 16 times as many axes.
+  Lcg rng{15};
+  const int order = 6;
+  std::vector<double> c(order);
+  int checked = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    std::vector<double> t;
+    if (trial % 2 == 0) {
+      t = random_unit_vector(rng, order);
+    } else {
+      std::vector<ZhLobe> lobes;
+      for (int k = 0; k < 2 + trial % 3; ++k) lobes.push_back(random_lobe(rng, order));
+      t.assign(36, 0.0);
+      lobes_to_sh(order, lobes, t);
+      for (double& x : t) x += 0.05 * (2 * rng.uniform() - 1);
+    }
+    for (const std::vector<bool>& mask : {std::vector<bool>{}, std::vector<bool>{false, true, true, true, true, true}}) {
+      Eigen::Vector3d fast_axis, ref_axis;
+      std::vector<double> fast_c(order), ref_c(order);
+      const double fast = best_single_lobe(order, t, mask, kSingleLobeAxes, kSingleLobeMaxima, fast_axis, fast_c);
+      const double ref = best_single_lobe(order, t, mask, 16 * kSingleLobeAxes, 0, ref_axis, ref_c);
+      EXPECT_NEAR(fast, ref, 1e-9 * ref) << "trial " << trial << " masked " << !mask.empty();
+      // The returned pair is Eq. 18 at the returned axis.
+      EXPECT_NEAR(single_lobe_closed_form(order, t, fast_axis, c, mask), fast, 1e-15);
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, 800);
+}
+
+TEST(ZhFit, DefaultEffortIsNearTheBestKnown) {
+  int order = 0;
+  for (const auto& [name, b] : load_best_known(order)) {
+    ZhFitOptions o;
+    o.order = order;
+    // Default effort: N = 2 within 2 % of the best known fit on both sets.
+    o.lobes = 2;
+    EXPECT_LE(mean_ratio_to_best(b, o, name), 1.02) << name;
+    o.lobes = 4;
+    const double varpro = mean_ratio_to_best(b, o, name);
+    // The reference method at the same effort stays behind (the reason for the default).
+    ZhFitOptions joint = o;
+    joint.method = ZhFitMethod::joint;
+    EXPECT_LT(varpro, mean_ratio_to_best(b, joint, name)) << name;
+    if (name == "random") {
+      // N = 4 within 10 % on random vectors, which all get the default's random starts.
+      EXPECT_LE(varpro, 1.10) << name;
+    } else {
+      // Transfer vectors are fitted within the 5 % restart threshold by the greedy start
+      // alone, so the default runs no random start for them and stays well above the
+      // best known at N = 4 (docs/fit-zh.md, "Benchmarks"); --effort 3, which restarts
+      // every vector, comes within 6 %.
+      EXPECT_LE(varpro, 1.8) << name;
+      ZhFitOptions high = o;
+      apply_effort(high, 3);
+      EXPECT_LE(mean_ratio_to_best(b, high, name), 1.06) << name;
+    }
+  }
 }
 
 TEST(ZhFit, EffortLevelsAndTheDefault) {

@@ -136,6 +136,8 @@ constexpr double kVarProExactFtolRel = 1e-10;
 // The greedy stages before the last: 1e-2, at most 30 evaluations.
 constexpr double kVarProStageFtolRel = 1e-2;
 constexpr int kVarProStageEvaluations = 30;
+// A single lobe's refinement from a grid peak: two angles, converged in far fewer.
+constexpr int kSingleLobeEvaluations = 200;
 
 double bfgs_objective(const std::vector<double>& x, std::vector<double>& grad, void* raw) {
   auto* d = static_cast<BfgsData*>(raw);
@@ -336,11 +338,17 @@ double varpro_bfgs(int order, std::span<const double> t, const std::vector<bool>
 }
 
 // The scan set's SH values, computed once per (order, count) and shared by every vector
-// and thread: the greedy scan is then a dot product per axis and band.
+// and thread: a scan is then a dot product per axis and band. `neighbours` lists, per
+// axis, the axes within kNeighbourSpacings mean spacings (s and -s count as one point,
+// so axes near the equator see those across it), which is what makes a grid local
+// maximum of the single-lobe energy.
 struct AxisScan {
   std::vector<Eigen::Vector3d> axes;
   std::vector<double> y;  // y[a * order^2 + i]
+  std::vector<int> first_neighbour, neighbours;  // axis a: neighbours[first_neighbour[a] .. first_neighbour[a + 1])
 };
+
+constexpr double kNeighbourSpacings = 2.2;
 
 const AxisScan& axis_scan(int order, int count) {
   static std::mutex mutex;
@@ -354,9 +362,57 @@ const AxisScan& axis_scan(int order, int count) {
     scan->y.resize(scan->axes.size() * n2);
     for (std::size_t a = 0; a < scan->axes.size(); ++a)
       eval_sh<double>(order, scan->axes[a], std::span<double>(scan->y.data() + a * n2, n2));
+    // The set's z falls by 1/count per index, and |p - q| >= |z_p - z_q|, so the axes
+    // within chord r of axis a lie within r count indices of a; those within r of -a
+    // (|p + q| >= z_p + z_q) are among the last ones, near the equator.
+    const double r = kNeighbourSpacings * std::sqrt(2.0 * std::numbers::pi / count);
+    const int window = static_cast<int>(std::ceil(r * count)) + 1;
+    const std::vector<Eigen::Vector3d>& p = scan->axes;
+    for (int a = 0; a < count; ++a) {
+      scan->first_neighbour.push_back(static_cast<int>(scan->neighbours.size()));
+      for (int b = std::max(0, a - window); b < std::min(count, a + window + 1); ++b)
+        if (b != a && (p[a] - p[b]).norm() < r) scan->neighbours.push_back(b);
+      for (int b = count - 1; b >= 0 && p[a].z() + p[b].z() < r; --b)
+        if (b != a && (p[a] + p[b]).norm() < r && (p[a] - p[b]).norm() >= r) scan->neighbours.push_back(b);
+    }
+    scan->first_neighbour.push_back(static_cast<int>(scan->neighbours.size()));
     entry = std::move(scan);
   }
   return *entry;
+}
+
+// The grid local maxima of the energy a single lobe captures with its Eq. 18
+// coefficients, sum_l (y_l(s) . t_l)^2 / sum_m y_lm(s)^2 (psi(s) is ||t||^2 minus it),
+// as (-energy, axis index), the best `keep` first (keep <= 0: all sorted). Ties between
+// neighbours go to the lower index.
+void grid_peaks(int order, std::span<const double> t, const std::vector<bool>& mask, const AxisScan& scan, int keep,
+                std::vector<std::pair<double, int>>& peaks) {
+  const int n2 = sh_count(order), count = static_cast<int>(scan.axes.size());
+  thread_local std::vector<double> energy;
+  energy.resize(count);
+  for (int a = 0; a < count; ++a) {
+    const double* y = scan.y.data() + static_cast<std::size_t>(a) * n2;
+    double captured = 0;
+    for (int l = 0; l < order; ++l) {
+      if (!mask.empty() && !mask[l]) continue;
+      double dot = 0;
+      for (int i = l * l; i < (l + 1) * (l + 1); ++i) dot += y[i] * t[i];
+      captured += dot * dot * (4.0 * std::numbers::pi / (2 * l + 1));
+    }
+    energy[a] = captured;
+  }
+  peaks.clear();
+  for (int a = 0; a < count; ++a) {
+    bool peak = true;
+    for (int j = scan.first_neighbour[a]; j < scan.first_neighbour[a + 1] && peak; ++j) {
+      const int b = scan.neighbours[j];
+      peak = energy[b] < energy[a] || (energy[b] == energy[a] && b > a);
+    }
+    if (peak) peaks.emplace_back(-energy[a], a);
+  }
+  const int sorted = keep <= 0 ? static_cast<int>(peaks.size()) : std::min<int>(keep, peaks.size());
+  std::partial_sort(peaks.begin(), peaks.begin() + sorted, peaks.end());
+  peaks.resize(sorted);
 }
 
 // The axis whose single lobe (Eq. 18) best fits `t`, among the scan set and the optimal
@@ -486,6 +542,37 @@ double single_lobe_closed_form(int order, std::span<const double> t, const Eigen
     psi -= dot * dot * inv_sum_sq;
   }
   return std::max(0.0, psi);
+}
+
+double best_single_lobe(int order, std::span<const double> t, const std::vector<bool>& mask, int axis_count,
+                        int maxima, Eigen::Vector3d& axis, std::span<double> coeffs) {
+  const AxisScan& scan = axis_scan(order, axis_count);
+  const int n2 = sh_count(order);
+  thread_local std::vector<std::pair<double, int>> peaks;
+  grid_peaks(order, t, mask, scan, maxima, peaks);
+  const int refine = static_cast<int>(peaks.size());
+  double best = std::numeric_limits<double>::infinity();
+  std::vector<double> c(order);
+  std::vector<Eigen::Vector3d> start(1);
+  for (int k = 0; k < refine; ++k) {
+    start[0] = scan.axes[peaks[k].second];
+    double squared_residual = 0;
+    varpro_bfgs(order, t, mask, start, kSingleLobeEvaluations, kVarProExactFtolRel, squared_residual);
+    // The closed form at the refined axis, without the ridge the search carries.
+    const double psi = single_lobe_closed_form(order, t, start[0], c, mask);
+    if (psi < best) {
+      best = psi;
+      axis = start[0];
+      std::copy(c.begin(), c.end(), coeffs.begin());
+    }
+  }
+  if (!(best < std::numeric_limits<double>::infinity())) {
+    // Every refinement non-finite (inputs near the end of the double range): a zero lobe.
+    axis = Eigen::Vector3d::UnitZ();
+    std::fill(coeffs.begin(), coeffs.begin() + order, 0.0);
+    best = squared_norm(t.first(n2));
+  }
+  return best;
 }
 
 Eigen::Vector3d optimal_linear_axis(std::span<const double> t) {
@@ -694,7 +781,12 @@ ZhFit fit_zh(std::span<const double> t_in, const ZhFitOptions& o, std::uint64_t 
     apply_effort(resolved, kDefaultEffort);
     resolved.restart_above = o.restart_above;
   }
-  if (o.method == ZhFitMethod::joint) {
+  if (o.lobes == 1) {
+    // Exact at every effort: random starts could not improve on it.
+    best.resize(1);
+    best[0].coeffs.assign(order, 0.0);
+    best_single_lobe(order, t, mask, o.single_lobe_axes, o.single_lobe_maxima, best[0].axis, best[0].coeffs);
+  } else if (o.method == ZhFitMethod::joint) {
     best = joint_search(order, t, mask, resolved, stream, good);
   } else {
     const std::vector<Eigen::Vector3d> axes = varpro_search(order, t, mask, resolved, stream, good);

@@ -40,6 +40,13 @@ enum class ZhFitMethod { varpro, joint };
 
 inline constexpr int kStartsByEffort = -1;
 
+// The single-lobe search's defaults (best_single_lobe): a lobe's energy is a degree-10
+// polynomial on the sphere at order 6, whose distinct maxima lie tenths of a radian
+// apart, and 1024 axes are 0.08 rad apart; checked against every grid maximum of 16
+// times as many axes (ZhFit.SingleLobeSearchFindsTheOptimumOfADenserGrid).
+inline constexpr int kSingleLobeAxes = 1024;
+inline constexpr int kSingleLobeMaxima = 4;
+
 struct ZhFitOptions {
   int order = 6;
   int lobes = 4;
@@ -51,12 +58,17 @@ struct ZhFitOptions {
   // effort/quality knob. kStartsByEffort: the default level's count for `lobes`
   // (apply_effort); 0: the greedy start only.
   int starts = kStartsByEffort;
-  // Axes of the dense well-spread set scanned with the closed form of Eq. 18 for each
-  // single lobe (a spherical-Fibonacci set on the upper hemisphere: s and -s give the
-  // same lobe).
+  // Axes of the well-spread set scanned with the closed form of Eq. 18 for each greedy
+  // stage of a multi-lobe fit (a spherical-Fibonacci set on the upper hemisphere: s and
+  // -s give the same lobe).
   int axis_samples = 128;
-  // Local refinements started from the best scanned axes (plus the optimal linear lobe).
+  // Joint method, greedy stages: local refinements started from the best scanned axes
+  // (plus the optimal linear lobe).
   int single_lobe_refinements = 2;
+  // A single lobe (lobes == 1, both methods): best_single_lobe over this many axes,
+  // refining this many grid maxima (<= 0: every one, the slow reference).
+  int single_lobe_axes = kSingleLobeAxes;
+  int single_lobe_maxima = kSingleLobeMaxima;
   int max_evaluations = 300;  // per BFGS run
   // varpro: the relative change of psi at which the polish of the best start stops
   // (starts themselves stop at 1e-3). 3e-4 leaves psi within a few tenths of a percent of
@@ -90,6 +102,15 @@ inline constexpr double kExactFitResidual = 1e-6;
 double single_lobe_closed_form(int order, std::span<const double> t, const Eigen::Vector3d& axis,
                                std::span<double> coeffs, const std::vector<bool>& mask = {});
 
+// The globally best single lobe ([4] Eq. 18 leaves psi a function of the axis s alone,
+// and psi(s) = psi(-s)): the closed form on `axis_count` spherical-Fibonacci axes of the
+// upper hemisphere, the grid's local maxima of captured energy ranked, and the best
+// `maxima` of them (<= 0: all) refined by L-BFGS to a relative change of 1e-10 in psi.
+// Writes the axis (unit) and its Eq. 18 coefficients (order values; bands with mask[l]
+// false get 0) and returns the squared residual.
+double best_single_lobe(int order, std::span<const double> t, const std::vector<bool>& mask, int axis_count,
+                        int maxima, Eigen::Vector3d& axis, std::span<double> coeffs);
+
 // Axis of symmetry of the linear band of t: normalise (-t_1^1, -t_1^-1, t_1^0)
 // (Sec. 3.3, with y_1^-1 = -c y, y_1^0 = c z, y_1^1 = -c x). +z if that band is zero.
 Eigen::Vector3d optimal_linear_axis(std::span<const double> t);
@@ -122,8 +143,8 @@ double zh_varpro_objective(int order, std::span<const double> t, const std::vect
                            std::span<const Eigen::Vector3d> axes, std::span<double> grad,
                            std::span<double> coeffs = {}, double* squared_residual = nullptr);
 
-// Full fit of one vector (t.size() == order^2): single lobe = dense axis scan + Eq. 18 +
-// BFGS from the best axes and the optimal linear lobe; multi-lobe = greedy, coefficient
+// Full fit of one vector (t.size() == order^2): single lobe = best_single_lobe (both
+// methods, every effort); multi-lobe = greedy, coefficient
 // refit with axes frozen, joint BFGS, then `starts` random axis sets (seeded by
 // options.seed and `stream`) each refit and BFGS-refined; the best is returned.
 // Axes are returned unit length with z >= 0 (odd-band coefficients flipped with them).
