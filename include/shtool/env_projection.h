@@ -127,7 +127,7 @@ class CubemapProjector {
   // i < N^2 (the reference rule, one texel at a time).
   void texel_integrals(CubeFace face, int x, int y, std::span<double> out) const;
 
-  static constexpr int kRowsPerGroup = 4;
+  static constexpr int kRowsPerGroup = 8;
 
  private:
   Eigen::Vector3d cube_vector(CubeFace face, double s, double t) const;

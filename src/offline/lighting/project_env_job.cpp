@@ -179,7 +179,7 @@ ProjectEnvReport run_project_env(const ProjectEnvRequest& r) {
     inputs = nlohmann::json::array();
     for (const char* suffix : kFaceSuffix) {
       const std::filesystem::path path = text.substr(0, at) + suffix + text.substr(at + 2);
-      ImageFile f = read_image(path, "image");
+      ImageFile f = read_image(path, "image", threads);
       inputs.push_back({{"image", path.filename().string()}, {"input_crc32", f.crc32}});
       faces.push_back(std::move(f.image));
     }
@@ -190,7 +190,7 @@ ProjectEnvReport run_project_env(const ProjectEnvRequest& r) {
                          std::to_string(f.width) + " x " + std::to_string(f.height) + " given)");
     report.layout = "faces " + std::to_string(faces[0].width) + " x " + std::to_string(faces[0].width);
   } else {
-    ImageFile f = read_image(r.image, "image");
+    ImageFile f = read_image(r.image, "image", threads);
     inputs = {{"image", r.image.filename().string()}, {"input_crc32", f.crc32}};
     const Image& img = f.image;
     if (layout == Layout::automatic) {

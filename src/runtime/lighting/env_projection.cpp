@@ -565,9 +565,10 @@ namespace {
 
 // The folded sums of one class for every face and channel: the eight images' values
 // (`offsets` from each face's first texel), F[fold][f * 4 + c].
-template <int C>
+template <int C, bool kScaled>
 void fold_class(const float* const* bases, const std::size_t* strides, const int (*at)[2], double scale,
                 double (*F)[kFaceLanes]) {
+  if constexpr (!kScaled) scale = 1;
   for (int f = 0; f < 6; ++f) {
     const float* texel[8];
     for (int g = 0; g < 8; ++g) texel[g] = bases[f] + at[g][1] * strides[f] + static_cast<std::size_t>(at[g][0]) * C;
@@ -637,11 +638,12 @@ Result<Ok> CubemapProjector::accumulate_block(std::span<const FloatImageView, 6>
           for (const auto& p : at) stabiliser += p[0] == x && p[1] == y;
           // A class of fewer than eight texels meets each of them 8 / |class| times.
           const double scale = 1.0 / stabiliser;
+          const bool scaled = stabiliser > 1;
           switch (channels) {
-            case 1: fold_class<1>(bases, strides, at, scale, F); break;
-            case 2: fold_class<2>(bases, strides, at, scale, F); break;
-            case 3: fold_class<3>(bases, strides, at, scale, F); break;
-            default: fold_class<4>(bases, strides, at, scale, F); break;
+            case 1: (scaled ? fold_class<1, true> : fold_class<1, false>)(bases, strides, at, scale, F); break;
+            case 2: (scaled ? fold_class<2, true> : fold_class<2, false>)(bases, strides, at, scale, F); break;
+            case 3: (scaled ? fold_class<3, true> : fold_class<3, false>)(bases, strides, at, scale, F); break;
+            default: (scaled ? fold_class<4, true> : fold_class<4, false>)(bases, strides, at, scale, F); break;
           }
           add_class(order_, W.data(), k, F, A.data());
         }
