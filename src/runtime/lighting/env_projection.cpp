@@ -152,8 +152,11 @@ namespace {
 // the same bits; only the vector width differs.
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__linux__)
 #define SHTOOL_SAME_BITS_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
+// The cube face rule and class sums also run 8 lanes wide (AVX-512), same bits again.
+#define SHTOOL_SAME_BITS_CLONES_WIDE __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
 #else
 #define SHTOOL_SAME_BITS_CLONES
+#define SHTOOL_SAME_BITS_CLONES_WIDE
 #endif
 
 // sum_x w[x] v[x] in four lanes (x mod 4), each summed in runs of 16 terms before its
@@ -336,7 +339,7 @@ enum Fold { kP0, kV0, kP2, kV2, kP1, kV1, kU1, kQ1, kFolds };
 // channel c at f * 4 + c.
 constexpr int kFaceLanes = 24;
 // Classes whose integrals are computed together (the vector lanes of the rule).
-constexpr int kClassLanes = 4;
+constexpr int kClassLanes = 8;
 
 // The rule of one texel per lane, texels (s_centre[lane], t_centre) of half-width
 // `half`, in the face frame: direction (s, t, 1) / r, polar axis the face normal.
@@ -345,21 +348,21 @@ constexpr int kClassLanes = 4;
 // azimuthal factors.
 // Row is scratch of the same size: the nodes are summed row of nodes by row of nodes,
 // as texel_integrals does (fewer roundings per sum).
-SHTOOL_SAME_BITS_CLONES void face_frame_integrals(int order, int nodes, const double* node, const double* weight,
+SHTOOL_SAME_BITS_CLONES_WIDE void face_frame_integrals(int order, int nodes, const double* node, const double* weight,
                                                   double half, const double* s_centre, double t_centre, double* W,
                                                   double* row) {
   const detail::LegendreRecurrence<double>& tab = detail::legendre_recurrence<double>();
   constexpr int L = kClassLanes;
   const int n = order * order;
   std::fill(W, W + static_cast<std::size_t>(n) * L, 0.0);
-  alignas(32) double cm[kMaxEnvOrder][L], sm[kMaxEnvOrder][L];
-  alignas(32) double qa[kMaxEnvOrder][L], qb[kMaxEnvOrder][L], qc[kMaxEnvOrder][L];
+  alignas(64) double cm[kMaxEnvOrder][L], sm[kMaxEnvOrder][L];
+  alignas(64) double qa[kMaxEnvOrder][L], qb[kMaxEnvOrder][L], qc[kMaxEnvOrder][L];
   constexpr double kSqrt2 = std::numbers::sqrt2;
   for (int a = 0; a < nodes; ++a) {
     const double t = t_centre + half * node[a];
     std::fill(row, row + static_cast<std::size_t>(n) * L, 0.0);
     for (int b = 0; b < nodes; ++b) {
-      alignas(32) double x[L], y[L], z[L];
+      alignas(64) double x[L], y[L], z[L];
       const double wab = weight[a] * weight[b] * half * half;
       for (int k = 0; k < L; ++k) {
         const double s = s_centre[k] + half * node[b];
@@ -371,10 +374,13 @@ SHTOOL_SAME_BITS_CLONES void face_frame_integrals(int order, int nodes, const do
         cm[0][k] = wab / (r2 * r);  // ds dt / r^3
         sm[0][k] = 0;
       }
+      // cm, sm carry sqrt2 from m = 1 on (y_l^{+-m} = sqrt2 Q_l^m Re, Im (x + i y)^m).
       for (int m = 1; m < order; ++m)
         for (int k = 0; k < L; ++k) {
-          cm[m][k] = x[k] * cm[m - 1][k] - y[k] * sm[m - 1][k];
-          sm[m][k] = x[k] * sm[m - 1][k] + y[k] * cm[m - 1][k];
+          const double c = m == 1 ? kSqrt2 * cm[0][k] : cm[m - 1][k];
+          const double sp = sm[m - 1][k];
+          cm[m][k] = x[k] * c - y[k] * sp;
+          sm[m][k] = x[k] * sp + y[k] * c;
         }
       double(*q2)[L] = qa;
       double(*q1)[L] = qb;
@@ -397,9 +403,8 @@ SHTOOL_SAME_BITS_CLONES void face_frame_integrals(int order, int nodes, const do
         for (int k = 0; k < L; ++k) centre[k] += q0[0][k] * cm[0][k];
         for (int m = 1; m <= l; ++m)
           for (int k = 0; k < L; ++k) {
-            const double q = kSqrt2 * q0[m][k];
-            centre[m * L + k] += q * cm[m][k];
-            centre[-m * L + k] += q * sm[m][k];
+            centre[m * L + k] += q0[m][k] * cm[m][k];
+            centre[-m * L + k] += q0[m][k] * sm[m][k];
           }
         double(*spare)[L] = q2;
         q2 = q1;
@@ -413,7 +418,7 @@ SHTOOL_SAME_BITS_CLONES void face_frame_integrals(int order, int nodes, const do
 
 // Adds one class's folded sums times its integrals (lane `lane` of W) into the face-frame
 // accumulators A[i * kFaceLanes + f * 4 + c].
-SHTOOL_SAME_BITS_CLONES void add_class(int order, const double* W, int lane, const double (*F)[kFaceLanes],
+SHTOOL_SAME_BITS_CLONES_WIDE void add_class(int order, const double* W, int lane, const double (*F)[kFaceLanes],
                                        double* A) {
   constexpr int L = kClassLanes, K = kFaceLanes;
   for (int l = 0; l < order; ++l) {
@@ -614,16 +619,37 @@ Result<Ok> CubemapProjector::accumulate_block(std::span<const FloatImageView, 6>
   // Per face, the coefficients in its own frame; carried to shtool's frame at the end.
   std::vector<double> A(static_cast<std::size_t>(n) * kFaceLanes, 0.0);
   std::vector<double> W(static_cast<std::size_t>(n) * kClassLanes), node_row(W.size());
-  alignas(32) double F[kFolds][kFaceLanes] = {};
+  alignas(64) double F[kFolds][kFaceLanes] = {};
   // A group of rows is walked in columns of kClassLanes classes: the images of a few
   // neighbouring classes share cache lines along rows and, transposed, along columns.
   auto do_group = [&](int group) {
     const int y_begin = first_row + group * kRowsPerGroup, y_end = std::min(R, y_begin + kRowsPerGroup);
     for (int x0 = y_begin; x0 < R; x0 += kClassLanes) {
+      // The images of a tile lie on 4 rows of the group and 4 of the columns, in 96
+      // different rows of the six faces: no hardware prefetcher follows that, so the
+      // texels of the next tile are asked for now.
+      if (const int xp = x0 + kClassLanes; xp < R) {
+        const int xpm = R - 1 - xp;
+        for (int f = 0; f < 6; ++f) {
+          for (int y = y_begin; y < y_end; ++y)
+            for (const int row : {y, R - 1 - y})
+              for (const int x : {xp, xp + kClassLanes / 2, xpm - kClassLanes / 2, xpm - kClassLanes + 1})
+                __builtin_prefetch(bases[f] + row * strides[f] + static_cast<std::size_t>(std::clamp(x, 0, R - 1)) * channels);
+          for (int x = xp; x < std::min(R, xp + kClassLanes); ++x) {
+            const int xm = R - 1 - x;
+            for (const int row : {x, xm}) {
+              __builtin_prefetch(bases[f] + row * strides[f] + static_cast<std::size_t>(y_begin) * channels);
+              __builtin_prefetch(bases[f] + row * strides[f] + static_cast<std::size_t>(y_end - 1) * channels);
+              __builtin_prefetch(bases[f] + row * strides[f] + static_cast<std::size_t>(R - y_end) * channels);
+              __builtin_prefetch(bases[f] + row * strides[f] + static_cast<std::size_t>(R - 1 - y_begin) * channels);
+            }
+          }
+        }
+      }
       for (int y = y_begin; y < y_end; ++y) {
         if (x0 + kClassLanes <= y) continue;
         const int lane_begin = std::max(0, y - x0), lane_end = std::min(kClassLanes, R - x0);
-        alignas(32) double s_centre[kClassLanes];
+        alignas(64) double s_centre[kClassLanes];
         for (int k = 0; k < kClassLanes; ++k)
           s_centre[k] = -1 + (2 * (x0 + std::clamp(k, lane_begin, lane_end - 1)) + 1) * half;
         face_frame_integrals(order_, nodes_, nodes_unit_.data(), weights_unit_.data(), half, s_centre,
