@@ -355,6 +355,8 @@ SHTOOL_SAME_BITS_CLONES_WIDE void face_frame_integrals(int order, int nodes, con
   constexpr int L = kClassLanes;
   const int n = order * order;
   std::fill(W, W + static_cast<std::size_t>(n) * L, 0.0);
+  // The lane loops read and write distinct rows of these arrays (q0, q1, q2 rotate over
+  // qa, qb, qc): `ivdep` tells GCC so, which it cannot prove, so that they vectorise.
   alignas(64) double cm[kMaxEnvOrder][L], sm[kMaxEnvOrder][L];
   alignas(64) double qa[kMaxEnvOrder][L], qb[kMaxEnvOrder][L], qc[kMaxEnvOrder][L];
   constexpr double kSqrt2 = std::numbers::sqrt2;
@@ -364,6 +366,7 @@ SHTOOL_SAME_BITS_CLONES_WIDE void face_frame_integrals(int order, int nodes, con
     for (int b = 0; b < nodes; ++b) {
       alignas(64) double x[L], y[L], z[L];
       const double wab = weight[a] * weight[b] * half * half;
+#pragma GCC ivdep
       for (int k = 0; k < L; ++k) {
         const double s = s_centre[k] + half * node[b];
         const double r2 = 1 + s * s + t * t;
@@ -376,6 +379,7 @@ SHTOOL_SAME_BITS_CLONES_WIDE void face_frame_integrals(int order, int nodes, con
       }
       // cm, sm carry sqrt2 from m = 1 on (y_l^{+-m} = sqrt2 Q_l^m Re, Im (x + i y)^m).
       for (int m = 1; m < order; ++m)
+#pragma GCC ivdep
         for (int k = 0; k < L; ++k) {
           const double c = m == 1 ? kSqrt2 * cm[0][k] : cm[m - 1][k];
           const double sp = sm[m - 1][k];
@@ -387,8 +391,10 @@ SHTOOL_SAME_BITS_CLONES_WIDE void face_frame_integrals(int order, int nodes, con
       double(*q0)[L] = qc;
       for (int l = 0; l < order; ++l) {
         if (l == 0) {
+#pragma GCC ivdep
           for (int k = 0; k < L; ++k) q0[0][k] = tab.q00;
         } else {
+#pragma GCC ivdep
           for (int k = 0; k < L; ++k) {
             q0[l][k] = tab.diag[l] * q1[l - 1][k];
             q0[l - 1][k] = tab.subdiag[l - 1] * z[k] * q1[l - 1][k];
@@ -396,12 +402,15 @@ SHTOOL_SAME_BITS_CLONES_WIDE void face_frame_integrals(int order, int nodes, con
           for (int m = 0; m <= l - 2; ++m) {
             const double ca = tab.a[detail::LegendreRecurrence<double>::tri(l, m)];
             const double cb = tab.b[detail::LegendreRecurrence<double>::tri(l, m)];
+#pragma GCC ivdep
             for (int k = 0; k < L; ++k) q0[m][k] = ca * (z[k] * q1[m][k] - cb * q2[m][k]);
           }
         }
         double* centre = row + static_cast<std::size_t>(l * (l + 1)) * L;
+#pragma GCC ivdep
         for (int k = 0; k < L; ++k) centre[k] += q0[0][k] * cm[0][k];
         for (int m = 1; m <= l; ++m)
+#pragma GCC ivdep
           for (int k = 0; k < L; ++k) {
             centre[m * L + k] += q0[m][k] * cm[m][k];
             centre[-m * L + k] += q0[m][k] * sm[m][k];
@@ -576,7 +585,8 @@ void fold_class(const float* const* bases, const std::size_t* strides, const int
   if constexpr (!kScaled) scale = 1;
   for (int f = 0; f < 6; ++f) {
     const float* texel[8];
-    for (int g = 0; g < 8; ++g) texel[g] = bases[f] + at[g][1] * strides[f] + static_cast<std::size_t>(at[g][0]) * C;
+    for (int g = 0; g < 8; ++g)
+      texel[g] = bases[f] + static_cast<std::size_t>(at[g][1]) * strides[f] + static_cast<std::size_t>(at[g][0]) * C;
     for (int c = 0; c < C; ++c) {
       double v[8];
       for (int g = 0; g < 8; ++g) v[g] = texel[g][c];
