@@ -4,6 +4,7 @@
 //   BM_DecodeExr/T        decode_image of a 4096 x 2048 float ZIP OpenEXR (100 MB) on T
 //                         threads (OpenEXR's pool; 0: every core)
 //   BM_Crc32              input_crc32 of the same bytes (what read_image hashes)
+//   BM_ReadFile           read_input_file of that file (page cache to memory)
 //   BM_ReadImage/T        read_image of that file: read once, decoded on T threads, hashed
 //   BM_DecodePng          decode_image of the 8-bit PNG (exact sRGB decode)
 //   BM_Project/N          project_equirect of the decoded image, order N (one thread)
@@ -84,6 +85,12 @@ void BM_Crc32(benchmark::State& state) {
   for (auto _ : state) benchmark::DoNotOptimize(shtool::input_crc32(bytes));
 }
 BENCHMARK(BM_Crc32)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_ReadFile(benchmark::State& state) {
+  static const std::filesystem::path path = write_file("read.exr", exr_bytes());
+  for (auto _ : state) benchmark::DoNotOptimize(shtool::read_input_file(path, "image"));
+}
+BENCHMARK(BM_ReadFile)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_ReadImage(benchmark::State& state) {
   static const std::filesystem::path path = write_file("read.exr", exr_bytes());
