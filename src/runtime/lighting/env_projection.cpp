@@ -346,7 +346,7 @@ constexpr int kClassLanes = 8;
 // W[i * kClassLanes + lane], i < N^2. The basis recurrence of sh.cpp (the Q_l^m of
 // basis/legendre_recurrence.h times Re, Im (x + i y)^m), node weights folded into the
 // azimuthal factors.
-// Row is scratch of the same size: the nodes are summed row of nodes by row of nodes,
+// `row` is scratch of the same size: the nodes are summed row of nodes by row of nodes,
 // as texel_integrals does (fewer roundings per sum).
 SHTOOL_SAME_BITS_CLONES_WIDE void face_frame_integrals(int order, int nodes, const double* node, const double* weight,
                                                   double half, const double* s_centre, double t_centre, double* W,
