@@ -77,14 +77,20 @@ std::array<Image, 6> faces_from_cross(const Image& cross, const std::filesystem:
     face.channels = cross.channels;
     face.texels.resize(static_cast<std::size_t>(size) * size * cross.channels);
     const bool turned = vertical && f == static_cast<int>(CubeFace::nz);
-    for (int y = 0; y < size; ++y)
-      for (int x = 0; x < size; ++x) {
-        const int sx = turned ? size - 1 - x : x, sy = turned ? size - 1 - y : y;
-        const std::size_t src =
-            (static_cast<std::size_t>(at[f][1] * size + sy) * cross.width + at[f][0] * size + sx) * cross.channels;
-        std::copy_n(cross.texels.begin() + src, cross.channels,
-                    face.texels.begin() + (static_cast<std::size_t>(y) * size + x) * cross.channels);
+    const std::size_t run = static_cast<std::size_t>(size) * cross.channels;
+    for (int y = 0; y < size; ++y) {
+      const int sy = turned ? size - 1 - y : y;
+      const auto src = cross.texels.begin() +
+                       (static_cast<std::size_t>(at[f][1] * size + sy) * cross.width + at[f][0] * size) * cross.channels;
+      const auto dst = face.texels.begin() + static_cast<std::size_t>(y) * run;
+      if (!turned) {
+        std::copy_n(src, run, dst);
+        continue;
       }
+      for (int x = 0; x < size; ++x)
+        std::copy_n(src + static_cast<std::size_t>(size - 1 - x) * cross.channels, cross.channels,
+                    dst + static_cast<std::size_t>(x) * cross.channels);
+    }
   }
   return faces;
 }
