@@ -54,14 +54,16 @@ const std::string& exr_bytes() {
   return bytes;
 }
 
-// A folder of this process's files, removed at exit.
+// A folder of this process's files, removed at exit (the handler is registered once the
+// path exists, so that it runs before the path's destructor).
 const std::filesystem::path& folder() {
   static const std::filesystem::path dir = [] {
     std::filesystem::path d = std::filesystem::temp_directory_path() / ("shtool_bench_images_" + std::to_string(getpid()));
     std::filesystem::create_directories(d);
-    std::atexit([] { std::filesystem::remove_all(folder()); });
     return d;
   }();
+  static const bool cleanup = std::atexit([] { std::filesystem::remove_all(folder()); }) == 0;
+  (void)cleanup;
   return dir;
 }
 
