@@ -4,7 +4,9 @@
 //                              project_equirect pays on every call)
 //   BM_NaiveEquirect/N         the textbook loop: all N^2 SH at every texel centre
 //   BM_ReadImageOnce           one pass over the same floats: the memory-bandwidth floor
-//   BM_ProjectCubemap/N        project_cubemap on six 1024 x 1024 RGB faces
+//   BM_ProjectCubemap/N        project_cubemap on six 1024 x 1024 RGB faces (create included)
+//   BM_ProjectCubemapReference/N  project_cubemap_reference on the same faces: the rule
+//                              run texel by texel, for the ratio
 // items_per_second is texels per second.
 // Run: build/bench/bench_env --benchmark_min_time=0.1
 // Figures and the machine they were measured on: docs/benchmarks.md.
@@ -143,18 +145,34 @@ void BM_ReadImageOnce(benchmark::State& state) {
   set_texel_rates(state, static_cast<std::size_t>(kEquirectWidth) * kEquirectHeight);
 }
 
-void BM_ProjectCubemap(benchmark::State& state) {
-  const int n = static_cast<int>(state.range(0));
+std::array<shtool::FloatImageView, 6> cube_views() {
   const std::vector<float>& texels = cube_texels();
   const std::size_t face = static_cast<std::size_t>(kFaceSize) * kFaceSize * kChannels;
   std::array<shtool::FloatImageView, 6> faces;
   for (int f = 0; f < 6; ++f) faces[f] = {texels.data() + f * face, kFaceSize, kFaceSize, kChannels, 0};
+  return faces;
+}
+
+void BM_ProjectCubemap(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  const std::array<shtool::FloatImageView, 6> faces = cube_views();
   for (auto _ : state) {
     shtool::Result<shtool::EnvCoefficients> r = shtool::project_cubemap(std::span<const shtool::FloatImageView, 6>(faces), n);
     benchmark::DoNotOptimize(check(r).data());
   }
   set_texel_rates(state, 6 * static_cast<std::size_t>(kFaceSize) * kFaceSize);
   state.counters["nodes"] = shtool::cubemap_nodes_per_side(kFaceSize, n);
+}
+
+void BM_ProjectCubemapReference(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  const std::array<shtool::FloatImageView, 6> faces = cube_views();
+  for (auto _ : state) {
+    shtool::Result<shtool::EnvCoefficients> r =
+        shtool::project_cubemap_reference(std::span<const shtool::FloatImageView, 6>(faces), n);
+    benchmark::DoNotOptimize(check(r).data());
+  }
+  set_texel_rates(state, 6 * static_cast<std::size_t>(kFaceSize) * kFaceSize);
 }
 
 }  // namespace
@@ -164,6 +182,7 @@ BENCHMARK(BM_ProjectEquirect)->Arg(3)->Arg(6)->Arg(10)->Arg(20)->Unit(benchmark:
 BENCHMARK(BM_ProjectEquirectSetup)->Arg(3)->Arg(6)->Arg(10)->Arg(20)->Unit(benchmark::kMicrosecond);
 // Seconds per call: one iteration is already far above any min_time worth asking for.
 BENCHMARK(BM_NaiveEquirect)->Arg(3)->Arg(6)->Arg(10)->Arg(20)->Iterations(1)->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_ProjectCubemap)->Arg(3)->Arg(6)->Arg(10)->Iterations(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_ProjectCubemap)->Arg(3)->Arg(6)->Arg(10)->Arg(20)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_ProjectCubemapReference)->Arg(3)->Iterations(1)->Unit(benchmark::kMillisecond);
 
 BENCHMARK_MAIN();

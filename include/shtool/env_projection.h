@@ -15,7 +15,15 @@
 // engine = (x, z, -y)); `mirror_x` negates X first. Each texel is integrated by a
 // Gauss-Legendre product rule in (s, t) of the solid-angle element
 // ds dt / (1 + s^2 + t^2)^(3/2), with enough nodes that a texel's integral is within
-// 1e-12 of its solid angle for the orders accepted.
+// 1e-12 of its solid angle for the orders accepted. Every face is the same square seen
+// through a signed permutation of axes, and the square is symmetric under the eight
+// maps (s, t) -> (+-s, +-t), (+-t, +-s): the rule runs once per class of eight texels,
+// in a frame with the face normal as polar axis where those maps only permute and negate
+// the pairs (cos m p, sin m p); the 48 texels of a class (8 per face) are folded into
+// eight sums per face and channel, and each face's coefficients are carried to shtool's
+// frame by the orthogonal map of its axes (docs/lighting.md). project_cubemap_reference
+// runs the rule on every texel in shtool's frame instead (the same integrals, another
+// rounding).
 //
 // Both accumulate in double, in a fixed order of fixed blocks of rows: the result does
 // not depend on how the blocks are shared among threads (Projector::block_count and
@@ -102,27 +110,42 @@ class CubemapProjector {
   int face_size() const { return size_; }
   // Gauss-Legendre nodes per texel side.
   int nodes_per_side() const { return nodes_; }
-  // Blocks of rows of all six faces, face-major.
+  // Blocks of texel classes: each covers two groups of kRowsPerGroup rows of the face's
+  // eighth s >= t >= 0 (rows near its centre are long, near the edge short: the groups
+  // are paired long with short, so that blocks hold nearly equal work) and the texels
+  // of those classes on all six faces.
   int block_count() const;
   std::size_t partial_size(int channels) const;
   // faces[f] is face f (CubeFace order), each face_size square with the same channels.
+  // A block with a non-finite texel reports the first one of the whole cubemap (face,
+  // then row, then column), so that the message does not depend on the block.
   Result<Ok> accumulate_block(std::span<const FloatImageView, 6> faces, int block, std::span<double> partial) const;
 
   // Unit direction (shtool's frame) at face coordinates (s, t).
   Eigen::Vector3d direction(CubeFace face, double s, double t) const;
-  // The integrals of every y_i over texel (x, y) of `face`: out[i], i < N^2.
+  // The integrals of every y_i over texel (x, y) of `face`, in shtool's frame: out[i],
+  // i < N^2 (the reference rule, one texel at a time).
   void texel_integrals(CubeFace face, int x, int y, std::span<double> out) const;
 
-  static constexpr int kRowsPerBlock = 4;
+  static constexpr int kRowsPerGroup = 8;
 
  private:
+  Eigen::Vector3d cube_vector(CubeFace face, double s, double t) const;
+
   int size_ = 0, order_ = 0, nodes_ = 0;
   bool mirror_x_ = false;
   std::vector<double> nodes_unit_;    // Gauss nodes on [-1, 1]
   std::vector<double> weights_unit_;  // their weights
+  // Per face, the orthogonal map of SH coefficients from the face's frame (s, t, 1) to
+  // shtool's, band blocks (2l+1)^2 row-major, bands in order.
+  std::vector<double> face_maps_;
 };
 
 Result<EnvCoefficients> project_cubemap(std::span<const FloatImageView, 6> faces, int order, bool mirror_x = false);
+// The same projection texel by texel: every texel's own rule in shtool's frame
+// (texel_integrals), face by face. Slow; the fast path is tested against it.
+Result<EnvCoefficients> project_cubemap_reference(std::span<const FloatImageView, 6> faces, int order,
+                                                  bool mirror_x = false);
 
 // Gauss-Legendre nodes per texel side for a face of `face_size` texels at `order`: the
 // fewest whose error bound on one texel is below 1e-13 of its solid angle.

@@ -15,6 +15,7 @@
 #include <map>
 #include <numbers>
 #include <random>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -369,6 +370,33 @@ TEST(CliProjectEnv, SameBytesWhateverTheThreadCount) {
                                                table.string()});
     ASSERT_EQ(r.exit_code, 0) << r.err;
     bytes[k] = read_text(json) + read_text(table);
+  }
+  EXPECT_EQ(bytes[0], bytes[1]);
+}
+
+TEST(CliProjectEnv, ExrCrossSameBytesWhateverTheThreadCountAndItsCrc) {
+  // A float ZIP OpenEXR cross of 40^2 faces: the decoder's pool and the cube blocks both
+  // follow --threads, and the generator record holds the CRC-32 of the file's bytes
+  // (hashed while OpenEXR reads them).
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(0, 3);
+  const int w = 160, h = 120;
+  Texels cross(static_cast<std::size_t>(w) * h * 3);
+  for (float& v : cross) v = u(rng);
+  const fs::path image = scratch("threads_cross.exr");
+  write_exr(image, w, h, cross, false);
+  std::string bytes[2];
+  for (int k = 0; k < 2; ++k) {
+    const fs::path json = scratch("x" + std::to_string(k) + ".json"), table = scratch("x" + std::to_string(k) + ".shtb");
+    const test::CommandResult r = run_command({kExe, "project-env", image.string(), "--order", "7", "--threads",
+                                               k == 0 ? "1" : "3", "--json", json.string(), "--out", table.string()});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    bytes[k] = read_text(json) + read_text(table);
+    const Result<Table> t = read_table(table, {"env-sh", 1, 0});
+    ASSERT_TRUE(t) << t.error().message;
+    const std::string file = read_text(image);
+    EXPECT_EQ(nlohmann::json::parse(t.value().generator)["parameters"]["input_crc32"].get<std::uint32_t>(),
+              table_crc32(std::span<const std::byte>(reinterpret_cast<const std::byte*>(file.data()), file.size())));
   }
   EXPECT_EQ(bytes[0], bytes[1]);
 }

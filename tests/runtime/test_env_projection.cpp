@@ -6,8 +6,10 @@
 
 #include <array>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <random>
+#include <string>
 #include <tuple>
 #include <vector>
 
@@ -279,6 +281,57 @@ TEST(CubemapProjection, FaceTableAndFrame) {
   EXPECT_GT(q.direction(CubeFace::pz, 0, -1).z(), 0.5);
   const Result<CubemapProjector> m = CubemapProjector::create(4, 2, true);
   EXPECT_TRUE(m.value().direction(CubeFace::px, 0, 0).isApprox(Eigen::Vector3d(-1, 0, 0)));
+}
+
+TEST(CubemapProjection, FastPathMatchesTheReferenceToRoundOff) {
+  // The class-folded path against every texel's own rule in shtool's frame: the same
+  // integrals, summed in another order, over odd and even faces (classes of 1, 4 and 8
+  // texels), every channel count and both mirrors.
+  struct Case {
+    int size, channels, order;
+    bool mirror;
+  };
+  for (const Case& k : {Case{1, 3, 6, false}, Case{2, 1, 8, true}, Case{3, 3, 5, false}, Case{4, 2, 7, false},
+                        Case{5, 4, 10, true}, Case{8, 3, 1, false}, Case{9, 3, 2, true}, Case{16, 3, 4, false},
+                        Case{33, 1, 9, false}, Case{12, 3, 13, true}}) {
+    std::array<std::vector<float>, 6> faces;
+    for (int f = 0; f < 6; ++f) faces[f] = random_image(k.size, k.size, k.channels, 300 + 11 * f + k.size);
+    const auto v = views(faces, k.size, k.channels);
+    const Result<EnvCoefficients> fast = project_cubemap(v, k.order, k.mirror);
+    const Result<EnvCoefficients> slow = project_cubemap_reference(v, k.order, k.mirror);
+    ASSERT_TRUE(fast && slow);
+    double scale = 0;
+    for (double c : slow.value().coefficients) scale = std::max(scale, std::abs(c));
+    for (std::size_t i = 0; i < slow.value().coefficients.size(); ++i)
+      ASSERT_NEAR(fast.value().coefficients[i], slow.value().coefficients[i], 4e-15 * scale)
+          << "size " << k.size << " order " << k.order << " coefficient " << i / k.channels;
+  }
+}
+
+TEST(CubemapProjection, BlocksCanRunInAnyOrderAndNonFiniteTexelsAreNamed) {
+  const int size = 37, order = 5;
+  std::array<std::vector<float>, 6> faces;
+  for (int f = 0; f < 6; ++f) faces[f] = random_image(size, size, 3, 40 + f);
+  const auto v = views(faces, size, 3);
+  const CubemapProjector p = CubemapProjector::create(size, order).value();
+  ASSERT_GT(p.block_count(), 1);
+  std::vector<std::vector<double>> partials(p.block_count(), std::vector<double>(p.partial_size(3), 0.0));
+  for (int b = p.block_count() - 1; b >= 0; --b) ASSERT_TRUE(p.accumulate_block(v, b, partials[b]));
+  std::vector<double> sum(p.partial_size(3), 0.0);
+  for (const auto& part : partials)
+    for (std::size_t i = 0; i < sum.size(); ++i) sum[i] += part[i];
+  EXPECT_EQ(sum, project_cubemap(v, order).value().coefficients);
+  // Two bad texels: every path names the first (face, row, column), whichever block meets it.
+  faces[3][(20 * size + 2) * 3 + 1] = std::numeric_limits<float>::infinity();
+  faces[4][(1 * size + 30) * 3 + 0] = std::numeric_limits<float>::quiet_NaN();
+  const std::string expected = "-Y face texel (2, 20) channel 1 is infinite";
+  EXPECT_EQ(project_cubemap(v, order).error().message, expected);
+  EXPECT_EQ(project_cubemap_reference(v, order).error().message, expected);
+  for (int b = 0; b < p.block_count(); ++b) {
+    std::vector<double> part(p.partial_size(3), 0.0);
+    const Result<Ok> r = p.accumulate_block(v, b, part);
+    if (!r) EXPECT_EQ(r.error().message, expected);
+  }
 }
 
 // ---------------------------------------------------------------------------

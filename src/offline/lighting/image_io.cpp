@@ -7,6 +7,8 @@
 #include <cstring>
 #include <exception>
 #include <memory>
+#include <mutex>
+#include <span>
 #include <thread>
 
 #include <stb_image.h>
@@ -22,6 +24,7 @@
 
 #include "common/input_error.h"
 #include "common/input_file.h"
+#include "shtool/table.h"
 
 namespace shtool::lighting {
 namespace {
@@ -72,20 +75,38 @@ void check_size(const std::filesystem::path& name, std::int64_t w, std::int64_t 
 // ---- OpenEXR from and to memory
 class MemoryIStream : public Imf::IStream {
  public:
-  MemoryIStream(std::string_view bytes, const std::string& name) : Imf::IStream(name.c_str()), bytes_(bytes) {}
+  // With `crc`, the CRC-32 of the bytes is run along as OpenEXR reads them (in order, in
+  // its reading thread, while its pool decompresses), so the file's bytes are hashed
+  // while they are in cache; finish_crc() hashes what was skipped or read out of order.
+  MemoryIStream(std::string_view bytes, const std::string& name, bool crc = false)
+      : Imf::IStream(name.c_str()), bytes_(bytes), hashing_(crc) {}
   bool read(char c[], int n) override {
     if (n < 0 || pos_ > bytes_.size() || static_cast<std::uint64_t>(n) > bytes_.size() - pos_)
       throw std::runtime_error("unexpected end of file");
     std::memcpy(c, bytes_.data() + pos_, static_cast<std::size_t>(n));
+    if (hashing_ && pos_ == hashed_) {
+      crc_ = table_crc32(std::span<const std::byte>(reinterpret_cast<const std::byte*>(c), static_cast<std::size_t>(n)),
+                         crc_);
+      hashed_ += static_cast<std::uint64_t>(n);
+    }
     pos_ += static_cast<std::uint64_t>(n);
     return pos_ < bytes_.size();
   }
   std::uint64_t tellg() override { return pos_; }
   void seekg(std::uint64_t pos) override { pos_ = pos; }
+  std::uint32_t finish_crc() {
+    const std::string_view rest = bytes_.substr(static_cast<std::size_t>(hashed_));
+    hashed_ = bytes_.size();
+    return crc_ = table_crc32(
+               std::span<const std::byte>(reinterpret_cast<const std::byte*>(rest.data()), rest.size()), crc_);
+  }
 
  private:
   std::string_view bytes_;
   std::uint64_t pos_ = 0;
+  bool hashing_ = false;
+  std::uint64_t hashed_ = 0;  // bytes [0, hashed_) are in crc_
+  std::uint32_t crc_ = 0;
 };
 
 class MemoryOStream : public Imf::OStream {
@@ -105,16 +126,23 @@ class MemoryOStream : public Imf::OStream {
   std::size_t pos_ = 0;
 };
 
-Image decode_exr(std::string_view bytes, const std::filesystem::path& name, std::int64_t max_texels) {
+// OpenEXR decompresses line blocks on its global pool (exact either way): `threads`
+// workers (1: none, the calling thread decodes). The pool is the process's, so its
+// size is set under a lock and only when it changes.
+int exr_pool(int threads) {
+  const int workers = threads <= 0 ? static_cast<int>(std::max(1u, std::thread::hardware_concurrency())) : threads;
+  const int pool = workers <= 1 ? 0 : workers;
+  static std::mutex mutex;
+  const std::lock_guard<std::mutex> lock(mutex);
+  if (Imf::globalThreadCount() != pool) Imf::setGlobalThreadCount(pool);
+  return pool;
+}
+
+Image decode_exr(std::string_view bytes, const std::filesystem::path& name, std::int64_t max_texels, int threads,
+                 std::uint32_t* crc) {
   try {
-    // OpenEXR decompresses line blocks on its own thread pool (exact either way).
-    static const bool pool = [] {
-      Imf::setGlobalThreadCount(static_cast<int>(std::max(1u, std::thread::hardware_concurrency())));
-      return true;
-    }();
-    (void)pool;
-    MemoryIStream stream(bytes, name.string());
-    Imf::InputFile file(stream);
+    MemoryIStream stream(bytes, name.string(), crc != nullptr);
+    Imf::InputFile file(stream, exr_pool(threads));
     const Imf::Header& header = file.header();
     const Imath::Box2i data = header.dataWindow(), display = header.displayWindow();
     if (data != display)
@@ -153,6 +181,7 @@ Image decode_exr(std::string_view bytes, const std::filesystem::path& name, std:
     file.readPixels(data.min.y, data.max.y);
     if (!rgb)
       for (std::size_t i = 0; i < img.texels.size(); i += 3) img.texels[i + 1] = img.texels[i + 2] = img.texels[i];
+    if (crc) *crc = stream.finish_crc();
     return img;
   } catch (const InputError&) {
     throw;
@@ -301,7 +330,11 @@ Image decode_stb(std::string_view bytes, const std::filesystem::path& name, Form
 double srgb_to_linear(double v) { return v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4); }
 double linear_to_srgb(double v) { return v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1 / 2.4) - 0.055; }
 
-Image decode_image(std::string_view bytes, const std::filesystem::path& name, std::int64_t max_texels) {
+namespace {
+
+// crc: when given, the CRC-32 of the bytes (as input_crc32), hashed during the decode.
+Image decode(std::string_view bytes, const std::filesystem::path& name, std::int64_t max_texels, int threads,
+             std::uint32_t* crc) {
   const Format content = sniff(bytes), extension = format_of_extension(name);
   if (content == Format::unknown) {
     if (extension != Format::unknown)
@@ -312,14 +345,22 @@ Image decode_image(std::string_view bytes, const std::filesystem::path& name, st
   if (extension != Format::unknown && extension != content)
     fail(name, std::string("the extension says ") + format_name(extension) + " but the content is " +
                    format_name(content));
-  return content == Format::exr ? decode_exr(bytes, name, max_texels) : decode_stb(bytes, name, content, max_texels);
+  if (content == Format::exr) return decode_exr(bytes, name, max_texels, threads, crc);
+  Image img = decode_stb(bytes, name, content, max_texels);
+  if (crc) *crc = input_crc32(bytes);
+  return img;
 }
 
-ImageFile read_image(const std::filesystem::path& path, std::string_view what) {
+}  // namespace
+
+Image decode_image(std::string_view bytes, const std::filesystem::path& name, std::int64_t max_texels, int threads) {
+  return decode(bytes, name, max_texels, threads, nullptr);
+}
+
+ImageFile read_image(const std::filesystem::path& path, std::string_view what, int threads) {
   const std::string bytes = read_input_file(path, what);
   ImageFile f;
-  f.image = decode_image(bytes, path);
-  f.crc32 = input_crc32(bytes);
+  f.image = decode(bytes, path, kMaxImageTexels, threads, &f.crc32);
   return f;
 }
 

@@ -31,15 +31,17 @@ inline constexpr std::int64_t kMaxImageTexels = std::int64_t(1) << 28;
 // whose content does not match its extension (.exr, .hdr, .png, .jpg/.jpeg) is refused
 // naming both. Single-channel files become grey RGB; alpha is dropped. An image of more
 // than max_texels is refused before anything is allocated. Throws InputError naming `name`.
+// OpenEXR decodes on `threads` threads (its own pool; 0: every core), the others on one.
 Image decode_image(std::string_view bytes, const std::filesystem::path& name,
-                   std::int64_t max_texels = kMaxImageTexels);
+                   std::int64_t max_texels = kMaxImageTexels, int threads = 0);
 
-// The file's bytes (read_input_file, `what` naming the option) and their CRC-32.
+// The file's bytes (read_input_file, `what` naming the option, read once) decoded, and
+// their CRC-32 (input_crc32), for OpenEXR hashed as the decoder reads them.
 struct ImageFile {
   Image image;
   std::uint32_t crc32 = 0;
 };
-ImageFile read_image(const std::filesystem::path& path, std::string_view what);
+ImageFile read_image(const std::filesystem::path& path, std::string_view what, int threads = 0);
 
 // Float RGB OpenEXR (ZIP compression); alpha written when the image has 4 channels.
 std::string encode_exr(const Image& image);

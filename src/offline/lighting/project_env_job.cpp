@@ -78,14 +78,20 @@ std::array<Image, 6> faces_from_cross(const Image& cross, const std::filesystem:
     face.channels = cross.channels;
     face.texels.resize(static_cast<std::size_t>(size) * size * cross.channels);
     const bool turned = vertical && f == static_cast<int>(CubeFace::nz);
-    for (int y = 0; y < size; ++y)
-      for (int x = 0; x < size; ++x) {
-        const int sx = turned ? size - 1 - x : x, sy = turned ? size - 1 - y : y;
-        const std::size_t src =
-            (static_cast<std::size_t>(at[f][1] * size + sy) * cross.width + at[f][0] * size + sx) * cross.channels;
-        std::copy_n(cross.texels.begin() + src, cross.channels,
-                    face.texels.begin() + (static_cast<std::size_t>(y) * size + x) * cross.channels);
+    const std::size_t run = static_cast<std::size_t>(size) * cross.channels;
+    for (int y = 0; y < size; ++y) {
+      const int sy = turned ? size - 1 - y : y;
+      const auto src = cross.texels.begin() +
+                       (static_cast<std::size_t>(at[f][1] * size + sy) * cross.width + at[f][0] * size) * cross.channels;
+      const auto dst = face.texels.begin() + static_cast<std::size_t>(y) * run;
+      if (!turned) {
+        std::copy_n(src, run, dst);
+        continue;
       }
+      for (int x = 0; x < size; ++x)
+        std::copy_n(src + static_cast<std::size_t>(size - 1 - x) * cross.channels, cross.channels,
+                    dst + static_cast<std::size_t>(x) * cross.channels);
+    }
   }
   return faces;
 }
@@ -250,7 +256,7 @@ ProjectEnvReport run_project_env(const ProjectEnvRequest& r) {
     inputs = nlohmann::json::array();
     for (const char* suffix : kFaceSuffix) {
       const std::filesystem::path path = text.substr(0, at) + suffix + text.substr(at + 2);
-      ImageFile f = read_image(path, "image");
+      ImageFile f = read_image(path, "image", threads);
       inputs.push_back({{"image", path.filename().string()}, {"input_crc32", f.crc32}});
       faces.push_back(std::move(f.image));
     }
@@ -261,7 +267,7 @@ ProjectEnvReport run_project_env(const ProjectEnvRequest& r) {
                          std::to_string(f.width) + " x " + std::to_string(f.height) + " given)");
     report.layout = "faces " + std::to_string(faces[0].width) + " x " + std::to_string(faces[0].width);
   } else {
-    ImageFile f = read_image(r.image, "image");
+    ImageFile f = read_image(r.image, "image", threads);
     inputs = {{"image", r.image.filename().string()}, {"input_crc32", f.crc32}};
     const Image& img = f.image;
     if (layout == Layout::automatic) {

@@ -8,7 +8,9 @@
 #include <string>
 #include <utility>
 
+#include "basis/legendre_recurrence.h"
 #include "shtool/legendre.h"
+#include "shtool/orthogonal_map.h"
 #include "shtool/quadrature.h"
 #include "precondition.h"
 #include "shtool/sh.h"
@@ -150,8 +152,11 @@ namespace {
 // the same bits; only the vector width differs.
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__linux__)
 #define SHTOOL_SAME_BITS_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
+// The cube face rule and class sums also run 8 lanes wide (AVX-512), same bits again.
+#define SHTOOL_SAME_BITS_CLONES_WIDE __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
 #else
 #define SHTOOL_SAME_BITS_CLONES
+#define SHTOOL_SAME_BITS_CLONES_WIDE
 #endif
 
 // sum_x w[x] v[x] in four lanes (x mod 4), each summed in runs of 16 terms before its
@@ -320,6 +325,162 @@ int cubemap_nodes_per_side(int face_size, int order) {
   return 64;
 }
 
+namespace {
+
+// The eight maps of the face square onto itself, as (k, e): the azimuth p about the face
+// normal goes to e p + k pi/2. Texel (x, y)'s image under each, and the folded sums the
+// pairs (cos m p, sin m p) meet. A texel integral over g(texel) of y_c, y_s (cos- and
+// sine-type, order m) is, over the texel itself, cos(m a) W_c - e sin(m a) W_s and
+// sin(m a) W_c + e cos(m a) W_s (a = k pi/2): summed over the eight images with their
+// values f, only m mod 4 matters, through these sums of E_k = f(k, +) + f(k, -) and
+// D_k = f(k, +) - f(k, -).
+enum Fold { kP0, kV0, kP2, kV2, kP1, kV1, kU1, kQ1, kFolds };
+// Face-channel lanes of the folded sums and of the per-face accumulators: face f,
+// channel c at f * 4 + c.
+constexpr int kFaceLanes = 24;
+// Classes whose integrals are computed together (the vector lanes of the rule).
+constexpr int kClassLanes = 8;
+
+// The rule of one texel per lane, texels (s_centre[lane], t_centre) of half-width
+// `half`, in the face frame: direction (s, t, 1) / r, polar axis the face normal.
+// W[i * kClassLanes + lane], i < N^2. The basis recurrence of sh.cpp (the Q_l^m of
+// basis/legendre_recurrence.h times Re, Im (x + i y)^m), node weights folded into the
+// azimuthal factors.
+// `row` is scratch of the same size: the nodes are summed row of nodes by row of nodes,
+// as texel_integrals does (fewer roundings per sum).
+SHTOOL_SAME_BITS_CLONES_WIDE void face_frame_integrals(int order, int nodes, const double* node, const double* weight,
+                                                  double half, const double* s_centre, double t_centre, double* W,
+                                                  double* row) {
+  const detail::LegendreRecurrence<double>& tab = detail::legendre_recurrence<double>();
+  constexpr int L = kClassLanes;
+  const int n = order * order;
+  std::fill(W, W + static_cast<std::size_t>(n) * L, 0.0);
+  // The lane loops read and write distinct rows of these arrays (q0, q1, q2 rotate over
+  // qa, qb, qc): `ivdep` tells GCC so, which it cannot prove, so that they vectorise.
+  alignas(64) double cm[kMaxEnvOrder][L], sm[kMaxEnvOrder][L];
+  alignas(64) double qa[kMaxEnvOrder][L], qb[kMaxEnvOrder][L], qc[kMaxEnvOrder][L];
+  constexpr double kSqrt2 = std::numbers::sqrt2;
+  for (int a = 0; a < nodes; ++a) {
+    const double t = t_centre + half * node[a];
+    std::fill(row, row + static_cast<std::size_t>(n) * L, 0.0);
+    for (int b = 0; b < nodes; ++b) {
+      alignas(64) double x[L], y[L], z[L];
+      const double wab = weight[a] * weight[b] * half * half;
+#pragma GCC ivdep
+      for (int k = 0; k < L; ++k) {
+        const double s = s_centre[k] + half * node[b];
+        const double r2 = 1 + s * s + t * t;
+        const double r = std::sqrt(r2), u = 1 / r;
+        x[k] = s * u;
+        y[k] = t * u;
+        z[k] = u;
+        cm[0][k] = wab / (r2 * r);  // ds dt / r^3
+        sm[0][k] = 0;
+      }
+      // cm, sm carry sqrt2 from m = 1 on (y_l^{+-m} = sqrt2 Q_l^m Re, Im (x + i y)^m).
+      for (int m = 1; m < order; ++m)
+#pragma GCC ivdep
+        for (int k = 0; k < L; ++k) {
+          const double c = m == 1 ? kSqrt2 * cm[0][k] : cm[m - 1][k];
+          const double sp = sm[m - 1][k];
+          cm[m][k] = x[k] * c - y[k] * sp;
+          sm[m][k] = x[k] * sp + y[k] * c;
+        }
+      double(*q2)[L] = qa;
+      double(*q1)[L] = qb;
+      double(*q0)[L] = qc;
+      for (int l = 0; l < order; ++l) {
+        if (l == 0) {
+#pragma GCC ivdep
+          for (int k = 0; k < L; ++k) q0[0][k] = tab.q00;
+        } else {
+#pragma GCC ivdep
+          for (int k = 0; k < L; ++k) {
+            q0[l][k] = tab.diag[l] * q1[l - 1][k];
+            q0[l - 1][k] = tab.subdiag[l - 1] * z[k] * q1[l - 1][k];
+          }
+          for (int m = 0; m <= l - 2; ++m) {
+            const double ca = tab.a[detail::LegendreRecurrence<double>::tri(l, m)];
+            const double cb = tab.b[detail::LegendreRecurrence<double>::tri(l, m)];
+#pragma GCC ivdep
+            for (int k = 0; k < L; ++k) q0[m][k] = ca * (z[k] * q1[m][k] - cb * q2[m][k]);
+          }
+        }
+        double* centre = row + static_cast<std::size_t>(l * (l + 1)) * L;
+#pragma GCC ivdep
+        for (int k = 0; k < L; ++k) centre[k] += q0[0][k] * cm[0][k];
+        for (int m = 1; m <= l; ++m)
+#pragma GCC ivdep
+          for (int k = 0; k < L; ++k) {
+            centre[m * L + k] += q0[m][k] * cm[m][k];
+            centre[-m * L + k] += q0[m][k] * sm[m][k];
+          }
+        double(*spare)[L] = q2;
+        q2 = q1;
+        q1 = q0;
+        q0 = spare;
+      }
+    }
+    for (int i = 0; i < n * L; ++i) W[i] += row[i];
+  }
+}
+
+// Adds one class's folded sums times its integrals (lane `lane` of W) into the face-frame
+// accumulators A[i * kFaceLanes + f * 4 + c].
+SHTOOL_SAME_BITS_CLONES_WIDE void add_class(int order, const double* W, int lane, const double (*F)[kFaceLanes],
+                                       double* A) {
+  constexpr int L = kClassLanes, K = kFaceLanes;
+  for (int l = 0; l < order; ++l) {
+    const int i0 = l * (l + 1);
+    {
+      const double w = W[i0 * L + lane];
+      double* a = A + static_cast<std::size_t>(i0) * K;
+      for (int k = 0; k < K; ++k) a[k] += w * F[kP0][k];
+    }
+    for (int m = 1; m <= l; ++m) {
+      const double wc = W[(i0 + m) * L + lane], ws = W[(i0 - m) * L + lane];
+      double* ac = A + static_cast<std::size_t>(i0 + m) * K;
+      double* as = A + static_cast<std::size_t>(i0 - m) * K;
+      switch (m & 3) {
+        case 0:
+          for (int k = 0; k < K; ++k) ac[k] += wc * F[kP0][k];
+          for (int k = 0; k < K; ++k) as[k] += ws * F[kV0][k];
+          break;
+        case 2:
+          for (int k = 0; k < K; ++k) ac[k] += wc * F[kP2][k];
+          for (int k = 0; k < K; ++k) as[k] += ws * F[kV2][k];
+          break;
+        case 1:
+          for (int k = 0; k < K; ++k) ac[k] += wc * F[kP1][k] - ws * F[kQ1][k];
+          for (int k = 0; k < K; ++k) as[k] += wc * F[kU1][k] + ws * F[kV1][k];
+          break;
+        default:
+          for (int k = 0; k < K; ++k) ac[k] += wc * F[kP1][k] + ws * F[kQ1][k];
+          for (int k = 0; k < K; ++k) as[k] += ws * F[kV1][k] - wc * F[kU1][k];
+          break;
+      }
+    }
+  }
+}
+
+constexpr const char* kFaceNames[6] = {"+X face ", "-X face ", "+Y face ", "-Y face ", "+Z face ", "-Z face "};
+
+Error first_non_finite(std::span<const FloatImageView, 6> faces) {
+  for (int f = 0; f < 6; ++f) {
+    const FloatImageView& image = faces[static_cast<std::size_t>(f)];
+    for (int y = 0; y < image.height; ++y) {
+      const float* row = image.row(y);
+      for (int x = 0; x < image.width; ++x)
+        for (int c = 0; c < image.channels; ++c)
+          if (const float v = row[static_cast<std::size_t>(x) * image.channels + c]; !std::isfinite(v))
+            return non_finite_error(kFaceNames[f], x, y, c, v);
+    }
+  }
+  return Error{"a cubemap block's sums are not finite, yet every texel is"};
+}
+
+}  // namespace
+
 Result<CubemapProjector> CubemapProjector::create(int face_size, int order, bool mirror_x) {
   if (order < 1 || order > kMaxEnvOrder) return order_error(order);
   if (face_size < 1) return Error{"a cubemap face must have at least one texel"};
@@ -331,16 +492,38 @@ Result<CubemapProjector> CubemapProjector::create(int face_size, int order, bool
   const GaussLegendre g = gauss_legendre(p.nodes_);
   p.nodes_unit_ = g.nodes;
   p.weights_unit_ = g.weights;
+  // The face frame's axes in shtool's frame: (s, t, 1) -> cube_vector(s, t) is linear.
+  const int n = sh_count(order);
+  std::vector<double> map(static_cast<std::size_t>(n) * n);
+  for (int f = 0; f < 6; ++f) {
+    const CubeFace face = static_cast<CubeFace>(f);
+    const Eigen::Vector3d origin = p.cube_vector(face, 0, 0);
+    Eigen::Matrix3d q;
+    q.col(0) = p.cube_vector(face, 1, 0) - origin;
+    q.col(1) = p.cube_vector(face, 0, 1) - origin;
+    q.col(2) = origin;
+    // Column j of the identity carried along is column j of the map.
+    std::fill(map.begin(), map.end(), 0.0);
+    for (int i = 0; i < n; ++i) map[static_cast<std::size_t>(i) * n + i] = 1;
+    if (Result<Ok> r = apply_orthogonal_map(q, n, map); !r) return r.error();
+    for (int l = 0; l < order; ++l)
+      for (int a = l * l; a < (l + 1) * (l + 1); ++a)
+        for (int b = l * l; b < (l + 1) * (l + 1); ++b) p.face_maps_.push_back(map[static_cast<std::size_t>(a) * n + b]);
+  }
   return p;
 }
 
-int CubemapProjector::block_count() const { return 6 * ((size_ + kRowsPerBlock - 1) / kRowsPerBlock); }
+int CubemapProjector::block_count() const {
+  const int rows = size_ - size_ / 2;  // rows of the eighth s >= t >= 0
+  const int groups = (rows + kRowsPerGroup - 1) / kRowsPerGroup;
+  return (groups + 1) / 2;
+}
 
 std::size_t CubemapProjector::partial_size(int channels) const {
   return static_cast<std::size_t>(sh_count(order_)) * channels;
 }
 
-Eigen::Vector3d CubemapProjector::direction(CubeFace face, double s, double t) const {
+Eigen::Vector3d CubemapProjector::cube_vector(CubeFace face, double s, double t) const {
   Eigen::Vector3d cube = Eigen::Vector3d::Zero();
   switch (face) {
     case CubeFace::px: cube = {1, -t, -s}; break;
@@ -351,7 +534,11 @@ Eigen::Vector3d CubemapProjector::direction(CubeFace face, double s, double t) c
     case CubeFace::nz: cube = {-s, -t, -1}; break;
   }
   if (mirror_x_) cube.x() = -cube.x();
-  return Eigen::Vector3d(cube.x(), -cube.z(), cube.y()).normalized();
+  return Eigen::Vector3d(cube.x(), -cube.z(), cube.y());
+}
+
+Eigen::Vector3d CubemapProjector::direction(CubeFace face, double s, double t) const {
+  return cube_vector(face, s, t).normalized();
 }
 
 void CubemapProjector::texel_integrals(CubeFace face, int x, int y, std::span<double> out) const {
@@ -378,45 +565,187 @@ void CubemapProjector::texel_integrals(CubeFace face, int x, int y, std::span<do
   }
 }
 
-Result<Ok> CubemapProjector::accumulate_block(std::span<const FloatImageView, 6> faces, int block,
-                                              std::span<double> partial) const {
+namespace {
+
+bool valid_faces(std::span<const FloatImageView, 6> faces, int size) {
   for (const FloatImageView& f : faces)
-    if (!valid_view(f, size_, size_) || f.channels != faces[0].channels)
-      return Error{"cubemap block: six faces of the projector's size and one channel count (1..4)"};
-  if (block < 0 || block >= block_count() || partial.size() < partial_size(faces[0].channels))
-    return Error{"cubemap block: block out of range or partial smaller than partial_size(channels)"};
-  const int blocks_per_face = (size_ + kRowsPerBlock - 1) / kRowsPerBlock;
-  const int f = block / blocks_per_face;
-  const FloatImageView& image = faces[static_cast<std::size_t>(f)];
-  const int channels = image.channels;
-  const int n = sh_count(order_);
-  static constexpr const char* kFaceNames[6] = {"+X face ", "-X face ", "+Y face ", "-Y face ", "+Z face ", "-Z face "};
-  std::array<double, kMaxEnvOrder * kMaxEnvOrder> integral;
-  const int y_begin = (block % blocks_per_face) * kRowsPerBlock;
-  const int y_end = std::min(size_, y_begin + kRowsPerBlock);
-  for (int y = y_begin; y < y_end; ++y) {
-    const float* row = image.row(y);
-    for (int x = 0; x < size_; ++x) {
-      const float* texel = row + static_cast<std::size_t>(x) * channels;
-      for (int c = 0; c < channels; ++c)
-        if (!std::isfinite(texel[c])) return non_finite_error(kFaceNames[f], x, y, c, texel[c]);
-      texel_integrals(static_cast<CubeFace>(f), x, y, integral);
-      for (int k = 0; k < n; ++k)
-        for (int c = 0; c < channels; ++c) partial[static_cast<std::size_t>(k) * channels + c] += integral[k] * texel[c];
+    if (!valid_view(f, size, size) || f.channels != faces[0].channels) return false;
+  return true;
+}
+
+}  // namespace
+
+namespace {
+
+// The folded sums of one class for every face and channel: the eight images' values
+// (`offsets` from each face's first texel), F[fold][f * 4 + c].
+template <int C, bool kScaled>
+void fold_class(const float* const* bases, const std::size_t* strides, const int (*at)[2], double scale,
+                double (*F)[kFaceLanes]) {
+  if constexpr (!kScaled) scale = 1;
+  for (int f = 0; f < 6; ++f) {
+    const float* texel[8];
+    for (int g = 0; g < 8; ++g)
+      texel[g] = bases[f] + static_cast<std::size_t>(at[g][1]) * strides[f] + static_cast<std::size_t>(at[g][0]) * C;
+    for (int c = 0; c < C; ++c) {
+      double v[8];
+      for (int g = 0; g < 8; ++g) v[g] = texel[g][c];
+      const double e0 = v[0] + v[1], d0 = v[0] - v[1], e1 = v[2] + v[3], d1 = v[2] - v[3];
+      const double e2 = v[4] + v[5], d2 = v[4] - v[5], e3 = v[6] + v[7], d3 = v[6] - v[7];
+      const double e02 = e0 + e2, e13 = e1 + e3, d02 = d0 + d2, d13 = d1 + d3;
+      const int lane = f * 4 + c;
+      F[kP0][lane] = scale * (e02 + e13);
+      F[kP2][lane] = scale * (e02 - e13);
+      F[kV0][lane] = scale * (d02 + d13);
+      F[kV2][lane] = scale * (d02 - d13);
+      F[kP1][lane] = scale * (e0 - e2);
+      F[kU1][lane] = scale * (e1 - e3);
+      F[kV1][lane] = scale * (d0 - d2);
+      F[kQ1][lane] = scale * (d1 - d3);
     }
   }
+}
+
+}  // namespace
+
+Result<Ok> CubemapProjector::accumulate_block(std::span<const FloatImageView, 6> faces, int block,
+                                              std::span<double> partial) const {
+  if (!valid_faces(faces, size_))
+    return Error{"cubemap block: six faces of the projector's size and one channel count (1..4)"};
+  if (block < 0 || block >= block_count() || partial.size() < partial_size(faces[0].channels))
+    return Error{"cubemap block: block out of range or partial smaller than partial_size(channels)"};
+  const int channels = faces[0].channels;
+  const int n = sh_count(order_);
+  const int R = size_;
+  const int first_row = R / 2, rows = R - first_row;
+  const int groups = (rows + kRowsPerGroup - 1) / kRowsPerGroup;
+  const double half = 1.0 / R;
+  const float* bases[6];
+  std::size_t strides[6];
+  for (int f = 0; f < 6; ++f) {
+    bases[f] = faces[static_cast<std::size_t>(f)].texels;
+    strides[f] = faces[static_cast<std::size_t>(f)].stride();
+  }
+  // Per face, the coefficients in its own frame; carried to shtool's frame at the end.
+  std::vector<double> A(static_cast<std::size_t>(n) * kFaceLanes, 0.0);
+  std::vector<double> W(static_cast<std::size_t>(n) * kClassLanes), node_row(W.size());
+  alignas(64) double F[kFolds][kFaceLanes] = {};
+  // A group of rows is walked in columns of kClassLanes classes: the images of a few
+  // neighbouring classes share cache lines along rows and, transposed, along columns.
+  auto do_group = [&](int group) {
+    const int y_begin = first_row + group * kRowsPerGroup, y_end = std::min(R, y_begin + kRowsPerGroup);
+    for (int x0 = y_begin; x0 < R; x0 += kClassLanes) {
+      // The images of a tile lie on 4 rows of the group and 4 of the columns, in 96
+      // different rows of the six faces: no hardware prefetcher follows that, so the
+      // texels of the next tile are asked for now.
+      if (const int xp = x0 + kClassLanes; xp < R) {
+        const int xpm = R - 1 - xp;
+        for (int f = 0; f < 6; ++f) {
+          for (int y = y_begin; y < y_end; ++y)
+            for (const int row : {y, R - 1 - y})
+              for (const int x : {xp, xp + kClassLanes / 2, xpm - kClassLanes / 2, xpm - kClassLanes + 1})
+                __builtin_prefetch(bases[f] + row * strides[f] + static_cast<std::size_t>(std::clamp(x, 0, R - 1)) * channels);
+          for (int x = xp; x < std::min(R, xp + kClassLanes); ++x) {
+            const int xm = R - 1 - x;
+            for (const int row : {x, xm}) {
+              __builtin_prefetch(bases[f] + row * strides[f] + static_cast<std::size_t>(y_begin) * channels);
+              __builtin_prefetch(bases[f] + row * strides[f] + static_cast<std::size_t>(y_end - 1) * channels);
+              __builtin_prefetch(bases[f] + row * strides[f] + static_cast<std::size_t>(R - y_end) * channels);
+              __builtin_prefetch(bases[f] + row * strides[f] + static_cast<std::size_t>(R - 1 - y_begin) * channels);
+            }
+          }
+        }
+      }
+      for (int y = y_begin; y < y_end; ++y) {
+        if (x0 + kClassLanes <= y) continue;
+        const int lane_begin = std::max(0, y - x0), lane_end = std::min(kClassLanes, R - x0);
+        alignas(64) double s_centre[kClassLanes];
+        for (int k = 0; k < kClassLanes; ++k)
+          s_centre[k] = -1 + (2 * (x0 + std::clamp(k, lane_begin, lane_end - 1)) + 1) * half;
+        face_frame_integrals(order_, nodes_, nodes_unit_.data(), weights_unit_.data(), half, s_centre,
+                             -1 + (2 * y + 1) * half, W.data(), node_row.data());
+        for (int k = lane_begin; k < lane_end; ++k) {
+          const int x = x0 + k, xm = R - 1 - x, ym = R - 1 - y;
+          // The images (column, row) of texel (x, y), in the order (k, e) =
+          // (0,+) (0,-) (1,+) (1,-) (2,+) (2,-) (3,+) (3,-): p, -p, p + pi/2, pi/2 - p,
+          // p + pi, pi - p, p - pi/2, -pi/2 - p.
+          const int at[8][2] = {{x, y}, {x, ym}, {ym, x}, {y, x}, {xm, ym}, {xm, y}, {y, xm}, {ym, xm}};
+          int stabiliser = 0;
+          for (const auto& p : at) stabiliser += p[0] == x && p[1] == y;
+          // A class of fewer than eight texels meets each of them 8 / |class| times.
+          const double scale = 1.0 / stabiliser;
+          const bool scaled = stabiliser > 1;
+          switch (channels) {
+            case 1: (scaled ? fold_class<1, true> : fold_class<1, false>)(bases, strides, at, scale, F); break;
+            case 2: (scaled ? fold_class<2, true> : fold_class<2, false>)(bases, strides, at, scale, F); break;
+            case 3: (scaled ? fold_class<3, true> : fold_class<3, false>)(bases, strides, at, scale, F); break;
+            default: (scaled ? fold_class<4, true> : fold_class<4, false>)(bases, strides, at, scale, F); break;
+          }
+          add_class(order_, W.data(), k, F, A.data());
+        }
+      }
+    }
+  };
+  do_group(block);
+  if (const int other = groups - 1 - block; other != block) do_group(other);
+  // y_00's integral is positive on every texel: a non-finite texel leaves its sum so.
+  for (int f = 0; f < 6; ++f)
+    for (int c = 0; c < channels; ++c)
+      if (!std::isfinite(A[static_cast<std::size_t>(f) * 4 + c])) return first_non_finite(faces);
+  std::size_t block_at = 0;
+  for (int f = 0; f < 6; ++f)
+    for (int l = 0; l < order_; ++l) {
+      const int width = 2 * l + 1, base = l * l;
+      const double* map = &face_maps_[block_at];
+      block_at += static_cast<std::size_t>(width) * width;
+      for (int a = 0; a < width; ++a)
+        for (int c = 0; c < channels; ++c) {
+          double sum = 0;
+          for (int b = 0; b < width; ++b)
+            sum += map[a * width + b] * A[static_cast<std::size_t>(base + b) * kFaceLanes + f * 4 + c];
+          partial[static_cast<std::size_t>(base + a) * channels + c] += sum;
+        }
+    }
   return Ok{};
 }
 
 Result<EnvCoefficients> project_cubemap(std::span<const FloatImageView, 6> faces, int order, bool mirror_x) {
   const int size = faces[0].width;
-  for (const FloatImageView& f : faces) {
-    if (!valid_view(f, size, size) || f.channels != faces[0].channels)
-      return Error{"the six cube faces must be square, of one size and one channel count (1..4)"};
-  }
+  if (!valid_faces(faces, size))
+    return Error{"the six cube faces must be square, of one size and one channel count (1..4)"};
   Result<CubemapProjector> p = CubemapProjector::create(size, order, mirror_x);
   if (!p) return p.error();
   return project_in_order(p.value(), faces, faces[0].channels);
+}
+
+Result<EnvCoefficients> project_cubemap_reference(std::span<const FloatImageView, 6> faces, int order,
+                                                  bool mirror_x) {
+  const int size = faces[0].width;
+  if (!valid_faces(faces, size))
+    return Error{"the six cube faces must be square, of one size and one channel count (1..4)"};
+  Result<CubemapProjector> made = CubemapProjector::create(size, order, mirror_x);
+  if (!made) return made.error();
+  const CubemapProjector& p = made.value();
+  const int channels = faces[0].channels;
+  const int n = sh_count(order);
+  EnvCoefficients out{order, channels, std::vector<double>(p.partial_size(channels), 0.0)};
+  std::vector<double> integral(n);
+  for (int f = 0; f < 6; ++f) {
+    const FloatImageView& image = faces[static_cast<std::size_t>(f)];
+    for (int y = 0; y < size; ++y) {
+      const float* row = image.row(y);
+      for (int x = 0; x < size; ++x) {
+        const float* texel = row + static_cast<std::size_t>(x) * channels;
+        for (int c = 0; c < channels; ++c)
+          if (!std::isfinite(texel[c])) return non_finite_error(kFaceNames[f], x, y, c, texel[c]);
+        p.texel_integrals(static_cast<CubeFace>(f), x, y, integral);
+        for (int k = 0; k < n; ++k)
+          for (int c = 0; c < channels; ++c)
+            out.coefficients[static_cast<std::size_t>(k) * channels + c] += integral[k] * texel[c];
+      }
+    }
+  }
+  return out;
 }
 
 }  // namespace shtool
