@@ -203,3 +203,41 @@ TEST(Random, UnitDoubleIsInRange) {
 
 }  // namespace
 }  // namespace shtool
+
+namespace {
+
+// MappedInput gives the bytes read_input_file gives, for a mapped file and for an empty
+// one (read instead), and refuses what read_input_file refuses, with its messages.
+TEST(InputFile, MappedInputIsTheFilesBytes) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("shtool_mapped_" + std::to_string(getpid()));
+  std::filesystem::create_directories(dir);
+  std::string bytes(3 * 4096 + 17, '\0');
+  std::mt19937 rng(3);
+  for (char& c : bytes) c = static_cast<char>(rng());
+  std::ofstream(dir / "some.bin", std::ios::binary) << bytes;
+  std::ofstream(dir / "empty.bin", std::ios::binary).flush();
+  {
+    const shtool::MappedInput mapped(dir / "some.bin", "image");
+    EXPECT_EQ(mapped.bytes(), bytes);
+    EXPECT_EQ(mapped.bytes(), shtool::read_input_file(dir / "some.bin", "image"));
+    EXPECT_EQ(shtool::MappedInput(dir / "empty.bin", "image").bytes(), "");
+  }
+  for (const std::filesystem::path& bad : {dir / "none.bin", dir}) {
+    std::string mapped_error, read_error;
+    try {
+      shtool::MappedInput m(bad, "image");
+    } catch (const shtool::InputError& e) {
+      mapped_error = e.what();
+    }
+    try {
+      shtool::read_input_file(bad, "image");
+    } catch (const shtool::InputError& e) {
+      read_error = e.what();
+    }
+    EXPECT_FALSE(mapped_error.empty()) << bad;
+    EXPECT_EQ(mapped_error, read_error);
+  }
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace

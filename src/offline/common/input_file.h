@@ -15,6 +15,25 @@ namespace shtool {
 // Throws InputError.
 std::string read_input_file(const std::filesystem::path& path, std::string_view what);
 
+// A whole input file mapped read-only into memory, for the big ones (images): the pages
+// are read ahead and used in place, never copied (a 100 MB EXR: 0.06 s against 0.43 s
+// through read_input_file here, where first touches of fresh memory are slow). The same
+// checks and messages as read_input_file; a file that cannot be mapped (empty, a pipe)
+// is read instead. The file must not shrink while it is mapped.
+class MappedInput {
+ public:
+  MappedInput(const std::filesystem::path& path, std::string_view what);
+  ~MappedInput();
+  MappedInput(const MappedInput&) = delete;
+  MappedInput& operator=(const MappedInput&) = delete;
+  std::string_view bytes() const { return map_ ? std::string_view(static_cast<const char*>(map_), size_) : read_; }
+
+ private:
+  void* map_ = nullptr;
+  std::size_t size_ = 0;
+  std::string read_;
+};
+
 // Parses `text` (the contents of `path`) as JSON. Throws InputError naming the input, the
 // parser's position and message, or nesting deeper than the tables' limit (64 levels,
 // refused before parsing so that no later step can exhaust the stack).

@@ -358,9 +358,9 @@ Image decode_image(std::string_view bytes, const std::filesystem::path& name, st
 }
 
 ImageFile read_image(const std::filesystem::path& path, std::string_view what, int threads) {
-  const std::string bytes = read_input_file(path, what);
+  const MappedInput file(path, what);
   ImageFile f;
-  f.image = decode(bytes, path, kMaxImageTexels, threads, &f.crc32);
+  f.image = decode(file.bytes(), path, kMaxImageTexels, threads, &f.crc32);
   return f;
 }
 
