@@ -269,6 +269,19 @@ TEST(MeshFrames, RenderAndDeformRefuseToMixFrames) {
   EXPECT_FALSE(fs::exists(image));
   must(run({"render", mesh.string(), "--fit", scratch("mix.shtb").string(), "--light", scratch("white.json").string(),
             "--width", "16", "--height", "16", "--out", image.string()}));
+  // The transfer vectors carry the record, and so does a fit made from them.
+  EXPECT_EQ(nlohmann::json::parse(shtool::test::read_file(scratch("mix.t.json")))["mesh_up"], "y");
+  must(run({"fit-zh", "--transfer", scratch("mix.t.json").string(), "--out", scratch("mix.from_t.shtb").string()}));
+  EXPECT_EQ(meta_of(scratch("mix.from_t.shtb"))["mesh_up"], "y");
+  for (const std::string& input : {"--transfer", "--fit"}) {
+    const fs::path baked = input == "--transfer" ? scratch("mix.t.json") : scratch("mix.from_t.shtb");
+    const fs::path refused = scratch("mix_refused.png");
+    r = run({"render", mesh.string(), "--up", "z", input, baked.string(), "--light", scratch("white.json").string(),
+             "--out", refused.string()});
+    EXPECT_EQ(r.exit_code, 1) << input;
+    EXPECT_NE(r.err.find("--up"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(refused));
+  }
   const fs::path posed = scratch("mix.posed.shtb");
   r = run({"deform", scratch("mix.shtb").string(), "--rest", mesh.string(), "--pose", mesh.string(), "--up", "z",
            "--out", posed.string()});

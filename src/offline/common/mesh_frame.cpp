@@ -25,6 +25,13 @@ Eigen::Vector3d obj_front() { return Eigen::Vector3d(0, 1, 0); }
 void check_same_up(const Table& table, UpAxis mesh_up, const std::string& what, const std::string& mesh) {
   const nlohmann::json meta = nlohmann::json::parse(table.meta, nullptr, false);
   std::string table_up = "z";
+  if (!meta.is_object() || !meta.contains(kMeshUpKey)) {
+    // A fit of given vectors that carried no record: nothing says which frame they are in.
+    const nlohmann::json generator = nlohmann::json::parse(table.generator, nullptr, false);
+    if (generator.is_object() && generator.contains("parameters") && generator["parameters"].is_object() &&
+        generator["parameters"].contains("transfer"))
+      return;
+  }
   if (meta.is_object() && meta.contains(kMeshUpKey)) {
     const nlohmann::json& up = meta[kMeshUpKey];
     if (!up.is_string() || (up != "y" && up != "z"))

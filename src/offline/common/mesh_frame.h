@@ -40,7 +40,8 @@ Eigen::Vector3d obj_front();
 // that reading. A command that puts such rows back on a mesh reads the mesh the same way
 // or refuses: InputError naming `what` (the table) and `mesh` (the file) when the table's
 // axis is not `mesh_up`. A table without the record predates it and was baked on a mesh
-// taken as written: "z".
+// taken as written: "z"; unless it fitted given vectors (fit-zh --transfer) that carried
+// no record, whose frame nothing states: not checked.
 inline constexpr const char* kMeshUpKey = "mesh_up";
 void check_same_up(const Table& table, UpAxis mesh_up, const std::string& what, const std::string& mesh);
 

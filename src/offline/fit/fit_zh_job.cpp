@@ -67,9 +67,9 @@ std::string ply_text(const Mesh& mesh, const std::vector<double>& transfer, int 
 }
 
 // The --save-transfer output, in the --transfer format.
-std::string transfer_json(const std::vector<double>& transfer, int order) {
+std::string transfer_json(const std::vector<double>& transfer, int order, UpAxis up) {
   const std::size_t n2 = sh_count(order);
-  nlohmann::json doc = {{"order", order}, {"vectors", nlohmann::json::array()}};
+  nlohmann::json doc = {{"order", order}, {kMeshUpKey, up_axis_name(up)}, {"vectors", nlohmann::json::array()}};
   for (std::size_t v = 0; v < transfer.size() / n2; ++v)
     doc["vectors"].push_back(std::vector<double>(transfer.begin() + v * n2, transfer.begin() + (v + 1) * n2));
   return doc.dump() + "\n";
@@ -151,11 +151,15 @@ std::string fits_json(const ZhFitTable<double>& fits) {
 
 
 // {"order": n, "vectors": [[n^2 numbers], ...]}
-std::vector<double> parse_transfer_json(std::string_view text, const std::filesystem::path& path_in, int& order) {
+std::vector<double> parse_transfer_json(std::string_view text, const std::filesystem::path& path_in, int& order,
+                                        std::string* mesh_up) {
   const std::string path = path_in.string();
   const nlohmann::json doc = parse_json_input(text, path_in, "--transfer");
   if (!doc.is_object() || !doc.contains("order") || !doc.at("order").is_number_integer())
     throw InputError("--transfer '" + path + "': expected {\"order\": n, \"vectors\": [[n^2 numbers], ...]}");
+  if (doc.contains(kMeshUpKey) && (!doc.at(kMeshUpKey).is_string() || (doc.at(kMeshUpKey) != "y" && doc.at(kMeshUpKey) != "z")))
+    throw InputError("--transfer '" + path + "': \"" + kMeshUpKey + "\" must be \"y\" or \"z\"");
+  if (mesh_up) *mesh_up = doc.contains(kMeshUpKey) ? doc.at(kMeshUpKey).get<std::string>() : std::string();
   const nlohmann::json& o = doc.at("order");
   const std::int64_t order64 = o.is_number_unsigned()
                                    ? (o.get<std::uint64_t>() > static_cast<std::uint64_t>(kMaxOrder) ? -1 : o.get<std::int64_t>())
@@ -277,7 +281,10 @@ FitZhReport run_fit_zh_on(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJo
   if (!r.transfer.empty()) {
     const std::string text = read_input_file(r.transfer, "--transfer");
     int file_order = 0;
-    transfer = parse_transfer_json(text, r.transfer, file_order);
+    std::string transfer_up;
+    transfer = parse_transfer_json(text, r.transfer, file_order, &transfer_up);
+    // Vectors simulated on a mesh keep its frame record, so that render checks the fit.
+    if (!transfer_up.empty()) meta[kMeshUpKey] = transfer_up;
     if (r.order_given && file_order != r.order)
       throw InputError("--order " + std::to_string(r.order) + " but --transfer '" + r.transfer.string() +
                        "' has order " + std::to_string(file_order));
@@ -469,7 +476,7 @@ FitZhReport run_fit_zh_on(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJo
   table = Table{};  // encoded: its arrays go back before the next output is made
   if (!r.json.empty()) add(r.json, fits_json(fits));
   if (!r.ply.empty()) add(r.ply, ply_text(mesh, transfer, order, fits));
-  if (!r.save_transfer.empty()) add(r.save_transfer, transfer_json(transfer, order));
+  if (!r.save_transfer.empty()) add(r.save_transfer, transfer_json(transfer, order, mesh.up));
   if (!r.gltf.empty())
     add(r.gltf, zh_fit_glb(mesh, fits, transfer_dc, "shtool " + generator["version"].get<std::string>() + " fit-zh"));
   if (maps) {

@@ -86,9 +86,12 @@ struct FitZhReport {
   int mpi_rank = 0, mpi_ranks = 0;
 };
 
-// The vectors of a --transfer document, vertex-major; sets `order`. Throws InputError
-// naming `path` and the problem.
-std::vector<double> parse_transfer_json(std::string_view text, const std::filesystem::path& path, int& order);
+// The vectors of a --transfer document, vertex-major; sets `order`, and `mesh_up` (when
+// given) to the document's "mesh_up" ("y" or "z": the up axis of the mesh file the
+// vectors were simulated on, as --save-transfer records it; empty when it has none).
+// Throws InputError naming `path` and the problem.
+std::vector<double> parse_transfer_json(std::string_view text, const std::filesystem::path& path, int& order,
+                                        std::string* mesh_up = nullptr);
 
 // The --json output: every fit's lobes (axis, coefficients), residual and norm, and its
 // direct coefficients when it stores some.
