@@ -1,4 +1,5 @@
 // shtool render: a mesh shaded by its baked transfer under SH lighting (docs/ldprt.md).
+#include <algorithm>
 #include <iostream>
 #include <memory>
 #include <string>
@@ -56,6 +57,10 @@ void setup_render(CLI::App& app) {
     const render::RenderResult result = render::run_render(r);
     std::cerr << "render: wrote " << r.out.string() << " (" << r.width << " x " << r.height << ", "
               << result.covered_pixels << " pixels covered, " << result.seconds << " s)\n";
+    if (result.negative_pixels)
+      std::cerr << "render: " << result.negative_pixels << " pixels below zero ("
+                << 100.0 * result.negative_pixels / std::max<std::size_t>(result.covered_pixels, 1)
+                << " % of those covered), lowest " << result.minimum << "\n";
     if (result.reference_nrms)
       std::cerr << "render: normalized RMS against " << r.reference.string() << ": " << *result.reference_nrms << "\n";
     for (std::size_t k = 0; k < result.compare_nrms.size(); ++k)

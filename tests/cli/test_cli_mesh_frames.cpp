@@ -235,8 +235,12 @@ TEST(MeshFrames, ZenithLightsAnUpFacingQuad) {
     must(run({"light", "--type", "directional", "--dir", dir, "--color", "1,1,1", "--order", "2", "--json",
               light.string()}));
     const fs::path out = scratch("lit" + dir + ".exr");
-    must(run({"render", mesh.string(), "--transfer", scratch("lit.t.json").string(), "--light", light.string(),
-              "--width", "64", "--height", "64", "--out", out.string()}));
+    const CommandResult rendered = run({"render", mesh.string(), "--transfer", scratch("lit.t.json").string(),
+                                        "--light", light.string(), "--width", "64", "--height", "64", "--out",
+                                        out.string()});
+    ASSERT_EQ(rendered.exit_code, 0) << rendered.err;
+    // render counts what it could not show: none under the zenith, the whole quad under the nadir.
+    EXPECT_EQ(rendered.err.find("below zero") != std::string::npos, dir == "0,0,-1") << rendered.err;
     const shtool::lighting::Image image =
         shtool::lighting::decode_image(shtool::test::read_file(out), out);
     // The background is 0; the quad is uniformly lit (one transfer vector, one light), so

@@ -518,6 +518,13 @@ RenderResult run_render(const RenderRequest& r) {
     image = compare_strip(hits, mesh, data, light, threads, result.compare_nrms);
   }
   result.seconds = seconds_since(start);
+  const int colours = std::min(image.channels, 3);
+  for (std::size_t p = 0; p < std::size_t(image.width) * image.height; ++p) {
+    const float* px = &image.texels[p * image.channels];
+    const float lowest = *std::min_element(px, px + colours);
+    if (lowest < 0) ++result.negative_pixels;
+    result.minimum = std::min(result.minimum, double(lowest));
+  }
   if (reference) {
     if (reference->width != image.width || reference->height != image.height)
       throw InputError("--reference " + r.reference.string() + ": " + std::to_string(reference->width) + " x " +

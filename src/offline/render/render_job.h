@@ -62,6 +62,10 @@ struct RenderRequest {
 struct RenderResult {
   Shading shading = Shading::transfer;
   std::size_t covered_pixels = 0;
+  // Pixels with a channel below zero (truncated lighting or transfer rings; PNG shows them
+  // black) and the lowest value among them.
+  std::size_t negative_pixels = 0;
+  double minimum = 0;
   double seconds = 0;  // rays, shading (and the fits of --compare), not reading or writing files
   std::vector<double> compare_nrms;  // --compare: normalized RMS of the N = 1..4 fits
   std::optional<double> reference_nrms;  // --reference: the image's normalized RMS against it
