@@ -1,16 +1,14 @@
 // shtool export-light / import-light: the lighting JSON of project-env and light in an
 // engine's convention, and back (docs/interop.md). The conversions are
-// src/offline/interop/engine_light.h; this file parses and prints.
+// src/offline/interop/engine_light.h; the jobs
+// src/offline/interop/light_files_job.h; this file parses and prints.
 #include <iostream>
 #include <memory>
 
 #include <CLI/CLI.hpp>
 
 #include "cli_common.h"
-#include "common/atomic_file.h"
-#include "common/input_file.h"
-#include "interop/engine_light.h"
-#include "lighting/lighting_output.h"
+#include "interop/light_files_job.h"
 
 namespace shtool::cli {
 namespace {
@@ -50,12 +48,9 @@ void setup_export_light(CLI::App& app) {
   add_common(sub, *o);
   sub->callback([=]() {
     o->raw.condon_shortley = o->cs == "on";
-    const lighting::Lighting l = lighting::read_lighting_json(*in, "light");
-    check_output_path(*out, "--out");
-    check_not_an_input(*out, "--out", *in);
-    const interop::ExportedLight e = interop::export_light(l, o->format, frame_of(*o), *intensity, o->raw);
-    write_file_atomically(*out, e.text);
-    for (const std::string& n : e.notes) std::cerr << "export-light: note: " << n << '\n';
+    const std::vector<std::string> notes =
+        interop::run_export_light({*in, *out, o->format, frame_of(*o), *intensity, o->raw});
+    for (const std::string& n : notes) std::cerr << "export-light: note: " << n << '\n';
     std::cerr << "export-light: wrote " << out->string() << '\n';
   });
 }
@@ -73,12 +68,7 @@ void setup_import_light(CLI::App& app) {
                   "radiance or irradiance", "radiance");
   add_common(sub, *o);
   sub->callback([=]() {
-    o->raw.condon_shortley = o->cs == "on";
-    const std::string text = read_input_file(*in, "file");
-    check_output_path(*json, "--json");
-    check_not_an_input(*json, "--json", *in);
-    const lighting::Lighting l = interop::import_light(text, *in, o->format, frame_of(*o), *quantity);
-    write_file_atomically(*json, lighting::lighting_json(l));
+    const lighting::Lighting l = interop::run_import_light({*in, *json, o->format, frame_of(*o), *quantity});
     std::cerr << "import-light: order " << l.order << ", " << lighting::quantity_name(l.quantity) << ", wrote "
               << json->string() << '\n';
   });

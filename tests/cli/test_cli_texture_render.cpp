@@ -175,7 +175,8 @@ TEST(TextureRender, BadRequestsAreRefusedByName) {
   shtool::lighting::ChannelImage dc =
       shtool::lighting::decode_exr_channels(shtool::test::read_file(dc_map), dc_map);
   dc.texels[5] = NAN;
-  shtool::test::write_file(scratch("broken") / "spot.tex.dc_linear.exr", shtool::lighting::encode_exr_channels(dc));
+  shtool::test::write_file(scratch("broken") / "spot.tex.dc_linear.exr",
+                           shtool::lighting::encode_exr_channels(dc, shtool::NonFinite::keep));
   refused({"render", kSpot, "--fit", broken.string(), "--light", bakes().sky.string(), "--out", out.string()},
           "is not finite");
   dc = shtool::lighting::decode_exr_channels(shtool::test::read_file(dc_map), dc_map);

@@ -1,4 +1,5 @@
-// The offline floor (src/offline/common): atomic outputs, all-or-none output sets, the
+// The offline floor (src/offline/common): atomic outputs, the job frame's output sets
+// (all or none, checked against inputs, signals), the
 // thread pool's determinism and error propagation, the input reader's messages, and the
 // platform-stable random draws against the standard library they reproduce.
 #include <algorithm>
@@ -10,12 +11,17 @@
 #include <string>
 #include <vector>
 
+#include <csignal>
+#include <functional>
+
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <gtest/gtest.h>
 
 #include "common/atomic_file.h"
 #include "common/input_error.h"
+#include "common/job_outputs.h"
 #include "common/input_file.h"
 #include "common/parallel_for.h"
 #include "common/random.h"
@@ -72,27 +78,154 @@ TEST_F(CommonFiles, AbandonedPendingFileRemovesItsTemporary) {
 
 TEST_F(CommonFiles, OutputSetIsAllOrNothing) {
   write_file_atomically(dir_ / "keep.txt", "old");
-  const std::string a = "A", b = "B";
-  // The second output's folder does not exist: neither output is written.
-  const std::vector<OutputFile> bad = {{dir_ / "keep.txt", a}, {dir_ / "missing" / "b.txt", b}};
-  try {
-    write_files_atomically(bad);
-    FAIL() << "expected InputError";
-  } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("does not exist"), std::string::npos) << e.what();
+  // The second output's folder does not exist: refused when it is declared.
+  {
+    JobOutputs io;
+    io.output(dir_ / "keep.txt", "--a");
+    try {
+      io.output(dir_ / "missing" / "b.txt", "--b");
+      FAIL() << "expected InputError";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("does not exist"), std::string::npos) << e.what();
+    }
+  }
+  // Two outputs naming one file (here through a different spelling) are refused.
+  {
+    JobOutputs io;
+    io.output(dir_ / "keep.txt", "--a");
+    try {
+      io.output(dir_ / "." / "keep.txt", "--b");
+      FAIL() << "expected InputError";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("--b and --a name the same file"), std::string::npos) << e.what();
+    }
   }
   EXPECT_EQ(read(dir_ / "keep.txt"), "old");
-  EXPECT_EQ(listing(), std::vector<std::string>{"keep.txt"});
-  // Two outputs naming one file (here through a different spelling) are refused.
-  const std::vector<OutputFile> twice = {{dir_ / "keep.txt", a}, {dir_ / "." / "keep.txt", b}};
-  EXPECT_THROW(write_files_atomically(twice), InputError);
-  EXPECT_EQ(read(dir_ / "keep.txt"), "old");
   // And a good set writes both.
-  const std::vector<OutputFile> good = {{dir_ / "keep.txt", a}, {dir_ / "b.txt", b}};
-  write_files_atomically(good);
+  JobOutputs io;
+  io.output(dir_ / "keep.txt", "--a");
+  io.output(dir_ / "b.txt", "--b");
+  EXPECT_TRUE(io.requested("--b"));
+  EXPECT_FALSE(io.requested("--c"));
+  io.set("--a", "A");
+  io.set("--b", "B");
+  io.commit();
   EXPECT_EQ(read(dir_ / "keep.txt"), "A");
   EXPECT_EQ(read(dir_ / "b.txt"), "B");
   EXPECT_EQ(listing(), (std::vector<std::string>{"b.txt", "keep.txt"}));
+}
+
+TEST_F(CommonFiles, OutputsNeverNameAnInputWhateverTheSpelling) {
+  write_file_atomically(dir_ / "mesh.obj", "v 0 0 0\n");
+  fs::create_hard_link(dir_ / "mesh.obj", dir_ / "linked.obj");
+  fs::create_symlink(dir_ / "mesh.obj", dir_ / "symlinked.obj");
+  for (const fs::path& out : {dir_ / "mesh.obj", dir_ / "linked.obj", dir_ / "symlinked.obj",
+                              dir_ / "sub" / ".." / "mesh.obj"}) {
+    fs::create_directories(dir_ / "sub");
+    // Declared in either order.
+    for (bool input_first : {true, false}) {
+      JobOutputs io;
+      try {
+        if (input_first) io.input(dir_ / "mesh.obj", "the mesh");
+        io.output(out, "--out");
+        if (!input_first) io.input(dir_ / "mesh.obj", "the mesh");
+        FAIL() << out;
+      } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("--out: '"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("(the mesh); refusing to overwrite it"), std::string::npos) << e.what();
+      }
+    }
+  }
+  EXPECT_EQ(read(dir_ / "mesh.obj"), "v 0 0 0\n");
+}
+
+TEST_F(CommonFiles, AFailedRenameGivesTheReplacedOutputsBackTheirContents) {
+  write_file_atomically(dir_ / "a.txt", "old a");
+  write_file_atomically(dir_ / "b.txt", "old b");
+  JobOutputs io;
+  io.output(dir_ / "a.txt", "--a");
+  io.output(dir_ / "b.txt", "--b");
+  io.output(dir_ / "c.txt", "--c");  // new
+  io.set("--a", "new a");
+  io.set("--b", "new b");
+  io.set("--c", "new c");
+  io.stage();
+  // The last of three cannot be replaced any more: a folder took its place (with a file
+  // in it, so that no rename can remove it).
+  fs::create_directories(dir_ / "c.txt");
+  write_file_atomically(dir_ / "c.txt" / "inside", "x");
+  try {
+    io.publish();
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("--c: cannot move the finished file into place"), std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("no output was changed"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(read(dir_ / "a.txt"), "old a");
+  EXPECT_EQ(read(dir_ / "b.txt"), "old b");
+  // No temporary file and no kept copy is left.
+  EXPECT_EQ(listing(), (std::vector<std::string>{"a.txt", "b.txt", "c.txt"}));
+  // The same, with the first output new: it goes again.
+  JobOutputs again;
+  again.output(dir_ / "new.txt", "--a");
+  again.output(dir_ / "d.txt", "--b");
+  again.set("--a", "new a");
+  again.set("--b", "new b");
+  again.stage();
+  fs::create_directories(dir_ / "d.txt" / "x");
+  EXPECT_THROW(again.publish(), InputError);
+  EXPECT_EQ(listing(), (std::vector<std::string>{"a.txt", "b.txt", "c.txt", "d.txt"}));
+}
+
+// The child ends by the signal it raised; what it leaves in the folder is the test.
+int child_status(const std::function<void()>& body) {
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    body();
+    ::_exit(0);
+  }
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  return status;
+}
+
+TEST_F(CommonFiles, ASignalRemovesTheTemporaryFilesThenEndsTheProcessAsItWould) {
+  write_file_atomically(dir_ / "a.txt", "old");
+  for (int sig : {SIGTERM, SIGINT}) {
+    const int status = child_status([&] {
+      JobOutputs io;
+      io.output(dir_ / "a.txt", "--a");
+      io.output(dir_ / "b.txt", "--b");
+      io.set("--a", "new");
+      io.set("--b", "new");
+      io.stage();  // both temporary files exist now
+      std::raise(sig);
+      ::_exit(42);  // not reached
+    });
+    ASSERT_TRUE(WIFSIGNALED(status)) << status;
+    EXPECT_EQ(WTERMSIG(status), sig);
+    EXPECT_EQ(listing(), std::vector<std::string>{"a.txt"});
+    EXPECT_EQ(read(dir_ / "a.txt"), "old");
+  }
+}
+
+TEST_F(CommonFiles, ASignalDuringACommitWaitsForItsEnd) {
+  const int status = child_status([&] {
+    PendingFile f(dir_ / "a.txt");
+    f.write(std::string_view("done"));
+    f.finish();
+    {
+      const CommitGuard guard;
+      std::raise(SIGTERM);  // held back
+      f.commit();
+    }
+    ::_exit(42);  // not reached: the guard's end delivers the signal
+  });
+  ASSERT_TRUE(WIFSIGNALED(status)) << status;
+  EXPECT_EQ(WTERMSIG(status), SIGTERM);
+  EXPECT_EQ(listing(), std::vector<std::string>{"a.txt"});
+  EXPECT_EQ(read(dir_ / "a.txt"), "done");
 }
 
 TEST_F(CommonFiles, OutputPathChecksNameTheProblem) {

@@ -1,14 +1,18 @@
 #include "common/atomic_file.h"
 
+#include <atomic>
 #include <cerrno>
+#include <climits>
 #include <csignal>
 #include <cstdlib>
 #include <cstdio>
 #include <cstring>
 #include <random>
+#include <mutex>
 #include <string>
 #include <system_error>
 
+#include <pthread.h>
 #include <signal.h>
 #include <unistd.h>
 
@@ -24,6 +28,73 @@ namespace {
 std::filesystem::path folder_of(const std::filesystem::path& target) {
   const std::filesystem::path dir = target.parent_path();
   return dir.empty() ? std::filesystem::path(".") : dir;
+}
+
+// The temporary files that exist now, for the signal handler: fixed slots of plain
+// characters, since a handler may call unlink() but neither allocate nor lock. A slot is
+// free (0), being filled (1) or live (2); a file beyond the last slot is still removed
+// by its PendingFile, only not on a signal.
+constexpr int kSlots = 64;
+char g_temp_paths[kSlots][PATH_MAX];
+std::atomic<int> g_slot_state[kSlots];
+std::atomic<int> g_commits{0};           // CommitGuards alive
+std::atomic<int> g_deferred_signal{0};   // a signal that came during a commit
+
+void remove_registered_temporaries() {
+  for (int i = 0; i < kSlots; ++i)
+    if (g_slot_state[i].load() == 2) ::unlink(g_temp_paths[i]);
+}
+
+[[noreturn]] void end_as_signal(int sig) {
+  remove_registered_temporaries();
+  std::signal(sig, SIG_DFL);
+  // Inside the handler the signal is blocked: unblocked, the raised one ends the process.
+  sigset_t set;
+  sigemptyset(&set);
+  sigaddset(&set, sig);
+  std::raise(sig);
+  ::pthread_sigmask(SIG_UNBLOCK, &set, nullptr);
+  std::_Exit(128 + sig);  // not reached
+}
+
+extern "C" void on_signal(int sig) {
+  if (g_commits.load() > 0) {
+    g_deferred_signal.store(sig);
+    return;
+  }
+  end_as_signal(sig);
+}
+
+void install_signal_handlers() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    for (int sig : {SIGINT, SIGTERM}) {
+      struct sigaction old {};
+      if (::sigaction(sig, nullptr, &old) != 0 || old.sa_handler == SIG_IGN) continue;  // e.g. under nohup
+      struct sigaction sa {};
+      sa.sa_handler = on_signal;
+      sigemptyset(&sa.sa_mask);
+      ::sigaction(sig, &sa, nullptr);
+    }
+  });
+}
+
+int register_temporary(const std::filesystem::path& temp) {
+  install_signal_handlers();
+  const std::string& s = temp.native();
+  if (s.size() >= PATH_MAX) return -1;
+  for (int i = 0; i < kSlots; ++i) {
+    int expected = 0;
+    if (!g_slot_state[i].compare_exchange_strong(expected, 1)) continue;
+    std::memcpy(g_temp_paths[i], s.c_str(), s.size() + 1);
+    g_slot_state[i].store(2);
+    return i;
+  }
+  return -1;
+}
+
+void unregister_temporary(int slot) {
+  if (slot >= 0) g_slot_state[slot].store(0);
 }
 
 // Temporary files of this target left by a process that no longer runs (killed between
@@ -48,25 +119,48 @@ void remove_stale_temporaries(const std::filesystem::path& target) {
 
 }  // namespace
 
+std::filesystem::path temporary_name_for(const std::filesystem::path& target) {
+  static std::random_device rd;
+  char suffix[64];
+  std::snprintf(suffix, sizeof suffix, ".tmp-%ld-%08x%08x", static_cast<long>(::getpid()), rd(), rd());
+  // Hidden and named after the target, so a leftover of a killed run is recognisable.
+  // Appended piece by piece: GCC 12 warns (-Wrestrict, a false positive) on "." + s.
+  std::string name(".");
+  name += target.filename().string();
+  name += suffix;
+  return folder_of(target) / name;
+}
+
+CommitGuard::CommitGuard() {
+  install_signal_handlers();
+  g_commits.fetch_add(1);
+}
+
+CommitGuard::~CommitGuard() {
+  if (g_commits.fetch_sub(1) == 1) {
+    const int sig = g_deferred_signal.exchange(0);
+    if (sig != 0) end_as_signal(sig);
+  }
+}
+
 PendingFile::PendingFile(std::filesystem::path target) : target_(std::move(target)) {
   check_output_path(target_, "");
   remove_stale_temporaries(target_);
-  std::random_device rd;
   int open_errno = 0;
   for (int attempt = 0; attempt < 16 && !file_; ++attempt) {
-    char suffix[64];
-    std::snprintf(suffix, sizeof suffix, ".tmp-%ld-%08x%08x", static_cast<long>(::getpid()), rd(), rd());
-    // Hidden and named after the target, so a leftover of a killed run is recognisable.
-    // Appended piece by piece: GCC 12 warns (-Wrestrict, a false positive) on "." + s.
-    std::string name(".");
-    name += target_.filename().string();
-    name += suffix;
-    const std::filesystem::path candidate = folder_of(target_) / name;
+    const std::filesystem::path candidate = temporary_name_for(target_);
+    // Registered before it exists, so a signal between the two cannot leave it behind.
+    const int slot = register_temporary(candidate);
     // "x": exclusive creation, so two writers never share a temporary file.
     file_ = std::fopen(candidate.c_str(), "wbx");
     open_errno = errno;
-    if (file_) temp_ = candidate;
-    else if (open_errno != EEXIST) break;
+    if (file_) {
+      temp_ = candidate;
+      slot_ = slot;
+    } else {
+      unregister_temporary(slot);
+      if (open_errno != EEXIST) break;
+    }
   }
   if (!file_)
     fail(target_, "cannot create a temporary file in '" + folder_of(target_).string() + "': " +
@@ -75,9 +169,10 @@ PendingFile::PendingFile(std::filesystem::path target) : target_(std::move(targe
 
 PendingFile::PendingFile(PendingFile&& other) noexcept
     : target_(std::move(other.target_)), temp_(std::move(other.temp_)), file_(other.file_),
-      committed_(other.committed_) {
+      slot_(other.slot_), committed_(other.committed_) {
   other.file_ = nullptr;
   other.temp_.clear();
+  other.slot_ = -1;
 }
 
 PendingFile::~PendingFile() {
@@ -86,6 +181,7 @@ PendingFile::~PendingFile() {
     std::error_code ec;
     std::filesystem::remove(temp_, ec);
   }
+  unregister_temporary(slot_);
 }
 
 void PendingFile::write(std::string_view bytes) {
@@ -113,12 +209,20 @@ void PendingFile::commit() {
   std::error_code ec;
   std::filesystem::rename(temp_, target_, ec);
   if (ec) fail(target_, "cannot move the finished file into place: " + ec.message());
+  mark_committed();
+}
+
+void PendingFile::mark_committed() {
   committed_ = true;
+  unregister_temporary(slot_);
+  slot_ = -1;
 }
 
 void write_file_atomically(const std::filesystem::path& target, std::string_view bytes) {
   PendingFile f(target);
   f.write(bytes);
+  f.finish();
+  const CommitGuard guard;
   f.commit();
 }
 
@@ -131,31 +235,6 @@ bool same_file(const std::filesystem::path& a, const std::filesystem::path& b) {
   const std::filesystem::path ca = std::filesystem::weakly_canonical(std::filesystem::absolute(a, ec), ec);
   const std::filesystem::path cb = std::filesystem::weakly_canonical(std::filesystem::absolute(b, ec), ec);
   return ca == cb;
-}
-
-void check_not_an_input(const std::filesystem::path& output, std::string_view what,
-                        const std::filesystem::path& input) {
-  if (!output.empty() && !input.empty() && same_file(output, input))
-    throw InputError(std::string(what) + ": '" + output.string() + "' is the input '" + input.string() +
-                     "'; refusing to overwrite it");
-}
-
-void write_files_atomically(std::span<const OutputFile> outputs) {
-  for (std::size_t i = 0; i < outputs.size(); ++i)
-    for (std::size_t j = 0; j < i; ++j) {
-      const bool same = same_file(outputs[i].path, outputs[j].path);
-      if (same)
-        throw InputError("two outputs are the same file: '" + outputs[j].path.string() + "' and '" +
-                         outputs[i].path.string() + "'");
-    }
-  std::vector<PendingFile> pending;
-  pending.reserve(outputs.size());
-  for (const OutputFile& o : outputs) {
-    pending.emplace_back(o.path);
-    pending.back().write(o.bytes);
-    pending.back().finish();
-  }
-  for (PendingFile& p : pending) p.commit();
 }
 
 void check_output_path(const std::filesystem::path& path, std::string_view what) {

@@ -4,13 +4,13 @@
 // target. On any failure, including an exception unwinding past a PendingFile, the
 // temporary file is removed and an old file at the target stays untouched; temporary
 // files of the target whose process is gone (killed between write and rename) are
-// removed by the next write.
+// removed by the next write, and SIGINT or SIGTERM removes the temporary files of this
+// process before ending it as the signal would.
 #pragma once
 
 #include <filesystem>
 #include <span>
 #include <string_view>
-#include <vector>
 
 namespace shtool {
 
@@ -33,36 +33,39 @@ class PendingFile {
   void commit();
 
   const std::filesystem::path& target() const { return target_; }
+  const std::filesystem::path& temporary() const { return temp_; }
+  // After the caller moved the finished temporary file into place itself.
+  void mark_committed();
 
  private:
   std::filesystem::path target_;
   std::filesystem::path temp_;
   std::FILE* file_ = nullptr;
+  int slot_ = -1;  // in the signal handler's list
   bool committed_ = false;
 };
 
-// The one-output case.
+// The one-output case of JobOutputs (common/job_outputs.h), for writers that are not jobs.
 void write_file_atomically(const std::filesystem::path& target, std::string_view bytes);
 
-// One output of a command that writes several.
-struct OutputFile {
-  std::filesystem::path path;
-  std::string_view bytes;
+// While a CommitGuard lives, SIGINT and SIGTERM are held back; when it ends, a signal
+// that came meanwhile ends the process as it would have. A commit that renames several
+// files is thereby never cut in half by a signal.
+class CommitGuard {
+ public:
+  CommitGuard();
+  ~CommitGuard();
+  CommitGuard(const CommitGuard&) = delete;
+  CommitGuard& operator=(const CommitGuard&) = delete;
 };
 
-// All or none: every temporary file is written and flushed before the first rename, so
-// a full disk or a missing folder leaves none of the outputs behind. Refuses two outputs
-// that are the same file.
-void write_files_atomically(std::span<const OutputFile> outputs);
+// A name for a hidden file beside `target` that the next write removes if this process
+// is gone (".<name>.tmp-<pid>-<random>").
+std::filesystem::path temporary_name_for(const std::filesystem::path& target);
 
 // Whether two paths name one file: existing files by identity (links, other spellings),
 // others by their normalised absolute paths.
 bool same_file(const std::filesystem::path& a, const std::filesystem::path& b);
-
-// Refuses an output that is the command's input (InputError naming both); `what` names
-// the output's option.
-void check_not_an_input(const std::filesystem::path& output, std::string_view what,
-                        const std::filesystem::path& input);
 
 // Checks, before any work, that `path` can be written: its folder exists and is a
 // folder, and the path itself is not a folder. `what` names the option in the message

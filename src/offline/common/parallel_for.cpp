@@ -15,7 +15,8 @@ int max_threads() {
 }
 
 int resolve_threads(int requested) {
-  if (requested <= 0) return std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  if (requested < 0) throw InputError("--threads must be 0 (every core) or more, got " + std::to_string(requested));
+  if (requested == 0) return std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
   if (requested > max_threads())
     throw InputError("--threads " + std::to_string(requested) + " is more than this machine can use (at most " +
                      std::to_string(max_threads()) + ")");

@@ -15,10 +15,10 @@
 namespace shtool {
 
 // The most threads a job may ask for: hardware threads times a small factor (more only
-// add switching, and thousands exhaust the process limit). 0 or less means "all cores".
+// add switching, and thousands exhaust the process limit).
 int max_threads();
-// The count a job runs with: `requested` (<= 0: hardware_concurrency), checked against
-// max_threads(). Throws InputError for a request above it.
+// The count a job runs with: `requested` (0: hardware_concurrency), checked against
+// max_threads(). Throws InputError for a request below 0 or above max_threads().
 int resolve_threads(int requested);
 
 // Persistent workers for jobs made of many parallel steps (a GA generation has several),

@@ -23,7 +23,7 @@ json parse_field(const std::string& text, const char* name) {
 }
 
 std::optional<std::string> check_for_write(const Table& t, const json& generator, const json& meta,
-                                           TableEncoding encoding) {
+                                           TableEncoding encoding, NonFinite non_finite) {
   if (!valid_kind_name(t.kind))
     return "table kind '" + t.kind + "' must be 1-64 characters of [a-z0-9-] not starting with '-'";
   if (!parse_version(t.kind_version))
@@ -41,15 +41,17 @@ std::optional<std::string> check_for_write(const Table& t, const json& generator
       return "array '" + a.name + "' has " + std::to_string(a.data.size()) + " bytes but shape " +
              shape_text(a.shape) + " of " + std::string(dtype_name(a.dtype)) + " needs " +
              std::to_string(*nbytes);
-    if (encoding == TableEncoding::json && (a.dtype == DType::f64 || a.dtype == DType::f32)) {
+    const bool refuse = encoding == TableEncoding::json || non_finite == NonFinite::refuse;
+    if (refuse && (a.dtype == DType::f64 || a.dtype == DType::f32)) {
       const std::size_t n = a.element_count();
       for (std::size_t i = 0; i < n; ++i) {
         const double v = a.dtype == DType::f64
                              ? table_detail::load_le<double>(a.data.data() + 8 * i)
                              : table_detail::load_le<float>(a.data.data() + 4 * i);
         if (!std::isfinite(v))
-          return "array '" + a.name + "' element " + std::to_string(i) +
-                 " is not finite; the JSON encoding cannot hold it (use the binary encoding)";
+          return "array '" + a.name + "' element " + std::to_string(i) + " is not finite" +
+                 (non_finite == NonFinite::keep ? "; the JSON encoding cannot hold it (use the binary encoding)"
+                                                : " (a computation overflowed: no output holds NaN or infinity)");
       }
     }
   }
@@ -167,11 +169,11 @@ nlohmann::json table_header(const Table& table) {
                      compute_layout(table));
 }
 
-std::string encode_table(const Table& table, TableEncoding encoding) {
+std::string encode_table(const Table& table, TableEncoding encoding, NonFinite non_finite) {
   try {
     const json generator = parse_field(table.generator, "generator");
     const json meta = parse_field(table.meta, "meta");
-    if (auto p = check_for_write(table, generator, meta, encoding)) throw InputError(*p);
+    if (auto p = check_for_write(table, generator, meta, encoding, non_finite)) throw InputError(*p);
     const std::vector<Layout> layout = compute_layout(table);
     const json header = header_from(table, generator, meta, layout);
     return encoding == TableEncoding::json ? json_document(header, table)
@@ -184,10 +186,11 @@ std::string encode_table(const Table& table, TableEncoding encoding) {
   }
 }
 
-void write_table(const Table& table, const std::filesystem::path& path, TableEncoding encoding) {
+void write_table(const Table& table, const std::filesystem::path& path, TableEncoding encoding,
+                 NonFinite non_finite) {
   std::string bytes;
   try {
-    bytes = encode_table(table, encoding);
+    bytes = encode_table(table, encoding, non_finite);
   } catch (const InputError& e) {
     throw InputError(path.string() + ": " + e.what());
   }

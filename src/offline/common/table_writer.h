@@ -8,6 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "common/finite.h"
 #include "shtool/table.h"
 
 namespace shtool {
@@ -18,14 +19,16 @@ namespace shtool {
 nlohmann::json table_header(const Table& table);
 
 // The file's bytes. Checks first: kind, versions, generator record, array names
-// (non-empty, unique), shapes against data sizes; for the JSON encoding, float values
-// must be finite (JSON has no NaN or infinity). Throws InputError naming the problem.
-std::string encode_table(const Table& table, TableEncoding encoding = TableEncoding::binary);
+// (non-empty, unique), shapes against data sizes, float values finite (with
+// NonFinite::keep, only for the JSON encoding, which has no NaN or infinity). Throws
+// InputError naming the problem.
+std::string encode_table(const Table& table, TableEncoding encoding = TableEncoding::binary,
+                         NonFinite non_finite = NonFinite::refuse);
 
 // encode_table, then written atomically (common/atomic_file.h): on failure nothing is
 // left at `path` and an old file there stays untouched. Throws InputError.
 void write_table(const Table& table, const std::filesystem::path& path,
-                 TableEncoding encoding = TableEncoding::binary);
+                 TableEncoding encoding = TableEncoding::binary, NonFinite non_finite = NonFinite::refuse);
 
 // A table of `kind` (kind_version 1.0) for SH order `order` with its generator record
 // and kind-specific meta, arrays still to add: how every job starts its output.

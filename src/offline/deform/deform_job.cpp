@@ -8,7 +8,7 @@
 
 #include <Eigen/Dense>
 
-#include "common/atomic_file.h"
+#include "common/job_outputs.h"
 #include "common/generator_record.h"
 #include "common/input_error.h"
 #include "common/table_writer.h"
@@ -152,8 +152,16 @@ ZhFitTable<double> fit_for_mesh(ZhFitTable<double> fit, const fit::Mesh& mesh, c
 
 DeformReport run_deform(const DeformRequest& r) {
   if (r.out.empty()) throw InputError("--out is required");
+  JobOutputs io;
+  io.input(r.fit, "the fit");
+  io.input(r.rest, "the rest mesh");
+  io.input(r.pose, "the posed mesh");
+  io.output(r.out, "--out");
+  io.output(r.json, "--json");
   const fit::Mesh rest = fit::load_mesh(r.rest, fit::NormalSource::automatic, r.up);
+  io.inputs(rest.files, "a file of the rest mesh");
   const fit::Mesh posed = fit::load_mesh(r.pose, fit::NormalSource::automatic, r.up);
+  io.inputs(posed.files, "a file of the posed mesh");
   Result<Table> input = read_table(r.fit, TableExpectation{std::string(kZhFitKind), 1, 0});
   if (!input) throw InputError(input.error().message);
   // A texture-space bake's rows are texels, not vertices.
@@ -179,13 +187,9 @@ DeformReport run_deform(const DeformRequest& r) {
                                  {"up", up_axis_name(rest.up)}};
   const nlohmann::json meta = {{"mode", "deformed"}, {"direct", moved.direct_count}, {kMeshUpKey, up_axis_name(rest.up)}};
   const Table table = fit::zh_fit_table(moved, meta, generator_record("shtool deform", params));
-  std::vector<std::string> bytes = {encode_table(table)};
-  std::vector<OutputFile> outputs = {{r.out, bytes[0]}};
-  if (!r.json.empty()) {
-    bytes.push_back(fit::fits_json(moved));
-    outputs.push_back({r.json, bytes[1]});
-  }
-  write_files_atomically(outputs);
+  io.set("--out", encode_table(table));
+  if (io.requested("--json")) io.set("--json", fit::fits_json(moved));
+  io.commit();
   return report;
 }
 

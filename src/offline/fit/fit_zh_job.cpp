@@ -11,7 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "common/atomic_file.h"
+#include "common/job_outputs.h"
 #include "common/enum_names.h"
 #include "common/generator_record.h"
 #include "common/input_error.h"
@@ -238,19 +238,16 @@ FitZhReport run_fit_zh_on(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJo
     dc_linear_map = dc_linear_map_path(out);
     lobes_map = lobes_map_path(out);
   }
-  const std::pair<const std::filesystem::path*, const char*> outputs_named[] = {
-      {&out, "--out"}, {&r.json, "--json"}, {&r.ply, "--ply"}, {&r.save_transfer, "--save-transfer"},
-      {&r.gltf, "--gltf"}, {&dc_linear_map, "the DC and linear map"}, {&lobes_map, "the lobe map"}};
-  for (std::size_t i = 0; i < std::size(outputs_named); ++i) {
-    const auto& [path, what] = outputs_named[i];
-    if (path->empty()) continue;
-    check_output_path(*path, what);
-    check_not_an_input(*path, what, input_path);
-    for (std::size_t j = 0; j < i; ++j)
-      if (!outputs_named[j].first->empty() && same_file(*path, *outputs_named[j].first))
-        throw InputError(std::string(what) + " and " + outputs_named[j].second + " name the same file '" +
-                         path->string() + "'");
-  }
+  JobOutputs io;
+  io.input(input_path, r.mesh.empty() ? "the --transfer input" : "the mesh");
+  // Every rank checks them, so that all stop alike (only rank 0 writes).
+  io.output(out, "--out");
+  io.output(r.json, "--json");
+  io.output(r.ply, "--ply");
+  io.output(r.save_transfer, "--save-transfer");
+  io.output(r.gltf, "--gltf");
+  io.output(dc_linear_map, "the DC and linear map");
+  io.output(lobes_map, "the lobe map");
 
   FitZhReport report;
   report.threads = threads;
@@ -297,6 +294,7 @@ FitZhReport run_fit_zh_on(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJo
     transfer.erase(transfer.begin(), transfer.begin() + range.begin * n2);
   } else {
     mesh = load_mesh(r.mesh, r.normals, r.up);
+    io.inputs(mesh.files, "a file of the mesh");
     if (cb.warning) {
       if (mesh.unreferenced_vertices)
         cb.warning("skipped " + std::to_string(mesh.unreferenced_vertices) + " unreferenced vertices");
@@ -465,25 +463,19 @@ FitZhReport run_fit_zh_on(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJo
   }
 
   // ---- outputs: everything is computed, then written as one set.
-  std::vector<std::string> bytes;
-  bytes.reserve(7);  // outputs hold views of these
-  std::vector<OutputFile> outputs;
-  auto add = [&](const std::filesystem::path& path, std::string content) {
-    bytes.push_back(std::move(content));
-    outputs.push_back({path, bytes.back()});
-  };
-  add(out, encode_table(table, r.encoding));
+  io.set("--out", encode_table(table, r.encoding));
   table = Table{};  // encoded: its arrays go back before the next output is made
-  if (!r.json.empty()) add(r.json, fits_json(fits));
-  if (!r.ply.empty()) add(r.ply, ply_text(mesh, transfer, order, fits));
-  if (!r.save_transfer.empty()) add(r.save_transfer, transfer_json(transfer, order, mesh.up));
-  if (!r.gltf.empty())
-    add(r.gltf, zh_fit_glb(mesh, fits, transfer_dc, "shtool " + generator["version"].get<std::string>() + " fit-zh"));
+  if (io.requested("--json")) io.set("--json", fits_json(fits));
+  if (io.requested("--ply")) io.set("--ply", ply_text(mesh, transfer, order, fits));
+  if (io.requested("--save-transfer")) io.set("--save-transfer", transfer_json(transfer, order, mesh.up));
+  if (io.requested("--gltf"))
+    io.set("--gltf",
+           zh_fit_glb(mesh, fits, transfer_dc, "shtool " + generator["version"].get<std::string>() + " fit-zh"));
   if (maps) {
-    add(dc_linear_map, lighting::encode_exr_channels(maps->dc_linear));
-    add(lobes_map, lighting::encode_exr_channels(maps->lobes));
+    io.set("the DC and linear map", lighting::encode_exr_channels(maps->dc_linear));
+    io.set("the lobe map", lighting::encode_exr_channels(maps->lobes));
   }
-  write_files_atomically(outputs);
+  io.commit();
   return report;
 }
 

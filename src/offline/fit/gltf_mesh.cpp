@@ -16,6 +16,7 @@
 #include "common/input_error.h"
 #include "common/input_file.h"
 #include "fit/mesh.h"
+#include "io/table_format.h"
 
 namespace shtool::fit {
 namespace {
@@ -25,6 +26,16 @@ constexpr std::size_t kMaxVertices = std::size_t(1) << 28;
 
 [[noreturn]] void fail(const std::filesystem::path& path, const std::string& what) {
   throw MeshError(path.string() + ": " + what);
+}
+
+// The JSON of a glTF: the whole text, or a GLB's first chunk (header: magic, version,
+// length; chunk: length, type, data), clipped to the bytes there are.
+std::string_view json_text_of(const std::string& bytes, bool binary) {
+  if (!binary) return bytes;
+  if (bytes.size() < 20) return {};
+  std::uint32_t length = 0;
+  std::memcpy(&length, bytes.data() + 12, 4);
+  return std::string_view(bytes).substr(20, length);
 }
 
 // Textures play no part in a mesh's transfer: images are neither decoded nor required.
@@ -275,6 +286,10 @@ Mesh load_gltf_bytes(const std::string& bytes, const std::filesystem::path& path
   const std::string base = path.has_parent_path() ? path.parent_path().string() : std::string(".");
   const bool binary = bytes.size() >= 4 && bytes.compare(0, 4, "glTF") == 0;
   if (bytes.size() > std::numeric_limits<unsigned int>::max()) fail(path, "file too large");
+  // tinygltf turns JSON into its values recursively (extras, extensions): nesting deep
+  // enough would exhaust the stack, so it is bounded before tinygltf sees the text.
+  if (auto problem = table_format::check_json_depth(json_text_of(bytes, binary), table_format::kMaxJsonDepth))
+    fail(path, "glTF JSON " + *problem);
   const bool ok =
       binary ? loader.LoadBinaryFromMemory(&model, &err, &warn, reinterpret_cast<const unsigned char*>(bytes.data()),
                                            static_cast<unsigned int>(bytes.size()), base)
@@ -296,6 +311,13 @@ Mesh load_gltf_bytes(const std::string& bytes, const std::filesystem::path& path
     fail(path, "--normals file: not every primitive has NORMAL");
   Mesh mesh;
   mesh.input_crc32 = input_crc32(bytes);
+  mesh.files.push_back(path);
+  // The external buffers and images: outputs must never replace them.
+  auto external = [&](const std::string& uri) {
+    if (!uri.empty() && uri.rfind("data:", 0) != 0) mesh.files.push_back(std::filesystem::path(base) / uri);
+  };
+  for (const tinygltf::Buffer& b : model.buffers) external(b.uri);
+  for (const tinygltf::Image& i : model.images) external(i.uri);
   mesh.obj_vertices = b.positions.size();
   mesh.up = UpAxis::y;
   mesh.front = gltf_front();

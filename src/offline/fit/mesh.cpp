@@ -273,6 +273,7 @@ Mesh load_obj_text(const std::string& text, const std::filesystem::path& path, N
 
   Mesh mesh;
   mesh.input_crc32 = input_crc32(text);
+  mesh.files.push_back(path);
   mesh.obj_vertices = nv;
   if (nv == 0) fail(path, "no vertices");
 

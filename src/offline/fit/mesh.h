@@ -41,6 +41,9 @@ struct Mesh {
   std::vector<std::array<Eigen::Vector2d, 3>> uvs;
 
   std::uint32_t input_crc32 = 0;           // CRC-32 of the file's bytes (provenance)
+  // Every file the mesh was read from: the file itself, and a glTF's external buffers and
+  // images (a job's outputs are checked against all of them).
+  std::vector<std::filesystem::path> files;
   UpAxis up = UpAxis::z;                   // the file's up axis: positions and normals were
                                            // turned from it into shtool's z-up frame
   Eigen::Vector3d front{0, 1, 0};          // the side the model faces (common/mesh_frame.h)

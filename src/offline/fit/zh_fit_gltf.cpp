@@ -11,6 +11,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "common/finite.h"
 #include "common/input_error.h"
 #include "common/mesh_frame.h"
 #include "shtool/orthogonal_map.h"
@@ -47,6 +48,8 @@ class ModelBuilder {
   // `values` holds `components` floats per vertex; with `bounds`, min and max per
   // component (POSITION must have them), taken from the floats as stored.
   int floats(const std::vector<float>& values, int type, bool bounds = false) {
+    // A double beyond float's range (a node translation of 1e39) became inf here.
+    check_finite(std::span<const float>(values), "--gltf: a vertex attribute's value");
     const int components = tinygltf::GetNumComponentsInType(type);
     tinygltf::Accessor a;
     a.bufferView = view(values.data(), values.size() * sizeof(float), TINYGLTF_TARGET_ARRAY_BUFFER);

@@ -5,7 +5,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "common/atomic_file.h"
+#include "common/job_outputs.h"
 #include "common/input_error.h"
 #include "common/table_writer.h"
 #include "fit/shard.h"
@@ -171,13 +171,14 @@ MergedFits merge_zh_fit_tables(std::vector<NamedTable> named) {
 MergeReport merge_zh_fit_parts(const MergeRequest& r) {
   if (r.parts.empty()) throw InputError("merge: give the partial tables to join");
   if (r.out.empty()) throw InputError("merge: give --out TABLE");
-  check_output_path(r.out, "--out");
+  JobOutputs io;
   for (std::size_t i = 0; i < r.parts.size(); ++i) {
-    check_not_an_input(r.out, "--out", r.parts[i]);
+    io.input(r.parts[i], "a part");
     for (std::size_t j = 0; j < i; ++j)
       if (same_file(r.parts[i], r.parts[j]))
         throw InputError("merge: '" + r.parts[i].string() + "' is given twice");
   }
+  io.output(r.out, "--out");
   std::vector<NamedTable> tables;
   tables.reserve(r.parts.size());
   for (const std::filesystem::path& path : r.parts) {
@@ -191,7 +192,8 @@ MergeReport merge_zh_fit_parts(const MergeRequest& r) {
   } catch (const InputError& e) {
     throw InputError(std::string("merge: ") + e.what());
   }
-  write_file_atomically(r.out, encode_table(merged.table, r.encoding));
+  io.set("--out", encode_table(merged.table, r.encoding));
+  io.commit();
   return {r.parts.size(), merged.fits.vertices};
 }
 

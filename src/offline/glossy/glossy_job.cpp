@@ -4,7 +4,7 @@
 #include <cmath>
 #include <string>
 
-#include "common/atomic_file.h"
+#include "common/job_outputs.h"
 #include "common/enum_names.h"
 #include "common/generator_record.h"
 #include "common/input_error.h"
@@ -57,19 +57,17 @@ void check_request(const GlossyRequest& r) {
   if (!(r.brdf.f0 >= 0 && r.brdf.f0 <= 1)) throw InputError("--f0 must be in [0, 1], got " + std::to_string(r.brdf.f0));
   resolve_threads(r.threads);
   if (r.out.empty()) throw InputError("--out is required");
-  check_output_path(r.out, "--out");
-  check_not_an_input(r.out, "--out", r.mesh);
-  if (!r.json.empty()) {
-    check_output_path(r.json, "--json");
-    check_not_an_input(r.json, "--json", r.mesh);
-    if (same_file(r.out, r.json)) throw InputError("--json names the same file as --out");
-  }
 }
 
 GlossyReport run_fit_glossy(const GlossyRequest& r) {
   check_request(r);
+  JobOutputs io;
+  io.input(r.mesh, "the mesh");
+  io.output(r.out, "--out");
+  io.output(r.json, "--json");
   const int threads = resolve_threads(r.threads);
   const fit::Mesh mesh = fit::load_mesh(r.mesh, r.normals, r.up);
+  io.inputs(mesh.files, "a file of the mesh");
   const std::vector<Eigen::Matrix3d> frames = deform::vertex_frames(mesh, mesh);
   GlossyReport report;
   report.vertices = mesh.positions.size();
@@ -148,11 +146,9 @@ GlossyReport run_fit_glossy(const GlossyRequest& r) {
   table.arrays.push_back(TableArray::from<std::uint32_t>(
       "vertex_index", {static_cast<std::int64_t>(report.vertices)}, mesh.source_index));
 
-  const std::string bytes = encode_table(table);
-  std::string json;
-  std::vector<OutputFile> outputs = {{r.out, bytes}};
-  if (!r.json.empty()) {
-    json = nlohmann::json{{"parameters", parameters(r)},
+  io.set("--out", encode_table(table));
+  if (io.requested("--json")) {
+    io.set("--json", nlohmann::json{{"parameters", parameters(r)},
                           {"vertices", report.vertices},
                           {"singular_values", report.singular_values},
                           {"normalized_rms",
@@ -160,11 +156,10 @@ GlossyReport run_fit_glossy(const GlossyRequest& r) {
                             {"zh", report.zh_nrms},
                             {"total", report.total_nrms},
                             {"zh_of_rows", report.rows_nrms}}}}
-               .dump(2) +
-           "\n";
-    outputs.push_back({r.json, json});
+                         .dump(2) +
+                     "\n");
   }
-  write_files_atomically(outputs);
+  io.commit();
   return report;
 }
 

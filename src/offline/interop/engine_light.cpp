@@ -369,7 +369,9 @@ ExportedLight export_light(const Lighting& light, LightFormat format, const Fram
   return out;
 }
 
-Lighting import_light(std::string_view text, const std::filesystem::path& name, LightFormat format,
+namespace {
+
+Lighting import_light_as_read(std::string_view text, const std::filesystem::path& name, LightFormat format,
                       const FrameMap& frame, Quantity quantity) {
   if (format == LightFormat::filament || format == LightFormat::filament_radiance) {
     const bool irradiance = format == LightFormat::filament;
@@ -466,7 +468,11 @@ Lighting import_light(std::string_view text, const std::filesystem::path& name, 
       if (order == doc.end() || !order->is_number_integer() || order->get<long long>() < 1 || order->get<long long>() > 32)
         bad(name, "\"order\" must be an integer in 1..32");
       const int n = order->get<int>();
+      if (doc.contains("condon_shortley") && !doc["condon_shortley"].is_boolean())
+        bad(name, "\"condon_shortley\" must be true or false");
       const bool cs = doc.value("condon_shortley", true);
+      for (const char* key : {"normalization", "frame", "quantity"})
+        if (doc.contains(key) && !doc[key].is_string()) bad(name, std::string("\"") + key + "\" must be a string");
       RawNormalization norm = RawNormalization::orthonormal;
       if (doc.contains("normalization")) {
         bool known = false;
@@ -513,6 +519,17 @@ Lighting import_light(std::string_view text, const std::filesystem::path& name, 
     default: break;
   }
   bad(name, "unknown format");
+}
+
+}  // namespace
+
+Lighting import_light(std::string_view text, const std::filesystem::path& name, LightFormat format,
+                      const FrameMap& frame, Quantity quantity) {
+  Lighting l = import_light_as_read(text, name, format, frame, quantity);
+  // Finite numbers whose conversion overflows (an intensity times a coefficient, pi / A_l).
+  for (double c : l.coefficients)
+    if (!std::isfinite(c)) bad(name, "its light overflows a double in shtool's convention (values too large)");
+  return l;
 }
 
 }  // namespace shtool::interop

@@ -63,6 +63,16 @@ std::optional<std::size_t> PlyElement::find(std::string_view property) const {
   return std::nullopt;
 }
 
+namespace {
+
+// Whether a header line's words are all read (a trailing word makes the line malformed).
+bool no_more_words(std::istringstream& words) {
+  std::string extra;
+  return !(words >> extra);
+}
+
+}  // namespace
+
 const PlyElement* PlyFile::element(std::string_view name) const {
   for (const PlyElement& e : elements_)
     if (e.name == name) return &e;
@@ -103,6 +113,8 @@ PlyFile PlyFile::parse(std::string bytes, const std::filesystem::path& name) {
     if (key == "format") {
       std::string fmt, version;
       words >> fmt >> version;
+      if (version != "1.0") throw fail("format version '" + version + "' (PLY 1.0 is read)");
+      if (!no_more_words(words)) throw fail("malformed format line '" + line + "'");
       if (fmt == "ascii") f.format_ = PlyFormat::ascii;
       else if (fmt == "binary_little_endian") f.format_ = PlyFormat::binary_little_endian;
       else if (fmt == "binary_big_endian") f.format_ = PlyFormat::binary_big_endian;
@@ -111,8 +123,13 @@ PlyFile PlyFile::parse(std::string bytes, const std::filesystem::path& name) {
     } else if (key == "element") {
       PlyElement e;
       long long count = -1;
-      words >> e.name >> count;
-      if (e.name.empty() || count < 0 || words.fail()) throw fail("malformed element line '" + line + "'");
+      std::string count_text;
+      words >> e.name >> count_text;
+      // A count is a whole number, nothing else ("20abc" is not 20).
+      const auto [ptr, ec] = std::from_chars(count_text.data(), count_text.data() + count_text.size(), count);
+      if (e.name.empty() || count_text.empty() || ec != std::errc() || ptr != count_text.data() + count_text.size() ||
+          count < 0 || !no_more_words(words))
+        throw fail("malformed element line '" + line + "' (expected: element NAME COUNT)");
       e.count = static_cast<std::size_t>(count);
       f.elements_.push_back(e);
     } else if (key == "property") {
@@ -122,7 +139,7 @@ PlyFile PlyFile::parse(std::string bytes, const std::filesystem::path& name) {
       if (type == "list") throw fail("list properties (element '" + f.elements_.back().name + "') are not supported");
       words >> pname;
       const std::optional<PlyType> t = type_from_name(type);
-      if (!t || pname.empty()) throw fail("malformed property line '" + line + "'");
+      if (!t || pname.empty() || !no_more_words(words)) throw fail("malformed property line '" + line + "'");
       PlyElement& e = f.elements_.back();
       if (e.find(pname)) throw fail("property '" + pname + "' appears twice");
       e.properties.push_back({pname, *t, e.record_size});

@@ -7,7 +7,7 @@
 
 #include <Eigen/Dense>
 
-#include "common/atomic_file.h"
+#include "common/job_outputs.h"
 #include "common/input_error.h"
 #include "common/input_file.h"
 #include "common/parallel_for.h"
@@ -104,8 +104,9 @@ TransformSplatsReport run_transform_splats(const TransformSplatsRequest& r) {
   for (double t : r.translate)
     if (!std::isfinite(t)) throw InputError("--translate must be finite");
   if (r.out.empty()) throw InputError("--out is required");
-  check_output_path(r.out, "--out");
-  check_not_an_input(r.out, "--out", r.in);
+  JobOutputs io;
+  io.input(r.in, "the input scene");
+  io.output(r.out, "--out");
   const int threads = resolve_threads(r.threads);
   const auto t0 = std::chrono::steady_clock::now();
 
@@ -131,11 +132,24 @@ TransformSplatsReport run_transform_splats(const TransformSplatsRequest& r) {
   const std::size_t count = v.count;
   const bool moves = !rot.isIdentity(0) || r.scale != 1 || !t.isZero(0);
   constexpr std::size_t kChunk = 4096;
-  parallel_for((count + kChunk - 1) / kChunk, threads, [&](std::size_t chunk) {
+  const std::size_t chunks = (count + kChunk - 1) / kChunk;
+  // The first problem of each chunk; the first chunk's is reported, whatever the threads.
+  std::vector<std::string> problems(chunks);
+  // The name of the first property of splat i that is not finite, or null.
+  auto non_finite = [&](std::size_t i) -> const std::string* {
+    for (std::size_t p = 0; p < v.properties.size(); ++p)
+      if (!std::isfinite(ply.get(v, i, p))) return &v.properties[p].name;
+    return nullptr;
+  };
+  parallel_for(chunks, threads, [&](std::size_t chunk) {
     std::array<std::vector<double>, 3> f, g;
     for (int c = 0; c < 3; ++c) f[c].resize(sh_count(order)), g[c].resize(sh_count(order));
     const std::size_t end = std::min(count, (chunk + 1) * kChunk);
     for (std::size_t i = chunk * kChunk; i < end; ++i) {
+      if (const std::string* name = non_finite(i)) {
+        problems[chunk] = r.in.string() + ": splat " + std::to_string(i) + ": '" + *name + "' is not finite";
+        return;
+      }
       Eigen::Vector3d p;
       for (int k = 0; k < 3; ++k) p[k] = ply.get(v, i, layout.position[k]);
       const Eigen::Vector3d moved = moves ? Eigen::Vector3d(r.scale * (rot * p) + t) : p;
@@ -165,10 +179,19 @@ TransformSplatsReport run_transform_splats(const TransformSplatsRequest& r) {
         for (int c = 0; c < 3; ++c)
           for (int k = 0; k < k_rest; ++k) ply.set(v, i, layout.rest[c * k_rest + k], g[c][1 + k]);
       }
+      // A finite value beyond the property's type (float32 past 3.4e38) was stored as inf.
+      if (const std::string* name = non_finite(i)) {
+        problems[chunk] = "splat " + std::to_string(i) + ": '" + *name +
+                          "' overflows its type after the transform (--scale or --translate too large for " +
+                          r.in.string() + ")";
+        return;
+      }
     }
   });
-  if (ply.format() == PlyFormat::ascii) write_file_atomically(r.out, ply.bytes());
-  else write_file_atomically(r.out, ply.binary_bytes());
+  for (const std::string& problem : problems)
+    if (!problem.empty()) throw InputError(problem);
+  io.set("--out", ply.format() == PlyFormat::ascii ? ply.bytes() : std::string(ply.binary_bytes()));
+  io.commit();
   TransformSplatsReport report;
   report.splats = count;
   report.degree = layout.degree;

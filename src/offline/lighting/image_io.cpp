@@ -22,6 +22,7 @@
 #include <ImfOutputFile.h>
 #include <ImfThreading.h>
 
+#include "common/finite.h"
 #include "common/input_error.h"
 #include "common/input_file.h"
 #include "shtool/table.h"
@@ -286,12 +287,44 @@ void check_hdr_complete(std::string_view b, const std::filesystem::path& name, s
 }
 
 // stb_image fills a truncated JPEG with grey instead of failing: a complete one ends
-// with the end-of-image marker.
+// with the end-of-image marker. And it returns memory it never wrote for a JPEG without a
+// scan: one must come (start-of-scan marker) before the end, found by walking the
+// marker segments from the start-of-image.
 void check_jpeg_complete(std::string_view b, const std::filesystem::path& name) {
   std::size_t end = b.size();
   while (end > 0 && b[end - 1] == '\0') --end;  // some writers pad
   if (end < 2 || static_cast<unsigned char>(b[end - 2]) != 0xff || static_cast<unsigned char>(b[end - 1]) != 0xd9)
     fail(name, "JPEG: the file ends before its end-of-image marker (truncated)");
+  auto byte = [&](std::size_t i) { return static_cast<unsigned char>(b[i]); };
+  std::size_t at = 2;  // after SOI
+  for (;;) {
+    if (at >= end || byte(at) != 0xff) fail(name, "JPEG: a marker segment is malformed before the first scan");
+    while (at < end && byte(at) == 0xff) ++at;  // fill bytes
+    if (at >= end) fail(name, "JPEG: the file ends before its first scan");
+    const unsigned marker = byte(at++);
+    if (marker == 0xda) return;  // start of scan
+    if (marker == 0xd9) fail(name, "JPEG: no scan (the image holds no pixel data)");
+    if (marker == 0x01 || (marker >= 0xd0 && marker <= 0xd7)) continue;  // no length
+    if (at + 2 > end) fail(name, "JPEG: the file ends inside a marker segment");
+    const std::size_t length = (std::size_t(byte(at)) << 8) | byte(at + 1);
+    if (length < 2) fail(name, "JPEG: a marker segment has length below 2");
+    at += length;
+  }
+}
+
+// Whether `size` bytes can hold a w x h image at all, checked before a decoder allocates
+// for it: a crafted header may claim any size. JPEG codes every 8 x 8 block of the first
+// component in at least one bit; PNG's deflate expands at most 1032-fold (258-byte
+// matches in a bit or two) the rows of at least one bit per pixel.
+void check_bytes_can_hold(std::string_view bytes, Format format, std::int64_t w, std::int64_t h,
+                          const std::filesystem::path& name) {
+  double least_bytes = 0;
+  if (format == Format::jpeg) least_bytes = double(w) * double(h) / 64 / 8;
+  if (format == Format::png) least_bytes = double(h) * (1 + std::ceil(double(w) / 8)) / 1032;
+  if (double(bytes.size()) + 1024 < least_bytes)
+    fail(name, std::string(format_name(format)) + ": " + std::to_string(w) + " x " + std::to_string(h) +
+                   " texels cannot be coded in a file of " + std::to_string(bytes.size()) +
+                   " bytes (its header is wrong or the file is cut short)");
 }
 
 Image decode_stb(std::string_view bytes, const std::filesystem::path& name, Format format, std::int64_t max_texels) {
@@ -303,6 +336,7 @@ Image decode_stb(std::string_view bytes, const std::filesystem::path& name, Form
   if (!stbi_info_from_memory(data, size, &w, &h, &comp))
     fail(name, std::string(format_name(format)) + ": " + stbi_failure_reason());
   check_size(name, w, h, max_texels);
+  check_bytes_can_hold(bytes, format, w, h, name);
   Image img;
   img.width = w;
   img.height = h;
@@ -364,7 +398,8 @@ ImageFile read_image(const std::filesystem::path& path, std::string_view what, i
   return f;
 }
 
-std::string encode_exr_channels(const ChannelImage& image) {
+std::string encode_exr_channels(const ChannelImage& image, NonFinite non_finite) {
+  if (non_finite == NonFinite::refuse) check_finite(std::span<const float>(image.texels), "the image's value");
   Imf::Header header(image.width, image.height);
   header.compression() = Imf::ZIP_COMPRESSION;
   for (const std::string& n : image.names) header.channels().insert(n, Imf::Channel(Imf::FLOAT));
@@ -389,6 +424,7 @@ std::string encode_exr(const Image& image) {
 }
 
 std::string encode_png(const Image& image, double exposure) {
+  check_finite(std::span<const float>(image.texels), "the image's value");
   const double scale = std::exp2(exposure);
   std::vector<unsigned char> bytes(image.texels.size());
   for (std::size_t i = 0; i < bytes.size(); ++i) {

@@ -5,6 +5,8 @@
 // memory, so that the decoders see exactly the bytes that were checked and hashed.
 #pragma once
 
+#include "common/finite.h"
+
 #include <cstdint>
 #include <filesystem>
 #include <string>
@@ -55,7 +57,8 @@ struct ChannelImage {
   std::vector<float> texels;  // width * height * names.size()
 };
 // Float OpenEXR, ZIP compression, one channel per name (the file lists them sorted).
-std::string encode_exr_channels(const ChannelImage& image);
+// Refuses a NaN or infinite value unless told to keep it (tests crafting bad maps).
+std::string encode_exr_channels(const ChannelImage& image, NonFinite non_finite = NonFinite::refuse);
 // The channels of an OpenEXR file as float: `only` (in that order; a channel of the file
 // not in it is neither read nor stored), or every channel in the file's (sorted) order
 // when `only` is empty. Throws InputError naming `name`: not OpenEXR, a channel of `only`

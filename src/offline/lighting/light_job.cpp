@@ -3,7 +3,7 @@
 #include <cmath>
 #include <numbers>
 
-#include "common/atomic_file.h"
+#include "common/job_outputs.h"
 #include "common/enum_names.h"
 #include "common/generator_record.h"
 #include "common/input_error.h"
@@ -128,30 +128,26 @@ Lighting run_light(const LightRequest& r) {
   if (r.json.empty()) throw InputError("--json is required");
   std::vector<LightSpec> lights = r.lights;
   nlohmann::json params = {{"order", r.order}, {"quantity", quantity_name(r.quantity)}};
+  JobOutputs io;
+  io.input(r.list, "the --lights list");
+  io.output(r.json, "--json");
+  io.output(r.out, "--out");
   if (!r.list.empty()) {
     if (!lights.empty()) throw InputError("--lights replaces --type and its options: give one or the other");
     const std::string text = read_input_file(r.list, "--lights");
     lights = parse_light_list(text, r.list);
     params["lights_file"] = r.list.filename().string();
     params["input_crc32"] = input_crc32(text);
-    check_not_an_input(r.json, "--json", r.list);
-    if (!r.out.empty()) check_not_an_input(r.out, "--out", r.list);
   }
   if (lights.empty()) throw InputError("no light: give --type (and its options) or --lights LIST.json");
-  check_output_path(r.json, "--json");
-  if (!r.out.empty()) check_output_path(r.out, "--out");
   const Lighting l = light_coefficients(lights, r.order, r.quantity);
   nlohmann::json specs = nlohmann::json::array();
   for (const LightSpec& s : lights) specs.push_back(spec_json(s));
   params["lights"] = specs;
-  const std::string json = lighting_json(l);
-  if (r.out.empty()) {
-    write_file_atomically(r.json, json);
-  } else {
-    const std::string table = encode_table(lighting_table(l, generator_record("shtool light", params)), r.encoding);
-    const std::vector<OutputFile> outputs = {{r.json, json}, {r.out, table}};
-    write_files_atomically(outputs);
-  }
+  io.set("--json", lighting_json(l));
+  if (io.requested("--out"))
+    io.set("--out", encode_table(lighting_table(l, generator_record("shtool light", params)), r.encoding));
+  io.commit();
   return l;
 }
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "common/finite.h"
 #include "common/input_error.h"
 #include "common/input_file.h"
 #include "common/table_writer.h"
@@ -14,6 +15,7 @@ namespace shtool::lighting {
 const char* quantity_name(Quantity q) { return q == Quantity::radiance ? "radiance" : "irradiance"; }
 
 std::string lighting_json(const Lighting& l) {
+  check_finite(std::span<const double>(l.coefficients), "lighting coefficient");
   // Written by hand for a readable layout (one [r, g, b] row per line, the keys in the
   // documented order); every value goes through nlohmann's dump, which prints doubles
   // with the shortest text that reads back to the same bits.

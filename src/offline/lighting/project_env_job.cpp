@@ -6,7 +6,7 @@
 #include <cmath>
 #include <numbers>
 
-#include "common/atomic_file.h"
+#include "common/job_outputs.h"
 #include "common/enum_names.h"
 #include "common/generator_record.h"
 #include "common/input_error.h"
@@ -224,22 +224,23 @@ ProjectEnvReport run_project_env(const ProjectEnvRequest& r) {
   const Layout layout_choice = r.layout == Layout::automatic && pattern ? Layout::faces : r.layout;
   if (r.preset != EquirectPreset::shtool && (layout_choice == Layout::cross || layout_choice == Layout::faces))
     throw InputError("--equirect-preset applies to equirect images");
-  check_output_path(r.json, "--json");
-  if (!pattern) {
-    check_not_an_input(r.json, "--json", r.image);
-    if (!r.out.empty()) check_not_an_input(r.out, "--out", r.image);
-    if (!r.render_back.empty()) check_not_an_input(r.render_back, "--render-back", r.image);
-    if (!r.render_source.empty()) check_not_an_input(r.render_source, "--render-source", r.image);
+  JobOutputs io;
+  if (pattern) {
+    const std::string text = r.image.string();
+    const std::size_t at = text.find("%s");
+    for (const char* suffix : kFaceSuffix)
+      io.input(text.substr(0, at) + suffix + text.substr(at + 2), "a face of the environment");
+  } else {
+    io.input(r.image, "the environment image");
   }
-  if (!r.out.empty()) check_output_path(r.out, "--out");
-  if (!r.render_back.empty()) {
-    check_output_path(r.render_back, "--render-back");
-    encode_image_for(r.render_back, Image{1, 1, 3, {0, 0, 0}}, "--render-back");  // the extension, early
-  }
-  if (!r.render_source.empty()) {
-    check_output_path(r.render_source, "--render-source");
+  io.output(r.json, "--json");
+  io.output(r.out, "--out");
+  io.output(r.render_back, "--render-back");
+  io.output(r.render_source, "--render-source");
+  // The extensions, early.
+  if (io.requested("--render-back")) encode_image_for(r.render_back, Image{1, 1, 3, {0, 0, 0}}, "--render-back");
+  if (io.requested("--render-source"))
     encode_image_for(r.render_source, Image{1, 1, 3, {0, 0, 0}}, "--render-source");
-  }
   const int threads = resolve_threads(r.threads);
   ProjectEnvReport report;
   report.threads = threads;
@@ -354,25 +355,19 @@ ProjectEnvReport run_project_env(const ProjectEnvRequest& r) {
   if (layout == Layout::equirect) params["equirect_preset"] = name_of(r.preset, equirect_preset_names());
   else params["mirror_x"] = r.mirror_x;
   if (r.cutoff) params["cutoff"] = *r.cutoff;
-  std::vector<std::string> bytes;
-  bytes.reserve(4);
-  std::vector<OutputFile> outputs;
-  auto add = [&](const std::filesystem::path& path, std::string content) {
-    bytes.push_back(std::move(content));
-    outputs.push_back({path, bytes.back()});
-  };
-  add(r.json, lighting_json(out));
-  if (!r.out.empty()) add(r.out, encode_table(lighting_table(out, generator_record("shtool project-env", params)), r.encoding));
+  io.set("--json", lighting_json(out));
+  if (io.requested("--out"))
+    io.set("--out", encode_table(lighting_table(out, generator_record("shtool project-env", params)), r.encoding));
   // The render-back and the source share a size, so they can be set side by side.
   const int h = std::clamp(layout == Layout::equirect ? equirect.height : 2 * faces[0].width, 256, 1024);
-  if (!r.render_back.empty())
-    add(r.render_back, encode_image_for(r.render_back, render_equirect(out, 2 * h, h, threads), "--render-back"));
-  if (!r.render_source.empty())
-    add(r.render_source, encode_image_for(r.render_source,
-                                          source_equirect(equirect, preset_map(r.preset), faces, r.mirror_x, 2 * h, h,
-                                                          threads),
-                                          "--render-source"));
-  write_files_atomically(outputs);
+  if (io.requested("--render-back"))
+    io.set("--render-back", encode_image_for(r.render_back, render_equirect(out, 2 * h, h, threads), "--render-back"));
+  if (io.requested("--render-source"))
+    io.set("--render-source",
+           encode_image_for(r.render_source,
+                            source_equirect(equirect, preset_map(r.preset), faces, r.mirror_x, 2 * h, h, threads),
+                            "--render-source"));
+  io.commit();
   return report;
 }
 

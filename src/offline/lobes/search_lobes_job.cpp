@@ -3,7 +3,7 @@
 #include <chrono>
 #include <string>
 
-#include "common/atomic_file.h"
+#include "common/job_outputs.h"
 #include "common/generator_record.h"
 #include "common/input_error.h"
 #include "common/table_writer.h"
@@ -28,8 +28,9 @@ SearchLobesReport run_search_lobes(SearchLobesRequest r, const SearchLobesCallba
     if (r.bands.empty()) throw InputError("give --band l, --bands a-b, or --shared --order N");
   }
   // Fail before a long search, not after it.
-  if (!r.out.empty()) check_output_path(r.out, "--out");
-  if (!r.json.empty()) check_output_path(r.json, "--json");
+  JobOutputs io;
+  io.output(r.out, "--out");
+  io.output(r.json, "--json");
   s.progress = cb.progress;
 
   const nlohmann::json params = {
@@ -67,19 +68,12 @@ SearchLobesReport run_search_lobes(SearchLobesRequest r, const SearchLobesCallba
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   report.summary = lobes_summary_json(report.results);
 
-  std::vector<std::string> bytes;
-  bytes.reserve(2);  // outputs hold views of these
-  std::vector<OutputFile> outputs;
-  if (!r.out.empty()) {
+  if (io.requested("--out")) {
     const Table t = make_lobes_table(report.results, generator_record("shtool search-lobes", params), s);
-    bytes.push_back(encode_table(t, r.out.extension() == ".json" ? TableEncoding::json : TableEncoding::binary));
-    outputs.push_back({r.out, bytes.back()});
+    io.set("--out", encode_table(t, r.out.extension() == ".json" ? TableEncoding::json : TableEncoding::binary));
   }
-  if (!r.json.empty()) {
-    bytes.push_back(report.summary.dump(2) + "\n");
-    outputs.push_back({r.json, bytes.back()});
-  }
-  write_files_atomically(outputs);
+  if (io.requested("--json")) io.set("--json", report.summary.dump(2) + "\n");
+  io.commit();
   return report;
 }
 

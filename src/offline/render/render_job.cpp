@@ -14,7 +14,7 @@
 #include <embree3/rtcore.h>
 #include <nlohmann/json.hpp>
 
-#include "common/atomic_file.h"
+#include "common/job_outputs.h"
 #include "common/input_error.h"
 #include "common/input_file.h"
 #include "common/parallel_for.h"
@@ -29,6 +29,7 @@
 #include "lighting/lighting_output.h"
 #include "render/glossy_shading.h"
 #include "render/texture_render.h"
+#include "fit/texture_bake.h"
 #include "render/wrinkle_shading.h"
 #include "shtool/glossy.h"
 #include "shtool/membrane.h"
@@ -331,7 +332,8 @@ RenderResult run_render(const RenderRequest& r) {
   if (r.width < 1 || r.height < 1 || r.width > 16384 || r.height > 16384)
     throw InputError("--width and --height must be between 1 and 16384, got " + std::to_string(r.width) + " x " +
                      std::to_string(r.height));
-  if (!(r.fov > 0 && r.fov < 180)) throw InputError("--fov must be between 0 and 180 degrees");
+  // Narrower than 0.01 degrees, the rays' spread vanishes in Embree's float arithmetic.
+  if (!(r.fov >= 0.01 && r.fov <= 179)) throw InputError("--fov must be between 0.01 and 179 degrees");
   if (!(std::abs(r.exposure) <= 64)) throw InputError("--exposure must be between -64 and 64");
   // The image encoders index with int: keep the largest output (the compare strip is six
   // panels wide) far below that.
@@ -360,18 +362,40 @@ RenderResult run_render(const RenderRequest& r) {
   if (shading != Shading::normals && r.light.empty()) throw InputError("--light is required");
   if (r.camera) {
     const Vec eye = vec(r.camera->eye), target = vec(r.camera->target), up = vec(r.camera->up);
-    if (!eye.allFinite() || !target.allFinite() || !up.allFinite() || (target - eye).norm() == 0 ||
+    // Embree traces in float: coordinates beyond 1e30 would overflow its arithmetic.
+    for (const Vec& v : {eye, target, up})
+      if (!v.allFinite() || v.cwiseAbs().maxCoeff() > 1e30)
+        throw InputError("--camera: every coordinate must be a finite number of magnitude at most 1e30");
+    if ((target - eye).norm() == 0 ||
         (target - eye).normalized().cross(up).norm() < 1e-9)
       throw InputError("--camera: eye and target must differ and up must not be parallel to the view");
   }
   // Checked before any work, so that a bad output name costs nothing.
+  JobOutputs io;
+  io.input(r.mesh, "the mesh");
+  io.input(r.pose, "the --pose mesh");
+  io.input(r.fit, "the --fit table");
+  if (!r.fit.empty()) {
+    // A texture-space bake's maps, read beside its table.
+    io.input(fit::dc_linear_map_path(r.fit), "a map of the --fit bake");
+    io.input(fit::lobes_map_path(r.fit), "a map of the --fit bake");
+  }
+  io.input(r.transfer, "the --transfer vectors");
+  io.input(r.light, "the --light");
+  io.input(r.alpha_map, "the --alpha-map");
+  io.input(r.wrinkle, "the --wrinkle table");
+  io.input(r.wrinkle_map, "the --wrinkle-map");
+  io.input(r.reference, "the --reference");
+  io.output(r.out, "--out");
   (void)lighting::encode_image_for(r.out, lighting::Image{1, 1, 4, std::vector<float>(4, 0.0f)}, "--out");
 
   const fit::Mesh rest = fit::load_mesh(r.mesh, fit::NormalSource::automatic, r.up);
+  io.inputs(rest.files, "a file of the mesh");
   std::vector<Eigen::Matrix3d> rotations;  // rest frame -> posed frame, per vertex (--pose)
   std::optional<fit::Mesh> posed;
   if (!r.pose.empty()) {
     posed = fit::load_mesh(r.pose, fit::NormalSource::automatic, r.up);
+    io.inputs(posed->files, "a file of the --pose mesh");
     rotations = deform::rest_to_pose_rotations(rest, *posed);
   }
   const fit::Mesh& mesh = posed ? *posed : rest;
@@ -539,7 +563,8 @@ RenderResult run_render(const RenderRequest& r) {
       }
     result.reference_nrms = norm > 0 ? std::sqrt(difference / norm) : std::sqrt(difference);
   }
-  write_file_atomically(r.out, lighting::encode_image_for(r.out, image, "--out", r.exposure));
+  io.set("--out", lighting::encode_image_for(r.out, image, "--out", r.exposure));
+  io.commit();
   return result;
 }
 

@@ -4,7 +4,7 @@
 #include <span>
 #include <system_error>
 
-#include "common/atomic_file.h"
+#include "common/job_outputs.h"
 #include "common/input_error.h"
 #include "common/input_file.h"
 #include "shtool/table.h"
@@ -35,9 +35,7 @@ ShaderSource run_gen_shader(const GenShaderRequest& r) {
   if (r.shader.zh_lobes < 1 || r.shader.zh_lobes > 16)
     throw InputError("--zh-lobes must be between 1 and 16, got " + std::to_string(r.shader.zh_lobes));
   if (r.out.empty()) throw InputError("--out: an output file is required");
-  std::error_code ec;
-  if (std::filesystem::is_directory(r.out, ec))
-    throw InputError("--out " + r.out.string() + " is a folder, not a file");
+  JobOutputs io;
   ShaderRequest request = r.shader;
   request.command = gen_shader_command(r);
   if (op == ShaderOperation::zhf_rotate || op == ShaderOperation::zhf_tailored_rotate) {
@@ -45,6 +43,7 @@ ShaderSource run_gen_shader(const GenShaderRequest& r) {
     if (path.empty())
       throw InputError("--lobes: no shipped zhf-lobes table covers order " + std::to_string(request.order) +
                        " (set SHTOOL_TABLES or give --lobes TABLE)");
+    io.input(path, "the --lobes table");
     const std::string bytes = read_input_file(path, "--lobes");
     const Result<Table> table =
         read_table_bytes(std::as_bytes(std::span(bytes.data(), bytes.size())), path.string());
@@ -54,8 +53,10 @@ ShaderSource run_gen_shader(const GenShaderRequest& r) {
     request.lobes = std::make_shared<const ZhfLobes>(std::move(lobes).value());
     request.lobes_crc = input_crc32(bytes);
   }
+  io.output(r.out, "--out");
   ShaderSource source = shader_source(request);
-  write_file_atomically(r.out, source.text);
+  io.set("--out", source.text);
+  io.commit();
   return source;
 }
 

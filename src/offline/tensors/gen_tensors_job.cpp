@@ -6,7 +6,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "common/atomic_file.h"
+#include "common/job_outputs.h"
 #include "common/generator_record.h"
 #include "common/input_error.h"
 #include "common/table_writer.h"
@@ -53,10 +53,11 @@ std::vector<GeneratedFile> run_gen_tensors(const GenTensorsRequest& r) {
   const nlohmann::json generator = generator_record("shtool gen-tensors", params);
 
   std::vector<GeneratedFile> files;
-  std::vector<std::string> contents;
+  JobOutputs io;
   auto add = [&](const std::string& name, std::string bytes, std::string summary) {
     files.push_back({r.out / name, std::move(summary)});
-    contents.push_back(std::move(bytes));
+    io.output(files.back().path, name);
+    io.set(name, std::move(bytes));
   };
   if (wanted("rotation")) {
     const RotationHelpers h = compute_rotation_helpers(r.order);
@@ -75,9 +76,7 @@ std::vector<GeneratedFile> run_gen_tensors(const GenTensorsRequest& r) {
     add("sh-fourier-tensors" + ext, encode_table(sh_fourier_tensors_table(r.order, r.inputs, generator), r.encoding),
         "order " + std::to_string(r.order) + ", products of up to " + std::to_string(r.inputs) + " inputs");
 
-  std::vector<OutputFile> outputs;
-  for (std::size_t i = 0; i < files.size(); ++i) outputs.push_back({files[i].path, contents[i]});
-  write_files_atomically(outputs);
+  io.commit();
   return files;
 }
 

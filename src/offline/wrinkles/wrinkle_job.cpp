@@ -4,7 +4,7 @@
 #include <cmath>
 #include <string>
 
-#include "common/atomic_file.h"
+#include "common/job_outputs.h"
 #include "common/generator_record.h"
 #include "common/input_error.h"
 #include "common/parallel_for.h"
@@ -37,11 +37,6 @@ void check_request(const WrinkleRequest& r) {
     throw InputError("--max-depth must be in (0, 4] periods, got " + std::to_string(r.max_depth));
   resolve_threads(r.threads);
   if (r.out.empty()) throw InputError("--out is required");
-  check_output_path(r.out, "--out");
-  if (!r.json.empty()) {
-    check_output_path(r.json, "--json");
-    if (same_file(r.out, r.json)) throw InputError("--json names the same file as --out");
-  }
 }
 
 Table wrinkle_table(const WrinkleFit& fit, const WrinkleRequest& r) {
@@ -98,6 +93,9 @@ nlohmann::json wrinkle_summary(const WrinkleFit& fit, const WrinkleRequest& r) {
 
 WrinkleReport run_fit_wrinkles(const WrinkleRequest& r) {
   check_request(r);
+  JobOutputs io;
+  io.output(r.out, "--out");
+  io.output(r.json, "--json");
   const WrinkleGrid grid{r.grid, r.samples, r.max_depth};
   WrinkleReport report;
   auto t0 = std::chrono::steady_clock::now();
@@ -118,14 +116,9 @@ WrinkleReport run_fit_wrinkles(const WrinkleRequest& r) {
   report.samples = grid.sample_count();
   report.parameters = static_cast<std::size_t>(grid.nodes()) * r.lobes * (3 + r.order - 2);
 
-  const std::string table = encode_table(wrinkle_table(fit, r));
-  std::string json;
-  std::vector<OutputFile> outputs = {{r.out, table}};
-  if (!r.json.empty()) {
-    json = wrinkle_summary(fit, r).dump(2) + "\n";
-    outputs.push_back({r.json, json});
-  }
-  write_files_atomically(outputs);
+  io.set("--out", encode_table(wrinkle_table(fit, r)));
+  if (io.requested("--json")) io.set("--json", wrinkle_summary(fit, r).dump(2) + "\n");
+  io.commit();
   return report;
 }
 

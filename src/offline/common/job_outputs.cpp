@@ -1,0 +1,149 @@
+#include "common/job_outputs.h"
+
+#include <cerrno>
+#include <cstring>
+#include <optional>
+#include <system_error>
+
+#include <unistd.h>
+
+#include "common/input_error.h"
+
+namespace shtool {
+namespace {
+
+// Piece by piece: GCC 12 warns (-Wrestrict, a false positive) on "'" + s.
+std::string quoted(const std::filesystem::path& p) {
+  std::string q(1, '\'');
+  q += p.string();
+  q += '\'';
+  return q;
+}
+
+}  // namespace
+
+void JobOutputs::input(const std::filesystem::path& path, std::string what) {
+  if (path.empty()) return;
+  for (const Output& o : outputs_)
+    if (same_file(o.path, path))
+      throw InputError(o.option + ": " + quoted(o.path) + " is the input " + quoted(path) + " (" + what +
+                       "); refusing to overwrite it");
+  inputs_.push_back({path, std::move(what)});
+}
+
+void JobOutputs::inputs(const std::vector<std::filesystem::path>& paths, const std::string& what) {
+  for (const std::filesystem::path& p : paths) input(p, what);
+}
+
+void JobOutputs::output(const std::filesystem::path& path, std::string option) {
+  if (path.empty()) return;
+  if (find_if(option)) throw std::logic_error("output " + option + " declared twice");
+  check_output_path(path, option);
+  for (const Input& i : inputs_)
+    if (same_file(path, i.path))
+      throw InputError(option + ": " + quoted(path) + " is the input " + quoted(i.path) + " (" + i.what +
+                       "); refusing to overwrite it");
+  for (const Output& o : outputs_)
+    if (same_file(path, o.path))
+      throw InputError(option + " and " + o.option + " name the same file " + quoted(path));
+  outputs_.push_back({path, std::move(option), {}, false});
+}
+
+const JobOutputs::Output* JobOutputs::find_if(std::string_view option) const {
+  for (const Output& o : outputs_)
+    if (o.option == option) return &o;
+  return nullptr;
+}
+
+JobOutputs::Output& JobOutputs::find(std::string_view option) {
+  for (Output& o : outputs_)
+    if (o.option == option) return o;
+  throw std::logic_error("output " + std::string(option) + " was not requested");
+}
+
+bool JobOutputs::requested(std::string_view option) const { return find_if(option) != nullptr; }
+
+const std::filesystem::path& JobOutputs::path(std::string_view option) const {
+  const Output* o = find_if(option);
+  if (!o) throw std::logic_error("output " + std::string(option) + " was not requested");
+  return o->path;
+}
+
+void JobOutputs::set(std::string_view option, std::string bytes) {
+  Output& o = find(option);
+  o.bytes = std::move(bytes);
+  o.set = true;
+}
+
+void JobOutputs::stage() {
+  for (const Output& o : outputs_)
+    if (!o.set) throw std::logic_error("output " + o.option + " has no bytes");
+  // Every temporary file written and flushed: a full disk stops here, nothing replaced.
+  pending_.clear();
+  pending_.reserve(outputs_.size());
+  for (Output& o : outputs_) {
+    pending_.emplace_back(o.path);
+    pending_.back().write(o.bytes);
+    pending_.back().finish();
+    o.bytes = std::string();  // written: its memory goes back
+  }
+}
+
+void JobOutputs::publish() {
+  std::vector<PendingFile> pending = std::move(pending_);
+  pending_.clear();
+  if (pending.size() != outputs_.size()) throw std::logic_error("JobOutputs::publish before stage");
+  // Each target's previous contents kept under a second name (a hard link, no copy),
+  // then the renames; a failed rename puts back what the earlier ones replaced.
+  const CommitGuard guard;
+  struct Kept {
+    std::filesystem::path backup;  // empty: the target did not exist
+  };
+  std::vector<Kept> kept(outputs_.size());
+  auto remove_backups = [&] {
+    for (const Kept& k : kept)
+      if (!k.backup.empty()) ::unlink(k.backup.c_str());
+  };
+  for (std::size_t i = 0; i < outputs_.size(); ++i) {
+    const std::filesystem::path& target = outputs_[i].path;
+    std::error_code ec;
+    const std::filesystem::file_status st = std::filesystem::symlink_status(target, ec);
+    // A folder that took the target's place since the checks cannot be replaced: its
+    // rename below fails and undoes the others.
+    if (std::filesystem::exists(st) && !std::filesystem::is_directory(st)) {
+      const std::filesystem::path backup = temporary_name_for(target);
+      if (::link(target.c_str(), backup.c_str()) == 0) kept[i].backup = backup;
+      else {
+        const int err = errno;
+        remove_backups();
+        throw InputError(outputs_[i].option + ": cannot write " + quoted(target) +
+                         ": cannot keep its previous contents while the outputs are replaced: " + std::strerror(err));
+      }
+    }
+  }
+  for (std::size_t i = 0; i < outputs_.size(); ++i) {
+    std::error_code ec;
+    std::filesystem::rename(pending[i].temporary(), outputs_[i].path, ec);
+    if (!ec) {
+      pending[i].mark_committed();
+      continue;
+    }
+    // Back to the state before the commit: the replaced targets get their contents
+    // back, the created ones go.
+    for (std::size_t j = 0; j < i; ++j) {
+      if (!kept[j].backup.empty()) {
+        std::error_code rc;
+        std::filesystem::rename(kept[j].backup, outputs_[j].path, rc);
+        if (!rc) kept[j].backup.clear();
+      } else {
+        ::unlink(outputs_[j].path.c_str());
+      }
+    }
+    remove_backups();
+    throw InputError(outputs_[i].option + ": cannot move the finished file into place at " + quoted(outputs_[i].path) +
+                     ": " + ec.message() + "; no output was changed");
+  }
+  remove_backups();
+}
+
+}  // namespace shtool

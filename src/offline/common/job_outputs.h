@@ -1,0 +1,79 @@
+// The output side of every job. A job declares its inputs and its outputs (each under the
+// option that named it) before any work; each declaration is checked at once against all
+// the others, so a long bake never starts when its result could not be written or would
+// replace one of its own inputs. When the work is done the job hands over each output's
+// bytes and commits: all or nothing.
+//
+//   JobOutputs io;
+//   io.input(r.mesh, "the mesh");
+//   io.output(r.out, "--out");
+//   io.output(r.json, "--json");          // an empty path: not requested, ignored
+//   ... work ...
+//   io.set("--out", encode_table(t));
+//   if (io.requested("--json")) io.set("--json", json);
+//   io.commit();
+//
+// The commit writes and flushes every temporary file first (a full disk leaves nothing
+// behind), keeps a link to each target's previous contents, then renames; if a rename
+// fails, the targets already replaced get their previous contents back. SIGINT and
+// SIGTERM wait for a commit under way to end (common/atomic_file.h removes the temporary
+// files of one that has not started).
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "common/atomic_file.h"
+
+namespace shtool {
+
+class JobOutputs {
+ public:
+  // A file the job reads; `what` names it in messages ("the mesh", "--fit"). Empty: ignored.
+  void input(const std::filesystem::path& path, std::string what);
+  // Several files of one input (a mesh's: the file and a glTF's buffers and images).
+  void inputs(const std::vector<std::filesystem::path>& paths, const std::string& what);
+  // An output under its option's name; empty: not requested. Throws InputError at once
+  // when the path cannot be written (no folder, a folder), is one of the inputs (by real
+  // path or hard link) or another output.
+  void output(const std::filesystem::path& path, std::string option);
+
+  bool requested(std::string_view option) const;
+  const std::filesystem::path& path(std::string_view option) const;
+
+  // The bytes of a requested output (owned here until the commit).
+  void set(std::string_view option, std::string bytes);
+
+  // Every requested output must have its bytes. Throws InputError naming the output that
+  // could not be written; then no output has changed.
+  void commit() {
+    stage();
+    publish();
+  }
+  // commit() in its two steps: every temporary file written and flushed, then the renames
+  // (a test puts an obstacle between them).
+  void stage();
+  void publish();
+
+ private:
+  struct Input {
+    std::filesystem::path path;
+    std::string what;
+  };
+  struct Output {
+    std::filesystem::path path;
+    std::string option;
+    std::string bytes;
+    bool set = false;
+  };
+  Output& find(std::string_view option);
+  const Output* find_if(std::string_view option) const;
+
+  std::vector<Input> inputs_;
+  std::vector<Output> outputs_;
+  std::vector<PendingFile> pending_;  // between stage() and publish()
+};
+
+}  // namespace shtool
