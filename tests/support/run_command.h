@@ -12,6 +12,7 @@
 #include <csignal>
 #include <cstring>
 #include <stdexcept>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -19,6 +20,7 @@
 #include <poll.h>
 #include <sys/types.h>
 #include <sys/wait.h>
+#include <sys/resource.h>
 #include <unistd.h>
 
 namespace shtool::test {
@@ -38,6 +40,9 @@ struct CommandOptions {
   std::string stdin_data;            // written to the child's stdin, then stdin is closed
   double timeout_seconds = 0.0;      // <= 0: no timeout
   std::string working_directory;     // empty: inherit
+  // The child's address space limit (RLIMIT_AS) in bytes; 0: none. A sanitizer's shadow
+  // memory needs terabytes of address space: the caller leaves it 0 there.
+  std::uint64_t address_space_bytes = 0;
 };
 
 namespace detail {
@@ -74,6 +79,10 @@ inline CommandResult run_command(const std::vector<std::string>& argv,
     dup2(in_pipe[0], STDIN_FILENO);
     dup2(out_pipe[1], STDOUT_FILENO);
     dup2(err_pipe[1], STDERR_FILENO);
+    if (options.address_space_bytes) {
+      const struct rlimit limit = {options.address_space_bytes, options.address_space_bytes};
+      setrlimit(RLIMIT_AS, &limit);
+    }
     if (!options.working_directory.empty() && chdir(options.working_directory.c_str()) != 0) {
       const int e = errno;
       (void)!write(exec_pipe[1], &e, sizeof e);
