@@ -4,7 +4,9 @@
   1. include/shtool/ (what an engine includes) reaches neither nlohmann/json nor FFTW,
      directly or through another shtool header;
   2. src/runtime/ and include/shtool/ include nothing of src/offline/ or src/cli/;
-  3. src/offline/ includes nothing of src/cli/;
+  3. src/offline/ includes nothing of src/cli/, and no job includes another job's header:
+     a `*_job.h` is included only by its own `.cpp` (the CLI includes any); what two jobs
+     share lives in a library header of their folders;
   4. no source or doc names a file the repository does not hold, a path out of it,
      or a tracker's issue.
 
@@ -56,6 +58,17 @@ def main():
     check_tree("include/shtool", OFFLINE_ROOTS + ("cli_common",), "the engine API must not depend on the offline tool")
     check_tree("src/runtime", OFFLINE_ROOTS + ("cli_common",), "the runtime must not depend on the offline tool")
     check_tree("src/offline", ("cli_common",), "the offline libraries must not depend on the CLI")
+
+    # 3b. one job, one header: src/offline/<folder>/<name>_job.h only from <name>_job.cpp
+    job_header = re.compile(r"^[a-z_]+/([a-z_]+_job)\.h$")
+    for p in sorted((root / "src/offline").rglob("*")):
+        if p.suffix not in (".h", ".cpp"):
+            continue
+        for inc in includes(p):
+            m = job_header.match(inc)
+            if m and p.name != m.group(1) + ".cpp":
+                problems.append(f"{p.relative_to(root)} includes \"{inc}\" (another job's header: move what they "
+                                "share into a library header)")
 
     # 4. references that a reader of the repository cannot follow: a document (.md,
     # .pdf) named but not held by the repository, a content-addressed text file (a name

@@ -8,7 +8,7 @@
 
 #include "common/input_error.h"
 #include "common/sh_inputs.h"
-#include "fit/fit_zh_job.h"
+#include "fit/transfer_file.h"
 #include "shtool/sh.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

@@ -13,7 +13,7 @@
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
-#include "deform/deform_job.h"
+#include "fit/deformation.h"
 #include "fit/embree_scene.h"
 #include "fit/mesh.h"
 #include "glossy/brdf.h"
@@ -152,7 +152,7 @@ const std::string kPlane =
 
 TEST(GlossyTransfer, OpenPlaneIsTheRotationIntoTheLocalFrame) {
   const fit::Mesh plane = from_obj("plane.obj", kPlane);
-  const std::vector<Eigen::Matrix3d> frames = deform::vertex_frames(plane, plane);
+  const std::vector<Eigen::Matrix3d> frames = fit::vertex_frames(plane, plane);
   const auto scene = fit::build_scene(plane);
   GlossyTransferOptions o;
   o.order = 4;
@@ -183,7 +183,7 @@ TEST(GlossyTransfer, SquareRoofMatchesAnalyticVisibility) {
   const fit::Mesh m = from_obj("roof.obj", mesh);
   const std::size_t centre = 4;
   ASSERT_NEAR(m.positions[centre].norm(), 0.0, 0.0);
-  const std::vector<Eigen::Matrix3d> frames = deform::vertex_frames(m, m);
+  const std::vector<Eigen::Matrix3d> frames = fit::vertex_frames(m, m);
   const Eigen::Matrix3d f = frames[centre];
   const auto scene = fit::build_scene(m);
   GlossyTransferOptions o;
@@ -225,9 +225,9 @@ TEST(GlossyTransfer, RowsRotateWithARigidlyRotatedMesh) {
   GlossyTransferOptions o;
   o.order = 4;
   o.shadowed = false;
-  const GlossyTransfer a = glossy_transfer(rest, deform::vertex_frames(rest, rest), factors.rows,
+  const GlossyTransfer a = glossy_transfer(rest, fit::vertex_frames(rest, rest), factors.rows,
                                            b.transpose() * b, o);
-  const GlossyTransfer c = glossy_transfer(turned, deform::vertex_frames(turned, turned), factors.rows,
+  const GlossyTransfer c = glossy_transfer(turned, fit::vertex_frames(turned, turned), factors.rows,
                                            b.transpose() * b, o);
   ShRotation<double> rotation(4, nullptr);
   ASSERT_TRUE(rotation.set(r, RotationMethod::reference));
@@ -249,7 +249,7 @@ TEST(GlossyTransfer, BytesDoNotDependOnTheThreadCount) {
   o.order = 3;
   o.rays = 64;
   o.threads = 1;
-  const auto frames = deform::vertex_frames(spot, spot);
+  const auto frames = fit::vertex_frames(spot, spot);
   const GlossyTransfer one = glossy_transfer(spot, frames, factors.rows, b.transpose() * b, o);
   o.threads = 2;
   const GlossyTransfer two = glossy_transfer(spot, frames, factors.rows, b.transpose() * b, o);

@@ -12,7 +12,7 @@
 #include "common/generator_record.h"
 #include "common/input_error.h"
 #include "common/sh_inputs.h"
-#include "fit/fit_zh_job.h"
+#include "fit/transfer_file.h"
 #include "fit/mesh.h"
 #include "fit/zh_fit.h"
 #include "shtool/rotation_helpers.h"

@@ -20,21 +20,18 @@
 #include "common/stopwatch.h"
 #include "common/table_writer.h"
 #include "fit/embree_scene.h"
-#include "fit/mpi_job.h"
+#include "fit/mpi_world.h"
 #include "fit/shard.h"
 #include "fit/texture_bake.h"
 #include "fit/zh_fit.h"
 #include "fit/zh_fit_gltf.h"
 #include "fit/zh_fit_merge.h"
+#include "fit/transfer_file.h"
 #include "fit/zh_fit_table.h"
 #include "shtool/sh.h"
 
 namespace shtool::fit {
 namespace {
-
-// Transfer coefficients are O(1) (radiance transfer of a unit light); far larger inputs
-// would overflow the squared norms of the fit (about 1e154).
-constexpr double kMaxTransferMagnitude = 1e100;
 
 std::string ply_text(const Mesh& mesh, const std::vector<double>& transfer, int order,
                      const ZhFitTable<double>& fits) {
@@ -64,15 +61,6 @@ std::string ply_text(const Mesh& mesh, const std::vector<double>& transfer, int 
   }
   for (const Eigen::Vector3i& t : mesh.triangles) s << "3 " << t[0] << ' ' << t[1] << ' ' << t[2] << '\n';
   return s.str();
-}
-
-// The --save-transfer output, in the --transfer format.
-std::string transfer_json(const std::vector<double>& transfer, int order, UpAxis up) {
-  const std::size_t n2 = sh_count(order);
-  nlohmann::json doc = {{"order", order}, {kMeshUpKey, up_axis_name(up)}, {"vectors", nlohmann::json::array()}};
-  for (std::size_t v = 0; v < transfer.size() / n2; ++v)
-    doc["vectors"].push_back(std::vector<double>(transfer.begin() + v * n2, transfer.begin() + (v + 1) * n2));
-  return doc.dump() + "\n";
 }
 
 void check_request(const FitZhRequest& r) {
@@ -131,134 +119,36 @@ void check_request(const FitZhRequest& r) {
 
 }  // namespace
 
-std::string fits_json(const ZhFitTable<double>& fits) {
-  nlohmann::json doc = {{"order", fits.order}, {"lobes", fits.lobes}, {"fits", nlohmann::json::array()}};
-  for (std::size_t v = 0; v < fits.vertices; ++v) {
-    nlohmann::json jf = {{"lobes", nlohmann::json::array()}};
-    const std::span<const double> coeffs = fits.coeffs_of(v);
-    for (int k = 0; k < fits.lobes; ++k) {
-      const Eigen::Vector3d& axis = fits.axes_of(v)[k];
-      jf["lobes"].push_back({{"axis", {axis.x(), axis.y(), axis.z()}},
-                             {"coeffs", coeffs.subspan(static_cast<std::size_t>(k) * fits.order, fits.order)}});
-    }
-    jf["residual"] = fits.residual[v];
-    jf["norm"] = fits.norm[v];
-    if (fits.direct_count) jf["direct"] = fits.direct_of(v);
-    doc["fits"].push_back(std::move(jf));
-  }
-  return doc.dump() + "\n";
-}
 
-
-// {"order": n, "vectors": [[n^2 numbers], ...]}
-std::vector<double> parse_transfer_json(std::string_view text, const std::filesystem::path& path_in, int& order,
-                                        std::string* mesh_up) {
-  const std::string path = path_in.string();
-  const nlohmann::json doc = parse_json_input(text, path_in, "--transfer");
-  if (!doc.is_object() || !doc.contains("order") || !doc.at("order").is_number_integer())
-    throw InputError("--transfer '" + path + "': expected {\"order\": n, \"vectors\": [[n^2 numbers], ...]}");
-  if (doc.contains(kMeshUpKey) && (!doc.at(kMeshUpKey).is_string() || (doc.at(kMeshUpKey) != "y" && doc.at(kMeshUpKey) != "z")))
-    throw InputError("--transfer '" + path + "': \"" + kMeshUpKey + "\" must be \"y\" or \"z\"");
-  if (mesh_up) *mesh_up = doc.contains(kMeshUpKey) ? doc.at(kMeshUpKey).get<std::string>() : std::string();
-  const nlohmann::json& o = doc.at("order");
-  const std::int64_t order64 = o.is_number_unsigned()
-                                   ? (o.get<std::uint64_t>() > static_cast<std::uint64_t>(kMaxOrder) ? -1 : o.get<std::int64_t>())
-                                   : o.get<std::int64_t>();
-  if (order64 < 1 || order64 > kMaxOrder)
-    throw InputError("--transfer '" + path + "': order " + o.dump() + " is not supported (1.." +
-                     std::to_string(kMaxOrder) + ")");
-  order = static_cast<int>(order64);
-  if (!doc.contains("vectors") || !doc.at("vectors").is_array() || doc.at("vectors").empty())
-    throw InputError("--transfer '" + path + "': \"vectors\" must be a non-empty array");
-  const std::size_t n2 = sh_count(order);
-  std::vector<double> values;
-  std::size_t v = 0;
-  for (const nlohmann::json& vec : doc.at("vectors")) {
-    if (!vec.is_array() || vec.size() != n2)
-      throw InputError("--transfer '" + path + "': vector " + std::to_string(v) + " must have " +
-                      std::to_string(n2) + " numbers (order " + std::to_string(order) + ")");
-    for (const nlohmann::json& x : vec) {
-      if (!x.is_number()) throw InputError("--transfer '" + path + "': vector " + std::to_string(v) + " has a non-number");
-      const double d = x.get<double>();
-      if (!std::isfinite(d)) throw InputError("--transfer '" + path + "': vector " + std::to_string(v) + " is not finite");
-      if (std::abs(d) > kMaxTransferMagnitude)
-        throw InputError("--transfer '" + path + "': vector " + std::to_string(v) +
-                         " has a coefficient beyond 1e100 in magnitude, more than the fit handles (its squared "
-                         "norms would overflow)");
-      values.push_back(d);
-    }
-    ++v;
-  }
-  return values;
-}
-
-
-const std::vector<std::pair<std::string, TransferMode>>& transfer_mode_names() {
-  static const std::vector<std::pair<std::string, TransferMode>> names = {
-      {"unshadowed", TransferMode::unshadowed},
-      {"shadowed", TransferMode::shadowed},
-      {"interreflected", TransferMode::interreflected}};
-  return names;
-}
-
-const std::vector<std::pair<std::string, ZhFitMethod>>& fit_method_names() {
-  static const std::vector<std::pair<std::string, ZhFitMethod>> names = {{"varpro", ZhFitMethod::varpro},
-                                                                         {"joint", ZhFitMethod::joint}};
-  return names;
-}
-
-const std::vector<std::pair<std::string, NormalSource>>& normal_source_names() {
-  static const std::vector<std::pair<std::string, NormalSource>> names = {
-      {"auto", NormalSource::automatic}, {"file", NormalSource::file}, {"computed", NormalSource::computed}};
-  return names;
-}
 
 namespace {
 
-FitZhReport run_fit_zh_on(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJob* mpi) {
-  check_request(r);
-  std::optional<Shard> shard;  // --shard: a partial table
-  if (!r.shard.empty()) shard = parse_shard(r.shard);
-  // The rows this process fits: its shard, or its rank's share of an MPI job.
-  std::optional<Shard> rows_of = shard;
-  if (mpi) rows_of = Shard{static_cast<std::size_t>(mpi->rank()), static_cast<std::size_t>(mpi->size())};
-  const int threads = resolve_threads(r.threads);
-  const std::filesystem::path input_path = r.mesh.empty() ? r.transfer : r.mesh;
-  const bool json_table = r.encoding == TableEncoding::json;
-  const std::string part =
-      shard ? ".part-" + std::to_string(shard->index) + "-of-" + std::to_string(shard->count) : std::string();
-  const std::filesystem::path out =
-      !r.out.empty() ? r.out
-                     : std::filesystem::path(input_path.stem().string() + ".zh" + part +
-                                             (json_table ? ".json" : ".shtb"));
-  // Fail before a long bake, not after it: every output writable, none the input, no two
-  // the same file.
-  std::filesystem::path dc_linear_map, lobes_map;  // --texture: beside --out
-  if (r.texture) {
-    dc_linear_map = dc_linear_map_path(out);
-    lobes_map = lobes_map_path(out);
-  }
-  JobOutputs io;
-  io.input(input_path, r.mesh.empty() ? "the --transfer input" : "the mesh");
-  // Every rank checks them, so that all stop alike (only rank 0 writes).
-  io.output(out, "--out");
-  io.output(r.json, "--json");
-  io.output(r.ply, "--ply");
-  io.output(r.save_transfer, "--save-transfer");
-  io.output(r.gltf, "--gltf");
-  io.output(dc_linear_map, "the DC and linear map");
-  io.output(lobes_map, "the lobe map");
+// Where the job runs: its outputs' paths and the rows it fits (its shard, or its rank's
+// share of an MPI job).
+struct FitZhPlan {
+  std::optional<Shard> shard;    // --shard: a partial table
+  std::optional<Shard> rows_of;  // --shard, or this rank of --mpi
+  int threads = 1;
+  std::filesystem::path out, dc_linear_map, lobes_map;
+};
 
-  FitZhReport report;
-  report.threads = threads;
-  report.lobes = r.lobes;
-  report.out = out;
-  report.from_mesh = !r.mesh.empty();
-
-  // ---- transfer vectors
-  int order = r.order;
-  std::size_t total = 0;  // vertices or vectors of the whole input
+// Step 1, the inputs: the transfer vectors of the rows this run fits, read from
+// --transfer or simulated on the mesh, with their provenance.
+struct FitZhInputs {
+  Mesh mesh;             // empty with --transfer
+  TexelSamples texels;   // --texture
+  std::vector<double> transfer;
+  int order = 0;
+  std::size_t total = 0;  // vertices, texels or vectors of the whole input
   VertexRange range;      // the rows this run fits
+  nlohmann::json params, meta = nlohmann::json::object();
+  double simulate_seconds = 0;
+};
+
+FitZhInputs read_inputs(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJob* mpi, const FitZhPlan& plan,
+                        JobOutputs& io) {
+  FitZhInputs in;
+  in.order = r.order;
   // A shard past the input's last vertex would write an empty table merge cannot check.
   auto shard_range_of = [&](const Shard& s, std::size_t count) {
     const std::string items = std::to_string(count) + (r.mesh.empty() ? " vectors" : " vertices");
@@ -270,100 +160,95 @@ FitZhReport run_fit_zh_on(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJo
                        " would leave some empty (N must be at most " + std::to_string(count) + ")");
     return shard_range(count, s);
   };
-  std::vector<double> transfer;
-  Mesh mesh;
-  TexelSamples texels;  // --texture
-  nlohmann::json params;
-  nlohmann::json meta = nlohmann::json::object();
   if (!r.transfer.empty()) {
     const std::string text = read_input_file(r.transfer, "--transfer");
     int file_order = 0;
     std::string transfer_up;
-    transfer = parse_transfer_json(text, r.transfer, file_order, &transfer_up);
+    in.transfer = parse_transfer_json(text, r.transfer, file_order, &transfer_up);
     // Vectors simulated on a mesh keep its frame record, so that render checks the fit.
-    if (!transfer_up.empty()) meta[kMeshUpKey] = transfer_up;
+    if (!transfer_up.empty()) in.meta[kMeshUpKey] = transfer_up;
     if (r.order_given && file_order != r.order)
       throw InputError("--order " + std::to_string(r.order) + " but --transfer '" + r.transfer.string() +
                        "' has order " + std::to_string(file_order));
-    order = file_order;
-    params = {{"transfer", r.transfer.filename().string()}, {"input_crc32", input_crc32(text)}};
-    const std::size_t n2 = sh_count(order);
-    total = transfer.size() / n2;
-    range = rows_of ? shard_range_of(*rows_of, total) : VertexRange{0, total};
-    transfer.erase(transfer.begin() + range.end * n2, transfer.end());
-    transfer.erase(transfer.begin(), transfer.begin() + range.begin * n2);
-  } else {
-    mesh = load_mesh(r.mesh, r.normals, r.up);
-    io.inputs(mesh.files, "a file of the mesh");
-    if (cb.warning) {
-      if (mesh.unreferenced_vertices)
-        cb.warning("skipped " + std::to_string(mesh.unreferenced_vertices) + " unreferenced vertices");
-      if (mesh.degenerate_faces) cb.warning("skipped " + std::to_string(mesh.degenerate_faces) + " degenerate faces");
-      if (mesh.zero_normals)
-        cb.warning(std::to_string(mesh.zero_normals) + " vertices have no defined normal (+z used)");
-    }
-    TransferOptions to;
-    to.order = order;
-    to.rays = r.rays;
-    to.seed = r.seed;
-    to.mode = r.mode;
-    to.bounces = r.bounces;
-    to.albedo = r.albedo;
-    to.threads = threads;
-    to.progress = cb.simulate_progress;
-    if (r.texture) {
-      const auto t0 = std::chrono::steady_clock::now();
-      texels = rasterize_texels(mesh, *r.texture, r.mesh);
-      total = texels.texel.size();
-      range = VertexRange{0, total};
-      transfer = compute_transfer_at(mesh, texels.positions, texels.normals, texels.texel, to);
-      report.simulate_seconds = seconds_since(t0);
-    } else {
-      total = mesh.positions.size();
-      range = rows_of ? shard_range_of(*rows_of, total) : VertexRange{0, total};
-      to.first_vertex = range.begin;
-      to.end_vertex = range.end;
-      // Each rank simulates its rows of every bounce and reads the others' between bounces.
-      if (mpi) to.gather_bounce = [mpi](std::vector<double> rows) { return mpi->allgather(std::move(rows)); };
-      const auto t0 = std::chrono::steady_clock::now();
-      transfer = compute_transfer(mesh, to);
-      report.simulate_seconds = seconds_since(t0);
-    }
-    params = {{"mesh", r.mesh.filename().string()},
-              {"input_crc32", mesh.input_crc32},
-              {"mesh_crc32", loaded_mesh_crc32(mesh)},
-              {"mode", name_of(r.mode, transfer_mode_names())},
-              {"rays", r.rays},
-              {"normals", name_of(r.normals, normal_source_names())},
-              {"up", up_axis_name(mesh.up)}};
-    if (r.mode == TransferMode::interreflected) {
-      params["bounces"] = r.bounces;
-      params["albedo"] = r.albedo;
-    }
-    meta["obj_vertices"] = mesh.obj_vertices;
-    meta["unreferenced_vertices"] = mesh.unreferenced_vertices;
-    meta["degenerate_faces"] = mesh.degenerate_faces;
-    meta["triangles"] = mesh.triangles.size();
-    meta["normals_from_file"] = mesh.normals_from_file;
-    meta[kMeshUpKey] = up_axis_name(mesh.up);
-    if (r.texture) {
-      params["texture"] = *r.texture;
-      // What render reads to find and sample the maps; vertex_index holds texel indices.
-      meta["texture"] = {{"resolution", *r.texture},
-                         {"texels", texels.texel.size()},
-                         {"gutter", kGutterTexels},
-                         {"uv_crc32", uv_layout_crc32(mesh)},
-                         {"rows", "texel index y * resolution + x, row 0 at v = 1 (UV origin bottom left)"},
-                         {"dc_linear_map", dc_linear_map.filename().string()},
-                         {"lobes_map", lobes_map.filename().string()}};
-    }
+    in.order = file_order;
+    in.params = {{"transfer", r.transfer.filename().string()}, {"input_crc32", input_crc32(text)}};
+    const std::size_t n2 = sh_count(in.order);
+    in.total = in.transfer.size() / n2;
+    in.range = plan.rows_of ? shard_range_of(*plan.rows_of, in.total) : VertexRange{0, in.total};
+    in.transfer.erase(in.transfer.begin() + in.range.end * n2, in.transfer.end());
+    in.transfer.erase(in.transfer.begin(), in.transfer.begin() + in.range.begin * n2);
+    return in;
   }
-  report.order = order;
-  report.count = transfer.size() / sh_count(order);
+  in.mesh = load_mesh(r.mesh, r.normals, r.up);
+  const Mesh& mesh = in.mesh;
+  io.inputs(mesh.files, "a file of the mesh");
+  if (cb.warning) {
+    if (mesh.unreferenced_vertices)
+      cb.warning("skipped " + std::to_string(mesh.unreferenced_vertices) + " unreferenced vertices");
+    if (mesh.degenerate_faces) cb.warning("skipped " + std::to_string(mesh.degenerate_faces) + " degenerate faces");
+    if (mesh.zero_normals) cb.warning(std::to_string(mesh.zero_normals) + " vertices have no defined normal (+z used)");
+  }
+  TransferOptions to;
+  to.order = in.order;
+  to.rays = r.rays;
+  to.seed = r.seed;
+  to.mode = r.mode;
+  to.bounces = r.bounces;
+  to.albedo = r.albedo;
+  to.threads = plan.threads;
+  to.progress = cb.simulate_progress;
+  const auto t0 = std::chrono::steady_clock::now();
+  if (r.texture) {
+    in.texels = rasterize_texels(mesh, *r.texture, r.mesh);
+    in.total = in.texels.texel.size();
+    in.range = VertexRange{0, in.total};
+    in.transfer = compute_transfer_at(mesh, in.texels.positions, in.texels.normals, in.texels.texel, to);
+  } else {
+    in.total = mesh.positions.size();
+    in.range = plan.rows_of ? shard_range_of(*plan.rows_of, in.total) : VertexRange{0, in.total};
+    to.first_vertex = in.range.begin;
+    to.end_vertex = in.range.end;
+    // Each rank simulates its rows of every bounce and reads the others' between bounces.
+    if (mpi) to.gather_bounce = [mpi](std::vector<double> rows) { return mpi->allgather(std::move(rows)); };
+    in.transfer = compute_transfer(mesh, to);
+  }
+  in.simulate_seconds = seconds_since(t0);
+  in.params = {{"mesh", r.mesh.filename().string()},
+               {"input_crc32", mesh.input_crc32},
+               {"mesh_crc32", loaded_mesh_crc32(mesh)},
+               {"mode", name_of(r.mode, transfer_mode_names())},
+               {"rays", r.rays},
+               {"normals", name_of(r.normals, normal_source_names())},
+               {"up", up_axis_name(mesh.up)}};
+  if (r.mode == TransferMode::interreflected) {
+    in.params["bounces"] = r.bounces;
+    in.params["albedo"] = r.albedo;
+  }
+  in.meta["obj_vertices"] = mesh.obj_vertices;
+  in.meta["unreferenced_vertices"] = mesh.unreferenced_vertices;
+  in.meta["degenerate_faces"] = mesh.degenerate_faces;
+  in.meta["triangles"] = mesh.triangles.size();
+  in.meta["normals_from_file"] = mesh.normals_from_file;
+  in.meta[kMeshUpKey] = up_axis_name(mesh.up);
+  if (r.texture) {
+    in.params["texture"] = *r.texture;
+    // What render reads to find and sample the maps; vertex_index holds texel indices.
+    in.meta["texture"] = {{"resolution", *r.texture},
+                          {"texels", in.texels.texel.size()},
+                          {"gutter", kGutterTexels},
+                          {"uv_crc32", uv_layout_crc32(mesh)},
+                          {"rows", "texel index y * resolution + x, row 0 at v = 1 (UV origin bottom left)"},
+                          {"dc_linear_map", plan.dc_linear_map.filename().string()},
+                          {"lobes_map", plan.lobes_map.filename().string()}};
+  }
+  return in;
+}
 
-  // ---- fit
+// Step 2, the fit of every row ([4] Sec. 4), its options recorded in the parameters.
+ZhFitTable<double> fit_rows(const FitZhRequest& r, const FitZhCallbacks& cb, const FitZhPlan& plan,
+                            FitZhInputs& in, FitZhReport& report) {
   ZhFitOptions fo;
-  fo.order = order;
+  fo.order = in.order;
   fo.lobes = r.lobes;
   fo.direct = r.direct;
   fo.method = r.fit_method;
@@ -372,105 +257,155 @@ FitZhReport run_fit_zh_on(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJo
   if (r.restart_above) fo.restart_above = *r.restart_above;
   fo.seed = r.seed;
   const auto t1 = std::chrono::steady_clock::now();
-  ZhFitTable<double> fits = fit_zh_all(transfer, fo, threads, cb.fit_progress, range.begin);
+  ZhFitTable<double> fits = fit_zh_all(in.transfer, fo, plan.threads, cb.fit_progress, in.range.begin);
   report.fit_seconds = seconds_since(t1);
+  in.params["order"] = in.order;
+  in.params["lobes"] = r.lobes;
+  in.params["seed"] = r.seed;
+  in.params["fit_method"] = name_of(r.fit_method, fit_method_names());
+  in.params["effort"] = r.effort;
+  in.params["starts"] = fo.starts;
+  in.params["restart_above"] = fo.restart_above;
+  in.params["direct"] = r.direct;
+  if (r.texture) {
+    fits.vertex_index.assign(in.texels.texel.begin(), in.texels.texel.end());
+  } else if (!in.mesh.source_index.empty()) {
+    fits.vertex_index.assign(in.mesh.source_index.begin() + in.range.begin,
+                             in.mesh.source_index.begin() + in.range.end);
+  }
+  return fits;
+}
+
+// Under MPI: every rank's rows reach rank 0 as a partial table and are joined by merge's
+// code (the same checks, a rank on another Embree, ISA or input refused, and the same
+// bytes as shards merged); only the rank that simulated a vertex has its transfer DC,
+// which reaches rank 0 beside the rows, in rank order as the rows are. Returns false on
+// the ranks that write nothing.
+bool gather_ranks(MpiJob& mpi, bool with_dc, Table& table, ZhFitTable<double>& fits,
+                  std::vector<double>& transfer_dc) {
+  const std::string mine = encode_table(table);
+  if (!mpi.all_ok(true)) throw InputError("rank " + std::to_string(mpi.rank()) + ": stopped, another rank failed");
+  const std::vector<std::string> parts = mpi.gather(mine);
+  if (with_dc) {
+    const std::vector<std::string> dc_parts = mpi.gather(
+        std::string_view(reinterpret_cast<const char*>(transfer_dc.data()), transfer_dc.size() * sizeof(double)));
+    transfer_dc.clear();
+    for (const std::string& part : dc_parts) {
+      const std::size_t at = transfer_dc.size();
+      transfer_dc.resize(at + part.size() / sizeof(double));
+      std::memcpy(transfer_dc.data() + at, part.data(), part.size() / sizeof(double) * sizeof(double));
+    }
+  }
+  if (mpi.rank() != 0) return false;
+  std::vector<NamedTable> tables;
+  for (std::size_t k = 0; k < parts.size(); ++k) {
+    const std::string name = "rank " + std::to_string(k);
+    Result<Table> t = read_table_bytes(std::as_bytes(std::span(parts[k])), name, {std::string(kZhFitKind), 1});
+    if (!t) throw InputError("--mpi: " + t.error().message);
+    tables.push_back({name, std::move(t).value()});
+  }
+  try {
+    MergedFits merged = merge_zh_fit_tables(std::move(tables));
+    table = std::move(merged.table);
+    fits = std::move(merged.fits);
+  } catch (const InputError& e) {
+    throw InputError(std::string("--mpi: ") + e.what());
+  }
+  return true;
+}
+
+FitZhReport run_fit_zh_on(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJob* mpi) {
+  check_request(r);
+  FitZhPlan plan;
+  if (!r.shard.empty()) plan.shard = parse_shard(r.shard);
+  plan.rows_of = plan.shard;
+  if (mpi) plan.rows_of = Shard{static_cast<std::size_t>(mpi->rank()), static_cast<std::size_t>(mpi->size())};
+  plan.threads = resolve_threads(r.threads);
+  const std::filesystem::path input_path = r.mesh.empty() ? r.transfer : r.mesh;
+  const std::string part = plan.shard ? ".part-" + std::to_string(plan.shard->index) + "-of-" +
+                                            std::to_string(plan.shard->count)
+                                      : std::string();
+  plan.out = !r.out.empty() ? r.out
+                            : std::filesystem::path(input_path.stem().string() + ".zh" + part +
+                                                    (r.encoding == TableEncoding::json ? ".json" : ".shtb"));
+  if (r.texture) {  // beside --out
+    plan.dc_linear_map = dc_linear_map_path(plan.out);
+    plan.lobes_map = lobes_map_path(plan.out);
+  }
+  // Fail before a long bake, not after it. Every rank checks, so that all stop alike
+  // (only rank 0 writes).
+  JobOutputs io;
+  io.input(input_path, r.mesh.empty() ? "the --transfer input" : "the mesh");
+  io.output(plan.out, "--out");
+  io.output(r.json, "--json");
+  io.output(r.ply, "--ply");
+  io.output(r.save_transfer, "--save-transfer");
+  io.output(r.gltf, "--gltf");
+  io.output(plan.dc_linear_map, "the DC and linear map");
+  io.output(plan.lobes_map, "the lobe map");
+
+  FitZhReport report;
+  report.threads = plan.threads;
+  report.lobes = r.lobes;
+  report.out = plan.out;
+  report.from_mesh = !r.mesh.empty();
+
+  FitZhInputs in = read_inputs(r, cb, mpi, plan, io);
+  report.simulate_seconds = in.simulate_seconds;
+  report.order = in.order;
+  report.count = in.transfer.size() / sh_count(in.order);
+  ZhFitTable<double> fits = fit_rows(r, cb, plan, in, report);
+
+  // ---- step 3, the outputs
   std::vector<double> transfer_dc;  // --gltf colours each vertex by its transfer's t_00
   if (!r.gltf.empty())
-    for (std::size_t v = 0; v < report.count; ++v) transfer_dc.push_back(transfer[v * sh_count(order)]);
+    for (std::size_t v = 0; v < report.count; ++v) transfer_dc.push_back(in.transfer[v * sh_count(in.order)]);
   // The table and its encoding come next, at the peak of memory: 288 bytes a vertex at
   // order 6 go back unless an output still reads the vectors.
-  if (r.ply.empty() && r.save_transfer.empty()) std::vector<double>().swap(transfer);
-
-  params["order"] = order;
-  params["lobes"] = r.lobes;
-  params["seed"] = r.seed;
-  params["fit_method"] = name_of(r.fit_method, fit_method_names());
-  params["effort"] = r.effort;
-  params["starts"] = fo.starts;
-  params["restart_above"] = fo.restart_above;
-  params["direct"] = r.direct;
-
+  if (r.ply.empty() && r.save_transfer.empty()) std::vector<double>().swap(in.transfer);
   // [4] Fig. 3: RMS error normalised by the total L2 length over all vertices.
   report.normalized_rms = normalized_rms(fits);
-  nlohmann::json generator = generator_record("shtool fit-zh", params);
+  nlohmann::json generator = generator_record("shtool fit-zh", in.params);
   if (report.from_mesh && r.mode != TransferMode::unshadowed) {
     const EmbreeIdentity embree = embree_identity();
     generator["embree"] = {{"version", embree.version}, {"isa", embree.isa}};
   }
-  if (r.texture) {
-    fits.vertex_index.assign(texels.texel.begin(), texels.texel.end());
-  } else if (!mesh.source_index.empty()) {
-    fits.vertex_index.assign(mesh.source_index.begin() + range.begin, mesh.source_index.begin() + range.end);
+  if (plan.rows_of) {
+    in.meta["shard"] = {{"index", plan.rows_of->index}, {"count", plan.rows_of->count},
+                        {"first_vertex", in.range.begin}, {"end_vertex", in.range.end}, {"vertices", in.total}};
+    report.sharded = plan.shard.has_value();
+    report.shard_index = plan.rows_of->index;
+    report.shard_count = plan.rows_of->count;
+    report.first_vertex = in.range.begin;
+    report.end_vertex = in.range.end;
+    report.total = in.total;
   }
-  if (rows_of) {
-    meta["shard"] = {{"index", rows_of->index}, {"count", rows_of->count}, {"first_vertex", range.begin},
-                     {"end_vertex", range.end}, {"vertices", total}};
-    report.sharded = shard.has_value();
-    report.shard_index = rows_of->index;
-    report.shard_count = rows_of->count;
-    report.first_vertex = range.begin;
-    report.end_vertex = range.end;
-    report.total = total;
-  }
-  Table table = zh_fit_table(fits, meta, generator);
+  Table table = zh_fit_table(fits, in.meta, generator);
   std::optional<TextureMaps> maps;
   if (r.texture) {
-    maps = texture_maps(texels, fits);
+    maps = texture_maps(in.texels, fits);
     report.texture_resolution = *r.texture;
-    report.dc_linear_map = dc_linear_map;
-    report.lobes_map = lobes_map;
+    report.dc_linear_map = plan.dc_linear_map;
+    report.lobes_map = plan.lobes_map;
   }
   // The table holds the fits now; the other outputs made from them keep them.
   if (r.json.empty() && r.ply.empty() && r.gltf.empty()) fits = ZhFitTable<double>{};
   if (mpi) {
-    // Every rank's rows reach rank 0 as a partial table and are joined by merge's code:
-    // the same checks (a rank on another Embree, ISA or input is refused) and the same
-    // bytes as shards merged.
-    const std::string mine = encode_table(table);
-    if (!mpi->all_ok(true)) throw InputError("rank " + std::to_string(mpi->rank()) + ": stopped, another rank failed");
-    const std::vector<std::string> parts = mpi->gather(mine);
-    // Only the rank that simulated a vertex has its transfer DC: they reach rank 0 beside
-    // the rows, in rank order as the rows are.
-    if (!r.gltf.empty()) {
-      const std::vector<std::string> dc_parts = mpi->gather(
-          std::string_view(reinterpret_cast<const char*>(transfer_dc.data()), transfer_dc.size() * sizeof(double)));
-      transfer_dc.clear();
-      for (const std::string& part : dc_parts) {
-        const std::size_t at = transfer_dc.size();
-        transfer_dc.resize(at + part.size() / sizeof(double));
-        std::memcpy(transfer_dc.data() + at, part.data(), part.size() / sizeof(double) * sizeof(double));
-      }
-    }
     report.mpi_rank = mpi->rank();
     report.mpi_ranks = mpi->size();
-    if (mpi->rank() != 0) return report;
-    std::vector<NamedTable> tables;
-    for (std::size_t k = 0; k < parts.size(); ++k) {
-      const std::string name = "rank " + std::to_string(k);
-      Result<Table> t = read_table_bytes(std::as_bytes(std::span(parts[k])), name, {"zh-fit", 1});
-      if (!t) throw InputError("--mpi: " + t.error().message);
-      tables.push_back({name, std::move(t).value()});
-    }
-    try {
-      MergedFits merged = merge_zh_fit_tables(std::move(tables));
-      table = std::move(merged.table);
-      fits = std::move(merged.fits);
-    } catch (const InputError& e) {
-      throw InputError(std::string("--mpi: ") + e.what());
-    }
+    if (!gather_ranks(*mpi, !r.gltf.empty(), table, fits, transfer_dc)) return report;
     report.count = fits.vertices;
     report.normalized_rms = normalized_rms(fits);
   }
-
-  // ---- outputs: everything is computed, then written as one set.
   io.set("--out", encode_table(table, r.encoding));
   table = Table{};  // encoded: its arrays go back before the next output is made
   if (io.requested("--json")) io.set("--json", fits_json(fits));
-  if (io.requested("--ply")) io.set("--ply", ply_text(mesh, transfer, order, fits));
-  if (io.requested("--save-transfer")) io.set("--save-transfer", transfer_json(transfer, order, mesh.up));
+  if (io.requested("--ply")) io.set("--ply", ply_text(in.mesh, in.transfer, in.order, fits));
+  if (io.requested("--save-transfer"))
+    io.set("--save-transfer", transfer_json(in.transfer, in.order, in.mesh.up));
   if (io.requested("--gltf"))
     io.set("--gltf",
-           zh_fit_glb(mesh, fits, transfer_dc, "shtool " + generator["version"].get<std::string>() + " fit-zh"));
+           zh_fit_glb(in.mesh, fits, transfer_dc, "shtool " + generator["version"].get<std::string>() + " fit-zh"));
   if (maps) {
     io.set("the DC and linear map", lighting::encode_exr_channels(maps->dc_linear));
     io.set("the lobe map", lighting::encode_exr_channels(maps->lobes));

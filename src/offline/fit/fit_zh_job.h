@@ -20,11 +20,6 @@
 
 namespace shtool::fit {
 
-// The names the command line and the generator record use for the enums.
-const std::vector<std::pair<std::string, TransferMode>>& transfer_mode_names();
-const std::vector<std::pair<std::string, ZhFitMethod>>& fit_method_names();
-const std::vector<std::pair<std::string, NormalSource>>& normal_source_names();
-
 struct FitZhRequest {
   std::filesystem::path mesh;      // OBJ mesh, or empty with `transfer`
   std::filesystem::path transfer;  // JSON {"order": n, "vectors": [[n^2 numbers], ...]}
@@ -85,17 +80,6 @@ struct FitZhReport {
   // With --mpi: this process's rank and the rank count; only rank 0 wrote.
   int mpi_rank = 0, mpi_ranks = 0;
 };
-
-// The vectors of a --transfer document, vertex-major; sets `order`, and `mesh_up` (when
-// given) to the document's "mesh_up" ("y" or "z": the up axis of the mesh file the
-// vectors were simulated on, as --save-transfer records it; empty when it has none).
-// Throws InputError naming `path` and the problem.
-std::vector<double> parse_transfer_json(std::string_view text, const std::filesystem::path& path, int& order,
-                                        std::string* mesh_up = nullptr);
-
-// The --json output: every fit's lobes (axis, coefficients), residual and norm, and its
-// direct coefficients when it stores some.
-std::string fits_json(const ZhFitTable<double>& fits);
 
 // Checks the request and every output path before any work (InputError), runs the job,
 // writes the outputs.

@@ -328,4 +328,11 @@ Mesh load_obj_text(const std::string& text, const std::filesystem::path& path, N
   return finish_mesh(std::move(mesh), positions, normals, tris, path, normal_source, texcoords);
 }
 
+
+const std::vector<std::pair<std::string, NormalSource>>& normal_source_names() {
+  static const std::vector<std::pair<std::string, NormalSource>> names = {
+      {"auto", NormalSource::automatic}, {"file", NormalSource::file}, {"computed", NormalSource::computed}};
+  return names;
+}
+
 }  // namespace shtool::fit

@@ -72,6 +72,7 @@ std::uint32_t loaded_mesh_crc32(const Mesh& mesh);
 std::uint32_t uv_layout_crc32(const Mesh& mesh);
 
 enum class NormalSource { automatic, file, computed };
+const std::vector<std::pair<std::string, NormalSource>>& normal_source_names();  // auto, file, computed
 
 // Loads an OBJ file, whose up axis is `up` (positions and normals turned into shtool's
 // frame when it is y). Throws MeshError on: missing/unreadable file, parse failure,

@@ -281,4 +281,13 @@ std::vector<double> compute_transfer_at(const Mesh& mesh, std::span<const Eigen:
   return result;
 }
 
+
+const std::vector<std::pair<std::string, TransferMode>>& transfer_mode_names() {
+  static const std::vector<std::pair<std::string, TransferMode>> names = {
+      {"unshadowed", TransferMode::unshadowed},
+      {"shadowed", TransferMode::shadowed},
+      {"interreflected", TransferMode::interreflected}};
+  return names;
+}
+
 }  // namespace shtool::fit

@@ -15,6 +15,8 @@
 #include <cstdint>
 #include <functional>
 #include <span>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "common/input_error.h"
@@ -23,6 +25,7 @@
 namespace shtool::fit {
 
 enum class TransferMode { unshadowed, shadowed, interreflected };
+const std::vector<std::pair<std::string, TransferMode>>& transfer_mode_names();
 
 // Most diffuse bounces an interreflected simulation runs.
 inline constexpr int kMaxBounces = 64;

@@ -848,4 +848,11 @@ int direct_count(const ZhFitOptions& options) {
 }
 
 
+
+const std::vector<std::pair<std::string, ZhFitMethod>>& fit_method_names() {
+  static const std::vector<std::pair<std::string, ZhFitMethod>> names = {{"varpro", ZhFitMethod::varpro},
+                                                                         {"joint", ZhFitMethod::joint}};
+  return names;
+}
+
 }  // namespace shtool::fit

@@ -16,6 +16,8 @@
 #include <cstdint>
 #include <functional>
 #include <span>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -37,6 +39,7 @@ struct ZhFit {
 };
 
 enum class ZhFitMethod { varpro, joint };
+const std::vector<std::pair<std::string, ZhFitMethod>>& fit_method_names();
 
 inline constexpr int kStartsByEffort = -1;
 

@@ -43,4 +43,22 @@ Table zh_fit_table(const ZhFitTable<double>& fits, nlohmann::json meta, const nl
   return table;
 }
 
+std::string fits_json(const ZhFitTable<double>& fits) {
+  nlohmann::json doc = {{"order", fits.order}, {"lobes", fits.lobes}, {"fits", nlohmann::json::array()}};
+  for (std::size_t v = 0; v < fits.vertices; ++v) {
+    nlohmann::json jf = {{"lobes", nlohmann::json::array()}};
+    const std::span<const double> coeffs = fits.coeffs_of(v);
+    for (int k = 0; k < fits.lobes; ++k) {
+      const Eigen::Vector3d& axis = fits.axes_of(v)[k];
+      jf["lobes"].push_back({{"axis", {axis.x(), axis.y(), axis.z()}},
+                             {"coeffs", coeffs.subspan(static_cast<std::size_t>(k) * fits.order, fits.order)}});
+    }
+    jf["residual"] = fits.residual[v];
+    jf["norm"] = fits.norm[v];
+    if (fits.direct_count) jf["direct"] = fits.direct_of(v);
+    doc["fits"].push_back(std::move(jf));
+  }
+  return doc.dump() + "\n";
+}
+
 }  // namespace shtool::fit

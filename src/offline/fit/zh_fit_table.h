@@ -2,6 +2,8 @@
 // (unit axis, order coefficients g*_l), the fit's residual and the transfer's norm.
 #pragma once
 
+#include <string>
+
 #include <nlohmann/json.hpp>
 
 #include "shtool/table.h"
@@ -15,5 +17,9 @@ double normalized_rms(const ZhFitTable<double>& fits);
 // The table of a flat fit set (its vertex_index, when not empty, maps each row back to
 // its OBJ vertex); `meta` gets the summary values added.
 Table zh_fit_table(const ZhFitTable<double>& fits, nlohmann::json meta, const nlohmann::json& generator);
+
+// The fits as fit-zh --json writes them: {"order", "lobes", "fits": [{"lobes": [{"axis",
+// "coeffs"}], "residual", "norm", "direct"?}]}.
+std::string fits_json(const ZhFitTable<double>& fits);
 
 }  // namespace shtool::fit

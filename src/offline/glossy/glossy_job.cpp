@@ -11,9 +11,9 @@
 #include "common/parallel_for.h"
 #include "common/stopwatch.h"
 #include "common/table_writer.h"
-#include "deform/deform_job.h"
+#include "fit/deformation.h"
 #include "fit/embree_scene.h"
-#include "fit/fit_zh_job.h"
+#include "fit/mesh.h"
 #include "fit/zh_fit_table.h"
 #include "glossy/glossy_transfer.h"
 #include "shtool/glossy.h"
@@ -68,7 +68,7 @@ GlossyReport run_fit_glossy(const GlossyRequest& r) {
   const int threads = resolve_threads(r.threads);
   const fit::Mesh mesh = fit::load_mesh(r.mesh, r.normals, r.up);
   io.inputs(mesh.files, "a file of the mesh");
-  const std::vector<Eigen::Matrix3d> frames = deform::vertex_frames(mesh, mesh);
+  const std::vector<Eigen::Matrix3d> frames = fit::vertex_frames(mesh, mesh);
   GlossyReport report;
   report.vertices = mesh.positions.size();
 

@@ -4,7 +4,7 @@
 
 #include "common/input_error.h"
 #include "common/parallel_for.h"
-#include "deform/deform_job.h"
+#include "fit/deformation.h"
 
 namespace shtool::render {
 
@@ -24,7 +24,7 @@ GlossyFit<double> deform_glossy_fit(const GlossyFit<double>& fit, const std::vec
   for (std::size_t v = 0; v < fit.vertices; ++v)
     for (int j = 0; j < fit.terms; ++j) per_row.push_back(rotations[v]);
   GlossyFit<double> out = fit;
-  out.rows = deform::deform_fit(fit.rows, per_row);
+  out.rows = fit::deform_fit(fit.rows, per_row);
   return out;
 }
 

@@ -23,7 +23,7 @@ namespace shtool::render {
 GlossyFit<double> glossy_fit_for_mesh(GlossyFit<double> fit, const fit::Mesh& mesh, const std::string& what);
 
 // The fit carried to a pose: every row's axes (and direct linear band) turned by its
-// vertex's rest-to-pose rotation (deform/deform_job.h).
+// vertex's rest-to-pose rotation (fit/deformation.h).
 GlossyFit<double> deform_glossy_fit(const GlossyFit<double>& fit, const std::vector<Eigen::Matrix3d>& rotations);
 
 // What the primary rays hit, pixel by pixel (triangle -1: nothing).

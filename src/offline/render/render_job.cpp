@@ -19,9 +19,9 @@
 #include "common/input_file.h"
 #include "common/parallel_for.h"
 #include "common/stopwatch.h"
-#include "deform/deform_job.h"
+#include "fit/deformation.h"
 #include "fit/embree_scene.h"
-#include "fit/fit_zh_job.h"
+#include "fit/transfer_file.h"
 #include "fit/zh_fit.h"
 #include "fit/zh_fit_table.h"
 #include "fit/mesh.h"
@@ -396,7 +396,7 @@ RenderResult run_render(const RenderRequest& r) {
   if (!r.pose.empty()) {
     posed = fit::load_mesh(r.pose, fit::NormalSource::automatic, r.up);
     io.inputs(posed->files, "a file of the --pose mesh");
-    rotations = deform::rest_to_pose_rotations(rest, *posed);
+    rotations = fit::rest_to_pose_rotations(rest, *posed);
   }
   const fit::Mesh& mesh = posed ? *posed : rest;
   VertexData data;
@@ -437,7 +437,7 @@ RenderResult run_render(const RenderRequest& r) {
     }
     glossy = glossy_fit_for_mesh(std::move(*glossy), rest, "--fit " + r.fit.string());
     if (posed) glossy = deform_glossy_fit(*glossy, rotations);
-    frames = deform::vertex_frames(rest, mesh);
+    frames = fit::vertex_frames(rest, mesh);
   }
   if (needs_transfer) {
     std::string transfer_up;
@@ -475,8 +475,8 @@ RenderResult run_render(const RenderRequest& r) {
     throw InputError(r.mesh.string() + ": its UV layout is not the one --fit " + r.fit.string() +
                      " was baked on (was it baked on another mesh?)");
   if (zh_fit) {
-    data.fit = deform::fit_for_mesh(std::move(*zh_fit), rest, "--fit " + r.fit.string());
-    if (posed) data.fit = deform::deform_fit(*data.fit, rotations);
+    data.fit = fit::fit_for_mesh(std::move(*zh_fit), rest, "--fit " + r.fit.string());
+    if (posed) data.fit = fit::deform_fit(*data.fit, rotations);
   }
   if (shading == Shading::membrane) {
     data.alpha.assign(mesh.positions.size(), r.alpha);

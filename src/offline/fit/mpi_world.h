@@ -14,7 +14,7 @@ namespace shtool::fit {
 bool mpi_built();
 
 // This process's part of the job: MPI_Init on construction (or joins an MPI already
-// initialised); MPI_Finalize at process exit, after a barrier (see mpi_job.cpp). One per
+// initialised); MPI_Finalize at process exit, after a barrier (see mpi_world.cpp). One per
 // process.
 class MpiJob {
  public:

@@ -1,4 +1,4 @@
-#include "fit/mpi_job.h"
+#include "fit/mpi_world.h"
 
 #include <climits>
 #include <cstdlib>
