@@ -136,9 +136,12 @@ class CubemapProjector {
   bool mirror_x_ = false;
   std::vector<double> nodes_unit_;    // Gauss nodes on [-1, 1]
   std::vector<double> weights_unit_;  // their weights
-  // Per face, the orthogonal map of SH coefficients from the face's frame (s, t, 1) to
-  // shtool's, band blocks (2l+1)^2 row-major, bands in order.
+  // For +X, +Y, +Z, the orthogonal map of SH coefficients from the face's frame (s, t, 1)
+  // to shtool's, band blocks (2l+1)^2 row-major, bands in order.
   std::vector<double> face_maps_;
+  // For the pairs (+X, -X), (+Y, -Y), (+Z, -Z): where the antipode of the first face's
+  // (s, t) lies on the second, as (swap s and t, then negate s, negate t) flags.
+  int antipode_[3][3] = {};
 };
 
 Result<EnvCoefficients> project_cubemap(std::span<const FloatImageView, 6> faces, int order, bool mirror_x = false);

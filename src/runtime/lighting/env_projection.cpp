@@ -327,137 +327,154 @@ int cubemap_nodes_per_side(int face_size, int order) {
 
 namespace {
 
-// The eight maps of the face square onto itself, as (k, e): the azimuth p about the face
-// normal goes to e p + k pi/2. Texel (x, y)'s image under each, and the folded sums the
-// pairs (cos m p, sin m p) meet. A texel integral over g(texel) of y_c, y_s (cos- and
-// sine-type, order m) is, over the texel itself, cos(m a) W_c - e sin(m a) W_s and
-// sin(m a) W_c + e cos(m a) W_s (a = k pi/2): summed over the eight images with their
-// values f, only m mod 4 matters, through these sums of E_k = f(k, +) + f(k, -) and
-// D_k = f(k, +) - f(k, -).
+// The texels of a cubemap come in classes under the cube's symmetries, and the rule runs
+// once per class (docs/lighting.md, "Exact projection"):
+// - the eight maps of the face square onto itself, as (k, e): the azimuth p about the
+//   face normal goes to e p + k pi/2. A texel integral over g(texel) of y_c, y_s (cos-
+//   and sine-type, order m) is, over the texel itself, cos(m a) W_c - e sin(m a) W_s and
+//   sin(m a) W_c + e cos(m a) W_s (a = k pi/2): summed over the eight images with their
+//   values f, only m mod 4 matters, through these sums of E_k = f(k, +) + f(k, -) and
+//   D_k = f(k, +) - f(k, -);
+// - the antipodal map w -> -w, which carries each face onto the opposite one and
+//   multiplies y_lm by (-1)^l: a texel of +X, +Y, +Z and its antipode (on -X, -Y, -Z)
+//   are summed (the even bands) and subtracted (the odd bands) before the square's folds.
 enum Fold { kP0, kV0, kP2, kV2, kP1, kV1, kU1, kQ1, kFolds };
-// Face-channel lanes of the folded sums and of the per-face accumulators: face f,
-// channel c at f * 4 + c.
-constexpr int kFaceLanes = 24;
-// Classes whose integrals are computed together (the vector lanes of the rule).
+// Classes whose integrals are computed together: the lanes of Lanes (GCC's vector
+// extension, lowered to AVX-512, AVX2 or SSE2 by the clones; one lane, one class).
 constexpr int kClassLanes = 8;
+using Lanes = double __attribute__((vector_size(kClassLanes * sizeof(double))));
+// Buffers of Lanes on the heap, 64-byte aligned: the baseline target aligns a Lanes to 16
+// bytes only, while the AVX-512 clones load and store whole aligned Lanes.
+struct alignas(64) LaneBox {
+  Lanes v;
+};
+static_assert(sizeof(LaneBox) == sizeof(Lanes));
+class LaneBuffer {
+ public:
+  explicit LaneBuffer(std::size_t size) : boxes_(size, LaneBox{Lanes{}}) {}
+  Lanes* data() { return &boxes_.data()->v; }
+  Lanes& operator[](std::size_t i) { return boxes_[i].v; }
+
+ private:
+  std::vector<LaneBox> boxes_;
+};
+// Folded sums of a tile of classes: F[(fold * 2 + band parity) * pc + pair * C + c] for
+// the three face pairs (+X -X, +Y -Y, +Z -Z) and C channels (pc = 3 C).
+constexpr int kPlanes = 2 * kFolds;
 
 // The rule of one texel per lane, texels (s_centre[lane], t_centre) of half-width
 // `half`, in the face frame: direction (s, t, 1) / r, polar axis the face normal.
-// W[i * kClassLanes + lane], i < N^2. The basis recurrence of sh.cpp (the Q_l^m of
-// basis/legendre_recurrence.h times Re, Im (x + i y)^m), node weights folded into the
-// azimuthal factors.
-// `row` is scratch of the same size: the nodes are summed row of nodes by row of nodes,
-// as texel_integrals does (fewer roundings per sum).
-SHTOOL_SAME_BITS_CLONES_WIDE void face_frame_integrals(int order, int nodes, const double* node, const double* weight,
-                                                  double half, const double* s_centre, double t_centre, double* W,
-                                                  double* row) {
+// W[i], i < N^2. The basis recurrence of sh.cpp (the Q_l^m of basis/legendre_recurrence.h
+// times Re, Im (x + i y)^m), node weights folded into the azimuthal factors. `row` is
+// scratch of N^2 Lanes: the nodes are summed row of nodes by row of nodes, as
+// texel_integrals does (fewer roundings per sum).
+SHTOOL_SAME_BITS_CLONES_WIDE void tile_rule(int order, int nodes, const double* node, const double* weight, double half,
+                                            const double* s_centre, double t_centre, Lanes* W, Lanes* row) {
   const detail::LegendreRecurrence<double>& tab = detail::legendre_recurrence<double>();
-  constexpr int L = kClassLanes;
   const int n = order * order;
-  std::fill(W, W + static_cast<std::size_t>(n) * L, 0.0);
-  // The lane loops read and write distinct rows of these arrays (q0, q1, q2 rotate over
-  // qa, qb, qc): `ivdep` tells GCC so, which it cannot prove, so that they vectorise.
-  alignas(64) double cm[kMaxEnvOrder][L], sm[kMaxEnvOrder][L];
-  alignas(64) double qa[kMaxEnvOrder][L], qb[kMaxEnvOrder][L], qc[kMaxEnvOrder][L];
+  for (int i = 0; i < n; ++i) W[i] = Lanes{};
+  Lanes cm[kMaxEnvOrder], sm[kMaxEnvOrder], qa[kMaxEnvOrder], qb[kMaxEnvOrder], qc[kMaxEnvOrder];
+  Lanes sc;
+  for (int k = 0; k < kClassLanes; ++k) sc[k] = s_centre[k];
   constexpr double kSqrt2 = std::numbers::sqrt2;
   for (int a = 0; a < nodes; ++a) {
     const double t = t_centre + half * node[a];
-    std::fill(row, row + static_cast<std::size_t>(n) * L, 0.0);
+    for (int i = 0; i < n; ++i) row[i] = Lanes{};
     for (int b = 0; b < nodes; ++b) {
-      alignas(64) double x[L], y[L], z[L];
       const double wab = weight[a] * weight[b] * half * half;
-#pragma GCC ivdep
-      for (int k = 0; k < L; ++k) {
-        const double s = s_centre[k] + half * node[b];
-        const double r2 = 1 + s * s + t * t;
-        const double r = std::sqrt(r2), u = 1 / r;
-        x[k] = s * u;
-        y[k] = t * u;
-        z[k] = u;
-        cm[0][k] = wab / (r2 * r);  // ds dt / r^3
-        sm[0][k] = 0;
-      }
+      const Lanes s = sc + half * node[b];
+      const Lanes r2 = 1 + s * s + t * t;
+      Lanes r;
+      for (int k = 0; k < kClassLanes; ++k) r[k] = std::sqrt(r2[k]);
+      const Lanes u = 1 / r;
+      const Lanes x = s * u, y = t * u, z = u;
+      cm[0] = wab / (r2 * r);  // ds dt / r^3
+      sm[0] = Lanes{};
       // cm, sm carry sqrt2 from m = 1 on (y_l^{+-m} = sqrt2 Q_l^m Re, Im (x + i y)^m).
-      for (int m = 1; m < order; ++m)
-#pragma GCC ivdep
-        for (int k = 0; k < L; ++k) {
-          const double c = m == 1 ? kSqrt2 * cm[0][k] : cm[m - 1][k];
-          const double sp = sm[m - 1][k];
-          cm[m][k] = x[k] * c - y[k] * sp;
-          sm[m][k] = x[k] * sp + y[k] * c;
-        }
-      double(*q2)[L] = qa;
-      double(*q1)[L] = qb;
-      double(*q0)[L] = qc;
+      if (order > 1) {
+        const Lanes c = kSqrt2 * cm[0];
+        cm[1] = x * c - y * sm[0];
+        sm[1] = x * sm[0] + y * c;
+      }
+      for (int m = 2; m < order; ++m) {
+        cm[m] = x * cm[m - 1] - y * sm[m - 1];
+        sm[m] = x * sm[m - 1] + y * cm[m - 1];
+      }
+      Lanes* q2 = qa;
+      Lanes* q1 = qb;
+      Lanes* q0 = qc;
       for (int l = 0; l < order; ++l) {
         if (l == 0) {
-#pragma GCC ivdep
-          for (int k = 0; k < L; ++k) q0[0][k] = tab.q00;
+          q0[0] = Lanes{} + tab.q00;
         } else {
-#pragma GCC ivdep
-          for (int k = 0; k < L; ++k) {
-            q0[l][k] = tab.diag[l] * q1[l - 1][k];
-            q0[l - 1][k] = tab.subdiag[l - 1] * z[k] * q1[l - 1][k];
-          }
+          q0[l] = tab.diag[l] * q1[l - 1];
+          q0[l - 1] = tab.subdiag[l - 1] * z * q1[l - 1];
           for (int m = 0; m <= l - 2; ++m) {
             const double ca = tab.a[detail::LegendreRecurrence<double>::tri(l, m)];
             const double cb = tab.b[detail::LegendreRecurrence<double>::tri(l, m)];
-#pragma GCC ivdep
-            for (int k = 0; k < L; ++k) q0[m][k] = ca * (z[k] * q1[m][k] - cb * q2[m][k]);
+            q0[m] = ca * (z * q1[m] - cb * q2[m]);
           }
         }
-        double* centre = row + static_cast<std::size_t>(l * (l + 1)) * L;
-#pragma GCC ivdep
-        for (int k = 0; k < L; ++k) centre[k] += q0[0][k] * cm[0][k];
-        for (int m = 1; m <= l; ++m)
-#pragma GCC ivdep
-          for (int k = 0; k < L; ++k) {
-            centre[m * L + k] += q0[m][k] * cm[m][k];
-            centre[-m * L + k] += q0[m][k] * sm[m][k];
-          }
-        double(*spare)[L] = q2;
+        Lanes* centre = row + l * (l + 1);
+        centre[0] += q0[0] * cm[0];
+        for (int m = 1; m <= l; ++m) {
+          centre[m] += q0[m] * cm[m];
+          centre[-m] += q0[m] * sm[m];
+        }
+        Lanes* spare = q2;
         q2 = q1;
         q1 = q0;
         q0 = spare;
       }
     }
-    for (int i = 0; i < n * L; ++i) W[i] += row[i];
+    for (int i = 0; i < n; ++i) W[i] += row[i];
   }
 }
 
-// Adds one class's folded sums times its integrals (lane `lane` of W) into the face-frame
-// accumulators A[i * kFaceLanes + f * 4 + c].
-SHTOOL_SAME_BITS_CLONES_WIDE void add_class(int order, const double* W, int lane, const double (*F)[kFaceLanes],
-                                       double* A) {
-  constexpr int L = kClassLanes, K = kFaceLanes;
+// Adds a tile's folded sums F times its integrals W into the face-frame accumulators
+// A[i * pc + pair * C + c] (pc = 3 C), lane by lane: coefficient (l, m) meets the fold of
+// its m mod 4 and its type, on the plane of its band's parity.
+template <int C>
+SHTOOL_SAME_BITS_CLONES_WIDE void contract_tile(int order, const Lanes* W, const Lanes* F, Lanes* A) {
+  constexpr int PC = 3 * C;
   for (int l = 0; l < order; ++l) {
-    const int i0 = l * (l + 1);
+    const int i0 = l * (l + 1), par = l & 1;
+    auto plane = [&](Fold f) { return F + (2 * f + par) * PC; };
     {
-      const double w = W[i0 * L + lane];
-      double* a = A + static_cast<std::size_t>(i0) * K;
-      for (int k = 0; k < K; ++k) a[k] += w * F[kP0][k];
+      const Lanes w = W[i0];
+      const Lanes* p0 = plane(kP0);
+      Lanes* a = A + i0 * PC;
+      for (int j = 0; j < PC; ++j) a[j] += w * p0[j];
     }
     for (int m = 1; m <= l; ++m) {
-      const double wc = W[(i0 + m) * L + lane], ws = W[(i0 - m) * L + lane];
-      double* ac = A + static_cast<std::size_t>(i0 + m) * K;
-      double* as = A + static_cast<std::size_t>(i0 - m) * K;
+      const Lanes wc = W[i0 + m], ws = W[i0 - m];
+      Lanes* ac = A + (i0 + m) * PC;
+      Lanes* as = A + (i0 - m) * PC;
       switch (m & 3) {
-        case 0:
-          for (int k = 0; k < K; ++k) ac[k] += wc * F[kP0][k];
-          for (int k = 0; k < K; ++k) as[k] += ws * F[kV0][k];
+        case 0: {
+          const Lanes *p = plane(kP0), *v = plane(kV0);
+          for (int j = 0; j < PC; ++j) ac[j] += wc * p[j];
+          for (int j = 0; j < PC; ++j) as[j] += ws * v[j];
           break;
-        case 2:
-          for (int k = 0; k < K; ++k) ac[k] += wc * F[kP2][k];
-          for (int k = 0; k < K; ++k) as[k] += ws * F[kV2][k];
+        }
+        case 2: {
+          const Lanes *p = plane(kP2), *v = plane(kV2);
+          for (int j = 0; j < PC; ++j) ac[j] += wc * p[j];
+          for (int j = 0; j < PC; ++j) as[j] += ws * v[j];
           break;
-        case 1:
-          for (int k = 0; k < K; ++k) ac[k] += wc * F[kP1][k] - ws * F[kQ1][k];
-          for (int k = 0; k < K; ++k) as[k] += wc * F[kU1][k] + ws * F[kV1][k];
+        }
+        case 1: {
+          const Lanes *p = plane(kP1), *q = plane(kQ1), *u = plane(kU1), *v = plane(kV1);
+          for (int j = 0; j < PC; ++j) ac[j] += wc * p[j] - ws * q[j];
+          for (int j = 0; j < PC; ++j) as[j] += wc * u[j] + ws * v[j];
           break;
-        default:
-          for (int k = 0; k < K; ++k) ac[k] += wc * F[kP1][k] + ws * F[kQ1][k];
-          for (int k = 0; k < K; ++k) as[k] += ws * F[kV1][k] - wc * F[kU1][k];
+        }
+        default: {
+          const Lanes *p = plane(kP1), *q = plane(kQ1), *u = plane(kU1), *v = plane(kV1);
+          for (int j = 0; j < PC; ++j) ac[j] += wc * p[j] + ws * q[j];
+          for (int j = 0; j < PC; ++j) as[j] += ws * v[j] - wc * u[j];
           break;
+        }
       }
     }
   }
@@ -495,7 +512,9 @@ Result<CubemapProjector> CubemapProjector::create(int face_size, int order, bool
   // The face frame's axes in shtool's frame: (s, t, 1) -> cube_vector(s, t) is linear.
   const int n = sh_count(order);
   std::vector<double> map(static_cast<std::size_t>(n) * n);
-  for (int f = 0; f < 6; ++f) {
+  // Only the first face of each antipodal pair (+X, +Y, +Z): the second's texels are
+  // folded onto it (accumulate_block).
+  for (int f = 0; f < 6; f += 2) {
     const CubeFace face = static_cast<CubeFace>(f);
     const Eigen::Vector3d origin = p.cube_vector(face, 0, 0);
     Eigen::Matrix3d q;
@@ -509,6 +528,22 @@ Result<CubemapProjector> CubemapProjector::create(int face_size, int order, bool
     for (int l = 0; l < order; ++l)
       for (int a = l * l; a < (l + 1) * (l + 1); ++a)
         for (int b = l * l; b < (l + 1) * (l + 1); ++b) p.face_maps_.push_back(map[static_cast<std::size_t>(a) * n + b]);
+    // The antipode of the face's point (s, t) on the opposite face, as a map of the
+    // square: one of the eight (s, t) -> (+-s, +-t), (+-t, +-s).
+    const CubeFace opposite = static_cast<CubeFace>(f + 1);
+    const double s0 = 0.25, t0 = 0.625;  // no map of the square fixes it
+    bool found = false;
+    for (int m = 0; m < 8 && !found; ++m) {
+      const bool swap = m & 1, flip_s = m & 2, flip_t = m & 4;
+      const double s1 = (flip_s ? -1 : 1) * (swap ? t0 : s0), t1 = (flip_t ? -1 : 1) * (swap ? s0 : t0);
+      if ((p.cube_vector(opposite, s1, t1) + p.cube_vector(face, s0, t0)).norm() < 1e-12) {
+        p.antipode_[f / 2][0] = swap;
+        p.antipode_[f / 2][1] = flip_s;
+        p.antipode_[f / 2][2] = flip_t;
+        found = true;
+      }
+    }
+    if (!found) detail::precondition_failed("CubemapProjector: opposite faces are not antipodal");
   }
   return p;
 }
@@ -573,35 +608,65 @@ bool valid_faces(std::span<const FloatImageView, 6> faces, int size) {
   return true;
 }
 
-}  // namespace
+// The eight folds of one class's eight values v (in the order of its images, below) into
+// out[fold * stride], each times `scale`.
+inline void fold_square(const double* v, double scale, double* out, std::size_t stride) {
+  const double e0 = v[0] + v[1], d0 = v[0] - v[1], e1 = v[2] + v[3], d1 = v[2] - v[3];
+  const double e2 = v[4] + v[5], d2 = v[4] - v[5], e3 = v[6] + v[7], d3 = v[6] - v[7];
+  const double e02 = e0 + e2, e13 = e1 + e3, d02 = d0 + d2, d13 = d1 + d3;
+  out[kP0 * stride] = scale * (e02 + e13);
+  out[kP2 * stride] = scale * (e02 - e13);
+  out[kV0 * stride] = scale * (d02 + d13);
+  out[kV2 * stride] = scale * (d02 - d13);
+  out[kP1 * stride] = scale * (e0 - e2);
+  out[kU1 * stride] = scale * (e1 - e3);
+  out[kV1 * stride] = scale * (d0 - d2);
+  out[kQ1 * stride] = scale * (d1 - d3);
+}
 
-namespace {
-
-// The folded sums of one class for every face and channel: the eight images' values
-// (`offsets` from each face's first texel), F[fold][f * 4 + c].
-template <int C, bool kScaled>
-void fold_class(const float* const* bases, const std::size_t* strides, const int (*at)[2], double scale,
-                double (*F)[kFaceLanes]) {
-  if constexpr (!kScaled) scale = 1;
-  for (int f = 0; f < 6; ++f) {
-    const float* texel[8];
-    for (int g = 0; g < 8; ++g)
-      texel[g] = bases[f] + static_cast<std::size_t>(at[g][1]) * strides[f] + static_cast<std::size_t>(at[g][0]) * C;
-    for (int c = 0; c < C; ++c) {
-      double v[8];
-      for (int g = 0; g < 8; ++g) v[g] = texel[g][c];
-      const double e0 = v[0] + v[1], d0 = v[0] - v[1], e1 = v[2] + v[3], d1 = v[2] - v[3];
-      const double e2 = v[4] + v[5], d2 = v[4] - v[5], e3 = v[6] + v[7], d3 = v[6] - v[7];
-      const double e02 = e0 + e2, e13 = e1 + e3, d02 = d0 + d2, d13 = d1 + d3;
-      const int lane = f * 4 + c;
-      F[kP0][lane] = scale * (e02 + e13);
-      F[kP2][lane] = scale * (e02 - e13);
-      F[kV0][lane] = scale * (d02 + d13);
-      F[kV2][lane] = scale * (d02 - d13);
-      F[kP1][lane] = scale * (e0 - e2);
-      F[kU1][lane] = scale * (e1 - e3);
-      F[kV1][lane] = scale * (d0 - d2);
-      F[kQ1][lane] = scale * (d1 - d3);
+// The folded sums of a tile of classes (x0 + k, y), lanes [lane_begin, lane_end) (the
+// others zero): per face pair, the class's eight texels on the first face plus (even
+// bands) and minus (odd bands) their antipodes on the second, then the square's folds.
+template <int C>
+void fold_tile(const float* const* bases, const std::size_t* strides, const int (*antipode)[3], int R, int x0, int y,
+               int lane_begin, int lane_end, Lanes* F) {
+  constexpr int PC = 3 * C;
+  for (int i = 0; i < kPlanes * PC; ++i) F[i] = Lanes{};
+  double* out = reinterpret_cast<double*>(F);
+  constexpr std::size_t kStride = 2 * PC * kClassLanes;  // from one fold to the next
+  const int ym = R - 1 - y;
+  for (int k = lane_begin; k < lane_end; ++k) {
+    const int x = x0 + k, xm = R - 1 - x;
+    // The images (column, row) of texel (x, y), in the order (k, e) =
+    // (0,+) (0,-) (1,+) (1,-) (2,+) (2,-) (3,+) (3,-): p, -p, p + pi/2, pi/2 - p,
+    // p + pi, pi - p, p - pi/2, -pi/2 - p.
+    const int at[8][2] = {{x, y}, {x, ym}, {ym, x}, {y, x}, {xm, ym}, {xm, y}, {y, xm}, {ym, xm}};
+    int stabiliser = 0;
+    for (const auto& p : at) stabiliser += p[0] == x && p[1] == y;
+    // A class of fewer than eight texels meets each of them 8 / |class| times.
+    const double scale = 1.0 / stabiliser;
+    for (int pair = 0; pair < 3; ++pair) {
+      const int fa = 2 * pair, fb = fa + 1;
+      const float *a[8], *b[8];
+      for (int g = 0; g < 8; ++g) {
+        a[g] = bases[fa] + static_cast<std::size_t>(at[g][1]) * strides[fa] + static_cast<std::size_t>(at[g][0]) * C;
+        int col = at[g][0], row = at[g][1];
+        if (antipode[pair][0]) std::swap(col, row);
+        if (antipode[pair][1]) col = R - 1 - col;
+        if (antipode[pair][2]) row = R - 1 - row;
+        b[g] = bases[fb] + static_cast<std::size_t>(row) * strides[fb] + static_cast<std::size_t>(col) * C;
+      }
+      for (int c = 0; c < C; ++c) {
+        double sum[8], diff[8];
+        for (int g = 0; g < 8; ++g) {
+          const double va = a[g][c], vb = b[g][c];
+          sum[g] = va + vb;
+          diff[g] = va - vb;
+        }
+        const std::size_t lane = static_cast<std::size_t>(pair * C + c) * kClassLanes + k;
+        fold_square(sum, scale, out + lane, kStride);
+        fold_square(diff, scale, out + PC * kClassLanes + lane, kStride);
+      }
     }
   }
 }
@@ -615,6 +680,7 @@ Result<Ok> CubemapProjector::accumulate_block(std::span<const FloatImageView, 6>
   if (block < 0 || block >= block_count() || partial.size() < partial_size(faces[0].channels))
     return Error{"cubemap block: block out of range or partial smaller than partial_size(channels)"};
   const int channels = faces[0].channels;
+  const int pc = 3 * channels;
   const int n = sh_count(order_);
   const int R = size_;
   const int first_row = R / 2, rows = R - first_row;
@@ -626,10 +692,9 @@ Result<Ok> CubemapProjector::accumulate_block(std::span<const FloatImageView, 6>
     bases[f] = faces[static_cast<std::size_t>(f)].texels;
     strides[f] = faces[static_cast<std::size_t>(f)].stride();
   }
-  // Per face, the coefficients in its own frame; carried to shtool's frame at the end.
-  std::vector<double> A(static_cast<std::size_t>(n) * kFaceLanes, 0.0);
-  std::vector<double> W(static_cast<std::size_t>(n) * kClassLanes), node_row(W.size());
-  alignas(64) double F[kFolds][kFaceLanes] = {};
+  // Per face pair, the coefficients in the first face's frame, one per lane (class);
+  // carried to shtool's frame at the end.
+  LaneBuffer A(static_cast<std::size_t>(n) * pc), W(n), node_row(n), F(static_cast<std::size_t>(kPlanes) * pc);
   // A group of rows is walked in columns of kClassLanes classes: the images of a few
   // neighbouring classes share cache lines along rows and, transposed, along columns.
   auto do_group = [&](int group) {
@@ -662,38 +727,42 @@ Result<Ok> CubemapProjector::accumulate_block(std::span<const FloatImageView, 6>
         alignas(64) double s_centre[kClassLanes];
         for (int k = 0; k < kClassLanes; ++k)
           s_centre[k] = -1 + (2 * (x0 + std::clamp(k, lane_begin, lane_end - 1)) + 1) * half;
-        face_frame_integrals(order_, nodes_, nodes_unit_.data(), weights_unit_.data(), half, s_centre,
-                             -1 + (2 * y + 1) * half, W.data(), node_row.data());
-        for (int k = lane_begin; k < lane_end; ++k) {
-          const int x = x0 + k, xm = R - 1 - x, ym = R - 1 - y;
-          // The images (column, row) of texel (x, y), in the order (k, e) =
-          // (0,+) (0,-) (1,+) (1,-) (2,+) (2,-) (3,+) (3,-): p, -p, p + pi/2, pi/2 - p,
-          // p + pi, pi - p, p - pi/2, -pi/2 - p.
-          const int at[8][2] = {{x, y}, {x, ym}, {ym, x}, {y, x}, {xm, ym}, {xm, y}, {y, xm}, {ym, xm}};
-          int stabiliser = 0;
-          for (const auto& p : at) stabiliser += p[0] == x && p[1] == y;
-          // A class of fewer than eight texels meets each of them 8 / |class| times.
-          const double scale = 1.0 / stabiliser;
-          const bool scaled = stabiliser > 1;
-          switch (channels) {
-            case 1: (scaled ? fold_class<1, true> : fold_class<1, false>)(bases, strides, at, scale, F); break;
-            case 2: (scaled ? fold_class<2, true> : fold_class<2, false>)(bases, strides, at, scale, F); break;
-            case 3: (scaled ? fold_class<3, true> : fold_class<3, false>)(bases, strides, at, scale, F); break;
-            default: (scaled ? fold_class<4, true> : fold_class<4, false>)(bases, strides, at, scale, F); break;
-          }
-          add_class(order_, W.data(), k, F, A.data());
+        tile_rule(order_, nodes_, nodes_unit_.data(), weights_unit_.data(), half, s_centre, -1 + (2 * y + 1) * half,
+                  W.data(), node_row.data());
+        switch (channels) {
+          case 1:
+            fold_tile<1>(bases, strides, antipode_, R, x0, y, lane_begin, lane_end, F.data());
+            contract_tile<1>(order_, W.data(), F.data(), A.data());
+            break;
+          case 2:
+            fold_tile<2>(bases, strides, antipode_, R, x0, y, lane_begin, lane_end, F.data());
+            contract_tile<2>(order_, W.data(), F.data(), A.data());
+            break;
+          case 3:
+            fold_tile<3>(bases, strides, antipode_, R, x0, y, lane_begin, lane_end, F.data());
+            contract_tile<3>(order_, W.data(), F.data(), A.data());
+            break;
+          default:
+            fold_tile<4>(bases, strides, antipode_, R, x0, y, lane_begin, lane_end, F.data());
+            contract_tile<4>(order_, W.data(), F.data(), A.data());
+            break;
         }
       }
     }
   };
   do_group(block);
   if (const int other = groups - 1 - block; other != block) do_group(other);
+  // The lanes summed in a fixed order.
+  std::vector<double> sums(static_cast<std::size_t>(n) * pc);
+  for (std::size_t i = 0; i < sums.size(); ++i) {
+    const Lanes& v = A[i];
+    sums[i] = ((v[0] + v[1]) + (v[2] + v[3])) + ((v[4] + v[5]) + (v[6] + v[7]));
+  }
   // y_00's integral is positive on every texel: a non-finite texel leaves its sum so.
-  for (int f = 0; f < 6; ++f)
-    for (int c = 0; c < channels; ++c)
-      if (!std::isfinite(A[static_cast<std::size_t>(f) * 4 + c])) return first_non_finite(faces);
+  for (int j = 0; j < pc; ++j)
+    if (!std::isfinite(sums[static_cast<std::size_t>(j)])) return first_non_finite(faces);
   std::size_t block_at = 0;
-  for (int f = 0; f < 6; ++f)
+  for (int pair = 0; pair < 3; ++pair)
     for (int l = 0; l < order_; ++l) {
       const int width = 2 * l + 1, base = l * l;
       const double* map = &face_maps_[block_at];
@@ -702,7 +771,7 @@ Result<Ok> CubemapProjector::accumulate_block(std::span<const FloatImageView, 6>
         for (int c = 0; c < channels; ++c) {
           double sum = 0;
           for (int b = 0; b < width; ++b)
-            sum += map[a * width + b] * A[static_cast<std::size_t>(base + b) * kFaceLanes + f * 4 + c];
+            sum += map[a * width + b] * sums[static_cast<std::size_t>(base + b) * pc + pair * channels + c];
           partial[static_cast<std::size_t>(base + a) * channels + c] += sum;
         }
     }
