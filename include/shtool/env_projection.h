@@ -139,9 +139,10 @@ class CubemapProjector {
   // For +X, +Y, +Z, the orthogonal map of SH coefficients from the face's frame (s, t, 1)
   // to shtool's, band blocks (2l+1)^2 row-major, bands in order.
   std::vector<double> face_maps_;
-  // For the pairs (+X, -X), (+Y, -Y), (+Z, -Z): where the antipode of the first face's
-  // (s, t) lies on the second, as (swap s and t, then negate s, negate t) flags.
-  int antipode_[3][3] = {};
+  // For the pairs (+X, -X), (+Y, -Y), (+Z, -Z): the antipode of image g of a class of
+  // texels on the first face is image antipode_[pair][g] of that class on the second
+  // (the images as accumulate_block orders them).
+  int antipode_[3][8] = {};
 };
 
 Result<EnvCoefficients> project_cubemap(std::span<const FloatImageView, 6> faces, int order, bool mirror_x = false);

@@ -358,8 +358,8 @@ class LaneBuffer {
  private:
   std::vector<LaneBox> boxes_;
 };
-// Folded sums of a tile of classes: F[(fold * 2 + band parity) * pc + pair * C + c] for
-// the three face pairs (+X -X, +Y -Y, +Z -Z) and C channels (pc = 3 C).
+// Folded sums of a tile of classes for one face pair (+X -X, +Y -Y or +Z -Z) and C
+// channels: F[(fold * 2 + band parity) * C + c].
 constexpr int kPlanes = 2 * kFolds;
 
 // The rule of one texel per lane, texels (s_centre[lane], t_centre) of half-width
@@ -431,12 +431,12 @@ SHTOOL_SAME_BITS_CLONES_WIDE void tile_rule(int order, int nodes, const double* 
   }
 }
 
-// Adds a tile's folded sums F times its integrals W into the face-frame accumulators
-// A[i * pc + pair * C + c] (pc = 3 C), lane by lane: coefficient (l, m) meets the fold of
+// Adds one face pair's folded sums F of a tile times the tile's integrals W into the
+// pair's accumulators A[i * C + c], lane by lane: coefficient (l, m) meets the fold of
 // its m mod 4 and its type, on the plane of its band's parity.
 template <int C>
 SHTOOL_SAME_BITS_CLONES_WIDE void contract_tile(int order, const Lanes* W, const Lanes* F, Lanes* A) {
-  constexpr int PC = 3 * C;
+  constexpr int PC = C;
   for (int l = 0; l < order; ++l) {
     const int i0 = l * (l + 1), par = l & 1;
     auto plane = [&](Fold f) { return F + (2 * f + par) * PC; };
@@ -532,18 +532,24 @@ Result<CubemapProjector> CubemapProjector::create(int face_size, int order, bool
     // square: one of the eight (s, t) -> (+-s, +-t), (+-t, +-s).
     const CubeFace opposite = static_cast<CubeFace>(f + 1);
     const double s0 = 0.25, t0 = 0.625;  // no map of the square fixes it
-    bool found = false;
-    for (int m = 0; m < 8 && !found; ++m) {
+    int found = 0;
+    for (int m = 0; m < 8; ++m) {
       const bool swap = m & 1, flip_s = m & 2, flip_t = m & 4;
       const double s1 = (flip_s ? -1 : 1) * (swap ? t0 : s0), t1 = (flip_t ? -1 : 1) * (swap ? s0 : t0);
-      if ((p.cube_vector(opposite, s1, t1) + p.cube_vector(face, s0, t0)).norm() < 1e-12) {
-        p.antipode_[f / 2][0] = swap;
-        p.antipode_[f / 2][1] = flip_s;
-        p.antipode_[f / 2][2] = flip_t;
-        found = true;
+      if ((p.cube_vector(opposite, s1, t1) + p.cube_vector(face, s0, t0)).norm() > 1e-12) continue;
+      // That map after image g of a class is another image of the class: which one, read
+      // off a texel of a 16-texel face that no map of the square fixes.
+      constexpr int kR = 16, x = 13, y = 10, xm = kR - 1 - x, ym = kR - 1 - y;
+      const int at[8][2] = {{x, y}, {x, ym}, {ym, x}, {y, x}, {xm, ym}, {xm, y}, {y, xm}, {ym, xm}};
+      for (int g = 0; g < 8; ++g) {
+        int col = swap ? at[g][1] : at[g][0], row = swap ? at[g][0] : at[g][1];
+        if (flip_s) col = kR - 1 - col;
+        if (flip_t) row = kR - 1 - row;
+        for (int h = 0; h < 8; ++h)
+          if (at[h][0] == col && at[h][1] == row) p.antipode_[f / 2][g] = h, ++found;
       }
     }
-    if (!found) detail::precondition_failed("CubemapProjector: opposite faces are not antipodal");
+    if (found != 8) detail::precondition_failed("CubemapProjector: opposite faces are not antipodal");
   }
   return p;
 }
@@ -608,12 +614,45 @@ bool valid_faces(std::span<const FloatImageView, 6> faces, int size) {
   return true;
 }
 
-// The eight folds of one class's eight values v (in the order of its images, below) into
+// A square of 8 x 8 classes (x0 + k, y0 + j) and the texels of its eight images on each
+// face: texels[((f * 8 + g) * C + c) * 64 + j * 8 + k] is channel c of image g of class
+// (x0 + k, y0 + j) on face f. Images, as (column, row) of texel (x, y), in the order
+// (k, e) = (0,+) (0,-) (1,+) (1,-) (2,+) (2,-) (3,+) (3,-): p, -p, p + pi/2, pi/2 - p,
+// p + pi, pi - p, p - pi/2, -pi/2 - p. Each image of the square is an 8 x 8 block of a
+// face read row by row (transposed for the images that swap s and t); classes outside
+// the face are clamped to its edge (their sums are weighted by zero).
+template <int C>
+void load_square(const float* const* bases, const std::size_t* strides, int R, int x0, int y0, float* texels) {
+  int xs[8], ys[8], xms[8], yms[8];
+  for (int k = 0; k < 8; ++k) {
+    xs[k] = std::min(x0 + k, R - 1);
+    ys[k] = std::min(y0 + k, R - 1);
+    xms[k] = R - 1 - xs[k];
+    yms[k] = R - 1 - ys[k];
+  }
+  // Per image: the column and row indices, and whether the column follows k (else j).
+  const int* const cols[8] = {xs, xs, yms, ys, xms, xms, ys, yms};
+  const int* const rows[8] = {ys, yms, xs, xs, yms, ys, xms, xms};
+  constexpr bool kColumnAlongK[8] = {true, true, false, false, true, true, false, false};
+  for (int f = 0; f < 6; ++f)
+    for (int g = 0; g < 8; ++g) {
+      float* out = texels + static_cast<std::size_t>(f * 8 + g) * C * 64;
+      for (int j = 0; j < 8; ++j)
+        for (int k = 0; k < 8; ++k) {
+          const int col = kColumnAlongK[g] ? cols[g][k] : cols[g][j];
+          const int row = kColumnAlongK[g] ? rows[g][j] : rows[g][k];
+          const float* t = bases[f] + static_cast<std::size_t>(row) * strides[f] + static_cast<std::size_t>(col) * C;
+          for (int c = 0; c < C; ++c) out[c * 64 + j * 8 + k] = t[c];
+        }
+    }
+}
+
+// The eight folds of a class's eight values v (in the order of its images) into
 // out[fold * stride], each times `scale`.
-inline void fold_square(const double* v, double scale, double* out, std::size_t stride) {
-  const double e0 = v[0] + v[1], d0 = v[0] - v[1], e1 = v[2] + v[3], d1 = v[2] - v[3];
-  const double e2 = v[4] + v[5], d2 = v[4] - v[5], e3 = v[6] + v[7], d3 = v[6] - v[7];
-  const double e02 = e0 + e2, e13 = e1 + e3, d02 = d0 + d2, d13 = d1 + d3;
+inline void fold_square(const Lanes* v, Lanes scale, Lanes* out, int stride) {
+  const Lanes e0 = v[0] + v[1], d0 = v[0] - v[1], e1 = v[2] + v[3], d1 = v[2] - v[3];
+  const Lanes e2 = v[4] + v[5], d2 = v[4] - v[5], e3 = v[6] + v[7], d3 = v[6] - v[7];
+  const Lanes e02 = e0 + e2, e13 = e1 + e3, d02 = d0 + d2, d13 = d1 + d3;
   out[kP0 * stride] = scale * (e02 + e13);
   out[kP2 * stride] = scale * (e02 - e13);
   out[kV0 * stride] = scale * (d02 + d13);
@@ -624,50 +663,30 @@ inline void fold_square(const double* v, double scale, double* out, std::size_t 
   out[kQ1 * stride] = scale * (d1 - d3);
 }
 
-// The folded sums of a tile of classes (x0 + k, y), lanes [lane_begin, lane_end) (the
-// others zero): per face pair, the class's eight texels on the first face plus (even
-// bands) and minus (odd bands) their antipodes on the second, then the square's folds.
+// The folded sums of row j of a loaded square for one face pair, F[(fold * 2 + band
+// parity) * C + c]: the class's eight texels on the pair's first face plus (even bands)
+// and minus (odd bands) their antipodes on the second (image `antipode[g]` there), then
+// the square's folds, times scale (1 / the class's stabiliser; 0 outside the eighth).
 template <int C>
-void fold_tile(const float* const* bases, const std::size_t* strides, const int (*antipode)[3], int R, int x0, int y,
-               int lane_begin, int lane_end, Lanes* F) {
-  constexpr int PC = 3 * C;
-  for (int i = 0; i < kPlanes * PC; ++i) F[i] = Lanes{};
-  double* out = reinterpret_cast<double*>(F);
-  constexpr std::size_t kStride = 2 * PC * kClassLanes;  // from one fold to the next
-  const int ym = R - 1 - y;
-  for (int k = lane_begin; k < lane_end; ++k) {
-    const int x = x0 + k, xm = R - 1 - x;
-    // The images (column, row) of texel (x, y), in the order (k, e) =
-    // (0,+) (0,-) (1,+) (1,-) (2,+) (2,-) (3,+) (3,-): p, -p, p + pi/2, pi/2 - p,
-    // p + pi, pi - p, p - pi/2, -pi/2 - p.
-    const int at[8][2] = {{x, y}, {x, ym}, {ym, x}, {y, x}, {xm, ym}, {xm, y}, {y, xm}, {ym, xm}};
-    int stabiliser = 0;
-    for (const auto& p : at) stabiliser += p[0] == x && p[1] == y;
-    // A class of fewer than eight texels meets each of them 8 / |class| times.
-    const double scale = 1.0 / stabiliser;
-    for (int pair = 0; pair < 3; ++pair) {
-      const int fa = 2 * pair, fb = fa + 1;
-      const float *a[8], *b[8];
-      for (int g = 0; g < 8; ++g) {
-        a[g] = bases[fa] + static_cast<std::size_t>(at[g][1]) * strides[fa] + static_cast<std::size_t>(at[g][0]) * C;
-        int col = at[g][0], row = at[g][1];
-        if (antipode[pair][0]) std::swap(col, row);
-        if (antipode[pair][1]) col = R - 1 - col;
-        if (antipode[pair][2]) row = R - 1 - row;
-        b[g] = bases[fb] + static_cast<std::size_t>(row) * strides[fb] + static_cast<std::size_t>(col) * C;
+SHTOOL_SAME_BITS_CLONES_WIDE void fold_row(const float* texels, int pair, const int* antipode, int j,
+                                           const double* scale, Lanes* F) {
+  Lanes sc;
+  for (int k = 0; k < kClassLanes; ++k) sc[k] = scale[k];
+  for (int c = 0; c < C; ++c) {
+    Lanes sum[8], diff[8];
+    for (int g = 0; g < 8; ++g) {
+      const float* a = texels + static_cast<std::size_t>((2 * pair * 8 + g) * C + c) * 64 + j * 8;
+      const float* b = texels + static_cast<std::size_t>(((2 * pair + 1) * 8 + antipode[g]) * C + c) * 64 + j * 8;
+      Lanes va, vb;
+      for (int k = 0; k < kClassLanes; ++k) {
+        va[k] = a[k];
+        vb[k] = b[k];
       }
-      for (int c = 0; c < C; ++c) {
-        double sum[8], diff[8];
-        for (int g = 0; g < 8; ++g) {
-          const double va = a[g][c], vb = b[g][c];
-          sum[g] = va + vb;
-          diff[g] = va - vb;
-        }
-        const std::size_t lane = static_cast<std::size_t>(pair * C + c) * kClassLanes + k;
-        fold_square(sum, scale, out + lane, kStride);
-        fold_square(diff, scale, out + PC * kClassLanes + lane, kStride);
-      }
+      sum[g] = va + vb;
+      diff[g] = va - vb;
     }
+    fold_square(sum, sc, F + c, 2 * C);
+    fold_square(diff, sc, F + C + c, 2 * C);
   }
 }
 
@@ -680,7 +699,6 @@ Result<Ok> CubemapProjector::accumulate_block(std::span<const FloatImageView, 6>
   if (block < 0 || block >= block_count() || partial.size() < partial_size(faces[0].channels))
     return Error{"cubemap block: block out of range or partial smaller than partial_size(channels)"};
   const int channels = faces[0].channels;
-  const int pc = 3 * channels;
   const int n = sh_count(order_);
   const int R = size_;
   const int first_row = R / 2, rows = R - first_row;
@@ -692,17 +710,19 @@ Result<Ok> CubemapProjector::accumulate_block(std::span<const FloatImageView, 6>
     bases[f] = faces[static_cast<std::size_t>(f)].texels;
     strides[f] = faces[static_cast<std::size_t>(f)].stride();
   }
-  // Per face pair, the coefficients in the first face's frame, one per lane (class);
-  // carried to shtool's frame at the end.
-  LaneBuffer A(static_cast<std::size_t>(n) * pc), W(n), node_row(n), F(static_cast<std::size_t>(kPlanes) * pc);
-  // A group of rows is walked in columns of kClassLanes classes: the images of a few
-  // neighbouring classes share cache lines along rows and, transposed, along columns.
+  // Per face pair, the coefficients in the first face's frame, one per lane (class):
+  // A[(pair * N^2 + i) * C + c]; carried to shtool's frame at the end.
+  const std::size_t per_pair = static_cast<std::size_t>(n) * channels;
+  LaneBuffer A(3 * per_pair), W(n), node_row(n), F(static_cast<std::size_t>(kPlanes) * channels);
+  std::vector<float> texels(static_cast<std::size_t>(6 * 8 * 64) * channels);
+  static_assert(kRowsPerGroup == 8 && kClassLanes == 8, "a square of classes is a group's rows by a tile's lanes");
+  // A group of rows is walked in squares of 8 x 8 classes: each of its 48 images is an
+  // 8 x 8 block of a face.
   auto do_group = [&](int group) {
     const int y_begin = first_row + group * kRowsPerGroup, y_end = std::min(R, y_begin + kRowsPerGroup);
     for (int x0 = y_begin; x0 < R; x0 += kClassLanes) {
-      // The images of a tile lie on 4 rows of the group and 4 of the columns, in 96
-      // different rows of the six faces: no hardware prefetcher follows that, so the
-      // texels of the next tile are asked for now.
+      // The next square's blocks lie on 64 different rows of each face: no hardware
+      // prefetcher follows that, so they are asked for now.
       if (const int xp = x0 + kClassLanes; xp < R) {
         const int xpm = R - 1 - xp;
         for (int f = 0; f < 6; ++f) {
@@ -721,31 +741,47 @@ Result<Ok> CubemapProjector::accumulate_block(std::span<const FloatImageView, 6>
           }
         }
       }
+      switch (channels) {
+        case 1: load_square<1>(bases, strides, R, x0, y_begin, texels.data()); break;
+        case 2: load_square<2>(bases, strides, R, x0, y_begin, texels.data()); break;
+        case 3: load_square<3>(bases, strides, R, x0, y_begin, texels.data()); break;
+        default: load_square<4>(bases, strides, R, x0, y_begin, texels.data()); break;
+      }
       for (int y = y_begin; y < y_end; ++y) {
         if (x0 + kClassLanes <= y) continue;
-        const int lane_begin = std::max(0, y - x0), lane_end = std::min(kClassLanes, R - x0);
-        alignas(64) double s_centre[kClassLanes];
-        for (int k = 0; k < kClassLanes; ++k)
-          s_centre[k] = -1 + (2 * (x0 + std::clamp(k, lane_begin, lane_end - 1)) + 1) * half;
+        const int j = y - y_begin, ym = R - 1 - y;
+        alignas(64) double s_centre[kClassLanes], scale[kClassLanes];
+        for (int k = 0; k < kClassLanes; ++k) {
+          const int x = std::clamp(x0 + k, y, R - 1), xm = R - 1 - x;
+          s_centre[k] = -1 + (2 * x + 1) * half;
+          // A class of fewer than eight texels meets each of them 8 / |class| times.
+          const int at[8][2] = {{x, y}, {x, ym}, {ym, x}, {y, x}, {xm, ym}, {xm, y}, {y, xm}, {ym, xm}};
+          int stabiliser = 0;
+          for (const auto& p : at) stabiliser += p[0] == x && p[1] == y;
+          scale[k] = x0 + k == x ? 1.0 / stabiliser : 0.0;
+        }
         tile_rule(order_, nodes_, nodes_unit_.data(), weights_unit_.data(), half, s_centre, -1 + (2 * y + 1) * half,
                   W.data(), node_row.data());
-        switch (channels) {
-          case 1:
-            fold_tile<1>(bases, strides, antipode_, R, x0, y, lane_begin, lane_end, F.data());
-            contract_tile<1>(order_, W.data(), F.data(), A.data());
-            break;
-          case 2:
-            fold_tile<2>(bases, strides, antipode_, R, x0, y, lane_begin, lane_end, F.data());
-            contract_tile<2>(order_, W.data(), F.data(), A.data());
-            break;
-          case 3:
-            fold_tile<3>(bases, strides, antipode_, R, x0, y, lane_begin, lane_end, F.data());
-            contract_tile<3>(order_, W.data(), F.data(), A.data());
-            break;
-          default:
-            fold_tile<4>(bases, strides, antipode_, R, x0, y, lane_begin, lane_end, F.data());
-            contract_tile<4>(order_, W.data(), F.data(), A.data());
-            break;
+        for (int pair = 0; pair < 3; ++pair) {
+          Lanes* a = A.data() + pair * per_pair;
+          switch (channels) {
+            case 1:
+              fold_row<1>(texels.data(), pair, antipode_[pair], j, scale, F.data());
+              contract_tile<1>(order_, W.data(), F.data(), a);
+              break;
+            case 2:
+              fold_row<2>(texels.data(), pair, antipode_[pair], j, scale, F.data());
+              contract_tile<2>(order_, W.data(), F.data(), a);
+              break;
+            case 3:
+              fold_row<3>(texels.data(), pair, antipode_[pair], j, scale, F.data());
+              contract_tile<3>(order_, W.data(), F.data(), a);
+              break;
+            default:
+              fold_row<4>(texels.data(), pair, antipode_[pair], j, scale, F.data());
+              contract_tile<4>(order_, W.data(), F.data(), a);
+              break;
+          }
         }
       }
     }
@@ -753,14 +789,15 @@ Result<Ok> CubemapProjector::accumulate_block(std::span<const FloatImageView, 6>
   do_group(block);
   if (const int other = groups - 1 - block; other != block) do_group(other);
   // The lanes summed in a fixed order.
-  std::vector<double> sums(static_cast<std::size_t>(n) * pc);
+  std::vector<double> sums(3 * per_pair);
   for (std::size_t i = 0; i < sums.size(); ++i) {
     const Lanes& v = A[i];
     sums[i] = ((v[0] + v[1]) + (v[2] + v[3])) + ((v[4] + v[5]) + (v[6] + v[7]));
   }
   // y_00's integral is positive on every texel: a non-finite texel leaves its sum so.
-  for (int j = 0; j < pc; ++j)
-    if (!std::isfinite(sums[static_cast<std::size_t>(j)])) return first_non_finite(faces);
+  for (int pair = 0; pair < 3; ++pair)
+    for (int c = 0; c < channels; ++c)
+      if (!std::isfinite(sums[pair * per_pair + c])) return first_non_finite(faces);
   std::size_t block_at = 0;
   for (int pair = 0; pair < 3; ++pair)
     for (int l = 0; l < order_; ++l) {
@@ -771,7 +808,7 @@ Result<Ok> CubemapProjector::accumulate_block(std::span<const FloatImageView, 6>
         for (int c = 0; c < channels; ++c) {
           double sum = 0;
           for (int b = 0; b < width; ++b)
-            sum += map[a * width + b] * sums[static_cast<std::size_t>(base + b) * pc + pair * channels + c];
+            sum += map[a * width + b] * sums[pair * per_pair + static_cast<std::size_t>(base + b) * channels + c];
           partial[static_cast<std::size_t>(base + a) * channels + c] += sum;
         }
     }
