@@ -365,69 +365,94 @@ constexpr int kPlanes = 2 * kFolds;
 // The rule of one texel per lane, texels (s_centre[lane], t_centre) of half-width
 // `half`, in the face frame: direction (s, t, 1) / r, polar axis the face normal.
 // W[i], i < N^2. The basis recurrence of sh.cpp (the Q_l^m of basis/legendre_recurrence.h
-// times Re, Im (x + i y)^m), node weights folded into the azimuthal factors. `row` is
-// scratch of N^2 Lanes: the nodes are summed row of nodes by row of nodes, as
-// texel_integrals does (fewer roundings per sum).
+// times Re, Im (x + i y)^m), node weights folded into the azimuthal factors. The nodes
+// are summed row of nodes by row of nodes, as texel_integrals does (fewer roundings per
+// sum), a few nodes of a row at a time (kNodeChunk: all of them for the 3 nodes of large
+// faces, whose row sums then never leave the registers); `row` is scratch of N^2 Lanes
+// for rows of more nodes.
+constexpr int kNodeChunk = 4;
 SHTOOL_SAME_BITS_CLONES_WIDE void tile_rule(int order, int nodes, const double* node, const double* weight, double half,
                                             const double* s_centre, double t_centre, Lanes* W, Lanes* row) {
   const detail::LegendreRecurrence<double>& tab = detail::legendre_recurrence<double>();
+  constexpr int U = kNodeChunk;
   const int n = order * order;
-  for (int i = 0; i < n; ++i) W[i] = Lanes{};
-  Lanes cm[kMaxEnvOrder], sm[kMaxEnvOrder], qa[kMaxEnvOrder], qb[kMaxEnvOrder], qc[kMaxEnvOrder];
+  Lanes cm[U][kMaxEnvOrder], sm[U][kMaxEnvOrder], qa[U][kMaxEnvOrder], qb[U][kMaxEnvOrder], qc[U][kMaxEnvOrder];
+  Lanes z[U];
   Lanes sc;
   for (int k = 0; k < kClassLanes; ++k) sc[k] = s_centre[k];
   constexpr double kSqrt2 = std::numbers::sqrt2;
+  const bool chunked = nodes > U;
   for (int a = 0; a < nodes; ++a) {
     const double t = t_centre + half * node[a];
-    for (int i = 0; i < n; ++i) row[i] = Lanes{};
-    for (int b = 0; b < nodes; ++b) {
-      const double wab = weight[a] * weight[b] * half * half;
-      const Lanes s = sc + half * node[b];
-      const Lanes r2 = 1 + s * s + t * t;
-      Lanes r;
-      for (int k = 0; k < kClassLanes; ++k) r[k] = std::sqrt(r2[k]);
-      const Lanes u = 1 / r;
-      const Lanes x = s * u, y = t * u, z = u;
-      cm[0] = wab / (r2 * r);  // ds dt / r^3
-      sm[0] = Lanes{};
-      // cm, sm carry sqrt2 from m = 1 on (y_l^{+-m} = sqrt2 Q_l^m Re, Im (x + i y)^m).
-      if (order > 1) {
-        const Lanes c = kSqrt2 * cm[0];
-        cm[1] = x * c - y * sm[0];
-        sm[1] = x * sm[0] + y * c;
+    for (int b0 = 0; b0 < nodes; b0 += U) {
+      const int nb = std::min(U, nodes - b0);
+      for (int u = 0; u < nb; ++u) {
+        const int b = b0 + u;
+        const double wab = weight[a] * weight[b] * half * half;
+        const Lanes s = sc + half * node[b];
+        const Lanes r2 = 1 + s * s + t * t;
+        Lanes r;
+        for (int k = 0; k < kClassLanes; ++k) r[k] = std::sqrt(r2[k]);
+        const Lanes inv = 1 / r;
+        const Lanes x = s * inv, y = t * inv;
+        z[u] = inv;
+        cm[u][0] = wab / (r2 * r);  // ds dt / r^3
+        sm[u][0] = Lanes{};
+        // cm, sm carry sqrt2 from m = 1 on (y_l^{+-m} = sqrt2 Q_l^m Re, Im (x + i y)^m).
+        if (order > 1) {
+          const Lanes c = kSqrt2 * cm[u][0];
+          cm[u][1] = x * c - y * sm[u][0];
+          sm[u][1] = x * sm[u][0] + y * c;
+        }
+        for (int m = 2; m < order; ++m) {
+          cm[u][m] = x * cm[u][m - 1] - y * sm[u][m - 1];
+          sm[u][m] = x * sm[u][m - 1] + y * cm[u][m - 1];
+        }
       }
-      for (int m = 2; m < order; ++m) {
-        cm[m] = x * cm[m - 1] - y * sm[m - 1];
-        sm[m] = x * sm[m - 1] + y * cm[m - 1];
-      }
-      Lanes* q2 = qa;
-      Lanes* q1 = qb;
-      Lanes* q0 = qc;
+      Lanes(*q2)[kMaxEnvOrder] = qa;
+      Lanes(*q1)[kMaxEnvOrder] = qb;
+      Lanes(*q0)[kMaxEnvOrder] = qc;
+      // This chunk's sums start or continue a row of nodes (in `row`, or in W when the
+      // row is one chunk), and a row starts or continues W.
+      Lanes* out = chunked ? row : W;
+      const bool first = chunked ? b0 == 0 : a == 0;
       for (int l = 0; l < order; ++l) {
-        if (l == 0) {
-          q0[0] = Lanes{} + tab.q00;
-        } else {
-          q0[l] = tab.diag[l] * q1[l - 1];
-          q0[l - 1] = tab.subdiag[l - 1] * z * q1[l - 1];
-          for (int m = 0; m <= l - 2; ++m) {
-            const double ca = tab.a[detail::LegendreRecurrence<double>::tri(l, m)];
-            const double cb = tab.b[detail::LegendreRecurrence<double>::tri(l, m)];
-            q0[m] = ca * (z * q1[m] - cb * q2[m]);
+        for (int u = 0; u < nb; ++u) {
+          if (l == 0) {
+            q0[u][0] = Lanes{} + tab.q00;
+          } else {
+            q0[u][l] = tab.diag[l] * q1[u][l - 1];
+            q0[u][l - 1] = tab.subdiag[l - 1] * z[u] * q1[u][l - 1];
+            for (int m = 0; m <= l - 2; ++m) {
+              const double ca = tab.a[detail::LegendreRecurrence<double>::tri(l, m)];
+              const double cb = tab.b[detail::LegendreRecurrence<double>::tri(l, m)];
+              q0[u][m] = ca * (z[u] * q1[u][m] - cb * q2[u][m]);
+            }
           }
         }
-        Lanes* centre = row + l * (l + 1);
-        centre[0] += q0[0] * cm[0];
-        for (int m = 1; m <= l; ++m) {
-          centre[m] += q0[m] * cm[m];
-          centre[-m] += q0[m] * sm[m];
+        Lanes* centre = out + l * (l + 1);
+        {
+          Lanes acc = q0[0][0] * cm[0][0];
+          for (int u = 1; u < nb; ++u) acc += q0[u][0] * cm[u][0];
+          centre[0] = first ? acc : centre[0] + acc;
         }
-        Lanes* spare = q2;
+        for (int m = 1; m <= l; ++m) {
+          Lanes ac = q0[0][m] * cm[0][m], as = q0[0][m] * sm[0][m];
+          for (int u = 1; u < nb; ++u) {
+            ac += q0[u][m] * cm[u][m];
+            as += q0[u][m] * sm[u][m];
+          }
+          centre[m] = first ? ac : centre[m] + ac;
+          centre[-m] = first ? as : centre[-m] + as;
+        }
+        Lanes(*spare)[kMaxEnvOrder] = q2;
         q2 = q1;
         q1 = q0;
         q0 = spare;
       }
     }
-    for (int i = 0; i < n; ++i) W[i] += row[i];
+    if (chunked)
+      for (int i = 0; i < n; ++i) W[i] = a == 0 ? row[i] : W[i] + row[i];
   }
 }
 
@@ -634,17 +659,22 @@ void load_square(const float* const* bases, const std::size_t* strides, int R, i
   const int* const cols[8] = {xs, xs, yms, ys, xms, xms, ys, yms};
   const int* const rows[8] = {ys, yms, xs, xs, yms, ys, xms, xms};
   constexpr bool kColumnAlongK[8] = {true, true, false, false, true, true, false, false};
-  for (int f = 0; f < 6; ++f)
+  for (int f = 0; f < 6; ++f) {
+    const std::ptrdiff_t stride = static_cast<std::ptrdiff_t>(strides[f]);
     for (int g = 0; g < 8; ++g) {
       float* out = texels + static_cast<std::size_t>(f * 8 + g) * C * 64;
-      for (int j = 0; j < 8; ++j)
-        for (int k = 0; k < 8; ++k) {
-          const int col = kColumnAlongK[g] ? cols[g][k] : cols[g][j];
-          const int row = kColumnAlongK[g] ? rows[g][j] : rows[g][k];
-          const float* t = bases[f] + static_cast<std::size_t>(row) * strides[f] + static_cast<std::size_t>(col) * C;
-          for (int c = 0; c < C; ++c) out[c * 64 + j * 8 + k] = t[c];
-        }
+      for (int j = 0; j < 8; ++j) {
+        // Along k the texels step by a column (images along rows) or a row, both ways.
+        std::ptrdiff_t offset[8];
+        if (kColumnAlongK[g])
+          for (int k = 0; k < 8; ++k) offset[k] = rows[g][j] * stride + cols[g][k] * C;
+        else
+          for (int k = 0; k < 8; ++k) offset[k] = rows[g][k] * stride + cols[g][j] * C;
+        for (int k = 0; k < 8; ++k)
+          for (int c = 0; c < C; ++c) out[c * 64 + j * 8 + k] = bases[f][offset[k] + c];
+      }
     }
+  }
 }
 
 // The eight folds of a class's eight values v (in the order of its images) into
