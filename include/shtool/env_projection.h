@@ -110,10 +110,10 @@ class CubemapProjector {
   int face_size() const { return size_; }
   // Gauss-Legendre nodes per texel side.
   int nodes_per_side() const { return nodes_; }
-  // Blocks of texel classes: each covers two groups of kRowsPerGroup rows of the face's
-  // eighth s >= t >= 0 (rows near its centre are long, near the edge short: the groups
-  // are paired long with short, so that blocks hold nearly equal work) and the texels
-  // of those classes on all six faces.
+  // Blocks of texel classes: each is a band of kRowsPerBand rows of the face's eighth
+  // s >= t >= 0 with the texels of its classes on all six faces. Rows near the face's
+  // centre are long, near its edge short: the blocks take the bands from both ends in
+  // turn, so that any contiguous run of blocks holds about its share of the work.
   int block_count() const;
   std::size_t partial_size(int channels) const;
   // faces[f] is face f (CubeFace order), each face_size square with the same channels.
@@ -127,7 +127,7 @@ class CubemapProjector {
   // i < N^2 (the reference rule, one texel at a time).
   void texel_integrals(CubeFace face, int x, int y, std::span<double> out) const;
 
-  static constexpr int kRowsPerGroup = 8;
+  static constexpr int kRowsPerBand = 16;
 
  private:
   Eigen::Vector3d cube_vector(CubeFace face, double s, double t) const;

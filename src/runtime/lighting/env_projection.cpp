@@ -581,8 +581,7 @@ Result<CubemapProjector> CubemapProjector::create(int face_size, int order, bool
 
 int CubemapProjector::block_count() const {
   const int rows = size_ - size_ / 2;  // rows of the eighth s >= t >= 0
-  const int groups = (rows + kRowsPerGroup - 1) / kRowsPerGroup;
-  return (groups + 1) / 2;
+  return (rows + kRowsPerBand - 1) / kRowsPerBand;
 }
 
 std::size_t CubemapProjector::partial_size(int channels) const {
@@ -639,39 +638,49 @@ bool valid_faces(std::span<const FloatImageView, 6> faces, int size) {
   return true;
 }
 
-// A square of 8 x 8 classes (x0 + k, y0 + j) and the texels of its eight images on each
-// face: texels[((f * 8 + g) * C + c) * 64 + j * 8 + k] is channel c of image g of class
-// (x0 + k, y0 + j) on face f. Images, as (column, row) of texel (x, y), in the order
+// A tile of T x T classes (x0 + k, y0 + j), T = kTile, and the texels of its eight images
+// on each face: texels[((f * 8 + g) * C + c) * T^2 + j * T + k] is channel c of image g of
+// class (x0 + k, y0 + j) on face f. Images, as (column, row) of texel (x, y), in the order
 // (k, e) = (0,+) (0,-) (1,+) (1,-) (2,+) (2,-) (3,+) (3,-): p, -p, p + pi/2, pi/2 - p,
-// p + pi, pi - p, p - pi/2, -pi/2 - p. Each image of the square is an 8 x 8 block of a
-// face read row by row (transposed for the images that swap s and t); classes outside
-// the face are clamped to its edge (their sums are weighted by zero).
+// p + pi, pi - p, p - pi/2, -pi/2 - p. Each image of the tile is a T x T block of a face:
+// images 0, 1, 4, 5 keep its rows (read forwards or backwards), images 2, 3, 6, 7 swap s
+// and t and are transposed as they are read, a row of T texels at a time. Classes
+// outside the face are clamped to its edge (their sums are weighted by zero).
+constexpr int kTile = 16;
 template <int C>
-void load_square(const float* const* bases, const std::size_t* strides, int R, int x0, int y0, float* texels) {
-  int xs[8], ys[8], xms[8], yms[8];
-  for (int k = 0; k < 8; ++k) {
+void load_tile(const float* const* bases, const std::size_t* strides, int R, int x0, int y0, float* texels) {
+  constexpr int T = kTile, TT = T * T;
+  int xs[T], ys[T], xms[T], yms[T];
+  for (int k = 0; k < T; ++k) {
     xs[k] = std::min(x0 + k, R - 1);
     ys[k] = std::min(y0 + k, R - 1);
     xms[k] = R - 1 - xs[k];
     yms[k] = R - 1 - ys[k];
   }
-  // Per image: the column and row indices, and whether the column follows k (else j).
+  // Per image: the face rows and columns its rows (j for images along rows, k for the
+  // transposed ones) and columns (k, j) follow.
   const int* const cols[8] = {xs, xs, yms, ys, xms, xms, ys, yms};
   const int* const rows[8] = {ys, yms, xs, xs, yms, ys, xms, xms};
-  constexpr bool kColumnAlongK[8] = {true, true, false, false, true, true, false, false};
+  constexpr bool kTransposed[8] = {false, false, true, true, false, false, true, true};
   for (int f = 0; f < 6; ++f) {
-    const std::ptrdiff_t stride = static_cast<std::ptrdiff_t>(strides[f]);
+    const float* base = bases[f];
+    const std::size_t stride = strides[f];
     for (int g = 0; g < 8; ++g) {
-      float* out = texels + static_cast<std::size_t>(f * 8 + g) * C * 64;
-      for (int j = 0; j < 8; ++j) {
-        // Along k the texels step by a column (images along rows) or a row, both ways.
-        std::ptrdiff_t offset[8];
-        if (kColumnAlongK[g])
-          for (int k = 0; k < 8; ++k) offset[k] = rows[g][j] * stride + cols[g][k] * C;
-        else
-          for (int k = 0; k < 8; ++k) offset[k] = rows[g][k] * stride + cols[g][j] * C;
-        for (int k = 0; k < 8; ++k)
-          for (int c = 0; c < C; ++c) out[c * 64 + j * 8 + k] = bases[f][offset[k] + c];
+      float* out = texels + static_cast<std::size_t>(f * 8 + g) * C * TT;
+      const int* col = cols[g];
+      for (int r = 0; r < T; ++r) {
+        // Row r of the block: T texels of one face row.
+        const float* src = base + static_cast<std::size_t>(rows[g][r]) * stride;
+        float line[C][T];
+        for (int i = 0; i < T; ++i)
+          for (int c = 0; c < C; ++c) line[c][i] = src[static_cast<std::size_t>(col[i]) * C + c];
+        if (kTransposed[g]) {
+          for (int c = 0; c < C; ++c)
+            for (int i = 0; i < T; ++i) out[c * TT + i * T + r] = line[c][i];
+        } else {
+          for (int c = 0; c < C; ++c)
+            for (int i = 0; i < T; ++i) out[c * TT + r * T + i] = line[c][i];
+        }
       }
     }
   }
@@ -693,20 +702,23 @@ inline void fold_square(const Lanes* v, Lanes scale, Lanes* out, int stride) {
   out[kQ1 * stride] = scale * (d1 - d3);
 }
 
-// The folded sums of row j of a loaded square for one face pair, F[(fold * 2 + band
-// parity) * C + c]: the class's eight texels on the pair's first face plus (even bands)
-// and minus (odd bands) their antipodes on the second (image `antipode[g]` there), then
-// the square's folds, times scale (1 / the class's stabiliser; 0 outside the eighth).
+// The folded sums of the 8 classes (x0 + k0 + k, y0 + j) of a loaded tile for one face
+// pair, F[(fold * 2 + band parity) * C + c]: the class's eight texels on the pair's first
+// face plus (even bands) and minus (odd bands) their antipodes on the second (image
+// `antipode[g]` there), then the square's folds, times scale (1 / the class's stabiliser;
+// 0 outside the eighth).
 template <int C>
-SHTOOL_SAME_BITS_CLONES_WIDE void fold_row(const float* texels, int pair, const int* antipode, int j,
+SHTOOL_SAME_BITS_CLONES_WIDE void fold_row(const float* texels, int pair, const int* antipode, int j, int k0,
                                            const double* scale, Lanes* F) {
+  constexpr int TT = kTile * kTile;
   Lanes sc;
   for (int k = 0; k < kClassLanes; ++k) sc[k] = scale[k];
+  const int at = j * kTile + k0;
   for (int c = 0; c < C; ++c) {
     Lanes sum[8], diff[8];
     for (int g = 0; g < 8; ++g) {
-      const float* a = texels + static_cast<std::size_t>((2 * pair * 8 + g) * C + c) * 64 + j * 8;
-      const float* b = texels + static_cast<std::size_t>(((2 * pair + 1) * 8 + antipode[g]) * C + c) * 64 + j * 8;
+      const float* a = texels + static_cast<std::size_t>((2 * pair * 8 + g) * C + c) * TT + at;
+      const float* b = texels + static_cast<std::size_t>(((2 * pair + 1) * 8 + antipode[g]) * C + c) * TT + at;
       Lanes va, vb;
       for (int k = 0; k < kClassLanes; ++k) {
         va[k] = a[k];
@@ -731,8 +743,7 @@ Result<Ok> CubemapProjector::accumulate_block(std::span<const FloatImageView, 6>
   const int channels = faces[0].channels;
   const int n = sh_count(order_);
   const int R = size_;
-  const int first_row = R / 2, rows = R - first_row;
-  const int groups = (rows + kRowsPerGroup - 1) / kRowsPerGroup;
+  const int first_row = R / 2;
   const double half = 1.0 / R;
   const float* bases[6];
   std::size_t strides[6];
@@ -744,51 +755,33 @@ Result<Ok> CubemapProjector::accumulate_block(std::span<const FloatImageView, 6>
   // A[(pair * N^2 + i) * C + c]; carried to shtool's frame at the end.
   const std::size_t per_pair = static_cast<std::size_t>(n) * channels;
   LaneBuffer A(3 * per_pair), W(n), node_row(n), F(static_cast<std::size_t>(kPlanes) * channels);
-  std::vector<float> texels(static_cast<std::size_t>(6 * 8 * 64) * channels);
-  static_assert(kRowsPerGroup == 8 && kClassLanes == 8, "a square of classes is a group's rows by a tile's lanes");
-  // A group of rows is walked in squares of 8 x 8 classes: each of its 48 images is an
-  // 8 x 8 block of a face.
-  auto do_group = [&](int group) {
-    const int y_begin = first_row + group * kRowsPerGroup, y_end = std::min(R, y_begin + kRowsPerGroup);
-    for (int x0 = y_begin; x0 < R; x0 += kClassLanes) {
-      // The next square's blocks lie on 64 different rows of each face: no hardware
-      // prefetcher follows that, so they are asked for now.
-      if (const int xp = x0 + kClassLanes; xp < R) {
-        const int xpm = R - 1 - xp;
-        for (int f = 0; f < 6; ++f) {
-          for (int y = y_begin; y < y_end; ++y)
-            for (const int row : {y, R - 1 - y})
-              for (const int x : {xp, xp + kClassLanes / 2, xpm - kClassLanes / 2, xpm - kClassLanes + 1})
-                __builtin_prefetch(bases[f] + row * strides[f] + static_cast<std::size_t>(std::clamp(x, 0, R - 1)) * channels);
-          for (int x = xp; x < std::min(R, xp + kClassLanes); ++x) {
-            const int xm = R - 1 - x;
-            for (const int row : {x, xm}) {
-              __builtin_prefetch(bases[f] + row * strides[f] + static_cast<std::size_t>(y_begin) * channels);
-              __builtin_prefetch(bases[f] + row * strides[f] + static_cast<std::size_t>(y_end - 1) * channels);
-              __builtin_prefetch(bases[f] + row * strides[f] + static_cast<std::size_t>(R - y_end) * channels);
-              __builtin_prefetch(bases[f] + row * strides[f] + static_cast<std::size_t>(R - 1 - y_begin) * channels);
-            }
-          }
-        }
-      }
-      switch (channels) {
-        case 1: load_square<1>(bases, strides, R, x0, y_begin, texels.data()); break;
-        case 2: load_square<2>(bases, strides, R, x0, y_begin, texels.data()); break;
-        case 3: load_square<3>(bases, strides, R, x0, y_begin, texels.data()); break;
-        default: load_square<4>(bases, strides, R, x0, y_begin, texels.data()); break;
-      }
-      for (int y = y_begin; y < y_end; ++y) {
-        if (x0 + kClassLanes <= y) continue;
-        const int j = y - y_begin, ym = R - 1 - y;
+  std::vector<float> texels(static_cast<std::size_t>(6 * 8 * kTile * kTile) * channels);
+  static_assert(kRowsPerBand == kTile && kTile % kClassLanes == 0, "a band is one row of tiles");
+  // Blocks take the bands from both ends in turn (long rows near the face's centre, short
+  // near its edge), so that any contiguous run of blocks holds about its share of work.
+  const int bands = block_count();
+  const int band = block % 2 == 0 ? block / 2 : bands - 1 - block / 2;
+  const int y_begin = first_row + band * kRowsPerBand, y_end = std::min(R, y_begin + kRowsPerBand);
+  for (int x0 = y_begin; x0 < R; x0 += kTile) {
+    switch (channels) {
+      case 1: load_tile<1>(bases, strides, R, x0, y_begin, texels.data()); break;
+      case 2: load_tile<2>(bases, strides, R, x0, y_begin, texels.data()); break;
+      case 3: load_tile<3>(bases, strides, R, x0, y_begin, texels.data()); break;
+      default: load_tile<4>(bases, strides, R, x0, y_begin, texels.data()); break;
+    }
+    for (int y = y_begin; y < y_end; ++y) {
+      const int j = y - y_begin, ym = R - 1 - y;
+      for (int k0 = 0; k0 < kTile; k0 += kClassLanes) {
+        if (x0 + k0 + kClassLanes <= y || x0 + k0 >= R) continue;
         alignas(64) double s_centre[kClassLanes], scale[kClassLanes];
         for (int k = 0; k < kClassLanes; ++k) {
-          const int x = std::clamp(x0 + k, y, R - 1), xm = R - 1 - x;
+          const int x = std::clamp(x0 + k0 + k, y, R - 1), xm = R - 1 - x;
           s_centre[k] = -1 + (2 * x + 1) * half;
           // A class of fewer than eight texels meets each of them 8 / |class| times.
           const int at[8][2] = {{x, y}, {x, ym}, {ym, x}, {y, x}, {xm, ym}, {xm, y}, {y, xm}, {ym, xm}};
           int stabiliser = 0;
           for (const auto& p : at) stabiliser += p[0] == x && p[1] == y;
-          scale[k] = x0 + k == x ? 1.0 / stabiliser : 0.0;
+          scale[k] = x0 + k0 + k == x ? 1.0 / stabiliser : 0.0;
         }
         tile_rule(order_, nodes_, nodes_unit_.data(), weights_unit_.data(), half, s_centre, -1 + (2 * y + 1) * half,
                   W.data(), node_row.data());
@@ -796,28 +789,26 @@ Result<Ok> CubemapProjector::accumulate_block(std::span<const FloatImageView, 6>
           Lanes* a = A.data() + pair * per_pair;
           switch (channels) {
             case 1:
-              fold_row<1>(texels.data(), pair, antipode_[pair], j, scale, F.data());
+              fold_row<1>(texels.data(), pair, antipode_[pair], j, k0, scale, F.data());
               contract_tile<1>(order_, W.data(), F.data(), a);
               break;
             case 2:
-              fold_row<2>(texels.data(), pair, antipode_[pair], j, scale, F.data());
+              fold_row<2>(texels.data(), pair, antipode_[pair], j, k0, scale, F.data());
               contract_tile<2>(order_, W.data(), F.data(), a);
               break;
             case 3:
-              fold_row<3>(texels.data(), pair, antipode_[pair], j, scale, F.data());
+              fold_row<3>(texels.data(), pair, antipode_[pair], j, k0, scale, F.data());
               contract_tile<3>(order_, W.data(), F.data(), a);
               break;
             default:
-              fold_row<4>(texels.data(), pair, antipode_[pair], j, scale, F.data());
+              fold_row<4>(texels.data(), pair, antipode_[pair], j, k0, scale, F.data());
               contract_tile<4>(order_, W.data(), F.data(), a);
               break;
           }
         }
       }
     }
-  };
-  do_group(block);
-  if (const int other = groups - 1 - block; other != block) do_group(other);
+  }
   // The lanes summed in a fixed order.
   std::vector<double> sums(3 * per_pair);
   for (std::size_t i = 0; i < sums.size(); ++i) {
