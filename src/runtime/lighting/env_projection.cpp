@@ -365,27 +365,77 @@ constexpr int kPlanes = 2 * kFolds;
 // The rule of one texel per lane, texels (s_centre[lane], t_centre) of half-width
 // `half`, in the face frame: direction (s, t, 1) / r, polar axis the face normal.
 // W[i], i < N^2. The basis recurrence of sh.cpp (the Q_l^m of basis/legendre_recurrence.h
-// times Re, Im (x + i y)^m), node weights folded into the azimuthal factors. The nodes
-// are summed row of nodes by row of nodes, as texel_integrals does (fewer roundings per
-// sum), a few nodes of a row at a time (kNodeChunk: all of them for the 3 nodes of large
-// faces, whose row sums then never leave the registers); `row` is scratch of N^2 Lanes
-// for rows of more nodes.
+// times Re, Im (x + i y)^m), node weights folded into the azimuthal factors, run m by m
+// (each Q_l^m from Q_{l-1}^m and Q_{l-2}^m, the diagonal Q_m^m carried from m - 1), so
+// that it lives in registers. The nodes are summed row of nodes by row of nodes, as
+// texel_integrals does (fewer roundings per sum), NB nodes of a row at a time
+// (kNodeChunk: all of them for the 3 nodes of large faces, whose row sums then never
+// leave the registers); `row` is scratch of N^2 Lanes for rows of more nodes.
 constexpr int kNodeChunk = 4;
+template <int NB>
+inline void rule_nodes(int order, const detail::LegendreRecurrence<double>& tab, const Lanes* x, const Lanes* y,
+                       const Lanes* z, const Lanes* w, bool first, Lanes* out) {
+  constexpr double kSqrt2 = std::numbers::sqrt2;
+  Lanes cm[NB], sm[NB], diag[NB];
+  for (int u = 0; u < NB; ++u) {
+    cm[u] = w[u];
+    sm[u] = Lanes{};
+    diag[u] = Lanes{} + tab.q00;
+  }
+  for (int m = 0; m < order; ++m) {
+    if (m > 0) {
+      // cm, sm carry sqrt2 from m = 1 on (y_l^{+-m} = sqrt2 Q_l^m Re, Im (x + i y)^m).
+      for (int u = 0; u < NB; ++u) {
+        const Lanes c = m == 1 ? kSqrt2 * cm[u] : cm[u];
+        const Lanes sp = sm[u];
+        cm[u] = x[u] * c - y[u] * sp;
+        sm[u] = x[u] * sp + y[u] * c;
+        diag[u] = tab.diag[m] * diag[u];
+      }
+    }
+    Lanes q2[NB] = {}, q1[NB];
+    for (int u = 0; u < NB; ++u) q1[u] = diag[u];
+    for (int l = m; l < order; ++l) {
+      Lanes q0[NB];
+      if (l == m) {
+        for (int u = 0; u < NB; ++u) q0[u] = q1[u];
+      } else if (l == m + 1) {
+        for (int u = 0; u < NB; ++u) q0[u] = tab.subdiag[m] * z[u] * q1[u];
+      } else {
+        const double ca = tab.a[detail::LegendreRecurrence<double>::tri(l, m)];
+        const double cb = tab.b[detail::LegendreRecurrence<double>::tri(l, m)];
+        for (int u = 0; u < NB; ++u) q0[u] = ca * (z[u] * q1[u] - cb * q2[u]);
+      }
+      Lanes* centre = out + l * (l + 1);
+      Lanes ac = q0[0] * cm[0];
+      for (int u = 1; u < NB; ++u) ac += q0[u] * cm[u];
+      centre[m] = first ? ac : centre[m] + ac;
+      if (m > 0) {
+        Lanes as = q0[0] * sm[0];
+        for (int u = 1; u < NB; ++u) as += q0[u] * sm[u];
+        centre[-m] = first ? as : centre[-m] + as;
+      }
+      if (l > m) {
+        for (int u = 0; u < NB; ++u) q2[u] = q1[u];
+      }
+      for (int u = 0; u < NB; ++u) q1[u] = q0[u];
+    }
+  }
+}
+
 SHTOOL_SAME_BITS_CLONES_WIDE void tile_rule(int order, int nodes, const double* node, const double* weight, double half,
                                             const double* s_centre, double t_centre, Lanes* W, Lanes* row) {
   const detail::LegendreRecurrence<double>& tab = detail::legendre_recurrence<double>();
   constexpr int U = kNodeChunk;
   const int n = order * order;
-  Lanes cm[U][kMaxEnvOrder], sm[U][kMaxEnvOrder], qa[U][kMaxEnvOrder], qb[U][kMaxEnvOrder], qc[U][kMaxEnvOrder];
-  Lanes z[U];
   Lanes sc;
   for (int k = 0; k < kClassLanes; ++k) sc[k] = s_centre[k];
-  constexpr double kSqrt2 = std::numbers::sqrt2;
   const bool chunked = nodes > U;
   for (int a = 0; a < nodes; ++a) {
     const double t = t_centre + half * node[a];
     for (int b0 = 0; b0 < nodes; b0 += U) {
       const int nb = std::min(U, nodes - b0);
+      Lanes x[U], y[U], z[U], w[U];
       for (int u = 0; u < nb; ++u) {
         const int b = b0 + u;
         const double wab = weight[a] * weight[b] * half * half;
@@ -394,61 +444,20 @@ SHTOOL_SAME_BITS_CLONES_WIDE void tile_rule(int order, int nodes, const double* 
         Lanes r;
         for (int k = 0; k < kClassLanes; ++k) r[k] = std::sqrt(r2[k]);
         const Lanes inv = 1 / r;
-        const Lanes x = s * inv, y = t * inv;
+        x[u] = s * inv;
+        y[u] = t * inv;
         z[u] = inv;
-        cm[u][0] = wab / (r2 * r);  // ds dt / r^3
-        sm[u][0] = Lanes{};
-        // cm, sm carry sqrt2 from m = 1 on (y_l^{+-m} = sqrt2 Q_l^m Re, Im (x + i y)^m).
-        if (order > 1) {
-          const Lanes c = kSqrt2 * cm[u][0];
-          cm[u][1] = x * c - y * sm[u][0];
-          sm[u][1] = x * sm[u][0] + y * c;
-        }
-        for (int m = 2; m < order; ++m) {
-          cm[u][m] = x * cm[u][m - 1] - y * sm[u][m - 1];
-          sm[u][m] = x * sm[u][m - 1] + y * cm[u][m - 1];
-        }
+        w[u] = wab / (r2 * r);  // ds dt / r^3
       }
-      Lanes(*q2)[kMaxEnvOrder] = qa;
-      Lanes(*q1)[kMaxEnvOrder] = qb;
-      Lanes(*q0)[kMaxEnvOrder] = qc;
       // This chunk's sums start or continue a row of nodes (in `row`, or in W when the
       // row is one chunk), and a row starts or continues W.
       Lanes* out = chunked ? row : W;
       const bool first = chunked ? b0 == 0 : a == 0;
-      for (int l = 0; l < order; ++l) {
-        for (int u = 0; u < nb; ++u) {
-          if (l == 0) {
-            q0[u][0] = Lanes{} + tab.q00;
-          } else {
-            q0[u][l] = tab.diag[l] * q1[u][l - 1];
-            q0[u][l - 1] = tab.subdiag[l - 1] * z[u] * q1[u][l - 1];
-            for (int m = 0; m <= l - 2; ++m) {
-              const double ca = tab.a[detail::LegendreRecurrence<double>::tri(l, m)];
-              const double cb = tab.b[detail::LegendreRecurrence<double>::tri(l, m)];
-              q0[u][m] = ca * (z[u] * q1[u][m] - cb * q2[u][m]);
-            }
-          }
-        }
-        Lanes* centre = out + l * (l + 1);
-        {
-          Lanes acc = q0[0][0] * cm[0][0];
-          for (int u = 1; u < nb; ++u) acc += q0[u][0] * cm[u][0];
-          centre[0] = first ? acc : centre[0] + acc;
-        }
-        for (int m = 1; m <= l; ++m) {
-          Lanes ac = q0[0][m] * cm[0][m], as = q0[0][m] * sm[0][m];
-          for (int u = 1; u < nb; ++u) {
-            ac += q0[u][m] * cm[u][m];
-            as += q0[u][m] * sm[u][m];
-          }
-          centre[m] = first ? ac : centre[m] + ac;
-          centre[-m] = first ? as : centre[-m] + as;
-        }
-        Lanes(*spare)[kMaxEnvOrder] = q2;
-        q2 = q1;
-        q1 = q0;
-        q0 = spare;
+      switch (nb) {
+        case 1: rule_nodes<1>(order, tab, x, y, z, w, first, out); break;
+        case 2: rule_nodes<2>(order, tab, x, y, z, w, first, out); break;
+        case 3: rule_nodes<3>(order, tab, x, y, z, w, first, out); break;
+        default: rule_nodes<4>(order, tab, x, y, z, w, first, out); break;
       }
     }
     if (chunked)
