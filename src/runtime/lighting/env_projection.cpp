@@ -677,12 +677,24 @@ void load_tile(const float* const* bases, const std::size_t* strides, int R, int
     for (int g = 0; g < 8; ++g) {
       float* out = texels + static_cast<std::size_t>(f * 8 + g) * C * TT;
       const int* col = cols[g];
+      // Away from the face's edge the block's columns run forwards or backwards.
+      const bool forward = col[T - 1] - col[0] == T - 1, backward = col[0] - col[T - 1] == T - 1;
       for (int r = 0; r < T; ++r) {
         // Row r of the block: T texels of one face row.
         const float* src = base + static_cast<std::size_t>(rows[g][r]) * stride;
         float line[C][T];
-        for (int i = 0; i < T; ++i)
-          for (int c = 0; c < C; ++c) line[c][i] = src[static_cast<std::size_t>(col[i]) * C + c];
+        if (forward) {
+          const float* p = src + static_cast<std::size_t>(col[0]) * C;
+          for (int i = 0; i < T; ++i)
+            for (int c = 0; c < C; ++c) line[c][i] = p[i * C + c];
+        } else if (backward) {
+          const float* p = src + static_cast<std::size_t>(col[T - 1]) * C;
+          for (int i = 0; i < T; ++i)
+            for (int c = 0; c < C; ++c) line[c][T - 1 - i] = p[i * C + c];
+        } else {
+          for (int i = 0; i < T; ++i)
+            for (int c = 0; c < C; ++c) line[c][i] = src[static_cast<std::size_t>(col[i]) * C + c];
+        }
         if (kTransposed[g]) {
           for (int c = 0; c < C; ++c)
             for (int i = 0; i < T; ++i) out[c * TT + i * T + r] = line[c][i];
