@@ -465,50 +465,68 @@ SHTOOL_SAME_BITS_CLONES_WIDE void tile_rule(int order, int nodes, const double* 
   }
 }
 
-// Adds one face pair's folded sums F of a tile times the tile's integrals W into the
-// pair's accumulators A[i * C + c], lane by lane: coefficient (l, m) meets the fold of
-// its m mod 4 and its type, on the plane of its band's parity.
+// Adds the folded sums F of a batch of `units` rows of 8 classes times their integrals W
+// into the face-frame accumulators A[i * 3 C + pair * C + c], lane by lane (one class per
+// lane): coefficient (l, m) meets the fold of its m mod 4 and its type, on the plane of
+// its band's parity. W[u * N^2 + i]; F[u * kPlanes * 3 C + plane * 3 C + pair * C + c].
+// The accumulators stay in registers over the batch.
 template <int C>
-SHTOOL_SAME_BITS_CLONES_WIDE void contract_tile(int order, const Lanes* W, const Lanes* F, Lanes* A) {
-  constexpr int PC = C;
+SHTOOL_SAME_BITS_CLONES_WIDE void contract_batch(int order, int units, const Lanes* W, const Lanes* F, Lanes* A) {
+  constexpr int PC = 3 * C, FS = kPlanes * PC;
+  const int n = order * order;
   for (int l = 0; l < order; ++l) {
     const int i0 = l * (l + 1), par = l & 1;
-    auto plane = [&](Fold f) { return F + (2 * f + par) * PC; };
     {
-      const Lanes w = W[i0];
-      const Lanes* p0 = plane(kP0);
       Lanes* a = A + i0 * PC;
-      for (int j = 0; j < PC; ++j) a[j] += w * p0[j];
+      Lanes acc[PC];
+      for (int j = 0; j < PC; ++j) acc[j] = a[j];
+      for (int u = 0; u < units; ++u) {
+        const Lanes w = W[u * n + i0];
+        const Lanes* p = F + u * FS + (2 * kP0 + par) * PC;
+        for (int j = 0; j < PC; ++j) acc[j] += w * p[j];
+      }
+      for (int j = 0; j < PC; ++j) a[j] = acc[j];
     }
     for (int m = 1; m <= l; ++m) {
-      const Lanes wc = W[i0 + m], ws = W[i0 - m];
       Lanes* ac = A + (i0 + m) * PC;
       Lanes* as = A + (i0 - m) * PC;
-      switch (m & 3) {
-        case 0: {
-          const Lanes *p = plane(kP0), *v = plane(kV0);
-          for (int j = 0; j < PC; ++j) ac[j] += wc * p[j];
-          for (int j = 0; j < PC; ++j) as[j] += ws * v[j];
-          break;
+      Lanes xc[PC], xs[PC];
+      for (int j = 0; j < PC; ++j) {
+        xc[j] = ac[j];
+        xs[j] = as[j];
+      }
+      const Lanes* wc = W + i0 + m;
+      const Lanes* ws = W + i0 - m;
+      if ((m & 1) == 0) {
+        const int pp = (2 * ((m & 3) == 0 ? kP0 : kP2) + par) * PC, pv = (2 * ((m & 3) == 0 ? kV0 : kV2) + par) * PC;
+        for (int u = 0; u < units; ++u) {
+          const Lanes c = wc[u * n], s = ws[u * n];
+          const Lanes *p = F + u * FS + pp, *v = F + u * FS + pv;
+          for (int j = 0; j < PC; ++j) xc[j] += c * p[j];
+          for (int j = 0; j < PC; ++j) xs[j] += s * v[j];
         }
-        case 2: {
-          const Lanes *p = plane(kP2), *v = plane(kV2);
-          for (int j = 0; j < PC; ++j) ac[j] += wc * p[j];
-          for (int j = 0; j < PC; ++j) as[j] += ws * v[j];
-          break;
+      } else {
+        const int pp = (2 * kP1 + par) * PC, pq = (2 * kQ1 + par) * PC, pu = (2 * kU1 + par) * PC,
+                  pv = (2 * kV1 + par) * PC;
+        if ((m & 3) == 1) {
+          for (int u = 0; u < units; ++u) {
+            const Lanes c = wc[u * n], s = ws[u * n];
+            const Lanes *p = F + u * FS + pp, *q = F + u * FS + pq, *uu = F + u * FS + pu, *v = F + u * FS + pv;
+            for (int j = 0; j < PC; ++j) xc[j] += c * p[j] - s * q[j];
+            for (int j = 0; j < PC; ++j) xs[j] += c * uu[j] + s * v[j];
+          }
+        } else {
+          for (int u = 0; u < units; ++u) {
+            const Lanes c = wc[u * n], s = ws[u * n];
+            const Lanes *p = F + u * FS + pp, *q = F + u * FS + pq, *uu = F + u * FS + pu, *v = F + u * FS + pv;
+            for (int j = 0; j < PC; ++j) xc[j] += c * p[j] + s * q[j];
+            for (int j = 0; j < PC; ++j) xs[j] += s * v[j] - c * uu[j];
+          }
         }
-        case 1: {
-          const Lanes *p = plane(kP1), *q = plane(kQ1), *u = plane(kU1), *v = plane(kV1);
-          for (int j = 0; j < PC; ++j) ac[j] += wc * p[j] - ws * q[j];
-          for (int j = 0; j < PC; ++j) as[j] += wc * u[j] + ws * v[j];
-          break;
-        }
-        default: {
-          const Lanes *p = plane(kP1), *q = plane(kQ1), *u = plane(kU1), *v = plane(kV1);
-          for (int j = 0; j < PC; ++j) ac[j] += wc * p[j] + ws * q[j];
-          for (int j = 0; j < PC; ++j) as[j] += ws * v[j] - wc * u[j];
-          break;
-        }
+      }
+      for (int j = 0; j < PC; ++j) {
+        ac[j] = xc[j];
+        as[j] = xs[j];
       }
     }
   }
@@ -724,13 +742,13 @@ inline void fold_square(const Lanes* v, Lanes scale, Lanes* out, int stride) {
 }
 
 // The folded sums of the 8 classes (x0 + k0 + k, y0 + j) of a loaded tile for one face
-// pair, F[(fold * 2 + band parity) * C + c]: the class's eight texels on the pair's first
+// pair, F[(fold * 2 + band parity) * plane_stride + c]: the class's eight texels on the pair's first
 // face plus (even bands) and minus (odd bands) their antipodes on the second (image
 // `antipode[g]` there), then the square's folds, times scale (1 / the class's stabiliser;
 // 0 outside the eighth).
 template <int C>
 SHTOOL_SAME_BITS_CLONES_WIDE void fold_row(const float* texels, int pair, const int* antipode, int j, int k0,
-                                           const double* scale, Lanes* F) {
+                                           const double* scale, Lanes* F, int plane_stride) {
   constexpr int TT = kTile * kTile;
   Lanes sc;
   for (int k = 0; k < kClassLanes; ++k) sc[k] = scale[k];
@@ -748,8 +766,8 @@ SHTOOL_SAME_BITS_CLONES_WIDE void fold_row(const float* texels, int pair, const 
       sum[g] = va + vb;
       diff[g] = va - vb;
     }
-    fold_square(sum, sc, F + c, 2 * C);
-    fold_square(diff, sc, F + C + c, 2 * C);
+    fold_square(sum, sc, F + c, 2 * plane_stride);
+    fold_square(diff, sc, F + plane_stride + c, 2 * plane_stride);
   }
 }
 
@@ -774,8 +792,15 @@ Result<Ok> CubemapProjector::accumulate_block(std::span<const FloatImageView, 6>
   }
   // Per face pair, the coefficients in the first face's frame, one per lane (class):
   // A[(pair * N^2 + i) * C + c]; carried to shtool's frame at the end.
-  const std::size_t per_pair = static_cast<std::size_t>(n) * channels;
-  LaneBuffer A(3 * per_pair), W(n), node_row(n), F(static_cast<std::size_t>(kPlanes) * channels);
+  // The coefficients in the frame of each pair's first face, one per lane (class):
+  // A[i * 3 C + pair * C + c]; carried to shtool's frame at the end.
+  const int pc = 3 * channels;
+  const std::size_t folded = static_cast<std::size_t>(kPlanes) * pc;
+  // Rows of 8 classes are contracted in batches of up to kBatchBytes of integrals.
+  constexpr std::size_t kBatchBytes = 128 * 1024;
+  const int batch = static_cast<int>(std::clamp<std::size_t>(kBatchBytes / (sizeof(Lanes) * n), 1, 8));
+  LaneBuffer A(static_cast<std::size_t>(n) * pc), W(static_cast<std::size_t>(n) * batch), node_row(n),
+      F(folded * batch);
   std::vector<float> texels(static_cast<std::size_t>(6 * 8 * kTile * kTile) * channels);
   static_assert(kRowsPerBand == kTile && kTile % kClassLanes == 0, "a band is one row of tiles");
   // Blocks take the bands from both ends in turn (long rows near the face's centre, short
@@ -783,6 +808,16 @@ Result<Ok> CubemapProjector::accumulate_block(std::span<const FloatImageView, 6>
   const int bands = block_count();
   const int band = block % 2 == 0 ? block / 2 : bands - 1 - block / 2;
   const int y_begin = first_row + band * kRowsPerBand, y_end = std::min(R, y_begin + kRowsPerBand);
+  int units = 0;  // rows of the batch so far
+  auto contract = [&] {
+    switch (channels) {
+      case 1: contract_batch<1>(order_, units, W.data(), F.data(), A.data()); break;
+      case 2: contract_batch<2>(order_, units, W.data(), F.data(), A.data()); break;
+      case 3: contract_batch<3>(order_, units, W.data(), F.data(), A.data()); break;
+      default: contract_batch<4>(order_, units, W.data(), F.data(), A.data()); break;
+    }
+    units = 0;
+  };
   for (int x0 = y_begin; x0 < R; x0 += kTile) {
     switch (channels) {
       case 1: load_tile<1>(bases, strides, R, x0, y_begin, texels.data()); break;
@@ -805,33 +840,23 @@ Result<Ok> CubemapProjector::accumulate_block(std::span<const FloatImageView, 6>
           scale[k] = x0 + k0 + k == x ? 1.0 / stabiliser : 0.0;
         }
         tile_rule(order_, nodes_, nodes_unit_.data(), weights_unit_.data(), half, s_centre, -1 + (2 * y + 1) * half,
-                  W.data(), node_row.data());
+                  W.data() + static_cast<std::size_t>(units) * n, node_row.data());
+        Lanes* f = F.data() + units * folded;
         for (int pair = 0; pair < 3; ++pair) {
-          Lanes* a = A.data() + pair * per_pair;
           switch (channels) {
-            case 1:
-              fold_row<1>(texels.data(), pair, antipode_[pair], j, k0, scale, F.data());
-              contract_tile<1>(order_, W.data(), F.data(), a);
-              break;
-            case 2:
-              fold_row<2>(texels.data(), pair, antipode_[pair], j, k0, scale, F.data());
-              contract_tile<2>(order_, W.data(), F.data(), a);
-              break;
-            case 3:
-              fold_row<3>(texels.data(), pair, antipode_[pair], j, k0, scale, F.data());
-              contract_tile<3>(order_, W.data(), F.data(), a);
-              break;
-            default:
-              fold_row<4>(texels.data(), pair, antipode_[pair], j, k0, scale, F.data());
-              contract_tile<4>(order_, W.data(), F.data(), a);
-              break;
+            case 1: fold_row<1>(texels.data(), pair, antipode_[pair], j, k0, scale, f + pair * 1, pc); break;
+            case 2: fold_row<2>(texels.data(), pair, antipode_[pair], j, k0, scale, f + pair * 2, pc); break;
+            case 3: fold_row<3>(texels.data(), pair, antipode_[pair], j, k0, scale, f + pair * 3, pc); break;
+            default: fold_row<4>(texels.data(), pair, antipode_[pair], j, k0, scale, f + pair * 4, pc); break;
           }
         }
+        if (++units == batch) contract();
       }
     }
   }
+  if (units > 0) contract();
   // The lanes summed in a fixed order.
-  std::vector<double> sums(3 * per_pair);
+  std::vector<double> sums(static_cast<std::size_t>(n) * pc);
   for (std::size_t i = 0; i < sums.size(); ++i) {
     const Lanes& v = A[i];
     sums[i] = ((v[0] + v[1]) + (v[2] + v[3])) + ((v[4] + v[5]) + (v[6] + v[7]));
@@ -839,7 +864,7 @@ Result<Ok> CubemapProjector::accumulate_block(std::span<const FloatImageView, 6>
   // y_00's integral is positive on every texel: a non-finite texel leaves its sum so.
   for (int pair = 0; pair < 3; ++pair)
     for (int c = 0; c < channels; ++c)
-      if (!std::isfinite(sums[pair * per_pair + c])) return first_non_finite(faces);
+      if (!std::isfinite(sums[static_cast<std::size_t>(pair * channels + c)])) return first_non_finite(faces);
   std::size_t block_at = 0;
   for (int pair = 0; pair < 3; ++pair)
     for (int l = 0; l < order_; ++l) {
@@ -850,7 +875,7 @@ Result<Ok> CubemapProjector::accumulate_block(std::span<const FloatImageView, 6>
         for (int c = 0; c < channels; ++c) {
           double sum = 0;
           for (int b = 0; b < width; ++b)
-            sum += map[a * width + b] * sums[pair * per_pair + static_cast<std::size_t>(base + b) * channels + c];
+            sum += map[a * width + b] * sums[static_cast<std::size_t>(base + b) * pc + pair * channels + c];
           partial[static_cast<std::size_t>(base + a) * channels + c] += sum;
         }
     }
