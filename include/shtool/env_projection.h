@@ -19,9 +19,12 @@
 // through a signed permutation of axes, and the square is symmetric under the eight
 // maps (s, t) -> (+-s, +-t), (+-t, +-s): the rule runs once per class of eight texels,
 // in a frame with the face normal as polar axis where those maps only permute and negate
-// the pairs (cos m p, sin m p); the 48 texels of a class (8 per face) are folded into
-// eight sums per face and channel, and each face's coefficients are carried to shtool's
-// frame by the orthogonal map of its axes (docs/lighting.md). project_cubemap_reference
+// the pairs (cos m p, sin m p). The antipodal map carries each face onto the opposite
+// one and multiplies y_lm by (-1)^l: the 48 texels of a class (8 per face) are added
+// (even bands) and subtracted (odd bands) across opposite faces and folded into eight
+// sums per face pair, band parity and channel, and the coefficients of +X, +Y and +Z are
+// carried to shtool's frame by the orthogonal maps of their axes (docs/lighting.md).
+// project_cubemap_reference
 // runs the rule on every texel in shtool's frame instead (the same integrals, another
 // rounding).
 //
