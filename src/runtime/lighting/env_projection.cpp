@@ -372,9 +372,9 @@ constexpr int kPlanes = 2 * kFolds;
 // (kNodeChunk: all of them for the 3 nodes of large faces, whose row sums then never
 // leave the registers); `row` is scratch of N^2 Lanes for rows of more nodes.
 constexpr int kNodeChunk = 4;
-template <int NB>
+template <int NB, bool First>
 inline void rule_nodes(int order, const detail::LegendreRecurrence<double>& tab, const Lanes* x, const Lanes* y,
-                       const Lanes* z, const Lanes* w, bool first, Lanes* out) {
+                       const Lanes* z, const Lanes* w, Lanes* out) {
   constexpr double kSqrt2 = std::numbers::sqrt2;
   Lanes cm[NB], sm[NB], diag[NB];
   for (int u = 0; u < NB; ++u) {
@@ -393,34 +393,49 @@ inline void rule_nodes(int order, const detail::LegendreRecurrence<double>& tab,
         diag[u] = tab.diag[m] * diag[u];
       }
     }
-    Lanes q2[NB] = {}, q1[NB];
-    for (int u = 0; u < NB; ++u) q1[u] = diag[u];
-    for (int l = m; l < order; ++l) {
-      Lanes q0[NB];
-      if (l == m) {
-        for (int u = 0; u < NB; ++u) q0[u] = q1[u];
-      } else if (l == m + 1) {
-        for (int u = 0; u < NB; ++u) q0[u] = tab.subdiag[m] * z[u] * q1[u];
-      } else {
-        const double ca = tab.a[detail::LegendreRecurrence<double>::tri(l, m)];
-        const double cb = tab.b[detail::LegendreRecurrence<double>::tri(l, m)];
-        for (int u = 0; u < NB; ++u) q0[u] = ca * (z[u] * q1[u] - cb * q2[u]);
-      }
+    // Q_l^m of every node times the azimuthal factors, summed over the nodes, into (l, +-m).
+    auto put = [&](int l, const Lanes* q) {
       Lanes* centre = out + l * (l + 1);
-      Lanes ac = q0[0] * cm[0];
-      for (int u = 1; u < NB; ++u) ac += q0[u] * cm[u];
-      centre[m] = first ? ac : centre[m] + ac;
+      Lanes ac = q[0] * cm[0];
+      for (int u = 1; u < NB; ++u) ac += q[u] * cm[u];
+      if constexpr (First) centre[m] = ac;
+      else centre[m] = centre[m] + ac;
       if (m > 0) {
-        Lanes as = q0[0] * sm[0];
-        for (int u = 1; u < NB; ++u) as += q0[u] * sm[u];
-        centre[-m] = first ? as : centre[-m] + as;
+        Lanes as = q[0] * sm[0];
+        for (int u = 1; u < NB; ++u) as += q[u] * sm[u];
+        if constexpr (First) centre[-m] = as;
+        else centre[-m] = centre[-m] + as;
       }
-      if (l > m) {
-        for (int u = 0; u < NB; ++u) q2[u] = q1[u];
+    };
+    Lanes q2[NB], q1[NB];
+    for (int u = 0; u < NB; ++u) q1[u] = diag[u];
+    put(m, q1);
+    if (m + 1 >= order) continue;
+    for (int u = 0; u < NB; ++u) {
+      q2[u] = q1[u];
+      q1[u] = tab.subdiag[m] * z[u] * q1[u];
+    }
+    put(m + 1, q1);
+    const double* ta = tab.a.data();
+    const double* tb = tab.b.data();
+    for (int l = m + 2, at = detail::LegendreRecurrence<double>::tri(m + 2, m); l < order; at += l + 1, ++l) {
+      const double ca = ta[at], cb = tb[at];
+      Lanes q0[NB];
+      for (int u = 0; u < NB; ++u) q0[u] = ca * (z[u] * q1[u] - cb * q2[u]);
+      put(l, q0);
+      for (int u = 0; u < NB; ++u) {
+        q2[u] = q1[u];
+        q1[u] = q0[u];
       }
-      for (int u = 0; u < NB; ++u) q1[u] = q0[u];
     }
   }
+}
+
+template <int NB>
+inline void rule_nodes(int order, const detail::LegendreRecurrence<double>& tab, const Lanes* x, const Lanes* y,
+                       const Lanes* z, const Lanes* w, bool first, Lanes* out) {
+  if (first) rule_nodes<NB, true>(order, tab, x, y, z, w, out);
+  else rule_nodes<NB, false>(order, tab, x, y, z, w, out);
 }
 
 SHTOOL_SAME_BITS_CLONES_WIDE void tile_rule(int order, int nodes, const double* node, const double* weight, double half,
@@ -727,7 +742,7 @@ void load_tile(const float* const* bases, const std::size_t* strides, int R, int
 
 // The eight folds of a class's eight values v (in the order of its images) into
 // out[fold * stride], each times `scale`.
-inline void fold_square(const Lanes* v, Lanes scale, Lanes* out, int stride) {
+inline void fold_square(const Lanes* v, const Lanes& scale, Lanes* out, int stride) {
   const Lanes e0 = v[0] + v[1], d0 = v[0] - v[1], e1 = v[2] + v[3], d1 = v[2] - v[3];
   const Lanes e2 = v[4] + v[5], d2 = v[4] - v[5], e3 = v[6] + v[7], d3 = v[6] - v[7];
   const Lanes e02 = e0 + e2, e13 = e1 + e3, d02 = d0 + d2, d13 = d1 + d3;
