@@ -398,13 +398,11 @@ inline void rule_nodes(int order, const detail::LegendreRecurrence<double>& tab,
       Lanes* centre = out + l * (l + 1);
       Lanes ac = q[0] * cm[0];
       for (int u = 1; u < NB; ++u) ac += q[u] * cm[u];
-      if constexpr (First) centre[m] = ac;
-      else centre[m] = centre[m] + ac;
+      centre[m] = First ? ac : centre[m] + ac;
       if (m > 0) {
         Lanes as = q[0] * sm[0];
         for (int u = 1; u < NB; ++u) as += q[u] * sm[u];
-        if constexpr (First) centre[-m] = as;
-        else centre[-m] = centre[-m] + as;
+        centre[-m] = First ? as : centre[-m] + as;
       }
     };
     Lanes q2[NB], q1[NB];
