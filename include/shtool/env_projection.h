@@ -24,9 +24,8 @@
 // (even bands) and subtracted (odd bands) across opposite faces and folded into eight
 // sums per face pair, band parity and channel, and the coefficients of +X, +Y and +Z are
 // carried to shtool's frame by the orthogonal maps of their axes (docs/lighting.md).
-// project_cubemap_reference
-// runs the rule on every texel in shtool's frame instead (the same integrals, another
-// rounding).
+// project_cubemap_reference runs the rule on every texel in shtool's frame instead (the
+// same integrals, another rounding).
 //
 // Both accumulate in double, in a fixed order of fixed blocks of rows: the result does
 // not depend on how the blocks are shared among threads (Projector::block_count and
