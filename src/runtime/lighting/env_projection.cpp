@@ -803,8 +803,6 @@ Result<Ok> CubemapProjector::accumulate_block(std::span<const FloatImageView, 6>
     bases[f] = faces[static_cast<std::size_t>(f)].texels;
     strides[f] = faces[static_cast<std::size_t>(f)].stride();
   }
-  // Per face pair, the coefficients in the first face's frame, one per lane (class):
-  // A[(pair * N^2 + i) * C + c]; carried to shtool's frame at the end.
   // The coefficients in the frame of each pair's first face, one per lane (class):
   // A[i * 3 C + pair * C + c]; carried to shtool's frame at the end.
   const int pc = 3 * channels;
