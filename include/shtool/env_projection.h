@@ -19,11 +19,13 @@
 // through a signed permutation of axes, and the square is symmetric under the eight
 // maps (s, t) -> (+-s, +-t), (+-t, +-s): the rule runs once per class of eight texels,
 // in a frame with the face normal as polar axis where those maps only permute and negate
-// the pairs (cos m p, sin m p); the 48 texels of a class (8 per face) are folded into
-// eight sums per face and channel, and each face's coefficients are carried to shtool's
-// frame by the orthogonal map of its axes (docs/lighting.md). project_cubemap_reference
-// runs the rule on every texel in shtool's frame instead (the same integrals, another
-// rounding).
+// the pairs (cos m p, sin m p). The antipodal map carries each face onto the opposite
+// one and multiplies y_lm by (-1)^l: the 48 texels of a class (8 per face) are added
+// (even bands) and subtracted (odd bands) across opposite faces and folded into eight
+// sums per face pair, band parity and channel, and the coefficients of +X, +Y and +Z are
+// carried to shtool's frame by the orthogonal maps of their axes (docs/lighting.md).
+// project_cubemap_reference runs the rule on every texel in shtool's frame instead (the
+// same integrals, another rounding).
 //
 // Both accumulate in double, in a fixed order of fixed blocks of rows: the result does
 // not depend on how the blocks are shared among threads (Projector::block_count and
@@ -110,10 +112,10 @@ class CubemapProjector {
   int face_size() const { return size_; }
   // Gauss-Legendre nodes per texel side.
   int nodes_per_side() const { return nodes_; }
-  // Blocks of texel classes: each covers two groups of kRowsPerGroup rows of the face's
-  // eighth s >= t >= 0 (rows near its centre are long, near the edge short: the groups
-  // are paired long with short, so that blocks hold nearly equal work) and the texels
-  // of those classes on all six faces.
+  // Blocks of texel classes: each is a band of kRowsPerBand rows of the face's eighth
+  // s >= t >= 0 with the texels of its classes on all six faces. Rows near the face's
+  // centre are long, near its edge short: the blocks take the bands from both ends in
+  // turn, so that any contiguous run of blocks holds about its share of the work.
   int block_count() const;
   std::size_t partial_size(int channels) const;
   // faces[f] is face f (CubeFace order), each face_size square with the same channels.
@@ -127,7 +129,7 @@ class CubemapProjector {
   // i < N^2 (the reference rule, one texel at a time).
   void texel_integrals(CubeFace face, int x, int y, std::span<double> out) const;
 
-  static constexpr int kRowsPerGroup = 8;
+  static constexpr int kRowsPerBand = 16;
 
  private:
   Eigen::Vector3d cube_vector(CubeFace face, double s, double t) const;
@@ -136,9 +138,13 @@ class CubemapProjector {
   bool mirror_x_ = false;
   std::vector<double> nodes_unit_;    // Gauss nodes on [-1, 1]
   std::vector<double> weights_unit_;  // their weights
-  // Per face, the orthogonal map of SH coefficients from the face's frame (s, t, 1) to
-  // shtool's, band blocks (2l+1)^2 row-major, bands in order.
+  // For +X, +Y, +Z, the orthogonal map of SH coefficients from the face's frame (s, t, 1)
+  // to shtool's, band blocks (2l+1)^2 row-major, bands in order.
   std::vector<double> face_maps_;
+  // For the pairs (+X, -X), (+Y, -Y), (+Z, -Z): the antipode of image g of a class of
+  // texels on the first face is image antipode_[pair][g] of that class on the second
+  // (the images as accumulate_block orders them).
+  int antipode_[3][8] = {};
 };
 
 Result<EnvCoefficients> project_cubemap(std::span<const FloatImageView, 6> faces, int order, bool mirror_x = false);

@@ -327,137 +327,219 @@ int cubemap_nodes_per_side(int face_size, int order) {
 
 namespace {
 
-// The eight maps of the face square onto itself, as (k, e): the azimuth p about the face
-// normal goes to e p + k pi/2. Texel (x, y)'s image under each, and the folded sums the
-// pairs (cos m p, sin m p) meet. A texel integral over g(texel) of y_c, y_s (cos- and
-// sine-type, order m) is, over the texel itself, cos(m a) W_c - e sin(m a) W_s and
-// sin(m a) W_c + e cos(m a) W_s (a = k pi/2): summed over the eight images with their
-// values f, only m mod 4 matters, through these sums of E_k = f(k, +) + f(k, -) and
-// D_k = f(k, +) - f(k, -).
+// The texels of a cubemap come in classes under the cube's symmetries, and the rule runs
+// once per class (docs/lighting.md, "Exact projection"):
+// - the eight maps of the face square onto itself, as (k, e): the azimuth p about the
+//   face normal goes to e p + k pi/2. A texel integral over g(texel) of y_c, y_s (cos-
+//   and sine-type, order m) is, over the texel itself, cos(m a) W_c - e sin(m a) W_s and
+//   sin(m a) W_c + e cos(m a) W_s (a = k pi/2): summed over the eight images with their
+//   values f, only m mod 4 matters, through these sums of E_k = f(k, +) + f(k, -) and
+//   D_k = f(k, +) - f(k, -);
+// - the antipodal map w -> -w, which carries each face onto the opposite one and
+//   multiplies y_lm by (-1)^l: a texel of +X, +Y, +Z and its antipode (on -X, -Y, -Z)
+//   are summed (the even bands) and subtracted (the odd bands) before the square's folds.
 enum Fold { kP0, kV0, kP2, kV2, kP1, kV1, kU1, kQ1, kFolds };
-// Face-channel lanes of the folded sums and of the per-face accumulators: face f,
-// channel c at f * 4 + c.
-constexpr int kFaceLanes = 24;
-// Classes whose integrals are computed together (the vector lanes of the rule).
+// Classes whose integrals are computed together: the lanes of Lanes (GCC's vector
+// extension, lowered to AVX-512, AVX2 or SSE2 by the clones; one lane, one class).
 constexpr int kClassLanes = 8;
+using Lanes = double __attribute__((vector_size(kClassLanes * sizeof(double))));
+// Buffers of Lanes on the heap, 64-byte aligned: the baseline target aligns a Lanes to 16
+// bytes only, while the AVX-512 clones load and store whole aligned Lanes.
+struct alignas(64) LaneBox {
+  Lanes v;
+};
+static_assert(sizeof(LaneBox) == sizeof(Lanes));
+class LaneBuffer {
+ public:
+  explicit LaneBuffer(std::size_t size) : boxes_(size, LaneBox{Lanes{}}) {}
+  Lanes* data() { return &boxes_.data()->v; }
+  Lanes& operator[](std::size_t i) { return boxes_[i].v; }
+
+ private:
+  std::vector<LaneBox> boxes_;
+};
+// Folded sums of a tile of classes for one face pair (+X -X, +Y -Y or +Z -Z) and C
+// channels: F[(fold * 2 + band parity) * C + c].
+constexpr int kPlanes = 2 * kFolds;
 
 // The rule of one texel per lane, texels (s_centre[lane], t_centre) of half-width
 // `half`, in the face frame: direction (s, t, 1) / r, polar axis the face normal.
-// W[i * kClassLanes + lane], i < N^2. The basis recurrence of sh.cpp (the Q_l^m of
-// basis/legendre_recurrence.h times Re, Im (x + i y)^m), node weights folded into the
-// azimuthal factors.
-// `row` is scratch of the same size: the nodes are summed row of nodes by row of nodes,
-// as texel_integrals does (fewer roundings per sum).
-SHTOOL_SAME_BITS_CLONES_WIDE void face_frame_integrals(int order, int nodes, const double* node, const double* weight,
-                                                  double half, const double* s_centre, double t_centre, double* W,
-                                                  double* row) {
-  const detail::LegendreRecurrence<double>& tab = detail::legendre_recurrence<double>();
-  constexpr int L = kClassLanes;
-  const int n = order * order;
-  std::fill(W, W + static_cast<std::size_t>(n) * L, 0.0);
-  // The lane loops read and write distinct rows of these arrays (q0, q1, q2 rotate over
-  // qa, qb, qc): `ivdep` tells GCC so, which it cannot prove, so that they vectorise.
-  alignas(64) double cm[kMaxEnvOrder][L], sm[kMaxEnvOrder][L];
-  alignas(64) double qa[kMaxEnvOrder][L], qb[kMaxEnvOrder][L], qc[kMaxEnvOrder][L];
+// W[i], i < N^2. The basis recurrence of sh.cpp (the Q_l^m of basis/legendre_recurrence.h
+// times Re, Im (x + i y)^m), node weights folded into the azimuthal factors, run m by m
+// (each Q_l^m from Q_{l-1}^m and Q_{l-2}^m, the diagonal Q_m^m carried from m - 1), so
+// that it lives in registers. The nodes are summed row of nodes by row of nodes, as
+// texel_integrals does (fewer roundings per sum), NB nodes of a row at a time
+// (kNodeChunk: all of them for the 3 nodes of large faces, whose row sums then never
+// leave the registers); `row` is scratch of N^2 Lanes for rows of more nodes.
+constexpr int kNodeChunk = 4;
+template <int NB, bool First>
+inline void rule_nodes(int order, const detail::LegendreRecurrence<double>& tab, const Lanes* x, const Lanes* y,
+                       const Lanes* z, const Lanes* w, Lanes* out) {
   constexpr double kSqrt2 = std::numbers::sqrt2;
-  for (int a = 0; a < nodes; ++a) {
-    const double t = t_centre + half * node[a];
-    std::fill(row, row + static_cast<std::size_t>(n) * L, 0.0);
-    for (int b = 0; b < nodes; ++b) {
-      alignas(64) double x[L], y[L], z[L];
-      const double wab = weight[a] * weight[b] * half * half;
-#pragma GCC ivdep
-      for (int k = 0; k < L; ++k) {
-        const double s = s_centre[k] + half * node[b];
-        const double r2 = 1 + s * s + t * t;
-        const double r = std::sqrt(r2), u = 1 / r;
-        x[k] = s * u;
-        y[k] = t * u;
-        z[k] = u;
-        cm[0][k] = wab / (r2 * r);  // ds dt / r^3
-        sm[0][k] = 0;
-      }
+  Lanes cm[NB], sm[NB], diag[NB];
+  for (int u = 0; u < NB; ++u) {
+    cm[u] = w[u];
+    sm[u] = Lanes{};
+    diag[u] = Lanes{} + tab.q00;
+  }
+  for (int m = 0; m < order; ++m) {
+    if (m > 0) {
       // cm, sm carry sqrt2 from m = 1 on (y_l^{+-m} = sqrt2 Q_l^m Re, Im (x + i y)^m).
-      for (int m = 1; m < order; ++m)
-#pragma GCC ivdep
-        for (int k = 0; k < L; ++k) {
-          const double c = m == 1 ? kSqrt2 * cm[0][k] : cm[m - 1][k];
-          const double sp = sm[m - 1][k];
-          cm[m][k] = x[k] * c - y[k] * sp;
-          sm[m][k] = x[k] * sp + y[k] * c;
-        }
-      double(*q2)[L] = qa;
-      double(*q1)[L] = qb;
-      double(*q0)[L] = qc;
-      for (int l = 0; l < order; ++l) {
-        if (l == 0) {
-#pragma GCC ivdep
-          for (int k = 0; k < L; ++k) q0[0][k] = tab.q00;
-        } else {
-#pragma GCC ivdep
-          for (int k = 0; k < L; ++k) {
-            q0[l][k] = tab.diag[l] * q1[l - 1][k];
-            q0[l - 1][k] = tab.subdiag[l - 1] * z[k] * q1[l - 1][k];
-          }
-          for (int m = 0; m <= l - 2; ++m) {
-            const double ca = tab.a[detail::LegendreRecurrence<double>::tri(l, m)];
-            const double cb = tab.b[detail::LegendreRecurrence<double>::tri(l, m)];
-#pragma GCC ivdep
-            for (int k = 0; k < L; ++k) q0[m][k] = ca * (z[k] * q1[m][k] - cb * q2[m][k]);
-          }
-        }
-        double* centre = row + static_cast<std::size_t>(l * (l + 1)) * L;
-#pragma GCC ivdep
-        for (int k = 0; k < L; ++k) centre[k] += q0[0][k] * cm[0][k];
-        for (int m = 1; m <= l; ++m)
-#pragma GCC ivdep
-          for (int k = 0; k < L; ++k) {
-            centre[m * L + k] += q0[m][k] * cm[m][k];
-            centre[-m * L + k] += q0[m][k] * sm[m][k];
-          }
-        double(*spare)[L] = q2;
-        q2 = q1;
-        q1 = q0;
-        q0 = spare;
+      for (int u = 0; u < NB; ++u) {
+        const Lanes c = m == 1 ? kSqrt2 * cm[u] : cm[u];
+        const Lanes sp = sm[u];
+        cm[u] = x[u] * c - y[u] * sp;
+        sm[u] = x[u] * sp + y[u] * c;
+        diag[u] = tab.diag[m] * diag[u];
       }
     }
-    for (int i = 0; i < n * L; ++i) W[i] += row[i];
+    // Q_l^m of every node times the azimuthal factors, summed over the nodes, into (l, +-m).
+    auto put = [&](int l, const Lanes* q) {
+      Lanes* centre = out + l * (l + 1);
+      Lanes ac = q[0] * cm[0];
+      for (int u = 1; u < NB; ++u) ac += q[u] * cm[u];
+      centre[m] = First ? ac : centre[m] + ac;
+      if (m > 0) {
+        Lanes as = q[0] * sm[0];
+        for (int u = 1; u < NB; ++u) as += q[u] * sm[u];
+        centre[-m] = First ? as : centre[-m] + as;
+      }
+    };
+    Lanes q2[NB], q1[NB];
+    for (int u = 0; u < NB; ++u) q1[u] = diag[u];
+    put(m, q1);
+    if (m + 1 >= order) continue;
+    for (int u = 0; u < NB; ++u) {
+      q2[u] = q1[u];
+      q1[u] = tab.subdiag[m] * z[u] * q1[u];
+    }
+    put(m + 1, q1);
+    const double* ta = tab.a.data();
+    const double* tb = tab.b.data();
+    for (int l = m + 2, at = detail::LegendreRecurrence<double>::tri(m + 2, m); l < order; at += l + 1, ++l) {
+      const double ca = ta[at], cb = tb[at];
+      Lanes q0[NB];
+      for (int u = 0; u < NB; ++u) q0[u] = ca * (z[u] * q1[u] - cb * q2[u]);
+      put(l, q0);
+      for (int u = 0; u < NB; ++u) {
+        q2[u] = q1[u];
+        q1[u] = q0[u];
+      }
+    }
   }
 }
 
-// Adds one class's folded sums times its integrals (lane `lane` of W) into the face-frame
-// accumulators A[i * kFaceLanes + f * 4 + c].
-SHTOOL_SAME_BITS_CLONES_WIDE void add_class(int order, const double* W, int lane, const double (*F)[kFaceLanes],
-                                       double* A) {
-  constexpr int L = kClassLanes, K = kFaceLanes;
+template <int NB>
+inline void rule_nodes(int order, const detail::LegendreRecurrence<double>& tab, const Lanes* x, const Lanes* y,
+                       const Lanes* z, const Lanes* w, bool first, Lanes* out) {
+  if (first) rule_nodes<NB, true>(order, tab, x, y, z, w, out);
+  else rule_nodes<NB, false>(order, tab, x, y, z, w, out);
+}
+
+SHTOOL_SAME_BITS_CLONES_WIDE void tile_rule(int order, int nodes, const double* node, const double* weight, double half,
+                                            const double* s_centre, double t_centre, Lanes* W, Lanes* row) {
+  const detail::LegendreRecurrence<double>& tab = detail::legendre_recurrence<double>();
+  constexpr int U = kNodeChunk;
+  const int n = order * order;
+  Lanes sc;
+  for (int k = 0; k < kClassLanes; ++k) sc[k] = s_centre[k];
+  const bool chunked = nodes > U;
+  for (int a = 0; a < nodes; ++a) {
+    const double t = t_centre + half * node[a];
+    for (int b0 = 0; b0 < nodes; b0 += U) {
+      const int nb = std::min(U, nodes - b0);
+      Lanes x[U], y[U], z[U], w[U];
+      for (int u = 0; u < nb; ++u) {
+        const int b = b0 + u;
+        const double wab = weight[a] * weight[b] * half * half;
+        const Lanes s = sc + half * node[b];
+        const Lanes r2 = 1 + s * s + t * t;
+        Lanes r;
+        for (int k = 0; k < kClassLanes; ++k) r[k] = std::sqrt(r2[k]);
+        const Lanes inv = 1 / r;
+        x[u] = s * inv;
+        y[u] = t * inv;
+        z[u] = inv;
+        w[u] = wab / (r2 * r);  // ds dt / r^3
+      }
+      // This chunk's sums start or continue a row of nodes (in `row`, or in W when the
+      // row is one chunk), and a row starts or continues W.
+      Lanes* out = chunked ? row : W;
+      const bool first = chunked ? b0 == 0 : a == 0;
+      switch (nb) {
+        case 1: rule_nodes<1>(order, tab, x, y, z, w, first, out); break;
+        case 2: rule_nodes<2>(order, tab, x, y, z, w, first, out); break;
+        case 3: rule_nodes<3>(order, tab, x, y, z, w, first, out); break;
+        default: rule_nodes<4>(order, tab, x, y, z, w, first, out); break;
+      }
+    }
+    if (chunked)
+      for (int i = 0; i < n; ++i) W[i] = a == 0 ? row[i] : W[i] + row[i];
+  }
+}
+
+// Adds the folded sums F of a batch of `units` rows of 8 classes times their integrals W
+// into the face-frame accumulators A[i * 3 C + pair * C + c], lane by lane (one class per
+// lane): coefficient (l, m) meets the fold of its m mod 4 and its type, on the plane of
+// its band's parity. W[u * N^2 + i]; F[u * kPlanes * 3 C + plane * 3 C + pair * C + c].
+// The accumulators stay in registers over the batch.
+template <int C>
+SHTOOL_SAME_BITS_CLONES_WIDE void contract_batch(int order, int units, const Lanes* W, const Lanes* F, Lanes* A) {
+  constexpr int PC = 3 * C, FS = kPlanes * PC;
+  const int n = order * order;
   for (int l = 0; l < order; ++l) {
-    const int i0 = l * (l + 1);
+    const int i0 = l * (l + 1), par = l & 1;
     {
-      const double w = W[i0 * L + lane];
-      double* a = A + static_cast<std::size_t>(i0) * K;
-      for (int k = 0; k < K; ++k) a[k] += w * F[kP0][k];
+      Lanes* a = A + i0 * PC;
+      Lanes acc[PC];
+      for (int j = 0; j < PC; ++j) acc[j] = a[j];
+      for (int u = 0; u < units; ++u) {
+        const Lanes w = W[u * n + i0];
+        const Lanes* p = F + u * FS + (2 * kP0 + par) * PC;
+        for (int j = 0; j < PC; ++j) acc[j] += w * p[j];
+      }
+      for (int j = 0; j < PC; ++j) a[j] = acc[j];
     }
     for (int m = 1; m <= l; ++m) {
-      const double wc = W[(i0 + m) * L + lane], ws = W[(i0 - m) * L + lane];
-      double* ac = A + static_cast<std::size_t>(i0 + m) * K;
-      double* as = A + static_cast<std::size_t>(i0 - m) * K;
-      switch (m & 3) {
-        case 0:
-          for (int k = 0; k < K; ++k) ac[k] += wc * F[kP0][k];
-          for (int k = 0; k < K; ++k) as[k] += ws * F[kV0][k];
-          break;
-        case 2:
-          for (int k = 0; k < K; ++k) ac[k] += wc * F[kP2][k];
-          for (int k = 0; k < K; ++k) as[k] += ws * F[kV2][k];
-          break;
-        case 1:
-          for (int k = 0; k < K; ++k) ac[k] += wc * F[kP1][k] - ws * F[kQ1][k];
-          for (int k = 0; k < K; ++k) as[k] += wc * F[kU1][k] + ws * F[kV1][k];
-          break;
-        default:
-          for (int k = 0; k < K; ++k) ac[k] += wc * F[kP1][k] + ws * F[kQ1][k];
-          for (int k = 0; k < K; ++k) as[k] += ws * F[kV1][k] - wc * F[kU1][k];
-          break;
+      Lanes* ac = A + (i0 + m) * PC;
+      Lanes* as = A + (i0 - m) * PC;
+      Lanes xc[PC], xs[PC];
+      for (int j = 0; j < PC; ++j) {
+        xc[j] = ac[j];
+        xs[j] = as[j];
+      }
+      const Lanes* wc = W + i0 + m;
+      const Lanes* ws = W + i0 - m;
+      if ((m & 1) == 0) {
+        const int pp = (2 * ((m & 3) == 0 ? kP0 : kP2) + par) * PC, pv = (2 * ((m & 3) == 0 ? kV0 : kV2) + par) * PC;
+        for (int u = 0; u < units; ++u) {
+          const Lanes c = wc[u * n], s = ws[u * n];
+          const Lanes *p = F + u * FS + pp, *v = F + u * FS + pv;
+          for (int j = 0; j < PC; ++j) xc[j] += c * p[j];
+          for (int j = 0; j < PC; ++j) xs[j] += s * v[j];
+        }
+      } else {
+        const int pp = (2 * kP1 + par) * PC, pq = (2 * kQ1 + par) * PC, pu = (2 * kU1 + par) * PC,
+                  pv = (2 * kV1 + par) * PC;
+        if ((m & 3) == 1) {
+          for (int u = 0; u < units; ++u) {
+            const Lanes c = wc[u * n], s = ws[u * n];
+            const Lanes *p = F + u * FS + pp, *q = F + u * FS + pq, *uu = F + u * FS + pu, *v = F + u * FS + pv;
+            for (int j = 0; j < PC; ++j) xc[j] += c * p[j] - s * q[j];
+            for (int j = 0; j < PC; ++j) xs[j] += c * uu[j] + s * v[j];
+          }
+        } else {
+          for (int u = 0; u < units; ++u) {
+            const Lanes c = wc[u * n], s = ws[u * n];
+            const Lanes *p = F + u * FS + pp, *q = F + u * FS + pq, *uu = F + u * FS + pu, *v = F + u * FS + pv;
+            for (int j = 0; j < PC; ++j) xc[j] += c * p[j] + s * q[j];
+            for (int j = 0; j < PC; ++j) xs[j] += s * v[j] - c * uu[j];
+          }
+        }
+      }
+      for (int j = 0; j < PC; ++j) {
+        ac[j] = xc[j];
+        as[j] = xs[j];
       }
     }
   }
@@ -495,7 +577,9 @@ Result<CubemapProjector> CubemapProjector::create(int face_size, int order, bool
   // The face frame's axes in shtool's frame: (s, t, 1) -> cube_vector(s, t) is linear.
   const int n = sh_count(order);
   std::vector<double> map(static_cast<std::size_t>(n) * n);
-  for (int f = 0; f < 6; ++f) {
+  // Only the first face of each antipodal pair (+X, +Y, +Z): the second's texels are
+  // folded onto it (accumulate_block).
+  for (int f = 0; f < 6; f += 2) {
     const CubeFace face = static_cast<CubeFace>(f);
     const Eigen::Vector3d origin = p.cube_vector(face, 0, 0);
     Eigen::Matrix3d q;
@@ -509,14 +593,35 @@ Result<CubemapProjector> CubemapProjector::create(int face_size, int order, bool
     for (int l = 0; l < order; ++l)
       for (int a = l * l; a < (l + 1) * (l + 1); ++a)
         for (int b = l * l; b < (l + 1) * (l + 1); ++b) p.face_maps_.push_back(map[static_cast<std::size_t>(a) * n + b]);
+    // The antipode of the face's point (s, t) on the opposite face, as a map of the
+    // square: one of the eight (s, t) -> (+-s, +-t), (+-t, +-s).
+    const CubeFace opposite = static_cast<CubeFace>(f + 1);
+    const double s0 = 0.25, t0 = 0.625;  // no map of the square fixes it
+    int found = 0;
+    for (int m = 0; m < 8; ++m) {
+      const bool swap = m & 1, flip_s = m & 2, flip_t = m & 4;
+      const double s1 = (flip_s ? -1 : 1) * (swap ? t0 : s0), t1 = (flip_t ? -1 : 1) * (swap ? s0 : t0);
+      if ((p.cube_vector(opposite, s1, t1) + p.cube_vector(face, s0, t0)).norm() > 1e-12) continue;
+      // That map after image g of a class is another image of the class: which one, read
+      // off a texel of a 16-texel face that no map of the square fixes.
+      constexpr int kR = 16, x = 13, y = 10, xm = kR - 1 - x, ym = kR - 1 - y;
+      const int at[8][2] = {{x, y}, {x, ym}, {ym, x}, {y, x}, {xm, ym}, {xm, y}, {y, xm}, {ym, xm}};
+      for (int g = 0; g < 8; ++g) {
+        int col = swap ? at[g][1] : at[g][0], row = swap ? at[g][0] : at[g][1];
+        if (flip_s) col = kR - 1 - col;
+        if (flip_t) row = kR - 1 - row;
+        for (int h = 0; h < 8; ++h)
+          if (at[h][0] == col && at[h][1] == row) p.antipode_[f / 2][g] = h, ++found;
+      }
+    }
+    if (found != 8) detail::precondition_failed("CubemapProjector: opposite faces are not antipodal");
   }
   return p;
 }
 
 int CubemapProjector::block_count() const {
   const int rows = size_ - size_ / 2;  // rows of the eighth s >= t >= 0
-  const int groups = (rows + kRowsPerGroup - 1) / kRowsPerGroup;
-  return (groups + 1) / 2;
+  return (rows + kRowsPerBand - 1) / kRowsPerBand;
 }
 
 std::size_t CubemapProjector::partial_size(int channels) const {
@@ -573,36 +678,109 @@ bool valid_faces(std::span<const FloatImageView, 6> faces, int size) {
   return true;
 }
 
-}  // namespace
-
-namespace {
-
-// The folded sums of one class for every face and channel: the eight images' values
-// (`offsets` from each face's first texel), F[fold][f * 4 + c].
-template <int C, bool kScaled>
-void fold_class(const float* const* bases, const std::size_t* strides, const int (*at)[2], double scale,
-                double (*F)[kFaceLanes]) {
-  if constexpr (!kScaled) scale = 1;
+// A tile of T x T classes (x0 + k, y0 + j), T = kTile, and the texels of its eight images
+// on each face: texels[((f * 8 + g) * C + c) * T^2 + j * T + k] is channel c of image g of
+// class (x0 + k, y0 + j) on face f. Images, as (column, row) of texel (x, y), in the order
+// (k, e) = (0,+) (0,-) (1,+) (1,-) (2,+) (2,-) (3,+) (3,-): p, -p, p + pi/2, pi/2 - p,
+// p + pi, pi - p, p - pi/2, -pi/2 - p. Each image of the tile is a T x T block of a face:
+// images 0, 1, 4, 5 keep its rows (read forwards or backwards), images 2, 3, 6, 7 swap s
+// and t and are transposed as they are read, a row of T texels at a time. Classes
+// outside the face are clamped to its edge (their sums are weighted by zero).
+constexpr int kTile = 16;
+template <int C>
+void load_tile(const float* const* bases, const std::size_t* strides, int R, int x0, int y0, float* texels) {
+  constexpr int T = kTile, TT = T * T;
+  int xs[T], ys[T], xms[T], yms[T];
+  for (int k = 0; k < T; ++k) {
+    xs[k] = std::min(x0 + k, R - 1);
+    ys[k] = std::min(y0 + k, R - 1);
+    xms[k] = R - 1 - xs[k];
+    yms[k] = R - 1 - ys[k];
+  }
+  // Per image: the face rows and columns its rows (j for images along rows, k for the
+  // transposed ones) and columns (k, j) follow.
+  const int* const cols[8] = {xs, xs, yms, ys, xms, xms, ys, yms};
+  const int* const rows[8] = {ys, yms, xs, xs, yms, ys, xms, xms};
+  constexpr bool kTransposed[8] = {false, false, true, true, false, false, true, true};
   for (int f = 0; f < 6; ++f) {
-    const float* texel[8];
-    for (int g = 0; g < 8; ++g)
-      texel[g] = bases[f] + static_cast<std::size_t>(at[g][1]) * strides[f] + static_cast<std::size_t>(at[g][0]) * C;
-    for (int c = 0; c < C; ++c) {
-      double v[8];
-      for (int g = 0; g < 8; ++g) v[g] = texel[g][c];
-      const double e0 = v[0] + v[1], d0 = v[0] - v[1], e1 = v[2] + v[3], d1 = v[2] - v[3];
-      const double e2 = v[4] + v[5], d2 = v[4] - v[5], e3 = v[6] + v[7], d3 = v[6] - v[7];
-      const double e02 = e0 + e2, e13 = e1 + e3, d02 = d0 + d2, d13 = d1 + d3;
-      const int lane = f * 4 + c;
-      F[kP0][lane] = scale * (e02 + e13);
-      F[kP2][lane] = scale * (e02 - e13);
-      F[kV0][lane] = scale * (d02 + d13);
-      F[kV2][lane] = scale * (d02 - d13);
-      F[kP1][lane] = scale * (e0 - e2);
-      F[kU1][lane] = scale * (e1 - e3);
-      F[kV1][lane] = scale * (d0 - d2);
-      F[kQ1][lane] = scale * (d1 - d3);
+    const float* base = bases[f];
+    const std::size_t stride = strides[f];
+    for (int g = 0; g < 8; ++g) {
+      float* out = texels + static_cast<std::size_t>(f * 8 + g) * C * TT;
+      const int* col = cols[g];
+      // Away from the face's edge the block's columns run forwards or backwards.
+      const bool forward = col[T - 1] - col[0] == T - 1, backward = col[0] - col[T - 1] == T - 1;
+      for (int r = 0; r < T; ++r) {
+        // Row r of the block: T texels of one face row.
+        const float* src = base + static_cast<std::size_t>(rows[g][r]) * stride;
+        float line[C][T];
+        if (forward) {
+          const float* p = src + static_cast<std::size_t>(col[0]) * C;
+          for (int i = 0; i < T; ++i)
+            for (int c = 0; c < C; ++c) line[c][i] = p[i * C + c];
+        } else if (backward) {
+          const float* p = src + static_cast<std::size_t>(col[T - 1]) * C;
+          for (int i = 0; i < T; ++i)
+            for (int c = 0; c < C; ++c) line[c][T - 1 - i] = p[i * C + c];
+        } else {
+          for (int i = 0; i < T; ++i)
+            for (int c = 0; c < C; ++c) line[c][i] = src[static_cast<std::size_t>(col[i]) * C + c];
+        }
+        if (kTransposed[g]) {
+          for (int c = 0; c < C; ++c)
+            for (int i = 0; i < T; ++i) out[c * TT + i * T + r] = line[c][i];
+        } else {
+          for (int c = 0; c < C; ++c)
+            for (int i = 0; i < T; ++i) out[c * TT + r * T + i] = line[c][i];
+        }
+      }
     }
+  }
+}
+
+// The eight folds of a class's eight values v (in the order of its images) into
+// out[fold * stride], each times `scale`.
+inline void fold_square(const Lanes* v, const Lanes& scale, Lanes* out, int stride) {
+  const Lanes e0 = v[0] + v[1], d0 = v[0] - v[1], e1 = v[2] + v[3], d1 = v[2] - v[3];
+  const Lanes e2 = v[4] + v[5], d2 = v[4] - v[5], e3 = v[6] + v[7], d3 = v[6] - v[7];
+  const Lanes e02 = e0 + e2, e13 = e1 + e3, d02 = d0 + d2, d13 = d1 + d3;
+  out[kP0 * stride] = scale * (e02 + e13);
+  out[kP2 * stride] = scale * (e02 - e13);
+  out[kV0 * stride] = scale * (d02 + d13);
+  out[kV2 * stride] = scale * (d02 - d13);
+  out[kP1 * stride] = scale * (e0 - e2);
+  out[kU1 * stride] = scale * (e1 - e3);
+  out[kV1 * stride] = scale * (d0 - d2);
+  out[kQ1 * stride] = scale * (d1 - d3);
+}
+
+// The folded sums of the 8 classes (x0 + k0 + k, y0 + j) of a loaded tile for one face
+// pair, F[(fold * 2 + band parity) * plane_stride + c]: the class's eight texels on the pair's first
+// face plus (even bands) and minus (odd bands) their antipodes on the second (image
+// `antipode[g]` there), then the square's folds, times scale (1 / the class's stabiliser;
+// 0 outside the eighth).
+template <int C>
+SHTOOL_SAME_BITS_CLONES_WIDE void fold_row(const float* texels, int pair, const int* antipode, int j, int k0,
+                                           const double* scale, Lanes* F, int plane_stride) {
+  constexpr int TT = kTile * kTile;
+  Lanes sc;
+  for (int k = 0; k < kClassLanes; ++k) sc[k] = scale[k];
+  const int at = j * kTile + k0;
+  for (int c = 0; c < C; ++c) {
+    Lanes sum[8], diff[8];
+    for (int g = 0; g < 8; ++g) {
+      const float* a = texels + static_cast<std::size_t>((2 * pair * 8 + g) * C + c) * TT + at;
+      const float* b = texels + static_cast<std::size_t>(((2 * pair + 1) * 8 + antipode[g]) * C + c) * TT + at;
+      Lanes va, vb;
+      for (int k = 0; k < kClassLanes; ++k) {
+        va[k] = a[k];
+        vb[k] = b[k];
+      }
+      sum[g] = va + vb;
+      diff[g] = va - vb;
+    }
+    fold_square(sum, sc, F + c, 2 * plane_stride);
+    fold_square(diff, sc, F + plane_stride + c, 2 * plane_stride);
   }
 }
 
@@ -617,8 +795,7 @@ Result<Ok> CubemapProjector::accumulate_block(std::span<const FloatImageView, 6>
   const int channels = faces[0].channels;
   const int n = sh_count(order_);
   const int R = size_;
-  const int first_row = R / 2, rows = R - first_row;
-  const int groups = (rows + kRowsPerGroup - 1) / kRowsPerGroup;
+  const int first_row = R / 2;
   const double half = 1.0 / R;
   const float* bases[6];
   std::size_t strides[6];
@@ -626,74 +803,81 @@ Result<Ok> CubemapProjector::accumulate_block(std::span<const FloatImageView, 6>
     bases[f] = faces[static_cast<std::size_t>(f)].texels;
     strides[f] = faces[static_cast<std::size_t>(f)].stride();
   }
-  // Per face, the coefficients in its own frame; carried to shtool's frame at the end.
-  std::vector<double> A(static_cast<std::size_t>(n) * kFaceLanes, 0.0);
-  std::vector<double> W(static_cast<std::size_t>(n) * kClassLanes), node_row(W.size());
-  alignas(64) double F[kFolds][kFaceLanes] = {};
-  // A group of rows is walked in columns of kClassLanes classes: the images of a few
-  // neighbouring classes share cache lines along rows and, transposed, along columns.
-  auto do_group = [&](int group) {
-    const int y_begin = first_row + group * kRowsPerGroup, y_end = std::min(R, y_begin + kRowsPerGroup);
-    for (int x0 = y_begin; x0 < R; x0 += kClassLanes) {
-      // The images of a tile lie on 4 rows of the group and 4 of the columns, in 96
-      // different rows of the six faces: no hardware prefetcher follows that, so the
-      // texels of the next tile are asked for now.
-      if (const int xp = x0 + kClassLanes; xp < R) {
-        const int xpm = R - 1 - xp;
-        for (int f = 0; f < 6; ++f) {
-          for (int y = y_begin; y < y_end; ++y)
-            for (const int row : {y, R - 1 - y})
-              for (const int x : {xp, xp + kClassLanes / 2, xpm - kClassLanes / 2, xpm - kClassLanes + 1})
-                __builtin_prefetch(bases[f] + row * strides[f] + static_cast<std::size_t>(std::clamp(x, 0, R - 1)) * channels);
-          for (int x = xp; x < std::min(R, xp + kClassLanes); ++x) {
-            const int xm = R - 1 - x;
-            for (const int row : {x, xm}) {
-              __builtin_prefetch(bases[f] + row * strides[f] + static_cast<std::size_t>(y_begin) * channels);
-              __builtin_prefetch(bases[f] + row * strides[f] + static_cast<std::size_t>(y_end - 1) * channels);
-              __builtin_prefetch(bases[f] + row * strides[f] + static_cast<std::size_t>(R - y_end) * channels);
-              __builtin_prefetch(bases[f] + row * strides[f] + static_cast<std::size_t>(R - 1 - y_begin) * channels);
-            }
-          }
-        }
-      }
-      for (int y = y_begin; y < y_end; ++y) {
-        if (x0 + kClassLanes <= y) continue;
-        const int lane_begin = std::max(0, y - x0), lane_end = std::min(kClassLanes, R - x0);
-        alignas(64) double s_centre[kClassLanes];
-        for (int k = 0; k < kClassLanes; ++k)
-          s_centre[k] = -1 + (2 * (x0 + std::clamp(k, lane_begin, lane_end - 1)) + 1) * half;
-        face_frame_integrals(order_, nodes_, nodes_unit_.data(), weights_unit_.data(), half, s_centre,
-                             -1 + (2 * y + 1) * half, W.data(), node_row.data());
-        for (int k = lane_begin; k < lane_end; ++k) {
-          const int x = x0 + k, xm = R - 1 - x, ym = R - 1 - y;
-          // The images (column, row) of texel (x, y), in the order (k, e) =
-          // (0,+) (0,-) (1,+) (1,-) (2,+) (2,-) (3,+) (3,-): p, -p, p + pi/2, pi/2 - p,
-          // p + pi, pi - p, p - pi/2, -pi/2 - p.
+  // The coefficients in the frame of each pair's first face, one per lane (class):
+  // A[i * 3 C + pair * C + c]; carried to shtool's frame at the end.
+  const int pc = 3 * channels;
+  const std::size_t folded = static_cast<std::size_t>(kPlanes) * pc;
+  // Rows of 8 classes are contracted in batches of up to kBatchBytes of integrals.
+  constexpr std::size_t kBatchBytes = 128 * 1024;
+  const int batch = static_cast<int>(std::clamp<std::size_t>(kBatchBytes / (sizeof(Lanes) * n), 1, 8));
+  LaneBuffer A(static_cast<std::size_t>(n) * pc), W(static_cast<std::size_t>(n) * batch), node_row(n),
+      F(folded * batch);
+  std::vector<float> texels(static_cast<std::size_t>(6 * 8 * kTile * kTile) * channels);
+  static_assert(kRowsPerBand == kTile && kTile % kClassLanes == 0, "a band is one row of tiles");
+  // Blocks take the bands from both ends in turn (long rows near the face's centre, short
+  // near its edge), so that any contiguous run of blocks holds about its share of work.
+  const int bands = block_count();
+  const int band = block % 2 == 0 ? block / 2 : bands - 1 - block / 2;
+  const int y_begin = first_row + band * kRowsPerBand, y_end = std::min(R, y_begin + kRowsPerBand);
+  int units = 0;  // rows of the batch so far
+  auto contract = [&] {
+    switch (channels) {
+      case 1: contract_batch<1>(order_, units, W.data(), F.data(), A.data()); break;
+      case 2: contract_batch<2>(order_, units, W.data(), F.data(), A.data()); break;
+      case 3: contract_batch<3>(order_, units, W.data(), F.data(), A.data()); break;
+      default: contract_batch<4>(order_, units, W.data(), F.data(), A.data()); break;
+    }
+    units = 0;
+  };
+  for (int x0 = y_begin; x0 < R; x0 += kTile) {
+    switch (channels) {
+      case 1: load_tile<1>(bases, strides, R, x0, y_begin, texels.data()); break;
+      case 2: load_tile<2>(bases, strides, R, x0, y_begin, texels.data()); break;
+      case 3: load_tile<3>(bases, strides, R, x0, y_begin, texels.data()); break;
+      default: load_tile<4>(bases, strides, R, x0, y_begin, texels.data()); break;
+    }
+    for (int y = y_begin; y < y_end; ++y) {
+      const int j = y - y_begin, ym = R - 1 - y;
+      for (int k0 = 0; k0 < kTile; k0 += kClassLanes) {
+        if (x0 + k0 + kClassLanes <= y || x0 + k0 >= R) continue;
+        alignas(64) double s_centre[kClassLanes], scale[kClassLanes];
+        for (int k = 0; k < kClassLanes; ++k) {
+          const int x = std::clamp(x0 + k0 + k, y, R - 1), xm = R - 1 - x;
+          s_centre[k] = -1 + (2 * x + 1) * half;
+          // A class of fewer than eight texels meets each of them 8 / |class| times.
           const int at[8][2] = {{x, y}, {x, ym}, {ym, x}, {y, x}, {xm, ym}, {xm, y}, {y, xm}, {ym, xm}};
           int stabiliser = 0;
           for (const auto& p : at) stabiliser += p[0] == x && p[1] == y;
-          // A class of fewer than eight texels meets each of them 8 / |class| times.
-          const double scale = 1.0 / stabiliser;
-          const bool scaled = stabiliser > 1;
-          switch (channels) {
-            case 1: (scaled ? fold_class<1, true> : fold_class<1, false>)(bases, strides, at, scale, F); break;
-            case 2: (scaled ? fold_class<2, true> : fold_class<2, false>)(bases, strides, at, scale, F); break;
-            case 3: (scaled ? fold_class<3, true> : fold_class<3, false>)(bases, strides, at, scale, F); break;
-            default: (scaled ? fold_class<4, true> : fold_class<4, false>)(bases, strides, at, scale, F); break;
-          }
-          add_class(order_, W.data(), k, F, A.data());
+          scale[k] = x0 + k0 + k == x ? 1.0 / stabiliser : 0.0;
         }
+        tile_rule(order_, nodes_, nodes_unit_.data(), weights_unit_.data(), half, s_centre, -1 + (2 * y + 1) * half,
+                  W.data() + static_cast<std::size_t>(units) * n, node_row.data());
+        Lanes* f = F.data() + units * folded;
+        for (int pair = 0; pair < 3; ++pair) {
+          switch (channels) {
+            case 1: fold_row<1>(texels.data(), pair, antipode_[pair], j, k0, scale, f + pair * 1, pc); break;
+            case 2: fold_row<2>(texels.data(), pair, antipode_[pair], j, k0, scale, f + pair * 2, pc); break;
+            case 3: fold_row<3>(texels.data(), pair, antipode_[pair], j, k0, scale, f + pair * 3, pc); break;
+            default: fold_row<4>(texels.data(), pair, antipode_[pair], j, k0, scale, f + pair * 4, pc); break;
+          }
+        }
+        if (++units == batch) contract();
       }
     }
-  };
-  do_group(block);
-  if (const int other = groups - 1 - block; other != block) do_group(other);
+  }
+  if (units > 0) contract();
+  // The lanes summed in a fixed order.
+  std::vector<double> sums(static_cast<std::size_t>(n) * pc);
+  for (std::size_t i = 0; i < sums.size(); ++i) {
+    const Lanes& v = A[i];
+    sums[i] = ((v[0] + v[1]) + (v[2] + v[3])) + ((v[4] + v[5]) + (v[6] + v[7]));
+  }
   // y_00's integral is positive on every texel: a non-finite texel leaves its sum so.
-  for (int f = 0; f < 6; ++f)
+  for (int pair = 0; pair < 3; ++pair)
     for (int c = 0; c < channels; ++c)
-      if (!std::isfinite(A[static_cast<std::size_t>(f) * 4 + c])) return first_non_finite(faces);
+      if (!std::isfinite(sums[static_cast<std::size_t>(pair * channels + c)])) return first_non_finite(faces);
   std::size_t block_at = 0;
-  for (int f = 0; f < 6; ++f)
+  for (int pair = 0; pair < 3; ++pair)
     for (int l = 0; l < order_; ++l) {
       const int width = 2 * l + 1, base = l * l;
       const double* map = &face_maps_[block_at];
@@ -702,7 +886,7 @@ Result<Ok> CubemapProjector::accumulate_block(std::span<const FloatImageView, 6>
         for (int c = 0; c < channels; ++c) {
           double sum = 0;
           for (int b = 0; b < width; ++b)
-            sum += map[a * width + b] * A[static_cast<std::size_t>(base + b) * kFaceLanes + f * 4 + c];
+            sum += map[a * width + b] * sums[static_cast<std::size_t>(base + b) * pc + pair * channels + c];
           partial[static_cast<std::size_t>(base + a) * channels + c] += sum;
         }
     }
