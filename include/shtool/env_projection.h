@@ -36,6 +36,7 @@
 
 #include <cstddef>
 #include <span>
+#include <string_view>
 #include <vector>
 
 #include <Eigen/Core>
@@ -43,6 +44,10 @@
 #include "shtool/result.h"
 
 namespace shtool {
+
+// The table kind of projected lighting (project-env and light --out): coefficients
+// [order^2, 3], RGB, in the quantity its meta names.
+inline constexpr std::string_view kEnvShKind = "env-sh";
 
 // Highest order the projections accept.
 inline constexpr int kMaxEnvOrder = 32;

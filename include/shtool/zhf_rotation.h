@@ -18,6 +18,7 @@
 #include <filesystem>
 #include <memory>
 #include <span>
+#include <string_view>
 #include <vector>
 
 #include "shtool/euler.h"
@@ -25,6 +26,9 @@
 #include "shtool/table.h"
 
 namespace shtool {
+
+// The table kind search-lobes writes and these loaders read.
+inline constexpr std::string_view kZhfLobesKind = "zhf-lobes";
 
 // Lobe data for bands 0..order-1.
 struct ZhfLobes {

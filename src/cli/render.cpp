@@ -25,7 +25,7 @@ void setup_render(CLI::App& app) {
   sub->add_option("--light", req->light, "lighting JSON (project-env --json, light --json), radiance, RGB");
   add_up_option(sub, req->up);
   sub->add_option("--camera", *camera, "eye,target,up: nine numbers in shtool's frame, z up (default: the mesh framed in three-quarters "
-                  "from the front, -y, and a little above)");
+                  "from the side the model faces (glTF: -y; OBJ: +y), a little above)");
   sub->add_option("--fov", req->fov, "vertical field of view, degrees")->capture_default_str();
   sub->add_option("--width", req->width, "image width")->capture_default_str();
   sub->add_option("--height", req->height, "image height")->capture_default_str();

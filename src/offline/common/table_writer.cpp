@@ -159,8 +159,8 @@ Table new_table(std::string_view kind, int order, const nlohmann::json& generato
   t.kind = std::string(kind);
   t.kind_version = "1.0";
   t.order = order;
-  t.generator = generator.dump();
-  t.meta = meta.dump();
+  t.generator = dump_finite(generator, "the table's generator record");
+  t.meta = dump_finite(meta, "the table's meta");
   return t;
 }
 

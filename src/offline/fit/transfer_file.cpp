@@ -69,7 +69,7 @@ std::string transfer_json(const std::vector<double>& transfer, int order, UpAxis
   nlohmann::json doc = {{"order", order}, {kMeshUpKey, up_axis_name(up)}, {"vectors", nlohmann::json::array()}};
   for (std::size_t v = 0; v < transfer.size() / n2; ++v)
     doc["vectors"].push_back(std::vector<double>(transfer.begin() + v * n2, transfer.begin() + (v + 1) * n2));
-  return doc.dump() + "\n";
+  return dump_finite(doc, "--save-transfer") + "\n";
 }
 
 }  // namespace shtool::fit

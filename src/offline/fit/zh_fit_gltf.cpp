@@ -15,6 +15,7 @@
 #include "common/input_error.h"
 #include "common/mesh_frame.h"
 #include "shtool/orthogonal_map.h"
+#include "shtool/zh_fit_table.h"
 
 namespace shtool::fit {
 
@@ -175,7 +176,7 @@ std::string zh_fit_glb(const Mesh& mesh, const ZhFitTable<double>& fits, std::sp
                          : b.indices<std::uint32_t>(mesh.triangles, TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT);
 
   tinygltf::Mesh m;
-  m.name = "zh-fit";
+  m.name = std::string(kZhFitKind);
   m.primitives.push_back(std::move(p));
   // What an engine needs to read the attributes without counting them.
   tinygltf::Value::Object fit{

@@ -55,7 +55,7 @@ Part read_part(NamedTable named) {
   p.name = std::move(named.name);
   p.table = std::move(named.table);
   const std::string& path = p.name;
-  if (p.table.kind != "zh-fit") fail(path, "a table of kind '" + p.table.kind + "', not zh-fit");
+  if (p.table.kind != kZhFitKind) fail(path, "a table of kind '" + p.table.kind + "', not zh-fit");
   p.generator = table_generator(p.table);
   p.meta = table_meta(p.table);
   if (!p.meta.is_object() || !p.meta.contains("shard") || !p.meta.at("shard").is_object())
@@ -182,7 +182,7 @@ MergeReport merge_zh_fit_parts(const MergeRequest& r) {
   std::vector<NamedTable> tables;
   tables.reserve(r.parts.size());
   for (const std::filesystem::path& path : r.parts) {
-    Result<Table> t = read_table(path, {"zh-fit", 1});
+    Result<Table> t = read_table(path, {std::string(kZhFitKind), 1});
     if (!t) throw InputError(t.error().message);
     tables.push_back({path.string(), std::move(t).value()});
   }

@@ -1,5 +1,6 @@
 #include "fit/zh_fit_table.h"
 
+#include "common/finite.h"
 #include "common/table_writer.h"
 
 #include <cmath>
@@ -27,7 +28,7 @@ Table zh_fit_table(const ZhFitTable<double>& fits, nlohmann::json meta, const nl
   meta["normalized_rms"] = normalized_rms(fits);
   meta["layout"] = "axes[v][k] unit axis, coeffs[v][k][l] = g*_l (lobe k adds g*_l y_l^m(axis) to SH (l,m)); "
                    "residual[v] = ||fit - t||, norm[v] = ||t||";
-  Table table = new_table("zh-fit", order, generator, meta);
+  Table table = new_table(kZhFitKind, order, generator, meta);
   // 1.1 added meta "shard" (partial tables of a sharded bake, docs/fit-zh.md), 1.2 meta
   // "texture" (texture-space bakes); other tables keep 1.1 and their bytes.
   table.kind_version = meta.contains("texture") ? "1.2" : "1.1";
@@ -58,7 +59,7 @@ std::string fits_json(const ZhFitTable<double>& fits) {
     if (fits.direct_count) jf["direct"] = fits.direct_of(v);
     doc["fits"].push_back(std::move(jf));
   }
-  return doc.dump() + "\n";
+  return dump_finite(doc, "--json") + "\n";
 }
 
 }  // namespace shtool::fit

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <string>
 
+#include "common/finite.h"
 #include "common/job_outputs.h"
 #include "common/enum_names.h"
 #include "common/generator_record.h"
@@ -148,16 +149,15 @@ GlossyReport run_fit_glossy(const GlossyRequest& r) {
 
   io.set("--out", encode_table(table));
   if (io.requested("--json")) {
-    io.set("--json", nlohmann::json{{"parameters", parameters(r)},
-                          {"vertices", report.vertices},
-                          {"singular_values", report.singular_values},
-                          {"normalized_rms",
-                           {{"svd", report.svd_nrms},
-                            {"zh", report.zh_nrms},
-                            {"total", report.total_nrms},
-                            {"zh_of_rows", report.rows_nrms}}}}
-                         .dump(2) +
-                     "\n");
+    const nlohmann::json summary = {{"parameters", parameters(r)},
+                                    {"vertices", report.vertices},
+                                    {"singular_values", report.singular_values},
+                                    {"normalized_rms",
+                                     {{"svd", report.svd_nrms},
+                                      {"zh", report.zh_nrms},
+                                      {"total", report.total_nrms},
+                                      {"zh_of_rows", report.rows_nrms}}}};
+    io.set("--json", dump_finite(summary, "--json", 2) + "\n");
   }
   io.commit();
   return report;

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "common/enum_names.h"
+#include "common/finite.h"
 #include "common/input_error.h"
 #include "common/input_file.h"
 #include "shtool/irradiance.h"
@@ -96,7 +97,7 @@ nlohmann::json rows_json(const Nine& v) {
 
 std::string rows_text(const nlohmann::json& j) {
   // One row per line inside the document, for reading.
-  std::string s = j.dump(1);
+  std::string s = dump_finite(j, "--out", 1);
   return s + "\n";
 }
 
@@ -252,7 +253,7 @@ ExportedLight export_light(const Lighting& light, LightFormat format, const Fram
             {"color", 16777215},
             {"intensity", intensity},
             {"sh", sh}}}};
-      out.text = doc.dump(1) + "\n";
+      out.text = dump_finite(doc, "--out", 1) + "\n";
       break;
     }
     case LightFormat::filament:
@@ -292,7 +293,7 @@ ExportedLight export_light(const Lighting& light, LightFormat format, const Fram
         doc[std::string("unity_SHB") + rgb[c]] = {s(4, c), s(5, c), 3 * s(6, c), s(7, c)};
       }
       doc["unity_SHC"] = {s(8, 0), s(8, 1), s(8, 2), 1};
-      out.text = doc.dump(1) + "\n";
+      out.text = dump_finite(doc, "--out", 1) + "\n";
       if (intensity != 1) out.notes.push_back("--intensity is folded into the coefficients");
       break;
     }

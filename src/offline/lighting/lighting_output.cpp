@@ -30,7 +30,7 @@ std::string lighting_json(const Lighting& l) {
 }
 
 Table lighting_table(const Lighting& l, const nlohmann::json& generator) {
-  Table t = new_table("env-sh", l.order, generator,
+  Table t = new_table(kEnvShKind, l.order, generator,
                       {{"quantity", quantity_name(l.quantity)}, {"channels", {"r", "g", "b"}}, {"window", l.window}});
   t.arrays.push_back(TableArray::from<double>("coefficients", {sh_count(l.order), 3}, l.coefficients));
   return t;

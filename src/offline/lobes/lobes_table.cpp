@@ -6,6 +6,7 @@
 
 #include "common/input_error.h"
 #include "common/table_writer.h"
+#include "shtool/zhf_rotation.h"
 
 namespace shtool::lobes {
 
@@ -57,7 +58,7 @@ Table make_lobes_table(const std::vector<SearchResult>& searches, const nlohmann
                        const SearchOptions& options) {
   const Layout lay = layout_of(searches);
   const bool shared = searches[0].shared;
-  Table t = new_table("zhf-lobes", 0, generator, nlohmann::json::object());
+  Table t = new_table(kZhfLobesKind, 0, generator, nlohmann::json::object());
   std::vector<std::int32_t> bands, offsets, row_start{0}, cols, lobes, zeros;
   std::vector<double> dirs, a_hat, vals, sparsity, cond, largest, smallest;
   for (std::size_t i = 0; i < lay.theta.size(); ++i) {

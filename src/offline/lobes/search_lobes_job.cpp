@@ -3,6 +3,7 @@
 #include <chrono>
 #include <string>
 
+#include "common/finite.h"
 #include "common/job_outputs.h"
 #include "common/generator_record.h"
 #include "common/input_error.h"
@@ -72,7 +73,7 @@ SearchLobesReport run_search_lobes(SearchLobesRequest r, const SearchLobesCallba
     const Table t = make_lobes_table(report.results, generator_record("shtool search-lobes", params), s);
     io.set("--out", encode_table(t, r.out.extension() == ".json" ? TableEncoding::json : TableEncoding::binary));
   }
-  if (io.requested("--json")) io.set("--json", report.summary.dump(2) + "\n");
+  if (io.requested("--json")) io.set("--json", dump_finite(report.summary, "--json", 2) + "\n");
   io.commit();
   return report;
 }

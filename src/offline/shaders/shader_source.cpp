@@ -8,6 +8,8 @@
 #include <sstream>
 #include <utility>
 
+#include "common/finite.h"
+#include "common/input_error.h"
 #include "shtool/irradiance.h"
 #include "shtool/table.h"
 #include "shtool/version.h"
@@ -38,6 +40,8 @@ struct Syntax {
 // A constant as the shader's float: rounded once from long double, then 9 significant
 // digits, which read back to the same float.
 std::string literal(long double v) {
+  // A constant beyond float (or NaN) would be "inf" in the source, which no compiler takes.
+  if (!finite_as_float(static_cast<double>(v))) throw InputError("a shader constant is not finite as a float");
   char buf[48];
   std::snprintf(buf, sizeof buf, "%.9g", static_cast<double>(static_cast<float>(v)));
   std::string s = buf;

@@ -5,12 +5,14 @@
 #include <string>
 
 #include "common/job_outputs.h"
+#include "common/finite.h"
 #include "common/generator_record.h"
 #include "common/input_error.h"
 #include "common/parallel_for.h"
 #include "common/stopwatch.h"
 #include "common/table_writer.h"
 #include "fit/embree_scene.h"
+#include "shtool/wrinkle_map.h"
 
 namespace shtool::wrinkles {
 
@@ -55,7 +57,7 @@ Table wrinkle_table(const WrinkleFit& fit, const WrinkleRequest& r) {
       {"layout",
        "node (k, j) at depth[k], x[j]; at (x, d) blend the 4 surrounding nodes bilinearly (x periodic with period 1), "
        "normalise each blended axis; lobe i adds coeffs[i][l] y_l^m(axis) to SH (l, m); direct = DC, then band 1"}};
-  Table t = new_table("wrinkle-zh", m.order, generator, meta);
+  Table t = new_table(kWrinkleZhKind, m.order, generator, meta);
   std::vector<double> xs(g), ds(g);
   for (int j = 0; j < g; ++j) xs[j] = m.grid.node_x(j);
   for (int k = 0; k < g; ++k) ds[k] = m.grid.node_depth(k);
@@ -117,7 +119,7 @@ WrinkleReport run_fit_wrinkles(const WrinkleRequest& r) {
   report.parameters = static_cast<std::size_t>(grid.nodes()) * r.lobes * (3 + r.order - 2);
 
   io.set("--out", encode_table(wrinkle_table(fit, r)));
-  if (io.requested("--json")) io.set("--json", wrinkle_summary(fit, r).dump(2) + "\n");
+  if (io.requested("--json")) io.set("--json", dump_finite(wrinkle_summary(fit, r), "--json", 2) + "\n");
   io.commit();
   return report;
 }

@@ -19,7 +19,7 @@ Error bad(const std::string& what) { return Error{"zhf-lobes table: " + what}; }
 }  // namespace
 
 Result<ZhfLobes> load_zhf_lobes(const std::filesystem::path& path, int order) {
-  Result<Table> read = read_table(path, TableExpectation{"zhf-lobes", 1, 0});
+  Result<Table> read = read_table(path, TableExpectation{std::string(kZhfLobesKind), 1, 0});
   if (!read) return read.error();
   Result<ZhfLobes> z = zhf_lobes_from_table(read.value(), order);
   if (!z) return Error{path.string() + ": " + z.error().message};
@@ -27,7 +27,7 @@ Result<ZhfLobes> load_zhf_lobes(const std::filesystem::path& path, int order) {
 }
 
 Result<ZhfLobes> zhf_lobes_from_table(const Table& t, int order) {
-  if (t.kind != "zhf-lobes") return bad("wrong kind '" + t.kind + "'");
+  if (t.kind != kZhfLobesKind) return bad("wrong kind '" + t.kind + "'");
   auto bands = t.get<std::int32_t>("bands");
   auto offset = t.get<std::int32_t>("direction_offset");
   auto dirs = t.get<double>("directions");
