@@ -74,7 +74,7 @@ struct ZhFitOptions {
   // (starts themselves stop at 1e-3). 3e-4 leaves psi within a few tenths of a percent of
   // its local minimum; with lobes >= order (an exact fit exists) 1e-10 is used whatever
   // this says.
-  double polish_ftol_rel = 3e-4;
+  double polish_ftol_rel = 1e-3;
   std::uint64_t seed = 1;
   // Multi-start runs only while the residual is above this fraction of ||t|| ("we apply
   // further computation when the fit error is high", Sec. 4.1): well-fitted vertices,
