@@ -139,9 +139,11 @@ constexpr int kVarProStageEvaluations = 30;
 // The split start (3 <= lobes < order, see varpro_search): the greedy start and the split
 // start are each grown with stages of at most 10 evaluations and a last stage stopped at
 // 1e-2 or 15 evaluations, and only the better of the two is polished. Two starts at these
-// stops cost about 1.3 times the evaluations of the one greedy start at the looser stops
-// above (90 against 70 a vector on the bunny's transfer), which keeps the fit of a mesh
-// below its transfer simulation (docs/fit-zh.md, "Measured figures").
+// stops cost about 1.3 times the evaluations of the one greedy start at the stops above
+// (90 against 70 a vector on the bunny's transfer), the greedy start alone less (about
+// 60), so with the split start skipped where the greedy start is already good
+// (split_above) the fit of a mesh costs about what it did with the greedy start alone
+// (docs/fit-zh.md, "Measured figures").
 constexpr int kSplitStageEvaluations = 10;
 constexpr int kSplitLastEvaluations = 15;
 constexpr double kSplitLastFtolRel = 1e-2;
@@ -528,8 +530,8 @@ Eigen::Vector3d elongation_direction(std::span<const double> t, const Eigen::Vec
 // lobe) often ends in a local minimum far above the best known; the best known fits
 // there mostly shape that lobe with two lobes either side of a instead. So a second start
 // begins from the pair a +- kSplitAngle d, d the lobe's long axis
-// (elongation_direction), and grows greedily from there. Both are deterministic, run
-// whatever the residual and at every effort.
+// (elongation_direction), and grows greedily from there, where the greedy start's residual
+// is above options.split_above x ||t||. Both are deterministic and run at every effort.
 std::vector<Eigen::Vector3d> varpro_search(int order, std::span<const double> t, const std::vector<bool>& mask,
                                            const ZhFitOptions& o, std::uint64_t stream, double good) {
   const AxisScan& scan = axis_scan(order, o.axis_samples);
@@ -551,14 +553,19 @@ std::vector<Eigen::Vector3d> varpro_search(int order, std::span<const double> t,
     const Eigen::Vector3d a = axes[0];
     best_psi = grow_greedy(order, t, mask, scan, o.lobes, axes, kSplitStageEvaluations, kSplitLastEvaluations,
                            kSplitLastFtolRel, best_residual);
-    const Eigen::Vector3d d = elongation_direction(t, a);
-    std::vector<Eigen::Vector3d> pair{(a + kSplitAngle * d).normalized(), (a - kSplitAngle * d).normalized()};
-    const double psi = grow_greedy(order, t, mask, scan, o.lobes, pair, kSplitStageEvaluations,
-                                   kSplitLastEvaluations, kSplitLastFtolRel, residual);
-    if (psi < best_psi) {
-      best_psi = psi;
-      best_residual = residual;
-      axes = pair;
+    // A greedy start already within split_above of ||t|| (0.2 % by default, half a step
+    // of an 8-bit display) keeps it: a better fit would not show.
+    const double split_good = o.split_above * o.split_above * squared_norm(t.first(sh_count(order)));
+    if (best_residual > split_good) {
+      const Eigen::Vector3d d = elongation_direction(t, a);
+      std::vector<Eigen::Vector3d> pair{(a + kSplitAngle * d).normalized(), (a - kSplitAngle * d).normalized()};
+      const double psi = grow_greedy(order, t, mask, scan, o.lobes, pair, kSplitStageEvaluations,
+                                     kSplitLastEvaluations, kSplitLastFtolRel, residual);
+      if (psi < best_psi) {
+        best_psi = psi;
+        best_residual = residual;
+        axes = pair;
+      }
     }
   }
   std::vector<Eigen::Vector3d> best = axes;

@@ -81,6 +81,11 @@ struct ZhFitOptions {
   // further computation when the fit error is high", Sec. 4.1): well-fitted vertices,
   // most of a mesh, stay cheap. 0: always run all starts.
   double restart_above = 0.05;
+  // varpro, 3 <= lobes < order: the split start runs only where the greedy start's
+  // residual is above this fraction of ||t|| (0.2 %: half a step of an 8-bit display;
+  // about 60 % of the bunny's vertices, every vector of the fit fixture's `spot` set).
+  // 0: always.
+  double split_above = 0.002;
 };
 
 // The --effort levels: each sets `starts` and `restart_above` for options.lobes (set
