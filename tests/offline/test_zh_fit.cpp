@@ -456,11 +456,13 @@ TEST(ZhFit, DefaultEffortIsNearTheBestKnown) {
       // N = 4 within 10 % on random vectors, which all get the default's random starts.
       EXPECT_LE(varpro, 1.10) << name;
     } else {
-      // Transfer vectors are fitted within the 5 % restart threshold by the greedy start
-      // alone, so the default runs no random start for them and stays well above the
-      // best known at N = 4 (docs/fit-zh.md, "Benchmarks"); --effort 3, which restarts
-      // every vector, comes within 6 %.
-      EXPECT_LE(varpro, 1.8) << name;
+      // Transfer vectors are fitted within the 5 % restart threshold by the deterministic
+      // starts (greedy and split), so the default runs no random start for them and stays
+      // above the best known at N = 4: 1.46 on average (1.77 with the greedy start alone),
+      // short of the 1.10 target (docs/fit-zh.md, "Benchmarks"). The fit is deterministic;
+      // 1.5 leaves room for the last bits of another libm, not for a lost split start.
+      // --effort 3, which restarts every vector, comes within 6 %.
+      EXPECT_LE(varpro, 1.5) << name;
       ZhFitOptions high = o;
       apply_effort(high, 3);
       EXPECT_LE(mean_ratio_to_best(b, high, name), 1.06) << name;

@@ -57,9 +57,10 @@ struct ZhFitOptions {
   // Store DC (and the linear band when lobes >= 3) directly, fit lobes to the rest
   // ([4] Sec. 3.3).
   bool direct = false;
-  // Random axis sets tried after the greedy start (the multi-start of Sec. 4.1); the
-  // effort/quality knob. kStartsByEffort: the default level's count for `lobes`
-  // (apply_effort); 0: the greedy start only.
+  // Random axis sets tried after the deterministic starts (the greedy start, and for the
+  // varpro method with 3 <= lobes < order the split start as well; the multi-start of
+  // Sec. 4.1); the effort/quality knob. kStartsByEffort: the default level's count for
+  // `lobes` (apply_effort); 0: the deterministic starts only.
   int starts = kStartsByEffort;
   // Axes of the well-spread set scanned with the closed form of Eq. 18 for each greedy
   // stage of a multi-lobe fit (a spherical-Fibonacci set on the upper hemisphere: s and
@@ -74,20 +75,25 @@ struct ZhFitOptions {
   int single_lobe_maxima = kSingleLobeMaxima;
   int max_evaluations = 300;  // per BFGS run
   // varpro: the relative change of psi at which the polish of the best start stops
-  // (starts themselves stop at 1e-3). 3e-4 leaves psi within a few tenths of a percent of
-  // its local minimum; with lobes >= order (an exact fit exists) 1e-10 is used whatever
-  // this says.
-  double polish_ftol_rel = 3e-4;
+  // (random starts themselves stop at 1e-3, the greedy and split starts of 3 <= lobes <
+  // order at 1e-2). 1e-3 leaves psi within a few tenths of a percent of its local
+  // minimum; with lobes >= order (an exact fit exists) 1e-10 is used whatever this says.
+  double polish_ftol_rel = 1e-3;
   std::uint64_t seed = 1;
   // Multi-start runs only while the residual is above this fraction of ||t|| ("we apply
   // further computation when the fit error is high", Sec. 4.1): well-fitted vertices,
   // most of a mesh, stay cheap. 0: always run all starts.
   double restart_above = 0.05;
+  // varpro, 3 <= lobes < order: the split start runs only where the greedy start's
+  // residual is above this fraction of ||t|| (0.2 %: half a step of an 8-bit display;
+  // about 60 % of the bunny's vertices, every vector of the fit fixture's `spot` set).
+  // 0: always.
+  double split_above = 0.002;
 };
 
 // The --effort levels: each sets `starts` and `restart_above` for options.lobes (set
 // lobes first). Local minima multiply with the lobe count, so the starts grow as N^2:
-// 1: none (the greedy start only); 2, the default: 5 N^2 where the residual is above 5 %
+// 1: none (the deterministic starts only); 2, the default: 5 N^2 where the residual is above 5 %
 // of ||t||; 3: 12 N^2 for every vector; 4: 40 N^2 for every vector. Measured quality and
 // cost per level are in docs/fit-zh.md.
 inline constexpr int kMinEffort = 1, kDefaultEffort = 2, kMaxEffort = 4;
@@ -147,9 +153,12 @@ double zh_varpro_objective(int order, std::span<const double> t, const std::vect
                            std::span<double> coeffs = {}, double* squared_residual = nullptr);
 
 // Full fit of one vector (t.size() == order^2): single lobe = best_single_lobe (both
-// methods, every effort); multi-lobe = greedy, coefficient
-// refit with axes frozen, joint BFGS, then `starts` random axis sets (seeded by
-// options.seed and `stream`) each refit and BFGS-refined; the best is returned.
+// methods, every effort); multi-lobe, varpro = the greedy start (and, for 3 <= lobes <
+// order, the split start: the single-lobe axis split into a pair along the lobe's long
+// axis, grown greedily), then `starts` random axis sets (seeded by options.seed and
+// `stream`), the best polished; multi-lobe, joint = greedy, coefficient refit with axes
+// frozen, joint BFGS, then `starts` random axis sets each refit and BFGS-refined; the best
+// is returned.
 // Axes are returned unit length with z >= 0 (odd-band coefficients flipped with them).
 ZhFit fit_zh(std::span<const double> t, const ZhFitOptions& options, std::uint64_t stream = 0);
 
