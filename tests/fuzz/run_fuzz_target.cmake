@@ -5,7 +5,7 @@ cmake_minimum_required(VERSION 3.20)
 file(REMOVE_RECURSE "${SCRATCH}")
 file(MAKE_DIRECTORY "${SCRATCH}/corpus" "${SCRATCH}/artifacts")
 file(COPY "${CORPUS}/" DESTINATION "${SCRATCH}/corpus")
-execute_process(COMMAND "${TARGET}" -max_total_time=${SECONDS} -max_len=65536 -timeout=10 -rss_limit_mb=2048
+execute_process(COMMAND "${TARGET}" -max_total_time=${SECONDS} -max_len=65536 -timeout=10 -rss_limit_mb=1024
                         -print_final_stats=1 "-artifact_prefix=${SCRATCH}/artifacts/" "${SCRATCH}/corpus"
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 string(REGEX MATCHALL "stat::[a-z_]+:[ \t]*[0-9]+" stats "${err}")
