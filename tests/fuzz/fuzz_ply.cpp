@@ -39,8 +39,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     return 0;
   }
   PlyFile& ply = *parsed;
+  // A vertex element without properties may claim any count (it holds no bytes): there
+  // is nothing to read, and transform-splats refuses it for want of x, y, z.
   const PlyElement* vertex = ply.element("vertex");
-  if (!vertex) return 0;
+  if (!vertex || vertex->properties.empty()) return 0;
   const std::size_t props = vertex->properties.size();
   std::vector<double> values;
   values.reserve(vertex->count * props);
