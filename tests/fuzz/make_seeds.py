@@ -147,6 +147,15 @@ def deep():
     return g
 
 
+def glb_buffer_length_zero():
+    # fuzz_gltf's finding: a buffer of byteLength 0 beside a BIN chunk, which tinygltf
+    # copied from data.at(0) of an empty vector (now refused with InputError).
+    js = json.dumps({"asset": {"version": "2.0"}, "buffers": [{"byteLength": 0}]}, separators=(",", ":")).encode()
+    js += b" " * (-len(js) % 4)
+    body = struct.pack("<II", len(js), 0x4E4F534A) + js + struct.pack("<II", 4, 0x004E4942) + b"\0" * 4
+    return b"glTF" + struct.pack("<II", 2, 12 + len(body)) + body
+
+
 def write(path, data):
     os.makedirs(os.path.dirname(path), exist_ok=True)
     with open(path, "wb") as f:
@@ -160,6 +169,7 @@ def gltf_seeds():
         write(os.path.join(d, name + ".gltf"), g.gltf_text())
         write(os.path.join(d, name + ".glb"), g.glb())
     write(os.path.join(d, "deep_extras.gltf"), deep().gltf_text(indent=None))
+    write(os.path.join(d, "glb_buffer_length_zero.glb"), glb_buffer_length_zero())
 
 
 # 3D Gaussian Splatting's vertex properties (as its training code writes them).

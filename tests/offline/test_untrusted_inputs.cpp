@@ -119,6 +119,27 @@ TEST(UntrustedObj, CoordinatesAndIndicesOutOfRange) {
   EXPECT_EQ(fit::load_obj_text("v 0 0 0\rv 1 0 0\rv 0 1 0\rf 1 2 3\r", "m.obj").triangles.size(), 1u);
 }
 
+// The smallest .glb of fuzz_gltf's finding: a buffer of byteLength 0 beside a BIN chunk,
+// which tinygltf copied from data.at(0) of an empty vector (std::out_of_range, exit 3).
+TEST(UntrustedGltf, BufferOfLengthZeroBesideABinChunk) {
+  std::string json = R"({"asset":{"version":"2.0"},"buffers":[{"byteLength":0}]})";
+  json.resize((json.size() + 3) / 4 * 4, ' ');
+  std::string glb = "glTF";
+  auto u32 = [&](std::size_t v) {
+    for (int b = 0; b < 4; ++b) glb.push_back(static_cast<char>((v >> (8 * b)) & 0xff));
+  };
+  u32(2);
+  u32(12 + 8 + json.size() + 8 + 4);
+  u32(json.size());
+  u32(0x4E4F534A);  // JSON
+  glb += json;
+  u32(4);
+  u32(0x004E4942);  // BIN
+  glb += std::string(4, '\0');
+  const std::string m = input_error([&] { fit::load_gltf_bytes(glb, "m.glb"); });
+  EXPECT_NE(m.find("m.glb: cannot read glTF"), std::string::npos) << "'" << m << "'";
+}
+
 TEST(UntrustedJsonInputs, DeepNestingAndNonNumbers) {
   const std::string deep = "{\"inputs\": " + std::string(52000, '[') + std::string(52000, ']') + "}";
   EXPECT_NE(input_error([&] { parse_product_inputs(deep, "stdin", 2, 2, 8); }).find("nested more than"),
