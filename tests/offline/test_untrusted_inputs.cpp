@@ -15,6 +15,7 @@
 #include "fit/fit_zh_job.h"
 #include "fit/mesh.h"
 #include "fit/zh_fit.h"
+#include "lighting/image_io.h"
 #include "shtool/rotation_helpers.h"
 #include "shtool/table.h"
 #include "shtool/zhf_rotation.h"
@@ -138,6 +139,25 @@ TEST(UntrustedGltf, BufferOfLengthZeroBesideABinChunk) {
   glb += std::string(4, '\0');
   const std::string m = input_error([&] { fit::load_gltf_bytes(glb, "m.glb"); });
   EXPECT_NE(m.find("m.glb: cannot read glTF"), std::string::npos) << "'" << m << "'";
+}
+
+// fuzz_images' finding: OpenEXR allocates what a header attribute claims before reading
+// it (a 364-byte file took 1.8 GB). Claims beyond the file's bytes are refused first: an
+// attribute's size, a preview's width x height, a stringvector's string length.
+TEST(UntrustedExr, AttributeClaimsBeyondTheFileAreRefusedBeforeOpenExrAllocates) {
+  const std::string head("\x76\x2f\x31\x01\x02\x00\x00\x00", 8);  // magic, version 2, single part
+  const std::string cases[] = {
+      head + std::string("huge\0opaque\0\x00\x00\x00\x70", 16) + std::string(64, '\0'),
+      head + std::string("thumb\0preview\0\x10\x00\x00\x00\xff\xff\x00\x00\xff\xff\x00\x00", 26) +
+          std::string(64, '\0'),
+      head + std::string("names\0stringvector\0\x08\x00\x00\x00\x00\x00\x00\x70\x41\x41\x41\x41", 31) +
+          std::string(64, '\0'),
+  };
+  for (const std::string& exr : cases) {
+    const std::string m = input_error([&] { lighting::decode_image(exr, "m.exr", std::int64_t(1) << 20); });
+    EXPECT_NE(m.find("m.exr: OpenEXR attribute"), std::string::npos) << "'" << m << "'";
+    EXPECT_NE(m.find("claims more bytes than the file holds"), std::string::npos) << "'" << m << "'";
+  }
 }
 
 TEST(UntrustedJsonInputs, DeepNestingAndNonNumbers) {
