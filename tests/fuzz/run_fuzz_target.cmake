@@ -1,15 +1,19 @@
 # Runs one fuzz target for SECONDS on a scratch copy of its seed corpus (so that what it
 # finds never lands in the source tree), then reports its last status line.
-#   cmake -DTARGET=... -DCORPUS=... -DSCRATCH=... -DSECONDS=30 [-DDICT=...] -P run_fuzz_target.cmake
+#   cmake -DTARGET=... -DCORPUS=... -DSCRATCH=... -DSECONDS=30 [-DDICT=...] [-DMALLOC_LIMIT_MB=...]
+#         -P run_fuzz_target.cmake
 cmake_minimum_required(VERSION 3.20)
 file(REMOVE_RECURSE "${SCRATCH}")
 file(MAKE_DIRECTORY "${SCRATCH}/corpus" "${SCRATCH}/artifacts")
 file(COPY "${CORPUS}/" DESTINATION "${SCRATCH}/corpus")
-set(dict_option)
+set(options)
 if(DICT)
-  set(dict_option "-dict=${DICT}")
+  list(APPEND options "-dict=${DICT}")
 endif()
-execute_process(COMMAND "${TARGET}" ${dict_option} -max_total_time=${SECONDS} -max_len=65536 -timeout=10
+if(MALLOC_LIMIT_MB)
+  list(APPEND options "-malloc_limit_mb=${MALLOC_LIMIT_MB}")
+endif()
+execute_process(COMMAND "${TARGET}" ${options} -max_total_time=${SECONDS} -max_len=65536 -timeout=10
                         -rss_limit_mb=1024 -print_final_stats=1 "-artifact_prefix=${SCRATCH}/artifacts/" "${SCRATCH}/corpus"
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 string(REGEX MATCHALL "stat::[a-z_]+:[ \t]*[0-9]+" stats "${err}")
