@@ -160,6 +160,18 @@ TEST(UntrustedExr, AttributeClaimsBeyondTheFileAreRefusedBeforeOpenExrAllocates)
   }
 }
 
+// fuzz_images' second finding: OpenEXR sizes its line buffers by the data window when it
+// opens a file, before shtool could compare it with max_texels (a 364-byte file with a
+// 3,997,712-texel-wide window took 36 s under ASan); the window is checked in the walk.
+TEST(UntrustedExr, DataWindowBeyondTheTexelBoundIsRefusedBeforeOpenExrOpens) {
+  std::string exr("\x76\x2f\x31\x01\x02\x00\x00\x00", 8);
+  exr += std::string("dataWindow\0box2i\0\x10\x00\x00\x00", 21);
+  exr += std::string("\x00\x00\x00\x00\x00\x00\x00\x00\x0f\x00\x3d\x00\x07\x00\x00\x00", 16);  // (0, 0)-(3997711, 7)
+  exr += std::string(64, '\0');
+  const std::string m = input_error([&] { lighting::decode_image(exr, "m.exr", std::int64_t(1) << 20); });
+  EXPECT_NE(m.find("m.exr: 3997712 x 8 texels is more than"), std::string::npos) << "'" << m << "'";
+}
+
 TEST(UntrustedJsonInputs, DeepNestingAndNonNumbers) {
   const std::string deep = "{\"inputs\": " + std::string(52000, '[') + std::string(52000, ']') + "}";
   EXPECT_NE(input_error([&] { parse_product_inputs(deep, "stdin", 2, 2, 8); }).find("nested more than"),

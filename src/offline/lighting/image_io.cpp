@@ -143,8 +143,9 @@ int exr_pool(int threads) {
 // whose unknown attribute claims 1.8 GB took that much (fuzz_images), and a preview's
 // width x height or a stringvector's string lengths are allocated the same way. This walks
 // the headers (name, type, int32 size, value; an empty name ends a header, and an empty
-// header ends a multi-part file's list) and refuses a claim the file's bytes cannot hold.
-void check_exr_headers(std::string_view b, const std::filesystem::path& name) {
+// header ends a multi-part file's list) and refuses a claim the file's bytes cannot hold,
+// and a data window beyond max_texels (OpenEXR sizes its line buffers by it on opening).
+void check_exr_headers(std::string_view b, const std::filesystem::path& name, std::int64_t max_texels) {
   auto le32 = [&](std::size_t at) {
     std::uint32_t v = 0;
     for (int k = 3; k >= 0; --k) v = (v << 8) | static_cast<unsigned char>(b[at + k]);
@@ -191,6 +192,10 @@ void check_exr_headers(std::string_view b, const std::filesystem::path& name) {
           k += 4 + n;
         }
       }
+      if (attribute == "dataWindow" && type == "box2i" && size == 16) {
+        const auto corner = [&](int k) { return std::int64_t(static_cast<std::int32_t>(le32(at + 4 * k))); };
+        check_size(name, corner(2) - corner(0) + 1, corner(3) - corner(1) + 1, max_texels);
+      }
       at += size;
     }
     if (!multipart) break;
@@ -199,7 +204,7 @@ void check_exr_headers(std::string_view b, const std::filesystem::path& name) {
 
 Image decode_exr(std::string_view bytes, const std::filesystem::path& name, std::int64_t max_texels, int threads,
                  std::uint32_t* crc) {
-  check_exr_headers(bytes, name);
+  check_exr_headers(bytes, name, max_texels);
   try {
     MemoryIStream stream(bytes, name.string(), crc != nullptr);
     Imf::InputFile file(stream, exr_pool(threads));
@@ -255,7 +260,7 @@ Image decode_exr(std::string_view bytes, const std::filesystem::path& name, std:
 ChannelImage decode_exr_channels(std::string_view bytes, const std::filesystem::path& name, std::int64_t max_texels,
                                  const std::vector<std::string>& only) {
   if (sniff(bytes) != Format::exr) fail(name, "not an OpenEXR file");
-  check_exr_headers(bytes, name);
+  check_exr_headers(bytes, name, max_texels);
   try {
     MemoryIStream stream(bytes, name.string());
     Imf::InputFile file(stream);
