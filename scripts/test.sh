@@ -58,7 +58,7 @@ echo "== fuzz targets (clang, libFuzzer)" >&2
 CXX=clang++ cmake -S "$root" -B "$build-fuzz" "${instrumented_flags[@]}" -DSHTOOL_FUZZ=ON \
   -DSHTOOL_BUILD_TESTS=OFF -DSHTOOL_BUILD_BENCH=OFF >/dev/null
 cmake --build "$build-fuzz" -j "$jobs" --target fuzz_table_reader fuzz_table_kinds fuzz_obj fuzz_json_inputs \
-  fuzz_images
+  fuzz_images fuzz_gltf fuzz_ply fuzz_engine_lights
 stage_done "fuzz build"
 ctest --test-dir "$build-fuzz" --output-on-failure -j "$jobs" -L fuzz
 stage_done "fuzz runs"

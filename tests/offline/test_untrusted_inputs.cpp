@@ -15,6 +15,7 @@
 #include "fit/transfer_file.h"
 #include "fit/mesh.h"
 #include "fit/zh_fit.h"
+#include "lighting/image_io.h"
 #include "shtool/rotation_helpers.h"
 #include "shtool/table.h"
 #include "shtool/zhf_rotation.h"
@@ -117,6 +118,58 @@ TEST(UntrustedObj, CoordinatesAndIndicesOutOfRange) {
   }
   // CR-only line endings are otherwise fine.
   EXPECT_EQ(fit::load_obj_text("v 0 0 0\rv 1 0 0\rv 0 1 0\rf 1 2 3\r", "m.obj").triangles.size(), 1u);
+}
+
+// The smallest .glb of fuzz_gltf's finding: a buffer of byteLength 0 beside a BIN chunk,
+// which tinygltf copied from data.at(0) of an empty vector (std::out_of_range, exit 3).
+TEST(UntrustedGltf, BufferOfLengthZeroBesideABinChunk) {
+  std::string json = R"({"asset":{"version":"2.0"},"buffers":[{"byteLength":0}]})";
+  json.resize((json.size() + 3) / 4 * 4, ' ');
+  std::string glb = "glTF";
+  auto u32 = [&](std::size_t v) {
+    for (int b = 0; b < 4; ++b) glb.push_back(static_cast<char>((v >> (8 * b)) & 0xff));
+  };
+  u32(2);
+  u32(12 + 8 + json.size() + 8 + 4);
+  u32(json.size());
+  u32(0x4E4F534A);  // JSON
+  glb += json;
+  u32(4);
+  u32(0x004E4942);  // BIN
+  glb += std::string(4, '\0');
+  const std::string m = input_error([&] { fit::load_gltf_bytes(glb, "m.glb"); });
+  EXPECT_NE(m.find("m.glb: cannot read glTF"), std::string::npos) << "'" << m << "'";
+}
+
+// fuzz_images' finding: OpenEXR allocates what a header attribute claims before reading
+// it (a 364-byte file took 1.8 GB). Claims beyond the file's bytes are refused first: an
+// attribute's size, a preview's width x height, a stringvector's string length.
+TEST(UntrustedExr, AttributeClaimsBeyondTheFileAreRefusedBeforeOpenExrAllocates) {
+  const std::string head("\x76\x2f\x31\x01\x02\x00\x00\x00", 8);  // magic, version 2, single part
+  const std::string cases[] = {
+      head + std::string("huge\0opaque\0\x00\x00\x00\x70", 16) + std::string(64, '\0'),
+      head + std::string("thumb\0preview\0\x10\x00\x00\x00\xff\xff\x00\x00\xff\xff\x00\x00", 26) +
+          std::string(64, '\0'),
+      head + std::string("names\0stringvector\0\x08\x00\x00\x00\x00\x00\x00\x70\x41\x41\x41\x41", 31) +
+          std::string(64, '\0'),
+  };
+  for (const std::string& exr : cases) {
+    const std::string m = input_error([&] { lighting::decode_image(exr, "m.exr", std::int64_t(1) << 20); });
+    EXPECT_NE(m.find("m.exr: OpenEXR attribute"), std::string::npos) << "'" << m << "'";
+    EXPECT_NE(m.find("claims more bytes than the file holds"), std::string::npos) << "'" << m << "'";
+  }
+}
+
+// fuzz_images' second finding: OpenEXR sizes its line buffers by the data window when it
+// opens a file, before shtool could compare it with max_texels (a 364-byte file with a
+// 3,997,712-texel-wide window took 36 s under ASan); the window is checked in the walk.
+TEST(UntrustedExr, DataWindowBeyondTheTexelBoundIsRefusedBeforeOpenExrOpens) {
+  std::string exr("\x76\x2f\x31\x01\x02\x00\x00\x00", 8);
+  exr += std::string("dataWindow\0box2i\0\x10\x00\x00\x00", 21);
+  exr += std::string("\x00\x00\x00\x00\x00\x00\x00\x00\x0f\x00\x3d\x00\x07\x00\x00\x00", 16);  // (0, 0)-(3997711, 7)
+  exr += std::string(64, '\0');
+  const std::string m = input_error([&] { lighting::decode_image(exr, "m.exr", std::int64_t(1) << 20); });
+  EXPECT_NE(m.find("m.exr: 3997712 x 8 texels is more than"), std::string::npos) << "'" << m << "'";
 }
 
 TEST(UntrustedJsonInputs, DeepNestingAndNonNumbers) {

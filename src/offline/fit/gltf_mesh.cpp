@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstring>
 #include <cstdint>
+#include <exception>
 #include <limits>
 #include <string>
 #include <vector>
@@ -290,11 +291,18 @@ Mesh load_gltf_bytes(const std::string& bytes, const std::filesystem::path& path
   // enough would exhaust the stack, so it is bounded before tinygltf sees the text.
   if (auto problem = table_format::check_json_depth(json_text_of(bytes, binary), table_format::kMaxJsonDepth))
     fail(path, "glTF JSON " + *problem);
-  const bool ok =
-      binary ? loader.LoadBinaryFromMemory(&model, &err, &warn, reinterpret_cast<const unsigned char*>(bytes.data()),
-                                           static_cast<unsigned int>(bytes.size()), base)
-             : loader.LoadASCIIFromString(&model, &err, &warn, bytes.data(), static_cast<unsigned int>(bytes.size()),
-                                          base);
+  bool ok = false;
+  try {
+    ok = binary ? loader.LoadBinaryFromMemory(&model, &err, &warn, reinterpret_cast<const unsigned char*>(bytes.data()),
+                                              static_cast<unsigned int>(bytes.size()), base)
+                : loader.LoadASCIIFromString(&model, &err, &warn, bytes.data(),
+                                             static_cast<unsigned int>(bytes.size()), base);
+  } catch (const std::exception& e) {
+    // tinygltf reports most problems in `err`, but some reach a throwing library call: a
+    // GLB buffer of byteLength 0 beside a BIN chunk is copied from data.at(0) of an empty
+    // vector (std::out_of_range; found by fuzz_gltf).
+    fail(path, std::string("cannot read glTF: tinygltf failed (") + e.what() + ")");
+  }
   if (!ok) {
     while (!err.empty() && (err.back() == '\n' || err.back() == ' ')) err.pop_back();
     fail(path, "cannot read glTF" + (err.empty() ? std::string() : ": " + err));

@@ -139,8 +139,72 @@ int exr_pool(int threads) {
   return pool;
 }
 
+// OpenEXR allocates what a header attribute claims before reading it: a 364-byte file
+// whose unknown attribute claims 1.8 GB took that much (fuzz_images), and a preview's
+// width x height or a stringvector's string lengths are allocated the same way. This walks
+// the headers (name, type, int32 size, value; an empty name ends a header, and an empty
+// header ends a multi-part file's list) and refuses a claim the file's bytes cannot hold,
+// and a data window beyond max_texels (OpenEXR sizes its line buffers by it on opening).
+void check_exr_headers(std::string_view b, const std::filesystem::path& name, std::int64_t max_texels) {
+  auto le32 = [&](std::size_t at) {
+    std::uint32_t v = 0;
+    for (int k = 3; k >= 0; --k) v = (v << 8) | static_cast<unsigned char>(b[at + k]);
+    return v;
+  };
+  auto too_short = [&] { fail(name, "the OpenEXR header ends before its attributes do"); };
+  if (b.size() < 8) too_short();
+  const bool multipart = (le32(4) & 0x1000) != 0;
+  std::size_t at = 8;
+  auto word = [&] {  // a NUL-terminated name
+    const std::size_t end = b.find('\0', at);
+    if (end == std::string_view::npos) too_short();
+    const std::string_view w = b.substr(at, end - at);
+    at = end + 1;
+    return w;
+  };
+  for (bool first = true;; first = false) {
+    if (at >= b.size()) too_short();
+    if (b[at] == '\0' && !first) break;  // the empty header after the last part
+    while (true) {
+      if (at >= b.size()) too_short();
+      if (b[at] == '\0') {
+        ++at;
+        break;
+      }
+      const std::string_view attribute = word(), type = word();
+      if (b.size() - at < 4) too_short();
+      const std::uint32_t size = le32(at);
+      at += 4;
+      auto claims_too_much = [&] {
+        std::string shown;  // the file's bytes, printable ones only
+        for (char c : attribute.substr(0, 40)) shown += c >= 0x20 && c < 0x7f ? c : '?';
+        fail(name, "OpenEXR attribute '" + shown + "' claims more bytes than the file holds");
+      };
+      if (size > 0x7fffffffu || size > b.size() - at) claims_too_much();
+      const std::string_view value = b.substr(at, size);
+      if (type == "preview") {  // width, height, then 4 bytes per pixel
+        if (size < 8 || std::uint64_t(le32(at)) * le32(at + 4) > (size - 8) / 4) claims_too_much();
+      } else if (type == "stringvector") {  // int32 length, then the string, repeated
+        for (std::size_t k = 0; k < value.size();) {
+          if (value.size() - k < 4) claims_too_much();
+          const std::uint32_t n = le32(at + k);
+          if (n > value.size() - k - 4) claims_too_much();
+          k += 4 + n;
+        }
+      }
+      if (attribute == "dataWindow" && type == "box2i" && size == 16) {
+        const auto corner = [&](int k) { return std::int64_t(static_cast<std::int32_t>(le32(at + 4 * k))); };
+        check_size(name, corner(2) - corner(0) + 1, corner(3) - corner(1) + 1, max_texels);
+      }
+      at += size;
+    }
+    if (!multipart) break;
+  }
+}
+
 Image decode_exr(std::string_view bytes, const std::filesystem::path& name, std::int64_t max_texels, int threads,
                  std::uint32_t* crc) {
+  check_exr_headers(bytes, name, max_texels);
   try {
     MemoryIStream stream(bytes, name.string(), crc != nullptr);
     Imf::InputFile file(stream, exr_pool(threads));
@@ -196,6 +260,7 @@ Image decode_exr(std::string_view bytes, const std::filesystem::path& name, std:
 ChannelImage decode_exr_channels(std::string_view bytes, const std::filesystem::path& name, std::int64_t max_texels,
                                  const std::vector<std::string>& only) {
   if (sniff(bytes) != Format::exr) fail(name, "not an OpenEXR file");
+  check_exr_headers(bytes, name, max_texels);
   try {
     MemoryIStream stream(bytes, name.string());
     Imf::InputFile file(stream);
