@@ -9,6 +9,8 @@
 
 #include <gtest/gtest.h>
 
+#include "scratch_files.h"
+
 #include "common/generator_record.h"
 #include "common/input_error.h"
 #include "common/sh_inputs.h"
@@ -170,6 +172,16 @@ TEST(UntrustedExr, DataWindowBeyondTheTexelBoundIsRefusedBeforeOpenExrOpens) {
   exr += std::string(64, '\0');
   const std::string m = input_error([&] { lighting::decode_image(exr, "m.exr", std::int64_t(1) << 20); });
   EXPECT_NE(m.find("m.exr: 3997712 x 8 texels is more than"), std::string::npos) << "'" << m << "'";
+}
+
+TEST(UntrustedExr, AChannelListCutShortIsRefusedBeforeOpenExrAllocates) {
+  // fuzz_images: every declared size fits the file, yet OpenEXR's C++ library allocated
+  // 1.6 GB from a size it misread; OpenEXRCore refuses the headers first.
+  const std::string exr =
+      test::read_file(std::filesystem::path(SHTOOL_SOURCE_DIR) / "tests/fuzz/corpus/images/exr_chlist_desync_oom.exr");
+  ASSERT_EQ(exr.size(), 405u);
+  const std::string m = input_error([&] { lighting::decode_image(exr, "m.exr", std::int64_t(1) << 20); });
+  EXPECT_NE(m.find("m.exr: EXR: "), std::string::npos) << "'" << m << "'";
 }
 
 TEST(UntrustedJsonInputs, DeepNestingAndNonNumbers) {
