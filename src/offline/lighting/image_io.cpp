@@ -233,6 +233,9 @@ void check_exr_with_core(std::string_view b, const std::filesystem::path& name) 
   init.read_fn = exr_core_read;
   init.size_fn = exr_core_size;
   init.error_handler_fn = exr_core_error;
+  // Strict: every attribute the format requires present and of its type; a header
+  // without them is where the C++ library's reader loses its place.
+  init.flags = EXR_CONTEXT_FLAG_STRICT_HEADER;
   g_exr_core_message.clear();
   exr_context_t context = nullptr;
   const exr_result_t rc = exr_start_read(&context, name.c_str(), &init);
