@@ -283,6 +283,31 @@ TEST(CubemapProjection, FaceTableAndFrame) {
   EXPECT_TRUE(m.value().direction(CubeFace::px, 0, 0).isApprox(Eigen::Vector3d(-1, 0, 0)));
 }
 
+
+// The coefficients against the reference's per-texel integrals (texel_integrals) summed
+// in long double: with 6 R^2 = 14k..38k texels, project_cubemap_reference's own double
+// sums drift by about sqrt(6 R^2) ulps, as much as the tolerance (4e-15 of the largest).
+void expect_near_texel_integral_sums(const std::array<FloatImageView, 6>& v, int size, int channels, int order,
+                                     bool mirror, const EnvCoefficients& fast) {
+  const CubemapProjector p = CubemapProjector::create(size, order, mirror).value();
+  const int n = sh_count(order);
+  std::vector<Ld> slow(static_cast<std::size_t>(n) * channels, 0);
+  std::vector<double> integral(n);
+  for (int f = 0; f < 6; ++f)
+    for (int y = 0; y < size; ++y)
+      for (int x = 0; x < size; ++x) {
+        p.texel_integrals(static_cast<CubeFace>(f), x, y, integral);
+        const float* texel = v[f].row(y) + static_cast<std::size_t>(x) * channels;
+        for (int i = 0; i < n; ++i)
+          for (int c = 0; c < channels; ++c) slow[i * channels + c] += Ld(integral[i]) * texel[c];
+      }
+  double scale = 0;
+  for (Ld c : slow) scale = std::max(scale, static_cast<double>(std::abs(c)));
+  for (std::size_t i = 0; i < slow.size(); ++i)
+    ASSERT_NEAR(fast.coefficients[i], static_cast<double>(slow[i]), 4e-15 * scale)
+        << "size " << size << " order " << order << " coefficient " << i / channels;
+}
+
 TEST(CubemapProjection, FastPathMatchesTheReferenceToRoundOff) {
   // The class-folded path against every texel's own rule in shtool's frame: the same
   // integrals, summed in another order, over odd and even faces (classes of 1, 4 and 8
@@ -299,26 +324,7 @@ TEST(CubemapProjection, FastPathMatchesTheReferenceToRoundOff) {
     const auto v = views(faces, k.size, k.channels);
     const Result<EnvCoefficients> fast = project_cubemap(v, k.order, k.mirror);
     ASSERT_TRUE(fast);
-    // The reference's per-texel integrals (texel_integrals), summed in long double: with
-    // 6 R^2 = 14k..38k texels, project_cubemap_reference's own double sums drift by
-    // about sqrt(6 R^2) ulps, as much as the tolerance.
-    const CubemapProjector p = CubemapProjector::create(k.size, k.order, k.mirror).value();
-    const int n = sh_count(k.order);
-    std::vector<Ld> slow(static_cast<std::size_t>(n) * k.channels, 0);
-    std::vector<double> integral(n);
-    for (int f = 0; f < 6; ++f)
-      for (int y = 0; y < k.size; ++y)
-        for (int x = 0; x < k.size; ++x) {
-          p.texel_integrals(static_cast<CubeFace>(f), x, y, integral);
-          const float* texel = v[f].row(y) + static_cast<std::size_t>(x) * k.channels;
-          for (int i = 0; i < n; ++i)
-            for (int c = 0; c < k.channels; ++c) slow[i * k.channels + c] += Ld(integral[i]) * texel[c];
-        }
-    double scale = 0;
-    for (Ld c : slow) scale = std::max(scale, static_cast<double>(std::abs(c)));
-    for (std::size_t i = 0; i < slow.size(); ++i)
-      ASSERT_NEAR(fast.value().coefficients[i], static_cast<double>(slow[i]), 4e-15 * scale)
-          << "size " << k.size << " order " << k.order << " coefficient " << i / k.channels;
+    expect_near_texel_integral_sums(v, k.size, k.channels, k.order, k.mirror, fast.value());
   }
 }
 
@@ -341,26 +347,7 @@ TEST(CubemapProjection, FastPathMatchesTheReferenceOnFacesOfManyTiles) {
     }
     const Result<EnvCoefficients> fast = project_cubemap(v, k.order, k.mirror);
     ASSERT_TRUE(fast);
-    // The reference's per-texel integrals (texel_integrals), summed in long double: with
-    // 6 R^2 = 14k..38k texels, project_cubemap_reference's own double sums drift by
-    // about sqrt(6 R^2) ulps, as much as the tolerance.
-    const CubemapProjector p = CubemapProjector::create(k.size, k.order, k.mirror).value();
-    const int n = sh_count(k.order);
-    std::vector<Ld> slow(static_cast<std::size_t>(n) * k.channels, 0);
-    std::vector<double> integral(n);
-    for (int f = 0; f < 6; ++f)
-      for (int y = 0; y < k.size; ++y)
-        for (int x = 0; x < k.size; ++x) {
-          p.texel_integrals(static_cast<CubeFace>(f), x, y, integral);
-          const float* texel = v[f].row(y) + static_cast<std::size_t>(x) * k.channels;
-          for (int i = 0; i < n; ++i)
-            for (int c = 0; c < k.channels; ++c) slow[i * k.channels + c] += Ld(integral[i]) * texel[c];
-        }
-    double scale = 0;
-    for (Ld c : slow) scale = std::max(scale, static_cast<double>(std::abs(c)));
-    for (std::size_t i = 0; i < slow.size(); ++i)
-      ASSERT_NEAR(fast.value().coefficients[i], static_cast<double>(slow[i]), 4e-15 * scale)
-          << "size " << k.size << " order " << k.order << " coefficient " << i / k.channels;
+    expect_near_texel_integral_sums(v, k.size, k.channels, k.order, k.mirror, fast.value());
   }
 }
 
