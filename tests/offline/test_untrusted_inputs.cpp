@@ -186,6 +186,16 @@ TEST(UntrustedExr, AChannelListCutShortIsRefusedBeforeOpenExrAllocates) {
   }
 }
 
+TEST(UntrustedPng, AChunkClaimingMoreThanTheFileIsRefusedBeforeStbAllocates) {
+  // fuzz_images: an 8 x 4 PNG whose IDAT length field claims 1.7 GB.
+  const std::string png = test::read_file(std::filesystem::path(SHTOOL_SOURCE_DIR) /
+                                          "tests/fuzz/corpus/images/png_chunk_claims_1_7_gb.png");
+  ASSERT_EQ(png.size(), 78u);
+  const std::string m = input_error([&] { lighting::decode_image(png, "m.png", std::int64_t(1) << 20); });
+  EXPECT_NE(m.find("m.png: PNG: chunk 'IDAT' claims 1785750805 bytes, more than the file holds"), std::string::npos)
+      << "'" << m << "'";
+}
+
 TEST(UntrustedJsonInputs, DeepNestingAndNonNumbers) {
   const std::string deep = "{\"inputs\": " + std::string(52000, '[') + std::string(52000, ']') + "}";
   EXPECT_NE(input_error([&] { parse_product_inputs(deep, "stdin", 2, 2, 8); }).find("nested more than"),

@@ -422,6 +422,22 @@ void check_jpeg_complete(std::string_view b, const std::filesystem::path& name) 
   }
 }
 
+// stb_image allocates what a PNG chunk's length field claims before it reads the chunk:
+// a 78-byte file whose IDAT claims 1.7 GB took that much (fuzz_images). Every chunk
+// (length, type, data, CRC) must fit the bytes that follow it.
+void check_png_chunks(std::string_view b, const std::filesystem::path& name) {
+  std::size_t at = 8;  // after the signature
+  while (at + 8 <= b.size()) {
+    const auto byte = [&](std::size_t i) { return std::uint32_t(static_cast<unsigned char>(b[i])); };
+    const std::uint32_t length = byte(at) << 24 | byte(at + 1) << 16 | byte(at + 2) << 8 | byte(at + 3);
+    const std::string type(b.substr(at + 4, 4));
+    if (length > b.size() - at - 8 || b.size() - at - 8 - length < 4)
+      fail(name, "PNG: chunk '" + type + "' claims " + std::to_string(length) + " bytes, more than the file holds");
+    at += 12 + std::size_t(length);
+    if (type == "IEND") return;
+  }
+}
+
 // Whether `size` bytes can hold a w x h image at all, checked before a decoder allocates
 // for it: a crafted header may claim any size. JPEG codes every 8 x 8 block of the first
 // component in at least one bit; PNG's deflate expands at most 1032-fold (258-byte
@@ -440,6 +456,7 @@ void check_bytes_can_hold(std::string_view bytes, Format format, std::int64_t w,
 Image decode_stb(std::string_view bytes, const std::filesystem::path& name, Format format, std::int64_t max_texels) {
   if (format == Format::hdr) check_hdr_complete(bytes, name, max_texels);
   if (format == Format::jpeg) check_jpeg_complete(bytes, name);
+  if (format == Format::png) check_png_chunks(bytes, name);
   const auto* data = reinterpret_cast<const stbi_uc*>(bytes.data());
   const int size = static_cast<int>(std::min<std::size_t>(bytes.size(), INT32_MAX));
   int w = 0, h = 0, comp = 0;
