@@ -6,6 +6,7 @@
 #include <atomic>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <random>
 #include <stdexcept>
 #include <string>
@@ -20,6 +21,7 @@
 #include <gtest/gtest.h>
 
 #include "common/atomic_file.h"
+#include "common/finite.h"
 #include "common/input_error.h"
 #include "common/job_outputs.h"
 #include "common/input_file.h"
@@ -259,6 +261,20 @@ TEST_F(CommonFiles, InputReaderMessages) {
   // Brackets inside strings do not count.
   write_file_atomically(dir_ / "ok.json", "{\"s\": \"" + std::string(1000, '[') + "\"}");
   EXPECT_EQ(message(dir_ / "ok.json"), "");
+}
+
+TEST(FiniteOutputs, JsonWithANanOrAnInfinityAnywhereIsRefused) {
+  const nlohmann::json good = {{"a", {1.5, 2}}, {"b", {{"c", -0.25}}}};
+  EXPECT_EQ(dump_finite(good, "--json", 2), good.dump(2));
+  for (double bad : {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity()}) {
+    const nlohmann::json nested = {{"a", {1.5, 2}}, {"b", {{"c", {0.0, bad}}}}};
+    try {
+      (void)dump_finite(nested, "--json");
+      FAIL() << "expected InputError";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("--json: a value is not finite"), std::string::npos) << e.what();
+    }
+  }
 }
 
 TEST(ParallelFor, SameResultsForEveryThreadCountAndAllItemsOnce) {

@@ -35,19 +35,19 @@ inline bool finite_as_float(double v) {
   return std::isfinite(v) && std::abs(v) <= static_cast<double>(std::numeric_limits<float>::max());
 }
 
+// Whether a JSON value holds a NaN or an infinity anywhere in it.
+inline bool has_non_finite(const nlohmann::json& j) {
+  if (j.is_number_float()) return !std::isfinite(j.get<double>());
+  if (j.is_array() || j.is_object())
+    for (const nlohmann::json& value : j)
+      if (has_non_finite(value)) return true;
+  return false;
+}
+
 // The JSON text of `doc` (nlohmann's dump with `indent`), refusing a NaN or an infinity
 // anywhere in it: nlohmann would write null. `what` names the output in the message.
 inline std::string dump_finite(const nlohmann::json& doc, std::string_view what, int indent = -1) {
-  struct Walk {
-    static const char* first_non_finite(const nlohmann::json& j) {
-      if (j.is_number_float()) return std::isfinite(j.get<double>()) ? nullptr : "";
-      if (j.is_array() || j.is_object())
-        for (const auto& [key, value] : j.items())
-          if (first_non_finite(value)) return "";
-      return nullptr;
-    }
-  };
-  if (Walk::first_non_finite(doc))
+  if (has_non_finite(doc))
     throw InputError(std::string(what) + ": a value is not finite (a computation overflowed: no output holds NaN or "
                      "infinity)");
   return doc.dump(indent);

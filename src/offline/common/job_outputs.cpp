@@ -2,7 +2,7 @@
 
 #include <cerrno>
 #include <cstring>
-#include <optional>
+#include <stdexcept>
 #include <system_error>
 
 #include <unistd.h>
