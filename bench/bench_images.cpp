@@ -3,6 +3,7 @@
 //
 //   BM_DecodeExr/T        decode_image of a 4096 x 2048 float ZIP OpenEXR (100 MB) on T
 //                         threads (OpenEXR's pool; 0: every core)
+//   BM_DecodeExrCppLibrary/T  the same bytes decoded by OpenEXR's C++ library, its pool at T
 //   BM_Crc32              input_crc32 of the same bytes (what read_image hashes)
 //   BM_ReadFile           read_input_file of that file (page cache to memory)
 //   BM_ReadImage/T        read_image of that file: read once, decoded on T threads, hashed
@@ -17,14 +18,22 @@
 //   build/bench/bench_images --benchmark_min_time=0.1 --benchmark_repetitions=3 --benchmark_report_aggregates_only=true
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <random>
 #include <string>
+#include <vector>
 
 #include <unistd.h>
 
 #include <benchmark/benchmark.h>
+
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfIO.h>
+#include <ImfInputFile.h>
+#include <ImfThreading.h>
 
 #include "common/input_file.h"
 #include "lighting/image_io.h"
@@ -81,6 +90,43 @@ void BM_DecodeExr(benchmark::State& state) {
   state.counters["MB"] = exr_bytes().size() / 1e6;
 }
 BENCHMARK(BM_DecodeExr)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// The peer: OpenEXR's C++ library decoding the same bytes into the same layout, its
+// global pool at T workers (0: none, the calling thread decodes).
+void BM_DecodeExrCppLibrary(benchmark::State& state) {
+  class Bytes : public Imf::IStream {
+   public:
+    explicit Bytes(const std::string& b) : Imf::IStream("memory"), b_(b) {}
+    bool read(char c[], int n) override {
+      std::memcpy(c, b_.data() + pos_, static_cast<std::size_t>(n));
+      pos_ += static_cast<std::uint64_t>(n);
+      return pos_ < b_.size();
+    }
+    std::uint64_t tellg() override { return pos_; }
+    void seekg(std::uint64_t pos) override { pos_ = pos; }
+
+   private:
+    const std::string& b_;
+    std::uint64_t pos_ = 0;
+  };
+  const int threads = static_cast<int>(state.range(0));
+  Imf::setGlobalThreadCount(threads);
+  for (auto _ : state) {
+    std::vector<float> texels(std::size_t(image().width) * image().height * 3);  // as decode_image's
+    Bytes stream(exr_bytes());
+    Imf::InputFile file(stream, threads);
+    const Imath::Box2i window = file.header().dataWindow();
+    Imf::FrameBuffer fb;
+    for (int c = 0; c < 3; ++c)
+      fb.insert(std::string(1, "RGB"[c]), Imf::Slice::Make(Imf::FLOAT, texels.data() + c, window, 3 * sizeof(float),
+                                                           image().width * 3 * sizeof(float)));
+    file.setFrameBuffer(fb);
+    file.readPixels(window.min.y, window.max.y);
+    benchmark::DoNotOptimize(texels.data());
+  }
+  Imf::setGlobalThreadCount(0);
+}
+BENCHMARK(BM_DecodeExrCppLibrary)->Arg(0)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_Crc32(benchmark::State& state) {
   const std::string& bytes = exr_bytes();

@@ -3,7 +3,7 @@
 # fixed (SEED, default 1): the suite replays the committed corpus and then the same
 # mutations each run, so its verdict does not depend on luck; longer runs with other
 # seeds happen outside it, and what they find joins the corpus with a regression test.
-#   cmake -DTARGET=... -DCORPUS=... -DSCRATCH=... -DSECONDS=30 [-DDICT=...] [-DMALLOC_LIMIT_MB=...]
+#   cmake -DTARGET=... -DCORPUS=... -DSCRATCH=... -DSECONDS=30 [-DDICT=...]
 #         -P run_fuzz_target.cmake
 cmake_minimum_required(VERSION 3.20)
 file(REMOVE_RECURSE "${SCRATCH}")
@@ -15,9 +15,6 @@ endif()
 set(options -seed=${SEED})
 if(DICT)
   list(APPEND options "-dict=${DICT}")
-endif()
-if(MALLOC_LIMIT_MB)
-  list(APPEND options "-malloc_limit_mb=${MALLOC_LIMIT_MB}")
 endif()
 execute_process(COMMAND "${TARGET}" ${options} -max_total_time=${SECONDS} -max_len=65536 -timeout=10
                         -rss_limit_mb=1024 -print_final_stats=1 "-artifact_prefix=${SCRATCH}/artifacts/" "${SCRATCH}/corpus"

@@ -8,6 +8,7 @@
 #include <fstream>
 #include <limits>
 #include <random>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -27,6 +28,7 @@
 #include "common/input_file.h"
 #include "common/parallel_for.h"
 #include "common/random.h"
+#include "shtool/table.h"
 
 namespace shtool {
 namespace {
@@ -390,3 +392,18 @@ TEST(InputFile, MappedInputIsTheFilesBytes) {
 }
 
 }  // namespace
+
+// input_crc32 is zlib's fast CRC; the table format's byte-at-a-time table_crc32 is the
+// reference it must equal (a table records its input's CRC, and tests recompute it so).
+TEST(InputCrc32, EqualsTheTableFormatsReferenceCrc) {
+  std::mt19937 rng(7);
+  for (std::size_t n : {std::size_t{0}, std::size_t{1}, std::size_t{7}, std::size_t{64}, std::size_t{1000},
+                        std::size_t{1} << 20}) {
+    std::string bytes(n, '\0');
+    for (char& c : bytes) c = static_cast<char>(rng());
+    EXPECT_EQ(shtool::input_crc32(bytes),
+              shtool::table_crc32(std::as_bytes(std::span<const char>(bytes.data(), bytes.size()))))
+        << n << " bytes";
+  }
+  EXPECT_EQ(shtool::input_crc32("123456789"), 0xCBF43926u);
+}

@@ -10,6 +10,7 @@
 #include <sys/mman.h>
 #include <sys/stat.h>
 #include <unistd.h>
+#include <zlib.h>
 
 #include "common/input_error.h"
 #include "io/table_format.h"
@@ -89,8 +90,12 @@ nlohmann::json read_json_input(const std::filesystem::path& path, std::string_vi
   return parse_json_input(read_input_file(path, what), path, what);
 }
 
+// zlib's CRC-32 is table_crc32's (the same polynomial and conditioning), computed several
+// bytes at a time: an input image of 100 MB is hashed in tens of milliseconds, not a
+// quarter of a second.
 std::uint32_t input_crc32(std::string_view bytes) {
-  return table_crc32(std::span<const std::byte>(reinterpret_cast<const std::byte*>(bytes.data()), bytes.size()));
+  return static_cast<std::uint32_t>(
+      crc32_z(0, reinterpret_cast<const Bytef*>(bytes.data()), static_cast<z_size_t>(bytes.size())));
 }
 
 }  // namespace shtool

@@ -21,11 +21,11 @@
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
 #include <openexr.h>
-#include <ImfThreading.h>
 
 #include "common/finite.h"
 #include "common/input_error.h"
 #include "common/input_file.h"
+#include "common/parallel_for.h"
 #include "shtool/table.h"
 
 namespace shtool::lighting {
@@ -74,140 +74,14 @@ void check_size(const std::filesystem::path& name, std::int64_t w, std::int64_t 
                    std::to_string(max_texels) + " accepted");
 }
 
-// ---- OpenEXR from and to memory
-class MemoryIStream : public Imf::IStream {
- public:
-  // With `crc`, the CRC-32 of the bytes is run along as OpenEXR reads them (in order, in
-  // its reading thread, while its pool decompresses), so the file's bytes are hashed
-  // while they are in cache; finish_crc() hashes what was skipped or read out of order.
-  MemoryIStream(std::string_view bytes, const std::string& name, bool crc = false)
-      : Imf::IStream(name.c_str()), bytes_(bytes), hashing_(crc) {}
-  bool read(char c[], int n) override {
-    if (n < 0 || pos_ > bytes_.size() || static_cast<std::uint64_t>(n) > bytes_.size() - pos_)
-      throw std::runtime_error("unexpected end of file");
-    std::memcpy(c, bytes_.data() + pos_, static_cast<std::size_t>(n));
-    if (hashing_ && pos_ == hashed_) {
-      crc_ = table_crc32(std::span<const std::byte>(reinterpret_cast<const std::byte*>(c), static_cast<std::size_t>(n)),
-                         crc_);
-      hashed_ += static_cast<std::uint64_t>(n);
-    }
-    pos_ += static_cast<std::uint64_t>(n);
-    return pos_ < bytes_.size();
-  }
-  std::uint64_t tellg() override { return pos_; }
-  void seekg(std::uint64_t pos) override { pos_ = pos; }
-  std::uint32_t finish_crc() {
-    const std::string_view rest = bytes_.substr(static_cast<std::size_t>(hashed_));
-    hashed_ = bytes_.size();
-    return crc_ = table_crc32(
-               std::span<const std::byte>(reinterpret_cast<const std::byte*>(rest.data()), rest.size()), crc_);
-  }
-
- private:
-  std::string_view bytes_;
-  std::uint64_t pos_ = 0;
-  bool hashing_ = false;
-  std::uint64_t hashed_ = 0;  // bytes [0, hashed_) are in crc_
-  std::uint32_t crc_ = 0;
-};
-
-class MemoryOStream : public Imf::OStream {
- public:
-  MemoryOStream() : Imf::OStream("memory") {}
-  void write(const char c[], int n) override {
-    if (pos_ + n > data_.size()) data_.resize(pos_ + n);
-    std::memcpy(data_.data() + pos_, c, static_cast<std::size_t>(n));
-    pos_ += static_cast<std::size_t>(n);
-  }
-  std::uint64_t tellp() override { return pos_; }
-  void seekp(std::uint64_t pos) override { pos_ = static_cast<std::size_t>(pos); }
-  std::string& data() { return data_; }
-
- private:
-  std::string data_;
-  std::size_t pos_ = 0;
-};
-
-// OpenEXR decompresses line blocks on its global pool (exact either way): `threads`
-// workers (1: none, the calling thread decodes). The pool is the process's, so its
-// size is set under a lock and only when it changes.
-int exr_pool(int threads) {
-  const int workers = threads <= 0 ? static_cast<int>(std::max(1u, std::thread::hardware_concurrency())) : threads;
-  const int pool = workers <= 1 ? 0 : workers;
-  static std::mutex mutex;
-  const std::lock_guard<std::mutex> lock(mutex);
-  if (Imf::globalThreadCount() != pool) Imf::setGlobalThreadCount(pool);
-  return pool;
-}
-
-// OpenEXR allocates what a header attribute claims before reading it: a 364-byte file
-// whose unknown attribute claims 1.8 GB took that much (fuzz_images), and a preview's
-// width x height or a stringvector's string lengths are allocated the same way. This walks
-// the headers (name, type, int32 size, value; an empty name ends a header, and an empty
-// header ends a multi-part file's list) and refuses a claim the file's bytes cannot hold,
-// and a data window beyond max_texels (OpenEXR sizes its line buffers by it on opening).
-void check_exr_headers(std::string_view b, const std::filesystem::path& name, std::int64_t max_texels) {
-  auto le32 = [&](std::size_t at) {
-    std::uint32_t v = 0;
-    for (int k = 3; k >= 0; --k) v = (v << 8) | static_cast<unsigned char>(b[at + k]);
-    return v;
-  };
-  auto too_short = [&] { fail(name, "the OpenEXR header ends before its attributes do"); };
-  if (b.size() < 8) too_short();
-  const bool multipart = (le32(4) & 0x1000) != 0;
-  std::size_t at = 8;
-  auto word = [&] {  // a NUL-terminated name
-    const std::size_t end = b.find('\0', at);
-    if (end == std::string_view::npos) too_short();
-    const std::string_view w = b.substr(at, end - at);
-    at = end + 1;
-    return w;
-  };
-  for (bool first = true;; first = false) {
-    if (at >= b.size()) too_short();
-    if (b[at] == '\0' && !first) break;  // the empty header after the last part
-    while (true) {
-      if (at >= b.size()) too_short();
-      if (b[at] == '\0') {
-        ++at;
-        break;
-      }
-      const std::string_view attribute = word(), type = word();
-      if (b.size() - at < 4) too_short();
-      const std::uint32_t size = le32(at);
-      at += 4;
-      auto claims_too_much = [&] {
-        std::string shown;  // the file's bytes, printable ones only
-        for (char c : attribute.substr(0, 40)) shown += c >= 0x20 && c < 0x7f ? c : '?';
-        fail(name, "OpenEXR attribute '" + shown + "' claims more bytes than the file holds");
-      };
-      if (size > 0x7fffffffu || size > b.size() - at) claims_too_much();
-      const std::string_view value = b.substr(at, size);
-      if (type == "preview") {  // width, height, then 4 bytes per pixel
-        if (size < 8 || std::uint64_t(le32(at)) * le32(at + 4) > (size - 8) / 4) claims_too_much();
-      } else if (type == "stringvector") {  // int32 length, then the string, repeated
-        for (std::size_t k = 0; k < value.size();) {
-          if (value.size() - k < 4) claims_too_much();
-          const std::uint32_t n = le32(at + k);
-          if (n > value.size() - k - 4) claims_too_much();
-          k += 4 + n;
-        }
-      }
-      if (attribute == "dataWindow" && type == "box2i" && size == 16) {
-        const auto corner = [&](int k) { return std::int64_t(static_cast<std::int32_t>(le32(at + 4 * k))); };
-        check_size(name, corner(2) - corner(0) + 1, corner(3) - corner(1) + 1, max_texels);
-      }
-      at += size;
-    }
-    if (!multipart) break;
-  }
-}
-
-// OpenEXR's core library (OpenEXRCore, written to be fuzzed) parses the headers with every
-// size checked against its neighbours; the C++ library that decodes the pixels trusts
-// them: a 405-byte file whose channel list is cut short made it allocate 1.6 GB from a
-// size read inside another attribute (fuzz_images). The core parses the headers first
-// and its refusal is the message; the pixels are then decoded as before.
+// ---- OpenEXR
+// Files are read by OpenEXR's core library (OpenEXRCore, the format's C core, written to be
+// fuzzed): it parses the headers with every size checked against the file and its
+// neighbours, strictly (every attribute the format requires present and typed), and
+// decodes each chunk into the caller's buffer, converting half and uint to float. The C++
+// library trusted what headers claim: a 405-byte file whose channel list was cut short
+// made it allocate 1.6 GB from a size read inside another attribute (fuzz_images). Chunks
+// are independent, so they are decoded on every worker, each writing its own rows.
 thread_local std::string g_exr_core_message;
 
 int64_t exr_core_read(exr_const_context_t, void* user, void* buffer, uint64_t size, uint64_t offset,
@@ -227,124 +101,246 @@ void exr_core_error(exr_const_context_t, exr_result_t, const char* message) {
   if (g_exr_core_message.empty() && message) g_exr_core_message = message;
 }
 
-void check_exr_with_core(std::string_view b, const std::filesystem::path& name) {
-  exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
-  init.user_data = &b;
-  init.read_fn = exr_core_read;
-  init.size_fn = exr_core_size;
-  init.error_handler_fn = exr_core_error;
-  // Strict: every attribute the format requires present and of its type; a header
-  // without them is where the C++ library's reader loses its place.
-  init.flags = EXR_CONTEXT_FLAG_STRICT_HEADER;
-  g_exr_core_message.clear();
-  exr_context_t context = nullptr;
-  const exr_result_t rc = exr_start_read(&context, name.c_str(), &init);
-  if (context) exr_finish(&context);
-  if (rc != EXR_ERR_SUCCESS)
-    fail(name, "EXR: " + (g_exr_core_message.empty() ? std::string(exr_get_default_error_message(rc))
-                                                     : g_exr_core_message));
-}
-
-Image decode_exr(std::string_view bytes, const std::filesystem::path& name, std::int64_t max_texels, int threads,
-                 std::uint32_t* crc) {
-  check_exr_headers(bytes, name, max_texels);
-  check_exr_with_core(bytes, name);
-  try {
-    MemoryIStream stream(bytes, name.string(), crc != nullptr);
-    Imf::InputFile file(stream, exr_pool(threads));
-    const Imf::Header& header = file.header();
-    const Imath::Box2i data = header.dataWindow(), display = header.displayWindow();
-    if (data != display)
-      fail(name, "the data window (" + std::to_string(data.min.x) + ", " + std::to_string(data.min.y) + ")-(" +
-                     std::to_string(data.max.x) + ", " + std::to_string(data.max.y) +
-                     ") differs from the display window (" + std::to_string(display.min.x) + ", " +
-                     std::to_string(display.min.y) + ")-(" + std::to_string(display.max.x) + ", " +
-                     std::to_string(display.max.y) + "): crop or pad the image to its display window first");
+// The first part of an OpenEXR file, its headers parsed; decode() fills float texels.
+class ExrCoreFile {
+ public:
+  ExrCoreFile(std::string_view bytes, const std::filesystem::path& name, std::int64_t max_texels)
+      : bytes_(bytes), name_(name) {
+    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+    init.user_data = &bytes_;
+    init.read_fn = exr_core_read;
+    init.size_fn = exr_core_size;
+    init.error_handler_fn = exr_core_error;
+    init.flags = EXR_CONTEXT_FLAG_STRICT_HEADER;
+    g_exr_core_message.clear();
+    check(exr_start_read(&context_, name.c_str(), &init));
+    exr_storage_t storage;
+    check(exr_get_storage(context_, 0, &storage));
+    if (storage != EXR_STORAGE_SCANLINE && storage != EXR_STORAGE_TILED)
+      fail(name, "a deep OpenEXR image (one value per texel is read)");
+    tiled_ = storage == EXR_STORAGE_TILED;
+    exr_compression_t compression;
+    check(exr_get_compression(context_, 0, &compression));
+    dwa_ = compression == EXR_COMPRESSION_DWAA || compression == EXR_COMPRESSION_DWAB;
+    exr_attr_box2i_t data, display;
+    check(exr_get_data_window(context_, 0, &data));
+    check(exr_get_display_window(context_, 0, &display));
+    auto box = [](const exr_attr_box2i_t& b) {
+      char text[96];
+      std::snprintf(text, sizeof text, "(%d, %d)-(%d, %d)", b.min.x, b.min.y, b.max.x, b.max.y);
+      return std::string(text);
+    };
+    if (data.min.x != display.min.x || data.min.y != display.min.y || data.max.x != display.max.x ||
+        data.max.y != display.max.y)
+      fail(name, "the data window " + box(data) + " differs from the display window " + box(display) +
+                     ": crop or pad the image to its display window first");
+    min_y_ = data.min.y;
     const std::int64_t w = std::int64_t(data.max.x) - data.min.x + 1, h = std::int64_t(data.max.y) - data.min.y + 1;
     check_size(name, w, h, max_texels);
-    const Imf::ChannelList& list = header.channels();
-    std::array<const char*, 3> names{"R", "G", "B"};
-    const bool rgb = list.findChannel("R") && list.findChannel("G") && list.findChannel("B");
-    if (!rgb) {
-      if (!list.findChannel("Y")) {
-        std::string found;
-        for (auto c = list.begin(); c != list.end(); ++c) found += std::string(found.empty() ? "" : ", ") + c.name();
-        fail(name, "no R, G, B or Y channels (found: " + (found.empty() ? std::string("none") : found) + ")");
-      }
-      names = {"Y", "Y", "Y"};
+    width_ = static_cast<int>(w);
+    height_ = static_cast<int>(h);
+    const exr_attr_chlist_t* channels = nullptr;
+    check(exr_get_channels(context_, 0, &channels));
+    for (int c = 0; c < channels->num_channels; ++c) {
+      const exr_attr_chlist_entry_t& e = channels->entries[c];
+      channels_.emplace_back(e.name.str, static_cast<std::size_t>(e.name.length));
+      if (e.x_sampling != 1 || e.y_sampling != 1) fail(name, "channel " + channels_.back() + " is subsampled");
     }
-    for (const char* c : names) {
-      const Imf::Channel* ch = list.findChannel(c);
-      if (ch->xSampling != 1 || ch->ySampling != 1) fail(name, std::string("channel ") + c + " is subsampled");
+    if (tiled_) {  // level (0, 0): the full-resolution image of a mipmapped file
+      std::int32_t tile_w = 0, tile_h = 0;
+      check(exr_get_tile_sizes(context_, 0, 0, 0, &tile_w, &tile_h));
+      if (tile_w < 1 || tile_h < 1) fail(name, "OpenEXR: empty tiles");
+      tile_w_ = tile_w;
+      tile_h_ = tile_h;
+      tiles_x_ = static_cast<std::int32_t>((w + tile_w - 1) / tile_w);
+      tiles_y_ = static_cast<std::int32_t>((h + tile_h - 1) / tile_h);
+      chunks_ = std::size_t(tiles_x_) * std::size_t(tiles_y_);
+    } else {
+      check(exr_get_scanlines_per_chunk(context_, 0, &lines_per_chunk_));
+      if (lines_per_chunk_ < 1) fail(name, "OpenEXR: no scanlines per chunk");
+      chunks_ = static_cast<std::size_t>((h + lines_per_chunk_ - 1) / lines_per_chunk_);
     }
-    Image img;
-    img.width = static_cast<int>(w);
-    img.height = static_cast<int>(h);
-    img.texels.assign(static_cast<std::size_t>(w * h * 3), 0.0f);
-    Imf::FrameBuffer fb;
-    // A frame buffer holds one slice per channel name: grey (Y) goes into red, then is copied.
-    for (int c = 0; c < (rgb ? 3 : 1); ++c)
-      fb.insert(names[c], Imf::Slice::Make(Imf::FLOAT, img.texels.data() + c, data, 3 * sizeof(float),
-                                           static_cast<std::size_t>(w) * 3 * sizeof(float)));
-    file.setFrameBuffer(fb);
-    file.readPixels(data.min.y, data.max.y);
-    if (!rgb)
-      for (std::size_t i = 0; i < img.texels.size(); i += 3) img.texels[i + 1] = img.texels[i + 2] = img.texels[i];
-    if (crc) *crc = stream.finish_crc();
-    return img;
-  } catch (const InputError&) {
-    throw;
-  } catch (const std::exception& e) {
-    fail(name, std::string("OpenEXR: ") + e.what());
   }
+  ~ExrCoreFile() {
+    if (context_) exr_finish(&context_);
+  }
+  ExrCoreFile(const ExrCoreFile&) = delete;
+  ExrCoreFile& operator=(const ExrCoreFile&) = delete;
+
+  int width() const { return width_; }
+  int height() const { return height_; }
+  const std::vector<std::string>& channels() const { return channels_; }
+  bool has(std::string_view channel) const {
+    return std::find(channels_.begin(), channels_.end(), channel) != channels_.end();
+  }
+
+  // Channel names[i] into texels[t * stride + i] for every texel t (rows top first), on
+  // `threads` workers. Every texel is written: a chunk the file lacks is an error.
+  void decode(const std::vector<std::string>& names, float* texels, int stride, int threads) {
+    if (dwa_) return decode_dwa(names, texels, stride);
+    // A contiguous run of chunks per worker, through one pipeline: its buffers (a ZIP
+    // block of a 4096-wide image is 0.8 MB) are allocated once, not per chunk.
+    const std::size_t workers = std::min<std::size_t>(std::size_t(std::max(threads, 1)), chunks_);
+    parallel_for(workers, static_cast<int>(workers), [&](std::size_t w) {
+      exr_decode_pipeline_t pipeline = EXR_DECODE_PIPELINE_INITIALIZER;
+      struct Destroy {
+        exr_const_context_t context;
+        exr_decode_pipeline_t* pipeline;
+        ~Destroy() { exr_decoding_destroy(context, pipeline); }
+      } destroy{context_, &pipeline};
+      for (std::size_t chunk = chunks_ * w / workers; chunk < chunks_ * (w + 1) / workers; ++chunk)
+        decode_chunk(chunk, pipeline, chunk == chunks_ * w / workers, names, texels, stride);
+    });
+  }
+
+ private:
+  void check(exr_result_t rc) const {
+    if (rc == EXR_ERR_SUCCESS) return;
+    fail(name_, "OpenEXR: " + (g_exr_core_message.empty() ? std::string(exr_get_default_error_message(rc))
+                                                          : g_exr_core_message));
+  }
+
+  // OpenEXRCore 3.1 has no DWA decompressor: those files (headers parsed by the core
+  // above) are decoded by the C++ library, on one thread.
+  void decode_dwa(const std::vector<std::string>& names, float* texels, int stride) {
+    class Bytes : public Imf::IStream {
+     public:
+      explicit Bytes(std::string_view b) : Imf::IStream("memory"), b_(b) {}
+      bool read(char c[], int n) override {
+        if (n < 0 || pos_ > b_.size() || std::uint64_t(n) > b_.size() - pos_)
+          throw std::runtime_error("unexpected end of file");
+        std::memcpy(c, b_.data() + pos_, static_cast<std::size_t>(n));
+        pos_ += static_cast<std::uint64_t>(n);
+        return pos_ < b_.size();
+      }
+      std::uint64_t tellg() override { return pos_; }
+      void seekg(std::uint64_t pos) override { pos_ = pos; }
+
+     private:
+      std::string_view b_;
+      std::uint64_t pos_ = 0;
+    } stream(bytes_);
+    try {
+      Imf::InputFile file(stream, 0);
+      const Imath::Box2i window = file.header().dataWindow();
+      const std::size_t pixel = std::size_t(stride) * sizeof(float), row = std::size_t(width_) * pixel;
+      Imf::FrameBuffer fb;
+      for (std::size_t c = 0; c < names.size(); ++c)
+        fb.insert(names[c], Imf::Slice::Make(Imf::FLOAT, texels + c, window, pixel, row));
+      file.setFrameBuffer(fb);
+      file.readPixels(window.min.y, window.max.y);
+    } catch (const std::exception& e) {
+      fail(name_, std::string("OpenEXR: ") + e.what());
+    }
+  }
+
+  void decode_chunk(std::size_t chunk, exr_decode_pipeline_t& decode, bool first, const std::vector<std::string>& names,
+                    float* texels, int stride) {
+    g_exr_core_message.clear();  // this worker's own
+    exr_chunk_info_t info;
+    int x0 = 0, y0 = 0;
+    if (tiled_) {
+      const int tx = static_cast<int>(chunk % std::size_t(tiles_x_)), ty = static_cast<int>(chunk / std::size_t(tiles_x_));
+      check(exr_read_tile_chunk_info(context_, 0, tx, ty, 0, 0, &info));
+      x0 = tx * tile_w_;
+      y0 = ty * tile_h_;
+    } else {
+      check(exr_read_scanline_chunk_info(context_, 0, min_y_ + static_cast<int>(chunk) * lines_per_chunk_, &info));
+      y0 = info.start_y - min_y_;
+    }
+    if (x0 < 0 || y0 < 0 || info.width < 0 || info.height < 0 || x0 + info.width > width_ ||
+        y0 + info.height > height_)
+      fail(name_, "OpenEXR: chunk " + std::to_string(chunk) + " lies outside the data window");
+    check(first ? exr_decoding_initialize(context_, 0, &info, &decode) : exr_decoding_update(context_, 0, &info, &decode));
+    const std::size_t row = std::size_t(width_) * std::size_t(stride);
+    for (int c = 0; c < decode.channel_count; ++c) {
+      exr_coding_channel_info_t& ch = decode.channels[c];
+      const auto slot = std::find(names.begin(), names.end(), std::string_view(ch.channel_name));
+      if (slot == names.end()) continue;  // not asked for: skipped by the decoder
+      ch.decode_to_ptr = reinterpret_cast<std::uint8_t*>(
+          texels + std::size_t(y0) * row + std::size_t(x0) * std::size_t(stride) + std::size_t(slot - names.begin()));
+      ch.user_pixel_stride = static_cast<std::int32_t>(std::size_t(stride) * sizeof(float));
+      ch.user_line_stride = static_cast<std::int32_t>(row * sizeof(float));
+      ch.user_data_type = EXR_PIXEL_FLOAT;
+      ch.user_bytes_per_element = sizeof(float);
+    }
+    check(exr_decoding_choose_default_routines(context_, 0, &decode));
+    check(exr_decoding_run(context_, 0, &decode));
+  }
+
+  std::string_view bytes_;
+  std::filesystem::path name_;
+  exr_context_t context_ = nullptr;
+  bool tiled_ = false, dwa_ = false;
+  int width_ = 0, height_ = 0, min_y_ = 0;
+  std::vector<std::string> channels_;
+  std::int32_t lines_per_chunk_ = 0, tiles_x_ = 0, tiles_y_ = 0;
+  int tile_w_ = 0, tile_h_ = 0;
+  std::size_t chunks_ = 0;
+};
+
+Image decode_exr(std::string_view bytes, const std::filesystem::path& name, std::int64_t max_texels, int threads) {
+  ExrCoreFile file(bytes, name, max_texels);
+  const bool rgb = file.has("R") && file.has("G") && file.has("B");
+  if (!rgb && !file.has("Y")) {
+    std::string found;
+    for (const std::string& c : file.channels()) found += (found.empty() ? "" : ", ") + c;
+    fail(name, "no R, G, B or Y channels (found: " + (found.empty() ? std::string("none") : found) + ")");
+  }
+  Image img;
+  img.width = file.width();
+  img.height = file.height();
+  img.texels.resize(std::size_t(img.width) * std::size_t(img.height) * 3);
+  // Grey (Y) is decoded into red, then copied.
+  file.decode(rgb ? std::vector<std::string>{"R", "G", "B"} : std::vector<std::string>{"Y"}, img.texels.data(), 3,
+              resolve_threads(threads));
+  if (!rgb)
+    for (std::size_t i = 0; i < img.texels.size(); i += 3) img.texels[i + 1] = img.texels[i + 2] = img.texels[i];
+  return img;
 }
+
+// The writer stays on the C++ library: it only ever sees shtool's own, checked images.
+class MemoryOStream : public Imf::OStream {
+ public:
+  MemoryOStream() : Imf::OStream("memory") {}
+  void write(const char c[], int n) override {
+    if (pos_ + n > data_.size()) data_.resize(pos_ + n);
+    std::memcpy(data_.data() + pos_, c, static_cast<std::size_t>(n));
+    pos_ += static_cast<std::size_t>(n);
+  }
+  std::uint64_t tellp() override { return pos_; }
+  void seekp(std::uint64_t pos) override { pos_ = static_cast<std::size_t>(pos); }
+  std::string& data() { return data_; }
+
+ private:
+  std::string data_;
+  std::size_t pos_ = 0;
+};
 
 }  // namespace
 
 ChannelImage decode_exr_channels(std::string_view bytes, const std::filesystem::path& name, std::int64_t max_texels,
                                  const std::vector<std::string>& only) {
   if (sniff(bytes) != Format::exr) fail(name, "not an OpenEXR file");
-  check_exr_headers(bytes, name, max_texels);
-  check_exr_with_core(bytes, name);
-  try {
-    MemoryIStream stream(bytes, name.string());
-    Imf::InputFile file(stream);
-    const Imf::Header& header = file.header();
-    const Imath::Box2i data = header.dataWindow();
-    if (data != header.displayWindow()) fail(name, "the data window differs from the display window");
-    const std::int64_t w = std::int64_t(data.max.x) - data.min.x + 1, h = std::int64_t(data.max.y) - data.min.y + 1;
-    check_size(name, w, h, max_texels);
-    ChannelImage img;
-    img.width = static_cast<int>(w);
-    img.height = static_cast<int>(h);
-    for (auto c = header.channels().begin(); c != header.channels().end(); ++c) {
-      if (c.channel().xSampling != 1 || c.channel().ySampling != 1)
-        fail(name, std::string("channel ") + c.name() + " is subsampled");
-      if (only.empty()) img.names.push_back(c.name());
-    }
-    if (!only.empty()) {
-      for (const std::string& n : only)
-        if (!header.channels().findChannel(n)) fail(name, "no channel '" + n + "'");
-      img.names = only;
-    }
-    const std::size_t k = img.names.size();
-    // The texel cap bounds one channel; a header may declare any number of them.
-    if (w * h * static_cast<std::int64_t>(k) > (std::int64_t{1} << 30))
-      fail(name, std::to_string(k) + " channels of " + std::to_string(w) + " x " + std::to_string(h) +
-                     ": more than 2^30 values");
-    img.texels.assign(static_cast<std::size_t>(w * h) * k, 0.0f);
-    Imf::FrameBuffer fb;
-    for (std::size_t c = 0; c < k; ++c)
-      fb.insert(img.names[c], Imf::Slice::Make(Imf::FLOAT, img.texels.data() + c, data, k * sizeof(float),
-                                               static_cast<std::size_t>(w) * k * sizeof(float)));
-    file.setFrameBuffer(fb);
-    file.readPixels(data.min.y, data.max.y);
-    return img;
-  } catch (const InputError&) {
-    throw;
-  } catch (const std::exception& e) {
-    fail(name, std::string("OpenEXR: ") + e.what());
+  ExrCoreFile file(bytes, name, max_texels);
+  ChannelImage img;
+  img.width = file.width();
+  img.height = file.height();
+  for (std::size_t i = 0; i < only.size(); ++i) {
+    if (!file.has(only[i])) fail(name, "no channel '" + only[i] + "'");
+    if (std::find(only.begin(), only.begin() + i, only[i]) != only.begin() + i)
+      fail(name, "channel '" + only[i] + "' asked for twice");
   }
+  img.names = only.empty() ? file.channels() : only;
+  const std::size_t k = img.names.size();
+  const std::int64_t w = img.width, h = img.height;
+  // The texel cap bounds one channel; a header may declare any number of them.
+  if (w * h * static_cast<std::int64_t>(k) > (std::int64_t{1} << 30))
+    fail(name, std::to_string(k) + " channels of " + std::to_string(w) + " x " + std::to_string(h) +
+                   ": more than 2^30 values");
+  img.texels.resize(static_cast<std::size_t>(w * h) * k);
+  if (k > 0) file.decode(img.names, img.texels.data(), static_cast<int>(k), 1);
+  return img;
 }
 
 namespace {
@@ -493,7 +489,7 @@ double linear_to_srgb(double v) { return v <= 0.0031308 ? 12.92 * v : 1.055 * st
 
 namespace {
 
-// crc: when given, the CRC-32 of the bytes (as input_crc32), hashed during the decode.
+// crc: when given, the CRC-32 of the bytes (input_crc32).
 Image decode(std::string_view bytes, const std::filesystem::path& name, std::int64_t max_texels, int threads,
              std::uint32_t* crc) {
   const Format content = sniff(bytes), extension = format_of_extension(name);
@@ -506,8 +502,8 @@ Image decode(std::string_view bytes, const std::filesystem::path& name, std::int
   if (extension != Format::unknown && extension != content)
     fail(name, std::string("the extension says ") + format_name(extension) + " but the content is " +
                    format_name(content));
-  if (content == Format::exr) return decode_exr(bytes, name, max_texels, threads, crc);
-  Image img = decode_stb(bytes, name, content, max_texels);
+  Image img = content == Format::exr ? decode_exr(bytes, name, max_texels, threads)
+                                     : decode_stb(bytes, name, content, max_texels);
   if (crc) *crc = input_crc32(bytes);
   return img;
 }

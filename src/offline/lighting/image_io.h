@@ -33,12 +33,12 @@ inline constexpr std::int64_t kMaxImageTexels = std::int64_t(1) << 28;
 // whose content does not match its extension (.exr, .hdr, .png, .jpg/.jpeg) is refused
 // naming both. Single-channel files become grey RGB; alpha is dropped. An image of more
 // than max_texels is refused before anything is allocated. Throws InputError naming `name`.
-// OpenEXR decodes on `threads` threads (its own pool; 0: every core), the others on one.
+// OpenEXR decodes its chunks on `threads` threads (0: every core), the others on one.
 Image decode_image(std::string_view bytes, const std::filesystem::path& name,
                    std::int64_t max_texels = kMaxImageTexels, int threads = 0);
 
 // The file's bytes (read_input_file, `what` naming the option, read once) decoded, and
-// their CRC-32 (input_crc32), for OpenEXR hashed as the decoder reads them.
+// their CRC-32 (input_crc32).
 struct ImageFile {
   Image image;
   std::uint32_t crc32 = 0;
