@@ -58,7 +58,8 @@ void setup_fit_zh(CLI::App& app) {
       ->check(kUnsignedText)
       ->capture_default_str();
   sub->add_option("--effort", opt->effort,
-                  "fit effort 1..4: sets --starts and --restart-above (1: 0, 0.05; 2: 4, 0.05; 3: 16, 0; 4: 64, 0)")
+                  "fit effort 1..4: sets --starts and --restart-above, with L = --lobes (1: 0, 0.05; 2: 5 L^2, 0.05; "
+                  "3: 12 L^2, 0; 4: 40 L^2, 0)")
       ->capture_default_str();
   // Plain values here; the request holds them only when given.
   auto starts = std::make_shared<int>(0);
