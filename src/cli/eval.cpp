@@ -7,6 +7,7 @@
 #include <CLI/CLI.hpp>
 
 #include "cli_common.h"
+#include "common/sh_inputs.h"
 #include "shtool/sh.h"
 
 namespace shtool::cli {
@@ -25,13 +26,7 @@ void run_eval(const EvalOptions& opt) {
   if (d.size() != 3)
     throw InputError("--dir needs 3 components x,y,z, got " + std::to_string(d.size()));
   Vec3<double> w(d[0], d[1], d[2]);
-  // Scale by the largest component first so that tiny or huge (but valid) directions
-  // neither underflow nor overflow in the norm.
-  const double largest = w.cwiseAbs().maxCoeff();
-  if (!(largest > 0.0))
-    throw InputError("--dir must be a non-zero vector, got '" + opt.dir + "'");
-  w /= largest;
-  w /= w.norm();
+  if (!normalize_direction(w)) throw InputError("--dir must be a non-zero vector, got '" + opt.dir + "'");
   std::vector<double> values(sh_count(opt.order));
   eval_sh<double>(opt.order, w, values);
   print_json({{"order", opt.order}, {"values", values}});

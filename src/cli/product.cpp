@@ -6,6 +6,7 @@
 #include <iostream>
 #include <iterator>
 #include <memory>
+#include <optional>
 #include <span>
 #include <sstream>
 #include <string>
@@ -47,15 +48,9 @@ void run_product(const ProductOptions& opt) {
   if (opt.order < 1 || opt.order > kMaxFourierProductOrder)
     throw InputError("--order " + std::to_string(opt.order) + " is not supported (1.." +
                     std::to_string(kMaxFourierProductOrder) + ")");
-  ProductMethod method = ProductMethod::automatic;
-  if (opt.method == "tripling")
-    method = ProductMethod::tripling;
-  else if (opt.method == "fourier")
-    method = ProductMethod::fourier;
-  else if (opt.method == "grid")
-    method = ProductMethod::grid;
-  else if (opt.method != "auto")
-    throw InputError("--method must be auto, tripling, fourier or grid, got '" + opt.method + "'");
+  const std::optional<ProductMethod> parsed = product_method_from_name(opt.method);
+  if (!parsed) throw InputError("--method must be auto, tripling, fourier or grid, got '" + opt.method + "'");
+  const ProductMethod method = *parsed;
   if (method == ProductMethod::tripling && opt.order > kMaxTriplingOrder)
     throw InputError("--method tripling supports orders up to " + std::to_string(kMaxTriplingOrder) +
                     "; use --method fourier");

@@ -9,7 +9,6 @@
 #include <vector>
 
 #include <CLI/CLI.hpp>
-#include <Eigen/LU>
 
 #include "cli_common.h"
 #include "common/input_file.h"
@@ -21,11 +20,6 @@
 
 namespace shtool::cli {
 namespace {
-
-// How far from unit length / orthonormal a user's rotation may be before it is
-// rejected rather than silently renormalised: a few float epsilons, so rotations
-// printed with 7 significant digits are accepted.
-constexpr double kRotationInputTolerance = 1e-6;
 
 struct RotateOptions {
   int order = 0;
@@ -48,10 +42,7 @@ Mat3<double> read_rotation(const RotateOptions& opt) {
   if (!opt.quat.empty()) {
     const std::vector<double> q = parse_number_list(opt.quat, "--quat");
     if (q.size() != 4) throw InputError("--quat needs 4 numbers w,x,y,z, got " + std::to_string(q.size()));
-    const double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-    if (std::abs(norm - 1.0) > kRotationInputTolerance)
-      throw InputError("--quat is not a unit quaternion (|q| = " + std::to_string(norm) + ")");
-    return matrix_from_quaternion<double>(q[0] / norm, q[1] / norm, q[2] / norm, q[3] / norm);
+    return checked_quaternion_matrix({q[0], q[1], q[2], q[3]}, "--quat");
   }
   if (!opt.zyz.empty()) {
     const std::vector<double> a = parse_number_list(opt.zyz, "--zyz");
@@ -62,11 +53,7 @@ Mat3<double> read_rotation(const RotateOptions& opt) {
   if (m.size() != 9) throw InputError("--matrix needs 9 numbers r00,r01,...,r22, got " + std::to_string(m.size()));
   Mat3<double> r;
   r << m[0], m[1], m[2], m[3], m[4], m[5], m[6], m[7], m[8];
-  const double defect = orthonormality_defect<double>(r);
-  if (defect > kRotationInputTolerance)
-    throw InputError("--matrix is not orthonormal (max |R^T R - I| = " + std::to_string(defect) + ")");
-  if (r.determinant() < 0) throw InputError("--matrix has determinant -1 (a reflection, not a rotation)");
-  return r;
+  return checked_rotation_matrix(r, "--matrix");
 }
 
 void run_rotate(const RotateOptions& opt) {
@@ -113,19 +100,7 @@ void run_rotate(const RotateOptions& opt) {
   }
 
   std::shared_ptr<const RotationHelpers> helpers;
-  if (*method != RotationMethod::reference) {
-    const std::filesystem::path path =
-        opt.tables.empty() ? default_rotation_helpers_path() : std::filesystem::path(opt.tables);
-    if (path.empty()) {
-      // No table given or shipped: the offline tool computes the helpers itself (the
-      // same bytes gen-tensors writes).
-      helpers = std::make_shared<RotationHelpers>(compute_rotation_helpers(opt.order));
-    } else {
-      Result<RotationHelpers> loaded = RotationHelpers::load(path, opt.order);
-      if (!loaded) throw InputError(loaded.error().message);
-      helpers = std::make_shared<RotationHelpers>(std::move(loaded).value());
-    }
-  }
+  if (*method != RotationMethod::reference) helpers = rotation_helpers_for(opt.order, opt.tables);
   ShRotation<double> rotation(opt.order, helpers);
   if (!rotation.set(r, *method, opt.tol)) throw InputError("rotation method unavailable for this order");
   rotation.apply(coeffs, out);

@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include <Eigen/LU>
 #include <nlohmann/json.hpp>
 
 #include "common/input_error.h"
@@ -9,6 +10,30 @@
 #include "shtool/sh.h"
 
 namespace shtool {
+
+std::optional<ProductMethod> product_method_from_name(std::string_view name) {
+  if (name == "auto") return ProductMethod::automatic;
+  if (name == "tripling") return ProductMethod::tripling;
+  if (name == "fourier") return ProductMethod::fourier;
+  if (name == "grid") return ProductMethod::grid;
+  return std::nullopt;
+}
+
+Mat3<double> checked_rotation_matrix(const Mat3<double>& r, const std::string& what) {
+  if (!r.allFinite()) throw InputError(what + " has a non-finite entry");
+  const double defect = orthonormality_defect<double>(r);
+  if (defect > kRotationInputTolerance)
+    throw InputError(what + " is not orthonormal (max |R^T R - I| = " + std::to_string(defect) + ")");
+  if (r.determinant() < 0) throw InputError(what + " has determinant -1 (a reflection, not a rotation)");
+  return r;
+}
+
+Mat3<double> checked_quaternion_matrix(const std::array<double, 4>& q, const std::string& what) {
+  const double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+  if (!(std::abs(norm - 1.0) <= kRotationInputTolerance))
+    throw InputError(what + " is not a unit quaternion (|q| = " + std::to_string(norm) + ")");
+  return matrix_from_quaternion<double>(q[0] / norm, q[1] / norm, q[2] / norm, q[3] / norm);
+}
 
 std::vector<double> parse_coefficients_json(std::string_view text, const std::string& where) {
   const nlohmann::json doc = parse_json_input(text, where, "--in");

@@ -31,6 +31,31 @@
 #include "shtool/sh.h"
 
 namespace shtool::fit {
+
+void check_fit_options(const FitZhRequest& r) {
+  if (r.lobes < 1 || r.lobes > 64) throw InputError("--lobes must be in 1..64, got " + std::to_string(r.lobes));
+  if (r.effort < kMinEffort || r.effort > kMaxEffort)
+    throw InputError("--effort must be in " + std::to_string(kMinEffort) + ".." + std::to_string(kMaxEffort) +
+                     ", got " + std::to_string(r.effort));
+  if (r.starts && *r.starts < 0) throw InputError("--starts must be >= 0, got " + std::to_string(*r.starts));
+  if (r.restart_above && !(*r.restart_above >= 0)) throw InputError("--restart-above must be >= 0");
+  if (r.threads < 0) throw InputError("--threads must be >= 0");
+}
+
+ZhFitOptions fit_zh_options(const FitZhRequest& r, int order) {
+  check_fit_options(r);
+  ZhFitOptions fo;
+  fo.order = order;
+  fo.lobes = r.lobes;
+  fo.direct = r.direct;
+  fo.method = r.fit_method;
+  apply_effort(fo, r.effort);
+  if (r.starts) fo.starts = *r.starts;
+  if (r.restart_above) fo.restart_above = *r.restart_above;
+  fo.seed = r.seed;
+  return fo;
+}
+
 namespace {
 
 std::string ply_text(const Mesh& mesh, const std::vector<double>& transfer, int order,
@@ -68,14 +93,8 @@ void check_request(const FitZhRequest& r) {
     throw InputError(r.mesh.empty() ? "give a mesh (MESH.obj) or --transfer FILE"
                                     : "give either a mesh or --transfer FILE, not both");
   if (!is_supported_order(r.order)) throw InputError("--order " + std::to_string(r.order) + " is not supported");
-  if (r.lobes < 1 || r.lobes > 64) throw InputError("--lobes must be in 1..64, got " + std::to_string(r.lobes));
   if (r.rays < 1) throw InputError("--rays must be at least 1, got " + std::to_string(r.rays));
-  if (r.effort < kMinEffort || r.effort > kMaxEffort)
-    throw InputError("--effort must be in " + std::to_string(kMinEffort) + ".." + std::to_string(kMaxEffort) +
-                     ", got " + std::to_string(r.effort));
-  if (r.starts && *r.starts < 0) throw InputError("--starts must be >= 0, got " + std::to_string(*r.starts));
-  if (r.restart_above && !(*r.restart_above >= 0)) throw InputError("--restart-above must be >= 0");
-  if (r.threads < 0) throw InputError("--threads must be >= 0");
+  check_fit_options(r);
   if (r.mode == TransferMode::interreflected) {
     if (r.bounces < 1 || r.bounces > kMaxBounces)
       throw InputError("--bounces must be in 1.." + std::to_string(kMaxBounces) + ", got " + std::to_string(r.bounces));
@@ -247,15 +266,7 @@ FitZhInputs read_inputs(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJob*
 // Step 2, the fit of every row ([4] Sec. 4), its options recorded in the parameters.
 ZhFitTable<double> fit_rows(const FitZhRequest& r, const FitZhCallbacks& cb, const FitZhPlan& plan,
                             FitZhInputs& in, FitZhReport& report) {
-  ZhFitOptions fo;
-  fo.order = in.order;
-  fo.lobes = r.lobes;
-  fo.direct = r.direct;
-  fo.method = r.fit_method;
-  apply_effort(fo, r.effort);
-  if (r.starts) fo.starts = *r.starts;
-  if (r.restart_above) fo.restart_above = *r.restart_above;
-  fo.seed = r.seed;
+  const ZhFitOptions fo = fit_zh_options(r, in.order);
   const auto t1 = std::chrono::steady_clock::now();
   ZhFitTable<double> fits = fit_zh_all(in.transfer, fo, plan.threads, cb.fit_progress, in.range.begin);
   report.fit_seconds = seconds_since(t1);

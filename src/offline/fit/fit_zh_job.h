@@ -81,6 +81,12 @@ struct FitZhReport {
   int mpi_rank = 0, mpi_ranks = 0;
 };
 
+// The fit options of a request (lobes, effort, starts, restart_above, seed, method,
+// direct) for vectors of `order`, checked as run_fit_zh checks them (InputError): the
+// per-vector fits of fit_zh_all are then the ones fit-zh makes.
+void check_fit_options(const FitZhRequest& request);
+ZhFitOptions fit_zh_options(const FitZhRequest& request, int order);
+
 // Checks the request and every output path before any work (InputError), runs the job,
 // writes the outputs.
 FitZhReport run_fit_zh(const FitZhRequest& request, const FitZhCallbacks& callbacks = {});

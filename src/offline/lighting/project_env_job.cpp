@@ -57,6 +57,8 @@ std::vector<double> project_parallel(const Projector& p, const Images& images, i
   return sum;
 }
 
+}  // namespace
+
 // A cross image cut into six faces (CubeFace order). Both layouts put +Y, -X +Z +X, -Y
 // in the same places; -Z sits right of +X (horizontal, 4:3) or below -Y turned by 180
 // degrees (vertical, 3:4): cmft's imageCubemapFromCross and filament's
@@ -98,7 +100,6 @@ std::array<Image, 6> faces_from_cross(const Image& cross, const std::filesystem:
 
 constexpr std::array<const char*, 6> kFaceSuffix = {"px", "nx", "py", "ny", "pz", "nz"};
 
-}  // namespace
 
 const std::vector<std::pair<std::string, Layout>>& layout_names() {
   static const std::vector<std::pair<std::string, Layout>> names = {
@@ -210,6 +211,53 @@ Image source_equirect(const Image& equirect, const Eigen::Matrix3d& preset, cons
   return img;
 }
 
+std::vector<double> project_env_views(const ProjectEnvRequest& r, std::span<const FloatImageView> views, int threads,
+                                      nlohmann::json& window) {
+  if (views.size() != 1 && views.size() != 6) throw InputError("an environment is one equirect image or six faces");
+  const int channels = views[0].channels;
+  for (const FloatImageView& v : views)
+    if (v.channels != channels) throw InputError("the six faces must have the same channels");
+  if (r.order < 1 || r.order > kMaxEnvOrder)
+    throw InputError("order " + std::to_string(r.order) + " is outside 1.." + std::to_string(kMaxEnvOrder));
+  std::vector<double> coefficients;
+  if (views.size() == 1) {
+    Result<EquirectProjector> p = EquirectProjector::create(views[0].width, views[0].height, r.order);
+    if (!p) throw InputError(p.error().message);
+    coefficients = project_parallel(p.value(), views[0], channels, threads);
+    if (r.preset != EquirectPreset::shtool) {
+      const Result<Ok> m = apply_orthogonal_map(preset_map(r.preset), channels, coefficients);
+      if (!m) throw InputError(m.error().message);
+    }
+  } else {
+    for (const FloatImageView& v : views)
+      if (v.width != views[0].width || v.height != v.width)
+        throw InputError("the six faces must be square and of one size");
+    Result<CubemapProjector> p = CubemapProjector::create(views[0].width, r.order, r.mirror_x);
+    if (!p) throw InputError(p.error().message);
+    coefficients = project_parallel(p.value(), std::span<const FloatImageView, 6>(views.data(), 6), channels, threads);
+  }
+
+  // ---- window, then quantity (both zonal: they commute)
+  std::vector<double> factors(r.order, 1.0);
+  if (r.window == WindowChoice::automatic) {
+    const Result<AutoWindow> w = choose_auto_window(coefficients, channels);
+    if (!w) throw InputError(w.error().message);
+    factors = w.value().factors;
+    window = {{"type", "auto"}, {"shape", "sinc4"}, {"factors", factors}, {"minimum", w.value().minimum}};
+    window["cutoff"] = w.value().cutoff ? nlohmann::json(*w.value().cutoff) : nlohmann::json(nullptr);
+  } else if (r.window != WindowChoice::none) {
+    const ShWindow shape = *sh_window_from_name(name_of(r.window, window_names()));
+    const double cutoff = r.cutoff.value_or(r.order);
+    factors = sh_window_factors(shape, cutoff, r.order);
+    window = {{"type", sh_window_name(shape)}, {"cutoff", cutoff}, {"factors", factors}};
+  } else {
+    window = {{"type", "none"}};
+  }
+  scale_bands(factors, channels, coefficients);
+  if (r.quantity == Quantity::irradiance) radiance_to_irradiance(channels, coefficients);
+  return coefficients;
+}
+
 ProjectEnvReport run_project_env(const ProjectEnvRequest& r) {
   if (r.order < 1 || r.order > kMaxEnvOrder)
     throw InputError("--order " + std::to_string(r.order) + " is outside 1.." + std::to_string(kMaxEnvOrder));
@@ -301,45 +349,14 @@ ProjectEnvReport run_project_env(const ProjectEnvRequest& r) {
   Lighting& out = report.lighting;
   out.order = r.order;
   out.quantity = r.quantity;
-  auto with_name = [&](const std::string& message) { return r.image.string() + ": " + message; };
+  std::vector<FloatImageView> views;
+  if (layout == Layout::equirect) views.push_back(equirect.view());
+  for (const Image& f : faces) views.push_back(f.view());
   try {
-    if (layout == Layout::equirect) {
-      Result<EquirectProjector> p = EquirectProjector::create(equirect.width, equirect.height, r.order);
-      if (!p) throw InputError(p.error().message);
-      out.coefficients = project_parallel(p.value(), equirect.view(), 3, threads);
-      if (r.preset != EquirectPreset::shtool) {
-        const Result<Ok> m = apply_orthogonal_map(preset_map(r.preset), 3, out.coefficients);
-        if (!m) throw InputError(m.error().message);
-      }
-    } else {
-      Result<CubemapProjector> p = CubemapProjector::create(faces[0].width, r.order, r.mirror_x);
-      if (!p) throw InputError(p.error().message);
-      std::array<FloatImageView, 6> views;
-      for (int f = 0; f < 6; ++f) views[f] = faces[f].view();
-      out.coefficients = project_parallel(p.value(), std::span<const FloatImageView, 6>(views), 3, threads);
-    }
+    out.coefficients = project_env_views(r, views, threads, out.window);
   } catch (const InputError& e) {
-    throw InputError(with_name(e.what()));
+    throw InputError(r.image.string() + ": " + e.what());
   }
-
-  // ---- window, then quantity (both zonal: they commute)
-  std::vector<double> factors(r.order, 1.0);
-  if (r.window == WindowChoice::automatic) {
-    const Result<AutoWindow> w = choose_auto_window(out.coefficients, 3);
-    if (!w) throw InputError(with_name(w.error().message));
-    factors = w.value().factors;
-    out.window = {{"type", "auto"}, {"shape", "sinc4"}, {"factors", factors}, {"minimum", w.value().minimum}};
-    out.window["cutoff"] = w.value().cutoff ? nlohmann::json(*w.value().cutoff) : nlohmann::json(nullptr);
-  } else if (r.window != WindowChoice::none) {
-    const ShWindow shape = *sh_window_from_name(name_of(r.window, window_names()));
-    const double cutoff = r.cutoff.value_or(r.order);
-    factors = sh_window_factors(shape, cutoff, r.order);
-    out.window = {{"type", sh_window_name(shape)}, {"cutoff", cutoff}, {"factors", factors}};
-  } else {
-    out.window = {{"type", "none"}};
-  }
-  scale_bands(factors, 3, out.coefficients);
-  if (r.quantity == Quantity::irradiance) radiance_to_irradiance(3, out.coefficients);
   report.project_seconds = seconds_since(t1);
 
   // ---- outputs, all or none

@@ -3,8 +3,10 @@
 // irradiance (docs/lighting.md). The CLI (src/cli/project_env.cpp) fills the request.
 #pragma once
 
+#include <array>
 #include <filesystem>
 #include <optional>
+#include <span>
 #include <string>
 #include <utility>
 #include <vector>
@@ -54,6 +56,18 @@ struct ProjectEnvReport {
 };
 
 ProjectEnvReport run_project_env(const ProjectEnvRequest& request);
+
+// The projection of images already in memory (what run_project_env does after reading):
+// one equirect view or six faces in CubeFace order, any number of channels, projected
+// exactly in the request's order, preset and mirror_x, then windowed and turned into
+// the requested quantity. Coefficients [i * channels + c]; `window` receives the record
+// the lighting JSON stores. InputError on a bad size, order or non-finite texel.
+std::vector<double> project_env_views(const ProjectEnvRequest& request, std::span<const FloatImageView> views,
+                                      int threads, nlohmann::json& window);
+
+// A cross image (4:3 horizontal or 3:4 vertical) cut into six faces (CubeFace order);
+// InputError naming `name` for any other shape.
+std::array<Image, 6> faces_from_cross(const Image& cross, const std::filesystem::path& name);
 
 // The render-back: the reconstruction sum_i c_i y_i(w) at the texel centres of a W x H
 // equirect image in shtool's mapping (rows in parallel).

@@ -20,6 +20,14 @@ constexpr double kStructuralZero = 1e-13;
 
 }  // namespace
 
+std::shared_ptr<const RotationHelpers> rotation_helpers_for(int order, const std::filesystem::path& table) {
+  const std::filesystem::path path = table.empty() ? default_rotation_helpers_path() : table;
+  if (path.empty()) return std::make_shared<const RotationHelpers>(compute_rotation_helpers(order));
+  Result<RotationHelpers> loaded = RotationHelpers::load(path, order);
+  if (!loaded) throw InputError(loaded.error().message);
+  return std::make_shared<const RotationHelpers>(std::move(loaded).value());
+}
+
 RotationHelpers compute_rotation_helpers(int order) {
   if (!is_supported_order(order)) throw InputError("unsupported order " + std::to_string(order));
   const int n = sh_count(order);

@@ -1,6 +1,8 @@
 // gen-tensors: the sparse helper matrices of the zxzxz and Taylor rotations.
 #pragma once
 
+#include <filesystem>
+#include <memory>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -19,6 +21,11 @@ namespace shtool {
 // are dropped. Throws std::logic_error if the closed form and the X90 table disagree,
 // which would mean a convention error.
 RotationHelpers compute_rotation_helpers(int order);
+
+// The helpers of the fast rotation methods for `order`: read from `table` (empty: the
+// shipped table, shtool/rotation_helpers.h), or computed when none is given or shipped
+// (the same bytes gen-tensors writes). InputError with the loader's message otherwise.
+std::shared_ptr<const RotationHelpers> rotation_helpers_for(int order, const std::filesystem::path& table = {});
 
 // Band l of X90 as a dense (2l+1) x (2l+1) block, [row][column], from the compressed rows:
 // what the kernel generators (C++ and shaders) write out as literals.

@@ -1,0 +1,174 @@
+"""shtool: spherical harmonics on numpy arrays.
+
+The runtime (evaluation, rotation, products, lighting) and the offline jobs of the
+`shtool` command line, with its conventions (docs/conventions.md): order N means bands
+0..N-1 (N**2 coefficients), flat index l(l+1)+m, real SH with the Condon-Shortley phase,
+z up, rotation g(w) = f(R^-1 w). Coefficients lie on the last axis (``axis=`` picks
+another); float32 stays float32, float64 stays float64. See docs/python.md.
+"""
+import json as _json
+import os as _os
+import tempfile as _tempfile
+from dataclasses import dataclass as _dataclass
+
+import numpy as _np
+
+from . import _shtool
+from ._shtool import __version__, eval_sh, gen_tensors, light, transform_splats
+
+__all__ = [
+    "eval_sh", "rotate", "quat_to_matrix", "product", "project_env", "project_env_file", "irradiance",
+    "window", "light", "fit_zh", "fit_zh_mesh", "load_table", "load_zh_fit", "transform_splats",
+    "gen_tensors", "search_lobes", "Table", "ZhFit",
+]
+
+
+def _float_array(x, name):
+    """x as an ndarray without copying; lists become float64 (other dtypes: TypeError)."""
+    a = x if isinstance(x, _np.ndarray) else _np.asarray(x, dtype=_np.float64)
+    if a.dtype not in (_np.float32, _np.float64):
+        raise TypeError(f"{name} must be float32 or float64, got {a.dtype}")
+    return a
+
+
+def _on_last_axis(a, axis, name):
+    if a.ndim == 0:
+        raise ValueError(f"{name} must have at least one axis")
+    try:
+        return _np.moveaxis(a, axis, -1)
+    except _np.AxisError as e:
+        raise ValueError(f"axis: {e}") from None
+
+
+def rotate(coeffs, matrix, method="auto", axis=-1, out=None, tol=None):
+    """Rotated coefficients g(w) = f(R^-1 w), same shape and dtype as `coeffs`.
+
+    `matrix` is a 3x3 rotation (orthonormal to 1e-6, det +1; ValueError otherwise) or one
+    per leading index, shape (..., 3, 3). `method`: auto, reference, zxzxz, taylor1,
+    taylor1.5, taylor2 (as ``shtool rotate --method``). `out` (axis=-1 only): a
+    C-contiguous array of the same shape and dtype, written in place.
+    """
+    a = _on_last_axis(_float_array(coeffs, "coeffs"), axis, "coeffs")
+    if out is not None and axis not in (-1, a.ndim - 1):
+        raise ValueError("out= needs axis=-1")
+    r = _shtool._rotate(a, matrix, method, tol, out)
+    return _np.moveaxis(r, -1, axis)
+
+
+def quat_to_matrix(q):
+    """Rotation matrix (..., 3, 3) of unit quaternions q = (w, x, y, z) (Hamilton)."""
+    return _shtool._quat_to_matrix(_float_array(q, "q"))
+
+
+def product(a, b, order=None, method="auto", axis=-1):
+    """The SH product of a and b truncated to `order` (default: a's order).
+
+    method: auto, tripling, fourier, grid (as ``shtool product``). Leading axes of a
+    and b must agree, or one of them has none.
+    """
+    fa = _on_last_axis(_float_array(a, "a"), axis, "a")
+    fb = _on_last_axis(_float_array(b, "b"), axis, "b")
+    return _np.moveaxis(_shtool._product(fa, fb, order, method), -1, axis)
+
+
+def irradiance(coeffs, axis=-1):
+    """Irradiance coefficients E_lm = A_l L_lm (clamped cosine, no 1/pi) of radiance."""
+    a = _on_last_axis(_float_array(coeffs, "coeffs"), axis, "coeffs")
+    return _np.moveaxis(_shtool._irradiance(a), -1, axis)
+
+
+def window(coeffs, kind, cutoff=None, axis=-1, return_factors=False):
+    """Windowed coefficients: kind none, hann, lanczos, sinc4 or auto (as project-env).
+
+    "auto" treats every vector of `coeffs` as one channel of one lighting (so an RGB
+    lighting (N**2, 3) takes axis=0). With return_factors, also (factors per band,
+    cutoff used).
+    """
+    a = _on_last_axis(_float_array(coeffs, "coeffs"), axis, "coeffs")
+    r, factors, used = _shtool._window(a, kind, cutoff)
+    r = _np.moveaxis(r, -1, axis)
+    return (r, factors, used) if return_factors else r
+
+
+def project_env(image, order, layout="equirect", quantity="radiance", window="none", cutoff=None,
+                preset="shtool", mirror_x=False, threads=0, return_window=False):
+    """Exact SH projection (order**2, C) float64 of an environment image in memory.
+
+    `image`: float32/float64 (H, W, C) equirect (2:1, docs/lighting.md's mapping) or cross
+    (4:3 / 3:4), or (6, S, S, C) faces in the order +X -X +Y -Y +Z -Z. The same texel
+    integrals, window and quantity as ``shtool project-env``.
+    """
+    img = _float_array(image, "image")
+    coeffs, win = _shtool._project_env(img, order, layout, quantity, window, cutoff, preset, mirror_x, threads)
+    return (coeffs, _json.loads(win)) if return_window else coeffs
+
+
+def project_env_file(image, order=3, json=None, **options):
+    """``shtool project-env`` on an image file; options as the CLI's (out=, window=, ...).
+
+    Returns the coefficients (order**2, 3); writes `json` (and `out`) when given.
+    """
+    with _tempfile.TemporaryDirectory() as tmp:
+        path = json if json is not None else _os.path.join(tmp, "lighting.json")
+        r = _shtool._project_env_file(str(image), str(path), order=order, **options)
+    return r["coefficients"]
+
+
+@_dataclass
+class ZhFit:
+    """ZH lobe fits of V vectors: axes (V, lobes, 3), coeffs (V, lobes, N) (the convolved
+    g*_l of each band), residual (V,) = ||fit - t||, norm (V,) = ||t||, direct (V, D)."""
+    axes: _np.ndarray
+    coeffs: _np.ndarray
+    residual: _np.ndarray
+    norm: _np.ndarray
+    direct: _np.ndarray
+
+
+def fit_zh(transfer, lobes=4, effort=None, seed=None, starts=None, restart_above=None, direct=False,
+           method="varpro", threads=0):
+    """The ZH fits ``shtool fit-zh --transfer`` makes for the vectors `transfer` (V, N**2)."""
+    t = _np.asarray(transfer)
+    if t.dtype not in (_np.float32, _np.float64):
+        raise TypeError(f"transfer must be float32 or float64, got {t.dtype}")
+    return ZhFit(*_shtool._fit_zh(t, lobes, effort, seed, starts, restart_above, direct, method, threads))
+
+
+def load_zh_fit(path):
+    """A zh-fit table (``fit-zh --out``) as a ZhFit, checked as the runtime's loader checks it."""
+    return ZhFit(*_shtool._load_zh_fit(str(path)))
+
+
+def fit_zh_mesh(mesh, out=None, **options):
+    """``shtool fit-zh MESH``: simulates the transfer and fits it; options as the CLI's
+    (order=, lobes=, rays=, mode=, seed=, effort=, threads=, json=, ply=, ...).
+
+    Writes `out` when given (the CLI's bytes) and returns the fits as a ZhFit.
+    """
+    with _tempfile.TemporaryDirectory() as tmp:
+        path = out if out is not None else _os.path.join(tmp, "fit.zh.shtb")
+        _shtool._fit_zh_mesh(str(mesh), out=str(path), **options)
+        return load_zh_fit(path)
+
+
+def search_lobes(**options):
+    """``shtool search-lobes``: bands=[...] or shared=True with order=N; out=, json=,
+    seed=, threads=, population=, stall=, restarts=, ... Returns the JSON summary as a dict."""
+    return _json.loads(_shtool._search_lobes(**options))
+
+
+class Table:
+    """A loaded table: kind, order, header (dict) and arrays (read-only views of the bytes)."""
+
+    def __init__(self, kind, order, header, arrays):
+        self.kind, self.order, self.header, self.arrays = kind, order, header, arrays
+
+    def __repr__(self):
+        shapes = ", ".join(f"{k}{tuple(v.shape)}" for k, v in self.arrays.items())
+        return f"Table(kind={self.kind!r}, order={self.order}, arrays: {shapes})"
+
+
+def load_table(path):
+    """Any shtool table (binary or JSON encoding), checked as the runtime checks it."""
+    kind, order, header, arrays = _shtool._load_table(str(path))
+    return Table(kind, order, _json.loads(header), dict(arrays))

@@ -1,0 +1,252 @@
+// eval_sh, rotate, quat_to_matrix, product: the runtime's basis, rotations and products
+// over batches of coefficient vectors (the last axis; the Python layer moves `axis=`).
+#include <algorithm>
+#include <map>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "common/input_error.h"
+#include "common/parallel_for.h"
+#include "common/sh_inputs.h"
+#include "py_arrays.h"
+#include "shtool/product.h"
+#include "shtool/rotation.h"
+#include "shtool/sh.h"
+#include "tensors/rotation_helpers_gen.h"
+
+namespace shtool::python {
+namespace {
+
+// Batches below this many vectors run on the calling thread: starting workers costs
+// more than the work.
+constexpr std::size_t kChunk = 4096;
+
+// body(begin, end) over [0, count) in chunks, on every core when there is more than one
+// chunk. The caller has released the GIL.
+void for_chunks(std::size_t count, const std::function<void(std::size_t, std::size_t)>& body) {
+  const std::size_t chunks = (count + kChunk - 1) / kChunk;
+  if (chunks <= 1) {
+    body(0, count);
+    return;
+  }
+  parallel_for(chunks, resolve_threads(0), [&](std::size_t c) { body(c * kChunk, std::min(count, (c + 1) * kChunk)); });
+}
+
+void check_order(int order) {
+  if (!is_supported_order(order))
+    throw py::value_error("order " + std::to_string(order) + " is not supported (1.." + std::to_string(kMaxOrder) + ")");
+}
+
+template <class T>
+py::array eval_sh_t(int order, const py::array& dirs_in, const py::object& out_arg) {
+  const auto dirs = contiguous<T>(dirs_in);
+  if (dirs.ndim() < 1 || dirs.shape(dirs.ndim() - 1) != 3) throw py::value_error("dirs must have shape (..., 3)");
+  std::vector<py::ssize_t> shape = shape_of(dirs);
+  shape.back() = sh_count(order);
+  auto out = output<T>(shape, out_arg);
+  if (overlaps(out, dirs)) throw py::value_error("out must not overlap dirs");
+  const std::size_t count = static_cast<std::size_t>(dirs.size() / 3), n2 = sh_count(order);
+  const T* d = dirs.data();
+  T* o = out.mutable_data();
+  std::size_t bad = count;  // first zero or non-finite direction
+  {
+    py::gil_scoped_release release;
+    std::vector<std::size_t> first_bad((count + kChunk - 1) / kChunk, count);
+    for_chunks(count, [&](std::size_t begin, std::size_t end) {
+      std::vector<T> unit(3 * (end - begin));
+      for (std::size_t k = begin; k < end; ++k) {
+        Vec3<T> w(d[3 * k], d[3 * k + 1], d[3 * k + 2]);
+        if (!normalize_direction(w)) {
+          first_bad[begin / kChunk] = k;
+          return;
+        }
+        for (int c = 0; c < 3; ++c) unit[3 * (k - begin) + c] = w[c];
+      }
+      eval_sh_batch<T>(order, unit, std::span<T>(o + begin * n2, (end - begin) * n2));
+    });
+    for (std::size_t b : first_bad) bad = std::min(bad, b);
+  }
+  if (bad < count) throw py::value_error("dirs[" + std::to_string(bad) + "] is zero or not finite");
+  return out;
+}
+
+// The helpers of one order, loaded (or computed) once per process.
+std::shared_ptr<const RotationHelpers> helpers_for(int order) {
+  static std::mutex mutex;
+  static std::map<int, std::shared_ptr<const RotationHelpers>> cache;
+  std::lock_guard<std::mutex> lock(mutex);
+  auto& h = cache[order];
+  if (!h) h = rotation_helpers_for(order);
+  return h;
+}
+
+RotationMethod method_from(const std::string& name) {
+  const std::optional<RotationMethod> m = rotation_method_from_name(name);
+  if (!m)
+    throw py::value_error("method: unknown rotation method '" + name +
+                          "' (auto, reference, zxzxz, taylor1, taylor1.5, taylor2)");
+  return *m;
+}
+
+template <class T>
+py::array rotate_t(const py::array& coeffs_in, const py::object& matrix, const std::string& method_name,
+                   std::optional<double> tol, const py::object& out_arg) {
+  const auto coeffs = contiguous<T>(coeffs_in);
+  if (coeffs.ndim() < 1) throw py::value_error("coeffs must have at least one axis");
+  const int order = order_of_count(coeffs.shape(coeffs.ndim() - 1), "coeffs");
+  const RotationMethod method = method_from(method_name);
+  const double tolerance = tol ? *tol : default_rotation_tolerance<T>();
+  if (!(tolerance > 0) || !std::isfinite(tolerance)) throw py::value_error("tol must be a positive number");
+  auto out = output<T>(shape_of(coeffs), out_arg);
+  if (overlaps(out, coeffs)) throw py::value_error("out must not overlap coeffs");
+  const std::size_t n2 = sh_count(order), count = coeffs.size() / n2;
+  const auto helpers = method == RotationMethod::reference ? nullptr : helpers_for(order);
+
+  // One matrix for every vector, or one per leading index of coeffs (shape (..., 3, 3)
+  // with the leading axes of coeffs' first axes).
+  const auto m = as_f64(matrix, "matrix");
+  if (m.ndim() == 2) {
+    ShRotation<T> rotation(order, helpers);
+    if (!rotation.set(rotation_from(m).template cast<T>(), method, tolerance))
+      throw py::value_error("rotation method unavailable for this order");
+    const T* in = coeffs.data();
+    T* o = out.mutable_data();
+    py::gil_scoped_release release;
+    for_chunks(count, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t k = begin; k < end; ++k)
+        rotation.apply(std::span<const T>(in + k * n2, n2), std::span<T>(o + k * n2, n2));
+    });
+    return out;
+  }
+  if (m.ndim() < 2 || m.shape(m.ndim() - 1) != 3 || m.shape(m.ndim() - 2) != 3 || m.ndim() - 2 > coeffs.ndim() - 1 ||
+      !std::equal(m.shape(), m.shape() + m.ndim() - 2, coeffs.shape()))
+    throw py::value_error("matrix must have shape (3, 3) or (..., 3, 3) with the leading axes of coeffs");
+  const std::size_t matrices = m.size() / 9, per_matrix = count / std::max<std::size_t>(matrices, 1);
+  std::vector<Mat3<T>> r(count);
+  for (std::size_t k = 0; k < matrices; ++k) {
+    Mat3<double> rk;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) rk(i, j) = m.data()[9 * k + 3 * i + j];
+    const Mat3<T> checked = checked_rotation_matrix(rk, "matrix[" + std::to_string(k) + "]").template cast<T>();
+    std::fill(r.begin() + k * per_matrix, r.begin() + (k + 1) * per_matrix, checked);
+  }
+  const T* in = coeffs.data();
+  T* o = out.mutable_data();
+  bool ok = true;
+  {
+    py::gil_scoped_release release;
+    std::vector<char> chunk_ok((count + kChunk - 1) / kChunk, 1);
+    for_chunks(count, [&](std::size_t begin, std::size_t end) {
+      ShRotation<T> rotation(order, helpers);
+      chunk_ok[begin / kChunk] = rotate_batch<T>(rotation, std::span<const Mat3<T>>(r.data() + begin, end - begin),
+                                                 std::span<const T>(in + begin * n2, (end - begin) * n2),
+                                                 std::span<T>(o + begin * n2, (end - begin) * n2), method, tolerance);
+    });
+    ok = std::all_of(chunk_ok.begin(), chunk_ok.end(), [](char c) { return c != 0; });
+  }
+  if (!ok) throw py::value_error("rotation method unavailable for this order");
+  return out;
+}
+
+template <class T>
+py::array quat_to_matrix_t(const py::array& q_in) {
+  const auto q = contiguous<T>(q_in);
+  if (q.ndim() < 1 || q.shape(q.ndim() - 1) != 4) throw py::value_error("q must have shape (..., 4): (w, x, y, z)");
+  std::vector<py::ssize_t> shape = shape_of(q);
+  shape.back() = 3;
+  shape.push_back(3);
+  py::array_t<T, py::array::c_style> out(shape);
+  const T* s = q.data();
+  T* o = out.mutable_data();
+  for (py::ssize_t k = 0; k < q.size() / 4; ++k) {
+    const Mat3<double> r = checked_quaternion_matrix({s[4 * k], s[4 * k + 1], s[4 * k + 2], s[4 * k + 3]},
+                                                     "q[" + std::to_string(k) + "]");
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) o[9 * k + 3 * i + j] = static_cast<T>(r(i, j));
+  }
+  return out;
+}
+
+template <class T>
+py::array product_t(const py::array& a_in, const py::array& b_in, std::optional<int> order_arg,
+                    const std::string& method_name) {
+  const auto a = contiguous<T>(a_in);
+  const auto b = contiguous<T>(b_in);
+  if (a.ndim() < 1 || b.ndim() < 1) throw py::value_error("a and b must have at least one axis");
+  const int na = order_of_count(a.shape(a.ndim() - 1), "a"), nb = order_of_count(b.shape(b.ndim() - 1), "b");
+  const int order = order_arg.value_or(na);
+  const std::optional<ProductMethod> method = product_method_from_name(method_name);
+  if (!method) throw py::value_error("method must be auto, tripling, fourier or grid, got '" + method_name + "'");
+  // Inputs of lower order are padded with zeros and the product taken at the highest of
+  // the three orders, then truncated: every band of the inputs reaches the result.
+  const int work = std::max({order, na, nb});
+  if (order < 1 || work > kMaxFourierProductOrder)
+    throw py::value_error("order " + std::to_string(work) + " is not supported (1.." +
+                          std::to_string(kMaxFourierProductOrder) + ")");
+  if (*method == ProductMethod::tripling && work > kMaxTriplingOrder)
+    throw py::value_error("method tripling supports orders up to " + std::to_string(kMaxTriplingOrder));
+  const std::size_t ca = a.size() / sh_count(na), cb = b.size() / sh_count(nb);
+  const bool same = std::equal(a.shape(), a.shape() + a.ndim() - 1, b.shape(), b.shape() + b.ndim() - 1);
+  if (!same && a.ndim() > 1 && b.ndim() > 1)
+    throw py::value_error("a and b must have the same leading axes (or one of them none)");
+  const py::array& lead = a.ndim() >= b.ndim() ? static_cast<const py::array&>(a) : b;
+  std::vector<py::ssize_t> shape(lead.shape(), lead.shape() + lead.ndim() - 1);
+  shape.push_back(sh_count(order));
+  auto out = py::array_t<T, py::array::c_style>(shape);
+  const std::size_t count = std::max(ca, cb), w2 = sh_count(work), o2 = sh_count(order);
+  const std::size_t a2 = sh_count(na), b2 = sh_count(nb);
+  const T *pa = a.data(), *pb = b.data();
+  T* po = out.mutable_data();
+  py::gil_scoped_release release;
+  for_chunks(count, [&](std::size_t begin, std::size_t end) {
+    ShProduct<T> product(work, *method);  // not thread-safe: one per chunk
+    std::vector<T> fa(w2, T(0)), fb(w2, T(0)), g(w2);
+    for (std::size_t k = begin; k < end; ++k) {
+      const T* ra = pa + (ca == 1 ? 0 : k) * a2;
+      const T* rb = pb + (cb == 1 ? 0 : k) * b2;
+      std::copy(ra, ra + a2, fa.begin());
+      std::copy(rb, rb + b2, fb.begin());
+      product.triple(fa, fb, g);
+      std::copy(g.begin(), g.begin() + o2, po + k * o2);
+    }
+  });
+  return out;
+}
+
+}  // namespace
+
+void bind_sh(py::module_& m) {
+  m.def(
+      "eval_sh",
+      [](int order, const py::array& dirs, const py::object& out) {
+        check_order(order);
+        return precision_of(dirs, "dirs") == Precision::f32 ? eval_sh_t<float>(order, dirs, out)
+                                                            : eval_sh_t<double>(order, dirs, out);
+      },
+      py::arg("order"), py::arg("dirs").noconvert(), py::arg("out") = py::none());
+  m.def(
+      "_rotate",
+      [](const py::array& coeffs, const py::object& matrix, const std::string& method, std::optional<double> tol,
+         const py::object& out) {
+        return precision_of(coeffs, "coeffs") == Precision::f32 ? rotate_t<float>(coeffs, matrix, method, tol, out)
+                                                                : rotate_t<double>(coeffs, matrix, method, tol, out);
+      },
+      py::arg("coeffs").noconvert(), py::arg("matrix"), py::arg("method"), py::arg("tol"), py::arg("out"));
+  m.def(
+      "_quat_to_matrix",
+      [](const py::array& q) {
+        return precision_of(q, "q") == Precision::f32 ? quat_to_matrix_t<float>(q) : quat_to_matrix_t<double>(q);
+      },
+      py::arg("q").noconvert());
+  m.def(
+      "_product",
+      [](const py::array& a, const py::array& b, std::optional<int> order, const std::string& method) {
+        const Precision p = precision_of(a, "a");
+        if (precision_of(b, "b") != p) throw py::type_error("a and b must have the same dtype");
+        return p == Precision::f32 ? product_t<float>(a, b, order, method) : product_t<double>(a, b, order, method);
+      },
+      py::arg("a").noconvert(), py::arg("b").noconvert(), py::arg("order"), py::arg("method"));
+}
+
+}  // namespace shtool::python

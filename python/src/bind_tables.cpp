@@ -1,0 +1,67 @@
+// load_table and the typed loaders. The engine API's loaders are used here only, so that
+// a change of their names touches one file.
+#include <memory>
+#include <string>
+
+#include "py_arrays.h"
+#include "shtool/table.h"
+#include "shtool/zh_fit_table.h"
+
+namespace shtool::python {
+namespace {
+
+py::dtype numpy_dtype(DType t) {
+  switch (t) {
+    case DType::f64: return py::dtype("<f8");
+    case DType::f32: return py::dtype("<f4");
+    case DType::i32: return py::dtype("<i4");
+    case DType::u32: return py::dtype("<u4");
+    case DType::i64: return py::dtype("<i8");
+    case DType::u64: return py::dtype("<u8");
+    case DType::u8: return py::dtype("u1");
+  }
+  throw py::value_error("unknown table dtype");
+}
+
+// (kind, order, header JSON text, {name: read-only array viewing the loaded bytes}); the
+// arrays keep the loaded table alive.
+py::tuple load_table(const std::string& path) {
+  TableFileInfo info;
+  Result<Table> loaded = [&] {
+    py::gil_scoped_release release;
+    return read_table(path, {}, &info);
+  }();
+  auto table = std::make_shared<Table>(value_or_raise(std::move(loaded)));
+  py::capsule owner(new std::shared_ptr<Table>(table),
+                    [](void* p) { delete static_cast<std::shared_ptr<Table>*>(p); });
+  py::dict arrays;
+  for (TableArray& a : table->arrays) {
+    std::vector<py::ssize_t> shape(a.shape.begin(), a.shape.end());
+    py::array view(numpy_dtype(a.dtype), shape, static_cast<const void*>(a.data.data()), owner);
+    py::detail::array_proxy(view.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
+    arrays[py::str(a.name)] = view;
+  }
+  return py::make_tuple(table->kind, table->order, info.header_json, arrays);
+}
+
+py::tuple load_zh_fit_table(const std::string& path) {
+  ZhFitTable<double> t = value_or_raise(load_zh_fit<double>(path));
+  const py::ssize_t v = static_cast<py::ssize_t>(t.vertices), n = t.lobes;
+  auto copy = [](const double* p, std::vector<py::ssize_t> shape) {
+    py::array_t<double> out(shape);
+    std::copy(p, p + out.size(), out.mutable_data());
+    return out;
+  };
+  return py::make_tuple(copy(t.axes.data()->data(), {v, n, 3}), copy(t.coeffs.data(), {v, n, py::ssize_t(t.order)}),
+                        copy(t.residual.data(), {v}), copy(t.norm.data(), {v}),
+                        copy(t.direct.data(), {v, py::ssize_t(t.direct_count)}));
+}
+
+}  // namespace
+
+void bind_tables(py::module_& m) {
+  m.def("_load_table", &load_table, py::arg("path"));
+  m.def("_load_zh_fit", &load_zh_fit_table, py::arg("path"));
+}
+
+}  // namespace shtool::python

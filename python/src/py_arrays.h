@@ -1,0 +1,99 @@
+// What every binding shares: the dtype rule (float32 and float64 kept, anything else a
+// TypeError), C-contiguous views without copies, output arrays (allocated or the
+// caller's `out=`), and errors as Python exceptions (ValueError for bad input).
+#pragma once
+
+#include <cstddef>
+#include <span>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include "shtool/euler.h"
+#include "shtool/result.h"
+
+namespace shtool::python {
+
+namespace py = pybind11;
+
+enum class Precision { f32, f64 };
+
+// float32 or float64; TypeError naming `what` for any other dtype.
+Precision precision_of(const py::array& a, const std::string& what);
+
+// `obj` as a C-contiguous array of T: the same memory when it already is one (numpy makes
+// no copy then), a contiguous copy otherwise. The dtype must already be T.
+template <class T>
+py::array_t<T, py::array::c_style> contiguous(const py::handle& obj) {
+  return py::array_t<T, py::array::c_style>::ensure(obj);
+}
+
+// Any array-like as float64, C-contiguous (matrices, directions, colours, quaternions).
+py::array_t<double, py::array::c_style> as_f64(const py::handle& obj, const std::string& what);
+
+// The output of a call: a new array of `shape`, or the caller's `out`, which must then be
+// a writeable C-contiguous array of T and exactly that shape (ValueError otherwise).
+template <class T>
+py::array_t<T, py::array::c_style> output(const std::vector<py::ssize_t>& shape, const py::object& out) {
+  if (out.is_none()) return py::array_t<T, py::array::c_style>(shape);
+  if (!py::isinstance<py::array>(out)) throw py::type_error("out must be a numpy array");
+  py::array a = py::reinterpret_borrow<py::array>(out);
+  if (!a.dtype().is(py::dtype::of<T>()))
+    throw py::type_error(std::string("out must have dtype ") + (sizeof(T) == 4 ? "float32" : "float64"));
+  if (!(a.flags() & py::array::c_style)) throw py::value_error("out must be C-contiguous");
+  if (!a.writeable()) throw py::value_error("out is read-only");
+  if (std::vector<py::ssize_t>(a.shape(), a.shape() + a.ndim()) != shape)
+    throw py::value_error("out has the wrong shape");
+  return py::reinterpret_borrow<py::array_t<T, py::array::c_style>>(a);
+}
+
+template <class T>
+std::span<const T> span_of(const py::array_t<T, py::array::c_style>& a) {
+  return {a.data(), static_cast<std::size_t>(a.size())};
+}
+template <class T>
+std::span<T> mutable_span_of(py::array_t<T, py::array::c_style>& a) {
+  return {a.mutable_data(), static_cast<std::size_t>(a.size())};
+}
+
+std::vector<py::ssize_t> shape_of(const py::array& a);
+
+// Whether two arrays' bytes overlap (kernels that read and write must not alias).
+bool overlaps(const py::array& a, const py::array& b);
+
+// The order N of a last axis of N^2 coefficients; ValueError otherwise.
+int order_of_count(py::ssize_t count, const std::string& what);
+
+// A 3x3 rotation, checked as the CLI checks --matrix.
+Mat3<double> rotation_from(const py::handle& matrix);
+
+// The value of a runtime Result, or ValueError with its message.
+template <class T>
+T value_or_raise(Result<T> r) {
+  if (!r) throw py::value_error(r.error().message);
+  return std::move(r).value();
+}
+
+// The value named `name` in one of the jobs' (name, value) lists; ValueError listing the
+// names otherwise.
+template <class E>
+E choice(const std::string& name, const std::vector<std::pair<std::string, E>>& names, const std::string& what) {
+  std::string known;
+  for (const auto& [n, v] : names) {
+    if (n == name) return v;
+    known += (known.empty() ? "" : ", ") + n;
+  }
+  throw py::value_error(what + ": unknown value '" + name + "' (" + known + ")");
+}
+
+// The binding groups (one translation unit each).
+void bind_sh(py::module_& m);
+void bind_lighting(py::module_& m);
+void bind_jobs(py::module_& m);
+void bind_tables(py::module_& m);
+
+}  // namespace shtool::python
