@@ -96,7 +96,7 @@ py::dict fit_zh_mesh(const std::string& mesh, py::kwargs kwargs) {
   kw.get("out", out), kw.get("json", json), kw.get("ply", ply), kw.get("save_transfer", save_transfer);
   kw.get("gltf", gltf);
   r.out = out, r.json = json, r.ply = ply, r.save_transfer = save_transfer, r.gltf = gltf;
-  kw.get_enum("encoding", r.encoding, encoding_names());
+  kw.get_enum("format", r.encoding, encoding_names());
   kw.get_enum("mode", r.mode, fit::transfer_mode_names());
   kw.get_enum("normals", r.normals, fit::normal_source_names());
   kw.get("order", r.order);
@@ -129,7 +129,7 @@ py::dict project_env_file(const std::string& image, const std::string& json, py:
   kw.get_enum("layout", r.layout, lighting::layout_names());
   kw.get_enum("equirect_preset", r.preset, lighting::equirect_preset_names());
   kw.get_enum("window", r.window, lighting::window_names());
-  kw.get_enum("encoding", r.encoding, encoding_names());
+  kw.get_enum("format", r.encoding, encoding_names());
   std::string quantity;
   kw.get("quantity", quantity);
   if (!quantity.empty())
@@ -171,7 +171,7 @@ std::vector<std::string> gen_tensors(int order, const std::string& out, py::kwar
   r.out = out;
   Kwargs kw(std::move(kwargs));
   kw.get("what", r.what), kw.get("inputs", r.inputs);
-  kw.get_enum("encoding", r.encoding, encoding_names());
+  kw.get_enum("format", r.encoding, encoding_names());
   kw.done("gen_tensors");
   std::vector<GeneratedFile> files;
   {
@@ -216,7 +216,7 @@ void bind_jobs(py::module_& m) {
         "transform-splats on a PLY file: keyword arguments quaternion=(w, x, y, z) or matrix=(9 numbers, "
         "row-major), translate=(x, y, z), scale, threads; writes path_out as the CLI does.");
   m.def("gen_tensors", &gen_tensors, py::arg("order"), py::arg("out"),
-        "gen-tensors: writes the tables into the folder `out`; keyword arguments what=[...], inputs, encoding. "
+        "gen-tensors: writes the tables into the folder `out`; keyword arguments what=[...], inputs, format. "
         "Returns the paths written.");
   m.def("_search_lobes", &search_lobes);
 }

@@ -1,0 +1,119 @@
+"""fit_zh against the CLI's fit-zh, load_table against the CLI's JSON encoding, the
+offline jobs' files against the CLI's bytes."""
+import json
+
+import numpy as np
+import pytest
+
+import shtool
+from conftest import SOURCE_DIR
+
+
+def transfer_vectors(count=12, order=4, seed=1):
+    """SH vectors that look like transfer: a positive lobe plus noise."""
+    rng = np.random.default_rng(seed)
+    axes = rng.normal(size=(count, 3))
+    t = shtool.eval_sh(order, axes) * 2 + 0.1 * rng.normal(size=(count, order * order))
+    t[:, 0] += 1.0
+    return t
+
+
+@pytest.mark.parametrize("lobes, effort, seed", [(1, None, None), (3, 2, 7), (4, 1, 3)])
+def test_fit_zh_equals_the_cli(cli, tmp_path, lobes, effort, seed):
+    t = transfer_vectors()
+    (tmp_path / "t.json").write_text(json.dumps({"order": 4, "vectors": t.tolist()}))
+    args = ["fit-zh", "--transfer", tmp_path / "t.json", "--out", tmp_path / "fit.shtb", "--lobes", lobes]
+    if effort is not None:
+        args += ["--effort", effort]
+    if seed is not None:
+        args += ["--seed", seed]
+    cli(*args)
+    # The CLI read the vectors from JSON: the same doubles (shortest round trip).
+    fit = shtool.fit_zh(t, lobes=lobes, effort=effort, seed=seed)
+    table = shtool.load_table(tmp_path / "fit.shtb")
+    assert table.kind == "zh-fit" and table.order == 4
+    assert fit.axes.shape == (12, lobes, 3) and fit.coeffs.shape == (12, lobes, 4) and fit.residual.shape == (12,)
+    np.testing.assert_array_equal(fit.axes.reshape(-1), table.arrays["axes"].reshape(-1))
+    np.testing.assert_array_equal(fit.coeffs.reshape(-1), table.arrays["coeffs"].reshape(-1))
+    np.testing.assert_array_equal(fit.residual, table.arrays["residual"])
+    loaded = shtool.load_zh_fit(tmp_path / "fit.shtb")
+    np.testing.assert_array_equal(loaded.axes, fit.axes)
+
+
+def test_fit_zh_bad_input():
+    with pytest.raises(ValueError):
+        shtool.fit_zh(np.ones((3, 15)))
+    with pytest.raises(ValueError):
+        shtool.fit_zh(np.ones((3, 16)), lobes=0)
+    with pytest.raises(ValueError):
+        shtool.fit_zh(np.ones((3, 16)), effort=9)
+    with pytest.raises(TypeError):
+        shtool.fit_zh(np.ones((3, 16), np.int64))
+    t = np.ones((3, 16))
+    t[1, 2] = np.inf
+    with pytest.raises(ValueError):
+        shtool.fit_zh(t)
+
+
+def test_load_table_arrays_equal_the_cli_json(cli, tmp_path):
+    cli("gen-tensors", "--order", 4, "--out", tmp_path / "bin")
+    cli("gen-tensors", "--order", 4, "--out", tmp_path / "json", "--format", "json")
+    for path in sorted((tmp_path / "bin").iterdir()):
+        table = shtool.load_table(path)
+        doc = json.loads(next((tmp_path / "json").glob(path.stem + ".*")).read_text())
+        assert table.kind == doc["kind"] and table.order == doc["order"]
+        assert table.header["kind"] == doc["kind"]
+        for name, values in doc["data"].items():
+            a = table.arrays[name]
+            assert not a.flags.writeable
+            np.testing.assert_array_equal(a.reshape(-1), np.asarray(values, dtype=a.dtype).reshape(-1))
+
+
+def test_gen_tensors_writes_the_cli_bytes(cli, tmp_path):
+    cli("gen-tensors", "--order", 5, "--out", tmp_path / "cli", "--what", "rotation")
+    written = shtool.gen_tensors(5, str(tmp_path / "py"), what=["rotation"])
+    assert len(written) == 1
+    for path in (tmp_path / "cli").iterdir():
+        assert (tmp_path / "py" / path.name).read_bytes() == path.read_bytes()
+
+
+def test_load_table_errors(tmp_path):
+    with pytest.raises(ValueError):
+        shtool.load_table(tmp_path / "missing.shtb")
+    (tmp_path / "bad.shtb").write_bytes(b"\x89SHT\r\n\x1a\nnonsense")
+    with pytest.raises(ValueError):
+        shtool.load_table(tmp_path / "bad.shtb")
+
+
+def test_fit_zh_mesh_writes_the_cli_bytes(cli, tmp_path):
+    mesh = SOURCE_DIR / "data" / "spot.obj"
+    opts = ["--order", 3, "--lobes", 2, "--rays", 64, "--effort", 1]
+    cli("fit-zh", mesh, "--out", tmp_path / "cli.shtb", *opts)
+    fit = shtool.fit_zh_mesh(mesh, out=str(tmp_path / "py.shtb"), order=3, lobes=2, rays=64, effort=1)
+    assert (tmp_path / "py.shtb").read_bytes() == (tmp_path / "cli.shtb").read_bytes()
+    assert fit.axes.shape[1:] == (2, 3)
+
+
+def test_transform_splats_writes_the_cli_bytes(cli, tmp_path):
+    # A tiny 3DGS PLY of degree 1: position, dc, rest (3 x 3), opacity, scale, rotation.
+    names = (["x", "y", "z", "f_dc_0", "f_dc_1", "f_dc_2"] + [f"f_rest_{i}" for i in range(9)] +
+             ["opacity", "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3"])
+    rng = np.random.default_rng(4)
+    data = rng.normal(size=(5, len(names))).astype("<f4")
+    header = "ply\nformat binary_little_endian 1.0\nelement vertex 5\n"
+    header += "".join(f"property float {n}\n" for n in names) + "end_header\n"
+    (tmp_path / "in.ply").write_bytes(header.encode() + data.tobytes())
+    cli("transform-splats", tmp_path / "in.ply", "--out", tmp_path / "cli.ply", "--quat", "0.8,0.6,0,0",
+        "--scale", 2)
+    report = shtool.transform_splats(str(tmp_path / "in.ply"), str(tmp_path / "py.ply"),
+                                     quaternion=(0.8, 0.6, 0, 0), scale=2.0)
+    assert report["splats"] == 5
+    assert (tmp_path / "py.ply").read_bytes() == (tmp_path / "cli.ply").read_bytes()
+
+
+def test_search_lobes_returns_the_summary(tmp_path):
+    summary = shtool.search_lobes(bands=[2], seed=1, threads=1, population=40, stall=5, restarts=1,
+                                  json=str(tmp_path / "s.json"))
+    assert json.loads((tmp_path / "s.json").read_text()) == summary
+    with pytest.raises(TypeError):
+        shtool.search_lobes(bands=[2], colour="red")

@@ -1,0 +1,141 @@
+"""rotate: g(w) = f(R^-1 w), checked as f(w) == rotate(f, R)(R w)."""
+import json
+import threading
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+import shtool
+
+# Largest error allowed per unit of the coefficients' size: the methods' default
+# tolerance (1e-10 double, 1e-6 float) plus rounding over up to 144 coefficients.
+TOL = {np.float64: 1e-9, np.float32: 2e-4}
+
+
+def random_rotation(seed):
+    return Rotation.random(random_state=seed).as_matrix()
+
+
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+@pytest.mark.parametrize("order", range(1, 13))
+def test_rotated_function_at_rotated_direction(order, dtype):
+    rng = np.random.default_rng(order)
+    f = rng.normal(size=(4, order * order)).astype(dtype)
+    r = random_rotation(order)
+    g = shtool.rotate(f, r)
+    assert g.dtype == dtype and g.shape == f.shape
+    w = rng.normal(size=(64, 3))
+    w /= np.linalg.norm(w, axis=1, keepdims=True)
+    before = shtool.eval_sh(order, w) @ f.astype(np.float64).T
+    after = shtool.eval_sh(order, w @ r.T) @ g.astype(np.float64).T
+    scale = np.abs(before).max() + 1
+    np.testing.assert_allclose(after, before, rtol=0, atol=TOL[dtype] * scale)
+
+
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+def test_composition_and_identity(dtype):
+    f = np.random.default_rng(3).normal(size=(10, 36)).astype(dtype)
+    r1, r2 = random_rotation(1), random_rotation(2)
+    both = shtool.rotate(shtool.rotate(f, r1), r2)
+    np.testing.assert_allclose(both, shtool.rotate(f, r2 @ r1), atol=TOL[dtype] * 10)
+    np.testing.assert_allclose(shtool.rotate(f, np.eye(3)), f, atol=TOL[dtype])
+
+
+def test_methods_agree_and_match_the_cli(cli):
+    f = np.random.default_rng(4).normal(size=25)
+    q = np.array([0.8, 0.2, -0.4, 0.4])
+    q /= np.linalg.norm(q)
+    r = shtool.quat_to_matrix(q)
+    for method in ("reference", "zxzxz", "taylor2", "auto"):
+        np.testing.assert_allclose(shtool.rotate(f, r, method=method), shtool.rotate(f, r, method="reference"),
+                                   atol=1e-6)
+    for method in ("reference", "zxzxz"):
+        printed = json.loads(cli("rotate", "--order", 5, "--method", method, "--matrix",
+                                 ",".join(repr(float(x)) for x in r.ravel()),
+                                 "--coeffs", ",".join(repr(float(x)) for x in f)))
+        np.testing.assert_array_equal(shtool.rotate(f, r, method=method), printed["coefficients"])
+
+
+def test_quaternion_matches_scipy():
+    q = np.random.default_rng(5).normal(size=(7, 4))
+    q /= np.linalg.norm(q, axis=1, keepdims=True)
+    expected = Rotation.from_quat(q[:, [1, 2, 3, 0]]).as_matrix()  # scipy: (x, y, z, w)
+    np.testing.assert_allclose(shtool.quat_to_matrix(q), expected, atol=1e-15)
+    assert shtool.quat_to_matrix(q.astype(np.float32)).dtype == np.float32
+
+
+def test_axis_and_rgb_lighting():
+    lighting = np.random.default_rng(6).normal(size=(16, 3))  # (N^2, 3): coefficients on axis 0
+    r = random_rotation(6)
+    g = shtool.rotate(lighting, r, axis=0)
+    assert g.shape == (16, 3)
+    np.testing.assert_allclose(g, shtool.rotate(lighting.T.copy(), r).T, atol=0)
+
+
+def test_one_matrix_per_vector_batch():
+    rng = np.random.default_rng(7)
+    f = rng.normal(size=(5, 3, 9))  # 5 splats, RGB, order 3
+    rs = np.stack([random_rotation(s) for s in range(5)])
+    g = shtool.rotate(f, rs)
+    for k in range(5):
+        np.testing.assert_allclose(g[k], shtool.rotate(f[k], rs[k]), atol=1e-12)
+
+
+def test_no_copy_with_out_and_contiguous_input():
+    f = np.random.default_rng(8).normal(size=(1000, 16))
+    out = np.empty_like(f)
+    g = shtool.rotate(f, random_rotation(8), out=out)
+    assert np.shares_memory(g, out)
+    with pytest.raises(ValueError):
+        shtool.rotate(f, random_rotation(8), out=f)  # in place would alias the kernel's input
+    with pytest.raises(TypeError):
+        shtool.rotate(f, random_rotation(8), out=np.empty((1000, 16), np.float32))
+
+
+def test_two_threads_at_once_give_the_results_of_one():
+    rng = np.random.default_rng(9)
+    data = [rng.normal(size=(20000, 3, 16)).astype(np.float32) for _ in range(2)]
+    rs = [random_rotation(10), random_rotation(11)]
+    alone = [shtool.rotate(d, r) for d, r in zip(data, rs)]
+    results = [None, None]
+
+    def work(k):
+        for _ in range(3):
+            results[k] = shtool.rotate(data[k], rs[k])
+
+    threads = [threading.Thread(target=work, args=(k,)) for k in range(2)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    for k in range(2):
+        np.testing.assert_array_equal(results[k], alone[k])
+
+
+@pytest.mark.parametrize("matrix", [
+    np.diag([1.0, 1.0, -1.0]),          # reflection
+    np.eye(3) * 2,                      # not orthonormal
+    np.eye(4),                          # shape
+    np.full((3, 3), np.nan),            # not finite
+])
+def test_bad_matrices(matrix):
+    with pytest.raises(ValueError):
+        shtool.rotate(np.ones(9), matrix)
+
+
+def test_bad_inputs():
+    with pytest.raises(ValueError):
+        shtool.rotate(np.ones(8), np.eye(3))            # not N^2
+    with pytest.raises(ValueError):
+        shtool.rotate(np.ones(9), np.eye(3), method="fast")
+    with pytest.raises(TypeError):
+        shtool.rotate(np.ones(9, np.int32), np.eye(3))
+    with pytest.raises(TypeError):
+        shtool.rotate(np.ones(9, np.float16), np.eye(3))
+    with pytest.raises(ValueError):
+        shtool.rotate(np.ones(9), np.eye(3), axis=3)
+    with pytest.raises(ValueError):
+        shtool.quat_to_matrix([1.0, 1.0, 0, 0])          # not unit
+    with pytest.raises(ValueError):
+        shtool.rotate(np.ones((2, 9)), np.stack([np.eye(3)] * 3))  # 3 matrices for 2 vectors
