@@ -18,6 +18,7 @@ packages=(
   glslang-tools spirv-tools libvulkan-dev mesa-vulkan-drivers  # shader tests (lavapipe: a CPU Vulkan device)
   clang libclang-rt-14-dev                               # fuzz targets (libFuzzer), sanitizers
   python3 python3-jsonschema python3-numpy               # schema checks, numpy reader test
+  python3-dev pybind11-dev python3-pybind11 python3-scipy python3-pytest python3-venv  # Python module and its tests
 )
 # The engine checks run three.js and Babylon.js in node (npm installs them into the
 # build folder at test time). A machine image's own Node.js is used as it is: Debian's

@@ -40,18 +40,19 @@ def _on_last_axis(a, axis, name):
         raise ValueError(f"axis: {e}") from None
 
 
-def rotate(coeffs, matrix, method="auto", axis=-1, out=None, tol=None):
+def rotate(coeffs, matrix, method="auto", axis=-1, out=None, tol=None, threads=0):
     """Rotated coefficients g(w) = f(R^-1 w), same shape and dtype as `coeffs`.
 
     `matrix` is a 3x3 rotation (orthonormal to 1e-6, det +1; ValueError otherwise) or one
     per leading index, shape (..., 3, 3). `method`: auto, reference, zxzxz, taylor1,
     taylor1.5, taylor2 (as ``shtool rotate --method``). `out` (axis=-1 only): a
-    C-contiguous array of the same shape and dtype, written in place.
+    C-contiguous array of the same shape and dtype, written in place. `threads`: 0 for
+    every core.
     """
     a = _on_last_axis(_float_array(coeffs, "coeffs"), axis, "coeffs")
     if out is not None and axis not in (-1, a.ndim - 1):
         raise ValueError("out= needs axis=-1")
-    r = _shtool._rotate(a, matrix, method, tol, out)
+    r = _shtool._rotate(a, matrix, method, tol, out, threads)
     return _np.moveaxis(r, -1, axis)
 
 
@@ -60,7 +61,7 @@ def quat_to_matrix(q):
     return _shtool._quat_to_matrix(_float_array(q, "q"))
 
 
-def product(a, b, order=None, method="auto", axis=-1):
+def product(a, b, order=None, method="auto", axis=-1, threads=0):
     """The SH product of a and b truncated to `order` (default: a's order).
 
     method: auto, tripling, fourier, grid (as ``shtool product``). Leading axes of a
@@ -68,7 +69,7 @@ def product(a, b, order=None, method="auto", axis=-1):
     """
     fa = _on_last_axis(_float_array(a, "a"), axis, "a")
     fb = _on_last_axis(_float_array(b, "b"), axis, "b")
-    return _np.moveaxis(_shtool._product(fa, fb, order, method), -1, axis)
+    return _np.moveaxis(_shtool._product(fa, fb, order, method, threads), -1, axis)
 
 
 def irradiance(coeffs, axis=-1):

@@ -22,15 +22,15 @@ namespace {
 // more than the work.
 constexpr std::size_t kChunk = 4096;
 
-// body(begin, end) over [0, count) in chunks, on every core when there is more than one
-// chunk. The caller has released the GIL.
-void for_chunks(std::size_t count, const std::function<void(std::size_t, std::size_t)>& body) {
+// body(begin, end) over [0, count) in chunks, on `threads` workers (resolved: 0 is every
+// core) when there is more than one chunk. The caller has released the GIL.
+void for_chunks(std::size_t count, int threads, const std::function<void(std::size_t, std::size_t)>& body) {
   const std::size_t chunks = (count + kChunk - 1) / kChunk;
-  if (chunks <= 1) {
+  if (chunks <= 1 || threads == 1) {
     body(0, count);
     return;
   }
-  parallel_for(chunks, resolve_threads(0), [&](std::size_t c) { body(c * kChunk, std::min(count, (c + 1) * kChunk)); });
+  parallel_for(chunks, threads, [&](std::size_t c) { body(c * kChunk, std::min(count, (c + 1) * kChunk)); });
 }
 
 void check_order(int order) {
@@ -39,7 +39,7 @@ void check_order(int order) {
 }
 
 template <class T>
-py::array eval_sh_t(int order, const py::array& dirs_in, const py::object& out_arg) {
+py::array eval_sh_t(int order, const py::array& dirs_in, const py::object& out_arg, int threads) {
   const auto dirs = contiguous<T>(dirs_in);
   if (dirs.ndim() < 1 || dirs.shape(dirs.ndim() - 1) != 3) throw py::value_error("dirs must have shape (..., 3)");
   std::vector<py::ssize_t> shape = shape_of(dirs);
@@ -53,7 +53,7 @@ py::array eval_sh_t(int order, const py::array& dirs_in, const py::object& out_a
   {
     py::gil_scoped_release release;
     std::vector<std::size_t> first_bad((count + kChunk - 1) / kChunk, count);
-    for_chunks(count, [&](std::size_t begin, std::size_t end) {
+    for_chunks(count, threads, [&](std::size_t begin, std::size_t end) {
       std::vector<T> unit(3 * (end - begin));
       for (std::size_t k = begin; k < end; ++k) {
         Vec3<T> w(d[3 * k], d[3 * k + 1], d[3 * k + 2]);
@@ -91,7 +91,7 @@ RotationMethod method_from(const std::string& name) {
 
 template <class T>
 py::array rotate_t(const py::array& coeffs_in, const py::object& matrix, const std::string& method_name,
-                   std::optional<double> tol, const py::object& out_arg) {
+                   std::optional<double> tol, const py::object& out_arg, int threads) {
   const auto coeffs = contiguous<T>(coeffs_in);
   if (coeffs.ndim() < 1) throw py::value_error("coeffs must have at least one axis");
   const int order = order_of_count(coeffs.shape(coeffs.ndim() - 1), "coeffs");
@@ -113,7 +113,7 @@ py::array rotate_t(const py::array& coeffs_in, const py::object& matrix, const s
     const T* in = coeffs.data();
     T* o = out.mutable_data();
     py::gil_scoped_release release;
-    for_chunks(count, [&](std::size_t begin, std::size_t end) {
+    for_chunks(count, threads, [&](std::size_t begin, std::size_t end) {
       for (std::size_t k = begin; k < end; ++k)
         rotation.apply(std::span<const T>(in + k * n2, n2), std::span<T>(o + k * n2, n2));
     });
@@ -137,7 +137,7 @@ py::array rotate_t(const py::array& coeffs_in, const py::object& matrix, const s
   {
     py::gil_scoped_release release;
     std::vector<char> chunk_ok((count + kChunk - 1) / kChunk, 1);
-    for_chunks(count, [&](std::size_t begin, std::size_t end) {
+    for_chunks(count, threads, [&](std::size_t begin, std::size_t end) {
       ShRotation<T> rotation(order, helpers);
       chunk_ok[begin / kChunk] = rotate_batch<T>(rotation, std::span<const Mat3<T>>(r.data() + begin, end - begin),
                                                  std::span<const T>(in + begin * n2, (end - begin) * n2),
@@ -170,7 +170,7 @@ py::array quat_to_matrix_t(const py::array& q_in) {
 
 template <class T>
 py::array product_t(const py::array& a_in, const py::array& b_in, std::optional<int> order_arg,
-                    const std::string& method_name) {
+                    const std::string& method_name, int threads) {
   const auto a = contiguous<T>(a_in);
   const auto b = contiguous<T>(b_in);
   if (a.ndim() < 1 || b.ndim() < 1) throw py::value_error("a and b must have at least one axis");
@@ -199,7 +199,7 @@ py::array product_t(const py::array& a_in, const py::array& b_in, std::optional<
   const T *pa = a.data(), *pb = b.data();
   T* po = out.mutable_data();
   py::gil_scoped_release release;
-  for_chunks(count, [&](std::size_t begin, std::size_t end) {
+  for_chunks(count, threads, [&](std::size_t begin, std::size_t end) {
     ShProduct<T> product(work, *method);  // not thread-safe: one per chunk
     std::vector<T> fa(w2, T(0)), fb(w2, T(0)), g(w2);
     for (std::size_t k = begin; k < end; ++k) {
@@ -219,20 +219,25 @@ py::array product_t(const py::array& a_in, const py::array& b_in, std::optional<
 void bind_sh(py::module_& m) {
   m.def(
       "eval_sh",
-      [](int order, const py::array& dirs, const py::object& out) {
+      [](int order, const py::array& dirs, const py::object& out, int threads) {
         check_order(order);
-        return precision_of(dirs, "dirs") == Precision::f32 ? eval_sh_t<float>(order, dirs, out)
-                                                            : eval_sh_t<double>(order, dirs, out);
+        threads = resolve_threads(threads);
+        return precision_of(dirs, "dirs") == Precision::f32 ? eval_sh_t<float>(order, dirs, out, threads)
+                                                            : eval_sh_t<double>(order, dirs, out, threads);
       },
-      py::arg("order"), py::arg("dirs").noconvert(), py::arg("out") = py::none());
+      py::arg("order"), py::arg("dirs").noconvert(), py::arg("out") = py::none(), py::arg("threads") = 0,
+      "Real SH values (..., order**2) at dirs (..., 3), normalised inside; float32 or float64 as dirs.");
   m.def(
       "_rotate",
       [](const py::array& coeffs, const py::object& matrix, const std::string& method, std::optional<double> tol,
-         const py::object& out) {
-        return precision_of(coeffs, "coeffs") == Precision::f32 ? rotate_t<float>(coeffs, matrix, method, tol, out)
-                                                                : rotate_t<double>(coeffs, matrix, method, tol, out);
+         const py::object& out, int threads) {
+        threads = resolve_threads(threads);
+        return precision_of(coeffs, "coeffs") == Precision::f32
+                   ? rotate_t<float>(coeffs, matrix, method, tol, out, threads)
+                   : rotate_t<double>(coeffs, matrix, method, tol, out, threads);
       },
-      py::arg("coeffs").noconvert(), py::arg("matrix"), py::arg("method"), py::arg("tol"), py::arg("out"));
+      py::arg("coeffs").noconvert(), py::arg("matrix"), py::arg("method"), py::arg("tol"), py::arg("out"),
+      py::arg("threads"));
   m.def(
       "_quat_to_matrix",
       [](const py::array& q) {
@@ -241,12 +246,14 @@ void bind_sh(py::module_& m) {
       py::arg("q").noconvert());
   m.def(
       "_product",
-      [](const py::array& a, const py::array& b, std::optional<int> order, const std::string& method) {
+      [](const py::array& a, const py::array& b, std::optional<int> order, const std::string& method, int threads) {
         const Precision p = precision_of(a, "a");
         if (precision_of(b, "b") != p) throw py::type_error("a and b must have the same dtype");
-        return p == Precision::f32 ? product_t<float>(a, b, order, method) : product_t<double>(a, b, order, method);
+        threads = resolve_threads(threads);
+        return p == Precision::f32 ? product_t<float>(a, b, order, method, threads)
+                                   : product_t<double>(a, b, order, method, threads);
       },
-      py::arg("a").noconvert(), py::arg("b").noconvert(), py::arg("order"), py::arg("method"));
+      py::arg("a").noconvert(), py::arg("b").noconvert(), py::arg("order"), py::arg("method"), py::arg("threads"));
 }
 
 }  // namespace shtool::python
