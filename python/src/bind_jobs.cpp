@@ -130,11 +130,7 @@ py::dict project_env_file(const std::string& image, const std::string& json, py:
   kw.get_enum("equirect_preset", r.preset, lighting::equirect_preset_names());
   kw.get_enum("window", r.window, lighting::window_names());
   kw.get_enum("format", r.encoding, encoding_names());
-  std::string quantity;
-  kw.get("quantity", quantity);
-  if (!quantity.empty())
-    r.quantity = choice(quantity, {{"radiance", lighting::Quantity::radiance}, {"irradiance", lighting::Quantity::irradiance}},
-                        "quantity");
+  kw.get_enum("quantity", r.quantity, lighting::quantity_names());
   kw.done("project_env_file");
   lighting::ProjectEnvReport report;
   {

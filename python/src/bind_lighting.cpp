@@ -17,12 +17,6 @@
 namespace shtool::python {
 namespace {
 
-const std::vector<std::pair<std::string, lighting::Quantity>>& quantity_names() {
-  static const std::vector<std::pair<std::string, lighting::Quantity>> names = {
-      {"radiance", lighting::Quantity::radiance}, {"irradiance", lighting::Quantity::irradiance}};
-  return names;
-}
-
 // Coefficients (..., N^2) times factors[band], in the array's own dtype.
 template <class T>
 py::array scale_by_band(const py::array& coeffs_in, const std::vector<double>& factors) {
@@ -104,7 +98,7 @@ py::array light(const std::string& kind, int order, const py::object& direction,
     spec.ground = triple(ground, "ground");
   }
   const lighting::Lighting l =
-      lighting::light_coefficients({spec}, order, choice(quantity, quantity_names(), "quantity"));
+      lighting::light_coefficients({spec}, order, choice(quantity, lighting::quantity_names(), "quantity"));
   py::array_t<double> out({static_cast<py::ssize_t>(sh_count(order)), py::ssize_t(3)});
   std::copy(l.coefficients.begin(), l.coefficients.end(), out.mutable_data());
   return out;
@@ -122,7 +116,7 @@ py::tuple project_env(const py::array& image, int order, const std::string& layo
                       bool mirror_x, int threads) {
   lighting::ProjectEnvRequest r;
   r.order = order;
-  r.quantity = choice(quantity, quantity_names(), "quantity");
+  r.quantity = choice(quantity, lighting::quantity_names(), "quantity");
   r.window = choice(window_name, lighting::window_names(), "window");
   r.preset = choice(preset, lighting::equirect_preset_names(), "preset");
   r.mirror_x = mirror_x;

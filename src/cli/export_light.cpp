@@ -63,8 +63,7 @@ void setup_import_light(CLI::App& app) {
   CLI::App* sub = app.add_subcommand("import-light", "Read SH lighting in an engine's convention into shtool's lighting JSON");
   sub->add_option("file", *in, "the engine's file (as export-light writes it)")->required();
   sub->add_option("--json", *json, "output lighting JSON")->required();
-  add_enum_option(sub, "--quantity", *quantity,
-                  {{"radiance", lighting::Quantity::radiance}, {"irradiance", lighting::Quantity::irradiance}},
+  add_enum_option(sub, "--quantity", *quantity, lighting::quantity_names(),
                   "radiance or irradiance", "radiance");
   add_common(sub, *o);
   sub->callback([=]() {

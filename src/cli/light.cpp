@@ -33,8 +33,7 @@ void setup_light(CLI::App& app) {
   CLI::Option* ground = sub->add_option("--ground", (*text)[2], "hemisphere: r,g,b below the horizon [0,0,0]");
   sub->add_option("--lights", opt->list, "several lights from a JSON list (instead of --type ...)");
   sub->add_option("--order", opt->order, "SH order N")->capture_default_str();
-  add_enum_option(sub, "--quantity", opt->quantity,
-                  {{"radiance", lighting::Quantity::radiance}, {"irradiance", lighting::Quantity::irradiance}},
+  add_enum_option(sub, "--quantity", opt->quantity, lighting::quantity_names(),
                   "radiance, or irradiance (clamped-cosine kernel)", "radiance");
   sub->add_option("--json", opt->json, "output lighting JSON")->required();
   sub->add_option("--out", opt->out, "also write the coefficients as a table (kind env-sh)");

@@ -23,8 +23,7 @@ void setup_project_env(CLI::App& app) {
   add_enum_option(sub, "--equirect-preset", opt->preset, lighting::equirect_preset_names(),
                   "whose equirect mapping the image follows: shtool (= three), three, filament, google", "shtool");
   sub->add_flag("--mirror-x", opt->mirror_x, "cubemaps: negate x of the cube frame (as three's CubeTexture, filament)");
-  add_enum_option(sub, "--quantity", opt->quantity,
-                  {{"radiance", lighting::Quantity::radiance}, {"irradiance", lighting::Quantity::irradiance}},
+  add_enum_option(sub, "--quantity", opt->quantity, lighting::quantity_names(),
                   "radiance, or irradiance (clamped-cosine kernel)", "radiance");
   add_enum_option(sub, "--window", opt->window, lighting::window_names(),
                   "none, hann, lanczos, sinc4, or auto (largest sinc4 cutoff without negative values)", "none");

@@ -14,6 +14,12 @@ namespace shtool::lighting {
 
 const char* quantity_name(Quantity q) { return q == Quantity::radiance ? "radiance" : "irradiance"; }
 
+const std::vector<std::pair<std::string, Quantity>>& quantity_names() {
+  static const std::vector<std::pair<std::string, Quantity>> names = {{"radiance", Quantity::radiance},
+                                                                      {"irradiance", Quantity::irradiance}};
+  return names;
+}
+
 std::string lighting_json(const Lighting& l) {
   check_finite(std::span<const double>(l.coefficients), "lighting coefficient");
   // Written by hand for a readable layout (one [r, g, b] row per line, the keys in the

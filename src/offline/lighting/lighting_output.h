@@ -8,6 +8,7 @@
 
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -18,6 +19,8 @@ namespace shtool::lighting {
 
 enum class Quantity { radiance, irradiance };
 const char* quantity_name(Quantity q);
+// The (name, value) list of --quantity.
+const std::vector<std::pair<std::string, Quantity>>& quantity_names();
 
 struct Lighting {
   int order = 0;
