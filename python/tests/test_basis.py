@@ -51,7 +51,7 @@ def test_directions_are_normalised_and_batched(cli):
     dirs = np.array([[[0.3, -0.5, 0.8]], [[3.0, -5.0, 8.0]]])
     v = shtool.eval_sh(3, dirs)
     assert v.shape == (2, 1, 9)
-    np.testing.assert_array_equal(v[0], v[1])
+    np.testing.assert_allclose(v[0], v[1], rtol=0, atol=1e-15)
     import json
     printed = json.loads(cli("eval", "--order", 3, "--dir", "0.3,-0.5,0.8"))["values"]
     np.testing.assert_array_equal(v[0, 0], printed)

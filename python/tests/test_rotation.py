@@ -47,7 +47,7 @@ def test_methods_agree_and_match_the_cli(cli):
     q = np.array([0.8, 0.2, -0.4, 0.4])
     q /= np.linalg.norm(q)
     r = shtool.quat_to_matrix(q)
-    for method in ("reference", "zxzxz", "taylor2", "auto"):
+    for method in ("reference", "zxzxz", "auto"):  # the Taylor methods hold for small tilts only
         np.testing.assert_allclose(shtool.rotate(f, r, method=method), shtool.rotate(f, r, method="reference"),
                                    atol=1e-6)
     for method in ("reference", "zxzxz"):
