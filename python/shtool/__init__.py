@@ -19,7 +19,8 @@ from ._shtool import __version__, eval_sh, gen_tensors, light, transform_splats
 __all__ = [
     "eval_sh", "rotate", "quat_to_matrix", "product", "project_env", "project_env_file", "irradiance",
     "window", "light", "fit_zh", "fit_zh_mesh", "load_table", "load_zh_fit", "transform_splats",
-    "gen_tensors", "search_lobes", "Table", "ZhFit",
+    "gen_tensors", "search_lobes", "Table", "ZhFit", "ZhFitTable", "GlossyFit", "WrinkleMap", "EnvSh",
+    "RotationHelpers", "TriplingTensor", "ShFourierTensors", "ZhfLobes",
 ]
 
 
@@ -159,17 +160,75 @@ def search_lobes(**options):
 
 
 class Table:
-    """A loaded table: kind, order, header (dict) and arrays (read-only views of the bytes)."""
+    """A loaded table: kind, order, header (dict) and arrays (read-only views of the
+    loaded bytes, also reachable as attributes: ``table.coeffs``)."""
 
     def __init__(self, kind, order, header, arrays):
         self.kind, self.order, self.header, self.arrays = kind, order, header, arrays
 
+    def __getattr__(self, name):
+        arrays = self.__dict__.get("arrays", {})
+        if name in arrays:
+            return arrays[name]
+        raise AttributeError(name)
+
     def __repr__(self):
         shapes = ", ".join(f"{k}{tuple(v.shape)}" for k, v in self.arrays.items())
-        return f"Table(kind={self.kind!r}, order={self.order}, arrays: {shapes})"
+        return f"{type(self).__name__}(kind={self.kind!r}, order={self.order}, arrays: {shapes})"
 
 
 def load_table(path):
     """Any shtool table (binary or JSON encoding), checked as the runtime checks it."""
     kind, order, header, arrays = _shtool._load_table(str(path))
     return Table(kind, order, _json.loads(header), dict(arrays))
+
+
+class _TypedTable(Table):
+    KIND = ""
+
+    @classmethod
+    def load(cls, path):
+        """The table at `path`, which must be of this kind and pass the checks of the
+        engine API's loader of that kind (ValueError otherwise)."""
+        kind, order, header, arrays = _shtool._load_table(str(path), cls.KIND)
+        return cls(kind, order, _json.loads(header), dict(arrays))
+
+
+class ZhFitTable(_TypedTable):
+    """zh-fit (fit-zh): axes, coeffs, residual, norm, ... per vertex."""
+    KIND = "zh-fit"
+
+
+class GlossyFit(_TypedTable):
+    """glossy-zh (fit-glossy)."""
+    KIND = "glossy-zh"
+
+
+class WrinkleMap(_TypedTable):
+    """wrinkle-zh (fit-wrinkles)."""
+    KIND = "wrinkle-zh"
+
+
+class EnvSh(_TypedTable):
+    """env-sh (project-env --out, light --out): coefficients (N**2, 3)."""
+    KIND = "env-sh"
+
+
+class RotationHelpers(_TypedTable):
+    """rotation-helpers (gen-tensors): the sparse matrices of the zxzxz and Taylor rotations."""
+    KIND = "rotation-helpers"
+
+
+class TriplingTensor(_TypedTable):
+    """tripling-tensor (gen-tensors)."""
+    KIND = "tripling-tensor"
+
+
+class ShFourierTensors(_TypedTable):
+    """sh-fourier-tensors (gen-tensors)."""
+    KIND = "sh-fourier-tensors"
+
+
+class ZhfLobes(_TypedTable):
+    """zhf-lobes (search-lobes --out)."""
+    KIND = "zhf-lobes"

@@ -4,8 +4,15 @@
 #include <string>
 
 #include "py_arrays.h"
+#include "shtool/env_projection.h"
+#include "shtool/fourier_tensors.h"
+#include "shtool/glossy.h"
+#include "shtool/rotation_helpers.h"
 #include "shtool/table.h"
+#include "shtool/tripling_product.h"
+#include "shtool/wrinkle_map.h"
 #include "shtool/zh_fit_table.h"
+#include "shtool/zhf_rotation.h"
 
 namespace shtool::python {
 namespace {
@@ -23,15 +30,37 @@ py::dtype numpy_dtype(DType t) {
   throw py::value_error("unknown table dtype");
 }
 
+// What the engine API's typed loader of `kind` checks beyond read_table (shapes against
+// each other, finiteness, unit axes, ...), or an error naming the problem.
+std::optional<std::string> typed_problem(const Table& t, const std::string& path) {
+  auto problem = [&](const auto& r) -> std::optional<std::string> {
+    if (r) return std::nullopt;
+    return path + ": " + r.error().message;
+  };
+  if (t.kind == kZhFitKind) return problem(ZhFitTable<double>::from_table(t));
+  if (t.kind == kGlossyZhKind) return problem(GlossyFit<double>::from_table(t));
+  if (t.kind == kWrinkleZhKind) return problem(WrinkleMap<double>::from_table(t));
+  if (t.kind == kRotationHelpersKind) return problem(RotationHelpers::from_table(t));
+  if (t.kind == kTriplingTensorKind) return problem(TriplingTensor::from_table(t));
+  if (t.kind == kShFourierTensorsKind) return problem(ShFourierTensors::from_table(t));
+  if (t.kind == kZhfLobesKind) return problem(load_zhf_lobes(path));
+  return std::nullopt;  // env-sh and the rest: read_table's checks are the loader's
+}
+
 // (kind, order, header JSON text, {name: read-only array viewing the loaded bytes}); the
-// arrays keep the loaded table alive.
-py::tuple load_table(const std::string& path) {
+// arrays keep the loaded table alive. With `kind`, the table must be of that kind and
+// pass its typed loader's checks.
+py::tuple load_table(const std::string& path, const std::string& kind) {
   TableFileInfo info;
+  TableExpectation expect;
+  expect.kind = kind;
   Result<Table> loaded = [&] {
     py::gil_scoped_release release;
-    return read_table(path, {}, &info);
+    return read_table(path, expect, &info);
   }();
   auto table = std::make_shared<Table>(value_or_raise(std::move(loaded)));
+  if (!kind.empty())
+    if (const std::optional<std::string> p = typed_problem(*table, path)) throw py::value_error(*p);
   py::capsule owner(new std::shared_ptr<Table>(table),
                     [](void* p) { delete static_cast<std::shared_ptr<Table>*>(p); });
   py::dict arrays;
@@ -60,7 +89,7 @@ py::tuple load_zh_fit_table(const std::string& path) {
 }  // namespace
 
 void bind_tables(py::module_& m) {
-  m.def("_load_table", &load_table, py::arg("path"));
+  m.def("_load_table", &load_table, py::arg("path"), py::arg("kind") = "");
   m.def("_load_zh_fit", &load_zh_fit_table, py::arg("path"));
 }
 

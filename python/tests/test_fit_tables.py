@@ -117,3 +117,22 @@ def test_search_lobes_returns_the_summary(tmp_path):
     assert json.loads((tmp_path / "s.json").read_text()) == summary
     with pytest.raises(TypeError):
         shtool.search_lobes(bands=[2], colour="red")
+
+
+@pytest.mark.parametrize("cls, name", [
+    (shtool.RotationHelpers, "rotation-helpers.shtb"), (shtool.TriplingTensor, "tripling-tensor.shtb"),
+    (shtool.ShFourierTensors, "sh-fourier-tensors.shtb"), (shtool.ZhfLobes, "zhf-shared-N4.shtb"),
+])
+def test_typed_loaders_of_the_shipped_tables(cls, name):
+    t = cls.load(SOURCE_DIR / "tables" / name)
+    assert t.kind == cls.KIND and t.arrays
+    first = next(iter(t.arrays))
+    assert getattr(t, first) is t.arrays[first]
+
+
+def test_typed_loaders_refuse_other_kinds(tmp_path, cli):
+    with pytest.raises(ValueError):
+        shtool.ZhFitTable.load(SOURCE_DIR / "tables" / "rotation-helpers.shtb")
+    cli("light", "--type", "constant", "--order", 2, "--json", tmp_path / "l.json", "--out", tmp_path / "l.shtb")
+    env = shtool.EnvSh.load(tmp_path / "l.shtb")
+    assert env.coefficients.shape == (4, 3)
