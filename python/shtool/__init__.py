@@ -194,41 +194,15 @@ class _TypedTable(Table):
         return cls(kind, order, _json.loads(header), dict(arrays))
 
 
-class ZhFitTable(_TypedTable):
-    """zh-fit (fit-zh): axes, coeffs, residual, norm, ... per vertex."""
-    KIND = "zh-fit"
+def _typed(name, kind, made_by):
+    return type(name, (_TypedTable,), {"KIND": kind, "__doc__": f"{kind} tables ({made_by})."})
 
 
-class GlossyFit(_TypedTable):
-    """glossy-zh (fit-glossy)."""
-    KIND = "glossy-zh"
-
-
-class WrinkleMap(_TypedTable):
-    """wrinkle-zh (fit-wrinkles)."""
-    KIND = "wrinkle-zh"
-
-
-class EnvSh(_TypedTable):
-    """env-sh (project-env --out, light --out): coefficients (N**2, 3)."""
-    KIND = "env-sh"
-
-
-class RotationHelpers(_TypedTable):
-    """rotation-helpers (gen-tensors): the sparse matrices of the zxzxz and Taylor rotations."""
-    KIND = "rotation-helpers"
-
-
-class TriplingTensor(_TypedTable):
-    """tripling-tensor (gen-tensors)."""
-    KIND = "tripling-tensor"
-
-
-class ShFourierTensors(_TypedTable):
-    """sh-fourier-tensors (gen-tensors)."""
-    KIND = "sh-fourier-tensors"
-
-
-class ZhfLobes(_TypedTable):
-    """zhf-lobes (search-lobes --out)."""
-    KIND = "zhf-lobes"
+ZhFitTable = _typed("ZhFitTable", "zh-fit", "fit-zh: axes, coeffs, residual, norm per vertex")
+GlossyFit = _typed("GlossyFit", "glossy-zh", "fit-glossy")
+WrinkleMap = _typed("WrinkleMap", "wrinkle-zh", "fit-wrinkles")
+EnvSh = _typed("EnvSh", "env-sh", "project-env --out, light --out: coefficients (N**2, 3)")
+RotationHelpers = _typed("RotationHelpers", "rotation-helpers", "gen-tensors: the zxzxz and Taylor matrices")
+TriplingTensor = _typed("TriplingTensor", "tripling-tensor", "gen-tensors")
+ShFourierTensors = _typed("ShFourierTensors", "sh-fourier-tensors", "gen-tensors")
+ZhfLobes = _typed("ZhfLobes", "zhf-lobes", "search-lobes --out")
