@@ -73,7 +73,7 @@ def main():
     sh = rng.normal(size=(1_000_000, 3, 9)).astype(np.float32)
     q = rng.normal(size=(1_000_000, 4))
     q /= np.linalg.norm(q, axis=1, keepdims=True)
-    per_splat = shtool.quat_to_matrix(q).astype(np.float32)[:, None]  # (S, 1, 3, 3): one per splat
+    per_splat = shtool.quat_to_matrix(q).astype(np.float32)  # (S, 3, 3): one per splat, for its 3 channels
     out = np.empty_like(sh)
     t_batch = best(lambda: shtool.rotate(sh, per_splat, out=out, threads=1), 3)
     rows.append(("rotate, 10^6 RGB order 3 float32, a matrix per splat, 1 thread",

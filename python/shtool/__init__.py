@@ -35,10 +35,17 @@ def _float_array(x, name):
 def _on_last_axis(a, axis, name):
     if a.ndim == 0:
         raise ValueError(f"{name} must have at least one axis")
+    if axis == -1 or axis == a.ndim - 1:
+        return a
     try:
         return _np.moveaxis(a, axis, -1)
     except _np.AxisError as e:
         raise ValueError(f"axis: {e}") from None
+
+
+def _back(r, axis):
+    """The result's coefficient axis put where the input's was."""
+    return r if axis == -1 or axis == r.ndim - 1 else _np.moveaxis(r, -1, axis)
 
 
 def rotate(coeffs, matrix, method="auto", axis=-1, out=None, tol=None, threads=0):
@@ -53,8 +60,7 @@ def rotate(coeffs, matrix, method="auto", axis=-1, out=None, tol=None, threads=0
     a = _on_last_axis(_float_array(coeffs, "coeffs"), axis, "coeffs")
     if out is not None and axis not in (-1, a.ndim - 1):
         raise ValueError("out= needs axis=-1")
-    r = _shtool._rotate(a, matrix, method, tol, out, threads)
-    return _np.moveaxis(r, -1, axis)
+    return _back(_shtool._rotate(a, matrix, method, tol, out, threads), axis)
 
 
 def quat_to_matrix(q):
@@ -70,13 +76,13 @@ def product(a, b, order=None, method="auto", axis=-1, threads=0):
     """
     fa = _on_last_axis(_float_array(a, "a"), axis, "a")
     fb = _on_last_axis(_float_array(b, "b"), axis, "b")
-    return _np.moveaxis(_shtool._product(fa, fb, order, method, threads), -1, axis)
+    return _back(_shtool._product(fa, fb, order, method, threads), axis)
 
 
 def irradiance(coeffs, axis=-1):
     """Irradiance coefficients E_lm = A_l L_lm (clamped cosine, no 1/pi) of radiance."""
     a = _on_last_axis(_float_array(coeffs, "coeffs"), axis, "coeffs")
-    return _np.moveaxis(_shtool._irradiance(a), -1, axis)
+    return _back(_shtool._irradiance(a), axis)
 
 
 def window(coeffs, kind, cutoff=None, axis=-1, return_factors=False):
@@ -88,7 +94,7 @@ def window(coeffs, kind, cutoff=None, axis=-1, return_factors=False):
     """
     a = _on_last_axis(_float_array(coeffs, "coeffs"), axis, "coeffs")
     r, factors, used = _shtool._window(a, kind, cutoff)
-    r = _np.moveaxis(r, -1, axis)
+    r = _back(r, axis)
     return (r, factors, used) if return_factors else r
 
 

@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/LU>
+
 #include "common/input_error.h"
 #include "common/parallel_for.h"
 #include "common/sh_inputs.h"
@@ -22,15 +24,22 @@ namespace {
 // more than the work.
 constexpr std::size_t kChunk = 4096;
 
-// body(begin, end) over [0, count) in chunks, on `threads` workers (resolved: 0 is every
-// core) when there is more than one chunk. The caller has released the GIL.
+// body(begin, end) over [0, count) in chunks, on `threads` workers (0: every core) when
+// there is more than one chunk. The thread count is resolved only then: asking the system
+// for its cores reads a file, which would be most of a one-vector call. The caller has
+// released the GIL.
 void for_chunks(std::size_t count, int threads, const std::function<void(std::size_t, std::size_t)>& body) {
   const std::size_t chunks = (count + kChunk - 1) / kChunk;
   if (chunks <= 1 || threads == 1) {
     body(0, count);
     return;
   }
-  parallel_for(chunks, threads, [&](std::size_t c) { body(c * kChunk, std::min(count, (c + 1) * kChunk)); });
+  parallel_for(chunks, resolve_threads(threads),
+               [&](std::size_t c) { body(c * kChunk, std::min(count, (c + 1) * kChunk)); });
+}
+
+void check_threads(int threads) {
+  if (threads < 0) throw py::value_error("threads must be >= 0");
 }
 
 void check_order(int order) {
@@ -105,7 +114,11 @@ py::array rotate_t(const py::array& coeffs_in, const py::object& matrix, const s
 
   // One matrix for every vector, or one per leading index of coeffs (shape (..., 3, 3)
   // with the leading axes of coeffs' first axes).
-  const auto m = as_f64(matrix, "matrix");
+  // float32 matrices are read as they are (a float64 copy of a million would cost more
+  // than rotating with them); anything else as float64.
+  const bool f32 = py::isinstance<py::array>(matrix) &&
+                   py::reinterpret_borrow<py::array>(matrix).dtype().is(py::dtype::of<float>());
+  const py::array m = f32 ? py::array(contiguous<float>(matrix)) : py::array(as_f64(matrix, "matrix"));
   if (m.ndim() == 2) {
     ShRotation<T> rotation(order, helpers);
     if (!rotation.set(rotation_from(m).template cast<T>(), method, tolerance))
@@ -123,14 +136,8 @@ py::array rotate_t(const py::array& coeffs_in, const py::object& matrix, const s
       !std::equal(m.shape(), m.shape() + m.ndim() - 2, coeffs.shape()))
     throw py::value_error("matrix must have shape (3, 3) or (..., 3, 3) with the leading axes of coeffs");
   const std::size_t matrices = m.size() / 9, per_matrix = count / std::max<std::size_t>(matrices, 1);
-  std::vector<Mat3<T>> r(count);
-  for (std::size_t k = 0; k < matrices; ++k) {
-    Mat3<double> rk;
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j) rk(i, j) = m.data()[9 * k + 3 * i + j];
-    const Mat3<T> checked = checked_rotation_matrix(rk, "matrix[" + std::to_string(k) + "]").template cast<T>();
-    std::fill(r.begin() + k * per_matrix, r.begin() + (k + 1) * per_matrix, checked);
-  }
+  const float* rm32 = f32 ? static_cast<const float*>(m.data()) : nullptr;
+  const double* rm64 = f32 ? nullptr : static_cast<const double*>(m.data());
   const T* in = coeffs.data();
   T* o = out.mutable_data();
   bool ok = true;
@@ -138,9 +145,24 @@ py::array rotate_t(const py::array& coeffs_in, const py::object& matrix, const s
     py::gil_scoped_release release;
     std::vector<char> chunk_ok((count + kChunk - 1) / kChunk, 1);
     for_chunks(count, threads, [&](std::size_t begin, std::size_t end) {
+      // The chunk's vectors each with its matrix (rotate_batch takes one per vector).
+      std::vector<Mat3<T>> r(end - begin);
+      for (std::size_t v = begin; v < end; ++v) {
+        const std::size_t k = v / per_matrix;
+        if (v > begin && k == (v - 1) / per_matrix) {
+          r[v - begin] = r[v - begin - 1];
+          continue;
+        }
+        Mat3<double> rk;
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 3; ++j) rk(i, j) = f32 ? rm32[9 * k + 3 * i + j] : rm64[9 * k + 3 * i + j];
+        // The message (a string per matrix) only for a matrix that fails.
+        if (!rk.allFinite() || orthonormality_defect<double>(rk) > kRotationInputTolerance || rk.determinant() < 0)
+          checked_rotation_matrix(rk, "matrix[" + std::to_string(k) + "]");
+        r[v - begin] = rk.template cast<T>();
+      }
       ShRotation<T> rotation(order, helpers);
-      chunk_ok[begin / kChunk] = rotate_batch<T>(rotation, std::span<const Mat3<T>>(r.data() + begin, end - begin),
-                                                 std::span<const T>(in + begin * n2, (end - begin) * n2),
+      chunk_ok[begin / kChunk] = rotate_batch<T>(rotation, r, std::span<const T>(in + begin * n2, (end - begin) * n2),
                                                  std::span<T>(o + begin * n2, (end - begin) * n2), method, tolerance);
     });
     ok = std::all_of(chunk_ok.begin(), chunk_ok.end(), [](char c) { return c != 0; });
@@ -221,7 +243,7 @@ void bind_sh(py::module_& m) {
       "eval_sh",
       [](int order, const py::array& dirs, const py::object& out, int threads) {
         check_order(order);
-        threads = resolve_threads(threads);
+        check_threads(threads);
         return precision_of(dirs, "dirs") == Precision::f32 ? eval_sh_t<float>(order, dirs, out, threads)
                                                             : eval_sh_t<double>(order, dirs, out, threads);
       },
@@ -231,7 +253,7 @@ void bind_sh(py::module_& m) {
       "_rotate",
       [](const py::array& coeffs, const py::object& matrix, const std::string& method, std::optional<double> tol,
          const py::object& out, int threads) {
-        threads = resolve_threads(threads);
+        check_threads(threads);
         return precision_of(coeffs, "coeffs") == Precision::f32
                    ? rotate_t<float>(coeffs, matrix, method, tol, out, threads)
                    : rotate_t<double>(coeffs, matrix, method, tol, out, threads);
@@ -249,7 +271,7 @@ void bind_sh(py::module_& m) {
       [](const py::array& a, const py::array& b, std::optional<int> order, const std::string& method, int threads) {
         const Precision p = precision_of(a, "a");
         if (precision_of(b, "b") != p) throw py::type_error("a and b must have the same dtype");
-        threads = resolve_threads(threads);
+        check_threads(threads);
         return p == Precision::f32 ? product_t<float>(a, b, order, method, threads)
                                    : product_t<double>(a, b, order, method, threads);
       },
