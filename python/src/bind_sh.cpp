@@ -2,11 +2,11 @@
 // over batches of coefficient vectors (the last axis; the Python layer moves `axis=`).
 #include <algorithm>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <string>
+#include <utility>
 #include <vector>
-
-#include <Eigen/LU>
 
 #include "common/input_error.h"
 #include "common/parallel_for.h"
@@ -30,8 +30,12 @@ constexpr std::size_t kChunk = 4096;
 // released the GIL.
 void for_chunks(std::size_t count, int threads, const std::function<void(std::size_t, std::size_t)>& body) {
   const std::size_t chunks = (count + kChunk - 1) / kChunk;
-  if (chunks <= 1 || threads == 1) {
+  if (chunks <= 1) {
     body(0, count);
+    return;
+  }
+  if (threads == 1) {  // still in chunks: each chunk's scratch stays in cache
+    for (std::size_t c = 0; c < chunks; ++c) body(c * kChunk, std::min(count, (c + 1) * kChunk));
     return;
   }
   parallel_for(chunks, resolve_threads(threads),
@@ -145,24 +149,41 @@ py::array rotate_t(const py::array& coeffs_in, const py::object& matrix, const s
     py::gil_scoped_release release;
     std::vector<char> chunk_ok((count + kChunk - 1) / kChunk, 1);
     for_chunks(count, threads, [&](std::size_t begin, std::size_t end) {
-      // The chunk's vectors each with its matrix (rotate_batch takes one per vector).
-      std::vector<Mat3<T>> r(end - begin);
-      for (std::size_t v = begin; v < end; ++v) {
-        const std::size_t k = v / per_matrix;
-        if (v > begin && k == (v - 1) / per_matrix) {
-          r[v - begin] = r[v - begin - 1];
-          continue;
-        }
-        Mat3<double> rk;
+      // The chunk's vectors each with its matrix (rotate_batch takes one per vector), in a
+      // buffer kept by the thread: a new one per chunk would be mapped and zeroed by the
+      // kernel every time (it is above malloc's mmap threshold).
+      thread_local std::vector<Mat3<T>> r;
+      r.resize(end - begin);
+      auto matrix_at = [&](std::size_t k) {
+        Mat3<T> rk;
         for (int i = 0; i < 3; ++i)
-          for (int j = 0; j < 3; ++j) rk(i, j) = f32 ? rm32[9 * k + 3 * i + j] : rm64[9 * k + 3 * i + j];
-        // The message (a string per matrix) only for a matrix that fails.
-        if (!rk.allFinite() || orthonormality_defect<double>(rk) > kRotationInputTolerance || rk.determinant() < 0)
-          checked_rotation_matrix(rk, "matrix[" + std::to_string(k) + "]");
-        r[v - begin] = rk.template cast<T>();
+          for (int j = 0; j < 3; ++j) rk(i, j) = static_cast<T>(f32 ? rm32[9 * k + 3 * i + j] : rm64[9 * k + 3 * i + j]);
+        // The message (a string per matrix) only for a matrix that fails, from the values given.
+        if (!is_rotation_matrix<T>(rk)) {
+          Mat3<double> given;
+          for (int i = 0; i < 9; ++i) given(i / 3, i % 3) = f32 ? rm32[9 * k + i] : rm64[9 * k + i];
+          checked_rotation_matrix(given, "matrix[" + std::to_string(k) + "]");
+          throw InputError("matrix[" + std::to_string(k) + "] is not a rotation in " +
+                           (sizeof(T) == 4 ? "float32" : "float64"));
+        }
+        return rk;
+      };
+      // Vector v takes matrix v / per_matrix: counted, not divided, per vector.
+      std::size_t k = begin / per_matrix, left = per_matrix - begin % per_matrix;
+      Mat3<T> current = matrix_at(k);
+      for (std::size_t v = begin; v < end; ++v, --left) {
+        if (left == 0) current = matrix_at(++k), left = per_matrix;
+        r[v - begin] = current;
       }
-      ShRotation<T> rotation(order, helpers);
-      chunk_ok[begin / kChunk] = rotate_batch<T>(rotation, r, std::span<const T>(in + begin * n2, (end - begin) * n2),
+      // One rotation object per thread and (order, helpers), kept across chunks and calls:
+      // making one costs as much as rotating a few hundred vectors.
+      thread_local std::unique_ptr<ShRotation<T>> rotation;
+      thread_local std::pair<int, const RotationHelpers*> made_for{0, nullptr};
+      if (!rotation || made_for != std::make_pair(order, helpers.get())) {
+        rotation = std::make_unique<ShRotation<T>>(order, helpers);
+        made_for = {order, helpers.get()};
+      }
+      chunk_ok[begin / kChunk] = rotate_batch<T>(*rotation, r, std::span<const T>(in + begin * n2, (end - begin) * n2),
                                                  std::span<T>(o + begin * n2, (end - begin) * n2), method, tolerance);
     });
     ok = std::all_of(chunk_ok.begin(), chunk_ok.end(), [](char c) { return c != 0; });

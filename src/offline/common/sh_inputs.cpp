@@ -20,6 +20,7 @@ std::optional<ProductMethod> product_method_from_name(std::string_view name) {
 }
 
 Mat3<double> checked_rotation_matrix(const Mat3<double>& r, const std::string& what) {
+  if (is_rotation_matrix<double>(r)) return r;
   if (!r.allFinite()) throw InputError(what + " has a non-finite entry");
   const double defect = orthonormality_defect<double>(r);
   if (defect > kRotationInputTolerance)

@@ -11,6 +11,8 @@
 #include <string_view>
 #include <vector>
 
+#include <Eigen/Geometry>
+
 #include "shtool/euler.h"
 #include "shtool/product.h"
 #include "shtool/sh.h"
@@ -22,8 +24,18 @@ namespace shtool {
 // significant digits are accepted.
 inline constexpr double kRotationInputTolerance = 1e-6;
 
-// A user's rotation matrix, checked: orthonormal to kRotationInputTolerance and det +1
-// (a reflection is no rotation of SH). InputError naming `what` otherwise.
+// Whether r is a rotation for a user's input: orthonormal to kRotationInputTolerance
+// (max |R^T R - I|) and det +1 (a reflection is no rotation of SH). Inline and without
+// messages, in the matrix's own precision (float: its rounding, 1e-7, is well inside the
+// tolerance): the Python module checks a matrix per splat. Branch-free until the end so
+// that the compiler keeps it in vector registers.
+template <class T>
+inline bool is_rotation_matrix(const Mat3<T>& r) {
+  const Mat3<T> defect = r.transpose() * r - Mat3<T>::Identity();
+  return (defect.array().abs() <= T(kRotationInputTolerance)).all() && r.col(0).dot(r.col(1).cross(r.col(2))) > 0;
+}
+
+// r if is_rotation_matrix(r), else InputError naming `what` and the problem.
 Mat3<double> checked_rotation_matrix(const Mat3<double>& r, const std::string& what);
 
 // A user's quaternion (w, x, y, z), unit to kRotationInputTolerance, as a rotation
