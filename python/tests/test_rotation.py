@@ -139,3 +139,10 @@ def test_bad_inputs():
         shtool.quat_to_matrix([1.0, 1.0, 0, 0])          # not unit
     with pytest.raises(ValueError):
         shtool.rotate(np.ones((2, 9)), np.stack([np.eye(3)] * 3))  # 3 matrices for 2 vectors
+
+
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+def test_one_bad_matrix_in_a_batch_is_named(dtype):
+    rs = np.stack([np.eye(3)] * 5 + [np.diag([1.0, 1.0, -1.0])]).astype(dtype)
+    with pytest.raises(ValueError, match=r"matrix\[5\]"):
+        shtool.rotate(np.ones((6, 9), dtype), rs)
