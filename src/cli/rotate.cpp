@@ -95,7 +95,8 @@ void run_rotate(const RotateOptions& opt) {
     if (path.empty())
       throw InputError("no shipped zhf-lobes table covers order " + std::to_string(opt.order) +
                       " (give one with --tables; make it with `shtool search-lobes --shared`)");
-    Result<ZhfLobes> loaded = load_zhf_lobes(path, opt.order);
+    Result<ZhfLobes> loaded = ZhfLobes::load(path);
+    if (loaded) loaded = loaded.value().bands_below(opt.order);
     if (!loaded) throw InputError(loaded.error().message);
     const auto lobes = std::make_shared<const ZhfLobes>(std::move(loaded).value());
     if (opt.method == "zhf") {
@@ -104,7 +105,8 @@ void run_rotate(const RotateOptions& opt) {
       rotation.apply(coeffs, out);
     } else {
       ZhfTailoredSignal<double> signal(lobes, coeffs);
-      signal.rotate(r, out);
+      signal.set(r);
+      signal.apply(out);
     }
     for (double c : out)
       if (!std::isfinite(c)) throw InputError("the rotated coefficients overflow double precision (inputs too large)");
@@ -121,8 +123,12 @@ void run_rotate(const RotateOptions& opt) {
       // same bytes gen-tensors writes).
       helpers = std::make_shared<RotationHelpers>(compute_rotation_helpers(opt.order));
     } else {
-      Result<RotationHelpers> loaded = RotationHelpers::load(path, opt.order);
+      Result<RotationHelpers> loaded = RotationHelpers::load(path);
       if (!loaded) throw InputError(loaded.error().message);
+      if (loaded.value().order < opt.order)
+        throw InputError(path.string() + ": rotation-helpers table covers order " +
+                         std::to_string(loaded.value().order) + ", order " + std::to_string(opt.order) +
+                         " was asked for");
       helpers = std::make_shared<RotationHelpers>(std::move(loaded).value());
     }
   }

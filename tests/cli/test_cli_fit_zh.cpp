@@ -310,10 +310,10 @@ TEST(CliFitZh, ShardsMergedInAnyOrderAreTheOneProcessTable) {
                                    {"vertices", 2930}}));
   EXPECT_EQ(t.value().kind_version, "1.1");
   EXPECT_EQ(generator_of(part), generator_of(whole));
-  const auto loaded = shtool::load_zh_fit<double>(part);
+  const auto loaded = shtool::ZhFitTable<double>::load(part);
   ASSERT_FALSE(loaded.ok());
   EXPECT_NE(loaded.error().message.find("partial table"), std::string::npos) << loaded.error().message;
-  ASSERT_TRUE(shtool::load_zh_fit<double>(whole).ok());
+  ASSERT_TRUE(shtool::ZhFitTable<double>::load(whole).ok());
   const std::string cmd = std::string(SHTOOL_PYTHON) + " '" + kSource + "/tests/validate_json_schema.py' '" + kSource +
                           "/schemas/zh-fit.schema.json' '" + part.string() + "' '" + whole.string() + "'";
   EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;

@@ -144,7 +144,7 @@ std::vector<float> render_rgb(const std::vector<std::string>& extra, int width =
 // Schwarz), and a pixel blends three vertices, so the image difference is bounded by the
 // largest residual times ||e_c||; the error shading is that difference.
 TEST(Render, ZhAgreesWithTransferToTheFitResidual) {
-  const auto fit = shtool::load_zh_fit<double>(bakes().shadowed_fit);
+  const auto fit = shtool::ZhFitTable<double>::load(bakes().shadowed_fit);
   ASSERT_TRUE(fit) << fit.error().message;
   const double worst_residual = *std::max_element(fit.value().residual.begin(), fit.value().residual.end());
   const nlohmann::json sky = nlohmann::json::parse(shtool::test::read_file(bakes().sky));
@@ -370,7 +370,7 @@ TEST(Render, BadRequestsAreRefusedByName) {
 TEST(Render, MembraneUnderConstantLightIsOnePlusAlpha) {
   const fs::path map = scratch("alpha.json");
   {
-    const auto fit = shtool::load_zh_fit<double>(bakes().shadowed_fit);
+    const auto fit = shtool::ZhFitTable<double>::load(bakes().shadowed_fit);
     ASSERT_TRUE(fit);
     const nlohmann::json doc = {{"alpha", std::vector<double>(fit.value().vertices, 0.5)}};
     shtool::test::write_file(map, doc.dump());
@@ -445,7 +445,7 @@ TEST(Deform, RigidRotationRotatesEveryLobe) {
       EXPECT_EQ(la["coeffs"], lb["coeffs"]);
     }
   EXPECT_LT(worst, 1e-4);
-  EXPECT_TRUE(shtool::load_zh_fit<double>(out)) << "the posed table loads";
+  EXPECT_TRUE(shtool::ZhFitTable<double>::load(out)) << "the posed table loads";
 }
 
 // Mean absolute difference between two renders, over pixels both cover, relative to the

@@ -67,7 +67,7 @@ class CliRotate : public ::testing::Test {
                                                 (*dir_ / "json").string(), "--format", "json"};
     const CommandResult rj = run_shtool(json_args);
     ASSERT_EQ(rj.exit_code, 0) << describe_command(json_args) << "\nstderr: " << rj.err;
-    Result<RotationHelpers> loaded = RotationHelpers::load(*table_, kTableOrder);
+    Result<RotationHelpers> loaded = RotationHelpers::load(*table_);
     ASSERT_TRUE(loaded) << loaded.error().message;
     helpers_ = new std::shared_ptr<const RotationHelpers>(
         std::make_shared<const RotationHelpers>(std::move(loaded).value()));
