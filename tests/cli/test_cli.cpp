@@ -29,9 +29,7 @@
 
 namespace {
 
-using shtool::test::CommandResult;
-using shtool::test::describe_command;
-using shtool::test::run_shtool;
+using namespace shtool::test;
 
 std::uint64_t bits(double v) {
   std::uint64_t b;

@@ -27,10 +27,7 @@ namespace shtool {
 namespace {
 
 namespace fs = std::filesystem;
-using test::Scratch;
-using test::read_file;
-using test::run_command;
-using test::run_shtool;
+using namespace test;
 using lighting::Lighting;
 using lighting::Quantity;
 constexpr double kPi = std::numbers::pi;

@@ -21,12 +21,7 @@
 namespace {
 
 namespace fs = std::filesystem;
-using shtool::test::CommandResult;
-using shtool::test::Scratch;
-using shtool::test::expect_valid_against_schema;
-using shtool::test::kSpotObj;
-using shtool::test::read_file;
-using shtool::test::run_shtool;
+using namespace shtool::test;
 
 const Scratch scratch("cli_fit_glossy");
 
@@ -93,7 +88,7 @@ TEST(CliFitGlossy, FlatPhongSurfaceSeenAlongItsNormalHasAlbedoOne) {
     r = run_shtool({"render", mesh.string(), "--up", "z", "--fit", table.string(), "--light", light.string(), "--camera", "0,0,5,0,0,0,0,1,0",
              "--fov", "2", "--width", "32", "--height", "32", "--out", image.string()});
     ASSERT_EQ(r.exit_code, 0) << r.err;
-    const shtool::lighting::Image img = shtool::lighting::decode_image(read_file(image), image);
+    const shtool::lighting::Image img = read_image(image);
     double worst = 0;
     for (std::size_t p = 0; p < std::size_t(img.width) * img.height; ++p)
       for (int c = 0; c < 3; ++c) worst = std::max(worst, std::abs(img.texels[p * img.channels + c] - 1.0));
@@ -116,7 +111,7 @@ TEST(CliFitGlossy, RenderShadesTheTableAsGlossy) {
            "--shading", "glossy", "--threads", "1", "--out", b.string()});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(read_file(a), read_file(b));
-  const shtool::lighting::Image img = shtool::lighting::decode_image(read_file(a), a);
+  const shtool::lighting::Image img = read_image(a);
   double brightest = 0;
   for (float v : img.texels) brightest = std::max(brightest, double(v));
   EXPECT_GT(brightest, 0.1);

@@ -15,11 +15,7 @@
 namespace {
 
 namespace fs = std::filesystem;
-using shtool::test::CommandResult;
-using shtool::test::Scratch;
-using shtool::test::expect_valid_against_schema;
-using shtool::test::read_file;
-using shtool::test::run_shtool;
+using namespace shtool::test;
 
 const Scratch scratch("cli_fit_wrinkles");
 

@@ -27,11 +27,7 @@
 namespace {
 
 namespace fs = std::filesystem;
-using shtool::test::CommandResult;
-using shtool::test::Scratch;
-using shtool::test::kSpotObj;
-using shtool::test::read_file;
-using shtool::test::run_shtool;
+using namespace shtool::test;
 
 const Scratch scratch("test_cli_fit_zh_gltf");
 

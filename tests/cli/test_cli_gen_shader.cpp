@@ -20,9 +20,7 @@
 namespace {
 
 namespace fs = std::filesystem;
-using shtool::test::Scratch;
-using shtool::test::read_file;
-using shtool::test::run_shtool;
+using namespace shtool::test;
 
 const Scratch scratch("gen_shader");
 

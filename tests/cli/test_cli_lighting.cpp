@@ -36,12 +36,7 @@ namespace shtool {
 namespace {
 
 namespace fs = std::filesystem;
-using test::Scratch;
-using test::expect_valid_against_schema;
-using test::kSourceDir;
-using test::read_file;
-using test::run_shtool;
-using test::write_file;
+using namespace test;
 constexpr double kPi = std::numbers::pi;
 
 const Scratch scratch("lighting");
@@ -323,11 +318,11 @@ TEST(CliProjectEnv, RenderSourceIsTheSourceInTheRenderBacksMapping) {
   const fs::path in = scratch("source_in.exr"), out = scratch("source_out.exr"), back = scratch("source_back.exr");
   write_exr(in, 512, 256, image, false);
   project({in.string(), "--order", "2", "--render-source", out.string(), "--render-back", back.string()});
-  const lighting::Image same = lighting::decode_image(read_file(out), out);
+  const lighting::Image same = read_image(out);
   ASSERT_EQ(same.width, 512);
   ASSERT_EQ(same.height, 256);
   EXPECT_EQ(same.texels, image);
-  EXPECT_EQ(lighting::decode_image(read_file(back), back).width, 512);
+  EXPECT_EQ(read_image(back).width, 512);
 
   Cube cube{4, {}};
   for (int f = 0; f < 6; ++f) cube.faces[f].assign(4 * 4 * 3, float(f + 1));
@@ -335,7 +330,7 @@ TEST(CliProjectEnv, RenderSourceIsTheSourceInTheRenderBacksMapping) {
   for (int f = 0; f < 6; ++f) write_exr(scratch(std::string("cface_") + suffix[f] + ".exr"), 4, 4, cube.faces[f], false);
   const fs::path faces_out = scratch("faces_source.exr");
   project({scratch("cface_%s.exr").string(), "--order", "2", "--render-source", faces_out.string()});
-  const lighting::Image seen = lighting::decode_image(read_file(faces_out), faces_out);
+  const lighting::Image seen = read_image(faces_out);
   ASSERT_EQ(seen.width, 512);  // 2 x 4 texels, raised to the smallest render-back of 256 rows
   ASSERT_EQ(seen.height, 256);
   int wrong = 0;

@@ -23,11 +23,7 @@
 namespace {
 
 namespace fs = std::filesystem;
-using shtool::test::CommandResult;
-using shtool::test::Scratch;
-using shtool::test::must;
-using shtool::test::read_file;
-using shtool::test::run_shtool;
+using namespace shtool::test;
 
 const Scratch scratch("mesh_frames");
 
@@ -233,8 +229,7 @@ TEST(MeshFrames, ZenithLightsAnUpFacingQuad) {
     ASSERT_EQ(rendered.exit_code, 0) << rendered.err;
     // render counts what it could not show: none under the zenith, the whole quad under the nadir.
     EXPECT_EQ(rendered.err.find("below zero") != std::string::npos, dir == "0,0,-1") << rendered.err;
-    const shtool::lighting::Image image =
-        shtool::lighting::decode_image(read_file(out), out);
+    const shtool::lighting::Image image = read_image(out);
     // The background is 0; the quad is uniformly lit (one transfer vector, one light), so
     // every covered pixel has the same sign.
     int positive = 0, negative = 0;

@@ -17,12 +17,7 @@
 namespace {
 
 namespace fs = std::filesystem;
-using shtool::test::CommandResult;
-using shtool::test::Scratch;
-using shtool::test::kShtoolExe;
-using shtool::test::kSpotObj;
-using shtool::test::read_file;
-using shtool::test::run_checked;
+using namespace shtool::test;
 
 // Every random path runs: rays rotated per vertex, a multi-start on every vertex.
 const std::vector<std::string> kQuick = {"--rays", "8", "--order", "2", "--lobes", "2", "--starts", "1",

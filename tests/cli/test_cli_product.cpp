@@ -16,8 +16,7 @@
 
 namespace {
 
-using shtool::test::CommandResult;
-using shtool::test::run_shtool;
+using namespace shtool::test;
 
 constexpr double kPi = std::numbers::pi;
 // Closed forms evaluated in double and products rounded in a few dozen operations.

@@ -31,18 +31,9 @@
 namespace {
 
 namespace fs = std::filesystem;
-using shtool::test::Scratch;
-using shtool::test::kSpotObj;
-using shtool::test::must;
-using shtool::test::read_file;
-using shtool::test::run_command;
-using shtool::test::run_shtool;
+using namespace shtool::test;
 
 const Scratch scratch("render");
-
-shtool::lighting::Image read_exr(const fs::path& p) {
-  return shtool::lighting::decode_image(read_file(p), p);
-}
 
 // Bakes on data/spot.obj once per test program: unshadowed and shadowed transfer (order
 // 3), their fits with 2 lobes (DC stored directly for the unshadowed one).
@@ -55,9 +46,7 @@ struct Bakes {
                      "--direct", "--out", unshadowed_fit.string(), "--save-transfer", unshadowed_t.string()}));
     must(run_shtool({"fit-zh", kSpotObj, "--order", "3", "--lobes", "2", "--rays", "128", "--mode", "shadowed", "--out",
                      shadowed_fit.string(), "--save-transfer", shadowed_t.string()}));
-    must(run_shtool({"light", "--type", "constant", "--color", "1,1,1", "--order", "3", "--json", white.string()}));
-    must(run_shtool({"project-env", std::string(SHTOOL_SOURCE_DIR) + "/data/sky.hdr", "--order", "3", "--json",
-                     sky.string()}));
+    make_white_and_sky_lights(3, white, sky);
   }
 };
 
@@ -72,7 +61,7 @@ TEST(Render, WhiteFurnaceIsOneOnEveryCoveredPixel) {
     const fs::path& baked = input == "--transfer" ? bakes().unshadowed_t : bakes().unshadowed_fit;
     must(run_shtool({"render", kSpotObj, input, baked.string(), "--light", bakes().white.string(), "--width", "96",
                      "--height", "80", "--out", out.string()}));
-    const auto image = read_exr(out);
+    const auto image = read_image(out);
     ASSERT_EQ(image.width, 96);
     ASSERT_EQ(image.height, 80);
     // decode_image drops alpha (ExrCarriesCoverageAlpha reads it); covered pixels are 1.
@@ -132,7 +121,7 @@ std::vector<float> render_rgb(const std::vector<std::string>& extra, int width =
   args.insert(args.end(), extra.begin(), extra.end());
   const auto r = run_shtool(args);
   EXPECT_EQ(r.exit_code, 0) << r.err;
-  return read_exr(out).texels;
+  return read_image(out).texels;
 }
 
 // ZH shading against the exact transfer: per vertex |r_zh - r_t| <= residual ||e|| (Cauchy-
@@ -213,7 +202,7 @@ TEST(Render, PngIsTheToneMappedExr) {
   for (const fs::path& out : {exr, png})
     must(run_shtool({"render", kSpotObj, "--transfer", bakes().shadowed_t.string(), "--light", bakes().sky.string(),
                      "--width", "72", "--height", "60", "--exposure", "1.5", "--out", out.string()}));
-  const auto linear = read_exr(exr);
+  const auto linear = read_image(exr);
   const std::string bytes = read_file(png);
   int w = 0, h = 0, channels = 0;
   unsigned char* pixels = stbi_load_from_memory(reinterpret_cast<const unsigned char*>(bytes.data()),
@@ -246,7 +235,7 @@ TEST(Render, CompareStripOfFits) {
                              bakes().sky.string(), "--compare", "--width", "40", "--height", "32", "--out",
                              out.string()});
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  const auto strip = read_exr(out);
+  const auto strip = read_image(out);
   EXPECT_EQ(strip.width, 6 * 40);
   EXPECT_EQ(strip.height, 32 + 22);
   std::vector<double> nrms;
@@ -479,7 +468,7 @@ TEST(Deform, PosedRenderMatchesAFreshBake) {
                                        "--height", "96", "--out", out.string()};
       args.insert(args.end(), extra.begin(), extra.end());
       must(run_shtool(args));
-      return read_exr(out).texels;
+      return read_image(out).texels;
     };
     const auto deformed = render_on(kSpotObj, {"--fit", bakes().shadowed_fit.string(), "--pose", pose.string()});
     const auto fresh = render_on(pose.string(), {"--fit", fresh_fit.string()});

@@ -20,17 +20,9 @@
 namespace {
 
 namespace fs = std::filesystem;
-using shtool::test::Scratch;
-using shtool::test::must;
-using shtool::test::read_file;
-using shtool::test::run_command;
-using shtool::test::run_shtool;
+using namespace shtool::test;
 
 const Scratch scratch("render_wrinkle");
-
-shtool::lighting::Image read_exr(const fs::path& p) {
-  return shtool::lighting::decode_image(read_file(p), p);
-}
 
 // Once per program: a small wrinkle map (order 4, 2 lobes, 6 x 6 nodes, depths 0..1),
 // the cylinder (6 grooves, 48 columns: 8 vertices per groove) with its coordinates, the
@@ -92,7 +84,7 @@ TEST(RenderWrinkle, CylinderCoversPixelsShowsGroovesAndIsThreadIndependent) {
   // the pixels it lights, is one rise and fall at most.
   const fs::path flat_out = scratch("flat_row.exr");
   must(run_shtool(wrinkle_args(inputs().flat, flat_out, 1)));
-  const auto image = read_exr(one), flat = read_exr(flat_out);
+  const auto image = read_image(one), flat = read_image(flat_out);
   const int row = 64 / 2 - 64 * 7 / 20;  // near the top of the cylinder: deep grooves
   auto turns = [&](const shtool::lighting::Image& im) {
     std::vector<double> v;
@@ -120,7 +112,7 @@ TEST(RenderWrinkle, FlatGrooveRendersAsTheUnshadowedSurface) {
                                 "--light", inputs().light.string(), "--out", mem.string()};
   m.insert(m.end(), kView.begin(), kView.end());
   must(run_shtool(m));
-  const auto a = read_exr(wr), b = read_exr(mem);
+  const auto a = read_image(wr), b = read_image(mem);
   ASSERT_EQ(a.texels.size(), b.texels.size());
   double peak = 0, worst = 0;
   for (std::size_t i = 0; i < a.texels.size(); ++i) peak = std::max(peak, double(b.texels[i]));

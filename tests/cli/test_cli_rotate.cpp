@@ -29,11 +29,7 @@
 namespace shtool {
 namespace {
 
-using test::CommandResult;
-using test::describe_command;
-using test::norm;
-using test::random_coeffs;
-using test::run_shtool;
+using namespace test;
 
 // Order of the helper table the tests generate; commands use orders up to this.
 constexpr int kTableOrder = 8;

@@ -18,12 +18,7 @@
 namespace {
 
 namespace fs = std::filesystem;
-using shtool::test::Scratch;
-using shtool::test::expect_valid_against_schema;
-using shtool::test::kSpotObj;
-using shtool::test::must;
-using shtool::test::read_file;
-using shtool::test::run_shtool;
+using namespace shtool::test;
 
 const Scratch scratch("texture_render");
 
@@ -46,9 +41,7 @@ struct Bakes {
     bake({"--texture", "64", "--out", texture.string()});
     bake({"--out", vertex.string()});
     bake({"--texture", "64", "--mode", "unshadowed", "--direct", "--out", furnace.string()});
-    must(run_shtool({"light", "--type", "constant", "--color", "1,1,1", "--order", "3", "--json", white.string()}));
-    must(run_shtool({"project-env", std::string(SHTOOL_SOURCE_DIR) + "/data/sky.hdr", "--order", "3", "--json",
-                     sky.string()}));
+    make_white_and_sky_lights(3, white, sky);
   }
 };
 

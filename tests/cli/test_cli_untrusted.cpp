@@ -18,7 +18,7 @@ namespace shtool {
 namespace {
 
 namespace fs = std::filesystem;
-using test::CommandResult;
+using namespace test;
 
 class CliUntrusted : public ::testing::Test {
  protected:

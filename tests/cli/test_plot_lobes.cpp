@@ -12,8 +12,7 @@
 
 namespace {
 
-using shtool::test::kShtoolExe;
-using shtool::test::run_checked;
+using namespace shtool::test;
 
 const std::string kScript = shtool::test::kSourceDir + "/scripts/plot_lobes.py";
 

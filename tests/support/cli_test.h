@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "lighting/image_io.h"
 #include "run_command.h"
 #include "schema_check.h"
 #include "scratch_files.h"
@@ -45,6 +46,16 @@ inline CommandResult run_shtool(std::vector<std::string> args, CommandOptions op
 inline void must(const CommandResult& r) { ASSERT_EQ(r.exit_code, 0) << r.err; }
 
 inline nlohmann::json read_json(const std::filesystem::path& p) { return nlohmann::json::parse(read_file(p)); }
+
+// An image a command wrote, decoded as shtool decodes its own inputs (alpha dropped).
+inline lighting::Image read_image(const std::filesystem::path& p) { return lighting::decode_image(read_file(p), p); }
+
+// The lights of the render tests: constant 1 (a white furnace) and data/sky.hdr projected.
+inline void make_white_and_sky_lights(int order, const std::filesystem::path& white, const std::filesystem::path& sky) {
+  const std::string o = std::to_string(order);
+  must(run_shtool({"light", "--type", "constant", "--color", "1,1,1", "--order", o, "--json", white.string()}));
+  must(run_shtool({"project-env", kSourceDir + "/data/sky.hdr", "--order", o, "--json", sky.string()}));
+}
 
 // A test program's scratch files: scratch("x.json") is <temp>/shtool_<suite>_<pid>/x.json.
 class Scratch {
