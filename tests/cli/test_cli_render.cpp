@@ -333,17 +333,7 @@ TEST(Render, BadRequestsAreRefusedByName) {
       {{kSpotObj, "--transfer", t, "--light", sky, "--exposure", "1e3"}, "--exposure"},
       {{kSpotObj, "--transfer", t, "--light", sky, "--compare", "--width", "8000", "--height", "8000"}, "2^26"},
   };
-  for (const Bad& b : bad) {
-    const fs::path out = scratch("bad.exr");
-    fs::remove(out);
-    std::vector<std::string> args = {"render"};
-    args.insert(args.end(), b.args.begin(), b.args.end());
-    args.insert(args.end(), {"--out", out.string()});
-    const auto r = run_shtool(args);
-    EXPECT_EQ(r.exit_code, 1) << b.message << "\n" << r.err;
-    EXPECT_NE(r.err.find(b.message), std::string::npos) << r.err;
-    EXPECT_FALSE(fs::exists(out)) << b.message;
-  }
+  for (const Bad& b : bad) expect_refused("render", b.args, b.message, scratch("bad.exr"));
   const auto r = run_shtool({"render", kSpotObj, "--transfer", t, "--light", sky, "--out", scratch("x.jpg").string()});
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("--out"), std::string::npos) << r.err;

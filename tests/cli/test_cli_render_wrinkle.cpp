@@ -163,17 +163,7 @@ TEST(RenderWrinkle, BadRequestsAreRefusedByName) {
        "x does not change across the surface at mesh vertex 0"},
       {{obj, "--shading", "wrinkle", "--wrinkle", map, "--wrinkle-map", xd}, "--light"},
   };
-  for (const Bad& b : bad) {
-    const fs::path out = scratch("bad.png");
-    fs::remove(out);
-    std::vector<std::string> args = {"render"};
-    args.insert(args.end(), b.args.begin(), b.args.end());
-    args.insert(args.end(), {"--out", out.string()});
-    const auto r = run_shtool(args);
-    EXPECT_EQ(r.exit_code, 1) << b.message << "\n" << r.err;
-    EXPECT_NE(r.err.find(b.message), std::string::npos) << r.err;
-    EXPECT_FALSE(fs::exists(out)) << b.message;
-  }
+  for (const Bad& b : bad) expect_refused("render", b.args, b.message, scratch("bad.png"));
 }
 
 }  // namespace

@@ -45,6 +45,22 @@ inline CommandResult run_shtool(std::vector<std::string> args, CommandOptions op
 // A command that has to succeed for the test to mean anything (making inputs).
 inline void must(const CommandResult& r) { ASSERT_EQ(r.exit_code, 0) << r.err; }
 
+// A request shtool must refuse: `command args out_option out` exits 1 with `message` in
+// its stderr and writes nothing at `out` (removed first: a file an earlier case left must
+// not pass for this one's).
+inline void expect_refused(const std::string& command, const std::vector<std::string>& args,
+                           const std::string& message, const std::filesystem::path& out,
+                           const std::string& out_option = "--out") {
+  std::filesystem::remove(out);
+  std::vector<std::string> argv = {command};
+  argv.insert(argv.end(), args.begin(), args.end());
+  argv.insert(argv.end(), {out_option, out.string()});
+  const CommandResult r = run_shtool(argv);
+  EXPECT_EQ(r.exit_code, 1) << message << "\n" << r.err;
+  EXPECT_NE(r.err.find(message), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(out)) << message;
+}
+
 inline nlohmann::json read_json(const std::filesystem::path& p) { return nlohmann::json::parse(read_file(p)); }
 
 // An image a command wrote, decoded as shtool decodes its own inputs (alpha dropped).
