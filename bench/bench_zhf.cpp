@@ -139,9 +139,5 @@ void register_all(const char* type) {
 int main(int argc, char** argv) {
   register_all<float>("float");
   register_all<double>("double");
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  return 0;
+  return shtool::bench::run_benchmarks(argc, argv);
 }
