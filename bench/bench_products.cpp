@@ -24,17 +24,23 @@ namespace {
 
 using shtool::sh_count;
 
+// Times multiply(f, h, g) of two random order-n vectors, the same for every method.
+template <class T, class Multiply>
+void time_pair_products(benchmark::State& state, int n, Multiply multiply) {
+  const auto f = shtool::bench::random_sh_vectors<T>(n, 2);
+  std::vector<T> g(sh_count(n));
+  for (auto _ : state) {
+    multiply(f[0], f[1], g);
+    benchmark::DoNotOptimize(g.data());
+    benchmark::ClobberMemory();
+  }
+}
+
 template <class T>
 void BM_TripleTripling(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));
   const shtool::TriplingProduct<T> product(shtool::TriplingTensor::compute(n));
-  const auto f = shtool::bench::random_sh_vectors<T>(n, 2);
-  std::vector<T> g(sh_count(n));
-  for (auto _ : state) {
-    product.multiply(f[0], f[1], g);
-    benchmark::DoNotOptimize(g.data());
-    benchmark::ClobberMemory();
-  }
+  time_pair_products<T>(state, n, [&](const auto& a, const auto& b, auto& g) { product.multiply(a, b, g); });
   state.counters["pairs"] = static_cast<double>(product.pair_count());
 }
 
@@ -44,13 +50,7 @@ template <class T, template <class> class Product>
 void BM_TripleOnGrid(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));
   Product<T> product(n, 2);
-  const auto f = shtool::bench::random_sh_vectors<T>(n, 2);
-  std::vector<T> g(sh_count(n));
-  for (auto _ : state) {
-    product.multiply(f[0], f[1], g);
-    benchmark::DoNotOptimize(g.data());
-    benchmark::ClobberMemory();
-  }
+  time_pair_products<T>(state, n, [&](const auto& a, const auto& b, auto& g) { product.multiply(a, b, g); });
   state.counters["grid"] = product.grid_theta() * 1000.0 + product.grid_phi();
 }
 
@@ -77,13 +77,7 @@ void BM_TripleAuto(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));
   shtool::ShProduct<T> product(n);
   product.prepare(2);
-  const auto f = shtool::bench::random_sh_vectors<T>(n, 2);
-  std::vector<T> g(sh_count(n));
-  for (auto _ : state) {
-    product.triple(f[0], f[1], g);
-    benchmark::DoNotOptimize(g.data());
-    benchmark::ClobberMemory();
-  }
+  time_pair_products<T>(state, n, [&](const auto& a, const auto& b, auto& g) { product.triple(a, b, g); });
 }
 
 enum Mode { kAccurateGrid, kAccurateFourier, kRecursiveTripling, kRecursiveAuto };

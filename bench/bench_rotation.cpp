@@ -56,7 +56,7 @@ std::shared_ptr<const shtool::RotationHelpers> helpers() {
 #ifdef SHTOOL_BENCH_HAVE_OFFLINE
     return std::make_shared<const shtool::RotationHelpers>(shtool::compute_rotation_helpers(kMaxOrder));
 #else
-    auto loaded = shtool::RotationHelpers::load(shtool::default_rotation_helpers_path(), kMaxOrder);
+    auto loaded = shtool::RotationHelpers::load(shtool::default_rotation_helpers_path());
     if (!loaded) throw std::runtime_error("bench_rotation: no rotation-helpers table; run shtool gen-tensors");
     return std::make_shared<const shtool::RotationHelpers>(std::move(loaded).value());
 #endif
@@ -150,9 +150,5 @@ void register_all(const char* type) {
 int main(int argc, char** argv) {
   register_all<float>("float");
   register_all<double>("double");
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  return 0;
+  return shtool::bench::run_benchmarks(argc, argv);
 }

@@ -8,9 +8,21 @@
 #include <random>
 #include <vector>
 
+#include <benchmark/benchmark.h>
+
 #include "shtool/sh.h"
 
 namespace shtool::bench {
+
+// The end of main() in a program that registers its benchmarks at run time (one per
+// order and type) before the command line is read.
+inline int run_benchmarks(int argc, char** argv) {
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}
 
 // Number of precomputed rotations a timed loop cycles through: enough that branch
 // predictors cannot learn one rotation, small enough to stay in L1.

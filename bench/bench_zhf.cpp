@@ -46,7 +46,7 @@ constexpr int kMaxOrder = 10;
 
 std::shared_ptr<const shtool::RotationHelpers> helpers() {
   static const std::shared_ptr<const shtool::RotationHelpers> h = [] {
-    auto loaded = shtool::RotationHelpers::load(shtool::default_rotation_helpers_path(), kMaxOrder);
+    auto loaded = shtool::RotationHelpers::load(shtool::default_rotation_helpers_path());
     if (!loaded) throw std::runtime_error("bench_zhf: " + loaded.error().message);
     return std::make_shared<const shtool::RotationHelpers>(std::move(loaded).value());
   }();
@@ -59,7 +59,8 @@ std::shared_ptr<const shtool::ZhfLobes> lobes(int order) {
   if (!slot) {
     const auto path = shtool::default_zhf_lobes_path(order);
     if (path.empty()) throw std::runtime_error("bench_zhf: no shipped zhf-shared table for N = " + std::to_string(order));
-    auto loaded = shtool::load_zhf_lobes(path, order);
+    auto loaded = shtool::ZhfLobes::load(path);
+    if (loaded) loaded = loaded.value().bands_below(order);
     if (!loaded) throw std::runtime_error("bench_zhf: " + loaded.error().message);
     slot = std::make_shared<const shtool::ZhfLobes>(std::move(loaded).value());
   }
@@ -111,9 +112,10 @@ void BM_Zhf(benchmark::State& state, Method method) {
       benchmark::ClobberMemory();
     }
   } else {
-    const shtool::ZhfTailoredSignal<T> signal(lobes(order), in);
+    shtool::ZhfTailoredSignal<T> signal(lobes(order), in);
     for (auto _ : state) {
-      signal.rotate(next(), out);
+      signal.set(next());
+      signal.apply(out);
       benchmark::DoNotOptimize(out.data());
       benchmark::ClobberMemory();
     }
@@ -137,9 +139,5 @@ void register_all(const char* type) {
 int main(int argc, char** argv) {
   register_all<float>("float");
   register_all<double>("double");
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  return 0;
+  return shtool::bench::run_benchmarks(argc, argv);
 }

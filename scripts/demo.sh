@@ -6,7 +6,7 @@
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 out="${1:-$root/out}"
-"$root/scripts/setup.sh" "$root/build" >/dev/null
+"$root/scripts/setup.sh" "$root/build" shtool >/dev/null
 shtool="$root/build/shtool"
 mkdir -p "$out"
 
@@ -48,7 +48,7 @@ echo "-- gen-tensors: rotation helpers, tripling tensor, SH<->Fourier tensors (o
 "$shtool" gen-tensors --out "$out"
 
 echo "-- rotate: the sky's red channel turned 90 degrees about z (the sun moves from azimuth 60 to 150)"
-red="$(python3 -c 'import json, sys; print(",".join(repr(r[0]) for r in json.load(open(sys.argv[1]))["coefficients"]))' \
+red="$(/usr/bin/python3 -c 'import json, sys; print(",".join(repr(r[0]) for r in json.load(open(sys.argv[1]))["coefficients"]))' \
   "$out/sky.json")"
 "$shtool" rotate --order 3 --quat 0.7071067811865476,0,0,0.7071067811865476 --coeffs "$red" \
   --tables "$out/rotation-helpers.shtb"

@@ -1,11 +1,13 @@
 #!/usr/bin/env bash
 # Installs the Debian packages shtool needs (only those missing), then configures and
-# builds it in Release. Idempotent: a second run installs nothing and rebuilds only
-# what changed.
-#   scripts/setup.sh [BUILD_DIR]     (default: build)
+# builds it in Release: every target, or only the TARGETs named (the demo builds the
+# `shtool` executable alone, not the tests and benchmarks it never runs). Idempotent: a
+# second run installs nothing and rebuilds only what changed.
+#   scripts/setup.sh [BUILD_DIR [TARGET...]]     (default: build, every target)
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="${1:-$root/build}"
+targets=("${@:2}")
 
 packages=(
   g++ cmake make ninja-build pkg-config
@@ -41,4 +43,4 @@ fi
 export CMAKE_GENERATOR="${CMAKE_GENERATOR:-Ninja}"
 # The Debian interpreter: the one the packages above (jsonschema, numpy) belong to.
 cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release -DPython3_EXECUTABLE=/usr/bin/python3 >/dev/null
-cmake --build "$build" -j "$(nproc)"
+cmake --build "$build" -j "$(nproc)" ${targets[@]:+--target "${targets[@]}"}

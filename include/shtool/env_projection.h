@@ -41,13 +41,10 @@
 
 #include <Eigen/Core>
 
+#include "shtool/lighting.h"
 #include "shtool/result.h"
 
 namespace shtool {
-
-// The table kind of projected lighting (project-env and light --out): coefficients
-// [order^2, 3], RGB, in the quantity its meta names.
-inline constexpr std::string_view kEnvShKind = "env-sh";
 
 // Highest order the projections accept.
 inline constexpr int kMaxEnvOrder = 32;

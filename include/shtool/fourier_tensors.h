@@ -25,6 +25,7 @@
 #pragma once
 
 #include <cstddef>
+#include <filesystem>
 #include <string_view>
 #include <vector>
 
@@ -52,8 +53,10 @@ struct ShFourierTensors {
   // Preconditions: 1 <= order <= kMaxOrder, order - 1 <= degree <= 4096.
   static ShFourierTensors compute(int order, int degree);
 
-  // Table loading (kind "sh-fourier-tensors", schemas/sh-fourier-tensors.schema.json).
+  // Table loading (kind "sh-fourier-tensors", schemas/sh-fourier-tensors.schema.json);
+  // load is read_table + from_table, the path prefixed to any message.
   static Result<ShFourierTensors> from_table(const Table& table);
+  static Result<ShFourierTensors> load(const std::filesystem::path& path);
 };
 
 }  // namespace shtool

@@ -79,16 +79,12 @@ struct GlossyFit {
   // Checks kind, the rows as zh-fit checks them (shapes, finiteness, unit axes), the
   // row count against vertices x terms, the view table's shape and finiteness.
   static Result<GlossyFit> from_table(const Table& table);
+  // read_table + from_table, the path prefixed to any message.
+  static Result<GlossyFit> load(const std::filesystem::path& path);
 };
-
-// read_table + from_table, the path prefixed to any message.
-template <class T>
-Result<GlossyFit<T>> load_glossy_fit(const std::filesystem::path& path);
 
 extern template struct GlossyFit<float>;
 extern template struct GlossyFit<double>;
-extern template Result<GlossyFit<float>> load_glossy_fit<float>(const std::filesystem::path&);
-extern template Result<GlossyFit<double>> load_glossy_fit<double>(const std::filesystem::path&);
 extern template Vec3<float> glossy_view_direction<float>(float, float) noexcept;
 extern template Vec3<double> glossy_view_direction<double>(double, double) noexcept;
 extern template std::array<float, 2> glossy_view_square<float>(const Vec3<float>&) noexcept;

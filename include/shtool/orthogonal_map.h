@@ -17,8 +17,10 @@
 
 namespace shtool {
 
-// In place: coefficients[i * channels + c], N^2 = coefficients.size() / channels.
-// An error if Q is not orthogonal to 1e-9.
+// In place: coefficients[i * channels + c], N^2 = coefficients.size() / channels, float
+// or double (the map is computed in double either way). An error if Q is not orthogonal
+// to 1e-9 (float: 1e-6).
 Result<Ok> apply_orthogonal_map(const Eigen::Matrix3d& q, int channels, std::span<double> coefficients);
+Result<Ok> apply_orthogonal_map(const Eigen::Matrix3f& q, int channels, std::span<float> coefficients);
 
 }  // namespace shtool

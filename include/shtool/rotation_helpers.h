@@ -30,11 +30,12 @@ struct RotationHelpers {
   std::vector<double> ddy_diag; // N^2 entries: D2[i][i]
   std::vector<double> ddy_off2; // N^2 entries: D2[i][i-2] (0 where i-2 is in another band)
 
-  // Table loading (the writer is offline). from_table checks kind, shapes and internal consistency (CSR
-  // bounds, columns inside the row's band) so a corrupted table cannot index out of range.
+  // Table loading (the writer is offline). from_table checks kind, shapes and internal
+  // consistency (CSR bounds, columns inside the row's band) so a corrupted table cannot
+  // index out of range; load is read_table + from_table, the path prefixed to any message.
+  // A rotation of a higher order than `order` refuses these helpers (ShRotation::set).
   static Result<RotationHelpers> from_table(const Table& table);
-  // Loads and checks that the table covers at least `min_order` bands.
-  static Result<RotationHelpers> load(const std::filesystem::path& path, int min_order = 1);
+  static Result<RotationHelpers> load(const std::filesystem::path& path);
 };
 
 // The shipped table (find_shipped_table in shtool/table.h: $SHTOOL_TABLES, then the

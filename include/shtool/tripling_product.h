@@ -15,6 +15,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <filesystem>
 #include <functional>
 #include <span>
 #include <string_view>
@@ -53,8 +54,10 @@ struct TriplingTensor {
 
   // Table loading (kind "tripling-tensor", schemas/tripling-tensor.schema.json).
   // from_table checks kind, order, shapes, index bounds, canonical order, uniqueness and
-  // the selection rules, so a corrupted table cannot make the product read out of range.
+  // the selection rules, so a corrupted table cannot make the product read out of range;
+  // load is read_table + from_table, the path prefixed to any message.
   static Result<TriplingTensor> from_table(const Table& table);
+  static Result<TriplingTensor> load(const std::filesystem::path& path);
 };
 
 // Azimuthal factor of the real-SH tripling coefficient: the integral over p in [0, 2 pi)

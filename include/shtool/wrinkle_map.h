@@ -118,15 +118,11 @@ struct WrinkleMap {
   // and no cell's four axes of a lobe can blend to zero (all within 90 degrees of their
   // sum, so every blended axis normalises). Values are read as double and stored as T.
   static Result<WrinkleMap> from_table(const Table& table);
+  // read_table + from_table, the path prefixed to any message.
+  static Result<WrinkleMap> load(const std::filesystem::path& path);
 };
-
-// read_table + from_table, the path prefixed to any message.
-template <class T>
-Result<WrinkleMap<T>> load_wrinkle_map(const std::filesystem::path& path);
 
 extern template struct WrinkleMap<float>;
 extern template struct WrinkleMap<double>;
-extern template Result<WrinkleMap<float>> load_wrinkle_map<float>(const std::filesystem::path&);
-extern template Result<WrinkleMap<double>> load_wrinkle_map<double>(const std::filesystem::path&);
 
 }  // namespace shtool

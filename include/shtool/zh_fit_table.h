@@ -48,15 +48,11 @@ struct ZhFitTable {
   // axes (to 1e-6) and non-negative residuals and norms; values are read as double and
   // stored as T.
   static Result<ZhFitTable> from_table(const Table& table);
+  // read_table + from_table, the path prefixed to any message.
+  static Result<ZhFitTable> load(const std::filesystem::path& path);
 };
-
-// read_table + from_table, the path prefixed to any message.
-template <class T>
-Result<ZhFitTable<T>> load_zh_fit(const std::filesystem::path& path);
 
 extern template struct ZhFitTable<float>;
 extern template struct ZhFitTable<double>;
-extern template Result<ZhFitTable<float>> load_zh_fit<float>(const std::filesystem::path&);
-extern template Result<ZhFitTable<double>> load_zh_fit<double>(const std::filesystem::path&);
 
 }  // namespace shtool

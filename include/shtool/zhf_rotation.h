@@ -11,8 +11,11 @@
 //                            inversely rotated directions and does one sparse product.
 // Both are exact up to rounding amplified by cond(Y_l) (recorded in the table).
 //
-// Objects own their scratch: apply()/rotate() allocate nothing and are not safe to call
-// concurrently on one object. Nothing here throws; loading reports errors as Result.
+// Both follow ShRotation's verbs: set(R) prepares a rotation (returning whether it took it,
+// as ShRotation::set does; these never refuse one), apply() writes the rotated
+// coefficients. Objects own their scratch: set() and apply() allocate nothing and are not
+// safe to call concurrently on one object. Nothing here throws; loading reports errors as
+// Result.
 #pragma once
 
 #include <filesystem>
@@ -21,6 +24,7 @@
 #include <string_view>
 #include <vector>
 
+#include "shtool/detail/zhf_lobe_plan.h"
 #include "shtool/euler.h"
 #include "shtool/sh.h"
 #include "shtool/table.h"
@@ -43,38 +47,22 @@ struct ZhfLobes {
   std::vector<double> cond;     // cond_2(Y_l) per band, as recorded in the table
 
   std::size_t nonzeros() const { return val.size(); }
-};
 
-// Loads and validates a zhf-lobes table covering bands 0..order-1 (a table with more bands
-// is truncated to `order`; order 0: all of the table's bands). Fails on a table that lacks
-// some band below `order`, on inconsistent sparse rows, and on every read_table error.
-Result<ZhfLobes> load_zhf_lobes(const std::filesystem::path& path, int order = 0);
-// The same checks on a table already read (read_table or read_table_bytes).
-Result<ZhfLobes> zhf_lobes_from_table(const Table& table, int order = 0);
+  // Table loading. from_table checks that the table holds bands 0..n-1 in order (a
+  // per-band search table cannot rotate on its own), the sparse rows' consistency, unit
+  // directions and finite values; load is read_table + from_table, the path prefixed to
+  // any message.
+  static Result<ZhfLobes> from_table(const Table& table);
+  static Result<ZhfLobes> load(const std::filesystem::path& path);
+  // Bands 0..order-1 alone, with only the directions they use (what a shader of that order
+  // embeds). An error if the table holds fewer bands.
+  Result<ZhfLobes> bands_below(int order) const;
+};
 
 // The shipped shared-lobe table for `order`: tables/zhf-shared-N<order>.shtb, or the
 // smallest shipped order above it (find_shipped_table: $SHTOOL_TABLES, then the install prefix).
 // Empty if none is found.
 std::filesystem::path default_zhf_lobes_path(int order);
-
-namespace detail {
-
-// How the evaluators walk the lobe directions. The SH recurrence runs for all directions
-// at once, structure-of-arrays (the direction loop is the innermost one, so it vectorises):
-// band l's recurrence is needed for the directions that some band >= l uses, a range that
-// only shrinks with l; band l's own values are those of its 2l+1 directions
-// band_offset[l] .. band_offset[l] + 2l (shared lobes: directions 0..2l of 2N-1).
-struct ZhfLobePlan {
-  int order = 0;
-  int directions = 0;
-  std::vector<int> band_offset;           // per band: its first direction
-  std::vector<int> active_lo, active_hi;  // per band l: directions [lo, hi) needing band l
-  std::vector<int> block_offset;          // band l's (2l+1)^2 block in a band-major buffer
-  ZhfLobePlan() = default;
-  ZhfLobePlan(const ZhfLobes& lobes, int order);
-};
-
-}  // namespace detail
 
 // Standard ZHF rotation (Eq. 10).
 template <class T>
@@ -84,7 +72,8 @@ class ZhfRotation {
   ZhfRotation(int order, std::shared_ptr<const ZhfLobes> lobes);
   int order() const { return order_; }
   // Prepares R (orthonormal, det +1): rotates the lobe directions and evaluates SH there.
-  void set(const Mat3<T>& r);
+  // Always true.
+  bool set(const Mat3<T>& r);
   // out = M(R) in, N^2 coefficients each; in and out must not overlap.
   void apply(std::span<const T> in, std::span<T> out) const;
 
@@ -110,8 +99,10 @@ class ZhfTailoredSignal {
   // expansions f~_l(u) = sum_m f_l^m y_l^m(u).
   ZhfTailoredSignal(std::shared_ptr<const ZhfLobes> lobes, std::span<const T> coeffs);
   int order() const { return order_; }
-  // out = M(R) f: samples f~_l at R^-1 w_d, then one sparse product with A^_l.
-  void rotate(const Mat3<T>& r, std::span<T> out) const;
+  // Prepares R (orthonormal, det +1): samples f~_l at R^-1 w_d. Always true.
+  bool set(const Mat3<T>& r);
+  // out = M(R) f (N^2 coefficients): one sparse product with A^_l per band.
+  void apply(std::span<T> out) const;
   // The sparse product alone, for callers that sample f~_l themselves (e.g. from cubemaps):
   // samples[sh_index(l, d - l)] = f~_l(R^-1 w_d) for d = 0..2l; out = A^ samples per band.
   static void apply_samples(const ZhfLobes& lobes, int order, std::span<const T> samples,
@@ -124,7 +115,7 @@ class ZhfTailoredSignal {
   std::vector<Vec3<T>> dirs_;
   std::vector<T> f_;
   std::vector<T> val_;  // A^ values converted to T once
-  mutable std::vector<T> samples_, walk_;
+  std::vector<T> samples_, walk_;
 };
 
 }  // namespace shtool

@@ -43,7 +43,7 @@ std::optional<std::string> typed_problem(const Table& t, const std::string& path
   if (t.kind == kRotationHelpersKind) return problem(RotationHelpers::from_table(t));
   if (t.kind == kTriplingTensorKind) return problem(TriplingTensor::from_table(t));
   if (t.kind == kShFourierTensorsKind) return problem(ShFourierTensors::from_table(t));
-  if (t.kind == kZhfLobesKind) return problem(load_zhf_lobes(path));
+  if (t.kind == kZhfLobesKind) return problem(ZhfLobes::from_table(t));
   return std::nullopt;  // env-sh and the rest: read_table's checks are the loader's
 }
 
@@ -74,7 +74,7 @@ py::tuple load_table(const std::string& path, const std::string& kind) {
 }
 
 py::tuple load_zh_fit_table(const std::string& path) {
-  ZhFitTable<double> t = value_or_raise(load_zh_fit<double>(path));
+  ZhFitTable<double> t = value_or_raise(ZhFitTable<double>::load(path));
   const py::ssize_t v = static_cast<py::ssize_t>(t.vertices), n = t.lobes;
   auto copy = [](const double* p, std::vector<py::ssize_t> shape) {
     py::array_t<double> out(shape);

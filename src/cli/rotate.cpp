@@ -82,7 +82,8 @@ void run_rotate(const RotateOptions& opt) {
     if (path.empty())
       throw InputError("no shipped zhf-lobes table covers order " + std::to_string(opt.order) +
                       " (give one with --tables; make it with `shtool search-lobes --shared`)");
-    Result<ZhfLobes> loaded = load_zhf_lobes(path, opt.order);
+    Result<ZhfLobes> loaded = ZhfLobes::load(path);
+    if (loaded) loaded = loaded.value().bands_below(opt.order);
     if (!loaded) throw InputError(loaded.error().message);
     const auto lobes = std::make_shared<const ZhfLobes>(std::move(loaded).value());
     if (opt.method == "zhf") {
@@ -91,7 +92,8 @@ void run_rotate(const RotateOptions& opt) {
       rotation.apply(coeffs, out);
     } else {
       ZhfTailoredSignal<double> signal(lobes, coeffs);
-      signal.rotate(r, out);
+      signal.set(r);
+      signal.apply(out);
     }
     for (double c : out)
       if (!std::isfinite(c)) throw InputError("the rotated coefficients overflow double precision (inputs too large)");

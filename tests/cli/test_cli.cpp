@@ -23,28 +23,13 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "run_command.h"
+#include "cli_test.h"
 #include "shtool/sh.h"
 #include "shtool/version.h"
 
 namespace {
 
-using shtool::test::CommandResult;
-using shtool::test::describe_command;
-
-const std::string kExe = SHTOOL_EXE;
-
-CommandResult run_shtool(std::vector<std::string> args) {
-  args.insert(args.begin(), kExe);
-  // Generous: every command here finishes in milliseconds; the timeout only turns a
-  // hang into a failure with a message instead of a ctest timeout.
-  shtool::test::CommandOptions options;
-  options.timeout_seconds = 60;
-  CommandResult r = shtool::test::run_command(args, options);
-  EXPECT_FALSE(r.signaled) << describe_command(args) << " was killed by signal " << r.signal
-                           << "\nstderr: " << r.err;
-  return r;
-}
+using namespace shtool::test;
 
 std::uint64_t bits(double v) {
   std::uint64_t b;

@@ -19,8 +19,7 @@
 #include "interop/engine_light.h"
 #include "lighting/lighting_output.h"
 #include "node_consumers.h"
-#include "run_command.h"
-#include "scratch_files.h"
+#include "cli_test.h"
 #include "shtool/irradiance.h"
 #include "shtool/sh.h"
 
@@ -28,15 +27,12 @@ namespace shtool {
 namespace {
 
 namespace fs = std::filesystem;
+using namespace test;
 using lighting::Lighting;
 using lighting::Quantity;
-using test::run_command;
 constexpr double kPi = std::numbers::pi;
-const std::string kExe = SHTOOL_EXE;
 
-fs::path scratch(const std::string& name) { return shtool::test::scratch_path("engine_light", name); }
-
-std::string read_text(const fs::path& p) { return shtool::test::read_file(p); }
+const Scratch scratch("engine_light");
 
 Lighting random_light(int order, Quantity q, unsigned seed) {
   std::mt19937 rng(seed);
@@ -85,10 +81,10 @@ TEST(EngineLight, ExportThenImportIsTheIdentity) {
       for (const std::string& f : kFormats) {
         const fs::path out = scratch("exported." + f), back = scratch("back.json");
         for (const std::string& intensity : {"1", "2.5"}) {
-          auto r = run_command({kExe, "export-light", in.string(), "--format", f, "--out", out.string(), "--intensity", intensity});
+          auto r = run_shtool({"export-light", in.string(), "--format", f, "--out", out.string(), "--intensity", intensity});
           ASSERT_EQ(r.exit_code, 0) << f << ": " << r.err;
           if (order > 3 && f != "raw") EXPECT_NE(r.err.find("dropped"), std::string::npos) << f << ": " << r.err;
-          r = run_command({kExe, "import-light", out.string(), "--format", f, "--json", back.string(), "--quantity",
+          r = run_shtool({"import-light", out.string(), "--format", f, "--json", back.string(), "--quantity",
                            lighting::quantity_name(q)});
           ASSERT_EQ(r.exit_code, 0) << f << ": " << r.err;
           const Lighting got = lighting::read_lighting_json(back, "back");
@@ -181,11 +177,7 @@ nlohmann::json consumer_eval(const std::string& format, const fs::path& file, co
 }
 
 TEST(EngineLight, TheConsumersReadWhatWasMeant) {
-  std::string why;
-  if (!test::node_consumers(why)) {
-    if (std::getenv("CI")) FAIL() << why;
-    GTEST_SKIP() << why << " (set CI to make this a failure)";
-  }
+  SHTOOL_REQUIRE_NODE_CONSUMERS();
   const Lighting l = random_light(4, Quantity::radiance, 13);  // band 3 is dropped on export
   const fs::path in = scratch("consumer.json");
   std::ofstream(in) << lighting::lighting_json(l);
@@ -196,7 +188,7 @@ TEST(EngineLight, TheConsumersReadWhatWasMeant) {
   // three.js: radiance and irradiance, the intensity field applied by three.
   {
     const fs::path out = scratch("probe.json");
-    ASSERT_EQ(run_command({kExe, "export-light", in.string(), "--format", "threejs", "--intensity", "2", "--out", out.string()}).exit_code, 0);
+    ASSERT_EQ(run_shtool({"export-light", in.string(), "--format", "threejs", "--intensity", "2", "--out", out.string()}).exit_code, 0);
     const Directions d = directions(interop::default_frame(interop::LightFormat::threejs));
     const nlohmann::json got = consumer_eval("threejs", out, d);
     ASSERT_EQ(got.size(), 50u);
@@ -213,7 +205,7 @@ TEST(EngineLight, TheConsumersReadWhatWasMeant) {
   // manifest's polynomial: E / pi at the direction of its default (left-handed) scene.
   for (const std::string f : {"gltf", "babylon"}) {
     const fs::path out = scratch("exported_" + f + ".json");
-    ASSERT_EQ(run_command({kExe, "export-light", in.string(), "--format", f, "--out", out.string()}).exit_code, 0);
+    ASSERT_EQ(run_shtool({"export-light", in.string(), "--format", f, "--out", out.string()}).exit_code, 0);
     const Directions d = directions(interop::default_frame(interop::LightFormat::babylon));
     const nlohmann::json got = consumer_eval(f, out, d);
     ASSERT_EQ(got.size(), 50u);
@@ -233,8 +225,8 @@ TEST(EngineLight, ShaderFormulasOfFilamentUnityAndGodot) {
   std::ofstream(in) << lighting::lighting_json(l);
   auto exported = [&](const std::string& f) {
     const fs::path out = scratch("shader." + f);
-    EXPECT_EQ(run_command({kExe, "export-light", in.string(), "--format", f, "--out", out.string()}).exit_code, 0);
-    return read_text(out);
+    EXPECT_EQ(run_shtool({"export-light", in.string(), "--format", f, "--out", out.string()}).exit_code, 0);
+    return read_file(out);
   };
   // filament shaders/src/surface_light_indirect.fs Irradiance_SphericalHarmonics: the
   // nine pre-scaled values against (1, y, z, x, yx, yz, 3z^2 - 1, zx, x^2 - y^2): E / pi.
@@ -331,9 +323,7 @@ TEST(EngineLight, BadInput) {
   };
   for (const Case& c : cases) {
     fs::remove(out);
-    std::vector<std::string> argv = {kExe};
-    argv.insert(argv.end(), c.args.begin(), c.args.end());
-    const auto r = run_command(argv);
+    const auto r = run_shtool(c.args);
     EXPECT_EQ(r.exit_code, 1) << c.args[0] << " " << c.message << ": " << r.err;
     EXPECT_NE(r.err.find(c.message), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(out));

@@ -14,38 +14,25 @@
 #include <nlohmann/json.hpp>
 
 #include "lighting/image_io.h"
-#include "run_command.h"
-#include "scratch_files.h"
+#include "cli_test.h"
 #include "shtool/glossy.h"
 #include "shtool/table.h"
 
 namespace {
 
 namespace fs = std::filesystem;
-using shtool::test::CommandResult;
+using namespace shtool::test;
 
-const std::string kExe = SHTOOL_EXE;
-const std::string kSpot = std::string(SHTOOL_SOURCE_DIR) + "/data/spot.obj";
-
-fs::path scratch(const std::string& name) { return shtool::test::scratch_path("cli_fit_glossy", name); }
-
-CommandResult run(std::vector<std::string> args) {
-  args.insert(args.begin(), kExe);
-  shtool::test::CommandOptions options;
-  options.timeout_seconds = 120;  // only turns a hang into a failure
-  CommandResult r = shtool::test::run_command(args, options);
-  EXPECT_FALSE(r.signaled) << "killed by signal " << r.signal;
-  return r;
-}
+const Scratch scratch("cli_fit_glossy");
 
 std::vector<std::string> small(const fs::path& out, const fs::path& json, int threads) {
-  return {"fit-glossy", kSpot, "--rays", "64", "--view-resolution", "8", "--lobes", "3", "--effort", "1",
+  return {"fit-glossy", kSpotObj, "--rays", "64", "--view-resolution", "8", "--lobes", "3", "--effort", "1",
           "--threads", std::to_string(threads), "--out", out.string(), "--json", json.string()};
 }
 
 TEST(CliFitGlossy, WritesTheTableAndTheSummary) {
   const fs::path out = scratch("g.shtb"), json = scratch("g.json");
-  const CommandResult r = run(small(out, json, 2));
+  const CommandResult r = run_shtool(small(out, json, 2));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.err.find("normalized RMS: SVD"), std::string::npos) << r.err;
   const shtool::Result<shtool::Table> t = shtool::read_table(out, {"glossy-zh", 1, 4});
@@ -57,7 +44,7 @@ TEST(CliFitGlossy, WritesTheTableAndTheSummary) {
   EXPECT_EQ(fit.value().view_resolution, 8);
   EXPECT_EQ(fit.value().rows.lobes, 3);
   EXPECT_EQ(fit.value().rows.direct_count, 4);  // DC and the linear band, stored from 3 lobes on
-  const nlohmann::json summary = nlohmann::json::parse(shtool::test::read_file(json));
+  const nlohmann::json summary = nlohmann::json::parse(read_file(json));
   const nlohmann::json meta = nlohmann::json::parse(t.value().meta);
   EXPECT_EQ(summary["normalized_rms"]["svd"], meta["svd_normalized_rms"]);
   EXPECT_EQ(summary["normalized_rms"]["zh"], meta["zh_normalized_rms"]);
@@ -69,18 +56,15 @@ TEST(CliFitGlossy, WritesTheTableAndTheSummary) {
   EXPECT_LT(svd, 0.45);
   EXPECT_LT(zh, 0.05);
   EXPECT_NEAR(summary["normalized_rms"]["total"].get<double>(), std::hypot(svd, zh), 1e-15);
-  const std::string source = SHTOOL_SOURCE_DIR;
-  const std::string cmd = std::string(SHTOOL_PYTHON) + " '" + source + "/tests/validate_json_schema.py' '" + source +
-                          "/schemas/glossy-zh.schema.json' '" + out.string() + "'";
-  EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  expect_valid_against_schema("glossy-zh.schema.json", {out});
 }
 
 TEST(CliFitGlossy, SameBytesOnOneAndTwoThreads) {
   const fs::path a = scratch("t1.shtb"), aj = scratch("t1.json"), b = scratch("t2.shtb"), bj = scratch("t2.json");
-  ASSERT_EQ(run(small(a, aj, 1)).exit_code, 0);
-  ASSERT_EQ(run(small(b, bj, 2)).exit_code, 0);
-  EXPECT_EQ(shtool::test::read_file(a), shtool::test::read_file(b));
-  EXPECT_EQ(shtool::test::read_file(aj), shtool::test::read_file(bj));
+  ASSERT_EQ(run_shtool(small(a, aj, 1)).exit_code, 0);
+  ASSERT_EQ(run_shtool(small(b, bj, 2)).exit_code, 0);
+  EXPECT_EQ(read_file(a), read_file(b));
+  EXPECT_EQ(read_file(aj), read_file(bj));
 }
 
 TEST(CliFitGlossy, FlatPhongSurfaceSeenAlongItsNormalHasAlbedoOne) {
@@ -92,19 +76,19 @@ TEST(CliFitGlossy, FlatPhongSurfaceSeenAlongItsNormalHasAlbedoOne) {
   const fs::path mesh = scratch("square.obj");
   std::ofstream(mesh) << "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nf 1 2 3\nf 1 3 4\n";
   const fs::path light = scratch("white.json");
-  ASSERT_EQ(run({"light", "--type", "constant", "--color", "1,1,1", "--order", "4", "--json", light.string()}).exit_code,
+  ASSERT_EQ(run_shtool({"light", "--type", "constant", "--color", "1,1,1", "--order", "4", "--json", light.string()}).exit_code,
             0);
   for (const std::string terms : {"16", "3"}) {
     const fs::path table = scratch("square" + terms + ".shtb"), image = scratch("square" + terms + ".exr");
     // The square is written in shtool's frame: --up z.
-    CommandResult r = run({"fit-glossy", mesh.string(), "--up", "z", "--brdf", "phong", "--roughness",
+    CommandResult r = run_shtool({"fit-glossy", mesh.string(), "--up", "z", "--brdf", "phong", "--roughness",
                            "0.30151134457776363", "--mode", "unshadowed", "--terms", terms, "--lobes", "1", "--out",
                            table.string()});
     ASSERT_EQ(r.exit_code, 0) << r.err;
-    r = run({"render", mesh.string(), "--up", "z", "--fit", table.string(), "--light", light.string(), "--camera", "0,0,5,0,0,0,0,1,0",
+    r = run_shtool({"render", mesh.string(), "--up", "z", "--fit", table.string(), "--light", light.string(), "--camera", "0,0,5,0,0,0,0,1,0",
              "--fov", "2", "--width", "32", "--height", "32", "--out", image.string()});
     ASSERT_EQ(r.exit_code, 0) << r.err;
-    const shtool::lighting::Image img = shtool::lighting::decode_image(shtool::test::read_file(image), image);
+    const shtool::lighting::Image img = read_image(image);
     double worst = 0;
     for (std::size_t p = 0; p < std::size_t(img.width) * img.height; ++p)
       for (int c = 0; c < 3; ++c) worst = std::max(worst, std::abs(img.texels[p * img.channels + c] - 1.0));
@@ -117,32 +101,32 @@ TEST(CliFitGlossy, FlatPhongSurfaceSeenAlongItsNormalHasAlbedoOne) {
 
 TEST(CliFitGlossy, RenderShadesTheTableAsGlossy) {
   const fs::path table = scratch("r.shtb"), json = scratch("r.json"), light = scratch("sun.json");
-  ASSERT_EQ(run(small(table, json, 2)).exit_code, 0);
-  ASSERT_EQ(run({"light", "--type", "directional", "--dir", "0,0.25,1", "--order", "4", "--json", light.string()}).exit_code, 0);
+  ASSERT_EQ(run_shtool(small(table, json, 2)).exit_code, 0);
+  ASSERT_EQ(run_shtool({"light", "--type", "directional", "--dir", "0,0.25,1", "--order", "4", "--json", light.string()}).exit_code, 0);
   const fs::path a = scratch("auto.exr"), b = scratch("glossy.exr");
-  CommandResult r = run({"render", kSpot, "--fit", table.string(), "--light", light.string(), "--width", "48",
+  CommandResult r = run_shtool({"render", kSpotObj, "--fit", table.string(), "--light", light.string(), "--width", "48",
                          "--height", "48", "--out", a.string()});
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  r = run({"render", kSpot, "--fit", table.string(), "--light", light.string(), "--width", "48", "--height", "48",
+  r = run_shtool({"render", kSpotObj, "--fit", table.string(), "--light", light.string(), "--width", "48", "--height", "48",
            "--shading", "glossy", "--threads", "1", "--out", b.string()});
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_EQ(shtool::test::read_file(a), shtool::test::read_file(b));
-  const shtool::lighting::Image img = shtool::lighting::decode_image(shtool::test::read_file(a), a);
+  EXPECT_EQ(read_file(a), read_file(b));
+  const shtool::lighting::Image img = read_image(a);
   double brightest = 0;
   for (float v : img.texels) brightest = std::max(brightest, double(v));
   EXPECT_GT(brightest, 0.1);
   // A diffuse table is not a glossy one; another mesh's table is refused.
   const fs::path diffuse = scratch("d.shtb");
-  ASSERT_EQ(run({"fit-zh", kSpot, "--order", "4", "--rays", "16", "--lobes", "1", "--out", diffuse.string()}).exit_code,
+  ASSERT_EQ(run_shtool({"fit-zh", kSpotObj, "--order", "4", "--rays", "16", "--lobes", "1", "--out", diffuse.string()}).exit_code,
             0);
   const fs::path bad = scratch("bad.exr");
-  r = run({"render", kSpot, "--fit", diffuse.string(), "--light", light.string(), "--shading", "glossy", "--out",
+  r = run_shtool({"render", kSpotObj, "--fit", diffuse.string(), "--light", light.string(), "--shading", "glossy", "--out",
            bad.string()});
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("glossy-zh"), std::string::npos) << r.err;
   const fs::path square = scratch("other.obj");
   std::ofstream(square) << "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nf 1 2 3\nf 1 3 4\n";
-  r = run({"render", square.string(), "--fit", table.string(), "--light", light.string(), "--out", bad.string()});
+  r = run_shtool({"render", square.string(), "--fit", table.string(), "--light", light.string(), "--out", bad.string()});
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("another mesh"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(bad));
@@ -165,21 +149,21 @@ TEST(CliFitGlossy, BadOptionsAreRefusedWithoutOutput) {
   };
   for (const auto& c : cases) {
     fs::remove(out);
-    std::vector<std::string> args = {"fit-glossy", kSpot, "--rays", "8", "--out", out.string()};
+    std::vector<std::string> args = {"fit-glossy", kSpotObj, "--rays", "8", "--out", out.string()};
     args.insert(args.end(), c.args.begin(), c.args.end());
-    const CommandResult r = run(args);
+    const CommandResult r = run_shtool(args);
     EXPECT_EQ(r.exit_code, 1) << c.names << ": " << r.err;
     EXPECT_NE(r.err.find(c.names), std::string::npos) << c.names << ": " << r.err;
     EXPECT_FALSE(fs::exists(out)) << c.names;
   }
   const fs::path missing = scratch("no-such-folder") / "g.shtb";
-  CommandResult r = run({"fit-glossy", kSpot, "--rays", "8", "--out", missing.string()});
+  CommandResult r = run_shtool({"fit-glossy", kSpotObj, "--rays", "8", "--out", missing.string()});
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("--out"), std::string::npos) << r.err;
-  r = run({"fit-glossy", scratch("no-such-mesh.obj").string(), "--out", out.string()});
+  r = run_shtool({"fit-glossy", scratch("no-such-mesh.obj").string(), "--out", out.string()});
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_FALSE(fs::exists(out));
-  r = run({"fit-glossy", kSpot, "--out", kSpot});
+  r = run_shtool({"fit-glossy", kSpotObj, "--out", kSpotObj});
   EXPECT_EQ(r.exit_code, 1);
 }
 

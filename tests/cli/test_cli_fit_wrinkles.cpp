@@ -9,27 +9,15 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "run_command.h"
-#include "scratch_files.h"
+#include "cli_test.h"
 #include "shtool/table.h"
 
 namespace {
 
 namespace fs = std::filesystem;
-using shtool::test::CommandResult;
+using namespace shtool::test;
 
-const std::string kExe = SHTOOL_EXE;
-
-fs::path scratch(const std::string& name) { return shtool::test::scratch_path("cli_fit_wrinkles", name); }
-
-CommandResult run(std::vector<std::string> args) {
-  args.insert(args.begin(), kExe);
-  shtool::test::CommandOptions options;
-  options.timeout_seconds = 120;  // only turns a hang into a failure
-  CommandResult r = shtool::test::run_command(args, options);
-  EXPECT_FALSE(r.signaled) << "killed by signal " << r.signal;
-  return r;
-}
+const Scratch scratch("cli_fit_wrinkles");
 
 std::vector<std::string> small(const fs::path& out, const fs::path& json, int threads,
                                const std::string& optimizer = "lbfgs") {
@@ -40,7 +28,7 @@ std::vector<std::string> small(const fs::path& out, const fs::path& json, int th
 
 TEST(CliFitWrinkles, WritesTheMapAndTheSummary) {
   const fs::path out = scratch("w.shtb"), json = scratch("w.json");
-  const CommandResult r = run(small(out, json, 2));
+  const CommandResult r = run_shtool(small(out, json, 2));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.err.find("normalized RMS: global"), std::string::npos) << r.err;
   const shtool::Result<shtool::Table> t = shtool::read_table(out, {"wrinkle-zh", 1, 4});
@@ -59,7 +47,7 @@ TEST(CliFitWrinkles, WritesTheMapAndTheSummary) {
     EXPECT_EQ(coeffs[i], 0.0);
     EXPECT_EQ(coeffs[i + 1], 0.0);
   }
-  const nlohmann::json summary = nlohmann::json::parse(shtool::test::read_file(json));
+  const nlohmann::json summary = nlohmann::json::parse(read_file(json));
   const nlohmann::json meta = nlohmann::json::parse(table.meta);
   EXPECT_EQ(summary["normalized_rms"]["global"], meta["normalized_rms"]);
   EXPECT_EQ(summary["normalized_rms"]["per_point"], meta["per_point_normalized_rms"]);
@@ -67,19 +55,16 @@ TEST(CliFitWrinkles, WritesTheMapAndTheSummary) {
   EXPECT_EQ(summary["samples"], 8 * 7);
   EXPECT_EQ(summary["by_depth"].size(), 7u);
   // The header follows schemas/wrinkle-zh.schema.json (python3-jsonschema).
-  const std::string source = SHTOOL_SOURCE_DIR;
-  const std::string cmd = std::string(SHTOOL_PYTHON) + " '" + source + "/tests/validate_json_schema.py' '" + source +
-                          "/schemas/wrinkle-zh.schema.json' '" + out.string() + "'";
-  EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  expect_valid_against_schema("wrinkle-zh.schema.json", {out});
 }
 
 TEST(CliFitWrinkles, SameBytesOnOneAndTwoThreads) {
   for (const std::string optimizer : {"lbfgs", "cg"}) {
     const fs::path a = scratch("t1.shtb"), aj = scratch("t1.json"), b = scratch("t2.shtb"), bj = scratch("t2.json");
-    ASSERT_EQ(run(small(a, aj, 1, optimizer)).exit_code, 0);
-    ASSERT_EQ(run(small(b, bj, 2, optimizer)).exit_code, 0);
-    EXPECT_EQ(shtool::test::read_file(a), shtool::test::read_file(b)) << optimizer;
-    EXPECT_EQ(shtool::test::read_file(aj), shtool::test::read_file(bj)) << optimizer;
+    ASSERT_EQ(run_shtool(small(a, aj, 1, optimizer)).exit_code, 0);
+    ASSERT_EQ(run_shtool(small(b, bj, 2, optimizer)).exit_code, 0);
+    EXPECT_EQ(read_file(a), read_file(b)) << optimizer;
+    EXPECT_EQ(read_file(aj), read_file(bj)) << optimizer;
   }
 }
 
@@ -108,18 +93,18 @@ TEST(CliFitWrinkles, BadOptionsAreRefusedWithoutOutput) {
     fs::remove(out);
     std::vector<std::string> args = {"fit-wrinkles", "--grid", "3", "--rays", "8", "--out", out.string()};
     args.insert(args.end(), c.args.begin(), c.args.end());
-    const CommandResult r = run(args);
+    const CommandResult r = run_shtool(args);
     EXPECT_EQ(r.exit_code, 1) << c.names << ": " << r.err;
     EXPECT_NE(r.err.find(c.names), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(out)) << c.names;
   }
   // A folder that does not exist, and no --out at all.
   const fs::path missing = scratch("no-such-folder") / "w.shtb";
-  CommandResult r = run({"fit-wrinkles", "--grid", "3", "--rays", "8", "--out", missing.string()});
+  CommandResult r = run_shtool({"fit-wrinkles", "--grid", "3", "--rays", "8", "--out", missing.string()});
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("--out"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(missing));
-  r = run({"fit-wrinkles", "--grid", "3"});
+  r = run_shtool({"fit-wrinkles", "--grid", "3"});
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("--out"), std::string::npos) << r.err;
 }

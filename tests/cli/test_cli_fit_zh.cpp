@@ -18,47 +18,24 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "run_command.h"
+#include "cli_test.h"
 #include "shtool/sh.h"
 #include "shtool/table.h"
 #include "shtool/zh.h"
 #include "shtool/zh_fit_table.h"
-#include "scratch_files.h"
 
 namespace {
 
-using shtool::test::CommandResult;
 namespace fs = std::filesystem;
+using namespace shtool::test;
 
-const std::string kExe = SHTOOL_EXE;
-const std::string kSource = SHTOOL_SOURCE_DIR;
-
-fs::path scratch(const std::string& name) { return shtool::test::scratch_path("test_cli_fit_zh", name); }
-
-CommandResult run(std::vector<std::string> args) {
-  args.insert(args.begin(), kExe);
-  shtool::test::CommandOptions options;
-  options.timeout_seconds = 120;  // only turns a hang into a failure
-  CommandResult r = shtool::test::run_command(args, options);
-  EXPECT_FALSE(r.signaled) << shtool::test::describe_command(args) << " killed by signal " << r.signal;
-  return r;
-}
-
-std::string read_bytes(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
+const Scratch scratch("test_cli_fit_zh");
 
 // The generator record of a table written by fit-zh.
 nlohmann::json generator_of(const fs::path& table) {
   const shtool::Result<shtool::Table> t = shtool::read_table(table, {"zh-fit", 1});
   EXPECT_TRUE(t.ok()) << (t.ok() ? "" : t.error().message);
   return t.ok() ? nlohmann::json::parse(t.value().generator) : nlohmann::json();
-}
-
-nlohmann::json read_json(const fs::path& path) {
-  std::ifstream in(path);
-  return nlohmann::json::parse(in);
 }
 
 // ||sum of lobes - t||, rebuilt with the runtime's add_zh_lobe_to_sh.
@@ -82,7 +59,7 @@ double rebuilt_residual(const nlohmann::json& fit, const std::vector<double>& t,
 TEST(CliFitZh, SpotEndToEnd) {
   const fs::path table = scratch("spot.shtb"), json = scratch("spot.json"), saved = scratch("spot_t.json"),
                  ply = scratch("spot.ply");
-  const CommandResult r = run({"fit-zh", kSource + "/data/spot.obj", "--rays", "16", "--order", "3", "--lobes", "2",
+  const CommandResult r = run_shtool({"fit-zh", kSpotObj, "--rays", "16", "--order", "3", "--lobes", "2",
                                "--starts", "0", "--out", table.string(), "--json", json.string(), "--save-transfer",
                                saved.string(), "--ply", ply.string()});
   ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -123,9 +100,7 @@ TEST(CliFitZh, SpotEndToEnd) {
   EXPECT_EQ(axes[3 * 2 + 1], fits["fits"][1]["lobes"][0]["axis"][1].get<double>());
   ASSERT_TRUE(loaded.value().get<std::uint32_t>("vertex_index").ok());
 
-  const std::string cmd = std::string(SHTOOL_PYTHON) + " '" + kSource + "/tests/validate_json_schema.py' '" + kSource +
-                          "/schemas/zh-fit.schema.json' '" + table.string() + "'";
-  EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  expect_valid_against_schema("zh-fit.schema.json", {table});
 
   std::ifstream p(ply);
   std::string magic;
@@ -143,7 +118,7 @@ TEST(CliFitZh, TransferFileWithKnownLobeAndDeterminism) {
   const fs::path in = scratch("known.json"), out1 = scratch("k1.json"), out2 = scratch("k2.json");
   std::ofstream(in) << nlohmann::json{{"order", 4}, {"vectors", {t, t}}}.dump();
   for (const fs::path& out : {out1, out2}) {
-    const CommandResult r = run({"fit-zh", "--transfer", in.string(), "--lobes", "1", "--out",
+    const CommandResult r = run_shtool({"fit-zh", "--transfer", in.string(), "--lobes", "1", "--out",
                                  scratch("k.shtb").string(), "--json", out.string(), "--threads",
                                  out == out1 ? "1" : "2"});
     ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -170,29 +145,29 @@ TEST(CliFitZh, BadInputExitsOneWithAMessageAndNoOutput) {
   for (const Case& c : cases) {
     const fs::path obj = scratch(c.name), out = scratch(c.name + ".shtb");
     std::ofstream(obj) << c.obj;
-    const CommandResult r = run({"fit-zh", obj.string(), "--rays", "4", "--out", out.string()});
+    const CommandResult r = run_shtool({"fit-zh", obj.string(), "--rays", "4", "--out", out.string()});
     EXPECT_EQ(r.exit_code, 1) << c.name << ": " << r.err;
     EXPECT_NE(r.err.find(c.message), std::string::npos) << c.name << ": " << r.err;
     EXPECT_FALSE(fs::exists(out)) << c.name;
   }
-  const CommandResult missing = run({"fit-zh", scratch("missing.obj").string()});
+  const CommandResult missing = run_shtool({"fit-zh", scratch("missing.obj").string()});
   EXPECT_EQ(missing.exit_code, 1);
   EXPECT_NE(missing.err.find("no such file"), std::string::npos) << missing.err;
-  const CommandResult neither = run({"fit-zh"});
+  const CommandResult neither = run_shtool({"fit-zh"});
   EXPECT_EQ(neither.exit_code, 1);
   const fs::path bad = scratch("bad_transfer.json");
   std::ofstream(bad) << R"({"order": 2, "vectors": [[1, 2, 3]]})";
-  const CommandResult short_vec = run({"fit-zh", "--transfer", bad.string(), "--out", scratch("b.shtb").string()});
+  const CommandResult short_vec = run_shtool({"fit-zh", "--transfer", bad.string(), "--out", scratch("b.shtb").string()});
   EXPECT_EQ(short_vec.exit_code, 1);
   EXPECT_NE(short_vec.err.find("must have 4 numbers"), std::string::npos) << short_vec.err;
   EXPECT_FALSE(fs::exists(scratch("b.shtb")));
-  const CommandResult mode = run({"fit-zh", kSource + "/data/spot.obj", "--mode", "glossy"});
+  const CommandResult mode = run_shtool({"fit-zh", kSpotObj, "--mode", "glossy"});
   EXPECT_EQ(mode.exit_code, 1);
   EXPECT_NE(mode.err.find("--mode"), std::string::npos) << mode.err;
 }
 
 TEST(CliFitZh, HeaderRecordsRayTracerAndLoadedMesh) {
-  const std::string spot = read_bytes(kSource + "/data/spot.obj");
+  const std::string spot = read_file(kSpotObj);
   const fs::path same = scratch("spot_comment.obj"), moved = scratch("spot_moved.obj");
   // Same geometry, other bytes: a comment line. Other geometry: the first vertex moved.
   std::ofstream(same) << spot << "# a comment changes the file, not the mesh\n";
@@ -205,10 +180,10 @@ TEST(CliFitZh, HeaderRecordsRayTracerAndLoadedMesh) {
   edited.replace(v, end - v, "v " + std::to_string(x + 1e-3) + " " + std::to_string(y) + " " + std::to_string(z));
   std::ofstream(moved) << edited;
   std::vector<nlohmann::json> gens;
-  for (const std::string& mesh : {kSource + "/data/spot.obj", same.string(), moved.string()}) {
+  for (const std::string& mesh : {kSpotObj, same.string(), moved.string()}) {
     const fs::path out = scratch("header.shtb");
     const CommandResult r =
-        run({"fit-zh", mesh, "--rays", "4", "--order", "2", "--lobes", "1", "--starts", "0", "--out", out.string()});
+        run_shtool({"fit-zh", mesh, "--rays", "4", "--order", "2", "--lobes", "1", "--starts", "0", "--out", out.string()});
     ASSERT_EQ(r.exit_code, 0) << r.err;
     gens.push_back(generator_of(out));
   }
@@ -225,7 +200,7 @@ TEST(CliFitZh, HeaderRecordsRayTracerAndLoadedMesh) {
 
   // No rays traced, no ray tracer recorded.
   const fs::path out = scratch("header_unshadowed.shtb");
-  const CommandResult r = run({"fit-zh", kSource + "/data/spot.obj", "--mode", "unshadowed", "--rays", "4", "--order",
+  const CommandResult r = run_shtool({"fit-zh", kSpotObj, "--mode", "unshadowed", "--rays", "4", "--order",
                                "2", "--lobes", "1", "--starts", "0", "--out", out.string()});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_FALSE(generator_of(out).contains("embree"));
@@ -241,18 +216,16 @@ CommandResult fit(const std::string& mesh, std::vector<std::string> extra) {
   std::vector<std::string> args = {"fit-zh", mesh};
   args.insert(args.end(), kQuick.begin(), kQuick.end());
   args.insert(args.end(), extra.begin(), extra.end());
-  return run(args);
+  return run_shtool(args);
 }
-
-const std::string kSpot = kSource + "/data/spot.obj";
 
 TEST(CliFitZh, ThreadCountDoesNotChangeABit) {
   std::vector<std::string> tables;
   for (const char* threads : {"1", "2", "3"}) {
     const fs::path out = scratch(std::string("threads") + threads + ".shtb");
-    const CommandResult r = fit(kSpot, {"--threads", threads, "--out", out.string()});
+    const CommandResult r = fit(kSpotObj, {"--threads", threads, "--out", out.string()});
     ASSERT_EQ(r.exit_code, 0) << r.err;
-    tables.push_back(read_bytes(out));
+    tables.push_back(read_file(out));
   }
   ASSERT_GT(tables[0].size(), 2930u * 2 * 2 * 8);
   EXPECT_EQ(tables[0], tables[1]);
@@ -269,7 +242,7 @@ std::vector<fs::path> bake_parts(const std::string& name, int n, const std::vect
     std::vector<std::string> args = {"--shard", std::to_string(k) + "/" + std::to_string(n), "--threads",
                                      std::to_string(k % 3 + 1), "--format", format, "--out", out.string()};
     args.insert(args.end(), extra.begin(), extra.end());
-    const CommandResult r = fit(kSpot, args);
+    const CommandResult r = fit(kSpotObj, args);
     EXPECT_EQ(r.exit_code, 0) << r.err;
     EXPECT_NE(r.err.find("shard " + std::to_string(k) + "/" + std::to_string(n)), std::string::npos) << r.err;
     parts.push_back(out);
@@ -281,13 +254,13 @@ CommandResult merge(const std::vector<fs::path>& parts, const fs::path& out) {
   std::vector<std::string> args = {"merge"};
   for (const fs::path& p : parts) args.push_back(p.string());
   args.insert(args.end(), {"--out", out.string()});
-  return run(args);
+  return run_shtool(args);
 }
 
 TEST(CliFitZh, ShardsMergedInAnyOrderAreTheOneProcessTable) {
   const fs::path whole = scratch("whole.shtb");
-  ASSERT_EQ(fit(kSpot, {"--out", whole.string()}).exit_code, 0);
-  const std::string expected = read_bytes(whole);
+  ASSERT_EQ(fit(kSpotObj, {"--out", whole.string()}).exit_code, 0);
+  const std::string expected = read_file(whole);
   fs::path part;  // shard 1 of 3
   for (int n : {1, 2, 3}) {
     // JSON parts for N = 2: the encoding of a part does not change the merged bytes.
@@ -299,7 +272,7 @@ TEST(CliFitZh, ShardsMergedInAnyOrderAreTheOneProcessTable) {
     const CommandResult r = merge(parts, out);
     ASSERT_EQ(r.exit_code, 0) << r.err;
     EXPECT_NE(r.err.find(std::to_string(n) + " parts, 2930 vertices"), std::string::npos) << r.err;
-    EXPECT_EQ(read_bytes(out), expected) << n << " shards";
+    EXPECT_EQ(read_file(out), expected) << n << " shards";
   }
 
   // A part says what it is, and the runtime refuses to shade it as a whole mesh.
@@ -310,13 +283,11 @@ TEST(CliFitZh, ShardsMergedInAnyOrderAreTheOneProcessTable) {
                                    {"vertices", 2930}}));
   EXPECT_EQ(t.value().kind_version, "1.1");
   EXPECT_EQ(generator_of(part), generator_of(whole));
-  const auto loaded = shtool::load_zh_fit<double>(part);
+  const auto loaded = shtool::ZhFitTable<double>::load(part);
   ASSERT_FALSE(loaded.ok());
   EXPECT_NE(loaded.error().message.find("partial table"), std::string::npos) << loaded.error().message;
-  ASSERT_TRUE(shtool::load_zh_fit<double>(whole).ok());
-  const std::string cmd = std::string(SHTOOL_PYTHON) + " '" + kSource + "/tests/validate_json_schema.py' '" + kSource +
-                          "/schemas/zh-fit.schema.json' '" + part.string() + "' '" + whole.string() + "'";
-  EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  ASSERT_TRUE(shtool::ZhFitTable<double>::load(whole).ok());
+  expect_valid_against_schema("zh-fit.schema.json", {part, whole});
 }
 
 TEST(CliFitZh, ShardsOfTransferVectorsMerge) {
@@ -332,16 +303,16 @@ TEST(CliFitZh, ShardsOfTransferVectorsMerge) {
   const std::vector<std::string> opts = {"--lobes", "2", "--starts", "2", "--restart-above", "0"};
   std::vector<std::string> args = {"fit-zh", "--transfer", in.string(), "--out", whole.string()};
   args.insert(args.end(), opts.begin(), opts.end());
-  ASSERT_EQ(run(args).exit_code, 0);
+  ASSERT_EQ(run_shtool(args).exit_code, 0);
   std::vector<fs::path> parts;
   for (const char* k : {"1", "0"}) {
     parts.push_back(scratch(std::string("vectors.part") + k));
     args = {"fit-zh", "--transfer", in.string(), "--shard", std::string(k) + "/2", "--out", parts.back().string()};
     args.insert(args.end(), opts.begin(), opts.end());
-    ASSERT_EQ(run(args).exit_code, 0);
+    ASSERT_EQ(run_shtool(args).exit_code, 0);
   }
   ASSERT_EQ(merge(parts, merged).exit_code, 0);
-  EXPECT_EQ(read_bytes(merged), read_bytes(whole));
+  EXPECT_EQ(read_file(merged), read_file(whole));
 }
 
 TEST(CliFitZh, MergeRefusesPartsThatDoNotMakeOneBake) {
@@ -350,7 +321,7 @@ TEST(CliFitZh, MergeRefusesPartsThatDoNotMakeOneBake) {
   const fs::path other_option = bake_parts("refuse_direct", 3, {"--direct"})[2];
   const fs::path other_count = bake_parts("refuse_count", 2)[1];
   // The same file under another name: the mesh CRC is the same, the file name differs.
-  const std::string spot = read_bytes(kSpot);
+  const std::string spot = read_file(kSpotObj);
   const fs::path moved = scratch("moved.obj");
   std::string edited = spot;
   edited.replace(edited.find("0.348799"), 8, "0.348800");  // spot's first vertex
@@ -359,15 +330,15 @@ TEST(CliFitZh, MergeRefusesPartsThatDoNotMakeOneBake) {
   ASSERT_EQ(fit(moved.string(), {"--shard", "2/3", "--out", other_mesh.string()}).exit_code, 0);
   const fs::path copy = scratch("refuse_copy.part"), corrupt = scratch("refuse_corrupt.part");
   fs::copy_file(parts[1], copy, fs::copy_options::overwrite_existing);
-  std::string bytes = read_bytes(parts[2]);
+  std::string bytes = read_file(parts[2]);
   bytes[bytes.size() - 5] ^= 0x10;  // inside the last array
   std::ofstream(corrupt, std::ios::binary) << bytes;
   const fs::path whole = scratch("refuse_whole.shtb");
-  ASSERT_EQ(fit(kSpot, {"--out", whole.string()}).exit_code, 0);
+  ASSERT_EQ(fit(kSpotObj, {"--out", whole.string()}).exit_code, 0);
   // A JSON part's header is plain text: its shard record edited to disagree with its rows.
   const fs::path edited_range = scratch("refuse_range.part");
-  ASSERT_EQ(fit(kSpot, {"--shard", "1/3", "--format", "json", "--out", edited_range.string()}).exit_code, 0);
-  std::string json_part = read_bytes(edited_range);
+  ASSERT_EQ(fit(kSpotObj, {"--shard", "1/3", "--format", "json", "--out", edited_range.string()}).exit_code, 0);
+  std::string json_part = read_file(edited_range);
   const std::size_t at = json_part.find("\"first_vertex\":976");
   ASSERT_NE(at, std::string::npos);
   json_part.replace(at, 18, "\"first_vertex\":975");
@@ -389,7 +360,7 @@ TEST(CliFitZh, MergeRefusesPartsThatDoNotMakeOneBake) {
       {"corrupted", {parts[0], parts[1], corrupt}, "CRC"},
       {"whole table", {parts[0], whole}, "not a partial table"},
       {"edited range", {parts[0], edited_range, parts[2]}, "shard 1 of 3 covers vertices [976, 1953)"},
-      {"not a table", {parts[0], kSpot}, "spot.obj"},
+      {"not a table", {parts[0], kSpotObj}, "spot.obj"},
   };
   for (const Case& c : cases) {
     const fs::path out = scratch("refused.shtb");
@@ -401,7 +372,7 @@ TEST(CliFitZh, MergeRefusesPartsThatDoNotMakeOneBake) {
   // Mesh CRCs are compared too: the mesh_crc32 of the moved vertex differs from spot's.
   EXPECT_NE(generator_of(other_mesh)["parameters"]["mesh_crc32"], generator_of(parts[0])["parameters"]["mesh_crc32"]);
   // --out is required, and may not overwrite a part.
-  EXPECT_EQ(run({"merge", parts[0].string()}).exit_code, 1);
+  EXPECT_EQ(run_shtool({"merge", parts[0].string()}).exit_code, 1);
   const CommandResult onto = merge({parts[0], parts[1], parts[2]}, parts[0]);
   EXPECT_EQ(onto.exit_code, 1);
   EXPECT_NE(onto.err.find("--out"), std::string::npos) << onto.err;
@@ -434,7 +405,7 @@ TEST(CliFitZh, BadShardOptionsAreRefusedBeforeAnyWork) {
     const fs::path out = scratch("badshard.shtb");
     std::vector<std::string> args = c.args;
     args.insert(args.end(), {"--out", out.string()});
-    const CommandResult r = fit(kSpot, args);
+    const CommandResult r = fit(kSpotObj, args);
     const std::string what = c.args[1];
     if (c.message.empty()) {
       EXPECT_EQ(r.exit_code, 0) << what << ": " << r.err;

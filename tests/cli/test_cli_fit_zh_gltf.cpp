@@ -22,27 +22,14 @@
 
 #include "fit/mesh.h"
 #include "node_consumers.h"
-#include "run_command.h"
-#include "scratch_files.h"
+#include "cli_test.h"
 
 namespace {
 
 namespace fs = std::filesystem;
-using shtool::test::CommandResult;
+using namespace shtool::test;
 
-const std::string kExe = SHTOOL_EXE;
-const std::string kSpot = std::string(SHTOOL_SOURCE_DIR) + "/data/spot.obj";
-
-fs::path scratch(const std::string& name) { return shtool::test::scratch_path("test_cli_fit_zh_gltf", name); }
-
-CommandResult run(std::vector<std::string> args) {
-  args.insert(args.begin(), kExe);
-  shtool::test::CommandOptions options;
-  options.timeout_seconds = 300;  // only turns a hang into a failure
-  CommandResult r = shtool::test::run_command(args, options);
-  EXPECT_FALSE(r.signaled) << shtool::test::describe_command(args) << " killed by signal " << r.signal;
-  return r;
-}
+const Scratch scratch("test_cli_fit_zh_gltf");
 
 // One bake of spot.obj with its .glb, --json fits and --save-transfer vectors.
 struct Bake {
@@ -66,7 +53,7 @@ const std::vector<Bake>& bakes() {
   static bool baked = false;
   if (!baked) {
     for (const Bake& b : list) {
-      std::vector<std::string> args = {"fit-zh",          kSpot,
+      std::vector<std::string> args = {"fit-zh",          kSpotObj,
                                        "--rays",          "64",
                                        "--order",         std::to_string(b.order),
                                        "--lobes",         std::to_string(b.lobes),
@@ -75,7 +62,7 @@ const std::vector<Bake>& bakes() {
                                        "--save-transfer", b.transfer().string(),
                                        "--out",           scratch(b.name + ".shtb").string()};
       args.insert(args.end(), b.extra.begin(), b.extra.end());
-      const CommandResult r = run(args);
+      const CommandResult r = run_shtool(args);
       EXPECT_EQ(r.exit_code, 0) << r.err;
     }
     baked = true;
@@ -111,7 +98,7 @@ tinygltf::Model load(const fs::path& glb) {
 }
 
 TEST(CliFitZhGltf, AttributesAreTheFitsOfTheSameRun) {
-  const shtool::fit::Mesh mesh = shtool::fit::load_mesh(kSpot);
+  const shtool::fit::Mesh mesh = shtool::fit::load_mesh(kSpotObj);
   const std::size_t n = mesh.positions.size();
   for (const Bake& b : bakes()) {
     SCOPED_TRACE(b.name);
@@ -167,7 +154,7 @@ TEST(CliFitZhGltf, AttributesAreTheFitsOfTheSameRun) {
       for (int c = 0; c < 3; ++c) ASSERT_EQ(idx[t * 3 + c], mesh.triangles[t][c]) << "triangle " << t;
 
     // COLOR_0: the transfer DC over the unshadowed DC 1/(2 sqrt(pi)), clamped.
-    const nlohmann::json transfer = nlohmann::json::parse(shtool::test::read_file(b.transfer()));
+    const nlohmann::json transfer = nlohmann::json::parse(read_file(b.transfer()));
     const std::vector<float> colour = floats(m, p.attributes.at("COLOR_0"), TINYGLTF_TYPE_VEC3, n);
     int clamped = 0;
     for (std::size_t v = 0; v < n; ++v) {
@@ -179,7 +166,7 @@ TEST(CliFitZhGltf, AttributesAreTheFitsOfTheSameRun) {
     EXPECT_EQ(clamped, 0);
 
     // Axes and coefficients: the --json fits as float, padding zero.
-    const nlohmann::json fits = nlohmann::json::parse(shtool::test::read_file(b.json()))["fits"];
+    const nlohmann::json fits = nlohmann::json::parse(read_file(b.json()))["fits"];
     ASSERT_EQ(fits.size(), n);
     for (int k = 0; k < b.lobes; ++k) {
       const std::string lobe = std::to_string(k);
@@ -217,7 +204,7 @@ TEST(CliFitZhGltf, AttributesAreTheFitsOfTheSameRun) {
 }
 
 TEST(CliFitZhGltf, ShtoolReadsTheSameMeshBack) {
-  const shtool::fit::Mesh baked = shtool::fit::load_mesh(kSpot);
+  const shtool::fit::Mesh baked = shtool::fit::load_mesh(kSpotObj);
   const shtool::fit::Mesh back = shtool::fit::load_mesh(bakes()[0].glb());
   ASSERT_EQ(back.positions.size(), baked.positions.size());
   ASSERT_EQ(back.triangles.size(), baked.triangles.size());
@@ -231,11 +218,7 @@ TEST(CliFitZhGltf, ShtoolReadsTheSameMeshBack) {
 
 // The Khronos glTF validator (npm gltf-validator) on every bake: no error, no warning.
 TEST(CliFitZhGltf, KhronosValidatorFindsNoError) {
-  std::string why;
-  if (!shtool::test::node_consumers(why)) {
-    if (std::getenv("CI")) FAIL() << why;
-    GTEST_SKIP() << why << " (set CI to make this a failure)";
-  }
+  SHTOOL_REQUIRE_NODE_CONSUMERS();
   for (const Bake& b : bakes()) {
     const CommandResult r = shtool::test::run_command(
         {"node", (shtool::test::node_consumers_dir() / "validate_gltf.mjs").string(), b.glb().string()});
@@ -254,11 +237,7 @@ TEST(CliFitZhGltf, KhronosValidatorFindsNoError) {
 // three.js's GLTFLoader, as an engine reads the file: every attribute under its
 // documented three.js name with the floats the file holds, the indices, the extras.
 TEST(CliFitZhGltf, ThreeJsReadsTheAttributes) {
-  std::string why;
-  if (!shtool::test::node_consumers(why)) {
-    if (std::getenv("CI")) FAIL() << why;
-    GTEST_SKIP() << why << " (set CI to make this a failure)";
-  }
+  SHTOOL_REQUIRE_NODE_CONSUMERS();
   for (const Bake& b : bakes()) {
     SCOPED_TRACE(b.name);
     const CommandResult r = shtool::test::run_command(
@@ -286,7 +265,7 @@ TEST(CliFitZhGltf, ThreeJsReadsTheAttributes) {
       for (std::size_t i = 0; i < want.size(); ++i)
         ASSERT_EQ(a["values"][i].get<double>(), want[i]) << name << " " << i;
     }
-    const shtool::fit::Mesh mesh = shtool::fit::load_mesh(kSpot);
+    const shtool::fit::Mesh mesh = shtool::fit::load_mesh(kSpotObj);
     ASSERT_EQ(three["index"].size(), mesh.triangles.size() * 3);
     for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
       for (int c = 0; c < 3; ++c) ASSERT_EQ(three["index"][t * 3 + c], mesh.triangles[t][c]);
@@ -304,15 +283,15 @@ TEST(CliFitZhGltf, RefusalsNameTheProblemAndWriteNothing) {
   };
   const std::vector<Case> cases = {
       {{"--transfer", vectors.string(), "--gltf", glb.string()}, "--gltf needs a mesh (not --transfer)"},
-      {{kSpot, "--shard", "0/2", "--gltf", glb.string()}, "--gltf is not written with --shard"},
-      {{kSpot, "--gltf", out.string()}, "--gltf and --out name the same file"},
-      {{kSpot, "--gltf", kSpot}, "--gltf: '" + kSpot + "' is the input"},
-      {{kSpot, "--gltf", scratch("no_such_folder/x.glb").string()}, "--gltf"},
+      {{kSpotObj, "--shard", "0/2", "--gltf", glb.string()}, "--gltf is not written with --shard"},
+      {{kSpotObj, "--gltf", out.string()}, "--gltf and --out name the same file"},
+      {{kSpotObj, "--gltf", kSpotObj}, "--gltf: '" + kSpotObj + "' is the input"},
+      {{kSpotObj, "--gltf", scratch("no_such_folder/x.glb").string()}, "--gltf"},
   };
   for (const Case& c : cases) {
     std::vector<std::string> args = {"fit-zh", "--rays", "8", "--order", "2", "--lobes", "1", "--out", out.string()};
     args.insert(args.end(), c.args.begin(), c.args.end());
-    const CommandResult r = run(args);
+    const CommandResult r = run_shtool(args);
     EXPECT_EQ(r.exit_code, 1) << c.message;
     EXPECT_NE(r.err.find(c.message), std::string::npos) << r.err;
     EXPECT_EQ(r.err.find("fit-zh: "), std::string::npos) << "refused after the bake: " << r.err;

@@ -15,21 +15,19 @@
 #include <string>
 #include <vector>
 
-#include "run_command.h"
-#include "scratch_files.h"
+#include "cli_test.h"
 
 namespace {
 
 namespace fs = std::filesystem;
-using shtool::test::run_command;
-const std::string kExe = SHTOOL_EXE;
+using namespace shtool::test;
 
-fs::path scratch(const std::string& name) { return shtool::test::scratch_path("gen_shader", name); }
+const Scratch scratch("gen_shader");
 
 shtool::test::CommandResult gen(const std::vector<std::string>& args) {
-  std::vector<std::string> argv = {kExe, "gen-shader"};
+  std::vector<std::string> argv = {"gen-shader"};
   argv.insert(argv.end(), args.begin(), args.end());
-  return run_command(argv);
+  return run_shtool(argv);
 }
 
 const char* kOperations[] = {"sh-eval",        "sh-irradiance", "zxzxz-rotate", "zhf-rotate", "zhf-tailored-rotate",
@@ -42,7 +40,7 @@ TEST(GenShader, EveryOperationIsAnIncludeWithTheContract) {
       const auto r = gen({"--lang", lang, "--what", what, "--order", "3", "--out", out.string()});
       ASSERT_EQ(r.exit_code, 0) << r.err;
       EXPECT_NE(r.err.find("multiplications"), std::string::npos) << r.err;
-      const std::string text = shtool::test::read_file(out);
+      const std::string text = read_file(out);
       SCOPED_TRACE(std::string(lang) + " " + what);
       EXPECT_EQ(text.find("#version"), std::string::npos);
       EXPECT_EQ(text.find("main("), std::string::npos);
@@ -97,7 +95,7 @@ TEST(GenShader, SignaturesAsDocumented) {
     const fs::path out = scratch("sig.txt");
     const auto r = gen({"--lang", e.lang, "--what", e.what, "--order", "4", "--out", out.string()});
     ASSERT_EQ(r.exit_code, 0) << r.err;
-    EXPECT_NE(shtool::test::read_file(out).find(e.signature), std::string::npos) << e.lang << " " << e.what;
+    EXPECT_NE(read_file(out).find(e.signature), std::string::npos) << e.lang << " " << e.what;
   }
 }
 
@@ -114,7 +112,7 @@ TEST(GenShader, ConstantsAtFullFloatPrecision) {
     // The code without its comments (the header names the tool's version).
     std::string text;
     {
-      std::istringstream lines(shtool::test::read_file(out));
+      std::istringstream lines(read_file(out));
       for (std::string line; std::getline(lines, line);) text += line.substr(0, line.find("//")) + "\n";
     }
     if (std::string(what) == "sh-eval") EXPECT_NE(text.find("y[0] = 0.282094806;"), std::string::npos);
@@ -139,7 +137,7 @@ TEST(GenShader, SameBytesOnEveryRun) {
     fs::create_directories(b.parent_path());
     ASSERT_EQ(gen({"--lang", "hlsl", "--what", what, "--order", "5", "--out", a.string()}).exit_code, 0);
     ASSERT_EQ(gen({"--lang", "hlsl", "--what", what, "--order", "5", "--out", b.string()}).exit_code, 0);
-    EXPECT_EQ(shtool::test::read_file(a), shtool::test::read_file(b)) << what;
+    EXPECT_EQ(read_file(a), read_file(b)) << what;
   }
 }
 

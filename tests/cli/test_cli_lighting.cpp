@@ -28,8 +28,7 @@
 #include <stb_image_write.h>
 
 #include "lighting/image_io.h"
-#include "run_command.h"
-#include "scratch_files.h"
+#include "cli_test.h"
 #include "shtool/sh.h"
 #include "shtool/table.h"
 
@@ -37,16 +36,10 @@ namespace shtool {
 namespace {
 
 namespace fs = std::filesystem;
-using test::run_command;
+using namespace test;
 constexpr double kPi = std::numbers::pi;
-const std::string kExe = SHTOOL_EXE;
-const std::string kSource = SHTOOL_SOURCE_DIR;
 
-fs::path scratch(const std::string& name) { return shtool::test::scratch_path("lighting", name); }
-
-std::string read_text(const fs::path& p) { return shtool::test::read_file(p); }
-
-void write_bytes(const fs::path& p, const std::string& bytes) { std::ofstream(p, std::ios::binary) << bytes; }
+const Scratch scratch("lighting");
 
 using Texels = std::vector<float>;  // RGB, rows top first
 
@@ -82,7 +75,7 @@ void write_flat_hdr(const fs::path& p, int w, int h, const Texels& rgb) {
     for (int c = 0; c < 3; ++c) out += static_cast<char>(static_cast<unsigned char>(rgb[i + c] * scale));
     out += static_cast<char>(e + 128);
   }
-  write_bytes(p, out);
+  write_file(p, out);
 }
 
 void write_stb(const fs::path& p, int w, int h, const Texels& rgb) {
@@ -99,14 +92,14 @@ void write_stb(const fs::path& p, int w, int h, const Texels& rgb) {
 }
 
 nlohmann::json project(const std::vector<std::string>& args) {
-  std::vector<std::string> argv = {kExe, "project-env"};
+  std::vector<std::string> argv = {"project-env"};
   argv.insert(argv.end(), args.begin(), args.end());
   const fs::path json = scratch("projection.json");
   fs::remove(json);
   argv.insert(argv.end(), {"--json", json.string()});
-  const test::CommandResult r = run_command(argv);
+  const test::CommandResult r = run_shtool(argv);
   EXPECT_EQ(r.exit_code, 0) << r.err;
-  return nlohmann::json::parse(read_text(json));
+  return nlohmann::json::parse(read_file(json));
 }
 
 void expect_uniform(const nlohmann::json& j, double value, const std::string& what) {
@@ -290,7 +283,7 @@ TEST(CliProjectEnv, EquirectPresetsMatchTheirTools) {
 }
 
 TEST(CliProjectEnv, RenderBackRoundTripAndOutputs) {
-  const fs::path sky = fs::path(kSource) / "data" / "sky.hdr";
+  const fs::path sky = fs::path(kSourceDir) / "data" / "sky.hdr";
   const fs::path back = scratch("back.exr"), table = scratch("sky.shtb");
   const nlohmann::json first =
       project({sky.string(), "--order", "4", "--render-back", back.string(), "--out", table.string()});
@@ -307,9 +300,7 @@ TEST(CliProjectEnv, RenderBackRoundTripAndOutputs) {
   ASSERT_TRUE(t) << t.error().message;
   const std::vector<double> c = t.value().get<double>("coefficients").value();
   EXPECT_EQ(c[3 * 5 + 2], first["coefficients"][5][2].get<double>());
-  const std::string cmd = std::string(SHTOOL_PYTHON) + " '" + kSource + "/tests/validate_json_schema.py' '" + kSource +
-                          "/schemas/env-sh.schema.json' '" + table.string() + "'";
-  EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  expect_valid_against_schema("env-sh.schema.json", {table});
   EXPECT_EQ(first["order"], 4);
   EXPECT_EQ(first["quantity"], "radiance");
   EXPECT_EQ(first["channels"], nlohmann::json({"r", "g", "b"}));
@@ -327,11 +318,11 @@ TEST(CliProjectEnv, RenderSourceIsTheSourceInTheRenderBacksMapping) {
   const fs::path in = scratch("source_in.exr"), out = scratch("source_out.exr"), back = scratch("source_back.exr");
   write_exr(in, 512, 256, image, false);
   project({in.string(), "--order", "2", "--render-source", out.string(), "--render-back", back.string()});
-  const lighting::Image same = lighting::decode_image(read_text(out), out);
+  const lighting::Image same = read_image(out);
   ASSERT_EQ(same.width, 512);
   ASSERT_EQ(same.height, 256);
   EXPECT_EQ(same.texels, image);
-  EXPECT_EQ(lighting::decode_image(read_text(back), back).width, 512);
+  EXPECT_EQ(read_image(back).width, 512);
 
   Cube cube{4, {}};
   for (int f = 0; f < 6; ++f) cube.faces[f].assign(4 * 4 * 3, float(f + 1));
@@ -339,7 +330,7 @@ TEST(CliProjectEnv, RenderSourceIsTheSourceInTheRenderBacksMapping) {
   for (int f = 0; f < 6; ++f) write_exr(scratch(std::string("cface_") + suffix[f] + ".exr"), 4, 4, cube.faces[f], false);
   const fs::path faces_out = scratch("faces_source.exr");
   project({scratch("cface_%s.exr").string(), "--order", "2", "--render-source", faces_out.string()});
-  const lighting::Image seen = lighting::decode_image(read_text(faces_out), faces_out);
+  const lighting::Image seen = read_image(faces_out);
   ASSERT_EQ(seen.width, 512);  // 2 x 4 texels, raised to the smallest render-back of 256 rows
   ASSERT_EQ(seen.height, 256);
   int wrong = 0;
@@ -361,15 +352,15 @@ TEST(CliProjectEnv, RenderSourceIsTheSourceInTheRenderBacksMapping) {
 }
 
 TEST(CliProjectEnv, SameBytesWhateverTheThreadCount) {
-  const fs::path sky = fs::path(kSource) / "data" / "sky.hdr";
+  const fs::path sky = fs::path(kSourceDir) / "data" / "sky.hdr";
   std::string bytes[2];
   for (int k = 0; k < 2; ++k) {
     const fs::path json = scratch("t" + std::to_string(k) + ".json"), table = scratch("t" + std::to_string(k) + ".shtb");
-    const test::CommandResult r = run_command({kExe, "project-env", sky.string(), "--order", "9", "--window", "auto",
+    const test::CommandResult r = run_shtool({"project-env", sky.string(), "--order", "9", "--window", "auto",
                                                "--threads", k == 0 ? "1" : "3", "--json", json.string(), "--out",
                                                table.string()});
     ASSERT_EQ(r.exit_code, 0) << r.err;
-    bytes[k] = read_text(json) + read_text(table);
+    bytes[k] = read_file(json) + read_file(table);
   }
   EXPECT_EQ(bytes[0], bytes[1]);
 }
@@ -388,13 +379,13 @@ TEST(CliProjectEnv, ExrCrossSameBytesWhateverTheThreadCountAndItsCrc) {
   std::string bytes[2];
   for (int k = 0; k < 2; ++k) {
     const fs::path json = scratch("x" + std::to_string(k) + ".json"), table = scratch("x" + std::to_string(k) + ".shtb");
-    const test::CommandResult r = run_command({kExe, "project-env", image.string(), "--order", "7", "--threads",
+    const test::CommandResult r = run_shtool({"project-env", image.string(), "--order", "7", "--threads",
                                                k == 0 ? "1" : "3", "--json", json.string(), "--out", table.string()});
     ASSERT_EQ(r.exit_code, 0) << r.err;
-    bytes[k] = read_text(json) + read_text(table);
+    bytes[k] = read_file(json) + read_file(table);
     const Result<Table> t = read_table(table, {"env-sh", 1, 0});
     ASSERT_TRUE(t) << t.error().message;
-    const std::string file = read_text(image);
+    const std::string file = read_file(image);
     EXPECT_EQ(nlohmann::json::parse(t.value().generator)["parameters"]["input_crc32"].get<std::uint32_t>(),
               table_crc32(std::span<const std::byte>(reinterpret_cast<const std::byte*>(file.data()), file.size())));
   }
@@ -444,7 +435,7 @@ struct BadCase {
 
 TEST(CliProjectEnv, BadInputIsAnErrorWithNoOutput) {
   const fs::path text = scratch("not_an_image.exr");
-  write_bytes(text, "hello, I am text\n");
+  write_file(text, "hello, I am text\n");
   const fs::path wide = scratch("wide.exr");
   write_exr(wide, 48, 16, Texels(48 * 16 * 3, 1.0f), false);
   const fs::path odd = scratch("odd.exr");
@@ -470,15 +461,15 @@ TEST(CliProjectEnv, BadInputIsAnErrorWithNoOutput) {
   write_flat_hdr(scratch("full_flat.hdr"), 16, 8, grey);
   write_stb(scratch("full.jpg"), 16, 8, grey);
   for (const char* name : {"full_rle.hdr", "full_flat.hdr", "full.jpg"}) {
-    const std::string bytes = read_text(scratch(name));
-    write_bytes(scratch(std::string("cut_") + name), bytes.substr(0, bytes.size() - 20));
+    const std::string bytes = read_file(scratch(name));
+    write_file(scratch(std::string("cut_") + name), bytes.substr(0, bytes.size() - 20));
   }
   const fs::path cross43 = scratch("cross43.exr"), windowed_ok = scratch("ok.exr");
   write_exr(cross43, 64, 48, Texels(64 * 48 * 3, 1.0f), false);
   write_exr(windowed_ok, 16, 8, Texels(16 * 8 * 3, 1.0f), false);
   // Run-length rows, then a flat row: stb reads the whole image flat from there.
   {
-    const std::string rle = read_text(scratch("full_rle.hdr"));
+    const std::string rle = read_file(scratch("full_rle.hdr"));
     const std::size_t body = rle.find("+X 16\n") + 6;
     std::string mixed = rle.substr(0, body);
     // First scanline as the file has it (run-length), then 4 bytes that are not a
@@ -520,10 +511,10 @@ TEST(CliProjectEnv, BadInputIsAnErrorWithNoOutput) {
     const fs::path json = scratch("bad.json"), table = scratch("bad.shtb");
     fs::remove(json);
     fs::remove(table);
-    std::vector<std::string> argv = {kExe, "project-env"};
+    std::vector<std::string> argv = {"project-env"};
     argv.insert(argv.end(), c.args.begin(), c.args.end());
     argv.insert(argv.end(), {"--json", json.string(), "--out", table.string()});
-    const test::CommandResult r = run_command(argv);
+    const test::CommandResult r = run_shtool(argv);
     EXPECT_EQ(r.exit_code, 1) << c.name << ": " << r.err;
     EXPECT_NE(r.err.find(c.message), std::string::npos) << c.name << ": " << r.err;
     EXPECT_FALSE(fs::exists(json)) << c.name;
@@ -537,17 +528,17 @@ TEST(CliProjectEnv, BadInputIsAnErrorWithNoOutput) {
 nlohmann::json light(const std::vector<std::string>& args, int expect = 0, std::string* err = nullptr) {
   const fs::path json = scratch("light.json");
   fs::remove(json);
-  std::vector<std::string> argv = {kExe, "light"};
+  std::vector<std::string> argv = {"light"};
   argv.insert(argv.end(), args.begin(), args.end());
   argv.insert(argv.end(), {"--json", json.string()});
-  const test::CommandResult r = run_command(argv);
+  const test::CommandResult r = run_shtool(argv);
   EXPECT_EQ(r.exit_code, expect) << r.err;
   if (err) *err = r.err;
   if (expect != 0) {
     EXPECT_FALSE(fs::exists(json));
     return {};
   }
-  return nlohmann::json::parse(read_text(json));
+  return nlohmann::json::parse(read_file(json));
 }
 
 TEST(CliLight, ClosedFormsAndSums) {
@@ -569,7 +560,7 @@ TEST(CliLight, ClosedFormsAndSums) {
   EXPECT_EQ(constant["quantity"], "irradiance");
   // A list sums its lights.
   const fs::path list = scratch("lights.json");
-  write_bytes(list, R"([{"type": "directional", "dir": [1, -2, 2], "color": [2, 3, 4]},
+  write_file(list, R"([{"type": "directional", "dir": [1, -2, 2], "color": [2, 3, 4]},
                         {"type": "cone", "dir": [0, 0, 1], "half_angle": 60}])");
   const nlohmann::json sum = light({"--lights", list.string(), "--order", "3"});
   for (int i = 0; i < 9; ++i)
@@ -580,7 +571,7 @@ TEST(CliLight, ClosedFormsAndSums) {
 
 TEST(CliLight, BadInput) {
   const fs::path list = scratch("bad_lights.json");
-  write_bytes(list, R"([{"type": "cone", "dir": [0, 0, 1]}])");
+  write_file(list, R"([{"type": "cone", "dir": [0, 0, 1]}])");
   const std::vector<BadCase> cases = {
       {"no light", {"--order", "3"}, "no light"},
       {"zero direction", {"--type", "directional", "--dir", "0,0,0"}, "not zero"},

@@ -17,27 +17,15 @@
 #include <nlohmann/json.hpp>
 
 #include "lighting/image_io.h"
-#include "run_command.h"
-#include "scratch_files.h"
+#include "cli_test.h"
 #include "shtool/table.h"
 
 namespace {
 
 namespace fs = std::filesystem;
-using shtool::test::CommandResult;
+using namespace shtool::test;
 
-const std::string kExe = SHTOOL_EXE;
-
-fs::path scratch(const std::string& name) { return shtool::test::scratch_path("mesh_frames", name); }
-
-CommandResult run(std::vector<std::string> args) {
-  args.insert(args.begin(), kExe);
-  CommandResult r = shtool::test::run_command(args);
-  EXPECT_FALSE(r.signaled) << shtool::test::describe_command(args);
-  return r;
-}
-
-void must(const CommandResult& r) { ASSERT_EQ(r.exit_code, 0) << r.err; }
+const Scratch scratch("mesh_frames");
 
 // A 2 x 2 quad in the plane through the origin spanned by `a` and `b`, as two triangles
 // counter-clockwise seen from a x b (its front). Coordinates are small integers, exact
@@ -134,10 +122,10 @@ std::vector<double> bake(const fs::path& mesh, const std::string& name, std::vec
                                    "--rays", "256", "--out", scratch(name + ".shtb").string(), "--save-transfer",
                                    scratch(name + ".t.json").string()};
   args.insert(args.end(), extra.begin(), extra.end());
-  const CommandResult r = run(args);
+  const CommandResult r = run_shtool(args);
   EXPECT_EQ(r.exit_code, 0) << r.err;
   std::vector<double> t;
-  const nlohmann::json doc = nlohmann::json::parse(shtool::test::read_file(scratch(name + ".t.json")));
+  const nlohmann::json doc = nlohmann::json::parse(read_file(scratch(name + ".t.json")));
   for (const auto& row : doc["vectors"])
     for (double x : row) t.push_back(x);
   return t;
@@ -195,7 +183,7 @@ TEST(MeshFrames, UpFacingQuadsBakeAlongZ) {
   EXPECT_EQ(gen["parameters"]["up"], "z") << gen.dump();
 
   // A glTF has no other frame.
-  const CommandResult r = run({"fit-zh", write_glb(up, "up2.glb").string(), "--up", "z", "--out",
+  const CommandResult r = run_shtool({"fit-zh", write_glb(up, "up2.glb").string(), "--up", "z", "--out",
                                scratch("refused.shtb").string()});
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("+Y up"), std::string::npos) << r.err;
@@ -212,7 +200,7 @@ TEST(MeshFrames, GltfOutputIsInGltfsFrame) {
     std::vector<std::string> args = {"fit-zh", in.string(), "--order", "2", "--lobes", "1", "--rays", "16",
                                      "--out", scratch("tilted_" + kind + ".shtb").string(), "--gltf", out.string()};
     if (kind == "obj_z") args.insert(args.end(), {"--up", "z"});
-    must(run(args));
+    must(run_shtool(args));
     const std::vector<float> p = glb_positions(out);
     ASSERT_EQ(p.size(), q.positions.size()) << kind;
     for (std::size_t v = 0; v < p.size() / 3; ++v) {
@@ -232,17 +220,16 @@ TEST(MeshFrames, ZenithLightsAnUpFacingQuad) {
   bake(mesh, "lit");
   for (const std::string& dir : {"0,0,1", "0,0,-1"}) {
     const fs::path light = scratch("light" + dir + ".json");
-    must(run({"light", "--type", "directional", "--dir", dir, "--color", "1,1,1", "--order", "2", "--json",
+    must(run_shtool({"light", "--type", "directional", "--dir", dir, "--color", "1,1,1", "--order", "2", "--json",
               light.string()}));
     const fs::path out = scratch("lit" + dir + ".exr");
-    const CommandResult rendered = run({"render", mesh.string(), "--transfer", scratch("lit.t.json").string(),
+    const CommandResult rendered = run_shtool({"render", mesh.string(), "--transfer", scratch("lit.t.json").string(),
                                         "--light", light.string(), "--width", "64", "--height", "64", "--out",
                                         out.string()});
     ASSERT_EQ(rendered.exit_code, 0) << rendered.err;
     // render counts what it could not show: none under the zenith, the whole quad under the nadir.
     EXPECT_EQ(rendered.err.find("below zero") != std::string::npos, dir == "0,0,-1") << rendered.err;
-    const shtool::lighting::Image image =
-        shtool::lighting::decode_image(shtool::test::read_file(out), out);
+    const shtool::lighting::Image image = read_image(out);
     // The background is 0; the quad is uniformly lit (one transfer vector, one light), so
     // every covered pixel has the same sign.
     int positive = 0, negative = 0;
@@ -263,36 +250,36 @@ TEST(MeshFrames, ZenithLightsAnUpFacingQuad) {
 TEST(MeshFrames, RenderAndDeformRefuseToMixFrames) {
   const fs::path mesh = write_obj(quad({1, 0, 0}, {0, 0, -1}), "mix.obj");
   bake(mesh, "mix");
-  must(run({"light", "--type", "constant", "--color", "1,1,1", "--order", "2", "--json",
+  must(run_shtool({"light", "--type", "constant", "--color", "1,1,1", "--order", "2", "--json",
             scratch("white.json").string()}));
   const fs::path image = scratch("mix.png");
-  CommandResult r = run({"render", mesh.string(), "--up", "z", "--fit", scratch("mix.shtb").string(), "--light",
+  CommandResult r = run_shtool({"render", mesh.string(), "--up", "z", "--fit", scratch("mix.shtb").string(), "--light",
                          scratch("white.json").string(), "--out", image.string()});
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("--up"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(image));
-  must(run({"render", mesh.string(), "--fit", scratch("mix.shtb").string(), "--light", scratch("white.json").string(),
+  must(run_shtool({"render", mesh.string(), "--fit", scratch("mix.shtb").string(), "--light", scratch("white.json").string(),
             "--width", "16", "--height", "16", "--out", image.string()}));
   // The transfer vectors carry the record, and so does a fit made from them.
-  EXPECT_EQ(nlohmann::json::parse(shtool::test::read_file(scratch("mix.t.json")))["mesh_up"], "y");
-  must(run({"fit-zh", "--transfer", scratch("mix.t.json").string(), "--out", scratch("mix.from_t.shtb").string()}));
+  EXPECT_EQ(nlohmann::json::parse(read_file(scratch("mix.t.json")))["mesh_up"], "y");
+  must(run_shtool({"fit-zh", "--transfer", scratch("mix.t.json").string(), "--out", scratch("mix.from_t.shtb").string()}));
   EXPECT_EQ(meta_of(scratch("mix.from_t.shtb"))["mesh_up"], "y");
   for (const std::string& input : {"--transfer", "--fit"}) {
     const fs::path baked = input == "--transfer" ? scratch("mix.t.json") : scratch("mix.from_t.shtb");
     const fs::path refused = scratch("mix_refused.png");
-    r = run({"render", mesh.string(), "--up", "z", input, baked.string(), "--light", scratch("white.json").string(),
+    r = run_shtool({"render", mesh.string(), "--up", "z", input, baked.string(), "--light", scratch("white.json").string(),
              "--out", refused.string()});
     EXPECT_EQ(r.exit_code, 1) << input;
     EXPECT_NE(r.err.find("--up"), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(refused));
   }
   const fs::path posed = scratch("mix.posed.shtb");
-  r = run({"deform", scratch("mix.shtb").string(), "--rest", mesh.string(), "--pose", mesh.string(), "--up", "z",
+  r = run_shtool({"deform", scratch("mix.shtb").string(), "--rest", mesh.string(), "--pose", mesh.string(), "--up", "z",
            "--out", posed.string()});
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("--up"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(posed));
-  must(run({"deform", scratch("mix.shtb").string(), "--rest", mesh.string(), "--pose", mesh.string(), "--out",
+  must(run_shtool({"deform", scratch("mix.shtb").string(), "--rest", mesh.string(), "--pose", mesh.string(), "--out",
             posed.string()}));
   EXPECT_EQ(meta_of(posed)["mesh_up"], "y");
 }

@@ -12,37 +12,21 @@
 
 #include <gtest/gtest.h>
 
-#include "run_command.h"
-#include "scratch_files.h"
+#include "cli_test.h"
 
 namespace {
 
 namespace fs = std::filesystem;
-using shtool::test::CommandResult;
+using namespace shtool::test;
 
-const std::string kExe = SHTOOL_EXE;
-const std::string kSpot = std::string(SHTOOL_SOURCE_DIR) + "/data/spot.obj";
 // Every random path runs: rays rotated per vertex, a multi-start on every vertex.
 const std::vector<std::string> kQuick = {"--rays", "8", "--order", "2", "--lobes", "2", "--starts", "1",
                                          "--restart-above", "0"};
 
-fs::path scratch(const std::string& name) { return shtool::test::scratch_path("test_cli_mpi", name); }
-
-std::string read_bytes(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
-
-CommandResult run(const std::vector<std::string>& args) {
-  shtool::test::CommandOptions options;
-  options.timeout_seconds = 120;  // only turns a hang (a rank waiting forever) into a failure
-  CommandResult r = shtool::test::run_command(args, options);
-  EXPECT_FALSE(r.signaled) << shtool::test::describe_command(args) << " killed by signal " << r.signal;
-  return r;
-}
+const Scratch scratch("test_cli_mpi");
 
 std::vector<std::string> fit_args(const std::string& mesh, const std::vector<std::string>& extra) {
-  std::vector<std::string> args = {kExe, "fit-zh", mesh};
+  std::vector<std::string> args = {kShtoolExe, "fit-zh", mesh};
   args.insert(args.end(), kQuick.begin(), kQuick.end());
   args.insert(args.end(), extra.begin(), extra.end());
   return args;
@@ -64,13 +48,13 @@ void prepare_mpirun() {
 CommandResult mpirun(int ranks, std::vector<std::string> args) {
   prepare_mpirun();
   args.insert(args.begin(), {SHTOOL_MPIEXEC, "--oversubscribe", "-np", std::to_string(ranks)});
-  return run(args);
+  return run_checked(args);
 }
 
 TEST(CliFitZhMpi, RanksWriteTheOneProcessTable) {
   const fs::path whole = scratch("whole.shtb"), whole_json = scratch("whole.json"), whole_glb = scratch("whole.glb");
-  const CommandResult one = run(
-      fit_args(kSpot, {"--out", whole.string(), "--json", whole_json.string(), "--gltf", whole_glb.string()}));
+  const CommandResult one = run_checked(
+      fit_args(kSpotObj, {"--out", whole.string(), "--json", whole_json.string(), "--gltf", whole_glb.string()}));
   ASSERT_EQ(one.exit_code, 0) << one.err;
   ASSERT_TRUE(fs::exists(whole_glb));
   for (int ranks : {2, 3}) {
@@ -78,13 +62,13 @@ TEST(CliFitZhMpi, RanksWriteTheOneProcessTable) {
                    json = scratch("mpi" + std::to_string(ranks) + ".json"),
                    glb = scratch("mpi" + std::to_string(ranks) + ".glb");
     // --gltf: rank 0 gathers the other ranks' transfer DC for the vertex colours.
-    const CommandResult r = mpirun(ranks, fit_args(kSpot, {"--mpi", "--threads", "1", "--out", out.string(), "--json",
+    const CommandResult r = mpirun(ranks, fit_args(kSpotObj, {"--mpi", "--threads", "1", "--out", out.string(), "--json",
                                                            json.string(), "--gltf", glb.string()}));
     ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
     EXPECT_NE(r.err.find("on each of " + std::to_string(ranks) + " MPI ranks"), std::string::npos) << r.err;
-    EXPECT_EQ(read_bytes(out), read_bytes(whole)) << ranks << " ranks";
-    EXPECT_EQ(read_bytes(json), read_bytes(whole_json)) << ranks << " ranks";
-    EXPECT_EQ(read_bytes(glb), read_bytes(whole_glb)) << ranks << " ranks";
+    EXPECT_EQ(read_file(out), read_file(whole)) << ranks << " ranks";
+    EXPECT_EQ(read_file(json), read_file(whole_json)) << ranks << " ranks";
+    EXPECT_EQ(read_file(glb), read_file(whole_glb)) << ranks << " ranks";
   }
 }
 
@@ -95,15 +79,15 @@ TEST(CliFitZhMpi, InterreflectedRanksWriteTheOneProcessTable) {
   std::vector<std::string> whole_args = inter;
   const fs::path whole = scratch("inter_whole.shtb");
   whole_args.insert(whole_args.end(), {"--out", whole.string()});
-  const CommandResult one = run(fit_args(kSpot, whole_args));
+  const CommandResult one = run_checked(fit_args(kSpotObj, whole_args));
   ASSERT_EQ(one.exit_code, 0) << one.err;
   for (int ranks : {2, 3}) {
     const fs::path out = scratch("inter_mpi" + std::to_string(ranks) + ".shtb");
     std::vector<std::string> args = inter;
     args.insert(args.end(), {"--mpi", "--threads", "1", "--out", out.string()});
-    const CommandResult r = mpirun(ranks, fit_args(kSpot, args));
+    const CommandResult r = mpirun(ranks, fit_args(kSpotObj, args));
     ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
-    EXPECT_EQ(read_bytes(out), read_bytes(whole)) << ranks << " ranks";
+    EXPECT_EQ(read_file(out), read_file(whole)) << ranks << " ranks";
   }
 }
 
@@ -113,13 +97,13 @@ TEST(CliFitZhMpi, ARankThatFailsStopsTheOthersAtTheNextBounce) {
   const fs::path out = scratch("inter_failed.shtb");
   const std::vector<std::string> inter = {"--mpi", "--mode", "interreflected", "--out", out.string()};
   std::vector<std::string> args = {SHTOOL_MPIEXEC, "--oversubscribe", "-np", "1"};
-  const std::vector<std::string> good = fit_args(kSpot, inter);
+  const std::vector<std::string> good = fit_args(kSpotObj, inter);
   args.insert(args.end(), good.begin(), good.end());
   args.insert(args.end(), {":", "-np", "1"});
   const std::vector<std::string> bad = fit_args(scratch("missing.obj").string(), inter);
   args.insert(args.end(), bad.begin(), bad.end());
   prepare_mpirun();
-  const CommandResult r = run(args);
+  const CommandResult r = run_checked(args);
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find("rank 0: stopped, another rank failed"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(out));
@@ -127,14 +111,14 @@ TEST(CliFitZhMpi, ARankThatFailsStopsTheOthersAtTheNextBounce) {
 
 TEST(CliFitZhMpi, ARefusalStopsEveryRank) {
   const fs::path out = scratch("refused.shtb");
-  const CommandResult both = mpirun(2, fit_args(kSpot, {"--mpi", "--shard", "0/2", "--out", out.string()}));
+  const CommandResult both = mpirun(2, fit_args(kSpotObj, {"--mpi", "--shard", "0/2", "--out", out.string()}));
   EXPECT_NE(both.exit_code, 0);
   EXPECT_NE(both.err.find("--mpi and --shard both split the vertices"), std::string::npos) << both.err;
   EXPECT_FALSE(fs::exists(out));
   // One vector for two ranks: both refuse after reading it.
   const fs::path one = scratch("one.json");
   std::ofstream(one) << R"({"order": 2, "vectors": [[0.8, 0.1, 0.2, 0.3]]})";
-  const CommandResult tiny = mpirun(2, {kExe, "fit-zh", "--transfer", one.string(), "--mpi", "--out", out.string()});
+  const CommandResult tiny = mpirun(2, {kShtoolExe, "fit-zh", "--transfer", one.string(), "--mpi", "--out", out.string()});
   EXPECT_NE(tiny.exit_code, 0);
   EXPECT_NE(tiny.err.find("2 ranks for 1 vectors would leave some without work"), std::string::npos) << tiny.err;
   EXPECT_FALSE(fs::exists(out));
@@ -142,12 +126,12 @@ TEST(CliFitZhMpi, ARefusalStopsEveryRank) {
 
 TEST(CliFitZhMpi, RankZeroRefusesRowsOfAnotherInput) {
   // Two programs in one job (MPMD): rank 1 reads a mesh whose first vertex moved.
-  std::ifstream in(kSpot, std::ios::binary);
+  std::ifstream in(kSpotObj, std::ios::binary);
   std::string text((std::istreambuf_iterator<char>(in)), {});
   text.replace(text.find("0.348799"), 8, "0.348800");  // spot's first vertex
   const fs::path moved = scratch("moved.obj"), out = scratch("mixed.shtb");
   std::ofstream(moved) << text;
-  std::vector<std::string> args = fit_args(kSpot, {"--mpi", "--out", out.string()});
+  std::vector<std::string> args = fit_args(kSpotObj, {"--mpi", "--out", out.string()});
   args.insert(args.begin(), {"-np", "1"});
   args.push_back(":");
   args.insert(args.end(), {"-np", "1"});
@@ -155,7 +139,7 @@ TEST(CliFitZhMpi, RankZeroRefusesRowsOfAnotherInput) {
   args.insert(args.end(), other.begin(), other.end());
   prepare_mpirun();
   args.insert(args.begin(), {SHTOOL_MPIEXEC, "--oversubscribe"});
-  const CommandResult r = run(args);
+  const CommandResult r = run_checked(args);
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find("'rank 1' and 'rank 0' are not parts of the same bake: generator.parameters.input_crc32"),
             std::string::npos)
@@ -167,7 +151,7 @@ TEST(CliFitZhMpi, RankZeroRefusesRowsOfAnotherInput) {
 
 TEST(CliFitZhMpi, WithoutMpiTheOptionIsAClearError) {
   const fs::path out = scratch("nompi.shtb");
-  const CommandResult r = run(fit_args(kSpot, {"--mpi", "--out", out.string()}));
+  const CommandResult r = run_checked(fit_args(kSpotObj, {"--mpi", "--out", out.string()}));
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("built without MPI"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(out));

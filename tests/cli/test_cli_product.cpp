@@ -12,26 +12,20 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "run_command.h"
+#include "cli_test.h"
 
 namespace {
 
-using shtool::test::CommandOptions;
-using shtool::test::CommandResult;
-using shtool::test::run_command;
+using namespace shtool::test;
 
-const std::string kExe = SHTOOL_EXE;
 constexpr double kPi = std::numbers::pi;
 // Closed forms evaluated in double and products rounded in a few dozen operations.
 constexpr double kTol = 1e-14;
 
 CommandResult product(const std::vector<std::string>& args, const std::string& stdin_data = "") {
-  std::vector<std::string> argv = {kExe, "product"};
+  std::vector<std::string> argv = {"product"};
   argv.insert(argv.end(), args.begin(), args.end());
-  CommandOptions options;
-  options.stdin_data = stdin_data;
-  options.timeout_seconds = 60;
-  return run_command(argv, options);
+  return run_shtool(argv, {.stdin_data = stdin_data});
 }
 
 std::vector<double> coefficients(const CommandResult& r, int order) {
@@ -51,30 +45,16 @@ std::vector<double> unit(int order, int index) {
   return v;
 }
 
-class TempFile {
- public:
-  explicit TempFile(const std::string& text) {
-    path_ = std::filesystem::temp_directory_path() /
-            ("shtool_product_" + std::to_string(::getpid()) + "_" + std::to_string(counter_++) + ".json");
-    std::ofstream(path_) << text;
-  }
-  ~TempFile() { std::filesystem::remove(path_); }
-  std::string path() const { return path_.string(); }
-
- private:
-  std::filesystem::path path_;
-  static inline int counter_ = 0;
-};
-
 TEST(CliProduct, SquareOfY10ClosedForm) {
   // (c z)^2 with c^2 = 3/(4 pi): z^2 = 1/3 + (2/3) P_2, so the product is
   // 1/sqrt(4 pi) y_0^0 + 1/sqrt(5 pi) y_2^0.
   const int order = 3;
   const std::string in = inputs_json({unit(order, 2), unit(order, 2)});
   for (const std::string method : {"tripling", "fourier", "grid", "auto"}) {
-    const TempFile file(in);
+    const std::filesystem::path file = shtool::test::scratch_path("cli_product", method + ".json");
+    shtool::test::write_file(file, in);
     const std::vector<double> g =
-        coefficients(product({"--order", "3", "--method", method, "--in", file.path()}), order);
+        coefficients(product({"--order", "3", "--method", method, "--in", file.string()}), order);
     ASSERT_EQ(g.size(), 9u);
     for (int i = 0; i < 9; ++i) {
       const double expected = i == 0 ? 0.5 / std::sqrt(kPi) : i == 6 ? 1.0 / std::sqrt(5.0 * kPi) : 0.0;

@@ -23,8 +23,7 @@
 
 #include "common/mesh_frame.h"
 #include "lighting/image_io.h"
-#include "run_command.h"
-#include "scratch_files.h"
+#include "cli_test.h"
 #include "shtool/rotation.h"
 #include "shtool/rotation_helpers.h"
 #include "shtool/zh_fit_table.h"
@@ -32,22 +31,9 @@
 namespace {
 
 namespace fs = std::filesystem;
-using shtool::test::run_command;
-const std::string kExe = SHTOOL_EXE;
-const std::string kSpot = std::string(SHTOOL_SOURCE_DIR) + "/data/spot.obj";
+using namespace shtool::test;
 
-fs::path scratch(const std::string& name) { return shtool::test::scratch_path("render", name); }
-
-shtool::test::CommandResult shtool_run(std::vector<std::string> args) {
-  args.insert(args.begin(), kExe);
-  return run_command(args);
-}
-
-void must(const shtool::test::CommandResult& r) { ASSERT_EQ(r.exit_code, 0) << r.err; }
-
-shtool::lighting::Image read_exr(const fs::path& p) {
-  return shtool::lighting::decode_image(shtool::test::read_file(p), p);
-}
+const Scratch scratch("render");
 
 // Bakes on data/spot.obj once per test program: unshadowed and shadowed transfer (order
 // 3), their fits with 2 lobes (DC stored directly for the unshadowed one).
@@ -56,13 +42,11 @@ struct Bakes {
   fs::path shadowed_t = scratch("shadowed.json"), shadowed_fit = scratch("shadowed.shtb");
   fs::path white = scratch("white.json"), sky = scratch("sky.json");
   Bakes() {
-    must(shtool_run({"fit-zh", kSpot, "--order", "3", "--lobes", "2", "--rays", "128", "--mode", "unshadowed",
+    must(run_shtool({"fit-zh", kSpotObj, "--order", "3", "--lobes", "2", "--rays", "128", "--mode", "unshadowed",
                      "--direct", "--out", unshadowed_fit.string(), "--save-transfer", unshadowed_t.string()}));
-    must(shtool_run({"fit-zh", kSpot, "--order", "3", "--lobes", "2", "--rays", "128", "--mode", "shadowed", "--out",
+    must(run_shtool({"fit-zh", kSpotObj, "--order", "3", "--lobes", "2", "--rays", "128", "--mode", "shadowed", "--out",
                      shadowed_fit.string(), "--save-transfer", shadowed_t.string()}));
-    must(shtool_run({"light", "--type", "constant", "--color", "1,1,1", "--order", "3", "--json", white.string()}));
-    must(shtool_run({"project-env", std::string(SHTOOL_SOURCE_DIR) + "/data/sky.hdr", "--order", "3", "--json",
-                     sky.string()}));
+    make_white_and_sky_lights(3, white, sky);
   }
 };
 
@@ -75,9 +59,9 @@ TEST(Render, WhiteFurnaceIsOneOnEveryCoveredPixel) {
   for (const std::string& input : {"--transfer", "--fit"}) {
     const fs::path out = scratch("furnace.exr");
     const fs::path& baked = input == "--transfer" ? bakes().unshadowed_t : bakes().unshadowed_fit;
-    must(shtool_run({"render", kSpot, input, baked.string(), "--light", bakes().white.string(), "--width", "96",
+    must(run_shtool({"render", kSpotObj, input, baked.string(), "--light", bakes().white.string(), "--width", "96",
                      "--height", "80", "--out", out.string()}));
-    const auto image = read_exr(out);
+    const auto image = read_image(out);
     ASSERT_EQ(image.width, 96);
     ASSERT_EQ(image.height, 80);
     // decode_image drops alpha (ExrCarriesCoverageAlpha reads it); covered pixels are 1.
@@ -98,7 +82,7 @@ TEST(Render, WhiteFurnaceIsOneOnEveryCoveredPixel) {
 // Coverage alpha in the EXR: 1 on the mesh, 0 (with RGB 0) elsewhere, read by OpenEXR.
 TEST(Render, ExrCarriesCoverageAlpha) {
   const fs::path out = scratch("alpha.exr");
-  must(shtool_run({"render", kSpot, "--transfer", bakes().shadowed_t.string(), "--light", bakes().sky.string(),
+  must(run_shtool({"render", kSpotObj, "--transfer", bakes().shadowed_t.string(), "--light", bakes().sky.string(),
                    "--width", "64", "--height", "48", "--out", out.string()}));
   Imf::InputFile file(out.c_str());
   const Imath::Box2i box = file.header().dataWindow();
@@ -132,22 +116,22 @@ TEST(Render, ExrCarriesCoverageAlpha) {
 
 std::vector<float> render_rgb(const std::vector<std::string>& extra, int width = 80, int height = 64) {
   const fs::path out = scratch("view.exr");
-  std::vector<std::string> args = {"render", kSpot, "--width", std::to_string(width), "--height",
+  std::vector<std::string> args = {"render", kSpotObj, "--width", std::to_string(width), "--height",
                                    std::to_string(height), "--out", out.string()};
   args.insert(args.end(), extra.begin(), extra.end());
-  const auto r = shtool_run(args);
+  const auto r = run_shtool(args);
   EXPECT_EQ(r.exit_code, 0) << r.err;
-  return read_exr(out).texels;
+  return read_image(out).texels;
 }
 
 // ZH shading against the exact transfer: per vertex |r_zh - r_t| <= residual ||e|| (Cauchy-
 // Schwarz), and a pixel blends three vertices, so the image difference is bounded by the
 // largest residual times ||e_c||; the error shading is that difference.
 TEST(Render, ZhAgreesWithTransferToTheFitResidual) {
-  const auto fit = shtool::load_zh_fit<double>(bakes().shadowed_fit);
+  const auto fit = shtool::ZhFitTable<double>::load(bakes().shadowed_fit);
   ASSERT_TRUE(fit) << fit.error().message;
   const double worst_residual = *std::max_element(fit.value().residual.begin(), fit.value().residual.end());
-  const nlohmann::json sky = nlohmann::json::parse(shtool::test::read_file(bakes().sky));
+  const nlohmann::json sky = nlohmann::json::parse(read_file(bakes().sky));
   double light_norm = 0;
   for (int c = 0; c < 3; ++c) {
     double n = 0;
@@ -186,11 +170,11 @@ TEST(Render, RotatedLightEqualsLightBuiltRotated) {
     return std::string(buf);
   };
   const fs::path a = scratch("cone.json"), b = scratch("cone_rotated_built.json"), c = scratch("cone_rotated.json");
-  must(shtool_run({"light", "--type", "cone", "--dir", dir(d), "--half-angle", "20", "--color", "3,2,1", "--order",
+  must(run_shtool({"light", "--type", "cone", "--dir", dir(d), "--half-angle", "20", "--color", "3,2,1", "--order",
                    "3", "--json", a.string()}));
-  must(shtool_run({"light", "--type", "cone", "--dir", dir(rd), "--half-angle", "20", "--color", "3,2,1", "--order",
+  must(run_shtool({"light", "--type", "cone", "--dir", dir(rd), "--half-angle", "20", "--color", "3,2,1", "--order",
                    "3", "--json", b.string()}));
-  nlohmann::json light = nlohmann::json::parse(shtool::test::read_file(a));
+  nlohmann::json light = nlohmann::json::parse(read_file(a));
   shtool::ShRotation<double> rot(3, nullptr);
   ASSERT_TRUE(rot.set(r, shtool::RotationMethod::reference));
   for (int ch = 0; ch < 3; ++ch) {
@@ -216,10 +200,10 @@ TEST(Render, RotatedLightEqualsLightBuiltRotated) {
 TEST(Render, PngIsTheToneMappedExr) {
   const fs::path exr = scratch("tm.exr"), png = scratch("tm.png");
   for (const fs::path& out : {exr, png})
-    must(shtool_run({"render", kSpot, "--transfer", bakes().shadowed_t.string(), "--light", bakes().sky.string(),
+    must(run_shtool({"render", kSpotObj, "--transfer", bakes().shadowed_t.string(), "--light", bakes().sky.string(),
                      "--width", "72", "--height", "60", "--exposure", "1.5", "--out", out.string()}));
-  const auto linear = read_exr(exr);
-  const std::string bytes = shtool::test::read_file(png);
+  const auto linear = read_image(exr);
+  const std::string bytes = read_file(png);
   int w = 0, h = 0, channels = 0;
   unsigned char* pixels = stbi_load_from_memory(reinterpret_cast<const unsigned char*>(bytes.data()),
                                                 static_cast<int>(bytes.size()), &w, &h, &channels, 4);
@@ -247,11 +231,11 @@ TEST(Render, PngIsTheToneMappedExr) {
 // fits' normalized RMS falling with N and printed.
 TEST(Render, CompareStripOfFits) {
   const fs::path out = scratch("compare.exr");
-  const auto r = shtool_run({"render", kSpot, "--transfer", bakes().shadowed_t.string(), "--light",
+  const auto r = run_shtool({"render", kSpotObj, "--transfer", bakes().shadowed_t.string(), "--light",
                              bakes().sky.string(), "--compare", "--width", "40", "--height", "32", "--out",
                              out.string()});
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  const auto strip = read_exr(out);
+  const auto strip = read_image(out);
   EXPECT_EQ(strip.width, 6 * 40);
   EXPECT_EQ(strip.height, 32 + 22);
   std::vector<double> nrms;
@@ -315,16 +299,16 @@ TEST(Render, NormalsShowTheViewsOrientation) {
 
 TEST(Render, SameBytesOnAnyThreadCount) {
   const fs::path one = scratch("t1.exr"), two = scratch("t3.exr");
-  must(shtool_run({"render", kSpot, "--fit", bakes().shadowed_fit.string(), "--light", bakes().sky.string(),
+  must(run_shtool({"render", kSpotObj, "--fit", bakes().shadowed_fit.string(), "--light", bakes().sky.string(),
                    "--threads", "1", "--out", one.string(), "--width", "64", "--height", "48"}));
-  must(shtool_run({"render", kSpot, "--fit", bakes().shadowed_fit.string(), "--light", bakes().sky.string(),
+  must(run_shtool({"render", kSpotObj, "--fit", bakes().shadowed_fit.string(), "--light", bakes().sky.string(),
                    "--threads", "3", "--out", two.string(), "--width", "64", "--height", "48"}));
-  EXPECT_EQ(shtool::test::read_file(one), shtool::test::read_file(two));
+  EXPECT_EQ(read_file(one), read_file(two));
 }
 
 TEST(Render, BadRequestsAreRefusedByName) {
   const fs::path irradiance = scratch("irr.json");
-  must(shtool_run({"project-env", std::string(SHTOOL_SOURCE_DIR) + "/data/sky.hdr", "--order", "3", "--quantity",
+  must(run_shtool({"project-env", std::string(SHTOOL_SOURCE_DIR) + "/data/sky.hdr", "--order", "3", "--quantity",
                    "irradiance", "--json", irradiance.string()}));
   const fs::path other_mesh = scratch("tetra.obj");
   shtool::test::write_file(other_mesh, "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 1 4 3\n");
@@ -333,34 +317,24 @@ TEST(Render, BadRequestsAreRefusedByName) {
     std::vector<std::string> args;
     const char* message;
   } bad[] = {
-      {{kSpot, "--transfer", t}, "--light"},
-      {{kSpot, "--light", sky}, "--fit"},
-      {{kSpot, "--transfer", t, "--light", sky, "--shading", "zh"}, "--fit"},
-      {{kSpot, "--fit", fit, "--light", sky, "--shading", "error"}, "--transfer"},
-      {{kSpot, "--transfer", t, "--light", irradiance.string()}, "irradiance"},
+      {{kSpotObj, "--transfer", t}, "--light"},
+      {{kSpotObj, "--light", sky}, "--fit"},
+      {{kSpotObj, "--transfer", t, "--light", sky, "--shading", "zh"}, "--fit"},
+      {{kSpotObj, "--fit", fit, "--light", sky, "--shading", "error"}, "--transfer"},
+      {{kSpotObj, "--transfer", t, "--light", irradiance.string()}, "irradiance"},
       {{other_mesh.string(), "--transfer", t, "--light", sky}, "vertices"},
       {{other_mesh.string(), "--fit", fit, "--light", sky}, "--fit"},
-      {{kSpot, "--transfer", t, "--light", sky, "--camera", "0,0,5,0,0,0"}, "--camera"},
-      {{kSpot, "--transfer", t, "--light", sky, "--camera", "0,0,5,0,0,0,0,0,1"}, "--camera"},
-      {{kSpot, "--transfer", t, "--light", sky, "--fov", "180"}, "--fov"},
-      {{kSpot, "--transfer", t, "--light", sky, "--width", "0"}, "--width"},
-      {{kSpot, "--transfer", sky, "--light", sky}, "--transfer"},
-      {{kSpot, "--transfer", t, "--light", sky, "--compare", "--shading", "zh"}, "--compare"},
-      {{kSpot, "--transfer", t, "--light", sky, "--exposure", "1e3"}, "--exposure"},
-      {{kSpot, "--transfer", t, "--light", sky, "--compare", "--width", "8000", "--height", "8000"}, "2^26"},
+      {{kSpotObj, "--transfer", t, "--light", sky, "--camera", "0,0,5,0,0,0"}, "--camera"},
+      {{kSpotObj, "--transfer", t, "--light", sky, "--camera", "0,0,5,0,0,0,0,0,1"}, "--camera"},
+      {{kSpotObj, "--transfer", t, "--light", sky, "--fov", "180"}, "--fov"},
+      {{kSpotObj, "--transfer", t, "--light", sky, "--width", "0"}, "--width"},
+      {{kSpotObj, "--transfer", sky, "--light", sky}, "--transfer"},
+      {{kSpotObj, "--transfer", t, "--light", sky, "--compare", "--shading", "zh"}, "--compare"},
+      {{kSpotObj, "--transfer", t, "--light", sky, "--exposure", "1e3"}, "--exposure"},
+      {{kSpotObj, "--transfer", t, "--light", sky, "--compare", "--width", "8000", "--height", "8000"}, "2^26"},
   };
-  for (const Bad& b : bad) {
-    const fs::path out = scratch("bad.exr");
-    fs::remove(out);
-    std::vector<std::string> args = {"render"};
-    args.insert(args.end(), b.args.begin(), b.args.end());
-    args.insert(args.end(), {"--out", out.string()});
-    const auto r = shtool_run(args);
-    EXPECT_EQ(r.exit_code, 1) << b.message << "\n" << r.err;
-    EXPECT_NE(r.err.find(b.message), std::string::npos) << r.err;
-    EXPECT_FALSE(fs::exists(out)) << b.message;
-  }
-  const auto r = shtool_run({"render", kSpot, "--transfer", t, "--light", sky, "--out", scratch("x.jpg").string()});
+  for (const Bad& b : bad) expect_refused("render", b.args, b.message, scratch("bad.exr"));
+  const auto r = run_shtool({"render", kSpotObj, "--transfer", t, "--light", sky, "--out", scratch("x.jpg").string()});
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("--out"), std::string::npos) << r.err;
 }
@@ -370,7 +344,7 @@ TEST(Render, BadRequestsAreRefusedByName) {
 TEST(Render, MembraneUnderConstantLightIsOnePlusAlpha) {
   const fs::path map = scratch("alpha.json");
   {
-    const auto fit = shtool::load_zh_fit<double>(bakes().shadowed_fit);
+    const auto fit = shtool::ZhFitTable<double>::load(bakes().shadowed_fit);
     ASSERT_TRUE(fit);
     const nlohmann::json doc = {{"alpha", std::vector<double>(fit.value().vertices, 0.5)}};
     shtool::test::write_file(map, doc.dump());
@@ -395,7 +369,7 @@ TEST(Render, MembraneUnderConstantLightIsOnePlusAlpha) {
   }
   const fs::path bad = scratch("alpha_bad.json");
   shtool::test::write_file(bad, "{\"alpha\": [0.5, 2]}");
-  const auto r = shtool_run({"render", kSpot, "--shading", "membrane", "--light", bakes().white.string(), "--alpha-map",
+  const auto r = run_shtool({"render", kSpotObj, "--shading", "membrane", "--light", bakes().white.string(), "--alpha-map",
                              bad.string(), "--out", scratch("never.png").string()});
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("--alpha-map"), std::string::npos) << r.err;
@@ -406,7 +380,7 @@ TEST(Render, MembraneUnderConstantLightIsOnePlusAlpha) {
 
 fs::path posed_mesh(const std::string& name, const std::vector<std::string>& how) {
   const fs::path out = scratch(name);
-  std::vector<std::string> args = {SHTOOL_PYTHON, std::string(SHTOOL_SOURCE_DIR) + "/scripts/pose_mesh.py", kSpot,
+  std::vector<std::string> args = {SHTOOL_PYTHON, std::string(SHTOOL_SOURCE_DIR) + "/scripts/pose_mesh.py", kSpotObj,
                                    out.string()};
   args.insert(args.end(), how.begin(), how.end());
   const auto r = run_command(args);
@@ -425,14 +399,14 @@ TEST(Deform, RigidRotationRotatesEveryLobe) {
   const Eigen::Matrix3d r = f * Eigen::AngleAxisd(0.9, axis).toRotationMatrix() * f.transpose();
   const fs::path turned = posed_mesh("turned.obj", {"--rotate", "1,1,1,0.9"});
   const fs::path out = scratch("turned.shtb"), json = scratch("turned_fits.json"), rest_json = scratch("rest.json");
-  must(shtool_run({"fit-zh", kSpot, "--order", "3", "--lobes", "2", "--rays", "64", "--out", scratch("r.shtb").string(),
+  must(run_shtool({"fit-zh", kSpotObj, "--order", "3", "--lobes", "2", "--rays", "64", "--out", scratch("r.shtb").string(),
                    "--json", rest_json.string()}));
-  const auto d = shtool_run({"deform", scratch("r.shtb").string(), "--rest", kSpot, "--pose", turned.string(), "--out",
+  const auto d = run_shtool({"deform", scratch("r.shtb").string(), "--rest", kSpotObj, "--pose", turned.string(), "--out",
                              out.string(), "--json", json.string()});
   ASSERT_EQ(d.exit_code, 0) << d.err;
   EXPECT_NE(d.err.find("largest frame rotation 0.9"), std::string::npos) << d.err;
-  const nlohmann::json a = nlohmann::json::parse(shtool::test::read_file(rest_json));
-  const nlohmann::json b = nlohmann::json::parse(shtool::test::read_file(json));
+  const nlohmann::json a = nlohmann::json::parse(read_file(rest_json));
+  const nlohmann::json b = nlohmann::json::parse(read_file(json));
   ASSERT_EQ(a["fits"].size(), b["fits"].size());
   double worst = 0;
   for (std::size_t v = 0; v < a["fits"].size(); ++v)
@@ -445,7 +419,7 @@ TEST(Deform, RigidRotationRotatesEveryLobe) {
       EXPECT_EQ(la["coeffs"], lb["coeffs"]);
     }
   EXPECT_LT(worst, 1e-4);
-  EXPECT_TRUE(shtool::load_zh_fit<double>(out)) << "the posed table loads";
+  EXPECT_TRUE(shtool::ZhFitTable<double>::load(out)) << "the posed table loads";
 }
 
 // Mean absolute difference between two renders, over pixels both cover, relative to the
@@ -476,19 +450,19 @@ TEST(Deform, PosedRenderMatchesAFreshBake) {
        std::vector<Pose>{{"turned2.obj", {"--rotate", "0,1,0,1.2"}, 0.01}, {"bent.obj", {"--bend", "0.8"}, 0.045}}) {
     const fs::path pose = posed_mesh(name, how);
     const fs::path fresh_fit = scratch("fresh.shtb"), fresh_t = scratch("fresh.json");
-    must(shtool_run({"fit-zh", pose.string(), "--order", "3", "--lobes", "2", "--rays", "128", "--out",
+    must(run_shtool({"fit-zh", pose.string(), "--order", "3", "--lobes", "2", "--rays", "128", "--out",
                      fresh_fit.string(), "--save-transfer", fresh_t.string()}));
     auto render_on = [&](const std::string& mesh, std::vector<std::string> extra) {
       const fs::path out = scratch("pose.exr");
       std::vector<std::string> args = {"render", mesh, "--light", sky, "--camera", camera, "--width", "96",
                                        "--height", "96", "--out", out.string()};
       args.insert(args.end(), extra.begin(), extra.end());
-      must(shtool_run(args));
-      return read_exr(out).texels;
+      must(run_shtool(args));
+      return read_image(out).texels;
     };
-    const auto deformed = render_on(kSpot, {"--fit", bakes().shadowed_fit.string(), "--pose", pose.string()});
+    const auto deformed = render_on(kSpotObj, {"--fit", bakes().shadowed_fit.string(), "--pose", pose.string()});
     const auto fresh = render_on(pose.string(), {"--fit", fresh_fit.string()});
-    const auto deformed_t = render_on(kSpot, {"--transfer", bakes().shadowed_t.string(), "--pose", pose.string()});
+    const auto deformed_t = render_on(kSpotObj, {"--transfer", bakes().shadowed_t.string(), "--pose", pose.string()});
     const auto fresh_transfer = render_on(pose.string(), {"--transfer", fresh_t.string()});
     const double zh = relative_mean_difference(deformed, fresh), t = relative_mean_difference(deformed_t, fresh_transfer);
     std::printf("%s: deformed against fresh bake, mean relative difference %.4f (ZH), %.4f (transfer)\n", name.c_str(),
@@ -502,12 +476,12 @@ TEST(Deform, APoseOfAnotherTopologyIsRefused) {
   const fs::path other = scratch("tetra2.obj");
   shtool::test::write_file(other, "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 1 4 3\n");
   const fs::path out = scratch("never.shtb");
-  const auto r = shtool_run({"deform", bakes().shadowed_fit.string(), "--rest", kSpot, "--pose", other.string(),
+  const auto r = run_shtool({"deform", bakes().shadowed_fit.string(), "--rest", kSpotObj, "--pose", other.string(),
                              "--out", out.string()});
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("topology"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(out));
-  const auto q = shtool_run({"render", kSpot, "--fit", bakes().shadowed_fit.string(), "--pose", other.string(),
+  const auto q = run_shtool({"render", kSpotObj, "--fit", bakes().shadowed_fit.string(), "--pose", other.string(),
                              "--light", bakes().sky.string(), "--out", scratch("never.exr").string()});
   EXPECT_EQ(q.exit_code, 1);
   EXPECT_NE(q.err.find("topology"), std::string::npos) << q.err;

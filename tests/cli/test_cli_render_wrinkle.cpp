@@ -15,27 +15,14 @@
 #include <nlohmann/json.hpp>
 
 #include "lighting/image_io.h"
-#include "run_command.h"
-#include "scratch_files.h"
+#include "cli_test.h"
 
 namespace {
 
 namespace fs = std::filesystem;
-using shtool::test::run_command;
-const std::string kExe = SHTOOL_EXE;
+using namespace shtool::test;
 
-fs::path scratch(const std::string& name) { return shtool::test::scratch_path("render_wrinkle", name); }
-
-shtool::test::CommandResult shtool_run(std::vector<std::string> args) {
-  args.insert(args.begin(), kExe);
-  return run_command(args);
-}
-
-void must(const shtool::test::CommandResult& r) { ASSERT_EQ(r.exit_code, 0) << r.err; }
-
-shtool::lighting::Image read_exr(const fs::path& p) {
-  return shtool::lighting::decode_image(shtool::test::read_file(p), p);
-}
+const Scratch scratch("render_wrinkle");
 
 // Once per program: a small wrinkle map (order 4, 2 lobes, 6 x 6 nodes, depths 0..1),
 // the cylinder (6 grooves, 48 columns: 8 vertices per groove) with its coordinates, the
@@ -46,16 +33,16 @@ struct Inputs {
   std::size_t vertices = 0;
   nlohmann::json coords;
   Inputs() {
-    must(shtool_run({"fit-wrinkles", "--order", "4", "--lobes", "2", "--grid", "6", "--samples", "1", "--rays", "1024",
+    must(run_shtool({"fit-wrinkles", "--order", "4", "--lobes", "2", "--grid", "6", "--samples", "1", "--rays", "1024",
                      "--max-evaluations", "200", "--out", map.string()}));
     must(run_command({SHTOOL_PYTHON, std::string(SHTOOL_SOURCE_DIR) + "/scripts/make_wrinkled_cylinder.py",
                       obj.string(), xd.string(), "--grooves", "6", "--rows", "12", "--cols", "48", "--depth", "0,1"}));
-    coords = nlohmann::json::parse(shtool::test::read_file(xd));
+    coords = nlohmann::json::parse(read_file(xd));
     vertices = coords["x"].size();
     nlohmann::json f = coords;
     for (auto& d : f["d"]) d = 0.0;
     shtool::test::write_file(flat, f.dump());
-    must(shtool_run({"light", "--type", "cone", "--dir", "1,1,0.3", "--half-angle", "30", "--color", "2,1.5,1",
+    must(run_shtool({"light", "--type", "cone", "--dir", "1,1,0.3", "--half-angle", "30", "--color", "2,1.5,1",
                      "--order", "4", "--json", light.string()}));
   }
 };
@@ -78,16 +65,16 @@ std::vector<std::string> wrinkle_args(const fs::path& xd, const fs::path& out, i
 
 TEST(RenderWrinkle, CylinderCoversPixelsShowsGroovesAndIsThreadIndependent) {
   const fs::path one = scratch("one.exr"), two = scratch("two.exr");
-  must(shtool_run(wrinkle_args(inputs().xd, one, 1)));
-  must(shtool_run(wrinkle_args(inputs().xd, two, 2)));
-  EXPECT_EQ(shtool::test::read_file(one), shtool::test::read_file(two));
+  must(run_shtool(wrinkle_args(inputs().xd, one, 1)));
+  must(run_shtool(wrinkle_args(inputs().xd, two, 2)));
+  EXPECT_EQ(read_file(one), read_file(two));
   const fs::path png1 = scratch("one.png"), png2 = scratch("two.png");
-  must(shtool_run(wrinkle_args(inputs().xd, png1, 1)));
-  must(shtool_run(wrinkle_args(inputs().xd, png2, 2)));
-  EXPECT_EQ(shtool::test::read_file(png1), shtool::test::read_file(png2));
+  must(run_shtool(wrinkle_args(inputs().xd, png1, 1)));
+  must(run_shtool(wrinkle_args(inputs().xd, png2, 2)));
+  EXPECT_EQ(read_file(png1), read_file(png2));
   // The cylinder (diameter 1, length 2) seen from 4 away with a 40-degree view fills
   // about 0.35 x 0.7 of the frame: ~15 % of the pixels; 5 % catches a camera or mesh slip.
-  const auto r = shtool_run(wrinkle_args(inputs().xd, one, 2));
+  const auto r = run_shtool(wrinkle_args(inputs().xd, one, 2));
   const std::size_t at = r.err.find("64 x 64, ");
   ASSERT_NE(at, std::string::npos) << r.err;
   const std::size_t covered = std::stoul(r.err.substr(at + 9));
@@ -96,8 +83,8 @@ TEST(RenderWrinkle, CylinderCoversPixelsShowsGroovesAndIsThreadIndependent) {
   // again across each groove; on the smooth cylinder (every d = 0) the same row, over
   // the pixels it lights, is one rise and fall at most.
   const fs::path flat_out = scratch("flat_row.exr");
-  must(shtool_run(wrinkle_args(inputs().flat, flat_out, 1)));
-  const auto image = read_exr(one), flat = read_exr(flat_out);
+  must(run_shtool(wrinkle_args(inputs().flat, flat_out, 1)));
+  const auto image = read_image(one), flat = read_image(flat_out);
   const int row = 64 / 2 - 64 * 7 / 20;  // near the top of the cylinder: deep grooves
   auto turns = [&](const shtool::lighting::Image& im) {
     std::vector<double> v;
@@ -120,12 +107,12 @@ TEST(RenderWrinkle, CylinderCoversPixelsShowsGroovesAndIsThreadIndependent) {
 // simulated plane (1024 rays): within 3 % of the lit radiance.
 TEST(RenderWrinkle, FlatGrooveRendersAsTheUnshadowedSurface) {
   const fs::path wr = scratch("flat.exr"), mem = scratch("membrane.exr");
-  must(shtool_run(wrinkle_args(inputs().flat, wr, 2)));
+  must(run_shtool(wrinkle_args(inputs().flat, wr, 2)));
   std::vector<std::string> m = {"render", inputs().obj.string(), "--up", "z", "--shading", "membrane", "--alpha", "0",
                                 "--light", inputs().light.string(), "--out", mem.string()};
   m.insert(m.end(), kView.begin(), kView.end());
-  must(shtool_run(m));
-  const auto a = read_exr(wr), b = read_exr(mem);
+  must(run_shtool(m));
+  const auto a = read_image(wr), b = read_image(mem);
   ASSERT_EQ(a.texels.size(), b.texels.size());
   double peak = 0, worst = 0;
   for (std::size_t i = 0; i < a.texels.size(); ++i) peak = std::max(peak, double(b.texels[i]));
@@ -153,7 +140,7 @@ TEST(RenderWrinkle, BadRequestsAreRefusedByName) {
     for (auto& x : j["x"]) x = 0.25;
   });
   const fs::path zh_fit = scratch("not_a_map.shtb");
-  shtool::test::write_file(zh_fit, shtool::test::read_file(s.map).substr(0, 100));
+  shtool::test::write_file(zh_fit, read_file(s.map).substr(0, 100));
   const std::string obj = s.obj.string(), map = s.map.string(), xd = s.xd.string(), light = s.light.string();
   struct Bad {
     std::vector<std::string> args;
@@ -176,17 +163,7 @@ TEST(RenderWrinkle, BadRequestsAreRefusedByName) {
        "x does not change across the surface at mesh vertex 0"},
       {{obj, "--shading", "wrinkle", "--wrinkle", map, "--wrinkle-map", xd}, "--light"},
   };
-  for (const Bad& b : bad) {
-    const fs::path out = scratch("bad.png");
-    fs::remove(out);
-    std::vector<std::string> args = {"render"};
-    args.insert(args.end(), b.args.begin(), b.args.end());
-    args.insert(args.end(), {"--out", out.string()});
-    const auto r = shtool_run(args);
-    EXPECT_EQ(r.exit_code, 1) << b.message << "\n" << r.err;
-    EXPECT_NE(r.err.find(b.message), std::string::npos) << r.err;
-    EXPECT_FALSE(fs::exists(out)) << b.message;
-  }
+  for (const Bad& b : bad) expect_refused("render", b.args, b.message, scratch("bad.png"));
 }
 
 }  // namespace

@@ -15,13 +15,11 @@
 #include <tuple>
 #include <vector>
 
-#include <unistd.h>
-
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "run_command.h"
+#include "cli_test.h"
 #include "test_util.h"
 #include "shtool/euler.h"
 #include "shtool/rotation.h"
@@ -31,32 +29,17 @@
 namespace shtool {
 namespace {
 
-using test::CommandResult;
-using test::describe_command;
+using namespace test;
 
-const std::string kExe = SHTOOL_EXE;
 // Order of the helper table the tests generate; commands use orders up to this.
 constexpr int kTableOrder = 8;
-
-CommandResult run_shtool(std::vector<std::string> args, const std::string& stdin_data = "") {
-  args.insert(args.begin(), kExe);
-  test::CommandOptions options;
-  options.stdin_data = stdin_data;
-  // Every command here takes milliseconds; the timeout only turns a hang into a message.
-  options.timeout_seconds = 60;
-  CommandResult r = test::run_command(args, options);
-  EXPECT_FALSE(r.signaled) << describe_command(args) << " was killed by signal " << r.signal
-                           << "\nstderr: " << r.err;
-  return r;
-}
 
 // A scratch folder with a helper table from `shtool gen-tensors`, made once.
 class CliRotate : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    std::string pattern = (std::filesystem::temp_directory_path() / "shtool-test-cli-rotate-XXXXXX").string();
-    ASSERT_NE(mkdtemp(pattern.data()), nullptr);
-    dir_ = new std::filesystem::path(pattern);
+    dir_ = new std::filesystem::path(test::scratch_path("cli_rotate", "tables"));
+    std::filesystem::create_directories(*dir_);
     const std::vector<std::string> args = {"gen-tensors", "--order", std::to_string(kTableOrder), "--out",
                                            dir_->string(), "--what", "rotation"};
     const CommandResult r = run_shtool(args);
@@ -67,14 +50,12 @@ class CliRotate : public ::testing::Test {
                                                 (*dir_ / "json").string(), "--format", "json"};
     const CommandResult rj = run_shtool(json_args);
     ASSERT_EQ(rj.exit_code, 0) << describe_command(json_args) << "\nstderr: " << rj.err;
-    Result<RotationHelpers> loaded = RotationHelpers::load(*table_, kTableOrder);
+    Result<RotationHelpers> loaded = RotationHelpers::load(*table_);
     ASSERT_TRUE(loaded) << loaded.error().message;
     helpers_ = new std::shared_ptr<const RotationHelpers>(
         std::make_shared<const RotationHelpers>(std::move(loaded).value()));
   }
   static void TearDownTestSuite() {
-    std::error_code ec;
-    if (dir_) std::filesystem::remove_all(*dir_, ec);
     delete dir_;
     delete table_;
     delete helpers_;
@@ -100,9 +81,6 @@ std::string list(const std::vector<double>& v) {
 std::string matrix_list(const Mat3<double>& r) {
   return list({r(0, 0), r(0, 1), r(0, 2), r(1, 0), r(1, 1), r(1, 2), r(2, 0), r(2, 1), r(2, 2)});
 }
-
-using test::norm;
-using test::random_coeffs;
 
 double distance(const std::vector<double>& a, const std::vector<double>& b) {
   double s = 0;
@@ -255,7 +233,7 @@ TEST_F(CliRotate, CoefficientsFromFileAndStdinEqualCommandLine) {
 
   std::vector<std::string> a3 = base;
   a3.insert(a3.end(), {"--in", "-"});
-  const Rotated from_stdin = parse_output(run_shtool(a3, doc.dump()), order, describe_command(a3));
+  const Rotated from_stdin = parse_output(run_shtool(a3, {.stdin_data = doc.dump()}), order, describe_command(a3));
 
   for (int i = 0; i < sh_count(order); ++i) {
     EXPECT_EQ(from_file.coefficients[i], direct.coefficients[i]) << i;
@@ -292,7 +270,7 @@ struct BadCase {
 void expect_fails(const BadCase& c) {
   std::vector<std::string> args = {"rotate"};
   args.insert(args.end(), c.args.begin(), c.args.end());
-  const CommandResult r = run_shtool(args, c.stdin_data);
+  const CommandResult r = run_shtool(args, {.stdin_data = c.stdin_data});
   const std::string what = c.name + ": " + describe_command(args);
   EXPECT_EQ(r.exit_code, 1) << what << "\nstdout: " << r.out << "\nstderr: " << r.err;
   EXPECT_EQ(r.out, "") << what << ": no partial output on error";

@@ -22,18 +22,14 @@
 #include <nlohmann/json.hpp>
 
 #include "node_consumers.h"
-#include "run_command.h"
-#include "scratch_files.h"
+#include "cli_test.h"
 
 namespace {
 
 namespace fs = std::filesystem;
-using shtool::test::run_command;
-const std::string kExe = SHTOOL_EXE;
+using namespace shtool::test;
 
-fs::path scratch(const std::string& name) { return shtool::test::scratch_path("splats", name); }
-
-std::string read_text(const fs::path& p) { return shtool::test::read_file(p); }
+const Scratch scratch("splats");
 
 // The reference implementation's eval_sh for one channel, degree <= 3, and its
 // colour: clamp(eval + 0.5) is left out (the clamp hides nothing at these values).
@@ -184,12 +180,12 @@ TEST(CliTransformSplats, ColoursPositionsOrientationsAndScales) {
       std::ostringstream quat;
       quat.precision(17);
       quat << qr.w() << "," << qr.x() << "," << qr.y() << "," << qr.z();
-      const auto r = run_command({kExe, "transform-splats", in.string(), "--quat", quat.str(), "--scale", "2.5",
+      const auto r = run_shtool({"transform-splats", in.string(), "--quat", quat.str(), "--scale", "2.5",
                                   "--translate", "1,-2,0.5", "--out", out.string()});
       ASSERT_EQ(r.exit_code, 0) << r.err;
-      const std::string bytes = read_text(out);
+      const std::string bytes = read_file(out);
       // The header is kept byte for byte.
-      const std::string in_bytes = read_text(in);
+      const std::string in_bytes = read_file(in);
       ASSERT_EQ(bytes.substr(0, bytes.find("end_header")), in_bytes.substr(0, in_bytes.find("end_header")));
       const std::vector<Splat> after = read_ply(bytes, deg, format, before.size());
       for (std::size_t i = 0; i < before.size(); ++i) {
@@ -218,11 +214,7 @@ TEST(CliTransformSplats, ColoursPositionsOrientationsAndScales) {
 // @playcanvas/splat-transform, a 3DGS tool with its own SH rotation, rotates the same
 // splats' colours by the same quaternion to the same numbers.
 TEST(CliTransformSplats, SplatTransformAgrees) {
-  std::string why;
-  if (!shtool::test::node_consumers(why)) {
-    if (std::getenv("CI")) FAIL() << why;
-    GTEST_SKIP() << why << " (set CI to make this a failure)";
-  }
+  SHTOOL_REQUIRE_NODE_CONSUMERS();
   const std::vector<Splat> before = random_splats(40, 3, 31);
   const fs::path in = scratch("pc_in.ply"), out = scratch("pc_out.ply"), json = scratch("pc_in.json");
   std::ofstream(in, std::ios::binary) << write_ply(before, 3, "binary_little_endian");
@@ -230,9 +222,9 @@ TEST(CliTransformSplats, SplatTransformAgrees) {
   std::ostringstream quat;
   quat.precision(17);
   quat << q.w() << "," << q.x() << "," << q.y() << "," << q.z();
-  const auto r = run_command({kExe, "transform-splats", in.string(), "--quat", quat.str(), "--out", out.string()});
+  const auto r = run_shtool({"transform-splats", in.string(), "--quat", quat.str(), "--out", out.string()});
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  const std::vector<Splat> after = read_ply(read_text(out), 3, "binary_little_endian", before.size());
+  const std::vector<Splat> after = read_ply(read_file(out), 3, "binary_little_endian", before.size());
   nlohmann::json doc = {{"quat", {q.w(), q.x(), q.y(), q.z()}}, {"rest", nlohmann::json::array()}};
   for (const Splat& s : before) {
     nlohmann::json row = nlohmann::json::array();
@@ -258,11 +250,11 @@ TEST(CliTransformSplats, IdentityKeepsTheBytes) {
     std::ofstream(in, std::ios::binary) << write_ply(s, 3, format);
     for (const std::vector<std::string> how : {std::vector<std::string>{"--quat", "1,0,0,0"},
                                                std::vector<std::string>{"--matrix", "1,0,0,0,1,0,0,0,1"}}) {
-      std::vector<std::string> argv = {kExe, "transform-splats", in.string(), "--out", out.string()};
+      std::vector<std::string> argv = {"transform-splats", in.string(), "--out", out.string()};
       argv.insert(argv.end(), how.begin(), how.end());
-      const auto r = run_command(argv);
+      const auto r = run_shtool(argv);
       ASSERT_EQ(r.exit_code, 0) << r.err;
-      EXPECT_TRUE(read_text(out) == read_text(in)) << format << " " << how[0];
+      EXPECT_TRUE(read_file(out) == read_file(in)) << format << " " << how[0];
     }
   }
 }
@@ -274,10 +266,10 @@ TEST(CliTransformSplats, SameBytesWhateverTheThreadCount) {
   std::string bytes[2];
   for (int k = 0; k < 2; ++k) {
     const fs::path out = scratch("threads_" + std::to_string(k) + ".ply");
-    const auto r = run_command({kExe, "transform-splats", in.string(), "--quat", "0.5,0.5,-0.5,0.5", "--threads",
+    const auto r = run_shtool({"transform-splats", in.string(), "--quat", "0.5,0.5,-0.5,0.5", "--threads",
                                 k ? "3" : "1", "--out", out.string()});
     ASSERT_EQ(r.exit_code, 0) << r.err;
-    bytes[k] = read_text(out);
+    bytes[k] = read_file(out);
   }
   EXPECT_EQ(bytes[0], bytes[1]);
 }
@@ -317,10 +309,10 @@ TEST(CliTransformSplats, BadInputIsAnErrorWithNoOutput) {
     const fs::path in = scratch("bad.ply"), out = scratch("bad_out.ply");
     std::ofstream(in, std::ios::binary) << c.bytes;
     fs::remove(out);
-    std::vector<std::string> argv = {kExe, "transform-splats", in.string(), "--out", out.string()};
+    std::vector<std::string> argv = {"transform-splats", in.string(), "--out", out.string()};
     if (c.args.empty()) argv.insert(argv.end(), {"--quat", "1,0,0,0"});
     argv.insert(argv.end(), c.args.begin(), c.args.end());
-    const auto r = run_command(argv);
+    const auto r = run_shtool(argv);
     EXPECT_EQ(r.exit_code, 1) << c.name << ": " << r.err;
     EXPECT_NE(r.err.find(c.message), std::string::npos) << c.name << ": " << r.err;
     EXPECT_FALSE(fs::exists(out)) << c.name;

@@ -13,27 +13,17 @@
 #include <vector>
 
 #include "lighting/image_io.h"
-#include "run_command.h"
-#include "scratch_files.h"
+#include "cli_test.h"
 
 namespace {
 
 namespace fs = std::filesystem;
-using shtool::test::run_command;
-const std::string kExe = SHTOOL_EXE;
-const std::string kSpot = std::string(SHTOOL_SOURCE_DIR) + "/data/spot.obj";
+using namespace shtool::test;
 
-fs::path scratch(const std::string& name) { return shtool::test::scratch_path("texture_render", name); }
-
-shtool::test::CommandResult shtool_run(std::vector<std::string> args) {
-  args.insert(args.begin(), kExe);
-  return run_command(args);
-}
-
-void must(const shtool::test::CommandResult& r) { ASSERT_EQ(r.exit_code, 0) << r.err; }
+const Scratch scratch("texture_render");
 
 shtool::lighting::ChannelImage read_rgba(const fs::path& p) {
-  return shtool::lighting::decode_exr_channels(shtool::test::read_file(p), p);  // A, B, G, R
+  return shtool::lighting::decode_exr_channels(read_file(p), p);  // A, B, G, R
 }
 
 // Order 3, 2 lobes, shadowed, on spot: per texel of a 64 x 64 atlas and per vertex.
@@ -44,16 +34,14 @@ struct Bakes {
   Bakes() {
     const std::vector<std::string> common = {"--order", "3", "--lobes", "2", "--rays", "64"};
     auto bake = [&](std::vector<std::string> args) {
-      args.insert(args.begin(), {"fit-zh", kSpot});
+      args.insert(args.begin(), {"fit-zh", kSpotObj});
       args.insert(args.end(), common.begin(), common.end());
-      must(shtool_run(args));
+      must(run_shtool(args));
     };
     bake({"--texture", "64", "--out", texture.string()});
     bake({"--out", vertex.string()});
     bake({"--texture", "64", "--mode", "unshadowed", "--direct", "--out", furnace.string()});
-    must(shtool_run({"light", "--type", "constant", "--color", "1,1,1", "--order", "3", "--json", white.string()}));
-    must(shtool_run({"project-env", std::string(SHTOOL_SOURCE_DIR) + "/data/sky.hdr", "--order", "3", "--json",
-                     sky.string()}));
+    make_white_and_sky_lights(3, white, sky);
   }
 };
 
@@ -67,15 +55,12 @@ TEST(TextureRender, MapsAreWrittenBesideTheTable) {
   EXPECT_TRUE(fs::exists(scratch("spot.tex.dc_linear.exr")));
   EXPECT_TRUE(fs::exists(scratch("spot.tex.lobes.exr")));
   EXPECT_FALSE(fs::exists(scratch("spot.vtx.dc_linear.exr")));  // a vertex bake writes none
-  const std::string source = SHTOOL_SOURCE_DIR;
-  const std::string cmd = std::string(SHTOOL_PYTHON) + " '" + source + "/tests/validate_json_schema.py' '" + source +
-                          "/schemas/zh-fit.schema.json' '" + bakes().texture.string() + "'";
-  EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  expect_valid_against_schema("zh-fit.schema.json", {bakes().texture});
 }
 
 TEST(TextureRender, WhiteFurnaceIsOneOnEveryCoveredPixel) {
   const fs::path out = scratch("furnace.exr");
-  must(shtool_run({"render", kSpot, "--fit", bakes().furnace.string(), "--light", bakes().white.string(), "--width",
+  must(run_shtool({"render", kSpotObj, "--fit", bakes().furnace.string(), "--light", bakes().white.string(), "--width",
                    "96", "--height", "80", "--out", out.string()}));
   const auto image = read_rgba(out);
   std::size_t covered = 0;
@@ -95,7 +80,7 @@ TEST(TextureRender, WhiteFurnaceIsOneOnEveryCoveredPixel) {
 TEST(TextureRender, MatchesTheVertexRender) {
   const fs::path tex = scratch("tex.exr"), vtx = scratch("vtx.exr");
   for (const auto& [fit, out] : {std::pair{bakes().texture, tex}, std::pair{bakes().vertex, vtx}})
-    must(shtool_run({"render", kSpot, "--fit", fit.string(), "--light", bakes().sky.string(), "--width", "96",
+    must(run_shtool({"render", kSpotObj, "--fit", fit.string(), "--light", bakes().sky.string(), "--width", "96",
                      "--height", "80", "--out", out.string()}));
   const auto a = read_rgba(tex), b = read_rgba(vtx);
   ASSERT_EQ(a.texels.size(), b.texels.size());
@@ -121,27 +106,27 @@ TEST(TextureRender, SameBytesOnAnyThreadCount) {
   std::string first;
   for (const char* threads : {"1", "2"}) {
     const fs::path out = scratch(std::string("threads") + threads + ".exr");
-    must(shtool_run({"render", kSpot, "--fit", bakes().texture.string(), "--light", bakes().sky.string(), "--width",
+    must(run_shtool({"render", kSpotObj, "--fit", bakes().texture.string(), "--light", bakes().sky.string(), "--width",
                      "64", "--height", "48", "--threads", threads, "--out", out.string()}));
-    if (first.empty()) first = shtool::test::read_file(out);
-    else EXPECT_TRUE(first == shtool::test::read_file(out));
+    if (first.empty()) first = read_file(out);
+    else EXPECT_TRUE(first == read_file(out));
   }
 }
 
 TEST(TextureRender, BadRequestsAreRefusedByName) {
   const fs::path out = scratch("bad.exr");
   auto refused = [&](std::vector<std::string> args, const std::string& words) {
-    const auto r = shtool_run(args);
+    const auto r = run_shtool(args);
     EXPECT_NE(r.exit_code, 0) << words;
     EXPECT_NE(r.err.find(words), std::string::npos) << words << ": " << r.err;
     EXPECT_FALSE(fs::exists(out));
   };
   // Lobes posed per vertex have no meaning for texels.
-  refused({"render", kSpot, "--fit", bakes().texture.string(), "--pose", kSpot, "--light", bakes().sky.string(),
+  refused({"render", kSpotObj, "--fit", bakes().texture.string(), "--pose", kSpotObj, "--light", bakes().sky.string(),
            "--out", out.string()},
           "is a texture-space bake");
   // Nor does deform carry a texel bake onto a pose.
-  refused({"deform", bakes().texture.string(), "--rest", kSpot, "--pose", kSpot, "--out", out.string()},
+  refused({"deform", bakes().texture.string(), "--rest", kSpotObj, "--pose", kSpotObj, "--out", out.string()},
           "texture-space bake");
   // A mesh without texture coordinates cannot be sampled.
   const fs::path bare = scratch("bare.obj");
@@ -150,7 +135,7 @@ TEST(TextureRender, BadRequestsAreRefusedByName) {
            out.string()},
           "no texture coordinates");
   // Another UV layout: the maps would be sampled at the wrong texels.
-  std::string text = shtool::test::read_file(kSpot);
+  std::string text = read_file(kSpotObj);
   const std::size_t vt = text.find("\nvt ");
   ASSERT_NE(vt, std::string::npos);
   text.replace(vt + 1, text.find('\n', vt + 1) - (vt + 1), "vt 0.5 0.5");  // the first texcoord moved
@@ -163,7 +148,7 @@ TEST(TextureRender, BadRequestsAreRefusedByName) {
   fs::create_directories(scratch("lonely"));
   const fs::path lonely = scratch("lonely") / "spot.tex.shtb";
   fs::copy_file(bakes().texture, lonely, fs::copy_options::overwrite_existing);
-  refused({"render", kSpot, "--fit", lonely.string(), "--light", bakes().sky.string(), "--out", out.string()},
+  refused({"render", kSpotObj, "--fit", lonely.string(), "--light", bakes().sky.string(), "--out", out.string()},
           "spot.tex.dc_linear.exr");
   // A map with a NaN, or without a channel the table needs: named.
   fs::create_directories(scratch("broken"));
@@ -173,18 +158,18 @@ TEST(TextureRender, BadRequestsAreRefusedByName) {
   fs::copy_file(lobes_map, scratch("broken") / "spot.tex.lobes.exr", fs::copy_options::overwrite_existing);
   const fs::path dc_map = bakes().texture.parent_path() / "spot.tex.dc_linear.exr";
   shtool::lighting::ChannelImage dc =
-      shtool::lighting::decode_exr_channels(shtool::test::read_file(dc_map), dc_map);
+      shtool::lighting::decode_exr_channels(read_file(dc_map), dc_map);
   dc.texels[5] = NAN;
   shtool::test::write_file(scratch("broken") / "spot.tex.dc_linear.exr",
                            shtool::lighting::encode_exr_channels(dc, shtool::NonFinite::keep));
-  refused({"render", kSpot, "--fit", broken.string(), "--light", bakes().sky.string(), "--out", out.string()},
+  refused({"render", kSpotObj, "--fit", broken.string(), "--light", bakes().sky.string(), "--out", out.string()},
           "is not finite");
-  dc = shtool::lighting::decode_exr_channels(shtool::test::read_file(dc_map), dc_map);
+  dc = shtool::lighting::decode_exr_channels(read_file(dc_map), dc_map);
   dc.names.back() = "sh9";  // one channel renamed
   shtool::test::write_file(scratch("broken") / "spot.tex.dc_linear.exr", shtool::lighting::encode_exr_channels(dc));
-  refused({"render", kSpot, "--fit", broken.string(), "--light", bakes().sky.string(), "--out", out.string()},
+  refused({"render", kSpotObj, "--fit", broken.string(), "--light", bakes().sky.string(), "--out", out.string()},
           "no channel");
-  refused({"fit-zh", kSpot, "--texture", "0", "--out", scratch("x.shtb").string()}, "--texture 0");
+  refused({"fit-zh", kSpotObj, "--texture", "0", "--out", scratch("x.shtb").string()}, "--texture 0");
   EXPECT_FALSE(fs::exists(scratch("x.shtb")));
   refused({"fit-zh", bare.string(), "--texture", "16", "--out", scratch("x.shtb").string()},
           "bare.obj: no texture coordinates");

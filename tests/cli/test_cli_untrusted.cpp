@@ -12,35 +12,24 @@
 
 #include <gtest/gtest.h>
 
-#include "run_command.h"
+#include "cli_test.h"
 
 namespace shtool {
 namespace {
 
 namespace fs = std::filesystem;
-using test::CommandResult;
+using namespace test;
 
 class CliUntrusted : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("shtool-test-untrusted-" + std::to_string(::getpid()) + "-" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
+    dir_ = test::empty_folder_for_this_test(test::Scratch("untrusted"));
     mesh_ = dir_ / "m.obj";
     fs::copy_file(fs::path(SHTOOL_SOURCE_DIR) / "data/spot.obj", mesh_);
     std::ofstream(dir_ / "t.json") << R"({"order":2,"vectors":[[1,0.1,0.2,0.3]]})";
   }
-  void TearDown() override {
-    std::error_code ec;
-    fs::remove_all(dir_, ec);
-  }
-  CommandResult run(std::vector<std::string> args, const std::string& stdin_data = "") {
-    args.insert(args.begin(), SHTOOL_EXE);
-    test::CommandOptions o;
-    o.stdin_data = stdin_data;
-    o.timeout_seconds = 120;
-    return test::run_command(args, o);
+  CommandResult run(const std::vector<std::string>& args, const std::string& stdin_data = "") {
+    return test::run_shtool(args, {.stdin_data = stdin_data});
   }
   // Exit 1, the fragment in the message, no "internal error".
   void expect_refused(const CommandResult& r, const std::string& fragment) {
@@ -124,7 +113,6 @@ TEST_F(CliUntrusted, DeepJsonIsAnErrorNotACrash) {
   std::ofstream(dir_ / "deep.shtb") << "{\"format\": " << std::string(52000, '[');
   expect_refused(run({"inspect", (dir_ / "deep.shtb").string()}), "nested more than");
 }
-
 
 // The smallest inputs of each failure class a fuzzing round found in the readers and
 // writers of later rounds: each exits 1 naming the problem, writes nothing and leaves

@@ -8,17 +8,17 @@
 #include <filesystem>
 #include <string>
 
-#include "run_command.h"
+#include "cli_test.h"
 
 namespace {
 
-using shtool::test::run_command;
+using namespace shtool::test;
 
-const std::string kScript = std::string(SHTOOL_SOURCE_DIR) + "/scripts/plot_lobes.py";
+const std::string kScript = shtool::test::kSourceDir + "/scripts/plot_lobes.py";
 
 TEST(PlotLobes, SelfCheckAgreesWithShtoolEvalAndTables) {
-  ASSERT_FALSE(std::string(SHTOOL_EXE).empty()) << "shtool executable not built";
-  const auto r = run_command({SHTOOL_PYTHON, kScript, "--check", "--shtool", SHTOOL_EXE}, {.timeout_seconds = 120});
+  ASSERT_FALSE(kShtoolExe.empty()) << "shtool executable not built";
+  const auto r = run_checked({SHTOOL_PYTHON, kScript, "--check", "--shtool", kShtoolExe});
   EXPECT_EQ(r.exit_code, 0) << "stdout:\n" << r.out << "\nstderr:\n" << r.err;
   EXPECT_NE(r.out.find("SH: max |script - shtool eval|"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("zero counts and patterns match"), std::string::npos) << r.out;
@@ -26,16 +26,14 @@ TEST(PlotLobes, SelfCheckAgreesWithShtoolEvalAndTables) {
 
 TEST(PlotLobes, SelfCheckFailsWhenShtoolFails) {
   // A failing evaluator must fail the check, not be skipped.
-  const auto r = run_command({SHTOOL_PYTHON, kScript, "--check", "--shtool", "/bin/false"}, {.timeout_seconds = 120});
+  const auto r = run_checked({SHTOOL_PYTHON, kScript, "--check", "--shtool", "/bin/false"});
   EXPECT_NE(r.exit_code, 0) << r.out;
   EXPECT_NE(r.err.find("plot_lobes.py: error"), std::string::npos) << r.err;
 }
 
 TEST(PlotLobes, NoTablesIsAClearError) {
-  const auto dir = std::filesystem::temp_directory_path() / "shtool_test_plot_lobes_empty";
-  std::filesystem::create_directories(dir);
-  const auto r = run_command({SHTOOL_PYTHON, kScript, "--check", "--tables", dir.string()}, {.timeout_seconds = 60});
-  std::filesystem::remove_all(dir);
+  const auto dir = shtool::test::empty_folder_for_this_test(shtool::test::Scratch("plot_lobes"));
+  const auto r = run_checked({SHTOOL_PYTHON, kScript, "--check", "--tables", dir.string()});
   EXPECT_EQ(r.exit_code, 1) << r.out;
   EXPECT_NE(r.err.find("no zhf-bands"), std::string::npos) << r.err;
 }

@@ -1,8 +1,9 @@
 // An engine's view of shtool: built against the installed package with -fno-exceptions
-// and -fno-rtti, it loads the shipped tables (found through SHTOOL_TABLES), rotates by
-// three methods, multiplies, maps glossy view directions and blends wrinkle weights, and
-// shades a fit-zh output (argv[1], when given) through
-// load_zh_fit. Every result is checked against an independent route (closed forms,
+// and -fno-rtti, it loads every table kind it is given through X::load, in float and in
+// double (the shipped tables through SHTOOL_TABLES; argv[1] a fit-zh output and argv[2]
+// an env-sh lighting, when given), rotates by three methods, multiplies, maps glossy view
+// directions and blends wrinkle weights, shades the fit-zh output, and runs the program
+// of docs/engine.md (engine_example.cpp). Every result is checked against an independent route (closed forms,
 // evaluation at rotated directions, pointwise products, the lobes summed into SH), so a
 // package whose headers and library disagree, or whose tables do not load, fails here.
 #include <algorithm>
@@ -12,10 +13,13 @@
 #include <cstring>
 #include <memory>
 #include <numbers>
+#include <span>
 #include <vector>
 
 #include <shtool/euler.h>
+#include <shtool/fourier_tensors.h>
 #include <shtool/glossy.h>
+#include <shtool/lighting.h>
 #include <shtool/product.h>
 #include <shtool/rotation.h>
 #include <shtool/sh.h>
@@ -31,6 +35,10 @@
 #if defined(__cpp_exceptions) || defined(__GXX_RTTI)
 #error "the consumer must be compiled with -fno-exceptions -fno-rtti"
 #endif
+
+// engine_example.cpp, the program docs/engine.md shows.
+bool shade_vertex(const char* fit_path, const char* lighting_path, const shtool::Mat3<float>& object, float rgb[3]);
+float multiply_by_one(std::span<const float> f);
 
 namespace {
 
@@ -93,9 +101,10 @@ void check_rotations(const shtool::Mat3<double>& r) {
   const std::filesystem::path helpers_path = shtool::default_rotation_helpers_path();
   require(!helpers_path.empty(), "rotation-helpers.shtb not found through SHTOOL_TABLES");
   if (helpers_path.empty()) return;
-  shtool::Result<shtool::RotationHelpers> helpers = shtool::RotationHelpers::load(helpers_path, 8);
+  shtool::Result<shtool::RotationHelpers> helpers = shtool::RotationHelpers::load(helpers_path);
   require(helpers.ok(), "cannot load the rotation helpers:", helpers.ok() ? "" : helpers.error().message.c_str());
   if (!helpers) return;
+  require(helpers.value().order >= 8, "the rotation helpers cover fewer than 8 bands");
   const auto shared = std::make_shared<const shtool::RotationHelpers>(std::move(helpers).value());
   for (int order : {3, 8}) {
     const std::vector<double> f = test_vector(order);
@@ -116,13 +125,13 @@ void check_rotations(const shtool::Mat3<double>& r) {
   const std::filesystem::path lobes_path = shtool::default_zhf_lobes_path(4);
   require(!lobes_path.empty(), "no zhf-shared table found through SHTOOL_TABLES");
   if (lobes_path.empty()) return;
-  shtool::Result<shtool::ZhfLobes> lobes = shtool::load_zhf_lobes(lobes_path, 4);
+  shtool::Result<shtool::ZhfLobes> lobes = shtool::ZhfLobes::load(lobes_path);
   require(lobes.ok(), "cannot load the ZHF lobes:", lobes.ok() ? "" : lobes.error().message.c_str());
   if (!lobes) return;
   const std::vector<double> f = test_vector(4);
   std::vector<double> g(f.size());
   shtool::ZhfRotation<double> zhf(4, std::make_shared<const shtool::ZhfLobes>(std::move(lobes).value()));
-  zhf.set(r);
+  require(zhf.set(r), "ZhfRotation refused a rotation matrix");
   zhf.apply(f, g);
   check_rotated("zhf N=4", f, g, 4, r, 1e-9);
 }
@@ -132,10 +141,7 @@ void check_products() {
   const std::filesystem::path path = shtool::find_shipped_table("tripling-tensor.shtb");
   require(!path.empty(), "tripling-tensor.shtb not found through SHTOOL_TABLES");
   if (path.empty()) return;
-  shtool::Result<shtool::Table> table = shtool::read_table(path, {"tripling-tensor", 1, 0});
-  require(table.ok(), "cannot read the tripling tensor:", table.ok() ? "" : table.error().message.c_str());
-  if (!table) return;
-  shtool::Result<shtool::TriplingTensor> tensor = shtool::TriplingTensor::from_table(table.value());
+  shtool::Result<shtool::TriplingTensor> tensor = shtool::TriplingTensor::load(path);
   require(tensor.ok(), "bad tripling tensor:", tensor.ok() ? "" : tensor.error().message.c_str());
   if (!tensor) return;
   std::vector<double> f1(9, 0.0), f2(9, 0.0), g(9);
@@ -157,7 +163,7 @@ void check_products() {
 // A fit-zh table shaded by [4] Eq. 13 equals the lobes summed into SH, dotted with the
 // light; the light-specialised table of Eq. 24-25 agrees within its documented bound.
 void check_zh_fit(const char* path) {
-  shtool::Result<shtool::ZhFitTable<double>> fit = shtool::load_zh_fit<double>(path);
+  shtool::Result<shtool::ZhFitTable<double>> fit = shtool::ZhFitTable<double>::load(path);
   require(fit.ok(), "cannot load the zh-fit table:", fit.ok() ? "" : fit.error().message.c_str());
   if (!fit) return;
   const shtool::ZhFitTable<double>& z = fit.value();
@@ -183,9 +189,54 @@ void check_zh_fit(const char* path) {
     const double tabled = light_table.shade(z.axes_of(v), z.coeffs_of(v));
     require(std::abs(tabled - want) <= bound + 1e-12, "ZhLightTable::shade is outside its error bound");
   }
-  shtool::Result<shtool::ZhFitTable<float>> fitf = shtool::load_zh_fit<float>(path);
+  shtool::Result<shtool::ZhFitTable<float>> fitf = shtool::ZhFitTable<float>::load(path);
   require(fitf.ok() && fitf.value().vertices == z.vertices, "the float load of the zh-fit table differs");
   std::printf("consumer: shaded %zu vertices of %s (%d lobes, order %d)\n", z.vertices, path, z.lobes, z.order);
+}
+
+// Every kind through X::load and, from the same bytes, X::from_table; T = float and
+// double where the type is a parameter.
+template <class X>
+void check_loads(const std::filesystem::path& path, const char* what) {
+  const shtool::Result<X> loaded = X::load(path);
+  require(loaded.ok(), what, loaded.ok() ? "" : loaded.error().message.c_str());
+  const shtool::Result<shtool::Table> table = shtool::read_table(path);
+  require(table.ok() && X::from_table(table.value()).ok(), what, "from_table refused what load accepts");
+}
+
+template <class T>
+void check_every_kind(const char* fit, const char* lighting) {
+  check_loads<shtool::RotationHelpers>(shtool::default_rotation_helpers_path(), "rotation-helpers:");
+  check_loads<shtool::ZhfLobes>(shtool::default_zhf_lobes_path(4), "zhf-lobes:");
+  check_loads<shtool::TriplingTensor>(shtool::find_shipped_table("tripling-tensor.shtb"), "tripling-tensor:");
+  check_loads<shtool::ShFourierTensors>(shtool::find_shipped_table("sh-fourier-tensors.shtb"), "sh-fourier-tensors:");
+  if (fit) check_loads<shtool::ZhFitTable<T>>(fit, "zh-fit:");
+  if (lighting) check_loads<shtool::ShLighting<T>>(lighting, "env-sh:");
+}
+
+// The program of docs/engine.md against the same shading of the lighting turned in double
+// by the reference method (no tables), and a product by 1 against its input.
+void check_engine_example(const char* fit, const char* lighting, const shtool::Mat3<double>& r) {
+  float rgb[3];
+  require(shade_vertex(fit, lighting, r.cast<float>(), rgb), "engine_example: shade_vertex failed");
+  const auto z = shtool::ZhFitTable<double>::load(fit);
+  const auto l = shtool::ShLighting<double>::load(lighting);
+  if (!z || !l) return;
+  shtool::ShRotation<double> reference(l.value().order, nullptr);
+  require(reference.set(r.transpose(), shtool::RotationMethod::reference), "the reference rotation refused");
+  std::vector<double> channel(shtool::sh_count(l.value().order)), turned(channel.size());
+  for (int c = 0; c < 3; ++c) {
+    l.value().channel(c, channel);
+    reference.apply(channel, turned);
+    const std::span<const double> bands = std::span<const double>(turned).first(shtool::sh_count(z.value().order));
+    double want = shtool::zh_shade_exact<double>(bands, z.value().axes_of(0), z.value().coeffs_of(0));
+    for (int k = 0; k < z.value().direct_count; ++k) want += z.value().direct_of(0)[k] * turned[k];
+    check("engine_example vertex 0", rgb[c], want, 1e-4);
+  }
+  std::vector<float> f(channel.begin(), channel.end());
+  const float worst = multiply_by_one(f);
+  require(worst >= 0, "engine_example: the tripling tensor did not load");
+  check("engine_example f * 1 - f", worst, 0.0, 1e-5);
 }
 
 // The glossy view map: a texel centre's direction maps back to its square point, and the
@@ -218,6 +269,11 @@ int main(int argc, char** argv) {
   check_products();
   check_view_map_and_wrinkle_weights();
   if (argc > 1) check_zh_fit(argv[1]);
+  const char* fit = argc > 1 ? argv[1] : nullptr;
+  const char* lighting = argc > 2 ? argv[2] : nullptr;
+  check_every_kind<float>(fit, lighting);
+  check_every_kind<double>(fit, lighting);
+  if (fit && lighting) check_engine_example(fit, lighting, r);
 
   if (failures != 0) {
     std::fprintf(stderr, "consumer: %d check(s) failed\n", failures);

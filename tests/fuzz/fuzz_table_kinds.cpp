@@ -85,7 +85,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (!t) return 0;
   const shtool::Table& table = t.value();
   if (auto h = shtool::RotationHelpers::from_table(table)) exercise_rotation(h.value());
-  if (auto z = shtool::zhf_lobes_from_table(table)) exercise_zhf(z.value());
+  if (auto z = shtool::ZhfLobes::from_table(table)) exercise_zhf(z.value());
   if (auto tr = shtool::TriplingTensor::from_table(table)) exercise_tripling(tr.value());
   (void)shtool::ShFourierTensors::from_table(table);
   if (auto z = shtool::ZhFitTable<double>::from_table(table)) exercise_zh_fit(z.value());

@@ -179,7 +179,8 @@ inline shtool::ShaderRequest request_for(shtool::ShaderLanguage language, shtool
   request.precision = precision;
   request.command = "test";
   if (op == shtool::ShaderOperation::zhf_rotate || op == shtool::ShaderOperation::zhf_tailored_rotate) {
-    auto loaded = shtool::load_zhf_lobes(shtool::default_zhf_lobes_path(order), order);
+    auto loaded = shtool::ZhfLobes::load(shtool::default_zhf_lobes_path(order));
+    if (loaded) loaded = loaded.value().bands_below(order);
     if (!loaded) throw std::runtime_error(loaded.error().message);
     request.lobes = std::make_shared<const shtool::ZhfLobes>(std::move(loaded).value());
   }

@@ -29,10 +29,7 @@
 namespace shtool {
 namespace {
 
-using test::reference_product;
-using test::relative_l2;
-using test::random_inputs;
-using test::sci;
+using namespace test;
 
 // The required accuracy for accurate products in double: 1e-10 relative.
 constexpr double kProductTolDouble = 1e-10;

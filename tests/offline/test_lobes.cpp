@@ -20,6 +20,7 @@
 #include "shtool/legendre.h"
 #include "shtool/sh.h"
 #include "shtool/table.h"
+#include "schema_check.h"
 #include "table_test_util.h"
 
 namespace {
@@ -359,10 +360,7 @@ TEST(ShippedLobeTables, SparsityAndConditioningRecomputed) {
     if (table_meta(t)["mode"] == "shared")
       EXPECT_DOUBLE_EQ(table_meta(t)["sparsity"].get<double>(), static_cast<double>(counted_zeros) / counted_entries) << name;
     ++checked;
-    // The header follows schemas/zhf-lobes.schema.json (python3-jsonschema).
-    const std::string cmd = std::string(SHTOOL_PYTHON) + " '" + SHTOOL_SOURCE_DIR + "/tests/validate_json_schema.py' '" +
-                            SHTOOL_SOURCE_DIR + "/schemas/zhf-lobes.schema.json' '" + e.path().string() + "'";
-    EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
+    shtool::test::expect_valid_against_schema("zhf-lobes.schema.json", {e.path()});
   }
   EXPECT_GE(checked, 1) << "no zhf-*.shtb tables in " << dir;
 }

@@ -184,7 +184,7 @@ TEST(TextureBake, MapsEqualTheTable) {
   r.direct = true;
   r.threads = 2;
   run_fit_zh(r);
-  const ZhFitTable<double> fits = load_zh_fit<double>(r.out).value();
+  const ZhFitTable<double> fits = ZhFitTable<double>::load(r.out).value();
   const lighting::ChannelImage lobes =
       lighting::decode_exr_channels(test::read_file(scratch("spot.zh.lobes.exr")), "lobes");
   const lighting::ChannelImage dc =

@@ -54,9 +54,9 @@ void set_i32(Table& t, const char* name, std::size_t i, std::int32_t v) {
 
 TEST(UntrustedZhfLobes, RowStartsBeyondTheNonZerosAreRefused) {
   Table t = shipped_zhf(4);
-  ASSERT_TRUE(zhf_lobes_from_table(t).ok());
+  ASSERT_TRUE(ZhfLobes::from_table(t).ok());
   set_i32(t, "sparse_row_start", 3, 1 << 30);  // past sparse_col, monotone up to there
-  const auto z = zhf_lobes_from_table(t);
+  const auto z = ZhfLobes::from_table(t);
   ASSERT_FALSE(z.ok());
   EXPECT_NE(z.error().message.find("sparse_row_start"), std::string::npos) << z.error().message;
 }
@@ -64,7 +64,7 @@ TEST(UntrustedZhfLobes, RowStartsBeyondTheNonZerosAreRefused) {
 TEST(UntrustedZhfLobes, HugeBandEntriesAreRefused) {
   Table t = shipped_zhf(4);
   set_i32(t, "bands", 3, std::numeric_limits<std::int32_t>::max());  // 2 * b + 1 overflows
-  const auto z = zhf_lobes_from_table(t, 3);
+  const auto z = ZhfLobes::from_table(t);
   ASSERT_FALSE(z.ok());
   EXPECT_NE(z.error().message.find("band entry 3"), std::string::npos) << z.error().message;
 }

@@ -21,6 +21,7 @@
 #include "wrinkles/wrinkle_fit.h"
 #include "wrinkles/wrinkle_job.h"
 #include "wrinkles/wrinkle_model.h"
+#include "wrinkle_test_model.h"
 
 namespace {
 
@@ -32,15 +33,9 @@ using namespace shtool::wrinkles;
 WrinkleModel smooth_random_model(const WrinkleGrid& grid, int order, int lobes, unsigned seed) {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
-  WrinkleModel m;
-  m.grid = grid;
-  m.order = order;
-  m.lobes = lobes;
+  WrinkleModel m = test::zero_wrinkle_model(grid, order, lobes);
   std::vector<Eigen::Vector3d> base(lobes);
   for (Eigen::Vector3d& b : base) b = Eigen::Vector3d(u(rng), u(rng), u(rng)).normalized();
-  m.axes.resize(static_cast<std::size_t>(grid.nodes()) * lobes * 3);
-  m.coeffs.assign(static_cast<std::size_t>(grid.nodes()) * lobes * order, 0.0);
-  m.direct.resize(static_cast<std::size_t>(grid.nodes()) * kDirectCoefficients);
   for (int node = 0; node < grid.nodes(); ++node)
     for (int i = 0; i < lobes; ++i) {
       // Length 0.5..1.5: the node axes are not unit in a fitted map either.

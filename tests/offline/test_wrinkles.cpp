@@ -17,6 +17,7 @@
 #include "shtool/sh.h"
 #include "wrinkles/wrinkle_fit.h"
 #include "wrinkles/wrinkle_model.h"
+#include "wrinkle_test_model.h"
 
 namespace {
 
@@ -27,13 +28,7 @@ using namespace shtool::wrinkles;
 WrinkleModel random_model(const WrinkleGrid& grid, int order, int lobes, unsigned seed) {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
-  WrinkleModel m;
-  m.grid = grid;
-  m.order = order;
-  m.lobes = lobes;
-  m.axes.resize(static_cast<std::size_t>(grid.nodes()) * lobes * 3);
-  m.coeffs.assign(static_cast<std::size_t>(grid.nodes()) * lobes * order, 0.0);
-  m.direct.resize(static_cast<std::size_t>(grid.nodes()) * kDirectCoefficients);
+  WrinkleModel m = test::zero_wrinkle_model(grid, order, lobes);
   for (double& a : m.axes) a = u(rng);
   for (std::size_t b = 0; b < static_cast<std::size_t>(grid.nodes()) * lobes; ++b)
     for (int l = 2; l < order; ++l) m.coeffs[b * order + l] = 0.3 * u(rng);

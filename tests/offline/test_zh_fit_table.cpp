@@ -1,4 +1,4 @@
-// load_zh_fit (include/shtool/zh_fit_table.h) against the fit-zh table writer: exact
+// ZhFitTable::load (include/shtool/zh_fit_table.h) against the fit-zh table writer: exact
 // round trip of every value, the span layout zh_shading.h takes, and every structural or
 // numeric corruption rejected with a message.
 #include <cmath>
@@ -79,7 +79,7 @@ TEST_F(ZhFitTableTest, RoundTripIsExactAndSpansShade) {
   const std::vector<fit::ZhFit> fits = some_fits(5, false);
   const fs::path p = dir_ / "f.shtb";
   ASSERT_TRUE(test::try_write(fit_table(5, false, {10, 11, 12, 20, 21}), p).ok());
-  const auto loaded = load_zh_fit<double>(p);
+  const auto loaded = ZhFitTable<double>::load(p);
   ASSERT_TRUE(loaded.ok()) << loaded.error().message;
   const ZhFitTable<double>& z = loaded.value();
   EXPECT_EQ(z.order, kOrder);
@@ -101,7 +101,7 @@ TEST_F(ZhFitTableTest, RoundTripIsExactAndSpansShade) {
     }
     EXPECT_NEAR(zh_shade_exact<double>(light, z.axes_of(v), z.coeffs_of(v)), want, 1e-13);
   }
-  const auto as_float = load_zh_fit<float>(p);
+  const auto as_float = ZhFitTable<float>::load(p);
   ASSERT_TRUE(as_float.ok()) << as_float.error().message;
   EXPECT_EQ(as_float.value().coeffs[7], static_cast<float>(z.coeffs[7]));
 }
@@ -169,7 +169,7 @@ TEST_F(ZhFitTableTest, CorruptionsAreRejected) {
 }
 
 TEST_F(ZhFitTableTest, LoadNamesTheFile) {
-  const auto z = load_zh_fit<double>(dir_ / "none.shtb");
+  const auto z = ZhFitTable<double>::load(dir_ / "none.shtb");
   ASSERT_FALSE(z.ok());
   EXPECT_NE(z.error().message.find("none.shtb"), std::string::npos) << z.error().message;
 }

@@ -68,7 +68,8 @@ void check_against_reference(const std::shared_ptr<const ZhfLobes>& lobes, int o
       ref.apply(f, expect);
       zhf.apply(f, got);
       ZhfTailoredSignal<double> sig(lobes, f);
-      sig.rotate(r, tailored);
+      ASSERT_TRUE(sig.set(r));
+      sig.apply(tailored);
       for (int i = 0; i < sh_count(order); ++i) {
         worst = std::max(worst, std::abs(got[i] - expect[i]));
         worst_t = std::max(worst_t, std::abs(tailored[i] - expect[i]));
@@ -87,7 +88,7 @@ TEST(ZhfRotation, ShippedSharedTablesMatchReference) {
   for (int n = 4; n <= 10; ++n) {
     const auto path = tables_dir() / ("zhf-shared-N" + std::to_string(n) + ".shtb");
     ASSERT_TRUE(std::filesystem::exists(path)) << "shipped table missing: " << path;
-    auto loaded = load_zhf_lobes(path);
+    auto loaded = ZhfLobes::load(path);
     ASSERT_TRUE(loaded.ok()) << loaded.error().message;
     auto lobes = std::make_shared<const ZhfLobes>(std::move(loaded).value());
     ASSERT_EQ(lobes->order, n);
@@ -103,7 +104,9 @@ TEST(ZhfRotation, DefaultPathFindsShippedTable) {
   ASSERT_TRUE(std::filesystem::exists(tables_dir() / "zhf-shared-N4.shtb")) << "shipped N=4 table missing";
   EXPECT_EQ(p.filename().string(), "zhf-shared-N4.shtb");
   // A larger shipped table serves a smaller order (nested directions).
-  auto small = load_zhf_lobes(p, 3);
+  auto small = ZhfLobes::load(p);
+  ASSERT_TRUE(small.ok()) << small.error().message;
+  small = small.value().bands_below(3);
   ASSERT_TRUE(small.ok()) << small.error().message;
   EXPECT_EQ(small.value().order, 3);
   EXPECT_EQ(small.value().directions.size(), 5u);
@@ -131,7 +134,7 @@ TEST(ZhfRotation, GenericDirectionsTableRoundTrip) {
   const auto path = std::filesystem::temp_directory_path() / "shtool_test_zhf_generic.shtb";
   const Table t = lobes::make_lobes_table({res}, generator_record("test", {{"seed", 99}}), {});
   ASSERT_TRUE(shtool::test::try_write(t, path).ok());
-  auto loaded = load_zhf_lobes(path);
+  auto loaded = ZhfLobes::load(path);
   std::filesystem::remove(path);
   ASSERT_TRUE(loaded.ok()) << loaded.error().message;
   auto lobes = std::make_shared<const ZhfLobes>(std::move(loaded).value());
@@ -165,7 +168,7 @@ TEST(ZhfRotation, PerBandDirectionsTableRoundTrip) {
   const auto path = std::filesystem::temp_directory_path() / "shtool_test_zhf_perband.shtb";
   const Table t = lobes::make_lobes_table(searches, generator_record("test", {{"seed", 7}}), {});
   ASSERT_TRUE(shtool::test::try_write(t, path).ok());
-  auto loaded = load_zhf_lobes(path);
+  auto loaded = ZhfLobes::load(path);
   std::filesystem::remove(path);
   ASSERT_TRUE(loaded.ok()) << loaded.error().message;
   auto lobes = std::make_shared<const ZhfLobes>(std::move(loaded).value());
@@ -176,7 +179,7 @@ TEST(ZhfRotation, PerBandDirectionsTableRoundTrip) {
 TEST(ZhfRotation, FloatAgreesWithinConditioning) {
   const auto path = default_zhf_lobes_path(6);
   ASSERT_FALSE(path.empty()) << "no shipped shared table found (SHTOOL_TABLES)";
-  auto loaded = load_zhf_lobes(path, 6);
+  auto loaded = ZhfLobes::load(path);
   ASSERT_TRUE(loaded.ok()) << loaded.error().message;
   auto lobes = std::make_shared<const ZhfLobes>(std::move(loaded).value());
   double cond = 1;
@@ -192,7 +195,8 @@ TEST(ZhfRotation, FloatAgreesWithinConditioning) {
     zhf.set(r.cast<float>());
     zhf.apply(ff, got);
     ZhfTailoredSignal<float> sig(lobes, ff);
-    sig.rotate(r.cast<float>(), tailored);
+    ASSERT_TRUE(sig.set(r.cast<float>()));
+    sig.apply(tailored);
     for (int i = 0; i < 36; ++i) {
       EXPECT_NEAR(got[i], expect[i], kZhfFloatTolerancePerCond * cond) << "i " << i;
       EXPECT_NEAR(tailored[i], expect[i], kZhfFloatTolerancePerCond * cond) << "i " << i;
@@ -204,7 +208,7 @@ TEST(ZhfRotation, ApplySamplesIsTheSparseProduct) {
   // With samples f~_l(w_d) of the unrotated signal, A^ samples gives f back (A^ Y = I).
   const auto path = default_zhf_lobes_path(5);
   ASSERT_FALSE(path.empty()) << "no shipped shared table found (SHTOOL_TABLES)";
-  auto loaded = load_zhf_lobes(path, 5);
+  auto loaded = ZhfLobes::load(path);
   ASSERT_TRUE(loaded.ok()) << loaded.error().message;
   const ZhfLobes& z = loaded.value();
   const std::vector<double> f = random_unit_vector(5, 11);
@@ -221,7 +225,7 @@ TEST(ZhfRotation, ApplySamplesIsTheSparseProduct) {
 }
 
 TEST(ZhfRotation, LoaderRejectsBadTables) {
-  auto missing = load_zhf_lobes("/nonexistent/zhf.shtb");
+  auto missing = ZhfLobes::load("/nonexistent/zhf.shtb");
   EXPECT_FALSE(missing.ok());
   // A table of another kind.
   Table other;
@@ -231,20 +235,20 @@ TEST(ZhfRotation, LoaderRejectsBadTables) {
   other.arrays.push_back(TableArray::from<double>("value", {1}, std::vector<double>{1.0}));
   const auto path = std::filesystem::temp_directory_path() / "shtool_test_zhf_wrongkind.shtb";
   ASSERT_TRUE(shtool::test::try_write(other, path).ok());
-  auto wrong = load_zhf_lobes(path);
+  auto wrong = ZhfLobes::load(path);
   EXPECT_FALSE(wrong.ok());
   if (!wrong.ok()) EXPECT_NE(wrong.error().message.find("zhf-lobes"), std::string::npos) << wrong.error().message;
   std::filesystem::remove(path);
   // A per-band table (bands 2..) cannot rotate on its own.
   const auto bands = tables_dir() / "zhf-bands-l2-10.shtb";
   if (std::filesystem::exists(bands)) {
-    auto b = load_zhf_lobes(bands);
+    auto b = ZhfLobes::load(bands);
     ASSERT_FALSE(b.ok());
     EXPECT_NE(b.error().message.find("band 0"), std::string::npos) << b.error().message;
   }
   // Asking for more bands than the table holds.
   const auto p4 = tables_dir() / "zhf-shared-N4.shtb";
-  if (std::filesystem::exists(p4)) EXPECT_FALSE(load_zhf_lobes(p4, 5).ok());
+  if (std::filesystem::exists(p4)) EXPECT_FALSE(ZhfLobes::load(p4).value().bands_below(5).ok());
 }
 
 }  // namespace

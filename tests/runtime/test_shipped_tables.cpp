@@ -31,21 +31,17 @@ TEST(ShippedTables, LookupHonoursShtoolTablesAndReportsAbsence) {
 }
 
 TEST(ShippedTables, RotationHelpersCoverOrder30) {
-  const auto h = RotationHelpers::load(shipped("rotation-helpers.shtb"), 30);
+  const auto h = RotationHelpers::load(shipped("rotation-helpers.shtb"));
   ASSERT_TRUE(h.ok()) << h.error().message;
   EXPECT_EQ(h.value().order, 30);
   EXPECT_EQ(default_rotation_helpers_path(), shipped("rotation-helpers.shtb"));
 }
 
 TEST(ShippedTables, TriplingAndFourierTensorsOfOrder16) {
-  auto t = read_table(shipped("tripling-tensor.shtb"), {"tripling-tensor", 1, 16});
-  ASSERT_TRUE(t.ok()) << t.error().message;
-  auto tensor = TriplingTensor::from_table(t.value());
+  auto tensor = TriplingTensor::load(shipped("tripling-tensor.shtb"));
   ASSERT_TRUE(tensor.ok()) << tensor.error().message;
   EXPECT_EQ(tensor.value().order, 16);
-  auto f = read_table(shipped("sh-fourier-tensors.shtb"), {"sh-fourier-tensors", 1, 16});
-  ASSERT_TRUE(f.ok()) << f.error().message;
-  auto fourier = ShFourierTensors::from_table(f.value());
+  auto fourier = ShFourierTensors::load(shipped("sh-fourier-tensors.shtb"));
   ASSERT_TRUE(fourier.ok()) << fourier.error().message;
   EXPECT_EQ(fourier.value().order, 16);
 }
@@ -53,7 +49,7 @@ TEST(ShippedTables, TriplingAndFourierTensorsOfOrder16) {
 TEST(ShippedTables, SharedLobesForOrders4To10) {
   for (int n = 4; n <= 10; ++n) {
     const std::string name = "zhf-shared-N" + std::to_string(n) + ".shtb";
-    const auto z = load_zhf_lobes(shipped(name), n);
+    const auto z = ZhfLobes::load(shipped(name));
     ASSERT_TRUE(z.ok()) << z.error().message;
     EXPECT_EQ(z.value().order, n) << name;
     // The default look-up picks the table of that order.
@@ -64,7 +60,7 @@ TEST(ShippedTables, SharedLobesForOrders4To10) {
 
 TEST(ShippedTables, PerBandLobeTables) {
   for (const char* name : {"zhf-bands-l2-10.shtb", "zhf-bands-l11-12.shtb", "zhf-bands-l13-18.shtb"}) {
-    const auto t = read_table(shipped(name), {"zhf-lobes", 1, 0});
+    const auto t = read_table(shipped(name), {std::string(kZhfLobesKind), 1, 0});
     EXPECT_TRUE(t.ok()) << (t.ok() ? "" : t.error().message);
   }
 }

@@ -5,8 +5,11 @@
 // reason when node or npm cannot do it; the tests then fail under CI and skip elsewhere.
 #pragma once
 
+#include <cstdlib>
 #include <filesystem>
 #include <string>
+
+#include <gtest/gtest.h>
 
 #include <fcntl.h>
 #include <sys/file.h>
@@ -48,3 +51,14 @@ inline bool node_consumers(std::string& why) {
 }
 
 }  // namespace shtool::test
+
+// In a test body: installs the consumers, or ends the test, failed under CI (where they
+// must run) and skipped elsewhere.
+#define SHTOOL_REQUIRE_NODE_CONSUMERS()                                          \
+  do {                                                                           \
+    std::string node_consumers_missing;                                          \
+    if (!::shtool::test::node_consumers(node_consumers_missing)) {               \
+      if (std::getenv("CI")) FAIL() << node_consumers_missing;                   \
+      GTEST_SKIP() << node_consumers_missing << " (set CI to make this a failure)"; \
+    }                                                                            \
+  } while (false)

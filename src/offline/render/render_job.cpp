@@ -496,7 +496,7 @@ RenderResult run_render(const RenderRequest& r) {
     }
   }
   if (shading == Shading::wrinkle) {
-    Result<WrinkleMap<double>> loaded = load_wrinkle_map<double>(r.wrinkle);
+    Result<WrinkleMap<double>> loaded = WrinkleMap<double>::load(r.wrinkle);
     if (!loaded) throw InputError("--wrinkle: " + loaded.error().message);
     data.wrinkle = std::move(loaded).value();
     data.groove = read_groove_coordinates(r.wrinkle_map, mesh, data.wrinkle->max_depth);

@@ -48,7 +48,8 @@ ShaderSource run_gen_shader(const GenShaderRequest& r) {
     const Result<Table> table =
         read_table_bytes(std::as_bytes(std::span(bytes.data(), bytes.size())), path.string());
     if (!table) throw InputError("--lobes: " + table.error().message);
-    Result<ZhfLobes> lobes = zhf_lobes_from_table(table.value(), request.order);
+    Result<ZhfLobes> lobes = ZhfLobes::from_table(table.value());
+    if (lobes) lobes = lobes.value().bands_below(request.order);
     if (!lobes) throw InputError("--lobes: " + lobes.error().message);
     request.lobes = std::make_shared<const ZhfLobes>(std::move(lobes).value());
     request.lobes_crc = input_crc32(bytes);

@@ -23,8 +23,11 @@ constexpr double kStructuralZero = 1e-13;
 std::shared_ptr<const RotationHelpers> rotation_helpers_for(int order, const std::filesystem::path& table) {
   const std::filesystem::path path = table.empty() ? default_rotation_helpers_path() : table;
   if (path.empty()) return std::make_shared<const RotationHelpers>(compute_rotation_helpers(order));
-  Result<RotationHelpers> loaded = RotationHelpers::load(path, order);
+  Result<RotationHelpers> loaded = RotationHelpers::load(path);
   if (!loaded) throw InputError(loaded.error().message);
+  if (loaded.value().order < order)
+    throw InputError(path.string() + ": rotation-helpers table covers order " + std::to_string(loaded.value().order) +
+                     ", order " + std::to_string(order) + " was asked for");
   return std::make_shared<const RotationHelpers>(std::move(loaded).value());
 }
 

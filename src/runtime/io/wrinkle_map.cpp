@@ -7,6 +7,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "io/load_kind.h"
 #include "io/table_format.h"
 #include "io/zh_rows.h"
 #include "shtool/zh_shading.h"
@@ -175,12 +176,8 @@ Result<WrinkleMap<T>> WrinkleMap<T>::from_table(const Table& t) {
 }
 
 template <class T>
-Result<WrinkleMap<T>> load_wrinkle_map(const std::filesystem::path& path) {
-  Result<Table> table = read_table(path, TableExpectation{std::string(kWrinkleZhKind), 1, 0});
-  if (!table) return table.error();
-  Result<WrinkleMap<T>> m = WrinkleMap<T>::from_table(table.value());
-  if (!m) return Error{path.string() + ": " + m.error().message};
-  return m;
+Result<WrinkleMap<T>> WrinkleMap<T>::load(const std::filesystem::path& path) {
+  return detail::load_kind<WrinkleMap>(path, kWrinkleZhKind);
 }
 
 template WrinkleWeights<float> wrinkle_weights<float>(int, float, float, float) noexcept;
@@ -197,7 +194,5 @@ template double shade_wrinkle_lobes<double>(std::span<const double>, const Eigen
                                             const WrinkleLobes<double>&) noexcept;
 template struct WrinkleMap<float>;
 template struct WrinkleMap<double>;
-template Result<WrinkleMap<float>> load_wrinkle_map<float>(const std::filesystem::path&);
-template Result<WrinkleMap<double>> load_wrinkle_map<double>(const std::filesystem::path&);
 
 }  // namespace shtool

@@ -6,6 +6,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "io/load_kind.h"
 #include "io/table_format.h"
 #include "io/zh_rows.h"
 
@@ -129,17 +130,11 @@ Result<ZhFitTable<T>> ZhFitTable<T>::from_table(const Table& t) {
 }
 
 template <class T>
-Result<ZhFitTable<T>> load_zh_fit(const std::filesystem::path& path) {
-  Result<Table> table = read_table(path, TableExpectation{std::string(kZhFitKind), 1, 0});
-  if (!table) return table.error();
-  Result<ZhFitTable<T>> z = ZhFitTable<T>::from_table(table.value());
-  if (!z) return Error{path.string() + ": " + z.error().message};
-  return z;
+Result<ZhFitTable<T>> ZhFitTable<T>::load(const std::filesystem::path& path) {
+  return detail::load_kind<ZhFitTable>(path, kZhFitKind);
 }
 
 template struct ZhFitTable<float>;
 template struct ZhFitTable<double>;
-template Result<ZhFitTable<float>> load_zh_fit<float>(const std::filesystem::path&);
-template Result<ZhFitTable<double>> load_zh_fit<double>(const std::filesystem::path&);
 
 }  // namespace shtool

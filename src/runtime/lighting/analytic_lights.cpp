@@ -9,21 +9,23 @@
 namespace shtool {
 namespace {
 
-int order_of(std::span<double> coefficients, int channels) {
+template <class T>
+int order_of(std::span<T> coefficients, int channels) {
   return detail::order_of_layout(coefficients.size(), channels, "analytic light");
 }
 
 // Adds color * sum_l weights[l] sum_m y_l^m(d) y_l^m(w): by the addition theorem, the
 // function sum_l weights[l] (2l+1) / (4 pi) P_l(w . d) of w . d alone.
-void add_rotated_zonal(const Eigen::Vector3d& direction, std::span<const double> weights,
-                       std::span<const double> color, int channels, std::span<double> coefficients) {
+template <class T>
+void add_rotated_zonal(const Eigen::Vector3<T>& direction, const std::vector<double>& weights,
+                       std::span<const T> color, int channels, std::span<T> coefficients) {
   const int order = order_of(coefficients, channels);
-  std::vector<double> y(sh_count(order));
-  eval_sh<double>(order, direction, y);
+  std::vector<T> y(sh_count(order));
+  eval_sh<T>(order, direction, y);
   for (int l = 0; l < order; ++l)
     for (int m = -l; m <= l; ++m) {
       const int i = sh_index(l, m);
-      for (int c = 0; c < channels; ++c) coefficients[i * channels + c] += color[c] * weights[l] * y[i];
+      for (int c = 0; c < channels; ++c) coefficients[i * channels + c] += color[c] * T(weights[l]) * y[i];
     }
 }
 
@@ -45,33 +47,73 @@ std::vector<double> cap_zonal_coefficients(double half_angle, int order) {
   return z;
 }
 
-void add_directional_light(const Eigen::Vector3d& direction, std::span<const double> color, int channels,
-                           std::span<double> coefficients) {
+namespace {
+
+template <class T>
+void add_directional_light_t(const Eigen::Vector3<T>& direction, std::span<const T> color,
+                           int channels, std::span<T> coefficients) {
   const int order = order_of(coefficients, channels);
-  std::vector<double> y(sh_count(order));
-  eval_sh<double>(order, direction, y);
+  std::vector<T> y(sh_count(order));
+  eval_sh<T>(order, direction, y);
   for (int i = 0; i < sh_count(order); ++i)
     for (int c = 0; c < channels; ++c) coefficients[i * channels + c] += color[c] * y[i];
 }
 
+template <class T>
+void add_cone_light_t(const Eigen::Vector3<T>& direction, T half_angle, std::span<const T> color,
+                    int channels, std::span<T> coefficients) {
+  // The cap's indicator is sum_l (2l+1)/2 I_l P_l(w . d), I_l = integral_{cos a}^1 P_l:
+  // weights 2 pi I_l (cap_zonal_coefficients, in double whatever T).
+  add_rotated_zonal<T>(direction, cap_zonal_coefficients(half_angle, order_of(coefficients, channels)), color,
+                       channels, coefficients);
+}
+
+template <class T>
+void add_hemisphere_light_t(const Eigen::Vector3<T>& direction, std::span<const T> sky,
+                          std::span<const T> ground, int channels,
+                          std::span<T> coefficients) {
+  std::vector<T> difference(channels);
+  for (int c = 0; c < channels; ++c) difference[c] = sky[c] - ground[c];
+  add_constant_light_t<T>(ground, channels, coefficients);
+  add_cone_light_t<T>(direction, std::numbers::pi_v<T> / 2, difference, channels, coefficients);
+}
+
+template <class T>
+void add_constant_light_t(std::span<const T> color, int channels, std::span<T> coefficients) {
+  for (int c = 0; c < channels; ++c) coefficients[c] += color[c] * std::sqrt(T(4) * std::numbers::pi_v<T>);
+}
+
+}  // namespace
+
+void add_directional_light(const Eigen::Vector3d& direction, std::span<const double> color, int channels,
+                           std::span<double> coefficients) {
+  add_directional_light_t(direction, color, channels, coefficients);
+}
+void add_directional_light(const Eigen::Vector3f& direction, std::span<const float> color, int channels,
+                           std::span<float> coefficients) {
+  add_directional_light_t(direction, color, channels, coefficients);
+}
 void add_cone_light(const Eigen::Vector3d& direction, double half_angle, std::span<const double> color,
                     int channels, std::span<double> coefficients) {
-  // The cap's indicator is sum_l (2l+1)/2 I_l P_l(w . d), I_l = integral_{cos a}^1 P_l:
-  // weights 2 pi I_l (cap_zonal_coefficients).
-  add_rotated_zonal(direction, cap_zonal_coefficients(half_angle, order_of(coefficients, channels)), color,
-                    channels, coefficients);
+  add_cone_light_t(direction, half_angle, color, channels, coefficients);
 }
-
+void add_cone_light(const Eigen::Vector3f& direction, float half_angle, std::span<const float> color,
+                    int channels, std::span<float> coefficients) {
+  add_cone_light_t(direction, half_angle, color, channels, coefficients);
+}
 void add_hemisphere_light(const Eigen::Vector3d& direction, std::span<const double> sky,
                           std::span<const double> ground, int channels, std::span<double> coefficients) {
-  std::vector<double> difference(channels);
-  for (int c = 0; c < channels; ++c) difference[c] = sky[c] - ground[c];
-  add_constant_light(ground, channels, coefficients);
-  add_cone_light(direction, std::numbers::pi / 2, difference, channels, coefficients);
+  add_hemisphere_light_t(direction, sky, ground, channels, coefficients);
 }
-
+void add_hemisphere_light(const Eigen::Vector3f& direction, std::span<const float> sky,
+                          std::span<const float> ground, int channels, std::span<float> coefficients) {
+  add_hemisphere_light_t(direction, sky, ground, channels, coefficients);
+}
 void add_constant_light(std::span<const double> color, int channels, std::span<double> coefficients) {
-  for (int c = 0; c < channels; ++c) coefficients[c] += color[c] * std::sqrt(4 * std::numbers::pi);
+  add_constant_light_t(color, channels, coefficients);
+}
+void add_constant_light(std::span<const float> color, int channels, std::span<float> coefficients) {
+  add_constant_light_t(color, channels, coefficients);
 }
 
 }  // namespace shtool

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "io/load_kind.h"
 #include "shtool/legendre.h"
 #include "shtool/sh.h"
 
@@ -94,6 +95,10 @@ ShFourierTensors ShFourierTensors::compute(int order, int degree) {
     }
   }
   return t;
+}
+
+Result<ShFourierTensors> ShFourierTensors::load(const std::filesystem::path& path) {
+  return detail::load_kind<ShFourierTensors>(path, kShFourierTensorsKind);
 }
 
 Result<ShFourierTensors> ShFourierTensors::from_table(const Table& table) {

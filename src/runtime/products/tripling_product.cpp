@@ -10,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include "io/load_kind.h"
 #include "kernels/tripling_kernels.h"
 #include "shtool/legendre.h"
 #include "shtool/quadrature.h"
@@ -145,6 +146,10 @@ TriplingTensor TriplingTensor::compute(int order) {
     for (int q = 0; q < nq; ++q) sum += gl.weights[q] * pa[q] * pb[q] * pc[q];
     return static_cast<double>(tripling_azimuthal_factor(a.m, b.m, c.m) * sum);
   });
+}
+
+Result<TriplingTensor> TriplingTensor::load(const std::filesystem::path& path) {
+  return detail::load_kind<TriplingTensor>(path, kTriplingTensorKind);
 }
 
 Result<TriplingTensor> TriplingTensor::from_table(const Table& table) {

@@ -1,6 +1,7 @@
 #include "shtool/orthogonal_map.h"
 
 #include <cmath>
+#include <type_traits>
 #include <vector>
 
 #include <Eigen/Dense>
@@ -10,8 +11,12 @@
 
 namespace shtool {
 
-Result<Ok> apply_orthogonal_map(const Eigen::Matrix3d& q, int channels, std::span<double> coefficients) {
-  if (!q.allFinite() || !(q.transpose() * q).isApprox(Eigen::Matrix3d::Identity(), 1e-9))
+namespace {
+
+template <class T>
+Result<Ok> apply_orthogonal_map_t(const Eigen::Matrix3<T>& q_in, int channels, std::span<T> coefficients) {
+  const Eigen::Matrix3d q = q_in.template cast<double>();
+  if (!q.allFinite() || !(q.transpose() * q).isApprox(Eigen::Matrix3d::Identity(), std::is_same_v<T, float> ? 1e-6 : 1e-9))
     return Error{"the frame map is not an orthogonal matrix"};
   if (channels < 1 || coefficients.size() % static_cast<std::size_t>(channels) != 0)
     return Error{"the coefficients are not a whole number of channels"};
@@ -26,12 +31,21 @@ Result<Ok> apply_orthogonal_map(const Eigen::Matrix3d& q, int channels, std::spa
   for (int c = 0; c < channels; ++c) {
     for (int i = 0; i < sh_count(order); ++i) {
       const double sign = reflection && sh_band(i) % 2 == 1 ? -1 : 1;
-      f[i] = sign * coefficients[static_cast<std::size_t>(i) * channels + c];
+      f[i] = sign * double(coefficients[static_cast<std::size_t>(i) * channels + c]);
     }
     rotation.apply(f, g);
-    for (int i = 0; i < sh_count(order); ++i) coefficients[static_cast<std::size_t>(i) * channels + c] = g[i];
+    for (int i = 0; i < sh_count(order); ++i) coefficients[static_cast<std::size_t>(i) * channels + c] = T(g[i]);
   }
   return Ok{};
+}
+
+}  // namespace
+
+Result<Ok> apply_orthogonal_map(const Eigen::Matrix3d& q, int channels, std::span<double> coefficients) {
+  return apply_orthogonal_map_t(q, channels, coefficients);
+}
+Result<Ok> apply_orthogonal_map(const Eigen::Matrix3f& q, int channels, std::span<float> coefficients) {
+  return apply_orthogonal_map_t(q, channels, coefficients);
 }
 
 }  // namespace shtool

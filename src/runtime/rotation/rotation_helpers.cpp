@@ -6,6 +6,7 @@
 #include <system_error>
 #include <vector>
 
+#include "io/load_kind.h"
 #include "rotation/x90_structure.h"
 #include "shtool/sh.h"
 
@@ -89,16 +90,8 @@ Result<RotationHelpers> RotationHelpers::from_table(const Table& table) {
   return h;
 }
 
-Result<RotationHelpers> RotationHelpers::load(const std::filesystem::path& path, int min_order) {
-  Result<Table> table = read_table(path, TableExpectation{std::string(kRotationHelpersKind), 1, 0});
-  if (!table) return table.error();
-  Result<RotationHelpers> h = from_table(table.value());
-  if (!h) return Error{path.string() + ": " + h.error().message};
-  if (h.value().order < min_order)
-    return Error{path.string() + ": rotation-helpers table covers order " +
-                      std::to_string(h.value().order) + ", order " + std::to_string(min_order) +
-                      " was asked for"};
-  return h;
+Result<RotationHelpers> RotationHelpers::load(const std::filesystem::path& path) {
+  return detail::load_kind<RotationHelpers>(path, kRotationHelpersKind);
 }
 
 std::filesystem::path default_rotation_helpers_path() { return find_shipped_table("rotation-helpers.shtb"); }

@@ -2,6 +2,7 @@
 #include "shtool/zhf_rotation.h"
 
 #include "basis/legendre_recurrence.h"
+#include "io/load_kind.h"
 
 #include <algorithm>
 #include <array>
@@ -16,17 +17,39 @@ namespace {
 
 Error bad(const std::string& what) { return Error{"zhf-lobes table: " + what}; }
 
+// Directions 0..used-1 are those some band below z.order uses; eval_order follows.
+int directions_used(ZhfLobes& z) {
+  int used = 0;
+  for (int l = 0; l < z.order; ++l) used = std::max(used, z.band_offset[l] + 2 * l + 1);
+  z.eval_order.assign(used, 0);
+  for (int l = 0; l < z.order; ++l)
+    for (int d = 0; d < 2 * l + 1; ++d) z.eval_order[z.band_offset[l] + d] = l + 1;
+  return used;
+}
+
 }  // namespace
 
-Result<ZhfLobes> load_zhf_lobes(const std::filesystem::path& path, int order) {
-  Result<Table> read = read_table(path, TableExpectation{std::string(kZhfLobesKind), 1, 0});
-  if (!read) return read.error();
-  Result<ZhfLobes> z = zhf_lobes_from_table(read.value(), order);
-  if (!z) return Error{path.string() + ": " + z.error().message};
+Result<ZhfLobes> ZhfLobes::load(const std::filesystem::path& path) {
+  return detail::load_kind<ZhfLobes>(path, kZhfLobesKind);
+}
+
+Result<ZhfLobes> ZhfLobes::bands_below(int n) const {
+  if (n < 1 || n > order)
+    return bad("bands 0.." + std::to_string(n - 1) + " asked of a table that holds bands 0.." +
+               std::to_string(order - 1));
+  ZhfLobes z;
+  z.order = n;
+  z.band_offset.assign(band_offset.begin(), band_offset.begin() + n);
+  z.cond.assign(cond.begin(), cond.begin() + n);
+  z.row_start.assign(row_start.begin(), row_start.begin() + sh_count(n) + 1);
+  z.col.assign(col.begin(), col.begin() + z.row_start.back());
+  z.val.assign(val.begin(), val.begin() + z.row_start.back());
+  const int used = directions_used(z);
+  z.directions.assign(directions.begin(), directions.begin() + used);
   return z;
 }
 
-Result<ZhfLobes> zhf_lobes_from_table(const Table& t, int order) {
+Result<ZhfLobes> ZhfLobes::from_table(const Table& t) {
   if (t.kind != kZhfLobesKind) return bad("wrong kind '" + t.kind + "'");
   auto bands = t.get<std::int32_t>("bands");
   auto offset = t.get<std::int32_t>("direction_offset");
@@ -42,8 +65,7 @@ Result<ZhfLobes> zhf_lobes_from_table(const Table& t, int order) {
   const auto& b = bands.value();
   const int nb = static_cast<int>(b.size());
   if (nb == 0) return bad("no bands");
-  if (order < 0) return bad("negative order requested");
-  const int want = order == 0 ? nb : order;
+  const int want = nb;
   if (want > kMaxOrder) return bad("order " + std::to_string(want) + " exceeds kMaxOrder");
   // Rotation needs every band 0..want-1, stored in order (shared and full tables do this).
   for (int l = 0; l < want; ++l)
@@ -97,18 +119,14 @@ Result<ZhfLobes> zhf_lobes_from_table(const Table& t, int order) {
       z.row_start.push_back(static_cast<int>(z.col.size()));
     }
   }
-  // Keep only the directions the kept bands use.
-  int used = 0;
-  for (int l = 0; l < want; ++l) used = std::max(used, z.band_offset[l] + 2 * l + 1);
-  z.eval_order.assign(used, 0);
+  // Keep only the directions the bands use.
+  const int used = directions_used(z);
   for (int d = 0; d < used; ++d) {
     const Vec3<double> w(dirs.value()[3 * d], dirs.value()[3 * d + 1], dirs.value()[3 * d + 2]);
     if (!w.allFinite() || std::abs(w.norm() - 1.0) > 1e-12)
       return bad("direction " + std::to_string(d) + " is not a unit vector");
     z.directions.push_back(w);
   }
-  for (int l = 0; l < want; ++l)
-    for (int d = 0; d < 2 * l + 1; ++d) z.eval_order[z.band_offset[l] + d] = l + 1;
   return z;
 }
 
@@ -244,7 +262,7 @@ inline void zhf_emit_rows(int n, const T* __restrict q, const T* __restrict c, c
   }
 }
 
-// acc[j] += q[j] (fc c[j] + fs s[j]): one m of f~_l at n directions (see rotate()).
+// acc[j] += q[j] (fc c[j] + fs s[j]): one m of f~_l at n directions (see ZhfTailoredSignal::set).
 template <class T>
 inline void zhf_emit_samples(int n, T fc, T fs, const T* __restrict q, const T* __restrict c,
                              const T* __restrict s, T* __restrict acc) {
@@ -309,7 +327,7 @@ ZhfRotation<T>::ZhfRotation(int order, std::shared_ptr<const ZhfLobes> lobes)
 }
 
 template <class T>
-void ZhfRotation<T>::set(const Mat3<T>& r) {
+bool ZhfRotation<T>::set(const Mat3<T>& r) {
   // Eq. 10: Y_l(R)[d][m] = y_l^m(R w_d). Each rotated direction is evaluated once, for
   // every band that uses it (shared lobes: 2N-1 evaluations serve the whole order).
   const int D = plan_.directions;
@@ -337,6 +355,7 @@ void ZhfRotation<T>::set(const Mat3<T>& r) {
       zhf_emit_rows<T>(n, qm, cm, sm, yt + m * n, yt - m * n);
     }
   });
+  return true;
 }
 
 template <class T>
@@ -375,10 +394,11 @@ ZhfTailoredSignal<T>::ZhfTailoredSignal(std::shared_ptr<const ZhfLobes> lobes, s
   val_.assign(lobes_->val.begin(), lobes_->val.begin() + lobes_->row_start[sh_count(order_)]);
   samples_.assign(sh_count(order_), T(0));
   walk_.assign(static_cast<std::size_t>(5 * order_ + 3) * plan_.directions, T(0));
+  set(Mat3<T>::Identity());
 }
 
 template <class T>
-void ZhfTailoredSignal<T>::rotate(const Mat3<T>& r, std::span<T> out) const {
+bool ZhfTailoredSignal<T>::set(const Mat3<T>& r) {
   // Eq. 11: sample each band's expansion f~_l at the inversely rotated lobe directions; a
   // direction shared by several bands runs the recurrence once for all of them.
   const Mat3<T> rinv = r.transpose();
@@ -409,6 +429,12 @@ void ZhfTailoredSignal<T>::rotate(const Mat3<T>& r, std::span<T> out) const {
       zhf_emit_samples<T>(n, fc, fs, qm, cm, sm, acc);
     }
   });
+  return true;
+}
+
+template <class T>
+void ZhfTailoredSignal<T>::apply(std::span<T> out) const {
+  const T* samples = samples_.data();
   const int* rs = lobes_->row_start.data();
   const int* col = lobes_->col.data();
   const T* val = val_.data();

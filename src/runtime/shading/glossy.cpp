@@ -6,6 +6,7 @@
 #include <numbers>
 #include <string>
 
+#include "io/load_kind.h"
 #include "io/table_format.h"
 #include "io/zh_rows.h"
 #include "shtool/zh_shading.h"
@@ -157,18 +158,12 @@ Result<GlossyFit<T>> GlossyFit<T>::from_table(const Table& t) {
 }
 
 template <class T>
-Result<GlossyFit<T>> load_glossy_fit(const std::filesystem::path& path) {
-  Result<Table> table = read_table(path, TableExpectation{std::string(kGlossyZhKind), 1, 0});
-  if (!table) return table.error();
-  Result<GlossyFit<T>> fit = GlossyFit<T>::from_table(table.value());
-  if (!fit) return Error{path.string() + ": " + fit.error().message};
-  return fit;
+Result<GlossyFit<T>> GlossyFit<T>::load(const std::filesystem::path& path) {
+  return detail::load_kind<GlossyFit>(path, kGlossyZhKind);
 }
 
 template struct GlossyFit<float>;
 template struct GlossyFit<double>;
-template Result<GlossyFit<float>> load_glossy_fit<float>(const std::filesystem::path&);
-template Result<GlossyFit<double>> load_glossy_fit<double>(const std::filesystem::path&);
 template Vec3<float> glossy_view_direction<float>(float, float) noexcept;
 template Vec3<double> glossy_view_direction<double>(double, double) noexcept;
 template std::array<float, 2> glossy_view_square<float>(const Vec3<float>&) noexcept;
