@@ -18,7 +18,7 @@ from ._shtool import __version__, eval_sh, gen_tensors, light, transform_splats
 
 __all__ = [
     "eval_sh", "rotate", "quat_to_matrix", "product", "project_env", "project_env_file", "irradiance",
-    "window", "light", "fit_zh", "fit_zh_mesh", "load_table", "load_zh_fit", "transform_splats",
+    "window", "light", "fit_zh", "fit_zh_mesh", "load_table", "load_zh_fit", "transform_splats", "transform_splat_arrays",
     "gen_tensors", "search_lobes", "Table", "ZhFit", "ZhFitTable", "GlossyFit", "WrinkleMap", "EnvSh",
     "RotationHelpers", "TriplingTensor", "ShFourierTensors", "ZhfLobes",
 ]
@@ -53,7 +53,8 @@ def rotate(coeffs, matrix, method="auto", axis=-1, out=None, tol=None, threads=0
 
     `matrix` is a 3x3 rotation (orthonormal to 1e-6, det +1; ValueError otherwise) or one
     per leading index, shape (..., 3, 3). `method`: auto, reference, zxzxz, taylor1,
-    taylor1.5, taylor2 (as ``shtool rotate --method``). `out` (axis=-1 only): a
+    taylor1.5, taylor2, zhf, zhf-tailored (as ``shtool rotate --method``; the zhf methods
+    take one matrix and the shipped shared lobes). `out` (axis=-1 only): a
     C-contiguous array of the same shape and dtype, written in place. `threads`: 0 for
     every core.
     """
@@ -120,6 +121,65 @@ def project_env_file(image, order=3, json=None, **options):
         path = json if json is not None else _os.path.join(tmp, "lighting.json")
         r = _shtool._project_env_file(str(image), str(path), order=order, **options)
     return r["coefficients"]
+
+
+def _quaternion_of(r):
+    """Unit quaternion (w, x, y, z) of a rotation matrix (Shepperd: the largest pivot)."""
+    t = _np.trace(r)
+    k = int(_np.argmax([t, r[0, 0], r[1, 1], r[2, 2]]))
+    if k == 0:
+        s = 2 * _np.sqrt(1 + t)
+        q = [s / 4, (r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s, (r[1, 0] - r[0, 1]) / s]
+    else:
+        i, j, l = (k - 1, k % 3, (k + 1) % 3)
+        s = 2 * _np.sqrt(1 + r[i, i] - r[j, j] - r[l, l])
+        q = [0.0] * 4
+        q[0] = (r[l, j] - r[j, l]) / s
+        q[1 + i], q[1 + j], q[1 + l] = s / 4, (r[j, i] + r[i, j]) / s, (r[l, i] + r[i, l]) / s
+    return _np.array(q)
+
+
+def transform_splat_arrays(sh=None, positions=None, rotations=None, log_scales=None, normals=None,
+                           quaternion=None, matrix=None, translate=(0.0, 0.0, 0.0), scale=1.0):
+    """``transform-splats`` on arrays already in memory, each optional, new arrays returned
+    in a dict: positions (S, 3) -> s R p + t; rotations (S, 4) (w, x, y, z) -> q_R q (the
+    Hamilton product; lengths kept); log_scales (S, 3) + log s; normals (S, 3) -> R n; sh
+    (S, 3, N**2) rotated exactly (method "reference", as the job), g(w) = f(R^-1 w).
+    Give the rotation as quaternion=(w, x, y, z) or matrix= (3x3), as the job takes them.
+    """
+    if (quaternion is None) == (matrix is None):
+        raise ValueError("give exactly one of quaternion, matrix")
+    if matrix is not None:
+        r = _np.asarray(matrix, dtype=_np.float64)
+        _shtool._rotate(_np.zeros(1), r, "reference", None, None, 1)  # the CLI's checks of a matrix
+        qr = _quaternion_of(r)
+    else:
+        qr = _np.asarray(quaternion, dtype=_np.float64)
+        r = quat_to_matrix(qr)
+        qr = qr / _np.linalg.norm(qr)
+    if not (scale > 0 and _np.isfinite(scale)):
+        raise ValueError("scale must be a positive number")
+    t = _np.asarray(translate, dtype=_np.float64)
+    out = {}
+    if positions is not None:
+        p = _np.asarray(positions)
+        out["positions"] = (scale * (p.astype(_np.float64) @ r.T) + t).astype(p.dtype)
+    if normals is not None:
+        n = _np.asarray(normals)
+        out["normals"] = (n.astype(_np.float64) @ r.T).astype(n.dtype)
+    if rotations is not None:
+        q = _np.asarray(rotations)
+        w2, x2, y2, z2 = q.astype(_np.float64).T
+        w1, x1, y1, z1 = qr
+        out["rotations"] = _np.stack([w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2, w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
+                                      w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2, w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2],
+                                     axis=-1).astype(q.dtype)
+    if log_scales is not None:
+        ls = _np.asarray(log_scales)
+        out["log_scales"] = (ls.astype(_np.float64) + _np.log(scale)).astype(ls.dtype)
+    if sh is not None:
+        out["sh"] = rotate(_float_array(sh, "sh"), r.astype(_np.asarray(sh).dtype), method="reference")
+    return out
 
 
 @_dataclass

@@ -11,10 +11,12 @@
 #include "common/input_error.h"
 #include "common/parallel_for.h"
 #include "common/sh_inputs.h"
+#include "lobes/lobes.h"
 #include "py_arrays.h"
 #include "shtool/product.h"
 #include "shtool/rotation.h"
 #include "shtool/sh.h"
+#include "shtool/zhf_rotation.h"
 #include "tensors/rotation_helpers_gen.h"
 
 namespace shtool::python {
@@ -94,11 +96,43 @@ std::shared_ptr<const RotationHelpers> helpers_for(int order) {
   return h;
 }
 
+// The zhf lobes of one order, loaded once per process.
+std::shared_ptr<const ZhfLobes> zhf_lobes(int order) {
+  static std::mutex mutex;
+  static std::map<int, std::shared_ptr<const ZhfLobes>> cache;
+  std::lock_guard<std::mutex> lock(mutex);
+  auto& l = cache[order];
+  if (!l) l = lobes::zhf_lobes_for(order);
+  return l;
+}
+
+// Zonal-harmonic factorisation with the shipped shared lobes, as `shtool rotate --method
+// zhf | zhf-tailored`: one matrix for every vector.
+template <class T>
+void rotate_zhf(bool tailored, int order, const Mat3<T>& r, const T* in, T* out, std::size_t count, int threads) {
+  const auto lobes = zhf_lobes(order);
+  const std::size_t n2 = sh_count(order);
+  for_chunks(count, threads, [&](std::size_t begin, std::size_t end) {
+    if (tailored) {
+      for (std::size_t k = begin; k < end; ++k) {
+        ZhfTailoredSignal<T> signal(lobes, std::span<const T>(in + k * n2, n2));
+        signal.set(r);
+        signal.apply(std::span<T>(out + k * n2, n2));
+      }
+      return;
+    }
+    ZhfRotation<T> rotation(order, lobes);  // scratch inside: one per chunk
+    rotation.set(r);
+    for (std::size_t k = begin; k < end; ++k)
+      rotation.apply(std::span<const T>(in + k * n2, n2), std::span<T>(out + k * n2, n2));
+  });
+}
+
 RotationMethod method_from(const std::string& name) {
   const std::optional<RotationMethod> m = rotation_method_from_name(name);
   if (!m)
     throw py::value_error("method: unknown rotation method '" + name +
-                          "' (auto, reference, zxzxz, taylor1, taylor1.5, taylor2)");
+                          "' (auto, reference, zxzxz, taylor1, taylor1.5, taylor2, zhf, zhf-tailored)");
   return *m;
 }
 
@@ -108,6 +142,18 @@ py::array rotate_t(const py::array& coeffs_in, const py::object& matrix, const s
   const auto coeffs = contiguous<T>(coeffs_in);
   if (coeffs.ndim() < 1) throw py::value_error("coeffs must have at least one axis");
   const int order = order_of_count(coeffs.shape(coeffs.ndim() - 1), "coeffs");
+  if (method_name == "zhf" || method_name == "zhf-tailored") {
+    auto out = output<T>(shape_of(coeffs), out_arg);
+    if (overlaps(out, coeffs)) throw py::value_error("out must not overlap coeffs");
+    const auto m = as_f64(matrix, "matrix");
+    if (m.ndim() != 2) throw py::value_error("the zhf methods take one matrix (3, 3)");
+    const Mat3<T> r = rotation_from(m).template cast<T>();
+    const T* in = coeffs.data();
+    T* o = out.mutable_data();
+    py::gil_scoped_release release;
+    rotate_zhf<T>(method_name == "zhf-tailored", order, r, in, o, coeffs.size() / sh_count(order), threads);
+    return out;
+  }
   const RotationMethod method = method_from(method_name);
   const double tolerance = tol ? *tol : default_rotation_tolerance<T>();
   if (!(tolerance > 0) || !std::isfinite(tolerance)) throw py::value_error("tol must be a positive number");

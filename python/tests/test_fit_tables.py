@@ -109,6 +109,18 @@ def test_transform_splats_writes_the_cli_bytes(cli, tmp_path):
                                      quaternion=(0.8, 0.6, 0, 0), scale=2.0)
     assert report["splats"] == 5
     assert (tmp_path / "py.ply").read_bytes() == (tmp_path / "cli.ply").read_bytes()
+    # The same transform on arrays in memory.
+    written = np.frombuffer((tmp_path / "cli.ply").read_bytes()[len(header):], "<f4").reshape(5, len(names))
+    sh = np.stack([np.concatenate([data[:, 3 + c:4 + c], data[:, 6 + 3 * c:9 + 3 * c]], axis=1) for c in range(3)],
+                  axis=1)  # (S, 3, 4): dc, then rest of channel c
+    for given in (dict(quaternion=(0.8, 0.6, 0, 0)), dict(matrix=shtool.quat_to_matrix([0.8, 0.6, 0.0, 0.0]))):
+        moved = shtool.transform_splat_arrays(sh=sh, positions=data[:, :3], rotations=data[:, 19:23],
+                                              log_scales=data[:, 16:19], scale=2.0, **given)
+        np.testing.assert_allclose(moved["positions"], written[:, :3], rtol=1e-6)
+        np.testing.assert_allclose(moved["rotations"], written[:, 19:23], rtol=1e-6, atol=1e-6)
+        np.testing.assert_allclose(moved["log_scales"], written[:, 16:19], rtol=1e-6)
+        for c in range(3):
+            np.testing.assert_allclose(moved["sh"][:, c, 1:], written[:, 6 + 3 * c:9 + 3 * c], atol=1e-6)
 
 
 def test_search_lobes_returns_the_summary(tmp_path):

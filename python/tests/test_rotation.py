@@ -47,10 +47,11 @@ def test_methods_agree_and_match_the_cli(cli):
     q = np.array([0.8, 0.2, -0.4, 0.4])
     q /= np.linalg.norm(q)
     r = shtool.quat_to_matrix(q)
-    for method in ("reference", "zxzxz", "auto"):  # the Taylor methods hold for small tilts only
+    # The Taylor methods hold for small tilts only.
+    for method in ("reference", "zxzxz", "auto", "zhf", "zhf-tailored"):
         np.testing.assert_allclose(shtool.rotate(f, r, method=method), shtool.rotate(f, r, method="reference"),
-                                   atol=1e-6)
-    for method in ("reference", "zxzxz"):
+                                   atol=1e-9)
+    for method in ("reference", "zxzxz", "zhf", "zhf-tailored"):
         printed = json.loads(cli("rotate", "--order", 5, "--method", method, "--matrix",
                                  ",".join(repr(float(x)) for x in r.ravel()),
                                  "--coeffs", ",".join(repr(float(x)) for x in f)))

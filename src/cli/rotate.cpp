@@ -13,6 +13,7 @@
 #include "cli_common.h"
 #include "common/input_file.h"
 #include "common/sh_inputs.h"
+#include "lobes/lobes.h"
 #include "tensors/rotation_helpers_gen.h"
 #include "shtool/rotation.h"
 #include "shtool/sh.h"
@@ -77,15 +78,7 @@ void run_rotate(const RotateOptions& opt) {
   std::vector<double> out(coeffs.size());
   if (zhf) {
     // Zonal-harmonic factorisation ([1] Eq. 10 and 11) with a shared-lobe table.
-    const std::filesystem::path path =
-        opt.tables.empty() ? default_zhf_lobes_path(opt.order) : std::filesystem::path(opt.tables);
-    if (path.empty())
-      throw InputError("no shipped zhf-lobes table covers order " + std::to_string(opt.order) +
-                      " (give one with --tables; make it with `shtool search-lobes --shared`)");
-    Result<ZhfLobes> loaded = ZhfLobes::load(path);
-    if (loaded) loaded = loaded.value().bands_below(opt.order);
-    if (!loaded) throw InputError(loaded.error().message);
-    const auto lobes = std::make_shared<const ZhfLobes>(std::move(loaded).value());
+    const auto lobes = lobes::zhf_lobes_for(opt.order, opt.tables);
     if (opt.method == "zhf") {
       ZhfRotation<double> rotation(opt.order, lobes);
       rotation.set(r);

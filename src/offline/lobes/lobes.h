@@ -6,8 +6,10 @@
 #pragma once
 
 #include <cstdint>
+#include <filesystem>
 #include <functional>
 #include <limits>
+#include <memory>
 #include <span>
 #include <string>
 #include <vector>
@@ -18,6 +20,7 @@
 #include <nlohmann/json.hpp>
 
 #include "shtool/table.h"
+#include "shtool/zhf_rotation.h"
 
 namespace shtool::lobes {
 
@@ -148,6 +151,10 @@ SearchResult search_shared(int order, const SearchOptions& options);
 Table make_lobes_table(const std::vector<SearchResult>& searches, const nlohmann::json& generator,
                        const SearchOptions& options);
 nlohmann::json lobes_summary_json(const std::vector<SearchResult>& searches);
+
+// The shared lobes of the zhf rotations for bands 0..order-1: from `table` (empty: the
+// shipped table that covers the order), InputError naming the problem otherwise.
+std::shared_ptr<const ZhfLobes> zhf_lobes_for(int order, const std::filesystem::path& table = {});
 
 std::uint64_t stream_seed(std::uint64_t seed, std::uint64_t restart, std::uint64_t generation,
                           std::uint64_t index);
