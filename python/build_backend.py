@@ -4,9 +4,9 @@ wheel zipped with the standard library.
 Why in-tree: the usual CMake backends (scikit-build-core, py-build-cmake) are not in
 Debian 12 and PyPI may be unreachable, so `pip install --no-build-isolation .` must work
 with what Debian ships (cmake, ninja, pybind11-dev). The build tree is the one
-scripts/setup.sh makes (build/, or $SHTOOL_BUILD_DIR), configured for the interpreter
-that runs pip (a venv's base interpreter: the extension is the same for both), so an
-installed wheel and PYTHONPATH=build/python run the same module.
+scripts/setup.sh makes (build/, or $SHTOOL_BUILD_DIR); a new one is configured for the
+interpreter that runs pip (a venv's base interpreter: the extension is the same for
+both). An installed wheel and PYTHONPATH=build/python run the same module.
 """
 import base64
 import hashlib
@@ -39,14 +39,16 @@ def _interpreter():
 
 def _build():
     build = pathlib.Path(os.environ.get("SHTOOL_BUILD_DIR", ROOT / "build"))
-    configure = ["cmake", "-S", str(ROOT), "-B", str(build), "-DCMAKE_BUILD_TYPE=Release",
-                 f"-DPython3_EXECUTABLE={_interpreter()}", "-DSHTOOL_PYTHON=ON"]
+    # A tree that exists keeps its settings (its build type, its interpreter): only the
+    # module's targets are brought up to date in it.
     if not (build / "CMakeCache.txt").exists():
+        configure = ["cmake", "-S", str(ROOT), "-B", str(build), "-DCMAKE_BUILD_TYPE=Release",
+                     f"-DPython3_EXECUTABLE={_interpreter()}", "-DSHTOOL_PYTHON=ON"]
         if shutil.which("ninja"):
             configure += ["-G", "Ninja"]
         if shutil.which("ccache"):
             configure += ["-DCMAKE_CXX_COMPILER_LAUNCHER=ccache"]
-    subprocess.run(configure, check=True, stdout=sys.stderr)
+        subprocess.run(configure, check=True, stdout=sys.stderr)
     subprocess.run(["cmake", "--build", str(build), "-j", str(os.cpu_count() or 2), "--target", "shtool_python",
                     "shtool_python_files"], check=True, stdout=sys.stderr)
     return build / "python" / NAME

@@ -14,7 +14,7 @@ from dataclasses import dataclass as _dataclass
 import numpy as _np
 
 from . import _shtool
-from ._shtool import __version__, eval_sh, gen_tensors, light, transform_splats
+from ._shtool import __version__, gen_tensors, light, transform_splats
 
 __all__ = [
     "eval_sh", "rotate", "quat_to_matrix", "product", "project_env", "project_env_file", "irradiance",
@@ -41,6 +41,13 @@ def _on_last_axis(a, axis, name):
         return _np.moveaxis(a, axis, -1)
     except _np.AxisError as e:
         raise ValueError(f"axis: {e}") from None
+
+
+def eval_sh(order, dirs, out=None, threads=0):
+    """Real SH values (..., order**2) at `dirs` (..., 3), normalised inside (a zero or
+    non-finite direction: ValueError); float32 or float64 as `dirs`. `out`: a C-contiguous
+    array of that shape and dtype, written in place."""
+    return _shtool._eval_sh(order, _float_array(dirs, "dirs"), out, threads)
 
 
 def _back(r, axis):

@@ -307,7 +307,7 @@ py::array product_t(const py::array& a_in, const py::array& b_in, std::optional<
 
 void bind_sh(py::module_& m) {
   m.def(
-      "eval_sh",
+      "_eval_sh",
       [](int order, const py::array& dirs, const py::object& out, int threads) {
         check_order(order);
         check_threads(threads);

@@ -79,6 +79,11 @@ def test_bad_directions(bad, error):
         shtool.eval_sh(3, bad)
 
 
+def test_lists_are_float64():
+    v = shtool.eval_sh(2, [0.0, 0.0, 2.0])
+    assert v.dtype == np.float64 and v.shape == (4,)
+
+
 def test_bad_orders():
     for order in (0, -1, 129):
         with pytest.raises(ValueError):

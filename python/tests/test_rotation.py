@@ -1,5 +1,6 @@
 """rotate: g(w) = f(R^-1 w), checked as f(w) == rotate(f, R)(R w)."""
 import json
+import sys
 import threading
 
 import numpy as np
@@ -147,3 +148,30 @@ def test_one_bad_matrix_in_a_batch_is_named(dtype):
     rs = np.stack([np.eye(3)] * 5 + [np.diag([1.0, 1.0, -1.0])]).astype(dtype)
     with pytest.raises(ValueError, match=r"matrix\[5\]"):
         shtool.rotate(np.ones((6, 9), dtype), rs)
+
+
+def test_the_gil_is_released_during_a_long_call():
+    f = np.random.default_rng(12).normal(size=(400_000, 64))
+    r = random_rotation(12)
+    started, done = threading.Event(), threading.Event()
+
+    def work():
+        started.set()
+        shtool.rotate(f, r, threads=1)
+        done.set()
+
+    interval = sys.getswitchinterval()
+    sys.setswitchinterval(1e-4)  # the worker enters the call at once
+    try:
+        t = threading.Thread(target=work)
+        t.start()
+        started.wait()
+        ticks = 0
+        while not done.is_set():
+            ticks += 1
+        t.join()
+    finally:
+        sys.setswitchinterval(interval)
+    # With the GIL held for the call this thread could not count while it runs (0.1 ms
+    # of counting at most before it starts); released, it counts throughout.
+    assert ticks > 100_000
