@@ -185,7 +185,8 @@ py::array rotate_t(const py::array& coeffs_in, const py::object& matrix, const s
   if (m.ndim() < 2 || m.shape(m.ndim() - 1) != 3 || m.shape(m.ndim() - 2) != 3 || m.ndim() - 2 > coeffs.ndim() - 1 ||
       !std::equal(m.shape(), m.shape() + m.ndim() - 2, coeffs.shape()))
     throw py::value_error("matrix must have shape (3, 3) or (..., 3, 3) with the leading axes of coeffs");
-  const std::size_t matrices = m.size() / 9, per_matrix = count / std::max<std::size_t>(matrices, 1);
+  if (count == 0) return out;
+  const std::size_t matrices = m.size() / 9, per_matrix = count / matrices;
   const float* rm32 = f32 ? static_cast<const float*>(m.data()) : nullptr;
   const double* rm64 = f32 ? nullptr : static_cast<const double*>(m.data());
   const T* in = coeffs.data();
@@ -270,7 +271,8 @@ py::array product_t(const py::array& a_in, const py::array& b_in, std::optional<
   // Inputs of lower order are padded with zeros and the product taken at the highest of
   // the three orders, then truncated: every band of the inputs reaches the result.
   const int work = std::max({order, na, nb});
-  if (order < 1 || work > kMaxFourierProductOrder)
+  if (order < 1) throw py::value_error("order must be at least 1, got " + std::to_string(order));
+  if (work > kMaxFourierProductOrder)
     throw py::value_error("order " + std::to_string(work) + " is not supported (1.." +
                           std::to_string(kMaxFourierProductOrder) + ")");
   if (*method == ProductMethod::tripling && work > kMaxTriplingOrder)
@@ -283,7 +285,7 @@ py::array product_t(const py::array& a_in, const py::array& b_in, std::optional<
   std::vector<py::ssize_t> shape(lead.shape(), lead.shape() + lead.ndim() - 1);
   shape.push_back(sh_count(order));
   auto out = py::array_t<T, py::array::c_style>(shape);
-  const std::size_t count = std::max(ca, cb), w2 = sh_count(work), o2 = sh_count(order);
+  const std::size_t count = out.size() / sh_count(order), w2 = sh_count(work), o2 = sh_count(order);
   const std::size_t a2 = sh_count(na), b2 = sh_count(nb);
   const T *pa = a.data(), *pb = b.data();
   T* po = out.mutable_data();

@@ -175,3 +175,10 @@ def test_the_gil_is_released_during_a_long_call():
     # With the GIL held for the call this thread could not count while it runs (0.1 ms
     # of counting at most before it starts); released, it counts throughout.
     assert ticks > 100_000
+
+
+def test_empty_batches():
+    assert shtool.rotate(np.zeros((0, 9)), np.eye(3)).shape == (0, 9)
+    assert shtool.rotate(np.zeros((0, 9)), np.zeros((0, 3, 3))).shape == (0, 9)
+    assert shtool.eval_sh(3, np.zeros((0, 3))).shape == (0, 9)
+    assert shtool.product(np.ones(9), np.ones((0, 9))).shape == (0, 9)
