@@ -86,24 +86,23 @@ py::array eval_sh_t(int order, const py::array& dirs_in, const py::object& out_a
   return out;
 }
 
-// The helpers of one order, loaded (or computed) once per process.
-std::shared_ptr<const RotationHelpers> helpers_for(int order) {
+// One V per order, made by make(order) once per process (callers on several threads).
+template <class V, class Make>
+std::shared_ptr<const V> once_per_order(int order, Make make) {
   static std::mutex mutex;
-  static std::map<int, std::shared_ptr<const RotationHelpers>> cache;
+  static std::map<int, std::shared_ptr<const V>> made;
   std::lock_guard<std::mutex> lock(mutex);
-  auto& h = cache[order];
-  if (!h) h = rotation_helpers_for(order);
-  return h;
+  auto& v = made[order];
+  if (!v) v = make(order);
+  return v;
 }
 
-// The zhf lobes of one order, loaded once per process.
+std::shared_ptr<const RotationHelpers> helpers_for(int order) {
+  return once_per_order<RotationHelpers>(order, [](int n) { return rotation_helpers_for(n); });
+}
+
 std::shared_ptr<const ZhfLobes> zhf_lobes(int order) {
-  static std::mutex mutex;
-  static std::map<int, std::shared_ptr<const ZhfLobes>> cache;
-  std::lock_guard<std::mutex> lock(mutex);
-  auto& l = cache[order];
-  if (!l) l = lobes::zhf_lobes_for(order);
-  return l;
+  return once_per_order<ZhfLobes>(order, [](int n) { return lobes::zhf_lobes_for(n); });
 }
 
 // Zonal-harmonic factorisation with the shipped shared lobes, as `shtool rotate --method
