@@ -69,6 +69,11 @@ void add_cone_light_t(const Eigen::Vector3<T>& direction, T half_angle, std::spa
 }
 
 template <class T>
+void add_constant_light_t(std::span<const T> color, int channels, std::span<T> coefficients) {
+  for (int c = 0; c < channels; ++c) coefficients[c] += color[c] * std::sqrt(T(4) * std::numbers::pi_v<T>);
+}
+
+template <class T>
 void add_hemisphere_light_t(const Eigen::Vector3<T>& direction, std::span<const T> sky,
                           std::span<const T> ground, int channels,
                           std::span<T> coefficients) {
@@ -76,11 +81,6 @@ void add_hemisphere_light_t(const Eigen::Vector3<T>& direction, std::span<const 
   for (int c = 0; c < channels; ++c) difference[c] = sky[c] - ground[c];
   add_constant_light_t<T>(ground, channels, coefficients);
   add_cone_light_t<T>(direction, std::numbers::pi_v<T> / 2, difference, channels, coefficients);
-}
-
-template <class T>
-void add_constant_light_t(std::span<const T> color, int channels, std::span<T> coefficients) {
-  for (int c = 0; c < channels; ++c) coefficients[c] += color[c] * std::sqrt(T(4) * std::numbers::pi_v<T>);
 }
 
 }  // namespace
