@@ -182,7 +182,7 @@ class ExrCoreFile {
     // block of a 4096-wide image is 0.8 MB) are allocated once, not per chunk.
     const std::size_t workers = std::min<std::size_t>(std::size_t(std::max(threads, 1)), chunks_);
     parallel_for(workers, static_cast<int>(workers), [&](std::size_t w) {
-      exr_decode_pipeline_t pipeline = EXR_DECODE_PIPELINE_INITIALIZER;
+      exr_decode_pipeline_t pipeline{};  // all zero, as EXR_DECODE_PIPELINE_INITIALIZER
       struct Destroy {
         exr_const_context_t context;
         exr_decode_pipeline_t* pipeline;
