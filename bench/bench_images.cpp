@@ -29,13 +29,10 @@
 
 #include <benchmark/benchmark.h>
 
-#include <ImfFrameBuffer.h>
-#include <ImfHeader.h>
-#include <ImfIO.h>
-#include <ImfInputFile.h>
 #include <ImfThreading.h>
 
 #include "common/input_file.h"
+#include "lighting/exr_cpp_library.h"
 #include "lighting/image_io.h"
 #include "lighting/project_env_job.h"
 #include "shtool/env_projection.h"
@@ -94,36 +91,10 @@ BENCHMARK(BM_DecodeExr)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond)->UseRealT
 // The peer: OpenEXR's C++ library decoding the same bytes into the same layout, its
 // global pool at T workers (0: none, the calling thread decodes).
 void BM_DecodeExrCppLibrary(benchmark::State& state) {
-  class Bytes : public Imf::IStream {
-   public:
-    explicit Bytes(const std::string& b) : Imf::IStream("memory"), b_(b) {}
-    bool read(char c[], int n) override {
-      std::memcpy(c, b_.data() + pos_, static_cast<std::size_t>(n));
-      pos_ += static_cast<std::uint64_t>(n);
-      return pos_ < b_.size();
-    }
-    std::uint64_t tellg() override { return pos_; }
-    void seekg(std::uint64_t pos) override { pos_ = pos; }
-
-   private:
-    const std::string& b_;
-    std::uint64_t pos_ = 0;
-  };
   const int threads = static_cast<int>(state.range(0));
   Imf::setGlobalThreadCount(threads);
-  for (auto _ : state) {
-    std::vector<float> texels(std::size_t(image().width) * image().height * 3);  // as decode_image's
-    Bytes stream(exr_bytes());
-    Imf::InputFile file(stream, threads);
-    const Imath::Box2i window = file.header().dataWindow();
-    Imf::FrameBuffer fb;
-    for (int c = 0; c < 3; ++c)
-      fb.insert(std::string(1, "RGB"[c]), Imf::Slice::Make(Imf::FLOAT, texels.data() + c, window, 3 * sizeof(float),
-                                                           image().width * 3 * sizeof(float)));
-    file.setFrameBuffer(fb);
-    file.readPixels(window.min.y, window.max.y);
-    benchmark::DoNotOptimize(texels.data());
-  }
+  for (auto _ : state)
+    benchmark::DoNotOptimize(shtool::lighting::decode_exr_with_cpp_library(exr_bytes(), {"R", "G", "B"}, threads));
   Imf::setGlobalThreadCount(0);
 }
 BENCHMARK(BM_DecodeExrCppLibrary)->Arg(0)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();

@@ -13,49 +13,15 @@
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
-#include <ImfIO.h>
-#include <ImfInputFile.h>
 #include <ImfOutputFile.h>
 #include <ImfTiledOutputFile.h>
 #include <half.h>
 
+#include "lighting/exr_cpp_library.h"
 #include "lighting/image_io.h"
 
 namespace shtool::lighting {
 namespace {
-
-class MemoryOut : public Imf::OStream {
- public:
-  MemoryOut() : Imf::OStream("memory") {}
-  void write(const char c[], int n) override {
-    if (pos_ + n > bytes.size()) bytes.resize(pos_ + n);
-    std::memcpy(bytes.data() + pos_, c, static_cast<std::size_t>(n));
-    pos_ += static_cast<std::size_t>(n);
-  }
-  std::uint64_t tellp() override { return pos_; }
-  void seekp(std::uint64_t pos) override { pos_ = pos; }
-  std::string bytes;
-
- private:
-  std::size_t pos_ = 0;
-};
-
-class MemoryIn : public Imf::IStream {
- public:
-  explicit MemoryIn(const std::string& b) : Imf::IStream("memory"), b_(b) {}
-  bool read(char c[], int n) override {
-    if (pos_ + n > b_.size()) throw std::runtime_error("end of file");
-    std::memcpy(c, b_.data() + pos_, static_cast<std::size_t>(n));
-    pos_ += static_cast<std::size_t>(n);
-    return pos_ < b_.size();
-  }
-  std::uint64_t tellg() override { return pos_; }
-  void seekg(std::uint64_t pos) override { pos_ = pos; }
-
- private:
-  const std::string& b_;
-  std::uint64_t pos_ = 0;
-};
 
 struct Layout {
   Imf::Compression compression;
@@ -90,7 +56,7 @@ std::string write_file(const Layout& layout, int w, int h, int x0, int y0, const
   Imf::FrameBuffer fb;
   for (std::size_t c = 0; c < k; ++c)
     fb.insert(names[c], Imf::Slice::Make(layout.type, base + c * size, window, k * size, w * k * size));
-  MemoryOut out;
+  ExrBytesOut out;
   if (layout.tiled) {
     Imf::TiledOutputFile file(out, header);
     file.setFrameBuffer(fb);
@@ -100,23 +66,12 @@ std::string write_file(const Layout& layout, int w, int h, int x0, int y0, const
     file.setFrameBuffer(fb);
     file.writePixels(h);
   }
-  return out.bytes;
+  return out.bytes();
 }
 
-// The reference: OpenEXR's C++ library, every channel as float, interleaved.
+// The reference: OpenEXR's C++ library, the channels as float, interleaved.
 std::vector<float> read_with_cpp_library(const std::string& bytes, const std::vector<std::string>& names) {
-  MemoryIn in(bytes);
-  Imf::InputFile file(in);
-  const Imath::Box2i window = file.header().dataWindow();
-  const std::size_t w = window.max.x - window.min.x + 1, h = window.max.y - window.min.y + 1, k = names.size();
-  std::vector<float> texels(w * h * k, -1.0f);
-  Imf::FrameBuffer fb;
-  for (std::size_t c = 0; c < k; ++c)
-    fb.insert(names[c], Imf::Slice::Make(Imf::FLOAT, texels.data() + c, window, k * sizeof(float),
-                                         w * k * sizeof(float)));
-  file.setFrameBuffer(fb);
-  file.readPixels(window.min.y, window.max.y);
-  return texels;
+  return decode_exr_with_cpp_library(bytes, names).texels;
 }
 
 bool same_bits(const std::vector<float>& a, const std::vector<float>& b) {

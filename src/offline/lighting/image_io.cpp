@@ -1,4 +1,5 @@
 #include "lighting/image_io.h"
+#include "lighting/exr_cpp_library.h"
 
 #include <algorithm>
 #include <array>
@@ -18,7 +19,6 @@
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
 #include <ImfIO.h>
-#include <ImfInputFile.h>
 #include <ImfOutputFile.h>
 #include <openexr.h>
 
@@ -182,7 +182,7 @@ class ExrCoreFile {
     // block of a 4096-wide image is 0.8 MB) are allocated once, not per chunk.
     const std::size_t workers = std::min<std::size_t>(std::size_t(std::max(threads, 1)), chunks_);
     parallel_for(workers, static_cast<int>(workers), [&](std::size_t w) {
-      exr_decode_pipeline_t pipeline = EXR_DECODE_PIPELINE_INITIALIZER;
+      exr_decode_pipeline_t pipeline{};  // all zero, as EXR_DECODE_PIPELINE_INITIALIZER
       struct Destroy {
         exr_const_context_t context;
         exr_decode_pipeline_t* pipeline;
@@ -203,35 +203,16 @@ class ExrCoreFile {
   // OpenEXRCore 3.1 has no DWA decompressor: those files (headers parsed by the core
   // above) are decoded by the C++ library, on one thread.
   void decode_dwa(const std::vector<std::string>& names, float* texels, int stride) {
-    class Bytes : public Imf::IStream {
-     public:
-      explicit Bytes(std::string_view b) : Imf::IStream("memory"), b_(b) {}
-      bool read(char c[], int n) override {
-        if (n < 0 || pos_ > b_.size() || std::uint64_t(n) > b_.size() - pos_)
-          throw std::runtime_error("unexpected end of file");
-        std::memcpy(c, b_.data() + pos_, static_cast<std::size_t>(n));
-        pos_ += static_cast<std::uint64_t>(n);
-        return pos_ < b_.size();
-      }
-      std::uint64_t tellg() override { return pos_; }
-      void seekg(std::uint64_t pos) override { pos_ = pos; }
-
-     private:
-      std::string_view b_;
-      std::uint64_t pos_ = 0;
-    } stream(bytes_);
+    ChannelImage decoded;
     try {
-      Imf::InputFile file(stream, 0);
-      const Imath::Box2i window = file.header().dataWindow();
-      const std::size_t pixel = std::size_t(stride) * sizeof(float), row = std::size_t(width_) * pixel;
-      Imf::FrameBuffer fb;
-      for (std::size_t c = 0; c < names.size(); ++c)
-        fb.insert(names[c], Imf::Slice::Make(Imf::FLOAT, texels + c, window, pixel, row));
-      file.setFrameBuffer(fb);
-      file.readPixels(window.min.y, window.max.y);
+      decoded = decode_exr_with_cpp_library(bytes_, names);
     } catch (const std::exception& e) {
       fail(name_, std::string("OpenEXR: ") + e.what());
     }
+    const std::size_t k = names.size(), texel_count = std::size_t(width_) * std::size_t(height_);
+    if (decoded.texels.size() != texel_count * k) fail(name_, "OpenEXR: the DWA decoder's size differs");
+    for (std::size_t t = 0; t < texel_count; ++t)
+      for (std::size_t c = 0; c < k; ++c) texels[t * std::size_t(stride) + c] = decoded.texels[t * k + c];
   }
 
   void decode_chunk(std::size_t chunk, exr_decode_pipeline_t& decode, bool first, const std::vector<std::string>& names,
@@ -299,23 +280,6 @@ Image decode_exr(std::string_view bytes, const std::filesystem::path& name, std:
   return img;
 }
 
-// The writer stays on the C++ library: it only ever sees shtool's own, checked images.
-class MemoryOStream : public Imf::OStream {
- public:
-  MemoryOStream() : Imf::OStream("memory") {}
-  void write(const char c[], int n) override {
-    if (pos_ + n > data_.size()) data_.resize(pos_ + n);
-    std::memcpy(data_.data() + pos_, c, static_cast<std::size_t>(n));
-    pos_ += static_cast<std::size_t>(n);
-  }
-  std::uint64_t tellp() override { return pos_; }
-  void seekp(std::uint64_t pos) override { pos_ = static_cast<std::size_t>(pos); }
-  std::string& data() { return data_; }
-
- private:
-  std::string data_;
-  std::size_t pos_ = 0;
-};
 
 }  // namespace
 
@@ -526,7 +490,7 @@ std::string encode_exr_channels(const ChannelImage& image, NonFinite non_finite)
   Imf::Header header(image.width, image.height);
   header.compression() = Imf::ZIP_COMPRESSION;
   for (const std::string& n : image.names) header.channels().insert(n, Imf::Channel(Imf::FLOAT));
-  MemoryOStream stream;
+  ExrBytesOut stream;
   {
     Imf::OutputFile file(stream, header);
     Imf::FrameBuffer fb;
@@ -536,7 +500,7 @@ std::string encode_exr_channels(const ChannelImage& image, NonFinite non_finite)
     file.setFrameBuffer(fb);
     file.writePixels(image.height);
   }
-  return std::move(stream.data());
+  return std::move(stream.bytes());
 }
 
 std::string encode_exr(const Image& image) {
