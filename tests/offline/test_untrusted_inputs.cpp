@@ -118,7 +118,7 @@ TEST(UntrustedObj, CoordinatesAndIndicesOutOfRange) {
       {"v 0 0 0\r\nv 0 1 0\r\nv 1 0 0\r\nf 1 2 -99999999999\r\n", "out of range"},
   };
   for (const auto& [text, fragment] : cases) {
-    const std::string m = input_error([&] { fit::load_obj_text(text, "m.obj"); });
+    const std::string m = input_error([&, text = text] { fit::load_obj_text(text, "m.obj"); });
     EXPECT_NE(m.find(fragment), std::string::npos) << "'" << m << "' lacks '" << fragment << "'";
   }
   // CR-only line endings are otherwise fine.
@@ -201,7 +201,7 @@ TEST(UntrustedExr, ChunksThatDoNotMatchTheWindowAreRefused) {
   const std::string exr = lighting::encode_exr(img);
   for (const auto& [x1, y1] : {std::pair{3, 79}, std::pair{63, 39}}) {
     const std::string m =
-        input_error([&] { lighting::decode_image(with_windows(exr, x1, y1), "m.exr", std::int64_t(1) << 20); });
+        input_error([&, x1 = x1, y1 = y1] { lighting::decode_image(with_windows(exr, x1, y1), "m.exr", std::int64_t(1) << 20); });
     EXPECT_EQ(m.rfind("m.exr: OpenEXR: ", 0), 0u) << x1 << " x " << y1 << ": '" << m << "'";
   }
 }
