@@ -113,18 +113,18 @@ class ExrCoreFile {
     init.error_handler_fn = exr_core_error;
     init.flags = EXR_CONTEXT_FLAG_STRICT_HEADER;
     g_exr_core_message.clear();
-    check(exr_start_read(&context_, name.c_str(), &init));
+    check(exr_start_read(&context_.handle, name.c_str(), &init));
     exr_storage_t storage;
-    check(exr_get_storage(context_, 0, &storage));
+    check(exr_get_storage(context_.handle, 0, &storage));
     if (storage != EXR_STORAGE_SCANLINE && storage != EXR_STORAGE_TILED)
       fail(name, "a deep OpenEXR image (one value per texel is read)");
     tiled_ = storage == EXR_STORAGE_TILED;
     exr_compression_t compression;
-    check(exr_get_compression(context_, 0, &compression));
+    check(exr_get_compression(context_.handle, 0, &compression));
     dwa_ = compression == EXR_COMPRESSION_DWAA || compression == EXR_COMPRESSION_DWAB;
     exr_attr_box2i_t data, display;
-    check(exr_get_data_window(context_, 0, &data));
-    check(exr_get_display_window(context_, 0, &display));
+    check(exr_get_data_window(context_.handle, 0, &data));
+    check(exr_get_display_window(context_.handle, 0, &display));
     auto box = [](const exr_attr_box2i_t& b) {
       char text[96];
       std::snprintf(text, sizeof text, "(%d, %d)-(%d, %d)", b.min.x, b.min.y, b.max.x, b.max.y);
@@ -140,7 +140,7 @@ class ExrCoreFile {
     width_ = static_cast<int>(w);
     height_ = static_cast<int>(h);
     const exr_attr_chlist_t* channels = nullptr;
-    check(exr_get_channels(context_, 0, &channels));
+    check(exr_get_channels(context_.handle, 0, &channels));
     for (int c = 0; c < channels->num_channels; ++c) {
       const exr_attr_chlist_entry_t& e = channels->entries[c];
       channels_.emplace_back(e.name.str, static_cast<std::size_t>(e.name.length));
@@ -148,7 +148,7 @@ class ExrCoreFile {
     }
     if (tiled_) {  // level (0, 0): the full-resolution image of a mipmapped file
       std::int32_t tile_w = 0, tile_h = 0;
-      check(exr_get_tile_sizes(context_, 0, 0, 0, &tile_w, &tile_h));
+      check(exr_get_tile_sizes(context_.handle, 0, 0, 0, &tile_w, &tile_h));
       if (tile_w < 1 || tile_h < 1) fail(name, "OpenEXR: empty tiles");
       tile_w_ = tile_w;
       tile_h_ = tile_h;
@@ -156,13 +156,10 @@ class ExrCoreFile {
       tiles_y_ = static_cast<std::int32_t>((h + tile_h - 1) / tile_h);
       chunks_ = std::size_t(tiles_x_) * std::size_t(tiles_y_);
     } else {
-      check(exr_get_scanlines_per_chunk(context_, 0, &lines_per_chunk_));
+      check(exr_get_scanlines_per_chunk(context_.handle, 0, &lines_per_chunk_));
       if (lines_per_chunk_ < 1) fail(name, "OpenEXR: no scanlines per chunk");
       chunks_ = static_cast<std::size_t>((h + lines_per_chunk_ - 1) / lines_per_chunk_);
     }
-  }
-  ~ExrCoreFile() {
-    if (context_) exr_finish(&context_);
   }
   ExrCoreFile(const ExrCoreFile&) = delete;
   ExrCoreFile& operator=(const ExrCoreFile&) = delete;
@@ -187,7 +184,7 @@ class ExrCoreFile {
         exr_const_context_t context;
         exr_decode_pipeline_t* pipeline;
         ~Destroy() { exr_decoding_destroy(context, pipeline); }
-      } destroy{context_, &pipeline};
+      } destroy{context_.handle, &pipeline};
       for (std::size_t chunk = chunks_ * w / workers; chunk < chunks_ * (w + 1) / workers; ++chunk)
         decode_chunk(chunk, pipeline, chunk == chunks_ * w / workers, names, texels, stride);
     });
@@ -222,17 +219,17 @@ class ExrCoreFile {
     int x0 = 0, y0 = 0;
     if (tiled_) {
       const int tx = static_cast<int>(chunk % std::size_t(tiles_x_)), ty = static_cast<int>(chunk / std::size_t(tiles_x_));
-      check(exr_read_tile_chunk_info(context_, 0, tx, ty, 0, 0, &info));
+      check(exr_read_tile_chunk_info(context_.handle, 0, tx, ty, 0, 0, &info));
       x0 = tx * tile_w_;
       y0 = ty * tile_h_;
     } else {
-      check(exr_read_scanline_chunk_info(context_, 0, min_y_ + static_cast<int>(chunk) * lines_per_chunk_, &info));
+      check(exr_read_scanline_chunk_info(context_.handle, 0, min_y_ + static_cast<int>(chunk) * lines_per_chunk_, &info));
       y0 = info.start_y - min_y_;
     }
     if (x0 < 0 || y0 < 0 || info.width < 0 || info.height < 0 || x0 + info.width > width_ ||
         y0 + info.height > height_)
       fail(name_, "OpenEXR: chunk " + std::to_string(chunk) + " lies outside the data window");
-    check(first ? exr_decoding_initialize(context_, 0, &info, &decode) : exr_decoding_update(context_, 0, &info, &decode));
+    check(first ? exr_decoding_initialize(context_.handle, 0, &info, &decode) : exr_decoding_update(context_.handle, 0, &info, &decode));
     const std::size_t row = std::size_t(width_) * std::size_t(stride);
     for (int c = 0; c < decode.channel_count; ++c) {
       exr_coding_channel_info_t& ch = decode.channels[c];
@@ -245,13 +242,20 @@ class ExrCoreFile {
       ch.user_data_type = EXR_PIXEL_FLOAT;
       ch.user_bytes_per_element = sizeof(float);
     }
-    check(exr_decoding_choose_default_routines(context_, 0, &decode));
-    check(exr_decoding_run(context_, 0, &decode));
+    check(exr_decoding_choose_default_routines(context_.handle, 0, &decode));
+    check(exr_decoding_run(context_.handle, 0, &decode));
   }
 
   std::string_view bytes_;
   std::filesystem::path name_;
-  exr_context_t context_ = nullptr;
+  // Finished however the object ends, also when a refused header throws from the
+  // constructor (members are destroyed then; the destructor would not run).
+  struct Context {
+    exr_context_t handle = nullptr;
+    ~Context() {
+      if (handle) exr_finish(&handle);
+    }
+  } context_;
   bool tiled_ = false, dwa_ = false;
   int width_ = 0, height_ = 0, min_y_ = 0;
   std::vector<std::string> channels_;
