@@ -172,8 +172,14 @@ std::string permutation_kernel_source(int order, const std::vector<Entry>& entri
       if (half.lane == std::array<int, 4>{4 * h, 4 * h + 1, 4 * h + 2, 4 * h + 3}) {
         source = (h ? "rh" : "rl") + row;
       } else {
+        // A lane whose coefficient is 0 takes the first used lane's value, never -1
+        // ("any value"): clang may leave an undefined lane as anything, NaN and infinity
+        // among them, and 0 times those is not 0.
+        int used = 0;
+        for (int k = 3; k >= 0; --k)
+          if (half.lane[k] >= 0) used = half.lane[k];
         source = "__builtin_shufflevector(rl" + row + ", rh" + row;
-        for (int k = 0; k < 4; ++k) source += ", " + std::to_string(half.lane[k]);
+        for (int k = 0; k < 4; ++k) source += ", " + std::to_string(half.lane[k] >= 0 ? half.lane[k] : used);
         source += ")";
       }
       std::string coefficients = "V4{";
