@@ -8,9 +8,7 @@
 #include <cstring>
 #include <exception>
 #include <memory>
-#include <mutex>
 #include <span>
-#include <thread>
 
 #include <stb_image.h>
 #include <stb_image_write.h>
