@@ -3,7 +3,7 @@
 # fixed (SEED, default 1): the suite replays the committed corpus and then the same
 # mutations each run, so its verdict does not depend on luck; longer runs with other
 # seeds happen outside it, and what they find joins the corpus with a regression test.
-#   cmake -DTARGET=... -DCORPUS=... -DSCRATCH=... -DSECONDS=30 [-DDICT=...]
+#   cmake -DTARGET=... -DCORPUS=... -DSCRATCH=... -DSECONDS=20 [-DDICT=...]
 #         -P run_fuzz_target.cmake
 cmake_minimum_required(VERSION 3.20)
 file(REMOVE_RECURSE "${SCRATCH}")
