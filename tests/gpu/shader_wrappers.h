@@ -112,21 +112,15 @@ inline Wrapper wrapper(shtool::ShaderLanguage lang, shtool::ShaderOperation op, 
       const bool zh3 = op == shtool::ShaderOperation::zh3_irradiance;
       w.in_stride = 3 + 12 + (zh3 ? 3 : 0);
       w.out_stride = zh3 ? 12 : 3;
-      std::string b = "  " + v3 + " n = " + vec3_of(lang, "ib") + ";
-  " + v3 + " L[4];
-" +
-                      "  for (int k = 0; k < 4; ++k) L[k] = " + vec3_of(lang, "ib + 3 + 3 * k") + ";
-";
+      std::string b = "  " + v3 + " n = " + vec3_of(lang, "ib") + ";\n  " + v3 + " L[4];\n" +
+                      "  for (int k = 0; k < 4; ++k) L[k] = " + vec3_of(lang, "ib + 3 + 3 * k") + ";\n";
       auto put = [&](int at, const std::string& call) {
-        b += "  { " + v3 + " e = " + call + ";
-    outp[ob + " + std::to_string(at) + "] = e.x; outp[ob + " +
-             std::to_string(at + 1) + "] = e.y; outp[ob + " + std::to_string(at + 2) + "] = e.z; }
-";
+        b += "  { " + v3 + " e = " + call + ";\n    outp[ob + " + std::to_string(at) + "] = e.x; outp[ob + " +
+             std::to_string(at + 1) + "] = e.y; outp[ob + " + std::to_string(at + 2) + "] = e.z; }\n";
       };
       if (!zh3) put(0, "shtool_l1_irradiance(n, L)");
       else {
-        b += "  " + v3 + " zonal = " + vec3_of(lang, "ib + 15") + ";
-";
+        b += "  " + v3 + " zonal = " + vec3_of(lang, "ib + 15") + ";\n";
         put(0, "shtool_zh3_irradiance(n, L, zonal)");
         put(3, "shtool_zh3_irradiance_per_channel(n, L, zonal)");
         put(6, "shtool_zh3_hallucinate_irradiance(n, L)");

@@ -230,41 +230,132 @@ TEST(ProbeEncoding, FloatFollowsDouble) {
   }
 }
 
-// Relative RMS irradiance error of each encoding over the sphere of normals, against the
-// exact irradiance of the light (not its band-limited projection).
+// Relative RMS irradiance error of each encoding over the sphere of normals, against a
+// reference irradiance of the light (exact, not its band-limited projection).
 struct Errors {
   double l1 = 0, zh3_hallucinated = 0, zh3 = 0, l2 = 0;
+  double l1_linear = 0;                     // bands 0 and 1 as plain SH
+  double zh3_hallucinated_per_channel = 0;  // the other axis choice
 };
 
-Errors errors_of(const Light& light, const SphereQuadrature& q) {
-  const std::vector<double> c = light.coefficients();
+template <class Reference>
+Errors errors_of(const std::vector<double>& c, Reference reference, const SphereQuadrature& q) {
   const L1Probe<double> l1 = encode_l1<double>(c);
   const Zh3Probe<double> zh = encode_zh3<double>(c, Zh3Axis::luminance, Zh3Fit::explicit_fit);
   const Zh3Probe<double> zhh = encode_zh3<double>(c, Zh3Axis::luminance, Zh3Fit::hallucinated);
+  const Zh3Probe<double> zhc = encode_zh3<double>(c, Zh3Axis::per_channel, Zh3Fit::hallucinated);
+  std::vector<double> linear(c.begin(), c.begin() + 12);
+  linear.resize(27, 0.0);
   Errors e;
   double norm = 0;
   for (std::size_t j = 0; j < q.directions.size(); ++j) {
     const V& n = q.directions[j];
     const double w = q.weights[j];
     const V a = l1_nonlinear_irradiance(l1, n), b = zh3_irradiance(zhh, Zh3Axis::luminance, n),
-            z = zh3_irradiance(zh, Zh3Axis::luminance, n);
+            z = zh3_irradiance(zh, Zh3Axis::luminance, n), hc = zh3_irradiance(zhc, Zh3Axis::per_channel, n);
     for (int k = 0; k < 3; ++k) {
-      const double t = light.irradiance(n, k);
+      const double t = reference(n, k), l2 = l2_irradiance(c, n, k), lin = l2_irradiance(linear, n, k);
+      e.l1_linear += w * (lin - t) * (lin - t);
+      e.zh3_hallucinated_per_channel += w * (hc[k] - t) * (hc[k] - t);
       norm += w * t * t;
       e.l1 += w * (a[k] - t) * (a[k] - t);
       e.zh3_hallucinated += w * (b[k] - t) * (b[k] - t);
       e.zh3 += w * (z[k] - t) * (z[k] - t);
-      e.l2 += w * (l2_irradiance(c, n, k) - t) * (l2_irradiance(c, n, k) - t);
+      e.l2 += w * (l2 - t) * (l2 - t);
     }
   }
-  for (double* x : {&e.l1, &e.zh3_hallucinated, &e.zh3, &e.l2}) *x = std::sqrt(*x / norm);
+  for (double* x : {&e.l1, &e.zh3_hallucinated, &e.zh3, &e.l2, &e.l1_linear, &e.zh3_hallucinated_per_channel})
+    *x = std::sqrt(*x / norm);
   return e;
 }
 
-TEST(ProbeEncoding, ErrorOrderingOverRandomLightsIsL1Zh3HallucinatedZh3L2) {
-  // 500 lights: a grey-ish ambient and 1 to 4 directional lights of random colour (the
-  // extreme of a non-negative light: band 2 matters most). The ordering is a property of
-  // averages (the paper's comparison over probes), not of every light.
+void accumulate(Errors& mean, const Errors& e, int count) {
+  mean.l1 += e.l1 / count, mean.zh3_hallucinated += e.zh3_hallucinated / count;
+  mean.zh3 += e.zh3 / count, mean.l2 += e.l2 / count;
+  mean.l1_linear += e.l1_linear / count, mean.zh3_hallucinated_per_channel += e.zh3_hallucinated_per_channel / count;
+}
+
+void print(const char* what, int lights, const Errors& m) {
+  std::printf("%s, mean relative RMS irradiance error over %d lights: L1 non-linear %.4f, L1 linear %.4f, ZH3 "
+              "hallucinated %.4f (per-channel axes %.4f), ZH3 %.4f, L2 %.4f\n",
+              what, lights, m.l1, m.l1_linear, m.zh3_hallucinated, m.zh3_hallucinated_per_channel, m.zh3, m.l2);
+}
+
+TEST(ProbeEncoding, ErrorOrderingOverRandomSmoothLights) {
+  // 200 lights: a grey-ish ambient plus 1 to 4 clamped cosine-power lobes
+  // P max(0, s . w)^p (p in 1..8, random colours and directions), the kind of light a probe
+  // sees from skies, windows and lit walls. The probe gets the order-3 projection; the
+  // reference is the order-16 irradiance (A_l |L_l| beyond band 15 is below 1e-5 of E). The
+  // ordering is a property of averages (the paper compares over production probes), not of
+  // every light. Measured (seed 2024): L1 non-linear 0.0726, L1 linear 0.1145, ZH3
+  // hallucinated 0.0730, ZH3 0.0534, L2 0.0069. The hallucinated ZH3 beats linear L1 by a
+  // third but only ties Geomerics' non-linear L1 (0.4% worse): that comparison is not
+  // asserted; the others are.
+  const SphereQuadrature q = sphere_quadrature(24);
+  std::mt19937_64 rng(2024);
+  std::uniform_real_distribution<double> u(0, 1);
+  std::normal_distribution<double> g(0, 1);
+  const int lights = 200, order = 16;
+  std::vector<double> a(order);
+  for (int l = 0; l < order; ++l) a[l] = clamped_cosine_band(l);
+  Errors mean;
+  for (int t = 0; t < lights; ++t) {
+    const double amb = 0.3 * u(rng);
+    std::array<double, 3> ambient;
+    for (int k = 0; k < 3; ++k) ambient[k] = amb * (0.5 + u(rng));
+    struct Lobe {
+      V s;
+      int p;
+      std::array<double, 3> power;
+    };
+    std::vector<Lobe> lobes(1 + static_cast<int>(u(rng) * 4));
+    for (Lobe& l : lobes) {
+      l.s = V(g(rng), g(rng), g(rng)).normalized();
+      l.p = 1 + static_cast<int>(u(rng) * 8);
+      const double power = 2 * u(rng);
+      l.power = {power * (0.5 + u(rng)), power * (0.5 + u(rng)), power * (0.5 + u(rng))};
+    }
+    std::vector<std::vector<double>> high(3);
+    for (int k = 0; k < 3; ++k) {
+      high[k] = project_sh(
+          order,
+          [&](const V& w) {
+            double v = ambient[k];
+            for (const Lobe& l : lobes) v += l.power[k] * std::pow(std::max(0.0, l.s.dot(w)), l.p);
+            return v;
+          },
+          48);
+      for (int i = 0; i < order * order; ++i) high[k][i] *= a[sh_band(i)];
+    }
+    std::vector<double> c(27);
+    for (int i = 0; i < 9; ++i)
+      for (int k = 0; k < 3; ++k) c[3 * i + k] = high[k][i] / a[sh_band(i)];
+    std::vector<double> y(order * order);
+    const Errors e = errors_of(
+        c,
+        [&](const V& n, int k) {
+          eval_sh<double>(order, n, y);
+          double sum = 0;
+          for (int i = 0; i < order * order; ++i) sum += high[k][i] * y[i];
+          return sum;
+        },
+        q);
+    accumulate(mean, e, lights);
+  }
+  print("smooth lights", lights, mean);
+  EXPECT_GE(mean.l1_linear, mean.zh3_hallucinated);
+  EXPECT_GE(mean.l1_linear, mean.l1);
+  EXPECT_GE(mean.l1, mean.zh3);
+  EXPECT_GE(mean.zh3_hallucinated, mean.zh3);
+  EXPECT_GE(mean.zh3, mean.l2);
+}
+
+TEST(ProbeEncoding, ErrorsUnderDirectionalLights) {
+  // 500 lights of ambient plus 1 to 4 directional lights (deltas, the extreme non-negative
+  // light), with their exact irradiance. Here the hallucinated coefficient, fitted to
+  // smooth production probes, does not beat the non-linear L1 (measured: 0.1215 against
+  // 0.1175, linear L1 0.1540); what holds is that the explicit ZH3 beats every 4-number
+  // encoding and L2 beats ZH3.
   const SphereQuadrature q = sphere_quadrature(24);
   std::mt19937_64 rng(2024);
   std::uniform_real_distribution<double> u(0, 1);
@@ -281,13 +372,11 @@ TEST(ProbeEncoding, ErrorOrderingOverRandomLightsIsL1Zh3HallucinatedZh3L2) {
       const double power = u(rng);
       l.deltas.push_back({s, {power * (0.5 + u(rng)), power * (0.5 + u(rng)), power * (0.5 + u(rng))}});
     }
-    const Errors e = errors_of(l, q);
-    mean.l1 += e.l1 / lights, mean.zh3_hallucinated += e.zh3_hallucinated / lights;
-    mean.zh3 += e.zh3 / lights, mean.l2 += e.l2 / lights;
+    accumulate(mean, errors_of(l.coefficients(), [&](const V& n, int k) { return l.irradiance(n, k); }, q), lights);
   }
-  std::printf("mean relative RMS irradiance error over %d lights: L1 %.4f, ZH3 hallucinated %.4f, ZH3 %.4f, L2 %.4f\n",
-              lights, mean.l1, mean.zh3_hallucinated, mean.zh3, mean.l2);
-  EXPECT_GE(mean.l1, mean.zh3_hallucinated);
+  print("directional lights", lights, mean);
+  EXPECT_GE(mean.l1_linear, mean.zh3_hallucinated);
+  EXPECT_GE(mean.l1, mean.zh3);
   EXPECT_GE(mean.zh3_hallucinated, mean.zh3);
   EXPECT_GE(mean.zh3, mean.l2);
 }

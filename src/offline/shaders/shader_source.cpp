@@ -634,9 +634,12 @@ void triple_product(const Syntax& s, int n, std::ostringstream& o, ShaderSource&
     << head << " {\n" << b.str() << "}\n";
 }
 
+// A vec3 constructor's name: GLSL takes no precision qualifier there.
+std::string vec3_constructor(const Syntax& s) { return s.glsl() ? "vec3" : s.vec3(); }
+
 // The L1 vector d = (-c_11, -c_1-1, c_10) of channel `ch` of RGB coefficients L[0..3].
 std::string l1_vector_code(const Syntax& s, const std::string& ch) {
-  return s.vec3() + "(-L[3]." + ch + ", -L[1]." + ch + ", L[2]." + ch + ")";
+  return vec3_constructor(s) + "(-L[3]." + ch + ", -L[1]." + ch + ", L[2]." + ch + ")";
 }
 
 // Geomerics' non-linear L1 irradiance (Hazel 2017; shtool/probe_encoding.h):
@@ -656,7 +659,7 @@ void l1_irradiance(const Syntax& s, std::ostringstream& o, ShaderSource& out) {
     << "  return " << literal(pi) << " * r0 * (a + (1.0 - a) * (p + 1.0) * pow(q, p));\n";
   const std::string head1 = real + " shtool_l1_irradiance_channel(" + v3 + " n, " + real + " c00, " + v3 + " d)";
   const std::string head3 = v3 + " shtool_l1_irradiance(" + v3 + " n, " + array(v3, "L", "4") + ")";
-  const std::string rgb = "  return " + v3 + "(shtool_l1_irradiance_channel(n, L[0].x, " + l1_vector_code(s, "x") +
+  const std::string rgb = "  return " + vec3_constructor(s) + "(shtool_l1_irradiance_channel(n, L[0].x, " + l1_vector_code(s, "x") +
                           "),\n    shtool_l1_irradiance_channel(n, L[0].y, " + l1_vector_code(s, "y") +
                           "),\n    shtool_l1_irradiance_channel(n, L[0].z, " + l1_vector_code(s, "z") + "));\n";
   count_ops(b.str(), 3, out);
@@ -679,8 +682,8 @@ void zh3_irradiance(const Syntax& s, std::ostringstream& o, ShaderSource& out) {
   std::ostringstream body;
   // Axis: luminance-weighted L1 vector, or the channel's own; +z for a zero band.
   const std::string axis_head = v3 + " shtool_zh3_axis(" + v3 + " d)";
-  const std::string axis = "  " + real + " len = length(d);\n  return len > 0.0 ? d / len : " + v3 +
-                           "(0.0, 0.0, 1.0);\n";
+  const std::string axis = "  " + real + " len = length(d);\n  return len > 0.0 ? d / len : " +
+                           vec3_constructor(s) + "(0.0, 0.0, 1.0);\n";
   const std::string lum_head = v3 + " shtool_zh3_luminance_axis(" + l + ")";
   const std::string lum = "  return shtool_zh3_axis(" + literal(kZh3LuminanceWeights[0]) + " * " +
                           l1_vector_code(s, "x") + " + " + literal(kZh3LuminanceWeights[1]) + " * " +
@@ -698,7 +701,7 @@ void zh3_irradiance(const Syntax& s, std::ostringstream& o, ShaderSource& out) {
     std::string h = v3 + " " + name + "(" + v3 + " n, " + l + (hallucinated ? "" : ", " + v3 + " zonal") + ")";
     std::string b;
     if (!per_channel) b += "  " + v3 + " a = shtool_zh3_luminance_axis(L);\n";
-    std::string ret = "  return " + v3 + "(";
+    std::string ret = "  return " + vec3_constructor(s) + "(";
     for (int c = 0; c < 3; ++c) {
       const std::string x(1, "xyz"[c]);
       const std::string d = "d" + x;
