@@ -261,12 +261,18 @@ TEST(ThreeProbeGrid, TheModuleRefusesATruncatedAtlasByName) {
 }
 
 // three's own shader reading the atlas on a GPU (SwiftShader's WebGL2 in headless
-// Chromium): a white MeshLambertMaterial sphere lit only by a loaded grid, rendered into a
-// float target, has exit radiance E(n) / pi at each pixel's normal (read back from a second
-// pass with MeshNormalMaterial). The grid is uniform (every probe the same light), so
-// three's trilinear filtering returns the probe itself and every pixel checks all seven
-// slots. Tolerance 1e-3 absolute for pixels near 1: float rendering and the normal's
-// float round trip are far below it, a wrong slot, sign or frame far above.
+// Chromium): a white MeshLambertMaterial sphere of radius 1 at the origin, lit only by a
+// loaded 4 x 4 x 4 grid over [-8, 8]^3, rendered into a float target, has exit radiance
+// E(n) / pi at each pixel's normal n (read back from a second pass with
+// MeshNormalMaterial), E being the irradiance of the coefficients three interpolates at its
+// sample point P + n spacing / 2 = 3 n (P = n on the unit sphere, spacing 4). Two grids:
+// every probe the same light (filtering returns it exactly; every pixel reads all seven
+// slots), and coefficients affine in the probe position, c(p) = c + G p, which trilinear
+// filtering reproduces exactly between probe centres (3 n stays inside [-6, 6]^3), so each
+// pixel checks where three finds each probe. Tolerance 1e-3 absolute for pixels near 1:
+// float rendering, the normal's round trip, the sphere's facets (|P - n| < 2e-4, times
+// |G| = 0.02) and 8-bit filter weights (1/512 of a neighbour difference of 0.08) stay
+// below it; a wrong slot, sign, axis or probe order moves pixels by 0.01 and more.
 TEST(ThreeProbeGrid, ChromiumRendersALambertSphereWithEOverPi) {
   SHTOOL_REQUIRE_NODE_CONSUMERS();
   if (test::run_command({"sh", "-c", "command -v chromium"}).exit_code != 0) {
@@ -289,39 +295,59 @@ TEST(ThreeProbeGrid, ChromiumRendersALambertSphereWithEOverPi) {
     for (int i = 0; i < 9; ++i)
       for (int c = 0; c < 3; ++c) light[3 * i + c] += sun.second[c] * y[i];
   }
-  ThreeProbeGridInput g;
-  g.resolution = {2, 3, 4};
-  g.min = Eigen::Vector3d(-4, -4, -4);
-  g.max = Eigen::Vector3d(4, 4, 4);
-  for (int p = 0; p < 24; ++p) g.coefficients.insert(g.coefficients.end(), light.begin(), light.end());
-  const fs::path dir = scratch_dir("browser");
-  interop::write_three_probe_grid(dir, g);
-  test::CommandOptions o;
-  o.timeout_seconds = 300;
-  const test::CommandResult r = test::run_command(
-      {"node", (consumers / "probe_grid_browser.mjs").string(), "chromium", dir.string()}, o);
-  ASSERT_EQ(r.exit_code, 0) << r.err;
-  const nlohmann::json out = nlohmann::json::parse(r.out);
-  ASSERT_FALSE(out.contains("error")) << out["error"].get<std::string>();
-  ASSERT_GT(out["pixels"].size(), 2000u);  // the sphere covers about 70% of 64 x 64
-  std::vector<double> e(light.begin(), light.end());
-  radiance_to_irradiance(3, e);
-  double worst = 0;
-  for (const nlohmann::json& px : out["pixels"]) {
-    Eigen::Vector3d n3(px[0], px[1], px[2]);
-    n3.normalize();
-    eval_sh<double>(3, shtool_of_three(n3), y);
-    for (int c = 0; c < 3; ++c) {
-      double want = 0;
-      for (int i = 0; i < 9; ++i) want += e[3 * i + c] * y[i];
-      want /= std::numbers::pi;
-      const double got = px[3 + c];
-      worst = std::max(worst, std::abs(got - want));
-      ASSERT_NEAR(got, want, 1e-3) << "normal " << n3.transpose() << " channel " << c;
+  // G: one gradient (shtool's frame) per coefficient and channel, |G| = 0.02.
+  std::vector<Eigen::Vector3d> gradient(27);
+  std::mt19937_64 rng(9);
+  std::normal_distribution<double> gauss;
+  for (auto& v : gradient) v = 0.02 * Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng)).normalized();
+  for (const bool affine : {false, true}) {
+    SCOPED_TRACE(affine ? "affine grid" : "uniform grid");
+    auto coefficients_at = [&](const Eigen::Vector3d& p) {
+      std::vector<double> c(light.begin(), light.end());
+      if (affine)
+        for (int k = 0; k < 27; ++k) c[k] += gradient[k].dot(p);
+      return c;
+    };
+    ThreeProbeGridInput g;
+    g.resolution = {4, 4, 4};
+    g.min = Eigen::Vector3d(-8, -8, -8);
+    g.max = Eigen::Vector3d(8, 8, 8);
+    for (int iz = 0; iz < 4; ++iz)
+      for (int iy = 0; iy < 4; ++iy)
+        for (int ix = 0; ix < 4; ++ix) {
+          const std::vector<double> c = coefficients_at(Eigen::Vector3d(-6 + 4 * ix, -6 + 4 * iy, -6 + 4 * iz));
+          g.coefficients.insert(g.coefficients.end(), c.begin(), c.end());
+        }
+    const fs::path dir = scratch_dir(affine ? "browser_affine" : "browser_uniform");
+    interop::write_three_probe_grid(dir, g);
+    test::CommandOptions o;
+    o.timeout_seconds = 300;
+    const test::CommandResult r = test::run_command(
+        {"node", (consumers / "probe_grid_browser.mjs").string(), "chromium", dir.string()}, o);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const nlohmann::json out = nlohmann::json::parse(r.out);
+    ASSERT_FALSE(out.contains("error")) << out["error"].get<std::string>();
+    ASSERT_GT(out["pixels"].size(), 2000u);  // the sphere covers about 70% of 64 x 64
+    double worst = 0;
+    for (const nlohmann::json& px : out["pixels"]) {
+      Eigen::Vector3d n3(px[0], px[1], px[2]);
+      n3.normalize();
+      const Eigen::Vector3d n = shtool_of_three(n3);
+      std::vector<double> e = coefficients_at(3 * n);
+      radiance_to_irradiance(3, e);
+      eval_sh<double>(3, n, y);
+      for (int c = 0; c < 3; ++c) {
+        double want = 0;
+        for (int i = 0; i < 9; ++i) want += e[3 * i + c] * y[i];
+        want /= std::numbers::pi;
+        const double got = px[3 + c];
+        worst = std::max(worst, std::abs(got - want));
+        ASSERT_NEAR(got, want, 1e-3) << "normal " << n3.transpose() << " channel " << c;
+      }
     }
+    std::printf("%s grid, %s: %zu pixels, worst |pixel - E/pi| %.3g\n", affine ? "affine" : "uniform",
+                out["renderer"].get<std::string>().c_str(), out["pixels"].size(), worst);
   }
-  std::printf("%s: %zu pixels, worst |pixel - E/pi| %.3g\n", out["renderer"].get<std::string>().c_str(),
-              out["pixels"].size(), worst);
 }
 
 }  // namespace
