@@ -19,8 +19,8 @@
 //     E(n) = pi c00 y00 + (2 pi / 3) k1 d . n + (pi / 4) f sqrt(5 / (16 pi)) (3 (a . n)^2 - 1).
 //   The axis is the luminance-weighted one, a = normalise(sum_c w_c d_c) with
 //   w = (0.2126, 0.7152, 0.0722) (the default, shared by the three channels), or each
-//   channel's own d_c / |d_c|. A zero L1 band has no axis: +z is taken (any axis gives
-//   the same result for the hallucinated f, which is then 0).
+//   channel's own d_c / |d_c|. A zero L1 vector (the channel's, or the weighted sum) has
+//   no direction: +z is taken.
 //   Explicit f: the least-squares fit of the band-2 coefficients c_2m by a zonal function
 //   along a, f = sqrt(4 pi / 5) sum_m c_2m y_2^m(a).
 //   Hallucinated f (no band 2 needed, nothing extra stored): with r = |d . a| / c00,
