@@ -21,6 +21,7 @@ packages=(
   clang libclang-rt-14-dev                               # fuzz targets (libFuzzer), sanitizers
   python3 python3-jsonschema python3-numpy               # schema checks, numpy reader test
   python3-dev pybind11-dev python3-pybind11 python3-scipy python3-pytest python3-venv  # Python module and its tests
+  chromium                                               # page tests: headless WebGL2 on SwiftShader
 )
 # The engine checks run three.js and Babylon.js in node (npm installs them into the
 # build folder at test time). A machine image's own Node.js is used as it is: Debian's

@@ -20,9 +20,12 @@ struct LightOptions {
   std::string cs = "on";
 };
 
-void add_common(CLI::App* sub, LightOptions& o) {
-  add_enum_option(sub, "--format", o.format, interop::light_format_names(),
-                  "threejs, filament, filament-radiance, unity, gltf, gltf-khr, babylon, godot or raw", "threejs")
+void add_common(CLI::App* sub, LightOptions& o, bool exporting) {
+  add_enum_option(sub, "--format", o.format, exporting ? interop::export_format_names() : interop::light_format_names(),
+                  exporting ? "threejs, filament, filament-radiance, unity, gltf, gltf-khr, babylon, godot, raw, or a "
+                              "probe encoding: l1 (Geomerics non-linear L1) or zh3"
+                            : "threejs, filament, filament-radiance, unity, gltf, gltf-khr, babylon, godot or raw",
+                  "threejs")
       ->required();
   sub->add_option("--frame", o.frame, "engine axes in shtool's, e.g. x,z,-y (default: the format's)");
   sub->add_option("--cs", o.cs, "raw: Condon-Shortley phase on or off")->check(CLI::IsMember({"on", "off"}))->default_str("on");
@@ -45,9 +48,16 @@ void setup_export_light(CLI::App& app) {
   sub->add_option("light", *in, "lighting JSON (shtool project-env / light)")->required();
   sub->add_option("--out", *out, "output file")->required();
   sub->add_option("--intensity", *intensity, "scale (the format's intensity field where it has one)")->capture_default_str();
-  add_common(sub, *o);
+  add_common(sub, *o, true);
+  auto axis = std::make_shared<std::string>();
+  sub->add_option("--axis", *axis, "zh3: the zonal axis, luminance (shared, the default) or per-channel")
+      ->check(CLI::IsMember({"luminance", "per-channel"}));
   sub->callback([=]() {
     o->raw.condon_shortley = o->cs == "on";
+    if (!axis->empty()) {
+      if (o->format != interop::LightFormat::zh3) throw InputError("--axis applies to --format zh3 only");
+      o->raw.zh3_axis = *axis == "luminance" ? Zh3Axis::luminance : Zh3Axis::per_channel;
+    }
     const std::vector<std::string> notes =
         interop::run_export_light({*in, *out, o->format, frame_of(*o), *intensity, o->raw});
     for (const std::string& n : notes) std::cerr << "export-light: note: " << n << '\n';
@@ -65,7 +75,7 @@ void setup_import_light(CLI::App& app) {
   sub->add_option("--json", *json, "output lighting JSON")->required();
   add_enum_option(sub, "--quantity", *quantity, lighting::quantity_names(),
                   "radiance or irradiance", "radiance");
-  add_common(sub, *o);
+  add_common(sub, *o, false);
   sub->callback([=]() {
     const lighting::Lighting l = interop::run_import_light({*in, *json, o->format, frame_of(*o), *quantity});
     std::cerr << "import-light: order " << l.order << ", " << lighting::quantity_name(l.quantity) << ", wrote "

@@ -23,7 +23,7 @@ void setup_gen_shader(CLI::App& app) {
   for (ShaderOperation op : shader_operations()) names.emplace_back(std::string(shader_operation_name(op)), op);
   add_enum_option(sub, "--what", req->shader.operation, names,
                   "operation: sh-eval, sh-irradiance, zxzxz-rotate, zhf-rotate, zhf-tailored-rotate, triple-product, "
-                  "zh-shade",
+                  "zh-shade, l1-irradiance, zh3-irradiance",
                   "")
       ->required();
   sub->add_option("--order", req->shader.order, "SH order N (bands 0..N-1)")->required();

@@ -31,7 +31,7 @@ shtool::test::CommandResult gen(const std::vector<std::string>& args) {
 }
 
 const char* kOperations[] = {"sh-eval",        "sh-irradiance", "zxzxz-rotate", "zhf-rotate", "zhf-tailored-rotate",
-                             "triple-product", "zh-shade"};
+                             "triple-product", "zh-shade",      "l1-irradiance", "zh3-irradiance"};
 
 TEST(GenShader, EveryOperationIsAnIncludeWithTheContract) {
   for (const char* lang : {"glsl", "hlsl"})
@@ -90,6 +90,11 @@ TEST(GenShader, SignaturesAsDocumented) {
       {"glsl", "zh-shade",
        "float shtool_zh_shade(vec3 axes[SHTOOL_ZH_LOBES], float g[SHTOOL_ZH_LOBES * SHTOOL_ORDER], float "
        "e[SHTOOL_ORDER * SHTOOL_ORDER])"},
+      {"glsl", "l1-irradiance", "vec3 shtool_l1_irradiance(vec3 n, vec3 L[4])"},
+      {"hlsl", "l1-irradiance", "float shtool_l1_irradiance_channel(float3 n, float c00, float3 d)"},
+      {"glsl", "zh3-irradiance", "vec3 shtool_zh3_irradiance(vec3 n, vec3 L[4], vec3 zonal)"},
+      {"hlsl", "zh3-irradiance", "float3 shtool_zh3_hallucinate_irradiance(float3 n, float3 L[4])"},
+      {"glsl", "zh3-irradiance", "vec3 shtool_zh3_irradiance_per_channel(vec3 n, vec3 L[4], vec3 zonal)"},
   };
   for (const Expect& e : expects) {
     const fs::path out = scratch("sig.txt");
@@ -151,6 +156,8 @@ TEST(GenShader, BadRequestsAreRefusedByName) {
       {{"--lang", "glsl", "--what", "zxzxz-rotate", "--order", "9"}, "--order 9"},
       {{"--lang", "glsl", "--what", "zxzxz-rotate", "--order", "1"}, "--order 1"},
       {{"--lang", "glsl", "--what", "triple-product", "--order", "7"}, "--order 7"},
+      {{"--lang", "glsl", "--what", "l1-irradiance", "--order", "1"}, "--order 1"},
+      {{"--lang", "glsl", "--what", "zh3-irradiance", "--order", "11"}, "--order 11"},
       {{"--lang", "glsl", "--what", "sh-eval", "--order", "3", "--zh-lobes", "2"}, "--zh-lobes"},
       {{"--lang", "glsl", "--what", "zh-shade", "--order", "3", "--zh-lobes", "0"}, "--zh-lobes"},
       {{"--lang", "glsl", "--what", "zh-shade", "--order", "3", "--zh-lobes", "17"}, "--zh-lobes"},

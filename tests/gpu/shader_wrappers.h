@@ -104,6 +104,31 @@ inline Wrapper wrapper(shtool::ShaderLanguage lang, shtool::ShaderOperation op, 
                load_array("float", "e", nn, "ib + " + std::to_string(3 * lobes + lobes * n)) +
                "  outp[ob] = shtool_zh_shade(axes, g, e);\n";
       break;
+    case shtool::ShaderOperation::l1_irradiance:
+    case shtool::ShaderOperation::zh3_irradiance: {
+      // n, L[4] as RGB, then (zh3) the zonal RGB coefficients. Outputs: l1 E (RGB); zh3 E
+      // (RGB) of stored zonal coefficients on the luminance axis, on per-channel axes, then
+      // hallucinated on the luminance axis and on per-channel axes.
+      const bool zh3 = op == shtool::ShaderOperation::zh3_irradiance;
+      w.in_stride = 3 + 12 + (zh3 ? 3 : 0);
+      w.out_stride = zh3 ? 12 : 3;
+      std::string b = "  " + v3 + " n = " + vec3_of(lang, "ib") + ";\n  " + v3 + " L[4];\n" +
+                      "  for (int k = 0; k < 4; ++k) L[k] = " + vec3_of(lang, "ib + 3 + 3 * k") + ";\n";
+      auto put = [&](int at, const std::string& call) {
+        b += "  { " + v3 + " e = " + call + ";\n    outp[ob + " + std::to_string(at) + "] = e.x; outp[ob + " +
+             std::to_string(at + 1) + "] = e.y; outp[ob + " + std::to_string(at + 2) + "] = e.z; }\n";
+      };
+      if (!zh3) put(0, "shtool_l1_irradiance(n, L)");
+      else {
+        b += "  " + v3 + " zonal = " + vec3_of(lang, "ib + 15") + ";\n";
+        put(0, "shtool_zh3_irradiance(n, L, zonal)");
+        put(3, "shtool_zh3_irradiance_per_channel(n, L, zonal)");
+        put(6, "shtool_zh3_hallucinate_irradiance(n, L)");
+        put(9, "shtool_zh3_hallucinate_irradiance_per_channel(n, L)");
+      }
+      w.body = b;
+      break;
+    }
   }
   return w;
 }

@@ -8,7 +8,8 @@
 // scale sqrt((2l+1)/4pi) (the recurrence adds a rounding per band: 1.9e-6 measured at
 // N = 10), zh-shade at 2e-6 of the sum of absolute terms,
 // rotations at 1e-5 of |f| (the bound docs/shaders.md states for N <= 8; measured errors are printed),
-// products and irradiance at 1e-6 of the sum of absolute terms.
+// products and irradiance at 1e-6 of the sum of absolute terms, the probe encodings (l1-,
+// zh3-irradiance) at 2e-6 of the sum of their terms' sizes (pow in L1).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -28,6 +29,7 @@
 #include "scratch_files.h"
 #include "shaders/shader_source.h"
 #include "shtool/irradiance.h"
+#include "shtool/probe_encoding.h"
 #include "shtool/rotation.h"
 #include "shtool/sh.h"
 #include "shtool/tripling_product.h"
@@ -125,6 +127,14 @@ Problem make_problem(ShaderOperation op, int n, int lobes, const Wrapper& w, std
         for (int i = 0; i < lobes; ++i) put_dir(inv, 3 * i, inv < 6 ? inv : 6 + i);
       break;
     case ShaderOperation::triple_product: break;
+    case ShaderOperation::l1_irradiance:
+    case ShaderOperation::zh3_irradiance:
+      // A light with positive band 0 (c00 in [0.5, 1.5]); |d| up to sqrt3 covers r beyond 1.
+      for (int inv = 0; inv < kInputs; ++inv) {
+        put_dir(inv, 0, inv);
+        for (int c = 0; c < 3; ++c) at(inv, 3 + c) = static_cast<float>(1.0 + 0.5 * u(rng));
+      }
+      break;
   }
   const std::vector<float> in = p.in;  // the float values are the problem
   const int in_stride = w.in_stride, out_stride = w.out_stride;
@@ -245,6 +255,45 @@ Problem make_problem(ShaderOperation op, int n, int lobes, const Wrapper& w, std
         return worst;
       };
       break;
+    case ShaderOperation::l1_irradiance:
+    case ShaderOperation::zh3_irradiance:
+      p.worst_error = [=](const std::vector<float>& out) {
+        const bool zh3 = op == ShaderOperation::zh3_irradiance;
+        const double pi = std::numbers::pi;
+        double worst = 0;
+        for (int inv = 0; inv < kInputs; ++inv) {
+          const Eigen::Vector3d d(in_at(inv, 0), in_at(inv, 1), in_at(inv, 2));
+          const Eigen::Vector3d nrm = d / d.norm();
+          shtool::Zh3Probe<double> probe;
+          for (int k = 0; k < 12; ++k) probe.l1.coefficients[k] = in_at(inv, 3 + k);
+          const auto tol = [&](int c, double f) {
+            // float rounding of every term: 2e-6 of the sum of their sizes (pow's argument
+            // and exponent reach 3: a few ulps each; measured 0.15 of it on lavapipe)
+            const double c00 = probe.l1.coefficients[c], dn = shtool::l1_vector(probe.l1, c).norm();
+            return 2e-6 * (pi * 0.2820948 * std::abs(c00) * 5 + 2.1 * 0.4886 * dn + 0.25 * 3 * std::abs(f) + 1e-6);
+          };
+          if (!zh3) {
+            const Eigen::Vector3d e = shtool::l1_nonlinear_irradiance(probe.l1, nrm);
+            for (int c = 0; c < 3; ++c)
+              worst = worse(worst, std::abs(out[std::size_t(inv) * out_stride + c] - e[c]) / tol(c, 0));
+            continue;
+          }
+          for (int c = 0; c < 3; ++c) probe.zonal[c] = in_at(inv, 15 + c);
+          int slot = 0;
+          for (bool hallucinated : {false, true})
+            for (shtool::Zh3Axis axis : {shtool::Zh3Axis::luminance, shtool::Zh3Axis::per_channel}) {
+              shtool::Zh3Probe<double> q = probe;
+              if (hallucinated)
+                for (int c = 0; c < 3; ++c) q.zonal[c] = shtool::zh3_hallucinated_zonal(q.l1, axis, c);
+              const Eigen::Vector3d e = shtool::zh3_irradiance(q, axis, nrm);
+              for (int c = 0; c < 3; ++c)
+                worst = worse(worst, std::abs(out[std::size_t(inv) * out_stride + 3 * slot + c] - e[c]) / tol(c, q.zonal[c]));
+              ++slot;
+            }
+        }
+        return worst;
+      };
+      break;
   }
   return p;
 }
@@ -276,6 +325,9 @@ std::vector<Case> all_cases() {
     for (int n = 2; n <= 10; ++n) cases.push_back({lang, ShaderOperation::zhf_tailored_rotate, n});
     for (int n = 2; n <= 6; ++n) cases.push_back({lang, ShaderOperation::triple_product, n});
     for (int n = 1; n <= 10; ++n) cases.push_back({lang, ShaderOperation::zh_shade, n, n == 1 ? 1 : (n % 3) + 2});
+    // The probe encodings read the same numbers at every order.
+    cases.push_back({lang, ShaderOperation::l1_irradiance, 2});
+    cases.push_back({lang, ShaderOperation::zh3_irradiance, 3});
   }
   return cases;
 }

@@ -157,6 +157,22 @@ const std::vector<std::pair<std::string, LightFormat>>& light_format_names() {
   return names;
 }
 
+const std::vector<std::pair<std::string, LightFormat>>& export_format_names() {
+  static const std::vector<std::pair<std::string, LightFormat>> names = [] {
+    std::vector<std::pair<std::string, LightFormat>> n = light_format_names();
+    n.emplace_back("l1", LightFormat::l1);
+    n.emplace_back("zh3", LightFormat::zh3);
+    return n;
+  }();
+  return names;
+}
+
+const std::vector<std::pair<std::string, Zh3Axis>>& zh3_axis_names() {
+  static const std::vector<std::pair<std::string, Zh3Axis>> names = {{"luminance", Zh3Axis::luminance},
+                                                                     {"per-channel", Zh3Axis::per_channel}};
+  return names;
+}
+
 const std::vector<std::pair<std::string, RawNormalization>>& raw_normalization_names() {
   static const std::vector<std::pair<std::string, RawNormalization>> names = {
       {"orthonormal", RawNormalization::orthonormal}, {"4pi", RawNormalization::four_pi},
@@ -201,7 +217,10 @@ FrameMap default_frame(LightFormat format) {
     case LightFormat::gltf:
     case LightFormat::gltf_khr:
     case LightFormat::babylon: return parse_frame_map("-x,z,-y");
-    case LightFormat::raw: break;
+    // The encodings and raw stay in shtool's frame unless told.
+    case LightFormat::raw:
+    case LightFormat::l1:
+    case LightFormat::zh3: break;
   }
   return parse_frame_map("x,y,z");
 }
@@ -218,6 +237,14 @@ std::vector<double> from_engine_frame(const FrameMap& frame, const std::vector<d
   const Result<Ok> r = apply_orthogonal_map(frame.q.transpose(), 3, out);
   if (!r) throw InputError("--frame '" + frame.text + "': " + r.error().message);
   return out;
+}
+
+std::array<double, 27> threejs_sh3(const std::array<double, 27>& radiance) {
+  const Nine g = engine(default_frame(LightFormat::threejs), radiance);
+  Nine t{};
+  for (int i = 0; i < 9; ++i)
+    for (int c = 0; c < 3; ++c) t[3 * i + c] = kSigma[i] * g[3 * i + c];
+  return t;
 }
 
 ExportedLight export_light(const Lighting& light, LightFormat format, const FrameMap& frame, double intensity,
@@ -344,6 +371,37 @@ ExportedLight export_light(const Lighting& light, LightFormat format, const Fram
       for (int i = 0; i < 9; ++i)
         for (int c = 0; c < 3; ++c) v[3 * i + c] = intensity * kSigma[i] * g[3 * i + c] / kPi;
       out.text = rows_text({{"godot_lightmap_probe_sh", rows_json(v)}});
+      if (intensity != 1) out.notes.push_back("--intensity is folded into the coefficients");
+      break;
+    }
+    case LightFormat::l1:
+    case LightFormat::zh3: {
+      // The encodings commute with the frame map (d turns as a vector, band 2 with it, f is
+      // invariant), so the light is carried to the frame first.
+      const Nine g = scaled(engine(frame, first_nine(light, Quantity::radiance, out.notes)));
+      const std::span<const double> all(g.data(), g.size());
+      nlohmann::json l1 = nlohmann::json::array();
+      for (int i = 0; i < 4; ++i) l1.push_back({g[3 * i], g[3 * i + 1], g[3 * i + 2]});
+      nlohmann::json doc = {{"encoding", format == LightFormat::l1 ? "l1" : "zh3"},
+                            {"quantity", "radiance"},
+                            {"basis", "shtool: real orthonormal SH, Condon-Shortley phase, index l(l+1)+m"},
+                            {"frame", frame.text},
+                            {"coefficients", l1}};
+      if (format == LightFormat::zh3) {
+        const Zh3Probe<double> fit = encode_zh3<double>(all, raw.zh3_axis, Zh3Fit::explicit_fit);
+        const Zh3Probe<double> guess = encode_zh3<double>(all, raw.zh3_axis, Zh3Fit::hallucinated);
+        nlohmann::json axes = nlohmann::json::array();
+        for (int c = 0; c < 3; ++c) {
+          const Vec3<double> a = zh3_axis(fit.l1, raw.zh3_axis, c);
+          axes.push_back({a.x(), a.y(), a.z()});
+        }
+        doc["axis"] = name_of(raw.zh3_axis, zh3_axis_names());
+        if (raw.zh3_axis == Zh3Axis::luminance) doc["luminance_weights"] = kZh3LuminanceWeights;
+        doc["zonal"] = fit.zonal;
+        doc["zonal_hallucinated"] = guess.zonal;
+        doc["axes"] = axes;
+      }
+      out.text = rows_text(doc);
       if (intensity != 1) out.notes.push_back("--intensity is folded into the coefficients");
       break;
     }

@@ -6,6 +6,7 @@
 // meaning; every engine format holds bands 0..2 only.
 #pragma once
 
+#include <array>
 #include <filesystem>
 #include <string>
 #include <string_view>
@@ -15,11 +16,16 @@
 #include <Eigen/Core>
 
 #include "lighting/lighting_output.h"
+#include "shtool/probe_encoding.h"
 
 namespace shtool::interop {
 
-enum class LightFormat { threejs, filament, filament_radiance, unity, gltf, gltf_khr, babylon, godot, raw };
+// l1 and zh3 are a probe's compact encodings (shtool/probe_encoding.h), written by
+// export-light only: they keep less than the light, so there is nothing to import.
+enum class LightFormat { threejs, filament, filament_radiance, unity, gltf, gltf_khr, babylon, godot, raw, l1, zh3 };
+// The formats import-light reads (all but l1 and zh3) and those export-light writes.
 const std::vector<std::pair<std::string, LightFormat>>& light_format_names();
+const std::vector<std::pair<std::string, LightFormat>>& export_format_names();
 
 // engine = Q w for shtool's w, written as three signed axis names: "x,z,-y" means
 // engine x = shtool x, engine y = shtool z, engine z = -shtool y. Q may be a reflection
@@ -31,13 +37,15 @@ struct FrameMap {
 FrameMap parse_frame_map(std::string_view text);  // InputError on anything but a signed permutation
 FrameMap default_frame(LightFormat format);
 
-// The raw format's choices (any order).
+// The raw format's choices (any order), and the zh3 format's axis.
 enum class RawNormalization { orthonormal, four_pi, schmidt };
 struct RawOptions {
   bool condon_shortley = true;
   RawNormalization normalization = RawNormalization::orthonormal;
+  Zh3Axis zh3_axis = Zh3Axis::luminance;
 };
 const std::vector<std::pair<std::string, RawNormalization>>& raw_normalization_names();
+const std::vector<std::pair<std::string, Zh3Axis>>& zh3_axis_names();
 
 struct ExportedLight {
   std::string text;                // the file's contents
@@ -55,6 +63,12 @@ ExportedLight export_light(const lighting::Lighting& light, LightFormat format, 
 // malformed file.
 lighting::Lighting import_light(std::string_view text, const std::filesystem::path& name, LightFormat format,
                                 const FrameMap& frame, lighting::Quantity quantity);
+
+// three.js's SphericalHarmonics3 of order-3 radiance coefficients in shtool's basis and
+// frame (in[3 i + c]): its 27 numbers (coefficient-major, RGB inner) in three's y-up
+// frame (x,z,-y) and basis (no Condon-Shortley phase), as LightProbe.sh and
+// LightProbeGridWebGL's atlas hold them.
+std::array<double, 27> threejs_sh3(const std::array<double, 27>& radiance);
 
 // The engine-frame coefficients in shtool's basis formula applied to engine coordinates:
 // g(e) = f(Q^-1 e) (rotation or reflection, any order).

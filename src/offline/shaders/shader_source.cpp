@@ -11,6 +11,7 @@
 #include "common/finite.h"
 #include "common/input_error.h"
 #include "shtool/irradiance.h"
+#include "shtool/probe_encoding.h"
 #include "shtool/table.h"
 #include "shtool/version.h"
 #include "tensors/rotation_helpers_gen.h"
@@ -633,6 +634,115 @@ void triple_product(const Syntax& s, int n, std::ostringstream& o, ShaderSource&
     << head << " {\n" << b.str() << "}\n";
 }
 
+// A vec3 constructor's name: GLSL takes no precision qualifier there.
+std::string vec3_constructor(const Syntax& s) { return s.glsl() ? "vec3" : s.vec3(); }
+
+// The L1 vector d = (-c_11, -c_1-1, c_10) of channel `ch` of RGB coefficients L[0..3].
+std::string l1_vector_code(const Syntax& s, const std::string& ch) {
+  return vec3_constructor(s) + "(-L[3]." + ch + ", -L[1]." + ch + ", L[2]." + ch + ")";
+}
+
+// Geomerics' non-linear L1 irradiance (Hazel 2017; shtool/probe_encoding.h):
+// E = pi R0 (a + (1 - a)(p + 1) q^p), R0 = c00 / sqrt(4 pi), R1 = d / sqrt(12 pi).
+void l1_irradiance(const Syntax& s, std::ostringstream& o, ShaderSource& out) {
+  const long double pi = std::numbers::pi_v<long double>;
+  const std::string real = s.real(), v3 = s.vec3();
+  std::ostringstream b;
+  b << "  " << real << " r0 = " << literal(1 / std::sqrt(4 * pi)) << " * c00;\n"
+    << "  if (!(r0 > 0.0)) return 0.0;\n"
+    << "  " << v3 << " r1 = " << literal(1 / std::sqrt(12 * pi)) << " * d;\n"
+    << "  " << real << " len = length(r1);\n"
+    << "  " << real << " r = len / r0;\n"
+    << "  " << real << " q = len > 0.0 ? max(0.5 + 0.5 * dot(n, r1) / len, 0.0) : 0.5;\n"
+    << "  " << real << " p = 1.0 + 2.0 * r;\n"
+    << "  " << real << " a = (1.0 - r) / (1.0 + r);\n"
+    << "  return " << literal(pi) << " * r0 * (a + (1.0 - a) * (p + 1.0) * pow(q, p));\n";
+  const std::string head1 = real + " shtool_l1_irradiance_channel(" + v3 + " n, " + real + " c00, " + v3 + " d)";
+  const std::string head3 = v3 + " shtool_l1_irradiance(" + v3 + " n, " + array(v3, "L", "4") + ")";
+  const std::string rgb = "  return " + vec3_constructor(s) + "(shtool_l1_irradiance_channel(n, L[0].x, " + l1_vector_code(s, "x") +
+                          "),\n    shtool_l1_irradiance_channel(n, L[0].y, " + l1_vector_code(s, "y") +
+                          "),\n    shtool_l1_irradiance_channel(n, L[0].z, " + l1_vector_code(s, "z") + "));\n";
+  count_ops(b.str(), 3, out);
+  count_ops(rgb, 1, out);
+  out.signature = head1 + ";\n" + head3 + ";";
+  o << "// Geomerics' non-linear L1 irradiance (Hazel 2017) of one channel: c00 its band-0 radiance\n"
+       "// coefficient, d = (-c_11, -c_1-1, c_10) its band-1 vector, n a unit normal. E without 1/pi;\n"
+       "// exact for a constant light and, at n = s, for one directional light along s.\n"
+    << head1 << " {\n" << b.str() << "}\n\n"
+    << "// The same for an RGB probe: L[i] = radiance coefficient i (shtool's basis, i = 0..3).\n"
+    << head3 << " {\n" << rgb << "}\n";
+}
+
+// ZH3 (Roughton et al. 2024): L1 plus a zonal band-2 coefficient per channel along an axis
+// from the L1 band (shtool/probe_encoding.h), explicit (stored) or hallucinated.
+void zh3_irradiance(const Syntax& s, std::ostringstream& o, ShaderSource& out) {
+  const long double pi = std::numbers::pi_v<long double>;
+  const std::string real = s.real(), v3 = s.vec3();
+  const std::string l = array(v3, "L", "4");
+  std::ostringstream body;
+  // Axis: luminance-weighted L1 vector, or the channel's own; +z for a zero band.
+  const std::string axis_head = v3 + " shtool_zh3_axis(" + v3 + " d)";
+  const std::string axis = "  " + real + " len = length(d);\n  return len > 0.0 ? d / len : " +
+                           vec3_constructor(s) + "(0.0, 0.0, 1.0);\n";
+  const std::string lum_head = v3 + " shtool_zh3_luminance_axis(" + l + ")";
+  const std::string lum = "  return shtool_zh3_axis(" + literal(kZh3LuminanceWeights[0]) + " * " +
+                          l1_vector_code(s, "x") + " + " + literal(kZh3LuminanceWeights[1]) + " * " +
+                          l1_vector_code(s, "y") + " + " + literal(kZh3LuminanceWeights[2]) + " * " +
+                          l1_vector_code(s, "z") + ");\n";
+  const std::string ch_head = real + " shtool_zh3_irradiance_channel(" + v3 + " n, " + real + " c00, " + v3 + " d, " +
+                              real + " f, " + v3 + " a)";
+  const std::string ch = "  " + real + " t = dot(a, n);\n  return " + literal(pi / std::sqrt(4 * pi)) + " * c00 + " +
+                         literal(2 * pi / 3 * std::sqrt(3 / (4 * pi))) + " * dot(d, n) + " +
+                         literal(pi / 4 * std::sqrt(5 / (16 * pi))) + " * f * (3.0 * t * t - 1.0);\n";
+  const std::string hal_head = real + " shtool_zh3_hallucinated_zonal(" + real + " c00, " + v3 + " d, " + v3 + " a)";
+  const std::string hal = "  if (!(c00 > 0.0)) return 0.0;\n  " + real + " r = abs(dot(d, a)) / c00;\n"
+                          "  return c00 * r * (0.08 + 0.6 * r);\n";
+  auto rgb = [&](const std::string& name, bool per_channel, bool hallucinated) {
+    std::string h = v3 + " " + name + "(" + v3 + " n, " + l + (hallucinated ? "" : ", " + v3 + " zonal") + ")";
+    std::string b;
+    if (!per_channel) b += "  " + v3 + " a = shtool_zh3_luminance_axis(L);\n";
+    std::string ret = "  return " + vec3_constructor(s) + "(";
+    for (int c = 0; c < 3; ++c) {
+      const std::string x(1, "xyz"[c]);
+      const std::string d = "d" + x;
+      b += "  " + v3 + " " + d + " = " + l1_vector_code(s, x) + ";\n";
+      const std::string a = per_channel ? "a" + x : "a";
+      if (per_channel) b += "  " + v3 + " " + a + " = shtool_zh3_axis(" + d + ");\n";
+      const std::string f = hallucinated ? "shtool_zh3_hallucinated_zonal(L[0]." + x + ", " + d + ", " + a + ")"
+                                         : "zonal." + x;
+      ret += (c ? ",\n    " : "") + std::string("shtool_zh3_irradiance_channel(n, L[0].") + x + ", " + d + ", " + f +
+             ", " + a + ")";
+    }
+    b += ret + ");\n";
+    return std::make_pair(h, b);
+  };
+  const auto explicit_lum = rgb("shtool_zh3_irradiance", false, false);
+  const auto explicit_per = rgb("shtool_zh3_irradiance_per_channel", true, false);
+  const auto hal_lum = rgb("shtool_zh3_hallucinate_irradiance", false, true);
+  const auto hal_per = rgb("shtool_zh3_hallucinate_irradiance_per_channel", true, true);
+  // The figure is the default path: the luminance axis, stored zonal coefficients.
+  count_ops(lum + ch + ch + ch + axis + explicit_lum.second, 1, out);
+  out.signature = axis_head + ";\n" + lum_head + ";\n" + ch_head + ";\n" + hal_head + ";\n" + explicit_lum.first +
+                  ";\n" + explicit_per.first + ";\n" + hal_lum.first + ";\n" + hal_per.first + ";";
+  o << "// ZH3 irradiance (Roughton, Sloan, Silvennoinen, Iwanicki, Shirley, i3D 2024). A probe stores per\n"
+       "// channel the band-0 and band-1 radiance coefficients (L[i], shtool's basis, i = 0..3) and one zonal\n"
+       "// band-2 coefficient f along an axis recomputed from the L1 band: the luminance-weighted one\n"
+       "// (Rec. 709 weights; the default) or each channel's own. E without 1/pi; n a unit normal.\n"
+    << "// The unit axis of an L1 vector d (+z when d = 0).\n"
+    << axis_head << " {\n" << axis << "}\n\n"
+    << "// normalise(sum_c w_c d_c), w = (0.2126, 0.7152, 0.0722).\n"
+    << lum_head << " {\n" << lum << "}\n\n"
+    << "// E(n) = pi c00 y00 + (2 pi / 3) k1 d . n + (pi / 4) f sqrt(5 / (16 pi)) (3 (a . n)^2 - 1).\n"
+    << ch_head << " {\n" << ch << "}\n\n"
+    << "// The hallucinated zonal coefficient from L1 alone: r = |d . a| / c00, f = c00 r (0.08 + 0.6 r).\n"
+    << hal_head << " {\n" << hal << "}\n\n"
+    << "// Stored zonal coefficients, luminance axis.\n" << explicit_lum.first << " {\n" << explicit_lum.second << "}\n\n"
+    << "// Stored zonal coefficients, per-channel axes.\n" << explicit_per.first << " {\n" << explicit_per.second << "}\n\n"
+    << "// Hallucinated zonal coefficients (nothing stored beyond L1), luminance axis.\n" << hal_lum.first << " {\n"
+    << hal_lum.second << "}\n\n"
+    << "// Hallucinated zonal coefficients, per-channel axes.\n" << hal_per.first << " {\n" << hal_per.second << "}\n";
+}
+
 std::string guard_name(ShaderOperation op) {
   std::string name = "SHTOOL_" + std::string(shader_operation_name(op)) + "_INCLUDED";
   for (char& c : name) c = c == '-' ? '_' : static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
@@ -645,7 +755,8 @@ const std::vector<ShaderOperation>& shader_operations() {
   static const std::vector<ShaderOperation> all = {ShaderOperation::sh_eval, ShaderOperation::sh_irradiance,
                                                    ShaderOperation::zxzxz_rotate, ShaderOperation::zhf_rotate,
                                                    ShaderOperation::zhf_tailored_rotate, ShaderOperation::triple_product,
-                                                   ShaderOperation::zh_shade};
+                                                   ShaderOperation::zh_shade, ShaderOperation::l1_irradiance,
+                                                   ShaderOperation::zh3_irradiance};
   return all;
 }
 
@@ -658,12 +769,15 @@ std::string_view shader_operation_name(ShaderOperation operation) {
     case ShaderOperation::zhf_tailored_rotate: return "zhf-tailored-rotate";
     case ShaderOperation::triple_product: return "triple-product";
     case ShaderOperation::zh_shade: return "zh-shade";
+    case ShaderOperation::l1_irradiance: return "l1-irradiance";
+    case ShaderOperation::zh3_irradiance: return "zh3-irradiance";
   }
   return "?";
 }
 
 int shader_min_order(ShaderOperation operation) {
-  return operation == ShaderOperation::zxzxz_rotate || operation == ShaderOperation::zhf_rotate ||
+  return operation == ShaderOperation::zxzxz_rotate || operation == ShaderOperation::l1_irradiance ||
+                 operation == ShaderOperation::zh3_irradiance || operation == ShaderOperation::zhf_rotate ||
                  operation == ShaderOperation::zhf_tailored_rotate || operation == ShaderOperation::triple_product
              ? 2
              : 1;
@@ -715,6 +829,15 @@ ShaderSource shader_source(const ShaderRequest& request) {
                   " from the zhf-lobes table whose file has the CRC-32 below; the basis as sh-eval";
       break;
     }
+    case ShaderOperation::l1_irradiance:
+      l1_irradiance(s, body, out);
+      constants = "1 / sqrt(4 pi), 1 / sqrt(12 pi) and pi, from their closed forms";
+      break;
+    case ShaderOperation::zh3_irradiance:
+      zh3_irradiance(s, body, out);
+      constants = "pi y00, (2 pi / 3) k1, (pi / 4) sqrt(5 / (16 pi)) from their closed forms; Rec. 709 luminance "
+                  "weights; the paper's hallucination curve 0.08, 0.6";
+      break;
     case ShaderOperation::triple_product:
       triple_product(s, n, body, out, crc);
       constants = "the tripling tensor of order " + std::to_string(n) + " (Wigner 3j construction)";

@@ -30,7 +30,9 @@ enum class ShaderOperation {
   zhf_rotate,
   zhf_tailored_rotate,
   triple_product,
-  zh_shade
+  zh_shade,
+  l1_irradiance,   // Geomerics' non-linear L1 of a probe's 4 RGB coefficients
+  zh3_irradiance   // ZH3: 4 RGB coefficients and a zonal coefficient per channel
 };
 
 struct ShaderRequest {
@@ -56,8 +58,11 @@ struct ShaderSource {
 };
 
 // Largest order each operation is generated for (sh-eval, sh-irradiance, zh-shade,
-// zhf-rotate, zhf-tailored-rotate 10; zxzxz-rotate 8; triple-product 6). Orders start at 1 (triple-product and
-// the rotations 2).
+// zhf-rotate, zhf-tailored-rotate, l1-irradiance, zh3-irradiance 10; zxzxz-rotate 8;
+// triple-product 6). Orders start at 1 (triple-product, the rotations and the probe
+// encodings 2). The probe encodings' functions read 4 RGB coefficients (and 3 zonal ones)
+// whatever the order, which only sets SHTOOL_ORDER so that the file is included beside the
+// other operations' files of that order.
 int shader_min_order(ShaderOperation operation);
 int shader_max_order(ShaderOperation operation);
 
