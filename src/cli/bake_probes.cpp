@@ -26,8 +26,11 @@ void setup_bake_probes(CLI::App& app) {
   sub->add_option("--threads", req->threads, "worker threads (0: all cores)")->capture_default_str();
   sub->add_option("--out", req->out, "probe-grid table to write")->required();
   sub->add_option("--json", req->json, "also the probes as JSON");
+  sub->add_option("--shard", req->shard, "bake shard K of N (0-based) of the probes into a partial table; join "
+                                         "the parts with shtool merge");
   sub->callback([req]() {
     const probes::BakeProbesReport r = probes::run_bake_probes(*req);
+    if (r.sharded) std::cerr << "bake-probes: shard of probes [" << r.first_probe << ", " << r.end_probe << ")\n";
     std::cerr << "bake-probes: " << r.probes << " probes (" << r.resolution[0] << " x " << r.resolution[1] << " x "
               << r.resolution[2] << "), " << r.triangles << " triangles, " << r.lights << " lights; " << r.rays
               << " rays in " << r.seconds << " s; " << r.invalid << " invalid probes filled from neighbours";

@@ -155,6 +155,53 @@ TEST(CliBakeProbes, SameBytesOnOneAndTwoThreads) {
   EXPECT_EQ(bytes[0], bytes[1]);
 }
 
+// Three shards joined by merge: the one-process table byte for byte, with a probe inside
+// a solid cube (invalid, filled only when the parts are joined).
+TEST(CliBakeProbes, ShardsMergeToTheOneProcessTable) {
+  ProbeTestScene t;
+  const int m = t.material({{0.5, 0.5, 0.5}});
+  t.box(Eigen::Vector3d(-0.5, -0.5, -0.5), Eigen::Vector3d(0.5, 0.5, 0.5), m, false);
+  t.light({{"type", "point"}, {"intensity", 5.0}}, Eigen::Vector3d(1, 1.2, 0.7), Eigen::Vector3d(0, -1, 0));
+  const fs::path scene = scratch("solid.gltf");
+  t.write(scene);
+  const std::vector<std::string> common = {"bake-probes", scene.string(), "--grid", "3,3,3", "--bounds",
+                                           "-1.5,-1.5,-1.5,1.5,1.5,1.5", "--samples", "64", "--order", "2"};
+  auto run = [&](std::vector<std::string> extra) {
+    std::vector<std::string> a = common;
+    a.insert(a.end(), extra.begin(), extra.end());
+    return run_shtool(a);
+  };
+  const fs::path whole = scratch("whole.shtb");
+  ASSERT_EQ(run({"--out", whole.string()}).exit_code, 0);
+  std::vector<std::string> merge = {"merge"};
+  for (const char* k : {"2", "0", "1"}) {
+    const fs::path part = scratch(std::string("part") + k + ".shtb");
+    const CommandResult r = run({"--shard", std::string(k) + "/3", "--out", part.string()});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    expect_valid_against_schema("probe-grid.schema.json", {part});
+    EXPECT_FALSE(shtool::ProbeGrid<double>::load(part).ok()) << "a partial table must not load as a grid";
+    merge.push_back(part.string());
+  }
+  const fs::path merged = scratch("merged.shtb");
+  merge.insert(merge.end(), {"--out", merged.string()});
+  const CommandResult r = run_shtool(merge);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(read_file(merged), read_file(whole));
+  const shtool::ProbeGrid<double> g = shtool::ProbeGrid<double>::load(merged).value();
+  EXPECT_FALSE(g.is_valid(13));
+  // A shard missing: refused, nothing written.
+  fs::remove(merged);
+  const CommandResult missing =
+      run_shtool({"merge", scratch("part0.shtb").string(), scratch("part2.shtb").string(), "--out", merged.string()});
+  EXPECT_EQ(missing.exit_code, 1);
+  EXPECT_NE(missing.err.find("shard 1 of 3 is missing"), std::string::npos) << missing.err;
+  EXPECT_FALSE(fs::exists(merged));
+  expect_refused("bake-probes", {scene.string(), "--grid", "3,3,3", "--shard", "0/2", "--json", scratch("j.json").string()},
+                 "--json needs the whole grid", scratch("p.shtb"));
+  expect_refused("bake-probes", {scene.string(), "--grid", "1,1,2", "--shard", "0/3"}, "more shards than", scratch("p.shtb"));
+  expect_refused("bake-probes", {scene.string(), "--grid", "1,1,2", "--shard", "3/3"}, "K must be below N", scratch("p.shtb"));
+}
+
 // OBJ: Kd and Ke from the .mtl, the furnace again (faces wound inward, y up by default).
 TEST(CliBakeProbes, ObjWithMtlMaterials) {
   const fs::path dir = empty_folder_for_this_test(scratch);

@@ -15,6 +15,7 @@
 #include "common/table_writer.h"
 #include "fit/embree_scene.h"
 #include "lighting/lighting_output.h"
+#include "probes/probe_grid_table.h"
 #include "shtool/probe_grid.h"
 
 namespace shtool::probes {
@@ -77,55 +78,6 @@ std::pair<Eigen::Vector3d, Eigen::Vector3d> parse_bounds(const std::string& text
   return {lo, hi};
 }
 
-Table probe_grid_table(const ProbeGridSpec& spec, const ProbeBake& bake, const nlohmann::json& generator,
-                       nlohmann::json meta) {
-  const std::int64_t nx = spec.resolution[0], ny = spec.resolution[1], nz = spec.resolution[2];
-  meta["quantity"] = "radiance";
-  meta["channels"] = {"r", "g", "b"};
-  meta["resolution"] = {nx, ny, nz};
-  meta["bounds"] = {{"min", {spec.lower.x(), spec.lower.y(), spec.lower.z()}},
-                    {"max", {spec.upper.x(), spec.upper.y(), spec.upper.z()}}};
-  meta["frame"] = "shtool (right-handed, z up)";
-  meta["layout"] = "coefficients[iz][iy][ix][k][c]: probe at min + (i + 1/2) (max - min) / n, SH index k = l(l+1)+m, "
-                   "c = r, g, b; incident radiance c_k = integral L y_k dw; valid[iz][iy][ix] = 0: inside geometry, "
-                   "filled from valid neighbours";
-  Table table = new_table(kProbeGridKind, spec.order, generator, meta);
-  const std::int64_t nn = static_cast<std::int64_t>(spec.order) * spec.order;
-  const std::vector<double> bounds = {spec.lower.x(), spec.lower.y(), spec.lower.z(),
-                                      spec.upper.x(), spec.upper.y(), spec.upper.z()};
-  table.arrays.push_back(TableArray::from<double>("bounds", {2, 3}, bounds));
-  table.arrays.push_back(TableArray::from<double>("coefficients", {nz, ny, nx, nn, 3}, bake.coefficients));
-  table.arrays.push_back(TableArray::from<std::uint8_t>("valid", {nz, ny, nx}, bake.valid));
-  return table;
-}
-
-nlohmann::json probe_grid_json(const ProbeGridSpec& spec, const ProbeBake& bake) {
-  nlohmann::json doc;
-  doc["order"] = spec.order;
-  doc["quantity"] = "radiance";
-  doc["channels"] = {"r", "g", "b"};
-  doc["resolution"] = {spec.resolution[0], spec.resolution[1], spec.resolution[2]};
-  doc["bounds"] = {{"min", {spec.lower.x(), spec.lower.y(), spec.lower.z()}},
-                   {"max", {spec.upper.x(), spec.upper.y(), spec.upper.z()}}};
-  nlohmann::json probes = nlohmann::json::array();
-  const std::size_t nn = static_cast<std::size_t>(spec.order) * spec.order;
-  for (std::size_t p = 0; p < spec.probe_count(); ++p) {
-    const std::array<int, 3> i = spec.grid_index(p);
-    const Eigen::Vector3d x = spec.position(p);
-    nlohmann::json rows = nlohmann::json::array();
-    for (std::size_t k = 0; k < nn; ++k) {
-      const double* c = bake.coefficients.data() + (p * nn + k) * 3;
-      rows.push_back({c[0], c[1], c[2]});
-    }
-    probes.push_back({{"index", {i[0], i[1], i[2]}},
-                      {"position", {x.x(), x.y(), x.z()}},
-                      {"valid", bake.valid[p] != 0},
-                      {"coefficients", std::move(rows)}});
-  }
-  doc["probes"] = std::move(probes);
-  return doc;
-}
-
 BakeProbesReport run_bake_probes(const BakeProbesRequest& r) {
   const auto t0 = std::chrono::steady_clock::now();
   if (r.scene.empty()) throw InputError("a scene file (glTF or OBJ) is required");
@@ -142,6 +94,15 @@ BakeProbesReport run_bake_probes(const BakeProbesRequest& r) {
   spec.bounces = r.bounces;
   spec.seed = r.seed;
   spec.threads = resolve_threads(r.threads);
+  std::optional<fit::Shard> shard;
+  if (!r.shard.empty()) {
+    shard = fit::parse_shard(r.shard);
+    if (!r.json.empty())
+      throw InputError("--json needs the whole grid: not with --shard (join the parts with shtool merge)");
+    if (shard->count > spec.probe_count())
+      throw InputError("--shard " + r.shard + ": more shards than the grid's " + std::to_string(spec.probe_count()) +
+                       " probes");
+  }
 
   JobOutputs io;
   io.input(r.scene, "the scene");
@@ -172,7 +133,9 @@ BakeProbesReport run_bake_probes(const BakeProbesRequest& r) {
                          ": give --bounds");
   }
 
-  const ProbeBake bake = bake_probe_grid(s, spec, env);
+  const fit::VertexRange range = shard ? fit::shard_range(spec.probe_count(), *shard)
+                                       : fit::VertexRange{0, spec.probe_count()};
+  const ProbeBake bake = shard ? bake_probe_range(s, spec, env, range.begin, range.end) : bake_probe_grid(s, spec, env);
   check_finite(std::span<const double>(bake.coefficients), "probe coefficient");
 
   params["input_crc32"] = s.mesh.input_crc32;
@@ -201,16 +164,14 @@ BakeProbesReport run_bake_probes(const BakeProbesRequest& r) {
   meta[kMeshUpKey] = up_axis_name(s.mesh.up);
   meta["triangles"] = s.mesh.triangles.size();
   meta["lights"] = s.lights.size();
-  meta["invalid_probes"] = invalid;
-  meta["unfilled_probes"] = bake.unfilled;
-  meta["back_face_threshold"] = kInvalidBackFaceShare;
 
-  io.set("--out", encode_table(probe_grid_table(spec, bake, generator, meta)));
+  io.set("--out", encode_table(shard ? probe_grid_part_table(spec, bake, *shard, range, generator, meta)
+                                     : probe_grid_table(spec, bake, generator, meta)));
   if (io.requested("--json")) io.set("--json", dump_finite(probe_grid_json(spec, bake), "--json") + "\n");
   io.commit();
 
   BakeProbesReport report;
-  report.probes = spec.probe_count();
+  report.probes = range.end - range.begin;
   report.invalid = invalid;
   report.unfilled = bake.unfilled;
   report.resolution = spec.resolution;
@@ -219,6 +180,9 @@ BakeProbesReport run_bake_probes(const BakeProbesRequest& r) {
   report.triangles = s.mesh.triangles.size();
   report.lights = s.lights.size();
   report.rays = bake.rays;
+  report.sharded = shard.has_value();
+  report.first_probe = range.begin;
+  report.end_probe = range.end;
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return report;
 }

@@ -38,6 +38,7 @@ struct BakeProbesRequest {
   int threads = 0;
   std::filesystem::path out;                  // the probe-grid table
   std::filesystem::path json;                 // optional
+  std::string shard;                          // "K/N": a partial table of probes; empty: all
 };
 
 struct BakeProbesReport {
@@ -47,16 +48,13 @@ struct BakeProbesReport {
   std::size_t triangles = 0, lights = 0;
   std::uint64_t rays = 0;
   double seconds = 0;
+  bool sharded = false;
+  std::size_t first_probe = 0, end_probe = 0;
 };
 
 // "NX,NY,NZ" and "X0,Y0,Z0,X1,Y1,Z1" parsed and checked; InputError naming the option.
 std::array<int, 3> parse_grid(const std::string& text);
 std::pair<Eigen::Vector3d, Eigen::Vector3d> parse_bounds(const std::string& text);
-
-// The table of a bake (kind "probe-grid", docs/table-format.md) and its --json document.
-Table probe_grid_table(const ProbeGridSpec& spec, const ProbeBake& bake, const nlohmann::json& generator,
-                       nlohmann::json meta);
-nlohmann::json probe_grid_json(const ProbeGridSpec& spec, const ProbeBake& bake);
 
 // Checks every option before reading anything large, bakes, writes both outputs or none.
 BakeProbesReport run_bake_probes(const BakeProbesRequest& request);

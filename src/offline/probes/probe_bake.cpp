@@ -173,7 +173,15 @@ std::size_t fill_invalid_probes(const std::array<int, 3>& res, int per_probe, co
 }
 
 ProbeBake bake_probe_grid(const scene::Scene& s, const ProbeGridSpec& spec, const Environment& env) {
-  const std::size_t probes = spec.probe_count();
+  ProbeBake out = bake_probe_range(s, spec, env, 0, spec.probe_count());
+  const int per_probe = spec.order * spec.order * 3;
+  out.unfilled = fill_invalid_probes(spec.resolution, per_probe, out.valid, out.coefficients);
+  return out;
+}
+
+ProbeBake bake_probe_range(const scene::Scene& s, const ProbeGridSpec& spec, const Environment& env,
+                           std::size_t begin, std::size_t end) {
+  const std::size_t probes = end - begin;
   const int nn = spec.order * spec.order;
   const std::size_t per_probe = static_cast<std::size_t>(nn) * 3;
   double extent = 0;
@@ -187,7 +195,8 @@ ProbeBake bake_probe_grid(const scene::Scene& s, const ProbeGridSpec& spec, cons
   out.back_face_share.assign(probes, 0.0);
   std::vector<std::uint64_t> rays(probes, 0);
 
-  parallel_for(probes, resolve_threads(spec.threads), [&](std::size_t p) {
+  parallel_for(probes, resolve_threads(spec.threads), [&](std::size_t i) {
+    const std::size_t p = begin + i;  // the probe's index in the whole grid: its draws
     const Eigen::Vector3d x = spec.position(p);
     const std::uint64_t probe_seed = splitmix64(spec.seed ^ splitmix64(p));
     const RayTurn turn = ray_turn(spec.seed, p);
@@ -209,7 +218,7 @@ ProbeBake bake_probe_grid(const scene::Scene& s, const ProbeGridSpec& spec, cons
       for (int k = 0; k < nn; ++k)
         for (int c = 0; c < 3; ++c) sum[k * 3 + c] += d[c] * y[k];
     }
-    double* c = out.coefficients.data() + p * per_probe;
+    double* c = out.coefficients.data() + i * per_probe;
     const double weight = 4 * kPi / static_cast<double>(S);
     for (std::size_t k = 0; k < per_probe; ++k) c[k] = sum[k] * weight;
     for (int k = 0; k < std::min(nn, env.order * env.order); ++k)
@@ -224,12 +233,11 @@ ProbeBake bake_probe_grid(const scene::Scene& s, const ProbeGridSpec& spec, cons
       for (int k = 0; k < nn; ++k)
         for (int ch = 0; ch < 3; ++ch) c[k * 3 + ch] += ls.irradiance[ch] * y[k];
     }
-    out.back_face_share[p] = static_cast<double>(back_faces) / static_cast<double>(S);
-    out.valid[p] = out.back_face_share[p] > kInvalidBackFaceShare ? 0 : 1;
-    rays[p] = probe_rays;
+    out.back_face_share[i] = static_cast<double>(back_faces) / static_cast<double>(S);
+    out.valid[i] = out.back_face_share[i] > kInvalidBackFaceShare ? 0 : 1;
+    rays[i] = probe_rays;
   });
   for (const std::uint64_t r : rays) out.rays += r;
-  out.unfilled = fill_invalid_probes(spec.resolution, static_cast<int>(per_probe), out.valid, out.coefficients);
   return out;
 }
 

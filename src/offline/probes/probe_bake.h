@@ -69,6 +69,12 @@ struct ProbeBake {
 
 ProbeBake bake_probe_grid(const scene::Scene& scene, const ProbeGridSpec& spec, const Environment& env);
 
+// Probes [begin, end) only, as bake_probe_grid computes them before the invalid ones are
+// filled (a shard of a bake: the fill needs every probe and runs when the parts are
+// joined). Its arrays hold end - begin probes; `unfilled` is 0.
+ProbeBake bake_probe_range(const scene::Scene& scene, const ProbeGridSpec& spec, const Environment& env,
+                           std::size_t begin, std::size_t end);
+
 // Fills each invalid probe (valid[p] == 0) from its 6-neighbours: in rounds, every
 // still-empty probe with at least one neighbour holding values (valid or filled in an
 // earlier round) takes their average, the neighbours in order -x, +x, -y, +y, -z, +z.
