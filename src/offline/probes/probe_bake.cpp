@@ -206,8 +206,10 @@ ProbeBake bake_probe_range(const scene::Scene& s, const ProbeGridSpec& spec, con
     std::uint64_t probe_rays = 0;
     const std::size_t S = static_cast<std::size_t>(spec.samples);
     for (std::size_t j = 0; j < S; ++j) {
-      const Eigen::Vector3d w = fit::sphere_fibonacci_direction(static_cast<int>(j), spec.samples, turn.rotation,
-                                                                turn.shift);
+      // Only the azimuths turn: the bands in z keep their midpoints (shift 1/2), so the set
+      // stays symmetric about z = 0 and integrates the low bands far better than a
+      // shifted one (whose z sum is off by 1 - 2 shift).
+      const Eigen::Vector3d w = fit::sphere_fibonacci_direction(static_cast<int>(j), spec.samples, turn.rotation, 0.5);
       SplitMixStream rng{splitmix64(probe_seed + splitmix64(j + 1))};
       bool escaped = false, back_face = false;
       const Rgb l = tracer.radiance(x, w, rng, escaped, back_face, probe_rays, env_y);

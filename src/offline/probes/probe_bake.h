@@ -1,8 +1,8 @@
 // The light transport of bake-probes: incident radiance at the centre of every cell of a
 // grid, projected on RGB SH (docs/probes.md).
 //
-// Per probe p, S directions w_j (a spherical Fibonacci set, turned about z and shifted in
-// z by ray_turn(seed, probe), common/random.h) each start a path: the radiance L_j arriving at p from w_j is what
+// Per probe p, S directions w_j (a spherical Fibonacci set turned about z by
+// ray_turn(seed, probe), common/random.h) each start a path: the radiance L_j arriving at p from w_j is what
 // the first surface hit emits plus what it reflects, estimated by a path of up to
 // `bounces` Lambertian reflections with next-event estimation toward the punctual lights
 // at each reflection (cosine-weighted continuation, so each reflection multiplies the
