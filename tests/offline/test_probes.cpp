@@ -7,6 +7,7 @@
 #include <numbers>
 
 #include "probe_scenes.h"
+#include "lighting/image_io.h"
 #include "probes/probe_bake.h"
 #include "scene/scene.h"
 #include "scratch_files.h"
@@ -68,6 +69,41 @@ TEST(ProbeBake, WhiteFurnaceEveryProbeEveryBounceCount) {
           else EXPECT_NEAR(v, 0.0, 1e-3 * L) << "bounces " << bounces << " probe " << p << " k " << k;
         }
     }
+  }
+}
+
+// The furnace with baseColorTexture and emissiveTexture: a 1 x 2 PNG whose top row (glTF
+// v = 0.25 at every vertex: the top row's centre) differs from its bottom row. Albedo =
+// baseColorFactor x the decoded texel, emission = emissiveFactor x texel x strength; a
+// texture read upside down, or a factor or the sRGB decoding left out, misses by far more
+// than the 1e-12 allowed (the furnace has no sampling error in c_00).
+TEST(ProbeBake, TexturedFurnaceReadsTheTopRowDecodedToLinear) {
+  lighting::Image image;
+  image.width = 1;
+  image.height = 2;
+  image.texels = {0.2f, 0.4f, 0.6f, 0.9f, 0.1f, 0.5f};  // row 0 (top), row 1
+  const std::string png = lighting::encode_png(image);
+  const lighting::Image decoded = lighting::decode_image(png, "texture.png");
+  ProbeTestScene t;
+  const int m = t.material({{0.8, 0.8, 0.8}, {1, 1, 1}, 2.0, false, true});
+  t.box(Eigen::Vector3d(-1, -1, -1), Eigen::Vector3d(1, 1, 1), m, true);
+  t.texture(png, Eigen::Vector2d(0.5, 0.25));
+  t.write(scratch("textured.gltf"));
+  const scene::Scene s = scene::load_scene(scratch("textured.gltf"), UpAxis::y);
+  ASSERT_EQ(s.mesh.uvs.size(), 12u);
+  const auto spec = grid({1, 1, 1}, Eigen::Vector3d::Constant(-0.5), Eigen::Vector3d::Constant(0.5), 2, 256, 2);
+  const probes::ProbeBake b = probes::bake_probe_grid(s, spec, {});
+  for (int c = 0; c < 3; ++c) {
+    auto radiance = [&](int row) {
+      const double texel = decoded.texels[row * 3 + c];
+      const double rho = 0.8 * texel, E = 2.0 * texel;
+      return E * (1 + rho + rho * rho);
+    };
+    const double got = b.coefficients[c] / std::sqrt(4 * kPi);
+    EXPECT_NEAR(got, radiance(0), 1e-12 * radiance(0)) << "channel " << c;
+    EXPECT_GT(std::abs(radiance(1) - radiance(0)), 0.1 * radiance(0));
+    // sRGB decoding: the texel is close to the tone-mapped value x / (1 + x) written.
+    EXPECT_NEAR(decoded.texels[c], image.texels[c] / (1 + image.texels[c]), 5e-3);
   }
 }
 

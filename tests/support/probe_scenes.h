@@ -40,6 +40,7 @@ struct ProbeTestMaterial {
   std::array<double, 3> emissive{0, 0, 0};
   double strength = 1;  // KHR_materials_emissive_strength when != 1
   bool double_sided = false;
+  bool textured = false;  // baseColorTexture and emissiveTexture: the scene's texture
 };
 
 class ProbeTestScene {
@@ -50,6 +51,10 @@ class ProbeTestScene {
                         {"emissiveFactor", m.emissive},
                         {"doubleSided", m.double_sided}};
     if (m.strength != 1) j["extensions"]["KHR_materials_emissive_strength"]["emissiveStrength"] = m.strength;
+    if (m.textured) {
+      j["pbrMetallicRoughness"]["baseColorTexture"] = {{"index", 0}};
+      j["emissiveTexture"] = {{"index", 0}};
+    }
     materials_.push_back(j);
     return static_cast<int>(materials_.size()) - 1;
   }
@@ -96,9 +101,22 @@ class ProbeTestScene {
                             {"extensions", {{"KHR_lights_punctual", {{"light", lights_.size() - 1}}}}}});
   }
 
+  // One texture (an encoded PNG) for the textured materials, and TEXCOORD_0 = uv at
+  // every vertex (glTF's convention: v down from the image's top).
+  void texture(const std::string& png, const Eigen::Vector2d& uv) {
+    png_ = png;
+    uv_ = uv;
+  }
+
   std::string gltf() const {
     std::string bytes(reinterpret_cast<const char*>(positions_.data()), positions_.size() * sizeof(float));
     const std::size_t vertices = positions_.size() / 3;
+    const std::size_t uv_offset = bytes.size();
+    if (!png_.empty())
+      for (std::size_t v = 0; v < vertices; ++v) {
+        const float uv[2] = {static_cast<float>(uv_.x()), static_cast<float>(uv_.y())};
+        bytes.append(reinterpret_cast<const char*>(uv), sizeof uv);
+      }
     nlohmann::json j;
     j["asset"] = {{"version", "2.0"}};
     j["buffers"] = {{{"byteLength", bytes.size()}, {"uri", "data:application/octet-stream;base64," + base64(bytes)}}};
@@ -107,6 +125,7 @@ class ProbeTestScene {
     nlohmann::json primitives = nlohmann::json::array();
     // One primitive per triangle (its own accessor): simple, and every triangle keeps its material.
     for (std::size_t t = 0; t < vertices / 3; ++t) {
+      const std::size_t position_accessor = j["accessors"].size();
       j["bufferViews"].push_back({{"buffer", 0}, {"byteOffset", t * 36}, {"byteLength", 36}});
       Eigen::Vector3f lo(1e30f, 1e30f, 1e30f), hi(-1e30f, -1e30f, -1e30f);
       for (int v = 0; v < 3; ++v)
@@ -114,9 +133,17 @@ class ProbeTestScene {
           lo[c] = std::min(lo[c], positions_[(t * 3 + v) * 3 + c]);
           hi[c] = std::max(hi[c], positions_[(t * 3 + v) * 3 + c]);
         }
-      j["accessors"].push_back({{"bufferView", t}, {"componentType", 5126}, {"count", 3}, {"type", "VEC3"},
+      j["accessors"].push_back({{"bufferView", j["bufferViews"].size() - 1}, {"componentType", 5126}, {"count", 3},
+                                {"type", "VEC3"},
                                 {"min", {lo[0], lo[1], lo[2]}}, {"max", {hi[0], hi[1], hi[2]}}});
-      nlohmann::json p = {{"attributes", {{"POSITION", t}}}, {"mode", 4}};
+      nlohmann::json p = {{"attributes", {{"POSITION", position_accessor}}}, {"mode", 4}};
+      if (!png_.empty()) {
+        const std::size_t index = j["accessors"].size();
+        j["bufferViews"].push_back({{"buffer", 0}, {"byteOffset", uv_offset + t * 24}, {"byteLength", 24}});
+        j["accessors"].push_back(
+            {{"bufferView", j["bufferViews"].size() - 1}, {"componentType", 5126}, {"count", 3}, {"type", "VEC2"}});
+        p["attributes"]["TEXCOORD_0"] = index;
+      }
       if (tri_material_[t] >= 0) p["material"] = tri_material_[t];
       primitives.push_back(p);
     }
@@ -130,6 +157,10 @@ class ProbeTestScene {
     j["scenes"] = {{{"nodes", scene_nodes}}};
     j["scene"] = 0;
     if (!materials_.empty()) j["materials"] = materials_;
+    if (!png_.empty()) {
+      j["images"] = {{{"uri", "data:image/png;base64," + base64(png_)}}};
+      j["textures"] = {{{"source", 0}}};
+    }
     if (!lights_.empty()) {
       j["extensions"]["KHR_lights_punctual"]["lights"] = lights_;
       j["extensionsUsed"] = {"KHR_lights_punctual"};
@@ -146,6 +177,8 @@ class ProbeTestScene {
   nlohmann::json materials_ = nlohmann::json::array();
   nlohmann::json lights_ = nlohmann::json::array();
   std::vector<nlohmann::json> light_nodes_;
+  std::string png_;
+  Eigen::Vector2d uv_ = Eigen::Vector2d::Zero();
 };
 
 }  // namespace shtool::test
