@@ -28,12 +28,15 @@ void setup_bake_probes(CLI::App& app) {
   sub->add_option("--json", req->json, "also the probes as JSON");
   sub->add_option("--shard", req->shard, "bake shard K of N (0-based) of the probes into a partial table; join "
                                          "the parts with shtool merge");
+  sub->add_flag("--mpi", req->mpi, "under mpirun: ranks split the probes, rank 0 writes the outputs");
   sub->callback([req]() {
     const probes::BakeProbesReport r = probes::run_bake_probes(*req);
+    if (r.mpi_rank != 0) return;  // rank 0 reports the job
     if (r.sharded) std::cerr << "bake-probes: shard of probes [" << r.first_probe << ", " << r.end_probe << ")\n";
     std::cerr << "bake-probes: " << r.probes << " probes (" << r.resolution[0] << " x " << r.resolution[1] << " x "
               << r.resolution[2] << "), " << r.triangles << " triangles, " << r.lights << " lights; " << r.rays
               << " rays in " << r.seconds << " s; " << r.invalid << " invalid probes filled from neighbours";
+    if (r.mpi_ranks) std::cerr << " (this rank's share; on each of " << r.mpi_ranks << " MPI ranks)";
     if (r.unfilled) std::cerr << " (" << r.unfilled << " with no valid neighbour left at 0)";
     std::cerr << "\nwrote " << req->out.string() << "\n";
   });

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstdlib>
 #include <limits>
+#include <optional>
+#include <span>
 #include <sstream>
 
 #include "common/finite.h"
@@ -14,6 +16,7 @@
 #include "common/parallel_for.h"
 #include "common/table_writer.h"
 #include "fit/embree_scene.h"
+#include "fit/mpi_world.h"
 #include "lighting/lighting_output.h"
 #include "probes/probe_grid_table.h"
 #include "shtool/probe_grid.h"
@@ -96,12 +99,23 @@ BakeProbesReport run_bake_probes(const BakeProbesRequest& r) {
   spec.threads = resolve_threads(r.threads);
   std::optional<fit::Shard> shard;
   if (!r.shard.empty()) {
+    if (r.mpi) throw InputError("--mpi and --shard both split the probes: give one of them");
     shard = fit::parse_shard(r.shard);
     if (!r.json.empty())
       throw InputError("--json needs the whole grid: not with --shard (join the parts with shtool merge)");
     if (shard->count > spec.probe_count())
       throw InputError("--shard " + r.shard + ": more shards than the grid's " + std::to_string(spec.probe_count()) +
                        " probes");
+  }
+  // Under MPI, rank R of S bakes shard R/S; rank 0 gathers the parts and joins them as
+  // merge does, so the bytes are a one-process run's.
+  std::optional<fit::MpiJob> mpi;
+  if (r.mpi) {
+    mpi.emplace();
+    if (static_cast<std::size_t>(mpi->size()) > spec.probe_count())
+      throw InputError("--mpi: " + std::to_string(mpi->size()) + " ranks for the grid's " +
+                       std::to_string(spec.probe_count()) + " probes");
+    shard = fit::Shard{static_cast<std::size_t>(mpi->rank()), static_cast<std::size_t>(mpi->size())};
   }
 
   JobOutputs io;
@@ -165,12 +179,38 @@ BakeProbesReport run_bake_probes(const BakeProbesRequest& r) {
   meta["triangles"] = s.mesh.triangles.size();
   meta["lights"] = s.lights.size();
 
-  io.set("--out", encode_table(shard ? probe_grid_part_table(spec, bake, *shard, range, generator, meta)
-                                     : probe_grid_table(spec, bake, generator, meta)));
-  if (io.requested("--json")) io.set("--json", dump_finite(probe_grid_json(spec, bake), "--json") + "\n");
-  io.commit();
-
   BakeProbesReport report;
+  if (mpi) {
+    report.mpi_rank = mpi->rank();
+    report.mpi_ranks = mpi->size();
+    const std::string mine = encode_table(probe_grid_part_table(spec, bake, *shard, range, generator, meta));
+    if (!mpi->all_ok(true)) throw InputError("rank " + std::to_string(mpi->rank()) + ": stopped, another rank failed");
+    const std::vector<std::string> parts = mpi->gather(mine);
+    if (mpi->rank() == 0) {
+      std::vector<std::pair<std::string, Table>> tables;
+      for (std::size_t k = 0; k < parts.size(); ++k) {
+        const std::string name = "rank " + std::to_string(k);
+        Result<Table> t = read_table_bytes(std::as_bytes(std::span(parts[k])), name, {std::string(kProbeGridKind), 1});
+        if (!t) throw InputError("--mpi: " + t.error().message);
+        tables.emplace_back(name, std::move(t).value());
+      }
+      const Table merged = merge_probe_grid_tables(tables);
+      io.set("--out", encode_table(merged));
+      if (io.requested("--json")) {
+        ProbeBake whole;
+        whole.coefficients = merged.find("coefficients")->values<double>();
+        whole.valid = merged.find("valid")->values<std::uint8_t>();
+        io.set("--json", dump_finite(probe_grid_json(spec, whole), "--json") + "\n");
+      }
+      io.commit();
+    }
+  } else {
+    io.set("--out", encode_table(shard ? probe_grid_part_table(spec, bake, *shard, range, generator, meta)
+                                       : probe_grid_table(spec, bake, generator, meta)));
+    if (io.requested("--json")) io.set("--json", dump_finite(probe_grid_json(spec, bake), "--json") + "\n");
+    io.commit();
+  }
+
   report.probes = range.end - range.begin;
   report.invalid = invalid;
   report.unfilled = bake.unfilled;
@@ -180,7 +220,7 @@ BakeProbesReport run_bake_probes(const BakeProbesRequest& r) {
   report.triangles = s.mesh.triangles.size();
   report.lights = s.lights.size();
   report.rays = bake.rays;
-  report.sharded = shard.has_value();
+  report.sharded = shard.has_value() && !mpi;
   report.first_probe = range.begin;
   report.end_probe = range.end;
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -39,6 +39,7 @@ struct BakeProbesRequest {
   std::filesystem::path out;                  // the probe-grid table
   std::filesystem::path json;                 // optional
   std::string shard;                          // "K/N": a partial table of probes; empty: all
+  bool mpi = false;                           // ranks split the probes, rank 0 writes
 };
 
 struct BakeProbesReport {
@@ -49,6 +50,7 @@ struct BakeProbesReport {
   std::uint64_t rays = 0;
   double seconds = 0;
   bool sharded = false;
+  int mpi_rank = 0, mpi_ranks = 0;            // ranks: 0 without --mpi
   std::size_t first_probe = 0, end_probe = 0;
 };
 
