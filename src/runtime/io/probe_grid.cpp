@@ -5,9 +5,9 @@
 #include <limits>
 #include <string>
 
-#include "io/load_kind.h"
 #include <nlohmann/json.hpp>
 
+#include "io/load_kind.h"
 #include "io/table_format.h"
 #include "io/zh_rows.h"
 #include "shtool/irradiance.h"
