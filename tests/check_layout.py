@@ -18,7 +18,8 @@ import sys
 
 INCLUDE = re.compile(r'^\s*#\s*include\s*[<"]([^>"]+)[>"]', re.M)
 # src/runtime has a lighting/ folder of its own, so the offline lighting/ cannot be told apart by prefix.
-OFFLINE_ROOTS = ("common/", "fit/", "lobes/", "tensors/", "interop/", "shaders/", "render/", "deform/", "wrinkles/")
+OFFLINE_ROOTS = ("common/", "fit/", "lobes/", "tensors/", "interop/", "shaders/", "render/", "deform/", "wrinkles/",
+                 "scene/", "probes/")
 FORBIDDEN_IN_ENGINE = ("nlohmann/", "fftw3")
 
 

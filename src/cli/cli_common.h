@@ -82,5 +82,6 @@ void setup_light(CLI::App& app);
 void setup_transform_splats(CLI::App& app);
 void setup_export_light(CLI::App& app);
 void setup_import_light(CLI::App& app);
+void setup_bake_probes(CLI::App& app);
 
 }  // namespace shtool::cli

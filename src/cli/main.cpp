@@ -34,6 +34,7 @@ int main(int argc, char** argv) {
   shtool::cli::setup_transform_splats(app);
   shtool::cli::setup_export_light(app);
   shtool::cli::setup_import_light(app);
+  shtool::cli::setup_bake_probes(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

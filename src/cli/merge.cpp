@@ -11,18 +11,30 @@
 #include "cli_common.h"
 #include "common/stopwatch.h"
 #include "fit/zh_fit_merge.h"
+#include "probes/probe_grid_table.h"
 
 namespace shtool::cli {
 
 void setup_merge(CLI::App& app) {
   auto opt = std::make_shared<fit::MergeRequest>();
-  CLI::App* sub = app.add_subcommand("merge", "Join the partial tables of fit-zh --shard K/N into one table");
+  CLI::App* sub = app.add_subcommand(
+      "merge", "Join the partial tables of fit-zh --shard K/N or bake-probes --shard K/N into one table");
   sub->add_option("parts", opt->parts, "partial tables, every shard 0..N-1 once, in any order")->required();
   sub->add_option("--out", opt->out, "the merged table")->required();
   add_enum_option(sub, "--format", opt->encoding, {{"binary", TableEncoding::binary}, {"json", TableEncoding::json}},
                   "table encoding: binary or json", "binary");
   sub->callback([opt]() {
     const auto t0 = std::chrono::steady_clock::now();
+    // The first part's kind decides (the merge then checks that every part has it).
+    if (probes::is_probe_grid_file(opt->parts.front())) {
+      const probes::ProbeMergeReport r = probes::merge_probe_grid_parts(opt->parts, opt->out, opt->encoding);
+      std::ostringstream summary;
+      summary.precision(3);
+      summary << "merge: " << r.parts << " parts, " << r.probes << " probes, " << seconds_since(t0) << " s, wrote "
+              << opt->out.string() << '\n';
+      std::cerr << summary.str();
+      return;
+    }
     const fit::MergeReport r = fit::merge_zh_fit_parts(*opt);
     std::ostringstream summary;
     summary.precision(3);

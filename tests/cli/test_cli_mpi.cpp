@@ -1,5 +1,6 @@
-// `shtool fit-zh --mpi`. Built with MPI: 2 and 3 ranks under mpiexec (oversubscribed on
-// a small machine) write the bytes one process writes, shadowed and interreflected, a
+// `shtool fit-zh --mpi` and `shtool bake-probes --mpi`. Built with MPI: 2 and 3 ranks
+// under mpiexec (oversubscribed on a small machine) write the bytes one process writes,
+// shadowed and interreflected (and a probe grid with an invalid probe), a
 // refusal reaches every rank, a rank that fails stops the others at the next bounce, and
 // rank 0 refuses a rank that read another input.
 // Built without MPI: --mpi is a clear error. A missing mpiexec fails the test.
@@ -13,6 +14,7 @@
 #include <gtest/gtest.h>
 
 #include "cli_test.h"
+#include "probe_scenes.h"
 
 namespace {
 
@@ -147,7 +149,46 @@ TEST(CliFitZhMpi, RankZeroRefusesRowsOfAnotherInput) {
   EXPECT_FALSE(fs::exists(out));
 }
 
+// bake-probes: 2 and 3 ranks write the one-process table and JSON, the invalid probe
+// (inside a solid cube) filled after the gather.
+TEST(CliBakeProbesMpi, RanksWriteTheOneProcessTable) {
+  ProbeTestScene t;
+  const int m = t.material({{0.5, 0.5, 0.5}});
+  t.box(Eigen::Vector3d(-0.5, -0.5, -0.5), Eigen::Vector3d(0.5, 0.5, 0.5), m, false);
+  t.light({{"type", "point"}, {"intensity", 5.0}}, Eigen::Vector3d(1, 1.2, 0.7), Eigen::Vector3d(0, -1, 0));
+  const fs::path scene = scratch("solid.gltf");
+  t.write(scene);
+  auto bake_args = [&](const fs::path& out, const fs::path& json, bool mpi) {
+    std::vector<std::string> a = {kShtoolExe, "bake-probes", scene.string(), "--grid", "3,3,3", "--bounds",
+                                  "-1.5,-1.5,-1.5,1.5,1.5,1.5", "--samples", "64", "--order", "2", "--threads", "1",
+                                  "--out", out.string(), "--json", json.string()};
+    if (mpi) a.push_back("--mpi");
+    return a;
+  };
+  const fs::path whole = scratch("probes_whole.shtb"), whole_json = scratch("probes_whole.json");
+  const CommandResult one = run_checked(bake_args(whole, whole_json, false));
+  ASSERT_EQ(one.exit_code, 0) << one.err;
+  for (int ranks : {2, 3}) {
+    const fs::path out = scratch("probes_mpi" + std::to_string(ranks) + ".shtb"),
+                   json = scratch("probes_mpi" + std::to_string(ranks) + ".json");
+    const CommandResult r = mpirun(ranks, bake_args(out, json, true));
+    ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+    EXPECT_NE(r.err.find("on each of " + std::to_string(ranks) + " MPI ranks"), std::string::npos) << r.err;
+    EXPECT_EQ(read_file(out), read_file(whole)) << ranks << " ranks";
+    EXPECT_EQ(read_file(json), read_file(whole_json)) << ranks << " ranks";
+  }
+}
+
 #else
+
+TEST(CliBakeProbesMpi, WithoutMpiTheOptionIsAClearError) {
+  const fs::path out = scratch("probes_nompi.shtb");
+  const CommandResult r = run_checked({kShtoolExe, "bake-probes", kSpotObj, "--grid", "2,2,2", "--mpi", "--out",
+                                       out.string()});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("built without MPI"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out));
+}
 
 TEST(CliFitZhMpi, WithoutMpiTheOptionIsAClearError) {
   const fs::path out = scratch("nompi.shtb");

@@ -1,7 +1,7 @@
 // An engine's view of shtool: built against the installed package with -fno-exceptions
 // and -fno-rtti, it loads every table kind it is given through X::load, in float and in
-// double (the shipped tables through SHTOOL_TABLES; argv[1] a fit-zh output and argv[2]
-// an env-sh lighting, when given), rotates by three methods, multiplies, maps glossy view
+// double (the shipped tables through SHTOOL_TABLES; argv[1] a fit-zh output, argv[2]
+// an env-sh lighting and argv[3] a probe-grid, when given), rotates by three methods, multiplies, maps glossy view
 // directions and blends wrinkle weights, shades the fit-zh output, and runs the program
 // of docs/engine.md (engine_example.cpp). Every result is checked against an independent route (closed forms,
 // evaluation at rotated directions, pointwise products, the lobes summed into SH), so a
@@ -20,6 +20,7 @@
 #include <shtool/fourier_tensors.h>
 #include <shtool/glossy.h>
 #include <shtool/lighting.h>
+#include <shtool/probe_grid.h>
 #include <shtool/product.h>
 #include <shtool/rotation.h>
 #include <shtool/sh.h>
@@ -205,13 +206,14 @@ void check_loads(const std::filesystem::path& path, const char* what) {
 }
 
 template <class T>
-void check_every_kind(const char* fit, const char* lighting) {
+void check_every_kind(const char* fit, const char* lighting, const char* probes) {
   check_loads<shtool::RotationHelpers>(shtool::default_rotation_helpers_path(), "rotation-helpers:");
   check_loads<shtool::ZhfLobes>(shtool::default_zhf_lobes_path(4), "zhf-lobes:");
   check_loads<shtool::TriplingTensor>(shtool::find_shipped_table("tripling-tensor.shtb"), "tripling-tensor:");
   check_loads<shtool::ShFourierTensors>(shtool::find_shipped_table("sh-fourier-tensors.shtb"), "sh-fourier-tensors:");
   if (fit) check_loads<shtool::ZhFitTable<T>>(fit, "zh-fit:");
   if (lighting) check_loads<shtool::ShLighting<T>>(lighting, "env-sh:");
+  if (probes) check_loads<shtool::ProbeGrid<T>>(probes, "probe-grid:");
 }
 
 // The program of docs/engine.md against the same shading of the lighting turned in double
@@ -271,8 +273,9 @@ int main(int argc, char** argv) {
   if (argc > 1) check_zh_fit(argv[1]);
   const char* fit = argc > 1 ? argv[1] : nullptr;
   const char* lighting = argc > 2 ? argv[2] : nullptr;
-  check_every_kind<float>(fit, lighting);
-  check_every_kind<double>(fit, lighting);
+  const char* probes = argc > 3 ? argv[3] : nullptr;
+  check_every_kind<float>(fit, lighting, probes);
+  check_every_kind<double>(fit, lighting, probes);
   if (fit && lighting) check_engine_example(fit, lighting, r);
 
   if (failures != 0) {

@@ -123,7 +123,10 @@ elseif(STEP STREQUAL "consumer")
     set(lighting "${CONSUMER_BINARY_DIR}/sky.env.shtb")
     run_step("light for the consumer" "${SHTOOL}" light --type hemisphere --dir 0.3,0.2,0.9 --color 1,0.8,0.6
              --ground 0.1,0.1,0.2 --order 5 --json "${CONSUMER_BINARY_DIR}/sky.json" --out "${lighting}")
-    set(fit_args "${fit}" "${lighting}")
+    set(probes "${CONSUMER_BINARY_DIR}/spot.probes.shtb")
+    run_step("bake-probes for the consumer" "${SHTOOL}" bake-probes "${SOURCE_DIR}/data/spot.obj" --grid 2,2,2
+             --samples 16 --bounces 1 --out "${probes}")
+    set(fit_args "${fit}" "${lighting}" "${probes}")
   endif()
   run_step("run consumer" "${CMAKE_COMMAND}" -E env "SHTOOL_TABLES=${tables}" "${consumer_exe}" ${fit_args})
   message(STATUS "${step_output}")

@@ -11,6 +11,7 @@
 #include "shtool/euler.h"
 #include "shtool/fourier_tensors.h"
 #include "shtool/glossy.h"
+#include "shtool/probe_grid.h"
 #include "shtool/rotation.h"
 #include "shtool/rotation_helpers.h"
 #include "shtool/table.h"
@@ -77,6 +78,19 @@ void exercise_glossy(const shtool::GlossyFit<T>& g) {
       (void)g.shade(light, v, view);
 }
 
+template <class T>
+void exercise_probe_grid(const shtool::ProbeGrid<T>& g) {
+  using V = shtool::Vec3<T>;
+  std::vector<T> out(static_cast<std::size_t>(g.order) * g.order * 3);
+  const T inf = std::numeric_limits<T>::infinity(), nan = std::numeric_limits<T>::quiet_NaN();
+  for (const V& x : {V(0, 0, 0), g.min, g.max, V(-inf, 0, inf), V(nan, nan, nan), V(T(1e30), T(-1e30), 0)})
+    g.sample(x, out);
+  for (std::size_t p = 0; p < std::min<std::size_t>(g.probe_count(), 8); ++p) {
+    (void)g.position(p);
+    (void)g.irradiance(p, V(0, 0, 1));
+  }
+}
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
@@ -94,5 +108,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (auto w = shtool::WrinkleMap<float>::from_table(table)) exercise_wrinkle(w.value());
   if (auto g = shtool::GlossyFit<double>::from_table(table)) exercise_glossy(g.value());
   if (auto g = shtool::GlossyFit<float>::from_table(table)) exercise_glossy(g.value());
+  if (auto g = shtool::ProbeGrid<double>::from_table(table)) exercise_probe_grid(g.value());
+  if (auto g = shtool::ProbeGrid<float>::from_table(table)) exercise_probe_grid(g.value());
   return 0;
 }

@@ -16,6 +16,7 @@
 
 #include "common/input_error.h"
 #include "common/input_file.h"
+#include "fit/gltf_model.h"
 #include "fit/mesh.h"
 #include "io/table_format.h"
 
@@ -42,6 +43,15 @@ std::string_view json_text_of(const std::string& bytes, bool binary) {
 // Textures play no part in a mesh's transfer: images are neither decoded nor required.
 bool skip_image(tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int,
                 void*) {
+  return true;
+}
+
+// A scene decodes its textures itself (lighting::decode_image: the project's one decoder,
+// with the exact sRGB curve): the encoded bytes are kept as they are.
+bool keep_image_bytes(tinygltf::Image* image, const int, std::string*, std::string*, int, int,
+                      const unsigned char* bytes, int size, void*) {
+  image->image.assign(bytes, bytes + size);
+  image->width = image->height = -1;
   return true;
 }
 
@@ -181,6 +191,8 @@ struct Builder {
   std::vector<Eigen::Vector3d> positions, normals;
   std::vector<Eigen::Vector2d> texcoords;  // one per position (zero where a primitive has none)
   std::vector<std::array<Corner, 3>> triangles;
+  std::vector<int> materials;  // per triangle: its primitive's material
+  std::vector<GltfLightNode> lights;
   std::size_t primitives = 0, skipped_primitives = 0;
   bool every_vertex_has_normal = true;
 
@@ -243,6 +255,7 @@ struct Builder {
       // A mirroring transform turns the winding around; swap to keep the front side.
       if (mirrored) std::swap(b, c);
       triangles.push_back({corner(a), corner(b), corner(c)});
+      materials.push_back(p.material);
     };
     if (mode == TINYGLTF_MODE_TRIANGLES) {
       for (std::size_t k = 0; k + 2 < index.size(); k += 3)
@@ -268,6 +281,13 @@ struct Builder {
     visited[index] = true;
     const tinygltf::Node& n = model.nodes[index];
     const Eigen::Matrix4d world = parent * local_transform(n);
+    if (const auto ext = n.extensions.find("KHR_lights_punctual"); ext != n.extensions.end() && ext->second.IsObject()) {
+      const tinygltf::Value& light = ext->second.Get("light");
+      if (!light.IsInt() || light.GetNumberAsInt() < 0 ||
+          static_cast<std::size_t>(light.GetNumberAsInt()) >= model.lights.size())
+        fail(path, "node " + std::to_string(index) + " names a KHR_lights_punctual light that does not exist");
+      lights.push_back({light.GetNumberAsInt(), world});
+    }
     if (n.mesh >= 0) {
       if (static_cast<std::size_t>(n.mesh) >= model.meshes.size())
         fail(path, "node " + std::to_string(index) + " names mesh " + std::to_string(n.mesh) + ", which does not exist");
@@ -279,10 +299,10 @@ struct Builder {
 
 }  // namespace
 
-Mesh load_gltf_bytes(const std::string& bytes, const std::filesystem::path& path, NormalSource normal_source) {
+tinygltf::Model parse_gltf(const std::string& bytes, const std::filesystem::path& path, bool keep_images) {
   tinygltf::Model model;
   tinygltf::TinyGLTF loader;
-  loader.SetImageLoader(skip_image, nullptr);
+  loader.SetImageLoader(keep_images ? keep_image_bytes : skip_image, nullptr);
   std::string err, warn;
   const std::string base = path.has_parent_path() ? path.parent_path().string() : std::string(".");
   const bool binary = bytes.size() >= 4 && bytes.compare(0, 4, "glTF") == 0;
@@ -307,6 +327,12 @@ Mesh load_gltf_bytes(const std::string& bytes, const std::filesystem::path& path
     while (!err.empty() && (err.back() == '\n' || err.back() == ' ')) err.pop_back();
     fail(path, "cannot read glTF" + (err.empty() ? std::string() : ": " + err));
   }
+  return model;
+}
+
+Mesh mesh_from_gltf(const tinygltf::Model& model, const std::string& bytes, const std::filesystem::path& path,
+                    NormalSource normal_source, std::vector<GltfLightNode>* lights) {
+  const std::string base = path.has_parent_path() ? path.parent_path().string() : std::string(".");
   if (model.scenes.empty()) fail(path, "no scene (glTF without scenes has nothing to render)");
   const int scene = model.defaultScene >= 0 ? model.defaultScene : 0;
   if (static_cast<std::size_t>(scene) >= model.scenes.size()) fail(path, "the default scene does not exist");
@@ -317,6 +343,7 @@ Mesh load_gltf_bytes(const std::string& bytes, const std::filesystem::path& path
     fail(path, b.skipped_primitives ? "no triangle primitive (only points or lines)" : "the default scene has no mesh");
   if (normal_source == NormalSource::file && !b.every_vertex_has_normal)
     fail(path, "--normals file: not every primitive has NORMAL");
+  if (lights) *lights = b.lights;
   Mesh mesh;
   mesh.input_crc32 = input_crc32(bytes);
   mesh.files.push_back(path);
@@ -324,14 +351,20 @@ Mesh load_gltf_bytes(const std::string& bytes, const std::filesystem::path& path
   auto external = [&](const std::string& uri) {
     if (!uri.empty() && uri.rfind("data:", 0) != 0) mesh.files.push_back(std::filesystem::path(base) / uri);
   };
-  for (const tinygltf::Buffer& b : model.buffers) external(b.uri);
+  for (const tinygltf::Buffer& buffer : model.buffers) external(buffer.uri);
   for (const tinygltf::Image& i : model.images) external(i.uri);
   mesh.obj_vertices = b.positions.size();
   mesh.up = UpAxis::y;
   mesh.front = gltf_front();
   for (Eigen::Vector3d& p : b.positions) p = from_y_up(p);
   for (Eigen::Vector3d& n : b.normals) n = from_y_up(n);
-  return finish_mesh(std::move(mesh), b.positions, b.normals, b.triangles, path, normal_source, b.texcoords);
+  return finish_mesh(std::move(mesh), b.positions, b.normals, b.triangles, path, normal_source, b.texcoords,
+                     b.materials);
+}
+
+Mesh load_gltf_bytes(const std::string& bytes, const std::filesystem::path& path, NormalSource normal_source) {
+  const tinygltf::Model model = parse_gltf(bytes, path, /*keep_images=*/false);
+  return mesh_from_gltf(model, bytes, path, normal_source, nullptr);
 }
 
 }  // namespace shtool::fit

@@ -73,6 +73,27 @@ void check_obj_text(const std::filesystem::path& path, const std::string& text) 
   }
 }
 
+// Whether the .mtl block of material `name` has a `key` line (Kd, Ke).
+bool mtl_states(const std::string& mtl, const std::string& name, const std::string& key) {
+  std::istringstream in(mtl);
+  std::string line;
+  bool inside = false;
+  while (std::getline(in, line)) {
+    std::istringstream words(line);
+    std::string first;
+    if (!(words >> first)) continue;
+    if (first == "newmtl") {
+      std::string n;
+      std::getline(words >> std::ws, n);
+      while (!n.empty() && (n.back() == '\r' || n.back() == ' ' || n.back() == '\t')) n.pop_back();
+      inside = n == name;
+    } else if (inside && first == key) {
+      return true;
+    }
+  }
+  return false;
+}
+
 }  // namespace
 
 std::uint32_t loaded_mesh_crc32(const Mesh& mesh) {
@@ -146,14 +167,16 @@ std::size_t compute_angle_weighted_normals(Mesh& mesh) {
 
 Mesh finish_mesh(Mesh mesh, const std::vector<Eigen::Vector3d>& positions, const std::vector<Eigen::Vector3d>& normals,
                  const std::vector<std::array<Corner, 3>>& tris, const std::filesystem::path& path,
-                 NormalSource normal_source, const std::vector<Eigen::Vector2d>& texcoords) {
+                 NormalSource normal_source, const std::vector<Eigen::Vector2d>& texcoords,
+                 const std::vector<int>& materials) {
   const std::size_t nv = positions.size(), nn = normals.size();
   auto position = [&](int v) { return positions[v]; };
   // Degenerate: repeated index or zero area. Zero area is tested exactly (cross product
   // of edges equal to zero): a sliver with tiny but non-zero area still has a normal.
   std::vector<std::array<Corner, 3>> kept;
   kept.reserve(tris.size());
-  for (const auto& t : tris) {
+  for (std::size_t f = 0; f < tris.size(); ++f) {
+    const auto& t = tris[f];
     const bool repeated = t[0].v == t[1].v || t[1].v == t[2].v || t[0].v == t[2].v;
     const Eigen::Vector3d p0 = position(t[0].v);
     const double area2 = (position(t[1].v) - p0).cross(position(t[2].v) - p0).norm();
@@ -162,6 +185,7 @@ Mesh finish_mesh(Mesh mesh, const std::vector<Eigen::Vector3d>& positions, const
       continue;
     }
     kept.push_back(t);
+    if (!materials.empty()) mesh.triangle_material.push_back(materials[f]);
   }
   if (kept.empty())
     fail(path, tris.empty() ? "no faces (need at least one triangle)"
@@ -243,7 +267,7 @@ Mesh load_mesh(const std::filesystem::path& path, NormalSource normal_source, Up
 }
 
 Mesh load_obj_text(const std::string& text, const std::filesystem::path& path, NormalSource normal_source,
-                   UpAxis up) {
+                   UpAxis up, const std::string& mtl_text) {
   check_obj_text(path, text);
 
   tinyobj::ObjReaderConfig config;
@@ -252,7 +276,7 @@ Mesh load_obj_text(const std::string& text, const std::filesystem::path& path, N
   config.triangulate = false;
   config.vertex_color = false;
   tinyobj::ObjReader reader;
-  if (!reader.ParseFromString(text, std::string(), config)) {
+  if (!reader.ParseFromString(text, mtl_text, config)) {
     std::string e = reader.Error();
     while (!e.empty() && (e.back() == '\n' || e.back() == '.')) e.pop_back();
     fail(path, "cannot parse OBJ" + (e.empty() ? std::string() : ": " + e));
@@ -279,6 +303,20 @@ Mesh load_obj_text(const std::string& text, const std::filesystem::path& path, N
 
   // Corners of every face, checked, then fanned: (c0, ci, ci+1).
   std::vector<std::array<Corner, 3>> tris;
+  std::vector<int> tri_materials;
+  const bool with_materials = !mtl_text.empty();
+  if (with_materials)
+    for (const tinyobj::material_t& m : reader.GetMaterials()) {
+      ObjMaterial om;
+      om.name = m.name;
+      // tinyobjloader leaves absent colours at their defaults; only stated ones count.
+      om.has_kd = mtl_states(mtl_text, m.name, "Kd");
+      om.has_ke = mtl_states(mtl_text, m.name, "Ke");
+      om.kd = Eigen::Vector3d(m.diffuse[0], m.diffuse[1], m.diffuse[2]);
+      om.ke = Eigen::Vector3d(m.emission[0], m.emission[1], m.emission[2]);
+      if (!om.kd.allFinite() || !om.ke.allFinite()) fail(path, "material '" + m.name + "' has a non-finite colour");
+      mesh.obj_materials.push_back(std::move(om));
+    }
   std::size_t face_number = 0;
   for (const tinyobj::shape_t& shape : reader.GetShapes()) {
     const tinyobj::mesh_t& m = shape.mesh;
@@ -308,7 +346,14 @@ Mesh load_obj_text(const std::string& text, const std::filesystem::path& path, N
         continue;
       }
       if (count > 3) ++mesh.polygons_triangulated;
-      for (std::size_t k = 1; k + 1 < count; ++k) tris.push_back({corners[0], corners[k], corners[k + 1]});
+      const int material = f < m.material_ids.size() && m.material_ids[f] >= 0 &&
+                                   static_cast<std::size_t>(m.material_ids[f]) < mesh.obj_materials.size()
+                               ? m.material_ids[f]
+                               : -1;
+      for (std::size_t k = 1; k + 1 < count; ++k) {
+        tris.push_back({corners[0], corners[k], corners[k + 1]});
+        if (with_materials) tri_materials.push_back(material);
+      }
     }
   }
 
@@ -325,7 +370,7 @@ Mesh load_obj_text(const std::string& text, const std::filesystem::path& path, N
     for (Eigen::Vector3d& p : positions) p = from_y_up(p);
     for (Eigen::Vector3d& n : normals) n = from_y_up(n);
   }
-  return finish_mesh(std::move(mesh), positions, normals, tris, path, normal_source, texcoords);
+  return finish_mesh(std::move(mesh), positions, normals, tris, path, normal_source, texcoords, tri_materials);
 }
 
 

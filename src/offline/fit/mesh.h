@@ -29,6 +29,14 @@ namespace shtool::fit {
 // Malformed or unusable input mesh. The message names the file and the problem.
 using MeshError = InputError;  // every mesh problem is bad input
 
+// The part of an OBJ .mtl material a diffuse scene uses: Kd (diffuse reflectance) and
+// Ke (emitted radiance), each only when the file states it.
+struct ObjMaterial {
+  std::string name;
+  bool has_kd = false, has_ke = false;
+  Eigen::Vector3d kd = Eigen::Vector3d::Zero(), ke = Eigen::Vector3d::Zero();
+};
+
 struct Mesh {
   std::vector<Eigen::Vector3d> positions;  // kept vertices only
   std::vector<Eigen::Vector3d> normals;    // unit vertex normals, one per position
@@ -39,6 +47,11 @@ struct Mesh {
   // glTF's top-left TEXCOORD_0 is flipped on load). Empty unless every corner of every
   // kept triangle has one.
   std::vector<std::array<Eigen::Vector2d, 3>> uvs;
+  // The material of each kept triangle, parallel to `triangles`: a glTF material index or
+  // an index into obj_materials; -1 for none. A scene's shading reads it (offline/scene).
+  std::vector<int> triangle_material;
+  // An OBJ's .mtl materials, when the loader was given the .mtl text.
+  std::vector<ObjMaterial> obj_materials;
 
   std::uint32_t input_crc32 = 0;           // CRC-32 of the file's bytes (provenance)
   // Every file the mesh was read from: the file itself, and a glTF's external buffers and
@@ -101,8 +114,11 @@ Mesh load_mesh(const std::filesystem::path& path, NormalSource normals = NormalS
                UpAxis up = UpAxis::y);
 
 // The same for OBJ text already in memory; `path` names it in messages.
+// `mtl_text`, when not empty, is the .mtl the OBJ's usemtl lines name (Mesh::obj_materials,
+// Mesh::triangle_material).
 Mesh load_obj_text(const std::string& text, const std::filesystem::path& path,
-                   NormalSource normals = NormalSource::automatic, UpAxis up = UpAxis::y);
+                   NormalSource normals = NormalSource::automatic, UpAxis up = UpAxis::y,
+                   const std::string& mtl_text = {});
 
 // One corner of a triangle: a vertex, the normal and the texture coordinate it has
 // there (-1: none).
@@ -117,10 +133,12 @@ struct Corner {
 // and the source allows, computed angle-weighted otherwise. Throws MeshError when no
 // usable triangle is left. `mesh` brings the counters the loader set. Texture
 // coordinates (Corner::t indexes `texcoords`, already in Mesh::uvs' convention) are kept
-// per corner when every kept corner has one.
+// per corner when every kept corner has one. `materials`, when not empty, is parallel to
+// `tris` and kept for the kept triangles (Mesh::triangle_material).
 Mesh finish_mesh(Mesh mesh, const std::vector<Eigen::Vector3d>& positions, const std::vector<Eigen::Vector3d>& normals,
                  const std::vector<std::array<Corner, 3>>& tris, const std::filesystem::path& path,
-                 NormalSource normal_source, const std::vector<Eigen::Vector2d>& texcoords = {});
+                 NormalSource normal_source, const std::vector<Eigen::Vector2d>& texcoords = {},
+                 const std::vector<int>& materials = {});
 
 // Angle-weighted vertex normals (Thürmer and Wüthrich 1998): each incident triangle
 // contributes its unit normal times the corner angle, which makes the result independent

@@ -22,16 +22,6 @@
 namespace shtool::fit {
 namespace {
 
-// Orthonormal basis around n without a branch-dependent discontinuity at the poles
-// (Duff et al., "Building an Orthonormal Basis, Revisited", JCGT 2017).
-void orthonormal_basis(const Eigen::Vector3d& n, Eigen::Vector3d& t, Eigen::Vector3d& b) {
-  const double sign = std::copysign(1.0, n.z());
-  const double a = -1.0 / (sign + n.z());
-  const double c = n.x() * n.y() * a;
-  t = Eigen::Vector3d(1.0 + sign * n.x() * n.x() * a, sign * c, -sign * n.x());
-  b = Eigen::Vector3d(c, sign + n.y() * n.y() * a, -n.y());
-}
-
 // Runs body(v) for every vertex (common/parallel_for.h: the partition never changes
 // what is computed), reporting progress through the pass's share of the total.
 template <class Body>
@@ -58,6 +48,20 @@ Eigen::Vector3d uniform_fibonacci_direction(int k, int count, double a, double b
   const double z = 1.0 - (k + b) / count, phi = fibonacci_azimuth(k, a);
   const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
   return Eigen::Vector3d(r * std::cos(phi), r * std::sin(phi), z);
+}
+
+Eigen::Vector3d sphere_fibonacci_direction(int k, int count, double a, double b) {
+  const double z = 1.0 - 2.0 * (k + b) / count, phi = fibonacci_azimuth(k, a);
+  const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
+  return Eigen::Vector3d(r * std::cos(phi), r * std::sin(phi), z);
+}
+
+void orthonormal_basis(const Eigen::Vector3d& n, Eigen::Vector3d& t, Eigen::Vector3d& b) {
+  const double sign = std::copysign(1.0, n.z());
+  const double a = -1.0 / (sign + n.z());
+  const double c = n.x() * n.y() * a;
+  t = Eigen::Vector3d(1.0 + sign * n.x() * n.x() * a, sign * c, -sign * n.x());
+  b = Eigen::Vector3d(c, sign + n.y() * n.y() * a, -n.y());
 }
 
 Eigen::Vector3d cosine_fibonacci_direction(int k, int count, double a, double b) {

@@ -107,4 +107,12 @@ Eigen::Vector3d cosine_fibonacci_direction(int k, int count, double a, double b)
 // and the same azimuths (the glossy transfer's rays, glossy/glossy_transfer.h).
 Eigen::Vector3d uniform_fibonacci_direction(int k, int count, double a, double b);
 
+// The same over the whole sphere: z = 1 - 2 (k + b) / count, the same azimuths (the
+// probe directions of bake-probes, probes/probe_bake.h).
+Eigen::Vector3d sphere_fibonacci_direction(int k, int count, double a, double b);
+
+// Orthonormal basis (t, b) around unit n without a branch-dependent discontinuity at the
+// poles (Duff et al., "Building an Orthonormal Basis, Revisited", JCGT 2017).
+void orthonormal_basis(const Eigen::Vector3d& n, Eigen::Vector3d& t, Eigen::Vector3d& b);
+
 }  // namespace shtool::fit

@@ -1,0 +1,230 @@
+#include "probes/bake_probes_job.h"
+
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <limits>
+#include <optional>
+#include <span>
+#include <sstream>
+
+#include "common/finite.h"
+#include "common/generator_record.h"
+#include "common/input_file.h"
+#include "common/input_error.h"
+#include "common/job_outputs.h"
+#include "common/parallel_for.h"
+#include "common/table_writer.h"
+#include "fit/embree_scene.h"
+#include "fit/mpi_world.h"
+#include "lighting/lighting_output.h"
+#include "probes/probe_grid_table.h"
+#include "shtool/probe_grid.h"
+
+namespace shtool::probes {
+namespace {
+
+// Comma-separated fields, each a whole number or a finite decimal as `what` says.
+std::vector<std::string> fields(const std::string& text) {
+  std::vector<std::string> out;
+  std::string item;
+  std::istringstream in(text);
+  while (std::getline(in, item, ',')) out.push_back(item);
+  if (!text.empty() && text.back() == ',') out.push_back("");
+  return out;
+}
+
+double parse_double(const std::string& s, const std::string& option) {
+  const char* begin = s.c_str();
+  char* end = nullptr;
+  const double v = std::strtod(begin, &end);
+  if (s.empty() || end == begin || *end != '\0' || !std::isfinite(v))
+    throw InputError(option + ": '" + s + "' is not a finite number");
+  return v;
+}
+
+}  // namespace
+
+std::array<int, 3> parse_grid(const std::string& text) {
+  const std::vector<std::string> f = fields(text);
+  if (f.size() != 3) throw InputError("--grid must be NX,NY,NZ (three whole numbers), got '" + text + "'");
+  std::array<int, 3> n{};
+  std::size_t total = 1;
+  for (int a = 0; a < 3; ++a) {
+    const char* begin = f[a].c_str();
+    char* end = nullptr;
+    const long long v = std::strtoll(begin, &end, 10);
+    if (f[a].empty() || end == begin || *end != '\0')
+      throw InputError("--grid: '" + f[a] + "' is not a whole number");
+    if (v < 1 || v > kMaxAxisProbes)
+      throw InputError("--grid: each count must be in 1.." + std::to_string(kMaxAxisProbes) + ", got " + f[a]);
+    n[a] = static_cast<int>(v);
+    total *= static_cast<std::size_t>(v);
+  }
+  if (total > kMaxProbes)
+    throw InputError("--grid: " + std::to_string(total) + " probes, more than " + std::to_string(kMaxProbes));
+  return n;
+}
+
+std::pair<Eigen::Vector3d, Eigen::Vector3d> parse_bounds(const std::string& text) {
+  const std::vector<std::string> f = fields(text);
+  if (f.size() != 6) throw InputError("--bounds must be X0,Y0,Z0,X1,Y1,Z1 (six numbers), got '" + text + "'");
+  Eigen::Vector3d lo, hi;
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = parse_double(f[a], "--bounds");
+    hi[a] = parse_double(f[3 + a], "--bounds");
+  }
+  for (int a = 0; a < 3; ++a)
+    if (!(lo[a] < hi[a]))
+      throw InputError(std::string("--bounds: min ") + "xyz"[a] + " (" + f[a] + ") must be below max " + "xyz"[a] +
+                       " (" + f[3 + a] + ")");
+  return {lo, hi};
+}
+
+BakeProbesReport run_bake_probes(const BakeProbesRequest& r) {
+  const auto t0 = std::chrono::steady_clock::now();
+  if (r.scene.empty()) throw InputError("a scene file (glTF or OBJ) is required");
+  if (r.out.empty()) throw InputError("--out is required");
+  check_option_range("--order", r.order, 1, kMaxOrder);
+  check_option_range("--samples", r.samples, 1, kMaxSamples);
+  check_option_range("--bounces", r.bounces, 0, kMaxBounces);
+  ProbeGridSpec spec;
+  spec.resolution = parse_grid(r.grid);
+  std::optional<std::pair<Eigen::Vector3d, Eigen::Vector3d>> bounds;
+  if (!r.bounds.empty()) bounds = parse_bounds(r.bounds);
+  spec.order = r.order;
+  spec.samples = r.samples;
+  spec.bounces = r.bounces;
+  spec.seed = r.seed;
+  spec.threads = resolve_threads(r.threads);
+  std::optional<fit::Shard> shard;
+  if (!r.shard.empty()) {
+    if (r.mpi) throw InputError("--mpi and --shard both split the probes: give one of them");
+    shard = fit::parse_shard(r.shard);
+    if (!r.json.empty())
+      throw InputError("--json needs the whole grid: not with --shard (join the parts with shtool merge)");
+    if (shard->count > spec.probe_count())
+      throw InputError("--shard " + r.shard + ": more shards than the grid's " + std::to_string(spec.probe_count()) +
+                       " probes");
+  }
+  // Under MPI, rank R of S bakes shard R/S; rank 0 gathers the parts and joins them as
+  // merge does, so the bytes are a one-process run's.
+  std::optional<fit::MpiJob> mpi;
+  if (r.mpi) {
+    mpi.emplace();
+    if (static_cast<std::size_t>(mpi->size()) > spec.probe_count())
+      throw InputError("--mpi: " + std::to_string(mpi->size()) + " ranks for the grid's " +
+                       std::to_string(spec.probe_count()) + " probes");
+    shard = fit::Shard{static_cast<std::size_t>(mpi->rank()), static_cast<std::size_t>(mpi->size())};
+  }
+
+  JobOutputs io;
+  io.input(r.scene, "the scene");
+  io.input(r.env, "--env");
+  io.output(r.out, "--out");
+  io.output(r.json, "--json");
+
+  Environment env;
+  nlohmann::json params = {{"scene", r.scene.filename().string()}};
+  if (!r.env.empty()) {
+    const lighting::Lighting l = lighting::read_lighting_json(r.env, "--env");
+    if (l.quantity != lighting::Quantity::radiance)
+      throw InputError(r.env.string() + ": --env needs radiance coefficients (this file holds irradiance)");
+    env.order = l.order;
+    env.coefficients = l.coefficients;
+  }
+  scene::Scene s = scene::load_scene(r.scene, r.up);
+  io.inputs(s.mesh.files, "a file of the scene");
+  if (bounds) {
+    spec.lower = bounds->first;
+    spec.upper = bounds->second;
+  } else {
+    spec.lower = s.lower();
+    spec.upper = s.upper();
+    for (int a = 0; a < 3; ++a)
+      if (!(spec.lower[a] < spec.upper[a]))
+        throw InputError(r.scene.string() + ": the scene's bounding box is flat along " + std::string(1, "xyz"[a]) +
+                         ": give --bounds");
+  }
+
+  const fit::VertexRange range = shard ? fit::shard_range(spec.probe_count(), *shard)
+                                       : fit::VertexRange{0, spec.probe_count()};
+  const ProbeBake bake = shard ? bake_probe_range(s, spec, env, range.begin, range.end) : bake_probe_grid(s, spec, env);
+  check_finite(std::span<const double>(bake.coefficients), "probe coefficient");
+
+  params["input_crc32"] = s.mesh.input_crc32;
+  params["mesh_crc32"] = fit::loaded_mesh_crc32(s.mesh);
+  params["up"] = up_axis_name(s.mesh.up);
+  params["grid"] = {spec.resolution[0], spec.resolution[1], spec.resolution[2]};
+  params["bounds"] = {{"min", {spec.lower.x(), spec.lower.y(), spec.lower.z()}},
+                      {"max", {spec.upper.x(), spec.upper.y(), spec.upper.z()}}};
+  params["bounds_from"] = bounds ? "option" : "scene";
+  params["order"] = r.order;
+  params["samples"] = r.samples;
+  params["bounces"] = r.bounces;
+  params["seed"] = r.seed;
+  params["encoding"] = "l2";
+  if (!r.env.empty()) {
+    params["env"] = r.env.filename().string();
+    params["env_crc32"] = input_crc32(read_input_file(r.env, "--env"));
+  }
+  nlohmann::json generator = generator_record("shtool bake-probes", params);
+  const fit::EmbreeIdentity embree = fit::embree_identity();
+  generator["embree"] = {{"version", embree.version}, {"isa", embree.isa}};
+
+  std::size_t invalid = 0;
+  for (const std::uint8_t v : bake.valid) invalid += v ? 0 : 1;
+  nlohmann::json meta;
+  meta[kMeshUpKey] = up_axis_name(s.mesh.up);
+  meta["triangles"] = s.mesh.triangles.size();
+  meta["lights"] = s.lights.size();
+
+  BakeProbesReport report;
+  if (mpi) {
+    report.mpi_rank = mpi->rank();
+    report.mpi_ranks = mpi->size();
+    const std::string mine = encode_table(probe_grid_part_table(spec, bake, *shard, range, generator, meta));
+    if (!mpi->all_ok(true)) throw InputError("rank " + std::to_string(mpi->rank()) + ": stopped, another rank failed");
+    const std::vector<std::string> parts = mpi->gather(mine);
+    if (mpi->rank() == 0) {
+      std::vector<std::pair<std::string, Table>> tables;
+      for (std::size_t k = 0; k < parts.size(); ++k) {
+        const std::string name = "rank " + std::to_string(k);
+        Result<Table> t = read_table_bytes(std::as_bytes(std::span(parts[k])), name, {std::string(kProbeGridKind), 1});
+        if (!t) throw InputError("--mpi: " + t.error().message);
+        tables.emplace_back(name, std::move(t).value());
+      }
+      const Table merged = merge_probe_grid_tables(tables);
+      io.set("--out", encode_table(merged));
+      if (io.requested("--json")) {
+        ProbeBake whole;
+        whole.coefficients = merged.find("coefficients")->values<double>();
+        whole.valid = merged.find("valid")->values<std::uint8_t>();
+        io.set("--json", dump_finite(probe_grid_json(spec, whole), "--json") + "\n");
+      }
+      io.commit();
+    }
+  } else {
+    io.set("--out", encode_table(shard ? probe_grid_part_table(spec, bake, *shard, range, generator, meta)
+                                       : probe_grid_table(spec, bake, generator, meta)));
+    if (io.requested("--json")) io.set("--json", dump_finite(probe_grid_json(spec, bake), "--json") + "\n");
+    io.commit();
+  }
+
+  report.probes = range.end - range.begin;
+  report.invalid = invalid;
+  report.unfilled = bake.unfilled;
+  report.resolution = spec.resolution;
+  report.lower = spec.lower;
+  report.upper = spec.upper;
+  report.triangles = s.mesh.triangles.size();
+  report.lights = s.lights.size();
+  report.rays = bake.rays;
+  report.sharded = shard.has_value() && !mpi;
+  report.first_probe = range.begin;
+  report.end_probe = range.end;
+  report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return report;
+}
+
+}  // namespace shtool::probes

@@ -1,0 +1,286 @@
+// End-to-end tests of `shtool bake-probes`: the table and --json of a white furnace read
+// back by the runtime loader (ProbeGrid<float> and <double>), the schema, OBJ scenes with
+// .mtl materials and --up, the same bytes on 1 and 2 threads, and bad scenes, grids,
+// bounds and options refused with a message, exit 1 and no output.
+#include <cmath>
+#include <filesystem>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "cli_test.h"
+#include "probe_scenes.h"
+#include "shtool/probe_grid.h"
+#include "shtool/table.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace shtool::test;
+constexpr double kPi = std::numbers::pi;
+
+const Scratch scratch("cli_bake_probes");
+
+// A closed box, walls of albedo 0.5 emitting 1: every probe's radiance is 1 + 0.5 + 0.25
+// for two bounces, in every direction (test_probes.cpp, WhiteFurnace...).
+fs::path furnace() {
+  const fs::path path = scratch("furnace.gltf");
+  ProbeTestScene t;
+  const int m = t.material({{0.5, 0.5, 0.5}, {0.5, 0.5, 0.5}, 2.0, false});
+  t.box(Eigen::Vector3d(-1, -1, -1), Eigen::Vector3d(1, 1, 1), m, true);
+  t.write(path);
+  return path;
+}
+
+TEST(CliBakeProbes, FurnaceTableJsonAndLoader) {
+  const fs::path scene = furnace(), out = scratch("f.shtb"), json = scratch("f.json");
+  const CommandResult r = run_shtool({"bake-probes", scene.string(), "--grid", "3,2,2", "--bounds",
+                                      "-0.9,-0.8,-0.7,0.9,0.8,0.7", "--samples", "512", "--bounces", "2", "--order",
+                                      "3", "--out", out.string(), "--json", json.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const double L = 1.75;
+  const nlohmann::json doc = read_json(json);
+  EXPECT_EQ(doc["order"], 3);
+  EXPECT_EQ(doc["quantity"], "radiance");
+  EXPECT_EQ(doc["channels"], nlohmann::json({"r", "g", "b"}));
+  EXPECT_EQ(doc["resolution"], nlohmann::json({3, 2, 2}));
+  EXPECT_EQ(doc["bounds"]["min"], nlohmann::json({-0.9, -0.8, -0.7}));
+  EXPECT_EQ(doc["bounds"]["max"], nlohmann::json({0.9, 0.8, 0.7}));
+  ASSERT_EQ(doc["probes"].size(), 12u);
+  // Index order: ix fastest, then iy, then iz; cell centres.
+  const nlohmann::json& p5 = doc["probes"][5];  // ix 2, iy 1, iz 0
+  EXPECT_EQ(p5["index"], nlohmann::json({2, 1, 0}));
+  EXPECT_NEAR(p5["position"][0].get<double>(), -0.9 + 2.5 * 0.6, 1e-15);
+  EXPECT_NEAR(p5["position"][1].get<double>(), -0.8 + 1.5 * 0.8, 1e-15);
+  EXPECT_NEAR(p5["position"][2].get<double>(), -0.7 + 0.5 * 0.7, 1e-15);
+  for (const nlohmann::json& p : doc["probes"]) {
+    EXPECT_EQ(p["valid"], true);
+    ASSERT_EQ(p["coefficients"].size(), 9u);
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(p["coefficients"][0][c].get<double>(), std::sqrt(4 * kPi) * L, 1e-12);
+  }
+  expect_valid_against_schema("probe-grid.schema.json", {out});
+
+  const shtool::Result<shtool::ProbeGrid<double>> g = shtool::ProbeGrid<double>::load(out);
+  ASSERT_TRUE(g.ok()) << g.error().message;
+  const shtool::ProbeGrid<double>& grid = g.value();
+  EXPECT_EQ(grid.order, 3);
+  EXPECT_EQ(grid.resolution, (std::array<int, 3>{3, 2, 2}));
+  ASSERT_EQ(grid.probe_count(), 12u);
+  for (std::size_t p = 0; p < 12; ++p) {
+    const nlohmann::json& jp = doc["probes"][p];
+    EXPECT_TRUE(grid.is_valid(p));
+    for (int a = 0; a < 3; ++a) EXPECT_EQ(grid.position(p)[a], jp["position"][a].get<double>());
+    const auto c = grid.coefficients_of(p);
+    for (int k = 0; k < 9; ++k)
+      for (int ch = 0; ch < 3; ++ch) EXPECT_EQ(c[k * 3 + ch], jp["coefficients"][k][ch].get<double>());
+    // Irradiance of uniform radiance L is pi L at every normal; the eight non-constant
+    // coefficients (sampling error below 5e-4 L each for 512 directions) times A_l |y_k|
+    // (below 1.3) move it by less than 1e-2 (0.2 % of pi L); a wrong A_l moves it by O(L).
+    for (const auto& n : {Eigen::Vector3d(0, 0, 1), Eigen::Vector3d(0.6, -0.8, 0), Eigen::Vector3d(0, 0, -1)}) {
+      const Eigen::Vector3d e = grid.irradiance(p, n);
+      for (int ch = 0; ch < 3; ++ch) EXPECT_NEAR(e[ch], kPi * L, 1e-2);
+    }
+  }
+  // Trilinear sampling: at a probe's centre, its own coefficients; between two probes,
+  // their mean; beyond the outermost centres, clamped.
+  std::vector<double> s(27);
+  grid.sample(grid.position(5), s);
+  for (int k = 0; k < 27; ++k) EXPECT_NEAR(s[k], grid.coefficients_of(5)[k], 1e-15);
+  grid.sample((grid.position(0) + grid.position(1)) / 2, s);
+  for (int k = 0; k < 27; ++k)
+    EXPECT_NEAR(s[k], (grid.coefficients_of(0)[k] + grid.coefficients_of(1)[k]) / 2, 1e-15);
+  grid.sample(Eigen::Vector3d(-50, -50, -50), s);
+  for (int k = 0; k < 27; ++k) EXPECT_NEAR(s[k], grid.coefficients_of(0)[k], 1e-15);
+
+  const shtool::Result<shtool::ProbeGrid<float>> gf = shtool::ProbeGrid<float>::load(out);
+  ASSERT_TRUE(gf.ok()) << gf.error().message;
+  EXPECT_EQ(gf.value().coefficients_of(3)[0], static_cast<float>(grid.coefficients_of(3)[0]));
+
+  // The generator record: the scene's CRC and every option.
+  const shtool::Result<shtool::Table> t = shtool::read_table(out, {"probe-grid", 1, 3});
+  ASSERT_TRUE(t.ok()) << t.error().message;
+  const nlohmann::json gen = nlohmann::json::parse(t.value().generator);
+  EXPECT_EQ(gen["command"], "shtool bake-probes");
+  EXPECT_EQ(gen["parameters"]["samples"], 512);
+  EXPECT_EQ(gen["parameters"]["bounces"], 2);
+  EXPECT_EQ(gen["parameters"]["bounds_from"], "option");
+  EXPECT_TRUE(gen["parameters"]["input_crc32"].is_number_integer());
+}
+
+TEST(CliBakeProbes, LoaderRefusesAnotherKindAndBrokenGrids) {
+  const fs::path scene = furnace(), out = scratch("k.shtb");
+  ASSERT_EQ(run_shtool({"bake-probes", scene.string(), "--grid", "2,2,2", "--samples", "16", "--out", out.string()})
+                .exit_code,
+            0);
+  shtool::Table t = shtool::read_table(out).value();
+  EXPECT_TRUE(shtool::ProbeGrid<double>::from_table(t).ok());
+  shtool::Table wrong = t;
+  wrong.kind = "zh-fit";
+  EXPECT_FALSE(shtool::ProbeGrid<double>::from_table(wrong).ok());
+  shtool::Table flipped = t;
+  for (auto& a : flipped.arrays)
+    if (a.name == "bounds") a = shtool::TableArray::from<double>("bounds", {2, 3}, std::vector<double>{1, 1, 1, 0, 0, 0});
+  const auto r = shtool::ProbeGrid<double>::from_table(flipped);
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("bounds"), std::string::npos) << r.error().message;
+  shtool::Table bad_flag = t;
+  for (auto& a : bad_flag.arrays)
+    if (a.name == "valid") a = shtool::TableArray::from<std::uint8_t>("valid", {2, 2, 2}, std::vector<std::uint8_t>(8, 2));
+  EXPECT_FALSE(shtool::ProbeGrid<double>::from_table(bad_flag).ok());
+  // The default bounds are the scene's box.
+  const nlohmann::json meta = nlohmann::json::parse(t.meta);
+  EXPECT_EQ(meta["bounds"]["min"], nlohmann::json({-1.0, -1.0, -1.0}));
+  EXPECT_EQ(meta["bounds"]["max"], nlohmann::json({1.0, 1.0, 1.0}));
+}
+
+TEST(CliBakeProbes, SameBytesOnOneAndTwoThreads) {
+  ProbeTestScene t;
+  const int walls = t.material({{0.7, 0.5, 0.3}});
+  t.box(Eigen::Vector3d(-2, 0, -2), Eigen::Vector3d(2, 3, 2), walls, true);
+  t.box(Eigen::Vector3d(-0.3, 0, -0.3), Eigen::Vector3d(0.3, 1, 0.3), walls, false);
+  t.light({{"type", "point"}, {"intensity", 5.0}}, Eigen::Vector3d(1, 2, 1), Eigen::Vector3d(0, -1, 0));
+  const fs::path scene = scratch("room.gltf");
+  t.write(scene);
+  std::vector<std::string> bytes;
+  for (const char* threads : {"1", "2"}) {
+    const fs::path out = scratch(std::string("room") + threads + ".shtb"), json = scratch(std::string("room") + threads + ".json");
+    const CommandResult r = run_shtool({"bake-probes", scene.string(), "--grid", "3,2,3", "--samples", "64",
+                                        "--threads", threads, "--seed", "11", "--out", out.string(), "--json",
+                                        json.string()});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    bytes.push_back(read_file(out) + read_file(json));
+  }
+  EXPECT_EQ(bytes[0], bytes[1]);
+}
+
+// Three shards joined by merge: the one-process table byte for byte, with a probe inside
+// a solid cube (invalid, filled only when the parts are joined).
+TEST(CliBakeProbes, ShardsMergeToTheOneProcessTable) {
+  ProbeTestScene t;
+  const int m = t.material({{0.5, 0.5, 0.5}});
+  t.box(Eigen::Vector3d(-0.5, -0.5, -0.5), Eigen::Vector3d(0.5, 0.5, 0.5), m, false);
+  t.light({{"type", "point"}, {"intensity", 5.0}}, Eigen::Vector3d(1, 1.2, 0.7), Eigen::Vector3d(0, -1, 0));
+  const fs::path scene = scratch("solid.gltf");
+  t.write(scene);
+  const std::vector<std::string> common = {"bake-probes", scene.string(), "--grid", "3,3,3", "--bounds",
+                                           "-1.5,-1.5,-1.5,1.5,1.5,1.5", "--samples", "64", "--order", "2"};
+  auto run = [&](std::vector<std::string> extra) {
+    std::vector<std::string> a = common;
+    a.insert(a.end(), extra.begin(), extra.end());
+    return run_shtool(a);
+  };
+  const fs::path whole = scratch("whole.shtb");
+  ASSERT_EQ(run({"--out", whole.string()}).exit_code, 0);
+  std::vector<std::string> merge = {"merge"};
+  for (const char* k : {"2", "0", "1"}) {
+    const fs::path part = scratch(std::string("part") + k + ".shtb");
+    const CommandResult r = run({"--shard", std::string(k) + "/3", "--out", part.string()});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    expect_valid_against_schema("probe-grid.schema.json", {part});
+    EXPECT_FALSE(shtool::ProbeGrid<double>::load(part).ok()) << "a partial table must not load as a grid";
+    merge.push_back(part.string());
+  }
+  const fs::path merged = scratch("merged.shtb");
+  merge.insert(merge.end(), {"--out", merged.string()});
+  const CommandResult r = run_shtool(merge);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(read_file(merged), read_file(whole));
+  const shtool::ProbeGrid<double> g = shtool::ProbeGrid<double>::load(merged).value();
+  EXPECT_FALSE(g.is_valid(13));
+  // A shard missing: refused, nothing written.
+  fs::remove(merged);
+  const CommandResult missing =
+      run_shtool({"merge", scratch("part0.shtb").string(), scratch("part2.shtb").string(), "--out", merged.string()});
+  EXPECT_EQ(missing.exit_code, 1);
+  EXPECT_NE(missing.err.find("shard 1 of 3 is missing"), std::string::npos) << missing.err;
+  EXPECT_FALSE(fs::exists(merged));
+  expect_refused("bake-probes", {scene.string(), "--grid", "3,3,3", "--shard", "0/2", "--json", scratch("j.json").string()},
+                 "--json needs the whole grid", scratch("p.shtb"));
+  expect_refused("bake-probes", {scene.string(), "--grid", "1,1,2", "--shard", "0/3"}, "more shards than", scratch("p.shtb"));
+  expect_refused("bake-probes", {scene.string(), "--grid", "1,1,2", "--shard", "3/3"}, "K must be below N", scratch("p.shtb"));
+}
+
+// OBJ: Kd and Ke from the .mtl, the furnace again (faces wound inward, y up by default).
+TEST(CliBakeProbes, ObjWithMtlMaterials) {
+  const fs::path dir = empty_folder_for_this_test(scratch);
+  write_file(dir / "box.mtl", "newmtl wall\nKd 0.25 0.5 0.75\nKe 1 1 1\n");
+  std::string obj = "mtllib box.mtl\n";
+  for (int x : {-1, 1})
+    for (int y : {-1, 1})
+      for (int z : {-1, 1}) obj += "v " + std::to_string(x) + " " + std::to_string(y) + " " + std::to_string(z) + "\n";
+  // Vertex (x, y, z) in {-1, 1}^3 is number 1 + 4 i + 2 j + k; faces wound inward.
+  obj += "usemtl wall\n"
+         "f 1 3 4 2\nf 5 6 8 7\nf 1 2 6 5\nf 3 7 8 4\nf 1 5 7 3\nf 2 4 8 6\n";
+  write_file(dir / "box.obj", obj);
+  const fs::path out = dir / "o.shtb", json = dir / "o.json";
+  const CommandResult r = run_shtool({"bake-probes", (dir / "box.obj").string(), "--grid", "1,1,1", "--bounds",
+                                      "-0.5,-0.5,-0.5,0.5,0.5,0.5", "--samples", "256", "--bounces", "1", "--out",
+                                      out.string(), "--json", json.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json doc = read_json(json);
+  ASSERT_EQ(doc["probes"][0]["valid"], true) << "faces wound outward?";
+  const double kd[3] = {0.25, 0.5, 0.75};
+  for (int c = 0; c < 3; ++c)
+    EXPECT_NEAR(doc["probes"][0]["coefficients"][0][c].get<double>(), std::sqrt(4 * kPi) * (1 + kd[c]), 1e-12) << c;
+}
+
+TEST(CliBakeProbes, RefusesBadScenesGridsBoundsAndOptions) {
+  const fs::path scene = furnace(), out = scratch("refused.shtb");
+  const std::string s = scene.string();
+  const std::vector<std::string> base = {s, "--samples", "8"};
+  auto with = [&](std::vector<std::string> extra) {
+    std::vector<std::string> a = base;
+    a.insert(a.end(), extra.begin(), extra.end());
+    return a;
+  };
+  expect_refused("bake-probes", with({"--grid", "0,2,2"}), "--grid: each count must be in 1..1024", out);
+  expect_refused("bake-probes", with({"--grid", "2,-1,2"}), "--grid: each count must be in 1..1024", out);
+  expect_refused("bake-probes", with({"--grid", "2,x,2"}), "--grid: 'x' is not a whole number", out);
+  expect_refused("bake-probes", with({"--grid", "2,2.5,2"}), "--grid: '2.5' is not a whole number", out);
+  expect_refused("bake-probes", with({"--grid", "2,2"}), "--grid must be NX,NY,NZ", out);
+  expect_refused("bake-probes", with({"--grid", "2,2,2,"}), "--grid must be NX,NY,NZ", out);
+  expect_refused("bake-probes", with({"--grid", "1024,1024,1024"}), "more than 16777216", out);
+  expect_refused("bake-probes", with({"--grid", "2,2,2", "--bounds", "0,0,0,1,1,0"}),
+                 "--bounds: min z (0) must be below max z (0)", out);
+  expect_refused("bake-probes", with({"--grid", "2,2,2", "--bounds", "2,0,0,1,1,1"}),
+                 "--bounds: min x (2) must be below max x (1)", out);
+  expect_refused("bake-probes", with({"--grid", "2,2,2", "--bounds", "0,0,0,1,1"}), "--bounds must be X0,Y0,Z0,X1,Y1,Z1",
+                 out);
+  expect_refused("bake-probes", with({"--grid", "2,2,2", "--bounds", "0,0,0,1,1,nan"}), "is not a finite number", out);
+  expect_refused("bake-probes", with({"--grid", "2,2,2", "--order", "0"}), "--order must be in 1..8", out);
+  expect_refused("bake-probes", with({"--grid", "2,2,2", "--order", "9"}), "--order must be in 1..8", out);
+  expect_refused("bake-probes", {s, "--grid", "2,2,2", "--samples", "0"}, "--samples must be in 1..1048576", out);
+  expect_refused("bake-probes", with({"--grid", "2,2,2", "--bounces", "-1"}), "--bounces must be in 0..64", out);
+  expect_refused("bake-probes", with({"--grid", "2,2,2", "--seed", "-3"}), "must not be negative", out);
+  expect_refused("bake-probes", with({"--grid", "2,2,2", "--up", "z"}), "glTF is +Y up", out);
+  expect_refused("bake-probes", {scratch("missing.gltf").string(), "--grid", "2,2,2"}, "no such file", out);
+  write_file(scratch("garbage.obj"), "v 0 0 0\nf 1 2 3\n");
+  expect_refused("bake-probes", {scratch("garbage.obj").string(), "--grid", "2,2,2"}, "refers to vertex 2", out);
+  write_file(scratch("broken.gltf"), "{\"asset\": {\"version\": \"2.0\"}, \"scenes\": [");
+  expect_refused("bake-probes", {scratch("broken.gltf").string(), "--grid", "2,2,2"}, "cannot read glTF", out);
+  // A flat scene needs --bounds.
+  ProbeTestScene flat;
+  flat.quad(Eigen::Vector3d(-1, 0, 1), Eigen::Vector3d(1, 0, 1), Eigen::Vector3d(1, 0, -1), Eigen::Vector3d(-1, 0, -1),
+            flat.material({}));
+  flat.write(scratch("flat.gltf"));
+  expect_refused("bake-probes", {scratch("flat.gltf").string(), "--grid", "2,2,2"}, "flat along z: give --bounds", out);
+  // --env must hold radiance.
+  const fs::path irr = scratch("irr.json");
+  write_file(irr, R"({"order": 1, "quantity": "irradiance", "channels": ["r", "g", "b"], "window": {"type": "none"},
+                      "coefficients": [[1, 1, 1]]})");
+  expect_refused("bake-probes", with({"--grid", "2,2,2", "--env", irr.string()}), "--env needs radiance", out);
+  // --out must not replace the scene; --json beside a bad request is not written either.
+  const fs::path json = scratch("refused.json");
+  fs::remove(json);
+  const CommandResult r = run_shtool({"bake-probes", s, "--grid", "0,1,1", "--json", json.string(), "--out", out.string()});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_FALSE(fs::exists(json));
+  const CommandResult same = run_shtool({"bake-probes", s, "--grid", "1,1,1", "--out", s});
+  EXPECT_EQ(same.exit_code, 1) << same.err;
+  EXPECT_TRUE(fs::exists(scene));
+}
+
+}  // namespace

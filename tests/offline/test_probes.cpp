@@ -1,0 +1,321 @@
+// bake-probes' light transport against closed forms: the white furnace, an environment
+// alone, a directional light over a plane, the glTF frame, invalid probes, the lights'
+// falloff and thread-count independence.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "probe_scenes.h"
+#include "lighting/image_io.h"
+#include "probes/probe_bake.h"
+#include "scene/scene.h"
+#include "scratch_files.h"
+#include "shtool/sh.h"
+
+namespace shtool {
+namespace {
+
+using test::ProbeTestMaterial;
+using test::ProbeTestScene;
+constexpr double kPi = std::numbers::pi;
+
+std::filesystem::path scratch(const std::string& name) { return test::scratch_path("test_probes", name); }
+
+probes::ProbeGridSpec grid(std::array<int, 3> n, Eigen::Vector3d lo, Eigen::Vector3d hi, int order, int samples,
+                           int bounces) {
+  probes::ProbeGridSpec s;
+  s.resolution = n;
+  s.lower = lo;
+  s.upper = hi;
+  s.order = order;
+  s.samples = samples;
+  s.bounces = bounces;
+  s.seed = 7;
+  s.threads = 2;
+  return s;
+}
+
+scene::Scene furnace_scene(double rho, double emitted) {
+  ProbeTestScene t;
+  const int m = t.material({{rho, rho, rho}, {emitted / 2, emitted / 2, emitted / 2}, 2.0, false});
+  t.box(Eigen::Vector3d(-1, -1, -1), Eigen::Vector3d(1, 1, 1), m, /*inward=*/true);
+  t.write(scratch("furnace.gltf"));
+  return scene::load_scene(scratch("furnace.gltf"), UpAxis::y);
+}
+
+// A closed box whose walls emit E and reflect rho: every path gains E at each of its
+// B + 1 hits, its weight multiplied by rho at each reflection, so the radiance in every
+// direction is E (1 + rho + ... + rho^B) with no variance at all. c_00 is then exact to
+// rounding; the other coefficients are the set's integration error of a constant,
+// (4 pi / S) |sum_j y_k(w_j)| L, which stays below 4e-4 L for 1024 spherical Fibonacci
+// points at order 3 whatever the azimuth turn (20 random turns in numpy); the tolerance
+// is 1e-3 L. A wrong sign or weight anywhere gives O(L).
+TEST(ProbeBake, WhiteFurnaceEveryProbeEveryBounceCount) {
+  const double rho = 0.5, E = 1.0;
+  const scene::Scene s = furnace_scene(rho, E);
+  ASSERT_EQ(s.mesh.triangles.size(), 12u);
+  for (int bounces : {0, 1, 3}) {
+    const auto spec = grid({2, 2, 2}, Eigen::Vector3d::Constant(-0.8), Eigen::Vector3d::Constant(0.8), 3, 1024, bounces);
+    const probes::ProbeBake b = probes::bake_probe_grid(s, spec, {});
+    double L = 0;
+    for (int k = 0; k <= bounces; ++k) L += E * std::pow(rho, k);
+    for (std::size_t p = 0; p < spec.probe_count(); ++p) {
+      EXPECT_EQ(b.valid[p], 1);
+      for (int k = 0; k < 9; ++k)
+        for (int c = 0; c < 3; ++c) {
+          const double v = b.coefficients[(p * 9 + k) * 3 + c];
+          if (k == 0) EXPECT_NEAR(v, std::sqrt(4 * kPi) * L, 1e-12) << "bounces " << bounces << " probe " << p;
+          else EXPECT_NEAR(v, 0.0, 1e-3 * L) << "bounces " << bounces << " probe " << p << " k " << k;
+        }
+    }
+  }
+}
+
+// The furnace with baseColorTexture and emissiveTexture: a 1 x 2 PNG whose top row (glTF
+// v = 0.25 at every vertex: the top row's centre) differs from its bottom row. Albedo =
+// baseColorFactor x the decoded texel, emission = emissiveFactor x texel x strength; a
+// texture read upside down, or a factor or the sRGB decoding left out, misses by far more
+// than the 1e-12 allowed (the furnace has no sampling error in c_00).
+TEST(ProbeBake, TexturedFurnaceReadsTheTopRowDecodedToLinear) {
+  lighting::Image image;
+  image.width = 1;
+  image.height = 2;
+  image.texels = {0.2f, 0.4f, 0.6f, 0.9f, 0.1f, 0.5f};  // row 0 (top), row 1
+  const std::string png = lighting::encode_png(image);
+  const lighting::Image decoded = lighting::decode_image(png, "texture.png");
+  ProbeTestScene t;
+  const int m = t.material({{0.8, 0.8, 0.8}, {1, 1, 1}, 2.0, false, true});
+  t.box(Eigen::Vector3d(-1, -1, -1), Eigen::Vector3d(1, 1, 1), m, true);
+  t.texture(png, Eigen::Vector2d(0.5, 0.25));
+  t.write(scratch("textured.gltf"));
+  const scene::Scene s = scene::load_scene(scratch("textured.gltf"), UpAxis::y);
+  ASSERT_EQ(s.mesh.uvs.size(), 12u);
+  const auto spec = grid({1, 1, 1}, Eigen::Vector3d::Constant(-0.5), Eigen::Vector3d::Constant(0.5), 2, 256, 2);
+  const probes::ProbeBake b = probes::bake_probe_grid(s, spec, {});
+  for (int c = 0; c < 3; ++c) {
+    auto radiance = [&](int row) {
+      const double texel = decoded.texels[row * 3 + c];
+      const double rho = 0.8 * texel, E = 2.0 * texel;
+      return E * (1 + rho + rho * rho);
+    };
+    const double got = b.coefficients[c] / std::sqrt(4 * kPi);
+    EXPECT_NEAR(got, radiance(0), 1e-12 * radiance(0)) << "channel " << c;
+    EXPECT_GT(std::abs(radiance(1) - radiance(0)), 0.1 * radiance(0));
+    // sRGB decoding: the texel is close to the tone-mapped value x / (1 + x) written.
+    EXPECT_NEAR(decoded.texels[c], image.texels[c] / (1 + image.texels[c]), 5e-3);
+  }
+}
+
+void write_env(const std::filesystem::path& path, const std::vector<double>& c, int order) {
+  nlohmann::json rows = nlohmann::json::array();
+  for (int k = 0; k < order * order; ++k) rows.push_back({c[k * 3], c[k * 3 + 1], c[k * 3 + 2]});
+  test::write_file(path, nlohmann::json{{"order", order},
+                                        {"quantity", "radiance"},
+                                        {"channels", {"r", "g", "b"}},
+                                        {"window", {{"type", "none"}}},
+                                        {"coefficients", rows}}
+                             .dump());
+}
+
+// A scene with nothing near the probes (one tiny triangle far away): the environment is
+// the control variate of the estimator, so every probe gets its coefficients exactly,
+// truncated to a lower order or padded with zeros to a higher one.
+TEST(ProbeBake, EnvironmentAloneIsReturnedAtEveryProbe) {
+  ProbeTestScene t;
+  const int m = t.material({});
+  t.triangle(Eigen::Vector3d(100, 100, 100), Eigen::Vector3d(100.001, 100, 100), Eigen::Vector3d(100, 100.001, 100), m);
+  t.write(scratch("far.gltf"));
+  const scene::Scene s = scene::load_scene(scratch("far.gltf"), UpAxis::y);
+  probes::Environment env;
+  env.order = 3;
+  for (int k = 0; k < 27; ++k) env.coefficients.push_back(std::sin(1.7 * k + 0.3) * (k < 3 ? 2.0 : 0.5));
+  for (int order : {2, 3, 4}) {
+    const auto spec = grid({3, 2, 2}, Eigen::Vector3d(-1, -1, -1), Eigen::Vector3d(1, 1, 1), order, 256, 2);
+    const probes::ProbeBake b = probes::bake_probe_grid(s, spec, env);
+    const int nn = order * order;
+    for (std::size_t p = 0; p < spec.probe_count(); ++p)
+      for (int k = 0; k < nn; ++k)
+        for (int c = 0; c < 3; ++c)
+          EXPECT_NEAR(b.coefficients[(p * nn + k) * 3 + c], k < 9 ? env.coefficients[k * 3 + c] : 0.0, 1e-12)
+              << "order " << order << " probe " << p << " k " << k;
+  }
+}
+
+// SH of a constant radiance L over the lower hemisphere (z < 0), orders <= 3:
+// c_00 = L sqrt(pi), c_10 = -L sqrt(3 pi) / 2 (integral of P_1 over [-1, 0] is -1/2, of P_2
+// is 0), every m != 0 term 0 by symmetry.
+std::vector<double> lower_hemisphere(double L) {
+  std::vector<double> c(9, 0.0);
+  c[0] = L * std::sqrt(kPi);
+  c[2] = -L * std::sqrt(3 * kPi) / 2;
+  return c;
+}
+
+// A directional light of irradiance E from polar angle theta over a plane of albedo rho
+// (1000 x the probe's height on each side): the light's delta E y_k(s) plus the plane's
+// radiance rho E cos(theta) / pi over the lower hemisphere. The plane misses the
+// directions within 1e-3 rad of the horizon (a relative 1e-3 of c_00); the hemisphere's
+// edge is a discontinuity, which 4096 Fibonacci directions integrate to ~1e-3 relative.
+// Tolerance 5e-3 of the floor's c_00 (measured: below 1e-3).
+TEST(ProbeBake, DirectionalLightOverPlaneMatchesClosedForm) {
+  const double rho = 0.6, E = 3.0, theta = kPi / 3;
+  ProbeTestScene t;
+  const int m = t.material({{rho, rho, rho}});
+  const double S = 1000;
+  t.quad(Eigen::Vector3d(-S, 0, S), Eigen::Vector3d(S, 0, S), Eigen::Vector3d(S, 0, -S), Eigen::Vector3d(-S, 0, -S), m);
+  const Eigen::Vector3d s(std::sin(theta), 0, std::cos(theta));                    // toward the sun, shtool
+  const Eigen::Vector3d travel_gltf(-s.x(), -s.z(), s.y());                         // to_y_up(-s)
+  t.light({{"type", "directional"}, {"intensity", E}, {"color", {1.0, 1.0, 1.0}}}, Eigen::Vector3d(0, 5, 0), travel_gltf);
+  t.write(scratch("plane.gltf"));
+  const scene::Scene sc = scene::load_scene(scratch("plane.gltf"), UpAxis::y);
+  ASSERT_EQ(sc.lights.size(), 1u);
+  EXPECT_NEAR((sc.lights[0].direction + s).norm(), 0.0, 1e-12);
+  const auto spec = grid({1, 1, 1}, Eigen::Vector3d(-0.1, -0.1, 0.9), Eigen::Vector3d(0.1, 0.1, 1.1), 3, 4096, 3);
+  const probes::ProbeBake b = probes::bake_probe_grid(sc, spec, {});
+  std::vector<double> expected = lower_hemisphere(rho * E * std::cos(theta) / kPi);
+  std::vector<double> y(9);
+  eval_sh<double>(3, s, y);
+  for (int k = 0; k < 9; ++k) expected[k] += E * y[k];
+  const double tol = 5e-3 * rho * E * std::cos(theta) / kPi * std::sqrt(kPi);
+  for (int k = 0; k < 9; ++k)
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(b.coefficients[k * 3 + c], expected[k], tol) << "k " << k;
+}
+
+// Uniform sky of radiance 1 over a black floor: the floor hides the lower hemisphere, so
+// the probe gets the sky's coefficients minus the lower hemisphere's (the control variate
+// must subtract the environment behind every surface hit). Same tolerance reasoning.
+TEST(ProbeBake, BlackFloorHidesTheLowerSky) {
+  ProbeTestScene t;
+  const int m = t.material({{0, 0, 0}});
+  const double S = 1000;
+  t.quad(Eigen::Vector3d(-S, 0, S), Eigen::Vector3d(S, 0, S), Eigen::Vector3d(S, 0, -S), Eigen::Vector3d(-S, 0, -S), m);
+  t.write(scratch("floor.gltf"));
+  const scene::Scene sc = scene::load_scene(scratch("floor.gltf"), UpAxis::y);
+  probes::Environment env;
+  env.order = 1;
+  env.coefficients = {std::sqrt(4 * kPi), std::sqrt(4 * kPi), std::sqrt(4 * kPi)};
+  const auto spec = grid({1, 1, 1}, Eigen::Vector3d(-0.1, -0.1, 0.9), Eigen::Vector3d(0.1, 0.1, 1.1), 3, 4096, 3);
+  const probes::ProbeBake b = probes::bake_probe_grid(sc, spec, env);
+  const std::vector<double> hidden = lower_hemisphere(1.0);
+  for (int k = 0; k < 9; ++k)
+    for (int c = 0; c < 3; ++c)
+      EXPECT_NEAR(b.coefficients[k * 3 + c], (k == 0 ? std::sqrt(4 * kPi) : 0.0) - hidden[k], 5e-3 * std::sqrt(kPi))
+          << "k " << k;
+}
+
+// glTF is +Y up: a directional light shining down glTF's -Y reaches the probe from
+// shtool's +z, so the delta has y_1^0 = sqrt(3 / 4 pi) E and no x or y part.
+TEST(ProbeBake, GltfUpIsShtoolZ) {
+  ProbeTestScene t;
+  const int m = t.material({});
+  t.triangle(Eigen::Vector3d(100, 100, 100), Eigen::Vector3d(100.001, 100, 100), Eigen::Vector3d(100, 100.001, 100), m);
+  t.light({{"type", "directional"}, {"intensity", 2.0}}, Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(0, -1, 0));
+  t.write(scratch("sun_down.gltf"));
+  const scene::Scene sc = scene::load_scene(scratch("sun_down.gltf"), UpAxis::y);
+  const auto spec = grid({1, 1, 1}, Eigen::Vector3d(-1, -1, -1), Eigen::Vector3d(1, 1, 1), 2, 64, 1);
+  const probes::ProbeBake b = probes::bake_probe_grid(sc, spec, {});
+  EXPECT_NEAR(b.coefficients[0], 2.0 / std::sqrt(4 * kPi), 1e-12);
+  EXPECT_NEAR(b.coefficients[1 * 3], 0.0, 1e-12);                              // y_1^-1 (y)
+  EXPECT_NEAR(b.coefficients[2 * 3], 2.0 * std::sqrt(3 / (4 * kPi)), 1e-12);  // y_1^0 (z)
+  EXPECT_NEAR(b.coefficients[3 * 3], 0.0, 1e-12);                              // y_1^1 (x)
+}
+
+// A solid (outward-facing, single-sided) cube around the centre probe of a 3 x 3 x 3 grid:
+// that probe sees only back faces and is invalid, filled with the mean of its six
+// neighbours (all outside the cube, valid).
+TEST(ProbeBake, ProbeInsideGeometryIsInvalidAndFilledFromNeighbours) {
+  ProbeTestScene t;
+  const int m = t.material({{0.5, 0.5, 0.5}});
+  t.box(Eigen::Vector3d(-0.5, -0.5, -0.5), Eigen::Vector3d(0.5, 0.5, 0.5), m, /*inward=*/false);
+  t.write(scratch("solid.gltf"));
+  const scene::Scene sc = scene::load_scene(scratch("solid.gltf"), UpAxis::y);
+  probes::Environment env;
+  env.order = 2;
+  env.coefficients = {3, 2, 1, 0.1, 0.2, 0.3, 0.5, 0.4, 0.3, -0.2, 0.1, 0};
+  const auto spec = grid({3, 3, 3}, Eigen::Vector3d::Constant(-1.5), Eigen::Vector3d::Constant(1.5), 2, 256, 2);
+  const probes::ProbeBake b = probes::bake_probe_grid(sc, spec, env);
+  const std::size_t centre = 13;
+  for (std::size_t p = 0; p < 27; ++p) EXPECT_EQ(b.valid[p], p == centre ? 0 : 1) << "probe " << p;
+  EXPECT_EQ(b.back_face_share[centre], 1.0);
+  EXPECT_EQ(b.unfilled, 0u);
+  for (int k = 0; k < 12; ++k) {
+    double mean = 0;
+    for (std::size_t q : {12u, 14u, 10u, 16u, 4u, 22u}) mean += b.coefficients[q * 12 + k];
+    EXPECT_NEAR(b.coefficients[centre * 12 + k], mean / 6, 1e-14) << "k " << k;
+  }
+}
+
+TEST(ProbeBake, FillReachesProbesFarFromValidOnes) {
+  // 4 x 1 x 1, only probe 0 valid: rounds fill 1, then 2, then 3, each from the one before.
+  std::vector<double> c = {5, 0, 0, 0};
+  EXPECT_EQ(probes::fill_invalid_probes({4, 1, 1}, 1, {1, 0, 0, 0}, c), 0u);
+  EXPECT_EQ(c, (std::vector<double>{5, 5, 5, 5}));
+  std::vector<double> none = {1, 2};
+  EXPECT_EQ(probes::fill_invalid_probes({2, 1, 1}, 1, {0, 0}, none), 2u);
+  EXPECT_EQ(none, (std::vector<double>{0, 0}));
+}
+
+// KHR_lights_punctual's falloff: inverse square, the range window (1 - (d/r)^4) clamped,
+// and the spot's smooth cone (squared linear ramp between the cone angles).
+TEST(ProbeBake, PunctualLightFalloff) {
+  scene::PunctualLight point;
+  point.type = scene::LightType::point;
+  point.intensity = scene::Rgb(4, 8, 12);
+  point.position = Eigen::Vector3d(0, 0, 2);
+  scene::LightSample ls = scene::light_at(point, Eigen::Vector3d::Zero());
+  EXPECT_NEAR(ls.distance, 2.0, 1e-15);
+  EXPECT_NEAR((ls.to_light - Eigen::Vector3d(0, 0, 1)).norm(), 0.0, 1e-15);
+  EXPECT_NEAR(ls.irradiance[0], 1.0, 1e-15);
+  EXPECT_NEAR(ls.irradiance[2], 3.0, 1e-15);
+  point.range = 4;  // d / r = 1/2: window 1 - 1/16
+  EXPECT_NEAR(scene::light_at(point, Eigen::Vector3d::Zero()).irradiance[0], 15.0 / 16.0, 1e-15);
+  point.range = 1.5;  // beyond the range: nothing
+  EXPECT_EQ(scene::light_at(point, Eigen::Vector3d::Zero()).irradiance[0], 0.0);
+
+  scene::PunctualLight spot;
+  spot.type = scene::LightType::spot;
+  spot.intensity = scene::Rgb(1, 1, 1);
+  spot.position = Eigen::Vector3d(0, 0, 1);
+  spot.direction = Eigen::Vector3d(0, 0, -1);
+  spot.inner_cone = 0.2;
+  spot.outer_cone = 0.6;
+  EXPECT_NEAR(scene::light_at(spot, Eigen::Vector3d::Zero()).irradiance[0], 1.0, 1e-15);  // on the axis
+  const double a = 0.4;                                                                   // between the cones
+  const Eigen::Vector3d x(std::tan(a), 0, 0);
+  const double t = (std::cos(a) - std::cos(0.6)) / (std::cos(0.2) - std::cos(0.6));
+  EXPECT_NEAR(scene::light_at(spot, x).irradiance[0], t * t / (1 + std::tan(a) * std::tan(a)), 1e-14);
+  EXPECT_EQ(scene::light_at(spot, Eigen::Vector3d(std::tan(0.7), 0, 0)).irradiance[0], 0.0);
+}
+
+// Point and spot lights, two bounces, a closed room: the same bits on 1 and 2 threads.
+TEST(ProbeBake, SameBitsOnOneAndTwoThreads) {
+  ProbeTestScene t;
+  const int walls = t.material({{0.7, 0.5, 0.3}});
+  const int lamp = t.material({{0.2, 0.2, 0.2}, {1, 0.5, 0.25}, 1.0, true});
+  t.box(Eigen::Vector3d(-2, 0, -2), Eigen::Vector3d(2, 3, 2), walls, true);
+  t.box(Eigen::Vector3d(-0.3, 0, -0.3), Eigen::Vector3d(0.3, 1, 0.3), lamp, false);
+  t.light({{"type", "point"}, {"intensity", 5.0}}, Eigen::Vector3d(1, 2, 1), Eigen::Vector3d(0, -1, 0));
+  t.light({{"type", "spot"}, {"intensity", 9.0}, {"spot", {{"innerConeAngle", 0.2}, {"outerConeAngle", 0.7}}}},
+          Eigen::Vector3d(-1, 2.5, 0), Eigen::Vector3d(0.2, -1, 0));
+  t.write(scratch("room.gltf"));
+  const scene::Scene sc = scene::load_scene(scratch("room.gltf"), UpAxis::y);
+  auto spec = grid({3, 3, 2}, Eigen::Vector3d(-1.9, -1.9, 0.1), Eigen::Vector3d(1.9, 1.9, 2.9), 3, 128, 2);
+  spec.threads = 1;
+  const probes::ProbeBake one = probes::bake_probe_grid(sc, spec, {});
+  spec.threads = 2;
+  const probes::ProbeBake two = probes::bake_probe_grid(sc, spec, {});
+  ASSERT_EQ(one.coefficients.size(), two.coefficients.size());
+  EXPECT_EQ(0, std::memcmp(one.coefficients.data(), two.coefficients.data(), one.coefficients.size() * sizeof(double)));
+  EXPECT_EQ(one.valid, two.valid);
+  EXPECT_EQ(one.rays, two.rays);
+  double dc = 0;
+  for (std::size_t p = 0; p < spec.probe_count(); ++p) dc += one.coefficients[p * 27];
+  EXPECT_GT(dc, 0.0);  // the room is lit
+  spec.seed = 8;
+  const probes::ProbeBake other = probes::bake_probe_grid(sc, spec, {});
+  EXPECT_NE(0, std::memcmp(one.coefficients.data(), other.coefficients.data(), one.coefficients.size() * sizeof(double)));
+}
+
+}  // namespace
+}  // namespace shtool
