@@ -26,6 +26,8 @@ void setup_bake_probes(CLI::App& app) {
   sub->add_option("--threads", req->threads, "worker threads (0: all cores)")->capture_default_str();
   sub->add_option("--out", req->out, "probe-grid table to write")->required();
   sub->add_option("--json", req->json, "also the probes as JSON");
+  sub->add_option("--threejs", req->threejs,
+                  "also DIR/probes.json and DIR/probes.bin for three.js's LightProbeGridWebGL (web/shtool-three.js)");
   sub->add_option("--shard", req->shard, "bake shard K of N (0-based) of the probes into a partial table; join "
                                          "the parts with shtool merge");
   sub->add_flag("--mpi", req->mpi, "under mpirun: ranks split the probes, rank 0 writes the outputs");

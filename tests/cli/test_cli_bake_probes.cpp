@@ -1,5 +1,6 @@
 // End-to-end tests of `shtool bake-probes`: the table and --json of a white furnace read
-// back by the runtime loader (ProbeGrid<float> and <double>), the schema, OBJ scenes with
+// back by the runtime loader (ProbeGrid<float> and <double>), the schema, --threejs (the
+// atlas of the same run's coefficients), OBJ scenes with
 // .mtl materials and --up, the same bytes on 1 and 2 threads, and bad scenes, grids,
 // bounds and options refused with a message, exit 1 and no output.
 #include <cmath>
@@ -12,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cli_test.h"
+#include "interop/three_probe_grid.h"
 #include "probe_scenes.h"
 #include "shtool/probe_grid.h"
 #include "shtool/table.h"
@@ -108,6 +110,53 @@ TEST(CliBakeProbes, FurnaceTableJsonAndLoader) {
   EXPECT_EQ(gen["parameters"]["bounces"], 2);
   EXPECT_EQ(gen["parameters"]["bounds_from"], "option");
   EXPECT_TRUE(gen["parameters"]["input_crc32"].is_number_integer());
+}
+
+// --threejs writes three.js's files of the very coefficients --json holds (the writer's
+// layout, frame and basis are checked against three's own code in test_three_probe_grid),
+// and refuses what it cannot write with nothing written.
+TEST(CliBakeProbes, ThreeJsFilesAreTheAtlasOfTheSameRun) {
+  const fs::path scene = scratch("sun_plane.gltf"), out = scratch("t.shtb"), json = scratch("t.json"),
+                 dir = scratch("three");
+  ProbeTestScene t;
+  const int m = t.material({{0.6, 0.5, 0.4}, {0, 0, 0}, 1.0, true});  // glTF: the floor y = 0, a sun
+  t.quad(Eigen::Vector3d(-4, 0, -4), Eigen::Vector3d(-4, 0, 4), Eigen::Vector3d(4, 0, 4), Eigen::Vector3d(4, 0, -4), m);
+  t.light({{"type", "directional"}, {"intensity", 3.0}, {"color", {1.0, 0.9, 0.8}}}, Eigen::Vector3d(0, 5, 0),
+          Eigen::Vector3d(0.3, -0.866, 0.4));
+  t.write(scene);
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::vector<std::string> base = {"bake-probes", scene.string(), "--grid", "3,2,4", "--bounds",
+                                         "-1,-1,0.2,1,1,1.4", "--samples", "64", "--bounces", "1"};
+  std::vector<std::string> args = base;
+  args.insert(args.end(), {"--out", out.string(), "--json", json.string(), "--threejs", dir.string()});
+  const CommandResult r = run_shtool(args);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json doc = read_json(json);
+  shtool::interop::ThreeProbeGridInput g;
+  g.resolution = {3, 2, 4};
+  g.min = Eigen::Vector3d(-1, -1, 0.2);
+  g.max = Eigen::Vector3d(1, 1, 1.4);
+  g.order = 3;
+  for (const nlohmann::json& p : doc["probes"])
+    for (const nlohmann::json& row : p["coefficients"])
+      for (int c = 0; c < 3; ++c) g.coefficients.push_back(row[c].get<double>());
+  const shtool::interop::ThreeProbeGridFiles want = shtool::interop::three_probe_grid_files(g);
+  EXPECT_EQ(read_file(dir / "probes.json"), want.json);
+  EXPECT_TRUE(read_file(dir / "probes.bin") == want.atlas) << "the atlas is not the one of the run's coefficients";
+  const nlohmann::json three = read_json(dir / "probes.json");
+  EXPECT_EQ(three["resolution"], nlohmann::json({3, 4, 2}));  // three = (x, z, -y)
+
+  // A shard has no whole grid; a missing folder cannot hold the files.
+  args = base;
+  args.insert(args.end(), {"--shard", "0/2", "--threejs", dir.string()});
+  expect_refused(args[0], std::vector<std::string>(args.begin() + 1, args.end()), "--threejs needs the whole grid",
+                 scratch("t_shard.shtb"));
+  args = base;
+  args.insert(args.end(), {"--threejs", (dir / "missing").string()});
+  expect_refused(args[0], std::vector<std::string>(args.begin() + 1, args.end()), "--threejs",
+                 scratch("t_missing.shtb"));
+  EXPECT_FALSE(fs::exists(dir / "missing"));
 }
 
 TEST(CliBakeProbes, LoaderRefusesAnotherKindAndBrokenGrids) {

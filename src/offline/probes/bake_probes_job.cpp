@@ -17,6 +17,7 @@
 #include "common/table_writer.h"
 #include "fit/embree_scene.h"
 #include "fit/mpi_world.h"
+#include "interop/three_probe_grid.h"
 #include "lighting/lighting_output.h"
 #include "probes/probe_grid_table.h"
 #include "shtool/probe_grid.h"
@@ -103,6 +104,8 @@ BakeProbesReport run_bake_probes(const BakeProbesRequest& r) {
     shard = fit::parse_shard(r.shard);
     if (!r.json.empty())
       throw InputError("--json needs the whole grid: not with --shard (join the parts with shtool merge)");
+    if (!r.threejs.empty())
+      throw InputError("--threejs needs the whole grid: not with --shard (join the parts with shtool merge)");
     if (shard->count > spec.probe_count())
       throw InputError("--shard " + r.shard + ": more shards than the grid's " + std::to_string(spec.probe_count()) +
                        " probes");
@@ -123,6 +126,7 @@ BakeProbesReport run_bake_probes(const BakeProbesRequest& r) {
   io.input(r.env, "--env");
   io.output(r.out, "--out");
   io.output(r.json, "--json");
+  if (!r.threejs.empty()) interop::declare_three_probe_grid(io, r.threejs, "--threejs");
 
   Environment env;
   nlohmann::json params = {{"scene", r.scene.filename().string()}};
@@ -179,6 +183,18 @@ BakeProbesReport run_bake_probes(const BakeProbesRequest& r) {
   meta["triangles"] = s.mesh.triangles.size();
   meta["lights"] = s.lights.size();
 
+  // three.js's atlas of the whole grid (docs/probe-encodings.md), from the joined coefficients.
+  const auto set_threejs = [&](const std::vector<double>& coefficients) {
+    if (r.threejs.empty()) return;
+    interop::ThreeProbeGridInput three;
+    three.resolution = spec.resolution;
+    three.min = spec.lower;
+    three.max = spec.upper;
+    three.order = spec.order;
+    three.coefficients = coefficients;
+    interop::set_three_probe_grid(io, "--threejs", interop::three_probe_grid_files(three));
+  };
+
   BakeProbesReport report;
   if (mpi) {
     report.mpi_rank = mpi->rank();
@@ -202,12 +218,14 @@ BakeProbesReport run_bake_probes(const BakeProbesRequest& r) {
         whole.valid = merged.find("valid")->values<std::uint8_t>();
         io.set("--json", dump_finite(probe_grid_json(spec, whole), "--json") + "\n");
       }
+      set_threejs(merged.find("coefficients")->values<double>());
       io.commit();
     }
   } else {
     io.set("--out", encode_table(shard ? probe_grid_part_table(spec, bake, *shard, range, generator, meta)
                                        : probe_grid_table(spec, bake, generator, meta)));
     if (io.requested("--json")) io.set("--json", dump_finite(probe_grid_json(spec, bake), "--json") + "\n");
+    if (!shard) set_threejs(bake.coefficients);
     io.commit();
   }
 

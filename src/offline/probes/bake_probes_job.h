@@ -38,6 +38,7 @@ struct BakeProbesRequest {
   int threads = 0;
   std::filesystem::path out;                  // the probe-grid table
   std::filesystem::path json;                 // optional
+  std::filesystem::path threejs;              // optional: a folder for probes.json and probes.bin
   std::string shard;                          // "K/N": a partial table of probes; empty: all
   bool mpi = false;                           // ranks split the probes, rank 0 writes
 };
