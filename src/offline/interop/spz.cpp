@@ -242,13 +242,17 @@ std::string write_spz(const SplatScene& s, const SpzWriteOptions& o) {
   for (int bits : {o.sh1_bits, o.sh_rest_bits})
     if (bits < 1 || bits > 8) throw InputError("--sh-bits must be in 1..8, got " + std::to_string(bits));
   if (s.count > 0xffffffffu) throw InputError("spz holds at most 2^32 - 1 splats");
-  float largest = 0;
-  for (float p : s.position) largest = std::max(largest, std::abs(p));
-  // The finest fixed point whose 24 bits reach every position.
+  float high = 0, low = 0;
+  for (float p : s.position) high = std::max(high, p), low = std::min(low, p);
+  // The finest fixed point whose 24 bits (two's complement) reach every position.
+  auto fits = [&](int bits) {
+    return std::round(std::ldexp(high, bits)) <= 8388607.0f && std::round(std::ldexp(low, bits)) >= -8388608.0f;
+  };
   int fractional_bits = kFractionalBits;
-  while (fractional_bits > 0 && std::round(std::ldexp(largest, fractional_bits)) > 8388607.0f) --fractional_bits;
-  if (std::round(std::ldexp(largest, fractional_bits)) > 8388607.0f)
-    throw InputError("a splat position (" + std::to_string(largest) + ") is past spz's 24-bit fixed point (8388607)");
+  while (fractional_bits > 0 && !fits(fractional_bits)) --fractional_bits;
+  if (!fits(fractional_bits))
+    throw InputError("a splat position (" + std::to_string(high > -low ? high : low) +
+                     ") is past spz's 24-bit fixed point (-8388608..8388607)");
   const std::size_t n = s.count, stride = s.sh_stride(), dim = sh_dim(s.degree);
   const std::array<std::uint64_t, 6> sizes = block_sizes(n, s.degree, o.version);
   std::array<std::string, 6> blocks;
