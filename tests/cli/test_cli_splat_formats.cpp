@@ -683,3 +683,22 @@ TEST(CliSplatFormats, SplatTransformReadsAndWritesTheSameSpz) {
   ASSERT_EQ(s.exit_code, 0) << s.err;
   expect_mapped(scene, read_ply(back), Eigen::Matrix3d::Identity(), spz_tolerance(3), "splat-transform spz -> shtool");
 }
+
+// Every output format: the same bytes with 1 and 3 threads (20000 splats: several chunks).
+TEST(CliSplatFormats, SameBytesWhateverTheThreadCount) {
+  const Scene scene = random_scene(20000, 3, 59);
+  const fs::path in = scratch("threads_in.ply");
+  write_bytes(in, ply_bytes(scene));
+  for (const Format& f : formats()) {
+    std::string bytes[2];
+    for (int k = 0; k < 2; ++k) {
+      const fs::path out = scratch("threads_" + std::to_string(k) + f.ext);
+      std::vector<std::string> args = {"--quat", "0.5,0.5,-0.5,0.5", "--sh-degree", "3", "--threads", k ? "3" : "1"};
+      args.insert(args.end(), f.args.begin(), f.args.end());
+      const auto r = convert(in, out, args);
+      ASSERT_EQ(r.exit_code, 0) << r.err;
+      bytes[k] = read_file(out);
+    }
+    EXPECT_TRUE(bytes[0] == bytes[1]) << f.name;
+  }
+}

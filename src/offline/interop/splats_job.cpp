@@ -255,7 +255,7 @@ TransformSplatsReport run_transform_splats(const TransformSplatsRequest& r) {
     SplatScene scene;
     switch (in_format) {
       case SplatFormat::ply: scene = read_ply_splats(PlyFile::parse(std::move(bytes), r.in), r.in, threads); break;
-      case SplatFormat::spz: scene = read_spz(bytes, r.in.string()); break;
+      case SplatFormat::spz: scene = read_spz(bytes, r.in.string(), nullptr, threads); break;
       case SplatFormat::gltf:
       case SplatFormat::glb: scene = read_gltf_splats(bytes, r.in); break;
     }
@@ -273,9 +273,9 @@ TransformSplatsReport run_transform_splats(const TransformSplatsRequest& r) {
     switch (out_format) {
       case SplatFormat::ply: out = write_ply_splats(scene); break;
       case SplatFormat::spz:
-        out = write_spz(scene, spz);
+        out = write_spz(scene, spz, threads);
         report.spz_sh_bound = spz_sh_error_bound(scene.degree, spz);
-        report.spz_sh_scene = spz_sh_error_of(scene, spz);
+        report.spz_sh_scene = spz_sh_error_of(scene, spz, threads);
         report.spz_dc_bound = spz_dc_error_bound();
         break;
       case SplatFormat::gltf: out = write_gltf_splats(scene, false); break;

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "common/input_error.h"
+#include "common/parallel_for.h"
 
 namespace shtool::interop {
 namespace {
@@ -54,10 +55,15 @@ std::uint8_t quantise_sh(float x, int bucket) {
 float unquantise_sh(std::uint8_t b) { return (static_cast<float>(b) - 128.0f) / 128.0f; }
 
 // The attributes of every splat from the six blocks (each exactly its size).
-void decode_blocks(const std::array<const unsigned char*, 6>& at, int version, int fractional_bits, SplatScene& s) {
+constexpr std::size_t kChunk = 4096;
+
+void decode_blocks(const std::array<const unsigned char*, 6>& at, int version, int fractional_bits, SplatScene& s,
+                   int threads) {
   const float step = std::ldexp(1.0f, -fractional_bits);
   const std::size_t stride = s.sh_stride(), dim = stride / 3 - 1;
-  for (std::size_t i = 0; i < s.count; ++i) {
+  parallel_for((s.count + kChunk - 1) / kChunk, threads, [&](std::size_t chunk) {
+  const std::size_t end = std::min(s.count, (chunk + 1) * kChunk);
+  for (std::size_t i = chunk * kChunk; i < end; ++i) {
     for (int c = 0; c < 3; ++c) {
       const unsigned char* p = at[0] + 9 * i + 3 * c;
       std::int32_t v = std::int32_t(p[0]) | std::int32_t(p[1]) << 8 | std::int32_t(p[2]) << 16;
@@ -97,6 +103,7 @@ void decode_blocks(const std::array<const unsigned char*, 6>& at, int version, i
     const unsigned char* sh = at[5] + 3 * dim * i;
     for (std::size_t k = 0; k < 3 * dim; ++k) s.sh[i * stride + 3 + k] = unquantise_sh(sh[k]);
   }
+  });
 }
 
 // Inflates up to `want` bytes more into out; returns the zlib status.
@@ -118,7 +125,7 @@ int inflate_some(z_stream& zs, std::string& out, std::size_t want) {
   return status;
 }
 
-SplatScene read_gzip(std::string_view bytes, const std::string& name, SpzHeader* header) {
+SplatScene read_gzip(std::string_view bytes, const std::string& name, SpzHeader* header, int threads) {
   auto fail = [&](const std::string& why) { return InputError(name + ": " + why); };
   z_stream zs{};
   if (inflateInit2(&zs, 16 + MAX_WBITS) != Z_OK) throw fail("zlib could not start");
@@ -165,12 +172,12 @@ SplatScene read_gzip(std::string_view bytes, const std::string& name, SpzHeader*
   std::array<const unsigned char*, 6> at{};
   const auto* p = reinterpret_cast<const unsigned char*>(data.data());
   for (int k = 0; k < 6; ++k) at[k] = p, p += sizes[k];
-  decode_blocks(at, static_cast<int>(version), fractional_bits, s);
+  decode_blocks(at, static_cast<int>(version), fractional_bits, s, threads);
   if (header) *header = {static_cast<int>(version), fractional_bits, (flags & 1) != 0};
   return s;
 }
 
-SplatScene read_ngsp(std::string_view bytes, const std::string& name, SpzHeader* header) {
+SplatScene read_ngsp(std::string_view bytes, const std::string& name, SpzHeader* header, int threads) {
   auto fail = [&](const std::string& why) { return InputError(name + ": " + why); };
   if (bytes.size() < 32) throw fail("truncated: " + std::to_string(bytes.size()) + " bytes, the spz v4 header needs 32");
   const auto* h = reinterpret_cast<const unsigned char*>(bytes.data());
@@ -194,6 +201,7 @@ SplatScene read_ngsp(std::string_view bytes, const std::string& name, SpzHeader*
   if (toc_end > bytes.size()) throw fail("truncated: the file ends inside its table of contents");
   std::uint64_t at = toc_end;
   std::vector<std::string> blocks(6);
+  std::vector<std::pair<std::uint64_t, std::uint64_t>> where(streams);  // offset, size
   for (int j = 0; j < streams; ++j) {
     const int k = present[j];
     const std::uint64_t packed = get_u64(h + toc + 16 * j), unpacked = get_u64(h + toc + 16 * j + 8);
@@ -205,22 +213,33 @@ SplatScene read_ngsp(std::string_view bytes, const std::string& name, SpzHeader*
     if (static_cast<double>(unpacked) > static_cast<double>(packed) * kZstdRatio + 4096)
       throw fail("oversized: stream " + std::to_string(j) + " claims " + std::to_string(unpacked) + " bytes from " +
                  std::to_string(packed));
-    const char* src = bytes.data() + at;
-    const unsigned long long frame = ZSTD_getFrameContentSize(src, packed);
+    const unsigned long long frame = ZSTD_getFrameContentSize(bytes.data() + at, packed);
     if (frame != ZSTD_CONTENTSIZE_UNKNOWN && frame != unpacked)
       throw fail("inconsistent: stream " + std::to_string(j) + "'s zstd frame is not the size its table entry says");
     blocks[k].resize(unpacked);
-    const std::size_t got = ZSTD_decompress(blocks[k].data(), unpacked, src, packed);
-    if (ZSTD_isError(got)) throw fail("stream " + std::to_string(j) + ": " + ZSTD_getErrorName(got));
-    if (got != unpacked) throw fail("truncated: stream " + std::to_string(j) + " decompresses to fewer bytes than its entry says");
+    where[j] = {at, packed};
     at += packed;
   }
   if (at != bytes.size()) throw fail(std::to_string(bytes.size() - at) + " bytes after the last stream");
+  // The streams are independent frames: decompressed side by side, the first problem
+  // in stream order reported.
+  std::vector<std::string> problems(streams);
+  parallel_for(static_cast<std::size_t>(streams), threads, [&](std::size_t j) {
+    const int k = present[j];
+    const std::size_t got = ZSTD_decompress(blocks[k].data(), blocks[k].size(), bytes.data() + where[j].first,
+                                            where[j].second);
+    if (ZSTD_isError(got))
+      problems[j] = "stream " + std::to_string(j) + ": " + ZSTD_getErrorName(got);
+    else if (got != blocks[k].size())
+      problems[j] = "truncated: stream " + std::to_string(j) + " decompresses to fewer bytes than its entry says";
+  });
+  for (const std::string& p : problems)
+    if (!p.empty()) throw fail(p);
   SplatScene s;
   s.resize(n, degree);
   std::array<const unsigned char*, 6> ptr{};
   for (int k = 0; k < 6; ++k) ptr[k] = reinterpret_cast<const unsigned char*>(blocks[k].data());
-  decode_blocks(ptr, 4, fractional_bits, s);
+  decode_blocks(ptr, 4, fractional_bits, s, threads);
   if (header) *header = {4, fractional_bits, (flags & 1) != 0};
   return s;
 }
@@ -229,15 +248,15 @@ int bucket(int bits) { return 1 << (8 - bits); }
 
 }  // namespace
 
-SplatScene read_spz(std::string_view bytes, const std::string& name, SpzHeader* header) {
+SplatScene read_spz(std::string_view bytes, const std::string& name, SpzHeader* header, int threads) {
   if (bytes.size() >= 4 && get_u32(reinterpret_cast<const unsigned char*>(bytes.data())) == kMagic)
-    return read_ngsp(bytes, name, header);
+    return read_ngsp(bytes, name, header, threads);
   if (bytes.size() >= 2 && static_cast<unsigned char>(bytes[0]) == 0x1f && static_cast<unsigned char>(bytes[1]) == 0x8b)
-    return read_gzip(bytes, name, header);
+    return read_gzip(bytes, name, header, threads);
   throw InputError(name + ": not an spz file (neither the NGSP header of version 4 nor a gzip stream)");
 }
 
-std::string write_spz(const SplatScene& s, const SpzWriteOptions& o) {
+std::string write_spz(const SplatScene& s, const SpzWriteOptions& o, int threads) {
   if (o.version != 3 && o.version != 4) throw InputError("spz version " + std::to_string(o.version) + ": 3 or 4 is written");
   for (int bits : {o.sh1_bits, o.sh_rest_bits})
     if (bits < 1 || bits > 8) throw InputError("--sh-bits must be in 1..8, got " + std::to_string(bits));
@@ -265,7 +284,9 @@ std::string write_spz(const SplatScene& s, const SpzWriteOptions& o) {
   auto* sh = reinterpret_cast<unsigned char*>(blocks[5].data());
   const float fixed = std::ldexp(1.0f, fractional_bits);
   const int b1 = bucket(o.sh1_bits), b_rest = bucket(o.sh_rest_bits);
-  for (std::size_t i = 0; i < n; ++i) {
+  parallel_for((n + kChunk - 1) / kChunk, threads, [&](std::size_t chunk) {
+  const std::size_t end = std::min(n, (chunk + 1) * kChunk);
+  for (std::size_t i = chunk * kChunk; i < end; ++i) {
     for (int c = 0; c < 3; ++c) {
       const auto v = static_cast<std::int32_t>(std::round(s.position[3 * i + c] * fixed));
       for (int b = 0; b < 3; ++b) pos[9 * i + 3 * c + b] = static_cast<unsigned char>((v >> (8 * b)) & 0xff);
@@ -295,6 +316,7 @@ std::string write_spz(const SplatScene& s, const SpzWriteOptions& o) {
     for (std::size_t k = 0; k < 3 * dim; ++k)
       sh[3 * dim * i + k] = quantise_sh(s.sh[i * stride + 3 + k], k < 9 ? b1 : b_rest);
   }
+  });
   std::string out;
   if (o.version == 3) {
     std::string plain;
@@ -327,15 +349,21 @@ std::string write_spz(const SplatScene& s, const SpzWriteOptions& o) {
     out.resize(out.size() - out_left);
     return out;
   }
-  std::vector<std::string> packed;
-  for (const std::string& b : blocks) {
-    if (b.empty()) continue;
+  // Each stream its own frame: compressed side by side.
+  std::vector<std::string> packed(6);
+  std::vector<std::string> problems(6);
+  parallel_for(6, threads, [&](std::size_t k) {
+    const std::string& b = blocks[k];
+    if (b.empty()) return;
     std::string z(ZSTD_compressBound(b.size()), '\0');
     const std::size_t got = ZSTD_compress(z.data(), z.size(), b.data(), b.size(), kZstdLevel);
-    if (ZSTD_isError(got)) throw InputError(std::string("zstd: ") + ZSTD_getErrorName(got));
-    z.resize(got);
-    packed.push_back(std::move(z));
-  }
+    if (ZSTD_isError(got)) problems[k] = std::string("zstd: ") + ZSTD_getErrorName(got);
+    z.resize(ZSTD_isError(got) ? 0 : got);
+    packed[k] = std::move(z);
+  });
+  for (const std::string& p : problems)
+    if (!p.empty()) throw InputError(p);
+  std::erase_if(packed, [](const std::string& z) { return z.empty(); });
   put_u32(out, kMagic);
   put_u32(out, 4);
   put_u32(out, static_cast<std::uint32_t>(n));
@@ -362,11 +390,14 @@ double spz_sh_error_bound(int degree, const SpzWriteOptions& o) {
   return bound;
 }
 
-double spz_sh_error_of(const SplatScene& s, const SpzWriteOptions& o) {
+double spz_sh_error_of(const SplatScene& s, const SpzWriteOptions& o, int threads) {
   const std::size_t stride = s.sh_stride();
   const int b1 = bucket(o.sh1_bits), b_rest = bucket(o.sh_rest_bits);
-  double worst = 0;
-  for (std::size_t i = 0; i < s.count; ++i)
+  std::vector<double> worst_of((s.count + kChunk - 1) / kChunk, 0.0);
+  parallel_for(worst_of.size(), threads, [&](std::size_t chunk) {
+  double& worst = worst_of[chunk];
+  const std::size_t end = std::min(s.count, (chunk + 1) * kChunk);
+  for (std::size_t i = chunk * kChunk; i < end; ++i)
     for (int c = 0; c < 3; ++c) {
       double sum = 0;
       for (int l = 1; l <= s.degree; ++l) {
@@ -380,6 +411,9 @@ double spz_sh_error_of(const SplatScene& s, const SpzWriteOptions& o) {
       }
       worst = std::max(worst, sum);
     }
+  });
+  double worst = 0;
+  for (double w : worst_of) worst = std::max(worst, w);
   return worst;
 }
 

@@ -28,12 +28,12 @@ struct SpzHeader {
 // InputError naming `name` on a truncated, oversized or inconsistent file, an unknown
 // version, SH degree 4 (not held by SplatScene) or a size past what the compressed
 // bytes could hold.
-SplatScene read_spz(std::string_view bytes, const std::string& name, SpzHeader* header = nullptr);
+SplatScene read_spz(std::string_view bytes, const std::string& name, SpzHeader* header = nullptr, int threads = 1);
 
 // InputError when a position is beyond the 24-bit fixed point at any fractional bits or
 // the options are out of range. Positions use 12 fractional bits (the reference
 // writer's) or fewer when the scene is larger than 2048 units.
-std::string write_spz(const SplatScene& scene, const SpzWriteOptions& options);
+std::string write_spz(const SplatScene& scene, const SpzWriteOptions& options, int threads = 1);
 
 // The largest change of a splat's colour (one channel, any direction) that the SH
 // quantisation of bands 1..D can make, for coefficients within the representable
@@ -44,7 +44,7 @@ double spz_sh_error_bound(int degree, const SpzWriteOptions& options);
 // The same for the scene's own coefficients, exact per band: max over splats and
 // channels of sum_l |delta_l| sqrt((2l+1) / (4 pi)), delta_l the band's quantisation
 // error vector (clipping of coefficients beyond [-1, 1] included).
-double spz_sh_error_of(const SplatScene& scene, const SpzWriteOptions& options);
+double spz_sh_error_of(const SplatScene& scene, const SpzWriteOptions& options, int threads = 1);
 
 // The largest change of the DC colour: half a step of the colour byte, times y_0^0.
 double spz_dc_error_bound();
