@@ -7,6 +7,11 @@
 //                                           counter splats_per_s, and the file size.
 //   BM_CopyFile/splats:S                    read the same file and write it back
 //                                           (the floor: the job is I/O bound there).
+//   BM_ConvertSplats/format:F/splats:S      the job from format F to F (1: spz v4,
+//                                           2: glb) with the same rotation, through
+//                                           the scene, 2 threads.
+//   BM_BareCodec/format:F/splats:S          the floor of that: read the file, decode
+//                                           it, encode it, write it, no transform.
 //
 // The files are made once per size in the temporary folder and removed at exit.
 //   build/bench/bench_splats --benchmark_counters_tabular=true
@@ -22,7 +27,9 @@
 
 #include "common/atomic_file.h"
 #include "common/input_file.h"
+#include "interop/splat_gltf.h"
 #include "interop/splats_job.h"
+#include "interop/spz.h"
 
 namespace {
 
@@ -81,6 +88,63 @@ void BM_CopyFile(benchmark::State& state) {
 }
 BENCHMARK(BM_CopyFile)->Arg(1 << 20)->Arg(6 << 20)->ArgName("splats")->Unit(benchmark::kMillisecond)->Iterations(1)->UseRealTime();
 
+// The scene of scene(splats) in format 1 (spz v4) or 2 (glb), made once.
+const fs::path& scene_as(int format, std::size_t splats) {
+  static std::map<std::pair<int, std::size_t>, fs::path> made;
+  const auto key = std::make_pair(format, splats);
+  auto it = made.find(key);
+  if (it != made.end()) return it->second;
+  shtool::interop::TransformSplatsRequest r;
+  r.in = scene(splats);
+  r.out = fs::temp_directory_path() / ("shtool_bench_splats_" + std::to_string(splats) + (format == 1 ? ".spz" : ".glb"));
+  shtool::interop::run_transform_splats(r);
+  return made.emplace(key, r.out).first->second;
+}
+
+void BM_ConvertSplats(benchmark::State& state) {
+  const int format = static_cast<int>(state.range(0));
+  const std::size_t splats = static_cast<std::size_t>(state.range(1));
+  shtool::interop::TransformSplatsRequest r;
+  r.in = scene_as(format, splats);
+  r.out = fs::temp_directory_path() / (std::string("shtool_bench_splats_out") + (format == 1 ? ".spz" : ".glb"));
+  r.quaternion = std::array<double, 4>{0.8, -0.3, 0.4, 0.33};
+  r.threads = 2;
+  for (auto _ : state) benchmark::DoNotOptimize(shtool::interop::run_transform_splats(r));
+  state.counters["splats_per_s"] = benchmark::Counter(static_cast<double>(splats), benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["MiB"] = static_cast<double>(fs::file_size(r.in)) / (1 << 20);
+  fs::remove(r.out);
+}
+BENCHMARK(BM_ConvertSplats)
+    ->ArgsProduct({{1, 2}, {1 << 20}})
+    ->ArgNames({"format", "splats"})
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(1)
+    ->UseRealTime();
+
+void BM_BareCodec(benchmark::State& state) {
+  const int format = static_cast<int>(state.range(0));
+  const std::size_t splats = static_cast<std::size_t>(state.range(1));
+  const fs::path in = scene_as(format, splats);
+  const fs::path out = fs::temp_directory_path() / (std::string("shtool_bench_splats_bare") + (format == 1 ? ".spz" : ".glb"));
+  for (auto _ : state) {
+    const std::string bytes = shtool::read_input_file(in, "input");
+    if (format == 1) {
+      const shtool::interop::SplatScene s = shtool::interop::read_spz(bytes, in.string(), nullptr, 2);
+      shtool::write_file_atomically(out, shtool::interop::write_spz(s, {}, 2));
+    } else {
+      const shtool::interop::SplatScene s = shtool::interop::read_gltf_splats(bytes, in);
+      shtool::write_file_atomically(out, shtool::interop::write_gltf_splats(s, true));
+    }
+  }
+  fs::remove(out);
+}
+BENCHMARK(BM_BareCodec)
+    ->ArgsProduct({{1, 2}, {1 << 20}})
+    ->ArgNames({"format", "splats"})
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(1)
+    ->UseRealTime();
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -88,6 +152,7 @@ int main(int argc, char** argv) {
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();
   for (std::size_t s : {std::size_t(1) << 20, std::size_t(6) << 20})
-    fs::remove(fs::temp_directory_path() / ("shtool_bench_splats_" + std::to_string(s) + ".ply"));
+    for (const char* ext : {".ply", ".spz", ".glb"})
+      fs::remove(fs::temp_directory_path() / ("shtool_bench_splats_" + std::to_string(s) + ext));
   return 0;
 }

@@ -13,7 +13,7 @@ packages=(
   g++ cmake make ninja-build pkg-config
   libeigen3-dev libfftw3-dev nlohmann-json3-dev          # runtime library
   libcli11-dev libnlopt-cxx-dev libembree-dev libtinyobjloader-dev  # offline tool
-  libopenexr-dev libstb-dev zlib1g-dev                   # offline tool: images, input CRCs
+  libopenexr-dev libstb-dev zlib1g-dev libzstd-dev       # offline tool: images, input CRCs, spz splats
   libtinygltf-dev                                        # offline tool: glTF meshes
   libopenmpi-dev openmpi-bin                             # fit-zh --mpi (optional at build time)
   libgtest-dev libbenchmark-dev                          # tests and benchmarks

@@ -1,5 +1,6 @@
-// shtool transform-splats: a similarity transform of a 3D Gaussian Splatting PLY, its
-// SH colours rotated (docs/interop.md). The job is interop::run_transform_splats.
+// shtool transform-splats: converts a 3D Gaussian Splatting scene between PLY, spz and
+// glTF by extension, optionally rotated, scaled and moved with its SH colours
+// (docs/interop.md, docs/splats.md). The job is interop::run_transform_splats.
 #include <iostream>
 #include <memory>
 
@@ -12,15 +13,28 @@ namespace shtool::cli {
 
 void setup_transform_splats(CLI::App& app) {
   auto opt = std::make_shared<interop::TransformSplatsRequest>();
-  auto text = std::make_shared<std::array<std::string, 3>>();  // quat, matrix, translate
-  CLI::App* sub = app.add_subcommand("transform-splats",
-                                     "Rotate, scale and move a 3D Gaussian Splatting PLY, its SH colours included");
-  sub->add_option("in", opt->in, "input PLY (binary little or big endian, or ASCII)")->required();
-  CLI::Option* quat = sub->add_option("--quat", (*text)[0], "rotation as a unit quaternion w,x,y,z");
-  CLI::Option* matrix = sub->add_option("--matrix", (*text)[1], "rotation as a matrix r00,r01,...,r22 (row-major)");
+  auto text = std::make_shared<std::array<std::string, 4>>();  // quat, matrix, translate, sh bits
+  auto degree = std::make_shared<int>(-1);
+  CLI::App* sub = app.add_subcommand(
+      "transform-splats",
+      "Convert a 3D Gaussian Splatting scene between .ply, .spz, .gltf and .glb, optionally rotated, scaled and moved, "
+      "its SH colours included");
+  sub->add_option("in", opt->in, "input scene: .ply (binary or ASCII), .spz (versions 2..4), .gltf/.glb "
+                                 "(KHR_gaussian_splatting)")->required();
+  CLI::Option* quat = sub->add_option("--quat", (*text)[0], "rotation as a unit quaternion w,x,y,z (input coordinates)");
+  CLI::Option* matrix =
+      sub->add_option("--matrix", (*text)[1], "rotation as a matrix r00,r01,...,r22 (row-major, input coordinates)");
   CLI::Option* translate = sub->add_option("--translate", (*text)[2], "translation x,y,z (after rotation and scale)");
   sub->add_option("--scale", opt->scale, "uniform scale s > 0")->capture_default_str();
-  sub->add_option("--out", opt->out, "output PLY (same header and layout)")->required();
+  sub->add_option("--out", opt->out, "output scene, format by extension (.ply: PLY in keeps its layout)")->required();
+  sub->add_option("--frame", opt->ply_frame,
+                  "axes of PLY files, one letter per x, y, z from R/L, U/D, F/B (3DGS, COLMAP: RDF)")
+      ->capture_default_str();
+  sub->add_option("--spz-frame", opt->spz_frame, "axes of spz files (the specification: RUB)")->capture_default_str();
+  sub->add_option("--sh-degree", *degree, "output SH degree 0..3 (bands above it dropped, missing ones zero)");
+  CLI::Option* bits = sub->add_option("--sh-bits", (*text)[3], "spz output: bits per SH byte, band 1 and bands 2..3 "
+                                                                "(B or B1,B2; 1..8; default 5,4)");
+  sub->add_option("--spz-version", opt->spz_version, "spz output version, 3 (gzip) or 4 (zstd)")->capture_default_str();
   sub->add_option("--threads", opt->threads, "worker threads (0: all cores)")->capture_default_str();
   sub->callback([=]() {
     if (quat->count()) {
@@ -40,9 +54,23 @@ void setup_transform_splats(CLI::App& app) {
       if (t.size() != 3) throw InputError("--translate needs three numbers");
       opt->translate = {t[0], t[1], t[2]};
     }
+    if (bits->count()) {
+      const std::vector<double> b = parse_number_list((*text)[3], "--sh-bits");
+      if (b.empty() || b.size() > 2) throw InputError("--sh-bits needs one or two numbers");
+      for (double x : b)
+        if (x != static_cast<int>(x)) throw InputError("--sh-bits must be whole numbers");
+      opt->sh_bits = {static_cast<int>(b[0]), static_cast<int>(b.back())};
+    }
+    if (*degree >= 0 || sub->get_option("--sh-degree")->count()) opt->sh_degree = *degree;
     const interop::TransformSplatsReport r = interop::run_transform_splats(*opt);
-    std::cerr << "transform-splats: " << r.splats << " splats, SH degree " << r.degree << ", " << r.seconds << " s ("
-              << r.threads << " threads), wrote " << opt->out.string() << '\n';
+    std::cerr << "transform-splats: " << r.splats << " splats, SH degree " << r.degree;
+    if (r.degree_in >= 0 && r.degree_in != r.degree) std::cerr << " (from " << r.degree_in << ")";
+    if (r.reflects) std::cerr << ", the frame change reflects";
+    std::cerr << ", " << r.seconds << " s (" << r.threads << " threads), wrote " << opt->out.string() << '\n';
+    if (r.spz_sh_bound > 0 || r.spz_dc_bound > 0)
+      std::cerr << "transform-splats: spz quantisation, largest colour change over the sphere (one channel): SH bands "
+                << r.spz_sh_bound << " from the bucket sizes (coefficients in [-1, 1]), " << r.spz_sh_scene
+                << " for this scene's coefficients; DC " << r.spz_dc_bound << '\n';
   });
 }
 

@@ -1,5 +1,6 @@
 #include "interop/splats_job.h"
 
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <string>
@@ -13,75 +14,18 @@
 #include "common/parallel_for.h"
 #include "common/stopwatch.h"
 #include "interop/ply.h"
+#include "interop/splat_gltf.h"
+#include "interop/splat_ply.h"
+#include "interop/spz.h"
 #include "shtool/euler.h"
 #include "shtool/rotation.h"
 #include "shtool/sh.h"
 
 namespace shtool::interop {
-namespace {
-
-// The properties of a 3DGS vertex this job reads and writes (indices into the
-// element's properties), found by name.
-struct SplatLayout {
-  std::array<std::size_t, 3> position{};
-  std::optional<std::array<std::size_t, 3>> normal;
-  std::optional<std::array<std::size_t, 4>> rotation;
-  std::optional<std::array<std::size_t, 3>> scale;
-  std::optional<std::array<std::size_t, 3>> dc;
-  std::vector<std::size_t> rest;  // f_rest_0 .. f_rest_{K-1}
-  int degree = 0;
-};
-
-SplatLayout find_layout(const PlyElement& v, const std::filesystem::path& name) {
-  auto fail = [&](const std::string& why) { return InputError(name.string() + ": " + why); };
-  auto need = [&](const std::string& p) {
-    const std::optional<std::size_t> i = v.find(p);
-    if (!i) throw fail("the vertex element has no property '" + p + "'");
-    return *i;
-  };
-  auto floats = [&](std::size_t i) {
-    if (v.properties[i].type != PlyType::float32 && v.properties[i].type != PlyType::float64)
-      throw fail("property '" + v.properties[i].name + "' must be float or double");
-    return i;
-  };
-  auto group = [&]<std::size_t N>(const std::array<const char*, N>& names) -> std::optional<std::array<std::size_t, N>> {
-    std::size_t found = 0;
-    for (const char* n : names) found += v.find(n).has_value();
-    if (found == 0) return std::nullopt;
-    if (found != N) throw fail(std::string("properties ") + names[0] + ".." + names[N - 1] + " are incomplete");
-    std::array<std::size_t, N> out{};
-    for (std::size_t k = 0; k < N; ++k) out[k] = floats(need(names[k]));
-    return out;
-  };
-  SplatLayout l;
-  for (int k = 0; k < 3; ++k) l.position[k] = floats(need(std::string(1, "xyz"[k])));
-  l.normal = group(std::array<const char*, 3>{"nx", "ny", "nz"});
-  l.rotation = group(std::array<const char*, 4>{"rot_0", "rot_1", "rot_2", "rot_3"});
-  l.scale = group(std::array<const char*, 3>{"scale_0", "scale_1", "scale_2"});
-  l.dc = group(std::array<const char*, 3>{"f_dc_0", "f_dc_1", "f_dc_2"});
-  for (std::size_t k = 0;; ++k) {
-    const std::optional<std::size_t> i = v.find("f_rest_" + std::to_string(k));
-    if (!i) break;
-    l.rest.push_back(floats(*i));
-  }
-  for (const PlyProperty& p : v.properties)
-    if (p.name.rfind("f_rest_", 0) == 0) {
-      bool listed = false;
-      for (std::size_t i : l.rest) listed = listed || v.properties[i].name == p.name;
-      if (!listed) throw fail("f_rest properties must be numbered from 0 without gaps ('" + p.name + "')");
-    }
-  const std::size_t per_channel = l.rest.size() / 3;
-  if (l.rest.size() % 3 != 0 || (per_channel != 0 && per_channel != 3 && per_channel != 8 && per_channel != 15))
-    throw fail(std::to_string(l.rest.size()) + " f_rest properties: 0, 9, 24 or 45 expected (SH degree 0..3)");
-  if (!l.rest.empty() && !l.dc) throw fail("f_rest properties without f_dc_0..2");
-  l.degree = per_channel == 0 ? 0 : per_channel == 3 ? 1 : per_channel == 8 ? 2 : 3;
-  return l;
-}
-
-}  // namespace
 
 Eigen::Matrix3d splat_rotation(const TransformSplatsRequest& r) {
-  if (r.quaternion.has_value() == r.matrix.has_value()) throw InputError("give exactly one of --quat and --matrix");
+  if (r.quaternion && r.matrix) throw InputError("give exactly one of --quat and --matrix, or neither");
+  if (!r.quaternion && !r.matrix) return Eigen::Matrix3d::Identity();
   if (r.quaternion) {
     const auto& q = *r.quaternion;
     const double n = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
@@ -98,23 +42,17 @@ Eigen::Matrix3d splat_rotation(const TransformSplatsRequest& r) {
   return m;
 }
 
-TransformSplatsReport run_transform_splats(const TransformSplatsRequest& r) {
-  const Eigen::Matrix3d rot = splat_rotation(r);
-  if (!(r.scale > 0) || !std::isfinite(r.scale)) throw InputError("--scale must be a positive number");
-  for (double t : r.translate)
-    if (!std::isfinite(t)) throw InputError("--translate must be finite");
-  if (r.out.empty()) throw InputError("--out is required");
-  JobOutputs io;
-  io.input(r.in, "the input scene");
-  io.output(r.out, "--out");
-  const int threads = resolve_threads(r.threads);
-  const auto t0 = std::chrono::steady_clock::now();
+namespace {
 
-  PlyFile ply = PlyFile::parse(read_input_file(r.in, "input"), r.in);
+// PLY in, PLY out in one frame: the file's values rewritten in place, every other
+// property, the header and the encoding kept.
+void transform_ply_in_place(const TransformSplatsRequest& r, const Eigen::Matrix3d& rot, std::string bytes,
+                            JobOutputs& io, int threads, TransformSplatsReport& report) {
+  PlyFile ply = PlyFile::parse(std::move(bytes), r.in);
   const PlyElement* vertex = ply.element("vertex");
   if (!vertex) throw InputError(r.in.string() + ": no 'vertex' element");
   const PlyElement& v = *vertex;
-  const SplatLayout layout = find_layout(v, r.in);
+  const SplatLayout layout = find_splat_layout(v, r.in);
   // The given quaternion itself when there is one (no round trip through the matrix).
   const Eigen::Quaterniond qr = r.quaternion ? Eigen::Quaterniond((*r.quaternion)[0], (*r.quaternion)[1],
                                                                   (*r.quaternion)[2], (*r.quaternion)[3])
@@ -191,11 +129,163 @@ TransformSplatsReport run_transform_splats(const TransformSplatsRequest& r) {
   for (const std::string& problem : problems)
     if (!problem.empty()) throw InputError(problem);
   io.set("--out", ply.format() == PlyFormat::ascii ? ply.bytes() : std::string(ply.binary_bytes()));
-  io.commit();
-  TransformSplatsReport report;
   report.splats = count;
   report.degree = layout.degree;
+}
+
+// A proper rotation P and whether the map is P or -P (a reflection).
+struct ProperPart {
+  Eigen::Matrix3d p;
+  bool reflects = false;
+};
+ProperPart proper_part(const Eigen::Matrix3d& m) {
+  const bool reflects = m.determinant() < 0;
+  return {reflects ? Eigen::Matrix3d(-m) : m, reflects};
+}
+
+}  // namespace
+
+Eigen::Matrix3d splat_frame(std::string_view letters) {
+  std::string up;
+  for (char c : letters) up.push_back(static_cast<char>(std::toupper(static_cast<unsigned char>(c))));
+  auto bad = [&] {
+    return InputError("frame '" + std::string(letters) +
+                      "': three letters, one of R/L, one of U/D and one of F/B, for the file's x, y, z axes (e.g. RDF, RUB)");
+  };
+  if (up.size() != 3) throw bad();
+  Eigen::Matrix3d q = Eigen::Matrix3d::Zero();
+  int seen = 0;
+  for (int axis = 0; axis < 3; ++axis) {
+    // shtool's frame in these letters is RFU: x right, y forward (away from the viewer), z up.
+    int row = -1;
+    double sign = 1;
+    switch (up[axis]) {
+      case 'R': row = 0; break;
+      case 'L': row = 0, sign = -1; break;
+      case 'F': row = 1; break;
+      case 'B': row = 1, sign = -1; break;
+      case 'U': row = 2; break;
+      case 'D': row = 2, sign = -1; break;
+      default: throw bad();
+    }
+    if (seen & (1 << row)) throw bad();
+    seen |= 1 << row;
+    q(row, axis) = sign;
+  }
+  return q;
+}
+
+void transform_splat_scene(SplatScene& s, const Eigen::Matrix3d& m, double scale, const Eigen::Vector3d& t,
+                           int threads) {
+  const ProperPart pp = proper_part(m);
+  const Eigen::Quaterniond qp(pp.p);
+  const bool moves = !m.isIdentity(0) || scale != 1 || !t.isZero(0);
+  if (!moves) return;
+  const float log_scale = static_cast<float>(std::log(scale));
+  const int order = s.degree + 1, coefficients = order * order;
+  ShRotation<double> sh_rotation(order, nullptr);
+  sh_rotation.set(pp.p, RotationMethod::reference);
+  const std::size_t stride = s.sh_stride();
+  constexpr std::size_t kChunk = 4096;
+  parallel_for((s.count + kChunk - 1) / kChunk, threads, [&](std::size_t chunk) {
+    std::array<std::vector<double>, 3> f, g;
+    for (int c = 0; c < 3; ++c) f[c].resize(coefficients), g[c].resize(coefficients);
+    const std::size_t end = std::min(s.count, (chunk + 1) * kChunk);
+    for (std::size_t i = chunk * kChunk; i < end; ++i) {
+      const Eigen::Vector3d p(s.position[3 * i], s.position[3 * i + 1], s.position[3 * i + 2]);
+      const Eigen::Vector3d moved = scale * (m * p) + t;
+      for (int k = 0; k < 3; ++k) s.position[3 * i + k] = static_cast<float>(moved[k]);
+      // Sigma' = M Sigma M^T = P Sigma P^T: the orientation turns by the proper part.
+      float* q = &s.rotation[4 * i];
+      const Eigen::Quaterniond out = qp * Eigen::Quaterniond(q[0], q[1], q[2], q[3]);
+      q[0] = static_cast<float>(out.w()), q[1] = static_cast<float>(out.x()), q[2] = static_cast<float>(out.y()),
+      q[3] = static_cast<float>(out.z());
+      for (int k = 0; k < 3; ++k) s.log_scale[3 * i + k] += log_scale;
+      if (order > 1) {
+        float* sh = &s.sh[i * stride];
+        for (int c = 0; c < 3; ++c)
+          for (int k = 0; k < coefficients; ++k) f[c][k] = sh[3 * k + c];
+        sh_rotation.apply_rgb({f[0], f[1], f[2]}, {g[0], g[1], g[2]});
+        // A reflection is -P: the inversion negates the odd bands (shtool/orthogonal_map.h).
+        for (int l = 1; l < order; ++l)
+          for (int k = l * l; k < (l + 1) * (l + 1); ++k)
+            for (int c = 0; c < 3; ++c)
+              sh[3 * k + c] = static_cast<float>(pp.reflects && (l & 1) ? -g[c][k] : g[c][k]);
+      }
+    }
+  });
+}
+
+TransformSplatsReport run_transform_splats(const TransformSplatsRequest& r) {
+  const Eigen::Matrix3d rot = splat_rotation(r);
+  if (!(r.scale > 0) || !std::isfinite(r.scale)) throw InputError("--scale must be a positive number");
+  for (double t : r.translate)
+    if (!std::isfinite(t)) throw InputError("--translate must be finite");
+  if (r.out.empty()) throw InputError("--out is required");
+  if (r.sh_degree) check_option_range("--sh-degree", *r.sh_degree, 0, 3);
+  splat_frame(r.ply_frame), splat_frame(r.spz_frame);  // both checked, used or not
+  const SplatFormat in_format = splat_format_of(r.in, "the input");
+  const SplatFormat out_format = splat_format_of(r.out, "--out");
+  auto frame_of = [&](SplatFormat f) {
+    return f == SplatFormat::ply ? splat_frame(r.ply_frame) : f == SplatFormat::spz ? splat_frame(r.spz_frame)
+                                                                                    : splat_frame("RUB");
+  };
+  const Eigen::Matrix3d frame_change = frame_of(out_format).transpose() * frame_of(in_format);
+  SpzWriteOptions spz;
+  spz.version = r.spz_version;
+  spz.sh1_bits = r.sh_bits[0];
+  spz.sh_rest_bits = r.sh_bits[1];
+  if (out_format == SplatFormat::spz) {
+    if (spz.version != 3 && spz.version != 4) throw InputError("--spz-version must be 3 or 4");
+    for (int b : r.sh_bits)
+      if (b < 1 || b > 8) throw InputError("--sh-bits must be in 1..8, got " + std::to_string(b));
+  }
+  JobOutputs io;
+  io.input(r.in, "the input scene");
+  io.output(r.out, "--out");
+  const int threads = resolve_threads(r.threads);
+  const auto t0 = std::chrono::steady_clock::now();
+  TransformSplatsReport report;
   report.threads = threads;
+  report.reflects = frame_change.determinant() < 0;
+  std::string bytes = read_input_file(r.in, "input");
+  if (in_format == SplatFormat::ply && out_format == SplatFormat::ply && !r.sh_degree) {
+    transform_ply_in_place(r, rot, std::move(bytes), io, threads, report);
+  } else {
+    SplatScene scene;
+    switch (in_format) {
+      case SplatFormat::ply: scene = read_ply_splats(PlyFile::parse(std::move(bytes), r.in), r.in, threads); break;
+      case SplatFormat::spz: scene = read_spz(bytes, r.in.string(), nullptr, threads); break;
+      case SplatFormat::gltf:
+      case SplatFormat::glb: scene = read_gltf_splats(bytes, r.in); break;
+    }
+    report.degree_in = scene.degree;
+    const Eigen::Vector3d t(r.translate[0], r.translate[1], r.translate[2]);
+    // The user's transform acts in the input's coordinates, then the frame changes.
+    transform_splat_scene(scene, frame_change * rot, r.scale, frame_change * t, threads);
+    if (r.sh_degree) scene.set_degree(*r.sh_degree);
+    for (std::size_t i = 0; i < scene.position.size(); ++i)
+      if (!std::isfinite(scene.position[i]) || !std::isfinite(scene.log_scale[i]))
+        throw InputError("splat " + std::to_string(i / 3) +
+                         ": a position or scale overflows float after the transform (--scale or --translate too large for " +
+                         r.in.string() + ")");
+    std::string out;
+    switch (out_format) {
+      case SplatFormat::ply: out = write_ply_splats(scene); break;
+      case SplatFormat::spz:
+        out = write_spz(scene, spz, threads);
+        report.spz_sh_bound = spz_sh_error_bound(scene.degree, spz);
+        report.spz_sh_scene = spz_sh_error_of(scene, spz, threads);
+        report.spz_dc_bound = spz_dc_error_bound();
+        break;
+      case SplatFormat::gltf: out = write_gltf_splats(scene, false); break;
+      case SplatFormat::glb: out = write_gltf_splats(scene, true); break;
+    }
+    io.set("--out", std::move(out));
+    report.splats = scene.count;
+    report.degree = scene.degree;
+  }
+  io.commit();
   report.seconds = seconds_since(t0);
   return report;
 }

@@ -1,16 +1,23 @@
-// shtool transform-splats: a similarity transform of a 3D Gaussian Splatting scene
-// (docs/interop.md). Positions p -> s R p + t; orientations q -> q_R q (Hamilton
-// product, unit q_R; the stored quaternion keeps its length, which 3DGS normalises on
-// load); log-scales + log s; normals R n; and the view-dependent colour's SH of every
-// splat rotated, g(w) = f(R^-1 w), so that a splat seen along d before looks the same
-// along R d after.
+// shtool transform-splats: converts a 3D Gaussian Splatting scene between PLY, spz and
+// glTF (KHR_gaussian_splatting), optionally under a similarity transform given in the
+// input file's coordinates (docs/interop.md, docs/splats.md). Positions p -> s R p + t;
+// orientations q -> q_R q (Hamilton product, unit q_R; the stored quaternion keeps its
+// length, which 3DGS normalises on load); log-scales + log s; normals R n; and the
+// view-dependent colour's SH of every splat rotated, g(w) = f(R^-1 w), so that a splat
+// seen along d before looks the same along R d after. Between formats the frames change
+// too (each format's frame, through shtool's); a frame change that reflects turns the
+// orientation by its proper part and the SH by the orthogonal map.
 #pragma once
 
 #include <array>
 #include <filesystem>
 #include <optional>
+#include <string>
+#include <string_view>
 
 #include <Eigen/Core>
+
+#include "interop/splat_scene.h"
 
 namespace shtool::interop {
 
@@ -20,20 +27,41 @@ struct TransformSplatsRequest {
   std::optional<std::array<double, 9>> matrix;      // row-major
   std::array<double, 3> translate{0, 0, 0};
   double scale = 1;
+  std::string ply_frame = "RDF";  // the axes of PLY files (COLMAP's, 3DGS's)
+  std::string spz_frame = "RUB";  // of spz files (the specification's)
+  std::optional<int> sh_degree;   // the output's SH degree, 0..3
+  int spz_version = 4;
+  std::array<int, 2> sh_bits{5, 4};  // spz: band 1, bands 2..3
   int threads = 0;
 };
 
 struct TransformSplatsReport {
   std::size_t splats = 0;
-  int degree = 0;
+  int degree = 0;      // the output's
+  int degree_in = -1;  // the input's when it was decoded into a scene
+  bool reflects = false;
   int threads = 1;
   double seconds = 0;
+  // spz output: the colour error bounds of its quantisation (one channel, any
+  // direction): the SH bands' from the bucket sizes, the same for this scene's
+  // coefficients, the DC's.
+  double spz_sh_bound = 0, spz_sh_scene = 0, spz_dc_bound = 0;
 };
 
-// The rotation of a request: the unit quaternion (normalised; zero refused) or the
-// matrix (orthonormal to 1e-6, det +1; a reflection is refused: its SH transform is no
-// rotation and 3DGS orientations cannot hold it).
+// The rotation of a request: the unit quaternion (normalised; zero refused), the matrix
+// (orthonormal to 1e-6, det +1; a reflection is refused: mirror through --frame), or the
+// identity when neither is given.
 Eigen::Matrix3d splat_rotation(const TransformSplatsRequest& request);
+
+// A frame by letters, one per file axis (x, y, z): R/L, U/D, F/B (right, up, forward
+// away from the viewer, and their opposites). Returns Q with shtool = Q * file
+// (shtool's frame is RFU). InputError on anything else.
+Eigen::Matrix3d splat_frame(std::string_view letters);
+
+// p -> s M p + t for an orthogonal M (det +1 or -1): orientations by M's proper part,
+// log-scales + log s, SH by the orthogonal map of M.
+void transform_splat_scene(SplatScene& scene, const Eigen::Matrix3d& m, double scale, const Eigen::Vector3d& t,
+                           int threads);
 
 TransformSplatsReport run_transform_splats(const TransformSplatsRequest& request);
 

@@ -1,0 +1,339 @@
+#include "interop/splat_gltf.h"
+
+#include <tiny_gltf.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+#include <vector>
+
+#include "common/input_error.h"
+#include "io/table_format.h"
+
+namespace shtool::interop {
+namespace {
+
+constexpr const char* kExtension = "KHR_gaussian_splatting";
+
+[[noreturn]] void fail(const std::filesystem::path& path, const std::string& why) {
+  throw InputError(path.string() + ": " + why);
+}
+
+std::string attribute(const std::string& name) { return std::string(kExtension) + ":" + name; }
+std::string sh_attribute(int l, int n) {
+  return attribute("SH_DEGREE_" + std::to_string(l) + "_COEF_" + std::to_string(n));
+}
+
+bool skip_image(tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int, void*) {
+  return true;
+}
+
+// Accessor `index` as floats, `components` per element: float, or (normalized) integer
+// types among `allowed`, checked against its buffer without overflow.
+std::vector<float> read_accessor(const tinygltf::Model& model, int index, int type, const std::vector<int>& allowed,
+                                 const std::string& what, const std::filesystem::path& path) {
+  if (index < 0 || static_cast<std::size_t>(index) >= model.accessors.size())
+    fail(path, what + ": accessor " + std::to_string(index) + " does not exist");
+  const tinygltf::Accessor& a = model.accessors[index];
+  if (a.sparse.isSparse) fail(path, what + ": sparse accessors are not read");
+  if (a.type != type) fail(path, what + ": accessor " + std::to_string(index) + " has the wrong type");
+  if (std::find(allowed.begin(), allowed.end(), a.componentType) == allowed.end())
+    fail(path, what + ": accessor " + std::to_string(index) + " has a component type the extension does not allow");
+  const bool is_float = a.componentType == TINYGLTF_COMPONENT_TYPE_FLOAT;
+  if (!is_float && !a.normalized && what.find("SCALE") == std::string::npos)
+    fail(path, what + ": integer components must be normalized");
+  if (a.bufferView < 0 || static_cast<std::size_t>(a.bufferView) >= model.bufferViews.size())
+    fail(path, what + ": accessor " + std::to_string(index) + " has no buffer view");
+  const tinygltf::BufferView& view = model.bufferViews[a.bufferView];
+  if (view.buffer < 0 || static_cast<std::size_t>(view.buffer) >= model.buffers.size())
+    fail(path, what + ": buffer view " + std::to_string(a.bufferView) + " names no buffer");
+  const std::vector<unsigned char>& buffer = model.buffers[view.buffer].data;
+  const int components = tinygltf::GetNumComponentsInType(a.type);
+  const std::size_t size = static_cast<std::size_t>(tinygltf::GetComponentSizeInBytes(a.componentType));
+  const std::size_t element = size * static_cast<std::size_t>(components);
+  const std::size_t stride = view.byteStride ? view.byteStride : element;
+  if (stride < element) fail(path, what + ": a byteStride below the element size");
+  if (view.byteOffset > buffer.size() || view.byteLength > buffer.size() - view.byteOffset || a.byteOffset > view.byteLength)
+    fail(path, what + ": accessor " + std::to_string(index) + " reads past the end of its buffer");
+  if (a.count > 0) {
+    const std::size_t available = view.byteLength - a.byteOffset;
+    if (element > available || (a.count - 1) > (available - element) / stride)
+      fail(path, what + ": accessor " + std::to_string(index) + " reads past the end of its buffer");
+  }
+  const unsigned char* base = buffer.data() + view.byteOffset + a.byteOffset;
+  std::vector<float> out(a.count * static_cast<std::size_t>(components));
+  for (std::size_t i = 0; i < a.count; ++i)
+    for (int c = 0; c < components; ++c) {
+      const unsigned char* p = base + i * stride + static_cast<std::size_t>(c) * size;
+      float v = 0;
+      switch (a.componentType) {
+        case TINYGLTF_COMPONENT_TYPE_FLOAT: std::memcpy(&v, p, 4); break;
+        case TINYGLTF_COMPONENT_TYPE_BYTE: {
+          std::int8_t x;
+          std::memcpy(&x, p, 1);
+          v = std::max(static_cast<float>(x) / 127.0f, -1.0f);
+          break;
+        }
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: v = static_cast<float>(*p) / (a.normalized ? 255.0f : 1.0f); break;
+        case TINYGLTF_COMPONENT_TYPE_SHORT: {
+          std::int16_t x;
+          std::memcpy(&x, p, 2);
+          v = std::max(static_cast<float>(x) / 32767.0f, -1.0f);
+          break;
+        }
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
+          std::uint16_t x;
+          std::memcpy(&x, p, 2);
+          v = static_cast<float>(x) / (a.normalized ? 65535.0f : 1.0f);
+          break;
+        }
+        default: fail(path, what + ": unsupported component type");
+      }
+      out[i * components + c] = v;
+    }
+  return out;
+}
+
+bool identity_node(const tinygltf::Node& n) {
+  if (n.matrix.size() == 16)
+    for (int k = 0; k < 16; ++k)
+      if (n.matrix[k] != (k % 5 == 0 ? 1.0 : 0.0)) return false;
+  if (n.translation.size() == 3 && (n.translation[0] != 0 || n.translation[1] != 0 || n.translation[2] != 0)) return false;
+  if (n.rotation.size() == 4 && (n.rotation[0] != 0 || n.rotation[1] != 0 || n.rotation[2] != 0 || std::abs(n.rotation[3]) != 1))
+    return false;
+  if (n.scale.size() == 3 && (n.scale[0] != 1 || n.scale[1] != 1 || n.scale[2] != 1)) return false;
+  return true;
+}
+
+struct Reader {
+  const tinygltf::Model& model;
+  const std::filesystem::path& path;
+  std::vector<SplatScene> parts;
+
+  void primitive(const tinygltf::Primitive& p) {
+    if (!p.extensions.count(kExtension)) return;
+    if (p.mode != TINYGLTF_MODE_POINTS) fail(path, "a KHR_gaussian_splatting primitive whose mode is not POINTS");
+    auto find = [&](const std::string& name) -> int {
+      const auto it = p.attributes.find(name);
+      return it == p.attributes.end() ? -1 : it->second;
+    };
+    auto need = [&](const std::string& name) {
+      const int i = find(name);
+      if (i < 0) fail(path, "a splat primitive without " + name);
+      return i;
+    };
+    constexpr int F = TINYGLTF_COMPONENT_TYPE_FLOAT, B = TINYGLTF_COMPONENT_TYPE_BYTE,
+                  UB = TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, S = TINYGLTF_COMPONENT_TYPE_SHORT,
+                  US = TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT;
+    const std::vector<float> pos = read_accessor(model, need("POSITION"), TINYGLTF_TYPE_VEC3, {F}, "POSITION", path);
+    const std::vector<float> rot =
+        read_accessor(model, need(attribute("ROTATION")), TINYGLTF_TYPE_VEC4, {F, B, S}, attribute("ROTATION"), path);
+    const std::vector<float> scale =
+        read_accessor(model, need(attribute("SCALE")), TINYGLTF_TYPE_VEC3, {F, UB, US}, attribute("SCALE"), path);
+    const std::vector<float> opacity =
+        read_accessor(model, need(attribute("OPACITY")), TINYGLTF_TYPE_SCALAR, {F, UB, US}, attribute("OPACITY"), path);
+    int degree = -1;
+    for (int l = 0; l <= 3 && find(sh_attribute(l, 0)) >= 0; ++l) degree = l;
+    if (degree < 0) fail(path, "a splat primitive without " + sh_attribute(0, 0));
+    for (int l = degree + 1; l <= 4; ++l)
+      for (int n = 0; n <= 2 * l; ++n)
+        if (find(sh_attribute(l, n)) >= 0)
+          fail(path, sh_attribute(l, n) + " without every coefficient of the lower degrees, or past degree 3");
+    const std::size_t count = pos.size() / 3;
+    SplatScene s;
+    s.resize(count, degree);
+    const std::size_t stride = s.sh_stride();
+    for (int l = 0; l <= degree; ++l)
+      for (int n = 0; n <= 2 * l; ++n) {
+        const std::vector<float> c =
+            read_accessor(model, need(sh_attribute(l, n)), TINYGLTF_TYPE_VEC3, {F}, sh_attribute(l, n), path);
+        if (c.size() != 3 * count) fail(path, sh_attribute(l, n) + " has not one value per splat");
+        for (std::size_t i = 0; i < count; ++i)
+          for (int ch = 0; ch < 3; ++ch) s.sh[i * stride + 3 * (l * l + n) + ch] = c[3 * i + ch];
+      }
+    if (rot.size() != 4 * count || scale.size() != 3 * count || opacity.size() != count)
+      fail(path, "the splat attributes have different counts");
+    for (std::size_t i = 0; i < count; ++i) {
+      for (int c = 0; c < 3; ++c) {
+        s.position[3 * i + c] = pos[3 * i + c];
+        const float sc = scale[3 * i + c];
+        if (sc < 0) fail(path, "splat " + std::to_string(i) + ": a negative scale (the extension's scales are linear, >= 0)");
+        s.log_scale[3 * i + c] = std::log(std::max(sc, 1e-30f));
+      }
+      s.rotation[4 * i] = rot[4 * i + 3];
+      for (int c = 0; c < 3; ++c) s.rotation[4 * i + 1 + c] = rot[4 * i + c];
+      const float a = opacity[i];
+      if (!(a >= 0 && a <= 1)) fail(path, "splat " + std::to_string(i) + ": opacity outside [0, 1]");
+      const float clamped = std::clamp(a, 1e-7f, 1 - 1e-7f);
+      s.opacity[i] = std::log(clamped / (1 - clamped));
+    }
+    parts.push_back(std::move(s));
+  }
+
+  // `moved`: this node or an ancestor transforms what it holds.
+  void node(int index, std::vector<bool>& visited, int depth, bool moved) {
+    if (index < 0 || static_cast<std::size_t>(index) >= model.nodes.size())
+      fail(path, "node " + std::to_string(index) + " does not exist");
+    if (visited[index]) fail(path, "node " + std::to_string(index) + " is reached twice: glTF nodes form trees");
+    if (depth > 1024) fail(path, "the node hierarchy is deeper than 1024");
+    visited[index] = true;
+    const tinygltf::Node& n = model.nodes[index];
+    moved = moved || !identity_node(n);
+    if (n.mesh >= 0) {
+      if (static_cast<std::size_t>(n.mesh) >= model.meshes.size())
+        fail(path, "node " + std::to_string(index) + " names a mesh that does not exist");
+      const std::size_t before = parts.size();
+      for (const tinygltf::Primitive& p : model.meshes[n.mesh].primitives) primitive(p);
+      if (parts.size() != before && moved)
+        fail(path, "node " + std::to_string(index) + "'s splats are under a node transform, which is not applied: bake it");
+    }
+    for (int child : n.children) node(child, visited, depth + 1, moved);
+  }
+};
+
+// One buffer, one view per accessor (4-byte aligned, no stride).
+struct Builder {
+  tinygltf::Model& model;
+  int floats(const std::vector<float>& v, int type, bool bounds = false) {
+    std::vector<unsigned char>& data = model.buffers[0].data;
+    tinygltf::BufferView view;
+    view.buffer = 0;
+    view.byteOffset = data.size();
+    view.byteLength = v.size() * 4;
+    view.target = TINYGLTF_TARGET_ARRAY_BUFFER;
+    const auto* p = reinterpret_cast<const unsigned char*>(v.data());
+    data.insert(data.end(), p, p + v.size() * 4);
+    model.bufferViews.push_back(view);
+    const int components = tinygltf::GetNumComponentsInType(type);
+    tinygltf::Accessor a;
+    a.bufferView = static_cast<int>(model.bufferViews.size()) - 1;
+    a.componentType = TINYGLTF_COMPONENT_TYPE_FLOAT;
+    a.type = type;
+    a.count = v.size() / components;
+    if (bounds) {
+      a.minValues.assign(components, std::numeric_limits<double>::infinity());
+      a.maxValues.assign(components, -std::numeric_limits<double>::infinity());
+      for (std::size_t i = 0; i < v.size(); ++i) {
+        a.minValues[i % components] = std::min<double>(a.minValues[i % components], v[i]);
+        a.maxValues[i % components] = std::max<double>(a.maxValues[i % components], v[i]);
+      }
+    }
+    model.accessors.push_back(a);
+    return static_cast<int>(model.accessors.size()) - 1;
+  }
+};
+
+}  // namespace
+
+SplatScene read_gltf_splats(const std::string& bytes, const std::filesystem::path& path) {
+  tinygltf::Model model;
+  tinygltf::TinyGLTF loader;
+  loader.SetImageLoader(skip_image, nullptr);
+  std::string err, warn;
+  const std::string base = path.has_parent_path() ? path.parent_path().string() : std::string(".");
+  const bool binary = bytes.size() >= 4 && bytes.compare(0, 4, "glTF") == 0;
+  if (bytes.size() > std::numeric_limits<unsigned int>::max()) fail(path, "file too large");
+  // tinygltf turns JSON into values recursively: nesting is bounded before it sees it.
+  std::string_view json = bytes;
+  if (binary) {
+    std::uint32_t length = 0;
+    if (bytes.size() >= 20) std::memcpy(&length, bytes.data() + 12, 4);
+    json = bytes.size() >= 20 ? std::string_view(bytes).substr(20, length) : std::string_view();
+  }
+  if (auto problem = table_format::check_json_depth(json, table_format::kMaxJsonDepth)) fail(path, "glTF JSON " + *problem);
+  bool ok = false;
+  try {
+    ok = binary ? loader.LoadBinaryFromMemory(&model, &err, &warn, reinterpret_cast<const unsigned char*>(bytes.data()),
+                                              static_cast<unsigned int>(bytes.size()), base)
+                : loader.LoadASCIIFromString(&model, &err, &warn, bytes.data(), static_cast<unsigned int>(bytes.size()), base);
+  } catch (const std::exception& e) {
+    fail(path, std::string("cannot read glTF: tinygltf failed (") + e.what() + ")");
+  }
+  if (!ok) {
+    while (!err.empty() && (err.back() == '\n' || err.back() == ' ')) err.pop_back();
+    fail(path, "cannot read glTF" + (err.empty() ? std::string() : ": " + err));
+  }
+  if (model.scenes.empty()) fail(path, "no scene");
+  const int scene = model.defaultScene >= 0 ? model.defaultScene : 0;
+  if (static_cast<std::size_t>(scene) >= model.scenes.size()) fail(path, "the default scene does not exist");
+  Reader r{model, path, {}};
+  std::vector<bool> visited(model.nodes.size(), false);
+  for (int n : model.scenes[scene].nodes) r.node(n, visited, 0, false);
+  if (r.parts.empty()) fail(path, "no KHR_gaussian_splatting primitive in the default scene");
+  SplatScene out = std::move(r.parts[0]);
+  for (std::size_t k = 1; k < r.parts.size(); ++k) {
+    const SplatScene& p = r.parts[k];
+    if (p.degree != out.degree) fail(path, "splat primitives of different SH degrees");
+    out.count += p.count;
+    out.position.insert(out.position.end(), p.position.begin(), p.position.end());
+    out.log_scale.insert(out.log_scale.end(), p.log_scale.begin(), p.log_scale.end());
+    out.rotation.insert(out.rotation.end(), p.rotation.begin(), p.rotation.end());
+    out.opacity.insert(out.opacity.end(), p.opacity.begin(), p.opacity.end());
+    out.sh.insert(out.sh.end(), p.sh.begin(), p.sh.end());
+  }
+  check_scene_finite(out, path.string());
+  return out;
+}
+
+std::string write_gltf_splats(const SplatScene& s, bool binary) {
+  const std::size_t n = s.count, stride = s.sh_stride();
+  const double bytes = 4.0 * double(n) * double(3 + 4 + 3 + 1 + stride);
+  if (bytes > double(std::numeric_limits<std::uint32_t>::max()) - (1 << 20))
+    throw InputError("the scene would take " + std::to_string(bytes / 1e9) + " GB, past the 4 GB limit of glTF buffers");
+  if (n == 0) throw InputError("glTF cannot hold an empty splat scene (accessors need count >= 1)");
+  tinygltf::Model model;
+  model.asset.version = "2.0";
+  model.asset.generator = "shtool transform-splats";
+  model.buffers.emplace_back();
+  Builder b{model};
+  std::vector<float> rot(4 * n), scale(3 * n), opacity(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const float* q = &s.rotation[4 * i];
+    float norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    const float w = norm > 0 ? q[0] / norm : 1.0f;
+    for (int c = 0; c < 3; ++c) rot[4 * i + c] = norm > 0 ? q[1 + c] / norm : 0.0f;
+    rot[4 * i + 3] = w;
+    for (int c = 0; c < 3; ++c) scale[3 * i + c] = std::exp(s.log_scale[3 * i + c]);
+    opacity[i] = 1.0f / (1.0f + std::exp(-s.opacity[i]));
+  }
+  tinygltf::Primitive p;
+  p.mode = TINYGLTF_MODE_POINTS;
+  p.attributes["POSITION"] = b.floats(s.position, TINYGLTF_TYPE_VEC3, true);
+  p.attributes[attribute("ROTATION")] = b.floats(rot, TINYGLTF_TYPE_VEC4);
+  p.attributes[attribute("SCALE")] = b.floats(scale, TINYGLTF_TYPE_VEC3);
+  p.attributes[attribute("OPACITY")] = b.floats(opacity, TINYGLTF_TYPE_SCALAR);
+  std::vector<float> coef(3 * n);
+  for (int l = 0; l <= s.degree; ++l)
+    for (int k = 0; k <= 2 * l; ++k) {
+      for (std::size_t i = 0; i < n; ++i)
+        for (int c = 0; c < 3; ++c) coef[3 * i + c] = s.sh[i * stride + 3 * (l * l + k) + c];
+      p.attributes[sh_attribute(l, k)] = b.floats(coef, TINYGLTF_TYPE_VEC3);
+    }
+  p.extensions[kExtension] = tinygltf::Value(tinygltf::Value::Object{
+      {"kernel", tinygltf::Value(std::string("ellipse"))},
+      {"colorSpace", tinygltf::Value(std::string("srgb_rec709_display"))},
+      {"projection", tinygltf::Value(std::string("perspective"))},
+      {"sortingMethod", tinygltf::Value(std::string("cameraDistance"))}});
+  model.extensionsUsed.push_back(kExtension);
+  tinygltf::Mesh mesh;
+  mesh.primitives.push_back(std::move(p));
+  model.meshes.push_back(std::move(mesh));
+  tinygltf::Node node;
+  node.mesh = 0;
+  model.nodes.push_back(node);
+  tinygltf::Scene scene;
+  scene.nodes.push_back(0);
+  model.scenes.push_back(scene);
+  model.defaultScene = 0;
+  std::ostringstream out;
+  tinygltf::TinyGLTF writer;
+  if (!writer.WriteGltfSceneToStream(&model, out, !binary, binary) || !out)
+    throw std::runtime_error("tinygltf could not write the model");
+  return out.str();
+}
+
+}  // namespace shtool::interop

@@ -1,0 +1,24 @@
+// glTF scenes of Gaussian splats by the KHR_gaussian_splatting extension
+// (docs/splats.md): POINTS primitives whose attributes are POSITION and
+// KHR_gaussian_splatting:ROTATION (x y z w), :SCALE (linear), :OPACITY (linear),
+// :SH_DEGREE_l_COEF_n (n = 0..2l for m = -l..l; degree 0 the DC coefficient).
+#pragma once
+
+#include <filesystem>
+#include <string>
+
+#include "interop/splat_scene.h"
+
+namespace shtool::interop {
+
+// Every splat primitive of the default scene, in node order, all of one SH degree.
+// Nodes must not transform them (InputError: bake the transform first). Linear scales
+// of 0 and opacities of 0 or 1 get the nearest finite log / logit (1e-30; 1e-7 from
+// the ends). InputError naming `path` on anything malformed.
+SplatScene read_gltf_splats(const std::string& bytes, const std::filesystem::path& path);
+
+// One node, one mesh, one POINTS primitive, float attributes; binary (.glb) or text
+// with the buffer embedded (.gltf).
+std::string write_gltf_splats(const SplatScene& scene, bool binary);
+
+}  // namespace shtool::interop

@@ -1,0 +1,50 @@
+// A 3D Gaussian Splatting scene in memory, whatever file it came from (docs/splats.md):
+// the values 3DGS trains and its PLY stores, one array per attribute. Each format's
+// reader decodes into it and each writer encodes from it (splat_ply.h, spz.h,
+// splat_gltf.h); frames are not touched here (the job turns them).
+#pragma once
+
+#include <cstddef>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace shtool::interop {
+
+struct SplatScene {
+  std::size_t count = 0;
+  int degree = 0;                // SH degree 0..3
+  std::vector<float> position;   // 3 per splat
+  std::vector<float> log_scale;  // 3 per splat: sigma = exp(log_scale)
+  std::vector<float> rotation;   // 4 per splat, w x y z, not necessarily unit
+  std::vector<float> opacity;    // 1 per splat, logit: alpha = sigmoid(opacity)
+  // 3 (deg+1)^2 per splat: coefficient-major, RGB inner (sh[i*stride + 3*k + c],
+  // k = l(l+1)+m, k = 0 the DC), 3DGS's basis (Condon-Shortley phase), colour =
+  // 0.5 + sum_k sh_k y_k(d).
+  std::vector<float> sh;
+
+  std::size_t sh_stride() const { return 3 * static_cast<std::size_t>((degree + 1) * (degree + 1)); }
+  void resize(std::size_t n, int deg) {
+    count = n;
+    degree = deg;
+    position.assign(3 * n, 0.0f);
+    log_scale.assign(3 * n, 0.0f);
+    rotation.assign(4 * n, 0.0f);
+    opacity.assign(n, 0.0f);
+    sh.assign(sh_stride() * n, 0.0f);
+  }
+  // Keeps bands 0..deg (the L2-nearest function of that degree over the sphere, the
+  // basis being orthonormal) or pads with zero bands.
+  void set_degree(int deg);
+};
+
+enum class SplatFormat { ply, spz, gltf, glb };
+// By extension (.ply, .spz, .gltf, .glb, any case); InputError naming `what` otherwise.
+SplatFormat splat_format_of(const std::filesystem::path& path, const std::string& what);
+const char* splat_format_name(SplatFormat format);
+
+// InputError naming `name` when a value that every format needs finite is not (the
+// first one found, in splat order).
+void check_scene_finite(const SplatScene& scene, const std::string& name);
+
+}  // namespace shtool::interop

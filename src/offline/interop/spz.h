@@ -1,0 +1,52 @@
+// Niantic's .spz splat files (docs/splats.md restates the format with its source):
+// versions 2 and 3 (one gzip stream: a 16-byte header, then the attributes), and 4 (a
+// 32-byte header, a table of contents and one zstd frame per attribute). Read: 2, 3, 4;
+// written: 3 and 4. Values are quantised as the reference writer does; the SH buckets'
+// widths (bits per coefficient) are the writer's choice and are not recorded.
+#pragma once
+
+#include <string>
+#include <string_view>
+
+#include "interop/splat_scene.h"
+
+namespace shtool::interop {
+
+struct SpzWriteOptions {
+  int version = 4;       // 3 or 4
+  int sh1_bits = 5;      // bits kept of each band-1 SH byte, 1..8
+  int sh_rest_bits = 4;  // bands 2 and 3
+};
+
+// What a file says about itself beyond the splats.
+struct SpzHeader {
+  int version = 0;
+  int fractional_bits = 0;
+  bool antialiased = false;
+};
+
+// InputError naming `name` on a truncated, oversized or inconsistent file, an unknown
+// version, SH degree 4 (not held by SplatScene) or a size past what the compressed
+// bytes could hold.
+SplatScene read_spz(std::string_view bytes, const std::string& name, SpzHeader* header = nullptr, int threads = 1);
+
+// InputError when a position is beyond the 24-bit fixed point at any fractional bits or
+// the options are out of range. Positions use 12 fractional bits (the reference
+// writer's) or fewer when the scene is larger than 2048 units.
+std::string write_spz(const SplatScene& scene, const SpzWriteOptions& options, int threads = 1);
+
+// The largest change of a splat's colour (one channel, any direction) that the SH
+// quantisation of bands 1..D can make, for coefficients within the representable
+// [-1, 127/128]: sum_l e_l (2l+1) / sqrt(4 pi), e_l = (floor(b_l/2) + 1/2) / 128,
+// b_l = 2^(8 - bits_l) (docs/splats.md).
+double spz_sh_error_bound(int degree, const SpzWriteOptions& options);
+
+// The same for the scene's own coefficients, exact per band: max over splats and
+// channels of sum_l |delta_l| sqrt((2l+1) / (4 pi)), delta_l the band's quantisation
+// error vector (clipping of coefficients beyond [-1, 1] included).
+double spz_sh_error_of(const SplatScene& scene, const SpzWriteOptions& options, int threads = 1);
+
+// The largest change of the DC colour: half a step of the colour byte, times y_0^0.
+double spz_dc_error_bound();
+
+}  // namespace shtool::interop

@@ -1,0 +1,704 @@
+// transform-splats between formats (.ply, .spz v3/v4, .glb, .gltf): round trips keep
+// every splat within its format's quantisation; colours seen along d before are the
+// colours along M d after, for rotations and for a reflecting frame change (3DGS's
+// eval_sh, written here from the reference implementation); spz files written by hand
+// decode to the values the specification gives; @playcanvas/splat-transform reads what
+// shtool writes and shtool reads what it writes; the glTF outputs pass the Khronos
+// validator; bad files are refused with nothing written.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include <nlohmann/json.hpp>
+
+#include "cli_test.h"
+#include "node_consumers.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace shtool::test;
+
+const Scratch scratch("splat_formats");
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double C0 = 0.28209479177387814, C1 = 0.4886025119029199;
+constexpr double C2[5] = {1.0925484305920792, -1.0925484305920792, 0.31539156525252005, -1.0925484305920792,
+                          0.5462742152960396};
+constexpr double C3[7] = {-0.5900435899266435, 2.890611442640554, -0.4570457994644658, 0.3731763325901154,
+                          -0.4570457994644658, 1.445305721320277, -0.5900435899266435};
+
+// graphdeco-inria's eval_sh, one channel, sh[k] k = 0..(deg+1)^2-1.
+double eval_3dgs(int deg, const double* sh, const Eigen::Vector3d& d) {
+  double r = C0 * sh[0];
+  if (deg < 1) return r;
+  const double x = d.x(), y = d.y(), z = d.z();
+  r += -C1 * y * sh[1] + C1 * z * sh[2] - C1 * x * sh[3];
+  if (deg < 2) return r;
+  const double xx = x * x, yy = y * y, zz = z * z, xy = x * y, yz = y * z, xz = x * z;
+  r += C2[0] * xy * sh[4] + C2[1] * yz * sh[5] + C2[2] * (2 * zz - xx - yy) * sh[6] + C2[3] * xz * sh[7] +
+       C2[4] * (xx - yy) * sh[8];
+  if (deg < 3) return r;
+  r += C3[0] * y * (3 * xx - yy) * sh[9] + C3[1] * xy * z * sh[10] + C3[2] * y * (4 * zz - xx - yy) * sh[11] +
+       C3[3] * z * (2 * zz - 3 * xx - 3 * yy) * sh[12] + C3[4] * x * (4 * zz - xx - yy) * sh[13] +
+       C3[5] * z * (xx - yy) * sh[14] + C3[6] * x * (xx - 3 * yy) * sh[15];
+  return r;
+}
+
+// A splat as the reference PLY holds it; sh[c][k], k = 0 the DC.
+struct Splat {
+  Eigen::Vector3d p, log_scale;
+  Eigen::Vector4d rot;  // w x y z
+  double opacity = 0;
+  std::array<std::vector<double>, 3> sh;
+
+  Eigen::Matrix3d rotation() const {
+    return Eigen::Quaterniond(rot[0], rot[1], rot[2], rot[3]).normalized().toRotationMatrix();
+  }
+  Eigen::Matrix3d covariance() const {
+    const Eigen::Vector3d s = log_scale.array().exp();
+    const Eigen::Matrix3d r = rotation();
+    return r * s.cwiseAbs2().asDiagonal() * r.transpose();
+  }
+  int degree() const { return static_cast<int>(std::lround(std::sqrt(double(sh[0].size())))) - 1; }
+  double colour(int c, const Eigen::Vector3d& d) const { return eval_3dgs(degree(), sh[c].data(), d); }
+};
+
+struct Scene {
+  int degree = 0;
+  std::vector<Splat> splats;
+};
+
+// Values inside every format's range: positions within spz's fixed point, log-scales
+// within [-10, 5.9], SH within spz's [-1, 1] under any rotation (a rotated coefficient
+// is at most its band's norm, sqrt(7) 0.34 < 0.9 at degree 3; spz clips beyond 1).
+Scene random_scene(std::size_t count, int degree, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g;
+  std::uniform_real_distribution<double> u(-1, 1);
+  Scene s;
+  s.degree = degree;
+  s.splats.resize(count);
+  for (Splat& x : s.splats) {
+    x.p = Eigen::Vector3d(3 * g(rng), 3 * g(rng), 3 * g(rng));
+    x.log_scale = Eigen::Vector3d(u(rng) * 3 - 4, u(rng) * 3 - 4, u(rng) * 3 - 4);
+    x.rot = Eigen::Vector4d(g(rng), g(rng), g(rng), g(rng));
+    x.opacity = 2 * g(rng);
+    for (auto& c : x.sh) {
+      c.resize((degree + 1) * (degree + 1));
+      c[0] = u(rng) * 2;
+      for (std::size_t k = 1; k < c.size(); ++k) c[k] = 0.34 * u(rng);
+    }
+  }
+  return s;
+}
+
+std::string ply_bytes(const Scene& s) {
+  const int rest = (s.degree + 1) * (s.degree + 1) - 1;
+  std::ostringstream h;
+  h << "ply\nformat binary_little_endian 1.0\nelement vertex " << s.splats.size() << "\n";
+  for (const char* n : {"x", "y", "z", "nx", "ny", "nz", "f_dc_0", "f_dc_1", "f_dc_2"}) h << "property float " << n << "\n";
+  for (int k = 0; k < 3 * rest; ++k) h << "property float f_rest_" << k << "\n";
+  for (const char* n : {"opacity", "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3"})
+    h << "property float " << n << "\n";
+  h << "end_header\n";
+  std::string out = h.str();
+  auto put = [&](double v) {
+    const float f = static_cast<float>(v);
+    out.append(reinterpret_cast<const char*>(&f), 4);
+  };
+  for (const Splat& x : s.splats) {
+    for (int k = 0; k < 3; ++k) put(x.p[k]);
+    for (int k = 0; k < 3; ++k) put(0);
+    for (int c = 0; c < 3; ++c) put(x.sh[c][0]);
+    for (int c = 0; c < 3; ++c)
+      for (int k = 1; k <= rest; ++k) put(x.sh[c][k]);
+    put(x.opacity);
+    for (int k = 0; k < 3; ++k) put(x.log_scale[k]);
+    for (int k = 0; k < 4; ++k) put(x.rot[k]);
+  }
+  return out;
+}
+
+// Any 3DGS PLY with float properties, binary little endian (what shtool and
+// splat-transform write), properties found by name.
+Scene read_ply(const fs::path& path) {
+  const std::string bytes = read_file(path);
+  const std::size_t body = bytes.find("end_header\n") + 11;
+  std::istringstream header(bytes.substr(0, body));
+  std::string line;
+  std::vector<std::string> names;
+  std::size_t count = 0;
+  while (std::getline(header, line)) {
+    std::istringstream w(line);
+    std::string a, b, c;
+    w >> a >> b >> c;
+    if (a == "element" && b == "vertex") count = std::stoul(c);
+    if (a == "property") {
+      EXPECT_EQ(b, "float") << line;
+      names.push_back(c);
+    }
+  }
+  auto index = [&](const std::string& n) -> int {
+    for (std::size_t i = 0; i < names.size(); ++i)
+      if (names[i] == n) return static_cast<int>(i);
+    return -1;
+  };
+  int rest = 0;
+  while (index("f_rest_" + std::to_string(rest)) >= 0) ++rest;
+  Scene s;
+  s.degree = rest == 0 ? 0 : rest == 9 ? 1 : rest == 24 ? 2 : 3;
+  const int k_rest = rest / 3;
+  s.splats.resize(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    auto get = [&](const std::string& n) {
+      float f;
+      std::memcpy(&f, bytes.data() + body + (i * names.size() + index(n)) * 4, 4);
+      return static_cast<double>(f);
+    };
+    Splat& x = s.splats[i];
+    for (int k = 0; k < 3; ++k) {
+      x.p[k] = get(std::string(1, "xyz"[k]));
+      x.log_scale[k] = get("scale_" + std::to_string(k));
+    }
+    for (int k = 0; k < 4; ++k) x.rot[k] = get("rot_" + std::to_string(k));
+    x.opacity = get("opacity");
+    for (int c = 0; c < 3; ++c) {
+      x.sh[c].resize(k_rest + 1);
+      x.sh[c][0] = get("f_dc_" + std::to_string(c));
+      for (int k = 0; k < k_rest; ++k) x.sh[c][k + 1] = get("f_rest_" + std::to_string(c * k_rest + k));
+    }
+  }
+  return s;
+}
+
+void write_bytes(const fs::path& p, const std::string& bytes) { std::ofstream(p, std::ios::binary) << bytes; }
+
+CommandResult convert(const fs::path& in, const fs::path& out, std::vector<std::string> more = {}) {
+  std::vector<std::string> argv = {"transform-splats", in.string(), "--out", out.string()};
+  argv.insert(argv.end(), more.begin(), more.end());
+  return run_shtool(argv);
+}
+
+// A file's values as stored (no frame change on the way to PLY).
+Scene raw_values(const fs::path& file) {
+  const fs::path ply = scratch("raw_" + file.filename().string() + ".ply");
+  const auto r = convert(file, ply, {"--frame", "RUB", "--spz-frame", "RUB"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  return read_ply(ply);
+}
+
+std::vector<Eigen::Vector3d> directions(unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g;
+  std::vector<Eigen::Vector3d> d(64);
+  for (auto& v : d) v = Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized();
+  return d;
+}
+
+double sigmoid(double x) { return 1 / (1 + std::exp(-x)); }
+
+// Quantisation of a format (0: float): the largest errors of one value.
+struct Tolerance {
+  double position = 1e-5, log_scale = 1e-5, alpha = 1e-6, covariance = 1e-5, colour = 1e-5;
+};
+// spz at the default bits: positions half of 2^-12; log-scales half of 1/16; alpha half
+// of 1/255; the smallest-three rotation's components within 0.7071/511/2; the colour
+// bound of docs/splats.md: DC 0.5/(0.15*255)*C0 plus sum_l e_l (2l+1)/sqrt(4 pi).
+Tolerance spz_tolerance(int degree) {
+  Tolerance t;
+  t.position = std::ldexp(1.0, -13) + 1e-5;
+  t.log_scale = 1.0 / 32 + 1e-5;
+  t.alpha = 0.5 / 255 + 1e-6;
+  t.covariance = 0.01;
+  t.colour = 0.5 / (0.15 * 255) * C0 + 1e-6;
+  for (int l = 1; l <= degree; ++l) t.colour += ((l == 1 ? 4 : 8) + 0.5) / 128 * (2 * l + 1) / std::sqrt(4 * kPi);
+  return t;
+}
+Tolerance combine(const Tolerance& a, const Tolerance& b) {
+  return {a.position + b.position, a.log_scale + b.log_scale, a.alpha + b.alpha, a.covariance + b.covariance,
+          a.colour + b.colour};
+}
+
+// after = M before (positions p -> M p, orientations and SH by M, orthogonal), within t.
+// Covariances are compared with the scales of `after` on both sides so that the
+// rotation's own error is measured, relative to the largest variance.
+void expect_mapped(const Scene& before, const Scene& after, const Eigen::Matrix3d& m, const Tolerance& t,
+                   const std::string& what) {
+  ASSERT_EQ(before.splats.size(), after.splats.size()) << what;
+  ASSERT_EQ(before.degree, after.degree) << what;
+  const std::vector<Eigen::Vector3d> dirs = directions(5);
+  double worst_colour = 0;
+  for (std::size_t i = 0; i < before.splats.size(); ++i) {
+    const Splat &a = before.splats[i], &b = after.splats[i];
+    ASSERT_LT((m * a.p - b.p).cwiseAbs().maxCoeff(), t.position) << what << " splat " << i;
+    ASSERT_LT((a.log_scale - b.log_scale).cwiseAbs().maxCoeff(), t.log_scale) << what << " splat " << i;
+    ASSERT_LT(std::abs(sigmoid(a.opacity) - sigmoid(b.opacity)), t.alpha) << what << " splat " << i;
+    Splat a_scaled = a;
+    a_scaled.log_scale = b.log_scale;
+    const Eigen::Matrix3d ca = m * a_scaled.covariance() * m.transpose(), cb = b.covariance();
+    const double biggest = b.log_scale.array().exp().square().maxCoeff();
+    ASSERT_LT((ca - cb).cwiseAbs().maxCoeff(), t.covariance * biggest) << what << " splat " << i;
+    for (const Eigen::Vector3d& d : dirs)
+      for (int c = 0; c < 3; ++c) {
+        const double e = std::abs(a.colour(c, d) - b.colour(c, m * d));
+        worst_colour = std::max(worst_colour, e);
+        ASSERT_LT(e, t.colour) << what << " splat " << i << " channel " << c;
+      }
+  }
+  std::cout << what << ": largest colour change " << worst_colour << " (allowed " << t.colour << ")\n";
+}
+
+// The frames of the formats, as matrices from the file's axes to shtool's (RFU): PLY
+// RDF by default, spz RUB, glTF RUB.
+const Eigen::Matrix3d kRdf = (Eigen::Matrix3d() << 1, 0, 0, 0, 0, 1, 0, -1, 0).finished();
+const Eigen::Matrix3d kRub = (Eigen::Matrix3d() << 1, 0, 0, 0, 0, -1, 0, 1, 0).finished();
+
+struct Format {
+  std::string name, ext;
+  std::vector<std::string> args;  // when writing it
+  Eigen::Matrix3d frame;
+  bool quantised;
+};
+const std::vector<Format>& formats() {
+  static const std::vector<Format> f = {
+      {"ply", ".ply", {}, kRdf, false},
+      {"spz4", ".spz", {}, kRub, true},
+      {"spz3", ".spz", {"--spz-version", "3"}, kRub, true},
+      {"glb", ".glb", {}, kRub, false},
+      {"gltf", ".gltf", {}, kRub, false},
+  };
+  return f;
+}
+
+}  // namespace
+
+// PLY -> A -> B -> PLY for every pair: every value within the quantisation of the spz
+// steps, and the frames undone exactly (the identity overall).
+TEST(CliSplatFormats, RoundTripsEveryPair) {
+  const Scene scene = random_scene(1000, 3, 17);
+  const fs::path in = scratch("pairs_in.ply");
+  write_bytes(in, ply_bytes(scene));
+  for (const Format& a : formats())
+    for (const Format& b : formats()) {
+      if (a.name == "ply" && b.name == "ply") continue;
+      const fs::path fa = scratch("pair_a_" + a.name + a.ext), fb = scratch("pair_b_" + b.name + b.ext),
+                     back = scratch("pair_back.ply");
+      auto r = convert(in, fa, a.args);
+      ASSERT_EQ(r.exit_code, 0) << r.err;
+      r = convert(fa, fb, b.args);
+      ASSERT_EQ(r.exit_code, 0) << r.err;
+      r = convert(fb, back);
+      ASSERT_EQ(r.exit_code, 0) << r.err;
+      Tolerance t;
+      if (a.quantised) t = combine(t, spz_tolerance(3));
+      if (b.quantised) t = combine(t, spz_tolerance(3));
+      expect_mapped(scene, read_ply(back), Eigen::Matrix3d::Identity(), t, a.name + " -> " + b.name);
+    }
+}
+
+// What each format stores is the scene in that format's frame: PLY (RDF) to spz or glTF
+// (RUB) turns it by Q = RUB^-1 RDF = diag(1, -1, -1), a half turn about x.
+TEST(CliSplatFormats, EachFormatStoresItsFrame) {
+  const Scene scene = random_scene(300, 3, 23);
+  const fs::path in = scratch("frame_in.ply");
+  write_bytes(in, ply_bytes(scene));
+  for (const Format& f : formats()) {
+    if (f.name == "ply") continue;
+    const fs::path out = scratch("frame_out" + f.ext);
+    const auto r = convert(in, out, f.args);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const Eigen::Matrix3d q = f.frame.transpose() * kRdf;
+    EXPECT_TRUE(q.isApprox(Eigen::Vector3d(1, -1, -1).asDiagonal().toDenseMatrix()));
+    Tolerance t = f.quantised ? spz_tolerance(3) : Tolerance{};
+    expect_mapped(scene, raw_values(out), q, t, "ply -> " + f.name + " (raw)");
+  }
+}
+
+// A rotation given in the input's coordinates, with scale and translation, into each
+// format; and a frame change that reflects (a left-handed PLY, Unity's RUF, into glTF's
+// RUB): colours along d before are colours along M d after (64 directions, 1000 splats).
+TEST(CliSplatFormats, ColoursFollowRotationsAndReflections) {
+  const Scene scene = random_scene(1000, 3, 29);
+  const fs::path in = scratch("rot_in.ply");
+  write_bytes(in, ply_bytes(scene));
+  const Eigen::Quaterniond qr = Eigen::Quaterniond(0.8, -0.3, 0.4, 0.33).normalized();
+  std::ostringstream quat;
+  quat.precision(17);
+  quat << qr.w() << "," << qr.x() << "," << qr.y() << "," << qr.z();
+  for (const Format& f : formats()) {
+    const fs::path out = scratch("rot_out" + f.ext);
+    std::vector<std::string> args = {"--quat", quat.str()};
+    args.insert(args.end(), f.args.begin(), f.args.end());
+    const auto r = convert(in, out, args);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const Eigen::Matrix3d m = f.frame.transpose() * kRdf * qr.toRotationMatrix();
+    const Scene after = f.name == "ply" ? read_ply(out) : raw_values(out);
+    expect_mapped(scene, after, m, f.quantised ? spz_tolerance(3) : Tolerance{}, "rotated into " + f.name);
+  }
+  // Reflection: the PLY's axes are RUF (left-handed); glTF's RUB: z flips.
+  for (const std::string ext : {".glb", ".spz"}) {
+    const fs::path out = scratch("mirror_out" + ext);
+    const auto r = convert(in, out, {"--frame", "RUF", "--quat", quat.str()});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE(r.err.find("reflects"), std::string::npos) << r.err;
+    const Eigen::Matrix3d ruf = (Eigen::Matrix3d() << 1, 0, 0, 0, 0, 1, 0, 1, 0).finished();
+    const Eigen::Matrix3d m = kRub.transpose() * ruf * qr.toRotationMatrix();
+    EXPECT_NEAR(m.determinant(), -1, 1e-12);
+    expect_mapped(scene, raw_values(out), m, ext == ".spz" ? spz_tolerance(3) : Tolerance{}, "reflected into " + ext);
+  }
+}
+
+// --sh-degree keeps the bands up to D as they are (the L2-nearest function of that
+// degree) and pads missing bands with zeros.
+TEST(CliSplatFormats, ShDegree) {
+  const Scene scene = random_scene(200, 3, 31);
+  const fs::path in = scratch("deg_in.ply"), out = scratch("deg_out.ply"), up = scratch("deg_up.ply");
+  write_bytes(in, ply_bytes(scene));
+  auto r = convert(in, out, {"--sh-degree", "1"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Scene low = read_ply(out);
+  ASSERT_EQ(low.degree, 1);
+  for (std::size_t i = 0; i < scene.splats.size(); ++i)
+    for (int c = 0; c < 3; ++c)
+      for (int k = 0; k < 4; ++k) ASSERT_EQ(low.splats[i].sh[c][k], static_cast<float>(scene.splats[i].sh[c][k]));
+  r = convert(out, up, {"--sh-degree", "3"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Scene high = read_ply(up);
+  ASSERT_EQ(high.degree, 3);
+  for (std::size_t i = 0; i < scene.splats.size(); ++i)
+    for (int c = 0; c < 3; ++c)
+      for (int k = 0; k < 16; ++k) ASSERT_EQ(high.splats[i].sh[c][k], k < 4 ? low.splats[i].sh[c][k] : 0.0);
+}
+
+namespace {
+
+void put24(std::string& s, std::int32_t v) {
+  for (int b = 0; b < 3; ++b) s.push_back(static_cast<char>((v >> (8 * b)) & 0xff));
+}
+void put32(std::string& s, std::uint32_t v) {
+  for (int b = 0; b < 4; ++b) s.push_back(static_cast<char>((v >> (8 * b)) & 0xff));
+}
+void put64(std::string& s, std::uint64_t v) {
+  put32(s, static_cast<std::uint32_t>(v));
+  put32(s, static_cast<std::uint32_t>(v >> 32));
+}
+
+// Two splats of degree 1 by the specification's encodings, block by block: positions,
+// alphas, colours, scales, rotations (v2: 3 bytes, v3+: 4), SH.
+std::array<std::string, 6> hand_blocks(int version) {
+  std::array<std::string, 6> b;
+  put24(b[0], 4096), put24(b[0], -2048), put24(b[0], 1);  // (1, -0.5, 2^-12) at 12 bits
+  put24(b[0], -1), put24(b[0], 0), put24(b[0], 8388607);  // (-2^-12, 0, 2048 - 2^-12)
+  b[1] = std::string("\xbf\x00", 2);                       // alpha 191/255, then 0 (bucket edge 0.5/255)
+  b[2] = std::string("\xa6\x80\x00\xff\x7f\x80", 6);       // colour bytes
+  b[3] = std::string("\x80\x90\x00\xff\xa0\x70", 6);       // log-scales byte/16 - 10
+  if (version == 2) {
+    b[4] = std::string("\x80\x80\x80\xff\x80\x80", 6);  // (0,0,0)+w -> identity; x = 1 -> (1,0,0,0)
+  } else {
+    put32(b[4], 3u << 30);  // largest w, others 0: identity
+    // largest x (index 0); y = +mag 511 (0.7071), z = 0, w = -0 ... : comp = 0, then y, z, w
+    put32(b[4], (((0u << 10 | 511u) << 10 | 0u) << 10) | 0u);
+  }
+  // SH: per splat, coefficient-major, RGB inner: 3 coefficients x 3 channels.
+  b[5] = std::string("\x80\xc0\x40\x00\xff\x80\x80\x80\x80", 9);
+  b[5] += std::string("\x88\x80\x80\x80\x78\x80\x80\x80\x90", 9);
+  return b;
+}
+
+std::string legacy_payload(int version) {
+  std::string s;
+  put32(s, 0x5053474e), put32(s, static_cast<std::uint32_t>(version)), put32(s, 2);
+  s += std::string("\x01\x0c\x00\x00", 4);  // degree 1, 12 fractional bits, flags, reserved
+  for (const std::string& b : hand_blocks(version)) s += b;
+  return s;
+}
+
+std::string compress_with(const std::string& tool, const std::string& plain) {
+  const fs::path p = scratch("plain.bin");
+  write_bytes(p, plain);
+  fs::remove(scratch(tool == "gzip" ? "plain.bin.gz" : "plain.bin.zst"));
+  const auto r = run_command({tool, "-q", "-k", "-f", p.string()});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  return read_file(scratch(tool == "gzip" ? "plain.bin.gz" : "plain.bin.zst"));
+}
+
+std::string hand_v4() {
+  const std::array<std::string, 6> b = hand_blocks(4);
+  std::vector<std::string> z;
+  for (const std::string& x : b) z.push_back(compress_with("zstd", x));
+  std::string s;
+  put32(s, 0x5053474e), put32(s, 4), put32(s, 2);
+  s += std::string("\x01\x0c\x00\x06", 4);  // degree 1, 12 bits, flags, 6 streams
+  put32(s, 32);
+  s.append(12, '\0');
+  for (int k = 0; k < 6; ++k) put64(s, z[k].size()), put64(s, b[k].size());
+  for (const std::string& x : z) s += x;
+  return s;
+}
+
+}  // namespace
+
+// spz files built here from the specification's encodings (gzip and zstd by their own
+// command-line tools) decode to the values it gives.
+TEST(CliSplatFormats, HandWrittenSpzDecodes) {
+  const std::vector<std::pair<int, std::string>> files = {{2, compress_with("gzip", legacy_payload(2))},
+                                                          {3, compress_with("gzip", legacy_payload(3))},
+                                                          {4, hand_v4()}};
+  for (const auto& [version, bytes] : files) {
+    const fs::path spz = scratch("hand.spz"), ply = scratch("hand.ply");
+    write_bytes(spz, bytes);
+    const auto r = convert(spz, ply, {"--spz-frame", "RDF"});  // PLY's frame: values as stored
+    ASSERT_EQ(r.exit_code, 0) << "version " << version << ": " << r.err;
+    const Scene s = read_ply(ply);
+    ASSERT_EQ(s.splats.size(), 2u);
+    ASSERT_EQ(s.degree, 1);
+    const Splat &a = s.splats[0], &b = s.splats[1];
+    EXPECT_EQ(a.p, Eigen::Vector3d(1, -0.5, 1.0 / 4096));
+    EXPECT_EQ(b.p, Eigen::Vector3d(-1.0 / 4096, 0, 2048 - 1.0 / 4096));
+    EXPECT_NEAR(a.opacity, std::log(191.0 / 64), 1e-6);
+    EXPECT_NEAR(b.opacity, std::log(0.5 / 254.5), 1e-5);
+    const double colour[6] = {0xa6, 0x80, 0x00, 0xff, 0x7f, 0x80};
+    for (int c = 0; c < 3; ++c) {
+      EXPECT_NEAR(a.sh[c][0], (colour[c] / 255 - 0.5) / 0.15, 1e-6);
+      EXPECT_NEAR(b.sh[c][0], (colour[3 + c] / 255 - 0.5) / 0.15, 1e-6);
+    }
+    EXPECT_EQ(a.log_scale, Eigen::Vector3d(-2, -1, -10));
+    EXPECT_EQ(b.log_scale, Eigen::Vector3d(255.0 / 16 - 10, 0, -3));
+    if (version == 2) {
+      // Bytes 0x80 decode to 128/127.5 - 1 (v2 cannot store 0); w = sqrt(1 - |xyz|^2).
+      const double e = 128.0 / 127.5 - 1;
+      EXPECT_NEAR(a.rot[0], std::sqrt(1 - 3 * e * e), 1e-6);
+      for (int k = 1; k < 4; ++k) EXPECT_NEAR(a.rot[k], e, 1e-6);
+      EXPECT_EQ(b.rot[0], 0);
+      EXPECT_EQ(b.rot[1], 1);
+      EXPECT_NEAR(b.rot[2], e, 1e-6);
+    } else {
+      EXPECT_EQ(a.rot, Eigen::Vector4d(1, 0, 0, 0)) << "version " << version;
+      // x the largest (recovered as sqrt(1 - y^2)), y = 0.7071.
+      EXPECT_NEAR(b.rot[2], std::sqrt(0.5), 1e-6);
+      EXPECT_NEAR(b.rot[1], std::sqrt(0.5), 1e-6);
+      EXPECT_EQ(b.rot[0], 0);
+      EXPECT_EQ(b.rot[3], 0);
+    }
+    // SH bytes (x - 128) / 128, coefficient k, channel c at byte 3k + c.
+    const unsigned char sh0[9] = {0x80, 0xc0, 0x40, 0x00, 0xff, 0x80, 0x80, 0x80, 0x80};
+    const unsigned char sh1[9] = {0x88, 0x80, 0x80, 0x80, 0x78, 0x80, 0x80, 0x80, 0x90};
+    for (int k = 0; k < 3; ++k)
+      for (int c = 0; c < 3; ++c) {
+        EXPECT_EQ(a.sh[c][1 + k], (sh0[3 * k + c] - 128.0) / 128);
+        EXPECT_EQ(b.sh[c][1 + k], (sh1[3 * k + c] - 128.0) / 128);
+      }
+  }
+}
+
+// The bytes shtool writes for a known splat (v4, then v3 inflated): the header and every
+// block as the specification encodes them.
+TEST(CliSplatFormats, SpzWriterBytes) {
+  Scene s = random_scene(1, 1, 3);
+  Splat& x = s.splats[0];
+  // In RUB, the spz's frame, from a PLY read as RUB too (no frame change).
+  x.p = Eigen::Vector3d(1, -0.5, 0.25);
+  x.log_scale = Eigen::Vector3d(-2, -1, 0.03);
+  x.rot = Eigen::Vector4d(2, 0, 0, 0);  // w = 2: normalised to the identity
+  x.opacity = 0;
+  for (int c = 0; c < 3; ++c) x.sh[c] = {0.2, 0.5, -0.5, 0.01};
+  const fs::path in = scratch("bytes_in.ply"), out = scratch("bytes_out.spz");
+  write_bytes(in, ply_bytes(s));
+  const auto r = convert(in, out, {"--frame", "RUB", "--spz-version", "3"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string gz = read_file(out);
+  ASSERT_GE(gz.size(), 2u);
+  EXPECT_EQ(static_cast<unsigned char>(gz[0]), 0x1f);
+  write_bytes(scratch("bytes_out.gz"), gz);
+  fs::remove(scratch("bytes_out"));
+  ASSERT_EQ(run_command({"gzip", "-d", "-k", "-f", scratch("bytes_out.gz").string()}).exit_code, 0);
+  const std::string p = read_file(scratch("bytes_out"));
+  std::string want;
+  put32(want, 0x5053474e), put32(want, 3), put32(want, 1);
+  want += std::string("\x01\x0c\x00\x00", 4);
+  put24(want, 4096), put24(want, -2048), put24(want, 1024);
+  want.push_back('\x80');  // sigmoid(0) * 255 = 127.5 -> 128
+  // round(0.2 * 0.15 * 255 + 127.5) = round(135.15) = 135
+  want += std::string("\x87\x87\x87", 3);
+  // round((s + 10) * 16): 128, 144, round(160.48) = 160
+  want += std::string("\x80\x90\xa0", 3);
+  put32(want, 3u << 30);
+  // SH band 1 at 5 bits (bucket 8): 0.5 -> 192; -0.5 -> 64; 0.01 -> round(1.28) = 1 + 128 = 129 -> 128.
+  for (int c = 0; c < 3; ++c) want.push_back('\xc0');
+  for (int c = 0; c < 3; ++c) want.push_back('\x40');
+  for (int c = 0; c < 3; ++c) want.push_back('\x80');
+  EXPECT_EQ(p, want);
+  EXPECT_NE(r.err.find("spz quantisation"), std::string::npos) << r.err;
+}
+
+// The bound that transform-splats reports for --sh-bits, from the bucket sizes.
+TEST(CliSplatFormats, QuantisationReport) {
+  const Scene scene = random_scene(50, 3, 41);
+  const fs::path in = scratch("report_in.ply"), out = scratch("report_out.spz");
+  write_bytes(in, ply_bytes(scene));
+  for (const auto& [bits, b1, b2] : std::vector<std::tuple<std::string, int, int>>{{"5,4", 8, 16}, {"8", 1, 1}, {"3,2", 32, 64}}) {
+    const auto r = convert(in, out, {"--sh-bits", bits});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    double bound = 0;
+    for (int l = 1; l <= 3; ++l) bound += ((l == 1 ? b1 : b2) / 2 + 0.5) / 128 * (2 * l + 1) / std::sqrt(4 * kPi);
+    std::ostringstream text;
+    text << "SH bands " << bound;
+    EXPECT_NE(r.err.find(text.str()), std::string::npos) << bits << ": " << r.err << " wanted " << text.str();
+  }
+}
+
+TEST(CliSplatFormats, BadFilesAreRefusedWithNothingWritten) {
+  const Scene scene = random_scene(20, 1, 43);
+  const fs::path in = scratch("bad_src.ply"), v4 = scratch("bad_src.spz"), v3 = scratch("bad_src3.spz"),
+                 glb = scratch("bad_src.glb");
+  write_bytes(in, ply_bytes(scene));
+  ASSERT_EQ(convert(in, v4).exit_code, 0);
+  ASSERT_EQ(convert(in, v3, {"--spz-version", "3"}).exit_code, 0);
+  ASSERT_EQ(convert(in, glb).exit_code, 0);
+  const std::string s4 = read_file(v4), s3 = read_file(v3), sg = read_file(glb);
+  std::string more_streams = s4;
+  more_streams[15] = 5;
+  std::string huge = s4;
+  huge[8] = '\xff', huge[9] = '\xff', huge[10] = '\xff', huge[11] = '\x0f';
+  std::string degree4 = s4;
+  degree4[12] = 4;
+  std::string gz_huge = compress_with("gzip", [] {
+    std::string p;
+    put32(p, 0x5053474e), put32(p, 3), put32(p, 0x0fffffff);
+    p += std::string("\x00\x0c\x00\x00", 4);
+    p.append(100, '\0');
+    return p;
+  }());
+  std::string gz_long = compress_with("gzip", legacy_payload(3) + "extra");
+  std::string bad_glb = sg;
+  const std::size_t at = bad_glb.find("OPACITY");
+  ASSERT_NE(at, std::string::npos);
+  bad_glb.replace(at, 7, "OPACITX");
+  struct Case {
+    std::string name, ext, bytes;
+    std::vector<std::string> args;
+    std::string message;
+  };
+  const std::vector<Case> cases = {
+      {"v4 truncated", ".spz", s4.substr(0, s4.size() - 5), {}, "truncated"},
+      {"v4 header only", ".spz", s4.substr(0, 20), {}, "truncated"},
+      {"v4 trailing bytes", ".spz", s4 + "zz", {}, "after the last stream"},
+      {"v4 stream count", ".spz", more_streams, {}, "inconsistent"},
+      {"v4 oversized", ".spz", huge, {}, "stream"},
+      {"v4 degree 4", ".spz", degree4, {}, "degree 4"},
+      {"v3 truncated", ".spz", s3.substr(0, s3.size() / 2), {}, "truncated"},
+      {"v3 oversized", ".spz", gz_huge, {}, "oversized"},
+      {"v3 longer than its splats", ".spz", gz_long, {}, "longer than"},
+      {"not spz", ".spz", "hello", {}, "not an spz"},
+      {"glb missing opacity", ".glb", bad_glb, {}, "OPACITY"},
+      {"glb truncated", ".glb", sg.substr(0, sg.size() / 2), {}, "glTF"},
+      {"unknown extension", ".splat", s4, {}, "unknown splat format"},
+      {"bad frame", ".spz", s4, {"--frame", "RUX"}, "frame"},
+      {"frame repeats an axis", ".spz", s4, {"--spz-frame", "RRU"}, "frame"},
+      {"sh bits", ".spz", s4, {"--sh-bits", "9"}, "--sh-bits"},
+      {"sh degree", ".spz", s4, {"--sh-degree", "4"}, "--sh-degree"},
+      {"spz version", ".spz", s4, {"--spz-version", "2"}, "--spz-version"},
+  };
+  for (const Case& c : cases) {
+    const fs::path bad = scratch("bad" + c.ext), out = scratch("bad_out.spz");
+    write_bytes(bad, c.bytes);
+    fs::remove(out);
+    const auto r = convert(bad, out, c.args);
+    EXPECT_EQ(r.exit_code, 1) << c.name << ": " << r.err;
+    EXPECT_NE(r.err.find(c.message), std::string::npos) << c.name << ": " << r.err;
+    EXPECT_FALSE(fs::exists(out)) << c.name;
+  }
+}
+
+// The Khronos validator on the glTF outputs: no error but its verdict on the extension's
+// attribute names, which it does not know (the messages are printed).
+TEST(CliSplatFormats, GltfValidatorFaultsOnlyTheExtensionAttributeNames) {
+  SHTOOL_REQUIRE_NODE_CONSUMERS();
+  const Scene scene = random_scene(100, 3, 47);
+  const fs::path in = scratch("val_in.ply");
+  write_bytes(in, ply_bytes(scene));
+  for (const std::string ext : {".glb", ".gltf"}) {
+    const fs::path out = scratch("val_out" + ext);
+    ASSERT_EQ(convert(in, out).exit_code, 0);
+    const auto r = run_command({"node", (node_consumers_dir() / "validate_gltf.mjs").string(), out.string()});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const nlohmann::json report = nlohmann::json::parse(r.out);
+    // This validator predates the extension: it knows no attribute semantic outside core
+    // glTF but "_"-prefixed ones, and reports each of the extension's as an error. Those
+    // are the only errors allowed.
+    int others = 0;
+    for (const nlohmann::json& m : report["issues"]["messages"])
+      if (m["severity"] == 0 && !(m["code"] == "MESH_PRIMITIVE_INVALID_ATTRIBUTE" &&
+                                  m["pointer"].get<std::string>().find("/attributes/KHR_gaussian_splatting:") !=
+                                      std::string::npos))
+        ++others;
+    EXPECT_EQ(others, 0) << report["issues"].dump(1);
+    EXPECT_EQ(report["issues"]["numErrors"], 3 + 16) << report["issues"].dump(1);  // rotation, scale, opacity, 16 SH
+    EXPECT_EQ(report["info"]["drawCallCount"], 1) << report.dump(1);
+    std::cout << ext << ": " << report["issues"]["numWarnings"] << " warnings, " << report["issues"]["numInfos"]
+              << " infos " << report["issues"]["messages"].dump() << '\n';
+  }
+}
+
+// @playcanvas/splat-transform (pinned in tests/consumer/node/package.json) both ways:
+// shtool's .spz read back by splat-transform into PLY gives the original values, and
+// splat-transform's .spz read by shtool into PLY gives them too, within the quantisation
+// (colours from 64 directions). So both place the PLY's RDF axes and spz's RUB alike.
+TEST(CliSplatFormats, SplatTransformReadsAndWritesTheSameSpz) {
+  SHTOOL_REQUIRE_NODE_CONSUMERS();
+  const Scene scene = random_scene(1000, 3, 53);
+  const fs::path in = scratch("st_in.ply");
+  write_bytes(in, ply_bytes(scene));
+  const std::string cli = (node_consumers_dir() / "splat_transform_cli.mjs").string();
+  for (const std::string version : {"4", "3"}) {
+    const fs::path ours = scratch("st_ours.spz"), theirs_ply = scratch("st_theirs.ply");
+    ASSERT_EQ(convert(in, ours, {"--spz-version", version}).exit_code, 0);
+    const auto r = run_command({"node", cli, ours.string(), theirs_ply.string()});
+    ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+    expect_mapped(scene, read_ply(theirs_ply), Eigen::Matrix3d::Identity(), spz_tolerance(3),
+                  "shtool spz v" + version + " -> splat-transform");
+  }
+  const fs::path theirs = scratch("st_theirs.spz"), back = scratch("st_back.ply");
+  const auto r = run_command({"node", cli, in.string(), theirs.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  const std::string bytes = read_file(theirs);
+  ASSERT_GE(bytes.size(), 8u);
+  std::cout << "splat-transform wrote spz version " << int(static_cast<unsigned char>(bytes[4]))
+            << (bytes.compare(0, 4, "NGSP") == 0 ? " (NGSP header)" : " (gzip)") << '\n';
+  const auto s = convert(theirs, back);
+  ASSERT_EQ(s.exit_code, 0) << s.err;
+  expect_mapped(scene, read_ply(back), Eigen::Matrix3d::Identity(), spz_tolerance(3), "splat-transform spz -> shtool");
+}
+
+// Every output format: the same bytes with 1 and 3 threads (20000 splats: several chunks).
+TEST(CliSplatFormats, SameBytesWhateverTheThreadCount) {
+  const Scene scene = random_scene(20000, 3, 59);
+  const fs::path in = scratch("threads_in.ply");
+  write_bytes(in, ply_bytes(scene));
+  for (const Format& f : formats()) {
+    std::string bytes[2];
+    for (int k = 0; k < 2; ++k) {
+      const fs::path out = scratch("threads_" + std::to_string(k) + f.ext);
+      std::vector<std::string> args = {"--quat", "0.5,0.5,-0.5,0.5", "--sh-degree", "3", "--threads", k ? "3" : "1"};
+      args.insert(args.end(), f.args.begin(), f.args.end());
+      const auto r = convert(in, out, args);
+      ASSERT_EQ(r.exit_code, 0) << r.err;
+      bytes[k] = read_file(out);
+    }
+    EXPECT_TRUE(bytes[0] == bytes[1]) << f.name;
+  }
+}
