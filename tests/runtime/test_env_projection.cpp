@@ -86,16 +86,32 @@ Ld max_abs(const std::vector<Ld>& v) {
   return m;
 }
 
+// Radiance 1 in all three channels projects to sqrt(4 pi) in band 0 and nothing above it.
+void expect_uniform_radiance(const Result<EnvCoefficients>& r, const std::string& what) {
+  ASSERT_TRUE(r) << r.error().message;
+  const std::vector<double>& c = r.value().coefficients;
+  for (int ch = 0; ch < 3; ++ch) EXPECT_NEAR(c[ch], std::sqrt(4 * kPi), 1e-14) << what;
+  for (std::size_t i = 3; i < c.size(); ++i) ASSERT_LT(std::abs(c[i]), 1e-14) << what << " coefficient " << i / 3;
+}
+
+// Every coefficient within 1e-12 of the largest reference coefficient of the per-texel
+// quadrature `ref`.
+void expect_matches_reference(const Result<EnvCoefficients>& r, const std::vector<Ld>& ref, int channels,
+                              const std::string& what) {
+  ASSERT_TRUE(r) << r.error().message;
+  const Ld scale = max_abs(ref);
+  for (std::size_t i = 0; i < ref.size(); ++i)
+    ASSERT_NEAR(r.value().coefficients[i], static_cast<double>(ref[i]), 1e-12 * static_cast<double>(scale))
+        << what << " coefficient " << i / channels;
+}
+
 TEST(EquirectProjection, UniformRadianceIsExact) {
   for (int h : {1, 2, 3, 8, 64, 301}) {
     for (int order : {1, 2, 5, 9, 16}) {
       const int w = 2 * h;
       const std::vector<float> img(static_cast<std::size_t>(w) * h * 3, 1.0f);
       const Result<EnvCoefficients> r = project_equirect({img.data(), w, h, 3}, order);
-      ASSERT_TRUE(r) << r.error().message;
-      const std::vector<double>& c = r.value().coefficients;
-      for (int ch = 0; ch < 3; ++ch) EXPECT_NEAR(c[ch], std::sqrt(4 * kPi), 1e-14) << h << " " << order;
-      for (std::size_t i = 3; i < c.size(); ++i) ASSERT_LT(std::abs(c[i]), 1e-14) << "h " << h << " i " << i / 3;
+      expect_uniform_radiance(r, "h " + std::to_string(h) + " order " + std::to_string(order));
     }
   }
 }
@@ -108,12 +124,8 @@ TEST(EquirectProjection, MatchesPerTexelQuadratureOnRandomImages) {
     const int w = 2 * k.h;
     const std::vector<float> img = random_image(w, k.h, k.channels, 17 + k.h);
     const Result<EnvCoefficients> r = project_equirect({img.data(), w, k.h, k.channels}, k.order);
-    ASSERT_TRUE(r) << r.error().message;
-    const std::vector<Ld> ref = reference_equirect(img, w, k.h, k.channels, k.order);
-    const Ld scale = max_abs(ref);
-    for (std::size_t i = 0; i < ref.size(); ++i)
-      ASSERT_NEAR(r.value().coefficients[i], static_cast<double>(ref[i]), 1e-12 * static_cast<double>(scale))
-          << "h " << k.h << " order " << k.order << " coefficient " << i / k.channels;
+    expect_matches_reference(r, reference_equirect(img, w, k.h, k.channels, k.order), k.channels,
+                             "h " + std::to_string(k.h) + " order " + std::to_string(k.order));
   }
 }
 
@@ -205,10 +217,7 @@ TEST(CubemapProjection, UniformRadianceIsExact) {
       for (auto& f : faces) f.assign(static_cast<std::size_t>(size) * size * 3, 1.0f);
       const auto v = views(faces, size, 3);
       const Result<EnvCoefficients> r = project_cubemap(v, order);
-      ASSERT_TRUE(r) << r.error().message;
-      const std::vector<double>& c = r.value().coefficients;
-      for (int ch = 0; ch < 3; ++ch) EXPECT_NEAR(c[ch], std::sqrt(4 * kPi), 1e-14) << size << " " << order;
-      for (std::size_t i = 3; i < c.size(); ++i) ASSERT_LT(std::abs(c[i]), 1e-14) << "size " << size << " i " << i / 3;
+      expect_uniform_radiance(r, "size " + std::to_string(size) + " order " + std::to_string(order));
     }
   }
 }
@@ -222,12 +231,8 @@ TEST(CubemapProjection, MatchesPerTexelQuadratureOnRandomImages) {
     std::array<std::vector<float>, 6> faces;
     for (int f = 0; f < 6; ++f) faces[f] = random_image(k.size, k.size, k.channels, 100 + 7 * f + k.size);
     const Result<EnvCoefficients> r = project_cubemap(views(faces, k.size, k.channels), k.order, k.mirror);
-    ASSERT_TRUE(r) << r.error().message;
-    const std::vector<Ld> ref = reference_cubemap(faces, k.size, k.channels, k.order, k.mirror);
-    const Ld scale = max_abs(ref);
-    for (std::size_t i = 0; i < ref.size(); ++i)
-      ASSERT_NEAR(r.value().coefficients[i], static_cast<double>(ref[i]), 1e-12 * static_cast<double>(scale))
-          << "size " << k.size << " order " << k.order << " coefficient " << i / k.channels;
+    expect_matches_reference(r, reference_cubemap(faces, k.size, k.channels, k.order, k.mirror), k.channels,
+                             "size " + std::to_string(k.size) + " order " + std::to_string(k.order));
   }
 }
 
