@@ -356,6 +356,18 @@ TEST(CubemapProjection, FastPathMatchesTheReferenceOnFacesOfManyTiles) {
   }
 }
 
+// What a parallel caller does, with the blocks run last first: each block into its own
+// partial sums of a 3-channel image, then the partials summed in block order.
+template <class Projector, class Image>
+std::vector<double> blocks_in_reverse(const Projector& p, const Image& image) {
+  std::vector<std::vector<double>> partials(p.block_count(), std::vector<double>(p.partial_size(3), 0.0));
+  for (int b = p.block_count() - 1; b >= 0; --b) EXPECT_TRUE(p.accumulate_block(image, b, partials[b])) << b;
+  std::vector<double> sum(p.partial_size(3), 0.0);
+  for (const auto& part : partials)
+    for (std::size_t i = 0; i < sum.size(); ++i) sum[i] += part[i];
+  return sum;
+}
+
 TEST(CubemapProjection, BlocksCanRunInAnyOrderAndNonFiniteTexelsAreNamed) {
   const int size = 37, order = 5;
   std::array<std::vector<float>, 6> faces;
@@ -363,12 +375,7 @@ TEST(CubemapProjection, BlocksCanRunInAnyOrderAndNonFiniteTexelsAreNamed) {
   const auto v = views(faces, size, 3);
   const CubemapProjector p = CubemapProjector::create(size, order).value();
   ASSERT_GT(p.block_count(), 1);
-  std::vector<std::vector<double>> partials(p.block_count(), std::vector<double>(p.partial_size(3), 0.0));
-  for (int b = p.block_count() - 1; b >= 0; --b) ASSERT_TRUE(p.accumulate_block(v, b, partials[b]));
-  std::vector<double> sum(p.partial_size(3), 0.0);
-  for (const auto& part : partials)
-    for (std::size_t i = 0; i < sum.size(); ++i) sum[i] += part[i];
-  EXPECT_EQ(sum, project_cubemap(v, order).value().coefficients);
+  EXPECT_EQ(blocks_in_reverse(p, v), project_cubemap(v, order).value().coefficients);
   // Two bad texels: every path names the first (face, row, column), whichever block meets it.
   faces[3][(20 * size + 2) * 3 + 1] = std::numeric_limits<float>::infinity();
   faces[4][(1 * size + 30) * 3 + 0] = std::numeric_limits<float>::quiet_NaN();
@@ -437,17 +444,11 @@ TEST(EnvProjection, LayoutsAgreeAndConvergeQuadratically) {
 }
 
 TEST(EnvProjection, BlocksCanRunInAnyOrder) {
-  // What a parallel caller does: blocks into their own partials, summed in block order.
   const int w = 64, h = 32, order = 7;
   const std::vector<float> img = random_image(w, h, 3, 9);
   const FloatImageView view{img.data(), w, h, 3};
   const EquirectProjector p = EquirectProjector::create(w, h, order).value();
-  std::vector<std::vector<double>> partials(p.block_count(), std::vector<double>(p.partial_size(3), 0.0));
-  for (int b = p.block_count() - 1; b >= 0; --b) ASSERT_TRUE(p.accumulate_block(view, b, partials[b]));
-  std::vector<double> sum(p.partial_size(3), 0.0);
-  for (const auto& part : partials)
-    for (std::size_t i = 0; i < sum.size(); ++i) sum[i] += part[i];
-  EXPECT_EQ(sum, project_equirect(view, order).value().coefficients);
+  EXPECT_EQ(blocks_in_reverse(p, view), project_equirect(view, order).value().coefficients);
 }
 
 }  // namespace
