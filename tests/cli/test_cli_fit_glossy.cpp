@@ -133,22 +133,14 @@ TEST(CliFitGlossy, RenderShadesTheTableAsGlossy) {
 TEST(CliFitGlossy, BadOptionsAreRefusedWithoutOutput) {
   const fs::path out = scratch("bad.shtb");
   const std::vector<Refused> cases = {
-      {{"--order", "1"}, "--order"},
-      {{"--order", "9"}, "--order"},
-      {{"--terms", "0"}, "--terms"},
-      {{"--terms", "17"}, "--terms"},
-      {{"--lobes", "0"}, "--lobes"},
-      {{"--view-resolution", "1"}, "--view-resolution"},
-      {{"--rays", "0"}, "--rays"},
-      {{"--roughness", "0.01"}, "--roughness"},
-      {{"--roughness", "nan"}, "--roughness"},
-      {{"--roughness", "1.5"}, "--roughness"},
-      {{"--f0", "-0.1"}, "--f0"},
-      {{"--brdf", "ward"}, "--brdf"},
-      {{"--effort", "5"}, "--effort"},
-      {{"--json", out.string()}, "--json"},
-      {{"--mode", "interreflected"}, "--mode"},
-      {{"--view-resolution", "2", "--terms", "5"}, "--terms"},
+      {{"--order", "1"}, "--order"},         {{"--order", "9"}, "--order"},
+      {{"--terms", "0"}, "--terms"},         {{"--terms", "17"}, "--terms"},
+      {{"--lobes", "0"}, "--lobes"},         {{"--view-resolution", "1"}, "--view-resolution"},
+      {{"--rays", "0"}, "--rays"},           {{"--roughness", "0.01"}, "--roughness"},
+      {{"--roughness", "nan"}, "--roughness"}, {{"--roughness", "1.5"}, "--roughness"},
+      {{"--f0", "-0.1"}, "--f0"},            {{"--brdf", "ward"}, "--brdf"},
+      {{"--effort", "5"}, "--effort"},       {{"--json", out.string()}, "--json"},
+      {{"--mode", "interreflected"}, "--mode"}, {{"--view-resolution", "2", "--terms", "5"}, "--terms"},
   };
   expect_all_refused("fit-glossy", {kSpotObj, "--rays", "8"}, cases, out);
   const fs::path missing = scratch("no-such-folder") / "g.shtb";

@@ -68,23 +68,24 @@ TEST(CliFitWrinkles, SameBytesOnOneAndTwoThreads) {
 
 TEST(CliFitWrinkles, BadOptionsAreRefusedWithoutOutput) {
   const fs::path out = scratch("bad.shtb");
-  const std::vector<Refused> cases = {
-      {{"--order", "2"}, "--order"},
-      {{"--order", "9"}, "--order"},
-      {{"--lobes", "0"}, "--lobes"},
-      {{"--lobes", "5"}, "--lobes"},
-      {{"--grid", "1"}, "--grid"},
-      {{"--samples", "0"}, "--samples"},
-      {{"--rays", "0"}, "--rays"},
-      {{"--max-depth", "0"}, "--max-depth"},
-      {{"--max-depth", "-1"}, "--max-depth"},
-      {{"--max-depth", "nan"}, "--max-depth"},
-      {{"--max-evaluations", "0"}, "--max-evaluations"},
-      {{"--seed", "-3"}, "--seed"},
-      {{"--json", out.string()}, "--json"},
-      {{"--optimizer", "bfgs"}, "--optimizer"},
-  };
-  expect_all_refused("fit-wrinkles", {"--grid", "3", "--rays", "8"}, cases, out);
+  expect_all_refused("fit-wrinkles", {"--grid", "3", "--rays", "8"},
+                     {
+                         {{"--order", "2"}, "--order"},
+                         {{"--order", "9"}, "--order"},
+                         {{"--lobes", "0"}, "--lobes"},
+                         {{"--lobes", "5"}, "--lobes"},
+                         {{"--grid", "1"}, "--grid"},
+                         {{"--samples", "0"}, "--samples"},
+                         {{"--rays", "0"}, "--rays"},
+                         {{"--max-depth", "0"}, "--max-depth"},
+                         {{"--max-depth", "-1"}, "--max-depth"},
+                         {{"--max-depth", "nan"}, "--max-depth"},
+                         {{"--max-evaluations", "0"}, "--max-evaluations"},
+                         {{"--seed", "-3"}, "--seed"},
+                         {{"--json", out.string()}, "--json"},
+                         {{"--optimizer", "bfgs"}, "--optimizer"},
+                     },
+                     out);
   // A folder that does not exist, and no --out at all.
   const fs::path missing = scratch("no-such-folder") / "w.shtb";
   CommandResult r = run_shtool({"fit-wrinkles", "--grid", "3", "--rays", "8", "--out", missing.string()});
