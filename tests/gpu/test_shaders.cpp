@@ -130,44 +130,51 @@ Problem make_problem(ShaderOperation op, int n, int lobes, const Wrapper& w, std
   const std::vector<float> in = p.in;  // the float values are the problem
   const int in_stride = w.in_stride, out_stride = w.out_stride;
   auto in_at = [in, in_stride](int inv, int k) { return static_cast<double>(in[std::size_t(inv) * in_stride + k]); };
+  // The float direction at k..k+2 of input inv, made unit: the shader takes it as unit, and
+  // so does the reference.
+  auto unit_at = [in_at](int inv, int k) {
+    const Eigen::Vector3d d(in_at(inv, k), in_at(inv, k + 1), in_at(inv, k + 2));
+    return Eigen::Vector3d(d / d.norm());
+  };
+  // The worst of check(inv, y, out) over the inputs, y the SH values at input inv's
+  // direction (its first three values).
+  auto worst_at_directions = [=](auto check) {
+    return [=](const std::vector<float>& out) {
+      double worst = 0;
+      std::vector<double> y(nn);
+      for (int inv = 0; inv < kInputs; ++inv) {
+        shtool::eval_sh<double>(n, unit_at(inv, 0), y);
+        worst = worse(worst, check(inv, y, out));
+      }
+      return worst;
+    };
+  };
   switch (op) {
     case ShaderOperation::sh_eval:
-      p.worst_error = [=](const std::vector<float>& out) {
+      p.worst_error = worst_at_directions([=](int inv, const std::vector<double>& y, const std::vector<float>& out) {
         double worst = 0;
-        std::vector<double> y(nn);
-        for (int inv = 0; inv < kInputs; ++inv) {
-          // The shader takes the float direction as unit; so does the reference.
-          const Eigen::Vector3d d(in_at(inv, 0), in_at(inv, 1), in_at(inv, 2));
-          shtool::eval_sh<double>(n, d / d.norm(), y);
-          for (int i = 0; i < nn; ++i) {
-            const int l = shtool::sh_band(i);
-            const double e = std::abs(out[std::size_t(inv) * out_stride + i] - y[i]) / (4e-6 * band_scale(l));
-            worst = worse(worst, e);
-          }
+        for (int i = 0; i < nn; ++i) {
+          const int l = shtool::sh_band(i);
+          worst = worse(worst, std::abs(out[std::size_t(inv) * out_stride + i] - y[i]) / (4e-6 * band_scale(l)));
         }
         return worst;
-      };
+      });
       break;
     case ShaderOperation::sh_irradiance:
-      p.worst_error = [=](const std::vector<float>& out) {
+      p.worst_error = worst_at_directions([=](int inv, const std::vector<double>& y, const std::vector<float>& out) {
         double worst = 0;
-        std::vector<double> y(nn);
-        for (int inv = 0; inv < kInputs; ++inv) {
-          const Eigen::Vector3d d(in_at(inv, 0), in_at(inv, 1), in_at(inv, 2));
-          shtool::eval_sh<double>(n, d / d.norm(), y);
-          for (int c = 0; c < 4; ++c) {
-            double e = 0, scale = 0;
-            for (int i = 0; i < nn; ++i) {
-              const double a = shtool::clamped_cosine_band(shtool::sh_band(i));
-              const double li = c == 0 ? in_at(inv, 3 + i) : in_at(inv, 3 + nn + 3 * i + (c - 1));
-              e += a * li * y[i];
-              scale += std::abs(a * li * y[i]);
-            }
-            worst = worse(worst, std::abs(out[std::size_t(inv) * out_stride + c] - e) / (1e-6 * scale + 1e-30));
+        for (int c = 0; c < 4; ++c) {
+          double e = 0, scale = 0;
+          for (int i = 0; i < nn; ++i) {
+            const double a = shtool::clamped_cosine_band(shtool::sh_band(i));
+            const double li = c == 0 ? in_at(inv, 3 + i) : in_at(inv, 3 + nn + 3 * i + (c - 1));
+            e += a * li * y[i];
+            scale += std::abs(a * li * y[i]);
           }
+          worst = worse(worst, std::abs(out[std::size_t(inv) * out_stride + c] - e) / (1e-6 * scale + 1e-30));
         }
         return worst;
-      };
+      });
       break;
     case ShaderOperation::zxzxz_rotate:
     case ShaderOperation::zhf_rotate:
@@ -230,10 +237,7 @@ Problem make_problem(ShaderOperation op, int n, int lobes, const Wrapper& w, std
         std::vector<double> g(lobes * n), e(nn), y(nn);
         for (int inv = 0; inv < kInputs; ++inv) {
           double scale = 0;
-          for (int i = 0; i < lobes; ++i) {
-            axes[i] = Eigen::Vector3d(in_at(inv, 3 * i), in_at(inv, 3 * i + 1), in_at(inv, 3 * i + 2));
-            axes[i] /= axes[i].norm();
-          }
+          for (int i = 0; i < lobes; ++i) axes[i] = unit_at(inv, 3 * i);
           for (int k = 0; k < lobes * n; ++k) g[k] = in_at(inv, 3 * lobes + k);
           for (int k = 0; k < nn; ++k) e[k] = in_at(inv, 3 * lobes + lobes * n + k);
           const double r = shtool::zh_shade_exact<double>(e, std::span<const Eigen::Vector3d>(axes), g);
