@@ -419,7 +419,9 @@ std::vector<uint32_t> textured_spirv(ShaderLanguage lang, const shtool::ShaderRe
 // One dispatch over kInputs inputs with the band textures of the SH function `f`, R = size.
 void run_with_band_textures(const std::vector<uint32_t>& spirv, std::vector<std::vector<float>>& buffers, int n,
                             const std::vector<double>& f, int size) {
-  run_with_band_textures(spirv, buffers, n, f, size);
+  const uint32_t count = kInputs;
+  const gpu::WrapperPush push{count, count};
+  gpu::shared_device()->run(spirv, buffers, count, &push, sizeof push, band_textures(n, f, size));
 }
 
 // Both languages at each order: within the interpolation allowance at 33 and 129 nodes per
