@@ -32,10 +32,8 @@ std::vector<std::string> small(const fs::path& out, const fs::path& json, int th
 
 TEST(CliFitGlossy, WritesTheTableAndTheSummary) {
   const fs::path out = scratch("g.shtb"), json = scratch("g.json");
-  const CommandResult r = run_shtool(small(out, json, 2));
-  ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_NE(r.err.find("normalized RMS: SVD"), std::string::npos) << r.err;
-  const shtool::Result<shtool::Table> t = shtool::read_table(out, {"glossy-zh", 1, 4});
+  const shtool::Result<shtool::Table> t =
+      run_and_read_table(small(out, json, 2), "normalized RMS: SVD", out, {"glossy-zh", 1, 4});
   ASSERT_TRUE(t.ok()) << t.error().message;
   const shtool::Result<shtool::GlossyFit<double>> fit = shtool::GlossyFit<double>::from_table(t.value());
   ASSERT_TRUE(fit.ok()) << fit.error().message;
@@ -134,10 +132,7 @@ TEST(CliFitGlossy, RenderShadesTheTableAsGlossy) {
 
 TEST(CliFitGlossy, BadOptionsAreRefusedWithoutOutput) {
   const fs::path out = scratch("bad.shtb");
-  const struct {
-    std::vector<std::string> args;
-    std::string names;
-  } cases[] = {
+  const std::vector<Refused> cases = {
       {{"--order", "1"}, "--order"},         {{"--order", "9"}, "--order"},
       {{"--terms", "0"}, "--terms"},         {{"--terms", "17"}, "--terms"},
       {{"--lobes", "0"}, "--lobes"},         {{"--view-resolution", "1"}, "--view-resolution"},
@@ -147,15 +142,7 @@ TEST(CliFitGlossy, BadOptionsAreRefusedWithoutOutput) {
       {{"--effort", "5"}, "--effort"},       {{"--json", out.string()}, "--json"},
       {{"--mode", "interreflected"}, "--mode"}, {{"--view-resolution", "2", "--terms", "5"}, "--terms"},
   };
-  for (const auto& c : cases) {
-    fs::remove(out);
-    std::vector<std::string> args = {"fit-glossy", kSpotObj, "--rays", "8", "--out", out.string()};
-    args.insert(args.end(), c.args.begin(), c.args.end());
-    const CommandResult r = run_shtool(args);
-    EXPECT_EQ(r.exit_code, 1) << c.names << ": " << r.err;
-    EXPECT_NE(r.err.find(c.names), std::string::npos) << c.names << ": " << r.err;
-    EXPECT_FALSE(fs::exists(out)) << c.names;
-  }
+  expect_all_refused("fit-glossy", {kSpotObj, "--rays", "8"}, cases, out);
   const fs::path missing = scratch("no-such-folder") / "g.shtb";
   CommandResult r = run_shtool({"fit-glossy", kSpotObj, "--rays", "8", "--out", missing.string()});
   EXPECT_EQ(r.exit_code, 1);

@@ -28,10 +28,8 @@ std::vector<std::string> small(const fs::path& out, const fs::path& json, int th
 
 TEST(CliFitWrinkles, WritesTheMapAndTheSummary) {
   const fs::path out = scratch("w.shtb"), json = scratch("w.json");
-  const CommandResult r = run_shtool(small(out, json, 2));
-  ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_NE(r.err.find("normalized RMS: global"), std::string::npos) << r.err;
-  const shtool::Result<shtool::Table> t = shtool::read_table(out, {"wrinkle-zh", 1, 4});
+  const shtool::Result<shtool::Table> t =
+      run_and_read_table(small(out, json, 2), "normalized RMS: global", out, {"wrinkle-zh", 1, 4});
   ASSERT_TRUE(t.ok()) << t.error().message;
   const shtool::Table& table = t.value();
   const auto shape = [&](const char* name) { return table.find(name)->shape; };
@@ -70,34 +68,24 @@ TEST(CliFitWrinkles, SameBytesOnOneAndTwoThreads) {
 
 TEST(CliFitWrinkles, BadOptionsAreRefusedWithoutOutput) {
   const fs::path out = scratch("bad.shtb");
-  const struct {
-    std::vector<std::string> args;
-    std::string names;
-  } cases[] = {
-      {{"--order", "2"}, "--order"},
-      {{"--order", "9"}, "--order"},
-      {{"--lobes", "0"}, "--lobes"},
-      {{"--lobes", "5"}, "--lobes"},
-      {{"--grid", "1"}, "--grid"},
-      {{"--samples", "0"}, "--samples"},
-      {{"--rays", "0"}, "--rays"},
-      {{"--max-depth", "0"}, "--max-depth"},
-      {{"--max-depth", "-1"}, "--max-depth"},
-      {{"--max-depth", "nan"}, "--max-depth"},
-      {{"--max-evaluations", "0"}, "--max-evaluations"},
-      {{"--seed", "-3"}, "--seed"},
-      {{"--json", out.string()}, "--json"},
-      {{"--optimizer", "bfgs"}, "--optimizer"},
-  };
-  for (const auto& c : cases) {
-    fs::remove(out);
-    std::vector<std::string> args = {"fit-wrinkles", "--grid", "3", "--rays", "8", "--out", out.string()};
-    args.insert(args.end(), c.args.begin(), c.args.end());
-    const CommandResult r = run_shtool(args);
-    EXPECT_EQ(r.exit_code, 1) << c.names << ": " << r.err;
-    EXPECT_NE(r.err.find(c.names), std::string::npos) << r.err;
-    EXPECT_FALSE(fs::exists(out)) << c.names;
-  }
+  expect_all_refused("fit-wrinkles", {"--grid", "3", "--rays", "8"},
+                     {
+                         {{"--order", "2"}, "--order"},
+                         {{"--order", "9"}, "--order"},
+                         {{"--lobes", "0"}, "--lobes"},
+                         {{"--lobes", "5"}, "--lobes"},
+                         {{"--grid", "1"}, "--grid"},
+                         {{"--samples", "0"}, "--samples"},
+                         {{"--rays", "0"}, "--rays"},
+                         {{"--max-depth", "0"}, "--max-depth"},
+                         {{"--max-depth", "-1"}, "--max-depth"},
+                         {{"--max-depth", "nan"}, "--max-depth"},
+                         {{"--max-evaluations", "0"}, "--max-evaluations"},
+                         {{"--seed", "-3"}, "--seed"},
+                         {{"--json", out.string()}, "--json"},
+                         {{"--optimizer", "bfgs"}, "--optimizer"},
+                     },
+                     out);
   // A folder that does not exist, and no --out at all.
   const fs::path missing = scratch("no-such-folder") / "w.shtb";
   CommandResult r = run_shtool({"fit-wrinkles", "--grid", "3", "--rays", "8", "--out", missing.string()});

@@ -16,8 +16,9 @@
 #include <cmath>
 #include <cstdio>
 #include <functional>
-#include <numbers>
+#include <initializer_list>
 #include <memory>
+#include <numbers>
 #include <random>
 #include <stdexcept>
 #include <string>
@@ -139,44 +140,51 @@ Problem make_problem(ShaderOperation op, int n, int lobes, const Wrapper& w, std
   const std::vector<float> in = p.in;  // the float values are the problem
   const int in_stride = w.in_stride, out_stride = w.out_stride;
   auto in_at = [in, in_stride](int inv, int k) { return static_cast<double>(in[std::size_t(inv) * in_stride + k]); };
+  // The float direction at k..k+2 of input inv, made unit: the shader takes it as unit, and
+  // so does the reference.
+  auto unit_at = [in_at](int inv, int k) {
+    const Eigen::Vector3d d(in_at(inv, k), in_at(inv, k + 1), in_at(inv, k + 2));
+    return Eigen::Vector3d(d / d.norm());
+  };
+  // The worst of check(inv, y, out) over the inputs, y the SH values at input inv's
+  // direction (its first three values).
+  auto worst_at_directions = [=](auto check) {
+    return [=](const std::vector<float>& out) {
+      double worst = 0;
+      std::vector<double> y(nn);
+      for (int inv = 0; inv < kInputs; ++inv) {
+        shtool::eval_sh<double>(n, unit_at(inv, 0), y);
+        worst = worse(worst, check(inv, y, out));
+      }
+      return worst;
+    };
+  };
   switch (op) {
     case ShaderOperation::sh_eval:
-      p.worst_error = [=](const std::vector<float>& out) {
+      p.worst_error = worst_at_directions([=](int inv, const std::vector<double>& y, const std::vector<float>& out) {
         double worst = 0;
-        std::vector<double> y(nn);
-        for (int inv = 0; inv < kInputs; ++inv) {
-          // The shader takes the float direction as unit; so does the reference.
-          const Eigen::Vector3d d(in_at(inv, 0), in_at(inv, 1), in_at(inv, 2));
-          shtool::eval_sh<double>(n, d / d.norm(), y);
-          for (int i = 0; i < nn; ++i) {
-            const int l = shtool::sh_band(i);
-            const double e = std::abs(out[std::size_t(inv) * out_stride + i] - y[i]) / (4e-6 * band_scale(l));
-            worst = worse(worst, e);
-          }
+        for (int i = 0; i < nn; ++i) {
+          const int l = shtool::sh_band(i);
+          worst = worse(worst, std::abs(out[std::size_t(inv) * out_stride + i] - y[i]) / (4e-6 * band_scale(l)));
         }
         return worst;
-      };
+      });
       break;
     case ShaderOperation::sh_irradiance:
-      p.worst_error = [=](const std::vector<float>& out) {
+      p.worst_error = worst_at_directions([=](int inv, const std::vector<double>& y, const std::vector<float>& out) {
         double worst = 0;
-        std::vector<double> y(nn);
-        for (int inv = 0; inv < kInputs; ++inv) {
-          const Eigen::Vector3d d(in_at(inv, 0), in_at(inv, 1), in_at(inv, 2));
-          shtool::eval_sh<double>(n, d / d.norm(), y);
-          for (int c = 0; c < 4; ++c) {
-            double e = 0, scale = 0;
-            for (int i = 0; i < nn; ++i) {
-              const double a = shtool::clamped_cosine_band(shtool::sh_band(i));
-              const double li = c == 0 ? in_at(inv, 3 + i) : in_at(inv, 3 + nn + 3 * i + (c - 1));
-              e += a * li * y[i];
-              scale += std::abs(a * li * y[i]);
-            }
-            worst = worse(worst, std::abs(out[std::size_t(inv) * out_stride + c] - e) / (1e-6 * scale + 1e-30));
+        for (int c = 0; c < 4; ++c) {
+          double e = 0, scale = 0;
+          for (int i = 0; i < nn; ++i) {
+            const double a = shtool::clamped_cosine_band(shtool::sh_band(i));
+            const double li = c == 0 ? in_at(inv, 3 + i) : in_at(inv, 3 + nn + 3 * i + (c - 1));
+            e += a * li * y[i];
+            scale += std::abs(a * li * y[i]);
           }
+          worst = worse(worst, std::abs(out[std::size_t(inv) * out_stride + c] - e) / (1e-6 * scale + 1e-30));
         }
         return worst;
-      };
+      });
       break;
     case ShaderOperation::zxzxz_rotate:
     case ShaderOperation::zhf_rotate:
@@ -239,10 +247,7 @@ Problem make_problem(ShaderOperation op, int n, int lobes, const Wrapper& w, std
         std::vector<double> g(lobes * n), e(nn), y(nn);
         for (int inv = 0; inv < kInputs; ++inv) {
           double scale = 0;
-          for (int i = 0; i < lobes; ++i) {
-            axes[i] = Eigen::Vector3d(in_at(inv, 3 * i), in_at(inv, 3 * i + 1), in_at(inv, 3 * i + 2));
-            axes[i] /= axes[i].norm();
-          }
+          for (int i = 0; i < lobes; ++i) axes[i] = unit_at(inv, 3 * i);
           for (int k = 0; k < lobes * n; ++k) g[k] = in_at(inv, 3 * lobes + k);
           for (int k = 0; k < nn; ++k) e[k] = in_at(inv, 3 * lobes + lobes * n + k);
           const double r = shtool::zh_shade_exact<double>(e, std::span<const Eigen::Vector3d>(axes), g);
@@ -448,14 +453,49 @@ double interpolation_allowance(int l, int size) {
 struct TextureRun {
   double worst = 0;  // largest error / allowance
   double max_error = 0;  // largest absolute error, for the convergence check
+
+  void add(double err, double allowance) {
+    worst = worse(worst, err / allowance);
+    max_error = std::max(max_error, std::isnan(err) ? INFINITY : err);
+  }
 };
 
-TextureRun run_zh_shade_table(ShaderLanguage lang, int n, int lobes, int size) {
-  shtool::ShaderRequest request = request_for(lang, ShaderOperation::zh_shade, n, lobes);
+// The generated source of `request` (order n, `lobes` lobes) in its textured wrapper,
+// compiled; it reads one band texture per four bands.
+std::vector<uint32_t> textured_spirv(ShaderLanguage lang, const shtool::ShaderRequest& request, int n, int lobes) {
   const std::string generated = shtool::shader_source(request).text;
-  const int textures = (n + 3) / 4, in_stride = 3 * lobes + lobes * n;
-  const Wrapper w = gpu::textured_wrapper(lang, ShaderOperation::zh_shade, n, lobes);
-  const std::vector<uint32_t> spirv = gpu::compiled_wrapper(lang, generated, w, textures);
+  const Wrapper w = gpu::textured_wrapper(lang, request.operation, n, lobes);
+  return gpu::compiled_wrapper(lang, generated, w, (n + 3) / 4);
+}
+
+// One dispatch over kInputs inputs with the band textures of the SH function `f`, R = size.
+void run_with_band_textures(const std::vector<uint32_t>& spirv, std::vector<std::vector<float>>& buffers, int n,
+                            const std::vector<double>& f, int size) {
+  const uint32_t count = kInputs;
+  const gpu::WrapperPush push{count, count};
+  gpu::shared_device()->run(spirv, buffers, count, &push, sizeof push, band_textures(n, f, size));
+}
+
+// Both languages at each order: within the interpolation allowance at 33 and 129 nodes per
+// face side, and the error falling as R^-2 between them ((129 / 33)^2 = 15.3; 12 required).
+template <class Run>
+void expect_texture_convergence(const char* name, std::initializer_list<int> orders, Run run) {
+  for (ShaderLanguage lang : {ShaderLanguage::glsl, ShaderLanguage::hlsl})
+    for (int n : orders) {
+      const TextureRun coarse = run(lang, n, 33), fine = run(lang, n, 129);
+      std::printf("%s %s N=%d: worst %.3g / %.3g of the allowance at 33 / 129 nodes per face side, error ratio %.3g\n",
+                  name, lang == ShaderLanguage::glsl ? "glsl" : "hlsl", n, coarse.worst, fine.worst,
+                  coarse.max_error / fine.max_error);
+      EXPECT_LE(coarse.worst, 1.0) << n;
+      EXPECT_LE(fine.worst, 1.0) << n;
+      EXPECT_GT(coarse.max_error / fine.max_error, 12.0) << n;
+    }
+}
+
+TextureRun run_zh_shade_table(ShaderLanguage lang, int n, int lobes, int size) {
+  const shtool::ShaderRequest request = request_for(lang, ShaderOperation::zh_shade, n, lobes);
+  const int in_stride = 3 * lobes + lobes * n;
+  const std::vector<uint32_t> spirv = textured_spirv(lang, request, n, lobes);
   std::mt19937_64 rng(77 + n);
   std::uniform_real_distribution<double> u(-1, 1);
   std::vector<double> e(n * n);
@@ -469,9 +509,7 @@ TextureRun run_zh_shade_table(ShaderLanguage lang, int n, int lobes, int size) {
     for (int k = 0; k < lobes * n; ++k) in[std::size_t(inv) * in_stride + 3 * lobes + k] = static_cast<float>(u(rng));
   }
   std::vector<std::vector<float>> buffers = {in, std::vector<float>(kInputs, NAN)};
-  const uint32_t count = kInputs;
-  const gpu::WrapperPush push{count, count};
-  gpu::shared_device()->run(spirv, buffers, count, &push, sizeof push, band_textures(n, e, size));
+  run_with_band_textures(spirv, buffers, n, e, size);
   const std::vector<double> bound = band_bounds(n, e);
   TextureRun result;
   std::vector<Eigen::Vector3d> axes(lobes);
@@ -487,9 +525,7 @@ TextureRun run_zh_shade_table(ShaderLanguage lang, int n, int lobes, int size) {
       }
     }
     const double r = shtool::zh_shade_exact<double>(e, std::span<const Eigen::Vector3d>(axes), g);
-    const double err = std::abs(buffers[1][inv] - r);
-    result.worst = worse(result.worst, err / allowance);
-    result.max_error = std::max(result.max_error, std::isnan(err) ? INFINITY : err);
+    result.add(std::abs(buffers[1][inv] - r), allowance);
   }
   return result;
 }
@@ -498,24 +534,14 @@ TextureRun run_zh_shade_table(ShaderLanguage lang, int n, int lobes, int size) {
 // with one fetch per four bands; converges to Eq. 13 as R grows.
 TEST(GeneratedShaderTextures, ZhShadeTableConvergesToEq13) {
   SHTOOL_REQUIRE_VULKAN();
-  for (ShaderLanguage lang : {ShaderLanguage::glsl, ShaderLanguage::hlsl})
-    for (int n : {3, 6, 10}) {
-      const TextureRun coarse = run_zh_shade_table(lang, n, 4, 33), fine = run_zh_shade_table(lang, n, 4, 129);
-      std::printf("zh_shade_table %s N=%d: worst %.3g / %.3g of the allowance at 33 / 129 nodes per face side, error ratio %.3g\n",
-                  lang == ShaderLanguage::glsl ? "glsl" : "hlsl", n, coarse.worst, fine.worst,
-                  coarse.max_error / fine.max_error);
-      EXPECT_LE(coarse.worst, 1.0) << n;
-      EXPECT_LE(fine.worst, 1.0) << n;
-      EXPECT_GT(coarse.max_error / fine.max_error, 12.0) << n;
-    }
+  expect_texture_convergence("zh_shade_table", {3, 6, 10},
+                             [](ShaderLanguage lang, int n, int size) { return run_zh_shade_table(lang, n, 4, size); });
 }
 
 TextureRun run_tailored(ShaderLanguage lang, int n, int size) {
   const shtool::ShaderRequest request = request_for(lang, ShaderOperation::zhf_tailored_rotate, n, 4);
-  const std::string generated = shtool::shader_source(request).text;
-  const int textures = (n + 3) / 4, nn = n * n;
-  const Wrapper w = gpu::textured_wrapper(lang, ShaderOperation::zhf_tailored_rotate, n, 4);
-  const std::vector<uint32_t> spirv = gpu::compiled_wrapper(lang, generated, w, textures);
+  const int nn = n * n;
+  const std::vector<uint32_t> spirv = textured_spirv(lang, request, n, 4);
   std::mt19937_64 rng(5 + n);
   std::uniform_real_distribution<double> u(-1, 1);
   std::vector<double> f(nn);
@@ -531,9 +557,7 @@ TextureRun run_tailored(ShaderLanguage lang, int n, int size) {
     for (int k = 0; k < 9; ++k) in[std::size_t(inv) * 9 + k] = static_cast<float>(rotations[inv](k / 3, k % 3));
   }
   std::vector<std::vector<float>> buffers = {in, std::vector<float>(std::size_t(kInputs) * nn, NAN)};
-  const uint32_t count = kInputs;
-  const gpu::WrapperPush push{count, count};
-  gpu::shared_device()->run(spirv, buffers, count, &push, sizeof push, band_textures(n, f, size));
+  run_with_band_textures(spirv, buffers, n, f, size);
   // Each g_lm sums A^_l[m][d] times samples that err by the band's allowance.
   const shtool::ZhfLobes& lobes = *request.lobes;
   const std::vector<double> bound = band_bounds(n, f);
@@ -552,11 +576,7 @@ TextureRun run_tailored(ShaderLanguage lang, int n, int size) {
     const Eigen::JacobiSVD<Eigen::Matrix3d> svd(r, Eigen::ComputeFullU | Eigen::ComputeFullV);
     rot.set(svd.matrixU() * svd.matrixV().transpose(), shtool::RotationMethod::reference);
     rot.apply(f, g);
-    for (int i = 0; i < nn; ++i) {
-      const double err = std::abs(buffers[1][std::size_t(inv) * nn + i] - g[i]);
-      result.worst = worse(result.worst, err / row_allowance[i]);
-      result.max_error = std::max(result.max_error, std::isnan(err) ? INFINITY : err);
-    }
+    for (int i = 0; i < nn; ++i) result.add(std::abs(buffers[1][std::size_t(inv) * nn + i] - g[i]), row_allowance[i]);
   }
   return result;
 }
@@ -566,16 +586,7 @@ TextureRun run_tailored(ShaderLanguage lang, int n, int size) {
 // as R^-2.
 TEST(GeneratedShaderTextures, TailoredZhfRotationFromBandTextures) {
   SHTOOL_REQUIRE_VULKAN();
-  for (ShaderLanguage lang : {ShaderLanguage::glsl, ShaderLanguage::hlsl})
-    for (int n : {3, 5, 8}) {
-      const TextureRun coarse = run_tailored(lang, n, 33), fine = run_tailored(lang, n, 129);
-      std::printf("zhf_tailored %s N=%d: worst %.3g / %.3g of the allowance at 33 / 129 nodes per face side, error ratio %.3g\n",
-                  lang == ShaderLanguage::glsl ? "glsl" : "hlsl", n, coarse.worst, fine.worst,
-                  coarse.max_error / fine.max_error);
-      EXPECT_LE(coarse.worst, 1.0) << n;
-      EXPECT_LE(fine.worst, 1.0) << n;
-      EXPECT_GT(coarse.max_error / fine.max_error, 12.0) << n;
-    }
+  expect_texture_convergence("zhf_tailored", {3, 5, 8}, run_tailored);
 }
 
 }  // namespace

@@ -760,6 +760,32 @@ void VulkanCompute::run(const std::vector<uint32_t>& spirv, std::vector<std::vec
   // handful, and coherent memory needs no flushes around the submission.
   const VkMemoryPropertyFlags host_coherent =
       VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+  // A buffer of `size` bytes for `usage` in its own host-visible coherent memory, mapped:
+  // freeing the memory unmaps it, so no unmap is needed on any exit path. `what` names the
+  // buffer in the error without a memory type, `call_suffix` in the failed calls.
+  auto host_buffer = [&](VkDeviceSize size, VkBufferUsageFlags usage, Owned<VkBuffer, vkDestroyBuffer>& buffer,
+                         Owned<VkDeviceMemory, vkFreeMemory>& memory, const std::string& what,
+                         const std::string& call_suffix) {
+    auto bci = vk_struct<VkBufferCreateInfo>(VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO);
+    bci.size = size;
+    bci.usage = usage;
+    bci.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+    check(vkCreateBuffer(device_, &bci, nullptr, buffer.out()), ("vkCreateBuffer" + call_suffix).c_str());
+    VkMemoryRequirements req;
+    vkGetBufferMemoryRequirements(device_, buffer.get(), &req);
+    const uint32_t type = find_memory_type(memory_, req.memoryTypeBits, host_coherent);
+    if (type == memory_.memoryTypeCount) {
+      throw std::runtime_error("VulkanCompute::run: no host-visible coherent memory type for " + what);
+    }
+    auto mai = vk_struct<VkMemoryAllocateInfo>(VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO);
+    mai.allocationSize = req.size;
+    mai.memoryTypeIndex = type;
+    check(vkAllocateMemory(device_, &mai, nullptr, memory.out()), ("vkAllocateMemory" + call_suffix).c_str());
+    check(vkBindBufferMemory(device_, buffer.get(), memory.get(), 0), ("vkBindBufferMemory" + call_suffix).c_str());
+    void* data = nullptr;
+    check(vkMapMemory(device_, memory.get(), 0, VK_WHOLE_SIZE, 0, &data), ("vkMapMemory" + call_suffix).c_str());
+    return data;
+  };
   std::vector<Owned<VkBuffer, vkDestroyBuffer>> vk_buffers;
   std::vector<Owned<VkDeviceMemory, vkFreeMemory>> memories;
   std::vector<void*> mapped(count);
@@ -772,27 +798,10 @@ void VulkanCompute::run(const std::vector<uint32_t>& spirv, std::vector<std::vec
       throw std::runtime_error("VulkanCompute::run: buffer " + std::to_string(k) + " of " + std::to_string(sizes[k]) +
                                " bytes exceeds maxStorageBufferRange " + std::to_string(limits.maxStorageBufferRange));
     }
-    auto bci = vk_struct<VkBufferCreateInfo>(VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO);
-    bci.size = sizes[k];
-    bci.usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
-    bci.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
     vk_buffers.emplace_back(device_);
-    check(vkCreateBuffer(device_, &bci, nullptr, vk_buffers.back().out()), "vkCreateBuffer");
-
-    VkMemoryRequirements req;
-    vkGetBufferMemoryRequirements(device_, vk_buffers.back().get(), &req);
-    const uint32_t type = find_memory_type(memory_, req.memoryTypeBits, host_coherent);
-    if (type == memory_.memoryTypeCount) {
-      throw std::runtime_error("VulkanCompute::run: no host-visible coherent memory type for a storage buffer");
-    }
-    auto mai = vk_struct<VkMemoryAllocateInfo>(VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO);
-    mai.allocationSize = req.size;
-    mai.memoryTypeIndex = type;
     memories.emplace_back(device_);
-    check(vkAllocateMemory(device_, &mai, nullptr, memories.back().out()), "vkAllocateMemory");
-    check(vkBindBufferMemory(device_, vk_buffers.back().get(), memories.back().get(), 0), "vkBindBufferMemory");
-    // Freeing the memory unmaps it: no unmap needed on any exit path.
-    check(vkMapMemory(device_, memories.back().get(), 0, VK_WHOLE_SIZE, 0, &mapped[k]), "vkMapMemory");
+    mapped[k] = host_buffer(sizes[k], VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, vk_buffers.back(), memories.back(),
+                            "a storage buffer", "");
     std::memset(mapped[k], 0, sizes[k]);
     if (!buffers[k].empty()) std::memcpy(mapped[k], buffers[k].data(), buffers[k].size() * sizeof(float));
   }
@@ -810,24 +819,8 @@ void VulkanCompute::run(const std::vector<uint32_t>& spirv, std::vector<std::vec
   cube_images.reserve(cube_count);
   cube_views.reserve(cube_count);
   if (cube_count > 0) {
-    auto bci = vk_struct<VkBufferCreateInfo>(VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO);
-    bci.size = staging_size;
-    bci.usage = VK_BUFFER_USAGE_TRANSFER_SRC_BIT;
-    bci.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
-    check(vkCreateBuffer(device_, &bci, nullptr, staging.out()), "vkCreateBuffer (staging)");
-    VkMemoryRequirements req;
-    vkGetBufferMemoryRequirements(device_, staging.get(), &req);
-    const uint32_t type = find_memory_type(memory_, req.memoryTypeBits, host_coherent);
-    if (type == memory_.memoryTypeCount) {
-      throw std::runtime_error("VulkanCompute::run: no host-visible coherent memory type for the staging buffer");
-    }
-    auto mai = vk_struct<VkMemoryAllocateInfo>(VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO);
-    mai.allocationSize = req.size;
-    mai.memoryTypeIndex = type;
-    check(vkAllocateMemory(device_, &mai, nullptr, staging_memory.out()), "vkAllocateMemory (staging)");
-    check(vkBindBufferMemory(device_, staging.get(), staging_memory.get(), 0), "vkBindBufferMemory (staging)");
-    void* data = nullptr;
-    check(vkMapMemory(device_, staging_memory.get(), 0, VK_WHOLE_SIZE, 0, &data), "vkMapMemory (staging)");
+    void* data = host_buffer(staging_size, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, staging, staging_memory,
+                             "the staging buffer", " (staging)");
     for (uint32_t k = 0; k < cube_count; ++k) {
       std::memcpy(static_cast<char*>(data) + cube_offsets[k], cubes[k].texels.data(),
                   cubes[k].texels.size() * sizeof(float));

@@ -82,28 +82,21 @@ TEST_F(CommonFiles, AbandonedPendingFileRemovesItsTemporary) {
 
 TEST_F(CommonFiles, OutputSetIsAllOrNothing) {
   write_file_atomically(dir_ / "keep.txt", "old");
-  // The second output's folder does not exist: refused when it is declared.
-  {
+  // A second output after "keep.txt" as --a: refused when it is declared, with `needle`.
+  auto expect_second_refused = [&](const fs::path& second, const std::string& needle) {
     JobOutputs io;
     io.output(dir_ / "keep.txt", "--a");
     try {
-      io.output(dir_ / "missing" / "b.txt", "--b");
+      io.output(second, "--b");
       FAIL() << "expected InputError";
     } catch (const InputError& e) {
-      EXPECT_NE(std::string(e.what()).find("does not exist"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
     }
-  }
-  // Two outputs naming one file (here through a different spelling) are refused.
-  {
-    JobOutputs io;
-    io.output(dir_ / "keep.txt", "--a");
-    try {
-      io.output(dir_ / "." / "keep.txt", "--b");
-      FAIL() << "expected InputError";
-    } catch (const InputError& e) {
-      EXPECT_NE(std::string(e.what()).find("--b and --a name the same file"), std::string::npos) << e.what();
-    }
-  }
+  };
+  // Its folder does not exist.
+  expect_second_refused(dir_ / "missing" / "b.txt", "does not exist");
+  // Two outputs naming one file (here through a different spelling).
+  expect_second_refused(dir_ / "." / "keep.txt", "--b and --a name the same file");
   EXPECT_EQ(read(dir_ / "keep.txt"), "old");
   // And a good set writes both.
   JobOutputs io;

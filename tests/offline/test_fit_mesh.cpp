@@ -1,9 +1,11 @@
 // OBJ loading for fit-zh: triangulation, skipped vertices and faces, normals, and the
 // errors for bad input. References are hand-built meshes whose answers are known.
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -117,18 +119,19 @@ TEST(FitMesh, FileNormalsAreUsedWhenComplete) {
 
 TEST(FitMesh, BadInputGivesClearErrors) {
   EXPECT_NE(load_error("/nonexistent/shtool/none.obj").find("no such file"), std::string::npos);
-  const std::string nan = load_error(write_obj("nan.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n"));
-  EXPECT_NE(nan.find("line 2: non-finite coordinate"), std::string::npos) << nan;
-  const std::string inf = load_error(write_obj("inf.obj", "v 0 0 0\nv 1e999 0 0\nv 0 1 0\nf 1 2 3\n"));
-  EXPECT_NE(inf.find("non-finite"), std::string::npos) << inf;
-  const std::string range = load_error(write_obj("range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n"));
-  EXPECT_NE(range.find("refers to vertex 7, but the file has 3 vertices"), std::string::npos) << range;
-  const std::string quad_range = load_error(write_obj("qrange.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3 99\n"));
-  EXPECT_NE(quad_range.find("refers to vertex 99"), std::string::npos) << quad_range;
-  const std::string none = load_error(write_obj("none.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n"));
-  EXPECT_NE(none.find("no faces"), std::string::npos) << none;
-  const std::string flat = load_error(write_obj("flat.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n"));
-  EXPECT_NE(flat.find("no usable triangle"), std::string::npos) << flat;
+  // {file name, OBJ text, what the message must say}
+  const std::vector<std::array<std::string, 3>> cases = {
+      {"nan.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n", "line 2: non-finite coordinate"},
+      {"inf.obj", "v 0 0 0\nv 1e999 0 0\nv 0 1 0\nf 1 2 3\n", "non-finite"},
+      {"range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n", "refers to vertex 7, but the file has 3 vertices"},
+      {"qrange.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3 99\n", "refers to vertex 99"},
+      {"none.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n", "no faces"},
+      {"flat.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n", "no usable triangle"},
+  };
+  for (const auto& [name, text, needle] : cases) {
+    const std::string error = load_error(write_obj(name, text));
+    EXPECT_NE(error.find(needle), std::string::npos) << name << ": " << error;
+  }
   const std::string empty = load_error(write_obj("empty.obj", ""));
   EXPECT_FALSE(empty.empty());
 }

@@ -22,6 +22,7 @@
 #include "shtool/quadrature.h"
 #include "shtool/rotation.h"
 #include "shtool/sh.h"
+#include "test_util.h"
 
 namespace {
 
@@ -36,17 +37,7 @@ fit::Mesh from_obj(const std::string& name, const std::string& text) {
   return fit::load_obj(dir / name, fit::NormalSource::automatic, UpAxis::z);  // written in shtool's frame
 }
 
-// P_l(x) by the three-term recurrence.
-double legendre_p(int l, double x) {
-  double p0 = 1, p1 = x;
-  if (l == 0) return p0;
-  for (int k = 2; k <= l; ++k) {
-    const double p2 = ((2 * k - 1) * x * p1 - (k - 1) * p0) / k;
-    p0 = p1;
-    p1 = p2;
-  }
-  return p1;
-}
+using test::legendre_p;
 
 TEST(GlossyBrdf, PhongAtNormalViewMatchesItsClosedForm) {
   // Exponent a (m = sqrt(2 / (a + 2))): at v = n the mirror direction is n, so

@@ -180,36 +180,31 @@ const std::vector<int> kOrders = {1, 2, 3, 4, 5, 8, 13, 20};
 // ---------------------------------------------------------------------------
 // Exact methods against rotate-then-project.
 
-TEST(RotationExact, ReferenceAndZxzxzMatchQuadratureDouble) {
-  std::mt19937_64 rng(101);
+// Both exact methods in precision T against rotate-then-project: `per_order` random
+// rotations of random coefficients at every order of kOrders.
+template <class T>
+void expect_exact_methods_match_quadrature(unsigned seed, int per_order, double tol) {
+  std::mt19937_64 rng(seed);
   for (int order : kOrders) {
-    for (int k = 0; k < 3; ++k) {
+    for (int k = 0; k < per_order; ++k) {
       const Mat3<double> r = random_rotation(rng);
       const std::vector<double> f = random_coeffs(order, rng);
       const std::vector<double> want = rotate_by_quadrature(order, r, f);
       for (RotationMethod m : {RotationMethod::reference, RotationMethod::zxzxz}) {
-        const std::vector<double> got = rotate<double>(order, r, m, f);
+        const std::vector<T> got = rotate<T>(order, r, m, f);
         const double err = distance(got, want) / norm(f);
-        EXPECT_LE(err, kExactTolDouble) << rotation_method_name(m) << " N " << order << " R " << matrix_text(r);
+        EXPECT_LE(err, tol) << rotation_method_name(m) << " N " << order << " R " << matrix_text(r);
       }
     }
   }
 }
 
+TEST(RotationExact, ReferenceAndZxzxzMatchQuadratureDouble) {
+  expect_exact_methods_match_quadrature<double>(101, 3, kExactTolDouble);
+}
+
 TEST(RotationExact, ReferenceAndZxzxzMatchQuadratureFloat) {
-  std::mt19937_64 rng(102);
-  for (int order : kOrders) {
-    for (int k = 0; k < 2; ++k) {
-      const Mat3<double> r = random_rotation(rng);
-      const std::vector<double> f = random_coeffs(order, rng);
-      const std::vector<double> want = rotate_by_quadrature(order, r, f);
-      for (RotationMethod m : {RotationMethod::reference, RotationMethod::zxzxz}) {
-        const std::vector<float> got = rotate<float>(order, r, m, f);
-        const double err = distance(got, want) / norm(f);
-        EXPECT_LE(err, kExactTolFloat) << rotation_method_name(m) << " N " << order << " R " << matrix_text(r);
-      }
-    }
-  }
+  expect_exact_methods_match_quadrature<float>(102, 2, kExactTolFloat);
 }
 
 TEST(RotationExact, ZxzxzMatchesReferenceEveryOrder) {
@@ -1242,6 +1237,17 @@ void replace_array(Table& t, const std::string& name, const std::vector<T>& valu
     if (a.name == name) a = TableArray::from<T>(name, {static_cast<std::int64_t>(values.size())}, values);
 }
 
+// A corruption: a copy of one of the helpers' arrays, changed by `edit`, stored as array
+// `name`.
+template <class T, class Edit>
+std::function<void(Table&)> edited(const std::string& name, const std::vector<T>& values, Edit edit) {
+  return [name, values, edit](Table& t) {
+    std::vector<T> v = values;
+    edit(v);
+    replace_array(t, name, v);
+  };
+}
+
 TEST(RotationHelpersTable, FromTableRejectsCorruption) {
   const RotationHelpers h = compute_rotation_helpers(5);
   const Table good = to_table(h, generator_record("test_rotation", {{"order", 5}}));
@@ -1253,80 +1259,22 @@ TEST(RotationHelpersTable, FromTableRejectsCorruption) {
     std::string message;
   };
   const std::vector<Case> cases = {
-      {"column in another band",
-       [&](Table& t) {
-         auto c = h.x90_col;
-         c[h.x90_row[5]] = 0;
-         replace_array(t, "x90_col", c);
-       },
+      {"column in another band", edited("x90_col", h.x90_col, [&](auto& c) { c[h.x90_row[5]] = 0; }),
        "outside its band"},
-      {"column beyond the matrix",
-       [&](Table& t) {
-         auto c = h.x90_col;
-         c.back() = 1 << 30;
-         replace_array(t, "x90_col", c);
-       },
+      {"column beyond the matrix", edited("x90_col", h.x90_col, [&](auto& c) { c.back() = 1 << 30; }),
        "outside its band"},
-      {"negative column",
-       [&](Table& t) {
-         auto c = h.x90_col;
-         c[3] = -1;
-         replace_array(t, "x90_col", c);
-       },
-       "outside its band"},
-      {"row starts one short",
-       [&](Table& t) {
-         auto r = h.x90_row;
-         r.pop_back();
-         replace_array(t, "x90_row", r);
-       },
-       "sizes"},
-      {"dy_sub too long",
-       [&](Table& t) {
-         auto d = h.dy_sub;
-         d.push_back(0);
-         replace_array(t, "dy_sub", d);
-       },
-       "sizes"},
-      {"ddy_off2 too short",
-       [&](Table& t) {
-         auto d = h.ddy_off2;
-         d.pop_back();
-         replace_array(t, "ddy_off2", d);
-       },
-       "sizes"},
-      {"last row start is not nnz",
-       [&](Table& t) {
-         auto r = h.x90_row;
-         r.back() = nnz - 1;
-         replace_array(t, "x90_row", r);
-       },
-       "inconsistent"},
-      {"values shorter than columns",
-       [&](Table& t) {
-         auto v = h.x90_val;
-         v.pop_back();
-         replace_array(t, "x90_val", v);
-       },
-       "inconsistent"},
-      {"row starts decrease",
-       [&](Table& t) {
-         auto r = h.x90_row;
-         std::swap(r[3], r[4]);
-         replace_array(t, "x90_row", r);
-       },
-       "decrease"},
+      {"negative column", edited("x90_col", h.x90_col, [&](auto& c) { c[3] = -1; }), "outside its band"},
+      {"row starts one short", edited("x90_row", h.x90_row, [&](auto& r) { r.pop_back(); }), "sizes"},
+      {"dy_sub too long", edited("dy_sub", h.dy_sub, [&](auto& d) { d.push_back(0); }), "sizes"},
+      {"ddy_off2 too short", edited("ddy_off2", h.ddy_off2, [&](auto& d) { d.pop_back(); }), "sizes"},
+      {"last row start is not nnz", edited("x90_row", h.x90_row, [&](auto& r) { r.back() = nnz - 1; }), "inconsistent"},
+      {"values shorter than columns", edited("x90_val", h.x90_val, [&](auto& v) { v.pop_back(); }), "inconsistent"},
+      {"row starts decrease", edited("x90_row", h.x90_row, [&](auto& r) { std::swap(r[3], r[4]); }), "decrease"},
       // A row start far beyond the data, with the last start still correct: must be
       // caught before any column of that row is read. (With the check done row by row
       // inside the column loop, the row before it reads past the end of x90_col: this
       // case then passes or fails by chance and valgrind reports the invalid read.)
-      {"row start beyond the data",
-       [&](Table& t) {
-         auto r = h.x90_row;
-         r[r.size() - 2] = 1 << 28;
-         replace_array(t, "x90_row", r);
-       },
-       "X90"},
+      {"row start beyond the data", edited("x90_row", h.x90_row, [&](auto& r) { r[r.size() - 2] = 1 << 28; }), "X90"},
       {"wrong dtype",
        [&](Table& t) {
          std::vector<float> v(h.x90_val.begin(), h.x90_val.end());
@@ -1340,21 +1288,19 @@ TEST(RotationHelpersTable, FromTableRejectsCorruption) {
       // rotation loops rely on: ShRotation's constructor used to throw a logic_error on
       // them (found by the fuzz target fuzz_table_kinds).
       {"a row of zeros",
-       [&](Table& t) {
-         auto v = h.x90_val;
-         for (int k = h.x90_row[1]; k < h.x90_row[2]; ++k) v[k] = 0;
-         replace_array(t, "x90_val", v);
-       },
+       edited("x90_val", h.x90_val,
+              [&](auto& v) {
+                for (int k = h.x90_row[1]; k < h.x90_row[2]; ++k) v[k] = 0;
+              }),
        "sparsity structure"},
       {"a non-zero outside its class",
-       [&](Table& t) {
-         // Row 6 (band 2, m = 0) has two non-zeros of one parity: one moves by a column.
-         ASSERT_EQ(h.x90_row[7] - h.x90_row[6], 2);
-         auto c = h.x90_col;
-         int& first = c[h.x90_row[6]];
-         first = first < 8 ? first + 1 : first - 1;
-         replace_array(t, "x90_col", c);
-       },
+       edited("x90_col", h.x90_col,
+              [&](auto& c) {
+                // Row 6 (band 2, m = 0) has two non-zeros of one parity: one moves by a column.
+                ASSERT_EQ(h.x90_row[7] - h.x90_row[6], 2);
+                int& first = c[h.x90_row[6]];
+                first = first < 8 ? first + 1 : first - 1;
+              }),
        "sparsity structure"},
   };
   for (const Case& c : cases) {

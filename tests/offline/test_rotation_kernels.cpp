@@ -121,6 +121,24 @@ Eigen::MatrixXd taylor_y(RotationMethod m, int order, double b) {
   return t;
 }
 
+// ||f rotated by ShRotation<float>(r, m) - want|| / ||f||, with the helpers; `used` gets the
+// method the rotation resolved m to.
+template <class V>
+double float_rotation_error(int order, const Mat3<double>& r, RotationMethod m, const std::vector<double>& f,
+                            const V& want, RotationMethod* used = nullptr) {
+  ShRotation<float> rot(order, helpers());
+  if (!rot.set(r.cast<float>(), m)) {
+    ADD_FAILURE() << "set refused " << rotation_method_name(m) << " order " << order;
+    return INFINITY;
+  }
+  if (used) *used = rot.method();
+  std::vector<float> ff(f.begin(), f.end()), got(f.size());
+  rot.apply(ff, got);
+  double err = 0;
+  for (std::size_t i = 0; i < f.size(); ++i) err += std::pow(got[i] - want[i], 2);
+  return std::sqrt(err) / norm(f);
+}
+
 TEST(RotationKernels, TaylorAppliesZTZ) {
   // Rotation Rz(a) Ry(b) Rz(g): the Taylor methods must give M(Rz(a)) T(b) M(Rz(g)) f,
   // with the z-rotations from the reference method. Tolerances: double 1e-13 (entries of
@@ -141,13 +159,8 @@ TEST(RotationKernels, TaylorAppliesZTZ) {
       double err = 0;
       for (std::size_t i = 0; i < f.size(); ++i) err = std::max(err, std::abs(got[i] - want[i]));
       EXPECT_LE(err, 1e-13) << rotation_method_name(m) << " order " << order;
-      ShRotation<float> rotf(order, helpers());
-      ASSERT_TRUE(rotf.set(r.cast<float>(), m));
-      std::vector<float> ff(f.begin(), f.end()), gotf(f.size());
-      rotf.apply(ff, gotf);
-      double errf = 0;
-      for (std::size_t i = 0; i < f.size(); ++i) errf += std::pow(gotf[i] - want[i], 2);
-      EXPECT_LE(std::sqrt(errf) / norm(f), 2e-6) << "float " << rotation_method_name(m) << " order " << order;
+      EXPECT_LE(float_rotation_error(order, r, m, f, want), 2e-6)
+          << "float " << rotation_method_name(m) << " order " << order;
     }
   }
 }
@@ -172,15 +185,10 @@ TEST(RotationKernels, FloatNearIdentityEveryKernelOrder) {
         std::vector<double> want(f.size());
         ref.apply(f, want);
         for (RotationMethod m : {RotationMethod::zxzxz, RotationMethod::automatic}) {
-          ShRotation<float> rot(order, helpers());
-          ASSERT_TRUE(rot.set(r.cast<float>(), m));
-          std::vector<float> ff(f.begin(), f.end()), got(f.size());
-          rot.apply(ff, got);
-          double err = 0;
-          for (std::size_t i = 0; i < f.size(); ++i) err += std::pow(got[i] - want[i], 2);
-          EXPECT_LE(std::sqrt(err) / norm(f), kTolFloat)
-              << rotation_method_name(m) << " (" << rotation_method_name(rot.method()) << ") order " << order
-              << " angle " << angle;
+          RotationMethod used = m;
+          EXPECT_LE(float_rotation_error(order, r, m, f, want, &used), kTolFloat)
+              << rotation_method_name(m) << " (" << rotation_method_name(used) << ") order " << order << " angle "
+              << angle;
         }
       }
     }

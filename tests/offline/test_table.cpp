@@ -16,6 +16,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iterator>
 #include <limits>
 #include <numbers>
@@ -651,8 +652,12 @@ TEST_F(TableTest, RejectsCorruptJsonTables) {
 // Writer checks and atomic writes.
 
 TEST_F(TableTest, WriterRejectsInvalidTables) {
-  auto expect_write_error = [&](const Table& t, const std::string& needle,
+  // make_table() changed by `edit` must be refused with a message naming `needle`, and
+  // leave nothing behind.
+  auto expect_write_error = [&](const std::function<void(Table&)>& edit, const std::string& needle,
                                 TableEncoding enc = TableEncoding::binary) {
+    Table t = make_table();
+    edit(t);
     const fs::path p = dir_ / "w.shtbl";
     auto r = shtool::test::try_write(t, p, enc);
     ASSERT_FALSE(r.ok()) << "invalid table written; expected '" << needle << "'";
@@ -660,33 +665,22 @@ TEST_F(TableTest, WriterRejectsInvalidTables) {
     EXPECT_EQ(r.error().message.rfind(p.string(), 0), 0u) << r.error().message;
     EXPECT_FALSE(fs::exists(p));
   };
-  Table t = make_table();
-  t.kind = "";
-  expect_write_error(t, "table kind ''");
-  t = make_table();
-  t.kind = "Bad Kind";
-  expect_write_error(t, "table kind 'Bad Kind'");
-  t = make_table();
-  t.kind_version = "1";
-  expect_write_error(t, "kind_version '1'");
-  t = make_table();
-  t.generator = "{}";
-  expect_write_error(t, "'generator' needs a string field 'tool'");
-  t = make_table();
-  t.arrays.push_back(t.arrays[0]);
-  expect_write_error(t, "two arrays are named 'f64_specials'");
-  t = make_table();
-  t.arrays[0].shape = {3, 8};
-  expect_write_error(t, "array 'f64_specials' has 128 bytes but shape [3, 8] of f64 needs 192");
-  t = make_table();
-  t.arrays[0].shape = {-2, -8};
-  expect_write_error(t, "invalid shape");
-  t = make_table();
-  t.meta = std::string("{\"bad\": \"\xff\xfe\"}");  // not UTF-8: not JSON text
-  expect_write_error(t, "cannot write table");
-  t = make_table();
-  t.arrays.push_back(TableArray::from<float>("nan", {1}, std::vector<float>{std::nanf("")}));
-  expect_write_error(t, "array 'nan' element 0 is not finite", TableEncoding::json);
+  expect_write_error([](Table& t) { t.kind = ""; }, "table kind ''");
+  expect_write_error([](Table& t) { t.kind = "Bad Kind"; }, "table kind 'Bad Kind'");
+  expect_write_error([](Table& t) { t.kind_version = "1"; }, "kind_version '1'");
+  expect_write_error([](Table& t) { t.generator = "{}"; }, "'generator' needs a string field 'tool'");
+  expect_write_error([](Table& t) { t.arrays.push_back(t.arrays[0]); }, "two arrays are named 'f64_specials'");
+  expect_write_error(
+      [](Table& t) {
+        t.arrays[0].shape = {3, 8};
+      },
+      "array 'f64_specials' has 128 bytes but shape [3, 8] of f64 needs 192");
+  expect_write_error([](Table& t) { t.arrays[0].shape = {-2, -8}; }, "invalid shape");
+  // Not UTF-8: not JSON text.
+  expect_write_error([](Table& t) { t.meta = std::string("{\"bad\": \"\xff\xfe\"}"); }, "cannot write table");
+  expect_write_error(
+      [](Table& t) { t.arrays.push_back(TableArray::from<float>("nan", {1}, std::vector<float>{std::nanf("")})); },
+      "array 'nan' element 0 is not finite", TableEncoding::json);
 }
 
 TEST_F(TableTest, AtomicWriteLeavesNothingBehind) {

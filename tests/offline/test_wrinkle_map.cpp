@@ -28,24 +28,8 @@ namespace {
 using namespace shtool;
 using namespace shtool::wrinkles;
 
-// A model with random node values whose lobe i stays within about 35 degrees of its own
-// direction (as a fitted map's corresponding lobes do), so every cell's blend is defined.
 WrinkleModel smooth_random_model(const WrinkleGrid& grid, int order, int lobes, unsigned seed) {
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  WrinkleModel m = test::zero_wrinkle_model(grid, order, lobes);
-  std::vector<Eigen::Vector3d> base(lobes);
-  for (Eigen::Vector3d& b : base) b = Eigen::Vector3d(u(rng), u(rng), u(rng)).normalized();
-  for (int node = 0; node < grid.nodes(); ++node)
-    for (int i = 0; i < lobes; ++i) {
-      // Length 0.5..1.5: the node axes are not unit in a fitted map either.
-      const Eigen::Vector3d a = (base[i] + 0.4 * Eigen::Vector3d(u(rng), u(rng), u(rng))).normalized() *
-                                (1.0 + 0.5 * u(rng));
-      for (int c = 0; c < 3; ++c) m.axes[(static_cast<std::size_t>(node) * lobes + i) * 3 + c] = a[c];
-      for (int l = 2; l < order; ++l) m.coeffs[(static_cast<std::size_t>(node) * lobes + i) * order + l] = 0.3 * u(rng);
-    }
-  for (double& d : m.direct) d = u(rng);
-  return m;
+  return test::random_wrinkle_model(grid, order, lobes, seed, test::WrinkleAxes::smooth);
 }
 
 // The table fit-wrinkles would write for this model.

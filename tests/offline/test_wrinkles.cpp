@@ -24,16 +24,8 @@ namespace {
 using namespace shtool;
 using namespace shtool::wrinkles;
 
-// A model with random node values (axes of random length and direction).
 WrinkleModel random_model(const WrinkleGrid& grid, int order, int lobes, unsigned seed) {
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  WrinkleModel m = test::zero_wrinkle_model(grid, order, lobes);
-  for (double& a : m.axes) a = u(rng);
-  for (std::size_t b = 0; b < static_cast<std::size_t>(grid.nodes()) * lobes; ++b)
-    for (int l = 2; l < order; ++l) m.coeffs[b * order + l] = 0.3 * u(rng);
-  for (double& d : m.direct) d = u(rng);
-  return m;
+  return test::random_wrinkle_model(grid, order, lobes, seed, test::WrinkleAxes::random);
 }
 
 TEST(Wrinkles, GrooveMeshFollowsTheFormula) {

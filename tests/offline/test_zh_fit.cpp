@@ -80,7 +80,17 @@ TEST(ZhRuntime, RotatingTheAxisRotatesTheFunction) {
 
 // Every fitting test runs both methods: variable projection (the default) and the joint
 // BFGS of [4] as printed (the reference).
-class ZhFitMethods : public ::testing::TestWithParam<ZhFitMethod> {};
+class ZhFitMethods : public ::testing::TestWithParam<ZhFitMethod> {
+ protected:
+  // The options of this method for `lobes` lobes at `order`, the rest at their defaults.
+  ZhFitOptions options(int order, int lobes) const {
+    ZhFitOptions o;
+    o.method = GetParam();
+    o.order = order;
+    o.lobes = lobes;
+    return o;
+  }
+};
 INSTANTIATE_TEST_SUITE_P(Methods, ZhFitMethods, ::testing::Values(ZhFitMethod::varpro, ZhFitMethod::joint),
                          [](const auto& info) { return info.param == ZhFitMethod::varpro ? "varpro" : "joint"; });
 
@@ -127,9 +137,7 @@ TEST(ZhFit, ClosedFormRecoversASingleLobe) {
 TEST_P(ZhFitMethods, KnownLobesAreRecovered) {
   Lcg rng{7};
   const int order = 6;
-  ZhFitOptions o;
-  o.method = GetParam();
-  o.order = order;
+  ZhFitOptions o = options(order, 1);
   for (int n : {1, 2}) {
     std::vector<ZhLobe> truth;
     for (int k = 0; k < n; ++k) truth.push_back(random_lobe(rng, order));
@@ -150,10 +158,7 @@ TEST_P(ZhFitMethods, AsManyLobesAsBandsIsExactAtDefaultEffort) {
   // it ([4] Fig. 2 reports 0.00908; that is beatable by orders of magnitude), not stop at the
   // percent-level restart threshold meant for N < order.
   Lcg rng{11};
-  ZhFitOptions o;
-  o.method = GetParam();
-  o.order = 6;
-  o.lobes = 6;
+  ZhFitOptions o = options(6, 6);
   for (int trial = 0; trial < 3; ++trial) {
     const std::vector<double> t = random_unit_vector(rng, o.order);
     const ZhFit fit = fit_zh(t, o, trial);
@@ -164,9 +169,7 @@ TEST_P(ZhFitMethods, AsManyLobesAsBandsIsExactAtDefaultEffort) {
 TEST_P(ZhFitMethods, NeverWorseThanBestDenseSingleLobe) {
   Lcg rng{8};
   const int order = 6;
-  ZhFitOptions o;
-  o.method = GetParam();
-  o.order = order;
+  ZhFitOptions o = options(order, 1);
   o.starts = 2;
   for (int trial = 0; trial < 3; ++trial) {
     const std::vector<double> t = random_unit_vector(rng, order);
@@ -191,10 +194,7 @@ TEST_P(ZhFitMethods, DirectStorageKeepsDcAndLinear) {
   Lcg rng{9};
   const int order = 4;
   const std::vector<double> t = random_unit_vector(rng, order);
-  ZhFitOptions o;
-  o.method = GetParam();
-  o.order = order;
-  o.lobes = 3;
+  ZhFitOptions o = options(order, 3);
   o.direct = true;
   o.starts = 0;
   const ZhFit fit = fit_zh(t, o);
@@ -219,10 +219,7 @@ TEST_P(ZhFitMethods, DeterministicAcrossThreadCounts) {
     const std::vector<double> t = random_unit_vector(rng, 4);
     vectors.insert(vectors.end(), t.begin(), t.end());
   }
-  ZhFitOptions o;
-  o.method = GetParam();
-  o.order = 4;
-  o.lobes = 2;
+  ZhFitOptions o = options(4, 2);
   o.starts = 1;
   o.restart_above = 0;
   const ZhFitTable<double> one = fit_zh_all(vectors, o, 1);

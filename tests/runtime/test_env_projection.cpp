@@ -86,16 +86,32 @@ Ld max_abs(const std::vector<Ld>& v) {
   return m;
 }
 
+// Radiance 1 in all three channels projects to sqrt(4 pi) in band 0 and nothing above it.
+void expect_uniform_radiance(const Result<EnvCoefficients>& r, const std::string& what) {
+  ASSERT_TRUE(r) << r.error().message;
+  const std::vector<double>& c = r.value().coefficients;
+  for (int ch = 0; ch < 3; ++ch) EXPECT_NEAR(c[ch], std::sqrt(4 * kPi), 1e-14) << what;
+  for (std::size_t i = 3; i < c.size(); ++i) ASSERT_LT(std::abs(c[i]), 1e-14) << what << " coefficient " << i / 3;
+}
+
+// Every coefficient within 1e-12 of the largest reference coefficient of the per-texel
+// quadrature `ref`.
+void expect_matches_reference(const Result<EnvCoefficients>& r, const std::vector<Ld>& ref, int channels,
+                              const std::string& what) {
+  ASSERT_TRUE(r) << r.error().message;
+  const Ld scale = max_abs(ref);
+  for (std::size_t i = 0; i < ref.size(); ++i)
+    ASSERT_NEAR(r.value().coefficients[i], static_cast<double>(ref[i]), 1e-12 * static_cast<double>(scale))
+        << what << " coefficient " << i / channels;
+}
+
 TEST(EquirectProjection, UniformRadianceIsExact) {
   for (int h : {1, 2, 3, 8, 64, 301}) {
     for (int order : {1, 2, 5, 9, 16}) {
       const int w = 2 * h;
       const std::vector<float> img(static_cast<std::size_t>(w) * h * 3, 1.0f);
       const Result<EnvCoefficients> r = project_equirect({img.data(), w, h, 3}, order);
-      ASSERT_TRUE(r) << r.error().message;
-      const std::vector<double>& c = r.value().coefficients;
-      for (int ch = 0; ch < 3; ++ch) EXPECT_NEAR(c[ch], std::sqrt(4 * kPi), 1e-14) << h << " " << order;
-      for (std::size_t i = 3; i < c.size(); ++i) ASSERT_LT(std::abs(c[i]), 1e-14) << "h " << h << " i " << i / 3;
+      expect_uniform_radiance(r, "h " + std::to_string(h) + " order " + std::to_string(order));
     }
   }
 }
@@ -108,12 +124,8 @@ TEST(EquirectProjection, MatchesPerTexelQuadratureOnRandomImages) {
     const int w = 2 * k.h;
     const std::vector<float> img = random_image(w, k.h, k.channels, 17 + k.h);
     const Result<EnvCoefficients> r = project_equirect({img.data(), w, k.h, k.channels}, k.order);
-    ASSERT_TRUE(r) << r.error().message;
-    const std::vector<Ld> ref = reference_equirect(img, w, k.h, k.channels, k.order);
-    const Ld scale = max_abs(ref);
-    for (std::size_t i = 0; i < ref.size(); ++i)
-      ASSERT_NEAR(r.value().coefficients[i], static_cast<double>(ref[i]), 1e-12 * static_cast<double>(scale))
-          << "h " << k.h << " order " << k.order << " coefficient " << i / k.channels;
+    expect_matches_reference(r, reference_equirect(img, w, k.h, k.channels, k.order), k.channels,
+                             "h " + std::to_string(k.h) + " order " + std::to_string(k.order));
   }
 }
 
@@ -205,10 +217,7 @@ TEST(CubemapProjection, UniformRadianceIsExact) {
       for (auto& f : faces) f.assign(static_cast<std::size_t>(size) * size * 3, 1.0f);
       const auto v = views(faces, size, 3);
       const Result<EnvCoefficients> r = project_cubemap(v, order);
-      ASSERT_TRUE(r) << r.error().message;
-      const std::vector<double>& c = r.value().coefficients;
-      for (int ch = 0; ch < 3; ++ch) EXPECT_NEAR(c[ch], std::sqrt(4 * kPi), 1e-14) << size << " " << order;
-      for (std::size_t i = 3; i < c.size(); ++i) ASSERT_LT(std::abs(c[i]), 1e-14) << "size " << size << " i " << i / 3;
+      expect_uniform_radiance(r, "size " + std::to_string(size) + " order " + std::to_string(order));
     }
   }
 }
@@ -222,12 +231,8 @@ TEST(CubemapProjection, MatchesPerTexelQuadratureOnRandomImages) {
     std::array<std::vector<float>, 6> faces;
     for (int f = 0; f < 6; ++f) faces[f] = random_image(k.size, k.size, k.channels, 100 + 7 * f + k.size);
     const Result<EnvCoefficients> r = project_cubemap(views(faces, k.size, k.channels), k.order, k.mirror);
-    ASSERT_TRUE(r) << r.error().message;
-    const std::vector<Ld> ref = reference_cubemap(faces, k.size, k.channels, k.order, k.mirror);
-    const Ld scale = max_abs(ref);
-    for (std::size_t i = 0; i < ref.size(); ++i)
-      ASSERT_NEAR(r.value().coefficients[i], static_cast<double>(ref[i]), 1e-12 * static_cast<double>(scale))
-          << "size " << k.size << " order " << k.order << " coefficient " << i / k.channels;
+    expect_matches_reference(r, reference_cubemap(faces, k.size, k.channels, k.order, k.mirror), k.channels,
+                             "size " + std::to_string(k.size) + " order " + std::to_string(k.order));
   }
 }
 
@@ -351,6 +356,18 @@ TEST(CubemapProjection, FastPathMatchesTheReferenceOnFacesOfManyTiles) {
   }
 }
 
+// What a parallel caller does, with the blocks run last first: each block into its own
+// partial sums of a 3-channel image, then the partials summed in block order.
+template <class Projector, class Image>
+std::vector<double> blocks_in_reverse(const Projector& p, const Image& image) {
+  std::vector<std::vector<double>> partials(p.block_count(), std::vector<double>(p.partial_size(3), 0.0));
+  for (int b = p.block_count() - 1; b >= 0; --b) EXPECT_TRUE(p.accumulate_block(image, b, partials[b])) << b;
+  std::vector<double> sum(p.partial_size(3), 0.0);
+  for (const auto& part : partials)
+    for (std::size_t i = 0; i < sum.size(); ++i) sum[i] += part[i];
+  return sum;
+}
+
 TEST(CubemapProjection, BlocksCanRunInAnyOrderAndNonFiniteTexelsAreNamed) {
   const int size = 37, order = 5;
   std::array<std::vector<float>, 6> faces;
@@ -358,12 +375,7 @@ TEST(CubemapProjection, BlocksCanRunInAnyOrderAndNonFiniteTexelsAreNamed) {
   const auto v = views(faces, size, 3);
   const CubemapProjector p = CubemapProjector::create(size, order).value();
   ASSERT_GT(p.block_count(), 1);
-  std::vector<std::vector<double>> partials(p.block_count(), std::vector<double>(p.partial_size(3), 0.0));
-  for (int b = p.block_count() - 1; b >= 0; --b) ASSERT_TRUE(p.accumulate_block(v, b, partials[b]));
-  std::vector<double> sum(p.partial_size(3), 0.0);
-  for (const auto& part : partials)
-    for (std::size_t i = 0; i < sum.size(); ++i) sum[i] += part[i];
-  EXPECT_EQ(sum, project_cubemap(v, order).value().coefficients);
+  EXPECT_EQ(blocks_in_reverse(p, v), project_cubemap(v, order).value().coefficients);
   // Two bad texels: every path names the first (face, row, column), whichever block meets it.
   faces[3][(20 * size + 2) * 3 + 1] = std::numeric_limits<float>::infinity();
   faces[4][(1 * size + 30) * 3 + 0] = std::numeric_limits<float>::quiet_NaN();
@@ -432,17 +444,11 @@ TEST(EnvProjection, LayoutsAgreeAndConvergeQuadratically) {
 }
 
 TEST(EnvProjection, BlocksCanRunInAnyOrder) {
-  // What a parallel caller does: blocks into their own partials, summed in block order.
   const int w = 64, h = 32, order = 7;
   const std::vector<float> img = random_image(w, h, 3, 9);
   const FloatImageView view{img.data(), w, h, 3};
   const EquirectProjector p = EquirectProjector::create(w, h, order).value();
-  std::vector<std::vector<double>> partials(p.block_count(), std::vector<double>(p.partial_size(3), 0.0));
-  for (int b = p.block_count() - 1; b >= 0; --b) ASSERT_TRUE(p.accumulate_block(view, b, partials[b]));
-  std::vector<double> sum(p.partial_size(3), 0.0);
-  for (const auto& part : partials)
-    for (std::size_t i = 0; i < sum.size(); ++i) sum[i] += part[i];
-  EXPECT_EQ(sum, project_equirect(view, order).value().coefficients);
+  EXPECT_EQ(blocks_in_reverse(p, view), project_equirect(view, order).value().coefficients);
 }
 
 }  // namespace

@@ -12,22 +12,14 @@
 #include "shtool/quadrature.h"
 #include "shtool/sh.h"
 #include "shtool/sh_window.h"
+#include "test_util.h"
 
 namespace shtool {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
 
-// Legendre P_l(x) by Bonnet's recurrence, for the quadrature references.
-double legendre_p(int l, double x) {
-  double p0 = 1, p1 = x;
-  if (l == 0) return 1;
-  for (int k = 1; k < l; ++k) {
-    const double p2 = ((2 * k + 1) * x * p1 - k * p0) / (k + 1);
-    p0 = p1, p1 = p2;
-  }
-  return p1;
-}
+using test::legendre_p;
 
 // integral_a^b f(x) dx by a 64-node Gauss rule (exact for the polynomials used here).
 template <class F>

@@ -20,6 +20,7 @@
 
 #include "shtool/quadrature.h"
 #include "shtool/sh.h"
+#include "test_util.h"
 
 // Counting replacement of the global allocator, so the allocation-free promise of
 // sh.h can be checked. Counting is switched on only around the calls under test.
@@ -151,17 +152,7 @@ std::vector<LD> reference_sh(int order, const Vec3<double>& w) {
   return out;
 }
 
-// Legendre polynomial P_l(x) by the Bonnet recurrence, long double.
-LD legendre_p(int l, LD x) {
-  LD p0 = 1, p1 = x;
-  if (l == 0) return p0;
-  for (int k = 2; k <= l; ++k) {
-    const LD pk = ((2 * k - 1) * x * p1 - (k - 1) * p0) / k;
-    p0 = p1;
-    p1 = pk;
-  }
-  return p1;
-}
+using test::legendre_p;
 
 std::vector<double> eval_d(int order, const Vec3<double>& w) {
   std::vector<double> v(sh_count(order));

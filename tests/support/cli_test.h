@@ -17,6 +17,7 @@
 #include "run_command.h"
 #include "schema_check.h"
 #include "scratch_files.h"
+#include "shtool/table.h"
 
 namespace shtool::test {
 
@@ -59,6 +60,33 @@ inline void expect_refused(const std::string& command, const std::vector<std::st
   EXPECT_EQ(r.exit_code, 1) << message << "\n" << r.err;
   EXPECT_NE(r.err.find(message), std::string::npos) << r.err;
   EXPECT_FALSE(std::filesystem::exists(out)) << message;
+}
+
+// One request shtool must refuse: its arguments, and what the message must name.
+struct Refused {
+  std::vector<std::string> args;
+  std::string message;
+};
+
+// expect_refused for every case, its arguments after the `common` ones.
+inline void expect_all_refused(const std::string& command, const std::vector<std::string>& common,
+                               const std::vector<Refused>& cases, const std::filesystem::path& out) {
+  for (const Refused& c : cases) {
+    std::vector<std::string> args = common;
+    args.insert(args.end(), c.args.begin(), c.args.end());
+    expect_refused(command, args, c.message, out);
+  }
+}
+
+// The table a command has to write: shtool `args` exits 0 with `report` in its stderr,
+// then `out` is read as `expect` says.
+inline Result<Table> run_and_read_table(const std::vector<std::string>& args, const std::string& report,
+                                        const std::filesystem::path& out, const TableExpectation& expect) {
+  const CommandResult r = run_shtool(args);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find(report), std::string::npos) << r.err;
+  if (r.exit_code != 0) return Error{"shtool failed: " + r.err};
+  return read_table(out, expect);
 }
 
 inline nlohmann::json read_json(const std::filesystem::path& p) { return nlohmann::json::parse(read_file(p)); }

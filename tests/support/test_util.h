@@ -35,6 +35,20 @@ inline std::vector<std::vector<double>> random_inputs(int order, int count, unsi
   return f;
 }
 
+// Legendre polynomial P_l(x) by Bonnet's recurrence, k P_k = (2k - 1) x P_{k-1} - (k - 1) P_{k-2},
+// in R (long double where a reference needs the digits): the quadrature references' P_l.
+template <class R>
+R legendre_p(int l, R x) {
+  R p0 = 1, p1 = x;
+  if (l == 0) return p0;
+  for (int k = 2; k <= l; ++k) {
+    const R pk = ((2 * k - 1) * x * p1 - (k - 1) * p0) / k;
+    p0 = p1;
+    p1 = pk;
+  }
+  return p1;
+}
+
 // Euclidean norm of a coefficient vector.
 inline double norm(const std::vector<double>& v) {
   double s = 0;

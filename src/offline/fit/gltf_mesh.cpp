@@ -61,6 +61,28 @@ struct AccessorView {
   const unsigned char* data = nullptr;
   std::size_t count = 0, stride = 0;
   int component_type = 0;
+
+  // Component c of element i stored as a U (copied out: the data need not be aligned).
+  template <class U>
+  U component(std::size_t i, int c) const {
+    U u;
+    std::memcpy(&u, data + i * stride + c * sizeof(U), sizeof u);
+    return u;
+  }
+  // Component c of element i: a float as it is, an unsigned integer as its value or, when
+  // `normalized`, divided by the type's maximum (glTF 2.0, 3.11).
+  double number(std::size_t i, int c, bool normalized) const {
+    switch (component_type) {
+      case TINYGLTF_COMPONENT_TYPE_FLOAT:
+        return component<float>(i, c);
+      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
+        return normalized ? component<std::uint8_t>(i, c) / 255.0 : component<std::uint8_t>(i, c);
+      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT:
+        return normalized ? component<std::uint16_t>(i, c) / 65535.0 : component<std::uint16_t>(i, c);
+      default:
+        return component<std::uint32_t>(i, c);
+    }
+  }
 };
 
 AccessorView accessor_view(const tinygltf::Model& model, int index, int type, const std::vector<int>& component_types,
@@ -98,69 +120,48 @@ AccessorView accessor_view(const tinygltf::Model& model, int index, int type, co
   return {buffer.data() + view.byteOffset + a.byteOffset, a.count, stride, a.componentType};
 }
 
+// Every element of accessor `index` (see accessor_view), each made by element(view, i).
+template <class Out, class Element>
+std::vector<Out> read_accessor(const tinygltf::Model& model, int index, int type,
+                               const std::vector<int>& component_types, const std::string& what,
+                               const std::filesystem::path& path, Element element) {
+  const AccessorView v = accessor_view(model, index, type, component_types, what, path);
+  std::vector<Out> out(v.count);
+  for (std::size_t i = 0; i < v.count; ++i) out[i] = element(v, i);
+  return out;
+}
+
 std::vector<Eigen::Vector3d> read_vec3(const tinygltf::Model& model, int index, const std::string& what,
                                        const std::filesystem::path& path) {
-  const AccessorView v =
-      accessor_view(model, index, TINYGLTF_TYPE_VEC3, {TINYGLTF_COMPONENT_TYPE_FLOAT}, what, path);
-  std::vector<Eigen::Vector3d> out(v.count);
-  for (std::size_t i = 0; i < v.count; ++i) {
-    float f[3];
-    std::memcpy(f, v.data + i * v.stride, sizeof f);
-    out[i] = Eigen::Vector3d(f[0], f[1], f[2]);
-  }
-  return out;
+  return read_accessor<Eigen::Vector3d>(model, index, TINYGLTF_TYPE_VEC3, {TINYGLTF_COMPONENT_TYPE_FLOAT}, what, path,
+                                        [](const AccessorView& v, std::size_t i) {
+                                          return Eigen::Vector3d(v.component<float>(i, 0), v.component<float>(i, 1),
+                                                                 v.component<float>(i, 2));
+                                        });
 }
 
 // TEXCOORD_0: float, or normalised unsigned byte / short (glTF 2.0, 3.7.2.1), returned
 // with v flipped into Mesh::uvs' bottom-left convention.
 std::vector<Eigen::Vector2d> read_texcoords(const tinygltf::Model& model, int index, const std::filesystem::path& path) {
-  const AccessorView v = accessor_view(model, index, TINYGLTF_TYPE_VEC2,
-                                       {TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE,
-                                        TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT},
-                                       "TEXCOORD_0", path);
-  std::vector<Eigen::Vector2d> out(v.count);
-  for (std::size_t i = 0; i < v.count; ++i) {
-    const unsigned char* p = v.data + i * v.stride;
-    double uv[2];
-    for (int c = 0; c < 2; ++c) {
-      if (v.component_type == TINYGLTF_COMPONENT_TYPE_FLOAT) {
-        float f;
-        std::memcpy(&f, p + c * sizeof f, sizeof f);
-        uv[c] = f;
-      } else if (v.component_type == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE) {
-        uv[c] = p[c] / 255.0;
-      } else {
-        std::uint16_t s;
-        std::memcpy(&s, p + c * sizeof s, sizeof s);
-        uv[c] = s / 65535.0;
-      }
-    }
-    if (!std::isfinite(uv[0]) || !std::isfinite(uv[1]))
-      fail(path, "TEXCOORD_0 of vertex " + std::to_string(i) + " is not finite");
-    out[i] = Eigen::Vector2d(uv[0], 1.0 - uv[1]);
-  }
-  return out;
+  return read_accessor<Eigen::Vector2d>(
+      model, index, TINYGLTF_TYPE_VEC2,
+      {TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT},
+      "TEXCOORD_0", path, [&path](const AccessorView& v, std::size_t i) {
+        const double uv[2] = {v.number(i, 0, true), v.number(i, 1, true)};
+        if (!std::isfinite(uv[0]) || !std::isfinite(uv[1]))
+          fail(path, "TEXCOORD_0 of vertex " + std::to_string(i) + " is not finite");
+        return Eigen::Vector2d(uv[0], 1.0 - uv[1]);
+      });
 }
 
 std::vector<std::uint32_t> read_indices(const tinygltf::Model& model, int index, const std::filesystem::path& path) {
-  const AccessorView v = accessor_view(model, index, TINYGLTF_TYPE_SCALAR,
-                                       {TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT,
-                                        TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT},
-                                       "indices", path);
-  std::vector<std::uint32_t> out(v.count);
-  for (std::size_t i = 0; i < v.count; ++i) {
-    const unsigned char* p = v.data + i * v.stride;
-    if (v.component_type == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE) {
-      out[i] = p[0];
-    } else if (v.component_type == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT) {
-      std::uint16_t s;
-      std::memcpy(&s, p, sizeof s);
-      out[i] = s;
-    } else {
-      std::memcpy(&out[i], p, sizeof(std::uint32_t));
-    }
-  }
-  return out;
+  return read_accessor<std::uint32_t>(
+      model, index, TINYGLTF_TYPE_SCALAR,
+      {TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT,
+       TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT},
+      "indices", path,
+      // Every u32 is exact in a double.
+      [](const AccessorView& v, std::size_t i) { return static_cast<std::uint32_t>(v.number(i, 0, false)); });
 }
 
 // The node's local transform: its matrix, or T R S.

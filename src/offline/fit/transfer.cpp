@@ -119,6 +119,19 @@ struct Points {
   }
 };
 
+// A point's `rays` directions, and for each the Embree record make(origin, direction) that
+// one stream call (or one call per ray) traces.
+template <class Record, class Make>
+void point_rays(const VertexRays& cast, int rays, std::vector<Eigen::Vector3d>& dirs, std::vector<Record>& records,
+                Make make) {
+  dirs.resize(rays);
+  records.resize(rays);
+  for (int k = 0; k < rays; ++k) {
+    dirs[k] = cast.direction(k);
+    records[k] = make(cast.origin(), dirs[k]);
+  }
+}
+
 // Pass 0: direct transfer of every row.
 std::vector<double> direct_pass(const EmbreeScene* scene, const Points& points, const TransferOptions& options,
                                 int threads, double offset, std::size_t progress_base, std::size_t progress_total) {
@@ -133,14 +146,9 @@ std::vector<double> direct_pass(const EmbreeScene* scene, const Points& points, 
     thread_local std::vector<RTCRay> traced;
     y.resize(n2);
     sum.assign(n2, 0.0);
-    dirs.resize(rays);
-    traced.resize(rays);
+    point_rays(cast, rays, dirs, traced, embree_ray);
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
-    for (int k = 0; k < rays; ++k) {
-      dirs[k] = cast.direction(k);
-      traced[k] = embree_ray(cast.origin(), dirs[k]);
-    }
     if (scene && options.ray_streams)
       rtcOccluded1M(scene->scene, &context, traced.data(), static_cast<unsigned>(rays), sizeof(RTCRay));
     else if (scene)
@@ -172,16 +180,14 @@ std::vector<double> bounce_pass(const Mesh& mesh, const EmbreeScene& scene, cons
     thread_local std::vector<Eigen::Vector3d> dirs;
     thread_local std::vector<RTCRayHit> hits;
     sum.assign(n2, 0.0);
-    dirs.resize(rays);
-    hits.resize(rays);
+    point_rays(cast, rays, dirs, hits, [](const Eigen::Vector3d& origin, const Eigen::Vector3d& dir) {
+      RTCRayHit hit{};
+      hit.ray = embree_ray(origin, dir);
+      hit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+      return hit;
+    });
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
-    for (int k = 0; k < rays; ++k) {
-      dirs[k] = cast.direction(k);
-      hits[k] = RTCRayHit{};
-      hits[k].ray = embree_ray(cast.origin(), dirs[k]);
-      hits[k].hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    }
     if (options.ray_streams)
       rtcIntersect1M(scene.scene, &context, hits.data(), static_cast<unsigned>(rays), sizeof(RTCRayHit));
     else

@@ -1,6 +1,5 @@
 #include "glossy/glossy_job.h"
 
-#include <chrono>
 #include <cmath>
 #include <string>
 
@@ -73,15 +72,14 @@ GlossyReport run_fit_glossy(const GlossyRequest& r) {
   GlossyReport report;
   report.vertices = mesh.positions.size();
 
-  auto t0 = std::chrono::steady_clock::now();
+  PhaseTimer timer;
   const Eigen::MatrixXd b = brdf_matrix(r.brdf, r.order, r.view_resolution, threads);
   const BrdfFactors factors = factor_brdf(b, r.terms);
   const Eigen::MatrixXd gram = b.transpose() * b;
-  report.brdf_seconds = seconds_since(t0);
+  report.brdf_seconds = timer.lap();
   report.singular_values.assign(factors.singular_values.data(),
                                 factors.singular_values.data() + factors.singular_values.size());
 
-  t0 = std::chrono::steady_clock::now();
   GlossyTransferOptions to;
   to.order = r.order;
   to.rays = r.rays;
@@ -89,9 +87,8 @@ GlossyReport run_fit_glossy(const GlossyRequest& r) {
   to.shadowed = r.shadowed;
   to.threads = threads;
   GlossyTransfer transfer = glossy_transfer(mesh, frames, factors.rows, gram, to);
-  report.simulate_seconds = seconds_since(t0);
+  report.simulate_seconds = timer.lap();
 
-  t0 = std::chrono::steady_clock::now();
   fit::ZhFitOptions fo;
   fo.order = r.order;
   fo.lobes = r.lobes;
@@ -99,7 +96,7 @@ GlossyReport run_fit_glossy(const GlossyRequest& r) {
   fit::apply_effort(fo, r.effort);
   fo.seed = r.seed;
   const ZhFitTable<double> fits = fit::fit_zh_all(transfer.rows, fo, threads);
-  report.fit_seconds = seconds_since(t0);
+  report.fit_seconds = timer.lap();
   std::vector<double>().swap(transfer.rows);
 
   double residual2 = 0;

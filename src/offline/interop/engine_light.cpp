@@ -95,6 +95,20 @@ nlohmann::json rows_json(const Nine& v) {
   return rows;
 }
 
+// Engine-frame coefficients g in the phase-free basis (sigma_i drops the Condon-Shortley
+// sign), times intensity / pi and, when `pre_scaled`, times the basis constants |K_i| (for
+// shaders that evaluate bare polynomials).
+Nine phase_free_over_pi(const Nine& g, double intensity, bool pre_scaled) {
+  Nine out{};
+  for (int i = 0; i < 9; ++i)
+    for (int c = 0; c < 3; ++c) {
+      double v = intensity * kSigma[i] * g[3 * i + c];
+      if (pre_scaled) v *= kAbsK[i];
+      out[3 * i + c] = v / kPi;
+    }
+  return out;
+}
+
 std::string rows_text(const nlohmann::json& j) {
   // One row per line inside the document, for reading.
   std::string s = dump_finite(j, "--out", 1);
@@ -305,10 +319,8 @@ ExportedLight export_light(const Lighting& light, LightFormat format, const Fram
     case LightFormat::unity: {
       // SphericalHarmonicsL2 holds E/pi pre-scaled by |K_i| in the phase-free basis of the
       // left-handed frame; ShadeSH9's unity_SH* constants by HDRP's PackCoefficients.
-      const Nine g = engine(frame, first_nine(light, Quantity::irradiance, out.notes));
-      Nine sh{};
-      for (int i = 0; i < 9; ++i)
-        for (int c = 0; c < 3; ++c) sh[3 * i + c] = intensity * kSigma[i] * g[3 * i + c] * kAbsK[i] / kPi;
+      const Nine sh = phase_free_over_pi(engine(frame, first_nine(light, Quantity::irradiance, out.notes)), intensity,
+                                         /*pre_scaled=*/true);
       nlohmann::json l2 = nlohmann::json::array();
       for (int c = 0; c < 3; ++c)
         for (int i = 0; i < 9; ++i) l2.push_back(sh[3 * i + c]);
@@ -366,10 +378,8 @@ ExportedLight export_light(const Lighting& light, LightFormat format, const Fram
     }
     case LightFormat::godot: {
       // LightmapGI probe captures: the phase-free basis, L/pi (lm_compute.glsl's 4/N).
-      const Nine g = engine(frame, first_nine(light, Quantity::radiance, out.notes));
-      Nine v{};
-      for (int i = 0; i < 9; ++i)
-        for (int c = 0; c < 3; ++c) v[3 * i + c] = intensity * kSigma[i] * g[3 * i + c] / kPi;
+      const Nine v = phase_free_over_pi(engine(frame, first_nine(light, Quantity::radiance, out.notes)), intensity,
+                                        /*pre_scaled=*/false);
       out.text = rows_text({{"godot_lightmap_probe_sh", rows_json(v)}});
       if (intensity != 1) out.notes.push_back("--intensity is folded into the coefficients");
       break;

@@ -4,8 +4,10 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <sstream>
 #include <stdexcept>
+#include <string>
 #include <tuple>
 #include <utility>
 #include <vector>
@@ -370,16 +372,23 @@ std::string tripling_kernels_source() {
   }
   s << tables.str();
   s << "}  // namespace\n\n";
-  s << "template <class T>\nTriplingKernel<T> tripling_kernel(int order) {\n  switch (order) {\n";
-  for (int order = 2; order <= kTriplingKernelMaxOrder; ++order)
-    s << "    case " << order << ":\n      return &tripling_kernel_" << order << "<T>;\n";
-  s << "    default:\n      return nullptr;\n  }\n}\n\n";
+  // A function `signature` that returns value(order) for each generated order, `fallback`
+  // for any other.
+  auto order_switch = [&s](const std::string& signature, const std::function<std::string(int)>& value,
+                           const std::string& fallback) {
+    s << signature << " {\n  switch (order) {\n";
+    for (int order = 2; order <= kTriplingKernelMaxOrder; ++order)
+      s << "    case " << order << ":\n      return " << value(order) << ";\n";
+    s << "    default:\n      return " << fallback << ";\n  }\n}\n\n";
+  };
+  order_switch(
+      "template <class T>\nTriplingKernel<T> tripling_kernel(int order)",
+      [](int order) { return "&tripling_kernel_" + std::to_string(order) + "<T>"; }, "nullptr");
   s << "template TriplingKernel<float> tripling_kernel<float>(int);\n";
   s << "template TriplingKernel<double> tripling_kernel<double>(int);\n\n";
-  s << "std::span<const TriplingKernelEntry> tripling_kernel_entries(int order) {\n  switch (order) {\n";
-  for (int order = 2; order <= kTriplingKernelMaxOrder; ++order)
-    s << "    case " << order << ":\n      return kEntries" << order << ";\n";
-  s << "    default:\n      return {};\n  }\n}\n\n";
+  order_switch(
+      "std::span<const TriplingKernelEntry> tripling_kernel_entries(int order)",
+      [](int order) { return "kEntries" + std::to_string(order); }, "{}");
   s << "}  // namespace shtool::detail\n";
   return s.str();
 }

@@ -1,6 +1,5 @@
 #include "wrinkles/wrinkle_job.h"
 
-#include <chrono>
 #include <cmath>
 #include <string>
 
@@ -100,10 +99,9 @@ WrinkleReport run_fit_wrinkles(const WrinkleRequest& r) {
   io.output(r.json, "--json");
   const WrinkleGrid grid{r.grid, r.samples, r.max_depth};
   WrinkleReport report;
-  auto t0 = std::chrono::steady_clock::now();
+  PhaseTimer timer;
   const std::vector<double> transfer = simulate_transfer(grid, {r.order, r.rays, r.seed, r.threads});
-  report.simulation_seconds = seconds_since(t0);
-  t0 = std::chrono::steady_clock::now();
+  report.simulation_seconds = timer.lap();
   WrinkleFitOptions options;
   options.order = r.order;
   options.lobes = r.lobes;
@@ -112,7 +110,7 @@ WrinkleReport run_fit_wrinkles(const WrinkleRequest& r) {
   options.max_evaluations = r.max_evaluations;
   options.optimizer = r.optimizer;
   const WrinkleFit fit = fit_wrinkles(grid, transfer, options);
-  report.fit_seconds = seconds_since(t0);
+  report.fit_seconds = timer.lap();
   report.errors = fit.errors;
   report.evaluations = fit.evaluations;
   report.samples = grid.sample_count();

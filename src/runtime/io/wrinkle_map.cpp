@@ -93,9 +93,8 @@ bool meta_int(const nlohmann::json& meta, const char* key, std::int64_t& out) {
 
 template <class T>
 Result<WrinkleMap<T>> WrinkleMap<T>::from_table(const Table& t) {
-  if (t.kind != kWrinkleZhKind) return wrinkle_error("wrong kind '" + t.kind + "'");
-  if (t.order < 2 || t.order > kMaxWrinkleOrder)
-    return wrinkle_error("order " + std::to_string(t.order) + " is outside 2.." + std::to_string(kMaxWrinkleOrder));
+  if (const auto problem = detail::kind_and_order_problem(t, kWrinkleZhKind, 2, kMaxWrinkleOrder))
+    return wrinkle_error(*problem);
   const nlohmann::json meta = nlohmann::json::parse(t.meta, nullptr, /*allow_exceptions=*/false);
   std::int64_t G = 0, N = 0;
   if (!meta_int(meta, "grid", G) || G < 2 || G > 4096)
@@ -175,11 +174,6 @@ Result<WrinkleMap<T>> WrinkleMap<T>::from_table(const Table& t) {
   return m;
 }
 
-template <class T>
-Result<WrinkleMap<T>> WrinkleMap<T>::load(const std::filesystem::path& path) {
-  return detail::load_kind<WrinkleMap>(path, kWrinkleZhKind);
-}
-
 template WrinkleWeights<float> wrinkle_weights<float>(int, float, float, float) noexcept;
 template WrinkleWeights<double> wrinkle_weights<double>(int, double, double, double) noexcept;
 template void blend_wrinkle_lobes<float>(int, int, std::span<const float>, std::span<const float>,
@@ -192,7 +186,6 @@ template float shade_wrinkle_lobes<float>(std::span<const float>, const Eigen::M
                                           const WrinkleLobes<float>&) noexcept;
 template double shade_wrinkle_lobes<double>(std::span<const double>, const Eigen::Matrix<double, 3, 3>&,
                                             const WrinkleLobes<double>&) noexcept;
-template struct WrinkleMap<float>;
-template struct WrinkleMap<double>;
+SHTOOL_LOAD_KIND_FLOAT_AND_DOUBLE(WrinkleMap, kWrinkleZhKind)
 
 }  // namespace shtool

@@ -36,6 +36,15 @@ Result<std::vector<double>> finite_f64_array(const Table& t, const char* name, c
   return v;
 }
 
+Result<std::vector<std::uint32_t>> optional_vertex_index(const Table& t, std::size_t vertices,
+                                                         const std::string& v_is) {
+  const TableArray* vi = t.find("vertex_index");
+  if (!vi) return std::vector<std::uint32_t>{};
+  if (vi->dtype != DType::u32 || vi->shape != std::vector<std::int64_t>{static_cast<std::int64_t>(vertices)})
+    return Error{"array 'vertex_index' is not u32 of shape [V] (" + v_is + "), got " + shape_text(vi->shape)};
+  return vi->values<std::uint32_t>();
+}
+
 template <class T>
 Result<ZhFitTable<T>> zh_rows_from_table(const Table& t, const std::string& prefix) {
   auto zh_fit_error = [&](const std::string& what) { return Error{prefix + what}; };
@@ -120,21 +129,12 @@ Result<ZhFitTable<T>> ZhFitTable<T>::from_table(const Table& t) {
   Result<ZhFitTable> rows = table_format::zh_rows_from_table<T>(t, "zh-fit table: ");
   if (!rows) return rows.error();
   ZhFitTable z = std::move(rows).value();
-  const auto V = static_cast<std::int64_t>(z.vertices);
-  if (const TableArray* vi = t.find("vertex_index")) {
-    if (vi->dtype != DType::u32 || vi->shape != std::vector<std::int64_t>{V})
-      return zh_fit_error("array 'vertex_index' is not u32 of shape [V]");
-    z.vertex_index = vi->values<std::uint32_t>();
-  }
+  auto index = table_format::optional_vertex_index(t, z.vertices, "V = " + std::to_string(z.vertices));
+  if (!index) return zh_fit_error(index.error().message);
+  z.vertex_index = std::move(index).value();
   return z;
 }
 
-template <class T>
-Result<ZhFitTable<T>> ZhFitTable<T>::load(const std::filesystem::path& path) {
-  return detail::load_kind<ZhFitTable>(path, kZhFitKind);
-}
-
-template struct ZhFitTable<float>;
-template struct ZhFitTable<double>;
+SHTOOL_LOAD_KIND_FLOAT_AND_DOUBLE(ZhFitTable, kZhFitKind)
 
 }  // namespace shtool

@@ -19,9 +19,8 @@ Error lighting_error(const std::string& what) { return Error{"env-sh table: " + 
 
 template <class T>
 Result<ShLighting<T>> ShLighting<T>::from_table(const Table& t) {
-  if (t.kind != kEnvShKind) return lighting_error("wrong kind '" + t.kind + "'");
-  if (t.order < 1 || t.order > kMaxEnvOrder)
-    return lighting_error("order " + std::to_string(t.order) + " outside 1.." + std::to_string(kMaxEnvOrder));
+  if (const auto problem = detail::kind_and_order_problem(t, kEnvShKind, 1, kMaxEnvOrder))
+    return lighting_error(*problem);
   const TableArray* a = t.find("coefficients");
   if (!a) return lighting_error("no array 'coefficients'");
   if (a->dtype != DType::f64 || a->shape != std::vector<std::int64_t>{sh_count(t.order), kChannels})
@@ -40,12 +39,6 @@ Result<ShLighting<T>> ShLighting<T>::from_table(const Table& t) {
   return l;
 }
 
-template <class T>
-Result<ShLighting<T>> ShLighting<T>::load(const std::filesystem::path& path) {
-  return detail::load_kind<ShLighting>(path, kEnvShKind);
-}
-
-template struct ShLighting<float>;
-template struct ShLighting<double>;
+SHTOOL_LOAD_KIND_FLOAT_AND_DOUBLE(ShLighting, kEnvShKind)
 
 }  // namespace shtool

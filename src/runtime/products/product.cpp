@@ -61,22 +61,28 @@ const TriplingProduct<T>& ShProduct<T>::tripling() {
   return *tripling_;
 }
 
-template <class T>
-FourierProduct<T>& ShProduct<T>::fourier(int inputs) {
+namespace {
+
+// The product of `inputs` inputs from its slot, built on first use.
+template <class P>
+P& product_for(std::vector<std::unique_ptr<P>>& slots, int order, int inputs) {
   if (inputs < 1 || inputs > kMaxProductInputs)
     detail::precondition_failed("ShProduct: " + std::to_string(inputs) + " inputs (1.." +
                                 std::to_string(kMaxProductInputs) + ")");
-  if (!fourier_[inputs]) fourier_[inputs] = std::make_unique<FourierProduct<T>>(order_, inputs);
-  return *fourier_[inputs];
+  if (!slots[inputs]) slots[inputs] = std::make_unique<P>(order, inputs);
+  return *slots[inputs];
+}
+
+}  // namespace
+
+template <class T>
+FourierProduct<T>& ShProduct<T>::fourier(int inputs) {
+  return product_for(fourier_, order_, inputs);
 }
 
 template <class T>
 GridProduct<T>& ShProduct<T>::grid(int inputs) {
-  if (inputs < 1 || inputs > kMaxProductInputs)
-    detail::precondition_failed("ShProduct: " + std::to_string(inputs) + " inputs (1.." +
-                                std::to_string(kMaxProductInputs) + ")");
-  if (!grid_[inputs]) grid_[inputs] = std::make_unique<GridProduct<T>>(order_, inputs);
-  return *grid_[inputs];
+  return product_for(grid_, order_, inputs);
 }
 
 template <class T>

@@ -10,6 +10,8 @@
 #include <cstdlib>
 #include <numbers>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace shtool {
 
@@ -248,6 +250,24 @@ inline void zhf_walk(const detail::ZhfLobePlan& plan, const T* x, const T* y, co
   }
 }
 
+// zhf_walk at the lobe directions turned by `turn`. walk: (5 N + 3) D values, the walk's
+// scratch followed by the turned directions' x, y and z rows.
+template <class T, class Emit>
+inline void zhf_walk_turned(const detail::ZhfLobePlan& plan, const Mat3<T>& turn, const std::vector<Vec3<T>>& dirs,
+                            T* walk, Emit&& emit) {
+  const int D = plan.directions;
+  T* x = walk + 5 * plan.order * D;
+  T* y = x + D;
+  T* z = y + D;
+  for (int d = 0; d < D; ++d) {
+    const Vec3<T> w = turn * dirs[d];
+    x[d] = w.x();
+    y[d] = w.y();
+    z[d] = w.z();
+  }
+  zhf_walk<T>(plan, x, y, z, walk, std::forward<Emit>(emit));
+}
+
 }  // namespace
 
 namespace {
@@ -331,17 +351,8 @@ bool ZhfRotation<T>::set(const Mat3<T>& r) {
   // Eq. 10: Y_l(R)[d][m] = y_l^m(R w_d). Each rotated direction is evaluated once, for
   // every band that uses it (shared lobes: 2N-1 evaluations serve the whole order).
   const int D = plan_.directions;
-  T* x = walk_.data() + 5 * order_ * D;
-  T* y = x + D;
-  T* z = y + D;
-  for (int d = 0; d < D; ++d) {
-    const Vec3<T> w = r * dirs_[d];
-    x[d] = w.x();
-    y[d] = w.y();
-    z[d] = w.z();
-  }
   T* yb = y_.data();
-  zhf_walk<T>(plan_, x, y, z, walk_.data(), [&](int l, const T* q, const T* c, const T* s) {
+  zhf_walk_turned<T>(plan_, r, dirs_, walk_.data(), [&](int l, const T* q, const T* c, const T* s) {
     // Stored transposed, yt[(l + m) n + j] = y_l^m(R w_{off+j}): the direction index j is
     // contiguous both here and in the recurrence, so these loops vectorise.
     const int n = 2 * l + 1, off = plan_.band_offset[l];
@@ -403,18 +414,9 @@ bool ZhfTailoredSignal<T>::set(const Mat3<T>& r) {
   // direction shared by several bands runs the recurrence once for all of them.
   const Mat3<T> rinv = r.transpose();
   const int D = plan_.directions;
-  T* x = walk_.data() + 5 * order_ * D;
-  T* y = x + D;
-  T* z = y + D;
-  for (int d = 0; d < D; ++d) {
-    const Vec3<T> u = rinv * dirs_[d];
-    x[d] = u.x();
-    y[d] = u.y();
-    z[d] = u.z();
-  }
   T* samples = samples_.data();
   const T* f = f_.data();
-  zhf_walk<T>(plan_, x, y, z, walk_.data(), [&](int l, const T* q, const T* c, const T* s) {
+  zhf_walk_turned<T>(plan_, rinv, dirs_, walk_.data(), [&](int l, const T* q, const T* c, const T* s) {
     const int n = 2 * l + 1, off = plan_.band_offset[l];
     const T* fl = f + l * l + l;  // fl[m] = f_l^m, m = -l..l
     T* acc = samples + l * l;     // acc[j] = f~_l(R^-1 w_{off+j})

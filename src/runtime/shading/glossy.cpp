@@ -121,7 +121,6 @@ T GlossyFit<T>::shade(std::span<const T> light, std::size_t vertex, const Vec3<T
 
 template <class T>
 Result<GlossyFit<T>> GlossyFit<T>::from_table(const Table& t) {
-  using table_format::shape_text;
   if (t.kind != kGlossyZhKind) return glossy_error("wrong kind '" + t.kind + "'");
   const TableArray* u = t.find("view_factors");
   if (!u || u->shape.size() != 3 || u->shape[0] != u->shape[1] || u->shape[0] < 1 ||
@@ -148,22 +147,14 @@ Result<GlossyFit<T>> GlossyFit<T>::from_table(const Table& t) {
     if (std::abs(f) > static_cast<double>(std::numeric_limits<T>::max()))
       return glossy_error("a view factor does not fit the requested precision");
   g_fit.view_factors.assign(factors.value().begin(), factors.value().end());
-  if (const TableArray* vi = t.find("vertex_index")) {
-    if (vi->dtype != DType::u32 || vi->shape != std::vector<std::int64_t>{static_cast<std::int64_t>(g_fit.vertices)})
-      return glossy_error("array 'vertex_index' is not u32 of shape [V] (V = rows / n_b = " +
-                          std::to_string(g_fit.vertices) + "), got " + shape_text(vi->shape));
-    g_fit.vertex_index = vi->values<std::uint32_t>();
-  }
+  auto index =
+      table_format::optional_vertex_index(t, g_fit.vertices, "V = rows / n_b = " + std::to_string(g_fit.vertices));
+  if (!index) return glossy_error(index.error().message);
+  g_fit.vertex_index = std::move(index).value();
   return g_fit;
 }
 
-template <class T>
-Result<GlossyFit<T>> GlossyFit<T>::load(const std::filesystem::path& path) {
-  return detail::load_kind<GlossyFit>(path, kGlossyZhKind);
-}
-
-template struct GlossyFit<float>;
-template struct GlossyFit<double>;
+SHTOOL_LOAD_KIND_FLOAT_AND_DOUBLE(GlossyFit, kGlossyZhKind)
 template Vec3<float> glossy_view_direction<float>(float, float) noexcept;
 template Vec3<double> glossy_view_direction<double>(double, double) noexcept;
 template std::array<float, 2> glossy_view_square<float>(const Vec3<float>&) noexcept;
