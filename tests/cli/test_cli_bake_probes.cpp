@@ -208,12 +208,8 @@ TEST(CliBakeProbes, SameBytesOnOneAndTwoThreads) {
 // Three shards joined by merge: the one-process table byte for byte, with a probe inside
 // a solid cube (invalid, filled only when the parts are joined).
 TEST(CliBakeProbes, ShardsMergeToTheOneProcessTable) {
-  ProbeTestScene t;
-  const int m = t.material({{0.5, 0.5, 0.5}});
-  t.box(Eigen::Vector3d(-0.5, -0.5, -0.5), Eigen::Vector3d(0.5, 0.5, 0.5), m, false);
-  t.light({{"type", "point"}, {"intensity", 5.0}}, Eigen::Vector3d(1, 1.2, 0.7), Eigen::Vector3d(0, -1, 0));
   const fs::path scene = scratch("solid.gltf");
-  t.write(scene);
+  write_solid_cube_scene(scene);
   const std::vector<std::string> common = {"bake-probes", scene.string(), "--grid", "3,3,3", "--bounds",
                                            "-1.5,-1.5,-1.5,1.5,1.5,1.5", "--samples", "64", "--order", "2"};
   auto run = [&](std::vector<std::string> extra) {

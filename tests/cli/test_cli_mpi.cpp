@@ -152,12 +152,8 @@ TEST(CliFitZhMpi, RankZeroRefusesRowsOfAnotherInput) {
 // bake-probes: 2 and 3 ranks write the one-process table and JSON, the invalid probe
 // (inside a solid cube) filled after the gather.
 TEST(CliBakeProbesMpi, RanksWriteTheOneProcessTable) {
-  ProbeTestScene t;
-  const int m = t.material({{0.5, 0.5, 0.5}});
-  t.box(Eigen::Vector3d(-0.5, -0.5, -0.5), Eigen::Vector3d(0.5, 0.5, 0.5), m, false);
-  t.light({{"type", "point"}, {"intensity", 5.0}}, Eigen::Vector3d(1, 1.2, 0.7), Eigen::Vector3d(0, -1, 0));
   const fs::path scene = scratch("solid.gltf");
-  t.write(scene);
+  write_solid_cube_scene(scene);
   auto bake_args = [&](const fs::path& out, const fs::path& json, bool mpi) {
     std::vector<std::string> a = {kShtoolExe, "bake-probes", scene.string(), "--grid", "3,3,3", "--bounds",
                                   "-1.5,-1.5,-1.5,1.5,1.5,1.5", "--samples", "64", "--order", "2", "--threads", "1",

@@ -23,6 +23,7 @@
 
 #include "node_consumers.h"
 #include "cli_test.h"
+#include "eval_3dgs.h"
 
 namespace {
 
@@ -30,30 +31,6 @@ namespace fs = std::filesystem;
 using namespace shtool::test;
 
 const Scratch scratch("splats");
-
-// The reference implementation's eval_sh for one channel, degree <= 3, and its
-// colour: clamp(eval + 0.5) is left out (the clamp hides nothing at these values).
-constexpr double C0 = 0.28209479177387814, C1 = 0.4886025119029199;
-constexpr double C2[5] = {1.0925484305920792, -1.0925484305920792, 0.31539156525252005, -1.0925484305920792,
-                          0.5462742152960396};
-constexpr double C3[7] = {-0.5900435899266435, 2.890611442640554, -0.4570457994644658, 0.3731763325901154,
-                          -0.4570457994644658, 1.445305721320277, -0.5900435899266435};
-
-double eval_3dgs(int deg, const std::vector<double>& sh, const Eigen::Vector3d& d) {
-  double r = C0 * sh[0];
-  if (deg < 1) return r;
-  const double x = d.x(), y = d.y(), z = d.z();
-  r += -C1 * y * sh[1] + C1 * z * sh[2] - C1 * x * sh[3];
-  if (deg < 2) return r;
-  const double xx = x * x, yy = y * y, zz = z * z, xy = x * y, yz = y * z, xz = x * z;
-  r += C2[0] * xy * sh[4] + C2[1] * yz * sh[5] + C2[2] * (2 * zz - xx - yy) * sh[6] + C2[3] * xz * sh[7] +
-       C2[4] * (xx - yy) * sh[8];
-  if (deg < 3) return r;
-  r += C3[0] * y * (3 * xx - yy) * sh[9] + C3[1] * xy * z * sh[10] + C3[2] * y * (4 * zz - xx - yy) * sh[11] +
-       C3[3] * z * (2 * zz - 3 * xx - 3 * yy) * sh[12] + C3[4] * x * (4 * zz - xx - yy) * sh[13] +
-       C3[5] * z * (xx - yy) * sh[14] + C3[6] * x * (xx - 3 * yy) * sh[15];
-  return r;
-}
 
 struct Splat {
   std::array<float, 3> p, n, scale;
@@ -203,7 +180,7 @@ TEST(CliTransformSplats, ColoursPositionsOrientationsAndScales) {
           const Eigen::Vector3d d = Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized();
           for (int c = 0; c < 3; ++c) {
             const std::vector<double> fa(a.sh[c].begin(), a.sh[c].end()), fb(b.sh[c].begin(), b.sh[c].end());
-            ASSERT_NEAR(eval_3dgs(deg, fb, R * d), eval_3dgs(deg, fa, d), 2e-6) << format << " degree " << deg;
+            ASSERT_NEAR(eval_3dgs(deg, fb.data(), R * d), eval_3dgs(deg, fa.data(), d), 2e-6) << format << " degree " << deg;
           }
         }
       }

@@ -181,4 +181,15 @@ class ProbeTestScene {
   Eigen::Vector2d uv_ = Eigen::Vector2d::Zero();
 };
 
+// A solid grey cube [-0.5, 0.5]^3 (outward faces) lit by a point light: on a 3 x 3 x 3 grid
+// over [-1.5, 1.5]^3 the centre probe is inside it (invalid, filled from its neighbours),
+// the scene of the shard and MPI tests.
+inline void write_solid_cube_scene(const std::filesystem::path& path) {
+  ProbeTestScene t;
+  const int m = t.material({{0.5, 0.5, 0.5}});
+  t.box(Eigen::Vector3d(-0.5, -0.5, -0.5), Eigen::Vector3d(0.5, 0.5, 0.5), m, false);
+  t.light({{"type", "point"}, {"intensity", 5.0}}, Eigen::Vector3d(1, 1.2, 0.7), Eigen::Vector3d(0, -1, 0));
+  t.write(path);
+}
+
 }  // namespace shtool::test

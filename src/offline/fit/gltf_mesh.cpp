@@ -55,70 +55,6 @@ bool keep_image_bytes(tinygltf::Image* image, const int, std::string*, std::stri
   return true;
 }
 
-// Where accessor `index` keeps its `count` elements (of `type`, with one of the allowed
-// component types), checked against its buffer view and buffer without overflow.
-struct AccessorView {
-  const unsigned char* data = nullptr;
-  std::size_t count = 0, stride = 0;
-  int component_type = 0;
-
-  // Component c of element i stored as a U (copied out: the data need not be aligned).
-  template <class U>
-  U component(std::size_t i, int c) const {
-    U u;
-    std::memcpy(&u, data + i * stride + c * sizeof(U), sizeof u);
-    return u;
-  }
-  // Component c of element i: a float as it is, an unsigned integer as its value or, when
-  // `normalized`, divided by the type's maximum (glTF 2.0, 3.11).
-  double number(std::size_t i, int c, bool normalized) const {
-    switch (component_type) {
-      case TINYGLTF_COMPONENT_TYPE_FLOAT:
-        return component<float>(i, c);
-      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
-        return normalized ? component<std::uint8_t>(i, c) / 255.0 : component<std::uint8_t>(i, c);
-      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT:
-        return normalized ? component<std::uint16_t>(i, c) / 65535.0 : component<std::uint16_t>(i, c);
-      default:
-        return component<std::uint32_t>(i, c);
-    }
-  }
-};
-
-AccessorView accessor_view(const tinygltf::Model& model, int index, int type, const std::vector<int>& component_types,
-                           const std::string& what, const std::filesystem::path& path) {
-  if (index < 0 || static_cast<std::size_t>(index) >= model.accessors.size())
-    fail(path, what + ": accessor " + std::to_string(index) + " does not exist");
-  const tinygltf::Accessor& a = model.accessors[index];
-  if (a.sparse.isSparse) fail(path, what + ": sparse accessors are not supported");
-  if (a.type != type) fail(path, what + ": accessor " + std::to_string(index) + " has the wrong type");
-  bool allowed = false;
-  for (int t : component_types) allowed = allowed || a.componentType == t;
-  if (!allowed) fail(path, what + ": accessor " + std::to_string(index) + " has an unsupported component type");
-  if (a.bufferView < 0 || static_cast<std::size_t>(a.bufferView) >= model.bufferViews.size())
-    fail(path, what + ": accessor " + std::to_string(index) + " has no buffer view");
-  const tinygltf::BufferView& view = model.bufferViews[a.bufferView];
-  if (view.buffer < 0 || static_cast<std::size_t>(view.buffer) >= model.buffers.size())
-    fail(path, what + ": buffer view " + std::to_string(a.bufferView) + " names no buffer");
-  const std::vector<unsigned char>& buffer = model.buffers[view.buffer].data;
-  const std::size_t element = static_cast<std::size_t>(tinygltf::GetComponentSizeInBytes(a.componentType)) *
-                              static_cast<std::size_t>(tinygltf::GetNumComponentsInType(a.type));
-  const std::size_t stride = view.byteStride ? view.byteStride : element;
-  if (stride < element)
-    fail(path, what + ": buffer view " + std::to_string(a.bufferView) + " has a byteStride (" +
-                   std::to_string(view.byteStride) + ") below its element size (" + std::to_string(element) + ")");
-  const auto out_of_range = [&] {
-    fail(path, what + ": accessor " + std::to_string(index) + " reads past the end of its buffer");
-  };
-  if (view.byteOffset > buffer.size() || view.byteLength > buffer.size() - view.byteOffset) out_of_range();
-  if (a.byteOffset > view.byteLength) out_of_range();
-  if (a.count > 0) {
-    const std::size_t available = view.byteLength - a.byteOffset;
-    if (element > available) out_of_range();
-    if ((a.count - 1) > (available - element) / stride) out_of_range();
-  }
-  return {buffer.data() + view.byteOffset + a.byteOffset, a.count, stride, a.componentType};
-}
 
 // Every element of accessor `index` (see accessor_view), each made by element(view, i).
 template <class Out, class Element>
@@ -299,6 +235,41 @@ struct Builder {
 };
 
 }  // namespace
+
+AccessorView accessor_view(const tinygltf::Model& model, int index, int type, const std::vector<int>& component_types,
+                           const std::string& what, const std::filesystem::path& path) {
+  if (index < 0 || static_cast<std::size_t>(index) >= model.accessors.size())
+    fail(path, what + ": accessor " + std::to_string(index) + " does not exist");
+  const tinygltf::Accessor& a = model.accessors[index];
+  if (a.sparse.isSparse) fail(path, what + ": sparse accessors are not supported");
+  if (a.type != type) fail(path, what + ": accessor " + std::to_string(index) + " has the wrong type");
+  bool allowed = false;
+  for (int t : component_types) allowed = allowed || a.componentType == t;
+  if (!allowed) fail(path, what + ": accessor " + std::to_string(index) + " has an unsupported component type");
+  if (a.bufferView < 0 || static_cast<std::size_t>(a.bufferView) >= model.bufferViews.size())
+    fail(path, what + ": accessor " + std::to_string(index) + " has no buffer view");
+  const tinygltf::BufferView& view = model.bufferViews[a.bufferView];
+  if (view.buffer < 0 || static_cast<std::size_t>(view.buffer) >= model.buffers.size())
+    fail(path, what + ": buffer view " + std::to_string(a.bufferView) + " names no buffer");
+  const std::vector<unsigned char>& buffer = model.buffers[view.buffer].data;
+  const std::size_t element = static_cast<std::size_t>(tinygltf::GetComponentSizeInBytes(a.componentType)) *
+                              static_cast<std::size_t>(tinygltf::GetNumComponentsInType(a.type));
+  const std::size_t stride = view.byteStride ? view.byteStride : element;
+  if (stride < element)
+    fail(path, what + ": buffer view " + std::to_string(a.bufferView) + " has a byteStride (" +
+                   std::to_string(view.byteStride) + ") below its element size (" + std::to_string(element) + ")");
+  const auto out_of_range = [&] {
+    fail(path, what + ": accessor " + std::to_string(index) + " reads past the end of its buffer");
+  };
+  if (view.byteOffset > buffer.size() || view.byteLength > buffer.size() - view.byteOffset) out_of_range();
+  if (a.byteOffset > view.byteLength) out_of_range();
+  if (a.count > 0) {
+    const std::size_t available = view.byteLength - a.byteOffset;
+    if (element > available) out_of_range();
+    if ((a.count - 1) > (available - element) / stride) out_of_range();
+  }
+  return {buffer.data() + view.byteOffset + a.byteOffset, a.count, stride, a.componentType};
+}
 
 tinygltf::Model parse_gltf(const std::string& bytes, const std::filesystem::path& path, bool keep_images) {
   tinygltf::Model model;

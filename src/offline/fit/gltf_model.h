@@ -3,6 +3,10 @@
 // node walk as the mesh loader, so a scene's triangles are exactly the mesh's.
 #pragma once
 
+#include <algorithm>
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -21,6 +25,46 @@ struct GltfLightNode {
   int light = -1;
   Eigen::Matrix4d world = Eigen::Matrix4d::Identity();
 };
+
+// Where accessor `index` keeps its `count` elements (of `type`, with one of the allowed
+// component types), checked against its buffer view and buffer without overflow.
+struct AccessorView {
+  const unsigned char* data = nullptr;
+  std::size_t count = 0, stride = 0;
+  int component_type = 0;
+
+  // Component c of element i stored as a U (copied out: the data need not be aligned).
+  template <class U>
+  U component(std::size_t i, int c) const {
+    U u;
+    std::memcpy(&u, data + i * stride + c * sizeof(U), sizeof u);
+    return u;
+  }
+  // Component c of element i: a float as it is, an integer as its value or, when
+  // `normalized`, divided by the type's maximum (signed: clamped at -1; glTF 2.0, 3.11).
+  double number(std::size_t i, int c, bool normalized) const {
+    switch (component_type) {
+      case TINYGLTF_COMPONENT_TYPE_FLOAT:
+        return component<float>(i, c);
+      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
+        return normalized ? component<std::uint8_t>(i, c) / 255.0 : component<std::uint8_t>(i, c);
+      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT:
+        return normalized ? component<std::uint16_t>(i, c) / 65535.0 : component<std::uint16_t>(i, c);
+      case TINYGLTF_COMPONENT_TYPE_BYTE:
+        return normalized ? std::max(component<std::int8_t>(i, c) / 127.0, -1.0) : component<std::int8_t>(i, c);
+      case TINYGLTF_COMPONENT_TYPE_SHORT:
+        return normalized ? std::max(component<std::int16_t>(i, c) / 32767.0, -1.0) : component<std::int16_t>(i, c);
+      default:
+        return component<std::uint32_t>(i, c);
+    }
+  }
+};
+
+// Accessor `index` of `type` with a component type among `component_types`; MeshError
+// naming `what` and the file when it does not exist, is sparse, has another type or reads
+// past its buffer.
+AccessorView accessor_view(const tinygltf::Model& model, int index, int type, const std::vector<int>& component_types,
+                           const std::string& what, const std::filesystem::path& path);
 
 // The file parsed by tinygltf with the checks of load_gltf_bytes. With `keep_images`, each
 // image's encoded bytes (PNG, JPEG, ...) are kept undecoded in Image::image, its width and

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "common/input_error.h"
+#include "fit/gltf_model.h"
 #include "io/table_format.h"
 
 namespace shtool::interop {
@@ -33,68 +34,17 @@ bool skip_image(tinygltf::Image*, const int, std::string*, std::string*, int, in
 }
 
 // Accessor `index` as floats, `components` per element: float, or (normalized) integer
-// types among `allowed`, checked against its buffer without overflow.
+// types among `allowed` (the checked view of the mesh reader).
 std::vector<float> read_accessor(const tinygltf::Model& model, int index, int type, const std::vector<int>& allowed,
                                  const std::string& what, const std::filesystem::path& path) {
-  if (index < 0 || static_cast<std::size_t>(index) >= model.accessors.size())
-    fail(path, what + ": accessor " + std::to_string(index) + " does not exist");
-  const tinygltf::Accessor& a = model.accessors[index];
-  if (a.sparse.isSparse) fail(path, what + ": sparse accessors are not read");
-  if (a.type != type) fail(path, what + ": accessor " + std::to_string(index) + " has the wrong type");
-  if (std::find(allowed.begin(), allowed.end(), a.componentType) == allowed.end())
-    fail(path, what + ": accessor " + std::to_string(index) + " has a component type the extension does not allow");
-  const bool is_float = a.componentType == TINYGLTF_COMPONENT_TYPE_FLOAT;
-  if (!is_float && !a.normalized && what.find("SCALE") == std::string::npos)
+  const fit::AccessorView v = fit::accessor_view(model, index, type, allowed, what, path);
+  const bool normalized = model.accessors[index].normalized;
+  if (v.component_type != TINYGLTF_COMPONENT_TYPE_FLOAT && !normalized && what.find("SCALE") == std::string::npos)
     fail(path, what + ": integer components must be normalized");
-  if (a.bufferView < 0 || static_cast<std::size_t>(a.bufferView) >= model.bufferViews.size())
-    fail(path, what + ": accessor " + std::to_string(index) + " has no buffer view");
-  const tinygltf::BufferView& view = model.bufferViews[a.bufferView];
-  if (view.buffer < 0 || static_cast<std::size_t>(view.buffer) >= model.buffers.size())
-    fail(path, what + ": buffer view " + std::to_string(a.bufferView) + " names no buffer");
-  const std::vector<unsigned char>& buffer = model.buffers[view.buffer].data;
-  const int components = tinygltf::GetNumComponentsInType(a.type);
-  const std::size_t size = static_cast<std::size_t>(tinygltf::GetComponentSizeInBytes(a.componentType));
-  const std::size_t element = size * static_cast<std::size_t>(components);
-  const std::size_t stride = view.byteStride ? view.byteStride : element;
-  if (stride < element) fail(path, what + ": a byteStride below the element size");
-  if (view.byteOffset > buffer.size() || view.byteLength > buffer.size() - view.byteOffset || a.byteOffset > view.byteLength)
-    fail(path, what + ": accessor " + std::to_string(index) + " reads past the end of its buffer");
-  if (a.count > 0) {
-    const std::size_t available = view.byteLength - a.byteOffset;
-    if (element > available || (a.count - 1) > (available - element) / stride)
-      fail(path, what + ": accessor " + std::to_string(index) + " reads past the end of its buffer");
-  }
-  const unsigned char* base = buffer.data() + view.byteOffset + a.byteOffset;
-  std::vector<float> out(a.count * static_cast<std::size_t>(components));
-  for (std::size_t i = 0; i < a.count; ++i)
-    for (int c = 0; c < components; ++c) {
-      const unsigned char* p = base + i * stride + static_cast<std::size_t>(c) * size;
-      float v = 0;
-      switch (a.componentType) {
-        case TINYGLTF_COMPONENT_TYPE_FLOAT: std::memcpy(&v, p, 4); break;
-        case TINYGLTF_COMPONENT_TYPE_BYTE: {
-          std::int8_t x;
-          std::memcpy(&x, p, 1);
-          v = std::max(static_cast<float>(x) / 127.0f, -1.0f);
-          break;
-        }
-        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: v = static_cast<float>(*p) / (a.normalized ? 255.0f : 1.0f); break;
-        case TINYGLTF_COMPONENT_TYPE_SHORT: {
-          std::int16_t x;
-          std::memcpy(&x, p, 2);
-          v = std::max(static_cast<float>(x) / 32767.0f, -1.0f);
-          break;
-        }
-        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
-          std::uint16_t x;
-          std::memcpy(&x, p, 2);
-          v = static_cast<float>(x) / (a.normalized ? 65535.0f : 1.0f);
-          break;
-        }
-        default: fail(path, what + ": unsupported component type");
-      }
-      out[i * components + c] = v;
-    }
+  const int components = tinygltf::GetNumComponentsInType(type);
+  std::vector<float> out(v.count * static_cast<std::size_t>(components));
+  for (std::size_t i = 0; i < v.count; ++i)
+    for (int c = 0; c < components; ++c) out[i * components + c] = static_cast<float>(v.number(i, c, normalized));
   return out;
 }
 

@@ -77,11 +77,11 @@ void ProbeGrid<T>::sample(const Vec3<T>& x, std::span<T> out) const noexcept {
 
 template <class T>
 Result<ProbeGrid<T>> ProbeGrid<T>::from_table(const Table& t) {
-  if (t.kind != kProbeGridKind) return probe_error("wrong kind '" + t.kind + "'");
+  if (const auto problem = detail::kind_and_order_problem(t, kProbeGridKind, 1, kMaxProbeOrder))
+    return probe_error(*problem);
   const nlohmann::json meta = nlohmann::json::parse(t.meta, nullptr, /*allow_exceptions=*/false);
   if (meta.is_object() && meta.contains("shard"))
     return probe_error("a partial table (bake-probes --shard): join the parts with shtool merge first");
-  if (t.order < 1 || t.order > kMaxProbeOrder) return probe_error("unsupported order " + std::to_string(t.order));
   const TableArray* co = t.find("coefficients");
   if (!co || co->shape.size() != 5) return probe_error("array 'coefficients' is missing or not of shape [NZ, NY, NX, N^2, 3]");
   const std::int64_t nz = co->shape[0], ny = co->shape[1], nx = co->shape[2], nn = t.order * t.order;
@@ -116,12 +116,6 @@ Result<ProbeGrid<T>> ProbeGrid<T>::from_table(const Table& t) {
   return g;
 }
 
-template <class T>
-Result<ProbeGrid<T>> ProbeGrid<T>::load(const std::filesystem::path& path) {
-  return detail::load_kind<ProbeGrid>(path, kProbeGridKind);
-}
-
-template struct ProbeGrid<float>;
-template struct ProbeGrid<double>;
+SHTOOL_LOAD_KIND_FLOAT_AND_DOUBLE(ProbeGrid, kProbeGridKind)
 
 }  // namespace shtool
