@@ -4,6 +4,7 @@
 // Anything else that escapes is a bug in shtool (exit 3).
 #pragma once
 
+#include <filesystem>
 #include <stdexcept>
 #include <string>
 
@@ -13,6 +14,11 @@ class InputError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
 };
+
+// Throws InputError "<file>: <problem>", the form every reader's refusal takes.
+[[noreturn]] inline void fail_input(const std::filesystem::path& file, const std::string& problem) {
+  throw InputError(file.string() + ": " + problem);
+}
 
 // An integer option within [lo, hi], or InputError "<option> must be in lo..hi, got v".
 inline void check_option_range(const char* option, long long value, long long lo, long long hi) {

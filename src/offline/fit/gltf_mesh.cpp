@@ -26,10 +26,6 @@ namespace {
 // Far below the int range of vertex numbers, and beyond any mesh a bake runs on.
 constexpr std::size_t kMaxVertices = std::size_t(1) << 28;
 
-[[noreturn]] void fail(const std::filesystem::path& path, const std::string& what) {
-  throw MeshError(path.string() + ": " + what);
-}
-
 // The JSON of a glTF: the whole text, or a GLB's first chunk (header: magic, version,
 // length; chunk: length, type, data), clipped to the bytes there are.
 std::string_view json_text_of(const std::string& bytes, bool binary) {
@@ -85,7 +81,7 @@ std::vector<Eigen::Vector2d> read_texcoords(const tinygltf::Model& model, int in
       "TEXCOORD_0", path, [&path](const AccessorView& v, std::size_t i) {
         const double uv[2] = {v.number(i, 0, true), v.number(i, 1, true)};
         if (!std::isfinite(uv[0]) || !std::isfinite(uv[1]))
-          fail(path, "TEXCOORD_0 of vertex " + std::to_string(i) + " is not finite");
+          fail_input(path, "TEXCOORD_0 of vertex " + std::to_string(i) + " is not finite");
         return Eigen::Vector2d(uv[0], 1.0 - uv[1]);
       });
 }
@@ -141,13 +137,13 @@ struct Builder {
       return;
     }
     const auto pos = p.attributes.find("POSITION");
-    if (pos == p.attributes.end()) fail(path, "a triangle primitive has no POSITION attribute");
+    if (pos == p.attributes.end()) fail_input(path, "a triangle primitive has no POSITION attribute");
     const std::vector<Eigen::Vector3d> local = read_vec3(model, pos->second, "POSITION", path);
     std::vector<Eigen::Vector3d> local_normals;
     const auto nrm = p.attributes.find("NORMAL");
     if (nrm != p.attributes.end()) {
       local_normals = read_vec3(model, nrm->second, "NORMAL", path);
-      if (local_normals.size() != local.size()) fail(path, "NORMAL and POSITION counts differ in a primitive");
+      if (local_normals.size() != local.size()) fail_input(path, "NORMAL and POSITION counts differ in a primitive");
     } else {
       every_vertex_has_normal = false;
     }
@@ -155,7 +151,7 @@ struct Builder {
     const auto tex = p.attributes.find("TEXCOORD_0");
     if (tex != p.attributes.end()) {
       local_uvs = read_texcoords(model, tex->second, path);
-      if (local_uvs.size() != local.size()) fail(path, "TEXCOORD_0 and POSITION counts differ in a primitive");
+      if (local_uvs.size() != local.size()) fail_input(path, "TEXCOORD_0 and POSITION counts differ in a primitive");
     }
     std::vector<std::uint32_t> index;
     if (p.indices >= 0) {
@@ -166,21 +162,21 @@ struct Builder {
     }
     for (std::uint32_t i : index)
       if (i >= local.size())
-        fail(path, "an index (" + std::to_string(i) + ") is past the " + std::to_string(local.size()) +
+        fail_input(path, "an index (" + std::to_string(i) + ") is past the " + std::to_string(local.size()) +
                        " vertices of its primitive");
     const Eigen::Matrix3d linear = world.block<3, 3>(0, 0);
     const Eigen::Matrix3d normal_matrix = linear.inverse().transpose();
     const bool mirrored = linear.determinant() < 0;
     // Vertex numbers are int (Corner): refused far below that.
     if (local.size() > kMaxVertices - positions.size())
-      fail(path, "more than " + std::to_string(kMaxVertices) + " vertices in the scene");
+      fail_input(path, "more than " + std::to_string(kMaxVertices) + " vertices in the scene");
     const int base = static_cast<int>(positions.size());
     for (std::size_t v = 0; v < local.size(); ++v) {
       const Eigen::Vector3d w = linear * local[v] + world.block<3, 1>(0, 3);
-      if (!w.allFinite()) fail(path, "vertex " + std::to_string(base + v) + " is not finite");
+      if (!w.allFinite()) fail_input(path, "vertex " + std::to_string(base + v) + " is not finite");
       positions.push_back(w);
       normals.push_back(local_normals.empty() ? Eigen::Vector3d::Zero() : (normal_matrix * local_normals[v]).eval());
-      if (!normals.back().allFinite()) fail(path, "normal of vertex " + std::to_string(base + v) + " is not finite");
+      if (!normals.back().allFinite()) fail_input(path, "normal of vertex " + std::to_string(base + v) + " is not finite");
       texcoords.push_back(local_uvs.empty() ? Eigen::Vector2d::Zero() : local_uvs[v]);
     }
     const bool has_normals = !local_normals.empty(), has_uvs = !local_uvs.empty();
@@ -211,10 +207,10 @@ struct Builder {
   // twice) is refused, which also bounds the work by the file's size.
   void node(int index, const Eigen::Matrix4d& parent, std::vector<bool>& visited, int depth) {
     if (index < 0 || static_cast<std::size_t>(index) >= model.nodes.size())
-      fail(path, "node " + std::to_string(index) + " does not exist");
+      fail_input(path, "node " + std::to_string(index) + " does not exist");
     if (visited[index])
-      fail(path, "node " + std::to_string(index) + " is reached twice (a cycle or a second parent): glTF nodes form trees");
-    if (depth > 1024) fail(path, "the node hierarchy is deeper than 1024");
+      fail_input(path, "node " + std::to_string(index) + " is reached twice (a cycle or a second parent): glTF nodes form trees");
+    if (depth > 1024) fail_input(path, "the node hierarchy is deeper than 1024");
     visited[index] = true;
     const tinygltf::Node& n = model.nodes[index];
     const Eigen::Matrix4d world = parent * local_transform(n);
@@ -222,12 +218,12 @@ struct Builder {
       const tinygltf::Value& light = ext->second.Get("light");
       if (!light.IsInt() || light.GetNumberAsInt() < 0 ||
           static_cast<std::size_t>(light.GetNumberAsInt()) >= model.lights.size())
-        fail(path, "node " + std::to_string(index) + " names a KHR_lights_punctual light that does not exist");
+        fail_input(path, "node " + std::to_string(index) + " names a KHR_lights_punctual light that does not exist");
       lights.push_back({light.GetNumberAsInt(), world});
     }
     if (n.mesh >= 0) {
       if (static_cast<std::size_t>(n.mesh) >= model.meshes.size())
-        fail(path, "node " + std::to_string(index) + " names mesh " + std::to_string(n.mesh) + ", which does not exist");
+        fail_input(path, "node " + std::to_string(index) + " names mesh " + std::to_string(n.mesh) + ", which does not exist");
       for (const tinygltf::Primitive& p : model.meshes[n.mesh].primitives) primitive(p, world);
     }
     for (int child : n.children) node(child, world, visited, depth + 1);
@@ -239,27 +235,27 @@ struct Builder {
 AccessorView accessor_view(const tinygltf::Model& model, int index, int type, const std::vector<int>& component_types,
                            const std::string& what, const std::filesystem::path& path) {
   if (index < 0 || static_cast<std::size_t>(index) >= model.accessors.size())
-    fail(path, what + ": accessor " + std::to_string(index) + " does not exist");
+    fail_input(path, what + ": accessor " + std::to_string(index) + " does not exist");
   const tinygltf::Accessor& a = model.accessors[index];
-  if (a.sparse.isSparse) fail(path, what + ": sparse accessors are not supported");
-  if (a.type != type) fail(path, what + ": accessor " + std::to_string(index) + " has the wrong type");
+  if (a.sparse.isSparse) fail_input(path, what + ": sparse accessors are not supported");
+  if (a.type != type) fail_input(path, what + ": accessor " + std::to_string(index) + " has the wrong type");
   bool allowed = false;
   for (int t : component_types) allowed = allowed || a.componentType == t;
-  if (!allowed) fail(path, what + ": accessor " + std::to_string(index) + " has an unsupported component type");
+  if (!allowed) fail_input(path, what + ": accessor " + std::to_string(index) + " has an unsupported component type");
   if (a.bufferView < 0 || static_cast<std::size_t>(a.bufferView) >= model.bufferViews.size())
-    fail(path, what + ": accessor " + std::to_string(index) + " has no buffer view");
+    fail_input(path, what + ": accessor " + std::to_string(index) + " has no buffer view");
   const tinygltf::BufferView& view = model.bufferViews[a.bufferView];
   if (view.buffer < 0 || static_cast<std::size_t>(view.buffer) >= model.buffers.size())
-    fail(path, what + ": buffer view " + std::to_string(a.bufferView) + " names no buffer");
+    fail_input(path, what + ": buffer view " + std::to_string(a.bufferView) + " names no buffer");
   const std::vector<unsigned char>& buffer = model.buffers[view.buffer].data;
   const std::size_t element = static_cast<std::size_t>(tinygltf::GetComponentSizeInBytes(a.componentType)) *
                               static_cast<std::size_t>(tinygltf::GetNumComponentsInType(a.type));
   const std::size_t stride = view.byteStride ? view.byteStride : element;
   if (stride < element)
-    fail(path, what + ": buffer view " + std::to_string(a.bufferView) + " has a byteStride (" +
+    fail_input(path, what + ": buffer view " + std::to_string(a.bufferView) + " has a byteStride (" +
                    std::to_string(view.byteStride) + ") below its element size (" + std::to_string(element) + ")");
   const auto out_of_range = [&] {
-    fail(path, what + ": accessor " + std::to_string(index) + " reads past the end of its buffer");
+    fail_input(path, what + ": accessor " + std::to_string(index) + " reads past the end of its buffer");
   };
   if (view.byteOffset > buffer.size() || view.byteLength > buffer.size() - view.byteOffset) out_of_range();
   if (a.byteOffset > view.byteLength) out_of_range();
@@ -278,11 +274,11 @@ tinygltf::Model parse_gltf(const std::string& bytes, const std::filesystem::path
   std::string err, warn;
   const std::string base = path.has_parent_path() ? path.parent_path().string() : std::string(".");
   const bool binary = bytes.size() >= 4 && bytes.compare(0, 4, "glTF") == 0;
-  if (bytes.size() > std::numeric_limits<unsigned int>::max()) fail(path, "file too large");
+  if (bytes.size() > std::numeric_limits<unsigned int>::max()) fail_input(path, "file too large");
   // tinygltf turns JSON into its values recursively (extras, extensions): nesting deep
   // enough would exhaust the stack, so it is bounded before tinygltf sees the text.
   if (auto problem = table_format::check_json_depth(json_text_of(bytes, binary), table_format::kMaxJsonDepth))
-    fail(path, "glTF JSON " + *problem);
+    fail_input(path, "glTF JSON " + *problem);
   bool ok = false;
   try {
     ok = binary ? loader.LoadBinaryFromMemory(&model, &err, &warn, reinterpret_cast<const unsigned char*>(bytes.data()),
@@ -293,11 +289,11 @@ tinygltf::Model parse_gltf(const std::string& bytes, const std::filesystem::path
     // tinygltf reports most problems in `err`, but some reach a throwing library call: a
     // GLB buffer of byteLength 0 beside a BIN chunk is copied from data.at(0) of an empty
     // vector (std::out_of_range; found by fuzz_gltf).
-    fail(path, std::string("cannot read glTF: tinygltf failed (") + e.what() + ")");
+    fail_input(path, std::string("cannot read glTF: tinygltf failed (") + e.what() + ")");
   }
   if (!ok) {
     while (!err.empty() && (err.back() == '\n' || err.back() == ' ')) err.pop_back();
-    fail(path, "cannot read glTF" + (err.empty() ? std::string() : ": " + err));
+    fail_input(path, "cannot read glTF" + (err.empty() ? std::string() : ": " + err));
   }
   return model;
 }
@@ -305,16 +301,16 @@ tinygltf::Model parse_gltf(const std::string& bytes, const std::filesystem::path
 Mesh mesh_from_gltf(const tinygltf::Model& model, const std::string& bytes, const std::filesystem::path& path,
                     NormalSource normal_source, std::vector<GltfLightNode>* lights) {
   const std::string base = path.has_parent_path() ? path.parent_path().string() : std::string(".");
-  if (model.scenes.empty()) fail(path, "no scene (glTF without scenes has nothing to render)");
+  if (model.scenes.empty()) fail_input(path, "no scene (glTF without scenes has nothing to render)");
   const int scene = model.defaultScene >= 0 ? model.defaultScene : 0;
-  if (static_cast<std::size_t>(scene) >= model.scenes.size()) fail(path, "the default scene does not exist");
+  if (static_cast<std::size_t>(scene) >= model.scenes.size()) fail_input(path, "the default scene does not exist");
   Builder b(model, path);
   std::vector<bool> visited(model.nodes.size(), false);
   for (int n : model.scenes[scene].nodes) b.node(n, Eigen::Matrix4d::Identity(), visited, 0);
   if (b.primitives == 0)
-    fail(path, b.skipped_primitives ? "no triangle primitive (only points or lines)" : "the default scene has no mesh");
+    fail_input(path, b.skipped_primitives ? "no triangle primitive (only points or lines)" : "the default scene has no mesh");
   if (normal_source == NormalSource::file && !b.every_vertex_has_normal)
-    fail(path, "--normals file: not every primitive has NORMAL");
+    fail_input(path, "--normals file: not every primitive has NORMAL");
   if (lights) *lights = b.lights;
   Mesh mesh;
   mesh.input_crc32 = input_crc32(bytes);

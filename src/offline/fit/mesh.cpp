@@ -10,15 +10,12 @@
 
 #include <tiny_obj_loader.h>
 
+#include "common/input_error.h"
 #include "common/input_file.h"
 #include "shtool/table.h"
 
 namespace shtool::fit {
 namespace {
-
-[[noreturn]] void fail(const std::filesystem::path& path, const std::string& what) {
-  throw MeshError(path.string() + ": " + what);
-}
 
 // tinyobjloader reads a coordinate it cannot parse ("nan", "inf") as 0 without a
 // warning, and a face index beyond int as a wrapped value, so both would pass silently.
@@ -45,10 +42,10 @@ void check_obj_text(const std::filesystem::path& path, const std::string& text) 
         char* stop = nullptr;
         const double value = std::strtod(s, &stop);
         if (stop == s)
-          fail(path, "line " + std::to_string(number) + ": missing or unreadable coordinate in '" + shown + "'");
+          fail_input(path, "line " + std::to_string(number) + ": missing or unreadable coordinate in '" + shown + "'");
         // Stored as float: a double beyond float's range would become infinite.
         if (!std::isfinite(value) || std::abs(value) > std::numeric_limits<float>::max())
-          fail(path, "line " + std::to_string(number) + ": non-finite coordinate (or beyond float range) in '" +
+          fail_input(path, "line " + std::to_string(number) + ": non-finite coordinate (or beyond float range) in '" +
                          shown + "'");
         s = stop;
       }
@@ -62,7 +59,7 @@ void check_obj_text(const std::filesystem::path& path, const std::string& text) 
             continue;
           }
           if (value > std::numeric_limits<int>::max() || value < -std::numeric_limits<int>::max())
-            fail(path, "line " + std::to_string(number) + ": face index " + std::string(s, static_cast<const char*>(stop)) +
+            fail_input(path, "line " + std::to_string(number) + ": face index " + std::string(s, static_cast<const char*>(stop)) +
                            " is out of range in '" + shown + "'");
           s = stop;
         } else {
@@ -188,7 +185,7 @@ Mesh finish_mesh(Mesh mesh, const std::vector<Eigen::Vector3d>& positions, const
     if (!materials.empty()) mesh.triangle_material.push_back(materials[f]);
   }
   if (kept.empty())
-    fail(path, tris.empty() ? "no faces (need at least one triangle)"
+    fail_input(path, tris.empty() ? "no faces (need at least one triangle)"
                             : "no usable triangle (all " + std::to_string(tris.size()) + " are degenerate)");
 
   // Keep referenced vertices only, in file order (so output order follows the file).
@@ -217,7 +214,7 @@ Mesh finish_mesh(Mesh mesh, const std::vector<Eigen::Vector3d>& positions, const
   for (const auto& t : kept)
     for (const Corner& c : t) all_have_normals = all_have_normals && c.n >= 0;
   if (normal_source == NormalSource::file && !all_have_normals)
-    fail(path, "--normals file: not every face corner has a normal in the file");
+    fail_input(path, "--normals file: not every face corner has a normal in the file");
   if (normal_source != NormalSource::computed && all_have_normals) {
     // A vertex may carry different normals on different faces (a crease); average them.
     std::vector<Eigen::Vector3d> sum(mesh.positions.size(), Eigen::Vector3d::Zero());
@@ -247,20 +244,20 @@ Mesh finish_mesh(Mesh mesh, const std::vector<Eigen::Vector3d>& positions, const
 Mesh load_obj(const std::filesystem::path& path, NormalSource normal_source, UpAxis up) {
   // Read once: the same bytes are checked, parsed and hashed.
   std::error_code ec;
-  if (!std::filesystem::exists(path, ec)) fail(path, "no such file");
-  if (std::filesystem::is_directory(path, ec)) fail(path, "is a directory, not an OBJ file");
+  if (!std::filesystem::exists(path, ec)) fail_input(path, "no such file");
+  if (std::filesystem::is_directory(path, ec)) fail_input(path, "is a directory, not an OBJ file");
   return load_obj_text(read_input_file(path, "mesh"), path, normal_source, up);
 }
 
 Mesh load_mesh(const std::filesystem::path& path, NormalSource normal_source, UpAxis up) {
   std::error_code ec;
-  if (!std::filesystem::exists(path, ec)) fail(path, "no such file");
-  if (std::filesystem::is_directory(path, ec)) fail(path, "is a directory, not a mesh file");
+  if (!std::filesystem::exists(path, ec)) fail_input(path, "no such file");
+  if (std::filesystem::is_directory(path, ec)) fail_input(path, "is a directory, not a mesh file");
   std::string bytes = read_input_file(path, "mesh");
   std::string ext = path.extension().string();
   for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   if ((bytes.size() >= 4 && bytes.compare(0, 4, "glTF") == 0) || ext == ".gltf" || ext == ".glb") {
-    if (up != UpAxis::y) fail(path, "--up z: glTF is +Y up by its specification (--up applies to OBJ files)");
+    if (up != UpAxis::y) fail_input(path, "--up z: glTF is +Y up by its specification (--up applies to OBJ files)");
     return load_gltf_bytes(bytes, path, normal_source);
   }
   return load_obj_text(bytes, path, normal_source, up);
@@ -279,7 +276,7 @@ Mesh load_obj_text(const std::string& text, const std::filesystem::path& path, N
   if (!reader.ParseFromString(text, mtl_text, config)) {
     std::string e = reader.Error();
     while (!e.empty() && (e.back() == '\n' || e.back() == '.')) e.pop_back();
-    fail(path, "cannot parse OBJ" + (e.empty() ? std::string() : ": " + e));
+    fail_input(path, "cannot parse OBJ" + (e.empty() ? std::string() : ": " + e));
   }
   const tinyobj::attrib_t& attrib = reader.GetAttrib();
   const std::size_t nv = attrib.vertices.size() / 3;
@@ -288,18 +285,18 @@ Mesh load_obj_text(const std::string& text, const std::filesystem::path& path, N
 
   // What tinyobjloader stored, whatever the text said.
   for (std::size_t i = 0; i < attrib.vertices.size(); ++i)
-    if (!std::isfinite(attrib.vertices[i])) fail(path, "vertex " + std::to_string(i / 3 + 1) + " is not finite");
+    if (!std::isfinite(attrib.vertices[i])) fail_input(path, "vertex " + std::to_string(i / 3 + 1) + " is not finite");
   for (std::size_t i = 0; i < attrib.normals.size(); ++i)
-    if (!std::isfinite(attrib.normals[i])) fail(path, "normal " + std::to_string(i / 3 + 1) + " is not finite");
+    if (!std::isfinite(attrib.normals[i])) fail_input(path, "normal " + std::to_string(i / 3 + 1) + " is not finite");
   for (std::size_t i = 0; i < attrib.texcoords.size(); ++i)
     if (!std::isfinite(attrib.texcoords[i]))
-      fail(path, "texture coordinate " + std::to_string(i / 2 + 1) + " is not finite");
+      fail_input(path, "texture coordinate " + std::to_string(i / 2 + 1) + " is not finite");
 
   Mesh mesh;
   mesh.input_crc32 = input_crc32(text);
   mesh.files.push_back(path);
   mesh.obj_vertices = nv;
-  if (nv == 0) fail(path, "no vertices");
+  if (nv == 0) fail_input(path, "no vertices");
 
   // Corners of every face, checked, then fanned: (c0, ci, ci+1).
   std::vector<std::array<Corner, 3>> tris;
@@ -314,7 +311,7 @@ Mesh load_obj_text(const std::string& text, const std::filesystem::path& path, N
       om.has_ke = mtl_states(mtl_text, m.name, "Ke");
       om.kd = Eigen::Vector3d(m.diffuse[0], m.diffuse[1], m.diffuse[2]);
       om.ke = Eigen::Vector3d(m.emission[0], m.emission[1], m.emission[2]);
-      if (!om.kd.allFinite() || !om.ke.allFinite()) fail(path, "material '" + m.name + "' has a non-finite colour");
+      if (!om.kd.allFinite() || !om.ke.allFinite()) fail_input(path, "material '" + m.name + "' has a non-finite colour");
       mesh.obj_materials.push_back(std::move(om));
     }
   std::size_t face_number = 0;
@@ -327,15 +324,15 @@ Mesh load_obj_text(const std::string& text, const std::filesystem::path& path, N
       for (std::size_t k = 0; k < count; ++k) {
         const tinyobj::index_t& idx = m.indices[offset + k];
         if (idx.vertex_index < 0 || static_cast<std::size_t>(idx.vertex_index) >= nv)
-          fail(path, "face " + std::to_string(face_number + 1) + " refers to vertex " +
+          fail_input(path, "face " + std::to_string(face_number + 1) + " refers to vertex " +
                          std::to_string(static_cast<long long>(idx.vertex_index) + 1) +
                          ", but the file has " + std::to_string(nv) + " vertices");
         if (idx.normal_index >= 0 && static_cast<std::size_t>(idx.normal_index) >= nn)
-          fail(path, "face " + std::to_string(face_number + 1) + " refers to normal " +
+          fail_input(path, "face " + std::to_string(face_number + 1) + " refers to normal " +
                          std::to_string(static_cast<long long>(idx.normal_index) + 1) +
                          ", but the file has " + std::to_string(nn) + " normals");
         if (idx.texcoord_index >= 0 && static_cast<std::size_t>(idx.texcoord_index) >= nt)
-          fail(path, "face " + std::to_string(face_number + 1) + " refers to texture coordinate " +
+          fail_input(path, "face " + std::to_string(face_number + 1) + " refers to texture coordinate " +
                          std::to_string(static_cast<long long>(idx.texcoord_index) + 1) +
                          ", but the file has " + std::to_string(nt) + " of them");
         corners.push_back({idx.vertex_index, idx.normal_index, idx.texcoord_index});

@@ -20,10 +20,6 @@ namespace {
 
 constexpr const char* kExtension = "KHR_gaussian_splatting";
 
-[[noreturn]] void fail(const std::filesystem::path& path, const std::string& why) {
-  throw InputError(path.string() + ": " + why);
-}
-
 std::string attribute(const std::string& name) { return std::string(kExtension) + ":" + name; }
 std::string sh_attribute(int l, int n) {
   return attribute("SH_DEGREE_" + std::to_string(l) + "_COEF_" + std::to_string(n));
@@ -40,7 +36,7 @@ std::vector<float> read_accessor(const tinygltf::Model& model, int index, int ty
   const fit::AccessorView v = fit::accessor_view(model, index, type, allowed, what, path);
   const bool normalized = model.accessors[index].normalized;
   if (v.component_type != TINYGLTF_COMPONENT_TYPE_FLOAT && !normalized && what.find("SCALE") == std::string::npos)
-    fail(path, what + ": integer components must be normalized");
+    fail_input(path, what + ": integer components must be normalized");
   const int components = tinygltf::GetNumComponentsInType(type);
   std::vector<float> out(v.count * static_cast<std::size_t>(components));
   for (std::size_t i = 0; i < v.count; ++i)
@@ -66,14 +62,14 @@ struct Reader {
 
   void primitive(const tinygltf::Primitive& p) {
     if (!p.extensions.count(kExtension)) return;
-    if (p.mode != TINYGLTF_MODE_POINTS) fail(path, "a KHR_gaussian_splatting primitive whose mode is not POINTS");
+    if (p.mode != TINYGLTF_MODE_POINTS) fail_input(path, "a KHR_gaussian_splatting primitive whose mode is not POINTS");
     auto find = [&](const std::string& name) -> int {
       const auto it = p.attributes.find(name);
       return it == p.attributes.end() ? -1 : it->second;
     };
     auto need = [&](const std::string& name) {
       const int i = find(name);
-      if (i < 0) fail(path, "a splat primitive without " + name);
+      if (i < 0) fail_input(path, "a splat primitive without " + name);
       return i;
     };
     constexpr int F = TINYGLTF_COMPONENT_TYPE_FLOAT, B = TINYGLTF_COMPONENT_TYPE_BYTE,
@@ -88,11 +84,11 @@ struct Reader {
         read_accessor(model, need(attribute("OPACITY")), TINYGLTF_TYPE_SCALAR, {F, UB, US}, attribute("OPACITY"), path);
     int degree = -1;
     for (int l = 0; l <= 3 && find(sh_attribute(l, 0)) >= 0; ++l) degree = l;
-    if (degree < 0) fail(path, "a splat primitive without " + sh_attribute(0, 0));
+    if (degree < 0) fail_input(path, "a splat primitive without " + sh_attribute(0, 0));
     for (int l = degree + 1; l <= 4; ++l)
       for (int n = 0; n <= 2 * l; ++n)
         if (find(sh_attribute(l, n)) >= 0)
-          fail(path, sh_attribute(l, n) + " without every coefficient of the lower degrees, or past degree 3");
+          fail_input(path, sh_attribute(l, n) + " without every coefficient of the lower degrees, or past degree 3");
     const std::size_t count = pos.size() / 3;
     SplatScene s;
     s.resize(count, degree);
@@ -101,23 +97,23 @@ struct Reader {
       for (int n = 0; n <= 2 * l; ++n) {
         const std::vector<float> c =
             read_accessor(model, need(sh_attribute(l, n)), TINYGLTF_TYPE_VEC3, {F}, sh_attribute(l, n), path);
-        if (c.size() != 3 * count) fail(path, sh_attribute(l, n) + " has not one value per splat");
+        if (c.size() != 3 * count) fail_input(path, sh_attribute(l, n) + " has not one value per splat");
         for (std::size_t i = 0; i < count; ++i)
           for (int ch = 0; ch < 3; ++ch) s.sh[i * stride + 3 * (l * l + n) + ch] = c[3 * i + ch];
       }
     if (rot.size() != 4 * count || scale.size() != 3 * count || opacity.size() != count)
-      fail(path, "the splat attributes have different counts");
+      fail_input(path, "the splat attributes have different counts");
     for (std::size_t i = 0; i < count; ++i) {
       for (int c = 0; c < 3; ++c) {
         s.position[3 * i + c] = pos[3 * i + c];
         const float sc = scale[3 * i + c];
-        if (sc < 0) fail(path, "splat " + std::to_string(i) + ": a negative scale (the extension's scales are linear, >= 0)");
+        if (sc < 0) fail_input(path, "splat " + std::to_string(i) + ": a negative scale (the extension's scales are linear, >= 0)");
         s.log_scale[3 * i + c] = std::log(std::max(sc, 1e-30f));
       }
       s.rotation[4 * i] = rot[4 * i + 3];
       for (int c = 0; c < 3; ++c) s.rotation[4 * i + 1 + c] = rot[4 * i + c];
       const float a = opacity[i];
-      if (!(a >= 0 && a <= 1)) fail(path, "splat " + std::to_string(i) + ": opacity outside [0, 1]");
+      if (!(a >= 0 && a <= 1)) fail_input(path, "splat " + std::to_string(i) + ": opacity outside [0, 1]");
       const float clamped = std::clamp(a, 1e-7f, 1 - 1e-7f);
       s.opacity[i] = std::log(clamped / (1 - clamped));
     }
@@ -127,19 +123,19 @@ struct Reader {
   // `moved`: this node or an ancestor transforms what it holds.
   void node(int index, std::vector<bool>& visited, int depth, bool moved) {
     if (index < 0 || static_cast<std::size_t>(index) >= model.nodes.size())
-      fail(path, "node " + std::to_string(index) + " does not exist");
-    if (visited[index]) fail(path, "node " + std::to_string(index) + " is reached twice: glTF nodes form trees");
-    if (depth > 1024) fail(path, "the node hierarchy is deeper than 1024");
+      fail_input(path, "node " + std::to_string(index) + " does not exist");
+    if (visited[index]) fail_input(path, "node " + std::to_string(index) + " is reached twice: glTF nodes form trees");
+    if (depth > 1024) fail_input(path, "the node hierarchy is deeper than 1024");
     visited[index] = true;
     const tinygltf::Node& n = model.nodes[index];
     moved = moved || !identity_node(n);
     if (n.mesh >= 0) {
       if (static_cast<std::size_t>(n.mesh) >= model.meshes.size())
-        fail(path, "node " + std::to_string(index) + " names a mesh that does not exist");
+        fail_input(path, "node " + std::to_string(index) + " names a mesh that does not exist");
       const std::size_t before = parts.size();
       for (const tinygltf::Primitive& p : model.meshes[n.mesh].primitives) primitive(p);
       if (parts.size() != before && moved)
-        fail(path, "node " + std::to_string(index) + "'s splats are under a node transform, which is not applied: bake it");
+        fail_input(path, "node " + std::to_string(index) + "'s splats are under a node transform, which is not applied: bake it");
     }
     for (int child : n.children) node(child, visited, depth + 1, moved);
   }
@@ -186,7 +182,7 @@ SplatScene read_gltf_splats(const std::string& bytes, const std::filesystem::pat
   std::string err, warn;
   const std::string base = path.has_parent_path() ? path.parent_path().string() : std::string(".");
   const bool binary = bytes.size() >= 4 && bytes.compare(0, 4, "glTF") == 0;
-  if (bytes.size() > std::numeric_limits<unsigned int>::max()) fail(path, "file too large");
+  if (bytes.size() > std::numeric_limits<unsigned int>::max()) fail_input(path, "file too large");
   // tinygltf turns JSON into values recursively: nesting is bounded before it sees it.
   std::string_view json = bytes;
   if (binary) {
@@ -194,30 +190,30 @@ SplatScene read_gltf_splats(const std::string& bytes, const std::filesystem::pat
     if (bytes.size() >= 20) std::memcpy(&length, bytes.data() + 12, 4);
     json = bytes.size() >= 20 ? std::string_view(bytes).substr(20, length) : std::string_view();
   }
-  if (auto problem = table_format::check_json_depth(json, table_format::kMaxJsonDepth)) fail(path, "glTF JSON " + *problem);
+  if (auto problem = table_format::check_json_depth(json, table_format::kMaxJsonDepth)) fail_input(path, "glTF JSON " + *problem);
   bool ok = false;
   try {
     ok = binary ? loader.LoadBinaryFromMemory(&model, &err, &warn, reinterpret_cast<const unsigned char*>(bytes.data()),
                                               static_cast<unsigned int>(bytes.size()), base)
                 : loader.LoadASCIIFromString(&model, &err, &warn, bytes.data(), static_cast<unsigned int>(bytes.size()), base);
   } catch (const std::exception& e) {
-    fail(path, std::string("cannot read glTF: tinygltf failed (") + e.what() + ")");
+    fail_input(path, std::string("cannot read glTF: tinygltf failed (") + e.what() + ")");
   }
   if (!ok) {
     while (!err.empty() && (err.back() == '\n' || err.back() == ' ')) err.pop_back();
-    fail(path, "cannot read glTF" + (err.empty() ? std::string() : ": " + err));
+    fail_input(path, "cannot read glTF" + (err.empty() ? std::string() : ": " + err));
   }
-  if (model.scenes.empty()) fail(path, "no scene");
+  if (model.scenes.empty()) fail_input(path, "no scene");
   const int scene = model.defaultScene >= 0 ? model.defaultScene : 0;
-  if (static_cast<std::size_t>(scene) >= model.scenes.size()) fail(path, "the default scene does not exist");
+  if (static_cast<std::size_t>(scene) >= model.scenes.size()) fail_input(path, "the default scene does not exist");
   Reader r{model, path, {}};
   std::vector<bool> visited(model.nodes.size(), false);
   for (int n : model.scenes[scene].nodes) r.node(n, visited, 0, false);
-  if (r.parts.empty()) fail(path, "no KHR_gaussian_splatting primitive in the default scene");
+  if (r.parts.empty()) fail_input(path, "no KHR_gaussian_splatting primitive in the default scene");
   SplatScene out = std::move(r.parts[0]);
   for (std::size_t k = 1; k < r.parts.size(); ++k) {
     const SplatScene& p = r.parts[k];
-    if (p.degree != out.degree) fail(path, "splat primitives of different SH degrees");
+    if (p.degree != out.degree) fail_input(path, "splat primitives of different SH degrees");
     out.count += p.count;
     out.position.insert(out.position.end(), p.position.begin(), p.position.end());
     out.log_scale.insert(out.log_scale.end(), p.log_scale.begin(), p.log_scale.end());

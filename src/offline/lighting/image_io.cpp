@@ -61,14 +61,10 @@ Format format_of_extension(const std::filesystem::path& p) {
   return Format::unknown;
 }
 
-[[noreturn]] void fail(const std::filesystem::path& name, const std::string& what) {
-  throw InputError(name.string() + ": " + what);
-}
-
 void check_size(const std::filesystem::path& name, std::int64_t w, std::int64_t h, std::int64_t max_texels) {
-  if (w < 1 || h < 1) fail(name, "the image is empty");
+  if (w < 1 || h < 1) fail_input(name, "the image is empty");
   if (w > max_texels || h > max_texels || w * h > max_texels)
-    fail(name, std::to_string(w) + " x " + std::to_string(h) + " texels is more than the " +
+    fail_input(name, std::to_string(w) + " x " + std::to_string(h) + " texels is more than the " +
                    std::to_string(max_texels) + " accepted");
 }
 
@@ -115,7 +111,7 @@ class ExrCoreFile {
     exr_storage_t storage;
     check(exr_get_storage(context_.handle, 0, &storage));
     if (storage != EXR_STORAGE_SCANLINE && storage != EXR_STORAGE_TILED)
-      fail(name, "a deep OpenEXR image (one value per texel is read)");
+      fail_input(name, "a deep OpenEXR image (one value per texel is read)");
     tiled_ = storage == EXR_STORAGE_TILED;
     exr_compression_t compression;
     check(exr_get_compression(context_.handle, 0, &compression));
@@ -130,7 +126,7 @@ class ExrCoreFile {
     };
     if (data.min.x != display.min.x || data.min.y != display.min.y || data.max.x != display.max.x ||
         data.max.y != display.max.y)
-      fail(name, "the data window " + box(data) + " differs from the display window " + box(display) +
+      fail_input(name, "the data window " + box(data) + " differs from the display window " + box(display) +
                      ": crop or pad the image to its display window first");
     min_y_ = data.min.y;
     const std::int64_t w = std::int64_t(data.max.x) - data.min.x + 1, h = std::int64_t(data.max.y) - data.min.y + 1;
@@ -142,12 +138,12 @@ class ExrCoreFile {
     for (int c = 0; c < channels->num_channels; ++c) {
       const exr_attr_chlist_entry_t& e = channels->entries[c];
       channels_.emplace_back(e.name.str, static_cast<std::size_t>(e.name.length));
-      if (e.x_sampling != 1 || e.y_sampling != 1) fail(name, "channel " + channels_.back() + " is subsampled");
+      if (e.x_sampling != 1 || e.y_sampling != 1) fail_input(name, "channel " + channels_.back() + " is subsampled");
     }
     if (tiled_) {  // level (0, 0): the full-resolution image of a mipmapped file
       std::int32_t tile_w = 0, tile_h = 0;
       check(exr_get_tile_sizes(context_.handle, 0, 0, 0, &tile_w, &tile_h));
-      if (tile_w < 1 || tile_h < 1) fail(name, "OpenEXR: empty tiles");
+      if (tile_w < 1 || tile_h < 1) fail_input(name, "OpenEXR: empty tiles");
       tile_w_ = tile_w;
       tile_h_ = tile_h;
       tiles_x_ = static_cast<std::int32_t>((w + tile_w - 1) / tile_w);
@@ -155,7 +151,7 @@ class ExrCoreFile {
       chunks_ = std::size_t(tiles_x_) * std::size_t(tiles_y_);
     } else {
       check(exr_get_scanlines_per_chunk(context_.handle, 0, &lines_per_chunk_));
-      if (lines_per_chunk_ < 1) fail(name, "OpenEXR: no scanlines per chunk");
+      if (lines_per_chunk_ < 1) fail_input(name, "OpenEXR: no scanlines per chunk");
       chunks_ = static_cast<std::size_t>((h + lines_per_chunk_ - 1) / lines_per_chunk_);
     }
   }
@@ -191,7 +187,7 @@ class ExrCoreFile {
  private:
   void check(exr_result_t rc) const {
     if (rc == EXR_ERR_SUCCESS) return;
-    fail(name_, "OpenEXR: " + (g_exr_core_message.empty() ? std::string(exr_get_default_error_message(rc))
+    fail_input(name_, "OpenEXR: " + (g_exr_core_message.empty() ? std::string(exr_get_default_error_message(rc))
                                                           : g_exr_core_message));
   }
 
@@ -202,10 +198,10 @@ class ExrCoreFile {
     try {
       decoded = decode_exr_with_cpp_library(bytes_, names);
     } catch (const std::exception& e) {
-      fail(name_, std::string("OpenEXR: ") + e.what());
+      fail_input(name_, std::string("OpenEXR: ") + e.what());
     }
     const std::size_t k = names.size(), texel_count = std::size_t(width_) * std::size_t(height_);
-    if (decoded.texels.size() != texel_count * k) fail(name_, "OpenEXR: the DWA decoder's size differs");
+    if (decoded.texels.size() != texel_count * k) fail_input(name_, "OpenEXR: the DWA decoder's size differs");
     for (std::size_t t = 0; t < texel_count; ++t)
       for (std::size_t c = 0; c < k; ++c) texels[t * std::size_t(stride) + c] = decoded.texels[t * k + c];
   }
@@ -226,7 +222,7 @@ class ExrCoreFile {
     }
     if (x0 < 0 || y0 < 0 || info.width < 0 || info.height < 0 || x0 + info.width > width_ ||
         y0 + info.height > height_)
-      fail(name_, "OpenEXR: chunk " + std::to_string(chunk) + " lies outside the data window");
+      fail_input(name_, "OpenEXR: chunk " + std::to_string(chunk) + " lies outside the data window");
     check(first ? exr_decoding_initialize(context_.handle, 0, &info, &decode) : exr_decoding_update(context_.handle, 0, &info, &decode));
     const std::size_t row = std::size_t(width_) * std::size_t(stride);
     for (int c = 0; c < decode.channel_count; ++c) {
@@ -268,7 +264,7 @@ Image decode_exr(std::string_view bytes, const std::filesystem::path& name, std:
   if (!rgb && !file.has("Y")) {
     std::string found;
     for (const std::string& c : file.channels()) found += (found.empty() ? "" : ", ") + c;
-    fail(name, "no R, G, B or Y channels (found: " + (found.empty() ? std::string("none") : found) + ")");
+    fail_input(name, "no R, G, B or Y channels (found: " + (found.empty() ? std::string("none") : found) + ")");
   }
   Image img;
   img.width = file.width();
@@ -287,22 +283,22 @@ Image decode_exr(std::string_view bytes, const std::filesystem::path& name, std:
 
 ChannelImage decode_exr_channels(std::string_view bytes, const std::filesystem::path& name, std::int64_t max_texels,
                                  const std::vector<std::string>& only) {
-  if (sniff(bytes) != Format::exr) fail(name, "not an OpenEXR file");
+  if (sniff(bytes) != Format::exr) fail_input(name, "not an OpenEXR file");
   ExrCoreFile file(bytes, name, max_texels);
   ChannelImage img;
   img.width = file.width();
   img.height = file.height();
   for (std::size_t i = 0; i < only.size(); ++i) {
-    if (!file.has(only[i])) fail(name, "no channel '" + only[i] + "'");
+    if (!file.has(only[i])) fail_input(name, "no channel '" + only[i] + "'");
     if (std::find(only.begin(), only.begin() + i, only[i]) != only.begin() + i)
-      fail(name, "channel '" + only[i] + "' asked for twice");
+      fail_input(name, "channel '" + only[i] + "' asked for twice");
   }
   img.names = only.empty() ? file.channels() : only;
   const std::size_t k = img.names.size();
   const std::int64_t w = img.width, h = img.height;
   // The texel cap bounds one channel; a header may declare any number of them.
   if (w * h * static_cast<std::int64_t>(k) > (std::int64_t{1} << 30))
-    fail(name, std::to_string(k) + " channels of " + std::to_string(w) + " x " + std::to_string(h) +
+    fail_input(name, std::to_string(k) + " channels of " + std::to_string(w) + " x " + std::to_string(h) +
                    ": more than 2^30 values");
   img.texels.resize(static_cast<std::size_t>(w * h) * k);
   if (k > 0) file.decode(img.names, img.texels.data(), static_cast<int>(k), 1);
@@ -318,19 +314,19 @@ namespace {
 // and refuses data that ends early.
 void check_hdr_complete(std::string_view b, const std::filesystem::path& name, std::int64_t max_texels) {
   const std::size_t header_end = b.find("\n\n");
-  if (header_end == std::string_view::npos) fail(name, "Radiance HDR: no end of header");
+  if (header_end == std::string_view::npos) fail_input(name, "Radiance HDR: no end of header");
   const std::size_t line_end = b.find('\n', header_end + 2);
-  if (line_end == std::string_view::npos) fail(name, "Radiance HDR: no resolution line");
+  if (line_end == std::string_view::npos) fail_input(name, "Radiance HDR: no resolution line");
   long long h = 0, w = 0;
   char tail = 0;
   const std::string line(b.substr(header_end + 2, line_end - header_end - 2));
   if (std::sscanf(line.c_str(), "-Y %lld +X %lld%c", &h, &w, &tail) != 2)
-    fail(name, "Radiance HDR: the resolution line is not '-Y <height> +X <width>'");
+    fail_input(name, "Radiance HDR: the resolution line is not '-Y <height> +X <width>'");
   check_size(name, w, h, max_texels);
   std::size_t at = line_end + 1;
   auto need = [&](std::size_t n) {
     if (b.size() - at < n)
-      fail(name, "Radiance HDR: the data ends before the " + std::to_string(w) + " x " + std::to_string(h) +
+      fail_input(name, "Radiance HDR: the data ends before the " + std::to_string(w) + " x " + std::to_string(h) +
                      " texels of its header");
   };
   for (long long y = 0; y < h; ++y) {
@@ -342,14 +338,14 @@ void check_hdr_complete(std::string_view b, const std::filesystem::path& name, s
       need(static_cast<std::size_t>(4 * w * h));
       return;
     }
-    if (((p[2] << 8) | p[3]) != w) fail(name, "Radiance HDR: a scanline's width differs from the header's");
+    if (((p[2] << 8) | p[3]) != w) fail_input(name, "Radiance HDR: a scanline's width differs from the header's");
     at += 4;
     for (int component = 0; component < 4; ++component) {
       for (long long x = 0; x < w;) {
         need(1);
         const int count = static_cast<unsigned char>(b[at++]);
         const int run = count > 128 ? count - 128 : count;
-        if (run == 0 || x + run > w) fail(name, "Radiance HDR: a run-length scanline is corrupt");
+        if (run == 0 || x + run > w) fail_input(name, "Radiance HDR: a run-length scanline is corrupt");
         need(count > 128 ? 1 : static_cast<std::size_t>(count));
         at += count > 128 ? 1 : static_cast<std::size_t>(count);
         x += run;
@@ -366,20 +362,20 @@ void check_jpeg_complete(std::string_view b, const std::filesystem::path& name) 
   std::size_t end = b.size();
   while (end > 0 && b[end - 1] == '\0') --end;  // some writers pad
   if (end < 2 || static_cast<unsigned char>(b[end - 2]) != 0xff || static_cast<unsigned char>(b[end - 1]) != 0xd9)
-    fail(name, "JPEG: the file ends before its end-of-image marker (truncated)");
+    fail_input(name, "JPEG: the file ends before its end-of-image marker (truncated)");
   auto byte = [&](std::size_t i) { return static_cast<unsigned char>(b[i]); };
   std::size_t at = 2;  // after SOI
   for (;;) {
-    if (at >= end || byte(at) != 0xff) fail(name, "JPEG: a marker segment is malformed before the first scan");
+    if (at >= end || byte(at) != 0xff) fail_input(name, "JPEG: a marker segment is malformed before the first scan");
     while (at < end && byte(at) == 0xff) ++at;  // fill bytes
-    if (at >= end) fail(name, "JPEG: the file ends before its first scan");
+    if (at >= end) fail_input(name, "JPEG: the file ends before its first scan");
     const unsigned marker = byte(at++);
     if (marker == 0xda) return;  // start of scan
-    if (marker == 0xd9) fail(name, "JPEG: no scan (the image holds no pixel data)");
+    if (marker == 0xd9) fail_input(name, "JPEG: no scan (the image holds no pixel data)");
     if (marker == 0x01 || (marker >= 0xd0 && marker <= 0xd7)) continue;  // no length
-    if (at + 2 > end) fail(name, "JPEG: the file ends inside a marker segment");
+    if (at + 2 > end) fail_input(name, "JPEG: the file ends inside a marker segment");
     const std::size_t length = (std::size_t(byte(at)) << 8) | byte(at + 1);
-    if (length < 2) fail(name, "JPEG: a marker segment has length below 2");
+    if (length < 2) fail_input(name, "JPEG: a marker segment has length below 2");
     at += length;
   }
 }
@@ -394,7 +390,7 @@ void check_png_chunks(std::string_view b, const std::filesystem::path& name) {
     const std::uint32_t length = byte(at) << 24 | byte(at + 1) << 16 | byte(at + 2) << 8 | byte(at + 3);
     const std::string type(b.substr(at + 4, 4));
     if (length > b.size() - at - 8 || b.size() - at - 8 - length < 4)
-      fail(name, "PNG: chunk '" + type + "' claims " + std::to_string(length) + " bytes, more than the file holds");
+      fail_input(name, "PNG: chunk '" + type + "' claims " + std::to_string(length) + " bytes, more than the file holds");
     at += 12 + std::size_t(length);
     if (type == "IEND") return;
   }
@@ -410,7 +406,7 @@ void check_bytes_can_hold(std::string_view bytes, Format format, std::int64_t w,
   if (format == Format::jpeg) least_bytes = double(w) * double(h) / 64 / 8;
   if (format == Format::png) least_bytes = double(h) * (1 + std::ceil(double(w) / 8)) / 1032;
   if (double(bytes.size()) + 1024 < least_bytes)
-    fail(name, std::string(format_name(format)) + ": " + std::to_string(w) + " x " + std::to_string(h) +
+    fail_input(name, std::string(format_name(format)) + ": " + std::to_string(w) + " x " + std::to_string(h) +
                    " texels cannot be coded in a file of " + std::to_string(bytes.size()) +
                    " bytes (its header is wrong or the file is cut short)");
 }
@@ -423,7 +419,7 @@ Image decode_stb(std::string_view bytes, const std::filesystem::path& name, Form
   const int size = static_cast<int>(std::min<std::size_t>(bytes.size(), INT32_MAX));
   int w = 0, h = 0, comp = 0;
   if (!stbi_info_from_memory(data, size, &w, &h, &comp))
-    fail(name, std::string(format_name(format)) + ": " + stbi_failure_reason());
+    fail_input(name, std::string(format_name(format)) + ": " + stbi_failure_reason());
   check_size(name, w, h, max_texels);
   check_bytes_can_hold(bytes, format, w, h, name);
   Image img;
@@ -431,7 +427,7 @@ Image decode_stb(std::string_view bytes, const std::filesystem::path& name, Form
   img.height = h;
   img.texels.resize(static_cast<std::size_t>(w) * h * 3);
   auto take = [&](auto* pixels, auto convert) {
-    if (!pixels) fail(name, std::string(format_name(format)) + ": " + stbi_failure_reason());
+    if (!pixels) fail_input(name, std::string(format_name(format)) + ": " + stbi_failure_reason());
     std::unique_ptr<void, void (*)(void*)> owner(pixels, stbi_image_free);
     for (std::size_t i = 0; i < img.texels.size(); ++i) img.texels[i] = convert(pixels[i]);
   };
@@ -461,12 +457,12 @@ Image decode(std::string_view bytes, const std::filesystem::path& name, std::int
   const Format content = sniff(bytes), extension = format_of_extension(name);
   if (content == Format::unknown) {
     if (extension != Format::unknown)
-      fail(name, std::string("not a ") + format_name(extension) + " file (its first bytes are not a " +
+      fail_input(name, std::string("not a ") + format_name(extension) + " file (its first bytes are not a " +
                      format_name(extension) + " signature)");
-    fail(name, "not an image shtool reads (OpenEXR, Radiance .hdr, PNG or JPEG)");
+    fail_input(name, "not an image shtool reads (OpenEXR, Radiance .hdr, PNG or JPEG)");
   }
   if (extension != Format::unknown && extension != content)
-    fail(name, std::string("the extension says ") + format_name(extension) + " but the content is " +
+    fail_input(name, std::string("the extension says ") + format_name(extension) + " but the content is " +
                    format_name(content));
   Image img = content == Format::exr ? decode_exr(bytes, name, max_texels, threads)
                                      : decode_stb(bytes, name, content, max_texels);

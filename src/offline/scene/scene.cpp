@@ -14,10 +14,6 @@
 namespace shtool::scene {
 namespace {
 
-[[noreturn]] void fail(const std::filesystem::path& path, const std::string& what) {
-  throw InputError(path.string() + ": " + what);
-}
-
 Rgb factor3(const std::vector<double>& v, const Rgb& fallback) {
   return v.size() >= 3 ? Rgb(v[0], v[1], v[2]) : fallback;
 }
@@ -26,15 +22,15 @@ Rgb factor3(const std::vector<double>& v, const Rgb& fallback) {
 int texture_image(const tinygltf::Model& model, int texture, const std::filesystem::path& path) {
   if (texture < 0) return -1;
   if (static_cast<std::size_t>(texture) >= model.textures.size())
-    fail(path, "a material names texture " + std::to_string(texture) + ", which does not exist");
+    fail_input(path, "a material names texture " + std::to_string(texture) + ", which does not exist");
   const int source = model.textures[texture].source;
   if (source < 0 || static_cast<std::size_t>(source) >= model.images.size())
-    fail(path, "texture " + std::to_string(texture) + " has no image");
+    fail_input(path, "texture " + std::to_string(texture) + " has no image");
   return source;
 }
 
 void check_color(const Rgb& c, const std::filesystem::path& path, const std::string& what) {
-  if (!c.allFinite() || (c.array() < 0).any()) fail(path, what + " must be finite and not negative");
+  if (!c.allFinite() || (c.array() < 0).any()) fail_input(path, what + " must be finite and not negative");
 }
 
 Scene gltf_scene(const std::string& bytes, const std::filesystem::path& path) {
@@ -45,7 +41,7 @@ Scene gltf_scene(const std::string& bytes, const std::filesystem::path& path) {
   s.mesh = fit::mesh_from_gltf(model, bytes, path, fit::NormalSource::automatic, &light_nodes);
   for (int& m : s.mesh.triangle_material)
     if (m >= static_cast<int>(model.materials.size()))
-      fail(path, "a primitive names material " + std::to_string(m) + ", which does not exist");
+      fail_input(path, "a primitive names material " + std::to_string(m) + ", which does not exist");
   std::vector<int> used_images;
   for (std::size_t i = 0; i < model.materials.size(); ++i) {
     const tinygltf::Material& gm = model.materials[i];
@@ -64,7 +60,7 @@ Scene gltf_scene(const std::string& bytes, const std::filesystem::path& path) {
     m.emissive_texture = texture_image(model, gm.emissiveTexture.index, path);
     if ((m.base_texture >= 0 && gm.pbrMetallicRoughness.baseColorTexture.texCoord != 0) ||
         (m.emissive_texture >= 0 && gm.emissiveTexture.texCoord != 0))
-      fail(path, what + ": only TEXCOORD_0 is supported for textures");
+      fail_input(path, what + ": only TEXCOORD_0 is supported for textures");
     m.double_sided = gm.doubleSided;
     s.materials.push_back(m);
   }
@@ -74,7 +70,7 @@ Scene gltf_scene(const std::string& bytes, const std::filesystem::path& path) {
     for (int image : {m.base_texture, m.emissive_texture}) {
       if (image < 0 || s.textures[image].width > 0) continue;
       const tinygltf::Image& gi = model.images[image];
-      if (gi.image.empty()) fail(path, "image " + std::to_string(image) + " has no data");
+      if (gi.image.empty()) fail_input(path, "image " + std::to_string(image) + " has no data");
       const std::string encoded(gi.image.begin(), gi.image.end());
       const lighting::Image decoded =
           lighting::decode_image(encoded, path.string() + " image " + std::to_string(image), lighting::kMaxImageTexels, 1);
@@ -103,19 +99,19 @@ Scene gltf_scene(const std::string& bytes, const std::filesystem::path& path) {
     }
     l.intensity = factor3(gl.color, Rgb(1, 1, 1)) * gl.intensity;
     check_color(l.intensity, path, what + " colour x intensity");
-    if (!(gl.range >= 0) || !std::isfinite(gl.range)) fail(path, what + " range must be positive");
+    if (!(gl.range >= 0) || !std::isfinite(gl.range)) fail_input(path, what + " range must be positive");
     l.range = gl.range;
     l.inner_cone = gl.spot.innerConeAngle;
     l.outer_cone = gl.spot.outerConeAngle;
     if (l.type == LightType::spot &&
         !(l.inner_cone >= 0 && l.inner_cone < l.outer_cone && l.outer_cone <= std::acos(-1.0) / 2))
-      fail(path, what + ": spot cone angles need 0 <= innerConeAngle < outerConeAngle <= pi/2");
+      fail_input(path, what + ": spot cone angles need 0 <= innerConeAngle < outerConeAngle <= pi/2");
     const Eigen::Matrix3d linear = node.world.block<3, 3>(0, 0);
     Eigen::Vector3d dir = linear * Eigen::Vector3d(0, 0, -1);  // lights shine along local -Z
-    if (!(dir.norm() > 0) || !dir.allFinite()) fail(path, what + ": its node's transform collapses its direction");
+    if (!(dir.norm() > 0) || !dir.allFinite()) fail_input(path, what + ": its node's transform collapses its direction");
     l.direction = from_y_up(dir.normalized());
     l.position = from_y_up(node.world.block<3, 1>(0, 3));
-    if (!l.position.allFinite()) fail(path, what + ": position is not finite");
+    if (!l.position.allFinite()) fail_input(path, what + ": position is not finite");
     s.lights.push_back(l);
   }
   return s;
@@ -251,14 +247,14 @@ Eigen::Vector3d Scene::upper() const {
 
 Scene load_scene(const std::filesystem::path& path, UpAxis up) {
   std::error_code ec;
-  if (!std::filesystem::exists(path, ec)) fail(path, "no such file");
-  if (std::filesystem::is_directory(path, ec)) fail(path, "is a directory, not a scene file");
+  if (!std::filesystem::exists(path, ec)) fail_input(path, "no such file");
+  if (std::filesystem::is_directory(path, ec)) fail_input(path, "is a directory, not a scene file");
   const std::string bytes = read_input_file(path, "scene");
   std::string ext = path.extension().string();
   for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   Scene s;
   if ((bytes.size() >= 4 && bytes.compare(0, 4, "glTF") == 0) || ext == ".gltf" || ext == ".glb") {
-    if (up != UpAxis::y) fail(path, "--up z: glTF is +Y up by its specification (--up applies to OBJ files)");
+    if (up != UpAxis::y) fail_input(path, "--up z: glTF is +Y up by its specification (--up applies to OBJ files)");
     s = gltf_scene(bytes, path);
   } else {
     s = obj_scene(bytes, path, up);

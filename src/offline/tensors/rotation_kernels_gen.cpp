@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "kernels/rotation_kernels.h"
+#include "tensors/cpp_literal.h"
 #include "tensors/rotation_helpers_gen.h"
 
 namespace shtool {
@@ -23,13 +24,6 @@ using detail::kBandKernelMaxBand;
 // "literal" + std::string at -O3).
 std::string indexed(const char* prefix, int j) { return std::string(prefix).append(std::to_string(j)); }
 
-// Round-trip text of a double (17 significant digits), identical on every run.
-std::string literal(double v) {
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.17g", v);
-  return buf;
-}
-
 // Sum of coefficient * variable terms as C++, accumulated left to right, each term after
 // the first through madd<F> (rotation_kernels.h: fused in the FMA kernels, two roundings
 // otherwise); exact zeros dropped, unit coefficients added without a multiplication.
@@ -40,9 +34,9 @@ std::string linear_sum(const std::vector<std::pair<double, std::string>>& terms)
     if (c == 0.0) continue;
     const bool neg = c < 0;
     const double a = std::abs(c);
-    if (s.empty()) s = a == 1.0 ? (neg ? "-" + name : name) : "T(" + literal(c) + ") * " + name;
+    if (s.empty()) s = a == 1.0 ? (neg ? "-" + name : name) : "T(" + cpp_literal(c) + ") * " + name;
     else if (a == 1.0) s += (neg ? " - " : " + ") + name;
-    else s = "madd<F>(T(" + literal(c) + "), " + name + ", " + s + ")";
+    else s = "madd<F>(T(" + cpp_literal(c) + "), " + name + ", " + s + ")";
   }
   return s;
 }
@@ -213,7 +207,7 @@ void x90_lanes(std::ostream& o, int l, const std::vector<std::vector<double>>& x
           } else {
             const auto& [value, j] = terms[i][k - pad];
             lanes[i] = slot[j];
-            c += std::string(i ? ", " : "") + "T(" + literal(value) + ")";
+            c += std::string(i ? ", " : "") + "T(" + cpp_literal(value) + ")";
           }
           uses_scalar_vector = uses_scalar_vector || lanes[i].first == scalar_vector;
         }

@@ -13,19 +13,13 @@
 #include <vector>
 
 #include "kernels/tripling_kernels.h"
+#include "tensors/cpp_literal.h"
 #include "tensors/tripling.h"
 
 namespace shtool {
 namespace {
 
 using detail::kTriplingKernelMaxOrder;
-
-// Round-trip text of a double (17 significant digits), identical on every run.
-std::string literal(double v) {
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.17g", v);
-  return buf;
-}
 
 // One canonical entry C_abc (a <= b <= c) of the exact tripling tensor.
 struct Entry {
@@ -185,14 +179,14 @@ std::string permutation_kernel_source(int order, const std::vector<Entry>& entri
         source += ")";
       }
       std::string coefficients = "V4{";
-      for (int k = 0; k < 4; ++k) coefficients += (k ? ", T(" : "T(") + literal(half.c[k]) + ")";
+      for (int k = 0; k < 4; ++k) coefficients += (k ? ", T(" : "T(") + cpp_literal(half.c[k]) + ")";
       coefficients += "}";
       s << "  " << (n < 2 ? "V4 " : "") << names[h] << n % 2 << " " << (n < 2 ? "= " : "+= ") << coefficients
         << " * " << source << ";\n";
     }
   }
   s << "  const V4 dl = fl * hl, dh = fh * hh;\n";
-  s << "  y[0] = T(" << literal(2 * c0) << ") * (f[0] * h[0] + (((dl[0] + dl[1]) + (dl[2] + dl[3])) + ((dh[0] + dh[1]) + (dh[2] + dh[3]))));\n";
+  s << "  y[0] = T(" << cpp_literal(2 * c0) << ") * (f[0] * h[0] + (((dl[0] + dl[1]) + (dl[2] + dl[3])) + ((dh[0] + dh[1]) + (dh[2] + dh[3]))));\n";
   s << "  *reinterpret_cast<U4*>(y + 1) = lo0 + lo1;\n";
   s << "  *reinterpret_cast<U4*>(y + 5) = hi0 + hi1;\n";
   s << "}\n\n";
@@ -279,7 +273,7 @@ std::string kernel_source(int order, const std::vector<Entry>& entries) {
         ++scalar_terms;
       }
       const Signed inner = balanced_sum(sum);
-      const std::string c = literal(inner.positive ? size : -size);
+      const std::string c = cpp_literal(inner.positive ? size : -size);
       products.push_back({"T(" + c + ") * " + (inner.sum ? "(" + inner.expr + ")" : inner.expr), true});
       ++groups;
     }
@@ -367,7 +361,7 @@ std::string tripling_kernels_source() {
     s << (order == 3 ? permutation_kernel_source(order, entries) : kernel_source(order, entries));
     tables << "constexpr TriplingKernelEntry kEntries" << order << "[] = {\n";
     for (const Entry& e : entries)
-      tables << "    {" << e.a << ", " << e.b << ", " << e.c << ", " << literal(e.value) << "},\n";
+      tables << "    {" << e.a << ", " << e.b << ", " << e.c << ", " << cpp_literal(e.value) << "},\n";
     tables << "};\n\n";
   }
   s << tables.str();
