@@ -1,0 +1,157 @@
+// Serves an `shtool export-web` folder alone on 127.0.0.1 and opens its page in one headless
+// Chromium (WebGL2 on SwiftShader), once per query string, driven over the DevTools
+// protocol on a pipe: waits for document.title 'shtool: ready', then saves the canvas as
+// PNG. Prints one JSON line: {views: [png paths], requests: [...], outside: [...],
+// missing: [...], console: [...]} or {error}.
+//   node export_web_browser.mjs CHROMIUM DIR OUT_DIR [QUERY ...]   (QUERY: '' or 'light-rotation=w,x,y,z')
+import { createServer } from 'node:http';
+import { spawn } from 'node:child_process';
+import { mkdtempSync, rmSync, writeFileSync } from 'node:fs';
+import { readFile } from 'node:fs/promises';
+import { tmpdir } from 'node:os';
+import { join, resolve, sep } from 'node:path';
+
+const [ chromium, dir, outDir, ...queries ] = process.argv.slice( 2 );
+const root = resolve( dir );
+const types = { '.html': 'text/html', '.js': 'text/javascript', '.json': 'application/json', '.glsl': 'text/plain' };
+const served = [], missing = [];
+
+const server = createServer( async ( req, res ) => {
+
+	const path = decodeURIComponent( new URL( req.url, 'http://x' ).pathname );
+	const file = resolve( root, '.' + path );
+	served.push( path );
+	if ( file !== root && ! file.startsWith( root + sep ) ) {
+
+		missing.push( path );
+		res.writeHead( 403 );
+		res.end();
+		return;
+
+	}
+	try {
+
+		const body = await readFile( path.endsWith( '/' ) ? join( file, 'index.html' ) : file );
+		res.writeHead( 200, { 'Content-Type': types[ file.slice( file.lastIndexOf( '.' ) ) ] || 'application/octet-stream' } );
+		res.end( body );
+
+	} catch {
+
+		missing.push( path );
+		res.writeHead( 404 );
+		res.end();
+
+	}
+
+} );
+await new Promise( ( r ) => server.listen( 0, '127.0.0.1', r ) );
+const origin = `http://127.0.0.1:${server.address().port}`;
+
+const profile = mkdtempSync( join( tmpdir(), 'shtool-chromium-' ) );
+const browser = spawn( chromium, [ '--headless', '--no-sandbox', '--disable-gpu-sandbox', '--use-angle=swiftshader',
+	'--enable-unsafe-swiftshader', '--ignore-gpu-blocklist', '--no-first-run', '--disable-extensions',
+	'--disable-background-networking', '--disable-component-update', '--disable-sync', '--no-default-browser-check',
+	'--force-device-scale-factor=1', `--user-data-dir=${profile}`, '--remote-debugging-pipe', 'about:blank' ],
+{ stdio: [ 'ignore', 'ignore', 'pipe', 'pipe', 'pipe' ] } );
+let stderr = '';
+browser.stderr.on( 'data', ( d ) => { stderr = ( stderr + d ).slice( - 4000 ); } );
+
+// The DevTools protocol on fds 3 (to Chromium) and 4 (from it), messages ended by NUL.
+let nextId = 1, buffer = '';
+const pending = new Map(), listeners = [];
+browser.stdio[ 4 ].on( 'data', ( chunk ) => {
+
+	buffer += chunk.toString( 'utf8' );
+	let end;
+	while ( ( end = buffer.indexOf( '\0' ) ) >= 0 ) {
+
+		const message = JSON.parse( buffer.slice( 0, end ) );
+		buffer = buffer.slice( end + 1 );
+		if ( message.id !== undefined && pending.has( message.id ) ) {
+
+			const { resolve: ok, reject } = pending.get( message.id );
+			pending.delete( message.id );
+			if ( message.error ) reject( new Error( JSON.stringify( message.error ) ) );
+			else ok( message.result );
+
+		} else for ( const l of listeners ) l( message );
+
+	}
+
+} );
+const send = ( method, params = {}, sessionId ) => new Promise( ( ok, reject ) => {
+
+	const id = nextId ++;
+	pending.set( id, { resolve: ok, reject } );
+	browser.stdio[ 3 ].write( JSON.stringify( { id, method, params, ...( sessionId ? { sessionId } : {} ) } ) + '\0' );
+
+} );
+const sleep = ( ms ) => new Promise( ( r ) => setTimeout( r, ms ) );
+
+const requests = [], outside = [], consoleLines = [];
+const result = { views: [] };
+const deadline = setTimeout( () => finish( { error: `timed out; chromium said: ${stderr}` } ), 240000 );
+function finish( extra ) {
+
+	clearTimeout( deadline );
+	Object.assign( result, { requests, outside, missing, served, console: consoleLines }, extra );
+	process.stdout.write( JSON.stringify( result ) + '\n' );
+	try { browser.kill( 'SIGKILL' ); } catch {}
+	server.close();
+	try { rmSync( profile, { recursive: true, force: true } ); } catch {}
+	process.exit( 0 );
+
+}
+
+try {
+
+	const { targetId } = await send( 'Target.createTarget', { url: 'about:blank' } );
+	const { sessionId } = await send( 'Target.attachToTarget', { targetId, flatten: true } );
+	listeners.push( ( m ) => {
+
+		if ( m.sessionId !== sessionId ) return;
+		if ( m.method === 'Network.requestWillBeSent' ) {
+
+			const url = m.params.request.url;
+			requests.push( url );
+			if ( ! url.startsWith( origin + '/' ) && ! url.startsWith( 'data:' ) && url !== 'about:blank' ) outside.push( url );
+
+		}
+		if ( m.method === 'Runtime.consoleAPICalled' )
+			consoleLines.push( m.params.args.map( ( a ) => a.value !== undefined ? String( a.value ) : a.description || '' ).join( ' ' ) );
+		if ( m.method === 'Runtime.exceptionThrown' ) consoleLines.push( JSON.stringify( m.params.exceptionDetails ) );
+
+	} );
+	await send( 'Network.enable', {}, sessionId );
+	await send( 'Runtime.enable', {}, sessionId );
+	await send( 'Page.enable', {}, sessionId );
+	for ( const [ i, query ] of ( queries.length ? queries : [ '' ] ).entries() ) {
+
+		await send( 'Page.navigate', { url: `${origin}/index.html${query ? '?' + query : ''}` }, sessionId );
+		let title = '';
+		for ( let t = 0; t < 1200; t ++ ) {
+
+			await sleep( 100 );
+			title = ( await send( 'Runtime.evaluate', { expression: 'document.title', returnByValue: true }, sessionId ) ).result.value;
+			if ( title === 'shtool: ready' || title === 'shtool: error' ) break;
+
+		}
+		if ( title !== 'shtool: ready' ) {
+
+			const text = ( await send( 'Runtime.evaluate', { expression: "document.getElementById('status') && document.getElementById('status').textContent", returnByValue: true }, sessionId ) ).result.value;
+			finish( { error: `view ${i} (${query}): title '${title}', status '${text}'` } );
+
+		}
+		const url = ( await send( 'Runtime.evaluate', { expression: "document.getElementById('view').toDataURL('image/png')", returnByValue: true }, sessionId ) ).result.value;
+		const png = join( outDir, `view-${i}.png` );
+		writeFileSync( png, Buffer.from( url.slice( url.indexOf( ',' ) + 1 ), 'base64' ) );
+		result.views.push( png );
+
+	}
+	finish( {} );
+
+} catch ( e ) {
+
+	finish( { error: `${e && e.stack || e}; chromium said: ${stderr}` } );
+
+}
