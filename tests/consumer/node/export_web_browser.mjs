@@ -1,9 +1,11 @@
-// Serves an `shtool export-web` folder alone on 127.0.0.1 and opens its page in one headless
-// Chromium (WebGL2 on SwiftShader), once per query string, driven over the DevTools
+// Serves `shtool export-web` folders on 127.0.0.1, folder k alone under /k/, and opens a
+// page per VIEW in one headless Chromium (WebGL2 on SwiftShader), driven over the DevTools
 // protocol on a pipe: waits for document.title 'shtool: ready', then saves the canvas as
-// PNG. Prints one JSON line: {views: [png paths], requests: [...], outside: [...],
-// missing: [...], console: [...]} or {error}.
-//   node export_web_browser.mjs CHROMIUM DIR OUT_DIR [QUERY ...]   (QUERY: '' or 'light-rotation=w,x,y,z')
+// PNG. A request of view k outside /k/, or for a file its folder lacks, is listed. Prints
+// one JSON line: {views: [png paths], requests: [...], outside: [...], missing: [...],
+// console: [...]} or {error}.
+//   node export_web_browser.mjs CHROMIUM OUT_DIR VIEW...
+// VIEW: DIR or DIR?QUERY (QUERY e.g. light-rotation=w,x,y,z); equal DIRs share a folder.
 import { createServer } from 'node:http';
 import { spawn } from 'node:child_process';
 import { mkdtempSync, rmSync, writeFileSync } from 'node:fs';
@@ -11,17 +13,27 @@ import { readFile } from 'node:fs/promises';
 import { tmpdir } from 'node:os';
 import { join, resolve, sep } from 'node:path';
 
-const [ chromium, dir, outDir, ...queries ] = process.argv.slice( 2 );
-const root = resolve( dir );
+const [ chromium, outDir, ...specs ] = process.argv.slice( 2 );
+const dirs = [], views = [];
+for ( const spec of specs ) {
+
+	const q = spec.indexOf( '?' );
+	const dir = resolve( q < 0 ? spec : spec.slice( 0, q ) );
+	if ( ! dirs.includes( dir ) ) dirs.push( dir );
+	views.push( { folder: dirs.indexOf( dir ), query: q < 0 ? '' : spec.slice( q + 1 ) } );
+
+}
 const types = { '.html': 'text/html', '.js': 'text/javascript', '.json': 'application/json', '.glsl': 'text/plain' };
 const served = [], missing = [];
 
 const server = createServer( async ( req, res ) => {
 
 	const path = decodeURIComponent( new URL( req.url, 'http://x' ).pathname );
-	const file = resolve( root, '.' + path );
 	served.push( path );
-	if ( file !== root && ! file.startsWith( root + sep ) ) {
+	const k = Number( path.split( '/' )[ 1 ] );
+	const root = dirs[ k ];
+	const file = root ? resolve( root, '.' + path.slice( path.indexOf( '/', 1 ) ) ) : '';
+	if ( ! root || ! file.startsWith( root + sep ) ) {
 
 		missing.push( path );
 		res.writeHead( 403 );
@@ -31,7 +43,7 @@ const server = createServer( async ( req, res ) => {
 	}
 	try {
 
-		const body = await readFile( path.endsWith( '/' ) ? join( file, 'index.html' ) : file );
+		const body = await readFile( file );
 		res.writeHead( 200, { 'Content-Type': types[ file.slice( file.lastIndexOf( '.' ) ) ] || 'application/octet-stream' } );
 		res.end( body );
 
@@ -89,6 +101,7 @@ const send = ( method, params = {}, sessionId ) => new Promise( ( ok, reject ) =
 const sleep = ( ms ) => new Promise( ( r ) => setTimeout( r, ms ) );
 
 const requests = [], outside = [], consoleLines = [];
+let current = 0;  // the folder of the view being loaded
 const result = { views: [] };
 const deadline = setTimeout( () => finish( { error: `timed out; chromium said: ${stderr}` } ), 240000 );
 function finish( extra ) {
@@ -114,7 +127,7 @@ try {
 
 			const url = m.params.request.url;
 			requests.push( url );
-			if ( ! url.startsWith( origin + '/' ) && ! url.startsWith( 'data:' ) && url !== 'about:blank' ) outside.push( url );
+			if ( ! url.startsWith( `${origin}/${current}/` ) && ! url.startsWith( 'data:' ) && url !== 'about:blank' ) outside.push( url );
 
 		}
 		if ( m.method === 'Runtime.consoleAPICalled' )
@@ -125,9 +138,10 @@ try {
 	await send( 'Network.enable', {}, sessionId );
 	await send( 'Runtime.enable', {}, sessionId );
 	await send( 'Page.enable', {}, sessionId );
-	for ( const [ i, query ] of ( queries.length ? queries : [ '' ] ).entries() ) {
+	for ( const [ i, { folder, query } ] of views.entries() ) {
 
-		await send( 'Page.navigate', { url: `${origin}/index.html${query ? '?' + query : ''}` }, sessionId );
+		current = folder;
+		await send( 'Page.navigate', { url: `${origin}/${folder}/index.html${query ? '?' + query : ''}` }, sessionId );
 		let title = '';
 		for ( let t = 0; t < 1200; t ++ ) {
 
