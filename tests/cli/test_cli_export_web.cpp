@@ -3,7 +3,8 @@
 // mesh, fit, light, camera, size and exposure (mean difference at most 2/255 per channel
 // over the pixels render covers), unrotated and with the light turned by the URL's
 // quaternion against render under the light `shtool rotate` turned the same way; the page
-// loads nothing from outside the folder; bad inputs are refused with nothing written.
+// loads nothing from outside the folder; dragging turns the light (to the rotation its
+// status line names); bad inputs are refused with nothing written.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -164,6 +165,7 @@ TEST(ExportWeb, PageDrawsWhatRenderDraws) {
   specs.push_back(pose_dir.string());
   labels.push_back("--pose, bent");
   specs.push_back(probe_dir.string());  // compared with the unrotated render below
+  specs.push_back(sky_dir.string() + "#drag=80,-50");  // compared with render at the rotation the page shows
 
   std::vector<std::string> node = {"node", (node_consumers_dir() / "export_web_browser.mjs").string(), "chromium",
                                    views.string()};
@@ -196,11 +198,30 @@ TEST(ExportWeb, PageDrawsWhatRenderDraws) {
     }
   }
   // The probe-lit scene: the ground and spheres cover pixels render's mesh does not.
-  const Rgba probe_page = read_png(result["views"][specs.size() - 1].get<std::string>());
+  const Rgba probe_page = read_png(result["views"][specs.size() - 2].get<std::string>());
   std::size_t opaque = 0;
   for (std::size_t p = 0; p < probe_page.pixels.size() / 4; ++p) opaque += probe_page.pixels[p * 4 + 3] == 255;
   std::cout << "probe-lit scene: " << opaque << " opaque pixels\n";
   EXPECT_GT(opaque, compare(unrotated, unrotated).covered + 1000);
+
+  // Dragging turned the light: the status line names the rotation drawn, and render under
+  // the light turned by it is the same picture.
+  const std::string status = result["status"][specs.size() - 1].get<std::string>();
+  const std::string prefix = "light-rotation=";
+  ASSERT_EQ(status.rfind(prefix, 0), 0u) << status;
+  const std::string dragged_quat = status.substr(prefix.size());
+  EXPECT_NE(dragged_quat, "1.000000,0.000000,0.000000,0.000000");
+  const fs::path dragged_png = scratch("render-dragged.png");
+  must(run_shtool(with_view({"render", kSpotObj, "--fit", bakes().fit.string(), "--light",
+                             rotated_light(bakes().sky, dragged_quat, "sky-dragged.json").string(), "--out",
+                             dragged_png.string()})));
+  const Difference dragged = compare(read_png(result["views"][specs.size() - 1].get<std::string>()), read_png(dragged_png));
+  const Difference turned = compare(read_png(dragged_png), unrotated);
+  std::cout << "dragged to " << dragged_quat << ": mean |page - render| " << dragged.mean[0] << ", "
+            << dragged.mean[1] << ", " << dragged.mean[2] << "; render against render unrotated " << turned.mean[0]
+            << ", " << turned.mean[1] << ", " << turned.mean[2] << "\n";
+  for (int c = 0; c < 3; ++c) EXPECT_LE(dragged.mean[c], 2.0) << "dragged, channel " << c;
+  EXPECT_GT(std::max({turned.mean[0], turned.mean[1], turned.mean[2]}), 6.0);
 }
 
 TEST(ExportWeb, RefusesBadInputsAndWritesNothing) {

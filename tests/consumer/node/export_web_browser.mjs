@@ -5,7 +5,9 @@
 // one JSON line: {views: [png paths], requests: [...], outside: [...], missing: [...],
 // console: [...]} or {error}.
 //   node export_web_browser.mjs CHROMIUM OUT_DIR VIEW...
-// VIEW: DIR or DIR?QUERY (QUERY e.g. light-rotation=w,x,y,z); equal DIRs share a folder.
+// VIEW: DIR or DIR?QUERY (QUERY e.g. light-rotation=w,x,y,z), then optionally #drag=DX,DY:
+// the mouse dragged from the canvas centre by (DX, DY) pixels before the capture. Equal
+// DIRs share a folder. Each view's status line is in `status`.
 import { createServer } from 'node:http';
 import { spawn } from 'node:child_process';
 import { mkdtempSync, rmSync, writeFileSync } from 'node:fs';
@@ -17,10 +19,13 @@ const [ chromium, outDir, ...specs ] = process.argv.slice( 2 );
 const dirs = [], views = [];
 for ( const spec of specs ) {
 
-	const q = spec.indexOf( '?' );
-	const dir = resolve( q < 0 ? spec : spec.slice( 0, q ) );
+	const hash = spec.indexOf( '#drag=' );
+	const drag = hash < 0 ? null : spec.slice( hash + 6 ).split( ',' ).map( Number );
+	const rest = hash < 0 ? spec : spec.slice( 0, hash );
+	const q = rest.indexOf( '?' );
+	const dir = resolve( q < 0 ? rest : rest.slice( 0, q ) );
 	if ( ! dirs.includes( dir ) ) dirs.push( dir );
-	views.push( { folder: dirs.indexOf( dir ), query: q < 0 ? '' : spec.slice( q + 1 ) } );
+	views.push( { folder: dirs.indexOf( dir ), query: q < 0 ? '' : rest.slice( q + 1 ), drag } );
 
 }
 const types = { '.html': 'text/html', '.js': 'text/javascript', '.json': 'application/json', '.glsl': 'text/plain' };
@@ -102,7 +107,7 @@ const sleep = ( ms ) => new Promise( ( r ) => setTimeout( r, ms ) );
 
 const requests = [], outside = [], consoleLines = [];
 let current = 0;  // the folder of the view being loaded
-const result = { views: [] };
+const result = { views: [], status: [] };
 const deadline = setTimeout( () => finish( { error: `timed out; chromium said: ${stderr}` } ), 240000 );
 function finish( extra ) {
 
@@ -138,7 +143,7 @@ try {
 	await send( 'Network.enable', {}, sessionId );
 	await send( 'Runtime.enable', {}, sessionId );
 	await send( 'Page.enable', {}, sessionId );
-	for ( const [ i, { folder, query } ] of views.entries() ) {
+	for ( const [ i, { folder, query, drag } ] of views.entries() ) {
 
 		current = folder;
 		await send( 'Page.navigate', { url: `${origin}/${folder}/index.html${query ? '?' + query : ''}` }, sessionId );
@@ -156,6 +161,19 @@ try {
 			finish( { error: `view ${i} (${query}): title '${title}', status '${text}'` } );
 
 		}
+		if ( drag ) {
+
+			const box = ( await send( 'Runtime.evaluate', { expression: "JSON.stringify(document.getElementById('view').getBoundingClientRect())", returnByValue: true }, sessionId ) ).result.value;
+			const { x, y, width, height } = JSON.parse( box );
+			const [ x0, y0 ] = [ x + width / 2, y + height / 2 ];
+			const mouse = ( type, px, py, buttons ) => send( 'Input.dispatchMouseEvent', { type, x: px, y: py, button: 'left', buttons, clickCount: 1 }, sessionId );
+			await mouse( 'mousePressed', x0, y0, 1 );
+			for ( let s = 1; s <= 4; s ++ ) await mouse( 'mouseMoved', x0 + drag[ 0 ] * s / 4, y0 + drag[ 1 ] * s / 4, 1 );
+			await mouse( 'mouseReleased', x0 + drag[ 0 ], y0 + drag[ 1 ], 0 );
+			await sleep( 500 );  // frames drawn with the new rotation
+
+		}
+		result.status.push( ( await send( 'Runtime.evaluate', { expression: "document.getElementById('status').textContent", returnByValue: true }, sessionId ) ).result.value );
 		const url = ( await send( 'Runtime.evaluate', { expression: "document.getElementById('view').toDataURL('image/png')", returnByValue: true }, sessionId ) ).result.value;
 		const png = join( outDir, `view-${i}.png` );
 		writeFileSync( png, Buffer.from( url.slice( url.indexOf( ',' ) + 1 ), 'base64' ) );
