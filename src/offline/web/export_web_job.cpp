@@ -23,6 +23,7 @@
 #include "shtool/table.h"
 #include "shtool/version.h"
 #include "shtool/zh_fit_table.h"
+#include "web/web_assets.h"
 
 namespace shtool::web {
 namespace {

@@ -35,14 +35,6 @@ struct ExportWebResult {
   std::size_t vertices = 0, triangles = 0;
 };
 
-// Where the three.js package (three@0.187.0, its package.json, build/ and examples/) is
-// read from: $SHTOOL_THREE_DIR, else the build tree's node_consumers/node_modules/three,
-// else the installed share/shtool/web/three. Empty when none has three's package.json.
-std::filesystem::path three_package_dir();
-// Where shtool's own page files (shtool-three.js, export-web.html) are read from:
-// $SHTOOL_WEB_DIR, else the source tree's web/, else the installed share/shtool/web.
-std::filesystem::path web_source_dir();
-
 // Checks everything before writing (InputError naming the problem: a fit of another mesh
 // or a texture-space bake, a fit or light order the generated shaders cannot take, too
 // many vertex attributes for WebGL2, an irradiance light, a missing three.js, an

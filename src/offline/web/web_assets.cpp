@@ -4,7 +4,7 @@
 #include <filesystem>
 #include <system_error>
 
-#include "web/export_web_job.h"
+#include "web/web_assets.h"
 
 #ifndef SHTOOL_BUILD_THREE_DIR
 #define SHTOOL_BUILD_THREE_DIR ""
