@@ -243,6 +243,14 @@ TEST(ExportWeb, RefusesBadInputsAndWritesNothing) {
                                       bakes().sky.string(), "--out", dir.string()});
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_TRUE(fs::is_empty(dir));
+  // three.js not where it was said to be: refused, the folder not made.
+  const fs::path no_three = scratch("no-three");
+  const CommandResult missing = run_checked({"env", "SHTOOL_THREE_DIR=" + scratch("nowhere").string(), kShtoolExe,
+                                             "export-web", kSpotObj, "--fit", bakes().fit.string(), "--light",
+                                             bakes().sky.string(), "--out", no_three.string()});
+  EXPECT_EQ(missing.exit_code, 1);
+  EXPECT_NE(missing.err.find("three.js was not found"), std::string::npos) << missing.err;
+  EXPECT_FALSE(fs::exists(no_three));
   // A folder that cannot be made: its parent is a file.
   const fs::path blocker = scratch("blocker");
   write_file(blocker, "x");

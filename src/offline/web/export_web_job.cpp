@@ -106,6 +106,10 @@ ExportWebResult run_export_web(const ExportWebRequest& r) {
     throw InputError("--out " + r.out.string() + ": exists and is not a folder");
 
   const std::filesystem::path three = three_package_dir();
+  if (!three.empty() && !std::filesystem::is_regular_file(three / "package.json", ec))
+    throw InputError("three.js was not found at " + three.string() +
+                     " ($SHTOOL_THREE_DIR): it must be the folder of the npm package three@" + interop::kThreeVersion +
+                     ", with its package.json");
   if (three.empty())
     throw InputError("three.js " + std::string(interop::kThreeVersion) +
                      " was not found: set SHTOOL_THREE_DIR to the npm package's folder (npm install three@" +
