@@ -66,6 +66,8 @@ struct Difference {
   std::size_t covered = 0, uncovered_on_page = 0;
   double mean[3] = {0, 0, 0};
   int max_both = 0;  // over the pixels both cover
+  std::size_t over_8 = 0;  // pixels both cover with a channel more than 8 apart
+  int max_x = 0, max_y = 0;
 };
 
 // Over the pixels the reference covers (alpha 255): the page's coverage there, and the mean
@@ -79,11 +81,19 @@ Difference compare(const Rgba& page, const Rgba& reference) {
     if (reference.pixels[p * 4 + 3] != 255) continue;
     ++d.covered;
     if (page.pixels[p * 4 + 3] != 255) ++d.uncovered_on_page;
+    bool far = false;
     for (int c = 0; c < 3; ++c) {
       const int diff = std::abs(int(page.pixels[p * 4 + c]) - int(reference.pixels[p * 4 + c]));
       d.mean[c] += diff;
-      if (page.pixels[p * 4 + 3] == 255) d.max_both = std::max(d.max_both, diff);
+      if (page.pixels[p * 4 + 3] != 255) continue;
+      far = far || diff > 8;
+      if (diff > d.max_both) {
+        d.max_both = diff;
+        d.max_x = int(p % reference.width);
+        d.max_y = int(p / reference.width);
+      }
     }
+    d.over_8 += far;
   }
   for (double& m : d.mean) m /= std::max<std::size_t>(d.covered, 1);
   return d;
@@ -186,7 +196,8 @@ TEST(ExportWeb, PageDrawsWhatRenderDraws) {
     const Difference d = compare(page, reference);
     std::cout << labels[k] << ": " << d.covered << " pixels covered by render, " << d.uncovered_on_page
               << " of them not by the page; mean |page - render| " << d.mean[0] << ", " << d.mean[1] << ", "
-              << d.mean[2] << " (R, G, B, of 255); max " << d.max_both << " where both cover\n";
+              << d.mean[2] << " (R, G, B, of 255); max " << d.max_both << " where both cover, at (" << d.max_x << ", "
+              << d.max_y << "); " << d.over_8 << " pixels more than 8 apart\n";
     ASSERT_GT(d.covered, 2000u);
     EXPECT_LE(d.uncovered_on_page, d.covered / 100) << labels[k];
     for (int c = 0; c < 3; ++c) EXPECT_LE(d.mean[c], 2.0) << labels[k] << ", channel " << c;

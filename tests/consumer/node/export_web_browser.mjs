@@ -114,10 +114,18 @@ function finish( extra ) {
 	clearTimeout( deadline );
 	Object.assign( result, { requests, outside, missing, served, console: consoleLines }, extra );
 	process.stdout.write( JSON.stringify( result ) + '\n' );
-	try { browser.kill( 'SIGKILL' ); } catch {}
 	server.close();
-	try { rmSync( profile, { recursive: true, force: true } ); } catch {}
-	process.exit( 0 );
+	// The profile goes once Chromium has exited (it writes there until then).
+	const done = () => {
+
+		try { rmSync( profile, { recursive: true, force: true } ); } catch {}
+		process.exit( 0 );
+
+	};
+	if ( browser.exitCode !== null || browser.signalCode !== null ) done();
+	browser.on( 'exit', () => setTimeout( done, 200 ) );
+	setTimeout( done, 5000 );
+	try { browser.kill( 'SIGTERM' ); } catch {}
 
 }
 
