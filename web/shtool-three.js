@@ -1,4 +1,7 @@
-// shtool's probe grids in three.js (three@0.187.0): loadProbeGrid reads the probes.json and
+// shtool in three.js (three@0.187.0): the module of `shtool export-web`'s page (the ZH
+// shading of a fit-zh glTF under a light rotated on the GPU, below) and of probe grids.
+//
+// Probe grids: loadProbeGrid reads the probes.json and
 // probes.bin that `shtool bake-probes --threejs DIR` writes and returns a LightProbeGridWebGL
 // whose texture is the file's atlas, ready for scene.add() with no bake at run time.
 // The layout is docs/probe-encodings.md's (three's own LightProbeGridWebGL atlas).
@@ -8,7 +11,7 @@
 //
 // The page needs an import map for 'three' and 'three/addons/' (three's own examples use the
 // same two entries). Do not call bake() on a loaded grid: it would bake over the atlas.
-import { Data3DTexture, FloatType, LinearFilter, RGBAFormat, REVISION, Vector3 } from 'three';
+import { BufferAttribute, BufferGeometry, Data3DTexture, DoubleSide, FloatType, LinearFilter, Matrix3, RGBAFormat, REVISION, ShaderMaterial, Vector3, Vector4 } from 'three';
 import { LightProbeGridWebGL } from 'three/addons/lighting/LightProbeGridWebGL.js';
 
 // The three.js release whose atlas layout the files follow.
@@ -128,5 +131,178 @@ export async function loadProbeGrid( url, options = {} ) {
 		fail( jsonUrl.href, '"atlas" (the name of the .bin beside it) is missing' );
 	const atlas = await load( new URL( doc.atlas, jsonUrl ).href );
 	return probeGridFromData( doc, atlas, jsonUrl.href );
+
+}
+
+// ---------------------------------------------------------------------------------------
+// The page of `shtool export-web DIR` (docs/web.md): the mesh of a fit-zh glTF with its ZH
+// lobes, shaded by [4] Eq. 13 under an SH light that the generated zxzxz code rotates on
+// the GPU, every vertex, every frame.
+
+// The glTF component types the mesh file uses.
+const COMPONENTS = { 5121: Uint8Array, 5123: Uint16Array, 5125: Uint32Array, 5126: Float32Array };
+const WIDTHS = { SCALAR: 1, VEC2: 2, VEC3: 3, VEC4: 4 };
+
+// A .glb as fit-zh --gltf and export-web write it (one mesh, one TRIANGLES primitive) as a
+// BufferGeometry: 'position', the lobes ('zhAxis<k>', 'zhCoeffs<k>_<j>'), 'zhDirect' when
+// stored, and the index. Frames are glTF's, as written.
+export function zhGeometryFromGlb( bytes, what = 'mesh.glb' ) {
+
+	const view = new DataView( bytes );
+	if ( bytes.byteLength < 20 || view.getUint32( 0, true ) !== 0x46546c67 || view.getUint32( 4, true ) !== 2 )
+		throw new Error( `${what}: not a binary glTF 2.0 file` );
+	const jsonLength = view.getUint32( 12, true );
+	if ( view.getUint32( 16, true ) !== 0x4e4f534a ) throw new Error( `${what}: the first chunk is not JSON` );
+	const doc = JSON.parse( new TextDecoder().decode( new Uint8Array( bytes, 20, jsonLength ) ) );
+	const binStart = 20 + jsonLength + 8;
+	const primitive = doc.meshes[ 0 ].primitives[ 0 ];
+	const accessor = ( index ) => {
+
+		const a = doc.accessors[ index ];
+		const bv = doc.bufferViews[ a.bufferView ];
+		const Type = COMPONENTS[ a.componentType ];
+		const width = WIDTHS[ a.type ];
+		if ( ! Type || ! width || ( bv.byteStride && bv.byteStride !== width * Type.BYTES_PER_ELEMENT ) )
+			throw new Error( `${what}: accessor ${index} is not a packed ${a.type}` );
+		const offset = binStart + ( bv.byteOffset || 0 ) + ( a.byteOffset || 0 );
+		return { array: new Type( bytes.slice( offset, offset + a.count * width * Type.BYTES_PER_ELEMENT ) ), width };
+
+	};
+	const geometry = new BufferGeometry();
+	const add = ( gltfName, name ) => {
+
+		if ( primitive.attributes[ gltfName ] === undefined ) return false;
+		const { array, width } = accessor( primitive.attributes[ gltfName ] );
+		geometry.setAttribute( name, new BufferAttribute( array, width ) );
+		return true;
+
+	};
+	add( 'POSITION', 'position' );
+	const extras = doc.meshes[ 0 ].extras || ( doc.asset && doc.asset.extras ) || {};
+	let lobes = 0;
+	while ( add( `_ZH_AXIS_${lobes}`, `zhAxis${lobes}` ) ) {
+
+		for ( let j = 0; add( `_ZH_COEFFS_${lobes}_${j}`, `zhCoeffs${lobes}_${j}` ); j ++ );
+		lobes ++;
+
+	}
+	add( '_ZH_DIRECT', 'zhDirect' );
+	geometry.setIndex( new BufferAttribute( accessor( primitive.indices ).array, 1 ) );
+	geometry.userData.lobes = lobes;
+	geometry.userData.extras = extras;
+	return geometry;
+
+}
+
+// The vertex shader: the light (uniform, glTF's frame) rotated by the generated
+// shtool_rotate, then each lobe's Eq. 13 by the generated shtool_zh_shade, plus the
+// coefficients stored directly; the RGB exit radiance goes to the fragments, which
+// interpolate it across the triangle (perspective-correct, as render's ray barycentrics).
+function zhVertexShader( rotateGlsl, shadeGlsl, order, lobes, direct ) {
+
+	const n2 = order * order;
+	const groups = Math.ceil( order / 4 );
+	const lines = [];
+	lines.push( 'uniform mat3 shtoolLightRotation;' );
+	lines.push( `uniform vec4 shtoolLight[${Math.ceil( 3 * n2 / 4 )}];` );
+	for ( let k = 0; k < lobes; k ++ ) {
+
+		lines.push( `attribute vec3 zhAxis${k};` );
+		for ( let j = 0; j < groups; j ++ ) lines.push( `attribute vec4 zhCoeffs${k}_${j};` );
+
+	}
+	if ( direct ) lines.push( 'attribute vec4 zhDirect;' );
+	lines.push( 'varying vec3 vRadiance;' );
+	lines.push( rotateGlsl, shadeGlsl );
+	lines.push( 'void main() {' );
+	lines.push( '  vec3 axes[SHTOOL_ZH_LOBES];' );
+	lines.push( '  float g[SHTOOL_ZH_LOBES * SHTOOL_ORDER];' );
+	for ( let k = 0; k < lobes; k ++ ) {
+
+		lines.push( `  axes[${k}] = zhAxis${k};` );
+		for ( let l = 0; l < order; l ++ ) lines.push( `  g[${k * order + l}] = zhCoeffs${k}_${Math.floor( l / 4 )}[${l % 4}];` );
+
+	}
+	lines.push( '  float f[SHTOOL_ORDER * SHTOOL_ORDER];' );
+	lines.push( '  float e[SHTOOL_ORDER * SHTOOL_ORDER];' );
+	lines.push( '  for (int c = 0; c < 3; ++c) {' );
+	lines.push( '    for (int i = 0; i < SHTOOL_ORDER * SHTOOL_ORDER; ++i) {' );
+	lines.push( '      int k = c * SHTOOL_ORDER * SHTOOL_ORDER + i;' );
+	lines.push( '      f[i] = shtoolLight[k / 4][k - 4 * (k / 4)];' );
+	lines.push( '    }' );
+	lines.push( '    shtool_rotate(shtoolLightRotation, f, e);' );
+	lines.push( '    float r = shtool_zh_shade(axes, g, e);' );
+	if ( direct ) lines.push( `    r += dot(zhDirect, vec4(e[0], e[1], e[2], e[3]));` );
+	lines.push( '    vRadiance[c] = r;' );
+	lines.push( '  }' );
+	lines.push( '  gl_Position = projectionMatrix * modelViewMatrix * vec4(position, 1.0);' );
+	lines.push( '}' );
+	return lines.join( '\n' );
+
+}
+
+// three's own tone mapping and output encoding on the radiance: with ReinhardToneMapping,
+// toneMappingExposure 2^E and sRGB output, v 2^E / (1 + v 2^E) then the sRGB curve, the
+// curve of render's PNG (negative radiance shown black, as there).
+const ZH_FRAGMENT_SHADER = `
+varying vec3 vRadiance;
+void main() {
+  gl_FragColor = vec4(max(vRadiance, vec3(0.0)), 1.0);
+  #include <tonemapping_fragment>
+  #include <colorspace_fragment>
+}`;
+
+// A ShaderMaterial for a zhGeometryFromGlb geometry. `light` holds the RGB coefficients of
+// the scene's order in glTF's frame ({r, g, b}); setLightRotation(R) takes a Matrix3 in
+// the same frame (g(w) = f(R^-1 w)).
+export function zhShadingMaterial( { rotateGlsl, shadeGlsl, order, lobes, direct, light } ) {
+
+	const n2 = order * order;
+	const packed = new Float32Array( 4 * Math.ceil( 3 * n2 / 4 ) );
+	[ 'r', 'g', 'b' ].forEach( ( name, c ) => {
+
+		if ( ! Array.isArray( light[ name ] ) || light[ name ].length !== n2 ) throw new Error( `light.${name} needs ${n2} coefficients` );
+		packed.set( light[ name ], c * n2 );
+
+	} );
+	const vectors = [];
+	for ( let i = 0; i < packed.length; i += 4 ) vectors.push( new Vector4( packed[ i ], packed[ i + 1 ], packed[ i + 2 ], packed[ i + 3 ] ) );
+	const material = new ShaderMaterial( {
+		uniforms: { shtoolLightRotation: { value: new Matrix3() }, shtoolLight: { value: vectors } },
+		vertexShader: zhVertexShader( rotateGlsl, shadeGlsl, order, lobes, direct ),
+		fragmentShader: ZH_FRAGMENT_SHADER,
+		side: DoubleSide
+	} );
+	material.name = 'shtool ZH shading';
+	return material;
+
+}
+
+// shtool's frame (z up) to glTF's and three's (y up): (x, y, z) -> (x, z, -y).
+export const SHTOOL_TO_THREE = new Matrix3().set( 1, 0, 0, 0, 0, 1, 0, - 1, 0 );
+
+// The rotation of a unit quaternion (w, x, y, z; Hamilton, shtool's frame) as a Matrix3 in
+// three's frame: C R C^T.
+export function lightRotationInThree( w, x, y, z ) {
+
+	const r = new Matrix3().set(
+		1 - 2 * ( y * y + z * z ), 2 * ( x * y - w * z ), 2 * ( x * z + w * y ),
+		2 * ( x * y + w * z ), 1 - 2 * ( x * x + z * z ), 2 * ( y * z - w * x ),
+		2 * ( x * z - w * y ), 2 * ( y * z + w * x ), 1 - 2 * ( x * x + y * y ) );
+	const ct = SHTOOL_TO_THREE.clone().transpose();
+	return SHTOOL_TO_THREE.clone().multiply( r ).multiply( ct );
+
+}
+
+// The `light-rotation=w,x,y,z` URL parameter as a unit quaternion [w, x, y, z] (identity
+// when absent); an Error when it is not four finite numbers of non-zero length.
+export function parseLightRotation( text ) {
+
+	if ( text === null || text === undefined ) return [ 1, 0, 0, 0 ];
+	const q = text.split( ',' ).map( Number );
+	const length = Math.hypot( ...q );
+	if ( q.length !== 4 || ! q.every( Number.isFinite ) || ! ( length > 0 ) )
+		throw new Error( `light-rotation=${text}: four numbers w,x,y,z of a quaternion are needed` );
+	return q.map( ( v ) => v / length );
 
 }

@@ -83,5 +83,6 @@ void setup_transform_splats(CLI::App& app);
 void setup_export_light(CLI::App& app);
 void setup_import_light(CLI::App& app);
 void setup_bake_probes(CLI::App& app);
+void setup_export_web(CLI::App& app);
 
 }  // namespace shtool::cli

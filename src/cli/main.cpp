@@ -35,6 +35,7 @@ int main(int argc, char** argv) {
   shtool::cli::setup_export_light(app);
   shtool::cli::setup_import_light(app);
   shtool::cli::setup_bake_probes(app);
+  shtool::cli::setup_export_web(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -125,31 +125,6 @@ std::vector<double> vertex_radiance(Shading shading, const VertexData& data, con
 
 Vec vec(const std::array<double, 3>& a) { return Vec(a[0], a[1], a[2]); }
 
-// The default view: the bounding sphere of the mesh filling the field of view, seen in
-// three-quarters from the side the model faces (its format's front, Mesh::front) and a
-// little above, z up.
-Camera frame_mesh(const fit::Mesh& mesh, double fov_degrees, double aspect) {
-  Vec lo = mesh.positions.front(), hi = lo;
-  for (const Vec& p : mesh.positions) {
-    lo = lo.cwiseMin(p);
-    hi = hi.cwiseMax(p);
-  }
-  const Vec centre = 0.5 * (lo + hi);
-  double radius = 0;
-  for (const Vec& p : mesh.positions) radius = std::max(radius, (p - centre).norm());
-  const double half = 0.5 * fov_degrees * std::numbers::pi / 180.0;
-  const double narrow = aspect < 1 ? std::atan(std::tan(half) * aspect) : half;
-  const double distance = 1.05 * radius / std::sin(narrow);
-  // 35 degrees round from the front towards the model's left (the viewer's right), 20 up.
-  const double azimuth = 35 * std::numbers::pi / 180, elevation = 20 * std::numbers::pi / 180;
-  const Vec front(mesh.front.x(), mesh.front.y(), 0);
-  const Vec side = Vec::UnitZ().cross(front);
-  const Vec toward_eye = std::cos(elevation) * (std::cos(azimuth) * front + std::sin(azimuth) * side) +
-                         std::sin(elevation) * Vec::UnitZ();
-  const Vec eye = centre + distance * toward_eye;
-  return {{eye.x(), eye.y(), eye.z()}, {centre.x(), centre.y(), centre.z()}, {0, 0, 1}};
-}
-
 // What each pixel's primary ray hit: triangle and barycentric weights (triangle -1: none).
 struct Hits {
   int width = 0, height = 0;
@@ -521,7 +496,7 @@ RenderResult run_render(const RenderRequest& r) {
   }
 
   const auto start = std::chrono::steady_clock::now();
-  const Camera camera = r.camera ? *r.camera : frame_mesh(mesh, r.fov, double(r.width) / r.height);
+  const Camera camera = r.camera ? *r.camera : view::frame_mesh(mesh, r.fov, double(r.width) / r.height);
   const Hits hits = cast_primary_rays(mesh, r, camera, threads);
   RenderResult result;
   result.covered_pixels = hits.covered();

@@ -12,16 +12,14 @@
 #include <vector>
 
 #include "common/mesh_frame.h"
+#include "view/camera.h"
 
 namespace shtool::render {
 
 enum class Shading { automatic, transfer, zh, zh_table, error, normals, membrane, wrinkle, glossy };
 const std::vector<std::pair<std::string, Shading>>& shading_names();
 
-// In shtool's frame (z up), like the meshes once loaded and the lighting.
-struct Camera {
-  std::array<double, 3> eye{}, target{}, up{0, 0, 1};
-};
+using Camera = view::Camera;  // in shtool's frame (z up)
 
 struct RenderRequest {
   std::filesystem::path mesh;      // OBJ or glTF

@@ -1,0 +1,32 @@
+#include "view/camera.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace shtool::view {
+
+Camera frame_mesh(const fit::Mesh& mesh, double fov_degrees, double aspect) {
+  using Vec = Eigen::Vector3d;
+  Vec lo = mesh.positions.front(), hi = lo;
+  for (const Vec& p : mesh.positions) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  const Vec centre = 0.5 * (lo + hi);
+  double radius = 0;
+  for (const Vec& p : mesh.positions) radius = std::max(radius, (p - centre).norm());
+  const double half = 0.5 * fov_degrees * std::numbers::pi / 180.0;
+  const double narrow = aspect < 1 ? std::atan(std::tan(half) * aspect) : half;
+  const double distance = 1.05 * radius / std::sin(narrow);
+  // 35 degrees round from the front towards the model's left (the viewer's right), 20 up.
+  const double azimuth = 35 * std::numbers::pi / 180, elevation = 20 * std::numbers::pi / 180;
+  const Vec front(mesh.front.x(), mesh.front.y(), 0);
+  const Vec side = Vec::UnitZ().cross(front);
+  const Vec toward_eye = std::cos(elevation) * (std::cos(azimuth) * front + std::sin(azimuth) * side) +
+                         std::sin(elevation) * Vec::UnitZ();
+  const Vec eye = centre + distance * toward_eye;
+  return {{eye.x(), eye.y(), eye.z()}, {centre.x(), centre.y(), centre.z()}, {0, 0, 1}};
+}
+
+}  // namespace shtool::view

@@ -1,0 +1,21 @@
+// The pinhole camera of `render` and `export-web`: one framing rule, so that a page and a
+// rendered image of the same options show the same view.
+#pragma once
+
+#include <array>
+
+#include "fit/mesh.h"
+
+namespace shtool::view {
+
+// In shtool's frame (z up), like the meshes once loaded and the lighting.
+struct Camera {
+  std::array<double, 3> eye{}, target{}, up{0, 0, 1};
+};
+
+// The default view: the mesh's bounding sphere (centred on its bounding box) filling the
+// narrower field of view, seen in three-quarters from the side the model faces
+// (Mesh::front) and a little above, z up. fov_degrees is vertical; aspect is width / height.
+Camera frame_mesh(const fit::Mesh& mesh, double fov_degrees, double aspect);
+
+}  // namespace shtool::view

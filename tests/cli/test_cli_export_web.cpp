@@ -1,0 +1,275 @@
+// shtool export-web: the folder's page, opened in headless Chromium (three.js on WebGL2,
+// SwiftShader) and served alone on 127.0.0.1, draws what `shtool render` draws for the same
+// mesh, fit, light, camera, size and exposure (mean difference at most 2/255 per channel
+// over the pixels render covers), unrotated and with the light turned by the URL's
+// quaternion against render under the light `shtool rotate` turned the same way; the page
+// loads nothing from outside the folder; dragging turns the light (to the rotation its
+// status line names); bad inputs are refused with nothing written.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+#include <stb_image.h>
+
+#include "cli_test.h"
+#include "node_consumers.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace shtool::test;
+
+const Scratch scratch("export_web");
+
+// A fit of data/spot.obj (order 3, 2 lobes, shadowed) and the sky's light, once per program.
+struct Bakes {
+  fs::path fit = scratch("spot.shtb"), sky = scratch("sky.json"), white = scratch("white.json");
+  Bakes() {
+    must(run_shtool({"fit-zh", kSpotObj, "--order", "3", "--lobes", "2", "--rays", "64", "--mode", "shadowed", "--out",
+                     fit.string()}));
+    make_white_and_sky_lights(3, white, sky);
+  }
+};
+
+const Bakes& bakes() {
+  static const Bakes b;
+  return b;
+}
+
+struct Rgba {
+  int width = 0, height = 0;
+  std::vector<unsigned char> pixels;
+};
+
+Rgba read_png(const fs::path& path) {
+  const std::string bytes = read_file(path);
+  Rgba image;
+  int channels = 0;
+  unsigned char* p = stbi_load_from_memory(reinterpret_cast<const unsigned char*>(bytes.data()),
+                                           static_cast<int>(bytes.size()), &image.width, &image.height, &channels, 4);
+  if (!p) {
+    ADD_FAILURE() << path << ": not a PNG";
+    return image;
+  }
+  image.pixels.assign(p, p + std::size_t(image.width) * image.height * 4);
+  stbi_image_free(p);
+  return image;
+}
+
+struct Difference {
+  std::size_t covered = 0, uncovered_on_page = 0;
+  double mean[3] = {0, 0, 0};
+  int max_both = 0;  // over the pixels both cover
+  std::size_t over_8 = 0;  // pixels both cover with a channel more than 8 apart
+  int max_x = 0, max_y = 0;
+};
+
+// Over the pixels the reference covers (alpha 255): the page's coverage there, and the mean
+// and largest absolute difference per channel, in 8-bit steps.
+Difference compare(const Rgba& page, const Rgba& reference) {
+  Difference d;
+  EXPECT_EQ(page.width, reference.width);
+  EXPECT_EQ(page.height, reference.height);
+  if (page.pixels.size() != reference.pixels.size()) return d;
+  for (std::size_t p = 0; p < reference.pixels.size() / 4; ++p) {
+    if (reference.pixels[p * 4 + 3] != 255) continue;
+    ++d.covered;
+    if (page.pixels[p * 4 + 3] != 255) ++d.uncovered_on_page;
+    bool far = false;
+    for (int c = 0; c < 3; ++c) {
+      const int diff = std::abs(int(page.pixels[p * 4 + c]) - int(reference.pixels[p * 4 + c]));
+      d.mean[c] += diff;
+      if (page.pixels[p * 4 + 3] != 255) continue;
+      far = far || diff > 8;
+      if (diff > d.max_both) {
+        d.max_both = diff;
+        d.max_x = int(p % reference.width);
+        d.max_y = int(p / reference.width);
+      }
+    }
+    d.over_8 += far;
+  }
+  for (double& m : d.mean) m /= std::max<std::size_t>(d.covered, 1);
+  return d;
+}
+
+// The lighting JSON turned by a quaternion with `shtool rotate`, channel by channel.
+fs::path rotated_light(const fs::path& light, const std::string& quat, const std::string& name) {
+  nlohmann::json doc = nlohmann::json::parse(read_file(light));
+  const int order = doc["order"].get<int>();
+  for (int c = 0; c < 3; ++c) {
+    std::string coeffs;
+    for (const auto& row : doc["coefficients"]) coeffs += (coeffs.empty() ? "" : ",") + std::to_string(row[c].get<double>());
+    const CommandResult r = run_shtool({"rotate", "--order", std::to_string(order), "--quat", quat, "--method",
+                                        "reference", "--coeffs", coeffs});
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    const nlohmann::json out = nlohmann::json::parse(r.out);
+    for (std::size_t i = 0; i < doc["coefficients"].size(); ++i) doc["coefficients"][i][c] = out["coefficients"][i];
+  }
+  const fs::path path = scratch(name);
+  write_file(path, doc.dump());
+  return path;
+}
+
+// Chromium present, or the test ends: failed under CI (setup.sh installs it), skipped elsewhere.
+#define REQUIRE_CHROMIUM()                                                                      \
+  do {                                                                                          \
+    if (run_command({"chromium", "--version"}).exit_code != 0) {                                \
+      if (std::getenv("CI")) FAIL() << "chromium is not installed (scripts/setup.sh installs it)"; \
+      GTEST_SKIP() << "chromium is not installed (set CI to make this a failure)";              \
+    }                                                                                           \
+  } while (false)
+
+// One Chromium for every view: the sky unrotated and turned two ways, a bent pose, and the
+// probe-lit scene.
+TEST(ExportWeb, PageDrawsWhatRenderDraws) {
+  SHTOOL_REQUIRE_NODE_CONSUMERS();  // three@0.187.0, which export-web copies
+  REQUIRE_CHROMIUM();
+  const fs::path sky_dir = scratch("page"), pose_dir = scratch("pose"), probe_dir = scratch("probes"),
+                 views = scratch("views"), bent = scratch("bent.obj"), probes = scratch("probes.shtb");
+  for (const fs::path& d : {sky_dir, pose_dir, probe_dir, views}) fs::remove_all(d);
+  fs::create_directories(views);
+  // Not square: the aspect ratio enters render's framing and the page's projection.
+  const std::vector<std::string> view_options = {"--width", "160", "--height", "120", "--exposure", "0.5"};
+  const auto with_view = [&](std::vector<std::string> args) {
+    args.insert(args.end(), view_options.begin(), view_options.end());
+    return args;
+  };
+  must(run_shtool(with_view({"export-web", kSpotObj, "--fit", bakes().fit.string(), "--light", bakes().sky.string(),
+                             "--out", sky_dir.string()})));
+  for (const char* f : {"index.html", "scene.json", "mesh.glb", "shtool-three.js", "shtool-rotate.glsl",
+                        "shtool-zh-shade.glsl", "three/build/three.module.js", "three/build/three.core.js"})
+    EXPECT_TRUE(fs::is_regular_file(sky_dir / f)) << f;
+  must(run_checked({SHTOOL_PYTHON, kSourceDir + "/scripts/pose_mesh.py", kSpotObj, bent.string(), "--bend", "0.8"}));
+  must(run_shtool(with_view({"export-web", kSpotObj, "--fit", bakes().fit.string(), "--pose", bent.string(),
+                             "--light", bakes().sky.string(), "--out", pose_dir.string()})));
+  must(run_shtool({"bake-probes", kSpotObj, "--grid", "4,4,3", "--env", bakes().sky.string(), "--samples", "64",
+                   "--bounces", "1", "--out", probes.string()}));
+  must(run_shtool(with_view({"export-web", kSpotObj, "--fit", bakes().fit.string(), "--light", bakes().sky.string(),
+                             "--probes", probes.string(), "--out", probe_dir.string()})));
+  EXPECT_TRUE(fs::is_regular_file(probe_dir / "probes/probes.bin"));
+
+  // Two turns of the light: about an oblique axis, and half a turn about x.
+  const std::vector<std::string> quats = {"0.8,0.2,-0.4,0.4", "0,1,0,0"};
+  std::vector<fs::path> references;
+  std::vector<std::string> specs, labels;
+  for (std::size_t k = 0; k <= quats.size(); ++k) {
+    const fs::path light = k == 0 ? bakes().sky : rotated_light(bakes().sky, quats[k - 1], "sky-" + std::to_string(k) + ".json");
+    const fs::path png = scratch("render-" + std::to_string(k) + ".png");
+    must(run_shtool(with_view({"render", kSpotObj, "--fit", bakes().fit.string(), "--light", light.string(), "--out",
+                               png.string()})));
+    references.push_back(png);
+    specs.push_back(sky_dir.string() + (k ? "?light-rotation=" + quats[k - 1] : ""));
+    labels.push_back(k ? "light-rotation=" + quats[k - 1] : "unrotated");
+  }
+  const fs::path posed_png = scratch("render-pose.png");
+  must(run_shtool(with_view({"render", kSpotObj, "--fit", bakes().fit.string(), "--pose", bent.string(), "--light",
+                             bakes().sky.string(), "--out", posed_png.string()})));
+  references.push_back(posed_png);
+  specs.push_back(pose_dir.string());
+  labels.push_back("--pose, bent");
+  specs.push_back(probe_dir.string());  // compared with the unrotated render below
+  specs.push_back(sky_dir.string() + "#drag=80,-50");  // compared with render at the rotation the page shows
+
+  std::vector<std::string> node = {"node", (node_consumers_dir() / "export_web_browser.mjs").string(), "chromium",
+                                   views.string()};
+  node.insert(node.end(), specs.begin(), specs.end());
+  const CommandResult r = run_checked(node);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json result = nlohmann::json::parse(r.out);
+  ASSERT_FALSE(result.contains("error")) << result.dump(1);
+  EXPECT_TRUE(result["outside"].empty()) << "requests outside the folder: " << result["outside"].dump();
+  EXPECT_TRUE(result["missing"].empty()) << "requests for files the folder lacks: " << result["missing"].dump();
+  EXPECT_NE(result["requests"].dump().find("/probes/probes.bin"), std::string::npos) << result["requests"].dump();
+  ASSERT_EQ(result["views"].size(), specs.size()) << result.dump(1);
+
+  const Rgba unrotated = read_png(references[0]);
+  for (std::size_t k = 0; k < references.size(); ++k) {
+    const Rgba page = read_png(result["views"][k].get<std::string>());
+    const Rgba reference = read_png(references[k]);
+    const Difference d = compare(page, reference);
+    std::cout << labels[k] << ": " << d.covered << " pixels covered by render, " << d.uncovered_on_page
+              << " of them not by the page; mean |page - render| " << d.mean[0] << ", " << d.mean[1] << ", "
+              << d.mean[2] << " (R, G, B, of 255); max " << d.max_both << " where both cover, at (" << d.max_x << ", "
+              << d.max_y << "); " << d.over_8 << " pixels more than 8 apart\n";
+    ASSERT_GT(d.covered, 2000u);
+    EXPECT_LE(d.uncovered_on_page, d.covered / 100) << labels[k];
+    for (int c = 0; c < 3; ++c) EXPECT_LE(d.mean[c], 2.0) << labels[k] << ", channel " << c;
+    if (k > 0) {  // the turn (or the pose) shows: a page that ignored it would fail the bound above
+      const Difference turned = compare(reference, unrotated);
+      std::cout << "  render against render unrotated: mean " << turned.mean[0] << ", " << turned.mean[1] << ", "
+                << turned.mean[2] << "\n";
+      EXPECT_GT(std::max({turned.mean[0], turned.mean[1], turned.mean[2]}), 6.0) << labels[k];
+    }
+  }
+  // The probe-lit scene: the ground and spheres cover pixels render's mesh does not.
+  const Rgba probe_page = read_png(result["views"][specs.size() - 2].get<std::string>());
+  std::size_t opaque = 0;
+  for (std::size_t p = 0; p < probe_page.pixels.size() / 4; ++p) opaque += probe_page.pixels[p * 4 + 3] == 255;
+  std::cout << "probe-lit scene: " << opaque << " opaque pixels\n";
+  EXPECT_GT(opaque, compare(unrotated, unrotated).covered + 1000);
+
+  // Dragging turned the light: the status line names the rotation drawn, and render under
+  // the light turned by it is the same picture.
+  const std::string status = result["status"][specs.size() - 1].get<std::string>();
+  const std::string prefix = "light-rotation=";
+  ASSERT_EQ(status.rfind(prefix, 0), 0u) << status;
+  const std::string dragged_quat = status.substr(prefix.size());
+  EXPECT_NE(dragged_quat, "1.000000,0.000000,0.000000,0.000000");
+  const fs::path dragged_png = scratch("render-dragged.png");
+  must(run_shtool(with_view({"render", kSpotObj, "--fit", bakes().fit.string(), "--light",
+                             rotated_light(bakes().sky, dragged_quat, "sky-dragged.json").string(), "--out",
+                             dragged_png.string()})));
+  const Difference dragged = compare(read_png(result["views"][specs.size() - 1].get<std::string>()), read_png(dragged_png));
+  const Difference turned = compare(read_png(dragged_png), unrotated);
+  std::cout << "dragged to " << dragged_quat << ": mean |page - render| " << dragged.mean[0] << ", "
+            << dragged.mean[1] << ", " << dragged.mean[2] << "; render against render unrotated " << turned.mean[0]
+            << ", " << turned.mean[1] << ", " << turned.mean[2] << "\n";
+  for (int c = 0; c < 3; ++c) EXPECT_LE(dragged.mean[c], 2.0) << "dragged, channel " << c;
+  EXPECT_GT(std::max({turned.mean[0], turned.mean[1], turned.mean[2]}), 6.0);
+}
+
+TEST(ExportWeb, RefusesBadInputsAndWritesNothing) {
+  SHTOOL_REQUIRE_NODE_CONSUMERS();  // with three.js present, only the input is at fault
+  const fs::path tetra = scratch("tetra.obj"), tetra_fit = scratch("tetra.shtb"), light9 = scratch("light9.json");
+  write_file(tetra, "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
+  must(run_shtool({"fit-zh", tetra.string(), "--order", "3", "--lobes", "1", "--rays", "16", "--mode", "unshadowed",
+                   "--out", tetra_fit.string()}));
+  must(run_shtool({"light", "--type", "constant", "--color", "1,1,1", "--order", "9", "--json", light9.string()}));
+  const fs::path dir = scratch("refused");
+  expect_all_refused("export-web", {kSpotObj},
+                     {{{"--fit", tetra_fit.string(), "--light", bakes().sky.string()}, "--fit"},
+                      {{"--fit", bakes().fit.string(), "--light", light9.string()}, "order 9"},
+                      {{"--fit", bakes().sky.string(), "--light", bakes().sky.string()}, "--fit"}},
+                     dir);
+  // An existing folder is left as it was.
+  fs::create_directories(dir);
+  const CommandResult r = run_shtool({"export-web", kSpotObj, "--fit", tetra_fit.string(), "--light",
+                                      bakes().sky.string(), "--out", dir.string()});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_TRUE(fs::is_empty(dir));
+  // three.js not where it was said to be: refused, the folder not made.
+  const fs::path no_three = scratch("no-three");
+  const CommandResult missing = run_checked({"env", "SHTOOL_THREE_DIR=" + scratch("nowhere").string(), kShtoolExe,
+                                             "export-web", kSpotObj, "--fit", bakes().fit.string(), "--light",
+                                             bakes().sky.string(), "--out", no_three.string()});
+  EXPECT_EQ(missing.exit_code, 1);
+  EXPECT_NE(missing.err.find("three.js was not found"), std::string::npos) << missing.err;
+  EXPECT_FALSE(fs::exists(no_three));
+  // A folder that cannot be made: its parent is a file.
+  const fs::path blocker = scratch("blocker");
+  write_file(blocker, "x");
+  const CommandResult blocked = run_shtool({"export-web", kSpotObj, "--fit", bakes().fit.string(), "--light",
+                                            bakes().sky.string(), "--out", (blocker / "page").string()});
+  EXPECT_EQ(blocked.exit_code, 1);
+  EXPECT_NE(blocked.err.find("is not a folder"), std::string::npos) << blocked.err;
+  EXPECT_EQ(read_file(blocker), "x");
+}
+
+}  // namespace
