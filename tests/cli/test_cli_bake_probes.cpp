@@ -30,7 +30,8 @@ constexpr double kPi = std::numbers::pi;
 const Scratch scratch("cli_bake_probes");
 
 // A closed box, walls of albedo 0.5 emitting 1: every probe's radiance is 1 + 0.5 + 0.25
-// for two bounces, in every direction (test_probes.cpp, WhiteFurnace...).
+// for two bounces, in every direction (test_probes.cpp, WhiteFurnace...), up to the noise
+// of emitter sampling.
 fs::path furnace() {
   const fs::path path = scratch("furnace.gltf");
   ProbeTestScene t;
@@ -64,7 +65,9 @@ TEST(CliBakeProbes, FurnaceTableJsonAndLoader) {
   for (const nlohmann::json& p : doc["probes"]) {
     EXPECT_EQ(p["valid"], true);
     ASSERT_EQ(p["coefficients"].size(), 9u);
-    for (int c = 0; c < 3; ++c) EXPECT_NEAR(p["coefficients"][0][c].get<double>(), std::sqrt(4 * kPi) * L, 1e-12);
+    // Emitter sampling's noise: at most 1.4 % of c_00 measured at 512 samples (seed 1).
+    for (int c = 0; c < 3; ++c)
+      EXPECT_NEAR(p["coefficients"][0][c].get<double>(), std::sqrt(4 * kPi) * L, 0.03 * std::sqrt(4 * kPi) * L);
   }
   expect_valid_against_schema("probe-grid.schema.json", {out});
 
@@ -81,12 +84,11 @@ TEST(CliBakeProbes, FurnaceTableJsonAndLoader) {
     const auto c = grid.coefficients_of(p);
     for (int k = 0; k < 9; ++k)
       for (int ch = 0; ch < 3; ++ch) EXPECT_EQ(c[k * 3 + ch], jp["coefficients"][k][ch].get<double>());
-    // Irradiance of uniform radiance L is pi L at every normal; the eight non-constant
-    // coefficients (sampling error below 5e-4 L each for 512 directions) times A_l |y_k|
-    // (below 1.3) move it by less than 1e-2 (0.2 % of pi L); a wrong A_l moves it by O(L).
+    // Irradiance of uniform radiance L is pi L at every normal; the emitter samples' noise
+    // moves it by at most 2.2 % (measured, 512 samples); a wrong A_0 moves it by O(L).
     for (const auto& n : {Eigen::Vector3d(0, 0, 1), Eigen::Vector3d(0.6, -0.8, 0), Eigen::Vector3d(0, 0, -1)}) {
       const Eigen::Vector3d e = grid.irradiance(p, n);
-      for (int ch = 0; ch < 3; ++ch) EXPECT_NEAR(e[ch], kPi * L, 1e-2);
+      for (int ch = 0; ch < 3; ++ch) EXPECT_NEAR(e[ch], kPi * L, 0.05 * kPi * L);
     }
   }
   // Trilinear sampling: at a probe's centre, its own coefficients; between two probes,
@@ -272,7 +274,10 @@ TEST(CliBakeProbes, ObjWithMtlMaterials) {
   ASSERT_EQ(doc["probes"][0]["valid"], true) << "faces wound outward?";
   const double kd[3] = {0.25, 0.5, 0.75};
   for (int c = 0; c < 3; ++c)
-    EXPECT_NEAR(doc["probes"][0]["coefficients"][0][c].get<double>(), std::sqrt(4 * kPi) * (1 + kd[c]), 1e-12) << c;
+    // Emitter sampling's noise: 1.6 % measured at 256 samples; the channels differ by 15 %.
+    EXPECT_NEAR(doc["probes"][0]["coefficients"][0][c].get<double>(), std::sqrt(4 * kPi) * (1 + kd[c]),
+                0.04 * std::sqrt(4 * kPi) * (1 + kd[c]))
+        << c;
 }
 
 TEST(CliBakeProbes, RefusesBadScenesGridsBoundsAndOptions) {
