@@ -123,11 +123,24 @@ struct Tracer {
   double eps;  // ray offset off surfaces: a few float ulps of the scene's extent
   const Emitters& emitters;
 
-  // Next-event estimation toward one point on an emissive triangle from x (normal n, ray
-  // origin xo), the contribution of light arriving at x weighted against the cosine
+  // The shading normal at a hit on the side of the oriented geometric normal n: the
+  // vertex normals of the file interpolated at (u, v), or n itself when the file has none
+  // (flat shading) or they cancel.
+  Eigen::Vector3d shading_normal(std::size_t triangle, double u, double v, const Eigen::Vector3d& n) const {
+    if (!s.mesh.normals_from_file) return n;
+    const Eigen::Vector3i& i = s.mesh.triangles[triangle];
+    Eigen::Vector3d ns = (1 - u - v) * s.mesh.normals[i[0]] + u * s.mesh.normals[i[1]] + v * s.mesh.normals[i[2]];
+    const double length = ns.norm();
+    if (!(length > 0)) return n;
+    ns /= length;
+    return ns.dot(n) < 0 ? Eigen::Vector3d(-ns) : ns;
+  }
+
+  // Next-event estimation toward one point on an emissive triangle from x (shading normal
+  // n, geometric normal ng on the same side, ray origin xo), the contribution of light arriving at x weighted against the cosine
   // sampling of the continuation that could have found the same point.
-  Rgb emitter_sample(const Eigen::Vector3d& xo, const Eigen::Vector3d& n, SplitMixStream& rng,
-                     std::uint64_t& rays) const {
+  Rgb emitter_sample(const Eigen::Vector3d& xo, const Eigen::Vector3d& n, const Eigen::Vector3d& ng,
+                     SplitMixStream& rng, std::uint64_t& rays) const {
     const double u0 = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
     const std::size_t t = emitters.triangles[emitters.pick(u0)];
     // Uniform on the triangle: Embree's barycentrics (u, v) of p = (1-u-v) p0 + u p1 + v p2.
@@ -140,7 +153,7 @@ struct Tracer {
     if (!(dist > 2 * eps)) return Rgb::Zero();
     const Eigen::Vector3d wi = d / dist;
     const double cos_x = n.dot(wi), cos_y = -s.face_normals[t].dot(wi);
-    if (!(cos_x > 0) || cos_y == 0 || (cos_y < 0 && !s.material_of(t).double_sided)) return Rgb::Zero();
+    if (!(cos_x > 0) || !(ng.dot(wi) > 0) || cos_y == 0 || (cos_y < 0 && !s.material_of(t).double_sided)) return Rgb::Zero();
     const Rgb le = s.emitted(t, bu, bv);
     if (!(le.maxCoeff() > 0)) return Rgb::Zero();
     const double light_pdf = emitters.area_density[t] * dist2 / std::abs(cos_y);  // per solid angle
@@ -189,23 +202,27 @@ struct Tracer {
       if (!(albedo.maxCoeff() > 0)) break;
       const Eigen::Vector3d x = origin + h.t * dir;
       const Eigen::Vector3d xo = x + eps * n;
+      // Shading uses the interpolated normal; visibility and sides the geometric one (a
+      // direction below the triangle's own plane is blocked whatever the shading normal).
+      const Eigen::Vector3d ns = shading_normal(h.triangle, h.u, h.v, n);
       for (const scene::PunctualLight& light : s.lights) {
         const scene::LightSample ls = scene::light_at(light, x);
-        const double cosine = n.dot(ls.to_light);
-        if (!(cosine > 0) || !(ls.irradiance.maxCoeff() > 0)) continue;
+        const double cosine = ns.dot(ls.to_light);
+        if (!(cosine > 0) || !(n.dot(ls.to_light) > 0) || !(ls.irradiance.maxCoeff() > 0)) continue;
         ++rays;
         if (occluded(s, xo, ls.to_light, ls.distance - 2 * eps)) continue;
         total += throughput.cwiseProduct(albedo).cwiseProduct(ls.irradiance) * (cosine / kPi);
       }
-      if (sample_emitters) total += throughput.cwiseProduct(albedo).cwiseProduct(emitter_sample(xo, n, rng, rays));
+      if (sample_emitters) total += throughput.cwiseProduct(albedo).cwiseProduct(emitter_sample(xo, ns, n, rng, rays));
       throughput = throughput.cwiseProduct(albedo);
       // Cosine-weighted continuation: pdf cos / pi against the BRDF albedo / pi times cos.
       const double u1 = rng.uniform(), u2 = rng.uniform();
       const double r = std::sqrt(u1), phi = 2 * kPi * u2;
       Eigen::Vector3d t, b;
-      fit::orthonormal_basis(n, t, b);
-      dir = (r * std::cos(phi) * t + r * std::sin(phi) * b + std::sqrt(std::max(0.0, 1 - u1)) * n).normalized();
-      continuation_pdf = std::max(0.0, n.dot(dir)) / kPi;
+      fit::orthonormal_basis(ns, t, b);
+      dir = (r * std::cos(phi) * t + r * std::sin(phi) * b + std::sqrt(std::max(0.0, 1 - u1)) * ns).normalized();
+      if (!(n.dot(dir) > 0)) break;  // into the surface: absorbed
+      continuation_pdf = std::max(0.0, ns.dot(dir)) / kPi;
       origin = xo;
     }
     return total;
