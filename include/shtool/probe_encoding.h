@@ -31,7 +31,9 @@
 #pragma once
 
 #include <array>
+#include <optional>
 #include <span>
+#include <string_view>
 
 #include "shtool/sh.h"
 
@@ -42,6 +44,18 @@ inline constexpr std::array<double, 3> kZh3LuminanceWeights = {0.2126, 0.7152, 0
 
 enum class Zh3Axis { luminance, per_channel };
 enum class Zh3Fit { explicit_fit, hallucinated };
+
+// What a probe stores: l2, its radiance coefficients of the grid's order (linear
+// reconstruction with the clamped-cosine kernel); l1, bands 0 and 1 (non-linear L1
+// reconstruction); zh3, bands 0 and 1 and one zonal coefficient per channel.
+enum class ProbeEncoding { l2, l1, zh3 };
+
+// "l2", "l1", "zh3" (bake-probes --encoding, the probe-grid table's meta.encoding).
+std::string_view probe_encoding_name(ProbeEncoding encoding) noexcept;
+std::optional<ProbeEncoding> parse_probe_encoding(std::string_view name) noexcept;
+// "luminance", "per-channel".
+std::string_view zh3_axis_name(Zh3Axis axis) noexcept;
+std::optional<Zh3Axis> parse_zh3_axis(std::string_view name) noexcept;
 
 // Bands 0 and 1 of an RGB probe: coefficients[3 i + c], i = 0..3 (shtool's basis).
 template <class T>

@@ -7,6 +7,12 @@
 // valid flag: an invalid probe (inside geometry) holds values filled in from its valid
 // neighbours.
 //
+// The grid's encoding (shtool/probe_encoding.h; bake-probes --encoding) says what a probe
+// stores and how its irradiance is reconstructed: l2, the coefficients of `order`, linear;
+// l1, bands 0 and 1 (order 2), Geomerics' non-linear L1; zh3, bands 0 and 1 (order 2) and
+// one zonal coefficient per channel along the L1 axis (`zh3_axis`), the explicit fit of
+// band 2 at bake time.
+//
 // The per-point calls allocate nothing and throw nothing.
 #pragma once
 
@@ -18,6 +24,7 @@
 #include <string_view>
 #include <vector>
 
+#include "shtool/probe_encoding.h"
 #include "shtool/result.h"
 #include "shtool/sh.h"
 #include "shtool/table.h"
@@ -29,36 +36,54 @@ inline constexpr std::string_view kProbeGridKind = "probe-grid";
 // their work in fixed-size arrays.
 inline constexpr int kMaxProbeOrder = 8;
 
+// The most values one probe stores (order kMaxProbeOrder, l2).
+inline constexpr std::size_t kMaxProbeValues = std::size_t(kMaxProbeOrder) * kMaxProbeOrder * 3;
+
 template <class T>
 struct ProbeGrid {
   int order = 0;
+  ProbeEncoding encoding = ProbeEncoding::l2;
+  Zh3Axis zh3_axis = Zh3Axis::luminance;   // zh3 only
   std::array<int, 3> resolution{0, 0, 0};  // NX, NY, NZ
   Vec3<T> min = Vec3<T>::Zero(), max = Vec3<T>::Zero();
-  std::vector<T> coefficients;        // probe-major, then SH index, then r, g, b
+  // Probe-major, values_per_probe() each: the N^2 x 3 coefficients [k * 3 + c], then for
+  // zh3 the zonal coefficient of r, g, b.
+  std::vector<T> coefficients;
   std::vector<std::uint8_t> valid;    // one per probe: 1 valid, 0 filled in
 
   std::size_t probe_count() const { return valid.size(); }
+  std::size_t values_per_probe() const {
+    return static_cast<std::size_t>(order) * order * 3 + (encoding == ProbeEncoding::zh3 ? 3 : 0);
+  }
   std::size_t probe_index(int ix, int iy, int iz) const {
     return (static_cast<std::size_t>(iz) * resolution[1] + iy) * resolution[0] + ix;
   }
   std::array<int, 3> grid_index(std::size_t probe) const;
   Vec3<T> position(std::size_t probe) const;
   bool is_valid(std::size_t probe) const { return valid[probe] != 0; }
-  // The probe's N^2 x 3 coefficients, [k * 3 + c].
+  // The probe's stored values: N^2 x 3 coefficients [k * 3 + c] (then 3 zonal ones for zh3).
   std::span<const T> coefficients_of(std::size_t probe) const {
-    const std::size_t n = static_cast<std::size_t>(order) * order * 3;
+    const std::size_t n = values_per_probe();
     return {coefficients.data() + probe * n, n};
   }
 
-  // Irradiance E(n) = integral L(w) max(n.w, 0) dw (no 1/pi) of one probe, RGB: the
-  // clamped-cosine kernel A_l applied to its radiance coefficients. n: unit normal.
+  // Irradiance E(n) = integral L(w) max(n.w, 0) dw (no 1/pi), RGB, of stored values (a
+  // probe's, or sample's output) by the grid's encoding: l2, the clamped-cosine kernel A_l
+  // applied to the radiance coefficients; l1, l1_nonlinear_irradiance; zh3, zh3_irradiance.
+  // n: unit normal; values: values_per_probe() of them.
+  Vec3<T> irradiance_of(std::span<const T> values, const Vec3<T>& normal) const noexcept;
+  // irradiance_of one probe.
   Vec3<T> irradiance(std::size_t probe, const Vec3<T>& normal) const noexcept;
-  // Radiance coefficients at x by trilinear interpolation between the eight probes
-  // around it (x clamped to the box of probe centres), into out[N^2 * 3].
+  // The stored values at x by trilinear interpolation between the eight probes around it
+  // (x clamped to the box of probe centres), into out[values_per_probe()] (as a GPU's
+  // filtering of the stored values does, also for l1 and zh3).
   void sample(const Vec3<T>& x, std::span<T> out) const noexcept;
+  // irradiance_of the values sample gives at x.
+  Vec3<T> irradiance_at(const Vec3<T>& x, const Vec3<T>& normal) const noexcept;
 
-  // Checks kind, order (1..kMaxProbeOrder), shapes, bounds (finite, min < max), finite
-  // coefficients and flags 0 or 1; refuses a partial table.
+  // Checks kind, order (1..kMaxProbeOrder; 2 for l1 and zh3), meta.encoding (absent: l2)
+  // and meta.zh3_axis, shapes, bounds (finite, min < max), finite coefficients (and zh3's
+  // array 'zonal' [NZ, NY, NX, 3]) and flags 0 or 1; refuses a partial table.
   static Result<ProbeGrid> from_table(const Table& table);
   // read_table + from_table, the path prefixed to any message.
   static Result<ProbeGrid> load(const std::filesystem::path& path);

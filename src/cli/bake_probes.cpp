@@ -24,6 +24,10 @@ void setup_bake_probes(CLI::App& app) {
       ->capture_default_str();
   sub->add_option("--seed", req->seed, "seed of the directions and paths")->check(kUnsignedText)->capture_default_str();
   sub->add_option("--threads", req->threads, "worker threads (0: all cores)")->capture_default_str();
+  sub->add_option("--encoding", req->encoding,
+                  "what each probe stores: l2 (the order-N coefficients), l1 (bands 0 and 1, non-linear L1 "
+                  "reconstruction; --order >= 2) or zh3 (bands 0 and 1 and a zonal band-2 coefficient; --order >= 3)")
+      ->capture_default_str();
   sub->add_option("--out", req->out, "probe-grid table to write")->required();
   sub->add_option("--json", req->json, "also the probes as JSON");
   sub->add_option("--threejs", req->threejs,
@@ -36,7 +40,7 @@ void setup_bake_probes(CLI::App& app) {
     if (r.mpi_rank != 0) return;  // rank 0 reports the job
     if (r.sharded) std::cerr << "bake-probes: shard of probes [" << r.first_probe << ", " << r.end_probe << ")\n";
     std::cerr << "bake-probes: " << r.probes << " probes (" << r.resolution[0] << " x " << r.resolution[1] << " x "
-              << r.resolution[2] << "), " << r.triangles << " triangles, " << r.lights << " lights; " << r.rays
+              << r.resolution[2] << ", encoding " << req->encoding << "), " << r.triangles << " triangles, " << r.lights << " lights; " << r.rays
               << " rays in " << r.seconds << " s; " << r.invalid << " invalid probes filled from neighbours";
     if (r.mpi_ranks) std::cerr << " (this rank's share; on each of " << r.mpi_ranks << " MPI ranks)";
     if (r.unfilled) std::cerr << " (" << r.unfilled << " with no valid neighbour left at 0)";

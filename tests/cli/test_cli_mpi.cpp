@@ -4,6 +4,7 @@
 // refusal reaches every rank, a rank that fails stops the others at the next bounce, and
 // rank 0 refuses a rank that read another input.
 // Built without MPI: --mpi is a clear error. A missing mpiexec fails the test.
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -173,6 +174,19 @@ TEST(CliBakeProbesMpi, RanksWriteTheOneProcessTable) {
     EXPECT_EQ(read_file(out), read_file(whole)) << ranks << " ranks";
     EXPECT_EQ(read_file(json), read_file(whole_json)) << ranks << " ranks";
   }
+  // An encoded grid: rank 0 fills, then encodes (bake-probes --encoding zh3).
+  auto zh3_args = [&](const fs::path& out, const fs::path& json, bool mpi) {
+    std::vector<std::string> a = bake_args(out, json, mpi);
+    *(std::find(a.begin(), a.end(), "--order") + 1) = "3";
+    a.insert(a.end(), {"--encoding", "zh3"});
+    return a;
+  };
+  ASSERT_EQ(run_checked(zh3_args(scratch("zh3_whole.shtb"), scratch("zh3_whole.json"), false)).exit_code, 0);
+  const std::vector<std::string> zh3_mpi = zh3_args(scratch("zh3_mpi.shtb"), scratch("zh3_mpi.json"), true);
+  const CommandResult r = mpirun(2, zh3_mpi);
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_EQ(read_file(scratch("zh3_mpi.shtb")), read_file(scratch("zh3_whole.shtb")));
+  EXPECT_EQ(read_file(scratch("zh3_mpi.json")), read_file(scratch("zh3_whole.json")));
 }
 
 #else

@@ -81,10 +81,12 @@ void exercise_glossy(const shtool::GlossyFit<T>& g) {
 template <class T>
 void exercise_probe_grid(const shtool::ProbeGrid<T>& g) {
   using V = shtool::Vec3<T>;
-  std::vector<T> out(static_cast<std::size_t>(g.order) * g.order * 3);
+  std::vector<T> out(g.values_per_probe());
   const T inf = std::numeric_limits<T>::infinity(), nan = std::numeric_limits<T>::quiet_NaN();
-  for (const V& x : {V(0, 0, 0), g.min, g.max, V(-inf, 0, inf), V(nan, nan, nan), V(T(1e30), T(-1e30), 0)})
+  for (const V& x : {V(0, 0, 0), g.min, g.max, V(-inf, 0, inf), V(nan, nan, nan), V(T(1e30), T(-1e30), 0)}) {
     g.sample(x, out);
+    (void)g.irradiance_at(x, V(0, 0, 1));
+  }
   for (std::size_t p = 0; p < std::min<std::size_t>(g.probe_count(), 8); ++p) {
     (void)g.position(p);
     (void)g.irradiance(p, V(0, 0, 1));

@@ -182,8 +182,9 @@ const std::vector<std::pair<std::string, LightFormat>>& export_format_names() {
 }
 
 const std::vector<std::pair<std::string, Zh3Axis>>& zh3_axis_names() {
-  static const std::vector<std::pair<std::string, Zh3Axis>> names = {{"luminance", Zh3Axis::luminance},
-                                                                     {"per-channel", Zh3Axis::per_channel}};
+  static const std::vector<std::pair<std::string, Zh3Axis>> names = {
+      {std::string(zh3_axis_name(Zh3Axis::luminance)), Zh3Axis::luminance},
+      {std::string(zh3_axis_name(Zh3Axis::per_channel)), Zh3Axis::per_channel}};
   return names;
 }
 

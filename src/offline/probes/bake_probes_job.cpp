@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <algorithm>
 #include <cstdlib>
 #include <limits>
 #include <optional>
@@ -44,7 +45,37 @@ double parse_double(const std::string& s, const std::string& option) {
   return v;
 }
 
+ProbeEncoding parse_encoding(const std::string& name) {
+  const std::optional<ProbeEncoding> e = parse_probe_encoding(name);
+  if (!e) throw InputError("--encoding: '" + name + "' is not one of l2, l1, zh3");
+  return *e;
+}
+
+// Why three.js cannot take an l1 grid (checked before the bake and by three_coefficients).
+const char* const kThreeL1 =
+    "--threejs with --encoding l1: three.js's LightProbeGridWebGL evaluates order-3 SH linearly and cannot "
+    "reconstruct non-linear L1; use --encoding zh3 or l2 for three.js";
+
 }  // namespace
+
+std::vector<double> three_coefficients(const EncodedProbes& probes, int& order) {
+  if (probes.encoding == ProbeEncoding::l1) throw InputError(kThreeL1);
+  order = probes.order;
+  if (probes.encoding == ProbeEncoding::l2) return probes.coefficients;
+  order = 3;
+  const std::size_t count = probes.valid.size();
+  std::vector<double> out;
+  out.reserve(count * 27);
+  for (std::size_t p = 0; p < count; ++p) {
+    Zh3Probe<double> zh3;
+    std::copy_n(probes.coefficients.begin() + p * 12, 12, zh3.l1.coefficients.begin());
+    std::copy_n(probes.zonal.begin() + p * 3, 3, zh3.zonal.begin());
+    const std::array<double, 15> band2 = zh3_band2(zh3, kProbeZh3Axis);
+    out.insert(out.end(), zh3.l1.coefficients.begin(), zh3.l1.coefficients.end());
+    out.insert(out.end(), band2.begin(), band2.end());
+  }
+  return out;
+}
 
 std::array<int, 3> parse_grid(const std::string& text) {
   const std::vector<std::string> f = fields(text);
@@ -89,6 +120,13 @@ BakeProbesReport run_bake_probes(const BakeProbesRequest& r) {
   check_option_range("--order", r.order, 1, kMaxOrder);
   check_option_range("--samples", r.samples, 1, kMaxSamples);
   check_option_range("--bounces", r.bounces, 0, kMaxBounces);
+  const ProbeEncoding encoding = parse_encoding(r.encoding);
+  if (r.order < lowest_bake_order(encoding))
+    throw InputError("--encoding " + r.encoding + " needs --order " + std::to_string(lowest_bake_order(encoding)) +
+                     " or more (" +
+                     (encoding == ProbeEncoding::l1 ? "it stores bands 0 and 1" : "its zonal coefficient is fitted to band 2") +
+                     "), got --order " + std::to_string(r.order));
+  if (encoding == ProbeEncoding::l1 && !r.threejs.empty()) throw InputError(kThreeL1);
   ProbeGridSpec spec;
   spec.resolution = parse_grid(r.grid);
   std::optional<std::pair<Eigen::Vector3d, Eigen::Vector3d>> bounds;
@@ -167,7 +205,7 @@ BakeProbesReport run_bake_probes(const BakeProbesRequest& r) {
   params["samples"] = r.samples;
   params["bounces"] = r.bounces;
   params["seed"] = r.seed;
-  params["encoding"] = "l2";
+  params["encoding"] = probe_encoding_name(encoding);
   if (!r.env.empty()) {
     params["env"] = r.env.filename().string();
     params["env_crc32"] = input_crc32(read_input_file(r.env, "--env"));
@@ -183,15 +221,16 @@ BakeProbesReport run_bake_probes(const BakeProbesRequest& r) {
   meta["triangles"] = s.mesh.triangles.size();
   meta["lights"] = s.lights.size();
 
-  // three.js's atlas of the whole grid (docs/probe-encodings.md), from the joined coefficients.
-  const auto set_threejs = [&](const std::vector<double>& coefficients) {
+  // The whole grid's outputs (docs/probe-encodings.md for three.js's atlas).
+  const auto set_whole = [&](const EncodedProbes& probes, const Table& table) {
+    io.set("--out", encode_table(table));
+    if (io.requested("--json")) io.set("--json", dump_finite(probe_grid_json(spec, probes), "--json") + "\n");
     if (r.threejs.empty()) return;
     interop::ThreeProbeGridInput three;
     three.resolution = spec.resolution;
     three.min = spec.lower;
     three.max = spec.upper;
-    three.order = spec.order;
-    three.coefficients = coefficients;
+    three.coefficients = three_coefficients(probes, three.order);
     interop::set_three_probe_grid(io, "--threejs", interop::three_probe_grid_files(three));
   };
 
@@ -210,22 +249,17 @@ BakeProbesReport run_bake_probes(const BakeProbesRequest& r) {
         if (!t) throw InputError("--mpi: " + t.error().message);
         tables.emplace_back(name, std::move(t).value());
       }
-      const Table merged = merge_probe_grid_tables(tables);
-      io.set("--out", encode_table(merged));
-      if (io.requested("--json")) {
-        ProbeBake whole;
-        whole.coefficients = merged.find("coefficients")->values<double>();
-        whole.valid = merged.find("valid")->values<std::uint8_t>();
-        io.set("--json", dump_finite(probe_grid_json(spec, whole), "--json") + "\n");
-      }
-      set_threejs(merged.find("coefficients")->values<double>());
+      const MergedProbeGrid merged = merge_probe_grid(tables);
+      set_whole(merged.probes, merged.table);
       io.commit();
     }
   } else {
-    io.set("--out", encode_table(shard ? probe_grid_part_table(spec, bake, *shard, range, generator, meta)
-                                       : probe_grid_table(spec, bake, generator, meta)));
-    if (io.requested("--json")) io.set("--json", dump_finite(probe_grid_json(spec, bake), "--json") + "\n");
-    if (!shard) set_threejs(bake.coefficients);
+    if (shard) {
+      io.set("--out", encode_table(probe_grid_part_table(spec, bake, *shard, range, generator, meta)));
+    } else {
+      const EncodedProbes probes = encode_probes(bake, spec.order, encoding);
+      set_whole(probes, probe_grid_table(spec, probes, generator, meta));
+    }
     io.commit();
   }
 

@@ -13,6 +13,7 @@
 
 #include "common/mesh_frame.h"
 #include "probes/probe_bake.h"
+#include "probes/probe_grid_table.h"
 #include "shtool/table.h"
 
 namespace shtool::probes {
@@ -36,6 +37,7 @@ struct BakeProbesRequest {
   int bounces = 3;
   std::uint64_t seed = 1;
   int threads = 0;
+  std::string encoding = "l2";                // l2, l1 or zh3 (docs/probe-encodings.md)
   std::filesystem::path out;                  // the probe-grid table
   std::filesystem::path json;                 // optional
   std::filesystem::path threejs;              // optional: a folder for probes.json and probes.bin
@@ -61,5 +63,12 @@ std::pair<Eigen::Vector3d, Eigen::Vector3d> parse_bounds(const std::string& text
 
 // Checks every option before reading anything large, bakes, writes both outputs or none.
 BakeProbesReport run_bake_probes(const BakeProbesRequest& request);
+
+// The order-3 radiance coefficients three.js's LightProbeGridWebGL takes for an encoded
+// grid: l2's own (bands above 2 dropped by the writer), zh3's L1 band with the band 2 its
+// zonal coefficient stands for (zh3_band2; three's linear irradiance of them is exactly
+// the ZH3 irradiance). l1 has none: its non-linear reconstruction is not a linear
+// function of SH coefficients (InputError).
+std::vector<double> three_coefficients(const EncodedProbes& probes, int& order);
 
 }  // namespace shtool::probes

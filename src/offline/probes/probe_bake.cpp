@@ -1,5 +1,6 @@
 #include "probes/probe_bake.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -60,11 +61,107 @@ Rgb environment_radiance(const Environment& env, const Eigen::Vector3d& dir, std
   return l;
 }
 
+// The emissive triangles for next-event estimation, built once per bake: triangle t is
+// chosen with probability P_t proportional to its area times its emitted power (the sum
+// of R, G and B of its emitted radiance at four points: the centroid and the midpoints
+// toward the corners), then a point uniformly on it, so the area density is P_t / A_t.
+// A triangle whose four points emit nothing has P_t = 0: its light then comes only from
+// the paths that hit it (their MIS weight is 1), so the estimate stays unbiased.
+struct Emitters {
+  std::vector<std::size_t> triangles;  // the emissive ones
+  std::vector<double> cdf;             // cumulative P over `triangles`, last 1
+  std::vector<double> area_density;    // per scene triangle: P_t / A_t (0: not sampled)
+
+  explicit Emitters(const scene::Scene& s) {
+    const std::size_t n = s.mesh.triangles.size();
+    area_density.assign(n, 0.0);
+    std::vector<double> weight;
+    double total = 0;
+    for (std::size_t t = 0; t < n; ++t) {
+      const double area = triangle_area(s, t);
+      if (!(area > 0)) continue;
+      const Rgb e = s.emitted(t, 1.0 / 3, 1.0 / 3) + s.emitted(t, 1.0 / 6, 1.0 / 6) + s.emitted(t, 2.0 / 3, 1.0 / 6) +
+                    s.emitted(t, 1.0 / 6, 2.0 / 3);
+      const double w = area * std::max(0.0, e.sum());
+      if (!(w > 0)) continue;
+      triangles.push_back(t);
+      weight.push_back(w);
+      total += w;
+    }
+    double running = 0;
+    for (std::size_t i = 0; i < triangles.size(); ++i) {
+      running += weight[i];
+      cdf.push_back(i + 1 == triangles.size() ? 1.0 : running / total);
+      area_density[triangles[i]] = weight[i] / total / triangle_area(s, triangles[i]);
+    }
+  }
+
+  static double triangle_area(const scene::Scene& s, std::size_t t) {
+    const Eigen::Vector3i& i = s.mesh.triangles[t];
+    const Eigen::Vector3d& a = s.mesh.positions[i[0]];
+    return 0.5 * (s.mesh.positions[i[1]] - a).cross(s.mesh.positions[i[2]] - a).norm();
+  }
+
+  // The emitter index of uniform u in [0, 1).
+  std::size_t pick(double u) const {
+    const auto it = std::upper_bound(cdf.begin(), cdf.end(), u);
+    return static_cast<std::size_t>(std::min<std::ptrdiff_t>(it - cdf.begin(), static_cast<std::ptrdiff_t>(cdf.size()) - 1));
+  }
+};
+
+// The power heuristic (beta = 2) of a sample from density `a` against the other
+// technique's density `b`, one sample each (Veach 1997, 9.2.1).
+double power_heuristic(double a, double b) {
+  const double a2 = a * a, b2 = b * b;
+  return a2 + b2 > 0 ? a2 / (a2 + b2) : 0.0;
+}
+
 struct Tracer {
   const scene::Scene& s;
   const ProbeGridSpec& spec;
   const Environment& env;
   double eps;  // ray offset off surfaces: a few float ulps of the scene's extent
+  const Emitters& emitters;
+
+  // The shading normal at a hit on the side of the oriented geometric normal n: the
+  // vertex normals of the file interpolated at (u, v), or n itself when the file has none
+  // (flat shading) or they cancel.
+  Eigen::Vector3d shading_normal(std::size_t triangle, double u, double v, const Eigen::Vector3d& n) const {
+    if (!s.mesh.normals_from_file) return n;
+    const Eigen::Vector3i& i = s.mesh.triangles[triangle];
+    Eigen::Vector3d ns = (1 - u - v) * s.mesh.normals[i[0]] + u * s.mesh.normals[i[1]] + v * s.mesh.normals[i[2]];
+    const double length = ns.norm();
+    if (!(length > 0)) return n;
+    ns /= length;
+    return ns.dot(n) < 0 ? Eigen::Vector3d(-ns) : ns;
+  }
+
+  // Next-event estimation toward one point on an emissive triangle from x (shading normal
+  // n, geometric normal ng on the same side, ray origin xo), the contribution of light arriving at x weighted against the cosine
+  // sampling of the continuation that could have found the same point.
+  Rgb emitter_sample(const Eigen::Vector3d& xo, const Eigen::Vector3d& n, const Eigen::Vector3d& ng,
+                     SplitMixStream& rng, std::uint64_t& rays) const {
+    const double u0 = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
+    const std::size_t t = emitters.triangles[emitters.pick(u0)];
+    // Uniform on the triangle: Embree's barycentrics (u, v) of p = (1-u-v) p0 + u p1 + v p2.
+    const double r = std::sqrt(u1), bu = r * (1 - u2), bv = r * u2;
+    const Eigen::Vector3i& i = s.mesh.triangles[t];
+    const Eigen::Vector3d y =
+        (1 - bu - bv) * s.mesh.positions[i[0]] + bu * s.mesh.positions[i[1]] + bv * s.mesh.positions[i[2]];
+    const Eigen::Vector3d d = y - xo;
+    const double dist2 = d.squaredNorm(), dist = std::sqrt(dist2);
+    if (!(dist > 2 * eps)) return Rgb::Zero();
+    const Eigen::Vector3d wi = d / dist;
+    const double cos_x = n.dot(wi), cos_y = -s.face_normals[t].dot(wi);
+    if (!(cos_x > 0) || !(ng.dot(wi) > 0) || cos_y == 0 || (cos_y < 0 && !s.material_of(t).double_sided)) return Rgb::Zero();
+    const Rgb le = s.emitted(t, bu, bv);
+    if (!(le.maxCoeff() > 0)) return Rgb::Zero();
+    const double light_pdf = emitters.area_density[t] * dist2 / std::abs(cos_y);  // per solid angle
+    const double weight = power_heuristic(light_pdf, cos_x / kPi);
+    ++rays;
+    if (occluded(s, xo, wi, dist - 2 * eps)) return Rgb::Zero();
+    return le * (cos_x / kPi * weight / light_pdf);
+  }
 
   // Radiance arriving at `origin` from `dir`. escaped: the first ray left the scene;
   // back_face: it hit the back of a single-sided triangle.
@@ -73,6 +170,8 @@ struct Tracer {
     Eigen::Vector3d origin = origin0, dir = dir0;
     Rgb throughput = Rgb::Ones(), total = Rgb::Zero();
     escaped = back_face = false;
+    const bool sample_emitters = spec.sample_emitters && !emitters.triangles.empty();
+    double continuation_pdf = 0;  // solid-angle density of `dir` (after the first hit)
     for (int depth = 0;; ++depth) {
       const Hit h = intersect(s, origin, dir);
       ++rays;
@@ -89,27 +188,41 @@ struct Tracer {
         break;
       }
       const Eigen::Vector3d n = front ? ng : Eigen::Vector3d(-ng);
-      total += throughput.cwiseProduct(s.emitted(h.triangle, h.u, h.v));
+      // The probe's own directions are a fixed set: what they see counts whole. A
+      // continuation's hit on an emitter shares it with the emitter sample of its vertex.
+      double emission_weight = 1;
+      if (depth > 0 && sample_emitters && emitters.area_density[h.triangle] > 0) {
+        const double cos_y = std::abs(ng.dot(dir));
+        const double light_pdf = cos_y > 0 ? emitters.area_density[h.triangle] * h.t * h.t / cos_y : 0.0;
+        emission_weight = power_heuristic(continuation_pdf, light_pdf);
+      }
+      total += throughput.cwiseProduct(s.emitted(h.triangle, h.u, h.v)) * emission_weight;
       if (depth == spec.bounces) break;
       const Rgb albedo = s.albedo(h.triangle, h.u, h.v);
       if (!(albedo.maxCoeff() > 0)) break;
       const Eigen::Vector3d x = origin + h.t * dir;
       const Eigen::Vector3d xo = x + eps * n;
+      // Shading uses the interpolated normal; visibility and sides the geometric one (a
+      // direction below the triangle's own plane is blocked whatever the shading normal).
+      const Eigen::Vector3d ns = shading_normal(h.triangle, h.u, h.v, n);
       for (const scene::PunctualLight& light : s.lights) {
         const scene::LightSample ls = scene::light_at(light, x);
-        const double cosine = n.dot(ls.to_light);
-        if (!(cosine > 0) || !(ls.irradiance.maxCoeff() > 0)) continue;
+        const double cosine = ns.dot(ls.to_light);
+        if (!(cosine > 0) || !(n.dot(ls.to_light) > 0) || !(ls.irradiance.maxCoeff() > 0)) continue;
         ++rays;
         if (occluded(s, xo, ls.to_light, ls.distance - 2 * eps)) continue;
         total += throughput.cwiseProduct(albedo).cwiseProduct(ls.irradiance) * (cosine / kPi);
       }
+      if (sample_emitters) total += throughput.cwiseProduct(albedo).cwiseProduct(emitter_sample(xo, ns, n, rng, rays));
       throughput = throughput.cwiseProduct(albedo);
       // Cosine-weighted continuation: pdf cos / pi against the BRDF albedo / pi times cos.
       const double u1 = rng.uniform(), u2 = rng.uniform();
       const double r = std::sqrt(u1), phi = 2 * kPi * u2;
       Eigen::Vector3d t, b;
-      fit::orthonormal_basis(n, t, b);
-      dir = (r * std::cos(phi) * t + r * std::sin(phi) * b + std::sqrt(std::max(0.0, 1 - u1)) * n).normalized();
+      fit::orthonormal_basis(ns, t, b);
+      dir = (r * std::cos(phi) * t + r * std::sin(phi) * b + std::sqrt(std::max(0.0, 1 - u1)) * ns).normalized();
+      if (!(n.dot(dir) > 0)) break;  // into the surface: absorbed
+      continuation_pdf = std::max(0.0, ns.dot(dir)) / kPi;
       origin = xo;
     }
     return total;
@@ -187,7 +300,8 @@ ProbeBake bake_probe_range(const scene::Scene& s, const ProbeGridSpec& spec, con
   double extent = 0;
   for (const Eigen::Vector3d& p : s.mesh.positions) extent = std::max(extent, p.cwiseAbs().maxCoeff());
   for (int a = 0; a < 3; ++a) extent = std::max({extent, std::abs(spec.lower[a]), std::abs(spec.upper[a])});
-  const Tracer tracer{s, spec, env, std::max(extent, 1e-30) * 1e-5};
+  const Emitters emitters(s);
+  const Tracer tracer{s, spec, env, std::max(extent, 1e-30) * 1e-5, emitters};
 
   ProbeBake out;
   out.coefficients.assign(probes * per_probe, 0.0);

@@ -4,9 +4,11 @@
 // Per probe p, S directions w_j (a spherical Fibonacci set turned about z by
 // ray_turn(seed, probe), common/random.h) each start a path: the radiance L_j arriving at p from w_j is what
 // the first surface hit emits plus what it reflects, estimated by a path of up to
-// `bounces` Lambertian reflections with next-event estimation toward the punctual lights
-// at each reflection (cosine-weighted continuation, so each reflection multiplies the
-// path's weight by the albedo). The environment is a control variate:
+// `bounces` Lambertian reflections with next-event estimation at each reflection: toward
+// every punctual light, and toward one point on the emissive triangles (chosen by area x
+// emitted power), combined with the cosine-weighted continuation's hits on emitters by
+// multiple importance sampling with the power heuristic (Veach 1997). Each reflection
+// multiplies the path's weight by the albedo. The environment is a control variate:
 //   c_k = env_k + (4 pi / S) sum_j [L_j - L_env(w_j)] y_k(w_j),
 // where the sum runs over the directions that hit a surface (for the others L_j is the
 // environment itself), so an open scene gets the environment's coefficients exactly.
@@ -44,6 +46,9 @@ struct ProbeGridSpec {
   int bounces = 3;
   std::uint64_t seed = 1;
   int threads = 0;
+  // Next-event estimation toward emissive triangles with multiple importance sampling
+  // (on in every bake; off only to measure what it brings).
+  bool sample_emitters = true;
 
   std::size_t probe_count() const {
     return static_cast<std::size_t>(resolution[0]) * resolution[1] * resolution[2];

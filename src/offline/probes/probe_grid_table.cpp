@@ -1,6 +1,8 @@
 #include "probes/probe_grid_table.h"
 
 #include <algorithm>
+#include <optional>
+#include <span>
 
 #include "common/atomic_file.h"
 #include "common/input_error.h"
@@ -18,9 +20,20 @@ nlohmann::json bounds_json(const ProbeGridSpec& spec) {
           {"max", {spec.upper.x(), spec.upper.y(), spec.upper.z()}}};
 }
 
-// The grid's own meta values beside the scene's.
-nlohmann::json grid_meta(const ProbeGridSpec& spec, nlohmann::json meta, std::size_t invalid, std::size_t unfilled) {
+constexpr const char* kZh3Fit = "explicit";
+
+// The grid's own meta values beside the scene's; `encoding` null for a partial table
+// (its coefficients are the bake's, encoded when the parts are joined).
+nlohmann::json grid_meta(const ProbeGridSpec& spec, nlohmann::json meta, std::size_t invalid, std::size_t unfilled,
+                         const ProbeEncoding* encoding) {
   meta["quantity"] = "radiance";
+  if (encoding) {
+    meta["encoding"] = probe_encoding_name(*encoding);
+    if (*encoding == ProbeEncoding::zh3) {
+      meta["zh3_axis"] = zh3_axis_name(kProbeZh3Axis);
+      meta["zh3_fit"] = kZh3Fit;
+    }
+  }
   meta["channels"] = {"r", "g", "b"};
   meta["resolution"] = {spec.resolution[0], spec.resolution[1], spec.resolution[2]};
   meta["bounds"] = bounds_json(spec);
@@ -28,9 +41,16 @@ nlohmann::json grid_meta(const ProbeGridSpec& spec, nlohmann::json meta, std::si
   meta["back_face_threshold"] = kInvalidBackFaceShare;
   meta["invalid_probes"] = invalid;
   meta["unfilled_probes"] = unfilled;
-  meta["layout"] = "coefficients[iz][iy][ix][k][c]: probe at min + (i + 1/2) (max - min) / n, SH index k = l(l+1)+m, "
-                   "c = r, g, b; incident radiance c_k = integral L y_k dw; valid[iz][iy][ix] = 0: inside geometry, "
-                   "filled from valid neighbours";
+  std::string layout =
+      "coefficients[iz][iy][ix][k][c]: probe at min + (i + 1/2) (max - min) / n, SH index k = l(l+1)+m, "
+      "c = r, g, b; incident radiance c_k = integral L y_k dw; valid[iz][iy][ix] = 0: inside geometry, "
+      "filled from valid neighbours";
+  if (encoding && *encoding == ProbeEncoding::l1)
+    layout += "; encoding l1: bands 0 and 1 only, irradiance by Geomerics' non-linear L1 reconstruction";
+  if (encoding && *encoding == ProbeEncoding::zh3)
+    layout += "; encoding zh3: bands 0 and 1, and zonal[iz][iy][ix][c], the l = 2 zonal coefficient along the "
+              "luminance-weighted L1 axis (explicit least-squares fit of band 2)";
+  meta["layout"] = std::move(layout);
   return meta;
 }
 
@@ -44,21 +64,63 @@ std::vector<double> bounds_values(const ProbeGridSpec& spec) {
 
 }  // namespace
 
-Table probe_grid_table(const ProbeGridSpec& spec, const ProbeBake& bake, const nlohmann::json& generator,
+int lowest_bake_order(ProbeEncoding encoding) {
+  switch (encoding) {
+    case ProbeEncoding::l1: return 2;
+    case ProbeEncoding::zh3: return 3;
+    case ProbeEncoding::l2: break;
+  }
+  return 1;
+}
+
+EncodedProbes encode_probes(const ProbeBake& bake, int order, ProbeEncoding encoding) {
+  EncodedProbes out;
+  out.encoding = encoding;
+  out.valid = bake.valid;
+  out.unfilled = bake.unfilled;
+  if (encoding == ProbeEncoding::l2) {
+    out.order = order;
+    out.coefficients = bake.coefficients;
+    return out;
+  }
+  if (order < lowest_bake_order(encoding))
+    throw InputError("encoding " + std::string(probe_encoding_name(encoding)) + " needs a bake of order " +
+                     std::to_string(lowest_bake_order(encoding)) + " or more, not " + std::to_string(order));
+  out.order = 2;
+  const std::size_t per_probe = static_cast<std::size_t>(order) * order * 3, probes = bake.valid.size();
+  out.coefficients.reserve(probes * 12);
+  if (encoding == ProbeEncoding::zh3) out.zonal.reserve(probes * 3);
+  for (std::size_t p = 0; p < probes; ++p) {
+    const std::span<const double> radiance(bake.coefficients.data() + p * per_probe, per_probe);
+    if (encoding == ProbeEncoding::l1) {
+      const L1Probe<double> l1 = encode_l1(radiance);
+      out.coefficients.insert(out.coefficients.end(), l1.coefficients.begin(), l1.coefficients.end());
+    } else {
+      const Zh3Probe<double> zh3 = encode_zh3(radiance, kProbeZh3Axis, Zh3Fit::explicit_fit);
+      out.coefficients.insert(out.coefficients.end(), zh3.l1.coefficients.begin(), zh3.l1.coefficients.end());
+      out.zonal.insert(out.zonal.end(), zh3.zonal.begin(), zh3.zonal.end());
+    }
+  }
+  return out;
+}
+
+Table probe_grid_table(const ProbeGridSpec& spec, const EncodedProbes& probes, const nlohmann::json& generator,
                        nlohmann::json meta) {
   const std::int64_t nx = spec.resolution[0], ny = spec.resolution[1], nz = spec.resolution[2];
-  meta = grid_meta(spec, std::move(meta), count_invalid(bake.valid), bake.unfilled);
-  Table table = new_table(kProbeGridKind, spec.order, generator, meta);
-  const std::int64_t nn = static_cast<std::int64_t>(spec.order) * spec.order;
+  meta = grid_meta(spec, std::move(meta), count_invalid(probes.valid), probes.unfilled, &probes.encoding);
+  Table table = new_table(kProbeGridKind, probes.order, generator, meta);
+  const std::int64_t nn = static_cast<std::int64_t>(probes.order) * probes.order;
   table.arrays.push_back(TableArray::from<double>("bounds", {2, 3}, bounds_values(spec)));
-  table.arrays.push_back(TableArray::from<double>("coefficients", {nz, ny, nx, nn, 3}, bake.coefficients));
-  table.arrays.push_back(TableArray::from<std::uint8_t>("valid", {nz, ny, nx}, bake.valid));
+  table.arrays.push_back(TableArray::from<double>("coefficients", {nz, ny, nx, nn, 3}, probes.coefficients));
+  table.arrays.push_back(TableArray::from<std::uint8_t>("valid", {nz, ny, nx}, probes.valid));
+  if (probes.encoding == ProbeEncoding::zh3)
+    table.arrays.push_back(TableArray::from<double>("zonal", {nz, ny, nx, 3}, probes.zonal));
   return table;
 }
 
 Table probe_grid_part_table(const ProbeGridSpec& spec, const ProbeBake& part, const fit::Shard& shard,
                             const fit::VertexRange& range, const nlohmann::json& generator, nlohmann::json meta) {
-  meta = grid_meta(spec, std::move(meta), count_invalid(part.valid), 0);
+  meta = grid_meta(spec, std::move(meta), count_invalid(part.valid), 0, nullptr);
   meta["shard"] = {{"index", shard.index},
                    {"count", shard.count},
                    {"first_probe", range.begin},
@@ -73,15 +135,20 @@ Table probe_grid_part_table(const ProbeGridSpec& spec, const ProbeBake& part, co
   return table;
 }
 
-nlohmann::json probe_grid_json(const ProbeGridSpec& spec, const ProbeBake& bake) {
+nlohmann::json probe_grid_json(const ProbeGridSpec& spec, const EncodedProbes& bake) {
   nlohmann::json doc;
-  doc["order"] = spec.order;
+  doc["order"] = bake.order;
+  if (bake.encoding != ProbeEncoding::l2) doc["encoding"] = probe_encoding_name(bake.encoding);
+  if (bake.encoding == ProbeEncoding::zh3) {
+    doc["zh3_axis"] = zh3_axis_name(kProbeZh3Axis);
+    doc["zh3_fit"] = kZh3Fit;
+  }
   doc["quantity"] = "radiance";
   doc["channels"] = {"r", "g", "b"};
   doc["resolution"] = {spec.resolution[0], spec.resolution[1], spec.resolution[2]};
   doc["bounds"] = bounds_json(spec);
   nlohmann::json probes = nlohmann::json::array();
-  const std::size_t nn = static_cast<std::size_t>(spec.order) * spec.order;
+  const std::size_t nn = static_cast<std::size_t>(bake.order) * bake.order;
   for (std::size_t p = 0; p < spec.probe_count(); ++p) {
     const std::array<int, 3> i = spec.grid_index(p);
     const Eigen::Vector3d x = spec.position(p);
@@ -90,16 +157,19 @@ nlohmann::json probe_grid_json(const ProbeGridSpec& spec, const ProbeBake& bake)
       const double* c = bake.coefficients.data() + (p * nn + k) * 3;
       rows.push_back({c[0], c[1], c[2]});
     }
-    probes.push_back({{"index", {i[0], i[1], i[2]}},
-                      {"position", {x.x(), x.y(), x.z()}},
-                      {"valid", bake.valid[p] != 0},
-                      {"coefficients", std::move(rows)}});
+    nlohmann::json probe = {{"index", {i[0], i[1], i[2]}},
+                            {"position", {x.x(), x.y(), x.z()}},
+                            {"valid", bake.valid[p] != 0},
+                            {"coefficients", std::move(rows)}};
+    if (bake.encoding == ProbeEncoding::zh3)
+      probe["zonal"] = {bake.zonal[p * 3], bake.zonal[p * 3 + 1], bake.zonal[p * 3 + 2]};
+    probes.push_back(std::move(probe));
   }
   doc["probes"] = std::move(probes);
   return doc;
 }
 
-Table merge_probe_grid_tables(const std::vector<std::pair<std::string, Table>>& parts) {
+MergedProbeGrid merge_probe_grid(const std::vector<std::pair<std::string, Table>>& parts) {
   if (parts.empty()) throw InputError("merge: no parts");
   struct Part {
     const std::string* name;
@@ -181,10 +251,23 @@ Table merge_probe_grid_tables(const std::vector<std::pair<std::string, Table>>& 
     bake.valid.insert(bake.valid.end(), v.begin(), v.end());
   }
   bake.unfilled = fill_invalid_probes(spec.resolution, spec.order * spec.order * 3, bake.valid, bake.coefficients);
+  const nlohmann::json encoding_name = gen["parameters"].value("encoding", nlohmann::json());
+  const std::optional<ProbeEncoding> encoding =
+      encoding_name.is_string() ? parse_probe_encoding(encoding_name.get<std::string>()) : std::nullopt;
+  if (!encoding)
+    fail(*read.front().name, "generator record's encoding " + encoding_name.dump() + " is not one of l2, l1, zh3");
   // The scene's meta values, without the grid's (probe_grid_table adds them again).
   for (const char* key : {"quantity", "channels", "resolution", "bounds", "frame", "back_face_threshold", "layout"})
     common_meta.erase(key);
-  return probe_grid_table(spec, bake, gen, common_meta);
+  MergedProbeGrid merged;
+  merged.spec = spec;
+  merged.probes = encode_probes(bake, spec.order, *encoding);
+  merged.table = probe_grid_table(spec, merged.probes, gen, common_meta);
+  return merged;
+}
+
+Table merge_probe_grid_tables(const std::vector<std::pair<std::string, Table>>& parts) {
+  return merge_probe_grid(parts).table;
 }
 
 bool is_probe_grid_file(const std::filesystem::path& path) {

@@ -12,28 +12,64 @@
 
 #include "fit/shard.h"
 #include "probes/probe_bake.h"
+#include "shtool/probe_encoding.h"
 #include "shtool/table.h"
 
 namespace shtool::probes {
 
+// The axis of the ZH3 grids bake-probes writes (shared by the three channels).
+inline constexpr Zh3Axis kProbeZh3Axis = Zh3Axis::luminance;
+
+// A whole grid's probes as its encoding stores them (docs/probe-encodings.md): l2, the
+// bake's coefficients of its order; l1, bands 0 and 1 (order 2); zh3, bands 0 and 1
+// (order 2) and per probe the explicit fit's zonal coefficient of r, g, b along the
+// luminance-weighted L1 axis.
+struct EncodedProbes {
+  ProbeEncoding encoding = ProbeEncoding::l2;
+  int order = 0;                       // the table's order
+  std::vector<double> coefficients;    // probe-major, then SH index (order^2), then r, g, b
+  std::vector<double> zonal;           // zh3: probe-major, then r, g, b; empty otherwise
+  std::vector<std::uint8_t> valid;
+  std::size_t unfilled = 0;
+};
+
+// The lowest bake order an encoding needs: l1 2 (bands 0 and 1), zh3 3 (band 2 is fitted),
+// l2 1.
+int lowest_bake_order(ProbeEncoding encoding);
+
+// Each probe of a whole, filled bake of order `order` (>= lowest_bake_order) encoded on
+// its own: the encoding is applied after the invalid probes are filled, so a grid's l1 or
+// zh3 table is exactly the encoding of its l2 table.
+EncodedProbes encode_probes(const ProbeBake& bake, int order, ProbeEncoding encoding);
+
 // The whole grid. `meta` brings the scene's values (mesh_up, triangles, lights); the grid's
-// own (quantity, resolution, bounds, invalid and unfilled counts, layout) are added here.
-Table probe_grid_table(const ProbeGridSpec& spec, const ProbeBake& bake, const nlohmann::json& generator,
+// own (quantity, encoding, resolution, bounds, invalid and unfilled counts, layout) are
+// added here.
+Table probe_grid_table(const ProbeGridSpec& spec, const EncodedProbes& probes, const nlohmann::json& generator,
                        nlohmann::json meta);
 // --json: {"order", "quantity", "channels", "resolution", "bounds", "probes": [{"index",
-// "position", "valid", "coefficients"}]} in index order.
-nlohmann::json probe_grid_json(const ProbeGridSpec& spec, const ProbeBake& bake);
+// "position", "valid", "coefficients"}]} in index order; an l1 or zh3 grid adds
+// "encoding" (and zh3 "zh3_axis", "zh3_fit" and each probe's "zonal": [r, g, b]).
+nlohmann::json probe_grid_json(const ProbeGridSpec& spec, const EncodedProbes& probes);
 
-// Shard `shard` of the grid: probes [range.begin, range.end) before the fill, arrays
+// Shard `shard` of the grid: probes [range.begin, range.end) before the fill and before any
+// encoding (the generator record's "encoding" is applied by the join), arrays
 // `bounds` [2, 3], `coefficients` [R, N^2, 3], `valid` [R], meta "shard" {index, count,
 // first_probe, end_probe, probes}. The runtime loader refuses it.
 Table probe_grid_part_table(const ProbeGridSpec& spec, const ProbeBake& part, const fit::Shard& shard,
                             const fit::VertexRange& range, const nlohmann::json& generator, nlohmann::json meta);
 
-// The parts of one bake (in any order) joined, the invalid probes filled: the table a
-// one-process run writes. Throws InputError naming the part: not a partial probe-grid
-// table, another bake's (generator records or meta differ), a shard missing or twice,
-// shapes that disagree with the shard record.
+// The parts of one bake (in any order) joined, the invalid probes filled, the probes
+// encoded as the generator record says: the table a one-process run writes. Throws
+// InputError naming the part: not a partial probe-grid table, another bake's (generator
+// records or meta differ), a shard missing or twice, shapes that disagree with the shard
+// record, an unknown encoding.
+struct MergedProbeGrid {
+  ProbeGridSpec spec;
+  EncodedProbes probes;
+  Table table;
+};
+MergedProbeGrid merge_probe_grid(const std::vector<std::pair<std::string, Table>>& parts);
 Table merge_probe_grid_tables(const std::vector<std::pair<std::string, Table>>& parts);
 
 // Whether a table file holds a probe-grid (merge dispatches on it).

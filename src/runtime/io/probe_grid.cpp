@@ -36,10 +36,18 @@ Vec3<T> ProbeGrid<T>::position(std::size_t probe) const {
 }
 
 template <class T>
-Vec3<T> ProbeGrid<T>::irradiance(std::size_t probe, const Vec3<T>& normal) const noexcept {
+Vec3<T> ProbeGrid<T>::irradiance_of(std::span<const T> c, const Vec3<T>& normal) const noexcept {
+  if (encoding != ProbeEncoding::l2) {
+    L1Probe<T> l1;
+    std::copy_n(c.begin(), l1.coefficients.size(), l1.coefficients.begin());
+    if (encoding == ProbeEncoding::l1) return l1_nonlinear_irradiance(l1, normal);
+    Zh3Probe<T> zh3;
+    zh3.l1 = l1;
+    std::copy_n(c.begin() + l1.coefficients.size(), 3, zh3.zonal.begin());
+    return zh3_irradiance(zh3, zh3_axis, normal);
+  }
   T y[kMaxProbeOrder * kMaxProbeOrder];
   eval_sh<T>(order, normal, std::span<T>(y, static_cast<std::size_t>(order) * order));
-  const std::span<const T> c = coefficients_of(probe);
   Vec3<T> e = Vec3<T>::Zero();
   for (int l = 0; l < order; ++l) {
     const T a = static_cast<T>(clamped_cosine_band(l));
@@ -52,8 +60,21 @@ Vec3<T> ProbeGrid<T>::irradiance(std::size_t probe, const Vec3<T>& normal) const
 }
 
 template <class T>
+Vec3<T> ProbeGrid<T>::irradiance(std::size_t probe, const Vec3<T>& normal) const noexcept {
+  return irradiance_of(coefficients_of(probe), normal);
+}
+
+template <class T>
+Vec3<T> ProbeGrid<T>::irradiance_at(const Vec3<T>& x, const Vec3<T>& normal) const noexcept {
+  T values[kMaxProbeValues];
+  const std::span<T> v(values, values_per_probe());
+  sample(x, v);
+  return irradiance_of(v, normal);
+}
+
+template <class T>
 void ProbeGrid<T>::sample(const Vec3<T>& x, std::span<T> out) const noexcept {
-  const std::size_t n = static_cast<std::size_t>(order) * order * 3;
+  const std::size_t n = values_per_probe();
   int i0[3], i1[3];
   T f[3];
   for (int a = 0; a < 3; ++a) {
@@ -82,6 +103,24 @@ Result<ProbeGrid<T>> ProbeGrid<T>::from_table(const Table& t) {
   const nlohmann::json meta = nlohmann::json::parse(t.meta, nullptr, /*allow_exceptions=*/false);
   if (meta.is_object() && meta.contains("shard"))
     return probe_error("a partial table (bake-probes --shard): join the parts with shtool merge first");
+  ProbeEncoding encoding = ProbeEncoding::l2;
+  Zh3Axis axis = Zh3Axis::luminance;
+  if (meta.is_object() && meta.contains("encoding")) {
+    const auto e = meta["encoding"].is_string() ? parse_probe_encoding(meta["encoding"].get<std::string>())
+                                                : std::nullopt;
+    if (!e) return probe_error("meta.encoding " + meta["encoding"].dump() + " is not one of l2, l1, zh3");
+    encoding = *e;
+  }
+  if (encoding != ProbeEncoding::l2 && t.order != 2)
+    return probe_error("encoding " + std::string(probe_encoding_name(encoding)) + " stores order 2 (bands 0 and 1), not " +
+                       std::to_string(t.order));
+  if (encoding == ProbeEncoding::zh3) {
+    const auto a = meta.contains("zh3_axis") && meta["zh3_axis"].is_string()
+                       ? parse_zh3_axis(meta["zh3_axis"].get<std::string>())
+                       : std::nullopt;
+    if (!a) return probe_error("meta.zh3_axis is missing or not 'luminance' or 'per-channel'");
+    axis = *a;
+  }
   const TableArray* co = t.find("coefficients");
   if (!co || co->shape.size() != 5) return probe_error("array 'coefficients' is missing or not of shape [NZ, NY, NX, N^2, 3]");
   const std::int64_t nz = co->shape[0], ny = co->shape[1], nx = co->shape[2], nn = t.order * t.order;
@@ -95,8 +134,16 @@ Result<ProbeGrid<T>> ProbeGrid<T>::from_table(const Table& t) {
   const TableArray* va = t.find("valid");
   if (!va || va->dtype != DType::u8 || va->shape != std::vector<std::int64_t>{nz, ny, nx})
     return probe_error("array 'valid' is missing or not u8 of shape [NZ, NY, NX]");
+  std::vector<double> zonal;
+  if (encoding == ProbeEncoding::zh3) {
+    auto z = table_format::finite_f64_array(t, "zonal", {nz, ny, nx, 3}, "probe-grid table: ");
+    if (!z) return z.error();
+    zonal = std::move(z).value();
+  }
   ProbeGrid g;
   g.order = t.order;
+  g.encoding = encoding;
+  g.zh3_axis = axis;
   g.resolution = {static_cast<int>(nx), static_cast<int>(ny), static_cast<int>(nz)};
   for (int a = 0; a < 3; ++a) {
     const double lo = b.value()[a], hi = b.value()[3 + a];
@@ -106,10 +153,21 @@ Result<ProbeGrid<T>> ProbeGrid<T>::from_table(const Table& t) {
     g.min[a] = static_cast<T>(lo);
     g.max[a] = static_cast<T>(hi);
   }
-  for (const double v : c.value())
-    if (std::abs(v) > double(std::numeric_limits<T>::max()))
-      return probe_error("a coefficient does not fit the requested precision");
-  g.coefficients.assign(c.value().begin(), c.value().end());
+  for (const std::vector<double>* values : {&c.value(), &zonal})
+    for (const double v : *values)
+      if (std::abs(v) > double(std::numeric_limits<T>::max()))
+        return probe_error("a coefficient does not fit the requested precision");
+  if (encoding == ProbeEncoding::zh3) {
+    // One probe's values together: its L1 band, then its zonal coefficients.
+    const std::size_t probes = zonal.size() / 3;
+    g.coefficients.reserve(probes * 15);
+    for (std::size_t p = 0; p < probes; ++p) {
+      g.coefficients.insert(g.coefficients.end(), c.value().begin() + p * 12, c.value().begin() + p * 12 + 12);
+      g.coefficients.insert(g.coefficients.end(), zonal.begin() + p * 3, zonal.begin() + p * 3 + 3);
+    }
+  } else {
+    g.coefficients.assign(c.value().begin(), c.value().end());
+  }
   g.valid = va->values<std::uint8_t>();
   for (const std::uint8_t v : g.valid)
     if (v > 1) return probe_error("array 'valid' holds a value other than 0 or 1");

@@ -36,6 +36,31 @@ Vec3<T> unit_or_z(const Vec3<T>& v) {
 
 }  // namespace
 
+std::string_view probe_encoding_name(ProbeEncoding encoding) noexcept {
+  switch (encoding) {
+    case ProbeEncoding::l1: return "l1";
+    case ProbeEncoding::zh3: return "zh3";
+    case ProbeEncoding::l2: break;
+  }
+  return "l2";
+}
+
+std::optional<ProbeEncoding> parse_probe_encoding(std::string_view name) noexcept {
+  for (const ProbeEncoding e : {ProbeEncoding::l2, ProbeEncoding::l1, ProbeEncoding::zh3})
+    if (probe_encoding_name(e) == name) return e;
+  return std::nullopt;
+}
+
+std::string_view zh3_axis_name(Zh3Axis axis) noexcept {
+  return axis == Zh3Axis::per_channel ? "per-channel" : "luminance";
+}
+
+std::optional<Zh3Axis> parse_zh3_axis(std::string_view name) noexcept {
+  for (const Zh3Axis a : {Zh3Axis::luminance, Zh3Axis::per_channel})
+    if (zh3_axis_name(a) == name) return a;
+  return std::nullopt;
+}
+
 template <class T>
 L1Probe<T> encode_l1(std::span<const T> radiance) {
   if (radiance.size() < 12) detail::precondition_failed("encode_l1: fewer than 4 RGB coefficients");
