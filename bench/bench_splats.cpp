@@ -14,8 +14,10 @@
 //                                           it, encode it, write it, no transform.
 //
 // The files are made once per size in the temporary folder and removed at exit. The
-// job and its floor run in one process, so their ratio is paired (the same machine
-// load, the same page cache): at 6 M splats (about 1.5 GB of PLY, 5 GB of memory)
+// job and its floor run in one process, one after the other (the same page cache, about
+// the same machine load); "Time" is the wall time, "CPU" the process's CPU time over all
+// threads (user + system), the work done, which a machine loaded by others disturbs
+// less. At 6 M splats (1.5 GB of PLY):
 //   build/bench/bench_splats --benchmark_filter='splats:6291456'
 //   build/bench/bench_splats --benchmark_counters_tabular=true
 #include <cstdio>
@@ -81,7 +83,7 @@ BENCHMARK(BM_TransformSplats)
     ->ArgNames({"splats", "threads"})
     ->Unit(benchmark::kMillisecond)
     ->Iterations(1)
-    ->UseRealTime();
+    ->MeasureProcessCPUTime()->UseRealTime();
 
 void BM_CopyFile(benchmark::State& state) {
   const fs::path in = scene(static_cast<std::size_t>(state.range(0)));
@@ -89,7 +91,7 @@ void BM_CopyFile(benchmark::State& state) {
   for (auto _ : state) shtool::write_file_atomically(out, shtool::read_input_file(in, "input"));
   fs::remove(out);
 }
-BENCHMARK(BM_CopyFile)->Arg(1 << 20)->Arg(6 << 20)->ArgName("splats")->Unit(benchmark::kMillisecond)->Iterations(1)->UseRealTime();
+BENCHMARK(BM_CopyFile)->Arg(1 << 20)->Arg(6 << 20)->ArgName("splats")->Unit(benchmark::kMillisecond)->Iterations(1)->MeasureProcessCPUTime()->UseRealTime();
 
 // The scene of scene(splats) in format 1 (spz v4) or 2 (glb), made once.
 const fs::path& scene_as(int format, std::size_t splats) {
@@ -122,7 +124,7 @@ BENCHMARK(BM_ConvertSplats)
     ->ArgNames({"format", "splats"})
     ->Unit(benchmark::kMillisecond)
     ->Iterations(1)
-    ->UseRealTime();
+    ->MeasureProcessCPUTime()->UseRealTime();
 
 void BM_BareCodec(benchmark::State& state) {
   const int format = static_cast<int>(state.range(0));
@@ -146,7 +148,7 @@ BENCHMARK(BM_BareCodec)
     ->ArgNames({"format", "splats"})
     ->Unit(benchmark::kMillisecond)
     ->Iterations(1)
-    ->UseRealTime();
+    ->MeasureProcessCPUTime()->UseRealTime();
 
 }  // namespace
 
