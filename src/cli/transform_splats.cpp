@@ -23,7 +23,8 @@ void setup_transform_splats(CLI::App& app) {
                                  "(KHR_gaussian_splatting)")->required();
   CLI::Option* quat = sub->add_option("--quat", (*text)[0], "rotation as a unit quaternion w,x,y,z (input coordinates)");
   CLI::Option* matrix =
-      sub->add_option("--matrix", (*text)[1], "rotation as a matrix r00,r01,...,r22 (row-major, input coordinates)");
+      sub->add_option("--matrix", (*text)[1], "rotation or reflection as an orthogonal matrix r00,r01,...,r22 "
+                                              "(row-major, input coordinates)");
   CLI::Option* translate = sub->add_option("--translate", (*text)[2], "translation x,y,z (after rotation and scale)");
   sub->add_option("--scale", opt->scale, "uniform scale s > 0")->capture_default_str();
   sub->add_option("--out", opt->out, "output scene, format by extension (.ply: PLY in keeps its layout)")->required();
@@ -31,6 +32,9 @@ void setup_transform_splats(CLI::App& app) {
                   "axes of PLY files, one letter per x, y, z from R/L, U/D, F/B (3DGS, COLMAP: RDF)")
       ->capture_default_str();
   sub->add_option("--spz-frame", opt->spz_frame, "axes of spz files (the specification: RUB)")->capture_default_str();
+  sub->add_option("--gltf-frame", opt->gltf_frame,
+                  "axes of glTF files (RUB: +Y up, the asset's front +Z; splat-transform's .glb: LUF)")
+      ->capture_default_str();
   sub->add_option("--sh-degree", *degree, "output SH degree 0..3 (bands above it dropped, missing ones zero)");
   CLI::Option* bits = sub->add_option("--sh-bits", (*text)[3], "spz output: bits per SH byte, band 1 and bands 2..3 "
                                                                 "(B or B1,B2; 1..8; default 5,4)");
@@ -65,7 +69,7 @@ void setup_transform_splats(CLI::App& app) {
     const interop::TransformSplatsReport r = interop::run_transform_splats(*opt);
     std::cerr << "transform-splats: " << r.splats << " splats, SH degree " << r.degree;
     if (r.degree_in >= 0 && r.degree_in != r.degree) std::cerr << " (from " << r.degree_in << ")";
-    if (r.reflects) std::cerr << ", the frame change reflects";
+    if (r.reflects) std::cerr << ", the map reflects";
     std::cerr << ", " << r.seconds << " s (" << r.threads << " threads), wrote " << opt->out.string() << '\n';
     if (r.spz_sh_bound > 0 || r.spz_dc_bound > 0)
       std::cerr << "transform-splats: spz quantisation, largest colour change over the sphere (one channel): SH bands "

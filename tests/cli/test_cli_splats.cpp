@@ -276,8 +276,7 @@ TEST(CliTransformSplats, BadInputIsAnErrorWithNoOutput) {
       {"huge ASCII count", "ply\nformat ascii 1.0\nelement vertex 4611686018427387904\nproperty float x\n"
                            "property float y\nproperty float z\nproperty float opacity\nend_header\n", {}, "more than the body"},
       {"end_header in a comment", "ply\nformat ascii 1.0\ncomment end_header\n", {}, "end_header"},
-      {"reflection", good, {"--matrix", "-1,0,0,0,1,0,0,0,1"}, "reflection"},
-      {"not a rotation", good, {"--matrix", "1,0,0,0,2,0,0,0,1"}, "rotation"},
+      {"not orthogonal", good, {"--matrix", "1,0,0,0,2,0,0,0,1"}, "orthogonal"},
       {"zero quaternion", good, {"--quat", "0,0,0,0"}, "non-zero"},
       {"both", good, {"--quat", "1,0,0,0", "--matrix", "1,0,0,0,1,0,0,0,1"}, "exactly one"},
       {"negative scale", good, {"--quat", "1,0,0,0", "--scale", "-1"}, "--scale"},

@@ -11,6 +11,8 @@
 #include <stdexcept>
 #include <vector>
 
+#include <Eigen/Dense>
+
 #include "common/input_error.h"
 #include "fit/gltf_model.h"
 #include "io/table_format.h"
@@ -44,20 +46,28 @@ std::vector<float> read_accessor(const tinygltf::Model& model, int index, int ty
   return out;
 }
 
-bool identity_node(const tinygltf::Node& n) {
-  if (n.matrix.size() == 16)
-    for (int k = 0; k < 16; ++k)
-      if (n.matrix[k] != (k % 5 == 0 ? 1.0 : 0.0)) return false;
-  if (n.translation.size() == 3 && (n.translation[0] != 0 || n.translation[1] != 0 || n.translation[2] != 0)) return false;
-  if (n.rotation.size() == 4 && (n.rotation[0] != 0 || n.rotation[1] != 0 || n.rotation[2] != 0 || std::abs(n.rotation[3]) != 1))
-    return false;
-  if (n.scale.size() == 3 && (n.scale[0] != 1 || n.scale[1] != 1 || n.scale[2] != 1)) return false;
-  return true;
+// The node's transform as a matrix (glTF: its matrix, column-major, or T R S with the
+// rotation x, y, z, w, normalised here).
+Eigen::Matrix4d local_matrix(const tinygltf::Node& n) {
+  Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
+  if (n.matrix.size() == 16) {
+    for (int k = 0; k < 16; ++k) m(k % 4, k / 4) = n.matrix[k];
+    return m;
+  }
+  if (n.scale.size() == 3) m.topLeftCorner<3, 3>() = Eigen::Vector3d(n.scale[0], n.scale[1], n.scale[2]).asDiagonal();
+  if (n.rotation.size() == 4) {
+    const Eigen::Quaterniond q(n.rotation[3], n.rotation[0], n.rotation[1], n.rotation[2]);
+    m.topLeftCorner<3, 3>() = (q.norm() > 0 ? q.normalized().toRotationMatrix() : Eigen::Matrix3d::Identity()) *
+                              m.topLeftCorner<3, 3>();
+  }
+  if (n.translation.size() == 3) m.topRightCorner<3, 1>() = Eigen::Vector3d(n.translation[0], n.translation[1], n.translation[2]);
+  return m;
 }
 
 struct Reader {
   const tinygltf::Model& model;
   const std::filesystem::path& path;
+  int threads;
   std::vector<SplatScene> parts;
 
   void primitive(const tinygltf::Primitive& p) {
@@ -120,24 +130,47 @@ struct Reader {
     parts.push_back(std::move(s));
   }
 
-  // `moved`: this node or an ancestor transforms what it holds.
-  void node(int index, std::vector<bool>& visited, int depth, bool moved) {
+  // The splats of primitives parts[from..] put where `world` (node to scene) puts them.
+  // A similarity (rotation or reflection, uniform scale, translation) moves the
+  // Gaussians exactly, their SH colours included; anything else would change the SH's
+  // meaning (the extension turns colours by the node's rotation only) and is refused.
+  void place(std::size_t from, const Eigen::Matrix4d& world, int index) {
+    if (world.isIdentity(0)) return;
+    const std::string node = "node " + std::to_string(index) + ": ";
+    if (!world.allFinite() || !world.row(3).isApprox(Eigen::RowVector4d(0, 0, 0, 1), 0))
+      fail_input(path, node + "its transform is not finite or not affine");
+    const Eigen::Matrix3d a = world.topLeftCorner<3, 3>();
+    const double det = a.determinant();
+    const double s = std::cbrt(std::abs(det));
+    if (!(s > 0) || !std::isfinite(s)) fail_input(path, node + "its transform flattens its splats (determinant 0)");
+    const Eigen::Matrix3d u = a / s;
+    if (!(u.transpose() * u).isApprox(Eigen::Matrix3d::Identity(), 1e-4))
+      fail_input(path, node + "a non-uniform scale or shear over its splats: only rotations, reflections, uniform scales and "
+                        "translations are applied to Gaussians with SH colours");
+    // The nearest orthogonal matrix (the polar factor): node values are often printed
+    // to 6 or 7 digits.
+    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(u, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    const Eigen::Matrix3d orthogonal = svd.matrixU() * svd.matrixV().transpose();
+    const Eigen::Vector3d t = world.topRightCorner<3, 1>();
+    for (std::size_t k = from; k < parts.size(); ++k) transform_splat_scene(parts[k], orthogonal, s, t, threads);
+  }
+
+  void node(int index, std::vector<bool>& visited, int depth, const Eigen::Matrix4d& parent) {
     if (index < 0 || static_cast<std::size_t>(index) >= model.nodes.size())
       fail_input(path, "node " + std::to_string(index) + " does not exist");
     if (visited[index]) fail_input(path, "node " + std::to_string(index) + " is reached twice: glTF nodes form trees");
     if (depth > 1024) fail_input(path, "the node hierarchy is deeper than 1024");
     visited[index] = true;
     const tinygltf::Node& n = model.nodes[index];
-    moved = moved || !identity_node(n);
+    const Eigen::Matrix4d world = parent * local_matrix(n);
     if (n.mesh >= 0) {
       if (static_cast<std::size_t>(n.mesh) >= model.meshes.size())
         fail_input(path, "node " + std::to_string(index) + " names a mesh that does not exist");
       const std::size_t before = parts.size();
       for (const tinygltf::Primitive& p : model.meshes[n.mesh].primitives) primitive(p);
-      if (parts.size() != before && moved)
-        fail_input(path, "node " + std::to_string(index) + "'s splats are under a node transform, which is not applied: bake it");
+      if (parts.size() != before) place(before, world, index);
     }
-    for (int child : n.children) node(child, visited, depth + 1, moved);
+    for (int child : n.children) node(child, visited, depth + 1, world);
   }
 };
 
@@ -175,7 +208,7 @@ struct Builder {
 
 }  // namespace
 
-SplatScene read_gltf_splats(const std::string& bytes, const std::filesystem::path& path) {
+SplatScene read_gltf_splats(const std::string& bytes, const std::filesystem::path& path, int threads) {
   tinygltf::Model model;
   tinygltf::TinyGLTF loader;
   loader.SetImageLoader(skip_image, nullptr);
@@ -206,9 +239,9 @@ SplatScene read_gltf_splats(const std::string& bytes, const std::filesystem::pat
   if (model.scenes.empty()) fail_input(path, "no scene");
   const int scene = model.defaultScene >= 0 ? model.defaultScene : 0;
   if (static_cast<std::size_t>(scene) >= model.scenes.size()) fail_input(path, "the default scene does not exist");
-  Reader r{model, path, {}};
+  Reader r{model, path, threads, {}};
   std::vector<bool> visited(model.nodes.size(), false);
-  for (int n : model.scenes[scene].nodes) r.node(n, visited, 0, false);
+  for (int n : model.scenes[scene].nodes) r.node(n, visited, 0, Eigen::Matrix4d::Identity());
   if (r.parts.empty()) fail_input(path, "no KHR_gaussian_splatting primitive in the default scene");
   SplatScene out = std::move(r.parts[0]);
   for (std::size_t k = 1; k < r.parts.size(); ++k) {

@@ -11,11 +11,15 @@
 
 namespace shtool::interop {
 
-// Every splat primitive of the default scene, in node order, all of one SH degree.
-// Nodes must not transform them (InputError: bake the transform first). Linear scales
+// Every splat primitive of the default scene, in node order, all of one SH degree,
+// placed by the transforms of its node and the node's ancestors (translation, rotation,
+// scale or matrix, composed down the hierarchy) as transform_splat_scene moves a scene:
+// positions, orientations, scales and SH colours together. A transform that is not a
+// similarity (non-uniform scale, shear) is refused: its SH colours have no exact image.
+// Linear scales
 // of 0 and opacities of 0 or 1 get the nearest finite log / logit (1e-30; 1e-7 from
 // the ends). InputError naming `path` on anything malformed.
-SplatScene read_gltf_splats(const std::string& bytes, const std::filesystem::path& path);
+SplatScene read_gltf_splats(const std::string& bytes, const std::filesystem::path& path, int threads = 1);
 
 // One node, one mesh, one POINTS primitive, float attributes; binary (.glb) or text
 // with the buffer embedded (.gltf).

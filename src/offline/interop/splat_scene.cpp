@@ -1,10 +1,15 @@
 #include "interop/splat_scene.h"
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cmath>
 
+#include <Eigen/Geometry>
+
 #include "common/input_error.h"
+#include "common/parallel_for.h"
+#include "shtool/orthogonal_map.h"
 
 namespace shtool::interop {
 
@@ -55,6 +60,42 @@ void check_scene_finite(const SplatScene& s, const std::string& name) {
     bad(s.opacity, 1, "opacity");
     bad(s.sh, stride, "SH colour");
   }
+}
+
+void transform_splat_scene(SplatScene& s, const Eigen::Matrix3d& m, double scale, const Eigen::Vector3d& t,
+                           int threads) {
+  if (m.isIdentity(0) && scale == 1 && t.isZero(0)) return;
+  Result<OrthogonalMap> made = OrthogonalMap::make(m, s.degree + 1, 1e-6);
+  if (!made) throw InputError("a splat transform: " + made.error().message);
+  const OrthogonalMap& map = made.value();
+  const Eigen::Quaterniond qp(map.proper());
+  const float log_scale = static_cast<float>(std::log(scale));
+  const int coefficients = (s.degree + 1) * (s.degree + 1);
+  const std::size_t stride = s.sh_stride();
+  constexpr std::size_t kChunk = 4096;
+  parallel_for((s.count + kChunk - 1) / kChunk, threads, [&](std::size_t chunk) {
+    std::array<std::vector<double>, 3> f, g;
+    for (int c = 0; c < 3; ++c) f[c].resize(coefficients), g[c].resize(coefficients);
+    const std::size_t end = std::min(s.count, (chunk + 1) * kChunk);
+    for (std::size_t i = chunk * kChunk; i < end; ++i) {
+      const Eigen::Vector3d p(s.position[3 * i], s.position[3 * i + 1], s.position[3 * i + 2]);
+      const Eigen::Vector3d moved = scale * (m * p) + t;
+      for (int k = 0; k < 3; ++k) s.position[3 * i + k] = static_cast<float>(moved[k]);
+      float* q = &s.rotation[4 * i];
+      const Eigen::Quaterniond out = qp * Eigen::Quaterniond(q[0], q[1], q[2], q[3]);
+      q[0] = static_cast<float>(out.w()), q[1] = static_cast<float>(out.x()), q[2] = static_cast<float>(out.y()),
+      q[3] = static_cast<float>(out.z());
+      for (int k = 0; k < 3; ++k) s.log_scale[3 * i + k] += log_scale;
+      if (coefficients > 1) {
+        float* sh = &s.sh[i * stride];
+        for (int c = 0; c < 3; ++c)
+          for (int k = 0; k < coefficients; ++k) f[c][k] = sh[3 * k + c];
+        map.apply_rgb({f[0], f[1], f[2]}, {g[0], g[1], g[2]});
+        for (int k = 1; k < coefficients; ++k)
+          for (int c = 0; c < 3; ++c) sh[3 * k + c] = static_cast<float>(g[c][k]);
+      }
+    }
+  });
 }
 
 }  // namespace shtool::interop

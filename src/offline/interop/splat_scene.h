@@ -1,13 +1,15 @@
 // A 3D Gaussian Splatting scene in memory, whatever file it came from (docs/splats.md):
 // the values 3DGS trains and its PLY stores, one array per attribute. Each format's
 // reader decodes into it and each writer encodes from it (splat_ply.h, spz.h,
-// splat_gltf.h); frames are not touched here (the job turns them).
+// splat_gltf.h); frames are turned by transform_splat_scene.
 #pragma once
 
 #include <cstddef>
 #include <filesystem>
 #include <string>
 #include <vector>
+
+#include <Eigen/Core>
 
 namespace shtool::interop {
 
@@ -46,5 +48,13 @@ const char* splat_format_name(SplatFormat format);
 // InputError naming `name` when a value that every format needs finite is not (the
 // first one found, in splat order).
 void check_scene_finite(const SplatScene& scene, const std::string& name);
+
+// p -> s M p + t for an orthogonal M (det +1 or -1, to 1e-6; InputError otherwise):
+// positions; orientations by the proper part P = det(M) M, since the covariance
+// M Sigma M^T = P Sigma P^T (q -> q_P q, the stored length kept); log-scales + log s;
+// the SH colour of every splat by the orthogonal map of M (shtool/orthogonal_map.h), so
+// that a splat seen along d before looks the same along M d after.
+void transform_splat_scene(SplatScene& scene, const Eigen::Matrix3d& m, double scale, const Eigen::Vector3d& t,
+                           int threads);
 
 }  // namespace shtool::interop

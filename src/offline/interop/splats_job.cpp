@@ -18,6 +18,7 @@
 #include "interop/splat_ply.h"
 #include "interop/spz.h"
 #include "shtool/euler.h"
+#include "shtool/orthogonal_map.h"
 #include "shtool/rotation.h"
 #include "shtool/sh.h"
 
@@ -35,10 +36,7 @@ Eigen::Matrix3d splat_rotation(const TransformSplatsRequest& r) {
   Eigen::Matrix3d m;
   for (int k = 0; k < 9; ++k) m(k / 3, k % 3) = (*r.matrix)[k];
   if (!m.allFinite() || !(m.transpose() * m).isApprox(Eigen::Matrix3d::Identity(), 1e-6))
-    throw InputError("--matrix must be a rotation (orthonormal rows to 1e-6)");
-  if (m.determinant() < 0)
-    throw InputError("--matrix is a reflection (determinant -1): 3DGS orientations are rotations, and mirrored SH "
-                     "colours would need the basis's parity too; mirror the scene in its own tool");
+    throw InputError("--matrix must be orthogonal (a rotation or a reflection: orthonormal rows to 1e-6)");
   return m;
 }
 
@@ -53,20 +51,23 @@ void transform_ply_in_place(const TransformSplatsRequest& r, const Eigen::Matrix
   if (!vertex) throw InputError(r.in.string() + ": no 'vertex' element");
   const PlyElement& v = *vertex;
   const SplatLayout layout = find_splat_layout(v, r.in);
-  // The given quaternion itself when there is one (no round trip through the matrix).
+  Result<OrthogonalMap> made = OrthogonalMap::make(rot, layout.degree + 1, 1e-6);
+  if (!made) throw InputError("--matrix: " + made.error().message);
+  const OrthogonalMap& map = made.value();
+  // Orientations turn by the proper part (a reflection's covariance M Sigma M^T is
+  // P Sigma P^T); the given quaternion itself when there is one (no round trip through
+  // the matrix).
   const Eigen::Quaterniond qr = r.quaternion ? Eigen::Quaterniond((*r.quaternion)[0], (*r.quaternion)[1],
                                                                   (*r.quaternion)[2], (*r.quaternion)[3])
                                                    .normalized()
-                                             : Eigen::Quaterniond(rot);
+                                             : Eigen::Quaterniond(map.proper());
   const double log_scale = std::log(r.scale);
   const Eigen::Vector3d t(r.translate[0], r.translate[1], r.translate[2]);
   const int order = layout.degree + 1;
   const int k_rest = sh_count(order) - 1;
 
-  // One rotation for every splat, by the reference method: exact to rounding at every
-  // angle (an identity leaves the colours' bits as they were).
-  ShRotation<double> sh_rotation(order, nullptr);
-  sh_rotation.set(rot, RotationMethod::reference);
+  // One map for every splat, by the reference rotation: exact to rounding at every angle
+  // (an identity leaves the colours' bits as they were).
   const std::size_t count = v.count;
   const bool moves = !rot.isIdentity(0) || r.scale != 1 || !t.isZero(0);
   constexpr std::size_t kChunk = 4096;
@@ -113,7 +114,7 @@ void transform_ply_in_place(const TransformSplatsRequest& r, const Eigen::Matrix
           f[c][0] = ply.get(v, i, (*layout.dc)[c]);
           for (int k = 0; k < k_rest; ++k) f[c][1 + k] = ply.get(v, i, layout.rest[c * k_rest + k]);
         }
-        sh_rotation.apply_rgb({f[0], f[1], f[2]}, {g[0], g[1], g[2]});
+        map.apply_rgb({f[0], f[1], f[2]}, {g[0], g[1], g[2]});
         for (int c = 0; c < 3; ++c)
           for (int k = 0; k < k_rest; ++k) ply.set(v, i, layout.rest[c * k_rest + k], g[c][1 + k]);
       }
@@ -131,16 +132,6 @@ void transform_ply_in_place(const TransformSplatsRequest& r, const Eigen::Matrix
   io.set("--out", ply.format() == PlyFormat::ascii ? ply.bytes() : std::string(ply.binary_bytes()));
   report.splats = count;
   report.degree = layout.degree;
-}
-
-// A proper rotation P and whether the map is P or -P (a reflection).
-struct ProperPart {
-  Eigen::Matrix3d p;
-  bool reflects = false;
-};
-ProperPart proper_part(const Eigen::Matrix3d& m) {
-  const bool reflects = m.determinant() < 0;
-  return {reflects ? Eigen::Matrix3d(-m) : m, reflects};
 }
 
 }  // namespace
@@ -175,47 +166,6 @@ Eigen::Matrix3d splat_frame(std::string_view letters) {
   return q;
 }
 
-void transform_splat_scene(SplatScene& s, const Eigen::Matrix3d& m, double scale, const Eigen::Vector3d& t,
-                           int threads) {
-  const ProperPart pp = proper_part(m);
-  const Eigen::Quaterniond qp(pp.p);
-  const bool moves = !m.isIdentity(0) || scale != 1 || !t.isZero(0);
-  if (!moves) return;
-  const float log_scale = static_cast<float>(std::log(scale));
-  const int order = s.degree + 1, coefficients = order * order;
-  ShRotation<double> sh_rotation(order, nullptr);
-  sh_rotation.set(pp.p, RotationMethod::reference);
-  const std::size_t stride = s.sh_stride();
-  constexpr std::size_t kChunk = 4096;
-  parallel_for((s.count + kChunk - 1) / kChunk, threads, [&](std::size_t chunk) {
-    std::array<std::vector<double>, 3> f, g;
-    for (int c = 0; c < 3; ++c) f[c].resize(coefficients), g[c].resize(coefficients);
-    const std::size_t end = std::min(s.count, (chunk + 1) * kChunk);
-    for (std::size_t i = chunk * kChunk; i < end; ++i) {
-      const Eigen::Vector3d p(s.position[3 * i], s.position[3 * i + 1], s.position[3 * i + 2]);
-      const Eigen::Vector3d moved = scale * (m * p) + t;
-      for (int k = 0; k < 3; ++k) s.position[3 * i + k] = static_cast<float>(moved[k]);
-      // Sigma' = M Sigma M^T = P Sigma P^T: the orientation turns by the proper part.
-      float* q = &s.rotation[4 * i];
-      const Eigen::Quaterniond out = qp * Eigen::Quaterniond(q[0], q[1], q[2], q[3]);
-      q[0] = static_cast<float>(out.w()), q[1] = static_cast<float>(out.x()), q[2] = static_cast<float>(out.y()),
-      q[3] = static_cast<float>(out.z());
-      for (int k = 0; k < 3; ++k) s.log_scale[3 * i + k] += log_scale;
-      if (order > 1) {
-        float* sh = &s.sh[i * stride];
-        for (int c = 0; c < 3; ++c)
-          for (int k = 0; k < coefficients; ++k) f[c][k] = sh[3 * k + c];
-        sh_rotation.apply_rgb({f[0], f[1], f[2]}, {g[0], g[1], g[2]});
-        // A reflection is -P: the inversion negates the odd bands (shtool/orthogonal_map.h).
-        for (int l = 1; l < order; ++l)
-          for (int k = l * l; k < (l + 1) * (l + 1); ++k)
-            for (int c = 0; c < 3; ++c)
-              sh[3 * k + c] = static_cast<float>(pp.reflects && (l & 1) ? -g[c][k] : g[c][k]);
-      }
-    }
-  });
-}
-
 TransformSplatsReport run_transform_splats(const TransformSplatsRequest& r) {
   const Eigen::Matrix3d rot = splat_rotation(r);
   if (!(r.scale > 0) || !std::isfinite(r.scale)) throw InputError("--scale must be a positive number");
@@ -223,12 +173,12 @@ TransformSplatsReport run_transform_splats(const TransformSplatsRequest& r) {
     if (!std::isfinite(t)) throw InputError("--translate must be finite");
   if (r.out.empty()) throw InputError("--out is required");
   if (r.sh_degree) check_option_range("--sh-degree", *r.sh_degree, 0, 3);
-  splat_frame(r.ply_frame), splat_frame(r.spz_frame);  // both checked, used or not
+  splat_frame(r.ply_frame), splat_frame(r.spz_frame), splat_frame(r.gltf_frame);  // all checked, used or not
   const SplatFormat in_format = splat_format_of(r.in, "the input");
   const SplatFormat out_format = splat_format_of(r.out, "--out");
   auto frame_of = [&](SplatFormat f) {
     return f == SplatFormat::ply ? splat_frame(r.ply_frame) : f == SplatFormat::spz ? splat_frame(r.spz_frame)
-                                                                                    : splat_frame("RUB");
+                                                                                    : splat_frame(r.gltf_frame);
   };
   const Eigen::Matrix3d frame_change = frame_of(out_format).transpose() * frame_of(in_format);
   SpzWriteOptions spz;
@@ -247,7 +197,7 @@ TransformSplatsReport run_transform_splats(const TransformSplatsRequest& r) {
   const auto t0 = std::chrono::steady_clock::now();
   TransformSplatsReport report;
   report.threads = threads;
-  report.reflects = frame_change.determinant() < 0;
+  report.reflects = (frame_change * rot).determinant() < 0;
   std::string bytes = read_input_file(r.in, "input");
   if (in_format == SplatFormat::ply && out_format == SplatFormat::ply && !r.sh_degree) {
     transform_ply_in_place(r, rot, std::move(bytes), io, threads, report);
@@ -257,7 +207,7 @@ TransformSplatsReport run_transform_splats(const TransformSplatsRequest& r) {
       case SplatFormat::ply: scene = read_ply_splats(PlyFile::parse(std::move(bytes), r.in), r.in, threads); break;
       case SplatFormat::spz: scene = read_spz(bytes, r.in.string(), nullptr, threads); break;
       case SplatFormat::gltf:
-      case SplatFormat::glb: scene = read_gltf_splats(bytes, r.in); break;
+      case SplatFormat::glb: scene = read_gltf_splats(bytes, r.in, threads); break;
     }
     report.degree_in = scene.degree;
     const Eigen::Vector3d t(r.translate[0], r.translate[1], r.translate[2]);

@@ -5,8 +5,9 @@
 // length, which 3DGS normalises on load); log-scales + log s; normals R n; and the
 // view-dependent colour's SH of every splat rotated, g(w) = f(R^-1 w), so that a splat
 // seen along d before looks the same along R d after. Between formats the frames change
-// too (each format's frame, through shtool's); a frame change that reflects turns the
-// orientation by its proper part and the SH by the orthogonal map.
+// too (each format's frame, through shtool's). A map that reflects (a --matrix of det -1,
+// a frame change between right- and left-handed axes) turns the orientation by its proper
+// part and the SH by the orthogonal map.
 #pragma once
 
 #include <array>
@@ -24,11 +25,12 @@ namespace shtool::interop {
 struct TransformSplatsRequest {
   std::filesystem::path in, out;
   std::optional<std::array<double, 4>> quaternion;  // w, x, y, z
-  std::optional<std::array<double, 9>> matrix;      // row-major
+  std::optional<std::array<double, 9>> matrix;      // row-major, orthogonal (det +1 or -1)
   std::array<double, 3> translate{0, 0, 0};
   double scale = 1;
   std::string ply_frame = "RDF";  // the axes of PLY files (COLMAP's, 3DGS's)
   std::string spz_frame = "RUB";  // of spz files (the specification's)
+  std::string gltf_frame = "RUB"; // of glTF files (+Y up, the asset's front +Z toward the viewer)
   std::optional<int> sh_degree;   // the output's SH degree, 0..3
   int spz_version = 4;
   std::array<int, 2> sh_bits{5, 4};  // spz: band 1, bands 2..3
@@ -48,8 +50,8 @@ struct TransformSplatsReport {
   double spz_sh_bound = 0, spz_sh_scene = 0, spz_dc_bound = 0;
 };
 
-// The rotation of a request: the unit quaternion (normalised; zero refused), the matrix
-// (orthonormal to 1e-6, det +1; a reflection is refused: mirror through --frame), or the
+// The orthogonal map of a request: the unit quaternion's rotation (normalised; zero
+// refused), the matrix (orthonormal to 1e-6; det -1, a reflection, allowed), or the
 // identity when neither is given.
 Eigen::Matrix3d splat_rotation(const TransformSplatsRequest& request);
 
@@ -57,11 +59,6 @@ Eigen::Matrix3d splat_rotation(const TransformSplatsRequest& request);
 // away from the viewer, and their opposites). Returns Q with shtool = Q * file
 // (shtool's frame is RFU). InputError on anything else.
 Eigen::Matrix3d splat_frame(std::string_view letters);
-
-// p -> s M p + t for an orthogonal M (det +1 or -1): orientations by M's proper part,
-// log-scales + log s, SH by the orthogonal map of M.
-void transform_splat_scene(SplatScene& scene, const Eigen::Matrix3d& m, double scale, const Eigen::Vector3d& t,
-                           int threads);
 
 TransformSplatsReport run_transform_splats(const TransformSplatsRequest& request);
 

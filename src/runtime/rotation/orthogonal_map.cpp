@@ -6,34 +6,57 @@
 
 #include <Eigen/Dense>
 
-#include "shtool/rotation.h"
 #include "shtool/sh.h"
 
 namespace shtool {
 
+OrthogonalMap::OrthogonalMap(const Eigen::Matrix3d& proper, bool reflects, int order)
+    : proper_(proper), reflects_(reflects), rotation_(order, nullptr) {
+  rotation_.set(proper_, RotationMethod::reference);
+}
+
+Result<OrthogonalMap> OrthogonalMap::make(const Eigen::Matrix3d& q, int order, double tolerance) {
+  if (!q.allFinite() || !(q.transpose() * q).isApprox(Eigen::Matrix3d::Identity(), tolerance))
+    return Error{"the frame map is not an orthogonal matrix"};
+  if (!is_supported_order(order)) return Error{"the SH order is not supported"};
+  const bool reflects = q.determinant() < 0;
+  return OrthogonalMap(reflects ? Eigen::Matrix3d(-q) : q, reflects, order);
+}
+
+// The rotation keeps each band within itself, so the inversion's signs may come after it.
+void OrthogonalMap::invert_odd_bands(std::span<double> out) const {
+  if (!reflects_) return;
+  for (int l = 1; l < order(); l += 2)
+    for (int i = l * l; i < (l + 1) * (l + 1); ++i) out[static_cast<std::size_t>(i)] = -out[static_cast<std::size_t>(i)];
+}
+
+void OrthogonalMap::apply(std::span<const double> in, std::span<double> out) const {
+  rotation_.apply(in, out);
+  invert_odd_bands(out);
+}
+
+void OrthogonalMap::apply_rgb(const std::array<std::span<const double>, 3>& in,
+                              const std::array<std::span<double>, 3>& out) const {
+  rotation_.apply_rgb(in, out);
+  for (const std::span<double>& o : out) invert_odd_bands(o);
+}
+
 namespace {
 
 template <class T>
-Result<Ok> apply_orthogonal_map_t(const Eigen::Matrix3<T>& q_in, int channels, std::span<T> coefficients) {
-  const Eigen::Matrix3d q = q_in.template cast<double>();
-  if (!q.allFinite() || !(q.transpose() * q).isApprox(Eigen::Matrix3d::Identity(), std::is_same_v<T, float> ? 1e-6 : 1e-9))
-    return Error{"the frame map is not an orthogonal matrix"};
+Result<Ok> apply_orthogonal_map_t(const Eigen::Matrix3<T>& q, int channels, std::span<T> coefficients) {
   if (channels < 1 || coefficients.size() % static_cast<std::size_t>(channels) != 0)
     return Error{"the coefficients are not a whole number of channels"};
   const int order = static_cast<int>(std::lround(std::sqrt(static_cast<double>(coefficients.size() / channels))));
   if (static_cast<std::size_t>(sh_count(order)) * channels != coefficients.size() || !is_supported_order(order))
     return Error{"the coefficient count is not channels x N^2 for a supported order N"};
-  const bool reflection = q.determinant() < 0;
-  const Eigen::Matrix3d p = reflection ? Eigen::Matrix3d(-q) : q;
-  ShRotation<double> rotation(order, nullptr);
-  rotation.set(p, RotationMethod::reference);
+  Result<OrthogonalMap> map =
+      OrthogonalMap::make(q.template cast<double>(), order, std::is_same_v<T, float> ? 1e-6 : 1e-9);
+  if (!map) return map.error();
   std::vector<double> f(sh_count(order)), g(f.size());
   for (int c = 0; c < channels; ++c) {
-    for (int i = 0; i < sh_count(order); ++i) {
-      const double sign = reflection && sh_band(i) % 2 == 1 ? -1 : 1;
-      f[i] = sign * double(coefficients[static_cast<std::size_t>(i) * channels + c]);
-    }
-    rotation.apply(f, g);
+    for (int i = 0; i < sh_count(order); ++i) f[i] = double(coefficients[static_cast<std::size_t>(i) * channels + c]);
+    map.value().apply(f, g);
     for (int i = 0; i < sh_count(order); ++i) coefficients[static_cast<std::size_t>(i) * channels + c] = T(g[i]);
   }
   return Ok{};
