@@ -51,7 +51,7 @@ stage_done "Release tests"
 
 echo "== instrumented: clang, ASan + UBSan + libFuzzer" >&2
 CXX=clang++ cmake -S "$root" -B "$build-check" "${instrumented_flags[@]}" -DSHTOOL_SANITIZE=ON -DSHTOOL_FUZZ=ON \
-  -DSHTOOL_BUILD_BENCH=OFF -DSHTOOL_GPU_TESTS=OFF -DPython3_EXECUTABLE=/usr/bin/python3 >/dev/null
+  -DSHTOOL_BUILD_BENCH=OFF -DSHTOOL_GPU_TESTS=OFF -DSHTOOL_TEST_PER_PROGRAM=ON -DPython3_EXECUTABLE=/usr/bin/python3 >/dev/null
 cmake --build "$build-check" -j "$jobs"
 stage_done "instrumented build"
 ctest --test-dir "$build-check" --output-on-failure -j "$jobs" -LE 'long|gpu|tables'

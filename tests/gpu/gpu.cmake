@@ -17,4 +17,4 @@ target_compile_definitions(shtool_gpu_harness PUBLIC
 
 add_executable(test_vulkan_harness ${CMAKE_CURRENT_LIST_DIR}/test_vulkan_harness.cpp)
 target_link_libraries(test_vulkan_harness PRIVATE shtool_gpu_harness GTest::gtest_main)
-gtest_discover_tests(test_vulkan_harness DISCOVERY_TIMEOUT 60 PROPERTIES TIMEOUT 300 LABELS gpu)
+shtool_register_gtest(test_vulkan_harness LABELS gpu)
