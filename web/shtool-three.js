@@ -11,7 +11,7 @@
 //
 // The page needs an import map for 'three' and 'three/addons/' (three's own examples use the
 // same two entries). Do not call bake() on a loaded grid: it would bake over the atlas.
-import { BufferAttribute, BufferGeometry, Data3DTexture, DoubleSide, FloatType, LinearFilter, Matrix3, RGBAFormat, REVISION, ShaderMaterial, Vector3, Vector4 } from 'three';
+import { BufferAttribute, BufferGeometry, Data3DTexture, DoubleSide, FloatType, LinearFilter, Matrix3, Mesh, NearestFilter, NoBlending, OrthographicCamera, RGBAFormat, REVISION, Scene, ShaderMaterial, Vector3, Vector4, WebGLRenderTarget } from 'three';
 import { LightProbeGridWebGL } from 'three/addons/lighting/LightProbeGridWebGL.js';
 
 // The three.js release whose atlas layout the files follow.
@@ -137,7 +137,8 @@ export async function loadProbeGrid( url, options = {} ) {
 // ---------------------------------------------------------------------------------------
 // The page of `shtool export-web DIR` (docs/web.md): the mesh of a fit-zh glTF with its ZH
 // lobes, shaded by [4] Eq. 13 under an SH light that the generated zxzxz code rotates on
-// the GPU, every vertex, every frame.
+// the GPU once per frame (lightRotationPass), or per vertex where WebGL cannot render to
+// float textures.
 
 // The glTF component types the mesh file uses.
 const COMPONENTS = { 5121: Uint8Array, 5123: Uint16Array, 5125: Uint32Array, 5126: Float32Array };
@@ -194,17 +195,121 @@ export function zhGeometryFromGlb( bytes, what = 'mesh.glb' ) {
 
 }
 
-// The vertex shader: the light (uniform, glTF's frame) rotated by the generated
-// shtool_rotate, then each lobe's Eq. 13 by the generated shtool_zh_shade, plus the
-// coefficients stored directly; the RGB exit radiance goes to the fragments, which
-// interpolate it across the triangle (perspective-correct, as render's ray barycentrics).
-function zhVertexShader( rotateGlsl, shadeGlsl, order, lobes, direct ) {
+// The light's coefficients for the shaders: channel c's coefficient i at k = c N^2 + i
+// of vec4 shtoolLight[ceil(3 N^2 / 4)].
+function packedLight( light, order ) {
 
 	const n2 = order * order;
+	const packed = new Float32Array( 4 * Math.ceil( 3 * n2 / 4 ) );
+	[ 'r', 'g', 'b' ].forEach( ( name, c ) => {
+
+		if ( ! Array.isArray( light[ name ] ) || light[ name ].length !== n2 ) throw new Error( `light.${name} needs ${n2} coefficients` );
+		packed.set( light[ name ], c * n2 );
+
+	} );
+	const vectors = [];
+	for ( let i = 0; i < packed.length; i += 4 ) vectors.push( new Vector4( packed[ i ], packed[ i + 1 ], packed[ i + 2 ], packed[ i + 3 ] ) );
+	return vectors;
+
+}
+
+// GLSL that reads channel c of the light uniform into f.
+function lightUniformLines( order ) {
+
+	return [
+		'uniform mat3 shtoolLightRotation;',
+		`uniform vec4 shtoolLight[${Math.ceil( 3 * order * order / 4 )}];`,
+		'void shtool_light_channel(int c, out float f[SHTOOL_ORDER * SHTOOL_ORDER]) {',
+		'  for (int i = 0; i < SHTOOL_ORDER * SHTOOL_ORDER; ++i) {',
+		'    int k = c * SHTOOL_ORDER * SHTOOL_ORDER + i;',
+		'    f[i] = shtoolLight[k / 4][k - 4 * (k / 4)];',
+		'  }',
+		'}' ].join( '\n' );
+
+}
+
+// The once-per-frame rotation: a float RGBA target of ceil(N^2 / 4) x 3 texels, row c the
+// rotated coefficients of colour channel c, four to a texel (coefficient i in texel i / 4,
+// component i % 4). One triangle covers it; each fragment rotates its row's channel with the
+// generated shtool_rotate and keeps its four coefficients: 3 ceil(N^2 / 4) rotations a
+// frame, whatever the vertex count. Float32 in and out, so the shading reads the same
+// numbers the per-vertex rotation computes. Needs EXT_color_buffer_float (WebGL2 renders to
+// RGBA32F only with it): check floatRenderTargets(renderer) first.
+export function lightRotationPass( { rotateGlsl, order, light } ) {
+
+	const n2 = order * order;
+	const target = new WebGLRenderTarget( Math.ceil( n2 / 4 ), 3, {
+		type: FloatType, format: RGBAFormat, minFilter: NearestFilter, magFilter: NearestFilter,
+		depthBuffer: false, stencilBuffer: false, generateMipmaps: false } );
+	target.texture.name = 'shtool rotated light';
+	const fragmentShader = [
+		rotateGlsl,
+		lightUniformLines( order ),
+		'void main() {',
+		'  int x = int(gl_FragCoord.x), c = int(gl_FragCoord.y);',
+		'  float f[SHTOOL_ORDER * SHTOOL_ORDER];',
+		'  float e[SHTOOL_ORDER * SHTOOL_ORDER];',
+		'  shtool_light_channel(c, f);',
+		'  shtool_rotate(shtoolLightRotation, f, e);',
+		'  vec4 texel = vec4(0.0);',
+		'  for (int j = 0; j < 4; ++j)',
+		'    if (4 * x + j < SHTOOL_ORDER * SHTOOL_ORDER) texel[j] = e[4 * x + j];',
+		'  gl_FragColor = texel;',
+		'}' ].join( '\n' );
+	const material = new ShaderMaterial( {
+		uniforms: { shtoolLightRotation: { value: new Matrix3() }, shtoolLight: { value: packedLight( light, order ) } },
+		vertexShader: 'void main() { gl_Position = vec4(position.xy, 0.0, 1.0); }',
+		fragmentShader,
+		blending: NoBlending, depthTest: false, depthWrite: false
+	} );
+	material.name = 'shtool light rotation';
+	const triangle = new BufferGeometry();
+	triangle.setAttribute( 'position', new BufferAttribute( new Float32Array( [ - 1, - 1, 0, 3, - 1, 0, - 1, 3, 0 ] ), 3 ) );
+	const mesh = new Mesh( triangle, material );
+	mesh.frustumCulled = false;
+	const scene = new Scene();
+	scene.add( mesh );
+	const camera = new OrthographicCamera( - 1, 1, 1, - 1, 0, 1 );
+	return {
+		texture: target.texture,
+		// Rotates the light by R (Matrix3, three's frame) into the texture.
+		render( renderer, rotation ) {
+
+			material.uniforms.shtoolLightRotation.value.copy( rotation );
+			const previous = renderer.getRenderTarget();
+			renderer.setRenderTarget( target );
+			renderer.render( scene, camera );
+			renderer.setRenderTarget( previous );
+
+		},
+		dispose() {
+
+			target.dispose();
+			material.dispose();
+			triangle.dispose();
+
+		}
+	};
+
+}
+
+// Whether the renderer can draw into the float target of lightRotationPass.
+export function floatRenderTargets( renderer ) {
+
+	return renderer.capabilities.isWebGL2 !== false && renderer.extensions.has( 'EXT_color_buffer_float' );
+
+}
+
+// The vertex shader: each lobe's Eq. 13 by the generated shtool_zh_shade on the rotated
+// light, plus the coefficients stored directly; the RGB exit radiance goes to the
+// fragments, which interpolate it across the triangle (perspective-correct, as render's ray
+// barycentrics). The rotated light is read from lightRotationPass's texture when
+// `perFrame`; otherwise the light uniform is rotated here by the generated shtool_rotate,
+// per vertex and channel.
+function zhVertexShader( rotateGlsl, shadeGlsl, order, lobes, direct, perFrame ) {
+
 	const groups = Math.ceil( order / 4 );
 	const lines = [];
-	lines.push( 'uniform mat3 shtoolLightRotation;' );
-	lines.push( `uniform vec4 shtoolLight[${Math.ceil( 3 * n2 / 4 )}];` );
 	for ( let k = 0; k < lobes; k ++ ) {
 
 		lines.push( `attribute vec3 zhAxis${k};` );
@@ -213,7 +318,16 @@ function zhVertexShader( rotateGlsl, shadeGlsl, order, lobes, direct ) {
 	}
 	if ( direct ) lines.push( 'attribute vec4 zhDirect;' );
 	lines.push( 'varying vec3 vRadiance;' );
-	lines.push( rotateGlsl, shadeGlsl );
+	if ( perFrame ) {
+
+		lines.push( shadeGlsl );
+		lines.push( 'uniform sampler2D shtoolRotatedLight;' );
+
+	} else {
+
+		lines.push( rotateGlsl, shadeGlsl, lightUniformLines( order ) );
+
+	}
 	lines.push( 'void main() {' );
 	lines.push( '  vec3 axes[SHTOOL_ZH_LOBES];' );
 	lines.push( '  float g[SHTOOL_ZH_LOBES * SHTOOL_ORDER];' );
@@ -223,14 +337,20 @@ function zhVertexShader( rotateGlsl, shadeGlsl, order, lobes, direct ) {
 		for ( let l = 0; l < order; l ++ ) lines.push( `  g[${k * order + l}] = zhCoeffs${k}_${Math.floor( l / 4 )}[${l % 4}];` );
 
 	}
-	lines.push( '  float f[SHTOOL_ORDER * SHTOOL_ORDER];' );
 	lines.push( '  float e[SHTOOL_ORDER * SHTOOL_ORDER];' );
+	if ( ! perFrame ) lines.push( '  float f[SHTOOL_ORDER * SHTOOL_ORDER];' );
 	lines.push( '  for (int c = 0; c < 3; ++c) {' );
-	lines.push( '    for (int i = 0; i < SHTOOL_ORDER * SHTOOL_ORDER; ++i) {' );
-	lines.push( '      int k = c * SHTOOL_ORDER * SHTOOL_ORDER + i;' );
-	lines.push( '      f[i] = shtoolLight[k / 4][k - 4 * (k / 4)];' );
-	lines.push( '    }' );
-	lines.push( '    shtool_rotate(shtoolLightRotation, f, e);' );
+	if ( perFrame ) {
+
+		lines.push( '    for (int i = 0; i < SHTOOL_ORDER * SHTOOL_ORDER; ++i)' );
+		lines.push( '      e[i] = texelFetch(shtoolRotatedLight, ivec2(i / 4, c), 0)[i - 4 * (i / 4)];' );
+
+	} else {
+
+		lines.push( '    shtool_light_channel(c, f);' );
+		lines.push( '    shtool_rotate(shtoolLightRotation, f, e);' );
+
+	}
 	lines.push( '    float r = shtool_zh_shade(axes, g, e);' );
 	if ( direct ) lines.push( `    r += dot(zhDirect, vec4(e[0], e[1], e[2], e[3]));` );
 	lines.push( '    vRadiance[c] = r;' );
@@ -252,24 +372,19 @@ void main() {
   #include <colorspace_fragment>
 }`;
 
-// A ShaderMaterial for a zhGeometryFromGlb geometry. `light` holds the RGB coefficients of
-// the scene's order in glTF's frame ({r, g, b}); setLightRotation(R) takes a Matrix3 in
-// the same frame (g(w) = f(R^-1 w)).
-export function zhShadingMaterial( { rotateGlsl, shadeGlsl, order, lobes, direct, light } ) {
+// A ShaderMaterial for a zhGeometryFromGlb geometry. With `rotatedLight` (the texture of a
+// lightRotationPass of the same order) it shades with the light that pass rotated; without,
+// it rotates `light` itself per vertex: `light` holds the RGB coefficients of the scene's
+// order in glTF's frame ({r, g, b}) and uniforms.shtoolLightRotation the rotation, a
+// Matrix3 in the same frame (g(w) = f(R^-1 w)).
+export function zhShadingMaterial( { rotateGlsl, shadeGlsl, order, lobes, direct, light, rotatedLight = null } ) {
 
-	const n2 = order * order;
-	const packed = new Float32Array( 4 * Math.ceil( 3 * n2 / 4 ) );
-	[ 'r', 'g', 'b' ].forEach( ( name, c ) => {
-
-		if ( ! Array.isArray( light[ name ] ) || light[ name ].length !== n2 ) throw new Error( `light.${name} needs ${n2} coefficients` );
-		packed.set( light[ name ], c * n2 );
-
-	} );
-	const vectors = [];
-	for ( let i = 0; i < packed.length; i += 4 ) vectors.push( new Vector4( packed[ i ], packed[ i + 1 ], packed[ i + 2 ], packed[ i + 3 ] ) );
+	const perFrame = rotatedLight !== null;
+	const uniforms = perFrame ? { shtoolRotatedLight: { value: rotatedLight } }
+		: { shtoolLightRotation: { value: new Matrix3() }, shtoolLight: { value: packedLight( light, order ) } };
 	const material = new ShaderMaterial( {
-		uniforms: { shtoolLightRotation: { value: new Matrix3() }, shtoolLight: { value: vectors } },
-		vertexShader: zhVertexShader( rotateGlsl, shadeGlsl, order, lobes, direct ),
+		uniforms,
+		vertexShader: zhVertexShader( rotateGlsl, shadeGlsl, order, lobes, direct, perFrame ),
 		fragmentShader: ZH_FRAGMENT_SHADER,
 		side: DoubleSide
 	} );

@@ -4,7 +4,9 @@
 // over the pixels render covers), unrotated and with the light turned by the URL's
 // quaternion against render under the light `shtool rotate` turned the same way; the page
 // loads nothing from outside the folder; dragging turns the light (to the rotation its
-// status line names); bad inputs are refused with nothing written.
+// status line names); the light rotated once per frame into a float texture draws the same
+// pixels as the light rotated per vertex (?rotate-light=per-vertex, the page's fallback);
+// bad inputs are refused with nothing written.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -174,8 +176,14 @@ TEST(ExportWeb, PageDrawsWhatRenderDraws) {
   references.push_back(posed_png);
   specs.push_back(pose_dir.string());
   labels.push_back("--pose, bent");
+  const std::size_t probe_view = specs.size(), drag_view = probe_view + 1, vertex_view = probe_view + 2,
+                    fallback_view = probe_view + 3;
   specs.push_back(probe_dir.string());  // compared with the unrotated render below
   specs.push_back(sky_dir.string() + "#drag=80,-50");  // compared with render at the rotation the page shows
+  // The per-vertex path, asked for and as the fallback of a WebGL without float render
+  // targets, compared with the per-frame page of the same rotation (view 1).
+  specs.push_back(sky_dir.string() + "?light-rotation=" + quats[0] + "&rotate-light=per-vertex");
+  specs.push_back(sky_dir.string() + "?light-rotation=" + quats[0] + "#no-float-targets");
 
   std::vector<std::string> node = {"node", (node_consumers_dir() / "export_web_browser.mjs").string(), "chromium",
                                    views.string()};
@@ -188,6 +196,16 @@ TEST(ExportWeb, PageDrawsWhatRenderDraws) {
   EXPECT_TRUE(result["missing"].empty()) << "requests for files the folder lacks: " << result["missing"].dump();
   EXPECT_NE(result["requests"].dump().find("/probes/probes.bin"), std::string::npos) << result["requests"].dump();
   ASSERT_EQ(result["views"].size(), specs.size()) << result.dump(1);
+
+  // SwiftShader renders to float textures, so every view but the two per-vertex ones takes
+  // the per-frame pass; the status line says which path drew, and why.
+  for (std::size_t k = 0; k < specs.size(); ++k) {
+    const char* path = k == vertex_view     ? "(light rotated per vertex (rotate-light=per-vertex))"
+                       : k == fallback_view ? "(light rotated per vertex: this WebGL cannot render to float textures"
+                                            : "(light rotated once per frame)";
+    EXPECT_NE(result["status"][k].get<std::string>().find(path), std::string::npos)
+        << specs[k] << ": " << result["status"][k];
+  }
 
   const Rgba unrotated = read_png(references[0]);
   for (std::size_t k = 0; k < references.size(); ++k) {
@@ -209,7 +227,7 @@ TEST(ExportWeb, PageDrawsWhatRenderDraws) {
     }
   }
   // The probe-lit scene: the ground and spheres cover pixels render's mesh does not.
-  const Rgba probe_page = read_png(result["views"][specs.size() - 2].get<std::string>());
+  const Rgba probe_page = read_png(result["views"][probe_view].get<std::string>());
   std::size_t opaque = 0;
   for (std::size_t p = 0; p < probe_page.pixels.size() / 4; ++p) opaque += probe_page.pixels[p * 4 + 3] == 255;
   std::cout << "probe-lit scene: " << opaque << " opaque pixels\n";
@@ -217,22 +235,41 @@ TEST(ExportWeb, PageDrawsWhatRenderDraws) {
 
   // Dragging turned the light: the status line names the rotation drawn, and render under
   // the light turned by it is the same picture.
-  const std::string status = result["status"][specs.size() - 1].get<std::string>();
+  const std::string status = result["status"][drag_view].get<std::string>();
   const std::string prefix = "light-rotation=";
   ASSERT_EQ(status.rfind(prefix, 0), 0u) << status;
-  const std::string dragged_quat = status.substr(prefix.size());
+  const std::string dragged_quat = status.substr(prefix.size(), status.find(' ') - prefix.size());
   EXPECT_NE(dragged_quat, "1.000000,0.000000,0.000000,0.000000");
   const fs::path dragged_png = scratch("render-dragged.png");
   must(run_shtool(with_view({"render", kSpotObj, "--fit", bakes().fit.string(), "--light",
                              rotated_light(bakes().sky, dragged_quat, "sky-dragged.json").string(), "--out",
                              dragged_png.string()})));
-  const Difference dragged = compare(read_png(result["views"][specs.size() - 1].get<std::string>()), read_png(dragged_png));
+  const Difference dragged = compare(read_png(result["views"][drag_view].get<std::string>()), read_png(dragged_png));
   const Difference turned = compare(read_png(dragged_png), unrotated);
   std::cout << "dragged to " << dragged_quat << ": mean |page - render| " << dragged.mean[0] << ", "
             << dragged.mean[1] << ", " << dragged.mean[2] << "; render against render unrotated " << turned.mean[0]
             << ", " << turned.mean[1] << ", " << turned.mean[2] << "\n";
   for (int c = 0; c < 3; ++c) EXPECT_LE(dragged.mean[c], 2.0) << "dragged, channel " << c;
   EXPECT_GT(std::max({turned.mean[0], turned.mean[1], turned.mean[2]}), 6.0);
+
+  // Per frame against per vertex, same rotation: the texture holds the float32 numbers the
+  // vertex shader would compute with the same generated code, so the pixels agree; 1/255
+  // leaves room for a driver that orders the arithmetic of the two shaders differently
+  // (SwiftShader draws them byte-identical). A texture read at the wrong texel, channel or
+  // component moves a coefficient to another band and misses this by far.
+  const Rgba per_frame = read_png(result["views"][1].get<std::string>());
+  for (const std::size_t k : {vertex_view, fallback_view}) {
+    const Rgba per_vertex = read_png(result["views"][k].get<std::string>());
+    const Difference paths = compare(per_vertex, per_frame);
+    const Difference against_render = compare(per_vertex, read_png(references[1]));
+    std::cout << specs[k] << " against per frame: " << paths.uncovered_on_page
+              << " pixels not covered by both; max difference " << paths.max_both << "; mean " << paths.mean[0]
+              << ", " << paths.mean[1] << ", " << paths.mean[2] << "; against render: mean " << against_render.mean[0]
+              << ", " << against_render.mean[1] << ", " << against_render.mean[2] << "\n";
+    EXPECT_EQ(paths.uncovered_on_page, 0u) << specs[k];
+    EXPECT_LE(paths.max_both, 1) << specs[k];
+    for (int c = 0; c < 3; ++c) EXPECT_LE(against_render.mean[c], 2.0) << specs[k] << ", channel " << c;
+  }
 }
 
 TEST(ExportWeb, RefusesBadInputsAndWritesNothing) {

@@ -1,6 +1,7 @@
 // export-web as a library job: a mesh, its ZH fit and an SH lighting as a folder that any
 // static web server serves (docs/web.md). three.js draws the mesh with the GLSL that
-// gen-shader generates: the light rotated on the GPU by the zxzxz rotation, each vertex
+// gen-shader generates: the light rotated on the GPU by the zxzxz rotation (once per frame
+// into a float texture, or per vertex where WebGL has no float render targets), each vertex
 // shaded by [4] Eq. 13 with its lobes, the exit radiance interpolated across the triangles
 // and tone-mapped as render's PNG, seen through render's camera for the same options.
 #pragma once

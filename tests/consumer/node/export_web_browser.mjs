@@ -6,8 +6,9 @@
 // console: [...]} or {error}.
 //   node export_web_browser.mjs CHROMIUM OUT_DIR VIEW...
 // VIEW: DIR or DIR?QUERY (QUERY e.g. light-rotation=w,x,y,z), then optionally #drag=DX,DY:
-// the mouse dragged from the canvas centre by (DX, DY) pixels before the capture. Equal
-// DIRs share a folder. Each view's status line is in `status`.
+// the mouse dragged from the canvas centre by (DX, DY) pixels before the capture, or
+// #no-float-targets: the page's WebGL reports no EXT_color_buffer_float (a WebGL that cannot
+// render to float textures). Equal DIRs share a folder. Each view's status line is in `status`.
 import { createServer } from 'node:http';
 import { spawn } from 'node:child_process';
 import { mkdtempSync, rmSync, writeFileSync } from 'node:fs';
@@ -19,13 +20,16 @@ const [ chromium, outDir, ...specs ] = process.argv.slice( 2 );
 const dirs = [], views = [];
 for ( const spec of specs ) {
 
-	const hash = spec.indexOf( '#drag=' );
-	const drag = hash < 0 ? null : spec.slice( hash + 6 ).split( ',' ).map( Number );
+	const hash = spec.indexOf( '#' );
+	const fragment = hash < 0 ? '' : spec.slice( hash + 1 );
+	const drag = fragment.startsWith( 'drag=' ) ? fragment.slice( 5 ).split( ',' ).map( Number ) : null;
+	const noFloatTargets = fragment === 'no-float-targets';
+	if ( fragment !== '' && ! drag && ! noFloatTargets ) throw new Error( `${spec}: #drag=DX,DY or #no-float-targets` );
 	const rest = hash < 0 ? spec : spec.slice( 0, hash );
 	const q = rest.indexOf( '?' );
 	const dir = resolve( q < 0 ? rest : rest.slice( 0, q ) );
 	if ( ! dirs.includes( dir ) ) dirs.push( dir );
-	views.push( { folder: dirs.indexOf( dir ), query: q < 0 ? '' : rest.slice( q + 1 ), drag } );
+	views.push( { folder: dirs.indexOf( dir ), query: q < 0 ? '' : rest.slice( q + 1 ), drag, noFloatTargets } );
 
 }
 const types = { '.html': 'text/html', '.js': 'text/javascript', '.json': 'application/json', '.glsl': 'text/plain' };
@@ -151,9 +155,17 @@ try {
 	await send( 'Network.enable', {}, sessionId );
 	await send( 'Runtime.enable', {}, sessionId );
 	await send( 'Page.enable', {}, sessionId );
-	for ( const [ i, { folder, query, drag } ] of views.entries() ) {
+	// Hides EXT_color_buffer_float from WebGL2 (getExtension and getSupportedExtensions), as
+	// on a WebGL that cannot render to float textures.
+	const hideFloatTargets = `{
+		const P = WebGL2RenderingContext.prototype, get = P.getExtension, list = P.getSupportedExtensions;
+		P.getExtension = function ( name ) { return name === 'EXT_color_buffer_float' ? null : get.call( this, name ); };
+		P.getSupportedExtensions = function () { return ( list.call( this ) || [] ).filter( ( n ) => n !== 'EXT_color_buffer_float' ); };
+	}`;
+	for ( const [ i, { folder, query, drag, noFloatTargets } ] of views.entries() ) {
 
 		current = folder;
+		const hidden = noFloatTargets ? ( await send( 'Page.addScriptToEvaluateOnNewDocument', { source: hideFloatTargets }, sessionId ) ).identifier : null;
 		await send( 'Page.navigate', { url: `${origin}/${folder}/index.html${query ? '?' + query : ''}` }, sessionId );
 		let title = '';
 		for ( let t = 0; t < 1200; t ++ ) {
@@ -163,6 +175,7 @@ try {
 			if ( title === 'shtool: ready' || title === 'shtool: error' ) break;
 
 		}
+		if ( hidden !== null ) await send( 'Page.removeScriptToEvaluateOnNewDocument', { identifier: hidden }, sessionId );
 		if ( title !== 'shtool: ready' ) {
 
 			const text = ( await send( 'Runtime.evaluate', { expression: "document.getElementById('status') && document.getElementById('status').textContent", returnByValue: true }, sessionId ) ).result.value;
