@@ -31,6 +31,13 @@ std::vector<double> parse_number_list(const std::string& text, const std::string
   return values;
 }
 
+std::optional<view::Camera> parse_camera(const std::string& text) {
+  if (text.empty()) return std::nullopt;
+  const std::vector<double> v = parse_number_list(text, "--camera");
+  if (v.size() != 9) throw InputError("--camera takes nine numbers: eye,target,up");
+  return view::Camera{{v[0], v[1], v[2]}, {v[3], v[4], v[5]}, {v[6], v[7], v[8]}};
+}
+
 std::vector<std::string> split_list(const std::string& text) {
   std::vector<std::string> items;
   std::size_t pos = 0;

@@ -2,6 +2,7 @@
 // numeric lists, and JSON printing with round-trip precision.
 #pragma once
 
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -11,6 +12,7 @@
 
 #include "common/input_error.h"
 #include "common/mesh_frame.h"
+#include "view/camera.h"
 
 #include <CLI/CLI.hpp>
 
@@ -24,6 +26,10 @@ using shtool::InputError;
 // Parses "a,b,c" into finite doubles; `what` names the option in error messages.
 // Throws InputError on empty fields, trailing garbage, NaN or infinity.
 std::vector<double> parse_number_list(const std::string& text, const std::string& what);
+
+// --camera of render and export-web: "eye,target,up", nine numbers in shtool's frame.
+// Empty text: no camera (the mesh is framed). Throws InputError on any other count.
+std::optional<view::Camera> parse_camera(const std::string& text);
 
 // "a,b,c" -> {"a", "b", "c"}; empty items are kept (so that they can be reported).
 std::vector<std::string> split_list(const std::string& text);

@@ -36,11 +36,7 @@ void setup_export_web(CLI::App& app) {
   sub->add_option("--out", req->out, "the folder to write (created if missing; its parent must exist)")->required();
   sub->callback([req, camera]() {
     web::ExportWebRequest r = *req;
-    if (!camera->empty()) {
-      const std::vector<double> v = parse_number_list(*camera, "--camera");
-      if (v.size() != 9) throw InputError("--camera takes nine numbers: eye,target,up");
-      r.camera = view::Camera{{v[0], v[1], v[2]}, {v[3], v[4], v[5]}, {v[6], v[7], v[8]}};
-    }
+    r.camera = parse_camera(*camera);
     const web::ExportWebResult result = web::run_export_web(r);
     std::cerr << "export-web: wrote " << result.files.size() << " files to " << r.out.string() << " (order "
               << result.order << ", " << result.lobes << " lobes, " << result.vertices << " vertices, "

@@ -49,11 +49,7 @@ void setup_render(CLI::App& app) {
       ->required();
   sub->callback([req, camera]() {
     render::RenderRequest r = *req;
-    if (!camera->empty()) {
-      const std::vector<double> v = parse_number_list(*camera, "--camera");
-      if (v.size() != 9) throw InputError("--camera takes nine numbers: eye,target,up");
-      r.camera = render::Camera{{v[0], v[1], v[2]}, {v[3], v[4], v[5]}, {v[6], v[7], v[8]}};
-    }
+    r.camera = parse_camera(*camera);
     const render::RenderResult result = render::run_render(r);
     std::cerr << "render: wrote " << r.out.string() << " (" << r.width << " x " << r.height << ", "
               << result.covered_pixels << " pixels covered, " << result.seconds << " s)\n";

@@ -41,6 +41,24 @@ fs::path furnace() {
   return path;
 }
 
+// The --threejs input of a baked grid (order 3), its coefficients still to be filled.
+shtool::interop::ThreeProbeGridInput three_grid(std::array<int, 3> resolution, const Eigen::Vector3d& min,
+                                                const Eigen::Vector3d& max) {
+  shtool::interop::ThreeProbeGridInput g;
+  g.resolution = resolution;
+  g.min = min;
+  g.max = max;
+  g.order = 3;
+  return g;
+}
+
+// The files --threejs wrote in `dir` are, byte for byte, those of `g`.
+void expect_three_files(const fs::path& dir, const shtool::interop::ThreeProbeGridInput& g, const std::string& why) {
+  const shtool::interop::ThreeProbeGridFiles want = shtool::interop::three_probe_grid_files(g);
+  EXPECT_EQ(read_file(dir / "probes.json"), want.json);
+  EXPECT_TRUE(read_file(dir / "probes.bin") == want.atlas) << why;
+}
+
 TEST(CliBakeProbes, FurnaceTableJsonAndLoader) {
   const fs::path scene = furnace(), out = scratch("f.shtb"), json = scratch("f.json");
   const CommandResult r = run_shtool({"bake-probes", scene.string(), "--grid", "3,2,2", "--bounds",
@@ -138,17 +156,11 @@ TEST(CliBakeProbes, ThreeJsFilesAreTheAtlasOfTheSameRun) {
   const CommandResult r = run_shtool(args);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const nlohmann::json doc = read_json(json);
-  shtool::interop::ThreeProbeGridInput g;
-  g.resolution = {3, 2, 4};
-  g.min = Eigen::Vector3d(-1, -1, 0.2);
-  g.max = Eigen::Vector3d(1, 1, 1.4);
-  g.order = 3;
+  shtool::interop::ThreeProbeGridInput g = three_grid({3, 2, 4}, Eigen::Vector3d(-1, -1, 0.2), Eigen::Vector3d(1, 1, 1.4));
   for (const nlohmann::json& p : doc["probes"])
     for (const nlohmann::json& row : p["coefficients"])
       for (int c = 0; c < 3; ++c) g.coefficients.push_back(row[c].get<double>());
-  const shtool::interop::ThreeProbeGridFiles want = shtool::interop::three_probe_grid_files(g);
-  EXPECT_EQ(read_file(dir / "probes.json"), want.json);
-  EXPECT_TRUE(read_file(dir / "probes.bin") == want.atlas) << "the atlas is not the one of the run's coefficients";
+  expect_three_files(dir, g, "the atlas is not the one of the run's coefficients");
   const nlohmann::json three = read_json(dir / "probes.json");
   EXPECT_EQ(three["resolution"], nlohmann::json({3, 4, 2}));  // three = (x, z, -y)
 
@@ -509,11 +521,8 @@ TEST(CliBakeProbes, Zh3ThreeJsAtlasIsTheOrder3FormOfTheZh3Probes) {
   const CommandResult r = run_shtool(bake_args(scene, "zh3", out, {"--json", json.string(), "--threejs", dir.string()}));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const nlohmann::json doc = read_json(json);
-  shtool::interop::ThreeProbeGridInput g;
-  g.resolution = {3, 3, 2};
-  g.min = Eigen::Vector3d(-1.5, -1.5, 0.3);
-  g.max = Eigen::Vector3d(1.5, 1.5, 2.7);
-  g.order = 3;
+  shtool::interop::ThreeProbeGridInput g =
+      three_grid({3, 3, 2}, Eigen::Vector3d(-1.5, -1.5, 0.3), Eigen::Vector3d(1.5, 1.5, 2.7));
   for (const nlohmann::json& p : doc["probes"]) {
     shtool::Zh3Probe<double> probe;
     for (int k = 0; k < 12; ++k) probe.l1.coefficients[k] = p["coefficients"][k / 3][k % 3].get<double>();
@@ -534,9 +543,7 @@ TEST(CliBakeProbes, Zh3ThreeJsAtlasIsTheOrder3FormOfTheZh3Probes) {
       }
     }
   }
-  const shtool::interop::ThreeProbeGridFiles want = shtool::interop::three_probe_grid_files(g);
-  EXPECT_EQ(read_file(dir / "probes.json"), want.json);
-  EXPECT_TRUE(read_file(dir / "probes.bin") == want.atlas) << "the atlas is not the order-3 form of the zh3 probes";
+  expect_three_files(dir, g, "the atlas is not the order-3 form of the zh3 probes");
 }
 
 TEST(CliBakeProbes, RefusesUnknownOrMeaninglessEncodings) {

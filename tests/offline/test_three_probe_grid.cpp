@@ -59,6 +59,15 @@ std::vector<double> random_coefficients(std::size_t count, std::uint64_t seed) {
   return c;
 }
 
+// The consumers' folder with the module under test copied beside their scripts, which
+// import it as ./shtool-three.js.
+fs::path consumers_with_module() {
+  const fs::path consumers = test::node_consumers_dir();
+  fs::copy_file(fs::path(SHTOOL_SOURCE_DIR) / "web/shtool-three.js", consumers / "shtool-three.js",
+                fs::copy_options::overwrite_existing);
+  return consumers;
+}
+
 TEST(ThreeProbeGrid, CoefficientMapIsThreesBasisInThreesFrame) {
   // f_three(d) = f_shtool(w) at w = (X, -Z, Y) for 200 random directions: the frame and the
   // dropped Condon-Shortley sign together. Exact up to rounding (a signed permutation and
@@ -175,9 +184,7 @@ TEST(ThreeProbeGrid, BadGridsAreRefusedAndNothingIsWritten) {
 // 1e-5 of the sum of the terms' sizes covers both and fails on any wrong sign or slot.
 TEST(ThreeProbeGrid, ThreeLoadsTheFilesAndEvaluatesShtoolsIrradiance) {
   SHTOOL_REQUIRE_NODE_CONSUMERS();
-  const fs::path consumers = test::node_consumers_dir();
-  fs::copy_file(fs::path(SHTOOL_SOURCE_DIR) / "web/shtool-three.js", consumers / "shtool-three.js",
-                fs::copy_options::overwrite_existing);
+  const fs::path consumers = consumers_with_module();
   ThreeProbeGridInput g;
   g.resolution = {3, 2, 2};
   g.min = Eigen::Vector3d(-2, -1, 0);
@@ -239,9 +246,7 @@ TEST(ThreeProbeGrid, ThreeLoadsTheFilesAndEvaluatesShtoolsIrradiance) {
 
 TEST(ThreeProbeGrid, TheModuleRefusesATruncatedAtlasByName) {
   SHTOOL_REQUIRE_NODE_CONSUMERS();
-  const fs::path consumers = test::node_consumers_dir();
-  fs::copy_file(fs::path(SHTOOL_SOURCE_DIR) / "web/shtool-three.js", consumers / "shtool-three.js",
-                fs::copy_options::overwrite_existing);
+  const fs::path consumers = consumers_with_module();
   ThreeProbeGridInput g;
   g.resolution = {2, 1, 1};
   g.min = Eigen::Vector3d(0, 0, 0);
