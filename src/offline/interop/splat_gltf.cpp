@@ -22,7 +22,7 @@ namespace {
 
 constexpr const char* kExtension = "KHR_gaussian_splatting";
 
-std::string attribute(const std::string& name) { return std::string(kExtension) + ":" + name; }
+std::string attribute(const std::string& name) { return std::string(kExtension).append(":").append(name); }
 std::string sh_attribute(int l, int n) {
   return attribute("SH_DEGREE_" + std::to_string(l) + "_COEF_" + std::to_string(n));
 }

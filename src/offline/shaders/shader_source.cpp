@@ -10,6 +10,7 @@
 
 #include "common/finite.h"
 #include "common/input_error.h"
+#include "common/source_text.h"
 #include "shtool/irradiance.h"
 #include "shtool/probe_encoding.h"
 #include "shtool/table.h"
@@ -116,18 +117,18 @@ std::string basis_code(const Syntax& s, int n, const std::string& dir, const std
                << indent << real << " pz = " << dir << ".z;\n";
   // Re and Im of (x + i y)^m, m >= 1.
   for (int m = 1; m < n; ++m) {
-    const std::string c = "c" + std::to_string(m), sn = "s" + std::to_string(m);
+    const std::string c = indexed("c", m), sn = indexed("s", m);
     if (m == 1) {
       o << indent << real << " c1 = px;\n" << indent << real << " s1 = py;\n";
       continue;
     }
-    const std::string pc = "c" + std::to_string(m - 1), ps = "s" + std::to_string(m - 1);
+    const std::string pc = indexed("c", m - 1), ps = indexed("s", m - 1);
     o << indent << real << " " << c << " = px * " << pc << " - py * " << ps << ";\n"
       << indent << real << " " << sn << " = px * " << ps << " + py * " << pc << ";\n";
   }
   for (int m = 0; m < n; ++m) {
     const long double qmm = sectoral_constant(m);
-    auto q = [m](int l) { return "q" + std::to_string(l) + "_" + std::to_string(m); };
+    auto q = [m](int l) { return indexed("q", l).append("_").append(std::to_string(m)); };
     auto with_azimuth = [&](int l, const std::string& factor) {
       if (m == 0) {
         assign(l, 0, factor);

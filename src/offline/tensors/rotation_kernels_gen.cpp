@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "common/source_text.h"
 #include "kernels/rotation_kernels.h"
-#include "tensors/cpp_literal.h"
 #include "tensors/rotation_helpers_gen.h"
 
 namespace shtool {
@@ -19,10 +19,6 @@ namespace {
 using detail::kKernelMaxBand;
 using detail::kKernelMaxOrder;
 using detail::kBandKernelMaxBand;
-
-// prefix followed by the number (append: GCC 12 warns, wrongly, -Wrestrict about
-// "literal" + std::string at -O3).
-std::string indexed(const char* prefix, int j) { return std::string(prefix).append(std::to_string(j)); }
 
 // Sum of coefficient * variable terms as C++, accumulated left to right, each term after
 // the first through madd<F> (rotation_kernels.h: fused in the FMA kernels, two roundings

@@ -12,8 +12,8 @@
 #include <utility>
 #include <vector>
 
+#include "common/source_text.h"
 #include "kernels/tripling_kernels.h"
-#include "tensors/cpp_literal.h"
 #include "tensors/tripling.h"
 
 namespace shtool {
