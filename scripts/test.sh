@@ -11,6 +11,8 @@
 #                       byte comparison checks results, not memory, and its generators are
 #                       the unit tests' code), and each reader's fuzz target for 20 s (label
 #                       fuzz) from its committed corpus with a fixed seed.
+#                       One ctest test per GoogleTest program there (its cases in one
+#                       process), and its command-line tests compiled at -O0.
 # The instrumented build compiles with -O1 -g1 (line tables: what a sanitizer's report
 # prints): half the compile time of -O2 -g, and the whole run has to fit the CI's
 # 90 minutes on 2 cores from a cold start.
