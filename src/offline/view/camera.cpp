@@ -6,7 +6,7 @@
 
 namespace shtool::view {
 
-Camera frame_mesh(const fit::Mesh& mesh, double fov_degrees, double aspect) {
+MeshBounds mesh_bounds(const fit::Mesh& mesh) {
   using Vec = Eigen::Vector3d;
   Vec lo = mesh.positions.front(), hi = lo;
   for (const Vec& p : mesh.positions) {
@@ -16,6 +16,14 @@ Camera frame_mesh(const fit::Mesh& mesh, double fov_degrees, double aspect) {
   const Vec centre = 0.5 * (lo + hi);
   double radius = 0;
   for (const Vec& p : mesh.positions) radius = std::max(radius, (p - centre).norm());
+  return {lo, hi, centre, radius};
+}
+
+Camera frame_mesh(const fit::Mesh& mesh, double fov_degrees, double aspect) {
+  using Vec = Eigen::Vector3d;
+  const MeshBounds bounds = mesh_bounds(mesh);
+  const Vec& centre = bounds.centre;
+  const double radius = bounds.radius;
   const double half = 0.5 * fov_degrees * std::numbers::pi / 180.0;
   const double narrow = aspect < 1 ? std::atan(std::tan(half) * aspect) : half;
   const double distance = 1.05 * radius / std::sin(narrow);

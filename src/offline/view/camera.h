@@ -18,4 +18,12 @@ struct Camera {
 // (Mesh::front) and a little above, z up. fov_degrees is vertical; aspect is width / height.
 Camera frame_mesh(const fit::Mesh& mesh, double fov_degrees, double aspect);
 
+// The mesh's bounding box (lo, hi) and the sphere round the box's centre that holds every
+// vertex: what frame_mesh fits into the view.
+struct MeshBounds {
+  Eigen::Vector3d lo, hi, centre;
+  double radius;
+};
+MeshBounds mesh_bounds(const fit::Mesh& mesh);
+
 }  // namespace shtool::view

@@ -211,14 +211,9 @@ ExportWebResult run_export_web(const ExportWebRequest& r) {
 
   // render's camera for the same options, in three's frame.
   const view::Camera camera = r.camera ? *r.camera : view::frame_mesh(mesh, r.fov, double(r.width) / r.height);
-  Vec lo_corner = mesh.positions.front(), hi_corner = lo_corner;
-  for (const Vec& p : mesh.positions) {
-    lo_corner = lo_corner.cwiseMin(p);
-    hi_corner = hi_corner.cwiseMax(p);
-  }
-  const Vec centre = 0.5 * (lo_corner + hi_corner);
-  double radius = 0;
-  for (const Vec& p : mesh.positions) radius = std::max(radius, (p - centre).norm());
+  const view::MeshBounds bounds = view::mesh_bounds(mesh);
+  const Vec& centre = bounds.centre;
+  const double radius = bounds.radius;
   double extent = radius;  // of everything drawn, round the mesh's centre
   nlohmann::json scene = nlohmann::json::object();
   if (probes) {
@@ -229,7 +224,7 @@ ExportWebResult run_export_web(const ExportWebRequest& r) {
     }
     // A ground under the mesh across the grid's box, and spheres beside the mesh, on the
     // ground, right and left of the view and behind, kept inside the box.
-    const double ground = std::clamp(lo_corner.z(), pmin.z(), pmax.z());
+    const double ground = std::clamp(bounds.lo.z(), pmin.z(), pmax.z());
     const Vec forward = (vec(camera.target) - vec(camera.eye)).normalized();
     Vec right = forward.cross(Vec::UnitZ());
     if (right.norm() < 1e-9) right = Vec::UnitX();
