@@ -1,6 +1,7 @@
 // SH rotations, every method side by side: rotations per second for
 // N = 2..20, one rotation = build from a unit quaternion (matrix_from_quaternion +
-// ShRotation::set) and apply it to one vector, or to three (an RGB light).
+// ShRotation::set) and apply it to one vector, or to three (an RGB light, interleaved
+// or as three vectors).
 //
 //   BM_Rotate/<type>/<method>/<tilt>/<vectors>/N
 //     type     float | double
@@ -10,13 +11,20 @@
 //              (default tolerance) takes a Taylor branch. The Taylor methods are timed on
 //              the small tilts only (on large ones they are fast but wrong); the exact
 //              methods cost the same at every tilt and are timed on the large ones.
-//     vectors  1 | 3 (three = an RGB light, one apply_rgb call)
+//     vectors  1: one vector, apply(in, out);
+//              3: an RGB light, interleaved (i * 3 + c), one apply(in, out, 3) call;
+//              3x1: the same light as three separate vectors, three apply() calls
 //   items_per_second = rotations per second; label of `auto` = the method it chose.
 //
 //   BM_RotateBatch/<type>/<method>/<tilt>/N: the same rotations (one vector each) through
 //     rotate_batch, kRotations (rotation, vector) pairs per call, matrices from the
 //     quaternions inside the timed loop; items_per_second = rotations per second,
 //     comparable with BM_Rotate/<type>/<method>/<tilt>/1/N.
+//
+//   BM_Apply/<type>/<vectors>/N: apply alone, one generic rotation set once (zxzxz),
+//     vectors 3 (interleaved, one apply(in, out, 3) call) or 3x1 (three apply() calls);
+//     items_per_second = RGB lights per second. The cost of the colour layout, without
+//     set() in the time.
 //
 // Run: build/bench/bench_rotation --benchmark_filter='BM_Rotate/double/.*/1/'
 // Figures, the machine and the peer comparison: docs/benchmarks.md, "Rotations".
@@ -64,13 +72,19 @@ std::shared_ptr<const shtool::RotationHelpers> helpers() {
   return h;
 }
 
+// vectors: 1 (one vector), 3 (interleaved RGB, one call), -3 (three vectors, three calls).
 template <class T>
 void BM_Rotate(benchmark::State& state, RotationMethod method, bool small_tilt, int vectors) {
   const int order = static_cast<int>(state.range(0));
   shtool::ShRotation<T> rotation(order, helpers());
   const auto q = shtool::bench::random_quaternions<T>(small_tilt ? kSmallTilt : -1);
-  const auto in = shtool::bench::random_sh_vectors<T>(order, vectors);
-  auto out = shtool::bench::random_sh_vectors<T>(order, vectors);
+  const int count = vectors < 0 ? -vectors : vectors;
+  const auto in = shtool::bench::random_sh_vectors<T>(order, count);
+  auto out = shtool::bench::random_sh_vectors<T>(order, count);
+  const std::size_t n = in[0].size();
+  std::vector<T> in_rgb(3 * n), out_rgb(3 * n);
+  for (std::size_t i = 0; i < n; ++i)
+    for (int c = 0; c < 3 && c < count; ++c) in_rgb[3 * i + c] = in[c][i];
 
   std::size_t k = 0;
   bool ok = true;
@@ -79,18 +93,45 @@ void BM_Rotate(benchmark::State& state, RotationMethod method, bool small_tilt, 
     k = shtool::bench::next_index(k, q.size());
     const shtool::Mat3<T> r = shtool::matrix_from_quaternion<T>(qk[0], qk[1], qk[2], qk[3]);
     ok &= rotation.set(r, method);
-    if (vectors == 3)  // one pass for the three (ShRotation::apply_rgb)
-      rotation.apply_rgb({std::span<const T>(in[0]), std::span<const T>(in[1]), std::span<const T>(in[2])},
-                         {std::span<T>(out[0]), std::span<T>(out[1]), std::span<T>(out[2])});
-    else
-      for (int v = 0; v < vectors; ++v) rotation.apply(in[v], out[v]);
-    benchmark::DoNotOptimize(out.data());
+    if (vectors == 3) {
+      ok &= rotation.apply(in_rgb, out_rgb, 3);
+      benchmark::DoNotOptimize(out_rgb.data());
+    } else {
+      for (int v = 0; v < count; ++v) rotation.apply(in[v], out[v]);
+      benchmark::DoNotOptimize(out.data());
+    }
     benchmark::ClobberMemory();
   }
-  if (!ok) state.SkipWithError("ShRotation::set failed (helpers missing?)");
+  if (!ok) state.SkipWithError("ShRotation::set or apply failed (helpers missing?)");
   state.SetItemsProcessed(state.iterations());
   if (method == RotationMethod::automatic)
     state.SetLabel(std::string(shtool::rotation_method_name(rotation.method())));
+}
+
+template <class T>
+void BM_Apply(benchmark::State& state, bool interleaved) {
+  const int order = static_cast<int>(state.range(0));
+  shtool::ShRotation<T> rotation(order, helpers());
+  const auto q = shtool::bench::random_quaternions<T>(-1)[0];
+  bool ok = rotation.set(shtool::matrix_from_quaternion<T>(q[0], q[1], q[2], q[3]), RotationMethod::zxzxz);
+  const auto in = shtool::bench::random_sh_vectors<T>(order, 3);
+  auto out = shtool::bench::random_sh_vectors<T>(order, 3);
+  const std::size_t n = in[0].size();
+  std::vector<T> in_rgb(3 * n), out_rgb(3 * n);
+  for (std::size_t i = 0; i < n; ++i)
+    for (int c = 0; c < 3; ++c) in_rgb[3 * i + c] = in[c][i];
+  for (auto _ : state) {
+    if (interleaved) {
+      ok &= rotation.apply(in_rgb, out_rgb, 3);
+      benchmark::DoNotOptimize(out_rgb.data());
+    } else {
+      for (int c = 0; c < 3; ++c) rotation.apply(in[c], out[c]);
+      benchmark::DoNotOptimize(out.data());
+    }
+    benchmark::ClobberMemory();
+  }
+  if (!ok) state.SkipWithError("ShRotation::set or apply failed (helpers missing?)");
+  state.SetItemsProcessed(state.iterations());
 }
 
 template <class T>
@@ -126,15 +167,22 @@ void register_all(const char* type) {
       {RotationMethod::taylor2, true},    {RotationMethod::automatic, true},
       {RotationMethod::automatic, false},
   };
-  for (int vectors : {1, 3})
+  for (int vectors : {1, 3, -3})
     for (const Case& c : cases) {
       const std::string name = std::string("BM_Rotate/") + type + "/" +
                                std::string(shtool::rotation_method_name(c.method)) + "/" +
-                               (c.small_tilt ? "small" : "large") + "/" + std::to_string(vectors);
+                               (c.small_tilt ? "small" : "large") + "/" +
+                               (vectors < 0 ? std::string("3x1") : std::to_string(vectors));
       benchmark::RegisterBenchmark(name.c_str(), [c, vectors](benchmark::State& s) {
         BM_Rotate<T>(s, c.method, c.small_tilt, vectors);
       })->DenseRange(kMinOrder, kMaxOrder);
     }
+  for (bool interleaved : {true, false}) {
+    const std::string name = std::string("BM_Apply/") + type + "/" + (interleaved ? "3" : "3x1");
+    benchmark::RegisterBenchmark(name.c_str(), [interleaved](benchmark::State& s) {
+      BM_Apply<T>(s, interleaved);
+    })->DenseRange(kMinOrder, kMaxOrder);
+  }
   for (const Case& c : cases) {
     const std::string name = std::string("BM_RotateBatch/") + type + "/" +
                              std::string(shtool::rotation_method_name(c.method)) + "/" +

@@ -34,12 +34,14 @@ class OrthogonalMap {
 
   // out = the coefficients of g from those of f, N^2 each; in and out must not overlap.
   void apply(std::span<const double> in, std::span<double> out) const;
-  // Three channels (RGB) in one pass, bit-identical to three apply() calls.
-  void apply_rgb(const std::array<std::span<const double>, 3>& in, const std::array<std::span<double>, 3>& out) const;
+  // Several channels interleaved (coefficient i of channel c at i * channels + c, N^2 *
+  // channels values each; ShRotation::apply(in, out, channels)), bit-identical to apply()
+  // of each channel. Returns false and writes nothing if the sizes are not that.
+  bool apply(std::span<const double> in, std::span<double> out, int channels) const;
 
  private:
   OrthogonalMap(const Eigen::Matrix3d& proper, bool reflects, int order);
-  void invert_odd_bands(std::span<double> out) const;
+  void invert_odd_bands(std::span<double> out, int channels = 1) const;
 
   Eigen::Matrix3d proper_;
   bool reflects_;

@@ -1,6 +1,6 @@
 // SH rotation: one API for every method. Build a rotation once for an order and a
-// 3x3 rotation, then apply it to as many coefficient vectors as needed (an RGB light is
-// three). g(w) = f(R^-1 w); see docs/conventions.md and docs/rotation.md.
+// 3x3 rotation, then apply it to as many coefficient vectors as needed (one channel, or
+// several interleaved: an RGB light). g(w) = f(R^-1 w); see docs/conventions.md and docs/rotation.md.
 //
 // Methods
 //   reference  dense per-band matrices by the Ivanic-Ruedenberg recurrences (exact);
@@ -137,24 +137,33 @@ class ShRotation {
     apply_general(in.data(), out.data());
   }
 
-  // Three vectors (an RGB light) in one pass: out[k] = M(R) in[k], k = 0, 1, 2. The three
-  // run in the lanes of one SIMD vector, so this costs about one apply(), not three;
-  // the results are bit-identical to three apply() calls. No in[k] may overlap an out[j].
-  void apply_rgb(const std::array<std::span<const T>, 3>& in, const std::array<std::span<T>, 3>& out) const {
+  // Several colour channels, interleaved as every colour table of the engine stores them
+  // (docs/engine.md, "Colour"): in and out hold N^2 * channels values, coefficient i of
+  // channel c at i * channels + c; out = M(R) in channel by channel, bit-identical to
+  // apply() of each channel alone. Three channels (an RGB light) run in the lanes of one
+  // SIMD vector, read and written in place, so they cost about one apply(), not three;
+  // other counts go three at a time through the same code, by way of stack buffers.
+  // Returns false and writes nothing if channels < 1 or in or out does not hold
+  // N^2 * channels values; in and out must not overlap. Allocates nothing and only reads
+  // the object, like apply().
+  bool apply(std::span<const T> in, std::span<T> out, int channels) const {
+    const std::size_t n = static_cast<std::size_t>(order_) * static_cast<std::size_t>(order_);
+    if (channels != 3 || in.size() != 3 * n || out.size() != 3 * n) return apply_channels(in, out, channels);
     if (order_ == 2 && resolved_ == RotationMethod::zxzxz) {  // inline, as in apply()
-      for (int k = 0; k < 3; ++k) detail::order2_rotate<T>(r_, in[k].data(), out[k].data());
-      return;
+      detail::order2_rotate3<T>(r_, in.data(), out.data());
+      return true;
     }
     if (whole_kernel3_) {  // as in apply()
       const detail::KernelState<T> state{r_,           cos_a_.data(), sin_a_.data(), cos_b_.data(),
                                          sin_b_.data(), cos_g_.data(), sin_g_.data(), beta_,
                                          T(0.5) * beta_ * beta_};
-      const T* src[3] = {in[0].data(), in[1].data(), in[2].data()};
-      T* dst[3] = {out[0].data(), out[1].data(), out[2].data()};
-      whole_kernel3_(state, src, dst);
-      return;
+      const T* src = in.data();
+      T* dst = out.data();
+      whole_kernel3_(state, &src, &dst);
+      return true;
     }
-    apply_rgb_general(in, out);
+    apply_general3(in.data(), out.data());
+    return true;
   }
 
   // The dense per-band matrices of the reference method for the current rotation
@@ -236,14 +245,19 @@ class ShRotation {
   bool set_general(const Mat3<T>& r, RotationMethod method, double tolerance,
                    const ZyzCosSin<T>* e = nullptr);
   void apply_general(const T* in, T* out) const;
-  void apply_rgb_general(const std::array<std::span<const T>, 3>& in,
-                         const std::array<std::span<T>, 3>& out) const;
+  void apply_general3(const T* in, T* out) const;  // three channels interleaved
+  // apply(in, out, channels) for channel counts other than 3, and the refusals.
+  bool apply_channels(std::span<const T> in, std::span<T> out, int channels) const;
+  // V lanes (1, or 3 interleaved): the generated kernel of the bands below
+  // first_table_band(), then the bands from it on.
   template <int V>
-  void apply_lanes(const T* const* in, T* const* out) const;
+  void apply_lanes(const T* in, T* out) const;
   template <int V>
-  void apply_reference(const T* const* in, T* const* out) const;
+  void apply_kernel(const T* in, T* out) const;
+  // Bands [from, to) (at or above first_table_band()); in and out point at coefficient from^2.
   template <int V>
-  void apply_large_bands(const T* const* in, T* const* out) const;
+  void apply_bands(int from, int to, const T* in, T* out) const;
+  int first_table_band() const;
   template <int V>
   using Kernel = void (*)(const detail::KernelState<T>&, const T* const*, T* const*);
   void build_reference(const Mat3<T>& r);
@@ -273,7 +287,7 @@ class ShRotation {
   // closed forms in R, and set() a copy of R.
   bool closed_ = false;
   // The FMA copies of the kernels (src/runtime/kernels/rotation_kernels.h), chosen once
-  // for the object so that apply, apply_rgb and rotate_batch always run the same copy.
+  // for the object so that both apply()s and rotate_batch always run the same copy.
   bool fused_ = false;
   // Helpers converted to T once (float rotations must not convert in the hot loop), for
   // the bands above the kernels.

@@ -38,15 +38,15 @@ bool shade_vertex(const char* fit_path, const char* lighting_path, const shtool:
   const shtool::ZhFitTable<T>& z = fit.value();
 
   // The lobes live in the object's frame: turn the lighting by the inverse of the object's
-  // rotation (g(w) = f(R^-1 w), docs/conventions.md), channel by channel.
+  // rotation (g(w) = f(R^-1 w), docs/conventions.md), its three channels in one call.
   shtool::ShRotation<T> rotation(light.value().order,
                                  std::make_shared<const shtool::RotationHelpers>(helpers.value()));
   if (!rotation.set(object.transpose())) return false;
   const std::size_t n2 = shtool::sh_count(light.value().order);
-  std::vector<T> channel(n2), turned(n2);
+  std::vector<T> turned_rgb(3 * n2), turned(n2);
+  if (!rotation.apply(light.value().coefficients, turned_rgb, 3)) return false;
   for (int c = 0; c < 3; ++c) {
-    light.value().channel(c, channel);
-    rotation.apply(channel, turned);
+    for (std::size_t i = 0; i < n2; ++i) turned[i] = turned_rgb[i * 3 + c];  // interleaved [i * 3 + c]
     // [4] Eq. 13 with the fit's bands (the lighting may have more), plus the coefficients
     // the fit stores directly (DC, then the linear band).
     const std::span<const T> bands = std::span<const T>(turned).first(shtool::sh_count(z.order));

@@ -33,6 +33,7 @@
 #include "common/generator_record.h"
 #include "kernel_copies.h"
 #include "shtool/euler.h"
+#include "shtool/orthogonal_map.h"
 #include "shtool/quadrature.h"
 #include "shtool/rotation.h"
 #include "shtool/rotation_helpers.h"
@@ -564,7 +565,7 @@ void check_set_quaternion(double tol) {
 TEST(RotationApi, SetQuaternionEqualsSetMatrixDouble) { check_set_quaternion<double>(1e-13); }
 TEST(RotationApi, SetQuaternionEqualsSetMatrixFloat) { check_set_quaternion<float>(2e-5); }
 
-// Order 2 in float runs band 1 in SSE2 lanes (apply, apply_rgb, rotate_batch): the
+// Order 2 in float runs band 1 in SSE2 lanes (apply, interleaved apply, rotate_batch): the
 // scalar band1_closed's bits for random and edge rotations and inputs with zeros of
 // both signs (an output that cancels to zero keeps the scalar code's sign).
 TEST(RotationApi, Order2FloatIsTheScalarCodeBitForBit) {
@@ -1018,7 +1019,7 @@ TEST(RotationApi, BatchLanesAreBitIdenticalToSingleRotationsDouble) {
   test::for_each_kernel_copy([] { check_batch_lanes_bitwise<double>(); });
 }
 
-// apply() and apply_rgb() call the generated kernel of the current rotation directly
+// apply() of one channel and of three interleaved call the generated kernel of the current rotation directly
 // when it covers every band: one object switched between methods, tilts and orders of
 // rotation must give what a fresh object gives for each, bit for bit.
 template <class T>
@@ -1042,11 +1043,9 @@ void check_reused_rotation() {
         std::vector<T> a(3 * n), b(3 * n);
         reused.apply(std::span<const T>(in).first(n), std::span<T>(a).first(n));
         fresh.apply(std::span<const T>(in).first(n), std::span<T>(b).first(n));
-        auto part = [n](std::vector<T>& v, int k) { return std::span<T>(v).subspan(k * n, n); };
-        auto cpart = [n](const std::vector<T>& v, int k) { return std::span<const T>(v).subspan(k * n, n); };
         for (int i = 0; i < n; ++i) ASSERT_EQ(a[i], b[i]) << "order " << order << " " << rotation_method_name(m);
-        reused.apply_rgb({cpart(in, 0), cpart(in, 1), cpart(in, 2)}, {part(a, 0), part(a, 1), part(a, 2)});
-        fresh.apply_rgb({cpart(in, 0), cpart(in, 1), cpart(in, 2)}, {part(b, 0), part(b, 1), part(b, 2)});
+        ASSERT_TRUE(reused.apply(in, a, 3));
+        ASSERT_TRUE(fresh.apply(in, b, 3));
         for (int i = 0; i < 3 * n; ++i)
           ASSERT_EQ(a[i], b[i]) << "rgb order " << order << " " << rotation_method_name(m);
       }
@@ -1137,6 +1136,62 @@ TEST(RotationApi, BatchAllocatesNothing) {
     ASSERT_TRUE(rotate_batch<float>(rotation, rs, in, out, RotationMethod::zxzxz));
     ASSERT_TRUE(rotate_batch<float>(rotation, rs, in, out, RotationMethod::automatic));
     EXPECT_EQ(test::allocation_count(), before) << "order " << order;
+  }
+}
+
+// apply(in, out, channels) allocates nothing, for any channel count, at orders within the
+// whole-order kernels, with band kernels, with table-driven bands and at the largest
+// order (reference), and not on the first call either (no per-thread buffer).
+template <class T>
+void check_interleaved_allocates_nothing() {
+  std::mt19937_64 rng(641);
+  for (int order : {2, 3, 6, 10, 14, 20, kMaxOrder}) {
+    const RotationMethod m = order <= 20 ? RotationMethod::zxzxz : RotationMethod::reference;
+    for (int channels : {3, 4, 5}) {
+      ShRotation<T> rotation(order, helpers());
+      ASSERT_TRUE(rotation.set(random_rotation(rng).cast<T>(), m));
+      const std::vector<T> in(static_cast<std::size_t>(channels) * sh_count(order), T(0.5));
+      std::vector<T> out(in.size());
+      const long before = test::allocation_count();
+      ASSERT_TRUE(rotation.apply(in, out, channels));
+      ASSERT_TRUE(rotation.apply(in, out, channels));
+      EXPECT_EQ(test::allocation_count(), before) << "order " << order << " channels " << channels;
+    }
+  }
+}
+TEST(RotationApi, InterleavedApplyAllocatesNothing) {
+  check_interleaved_allocates_nothing<float>();
+  check_interleaved_allocates_nothing<double>();
+}
+
+// OrthogonalMap::apply(in, out, channels): a reflection (the inversion's signs after the
+// rotation, on every channel) and a rotation, against apply() of each channel, bit for
+// bit; wrong sizes refused with nothing written.
+TEST(RotationApi, OrthogonalMapInterleavedEqualsPerChannel) {
+  std::mt19937_64 rng(643);
+  for (int order : {1, 3, 4, 7}) {
+    for (bool reflect : {false, true}) {
+      const Eigen::Matrix3d q = reflect ? Eigen::Matrix3d(-random_rotation(rng)) : random_rotation(rng);
+      Result<OrthogonalMap> map = OrthogonalMap::make(q, order);
+      ASSERT_TRUE(map.ok());
+      ASSERT_EQ(map.value().reflects(), reflect);
+      for (int channels : {1, 3, 4}) {
+        const int n = sh_count(order);
+        std::vector<double> in(static_cast<std::size_t>(channels) * n), out(in.size(), -7.0), one(n), mapped(n);
+        for (double& v : in) v = std::uniform_real_distribution<double>(-1, 1)(rng);
+        ASSERT_TRUE(map.value().apply(in, out, channels));
+        for (int c = 0; c < channels; ++c) {
+          for (int i = 0; i < n; ++i) one[i] = in[i * channels + c];
+          map.value().apply(one, mapped);
+          for (int i = 0; i < n; ++i)
+            ASSERT_EQ(out[i * channels + c], mapped[i]) << "order " << order << " reflect " << reflect << " c " << c;
+        }
+        std::vector<double> untouched(in.size() + 1, -7.0), wrong(in.size() + 1, 0.5);
+        EXPECT_FALSE(map.value().apply(wrong, untouched, channels));
+        EXPECT_FALSE(map.value().apply(std::span<const double>(in), std::span<double>(untouched).first(in.size()), 0));
+        for (double v : untouched) ASSERT_EQ(v, -7.0);
+      }
+    }
   }
 }
 

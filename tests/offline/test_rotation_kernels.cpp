@@ -1,8 +1,10 @@
 // The generated fixed-order rotation kernels (src/runtime/kernels/rotation_kernels.h,
-// rotation_kernels_generated.inc) and the three-vector apply:
+// rotation_kernels_generated.inc) and the interleaved colour apply:
 //  - the committed generated source is byte-identical to what its generator writes
 //    now, through the library call and through `shtool gen-tensors`;
-//  - apply_rgb gives the bits of three apply() calls, for every method and type;
+//  - apply() of interleaved channels gives the bits of apply() of each channel, for every
+//    method and type and 1..6 channels, writes nothing outside its spans, and refuses
+//    wrong sizes;
 //  - the Taylor kernels apply Z(a) T(b) Z(g) with T the truncated series, against a dense
 //    product of reference z-rotations and D1, D2 (orders across the generated /
 //    run-time boundary);
@@ -41,7 +43,7 @@ using test::norm;
 using test::random_coeffs;
 using test::reference_matrix;
 
-constexpr int kHelperOrder = 20;
+constexpr int kHelperOrder = 24;
 
 std::shared_ptr<const RotationHelpers> helpers() {
   static const std::shared_ptr<const RotationHelpers> h =
@@ -60,25 +62,29 @@ Mat3<double> random_rotation(std::mt19937_64& rng) {
   return matrix_from_quaternion<double>(q[0], q[1], q[2], q[3]);
 }
 
+// apply(in, out, channels) on interleaved channels against apply() of each channel alone:
+// the same bits (the lanes of the three-lane kernels are independent, and a group of two
+// lanes or one must not disturb them).
 template <class T>
-void expect_rgb_equals_three_applies(int order, const Mat3<double>& r, RotationMethod m, std::mt19937_64& rng) {
+void expect_interleaved_equals_per_channel(int order, const Mat3<double>& r, RotationMethod m, int channels,
+                                           std::mt19937_64& rng) {
   ShRotation<T> rot(order, helpers());
   ASSERT_TRUE(rot.set(r.cast<T>(), m, 1e-3));
   const int n = sh_count(order);
-  std::vector<std::vector<T>> in(3), one(3, std::vector<T>(n)), rgb(3, std::vector<T>(n, T(-7)));
-  for (auto& v : in) {
-    const std::vector<double> f = random_coeffs(order, rng);
-    v.assign(f.begin(), f.end());
-  }
-  for (int k = 0; k < 3; ++k) rot.apply(in[k], one[k]);
-  rot.apply_rgb({std::span<const T>(in[0]), std::span<const T>(in[1]), std::span<const T>(in[2])},
-                {std::span<T>(rgb[0]), std::span<T>(rgb[1]), std::span<T>(rgb[2])});
-  for (int k = 0; k < 3; ++k)
+  std::vector<T> in(static_cast<std::size_t>(n) * channels), out(in.size(), T(-7)), one(n), rotated(n);
+  for (T& v : in) v = static_cast<T>(std::uniform_real_distribution<double>(-1, 1)(rng));
+  ASSERT_TRUE(rot.apply(in, out, channels));
+  for (int c = 0; c < channels; ++c) {
+    for (int i = 0; i < n; ++i) one[i] = in[i * channels + c];
+    rot.apply(one, rotated);
     for (int i = 0; i < n; ++i)
-      ASSERT_EQ(rgb[k][i], one[k][i]) << rotation_method_name(m) << " order " << order << " vector " << k << " i " << i;
+      ASSERT_EQ(out[i * channels + c], rotated[i])
+          << rotation_method_name(m) << " order " << order << " channels " << channels << " channel " << c << " i "
+          << i;
+  }
 }
 
-TEST(RotationKernels, ApplyRgbEqualsThreeApplies) {
+TEST(RotationKernels, InterleavedChannelsEqualPerChannelApplies) {
   test::for_each_kernel_copy([] {
     std::mt19937_64 rng(11);
     for (int order = 1; order <= 13; ++order) {
@@ -87,13 +93,98 @@ TEST(RotationKernels, ApplyRgbEqualsThreeApplies) {
       for (RotationMethod m : {RotationMethod::reference, RotationMethod::zxzxz, RotationMethod::taylor1,
                                RotationMethod::taylor15, RotationMethod::taylor2, RotationMethod::automatic}) {
         const Mat3<double>& r = (m == RotationMethod::reference || m == RotationMethod::zxzxz) ? big : small;
-        expect_rgb_equals_three_applies<float>(order, r, m, rng);
-        expect_rgb_equals_three_applies<double>(order, r, m, rng);
+        for (int channels = 1; channels <= 6; ++channels) {
+          expect_interleaved_equals_per_channel<float>(order, r, m, channels, rng);
+          expect_interleaved_equals_per_channel<double>(order, r, m, channels, rng);
+        }
       }
     }
-    // A generic rotation with auto takes zxzxz through apply_rgb too.
-    expect_rgb_equals_three_applies<double>(20, random_rotation(rng), RotationMethod::automatic, rng);
+    // Above the whole-order kernels: the kernels of single bands (up to band 19), the
+    // table-driven bands (20 on; in double zxzxz the paired rows from band 10), and the
+    // reference method (no helpers needed) at 24 and at the largest order.
+    for (int channels : {2, 3, 4, 5}) {
+      for (int order : {16, 22}) {
+        expect_interleaved_equals_per_channel<float>(order, random_rotation(rng), RotationMethod::zxzxz, channels, rng);
+        expect_interleaved_equals_per_channel<double>(order, random_rotation(rng), RotationMethod::zxzxz, channels, rng);
+        const Mat3<double> small = matrix_from_zyz<double>({0.7, 0.01, -2.1});
+        expect_interleaved_equals_per_channel<float>(order, small, RotationMethod::taylor2, channels, rng);
+        expect_interleaved_equals_per_channel<double>(order, small, RotationMethod::taylor15, channels, rng);
+      }
+      expect_interleaved_equals_per_channel<double>(20, random_rotation(rng), RotationMethod::automatic, channels, rng);
+      expect_interleaved_equals_per_channel<double>(24, random_rotation(rng), RotationMethod::reference, channels, rng);
+      expect_interleaved_equals_per_channel<float>(24, random_rotation(rng), RotationMethod::reference, channels, rng);
+    }
+    expect_interleaved_equals_per_channel<float>(kMaxOrder, random_rotation(rng), RotationMethod::reference, 3, rng);
+    expect_interleaved_equals_per_channel<double>(kMaxOrder, random_rotation(rng), RotationMethod::reference, 4, rng);
   });
+}
+
+// The three-lane kernels load and store a coefficient's three values with 4-wide vector
+// moves: nothing before or after the spans may be written, at every order with a
+// generated kernel (whole-order or one band) and beyond, for every method. The spans
+// sit inside larger arrays, between guard values.
+template <class T>
+void check_interleaved_stays_in_bounds() {
+  std::mt19937_64 rng(23);
+  constexpr std::size_t kGuard = 8;
+  const T guard = T(-12345);
+  for (int order : {1, 2, 3, 4, 5, 9, 10, 11, 12, 19, 20, 21, 22}) {
+    for (RotationMethod m : {RotationMethod::reference, RotationMethod::zxzxz, RotationMethod::taylor1,
+                             RotationMethod::taylor2}) {
+      const bool exact = m == RotationMethod::reference || m == RotationMethod::zxzxz;
+      ShRotation<T> rot(order, helpers());
+      ASSERT_TRUE(rot.set((exact ? random_rotation(rng) : matrix_from_zyz<double>({0.7, 0.01, -2.1})).cast<T>(), m));
+      const std::size_t n = 3 * static_cast<std::size_t>(sh_count(order));
+      std::vector<T> in(n + 2 * kGuard, guard), out(n + 2 * kGuard, guard);
+      for (std::size_t i = kGuard; i < kGuard + n; ++i)
+        in[i] = static_cast<T>(std::uniform_real_distribution<double>(-1, 1)(rng));
+      ASSERT_TRUE(rot.apply(std::span<const T>(in).subspan(kGuard, n), std::span<T>(out).subspan(kGuard, n), 3));
+      for (std::size_t i = 0; i < kGuard; ++i) {
+        ASSERT_EQ(out[i], guard) << "order " << order << " " << rotation_method_name(m) << " before";
+        ASSERT_EQ(out[kGuard + n + i], guard) << "order " << order << " " << rotation_method_name(m) << " after";
+      }
+      for (std::size_t i = kGuard; i < kGuard + n; ++i)
+        ASSERT_NE(out[i], guard) << "order " << order << " " << rotation_method_name(m) << " i " << i - kGuard;
+    }
+  }
+}
+
+TEST(RotationKernels, InterleavedApplyWritesNothingOutsideTheSpans) {
+  test::for_each_kernel_copy([] {
+    check_interleaved_stays_in_bounds<float>();
+    check_interleaved_stays_in_bounds<double>();
+  });
+}
+
+// Wrong sizes and channel counts are refused and nothing is written, at an order with the
+// inline kernels (3), at order 2 (inline band 1) and above them (12).
+TEST(RotationKernels, InterleavedApplyRefusesWrongSizes) {
+  std::mt19937_64 rng(5);
+  for (int order : {1, 2, 3, 12}) {
+    ShRotation<float> rot(order, helpers());
+    ASSERT_TRUE(rot.set(random_rotation(rng).cast<float>(), RotationMethod::zxzxz));
+    const std::size_t n = static_cast<std::size_t>(sh_count(order));
+    const std::vector<float> in(4 * n + 1, 0.5f);
+    std::vector<float> out(4 * n + 1, -7.0f);
+    auto untouched = [&out] {
+      for (float v : out)
+        if (v != -7.0f) return false;
+      return true;
+    };
+    const std::span<const float> i3(in.data(), 3 * n);
+    const std::span<float> o3(out.data(), 3 * n);
+    EXPECT_FALSE(rot.apply(i3, o3, 0)) << "order " << order;
+    EXPECT_FALSE(rot.apply(i3, o3, -3)) << "order " << order;
+    EXPECT_FALSE(rot.apply(i3, o3, 4)) << "order " << order;  // 3 N^2 values for 4 channels
+    EXPECT_FALSE(rot.apply(i3, std::span<float>(out.data(), 3 * n + 1), 3)) << "order " << order;
+    EXPECT_FALSE(rot.apply(std::span<const float>(in.data(), 3 * n - 1), o3, 3)) << "order " << order;
+    EXPECT_FALSE(rot.apply(std::span<const float>(in.data(), 3 * n + 1), o3, 3)) << "order " << order;
+    EXPECT_FALSE(rot.apply(std::span<const float>(in.data(), 2 * n), std::span<float>(out.data(), 2 * n), 1))
+        << "order " << order;
+    EXPECT_TRUE(untouched()) << "order " << order;
+    EXPECT_TRUE(rot.apply(i3, o3, 3)) << "order " << order;
+    EXPECT_FALSE(untouched()) << "order " << order;
+  }
 }
 
 Mat3<double> rz(double a) {

@@ -74,8 +74,7 @@ void transform_splat_scene(SplatScene& s, const Eigen::Matrix3d& m, double scale
   const std::size_t stride = s.sh_stride();
   constexpr std::size_t kChunk = 4096;
   parallel_for((s.count + kChunk - 1) / kChunk, threads, [&](std::size_t chunk) {
-    std::array<std::vector<double>, 3> f, g;
-    for (int c = 0; c < 3; ++c) f[c].resize(coefficients), g[c].resize(coefficients);
+    std::vector<double> f(3 * static_cast<std::size_t>(coefficients)), g(f.size());
     const std::size_t end = std::min(s.count, (chunk + 1) * kChunk);
     for (std::size_t i = chunk * kChunk; i < end; ++i) {
       const Eigen::Vector3d p(s.position[3 * i], s.position[3 * i + 1], s.position[3 * i + 2]);
@@ -88,11 +87,9 @@ void transform_splat_scene(SplatScene& s, const Eigen::Matrix3d& m, double scale
       for (int k = 0; k < 3; ++k) s.log_scale[3 * i + k] += log_scale;
       if (coefficients > 1) {
         float* sh = &s.sh[i * stride];
-        for (int c = 0; c < 3; ++c)
-          for (int k = 0; k < coefficients; ++k) f[c][k] = sh[3 * k + c];
-        map.apply_rgb({f[0], f[1], f[2]}, {g[0], g[1], g[2]});
-        for (int k = 1; k < coefficients; ++k)
-          for (int c = 0; c < 3; ++c) sh[3 * k + c] = static_cast<float>(g[c][k]);
+        for (std::size_t k = 0; k < f.size(); ++k) f[k] = sh[k];
+        map.apply(f, g, 3);
+        for (std::size_t k = 3; k < g.size(); ++k) sh[k] = static_cast<float>(g[k]);
       }
     }
   });

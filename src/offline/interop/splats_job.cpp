@@ -81,8 +81,7 @@ void transform_ply_in_place(const TransformSplatsRequest& r, const Eigen::Matrix
     return nullptr;
   };
   parallel_for(chunks, threads, [&](std::size_t chunk) {
-    std::array<std::vector<double>, 3> f, g;
-    for (int c = 0; c < 3; ++c) f[c].resize(sh_count(order)), g[c].resize(sh_count(order));
+    std::vector<double> f(3 * static_cast<std::size_t>(sh_count(order))), g(f.size());  // interleaved
     const std::size_t end = std::min(count, (chunk + 1) * kChunk);
     for (std::size_t i = chunk * kChunk; i < end; ++i) {
       if (const std::string* name = non_finite(i)) {
@@ -111,12 +110,12 @@ void transform_ply_in_place(const TransformSplatsRequest& r, const Eigen::Matrix
         for (int k = 0; k < 3; ++k) ply.set(v, i, (*layout.scale)[k], ply.get(v, i, (*layout.scale)[k]) + log_scale);
       if (layout.degree > 0) {
         for (int c = 0; c < 3; ++c) {
-          f[c][0] = ply.get(v, i, (*layout.dc)[c]);
-          for (int k = 0; k < k_rest; ++k) f[c][1 + k] = ply.get(v, i, layout.rest[c * k_rest + k]);
+          f[c] = ply.get(v, i, (*layout.dc)[c]);
+          for (int k = 0; k < k_rest; ++k) f[3 * (1 + k) + c] = ply.get(v, i, layout.rest[c * k_rest + k]);
         }
-        map.apply_rgb({f[0], f[1], f[2]}, {g[0], g[1], g[2]});
+        map.apply(f, g, 3);
         for (int c = 0; c < 3; ++c)
-          for (int k = 0; k < k_rest; ++k) ply.set(v, i, layout.rest[c * k_rest + k], g[c][1 + k]);
+          for (int k = 0; k < k_rest; ++k) ply.set(v, i, layout.rest[c * k_rest + k], g[3 * (1 + k) + c]);
       }
       // A finite value beyond the property's type (float32 past 3.4e38) was stored as inf.
       if (const std::string* name = non_finite(i)) {

@@ -344,8 +344,8 @@ void order_function(std::ostream& o, bool taylor, int n) {
 }
 
 // The entry points of one function of bands (a whole order, or one band above them):
-// one rotation of V vectors (one vector works in place on the caller's arrays, three are
-// gathered into lanes first), and a batch of rotations in lanes. Fused: the FMA copy,
+// one rotation of V lanes (one vector works in place on the caller's array, three
+// interleaved channels are loaded into lane vectors and stored back, run_lanes), and a batch of rotations in lanes. Fused: the FMA copy,
 // name suffix _fma, compiled for AVX2 + FMA (SHTOOL_FMA_TARGET).
 void entry_functions(std::ostream& o, bool taylor, const std::string& body, int first, int count, bool fused) {
   const std::string targs = std::string(fused ? "true, " : "false, ") + (taylor ? "Order, T, " : "T, ");

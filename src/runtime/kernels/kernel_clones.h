@@ -5,7 +5,7 @@
 // fuses a * b + c in the v3 copy (C++ contracts by default; the tripling kernels' file
 // also says -ffp-contract=fast), so results differ from the baseline copy by rounding:
 // only for kernels whose results no inline code in the user's build must reproduce bit
-// for bit (not the rotation kernels: apply_rgb equals three apply() calls exactly, and
+// for bit (not the rotation kernels: three interleaved channels equal three apply() calls exactly, and
 // their order-2/3 paths are inline).
 #pragma once
 

@@ -38,10 +38,10 @@ inline constexpr int kKernelMaxOrder = kKernelMaxBand + 1;
 // one band at a time); larger bands run the table-driven code in rotation.cpp.
 inline constexpr int kBandKernelMaxBand = 19;
 
-// Lanes of one rotation: V = 1 is the plain type; V = 3 (an RGB light) runs the three
-// vectors in the lanes of one 4-wide vector (GCC/Clang vector extension; for float one
-// SSE register), so the three cost one pass over the code and its constants. Lane
-// arithmetic is the same IEEE arithmetic as the scalar code.
+// Lanes of one rotation: V = 1 is the plain type; V = 3 (an RGB light, its channels
+// interleaved) runs the three channels in the lanes of one 4-wide vector (GCC/Clang
+// vector extension; for float one SSE register), so the three cost one pass over the
+// code and its constants. Lane arithmetic is the same IEEE arithmetic as the scalar code.
 template <class T, int V>
 struct Lanes;
 template <class T>
@@ -70,7 +70,8 @@ SHTOOL_KERNEL_INLINE P splat(T v) {
 // copy compiled for AVX2 + FMA, which ShRotation takes on CPUs that have them. The FMA
 // copy fuses exactly the a * b + c that the source writes as madd<true>: the compiler's
 // own contraction (off for the runtime) fuses differently in scalar and lane code, and
-// apply_rgb must equal three apply() calls, and rotate_batch set() + apply(), bit for bit.
+// three interleaved channels must equal apply() of each, and rotate_batch set() + apply(),
+// bit for bit.
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__linux__) && \
     !defined(SHTOOL_NO_KERNEL_CLONES)
 #define SHTOOL_FMA_KERNELS 1
@@ -182,8 +183,9 @@ SHTOOL_KERNEL_INLINE void store_pairs_minus(float* p, Lanes4 v) {
 
 // KernelState (what one rotation needs at apply time) is in shtool/rotation.h.
 
-// in[v] / out[v]: vector v of N^2 coefficients. Transforms the first
-// min(order, kKernelMaxOrder)^2 coefficients.
+// in[0] / out[0]: V = 1 one vector, V = 3 three channels interleaved (coefficient i of
+// channel k at [3 i + k]). Transforms the first min(order, kKernelMaxOrder)^2
+// coefficients.
 template <class T, int V>
 using RotationKernel = void (*)(const KernelState<T>&, const T* const* in, T* const* out);
 
@@ -193,7 +195,8 @@ using RotationKernel = void (*)(const KernelState<T>&, const T* const* in, T* co
 template <class T, int V>
 RotationKernel<T, V> rotation_kernel(int method, int order, bool fused);
 // Kernel of band l alone (kKernelMaxOrder <= l <= kBandKernelMaxBand, else null): same
-// methods, same arguments (it transforms coefficients l^2 .. l^2 + 2l).
+// methods, same arguments, except that in[0] and out[0] point at coefficient l^2 (it
+// transforms coefficients l^2 .. l^2 + 2l).
 template <class T, int V>
 RotationKernel<T, V> band_kernel(int method, int l, bool fused);
 
@@ -210,51 +213,84 @@ struct Lanes<T, 2> {
   typedef T type __attribute__((vector_size(2 * sizeof(T))));
 };
 
-template <class T, class P>
-SHTOOL_KERNEL_INLINE P load_lane_vector(const T* const* in, int i) {
-  if constexpr (std::is_same_v<P, T>) return in[0][i];
-  else if constexpr (sizeof(P) == 2 * sizeof(T)) return P{in[0][i], in[1][i]};
-  else return P{in[0][i], in[1][i], in[2][i], T(0)};
-}
-
-template <class T, class P>
-SHTOOL_KERNEL_INLINE void store_lane_vector(const P& y, int i, T* const* out) {
-  if constexpr (std::is_same_v<P, T>) {
-    out[0][i] = y;
+// Three lanes interleaved (an RGB light as the engine stores colour, coefficient i of
+// lane k at p[3 i + k]): the three values of one coefficient are contiguous, so a lane
+// vector moves in one load or store. A 4-wide vector reads and writes one value past
+// them (the next coefficient's lane 0: lanes never mix, and the stores go in order, so
+// the next coefficient's store overwrites it); the last coefficient of a range moves
+// three values only, so nothing outside the arrays is read or written.
+template <class T, class P, bool Last>
+SHTOOL_KERNEL_INLINE P load_interleaved(const T* p) {
+  if constexpr (sizeof(P) == 2 * sizeof(T) || !Last) {  // lanes 0, 1 (a pair) or 0..3
+    P v;
+    __builtin_memcpy(&v, p, sizeof v);
+    return v;
+  } else if constexpr (std::is_same_v<T, float>) {
+    return pairs_plus<3>(p);
   } else {
-    out[0][i] = y[0];
-    out[1][i] = y[1];
-    if constexpr (sizeof(P) == 4 * sizeof(T)) out[2][i] = y[2];
+    return P{p[0], p[1], p[2], T(0)};
+  }
+}
+template <class T, class P, bool Last>
+SHTOOL_KERNEL_INLINE void store_interleaved(T* p, const P& v) {
+  if constexpr (sizeof(P) == 2 * sizeof(T) || !Last) {
+    __builtin_memcpy(p, &v, sizeof v);
+  } else if constexpr (std::is_same_v<T, float>) {
+    store_pairs_plus<3>(p, v);
+  } else {
+    p[0] = v[0];
+    p[1] = v[1];
+    p[2] = v[2];
   }
 }
 
-template <class T, class P>
-SHTOOL_KERNEL_INLINE void load_lanes(const T* const* in, int first, int count, P* x) {
-  for (int i = 0; i < count; ++i) x[i] = load_lane_vector<T, P>(in, first + i);
+// x[j] = coefficient j of V lanes: V = 1 in[j]; V = 3 interleaved, as lane vectors P, or
+// lane `lane` alone when P is T (three doubles without AVX, see Lanes).
+template <int V, class T, class P>
+SHTOOL_KERNEL_INLINE void load_lanes(const T* __restrict in, int count, P* __restrict x, int lane = 0) {
+  if constexpr (V == 1) {
+    for (int j = 0; j < count; ++j) x[j] = in[j];
+  } else if constexpr (std::is_same_v<P, T>) {
+    for (int j = 0; j < count; ++j) x[j] = in[3 * j + lane];
+  } else {
+    for (int j = 0; j + 1 < count; ++j) x[j] = load_interleaved<T, P, false>(in + 3 * j);
+    x[count - 1] = load_interleaved<T, P, true>(in + 3 * (count - 1));
+  }
+}
+template <int V, class T, class P>
+SHTOOL_KERNEL_INLINE void store_lanes(const P* __restrict y, int count, T* __restrict out, int lane = 0) {
+  if constexpr (V == 1) {
+    for (int j = 0; j < count; ++j) out[j] = y[j];
+  } else if constexpr (std::is_same_v<P, T>) {
+    for (int j = 0; j < count; ++j) out[3 * j + lane] = y[j];
+  } else {
+    for (int j = 0; j + 1 < count; ++j) store_interleaved<T, P, false>(out + 3 * j, y[j]);
+    store_interleaved<T, P, true>(out + 3 * (count - 1), y[count - 1]);
+  }
 }
 
-template <class T, class P>
-SHTOOL_KERNEL_INLINE void store_lanes(const P* y, int first, int count, T* const* out) {
-  for (int i = 0; i < count; ++i) store_lane_vector<T, P>(y[i], first + i, out);
-}
-
-// Runs bands(x, y) on coefficients first .. first + count - 1 of V vectors: one vector in
-// place on the caller's arrays, three gathered into lane vectors (see Lanes).
+// Runs bands(x, y) on coefficients First .. First + Count - 1 of V lanes; in[0] and
+// out[0] point at coefficient First. One vector works in place on the caller's arrays;
+// three (interleaved) are loaded into lane vectors, or, for doubles without AVX, lanes
+// 0 and 1 into pairs (one SSE2 register) and lane 2 alone (see Lanes).
 template <class T, int V, int First, int Count, class F>
 SHTOOL_KERNEL_INLINE void run_lanes(const T* const* in, T* const* out, F&& bands) {
   if constexpr (V == 1) {
-    bands(in[0] + First, out[0] + First);
+    bands(in[0], out[0]);
   } else if constexpr (4 * sizeof(T) <= kNativeLaneBytes) {
     Pack<T, 3> x[Count], y[Count];
-    load_lanes<T>(in, First, Count, x);
+    load_lanes<3>(in[0], Count, x);
     bands(static_cast<const Pack<T, 3>*>(x), y);
-    store_lanes<T>(y, First, Count, out);
+    store_lanes<3>(y, Count, out[0]);
   } else {
     Pack<T, 2> x[Count], y[Count];
-    load_lanes<T>(in, First, Count, x);
+    load_lanes<3>(in[0], Count, x);
     bands(static_cast<const Pack<T, 2>*>(x), y);
-    store_lanes<T>(y, First, Count, out);
-    bands(in[2] + First, out[2] + First);
+    store_lanes<3>(y, Count, out[0]);
+    T x2[Count], y2[Count];
+    load_lanes<3>(in[0], Count, x2, 2);
+    bands(static_cast<const T*>(x2), y2);
+    store_lanes<3>(static_cast<const T*>(y2), Count, out[0], 2);
   }
 }
 
@@ -434,7 +470,7 @@ SHTOOL_KERNEL_INLINE void band3_coefficients(P bxxx, P bxxy, P bxyy, P byyy, P b
 // Bands 2 and 3 of one float vector run their contractions with R on 4-wide lane vectors
 // (lane 3 unused): each lane takes the products and sums of one entry of the scalar code
 // (band2_closed, band3_closed below) in the same order, so the results have its bits,
-// which apply_rgb and rotate_batch compute lane by lane. Against the scalar form, 3
+// which the three-channel apply and rotate_batch compute lane by lane. Against the scalar form, 3
 // operations where it takes 9 per group of three entries, plus lane broadcasts.
 template <int L>
 SHTOOL_KERNEL_INLINE Lanes4 lane_splat(Lanes4 v) {

@@ -1,5 +1,5 @@
 // The generated rotation kernels (rotation_kernels_generated.inc) for float, three
-// vectors (RGB) at a time (split as rotation_kernels_float_batch.cpp says).
+// channels (RGB) interleaved (split as rotation_kernels_float_batch.cpp says).
 #include "rotation_kernels_generated.inc"
 
 namespace shtool::detail {

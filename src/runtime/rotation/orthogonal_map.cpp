@@ -24,10 +24,12 @@ Result<OrthogonalMap> OrthogonalMap::make(const Eigen::Matrix3d& q, int order, d
 }
 
 // The rotation keeps each band within itself, so the inversion's signs may come after it.
-void OrthogonalMap::invert_odd_bands(std::span<double> out) const {
+void OrthogonalMap::invert_odd_bands(std::span<double> out, int channels) const {
   if (!reflects_) return;
+  const std::size_t c = static_cast<std::size_t>(channels);
   for (int l = 1; l < order(); l += 2)
-    for (int i = l * l; i < (l + 1) * (l + 1); ++i) out[static_cast<std::size_t>(i)] = -out[static_cast<std::size_t>(i)];
+    for (std::size_t i = c * static_cast<std::size_t>(l * l); i < c * static_cast<std::size_t>((l + 1) * (l + 1)); ++i)
+      out[i] = -out[i];
 }
 
 void OrthogonalMap::apply(std::span<const double> in, std::span<double> out) const {
@@ -35,10 +37,10 @@ void OrthogonalMap::apply(std::span<const double> in, std::span<double> out) con
   invert_odd_bands(out);
 }
 
-void OrthogonalMap::apply_rgb(const std::array<std::span<const double>, 3>& in,
-                              const std::array<std::span<double>, 3>& out) const {
-  rotation_.apply_rgb(in, out);
-  for (const std::span<double>& o : out) invert_odd_bands(o);
+bool OrthogonalMap::apply(std::span<const double> in, std::span<double> out, int channels) const {
+  if (!rotation_.apply(in, out, channels)) return false;
+  invert_odd_bands(out, channels);
+  return true;
 }
 
 namespace {
@@ -53,12 +55,10 @@ Result<Ok> apply_orthogonal_map_t(const Eigen::Matrix3<T>& q, int channels, std:
   Result<OrthogonalMap> map =
       OrthogonalMap::make(q.template cast<double>(), order, std::is_same_v<T, float> ? 1e-6 : 1e-9);
   if (!map) return map.error();
-  std::vector<double> f(sh_count(order)), g(f.size());
-  for (int c = 0; c < channels; ++c) {
-    for (int i = 0; i < sh_count(order); ++i) f[i] = double(coefficients[static_cast<std::size_t>(i) * channels + c]);
-    map.value().apply(f, g);
-    for (int i = 0; i < sh_count(order); ++i) coefficients[static_cast<std::size_t>(i) * channels + c] = T(g[i]);
-  }
+  const std::vector<double> f(coefficients.begin(), coefficients.end());
+  std::vector<double> g(f.size());
+  map.value().apply(f, g, channels);
+  for (std::size_t i = 0; i < g.size(); ++i) coefficients[i] = T(g[i]);
   return Ok{};
 }
 

@@ -247,7 +247,7 @@ void ShRotation<T>::build_pairs() {
         // rounded up to even (paired_rows sums even and odd columns apart): one trip
         // count per band also keeps the inner loop's exit branch predictable. The
         // padding reads at most two values past a class: the next class, or the two
-        // zeroed slots after the band (apply_large_bands).
+        // zeroed slots after the band (apply_bands).
         const int count = detail::x90_row_length(l, r), padded = pair_count(l);
         pair_rows_.insert(pair_rows_.end(), {start[first + r], r, partner >= 0 ? partner : size});
         for (int c = 0; c < padded; ++c) {
@@ -569,15 +569,16 @@ inline void z_band_to_split(int l, const T* __restrict c, const T* __restrict s,
   }
 }
 
-// Band l of a z-rotation, natural order in and out.
-template <class T, class P>
+// Band l of a z-rotation, natural order in and out (entry j of the output at out[S j]:
+// S = 3 writes one lane of three interleaved).
+template <class T, class P, int S = 1>
 inline void z_band(int l, const T* __restrict c, const T* __restrict s, const P* __restrict in,
                    P* __restrict out) {
-  out[l] = in[l];
+  out[S * l] = in[l];
   for (int m = 1; m <= l; ++m) {
     const P p = in[l + m], q = in[l - m];
-    out[l + m] = c[m] * p - s[m] * q;
-    out[l - m] = s[m] * p + c[m] * q;
+    out[S * (l + m)] = c[m] * p - s[m] * q;
+    out[S * (l - m)] = s[m] * p + c[m] * q;
   }
 }
 
@@ -618,7 +619,7 @@ inline void taylor_y_band(int l, T b, T hb2, const T* __restrict s1, const T* __
 // register, written so by z_band_to_split_pairs), so no broadcast is needed per use.
 // Two partial sums (even and odd columns; the padded count is even) halve the chain of
 // dependent additions. This path alone computes zxzxz bands >= pair_from_ in double, for
-// apply() and apply_rgb() alike, so their results stay identical.
+// one vector and three interleaved alike, so their results stay identical.
 using Pair = detail::Pack<double, 2>;
 inline void paired_rows(const int* __restrict rows, int pairs, int count, const double* __restrict val,
                         const Pair* __restrict in, double* __restrict out) {
@@ -641,14 +642,16 @@ inline void paired_rows(const int* __restrict rows, int pairs, int count, const 
   }
 }
 
-// z_band_to_split with every value written twice, into a register-sized pair.
+// z_band_to_split with every value written twice, into a register-sized pair (entry j
+// of the input at in[S j], as in z_band).
+template <int S>
 inline void z_band_to_split_pairs(int l, const double* __restrict c, const double* __restrict s,
                                   const double* __restrict in, Pair* __restrict out) {
   Pair* even = out;
   Pair* odd = out + l + 1;
-  out[(l & 1) ? l + 1 + (l >> 1) : (l >> 1)] = Pair{in[l], in[l]};  // as in z_band_to_split
+  out[(l & 1) ? l + 1 + (l >> 1) : (l >> 1)] = Pair{in[S * l], in[S * l]};  // as in z_band_to_split
   for (int m = 1; m <= l; ++m) {
-    const double p = in[l + m], q = in[l - m];
+    const double p = in[S * (l + m)], q = in[S * (l - m)];
     Pair* half = ((l + m) & 1) ? odd : even;
     const double a = c[m] * p - s[m] * q, b = s[m] * p + c[m] * q;
     half[(l + m) >> 1] = Pair{a, a};
@@ -662,107 +665,16 @@ constexpr int kBandBuffer = 2 * kMaxOrder + 8;
 }  // namespace
 
 template <class T>
-template <int V>
-void ShRotation<T>::apply_reference(const T* const* in, T* const* out) const {
-  if constexpr (V == 3 && 4 * sizeof(T) > detail::kNativeLaneBytes) {
-    for (int k = 0; k < 3; ++k) apply_reference<1>(in + k, out + k);  // see Lanes
-    return;
-  }
-  using P = detail::Pack<T, V>;
-  P x[kBandBuffer], y[kBandBuffer];
-  for (int l = 0; l < order_; ++l) {
-    const int size = 2 * l + 1, first = l * l;
-    const T* block = dense_.data() + block_offset(l);
-    detail::load_lanes<T>(in, first, size, x);
-    for (int r = 0; r < size; ++r) {
-      P sum = block[r * size] * x[0];
-      for (int c = 1; c < size; ++c) sum += block[r * size + c] * x[c];
-      y[r] = sum;
-    }
-    detail::store_lanes<T>(y, first, size, out);
-  }
+int ShRotation<T>::first_table_band() const {
+  if (resolved_ == RotationMethod::reference) return 0;
+  if (resolved_ == RotationMethod::zxzxz && pair_from_ < order_) return pair_from_;
+  return kernel_order_;
 }
 
-// Bands kernel_order_..order_-1 (above the generated kernels), at run time.
+// The generated kernel of the bands below first_table_band() (> 0).
 template <class T>
 template <int V>
-void ShRotation<T>::apply_large_bands(const T* const* in, T* const* out) const {
-  // Lanes of the table-driven bands: as in rotation_kernels.h, but three doubles without
-  // AVX run one vector at a time.
-  constexpr bool kSplit = V == 3 && 4 * sizeof(T) > detail::kNativeLaneBytes;
-  using P = detail::Pack<T, kSplit ? 1 : V>;
-  P x[kBandBuffer], y[kBandBuffer], t1[kBandBuffer], t2[kBandBuffer];
-  const T hb2 = T(0.5) * beta_ * beta_;
-  const int k = resolved_ == RotationMethod::zxzxz      ? 0
-                : resolved_ == RotationMethod::taylor1  ? 1
-                : resolved_ == RotationMethod::taylor15 ? 2
-                                                        : 3;
-  const detail::KernelState<T> state{r_,          cos_a_.data(), sin_a_.data(), cos_b_.data(), sin_b_.data(),
-                                     cos_g_.data(), sin_g_.data(), beta_,         hb2};
-  if constexpr (std::is_same_v<T, double>) {
-    if (k == 0 && pair_from_ < order_) {
-      // zxzxz in double: X90 two rows at a time, one vector at a time (see Lanes).
-      Pair split[kBandBuffer];
-      double t[kBandBuffer];
-      for (int l = pair_from_; l < order_; ++l) {
-        const int first = l * l, count = pair_count(l);
-        const int* rows = pair_rows_.data() + 3 * pair_band_[2 * l];
-        const int* rows_t = pair_rows_.data() + 3 * pair_band_[2 * l + 1];
-        const int pairs = pair_band_[2 * l + 1] - pair_band_[2 * l];
-        const int pairs_t = pair_band_[2 * l + 2] - pair_band_[2 * l + 1];
-        const double* val = pair_val_.data() + pair_band_val_[2 * l];
-        const double* val_t = pair_val_.data() + pair_band_val_[2 * l + 1];
-        split[2 * l + 1] = split[2 * l + 2] = Pair{};  // read (times 0) by the padding
-        for (int vec = 0; vec < V; ++vec) {
-          z_band_to_split_pairs(l, cos_g_.data(), sin_g_.data(), in[vec] + first, split);
-          paired_rows(rows, pairs, count, val, split, t);
-          z_band_to_split_pairs(l, cos_b_.data(), sin_b_.data(), t, split);
-          paired_rows(rows_t, pairs_t, count, val_t, split, t);
-          z_band(l, cos_a_.data(), sin_a_.data(), t, out[vec] + first);
-        }
-      }
-      return;
-    }
-  }
-  for (int l = kernel_order_; l < order_; ++l) {
-    // Generated kernel of this band, when there is one.
-    if (const auto kernel = detail::band_kernel<T, V>(kKernelMethod[k], l, fused_)) {
-      kernel(state, in, out);
-      continue;
-    }
-    const int first = l * l, size = 2 * l + 1;
-    for (int vec = 0; vec < (kSplit ? 3 : 1); ++vec) {
-    detail::load_lanes<T>(in + vec, first, size, x);
-    if (resolved_ == RotationMethod::zxzxz) {
-      // Band l of M(R) = Z(a) X90^T Z(b) X90 Z(g) (Ry(b) = Rx(-90) Rz(b) Rx(+90)).
-      z_band_to_split(l, cos_g_.data(), sin_g_.data(), x, t1);
-      strided_rows(l, x90_start_.data() + first, x90_val_.data() + x90_band_val_[l], t1, t2);
-      z_band_to_split(l, cos_b_.data(), sin_b_.data(), t2, t1);
-      strided_rows(l, x90t_start_.data() + first, x90t_val_.data() + x90t_band_val_[l], t1, t2);
-      z_band(l, cos_a_.data(), sin_a_.data(), t2, y);
-    } else {
-      // Band l of Z(a) T(b) Z(g), T the truncated Taylor series of the y-rotation.
-      P* t = t1 + 2;  // t[-2], t[-1] and t[size], t[size + 1] are 0
-      t1[0] = t1[1] = t[size] = t[size + 1] = P{};
-      z_band(l, cos_g_.data(), sin_g_.data(), x, t);
-      const T* s1 = dy_sub_.data() + first;
-      const T* sd = ddy_diag_.data() + first;
-      const T* s2 = ddy_off2_.data() + first;
-      if (resolved_ == RotationMethod::taylor1) taylor_y_band<1>(l, beta_, hb2, s1, sd, s2, t, t2);
-      else if (resolved_ == RotationMethod::taylor15) taylor_y_band<15>(l, beta_, hb2, s1, sd, s2, t, t2);
-      else taylor_y_band<2>(l, beta_, hb2, s1, sd, s2, t, t2);
-      z_band(l, cos_a_.data(), sin_a_.data(), t2, y);
-    }
-    detail::store_lanes<T>(y, first, size, out + vec);
-    }
-  }
-}
-
-template <class T>
-template <int V>
-void ShRotation<T>::apply_lanes(const T* const* in, T* const* out) const {
-  if (resolved_ == RotationMethod::reference) return apply_reference<V>(in, out);
-  // Generated kernel for the bands below kernel_order_ (every band at orders <= 10).
+void ShRotation<T>::apply_kernel(const T* in, T* out) const {
   const int k = resolved_ == RotationMethod::zxzxz      ? 0
                 : resolved_ == RotationMethod::taylor1  ? 1
                 : resolved_ == RotationMethod::taylor15 ? 2
@@ -776,24 +688,178 @@ void ShRotation<T>::apply_lanes(const T* const* in, T* const* out) const {
                                      sin_g_.data(),
                                      beta_,
                                      T(0.5) * beta_ * beta_};
-  if constexpr (V == 1) kernel1_[k](state, in, out);
-  else kernel3_[k](state, in, out);
-  if (order_ > kernel_order_ || (k == 0 && order_ > pair_from_)) apply_large_bands<V>(in, out);
+  if constexpr (V == 1) kernel1_[k](state, &in, &out);
+  else kernel3_[k](state, &in, &out);
+}
+
+// Bands from..to-1 at run time: the reference blocks, the paired zxzxz rows (double), the
+// generated kernels of single bands, or the table-driven bands.
+template <class T>
+template <int V>
+void ShRotation<T>::apply_bands(int from, int to, const T* in, T* out) const {
+  // Lanes of the table-driven bands: as in rotation_kernels.h, but three doubles without
+  // AVX run one lane at a time.
+  constexpr bool kSplit = V == 3 && 4 * sizeof(T) > detail::kNativeLaneBytes;
+  constexpr int kPasses = kSplit ? 3 : 1;
+  using P = detail::Pack<T, kSplit ? 1 : V>;
+  P x[kBandBuffer], y[kBandBuffer];
+  const int base = from * from;
+  if (resolved_ == RotationMethod::reference) {
+    for (int l = from; l < to; ++l) {
+      const int size = 2 * l + 1;
+      const T* block = dense_.data() + block_offset(l);
+      const T* src = in + V * (l * l - base);
+      T* dst = out + V * (l * l - base);
+      for (int lane = 0; lane < kPasses; ++lane) {
+        detail::load_lanes<V>(src, size, x, lane);
+        for (int r = 0; r < size; ++r) {
+          P sum = block[r * size] * x[0];
+          for (int c = 1; c < size; ++c) sum += block[r * size + c] * x[c];
+          y[r] = sum;
+        }
+        detail::store_lanes<V>(static_cast<const P*>(y), size, dst, lane);
+      }
+    }
+    return;
+  }
+  P t1[kBandBuffer], t2[kBandBuffer];
+  const T hb2 = T(0.5) * beta_ * beta_;
+  const int k = resolved_ == RotationMethod::zxzxz      ? 0
+                : resolved_ == RotationMethod::taylor1  ? 1
+                : resolved_ == RotationMethod::taylor15 ? 2
+                                                        : 3;
+  const detail::KernelState<T> state{r_,          cos_a_.data(), sin_a_.data(), cos_b_.data(), sin_b_.data(),
+                                     cos_g_.data(), sin_g_.data(), beta_,         hb2};
+  if constexpr (std::is_same_v<T, double>) {
+    if (k == 0 && pair_from_ < order_) {
+      // zxzxz in double: X90 two rows at a time, one lane at a time (see Lanes).
+      Pair split[kBandBuffer];
+      double t[kBandBuffer];
+      for (int l = from; l < to; ++l) {
+        const int count = pair_count(l);
+        const int* rows = pair_rows_.data() + 3 * pair_band_[2 * l];
+        const int* rows_t = pair_rows_.data() + 3 * pair_band_[2 * l + 1];
+        const int pairs = pair_band_[2 * l + 1] - pair_band_[2 * l];
+        const int pairs_t = pair_band_[2 * l + 2] - pair_band_[2 * l + 1];
+        const double* val = pair_val_.data() + pair_band_val_[2 * l];
+        const double* val_t = pair_val_.data() + pair_band_val_[2 * l + 1];
+        split[2 * l + 1] = split[2 * l + 2] = Pair{};  // read (times 0) by the padding
+        for (int lane = 0; lane < V; ++lane) {
+          z_band_to_split_pairs<V>(l, cos_g_.data(), sin_g_.data(), in + V * (l * l - base) + lane, split);
+          paired_rows(rows, pairs, count, val, split, t);
+          z_band_to_split_pairs<1>(l, cos_b_.data(), sin_b_.data(), t, split);
+          paired_rows(rows_t, pairs_t, count, val_t, split, t);
+          z_band<double, double, V>(l, cos_a_.data(), sin_a_.data(), t, out + V * (l * l - base) + lane);
+        }
+      }
+      return;
+    }
+  }
+  for (int l = from; l < to; ++l) {
+    const int first = l * l, size = 2 * l + 1;
+    const T* src = in + V * (first - base);
+    T* dst = out + V * (first - base);
+    // Generated kernel of this band, when there is one.
+    if (const auto kernel = detail::band_kernel<T, V>(kKernelMethod[k], l, fused_)) {
+      kernel(state, &src, &dst);
+      continue;
+    }
+    for (int lane = 0; lane < kPasses; ++lane) {
+      detail::load_lanes<V>(src, size, x, lane);
+      if (resolved_ == RotationMethod::zxzxz) {
+        // Band l of M(R) = Z(a) X90^T Z(b) X90 Z(g) (Ry(b) = Rx(-90) Rz(b) Rx(+90)).
+        z_band_to_split(l, cos_g_.data(), sin_g_.data(), x, t1);
+        strided_rows(l, x90_start_.data() + first, x90_val_.data() + x90_band_val_[l], t1, t2);
+        z_band_to_split(l, cos_b_.data(), sin_b_.data(), t2, t1);
+        strided_rows(l, x90t_start_.data() + first, x90t_val_.data() + x90t_band_val_[l], t1, t2);
+        z_band(l, cos_a_.data(), sin_a_.data(), t2, y);
+      } else {
+        // Band l of Z(a) T(b) Z(g), T the truncated Taylor series of the y-rotation.
+        P* t = t1 + 2;  // t[-2], t[-1] and t[size], t[size + 1] are 0
+        t1[0] = t1[1] = t[size] = t[size + 1] = P{};
+        z_band(l, cos_g_.data(), sin_g_.data(), x, t);
+        const T* s1 = dy_sub_.data() + first;
+        const T* sd = ddy_diag_.data() + first;
+        const T* s2 = ddy_off2_.data() + first;
+        if (resolved_ == RotationMethod::taylor1) taylor_y_band<1>(l, beta_, hb2, s1, sd, s2, t, t2);
+        else if (resolved_ == RotationMethod::taylor15) taylor_y_band<15>(l, beta_, hb2, s1, sd, s2, t, t2);
+        else taylor_y_band<2>(l, beta_, hb2, s1, sd, s2, t, t2);
+        z_band(l, cos_a_.data(), sin_a_.data(), t2, y);
+      }
+      detail::store_lanes<V>(static_cast<const P*>(y), size, dst, lane);
+    }
+  }
+}
+
+template <class T>
+template <int V>
+void ShRotation<T>::apply_lanes(const T* in, T* out) const {
+  const int from = first_table_band();
+  if (from > 0) apply_kernel<V>(in, out);
+  if (from < order_) apply_bands<V>(from, order_, in + V * from * from, out + V * from * from);
 }
 
 template <class T>
 void ShRotation<T>::apply_general(const T* in, T* out) const {
-  const T* src[1] = {in};
-  T* dst[1] = {out};
-  apply_lanes<1>(src, dst);
+  apply_lanes<1>(in, out);
 }
 
 template <class T>
-void ShRotation<T>::apply_rgb_general(const std::array<std::span<const T>, 3>& in,
-                                      const std::array<std::span<T>, 3>& out) const {
-  const T* src[3] = {in[0].data(), in[1].data(), in[2].data()};
-  T* dst[3] = {out[0].data(), out[1].data(), out[2].data()};
-  apply_lanes<3>(src, dst);
+void ShRotation<T>::apply_general3(const T* in, T* out) const {
+  apply_lanes<3>(in, out);
+}
+
+// Channel counts other than 3: groups of three channels (a last group of one or two
+// repeats its last channel in the spare lanes, whose results are dropped) copied into
+// interleaved stack buffers, the kernel's bands at once and the others band by band, so
+// that no buffer grows with the order beyond one band.
+template <class T>
+bool ShRotation<T>::apply_channels(std::span<const T> in, std::span<T> out, int channels) const {
+  if (channels < 1) return false;
+  const std::size_t n = static_cast<std::size_t>(order_) * static_cast<std::size_t>(order_);
+  if (in.size() / static_cast<std::size_t>(channels) != n || in.size() % static_cast<std::size_t>(channels) != 0 ||
+      out.size() != in.size())
+    return false;
+  if (channels == 1) {
+    apply(in, out);
+    return true;
+  }
+  if (channels == 3) {  // the sizes were right after all (only reached through a direct call)
+    apply_general3(in.data(), out.data());
+    return true;
+  }
+  const int from = first_table_band();
+  constexpr int kKernelValues = 3 * detail::kKernelMaxOrder * detail::kKernelMaxOrder;
+  constexpr int kBandValues = 3 * (2 * kMaxOrder - 1);
+  T x[kBandValues > kKernelValues ? kBandValues : kKernelValues];
+  T y[sizeof x / sizeof x[0]];
+  const std::size_t stride = static_cast<std::size_t>(channels);
+  for (int c0 = 0; c0 < channels; c0 += 3) {
+    const int lanes = std::min(3, channels - c0);
+    // Coefficients first .. first + count - 1 of the group, to and from x and y.
+    auto gather = [&](int first, int count) {
+      const T* src = in.data() + static_cast<std::size_t>(first) * stride + c0;
+      for (int j = 0; j < count; ++j, src += stride)
+        for (int k = 0; k < 3; ++k) x[3 * j + k] = src[std::min(k, lanes - 1)];
+    };
+    auto scatter = [&](int first, int count) {
+      T* dst = out.data() + static_cast<std::size_t>(first) * stride + c0;
+      for (int j = 0; j < count; ++j, dst += stride)
+        for (int k = 0; k < lanes; ++k) dst[k] = y[3 * j + k];
+    };
+    if (from > 0) {
+      gather(0, from * from);
+      if (order_ == 2 && resolved_ == RotationMethod::zxzxz) detail::order2_rotate3<T>(r_, x, y);
+      else apply_kernel<3>(x, y);
+      scatter(0, from * from);
+    }
+    for (int l = from; l < order_; ++l) {
+      gather(l * l, 2 * l + 1);
+      apply_bands<3>(l, l + 1, x, y);
+      scatter(l * l, 2 * l + 1);
+    }
+  }
+  return true;
 }
 
 // Ivanic-Ruedenberg recurrences (J. Phys. Chem. 1996, with the 1998 errata), written
