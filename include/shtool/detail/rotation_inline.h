@@ -107,13 +107,33 @@ inline void order2_rotate(const T* __restrict r, const T* __restrict in, T* __re
 }
 // order2_rotate of three channels interleaved (in[3 i + k], 12 values): band1_closed
 // on lane vectors, lane k doing channel k's operations in order2_scalar's order, so with
-// its bits. Three loads, three stores and six shuffles move the 12 values, where three
-// order2_rotate calls would need 12 gathers and scatters.
+// its bits. In float three loads, three stores and six shuffles move the 12 values,
+// where three order2_rotate calls would need 12 gathers and scatters; in double (four
+// lanes are two SSE2 registers without AVX) channels 0 and 1 run as pairs.
 template <class T>
 #if defined(__GNUC__)
 __attribute__((always_inline))
 #endif
 inline void order2_rotate3(const T* __restrict r, const T* __restrict in, T* __restrict out) {
+#if defined(__GNUC__) && defined(__SSE2__)
+  if constexpr (std::is_same_v<T, double>) {  // channels 0, 1 as a pair (one SSE2 register), 2 alone
+    typedef double Pair __attribute__((vector_size(16)));
+    Pair x[3], y[3];
+    __builtin_memcpy(&x[0], in + 3, sizeof(Pair));
+    __builtin_memcpy(&x[1], in + 6, sizeof(Pair));
+    __builtin_memcpy(&x[2], in + 9, sizeof(Pair));
+    band1_closed<T, Pair>(r, x, y);
+    const double x2[3] = {in[5], in[8], in[11]};
+    double y2[3];
+    band1_closed<T, T>(r, x2, y2);
+    __builtin_memcpy(out, in, 3 * sizeof(double));
+    for (int i = 0; i < 3; ++i) {
+      __builtin_memcpy(out + 3 + 3 * i, &y[i], sizeof(Pair));
+      out[5 + 3 * i] = y2[i];
+    }
+    return;
+  }
+#endif
 #if defined(__GNUC__)
   typedef T Lanes __attribute__((vector_size(4 * sizeof(T))));
   Lanes a, b, c;  // in[0..3], in[4..7], in[8..11]

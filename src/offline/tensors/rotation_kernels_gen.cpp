@@ -345,8 +345,10 @@ void order_function(std::ostream& o, bool taylor, int n) {
 
 // The entry points of one function of bands (a whole order, or one band above them):
 // one rotation of V lanes (one vector works in place on the caller's array, three
-// interleaved channels are loaded into lane vectors and stored back, run_lanes), and a batch of rotations in lanes. Fused: the FMA copy,
-// name suffix _fma, compiled for AVX2 + FMA (SHTOOL_FMA_TARGET).
+// interleaved channels are loaded into lane vectors and stored back, run_lanes), and a
+// batch of rotations in lanes. Fused: the FMA copy, name suffix _fma, compiled for
+// AVX2 + FMA (SHTOOL_FMA_TARGET), whose three lanes of doubles fill one AVX register
+// (run_lanes' Avx).
 void entry_functions(std::ostream& o, bool taylor, const std::string& body, int first, int count, bool fused) {
   const std::string targs = std::string(fused ? "true, " : "false, ") + (taylor ? "Order, T, " : "T, ");
   const bool whole_order = body.ends_with("_bands");
@@ -357,7 +359,7 @@ void entry_functions(std::ostream& o, bool taylor, const std::string& body, int 
   if (taylor) o << "template <int Order, class T, int V>\n";
   else o << "template <class T, int V>\n";
   o << attr << "void " << entry << "(const KernelState<T>& s, const T* const* in, T* const* out) {\n"
-    << "  run_lanes<T, V, " << first << ", " << count
+    << "  run_lanes<T, V, " << first << ", " << count << (fused ? ", true" : "")
     << ">(in, out, [&s](const auto* __restrict x, auto* __restrict y) SHTOOL_KERNEL_LAMBDA_INLINE {\n"
     << "    " << body << "<" << targs << "std::remove_cvref_t<decltype(*y)>>(s, x, y);\n"
     << "  });\n}\n\n";

@@ -272,12 +272,14 @@ SHTOOL_KERNEL_INLINE void store_lanes(const P* __restrict y, int count, T* __res
 // Runs bands(x, y) on coefficients First .. First + Count - 1 of V lanes; in[0] and
 // out[0] point at coefficient First. One vector works in place on the caller's arrays;
 // three (interleaved) are loaded into lane vectors, or, for doubles without AVX, lanes
-// 0 and 1 into pairs (one SSE2 register) and lane 2 alone (see Lanes).
-template <class T, int V, int First, int Count, class F>
+// 0 and 1 into pairs (one SSE2 register) and lane 2 alone (see Lanes). Avx: the caller
+// is compiled for AVX (the FMA copies, SHTOOL_FMA_TARGET), where four doubles are one
+// register whatever the build's flags.
+template <class T, int V, int First, int Count, bool Avx = false, class F>
 SHTOOL_KERNEL_INLINE void run_lanes(const T* const* in, T* const* out, F&& bands) {
   if constexpr (V == 1) {
     bands(in[0], out[0]);
-  } else if constexpr (4 * sizeof(T) <= kNativeLaneBytes) {
+  } else if constexpr (4 * sizeof(T) <= (Avx ? 32 : kNativeLaneBytes)) {
     Pack<T, 3> x[Count], y[Count];
     load_lanes<3>(in[0], Count, x);
     bands(static_cast<const Pack<T, 3>*>(x), y);
