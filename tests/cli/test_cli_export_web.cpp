@@ -4,8 +4,10 @@
 // over the pixels render covers), unrotated and with the light turned by the URL's
 // quaternion against render under the light `shtool rotate` turned the same way; the page
 // loads nothing from outside the folder; dragging turns the light (to the rotation its
-// status line names); the light rotated once per frame into a float texture draws the same
-// pixels as the light rotated per vertex (?rotate-light=per-vertex, the page's fallback);
+// status line names), a finger's drag (pointer events of type touch) as the mouse's; the
+// light rotated once per frame and colour channel (one gl.POINTS draw of 3 points a frame)
+// draws the same pixels as the light rotated per vertex (?rotate-light=per-vertex, the
+// page's fallback) and as the pass split over more points when WebGL passes fewer varyings;
 // bad inputs are refused with nothing written.
 #include <gtest/gtest.h>
 
@@ -176,14 +178,18 @@ TEST(ExportWeb, PageDrawsWhatRenderDraws) {
   references.push_back(posed_png);
   specs.push_back(pose_dir.string());
   labels.push_back("--pose, bent");
-  const std::size_t probe_view = specs.size(), drag_view = probe_view + 1, vertex_view = probe_view + 2,
-                    fallback_view = probe_view + 3;
+  const std::size_t probe_view = specs.size(), drag_view = probe_view + 1, touch_view = probe_view + 2,
+                    vertex_view = probe_view + 3, fallback_view = probe_view + 4, split_view = probe_view + 5;
   specs.push_back(probe_dir.string());  // compared with the unrotated render below
   specs.push_back(sky_dir.string() + "#drag=80,-50");  // compared with render at the rotation the page shows
+  specs.push_back(sky_dir.string() + "#touch-drag=80,-50");  // the same drag by a finger
   // The per-vertex path, asked for and as the fallback of a WebGL without float render
   // targets, compared with the per-frame page of the same rotation (view 1).
   specs.push_back(sky_dir.string() + "?light-rotation=" + quats[0] + "&rotate-light=per-vertex");
   specs.push_back(sky_dir.string() + "?light-rotation=" + quats[0] + "#no-float-targets");
+  // Order 3 needs 3 texels per channel; with 2 varying vectors the pass takes 2 points per
+  // channel, each rotating once and writing its share. Compared with view 1 as well.
+  specs.push_back(sky_dir.string() + "?light-rotation=" + quats[0] + "#max-varying-vectors=2");
 
   std::vector<std::string> node = {"node", (node_consumers_dir() / "export_web_browser.mjs").string(), "chromium",
                                    views.string()};
@@ -198,13 +204,26 @@ TEST(ExportWeb, PageDrawsWhatRenderDraws) {
   ASSERT_EQ(result["views"].size(), specs.size()) << result.dump(1);
 
   // SwiftShader renders to float textures, so every view but the two per-vertex ones takes
-  // the per-frame pass; the status line says which path drew, and why.
+  // the per-frame pass; the status line says which path drew, and why. The pass is one
+  // gl.POINTS draw a frame, a point per colour channel (two with 2 varying vectors), and the
+  // rotation runs in the points' vertex shader: 3 rotations a frame (6 split). The
+  // per-vertex paths draw no points.
   for (std::size_t k = 0; k < specs.size(); ++k) {
-    const char* path = k == vertex_view     ? "(light rotated per vertex (rotate-light=per-vertex))"
-                       : k == fallback_view ? "(light rotated per vertex: this WebGL cannot render to float textures"
-                                            : "(light rotated once per frame)";
+    const char* path =
+        k == vertex_view     ? "(light rotated per vertex (rotate-light=per-vertex))"
+        : k == fallback_view ? "(light rotated per vertex: this WebGL cannot render to float textures"
+        : k == split_view    ? "(light rotated once per frame: 2 rotations per colour channel, this WebGL passing 2 of "
+                               "the 3 texels per point (MAX_VARYING_VECTORS 2"
+                             : "(light rotated once per frame: one rotation per colour channel)";
     EXPECT_NE(result["status"][k].get<std::string>().find(path), std::string::npos)
         << specs[k] << ": " << result["status"][k];
+    const nlohmann::json& points = result["points"][k];
+    if (k == vertex_view || k == fallback_view) {
+      EXPECT_TRUE(points.empty()) << specs[k] << ": " << points;
+      continue;
+    }
+    EXPECT_FALSE(points.empty()) << specs[k];
+    for (const auto& count : points) EXPECT_EQ(count.get<int>(), k == split_view ? 6 : 3) << specs[k] << ": " << points;
   }
 
   const Rgba unrotated = read_png(references[0]);
@@ -251,14 +270,29 @@ TEST(ExportWeb, PageDrawsWhatRenderDraws) {
             << ", " << turned.mean[1] << ", " << turned.mean[2] << "\n";
   for (int c = 0; c < 3; ++c) EXPECT_LE(dragged.mean[c], 2.0) << "dragged, channel " << c;
   EXPECT_GT(std::max({turned.mean[0], turned.mean[1], turned.mean[2]}), 6.0);
+  // A finger's drag reaches the page as pointer events of type touch and turns the light as
+  // the mouse's drag does: the same rotation, the same pixels.
+  for (const auto& [view, type] : {std::pair{drag_view, "mouse"}, std::pair{touch_view, "touch"}}) {
+    const nlohmann::json& types = result["pointerTypes"][view];
+    EXPECT_FALSE(types.empty()) << specs[view] << ": no pointermove on the canvas";
+    for (const auto& t : types) EXPECT_EQ(t.get<std::string>(), type) << specs[view] << ": " << types;
+  }
+  EXPECT_EQ(result["status"][touch_view], result["status"][drag_view]);
+  const Difference touch_vs_mouse = compare(read_png(result["views"][touch_view].get<std::string>()),
+                                            read_png(result["views"][drag_view].get<std::string>()));
+  std::cout << "touch drag: " << result["status"][touch_view] << "; against the mouse drag: max difference "
+            << touch_vs_mouse.max_both << "\n";
+  EXPECT_EQ(touch_vs_mouse.uncovered_on_page, 0u);
+  EXPECT_LE(touch_vs_mouse.max_both, 1);
 
-  // Per frame against per vertex, same rotation: the texture holds the float32 numbers the
-  // vertex shader would compute with the same generated code, so the pixels agree; 1/255
+  // Per frame against per vertex (and against the split pass), same rotation: the texture
+  // holds the float32 numbers the vertex shader would compute with the same generated code,
+  // passed as flat varyings, so the pixels agree; 1/255
   // leaves room for a driver that orders the arithmetic of the two shaders differently
   // (SwiftShader draws them byte-identical). A texture read at the wrong texel, channel or
   // component moves a coefficient to another band and misses this by far.
   const Rgba per_frame = read_png(result["views"][1].get<std::string>());
-  for (const std::size_t k : {vertex_view, fallback_view}) {
+  for (const std::size_t k : {vertex_view, fallback_view, split_view}) {
     const Rgba per_vertex = read_png(result["views"][k].get<std::string>());
     const Difference paths = compare(per_vertex, per_frame);
     const Difference against_render = compare(per_vertex, read_png(references[1]));
