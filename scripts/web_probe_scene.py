@@ -62,7 +62,7 @@ def front_camera(floor):
     xs = [p[0] for p in positions]
     ys = [-p[2] for p in positions]
     target = (0.5 * (min(xs) + max(xs)), 0.5 * (min(ys) + max(ys)), floor + 0.45)
-    azimuth, elevation, distance = math.radians(35), math.radians(24), 5.6
+    azimuth, elevation, distance = math.radians(35), math.radians(24), 4.9
     toward = (-math.cos(elevation) * math.sin(azimuth), math.cos(elevation) * math.cos(azimuth), math.sin(elevation))
     eye = tuple(t + distance * d for t, d in zip(target, toward))
     return eye, target
