@@ -280,8 +280,12 @@ TEST(ExportWeb, PageDrawsWhatRenderDraws) {
   EXPECT_EQ(result["status"][touch_view], result["status"][drag_view]);
   const Difference touch_vs_mouse = compare(read_png(result["views"][touch_view].get<std::string>()),
                                             read_png(result["views"][drag_view].get<std::string>()));
+  const Difference touch_vs_render = compare(read_png(result["views"][touch_view].get<std::string>()), read_png(dragged_png));
   std::cout << "touch drag: " << result["status"][touch_view] << "; against the mouse drag: max difference "
-            << touch_vs_mouse.max_both << "\n";
+            << touch_vs_mouse.max_both << "; against render: mean " << touch_vs_render.mean[0] << ", "
+            << touch_vs_render.mean[1] << ", " << touch_vs_render.mean[2] << "; max " << touch_vs_render.max_both
+            << "\n";
+  for (int c = 0; c < 3; ++c) EXPECT_LE(touch_vs_render.mean[c], 2.0) << "touch drag, channel " << c;
   EXPECT_EQ(touch_vs_mouse.uncovered_on_page, 0u);
   EXPECT_LE(touch_vs_mouse.max_both, 1);
 
@@ -298,8 +302,10 @@ TEST(ExportWeb, PageDrawsWhatRenderDraws) {
     const Difference against_render = compare(per_vertex, read_png(references[1]));
     std::cout << specs[k] << " against per frame: " << paths.uncovered_on_page
               << " pixels not covered by both; max difference " << paths.max_both << "; mean " << paths.mean[0]
-              << ", " << paths.mean[1] << ", " << paths.mean[2] << "; against render: mean " << against_render.mean[0]
-              << ", " << against_render.mean[1] << ", " << against_render.mean[2] << "\n";
+              << ", " << paths.mean[1] << ", " << paths.mean[2] << "; against render: " << against_render.covered
+              << " pixels covered by render, " << against_render.uncovered_on_page << " of them not by the page; mean "
+              << against_render.mean[0] << ", " << against_render.mean[1] << ", " << against_render.mean[2] << "; max "
+              << against_render.max_both << " where both cover\n";
     EXPECT_EQ(paths.uncovered_on_page, 0u) << specs[k];
     EXPECT_LE(paths.max_both, 1) << specs[k];
     for (int c = 0; c < 3; ++c) EXPECT_LE(against_render.mean[c], 2.0) << specs[k] << ", channel " << c;
