@@ -190,7 +190,7 @@ TEST(ExportWeb, PageDrawsWhatRenderDraws) {
   const std::size_t probe_view = specs.size(), drag_view = probe_view + 1, touch_view = probe_view + 2,
                     vertex_view = probe_view + 3, fallback_view = probe_view + 4, split_view = probe_view + 5,
                     order8_view = probe_view + 6, order8_vertex_view = probe_view + 7,
-                    order8_split_view = probe_view + 8;
+                    order8_split_view = probe_view + 8, broken_view = probe_view + 9;
   specs.push_back(probe_dir.string());  // compared with the unrotated render below
   specs.push_back(sky_dir.string() + "#drag=80,-50");  // compared with render at the rotation the page shows
   specs.push_back(sky_dir.string() + "#touch-drag=80,-50");  // the same drag by a finger
@@ -205,6 +205,9 @@ TEST(ExportWeb, PageDrawsWhatRenderDraws) {
   specs.push_back(order8_dir.string() + "?light-rotation=" + quats[0]);
   specs.push_back(order8_dir.string() + "?light-rotation=" + quats[0] + "&rotate-light=per-vertex");
   specs.push_back(order8_dir.string() + "?light-rotation=" + quats[0] + "#max-varying-vectors=15");
+  // The pass broken on purpose (each texel written with its neighbour's coefficients): the
+  // checks above must see it.
+  specs.push_back(sky_dir.string() + "?light-rotation=" + quats[0] + "#shifted-texels");
 
   std::vector<std::string> node = {"node", (node_consumers_dir() / "export_web_browser.mjs").string(), "chromium",
                                    views.string()};
@@ -330,6 +333,16 @@ TEST(ExportWeb, PageDrawsWhatRenderDraws) {
     EXPECT_LE(paths.max_both, 1) << specs[k];
     for (int c = 0; c < 3; ++c) EXPECT_LE(against_render.mean[c], 2.0) << specs[k] << ", channel " << c;
   }
+
+  // A broken pass misses render by far, and the per-vertex page too.
+  const Rgba broken = read_png(result["views"][broken_view].get<std::string>());
+  const Difference broken_vs_render = compare(broken, read_png(references[1]));
+  const Difference broken_vs_vertex = compare(broken, read_png(result["views"][vertex_view].get<std::string>()));
+  std::cout << "pass broken on purpose (texels shifted): mean |page - render| " << broken_vs_render.mean[0] << ", "
+            << broken_vs_render.mean[1] << ", " << broken_vs_render.mean[2] << "; max against per vertex "
+            << broken_vs_vertex.max_both << "\n";
+  EXPECT_GT(std::max({broken_vs_render.mean[0], broken_vs_render.mean[1], broken_vs_render.mean[2]}), 2.0);
+  EXPECT_GT(broken_vs_vertex.max_both, 1);
 
   // Order 8: the one-point pass against render under the turned order-8 light, and against
   // the per-vertex path and the two-point split, as above.

@@ -10,7 +10,9 @@
 // #touch-drag=DX,DY: the same drag by a finger (DevTools touch events, which the page sees as
 // pointer events of type touch), #no-float-targets: the page's WebGL reports no
 // EXT_color_buffer_float (a WebGL that cannot render to float textures), or
-// #max-varying-vectors=V: its WebGL reports MAX_VARYING_VECTORS = V. Equal DIRs share a
+// #max-varying-vectors=V: its WebGL reports MAX_VARYING_VECTORS = V, or #shifted-texels: the
+// rotation pass broken on purpose (each fragment writes the next texel's coefficients, by
+// editing the shader source WebGL receives), a check that the test sees a broken pass. Equal DIRs share a
 // folder. Per view: its status line in `status`, the vertex counts of its first 16 gl.POINTS
 // draws (the rotation pass, one a frame) in `points`, and the pointerType of each
 // pointermove on the canvas during a drag in `pointerTypes`.
@@ -31,13 +33,14 @@ for ( const spec of specs ) {
 	const drag = fragment.startsWith( 'drag=' ) || touch ? fragment.slice( fragment.indexOf( '=' ) + 1 ).split( ',' ).map( Number ) : null;
 	const noFloatTargets = fragment === 'no-float-targets';
 	const varyingVectors = fragment.startsWith( 'max-varying-vectors=' ) ? Number( fragment.slice( 20 ) ) : null;
-	if ( fragment !== '' && ! drag && ! noFloatTargets && ! varyingVectors )
-		throw new Error( `${spec}: #drag=DX,DY, #touch-drag=DX,DY, #no-float-targets or #max-varying-vectors=V` );
+	const shiftedTexels = fragment === 'shifted-texels';
+	if ( fragment !== '' && ! drag && ! noFloatTargets && ! varyingVectors && ! shiftedTexels )
+		throw new Error( `${spec}: #drag=DX,DY, #touch-drag=DX,DY, #no-float-targets, #max-varying-vectors=V or #shifted-texels` );
 	const rest = hash < 0 ? spec : spec.slice( 0, hash );
 	const q = rest.indexOf( '?' );
 	const dir = resolve( q < 0 ? rest : rest.slice( 0, q ) );
 	if ( ! dirs.includes( dir ) ) dirs.push( dir );
-	views.push( { folder: dirs.indexOf( dir ), query: q < 0 ? '' : rest.slice( q + 1 ), drag, touch, noFloatTargets, varyingVectors } );
+	views.push( { folder: dirs.indexOf( dir ), query: q < 0 ? '' : rest.slice( q + 1 ), drag, touch, noFloatTargets, varyingVectors, shiftedTexels } );
 
 }
 const types = { '.html': 'text/html', '.js': 'text/javascript', '.json': 'application/json', '.glsl': 'text/plain' };
@@ -175,6 +178,17 @@ try {
 		const P = WebGL2RenderingContext.prototype, get = P.getParameter;
 		P.getParameter = function ( name ) { return name === this.MAX_VARYING_VECTORS ? ${v} : get.call( this, name ); };
 	}`;
+	// The rotation pass's fragments write the texel after theirs (the shader's own line
+	// edited); the edit must be found, or the view would test nothing.
+	const shiftTexels = `{
+		const P = WebGL2RenderingContext.prototype, source = P.shaderSource;
+		window.shtoolShifted = 0;
+		P.shaderSource = function ( shader, text ) {
+			const edited = text.replace( 'if (k == t) texel = shtoolRotated[k];', 'if (k == (t + 1) % SHTOOL_TEXELS_PER_POINT) texel = shtoolRotated[k];' );
+			if ( edited !== text ) window.shtoolShifted ++;
+			return source.call( this, shader, edited );
+		};
+	}`;
 	// The vertex count of every gl.POINTS draw (the first few), for every view.
 	await send( 'Page.addScriptToEvaluateOnNewDocument', { source: `{
 		window.shtoolPointDraws = [];
@@ -185,10 +199,10 @@ try {
 		};
 	}` }, sessionId );
 	const evaluate = async ( expression ) => ( await send( 'Runtime.evaluate', { expression, returnByValue: true }, sessionId ) ).result.value;
-	for ( const [ i, { folder, query, drag, touch, noFloatTargets, varyingVectors } ] of views.entries() ) {
+	for ( const [ i, { folder, query, drag, touch, noFloatTargets, varyingVectors, shiftedTexels } ] of views.entries() ) {
 
 		current = folder;
-		const source = noFloatTargets ? hideFloatTargets : varyingVectors ? fewVaryings( varyingVectors ) : null;
+		const source = noFloatTargets ? hideFloatTargets : varyingVectors ? fewVaryings( varyingVectors ) : shiftedTexels ? shiftTexels : null;
 		const hidden = source ? ( await send( 'Page.addScriptToEvaluateOnNewDocument', { source }, sessionId ) ).identifier : null;
 		await send( 'Page.navigate', { url: `${origin}/${folder}/index.html${query ? '?' + query : ''}` }, sessionId );
 		let title = '';
@@ -233,6 +247,7 @@ try {
 			if ( touch ) await send( 'Emulation.setTouchEmulationEnabled', { enabled: false }, sessionId );
 
 		}
+		if ( shiftedTexels && ! await evaluate( 'window.shtoolShifted' ) ) throw new Error( `view ${i}: #shifted-texels found no rotation pass to break` );
 		result.status.push( await evaluate( "document.getElementById('status').textContent" ) );
 		result.points.push( await evaluate( 'window.shtoolPointDraws' ) );
 		result.pointerTypes.push( drag ? await evaluate( 'window.shtoolPointerTypes' ) : [] );
