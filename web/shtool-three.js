@@ -237,7 +237,7 @@ function lightUniformLines( order ) {
 // (MAX_VARYING_VECTORS, at least 15: orders up to 7 everywhere, 8 where it is 16 or more)
 // and draws points that wide (ALIASED_POINT_SIZE_RANGE); otherwise each channel takes the
 // fewest points that fit, each running the rotation once and writing its share.
-// `limits` overrides the two WebGL limits ({ varyingVectors, pointSize }). Needs
+// `limits`: those two, { varyingVectors, pointSize } (rotationPassLimits(renderer)). Needs
 // EXT_color_buffer_float (WebGL2 renders to RGBA32F only with it): check
 // floatRenderTargets(renderer) first.
 export function lightRotationPass( { rotateGlsl, order, light, limits } ) {
