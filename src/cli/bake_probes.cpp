@@ -27,7 +27,8 @@ void setup_bake_probes(CLI::App& app) {
   sub->add_option("--threads", req->threads, "worker threads (0: all cores)")->capture_default_str();
   sub->add_option("--encoding", req->encoding,
                   "what each probe stores: l2 (the order-N coefficients), l1 (bands 0 and 1, non-linear L1 "
-                  "reconstruction; --order >= 2) or zh3 (bands 0 and 1 and a zonal band-2 coefficient; --order >= 3)")
+                  "reconstruction; --order >= 2) or zh3 (bands 0 and 1 and a zonal band-2 coefficient, --zh3-fit, --zh3-axis; "
+                  "--order >= 3 for the explicit fit)")
       ->capture_default_str();
   sub->add_option("--zh3-fit", req->zh3_fit,
                   "zh3: explicit (default; the zonal coefficient fitted to band 2 and stored) or hallucinated "

@@ -674,7 +674,8 @@ TEST(CliBakeProbes, Zh3FitAndAxisChoicesAreTheEncodingOfTheL2Bake) {
       }
       for (const Eigen::Vector3d& n : test_normals()) {
         EXPECT_EQ(g.value().irradiance(p, n), shtool::zh3_irradiance(want, ch.a, n)) << "probe " << p;
-        EXPECT_EQ(f.value().irradiance(p, n.cast<float>()), shtool::zh3_irradiance(wantf, ch.a, n.cast<float>()))
+        const Eigen::Vector3f nf = n.cast<float>();
+        EXPECT_EQ(f.value().irradiance(p, nf), shtool::zh3_irradiance(wantf, ch.a, nf))
             << "probe " << p;
       }
       three.coefficients.insert(three.coefficients.end(), want.l1.coefficients.begin(), want.l1.coefficients.end());
@@ -759,6 +760,17 @@ TEST(CliBakeProbes, LoaderReadsKindVersion10And11AndRefusesANewerMajor) {
   ASSERT_FALSE(bad.ok());
   EXPECT_NE(bad.error().message.find("array 'zonal' in a grid whose encoding stores none"), std::string::npos)
       << bad.error().message;
+  // The schema refuses both too (and accepts the 1.0 zh3 table without zh3_fit).
+  const std::string source = SHTOOL_SOURCE_DIR;
+  for (const auto& [table, valid] : {std::pair<const shtool::Table*, bool>{&hal_zonal, false},
+                                     std::pair<const shtool::Table*, bool>{&unnamed, false},
+                                     std::pair<const shtool::Table*, bool>{&old, true}}) {
+    const fs::path file = scratch("kv_schema.json");
+    shtool::write_table(*table, file, shtool::TableEncoding::json);
+    const CommandResult v = run_command({SHTOOL_PYTHON, source + "/tests/validate_json_schema.py",
+                                         source + "/schemas/probe-grid.schema.json", file.string()});
+    EXPECT_EQ(v.exit_code, valid ? 0 : 1) << table->meta << "\n" << v.out << v.err;
+  }
   shtool::Table unknown_fit = h;
   nlohmann::json hm = nlohmann::json::parse(h.meta);
   hm["zh3_fit"] = "solved";
