@@ -366,6 +366,39 @@ TEST(ExportWeb, PageDrawsWhatRenderDraws) {
   }
 }
 
+// An encoded grid reaches three.js as bake-probes --threejs writes it: zh3 as the order-3
+// SH it stands for (explicit and hallucinated fits), the same bytes; l1, which three.js
+// cannot reconstruct, refused with nothing written.
+TEST(ExportWeb, EncodedProbeGridsAsBakeProbesWritesThemForThree) {
+  SHTOOL_REQUIRE_NODE_CONSUMERS();
+  const std::vector<std::string> bake = {"bake-probes", kSpotObj,  "--grid",    "3,2,2", "--env", bakes().sky.string(),
+                                         "--samples",   "32",      "--bounces", "1",     "--order", "3"};
+  for (const char* fit : {"explicit", "hallucinated"}) {
+    const fs::path table = scratch(std::string("zh3-") + fit + ".shtb"), three = scratch(std::string("three-") + fit),
+                   page = scratch(std::string("page-zh3-") + fit);
+    fs::remove_all(three);
+    fs::remove_all(page);
+    fs::create_directories(three);
+    std::vector<std::string> args = bake;
+    args.insert(args.end(), {"--encoding", "zh3", "--zh3-fit", fit, "--out", table.string(), "--threejs", three.string()});
+    must(run_shtool(args));
+    must(run_shtool({"export-web", kSpotObj, "--fit", bakes().fit.string(), "--light", bakes().sky.string(),
+                     "--probes", table.string(), "--out", page.string()}));
+    EXPECT_EQ(read_file(page / "probes/probes.bin"), read_file(three / "probes.bin")) << fit;
+    EXPECT_EQ(read_json(page / "probes/probes.json"), read_json(three / "probes.json")) << fit;
+  }
+  const fs::path l1 = scratch("l1.shtb"), page = scratch("page-l1");
+  fs::remove_all(page);
+  std::vector<std::string> args = bake;
+  args.insert(args.end(), {"--encoding", "l1", "--out", l1.string()});
+  must(run_shtool(args));
+  const CommandResult r = run_shtool({"export-web", kSpotObj, "--fit", bakes().fit.string(), "--light",
+                                      bakes().sky.string(), "--probes", l1.string(), "--out", page.string()});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("non-linear L1"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(page));
+}
+
 TEST(ExportWeb, RefusesBadInputsAndWritesNothing) {
   SHTOOL_REQUIRE_NODE_CONSUMERS();  // with three.js present, only the input is at fault
   const fs::path tetra = scratch("tetra.obj"), tetra_fit = scratch("tetra.shtb"), light9 = scratch("light9.json");

@@ -70,9 +70,7 @@ GridEncoding parse_encoding(const BakeProbesRequest& r) {
 }
 
 // Why three.js cannot take an l1 grid (checked before the bake and by three_coefficients).
-const char* const kThreeL1 =
-    "--threejs with --encoding l1: three.js's LightProbeGridWebGL evaluates order-3 SH linearly and cannot "
-    "reconstruct non-linear L1; use --encoding zh3 or l2 for three.js";
+const std::string kThreeL1 = std::string("--threejs with --encoding l1: ") + interop::kThreeCannotShowL1;
 
 }  // namespace
 
@@ -86,13 +84,10 @@ std::vector<double> three_coefficients(const EncodedProbes& probes, int& order) 
   std::vector<double> out;
   out.reserve(count * 27);
   for (std::size_t p = 0; p < count; ++p) {
-    Zh3Probe<double> zh3;
-    std::copy_n(probes.coefficients.begin() + p * 12, 12, zh3.l1.coefficients.begin());
-    for (int c = 0; c < 3; ++c)
-      zh3.zonal[c] = e.stores_zonal() ? probes.zonal[p * 3 + c] : zh3_hallucinated_zonal(zh3.l1, e.zh3_axis, c);
-    const std::array<double, 15> band2 = zh3_band2(zh3, e.zh3_axis);
-    out.insert(out.end(), zh3.l1.coefficients.begin(), zh3.l1.coefficients.end());
-    out.insert(out.end(), band2.begin(), band2.end());
+    const std::array<double, 27> sh = interop::zh3_as_order3_sh(
+        std::span<const double, 12>(probes.coefficients.data() + p * 12, 12),
+        e.stores_zonal() ? probes.zonal.data() + p * 3 : nullptr, e.zh3_axis);
+    out.insert(out.end(), sh.begin(), sh.end());
   }
   return out;
 }
