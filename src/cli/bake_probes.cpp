@@ -47,11 +47,7 @@ void setup_bake_probes(CLI::App& app) {
     if (r.mpi_rank != 0) return;  // rank 0 reports the job
     if (r.sharded) std::cerr << "bake-probes: shard of probes [" << r.first_probe << ", " << r.end_probe << ")\n";
     std::cerr << "bake-probes: " << r.probes << " probes (" << r.resolution[0] << " x " << r.resolution[1] << " x "
-              << r.resolution[2] << ", encoding " << req->encoding
-              << (req->encoding == "zh3" ? " " + (req->zh3_fit.empty() ? std::string("explicit") : req->zh3_fit) + ", " +
-                                              (req->zh3_axis.empty() ? std::string("luminance") : req->zh3_axis) + " axis"
-                                        : std::string())
-              << "), " << r.triangles << " triangles, " << r.lights << " lights; " << r.rays
+              << r.resolution[2] << ", encoding " << r.encoding << "), " << r.triangles << " triangles, " << r.lights << " lights; " << r.rays
               << " rays in " << r.seconds << " s; " << r.invalid << " invalid probes filled from neighbours";
     if (r.mpi_ranks) std::cerr << " (this rank's share; on each of " << r.mpi_ranks << " MPI ranks)";
     if (r.unfilled) std::cerr << " (" << r.unfilled << " with no valid neighbour left at 0)";

@@ -294,6 +294,10 @@ BakeProbesReport run_bake_probes(const BakeProbesRequest& r) {
   report.sharded = shard.has_value() && !mpi;
   report.first_probe = range.begin;
   report.end_probe = range.end;
+  report.encoding = std::string(probe_encoding_name(encoding.encoding));
+  if (encoding.encoding == ProbeEncoding::zh3)
+    report.encoding += " " + std::string(zh3_fit_name(encoding.zh3_fit)) + ", " +
+                       std::string(zh3_axis_name(encoding.zh3_axis)) + " axis";
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return report;
 }

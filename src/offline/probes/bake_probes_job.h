@@ -57,6 +57,7 @@ struct BakeProbesReport {
   bool sharded = false;
   int mpi_rank = 0, mpi_ranks = 0;            // ranks: 0 without --mpi
   std::size_t first_probe = 0, end_probe = 0;
+  std::string encoding;  // as stored: "l2", "l1", "zh3 explicit, luminance axis", ...
 };
 
 // "NX,NY,NZ" and "X0,Y0,Z0,X1,Y1,Z1" parsed and checked; InputError naming the option.
