@@ -10,6 +10,8 @@
 #include "common/input_error.h"
 #include "common/parallel_for.h"
 #include "shtool/orthogonal_map.h"
+#include "shtool/rotation.h"
+#include "shtool/sh.h"
 
 namespace shtool::interop {
 
@@ -62,22 +64,56 @@ void check_scene_finite(const SplatScene& s, const std::string& name) {
   }
 }
 
+SplatShLanes::SplatShLanes(const OrthogonalMap& map) : order_(map.order()), reflects_(map.reflects()) {
+  // The rotation OrthogonalMap applies (its proper part, the reference method).
+  ShRotation<double> rotation(order_, nullptr);
+  rotation.set(map.proper(), RotationMethod::reference);
+  const std::span<const double> blocks = rotation.reference_blocks();
+  blocks_.assign(blocks.begin(), blocks.end());
+}
+
+void SplatShLanes::apply(const double* in, double* out) const {
+  constexpr int L = kLanes;
+  const int rest = sh_count(order_) - 1;
+  for (int c = 0; c < 3; ++c) {
+    const double* x = in + c * rest * L;
+    double* y = out + c * rest * L;
+    for (int l = 1; l < order_; ++l) {
+      const int size = 2 * l + 1, first = l * l - 1;
+      const double* block = blocks_.data() + l * (4 * l * l - 1) / 3;
+      const double* xl = x + first * L;
+      double* yl = y + first * L;
+      for (int r = 0; r < size; ++r) {
+        // As ShRotation's reference apply: the first product, then each next one added.
+        double sum[L];
+        const double* row = block + r * size;
+        for (int s = 0; s < L; ++s) sum[s] = row[0] * xl[s];
+        for (int k = 1; k < size; ++k)
+          for (int s = 0; s < L; ++s) sum[s] += row[k] * xl[k * L + s];
+        if (reflects_ && (l & 1))
+          for (int s = 0; s < L; ++s) yl[r * L + s] = -sum[s];
+        else
+          for (int s = 0; s < L; ++s) yl[r * L + s] = sum[s];
+      }
+    }
+  }
+}
+
 void transform_splat_scene(SplatScene& s, const Eigen::Matrix3d& m, double scale, const Eigen::Vector3d& t,
                            int threads) {
   if (m.isIdentity(0) && scale == 1 && t.isZero(0)) return;
   Result<OrthogonalMap> made = OrthogonalMap::make(m, s.degree + 1, 1e-6);
   if (!made) throw InputError("a splat transform: " + made.error().message);
   const OrthogonalMap& map = made.value();
+  const SplatShLanes lanes(map);
   const Eigen::Quaterniond qp(map.proper());
   const float log_scale = static_cast<float>(std::log(scale));
-  const int coefficients = (s.degree + 1) * (s.degree + 1);
+  const std::size_t rest = static_cast<std::size_t>((s.degree + 1) * (s.degree + 1)) - 1;
   const std::size_t stride = s.sh_stride();
   constexpr std::size_t kChunk = 4096;
   parallel_for((s.count + kChunk - 1) / kChunk, threads, [&](std::size_t chunk) {
-    std::array<std::vector<double>, 3> f, g;
-    for (int c = 0; c < 3; ++c) f[c].resize(coefficients), g[c].resize(coefficients);
-    const std::size_t end = std::min(s.count, (chunk + 1) * kChunk);
-    for (std::size_t i = chunk * kChunk; i < end; ++i) {
+    const std::size_t begin = chunk * kChunk, end = std::min(s.count, (chunk + 1) * kChunk);
+    for (std::size_t i = begin; i < end; ++i) {
       const Eigen::Vector3d p(s.position[3 * i], s.position[3 * i + 1], s.position[3 * i + 2]);
       const Eigen::Vector3d moved = scale * (m * p) + t;
       for (int k = 0; k < 3; ++k) s.position[3 * i + k] = static_cast<float>(moved[k]);
@@ -86,14 +122,24 @@ void transform_splat_scene(SplatScene& s, const Eigen::Matrix3d& m, double scale
       q[0] = static_cast<float>(out.w()), q[1] = static_cast<float>(out.x()), q[2] = static_cast<float>(out.y()),
       q[3] = static_cast<float>(out.z());
       for (int k = 0; k < 3; ++k) s.log_scale[3 * i + k] += log_scale;
-      if (coefficients > 1) {
-        float* sh = &s.sh[i * stride];
-        for (int c = 0; c < 3; ++c)
-          for (int k = 0; k < coefficients; ++k) f[c][k] = sh[3 * k + c];
-        map.apply_rgb({f[0], f[1], f[2]}, {g[0], g[1], g[2]});
-        for (int k = 1; k < coefficients; ++k)
-          for (int c = 0; c < 3; ++c) sh[3 * k + c] = static_cast<float>(g[c][k]);
-      }
+    }
+    if (rest == 0) return;
+    // The SH of SplatShLanes::kLanes splats at once, channel-major in the lanes.
+    constexpr std::size_t L = SplatShLanes::kLanes;
+    double in[45 * L], out[45 * L];
+    for (std::size_t b = begin; b < end; b += L) {
+      const std::size_t n = std::min(L, end - b);
+      for (int c = 0; c < 3; ++c)
+        for (std::size_t k = 1; k <= rest; ++k) {
+          double* x = in + (c * rest + k - 1) * L;
+          for (std::size_t j = 0; j < n; ++j) x[j] = s.sh[(b + j) * stride + 3 * k + c];
+          for (std::size_t j = n; j < L; ++j) x[j] = 0;
+        }
+      lanes.apply(in, out);
+      for (int c = 0; c < 3; ++c)
+        for (std::size_t k = 1; k <= rest; ++k)
+          for (std::size_t j = 0; j < n; ++j)
+            s.sh[(b + j) * stride + 3 * k + c] = static_cast<float>(out[(c * rest + k - 1) * L + j]);
     }
   });
 }
