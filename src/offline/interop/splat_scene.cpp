@@ -72,6 +72,12 @@ SplatShLanes::SplatShLanes(const OrthogonalMap& map) : order_(map.order()), refl
   blocks_.assign(blocks.begin(), blocks.end());
 }
 
+// Also compiled for x86-64-v3 (AVX2: four lanes a vector, not two) and chosen at load
+// time where the CPU has it; products and sums stay separate roundings (the offline code
+// is built with -ffp-contract=off), so both copies give the same bits.
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__linux__)
+__attribute__((target_clones("arch=x86-64-v3", "default")))
+#endif
 void SplatShLanes::apply(const double* in, double* out) const {
   constexpr int L = kLanes;
   const int rest = sh_count(order_) - 1;

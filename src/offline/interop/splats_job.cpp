@@ -108,7 +108,19 @@ void transform_ply_streamed(const TransformSplatsRequest& r, const Eigen::Matrix
     const float f = static_cast<float>(value);
     std::memcpy(record + offset, &f, 4);
   };
+  // Records of float32 alone (3DGS's) are checked as one run of words, in SIMD lanes.
+  const bool all_float = floats.size() * 4 == size;
+  auto finite_run = [](const char* at, std::size_t words) {
+    std::uint32_t bad = 0;
+    for (std::size_t w = 0; w < words; ++w) {
+      std::uint32_t b;
+      std::memcpy(&b, at + 4 * w, 4);
+      bad |= static_cast<std::uint32_t>((b & 0x7f800000u) == 0x7f800000u);
+    }
+    return bad == 0;
+  };
   auto finite = [&](const char* record) {
+    if (all_float) return finite_run(record, floats.size());
     std::uint32_t bad = 0;
     for (std::size_t o : floats) {
       std::uint32_t b;
@@ -116,6 +128,13 @@ void transform_ply_streamed(const TransformSplatsRequest& r, const Eigen::Matrix
       bad |= static_cast<std::uint32_t>((b & 0x7f800000u) == 0x7f800000u);
     }
     return bad == 0;
+  };
+  // The first of records[0, count) that is not finite, or count.
+  auto first_non_finite = [&](const char* records, std::size_t count) {
+    if (all_float && finite_run(records, count * floats.size())) return count;
+    std::size_t j = 0;
+    while (j < count && finite(records + j * size)) ++j;
+    return j;
   };
   // The name of the first property of a record that is not finite (its message).
   auto non_finite = [&](const char* record) -> const std::string& {
@@ -127,8 +146,7 @@ void transform_ply_streamed(const TransformSplatsRequest& r, const Eigen::Matrix
   rewrite_binary_ply(bytes, v, out, threads, [&](char* records, std::size_t first, std::size_t count) -> std::string {
     // Up to the first splat whose input is not finite; a splat before it that overflows
     // after the transform is the problem reported, as one splat after another would find.
-    std::size_t limit = 0;
-    while (limit < count && finite(records + limit * size)) ++limit;
+    const std::size_t limit = first_non_finite(records, count);
     for (std::size_t j = 0; j < limit; ++j) {
       char* s = records + j * size;
       const Eigen::Vector3d p(get(s, position[0]), get(s, position[1]), get(s, position[2]));
@@ -168,7 +186,8 @@ void transform_ply_streamed(const TransformSplatsRequest& r, const Eigen::Matrix
       }
     }
     // A finite value beyond float32 (3.4e38) was stored as inf.
-    for (std::size_t j = 0; j < limit; ++j)
+    const std::size_t overflow = first_non_finite(records, limit);
+    for (std::size_t j = overflow; j < limit; ++j)
       if (!finite(records + j * size))
         return "splat " + std::to_string(first + j) + ": '" + non_finite(records + j * size) +
                "' overflows its type after the transform (--scale or --translate too large for " + r.in.string() + ")";
