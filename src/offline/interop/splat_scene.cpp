@@ -4,6 +4,7 @@
 #include <array>
 #include <cctype>
 #include <cmath>
+#include <cstring>
 
 #include <Eigen/Geometry>
 
@@ -79,27 +80,39 @@ SplatShLanes::SplatShLanes(const OrthogonalMap& map) : order_(map.order()), refl
 __attribute__((target_clones("arch=x86-64-v3", "default")))
 #endif
 void SplatShLanes::apply(const double* in, double* out) const {
-  constexpr int L = kLanes;
+  // Two vectors of four lanes (one register each under AVX2, two SSE2 registers
+  // otherwise), written out: left to itself GCC vectorised along the rows, with shuffles.
+  using V = double __attribute__((vector_size(4 * sizeof(double))));
+  static_assert(kLanes == 8);
+  // By reference: a vector passed by value would change the baseline copy's ABI (-Wpsabi).
+  auto load = [](V& v, const double* p) { std::memcpy(&v, p, sizeof v); };
+  auto store = [](double* p, const V& v) { std::memcpy(p, &v, sizeof v); };
   const int rest = sh_count(order_) - 1;
   for (int c = 0; c < 3; ++c) {
-    const double* x = in + c * rest * L;
-    double* y = out + c * rest * L;
+    const double* x = in + c * rest * kLanes;
+    double* y = out + c * rest * kLanes;
     for (int l = 1; l < order_; ++l) {
       const int size = 2 * l + 1, first = l * l - 1;
       const double* block = blocks_.data() + l * (4 * l * l - 1) / 3;
-      const double* xl = x + first * L;
-      double* yl = y + first * L;
+      const double* xl = x + first * kLanes;
+      double* yl = y + first * kLanes;
+      const bool negate = reflects_ && (l & 1);
       for (int r = 0; r < size; ++r) {
         // As ShRotation's reference apply: the first product, then each next one added.
-        double sum[L];
         const double* row = block + r * size;
-        for (int s = 0; s < L; ++s) sum[s] = row[0] * xl[s];
-        for (int k = 1; k < size; ++k)
-          for (int s = 0; s < L; ++s) sum[s] += row[k] * xl[k * L + s];
-        if (reflects_ && (l & 1))
-          for (int s = 0; s < L; ++s) yl[r * L + s] = -sum[s];
-        else
-          for (int s = 0; s < L; ++s) yl[r * L + s] = sum[s];
+        V a, b;
+        load(a, xl);
+        load(b, xl + 4);
+        V lo = row[0] * a, hi = row[0] * b;
+        for (int k = 1; k < size; ++k) {
+          load(a, xl + k * kLanes);
+          load(b, xl + k * kLanes + 4);
+          lo += row[k] * a;
+          hi += row[k] * b;
+        }
+        if (negate) lo = -lo, hi = -hi;
+        store(yl + r * kLanes, lo);
+        store(yl + r * kLanes + 4, hi);
       }
     }
   }

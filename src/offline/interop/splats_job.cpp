@@ -176,13 +176,24 @@ void transform_ply_streamed(const TransformSplatsRequest& r, const Eigen::Matrix
       double in[45 * L], out[45 * L];
       for (std::size_t b = 0; b < limit; b += L) {
         const std::size_t n = std::min(L, limit - b);
-        for (std::size_t j = 0; j < rest.size(); ++j) {
-          for (std::size_t s = 0; s < n; ++s) in[j * L + s] = get(records + (b + s) * size, rest[j]);
-          for (std::size_t s = n; s < L; ++s) in[j * L + s] = 0;
+        char* base = records + b * size;
+        if (n == L) {  // the loops over lanes unrolled
+          for (std::size_t j = 0; j < rest.size(); ++j)
+            for (std::size_t s = 0; s < L; ++s) in[j * L + s] = get(base + s * size, rest[j]);
+        } else {
+          for (std::size_t j = 0; j < rest.size(); ++j) {
+            for (std::size_t s = 0; s < n; ++s) in[j * L + s] = get(base + s * size, rest[j]);
+            for (std::size_t s = n; s < L; ++s) in[j * L + s] = 0;
+          }
         }
         lanes.apply(in, out);
-        for (std::size_t j = 0; j < rest.size(); ++j)
-          for (std::size_t s = 0; s < n; ++s) put(records + (b + s) * size, rest[j], out[j * L + s]);
+        if (n == L) {
+          for (std::size_t j = 0; j < rest.size(); ++j)
+            for (std::size_t s = 0; s < L; ++s) put(base + s * size, rest[j], out[j * L + s]);
+        } else {
+          for (std::size_t j = 0; j < rest.size(); ++j)
+            for (std::size_t s = 0; s < n; ++s) put(base + s * size, rest[j], out[j * L + s]);
+        }
       }
     }
     // A finite value beyond float32 (3.4e38) was stored as inf.
