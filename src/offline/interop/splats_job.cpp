@@ -110,11 +110,11 @@ void transform_ply_streamed(const TransformSplatsRequest& r, const Eigen::Matrix
   };
   // Records of float32 alone (3DGS's) are checked as one run of words, in SIMD lanes.
   const bool all_float = floats.size() * 4 == size;
-  auto finite_run = [](const char* at, std::size_t words) {
+  auto finite_run = [](const char* from, std::size_t words) {
     std::uint32_t bad = 0;
     for (std::size_t w = 0; w < words; ++w) {
       std::uint32_t b;
-      std::memcpy(&b, at + 4 * w, 4);
+      std::memcpy(&b, from + 4 * w, 4);
       bad |= static_cast<std::uint32_t>((b & 0x7f800000u) == 0x7f800000u);
     }
     return bad == 0;
@@ -173,26 +173,26 @@ void transform_ply_streamed(const TransformSplatsRequest& r, const Eigen::Matrix
     }
     if (!rest.empty()) {
       constexpr std::size_t L = SplatShLanes::kLanes;
-      double in[45 * L], out[45 * L];
+      double sh_in[45 * L], sh_out[45 * L];
       for (std::size_t b = 0; b < limit; b += L) {
         const std::size_t n = std::min(L, limit - b);
         char* base = records + b * size;
         if (n == L) {  // the loops over lanes unrolled
           for (std::size_t j = 0; j < rest.size(); ++j)
-            for (std::size_t s = 0; s < L; ++s) in[j * L + s] = get(base + s * size, rest[j]);
+            for (std::size_t s = 0; s < L; ++s) sh_in[j * L + s] = get(base + s * size, rest[j]);
         } else {
           for (std::size_t j = 0; j < rest.size(); ++j) {
-            for (std::size_t s = 0; s < n; ++s) in[j * L + s] = get(base + s * size, rest[j]);
-            for (std::size_t s = n; s < L; ++s) in[j * L + s] = 0;
+            for (std::size_t s = 0; s < n; ++s) sh_in[j * L + s] = get(base + s * size, rest[j]);
+            for (std::size_t s = n; s < L; ++s) sh_in[j * L + s] = 0;
           }
         }
-        lanes.apply(in, out);
+        lanes.apply(sh_in, sh_out);
         if (n == L) {
           for (std::size_t j = 0; j < rest.size(); ++j)
-            for (std::size_t s = 0; s < L; ++s) put(base + s * size, rest[j], out[j * L + s]);
+            for (std::size_t s = 0; s < L; ++s) put(base + s * size, rest[j], sh_out[j * L + s]);
         } else {
           for (std::size_t j = 0; j < rest.size(); ++j)
-            for (std::size_t s = 0; s < n; ++s) put(base + s * size, rest[j], out[j * L + s]);
+            for (std::size_t s = 0; s < n; ++s) put(base + s * size, rest[j], sh_out[j * L + s]);
         }
       }
     }
