@@ -153,7 +153,7 @@ constexpr double kSplitAngle = 0.1;
 // The re-seated last lobe (see varpro_search): the next grid maxima of what the other
 // lobes leave, at least this far (radians) from the lobe they replace, this many of them.
 // On the fit fixture's transfer vectors at N = 4 one re-seat lowers the mean residual over
-// the best known from 1.46 to 1.43 for about 14 % more fit time on the bunny; two lower it
+// the best known from 1.46 to 1.43 for 0-14 % more fit time on the bunny; two lower it
 // to 1.36 but cost about 50 % more there, which puts the bunny's fit above its simulation.
 constexpr int kReseats = 1;
 constexpr double kReseatMinAngle = 0.25;
