@@ -6,12 +6,17 @@
 //                                           each), rotation + scale + translation;
 //                                           counter splats_per_s, and the file size.
 //   BM_CopyFile/splats:S                    read the same file and write it back
-//                                           (the floor: the job is I/O bound there).
+//                                           (read_input_file, write_file_atomically).
 //   BM_ConvertSplats/format:F/splats:S      the job from format F to F (1: spz v4,
 //                                           2: glb) with the same rotation, through
 //                                           the scene, 2 threads.
 //   BM_BareCodec/format:F/splats:S          the floor of that: read the file, decode
 //                                           it, encode it, write it, no transform.
+//                                           Format 0, PLY, is the floor of the PLY job
+//                                           through its own I/O calls: the file mapped,
+//                                           its header parsed, the records written in
+//                                           pieces from 2 threads (rewrite_binary_ply
+//                                           without an edit), the same commit.
 //
 // The files are made once per size in the temporary folder and removed at exit. The
 // job and its floor run in one process, one after the other (the same page cache, about
@@ -32,7 +37,10 @@
 
 #include "common/atomic_file.h"
 #include "common/input_file.h"
+#include "common/job_outputs.h"
+#include "interop/ply.h"
 #include "interop/splat_gltf.h"
+#include "interop/splat_ply.h"
 #include "interop/splats_job.h"
 #include "interop/spz.h"
 
@@ -93,8 +101,10 @@ void BM_CopyFile(benchmark::State& state) {
 }
 BENCHMARK(BM_CopyFile)->Arg(1 << 20)->Arg(6 << 20)->ArgName("splats")->Unit(benchmark::kMillisecond)->Iterations(1)->MeasureProcessCPUTime()->UseRealTime();
 
-// The scene of scene(splats) in format 1 (spz v4) or 2 (glb), made once.
+// The scene of scene(splats) in format 1 (spz v4) or 2 (glb), made once; format 0 is
+// the PLY itself.
 const fs::path& scene_as(int format, std::size_t splats) {
+  if (format == 0) return scene(splats);
   static std::map<std::pair<int, std::size_t>, fs::path> made;
   const auto key = std::make_pair(format, splats);
   auto it = made.find(key);
@@ -130,8 +140,21 @@ void BM_BareCodec(benchmark::State& state) {
   const int format = static_cast<int>(state.range(0));
   const std::size_t splats = static_cast<std::size_t>(state.range(1));
   const fs::path in = scene_as(format, splats);
-  const fs::path out = fs::temp_directory_path() / (std::string("shtool_bench_splats_bare") + (format == 1 ? ".spz" : ".glb"));
+  const fs::path out = fs::temp_directory_path() /
+                       (std::string("shtool_bench_splats_bare") + (format == 0 ? ".ply" : format == 1 ? ".spz" : ".glb"));
   for (auto _ : state) {
+    if (format == 0) {
+      shtool::JobOutputs io;
+      io.input(in, "the input scene");
+      io.output(out, "--out");
+      const shtool::MappedInput mapped(in, "input");
+      const shtool::interop::PlyFile header = shtool::interop::PlyFile::parse_header(mapped.bytes(), in);
+      shtool::PendingFile file(out);
+      shtool::interop::rewrite_binary_ply(mapped.bytes(), *header.element("vertex"), file, 2, {});
+      io.set_written("--out", std::move(file));
+      io.commit();
+      continue;
+    }
     const std::string bytes = shtool::read_input_file(in, "input");
     if (format == 1) {
       const shtool::interop::SplatScene s = shtool::interop::read_spz(bytes, in.string(), nullptr, 2);
@@ -144,7 +167,7 @@ void BM_BareCodec(benchmark::State& state) {
   fs::remove(out);
 }
 BENCHMARK(BM_BareCodec)
-    ->ArgsProduct({{1, 2}, {1 << 20, 6 << 20}})
+    ->ArgsProduct({{0, 1, 2}, {1 << 20, 6 << 20}})
     ->ArgNames({"format", "splats"})
     ->Unit(benchmark::kMillisecond)
     ->Iterations(1)

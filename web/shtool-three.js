@@ -11,7 +11,7 @@
 //
 // The page needs an import map for 'three' and 'three/addons/' (three's own examples use the
 // same two entries). Do not call bake() on a loaded grid: it would bake over the atlas.
-import { BufferAttribute, BufferGeometry, Data3DTexture, DoubleSide, FloatType, LinearFilter, Matrix3, Mesh, NearestFilter, NoBlending, OrthographicCamera, RGBAFormat, REVISION, Scene, ShaderMaterial, Vector3, Vector4, WebGLRenderTarget } from 'three';
+import { BufferAttribute, BufferGeometry, Data3DTexture, DoubleSide, FloatType, LinearFilter, Matrix3, NearestFilter, NoBlending, OrthographicCamera, Points, RGBAFormat, REVISION, Scene, ShaderMaterial, Vector3, Vector4, WebGLRenderTarget } from 'three';
 import { LightProbeGridWebGL } from 'three/addons/lighting/LightProbeGridWebGL.js';
 
 // The three.js release whose atlas layout the files follow.
@@ -228,50 +228,100 @@ function lightUniformLines( order ) {
 
 }
 
-// The once-per-frame rotation: a float RGBA target of ceil(N^2 / 4) x 3 texels, row c the
-// rotated coefficients of colour channel c, four to a texel (coefficient i in texel i / 4,
-// component i % 4). One triangle covers it; each fragment rotates its row's channel with the
-// generated shtool_rotate and keeps its four coefficients: 3 ceil(N^2 / 4) rotations a
-// frame, whatever the vertex count. Float32 in and out, so the shading reads the same
-// numbers the per-vertex rotation computes. Needs EXT_color_buffer_float (WebGL2 renders to
-// RGBA32F only with it): check floatRenderTargets(renderer) first.
-export function lightRotationPass( { rotateGlsl, order, light } ) {
+// The once-per-frame rotation: the generated shtool_rotate runs once per colour channel,
+// in the vertex shader of one point (gl.POINTS), and the point's fragments write the N^2
+// rotated coefficients, which reach them as flat varyings (exact float32), into a float
+// RGBA target of 3 ceil(N^2 / 4) x 1 texels: channel c's coefficient i in texel
+// c ceil(N^2 / 4) + i / 4, component i % 4. A point of size L covers L texels of the row, so
+// one point per channel carries all of them when WebGL passes ceil(N^2 / 4) varying vectors
+// (MAX_VARYING_VECTORS, at least 15: orders up to 7 everywhere, 8 where it is 16 or more)
+// and draws points that wide (ALIASED_POINT_SIZE_RANGE); otherwise each channel takes the
+// fewest points that fit, each running the rotation once and writing its share.
+// `limits`: those two, { varyingVectors, pointSize } (rotationPassLimits(renderer)). Needs
+// EXT_color_buffer_float (WebGL2 renders to RGBA32F only with it): check
+// floatRenderTargets(renderer) first.
+export function lightRotationPass( { rotateGlsl, order, light, limits } ) {
 
 	const n2 = order * order;
-	const target = new WebGLRenderTarget( Math.ceil( n2 / 4 ), 3, {
+	const texels = Math.ceil( n2 / 4 );
+	const perPoint = Math.max( 1, Math.min( texels, Math.floor( limits.varyingVectors ), Math.floor( limits.pointSize ) ) );
+	const points = Math.ceil( texels / perPoint );
+	const target = new WebGLRenderTarget( 3 * texels, 1, {
 		type: FloatType, format: RGBAFormat, minFilter: NearestFilter, magFilter: NearestFilter,
 		depthBuffer: false, stencilBuffer: false, generateMipmaps: false } );
 	target.texture.name = 'shtool rotated light';
-	const fragmentShader = [
+	const defines = [
+		`#define SHTOOL_TEXELS ${texels}`,
+		`#define SHTOOL_TEXELS_PER_POINT ${perPoint}`,
+		'flat varying vec4 shtoolRotated[SHTOOL_TEXELS_PER_POINT];' ].join( '\n' );
+	const vertexShader = [
 		rotateGlsl,
 		lightUniformLines( order ),
+		defines,
+		'attribute vec2 shtoolPoint;  // colour channel, first texel of the point within it',
 		'void main() {',
-		'  int x = int(gl_FragCoord.x), c = int(gl_FragCoord.y);',
+		'  int c = int(shtoolPoint.x), first = int(shtoolPoint.y);',
 		'  float f[SHTOOL_ORDER * SHTOOL_ORDER];',
 		'  float e[SHTOOL_ORDER * SHTOOL_ORDER];',
 		'  shtool_light_channel(c, f);',
 		'  shtool_rotate(shtoolLightRotation, f, e);',
+		'  for (int t = 0; t < SHTOOL_TEXELS_PER_POINT; ++t) {',
+		'    vec4 texel = vec4(0.0);',
+		'    for (int j = 0; j < 4; ++j) {',
+		'      int i = 4 * (first + t) + j;',
+		'      if (i < SHTOOL_ORDER * SHTOOL_ORDER) texel[j] = e[i];',
+		'    }',
+		'    shtoolRotated[t] = texel;',
+		'  }',
+		'  gl_PointSize = float(min(SHTOOL_TEXELS_PER_POINT, SHTOOL_TEXELS - first));',
+		'  gl_Position = vec4(position.xy, 0.0, 1.0);',
+		'}' ].join( '\n' );
+	const fragmentShader = [
+		defines,
+		'void main() {',
+		'  int x = int(gl_FragCoord.x);',
+		'  int i = x - SHTOOL_TEXELS * (x / SHTOOL_TEXELS);  // texel within the channel',
+		'  int t = i - SHTOOL_TEXELS_PER_POINT * (i / SHTOOL_TEXELS_PER_POINT);  // within the point',
 		'  vec4 texel = vec4(0.0);',
-		'  for (int j = 0; j < 4; ++j)',
-		'    if (4 * x + j < SHTOOL_ORDER * SHTOOL_ORDER) texel[j] = e[4 * x + j];',
+		'  for (int k = 0; k < SHTOOL_TEXELS_PER_POINT; ++k)',
+		'    if (k == t) texel = shtoolRotated[k];',
 		'  gl_FragColor = texel;',
 		'}' ].join( '\n' );
 	const material = new ShaderMaterial( {
 		uniforms: { shtoolLightRotation: { value: new Matrix3() }, shtoolLight: { value: packedLight( light, order ) } },
-		vertexShader: 'void main() { gl_Position = vec4(position.xy, 0.0, 1.0); }',
+		vertexShader,
 		fragmentShader,
 		blending: NoBlending, depthTest: false, depthWrite: false
 	} );
 	material.name = 'shtool light rotation';
-	const triangle = new BufferGeometry();
-	triangle.setAttribute( 'position', new BufferAttribute( new Float32Array( [ - 1, - 1, 0, 3, - 1, 0, - 1, 3, 0 ] ), 3 ) );
-	const mesh = new Mesh( triangle, material );
-	mesh.frustumCulled = false;
+	// Point k of channel c covers texels c texels + k perPoint .. + its size, centred on
+	// them (window x = first texel + size / 2, the single row's centre 0.5).
+	const centres = [], starts = [];
+	for ( let c = 0; c < 3; c ++ ) {
+
+		for ( let k = 0; k < points; k ++ ) {
+
+			const first = k * perPoint, size = Math.min( perPoint, texels - first );
+			centres.push( 2 * ( c * texels + first + size / 2 ) / ( 3 * texels ) - 1, 0, 0 );
+			starts.push( c, first );
+
+		}
+
+	}
+	const geometry = new BufferGeometry();
+	geometry.setAttribute( 'position', new BufferAttribute( new Float32Array( centres ), 3 ) );
+	geometry.setAttribute( 'shtoolPoint', new BufferAttribute( new Float32Array( starts ), 2 ) );
+	const cloud = new Points( geometry, material );
+	cloud.frustumCulled = false;
 	const scene = new Scene();
-	scene.add( mesh );
+	scene.add( cloud );
 	const camera = new OrthographicCamera( - 1, 1, 1, - 1, 0, 1 );
 	return {
 		texture: target.texture,
+		texels,
+		// Rotations of one colour channel a frame (1 unless the WebGL limits split it).
+		rotationsPerChannel: points,
+		texelsPerPoint: perPoint,
 		// Rotates the light by R (Matrix3, three's frame) into the texture.
 		render( renderer, rotation ) {
 
@@ -286,10 +336,18 @@ export function lightRotationPass( { rotateGlsl, order, light } ) {
 
 			target.dispose();
 			material.dispose();
-			triangle.dispose();
+			geometry.dispose();
 
 		}
 	};
+
+}
+
+// The two WebGL limits that decide how many points lightRotationPass draws per channel.
+export function rotationPassLimits( renderer ) {
+
+	const gl = renderer.getContext();
+	return { varyingVectors: gl.getParameter( gl.MAX_VARYING_VECTORS ), pointSize: gl.getParameter( gl.ALIASED_POINT_SIZE_RANGE )[ 1 ] };
 
 }
 
@@ -343,7 +401,7 @@ function zhVertexShader( rotateGlsl, shadeGlsl, order, lobes, direct, perFrame )
 	if ( perFrame ) {
 
 		lines.push( '    for (int i = 0; i < SHTOOL_ORDER * SHTOOL_ORDER; ++i)' );
-		lines.push( '      e[i] = texelFetch(shtoolRotatedLight, ivec2(i / 4, c), 0)[i - 4 * (i / 4)];' );
+		lines.push( `      e[i] = texelFetch(shtoolRotatedLight, ivec2(${Math.ceil( order * order / 4 )} * c + i / 4, 0), 0)[i - 4 * (i / 4)];` );
 
 	} else {
 

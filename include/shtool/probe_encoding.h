@@ -56,6 +56,9 @@ std::optional<ProbeEncoding> parse_probe_encoding(std::string_view name) noexcep
 // "luminance", "per-channel".
 std::string_view zh3_axis_name(Zh3Axis axis) noexcept;
 std::optional<Zh3Axis> parse_zh3_axis(std::string_view name) noexcept;
+// "explicit", "hallucinated" (bake-probes --zh3-fit, the probe-grid table's meta.zh3_fit).
+std::string_view zh3_fit_name(Zh3Fit fit) noexcept;
+std::optional<Zh3Fit> parse_zh3_fit(std::string_view name) noexcept;
 
 // Bands 0 and 1 of an RGB probe: coefficients[3 i + c], i = 0..3 (shtool's basis).
 template <class T>

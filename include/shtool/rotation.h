@@ -67,11 +67,14 @@ class ShRotation;
 // rotation per SIMD lane (4 in float, 2 in double): the setup of several rotations
 // overlaps and the kernel's instructions are shared (docs/rotation.md, "Many
 // rotations"). Returns false (like set()) if the method needs helpers that are missing.
+// vectors_per_rotation > 1 turns that many consecutive vectors by each rotation (a
+// splat's colour channels, one vector per channel): rotation k turns vectors
+// k v .. k v + v - 1, and its setup is made once for the v of them.
 template <class T>
 bool rotate_batch(ShRotation<T>& rotation, std::span<const Mat3<T>> rotations,
                   std::span<const T> in, std::span<T> out,
                   RotationMethod method = RotationMethod::automatic,
-                  double tolerance = default_rotation_tolerance<T>());
+                  double tolerance = default_rotation_tolerance<T>(), int vectors_per_rotation = 1);
 
 template <class T>
 class ShRotation {
@@ -172,7 +175,7 @@ class ShRotation {
 
  private:
   friend bool rotate_batch<T>(ShRotation<T>&, std::span<const Mat3<T>>, std::span<const T>, std::span<T>,
-                              RotationMethod, double);
+                              RotationMethod, double, int);
   // r_ = R. Two register-sized copies and one element (Eigen packets), spelled out: as a
   // memcpy, or as copy_n, GCC 12 has emitted a memmove call or `rep movs` here, either of
   // which costs more than a small-order rotation.
@@ -240,7 +243,7 @@ class ShRotation {
   // rotate_batch's lane path over whole groups of lanes; returns how many rotations it
   // did (0 if it does not apply: then every pair goes through set() and apply()).
   std::size_t rotate_lanes(std::span<const Mat3<T>> rotations, const T* in, T* out, RotationMethod method,
-                           double tolerance);
+                           double tolerance, int vectors_per_rotation);
   // e: the zyz cosines and sines of r if the caller has them (else computed from r).
   bool set_general(const Mat3<T>& r, RotationMethod method, double tolerance,
                    const ZyzCosSin<T>* e = nullptr);

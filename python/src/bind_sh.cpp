@@ -1,6 +1,7 @@
 // eval_sh, rotate, quat_to_matrix, product: the runtime's basis, rotations and products
 // over batches of coefficient vectors (the last axis; the Python layer moves `axis=`).
 #include <algorithm>
+#include <limits>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -186,6 +187,8 @@ py::array rotate_t(const py::array& coeffs_in, const py::object& matrix, const s
     throw py::value_error("matrix must have shape (3, 3) or (..., 3, 3) with the leading axes of coeffs");
   if (count == 0) return out;
   const std::size_t matrices = m.size() / 9, per_matrix = count / matrices;
+  if (per_matrix > static_cast<std::size_t>(std::numeric_limits<int>::max()))
+    throw py::value_error("more than 2^31 - 1 vectors per matrix: pass one matrix (3, 3) instead");
   const float* rm32 = f32 ? static_cast<const float*>(m.data()) : nullptr;
   const double* rm64 = f32 ? nullptr : static_cast<const double*>(m.data());
   const T* in = coeffs.data();
@@ -193,15 +196,17 @@ py::array rotate_t(const py::array& coeffs_in, const py::object& matrix, const s
   bool ok = true;
   {
     py::gil_scoped_release release;
-    std::vector<char> chunk_ok((count + kChunk - 1) / kChunk, 1);
-    for_chunks(count, threads, [&](std::size_t begin, std::size_t end) {
-      // The chunk's vectors each with its matrix (rotate_batch takes one per vector), in a
-      // buffer kept by the thread: a new one per chunk would be mapped and zeroed by the
-      // kernel every time (it is above malloc's mmap threshold).
+    // In chunks of matrices; each matrix turns its per_matrix consecutive vectors (a
+    // splat's colour channels), and rotate_batch makes its setup once for them.
+    std::vector<char> chunk_ok((matrices + kChunk - 1) / kChunk, 1);
+    for_chunks(matrices, threads, [&](std::size_t begin, std::size_t end) {
+      // The chunk's matrices, checked, in a buffer kept by the thread: a new one per chunk
+      // would be mapped and zeroed by the kernel every time (it is above malloc's mmap
+      // threshold).
       thread_local std::vector<Mat3<T>> r;
       r.resize(end - begin);
-      auto matrix_at = [&](std::size_t k) {
-        Mat3<T> rk;
+      for (std::size_t k = begin; k < end; ++k) {
+        Mat3<T>& rk = r[k - begin];
         for (int i = 0; i < 3; ++i)
           for (int j = 0; j < 3; ++j) rk(i, j) = static_cast<T>(f32 ? rm32[9 * k + 3 * i + j] : rm64[9 * k + 3 * i + j]);
         // The message (a string per matrix) only for a matrix that fails, from the values given.
@@ -212,14 +217,6 @@ py::array rotate_t(const py::array& coeffs_in, const py::object& matrix, const s
           throw InputError("matrix[" + std::to_string(k) + "] is not a rotation in " +
                            (sizeof(T) == 4 ? "float32" : "float64"));
         }
-        return rk;
-      };
-      // Vector v takes matrix v / per_matrix: counted, not divided, per vector.
-      std::size_t k = begin / per_matrix, left = per_matrix - begin % per_matrix;
-      Mat3<T> current = matrix_at(k);
-      for (std::size_t v = begin; v < end; ++v, --left) {
-        if (left == 0) current = matrix_at(++k), left = per_matrix;
-        r[v - begin] = current;
       }
       // One rotation object per thread and (order, helpers), kept across chunks and calls:
       // making one costs as much as rotating a few hundred vectors.
@@ -229,8 +226,10 @@ py::array rotate_t(const py::array& coeffs_in, const py::object& matrix, const s
         rotation = std::make_unique<ShRotation<T>>(order, helpers);
         made_for = {order, helpers.get()};
       }
-      chunk_ok[begin / kChunk] = rotate_batch<T>(*rotation, r, std::span<const T>(in + begin * n2, (end - begin) * n2),
-                                                 std::span<T>(o + begin * n2, (end - begin) * n2), method, tolerance);
+      const std::size_t first = begin * per_matrix * n2, size = (end - begin) * per_matrix * n2;
+      chunk_ok[begin / kChunk] =
+          rotate_batch<T>(*rotation, r, std::span<const T>(in + first, size), std::span<T>(o + first, size), method,
+                          tolerance, static_cast<int>(per_matrix));
     });
     ok = std::all_of(chunk_ok.begin(), chunk_ok.end(), [](char c) { return c != 0; });
   }

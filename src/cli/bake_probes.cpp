@@ -1,6 +1,7 @@
 // shtool bake-probes: irradiance probe volumes baked from a glTF or OBJ scene (docs/probes.md).
 #include <iostream>
 #include <memory>
+#include <string>
 
 #include <CLI/CLI.hpp>
 
@@ -26,8 +27,14 @@ void setup_bake_probes(CLI::App& app) {
   sub->add_option("--threads", req->threads, "worker threads (0: all cores)")->capture_default_str();
   sub->add_option("--encoding", req->encoding,
                   "what each probe stores: l2 (the order-N coefficients), l1 (bands 0 and 1, non-linear L1 "
-                  "reconstruction; --order >= 2) or zh3 (bands 0 and 1 and a zonal band-2 coefficient; --order >= 3)")
+                  "reconstruction; --order >= 2) or zh3 (bands 0 and 1 and a zonal band-2 coefficient, --zh3-fit, --zh3-axis; "
+                  "--order >= 3 for the explicit fit)")
       ->capture_default_str();
+  sub->add_option("--zh3-fit", req->zh3_fit,
+                  "zh3: explicit (default; the zonal coefficient fitted to band 2 and stored) or hallucinated "
+                  "(nothing stored beyond L1; the reader derives the coefficient from it; --order >= 2)");
+  sub->add_option("--zh3-axis", req->zh3_axis,
+                  "zh3: luminance (default; one axis from the luminance-weighted L1 band) or per-channel");
   sub->add_option("--out", req->out, "probe-grid table to write")->required();
   sub->add_option("--json", req->json, "also the probes as JSON");
   sub->add_option("--threejs", req->threejs,
@@ -40,7 +47,7 @@ void setup_bake_probes(CLI::App& app) {
     if (r.mpi_rank != 0) return;  // rank 0 reports the job
     if (r.sharded) std::cerr << "bake-probes: shard of probes [" << r.first_probe << ", " << r.end_probe << ")\n";
     std::cerr << "bake-probes: " << r.probes << " probes (" << r.resolution[0] << " x " << r.resolution[1] << " x "
-              << r.resolution[2] << ", encoding " << req->encoding << "), " << r.triangles << " triangles, " << r.lights << " lights; " << r.rays
+              << r.resolution[2] << ", encoding " << r.encoding << "), " << r.triangles << " triangles, " << r.lights << " lights; " << r.rays
               << " rays in " << r.seconds << " s; " << r.invalid << " invalid probes filled from neighbours";
     if (r.mpi_ranks) std::cerr << " (this rank's share; on each of " << r.mpi_ranks << " MPI ranks)";
     if (r.unfilled) std::cerr << " (" << r.unfilled << " with no valid neighbour left at 0)";

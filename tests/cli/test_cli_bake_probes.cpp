@@ -2,8 +2,9 @@
 // back by the runtime loader (ProbeGrid<float> and <double>), the schema, --threejs (the
 // atlas of the same run's coefficients), OBJ scenes with
 // .mtl materials and --up, the same bytes on 1 and 2 threads, bad scenes, grids,
-// bounds and options refused with a message, exit 1 and no output, and --encoding l1 and
-// zh3 through the table, --json, the loader, --threejs and merge.
+// bounds and options refused with a message, exit 1 and no output, --encoding l1 and
+// zh3 (with --zh3-fit and --zh3-axis) through the table, --json, the loader, --threejs and
+// merge, and the loader's reading of kind_version 1.0 and 1.1 tables.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -16,6 +17,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cli_test.h"
+#include "common/table_writer.h"
 #include "interop/three_probe_grid.h"
 #include "probe_scenes.h"
 #include "shtool/probe_grid.h"
@@ -590,4 +592,239 @@ TEST(CliBakeProbes, RefusesUnknownOrMeaninglessEncodings) {
   bad = shtool::ProbeGrid<double>::from_table(l1_order3);
   ASSERT_FALSE(bad.ok());
   EXPECT_NE(bad.error().message.find("stores order 2"), std::string::npos) << bad.error().message;
+}
+
+// --zh3-fit and --zh3-axis: each choice's table and --json hold exactly the library's
+// encoding of the l2 bake of the same seed (hallucinated: the L1 band alone, no zonal
+// array), the loader (double and float) gives zh3_irradiance of the zonal coefficient the
+// choice stands for, also between probes, and --threejs writes the order-3 form of it.
+TEST(CliBakeProbes, Zh3FitAndAxisChoicesAreTheEncodingOfTheL2Bake) {
+  using shtool::Zh3Axis;
+  using shtool::Zh3Fit;
+  const fs::path scene = encoding_room(), l2 = scratch("choice_l2.shtb");
+  ASSERT_EQ(run_shtool(bake_args(scene, "l2", l2)).exit_code, 0);
+  const shtool::ProbeGrid<double> g2 = shtool::ProbeGrid<double>::load(l2).value();
+  EXPECT_EQ(shtool::read_table(l2).value().kind_version, "1.1");
+  struct Choice {
+    const char* fit;
+    const char* axis;
+    Zh3Fit f;
+    Zh3Axis a;
+  };
+  for (const Choice& ch : {Choice{"hallucinated", "luminance", Zh3Fit::hallucinated, Zh3Axis::luminance},
+                           Choice{"hallucinated", "per-channel", Zh3Fit::hallucinated, Zh3Axis::per_channel},
+                           Choice{"explicit", "per-channel", Zh3Fit::explicit_fit, Zh3Axis::per_channel}}) {
+    const std::string name = std::string(ch.fit) + "_" + ch.axis;
+    SCOPED_TRACE(name);
+    const bool hallucinated = ch.f == Zh3Fit::hallucinated;
+    const fs::path out = scratch("choice_" + name + ".shtb"), json = scratch("choice_" + name + ".json"),
+                   dir = scratch("three_" + name);
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    const CommandResult r = run_shtool(bake_args(
+        scene, "zh3", out,
+        {"--zh3-fit", ch.fit, "--zh3-axis", ch.axis, "--json", json.string(), "--threejs", dir.string()}));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    expect_valid_against_schema("probe-grid.schema.json", {out});
+    const shtool::Table t = shtool::read_table(out).value();
+    EXPECT_EQ(t.kind_version, "1.1");
+    EXPECT_EQ(t.order, 2);
+    EXPECT_EQ(t.find("zonal") != nullptr, !hallucinated);
+    const nlohmann::json meta = nlohmann::json::parse(t.meta), gen = nlohmann::json::parse(t.generator);
+    EXPECT_EQ(meta["zh3_fit"], ch.fit);
+    EXPECT_EQ(meta["zh3_axis"], ch.axis);
+    EXPECT_EQ(gen["parameters"]["zh3_fit"], ch.fit);
+    EXPECT_EQ(gen["parameters"]["zh3_axis"], ch.axis);
+    const nlohmann::json doc = read_json(json);
+    EXPECT_EQ(doc["encoding"], "zh3");
+    EXPECT_EQ(doc["zh3_fit"], ch.fit);
+    EXPECT_EQ(doc["zh3_axis"], ch.axis);
+
+    const auto g = shtool::ProbeGrid<double>::load(out);
+    const auto f = shtool::ProbeGrid<float>::load(out);
+    ASSERT_TRUE(g.ok()) << g.error().message;
+    ASSERT_TRUE(f.ok()) << f.error().message;
+    EXPECT_EQ(g.value().zh3_fit, ch.f);
+    EXPECT_EQ(g.value().zh3_axis, ch.a);
+    EXPECT_EQ(f.value().zh3_fit, ch.f);
+    ASSERT_EQ(g.value().values_per_probe(), hallucinated ? 12u : 15u);
+    EXPECT_EQ(g.value().valid, g2.valid);
+    shtool::interop::ThreeProbeGridInput three =
+        three_grid({3, 3, 2}, Eigen::Vector3d(-1.5, -1.5, 0.3), Eigen::Vector3d(1.5, 1.5, 2.7));
+    double largest_zonal = 0;
+    for (std::size_t p = 0; p < g2.probe_count(); ++p) {
+      const auto c2 = g2.coefficients_of(p);
+      const shtool::Zh3Probe<double> want = shtool::encode_zh3(c2, ch.a, ch.f);
+      // float: the stored values rounded, the hallucinated coefficient made in float.
+      shtool::Zh3Probe<float> wantf;
+      for (int k = 0; k < 12; ++k) wantf.l1.coefficients[k] = static_cast<float>(c2[k]);
+      for (int k = 0; k < 3; ++k)
+        wantf.zonal[k] = hallucinated ? shtool::zh3_hallucinated_zonal(wantf.l1, ch.a, k)
+                                      : static_cast<float>(want.zonal[k]);
+      const auto c = g.value().coefficients_of(p);
+      for (int k = 0; k < 12; ++k) {
+        EXPECT_EQ(c[k], c2[k]) << "probe " << p << " value " << k;
+        EXPECT_EQ(doc["probes"][p]["coefficients"][k / 3][k % 3].get<double>(), c2[k]);
+      }
+      EXPECT_EQ(doc["probes"][p].contains("zonal"), !hallucinated);
+      for (int k = 0; k < 3; ++k) {
+        if (!hallucinated) EXPECT_EQ(c[12 + k], want.zonal[k]) << "probe " << p;
+        if (!hallucinated) EXPECT_EQ(doc["probes"][p]["zonal"][k].get<double>(), want.zonal[k]);
+        largest_zonal = std::max(largest_zonal, std::abs(want.zonal[k]));
+      }
+      for (const Eigen::Vector3d& n : test_normals()) {
+        EXPECT_EQ(g.value().irradiance(p, n), shtool::zh3_irradiance(want, ch.a, n)) << "probe " << p;
+        const Eigen::Vector3f nf = n.cast<float>();
+        EXPECT_EQ(f.value().irradiance(p, nf), shtool::zh3_irradiance(wantf, ch.a, nf))
+            << "probe " << p;
+      }
+      three.coefficients.insert(three.coefficients.end(), want.l1.coefficients.begin(), want.l1.coefficients.end());
+      const std::array<double, 15> band2 = shtool::zh3_band2(want, ch.a);
+      three.coefficients.insert(three.coefficients.end(), band2.begin(), band2.end());
+    }
+    EXPECT_GT(largest_zonal, 0.01) << "the zonal coefficients are not exercised";
+    expect_three_files(dir, three, "the atlas is not the order-3 form of the probes' ZH3");
+    // Between two probes the hallucinated variant derives its zonal coefficient from the
+    // interpolated L1 band (what a shader does after filtering the L1 texture), which is
+    // not the mean of the two probes' hallucinated coefficients.
+    const shtool::ProbeGrid<double>& z = g.value();
+    const Eigen::Vector3d x = (z.position(0) + z.position(1)) / 2, n(0.6, -0.8, 0);
+    std::vector<double> mid(z.values_per_probe());
+    z.sample(x, mid);
+    shtool::Zh3Probe<double> m;
+    std::copy_n(mid.begin(), 12, m.l1.coefficients.begin());
+    for (int k = 0; k < 3; ++k)
+      m.zonal[k] = hallucinated ? shtool::zh3_hallucinated_zonal(m.l1, ch.a, k) : mid[12 + k];
+    EXPECT_EQ(z.irradiance_at(x, n), shtool::zh3_irradiance(m, ch.a, n));
+  }
+}
+
+// 1.0 tables (before --zh3-fit) still load: l2 without meta.encoding, zh3 without
+// meta.zh3_fit (explicit); a 1.1 zh3 table must name its fit; another major is refused by
+// from_table and by load; a hallucinated table must not carry a zonal array.
+TEST(CliBakeProbes, LoaderReadsKindVersion10And11AndRefusesANewerMajor) {
+  const fs::path scene = encoding_room(), zh3 = scratch("kv_zh3.shtb"), hal = scratch("kv_hal.shtb");
+  ASSERT_EQ(run_shtool(bake_args(scene, "zh3", zh3)).exit_code, 0);
+  ASSERT_EQ(run_shtool(bake_args(scene, "zh3", hal, {"--zh3-fit", "hallucinated"})).exit_code, 0);
+  const shtool::Table t = shtool::read_table(zh3).value(), h = shtool::read_table(hal).value();
+  const shtool::ProbeGrid<double> now = shtool::ProbeGrid<double>::from_table(t).value();
+  const nlohmann::json meta = nlohmann::json::parse(t.meta);
+
+  shtool::Table old = t;
+  old.kind_version = "1.0";
+  nlohmann::json m = meta;
+  m.erase("zh3_fit");
+  old.meta = m.dump();
+  auto g = shtool::ProbeGrid<double>::from_table(old);
+  ASSERT_TRUE(g.ok()) << g.error().message;
+  EXPECT_EQ(g.value().zh3_fit, shtool::Zh3Fit::explicit_fit);
+  EXPECT_EQ(g.value().coefficients, now.coefficients);
+  shtool::Table old_l2 = old;
+  m.erase("encoding");
+  m.erase("zh3_axis");
+  old_l2.meta = m.dump();
+  old_l2.arrays.pop_back();  // zonal
+  g = shtool::ProbeGrid<double>::from_table(old_l2);
+  ASSERT_TRUE(g.ok()) << g.error().message;
+  EXPECT_EQ(g.value().encoding, shtool::ProbeEncoding::l2);
+
+  shtool::Table unnamed = old;
+  unnamed.kind_version = "1.1";
+  auto bad = shtool::ProbeGrid<double>::from_table(unnamed);
+  ASSERT_FALSE(bad.ok());
+  EXPECT_NE(bad.error().message.find("meta.zh3_fit is missing"), std::string::npos) << bad.error().message;
+  // A later minor only adds: read by the same rules.
+  shtool::Table later = t;
+  later.kind_version = "1.7";
+  EXPECT_TRUE(shtool::ProbeGrid<float>::from_table(later).ok());
+
+  shtool::Table newer = t;
+  newer.kind_version = "2.0";
+  bad = shtool::ProbeGrid<double>::from_table(newer);
+  ASSERT_FALSE(bad.ok());
+  EXPECT_NE(bad.error().message.find("kind_version 2.0 is not readable: this reader knows 1.x (up to 1.1); a newer "
+                                     "shtool wrote it"),
+            std::string::npos)
+      << bad.error().message;
+  const fs::path newer_file = scratch("kv_2.shtb");
+  shtool::write_table(newer, newer_file);
+  const auto loaded = shtool::ProbeGrid<float>::load(newer_file);
+  ASSERT_FALSE(loaded.ok());
+  EXPECT_NE(loaded.error().message.find("version 2.0"), std::string::npos) << loaded.error().message;
+  EXPECT_NE(loaded.error().message.find(newer_file.string()), std::string::npos) << loaded.error().message;
+
+  shtool::Table hal_zonal = h;
+  hal_zonal.arrays.push_back(t.arrays.back());
+  ASSERT_EQ(hal_zonal.arrays.back().name, "zonal");
+  bad = shtool::ProbeGrid<double>::from_table(hal_zonal);
+  ASSERT_FALSE(bad.ok());
+  EXPECT_NE(bad.error().message.find("array 'zonal' in a grid whose encoding stores none"), std::string::npos)
+      << bad.error().message;
+  // The schema refuses both too (and accepts the 1.0 zh3 table without zh3_fit).
+  const std::string source = SHTOOL_SOURCE_DIR;
+  for (const auto& [table, valid] : {std::pair<const shtool::Table*, bool>{&hal_zonal, false},
+                                     std::pair<const shtool::Table*, bool>{&unnamed, false},
+                                     std::pair<const shtool::Table*, bool>{&old, true}}) {
+    const fs::path file = scratch("kv_schema.json");
+    shtool::write_table(*table, file, shtool::TableEncoding::json);
+    const CommandResult v = run_command({SHTOOL_PYTHON, source + "/tests/validate_json_schema.py",
+                                         source + "/schemas/probe-grid.schema.json", file.string()});
+    EXPECT_EQ(v.exit_code, valid ? 0 : 1) << table->meta << "\n" << v.out << v.err;
+  }
+  shtool::Table unknown_fit = h;
+  nlohmann::json hm = nlohmann::json::parse(h.meta);
+  hm["zh3_fit"] = "solved";
+  unknown_fit.meta = hm.dump();
+  bad = shtool::ProbeGrid<double>::from_table(unknown_fit);
+  ASSERT_FALSE(bad.ok());
+  EXPECT_NE(bad.error().message.find("not 'explicit' or 'hallucinated'"), std::string::npos) << bad.error().message;
+}
+
+TEST(CliBakeProbes, RefusesZh3ChoicesOutsideZh3AndUnknownOnes) {
+  const fs::path scene = furnace(), out = scratch("choice_refused.shtb");
+  const std::vector<std::string> base = {scene.string(), "--grid", "2,2,2", "--samples", "8"};
+  auto with = [&](std::vector<std::string> extra) {
+    std::vector<std::string> a = base;
+    a.insert(a.end(), extra.begin(), extra.end());
+    return a;
+  };
+  expect_refused("bake-probes", with({"--zh3-fit", "hallucinated"}),
+                 "--zh3-fit applies to --encoding zh3 only (the grid's encoding is l2", out);
+  expect_refused("bake-probes", with({"--encoding", "l1", "--zh3-axis", "per-channel"}),
+                 "--zh3-axis applies to --encoding zh3 only (the grid's encoding is l1", out);
+  expect_refused("bake-probes", with({"--encoding", "l2", "--zh3-fit", "explicit"}),
+                 "--zh3-fit applies to --encoding zh3 only", out);
+  expect_refused("bake-probes", with({"--encoding", "zh3", "--zh3-fit", "solved"}),
+                 "--zh3-fit: 'solved' is not one of explicit, hallucinated", out);
+  expect_refused("bake-probes", with({"--encoding", "zh3", "--zh3-axis", "red"}),
+                 "--zh3-axis: 'red' is not one of luminance, per-channel", out);
+  expect_refused("bake-probes", with({"--encoding", "zh3", "--zh3-fit", "explicit", "--order", "2"}),
+                 "--encoding zh3 needs --order 3 or more (its zonal coefficient is fitted to band 2)", out);
+  // The hallucinated variant needs the L1 band only.
+  const CommandResult r = run_shtool({"bake-probes", scene.string(), "--grid", "2,1,1", "--samples", "8", "--order",
+                                      "2", "--encoding", "zh3", "--zh3-fit", "hallucinated", "--out", out.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("encoding zh3 hallucinated, luminance axis"), std::string::npos) << r.err;
+  EXPECT_EQ(shtool::ProbeGrid<double>::load(out).value().zh3_fit, shtool::Zh3Fit::hallucinated);
+}
+
+TEST(CliBakeProbes, Zh3ChoicesShardsMergeToTheOneProcessTable) {
+  const fs::path scene = encoding_room(), whole = scratch("choicew.shtb"), merged = scratch("choicem.shtb");
+  const std::vector<std::string> choice = {"--zh3-fit", "hallucinated", "--zh3-axis", "per-channel"};
+  ASSERT_EQ(run_shtool(bake_args(scene, "zh3", whole, choice)).exit_code, 0);
+  std::vector<std::string> merge = {"merge"};
+  for (const char* k : {"1", "0"}) {
+    const fs::path part = scratch(std::string("choicep") + k + ".shtb");
+    std::vector<std::string> extra = choice;
+    extra.insert(extra.end(), {"--shard", std::string(k) + "/2"});
+    const CommandResult r = run_shtool(bake_args(scene, "zh3", part, extra));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    expect_valid_against_schema("probe-grid.schema.json", {part});
+    merge.push_back(part.string());
+  }
+  merge.insert(merge.end(), {"--out", merged.string()});
+  const CommandResult r = run_shtool(merge);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(read_file(merged) == read_file(whole)) << "the joined shards differ from one process";
+  EXPECT_EQ(shtool::ProbeGrid<double>::load(merged).value().zh3_axis, shtool::Zh3Axis::per_channel);
 }

@@ -4,9 +4,11 @@
 // over the pixels render covers), unrotated and with the light turned by the URL's
 // quaternion against render under the light `shtool rotate` turned the same way; the page
 // loads nothing from outside the folder; dragging turns the light (to the rotation its
-// status line names); the light rotated once per frame into a float texture draws the same
-// pixels as the light rotated per vertex (?rotate-light=per-vertex, the page's fallback);
-// bad inputs are refused with nothing written.
+// status line names), a finger's drag (pointer events of type touch) as the mouse's; the
+// light rotated once per frame and colour channel (one gl.POINTS draw of 3 points a frame)
+// draws the same pixels as the light rotated per vertex (?rotate-light=per-vertex, the
+// page's fallback) and as the pass split over more points when WebGL passes fewer varyings,
+// at order 3 and at order 8; bad inputs are refused with nothing written.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -134,8 +136,9 @@ TEST(ExportWeb, PageDrawsWhatRenderDraws) {
   SHTOOL_REQUIRE_NODE_CONSUMERS();  // three@0.187.0, which export-web copies
   REQUIRE_CHROMIUM();
   const fs::path sky_dir = scratch("page"), pose_dir = scratch("pose"), probe_dir = scratch("probes"),
-                 views = scratch("views"), bent = scratch("bent.obj"), probes = scratch("probes.shtb");
-  for (const fs::path& d : {sky_dir, pose_dir, probe_dir, views}) fs::remove_all(d);
+                 views = scratch("views"), bent = scratch("bent.obj"), probes = scratch("probes.shtb"),
+                 order8_dir = scratch("page8");
+  for (const fs::path& d : {sky_dir, pose_dir, probe_dir, views, order8_dir}) fs::remove_all(d);
   fs::create_directories(views);
   // Not square: the aspect ratio enters render's framing and the page's projection.
   const std::vector<std::string> view_options = {"--width", "160", "--height", "120", "--exposure", "0.5"};
@@ -156,6 +159,14 @@ TEST(ExportWeb, PageDrawsWhatRenderDraws) {
   must(run_shtool(with_view({"export-web", kSpotObj, "--fit", bakes().fit.string(), "--light", bakes().sky.string(),
                              "--probes", probes.string(), "--out", probe_dir.string()})));
   EXPECT_TRUE(fs::is_regular_file(probe_dir / "probes/probes.bin"));
+  // Order 8, the largest: 16 texels per channel, one point of 16 varying vectors (SwiftShader
+  // has 31), or two where WebGL2 passes only its guaranteed 15.
+  const fs::path fit8 = scratch("spot8.shtb"), sky8 = scratch("sky8.json"), white8 = scratch("white8.json");
+  must(run_shtool({"fit-zh", kSpotObj, "--order", "8", "--lobes", "4", "--rays", "64", "--mode", "shadowed", "--out",
+                   fit8.string()}));
+  make_white_and_sky_lights(8, white8, sky8);
+  must(run_shtool(with_view({"export-web", kSpotObj, "--fit", fit8.string(), "--light", sky8.string(), "--out",
+                             order8_dir.string()})));
 
   // Two turns of the light: about an oblique axis, and half a turn about x.
   const std::vector<std::string> quats = {"0.8,0.2,-0.4,0.4", "0,1,0,0"};
@@ -176,14 +187,27 @@ TEST(ExportWeb, PageDrawsWhatRenderDraws) {
   references.push_back(posed_png);
   specs.push_back(pose_dir.string());
   labels.push_back("--pose, bent");
-  const std::size_t probe_view = specs.size(), drag_view = probe_view + 1, vertex_view = probe_view + 2,
-                    fallback_view = probe_view + 3;
+  const std::size_t probe_view = specs.size(), drag_view = probe_view + 1, touch_view = probe_view + 2,
+                    vertex_view = probe_view + 3, fallback_view = probe_view + 4, split_view = probe_view + 5,
+                    order8_view = probe_view + 6, order8_vertex_view = probe_view + 7,
+                    order8_split_view = probe_view + 8, broken_view = probe_view + 9;
   specs.push_back(probe_dir.string());  // compared with the unrotated render below
   specs.push_back(sky_dir.string() + "#drag=80,-50");  // compared with render at the rotation the page shows
+  specs.push_back(sky_dir.string() + "#touch-drag=80,-50");  // the same drag by a finger
   // The per-vertex path, asked for and as the fallback of a WebGL without float render
   // targets, compared with the per-frame page of the same rotation (view 1).
   specs.push_back(sky_dir.string() + "?light-rotation=" + quats[0] + "&rotate-light=per-vertex");
   specs.push_back(sky_dir.string() + "?light-rotation=" + quats[0] + "#no-float-targets");
+  // Order 3 needs 3 texels per channel; with 2 varying vectors the pass takes 2 points per
+  // channel, each rotating once and writing its share. Compared with view 1 as well.
+  specs.push_back(sky_dir.string() + "?light-rotation=" + quats[0] + "#max-varying-vectors=2");
+  // Order 8: per frame (against render), per vertex, and split by WebGL2's minimum of 15.
+  specs.push_back(order8_dir.string() + "?light-rotation=" + quats[0]);
+  specs.push_back(order8_dir.string() + "?light-rotation=" + quats[0] + "&rotate-light=per-vertex");
+  specs.push_back(order8_dir.string() + "?light-rotation=" + quats[0] + "#max-varying-vectors=15");
+  // The pass broken on purpose (each texel written with its neighbour's coefficients): the
+  // checks above must see it.
+  specs.push_back(sky_dir.string() + "?light-rotation=" + quats[0] + "#shifted-texels");
 
   std::vector<std::string> node = {"node", (node_consumers_dir() / "export_web_browser.mjs").string(), "chromium",
                                    views.string()};
@@ -198,13 +222,31 @@ TEST(ExportWeb, PageDrawsWhatRenderDraws) {
   ASSERT_EQ(result["views"].size(), specs.size()) << result.dump(1);
 
   // SwiftShader renders to float textures, so every view but the two per-vertex ones takes
-  // the per-frame pass; the status line says which path drew, and why.
+  // the per-frame pass; the status line says which path drew, and why. The pass is one
+  // gl.POINTS draw a frame, a point per colour channel (two with 2 varying vectors), and the
+  // rotation runs in the points' vertex shader: 3 rotations a frame (6 split). The
+  // per-vertex paths draw no points.
   for (std::size_t k = 0; k < specs.size(); ++k) {
-    const char* path = k == vertex_view     ? "(light rotated per vertex (rotate-light=per-vertex))"
-                       : k == fallback_view ? "(light rotated per vertex: this WebGL cannot render to float textures"
-                                            : "(light rotated once per frame)";
+    const bool per_vertex = k == vertex_view || k == fallback_view || k == order8_vertex_view;
+    const char* path =
+        k == vertex_view || k == order8_vertex_view ? "(light rotated per vertex (rotate-light=per-vertex))"
+        : k == fallback_view ? "(light rotated per vertex: this WebGL cannot render to float textures"
+        : k == split_view    ? "(light rotated once per frame: 2 rotations per colour channel, this WebGL passing 2 of "
+                               "the 3 texels per point (MAX_VARYING_VECTORS 2"
+        : k == order8_split_view
+            ? "(light rotated once per frame: 2 rotations per colour channel, this WebGL passing 15 of the 16 texels "
+              "per point (MAX_VARYING_VECTORS 15"
+            : "(light rotated once per frame: one rotation per colour channel)";
     EXPECT_NE(result["status"][k].get<std::string>().find(path), std::string::npos)
         << specs[k] << ": " << result["status"][k];
+    const nlohmann::json& points = result["points"][k];
+    if (per_vertex) {
+      EXPECT_TRUE(points.empty()) << specs[k] << ": " << points;
+      continue;
+    }
+    EXPECT_FALSE(points.empty()) << specs[k];
+    const int per_frame_points = k == split_view || k == order8_split_view ? 6 : 3;
+    for (const auto& count : points) EXPECT_EQ(count.get<int>(), per_frame_points) << specs[k] << ": " << points;
   }
 
   const Rgba unrotated = read_png(references[0]);
@@ -251,25 +293,110 @@ TEST(ExportWeb, PageDrawsWhatRenderDraws) {
             << ", " << turned.mean[1] << ", " << turned.mean[2] << "\n";
   for (int c = 0; c < 3; ++c) EXPECT_LE(dragged.mean[c], 2.0) << "dragged, channel " << c;
   EXPECT_GT(std::max({turned.mean[0], turned.mean[1], turned.mean[2]}), 6.0);
+  // A finger's drag reaches the page as pointer events of type touch and turns the light as
+  // the mouse's drag does: the same rotation, the same pixels.
+  for (const auto& [view, type] : {std::pair{drag_view, "mouse"}, std::pair{touch_view, "touch"}}) {
+    const nlohmann::json& types = result["pointerTypes"][view];
+    EXPECT_FALSE(types.empty()) << specs[view] << ": no pointermove on the canvas";
+    for (const auto& t : types) EXPECT_EQ(t.get<std::string>(), type) << specs[view] << ": " << types;
+  }
+  EXPECT_EQ(result["status"][touch_view], result["status"][drag_view]);
+  const Difference touch_vs_mouse = compare(read_png(result["views"][touch_view].get<std::string>()),
+                                            read_png(result["views"][drag_view].get<std::string>()));
+  const Difference touch_vs_render = compare(read_png(result["views"][touch_view].get<std::string>()), read_png(dragged_png));
+  std::cout << "touch drag: " << result["status"][touch_view] << "; against the mouse drag: max difference "
+            << touch_vs_mouse.max_both << "; against render: mean " << touch_vs_render.mean[0] << ", "
+            << touch_vs_render.mean[1] << ", " << touch_vs_render.mean[2] << "; max " << touch_vs_render.max_both
+            << "\n";
+  for (int c = 0; c < 3; ++c) EXPECT_LE(touch_vs_render.mean[c], 2.0) << "touch drag, channel " << c;
+  EXPECT_EQ(touch_vs_mouse.uncovered_on_page, 0u);
+  EXPECT_LE(touch_vs_mouse.max_both, 1);
 
-  // Per frame against per vertex, same rotation: the texture holds the float32 numbers the
-  // vertex shader would compute with the same generated code, so the pixels agree; 1/255
+  // Per frame against per vertex (and against the split pass), same rotation: the texture
+  // holds the float32 numbers the vertex shader would compute with the same generated code,
+  // passed as flat varyings, so the pixels agree; 1/255
   // leaves room for a driver that orders the arithmetic of the two shaders differently
   // (SwiftShader draws them byte-identical). A texture read at the wrong texel, channel or
   // component moves a coefficient to another band and misses this by far.
   const Rgba per_frame = read_png(result["views"][1].get<std::string>());
-  for (const std::size_t k : {vertex_view, fallback_view}) {
+  for (const std::size_t k : {vertex_view, fallback_view, split_view}) {
     const Rgba per_vertex = read_png(result["views"][k].get<std::string>());
     const Difference paths = compare(per_vertex, per_frame);
     const Difference against_render = compare(per_vertex, read_png(references[1]));
     std::cout << specs[k] << " against per frame: " << paths.uncovered_on_page
               << " pixels not covered by both; max difference " << paths.max_both << "; mean " << paths.mean[0]
-              << ", " << paths.mean[1] << ", " << paths.mean[2] << "; against render: mean " << against_render.mean[0]
-              << ", " << against_render.mean[1] << ", " << against_render.mean[2] << "\n";
+              << ", " << paths.mean[1] << ", " << paths.mean[2] << "; against render: " << against_render.covered
+              << " pixels covered by render, " << against_render.uncovered_on_page << " of them not by the page; mean "
+              << against_render.mean[0] << ", " << against_render.mean[1] << ", " << against_render.mean[2] << "; max "
+              << against_render.max_both << " where both cover\n";
     EXPECT_EQ(paths.uncovered_on_page, 0u) << specs[k];
     EXPECT_LE(paths.max_both, 1) << specs[k];
     for (int c = 0; c < 3; ++c) EXPECT_LE(against_render.mean[c], 2.0) << specs[k] << ", channel " << c;
   }
+
+  // A broken pass misses render by far, and the per-vertex page too.
+  const Rgba broken = read_png(result["views"][broken_view].get<std::string>());
+  const Difference broken_vs_render = compare(broken, read_png(references[1]));
+  const Difference broken_vs_vertex = compare(broken, read_png(result["views"][vertex_view].get<std::string>()));
+  std::cout << "pass broken on purpose (texels shifted): mean |page - render| " << broken_vs_render.mean[0] << ", "
+            << broken_vs_render.mean[1] << ", " << broken_vs_render.mean[2] << "; max against per vertex "
+            << broken_vs_vertex.max_both << "\n";
+  EXPECT_GT(std::max({broken_vs_render.mean[0], broken_vs_render.mean[1], broken_vs_render.mean[2]}), 2.0);
+  EXPECT_GT(broken_vs_vertex.max_both, 1);
+
+  // Order 8: the one-point pass against render under the turned order-8 light, and against
+  // the per-vertex path and the two-point split, as above.
+  const fs::path render8 = scratch("render-8.png");
+  must(run_shtool(with_view({"render", kSpotObj, "--fit", fit8.string(), "--light",
+                             rotated_light(sky8, quats[0], "sky8-turned.json").string(), "--out", render8.string()})));
+  const Rgba order8 = read_png(result["views"][order8_view].get<std::string>());
+  const Difference d8 = compare(order8, read_png(render8));
+  std::cout << "order 8, light-rotation=" << quats[0] << ": " << d8.covered << " pixels covered by render, "
+            << d8.uncovered_on_page << " of them not by the page; mean |page - render| " << d8.mean[0] << ", "
+            << d8.mean[1] << ", " << d8.mean[2] << "; max " << d8.max_both << " where both cover\n";
+  ASSERT_GT(d8.covered, 2000u);
+  EXPECT_LE(d8.uncovered_on_page, d8.covered / 100);
+  for (int c = 0; c < 3; ++c) EXPECT_LE(d8.mean[c], 2.0) << "order 8, channel " << c;
+  for (const std::size_t k : {order8_vertex_view, order8_split_view}) {
+    const Difference paths = compare(read_png(result["views"][k].get<std::string>()), order8);
+    std::cout << specs[k] << " against per frame: " << paths.uncovered_on_page
+              << " pixels not covered by both; max difference " << paths.max_both << "\n";
+    EXPECT_EQ(paths.uncovered_on_page, 0u) << specs[k];
+    EXPECT_LE(paths.max_both, 1) << specs[k];
+  }
+}
+
+// An encoded grid reaches three.js as bake-probes --threejs writes it: zh3 as the order-3
+// SH it stands for (explicit and hallucinated fits), the same bytes; l1, which three.js
+// cannot reconstruct, refused with nothing written.
+TEST(ExportWeb, EncodedProbeGridsAsBakeProbesWritesThemForThree) {
+  SHTOOL_REQUIRE_NODE_CONSUMERS();
+  const std::vector<std::string> bake = {"bake-probes", kSpotObj,  "--grid",    "3,2,2", "--env", bakes().sky.string(),
+                                         "--samples",   "32",      "--bounces", "1",     "--order", "3"};
+  for (const char* fit : {"explicit", "hallucinated"}) {
+    const fs::path table = scratch(std::string("zh3-") + fit + ".shtb"), three = scratch(std::string("three-") + fit),
+                   page = scratch(std::string("page-zh3-") + fit);
+    fs::remove_all(three);
+    fs::remove_all(page);
+    fs::create_directories(three);
+    std::vector<std::string> args = bake;
+    args.insert(args.end(), {"--encoding", "zh3", "--zh3-fit", fit, "--out", table.string(), "--threejs", three.string()});
+    must(run_shtool(args));
+    must(run_shtool({"export-web", kSpotObj, "--fit", bakes().fit.string(), "--light", bakes().sky.string(),
+                     "--probes", table.string(), "--out", page.string()}));
+    EXPECT_EQ(read_file(page / "probes/probes.bin"), read_file(three / "probes.bin")) << fit;
+    EXPECT_EQ(read_json(page / "probes/probes.json"), read_json(three / "probes.json")) << fit;
+  }
+  const fs::path l1 = scratch("l1.shtb"), page = scratch("page-l1");
+  fs::remove_all(page);
+  std::vector<std::string> args = bake;
+  args.insert(args.end(), {"--encoding", "l1", "--out", l1.string()});
+  must(run_shtool(args));
+  const CommandResult r = run_shtool({"export-web", kSpotObj, "--fit", bakes().fit.string(), "--light",
+                                      bakes().sky.string(), "--probes", l1.string(), "--out", page.string()});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("non-linear L1"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(page));
 }
 
 TEST(ExportWeb, RefusesBadInputsAndWritesNothing) {

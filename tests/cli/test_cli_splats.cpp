@@ -251,6 +251,65 @@ TEST(CliTransformSplats, SameBytesWhateverTheThreadCount) {
   EXPECT_EQ(bytes[0], bytes[1]);
 }
 
+// The common file (binary in the machine's order, float32) is streamed in pieces of
+// records with the SH of several splats at once; big-endian files take the general
+// path, one value at a time. Both give the same bits, reflections included.
+TEST(CliTransformSplats, StreamedAndGeneralPathsGiveTheSameBits) {
+  const std::vector<Splat> s = random_splats(5000, 3, 21);
+  const fs::path le = scratch("paths_le.ply"), be = scratch("paths_be.ply");
+  std::ofstream(le, std::ios::binary) << write_ply(s, 3, "binary_little_endian");
+  std::ofstream(be, std::ios::binary) << write_ply(s, 3, "binary_big_endian");
+  for (const std::vector<std::string> how :
+       {std::vector<std::string>{"--quat", "0.8,-0.3,0.4,0.33", "--scale", "2", "--translate", "1,2,3"},
+        std::vector<std::string>{"--matrix", "0,1,0,1,0,0,0,0,1", "--translate", "-1,0.5,0"}}) {
+    std::string bytes[2];
+    for (int k = 0; k < 2; ++k) {
+      const fs::path out = scratch(k ? "paths_be_out.ply" : "paths_le_out.ply");
+      std::vector<std::string> argv = {"transform-splats", (k ? be : le).string(), "--out", out.string()};
+      argv.insert(argv.end(), how.begin(), how.end());
+      const auto r = run_shtool(argv);
+      ASSERT_EQ(r.exit_code, 0) << r.err;
+      bytes[k] = read_file(out);
+    }
+    const std::size_t body[2] = {bytes[0].find("end_header\n") + 11, bytes[1].find("end_header\n") + 11};
+    ASSERT_EQ(bytes[0].size() - body[0], bytes[1].size() - body[1]);
+    std::string swapped = bytes[1].substr(body[1]);
+    for (std::size_t i = 0; i + 4 <= swapped.size(); i += 4) std::swap(swapped[i], swapped[i + 3]), std::swap(swapped[i + 1], swapped[i + 2]);
+    EXPECT_TRUE(swapped == bytes[0].substr(body[0])) << how[0];
+    // And the values did change.
+    EXPECT_FALSE(bytes[0] == read_file(le));
+  }
+}
+
+// In the streamed path too a value that is not finite, or one the transform takes past
+// float32, is refused, the first splat's problem named whatever the threads, nothing written.
+TEST(CliTransformSplats, StreamedPathRefusesNonFiniteValues) {
+  struct Case {
+    std::vector<std::pair<std::size_t, float>> x;  // splat, its x
+    std::string message;
+  };
+  const std::vector<Case> cases = {
+      {{{4500, std::nanf("")}}, "splat 4500: 'x' is not finite"},
+      {{{4500, INFINITY}, {100, 3e38f}}, "splat 100: 'x' overflows its type after the transform"},
+      {{{4500, 3e38f}, {4600, std::nanf("")}}, "splat 4500: 'x' overflows its type after the transform"},
+      {{{2100, std::nanf("")}, {4500, 3e38f}}, "splat 2100: 'x' is not finite"},
+  };
+  for (const Case& c : cases) {
+    std::vector<Splat> s = random_splats(5000, 2, 23);
+    for (const auto& [i, x] : c.x) s[i].p[0] = x;
+    const fs::path in = scratch("nonfinite.ply"), out = scratch("nonfinite_out.ply");
+    std::ofstream(in, std::ios::binary) << write_ply(s, 2, "binary_little_endian");
+    for (const char* threads : {"1", "3"}) {
+      fs::remove(out);
+      const auto r = run_shtool({"transform-splats", in.string(), "--quat", "0.6,0.8,0,0", "--scale", "2",
+                                  "--threads", threads, "--out", out.string()});
+      EXPECT_EQ(r.exit_code, 1) << c.message << ": " << r.err;
+      EXPECT_NE(r.err.find(c.message), std::string::npos) << threads << " threads: " << r.err;
+      EXPECT_FALSE(fs::exists(out)) << c.message;
+    }
+  }
+}
+
 TEST(CliTransformSplats, BadInputIsAnErrorWithNoOutput) {
   const std::string good = write_ply(random_splats(10, 1, 3), 1, "binary_little_endian");
   auto replace = [&](const std::string& from, const std::string& to) {

@@ -983,33 +983,38 @@ void check_batch_lanes_bitwise() {
   ASSERT_NE(mixed.size() % 4, 0u);  // a tail in float
   // Helpers beyond the other tests' order, for an order without a lane path.
   static const auto h22 = std::make_shared<const RotationHelpers>(compute_rotation_helpers(22));
-  for (const std::vector<Mat3<T>>* rs : {&mixed, &small})
-    for (int order : {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 15, 20, 21}) {
-      const int n = sh_count(order), count = static_cast<int>(rs->size());
-      std::vector<T> in(count * n);
-      for (T& v : in) v = static_cast<T>(std::uniform_real_distribution<double>(-1, 1)(rng));
-      for (RotationMethod m : {RotationMethod::zxzxz, RotationMethod::automatic, RotationMethod::taylor1,
-                               RotationMethod::taylor15, RotationMethod::taylor2}) {
-        const double tol = rs == &small ? 0.1 : 1e-5;  // small: `automatic` takes Taylor
-        ShRotation<T> batch(order, h22), single(order, h22);
-        std::vector<T> out(in.size(), T(7)), one(n);
-        ASSERT_TRUE(rotate_batch<T>(batch, *rs, in, out, m, tol));
-        for (int k = 0; k < count; ++k) {
-          ASSERT_TRUE(single.set((*rs)[k], m, tol));
-          if (rs == &small && m == RotationMethod::automatic && order > detail::kClosedMaxOrder)  // else zxzxz
-            ASSERT_NE(single.method(), RotationMethod::zxzxz) << "order " << order;
-          single.apply(std::span<const T>(in.data() + k * n, n), one);
-          for (int i = 0; i < n; ++i)
-            ASSERT_EQ(out[k * n + i], one[i]) << "order " << order << " " << rotation_method_name(m) << " pair " << k
-                                              << " (" << rotation_method_name(single.method()) << ") i " << i;
+  // vectors: 1, or 3 per rotation (a splat's colour channels, the lanes' setup shared).
+  for (const int vectors : {1, 3})
+    for (const std::vector<Mat3<T>>* rs : {&mixed, &small})
+      for (int order : {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 15, 20, 21}) {
+        const int n = sh_count(order), count = static_cast<int>(rs->size());
+        std::vector<T> in(count * vectors * n);
+        for (T& v : in) v = static_cast<T>(std::uniform_real_distribution<double>(-1, 1)(rng));
+        for (RotationMethod m : {RotationMethod::zxzxz, RotationMethod::automatic, RotationMethod::taylor1,
+                                 RotationMethod::taylor15, RotationMethod::taylor2}) {
+          const double tol = rs == &small ? 0.1 : 1e-5;  // small: `automatic` takes Taylor
+          ShRotation<T> batch(order, h22), single(order, h22);
+          std::vector<T> out(in.size(), T(7)), one(n);
+          ASSERT_TRUE(rotate_batch<T>(batch, *rs, in, out, m, tol, vectors));
+          for (int k = 0; k < count; ++k) {
+            ASSERT_TRUE(single.set((*rs)[k], m, tol));
+            if (rs == &small && m == RotationMethod::automatic && order > detail::kClosedMaxOrder)  // else zxzxz
+              ASSERT_NE(single.method(), RotationMethod::zxzxz) << "order " << order;
+            for (int c = k * vectors; c < (k + 1) * vectors; ++c) {
+              single.apply(std::span<const T>(in.data() + c * n, n), one);
+              for (int i = 0; i < n; ++i)
+                ASSERT_EQ(out[c * n + i], one[i]) << "order " << order << " " << rotation_method_name(m) << " pair "
+                                                  << k << " vector " << c << " ("
+                                                  << rotation_method_name(single.method()) << ") i " << i;
+            }
+          }
+          // The rotation object holds the last rotation afterwards.
+          EXPECT_EQ(batch.method(), single.method());
+          std::vector<T> again(n);
+          batch.apply(std::span<const T>(in.data() + (count * vectors - 1) * n, n), again);
+          for (int i = 0; i < n; ++i) EXPECT_EQ(again[i], one[i]);
         }
-        // The rotation object holds the last rotation afterwards.
-        EXPECT_EQ(batch.method(), single.method());
-        std::vector<T> again(n);
-        batch.apply(std::span<const T>(in.data() + (count - 1) * n, n), again);
-        for (int i = 0; i < n; ++i) EXPECT_EQ(again[i], one[i]);
       }
-    }
 }
 
 TEST(RotationApi, BatchLanesAreBitIdenticalToSingleRotationsFloat) {
@@ -1116,6 +1121,14 @@ TEST(RotationApi, BatchOfNothingAndWrongSizes) {
     EXPECT_NE(std::string(e.what()).find("need 80 coefficients"), std::string::npos) << e.what();
   }
   EXPECT_THROW(rotate_batch<float>(rotation, rs, std::span<const float>(in).first(79), out), std::invalid_argument);
+  // Three vectors per rotation need three times the coefficients; none per rotation is refused.
+  try {
+    rotate_batch<float>(rotation, rs, in, out, RotationMethod::automatic, 1e-6, 3);
+    FAIL() << "no exception for three vectors per rotation in room for one";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("and 3 vectors each need 240 coefficients"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(rotate_batch<float>(rotation, rs, in, out, RotationMethod::automatic, 1e-6, 0), std::invalid_argument);
   // Without helpers only the reference method works, in batches as in set().
   ShRotation<float> none(4, nullptr);
   EXPECT_FALSE(rotate_batch<float>(none, rs, in, out, RotationMethod::zxzxz));

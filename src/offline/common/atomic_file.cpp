@@ -194,6 +194,18 @@ void PendingFile::write(std::span<const std::byte> bytes) {
   write(std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
 }
 
+void PendingFile::write_at(std::uint64_t offset, std::string_view bytes) {
+  if (!file_) fail(target_, "write after the file was finished");
+  const int fd = ::fileno(file_);
+  while (!bytes.empty()) {
+    const ssize_t n = ::pwrite(fd, bytes.data(), bytes.size(), static_cast<off_t>(offset));
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) fail(target_, n < 0 ? std::strerror(errno) : "nothing written");
+    bytes.remove_prefix(static_cast<std::size_t>(n));
+    offset += static_cast<std::uint64_t>(n);
+  }
+}
+
 void PendingFile::finish() {
   if (!file_) return;
   const int flush_rc = std::fflush(file_);

@@ -8,6 +8,8 @@
 // process before ending it as the signal would.
 #pragma once
 
+#include <cstdint>
+#include <cstdio>
 #include <filesystem>
 #include <span>
 #include <string_view>
@@ -27,6 +29,10 @@ class PendingFile {
 
   void write(std::string_view bytes);
   void write(std::span<const std::byte> bytes);
+  // The bytes at a byte offset of the file, unbuffered (one pwrite): several threads may
+  // write disjoint pieces of one big output at once, in any order. Not to be mixed with
+  // write() on the same file.
+  void write_at(std::uint64_t offset, std::string_view bytes);
   // Flushes and closes the temporary file (reporting a full disk here, not later).
   void finish();
   // finish() if needed, then renames the temporary file over the target.

@@ -46,7 +46,7 @@ void JobOutputs::output(const std::filesystem::path& path, std::string option) {
   for (const Output& o : outputs_)
     if (same_file(path, o.path))
       throw InputError(option + " and " + o.option + " name the same file " + quoted(path));
-  outputs_.push_back({path, std::move(option), {}, false});
+  outputs_.push_back({path, std::move(option), {}, false, std::nullopt});
 }
 
 const JobOutputs::Output* JobOutputs::find_if(std::string_view option) const {
@@ -75,6 +75,14 @@ void JobOutputs::set(std::string_view option, std::string bytes) {
   o.set = true;
 }
 
+void JobOutputs::set_written(std::string_view option, PendingFile file) {
+  Output& o = find(option);
+  if (file.target() != o.path) throw std::logic_error("output " + o.option + " written to another path");
+  o.written.emplace(std::move(file));
+  o.bytes = std::string();
+  o.set = true;
+}
+
 void JobOutputs::stage() {
   for (const Output& o : outputs_)
     if (!o.set) throw std::logic_error("output " + o.option + " has no bytes");
@@ -82,6 +90,12 @@ void JobOutputs::stage() {
   pending_.clear();
   pending_.reserve(outputs_.size());
   for (Output& o : outputs_) {
+    if (o.written) {
+      pending_.emplace_back(std::move(*o.written));
+      o.written.reset();
+      pending_.back().finish();
+      continue;
+    }
     pending_.emplace_back(o.path);
     pending_.back().write(o.bytes);
     pending_.back().finish();

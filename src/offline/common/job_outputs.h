@@ -21,6 +21,7 @@
 #pragma once
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -45,6 +46,9 @@ class JobOutputs {
 
   // The bytes of a requested output (owned here until the commit).
   void set(std::string_view option, std::string bytes);
+  // Or the output already written by the job into a PendingFile of path(option) (a big
+  // one streamed piece by piece, PendingFile::write_at), renamed with the others.
+  void set_written(std::string_view option, PendingFile file);
 
   // Every requested output must have its bytes. Throws InputError naming the output that
   // could not be written; then no output has changed.
@@ -67,6 +71,7 @@ class JobOutputs {
     std::string option;
     std::string bytes;
     bool set = false;
+    std::optional<PendingFile> written;
   };
   Output& find(std::string_view option);
   const Output* find_if(std::string_view option) const;

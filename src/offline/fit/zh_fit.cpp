@@ -150,6 +150,13 @@ constexpr double kSplitLastFtolRel = 1e-2;
 // The two axes of the split start lie this far (radians, to first order) either side of
 // the single-lobe axis.
 constexpr double kSplitAngle = 0.1;
+// The re-seated last lobe (see varpro_search): the next grid maxima of what the other
+// lobes leave, at least this far (radians) from the lobe they replace, this many of them.
+// On the fit fixture's transfer vectors at N = 4 one re-seat lowers the mean residual over
+// the best known from 1.46 to 1.43 for 0-14 % more fit time on the bunny; two lower it
+// to 1.36 but cost about 50 % more there, which puts the bunny's fit above its simulation.
+constexpr int kReseats = 1;
+constexpr double kReseatMinAngle = 0.25;
 // A single lobe's refinement from a grid peak: two angles, converged in far fewer.
 constexpr int kSingleLobeEvaluations = 200;
 
@@ -521,6 +528,40 @@ Eigen::Vector3d elongation_direction(std::span<const double> t, const Eigen::Vec
   return (c[0] * u + c[1] * v).normalized();
 }
 
+// The last lobe a greedy growth adds is the single best lobe for what the others leave,
+// judged before they move; once all are polished together another grid maximum of that
+// remainder often ends lower (on transfer vectors the last lobe often mends the shadow's
+// edge near the horizon, where several maxima compete). So the better start's last lobe
+// is re-seated at the next kReseats grid maxima of what the other lobes leave (each at
+// least kReseatMinAngle from it), each polished as a last stage, and the lowest psi is
+// kept. Deterministic, like the starts it follows.
+void reseat_last_lobe(int order, std::span<const double> t, const std::vector<bool>& mask, const AxisScan& scan,
+                      std::vector<Eigen::Vector3d>& axes, double& best_psi, double& best_residual) {
+  const std::vector<Eigen::Vector3d> others(axes.begin(), axes.end() - 1);
+  const Eigen::Vector3d last = axes.back();
+  thread_local std::vector<double> left;
+  left.resize(sh_count(order));
+  residual_after(order, t, mask, others, left);
+  thread_local std::vector<std::pair<double, int>> peaks;
+  grid_peaks(order, left, mask, scan, kReseats + 1, peaks);
+  int tried = 0;
+  for (const auto& peak : peaks) {
+    const Eigen::Vector3d& candidate = scan.axes[peak.second];
+    // s and -s are one lobe.
+    if (std::abs(candidate.dot(last)) > std::cos(kReseatMinAngle)) continue;
+    if (tried++ == kReseats) break;
+    std::vector<Eigen::Vector3d> trial = others;
+    trial.push_back(candidate);
+    double residual = 0;
+    const double psi = varpro_bfgs(order, t, mask, trial, kSplitLastEvaluations, kSplitLastFtolRel, residual);
+    if (psi < best_psi) {
+      best_psi = psi;
+      best_residual = residual;
+      axes = trial;
+    }
+  }
+}
+
 // Greedy axes (and, for 3 <= lobes < order, the split start), then random axis sets, each
 // run of varpro_bfgs stopped at a loose tolerance (where starts are told apart); the best
 // is then polished to the tight one.
@@ -531,7 +572,9 @@ Eigen::Vector3d elongation_direction(std::span<const double> t, const Eigen::Vec
 // there mostly shape that lobe with two lobes either side of a instead. So a second start
 // begins from the pair a +- kSplitAngle d, d the lobe's long axis
 // (elongation_direction), and grows greedily from there, where the greedy start's residual
-// is above options.split_above x ||t||. Both are deterministic and run at every effort.
+// is above options.split_above x ||t||. Both are deterministic and run at every effort;
+// where the better of them is still above that, its last lobe is re-seated
+// (reseat_last_lobe).
 std::vector<Eigen::Vector3d> varpro_search(int order, std::span<const double> t, const std::vector<bool>& mask,
                                            const ZhFitOptions& o, std::uint64_t stream, double good) {
   const AxisScan& scan = axis_scan(order, o.axis_samples);
@@ -567,6 +610,7 @@ std::vector<Eigen::Vector3d> varpro_search(int order, std::span<const double> t,
         axes = pair;
       }
     }
+    if (best_residual > split_good) reseat_last_lobe(order, t, mask, scan, axes, best_psi, best_residual);
   }
   std::vector<Eigen::Vector3d> best = axes;
 

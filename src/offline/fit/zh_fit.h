@@ -86,7 +86,8 @@ struct ZhFitOptions {
   double restart_above = 0.05;
   // varpro, 3 <= lobes < order: the split start runs only where the greedy start's
   // residual is above this fraction of ||t|| (0.2 %: half a step of an 8-bit display;
-  // about 60 % of the bunny's vertices, every vector of the fit fixture's `spot` set).
+  // about 60 % of the bunny's vertices, every vector of the fit fixture's `spot` set),
+  // and the better start's last lobe is re-seated only where it is still above it.
   // 0: always.
   double split_above = 0.002;
 };
@@ -155,7 +156,8 @@ double zh_varpro_objective(int order, std::span<const double> t, const std::vect
 // Full fit of one vector (t.size() == order^2): single lobe = best_single_lobe (both
 // methods, every effort); multi-lobe, varpro = the greedy start (and, for 3 <= lobes <
 // order, the split start: the single-lobe axis split into a pair along the lobe's long
-// axis, grown greedily), then `starts` random axis sets (seeded by options.seed and
+// axis, grown greedily, and the better start's last lobe re-seated at the next grid
+// maximum of what the others leave), then `starts` random axis sets (seeded by options.seed and
 // `stream`), the best polished; multi-lobe, joint = greedy, coefficient refit with axes
 // frozen, joint BFGS, then `starts` random axis sets each refit and BFGS-refined; the best
 // is returned.

@@ -79,9 +79,8 @@ const PlyElement* PlyFile::element(std::string_view name) const {
   return nullptr;
 }
 
-PlyFile PlyFile::parse(std::string bytes, const std::filesystem::path& name) {
+std::size_t PlyFile::parse_layout(std::string_view bytes, const std::filesystem::path& name, PlyFile& f) {
   auto fail = [&](const std::string& why) { return InputError(name.string() + ": PLY: " + why); };
-  PlyFile f;
   if (bytes.rfind("ply\n", 0) != 0 && bytes.rfind("ply\r\n", 0) != 0) throw fail("not a PLY file (no 'ply' line)");
   // The header ends at a line that is exactly "end_header" (not a comment holding it).
   std::size_t end = std::string::npos;
@@ -100,7 +99,7 @@ PlyFile PlyFile::parse(std::string bytes, const std::filesystem::path& name) {
   if (body == std::string::npos) throw fail("nothing after end_header");
   ++body;
   f.header_size_ = body;
-  std::istringstream header(bytes.substr(0, end));
+  std::istringstream header(std::string(bytes.substr(0, end)));
   std::string line;
   bool have_format = false;
   std::getline(header, line);  // "ply"
@@ -159,7 +158,22 @@ PlyFile PlyFile::parse(std::string bytes, const std::filesystem::path& name) {
     }
     if (at != bytes.size())
       throw fail(std::to_string(bytes.size() - at) + " bytes after the last element (the header's counts do not match the body)");
-  } else {
+  }
+  f.swap_ = big_endian(f.format_) != (std::endian::native == std::endian::big);
+  return body;
+}
+
+PlyFile PlyFile::parse_header(std::string_view bytes, const std::filesystem::path& name) {
+  PlyFile f;
+  parse_layout(bytes, name, f);
+  return f;
+}
+
+PlyFile PlyFile::parse(std::string bytes, const std::filesystem::path& name) {
+  auto fail = [&](const std::string& why) { return InputError(name.string() + ": PLY: " + why); };
+  PlyFile f;
+  const std::size_t body = parse_layout(bytes, name, f);
+  if (f.format_ == PlyFormat::ascii) {
     // Tokens with the whitespace that follows each, so that unchanged values keep their text.
     // Every value takes at least two bytes (a digit and a separator): counts beyond that
     // are refused before any multiplication can wrap or any memory is reserved.
@@ -191,7 +205,6 @@ PlyFile PlyFile::parse(std::string bytes, const std::filesystem::path& name) {
     if (f.ascii_tail_.find_first_not_of(" \t\r\n") != std::string::npos)
       throw fail("values after the last element (the header's counts do not match the body)");
   }
-  f.swap_ = big_endian(f.format_) != (std::endian::native == std::endian::big);
   f.data_ = std::move(bytes);
   return f;
 }

@@ -42,8 +42,15 @@ class PlyFile {
   // Throws InputError naming `name` on a malformed header, list properties, unknown
   // types, or a body shorter or longer than the header says.
   static PlyFile parse(std::string bytes, const std::filesystem::path& name);
+  // The header alone, with the same checks (a binary body's size included), for a file
+  // read in place elsewhere (mapped): elements, properties and their offsets, no values
+  // (get and set are not to be called on it). An ASCII body is not looked at.
+  static PlyFile parse_header(std::string_view bytes, const std::filesystem::path& name);
 
   PlyFormat format() const { return format_; }
+  // Binary: whether the file's byte order is the machine's (values can be used in place).
+  bool native_order() const { return !swap_; }
+  std::size_t header_size() const { return header_size_; }
   const std::vector<PlyElement>& elements() const { return elements_; }
   const PlyElement* element(std::string_view name) const;
 
@@ -79,8 +86,12 @@ class PlyFile {
   // (no copy of a multi-GiB scene), text assembled for ASCII ones.
   std::string_view binary_bytes() const { return data_; }
   std::string bytes() const;
+  // The binary bytes handed over (the file is empty afterwards): no copy of the scene.
+  std::string take_binary_bytes() { return std::move(data_); }
 
  private:
+  // Everything but the ASCII body's values; returns the body's offset.
+  static std::size_t parse_layout(std::string_view bytes, const std::filesystem::path& name, PlyFile& f);
   double get_ascii(const PlyElement& e, std::size_t i, std::size_t p) const;
   void set_ascii(const PlyElement& e, std::size_t i, std::size_t p, double v);
   double get_binary(PlyType type, const char* at) const;

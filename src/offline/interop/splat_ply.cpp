@@ -1,5 +1,7 @@
 #include "interop/splat_ply.h"
 
+#include <algorithm>
+#include <atomic>
 #include <bit>
 #include <cmath>
 #include <cstring>
@@ -90,6 +92,39 @@ SplatScene read_ply_splats(const PlyFile& ply, const std::filesystem::path& name
   });
   check_scene_finite(s, name.string());
   return s;
+}
+
+void rewrite_binary_ply(std::string_view bytes, const PlyElement& e, PendingFile& out, int threads,
+                        const PlyRecordEdit& edit) {
+  const std::size_t begin = e.data_offset, end = e.data_offset + e.count * e.record_size;
+  out.write_at(0, bytes.substr(0, begin));
+  out.write_at(end, bytes.substr(end));
+  const std::size_t pieces = (e.count + kPlyPiece - 1) / kPlyPiece;
+  std::vector<std::string> problems(pieces);
+  // The earliest piece with a problem: later ones are skipped, earlier ones all run.
+  std::atomic<std::size_t> failed{pieces};
+  parallel_for(pieces, threads, [&](std::size_t piece) {
+    if (piece > failed.load(std::memory_order_relaxed)) return;
+    const std::size_t first = piece * kPlyPiece, count = std::min(e.count, first + kPlyPiece) - first;
+    const std::string_view records = bytes.substr(begin + first * e.record_size, count * e.record_size);
+    if (!edit) {
+      out.write_at(begin + first * e.record_size, records);
+      return;
+    }
+    // One buffer per thread, kept from piece to piece (fresh pages cost more than the copy).
+    thread_local std::string buffer;
+    buffer.assign(records);
+    problems[piece] = edit(buffer.data(), first, count);
+    if (!problems[piece].empty()) {
+      std::size_t now = failed.load();
+      while (piece < now && !failed.compare_exchange_weak(now, piece)) {
+      }
+      return;
+    }
+    out.write_at(begin + first * e.record_size, buffer);
+  });
+  for (const std::string& problem : problems)
+    if (!problem.empty()) throw InputError(problem);
 }
 
 std::string write_ply_splats(const SplatScene& s) {

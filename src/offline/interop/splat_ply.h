@@ -6,10 +6,13 @@
 #include <array>
 #include <cstddef>
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
+#include "common/atomic_file.h"
 #include "interop/ply.h"
 #include "interop/splat_scene.h"
 
@@ -36,6 +39,19 @@ SplatLayout find_splat_layout(const PlyElement& vertex, const std::filesystem::p
 // The whole scene (every splat property required but the normals); InputError naming
 // `name` on a missing property or a value that is not finite.
 SplatScene read_ply_splats(const PlyFile& ply, const std::filesystem::path& name, int threads);
+
+// A binary PLY copied from its bytes (a mapped file) into `out` as it is read: the
+// records of `element` in pieces of kPlyPiece records, on `threads` threads, each piece
+// copied into a buffer of its thread, changed there by `edit` (when given) and written at
+// its place (PendingFile::write_at); the bytes before and after the element as they are.
+// edit(records, first, count) changes records first..first+count-1 and returns a problem
+// ("" when none): after it no later piece is edited, and the problem of the earliest
+// piece is thrown as InputError, the same whatever the threads. Without an edit this is
+// the bare PLY decode + encode the job is measured against (bench_splats).
+inline constexpr std::size_t kPlyPiece = 2048;
+using PlyRecordEdit = std::function<std::string(char* records, std::size_t first, std::size_t count)>;
+void rewrite_binary_ply(std::string_view bytes, const PlyElement& element, PendingFile& out, int threads,
+                        const PlyRecordEdit& edit);
 
 // The reference layout, binary little endian float: x y z nx ny nz (zeros) f_dc_0..2
 // f_rest_* opacity scale_0..2 rot_0..3.

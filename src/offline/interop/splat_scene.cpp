@@ -4,12 +4,15 @@
 #include <array>
 #include <cctype>
 #include <cmath>
+#include <cstring>
 
 #include <Eigen/Geometry>
 
 #include "common/input_error.h"
 #include "common/parallel_for.h"
 #include "shtool/orthogonal_map.h"
+#include "shtool/rotation.h"
+#include "shtool/sh.h"
 
 namespace shtool::interop {
 
@@ -62,21 +65,74 @@ void check_scene_finite(const SplatScene& s, const std::string& name) {
   }
 }
 
+SplatShLanes::SplatShLanes(const OrthogonalMap& map) : order_(map.order()), reflects_(map.reflects()) {
+  // The rotation OrthogonalMap applies (its proper part, the reference method).
+  ShRotation<double> rotation(order_, nullptr);
+  rotation.set(map.proper(), RotationMethod::reference);
+  const std::span<const double> blocks = rotation.reference_blocks();
+  blocks_.assign(blocks.begin(), blocks.end());
+}
+
+// Also compiled for x86-64-v3 (AVX2: four lanes a vector, not two) and chosen at load
+// time where the CPU has it; products and sums stay separate roundings (the offline code
+// is built with -ffp-contract=off), so both copies give the same bits.
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__linux__)
+__attribute__((target_clones("arch=x86-64-v3", "default")))
+#endif
+void SplatShLanes::apply(const double* in, double* out) const {
+  // Two vectors of four lanes (one register each under AVX2, two SSE2 registers
+  // otherwise), written out: left to itself GCC vectorised along the rows, with shuffles.
+  using V = double __attribute__((vector_size(4 * sizeof(double))));
+  static_assert(kLanes == 8);
+  // By reference: a vector passed by value would change the baseline copy's ABI (-Wpsabi).
+  auto load = [](V& v, const double* p) { std::memcpy(&v, p, sizeof v); };
+  auto store = [](double* p, const V& v) { std::memcpy(p, &v, sizeof v); };
+  const int rest = sh_count(order_) - 1;
+  for (int c = 0; c < 3; ++c) {
+    const double* x = in + c * rest * kLanes;
+    double* y = out + c * rest * kLanes;
+    for (int l = 1; l < order_; ++l) {
+      const int size = 2 * l + 1, first = l * l - 1;
+      const double* block = blocks_.data() + l * (4 * l * l - 1) / 3;
+      const double* xl = x + first * kLanes;
+      double* yl = y + first * kLanes;
+      const bool negate = reflects_ && (l & 1);
+      for (int r = 0; r < size; ++r) {
+        // As ShRotation's reference apply: the first product, then each next one added.
+        const double* row = block + r * size;
+        V a, b;
+        load(a, xl);
+        load(b, xl + 4);
+        V lo = row[0] * a, hi = row[0] * b;
+        for (int k = 1; k < size; ++k) {
+          load(a, xl + k * kLanes);
+          load(b, xl + k * kLanes + 4);
+          lo += row[k] * a;
+          hi += row[k] * b;
+        }
+        if (negate) lo = -lo, hi = -hi;
+        store(yl + r * kLanes, lo);
+        store(yl + r * kLanes + 4, hi);
+      }
+    }
+  }
+}
+
 void transform_splat_scene(SplatScene& s, const Eigen::Matrix3d& m, double scale, const Eigen::Vector3d& t,
                            int threads) {
   if (m.isIdentity(0) && scale == 1 && t.isZero(0)) return;
   Result<OrthogonalMap> made = OrthogonalMap::make(m, s.degree + 1, 1e-6);
   if (!made) throw InputError("a splat transform: " + made.error().message);
   const OrthogonalMap& map = made.value();
+  const SplatShLanes lanes(map);
   const Eigen::Quaterniond qp(map.proper());
   const float log_scale = static_cast<float>(std::log(scale));
-  const int coefficients = (s.degree + 1) * (s.degree + 1);
+  const std::size_t rest = static_cast<std::size_t>((s.degree + 1) * (s.degree + 1)) - 1;
   const std::size_t stride = s.sh_stride();
   constexpr std::size_t kChunk = 4096;
   parallel_for((s.count + kChunk - 1) / kChunk, threads, [&](std::size_t chunk) {
-    std::vector<double> f(3 * static_cast<std::size_t>(coefficients)), g(f.size());
-    const std::size_t end = std::min(s.count, (chunk + 1) * kChunk);
-    for (std::size_t i = chunk * kChunk; i < end; ++i) {
+    const std::size_t begin = chunk * kChunk, end = std::min(s.count, (chunk + 1) * kChunk);
+    for (std::size_t i = begin; i < end; ++i) {
       const Eigen::Vector3d p(s.position[3 * i], s.position[3 * i + 1], s.position[3 * i + 2]);
       const Eigen::Vector3d moved = scale * (m * p) + t;
       for (int k = 0; k < 3; ++k) s.position[3 * i + k] = static_cast<float>(moved[k]);
@@ -85,12 +141,24 @@ void transform_splat_scene(SplatScene& s, const Eigen::Matrix3d& m, double scale
       q[0] = static_cast<float>(out.w()), q[1] = static_cast<float>(out.x()), q[2] = static_cast<float>(out.y()),
       q[3] = static_cast<float>(out.z());
       for (int k = 0; k < 3; ++k) s.log_scale[3 * i + k] += log_scale;
-      if (coefficients > 1) {
-        float* sh = &s.sh[i * stride];
-        for (std::size_t k = 0; k < f.size(); ++k) f[k] = sh[k];
-        map.apply(f, g, 3);
-        for (std::size_t k = 3; k < g.size(); ++k) sh[k] = static_cast<float>(g[k]);
-      }
+    }
+    if (rest == 0) return;
+    // The SH of SplatShLanes::kLanes splats at once, channel-major in the lanes.
+    constexpr std::size_t L = SplatShLanes::kLanes;
+    double in[45 * L], out[45 * L];
+    for (std::size_t b = begin; b < end; b += L) {
+      const std::size_t n = std::min(L, end - b);
+      for (int c = 0; c < 3; ++c)
+        for (std::size_t k = 1; k <= rest; ++k) {
+          double* x = in + (c * rest + k - 1) * L;
+          for (std::size_t j = 0; j < n; ++j) x[j] = s.sh[(b + j) * stride + 3 * k + c];
+          for (std::size_t j = n; j < L; ++j) x[j] = 0;
+        }
+      lanes.apply(in, out);
+      for (int c = 0; c < 3; ++c)
+        for (std::size_t k = 1; k <= rest; ++k)
+          for (std::size_t j = 0; j < n; ++j)
+            s.sh[(b + j) * stride + 3 * k + c] = static_cast<float>(out[(c * rest + k - 1) * L + j]);
     }
   });
 }

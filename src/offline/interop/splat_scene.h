@@ -11,6 +11,8 @@
 
 #include <Eigen/Core>
 
+#include "shtool/orthogonal_map.h"
+
 namespace shtool::interop {
 
 struct SplatScene {
@@ -48,6 +50,27 @@ const char* splat_format_name(SplatFormat format);
 // InputError naming `name` when a value that every format needs finite is not (the
 // first one found, in splat order).
 void check_scene_finite(const SplatScene& scene, const std::string& name);
+
+// One orthogonal map of SH colours for many splats (a whole scene turned by one matrix):
+// the reference rotation's band blocks, OrthogonalMap's own, applied to kLanes splats at
+// once in the lanes of SIMD vectors. Each coefficient is the same products summed in the
+// same order as OrthogonalMap::apply(in, out, 3) makes it, so the results are its bits; the odd
+// bands are negated for a reflection.
+class SplatShLanes {
+ public:
+  static constexpr int kLanes = 8;
+  explicit SplatShLanes(const OrthogonalMap& map);
+  int order() const { return order_; }
+  // The coefficients of bands 1.. (k >= 1) of kLanes splats, channel-major as PLY's
+  // f_rest: value j = c (N^2 - 1) + k - 1 of lane s at [j kLanes + s]; in and out of
+  // 3 (N^2 - 1) kLanes values, not overlapping. Band 0 is left to the caller (it stays).
+  void apply(const double* in, double* out) const;
+
+ private:
+  int order_;
+  bool reflects_;
+  std::vector<double> blocks_;  // band l's (2l+1)^2 values, row-major, from l(4l^2-1)/3
+};
 
 // p -> s M p + t for an orthogonal M (det +1 or -1, to 1e-6; InputError otherwise):
 // positions; orientations by the proper part P = det(M) M, since the covariance

@@ -1,6 +1,9 @@
 #include "interop/splats_job.h"
 
+#include <array>
 #include <cctype>
+#include <cstdint>
+#include <cstring>
 #include <chrono>
 #include <cmath>
 #include <string>
@@ -42,8 +45,175 @@ Eigen::Matrix3d splat_rotation(const TransformSplatsRequest& r) {
 
 namespace {
 
-// PLY in, PLY out in one frame: the file's values rewritten in place, every other
-// property, the header and the encoding kept.
+// What PLY in, PLY out applies to every splat, in the file's own coordinates.
+struct PlyMotion {
+  const OrthogonalMap map;
+  Eigen::Quaterniond qr;  // the orientations' turn (unit)
+  double log_scale;
+  Eigen::Vector3d t;
+  bool moves;  // positions change
+
+  static OrthogonalMap make_map(const Eigen::Matrix3d& rot, int degree) {
+    Result<OrthogonalMap> made = OrthogonalMap::make(rot, degree + 1, 1e-6);
+    if (!made) throw InputError("--matrix: " + made.error().message);
+    return std::move(made.value());
+  }
+  PlyMotion(const TransformSplatsRequest& r, const Eigen::Matrix3d& rot, int degree)
+      : map(make_map(rot, degree)),
+        // Orientations turn by the proper part (a reflection's covariance M Sigma M^T is
+        // P Sigma P^T); the given quaternion itself when there is one (no round trip
+        // through the matrix).
+        qr(r.quaternion ? Eigen::Quaterniond((*r.quaternion)[0], (*r.quaternion)[1], (*r.quaternion)[2],
+                                             (*r.quaternion)[3])
+                              .normalized()
+                        : Eigen::Quaterniond(map.proper())),
+        log_scale(std::log(r.scale)),
+        t(r.translate[0], r.translate[1], r.translate[2]),
+        moves(!rot.isIdentity(0) || r.scale != 1 || !t.isZero(0)) {}
+};
+
+// Whether a PLY can be rewritten record by record at fixed offsets (rewrite_binary_ply):
+// binary in the machine's byte order with every floating-point property float32, as
+// 3DGS writes them.
+bool rewritable_in_place(const PlyFile& ply, const PlyElement& v) {
+  if (ply.format() == PlyFormat::ascii || !ply.native_order()) return false;
+  for (const PlyProperty& p : v.properties)
+    if (p.type == PlyType::float64) return false;
+  return true;
+}
+
+// The common 3DGS file, PLY in and out in one frame: streamed from the mapped input into
+// the output in pieces of records (rewrite_binary_ply), each value at its known offset
+// and the SH colours of SplatShLanes::kLanes splats at once. The same bits and the same
+// messages as transform_ply_in_place.
+void transform_ply_streamed(const TransformSplatsRequest& r, const Eigen::Matrix3d& rot, std::string_view bytes,
+                            const PlyElement& v, const SplatLayout& layout, JobOutputs& io, int threads,
+                            TransformSplatsReport& report) {
+  const PlyMotion motion(r, rot, layout.degree);
+  const SplatShLanes lanes(motion.map);
+  const std::size_t size = v.record_size;
+  auto at = [&](std::size_t p) { return v.properties[p].offset; };
+  std::vector<std::size_t> floats;  // every float property's offset: each must be finite
+  for (const PlyProperty& p : v.properties)
+    if (p.type == PlyType::float32) floats.push_back(p.offset);
+  const std::array<std::size_t, 3> position{at(layout.position[0]), at(layout.position[1]), at(layout.position[2])};
+  std::vector<std::size_t> rest;  // f_rest_0.., channel-major as SplatShLanes takes them
+  for (std::size_t p : layout.rest) rest.push_back(at(p));
+  auto get = [](const char* record, std::size_t offset) {
+    float f;
+    std::memcpy(&f, record + offset, 4);
+    return f;
+  };
+  auto put = [](char* record, std::size_t offset, double value) {
+    const float f = static_cast<float>(value);
+    std::memcpy(record + offset, &f, 4);
+  };
+  // Records of float32 alone (3DGS's) are checked as one run of words, in SIMD lanes.
+  const bool all_float = floats.size() * 4 == size;
+  auto finite_run = [](const char* from, std::size_t words) {
+    std::uint32_t bad = 0;
+    for (std::size_t w = 0; w < words; ++w) {
+      std::uint32_t b;
+      std::memcpy(&b, from + 4 * w, 4);
+      bad |= static_cast<std::uint32_t>((b & 0x7f800000u) == 0x7f800000u);
+    }
+    return bad == 0;
+  };
+  auto finite = [&](const char* record) {
+    if (all_float) return finite_run(record, floats.size());
+    std::uint32_t bad = 0;
+    for (std::size_t o : floats) {
+      std::uint32_t b;
+      std::memcpy(&b, record + o, 4);
+      bad |= static_cast<std::uint32_t>((b & 0x7f800000u) == 0x7f800000u);
+    }
+    return bad == 0;
+  };
+  // The first of records[0, count) that is not finite, or count.
+  auto first_non_finite = [&](const char* records, std::size_t count) {
+    if (all_float && finite_run(records, count * floats.size())) return count;
+    std::size_t j = 0;
+    while (j < count && finite(records + j * size)) ++j;
+    return j;
+  };
+  // The name of the first property of a record that is not finite (its message).
+  auto non_finite = [&](const char* record) -> const std::string& {
+    for (const PlyProperty& p : v.properties)
+      if (p.type == PlyType::float32 && !std::isfinite(get(record, p.offset))) return p.name;
+    return v.properties.front().name;
+  };
+  PendingFile out(io.path("--out"));
+  rewrite_binary_ply(bytes, v, out, threads, [&](char* records, std::size_t first, std::size_t count) -> std::string {
+    // Up to the first splat whose input is not finite; a splat before it that overflows
+    // after the transform is the problem reported, as one splat after another would find.
+    const std::size_t limit = first_non_finite(records, count);
+    for (std::size_t j = 0; j < limit; ++j) {
+      char* s = records + j * size;
+      const Eigen::Vector3d p(get(s, position[0]), get(s, position[1]), get(s, position[2]));
+      const Eigen::Vector3d moved = motion.moves ? Eigen::Vector3d(r.scale * (rot * p) + motion.t) : p;
+      for (int k = 0; k < 3; ++k) put(s, position[k], moved[k]);
+      if (layout.normal) {
+        const auto& idx = *layout.normal;
+        const Eigen::Vector3d n(get(s, at(idx[0])), get(s, at(idx[1])), get(s, at(idx[2])));
+        const Eigen::Vector3d turned = rot * n;
+        for (int k = 0; k < 3; ++k) put(s, at(idx[k]), turned[k]);
+      }
+      if (layout.rotation) {
+        const auto& idx = *layout.rotation;
+        const Eigen::Quaterniond q(get(s, at(idx[0])), get(s, at(idx[1])), get(s, at(idx[2])), get(s, at(idx[3])));
+        const Eigen::Quaterniond turned = motion.qr * q;  // |turned| = |q|: qr is unit
+        const double parts[4] = {turned.w(), turned.x(), turned.y(), turned.z()};
+        for (int k = 0; k < 4; ++k) put(s, at(idx[k]), parts[k]);
+      }
+      if (layout.scale && motion.log_scale != 0)
+        for (int k = 0; k < 3; ++k) {
+          const std::size_t o = at((*layout.scale)[k]);
+          put(s, o, get(s, o) + motion.log_scale);
+        }
+    }
+    if (!rest.empty()) {
+      constexpr std::size_t L = SplatShLanes::kLanes;
+      double sh_in[45 * L], sh_out[45 * L];
+      for (std::size_t b = 0; b < limit; b += L) {
+        const std::size_t n = std::min(L, limit - b);
+        char* base = records + b * size;
+        if (n == L) {  // the loops over lanes unrolled
+          for (std::size_t j = 0; j < rest.size(); ++j)
+            for (std::size_t s = 0; s < L; ++s) sh_in[j * L + s] = get(base + s * size, rest[j]);
+        } else {
+          for (std::size_t j = 0; j < rest.size(); ++j) {
+            for (std::size_t s = 0; s < n; ++s) sh_in[j * L + s] = get(base + s * size, rest[j]);
+            for (std::size_t s = n; s < L; ++s) sh_in[j * L + s] = 0;
+          }
+        }
+        lanes.apply(sh_in, sh_out);
+        if (n == L) {
+          for (std::size_t j = 0; j < rest.size(); ++j)
+            for (std::size_t s = 0; s < L; ++s) put(base + s * size, rest[j], sh_out[j * L + s]);
+        } else {
+          for (std::size_t j = 0; j < rest.size(); ++j)
+            for (std::size_t s = 0; s < n; ++s) put(base + s * size, rest[j], sh_out[j * L + s]);
+        }
+      }
+    }
+    // A finite value beyond float32 (3.4e38) was stored as inf.
+    const std::size_t overflow = first_non_finite(records, limit);
+    for (std::size_t j = overflow; j < limit; ++j)
+      if (!finite(records + j * size))
+        return "splat " + std::to_string(first + j) + ": '" + non_finite(records + j * size) +
+               "' overflows its type after the transform (--scale or --translate too large for " + r.in.string() + ")";
+    if (limit < count)
+      return r.in.string() + ": splat " + std::to_string(first + limit) + ": '" + non_finite(records + limit * size) +
+             "' is not finite";
+    return "";
+  });
+  io.set_written("--out", std::move(out));
+  report.splats = v.count;
+  report.degree = layout.degree;
+}
+
+// PLY in, PLY out in one frame, any encoding: the file's values rewritten in place, every
+// other property, the header and the encoding kept.
 void transform_ply_in_place(const TransformSplatsRequest& r, const Eigen::Matrix3d& rot, std::string bytes,
                             JobOutputs& io, int threads, TransformSplatsReport& report) {
   PlyFile ply = PlyFile::parse(std::move(bytes), r.in);
@@ -51,25 +221,18 @@ void transform_ply_in_place(const TransformSplatsRequest& r, const Eigen::Matrix
   if (!vertex) throw InputError(r.in.string() + ": no 'vertex' element");
   const PlyElement& v = *vertex;
   const SplatLayout layout = find_splat_layout(v, r.in);
-  Result<OrthogonalMap> made = OrthogonalMap::make(rot, layout.degree + 1, 1e-6);
-  if (!made) throw InputError("--matrix: " + made.error().message);
-  const OrthogonalMap& map = made.value();
-  // Orientations turn by the proper part (a reflection's covariance M Sigma M^T is
-  // P Sigma P^T); the given quaternion itself when there is one (no round trip through
-  // the matrix).
-  const Eigen::Quaterniond qr = r.quaternion ? Eigen::Quaterniond((*r.quaternion)[0], (*r.quaternion)[1],
-                                                                  (*r.quaternion)[2], (*r.quaternion)[3])
-                                                   .normalized()
-                                             : Eigen::Quaterniond(map.proper());
-  const double log_scale = std::log(r.scale);
-  const Eigen::Vector3d t(r.translate[0], r.translate[1], r.translate[2]);
+  const PlyMotion motion(r, rot, layout.degree);
+  const OrthogonalMap& map = motion.map;
+  const Eigen::Quaterniond& qr = motion.qr;
+  const double log_scale = motion.log_scale;
+  const Eigen::Vector3d& t = motion.t;
   const int order = layout.degree + 1;
   const int k_rest = sh_count(order) - 1;
 
   // One map for every splat, by the reference rotation: exact to rounding at every angle
   // (an identity leaves the colours' bits as they were).
   const std::size_t count = v.count;
-  const bool moves = !rot.isIdentity(0) || r.scale != 1 || !t.isZero(0);
+  const bool moves = motion.moves;
   constexpr std::size_t kChunk = 4096;
   const std::size_t chunks = (count + kChunk - 1) / kChunk;
   // The first problem of each chunk; the first chunk's is reported, whatever the threads.
@@ -128,7 +291,7 @@ void transform_ply_in_place(const TransformSplatsRequest& r, const Eigen::Matrix
   });
   for (const std::string& problem : problems)
     if (!problem.empty()) throw InputError(problem);
-  io.set("--out", ply.format() == PlyFormat::ascii ? ply.bytes() : std::string(ply.binary_bytes()));
+  io.set("--out", ply.format() == PlyFormat::ascii ? ply.bytes() : ply.take_binary_bytes());
   report.splats = count;
   report.degree = layout.degree;
 }
@@ -197,10 +360,17 @@ TransformSplatsReport run_transform_splats(const TransformSplatsRequest& r) {
   TransformSplatsReport report;
   report.threads = threads;
   report.reflects = (frame_change * rot).determinant() < 0;
-  std::string bytes = read_input_file(r.in, "input");
   if (in_format == SplatFormat::ply && out_format == SplatFormat::ply && !r.sh_degree) {
-    transform_ply_in_place(r, rot, std::move(bytes), io, threads, report);
+    // Mapped, not read: the common file is streamed from the page cache to the output.
+    const MappedInput in(r.in, "input");
+    const PlyFile header = PlyFile::parse_header(in.bytes(), r.in);
+    const PlyElement* vertex = header.element("vertex");
+    if (vertex && rewritable_in_place(header, *vertex))
+      transform_ply_streamed(r, rot, in.bytes(), *vertex, find_splat_layout(*vertex, r.in), io, threads, report);
+    else
+      transform_ply_in_place(r, rot, std::string(in.bytes()), io, threads, report);
   } else {
+    std::string bytes = read_input_file(r.in, "input");
     SplatScene scene;
     switch (in_format) {
       case SplatFormat::ply: scene = read_ply_splats(PlyFile::parse(std::move(bytes), r.in), r.in, threads); break;

@@ -1,5 +1,6 @@
 #include "interop/three_probe_grid.h"
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstdint>
@@ -28,6 +29,17 @@ std::string json_name(const std::string& option) { return option + " probes.json
 std::string atlas_name(const std::string& option) { return option + " probes.bin"; }
 
 }  // namespace
+
+std::array<double, 27> zh3_as_order3_sh(std::span<const double, 12> l1, const double* zonal, Zh3Axis axis) {
+  Zh3Probe<double> zh3;
+  std::copy(l1.begin(), l1.end(), zh3.l1.coefficients.begin());
+  for (int c = 0; c < 3; ++c) zh3.zonal[c] = zonal ? zonal[c] : zh3_hallucinated_zonal(zh3.l1, axis, c);
+  const std::array<double, 15> band2 = zh3_band2(zh3, axis);
+  std::array<double, 27> out{};
+  std::copy(l1.begin(), l1.end(), out.begin());
+  std::copy(band2.begin(), band2.end(), out.begin() + 12);
+  return out;
+}
 
 ThreeProbeGridFiles three_probe_grid_files(const ThreeProbeGridInput& g) {
   const auto [nx, ny, nz] = g.resolution;

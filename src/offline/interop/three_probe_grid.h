@@ -18,12 +18,14 @@
 
 #include <array>
 #include <filesystem>
+#include <span>
 #include <string>
 #include <vector>
 
 #include <Eigen/Core>
 
 #include "common/job_outputs.h"
+#include "shtool/probe_encoding.h"
 
 namespace shtool::interop {
 
@@ -42,6 +44,18 @@ struct ThreeProbeGridFiles {
   std::string json;   // probes.json
   std::string atlas;  // probes.bin
 };
+
+// Why three.js cannot show an l1 grid: LightProbeGridWebGL evaluates SH linearly, and
+// Geomerics' L1 reconstruction is not linear.
+inline constexpr const char* kThreeCannotShowL1 =
+    "three.js's LightProbeGridWebGL evaluates order-3 SH linearly and cannot reconstruct non-linear L1; "
+    "bake with --encoding zh3 or l2 for three.js";
+
+// The order-3 radiance SH that three.js evaluates linearly for one ZH3 probe: its bands 0
+// and 1 (l1, [3 k + c]) and the band 2 its zonal coefficients stand for along the axis
+// (zh3_band2); `zonal` the stored r, g, b of the explicit fit, or null for the
+// hallucinated fit (then from the L1 band, zh3_hallucinated_zonal). 27 values [3 k + c].
+std::array<double, 27> zh3_as_order3_sh(std::span<const double, 12> l1, const double* zonal, Zh3Axis axis);
 
 // InputError on a resolution below 1 or above 4096 per axis, bounds not finite or not
 // min < max, a wrong coefficient count, or a value that is not finite as float32.

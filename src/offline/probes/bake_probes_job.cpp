@@ -45,34 +45,49 @@ double parse_double(const std::string& s, const std::string& option) {
   return v;
 }
 
-ProbeEncoding parse_encoding(const std::string& name) {
-  const std::optional<ProbeEncoding> e = parse_probe_encoding(name);
-  if (!e) throw InputError("--encoding: '" + name + "' is not one of l2, l1, zh3");
-  return *e;
+// --encoding with --zh3-fit and --zh3-axis, which mean something for zh3 only.
+GridEncoding parse_encoding(const BakeProbesRequest& r) {
+  const std::optional<ProbeEncoding> e = parse_probe_encoding(r.encoding);
+  if (!e) throw InputError("--encoding: '" + r.encoding + "' is not one of l2, l1, zh3");
+  GridEncoding g;
+  g.encoding = *e;
+  for (const auto& [option, value] : {std::pair<const char*, const std::string*>{"--zh3-fit", &r.zh3_fit},
+                                      std::pair<const char*, const std::string*>{"--zh3-axis", &r.zh3_axis}})
+    if (!value->empty() && g.encoding != ProbeEncoding::zh3)
+      throw InputError(std::string(option) + " applies to --encoding zh3 only (the grid's encoding is " + r.encoding +
+                       ", which has no zonal coefficient)");
+  if (!r.zh3_fit.empty()) {
+    const std::optional<Zh3Fit> f = parse_zh3_fit(r.zh3_fit);
+    if (!f) throw InputError("--zh3-fit: '" + r.zh3_fit + "' is not one of explicit, hallucinated");
+    g.zh3_fit = *f;
+  }
+  if (!r.zh3_axis.empty()) {
+    const std::optional<Zh3Axis> a = parse_zh3_axis(r.zh3_axis);
+    if (!a) throw InputError("--zh3-axis: '" + r.zh3_axis + "' is not one of luminance, per-channel");
+    g.zh3_axis = *a;
+  }
+  return g;
 }
 
 // Why three.js cannot take an l1 grid (checked before the bake and by three_coefficients).
-const char* const kThreeL1 =
-    "--threejs with --encoding l1: three.js's LightProbeGridWebGL evaluates order-3 SH linearly and cannot "
-    "reconstruct non-linear L1; use --encoding zh3 or l2 for three.js";
+const std::string kThreeL1 = std::string("--threejs with --encoding l1: ") + interop::kThreeCannotShowL1;
 
 }  // namespace
 
 std::vector<double> three_coefficients(const EncodedProbes& probes, int& order) {
-  if (probes.encoding == ProbeEncoding::l1) throw InputError(kThreeL1);
+  const GridEncoding& e = probes.encoding;
+  if (e.encoding == ProbeEncoding::l1) throw InputError(kThreeL1);
   order = probes.order;
-  if (probes.encoding == ProbeEncoding::l2) return probes.coefficients;
+  if (e.encoding == ProbeEncoding::l2) return probes.coefficients;
   order = 3;
   const std::size_t count = probes.valid.size();
   std::vector<double> out;
   out.reserve(count * 27);
   for (std::size_t p = 0; p < count; ++p) {
-    Zh3Probe<double> zh3;
-    std::copy_n(probes.coefficients.begin() + p * 12, 12, zh3.l1.coefficients.begin());
-    std::copy_n(probes.zonal.begin() + p * 3, 3, zh3.zonal.begin());
-    const std::array<double, 15> band2 = zh3_band2(zh3, kProbeZh3Axis);
-    out.insert(out.end(), zh3.l1.coefficients.begin(), zh3.l1.coefficients.end());
-    out.insert(out.end(), band2.begin(), band2.end());
+    const std::array<double, 27> sh = interop::zh3_as_order3_sh(
+        std::span<const double, 12>(probes.coefficients.data() + p * 12, 12),
+        e.stores_zonal() ? probes.zonal.data() + p * 3 : nullptr, e.zh3_axis);
+    out.insert(out.end(), sh.begin(), sh.end());
   }
   return out;
 }
@@ -120,13 +135,13 @@ BakeProbesReport run_bake_probes(const BakeProbesRequest& r) {
   check_option_range("--order", r.order, 1, kMaxOrder);
   check_option_range("--samples", r.samples, 1, kMaxSamples);
   check_option_range("--bounces", r.bounces, 0, kMaxBounces);
-  const ProbeEncoding encoding = parse_encoding(r.encoding);
+  const GridEncoding encoding = parse_encoding(r);
   if (r.order < lowest_bake_order(encoding))
     throw InputError("--encoding " + r.encoding + " needs --order " + std::to_string(lowest_bake_order(encoding)) +
                      " or more (" +
-                     (encoding == ProbeEncoding::l1 ? "it stores bands 0 and 1" : "its zonal coefficient is fitted to band 2") +
+                     (encoding.stores_zonal() ? "its zonal coefficient is fitted to band 2" : "it stores bands 0 and 1") +
                      "), got --order " + std::to_string(r.order));
-  if (encoding == ProbeEncoding::l1 && !r.threejs.empty()) throw InputError(kThreeL1);
+  if (encoding.encoding == ProbeEncoding::l1 && !r.threejs.empty()) throw InputError(kThreeL1);
   ProbeGridSpec spec;
   spec.resolution = parse_grid(r.grid);
   std::optional<std::pair<Eigen::Vector3d, Eigen::Vector3d>> bounds;
@@ -205,7 +220,11 @@ BakeProbesReport run_bake_probes(const BakeProbesRequest& r) {
   params["samples"] = r.samples;
   params["bounces"] = r.bounces;
   params["seed"] = r.seed;
-  params["encoding"] = probe_encoding_name(encoding);
+  params["encoding"] = probe_encoding_name(encoding.encoding);
+  if (encoding.encoding == ProbeEncoding::zh3) {
+    params["zh3_axis"] = zh3_axis_name(encoding.zh3_axis);
+    params["zh3_fit"] = zh3_fit_name(encoding.zh3_fit);
+  }
   if (!r.env.empty()) {
     params["env"] = r.env.filename().string();
     params["env_crc32"] = input_crc32(read_input_file(r.env, "--env"));
@@ -275,6 +294,10 @@ BakeProbesReport run_bake_probes(const BakeProbesRequest& r) {
   report.sharded = shard.has_value() && !mpi;
   report.first_probe = range.begin;
   report.end_probe = range.end;
+  report.encoding = std::string(probe_encoding_name(encoding.encoding));
+  if (encoding.encoding == ProbeEncoding::zh3)
+    report.encoding += " " + std::string(zh3_fit_name(encoding.zh3_fit)) + ", " +
+                       std::string(zh3_axis_name(encoding.zh3_axis)) + " axis";
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return report;
 }

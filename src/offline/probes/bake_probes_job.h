@@ -38,6 +38,8 @@ struct BakeProbesRequest {
   std::uint64_t seed = 1;
   int threads = 0;
   std::string encoding = "l2";                // l2, l1 or zh3 (docs/probe-encodings.md)
+  std::string zh3_fit;                        // zh3: explicit (empty: explicit) or hallucinated
+  std::string zh3_axis;                       // zh3: luminance (empty: luminance) or per-channel
   std::filesystem::path out;                  // the probe-grid table
   std::filesystem::path json;                 // optional
   std::filesystem::path threejs;              // optional: a folder for probes.json and probes.bin
@@ -55,6 +57,7 @@ struct BakeProbesReport {
   bool sharded = false;
   int mpi_rank = 0, mpi_ranks = 0;            // ranks: 0 without --mpi
   std::size_t first_probe = 0, end_probe = 0;
+  std::string encoding;  // as stored: "l2", "l1", "zh3 explicit, luminance axis", ...
 };
 
 // "NX,NY,NZ" and "X0,Y0,Z0,X1,Y1,Z1" parsed and checked; InputError naming the option.
@@ -66,9 +69,10 @@ BakeProbesReport run_bake_probes(const BakeProbesRequest& request);
 
 // The order-3 radiance coefficients three.js's LightProbeGridWebGL takes for an encoded
 // grid: l2's own (bands above 2 dropped by the writer), zh3's L1 band with the band 2 its
-// zonal coefficient stands for (zh3_band2; three's linear irradiance of them is exactly
-// the ZH3 irradiance). l1 has none: its non-linear reconstruction is not a linear
-// function of SH coefficients (InputError).
+// zonal coefficient stands for (zh3_band2 along the grid's axis, of the stored f or, for
+// the hallucinated variant, of the f each probe's L1 band gives; three's linear irradiance
+// of them is exactly the ZH3 irradiance at the probe). l1 has none: its non-linear
+// reconstruction is not a linear function of SH coefficients (InputError).
 std::vector<double> three_coefficients(const EncodedProbes& probes, int& order);
 
 }  // namespace shtool::probes

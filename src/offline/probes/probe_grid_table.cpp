@@ -20,18 +20,16 @@ nlohmann::json bounds_json(const ProbeGridSpec& spec) {
           {"max", {spec.upper.x(), spec.upper.y(), spec.upper.z()}}};
 }
 
-constexpr const char* kZh3Fit = "explicit";
-
 // The grid's own meta values beside the scene's; `encoding` null for a partial table
 // (its coefficients are the bake's, encoded when the parts are joined).
 nlohmann::json grid_meta(const ProbeGridSpec& spec, nlohmann::json meta, std::size_t invalid, std::size_t unfilled,
-                         const ProbeEncoding* encoding) {
+                         const GridEncoding* encoding) {
   meta["quantity"] = "radiance";
   if (encoding) {
-    meta["encoding"] = probe_encoding_name(*encoding);
-    if (*encoding == ProbeEncoding::zh3) {
-      meta["zh3_axis"] = zh3_axis_name(kProbeZh3Axis);
-      meta["zh3_fit"] = kZh3Fit;
+    meta["encoding"] = probe_encoding_name(encoding->encoding);
+    if (encoding->encoding == ProbeEncoding::zh3) {
+      meta["zh3_axis"] = zh3_axis_name(encoding->zh3_axis);
+      meta["zh3_fit"] = zh3_fit_name(encoding->zh3_fit);
     }
   }
   meta["channels"] = {"r", "g", "b"};
@@ -45,11 +43,17 @@ nlohmann::json grid_meta(const ProbeGridSpec& spec, nlohmann::json meta, std::si
       "coefficients[iz][iy][ix][k][c]: probe at min + (i + 1/2) (max - min) / n, SH index k = l(l+1)+m, "
       "c = r, g, b; incident radiance c_k = integral L y_k dw; valid[iz][iy][ix] = 0: inside geometry, "
       "filled from valid neighbours";
-  if (encoding && *encoding == ProbeEncoding::l1)
+  if (encoding && encoding->encoding == ProbeEncoding::l1)
     layout += "; encoding l1: bands 0 and 1 only, irradiance by Geomerics' non-linear L1 reconstruction";
-  if (encoding && *encoding == ProbeEncoding::zh3)
-    layout += "; encoding zh3: bands 0 and 1, and zonal[iz][iy][ix][c], the l = 2 zonal coefficient along the "
-              "luminance-weighted L1 axis (explicit least-squares fit of band 2)";
+  const std::string axis = encoding && encoding->zh3_axis == Zh3Axis::per_channel
+                               ? "each channel's own L1 axis"
+                               : "the luminance-weighted L1 axis";
+  if (encoding && encoding->stores_zonal())
+    layout += "; encoding zh3: bands 0 and 1, and zonal[iz][iy][ix][c], the l = 2 zonal coefficient along " + axis +
+              " (explicit least-squares fit of band 2)";
+  if (encoding && encoding->encoding == ProbeEncoding::zh3 && !encoding->stores_zonal())
+    layout += "; encoding zh3, hallucinated: bands 0 and 1 only; the l = 2 zonal coefficient along " + axis +
+              " is f = c00 r (0.08 + 0.6 r), r = |d . a| / c00, from the L1 band being evaluated";
   meta["layout"] = std::move(layout);
   return meta;
 }
@@ -64,39 +68,40 @@ std::vector<double> bounds_values(const ProbeGridSpec& spec) {
 
 }  // namespace
 
-int lowest_bake_order(ProbeEncoding encoding) {
-  switch (encoding) {
+int lowest_bake_order(const GridEncoding& encoding) {
+  switch (encoding.encoding) {
     case ProbeEncoding::l1: return 2;
-    case ProbeEncoding::zh3: return 3;
+    case ProbeEncoding::zh3: return encoding.stores_zonal() ? 3 : 2;
     case ProbeEncoding::l2: break;
   }
   return 1;
 }
 
-EncodedProbes encode_probes(const ProbeBake& bake, int order, ProbeEncoding encoding) {
+EncodedProbes encode_probes(const ProbeBake& bake, int order, const GridEncoding& encoding) {
   EncodedProbes out;
   out.encoding = encoding;
   out.valid = bake.valid;
   out.unfilled = bake.unfilled;
-  if (encoding == ProbeEncoding::l2) {
+  if (encoding.encoding == ProbeEncoding::l2) {
     out.order = order;
     out.coefficients = bake.coefficients;
     return out;
   }
   if (order < lowest_bake_order(encoding))
-    throw InputError("encoding " + std::string(probe_encoding_name(encoding)) + " needs a bake of order " +
+    throw InputError("encoding " + std::string(probe_encoding_name(encoding.encoding)) + " needs a bake of order " +
                      std::to_string(lowest_bake_order(encoding)) + " or more, not " + std::to_string(order));
   out.order = 2;
   const std::size_t per_probe = static_cast<std::size_t>(order) * order * 3, probes = bake.valid.size();
   out.coefficients.reserve(probes * 12);
-  if (encoding == ProbeEncoding::zh3) out.zonal.reserve(probes * 3);
+  if (encoding.stores_zonal()) out.zonal.reserve(probes * 3);
   for (std::size_t p = 0; p < probes; ++p) {
     const std::span<const double> radiance(bake.coefficients.data() + p * per_probe, per_probe);
-    if (encoding == ProbeEncoding::l1) {
+    // Hallucinated ZH3 stores what l1 stores: its zonal coefficient is the reader's to make.
+    if (!encoding.stores_zonal()) {
       const L1Probe<double> l1 = encode_l1(radiance);
       out.coefficients.insert(out.coefficients.end(), l1.coefficients.begin(), l1.coefficients.end());
     } else {
-      const Zh3Probe<double> zh3 = encode_zh3(radiance, kProbeZh3Axis, Zh3Fit::explicit_fit);
+      const Zh3Probe<double> zh3 = encode_zh3(radiance, encoding.zh3_axis, Zh3Fit::explicit_fit);
       out.coefficients.insert(out.coefficients.end(), zh3.l1.coefficients.begin(), zh3.l1.coefficients.end());
       out.zonal.insert(out.zonal.end(), zh3.zonal.begin(), zh3.zonal.end());
     }
@@ -109,11 +114,12 @@ Table probe_grid_table(const ProbeGridSpec& spec, const EncodedProbes& probes, c
   const std::int64_t nx = spec.resolution[0], ny = spec.resolution[1], nz = spec.resolution[2];
   meta = grid_meta(spec, std::move(meta), count_invalid(probes.valid), probes.unfilled, &probes.encoding);
   Table table = new_table(kProbeGridKind, probes.order, generator, meta);
+  table.kind_version = kProbeGridKindVersion;
   const std::int64_t nn = static_cast<std::int64_t>(probes.order) * probes.order;
   table.arrays.push_back(TableArray::from<double>("bounds", {2, 3}, bounds_values(spec)));
   table.arrays.push_back(TableArray::from<double>("coefficients", {nz, ny, nx, nn, 3}, probes.coefficients));
   table.arrays.push_back(TableArray::from<std::uint8_t>("valid", {nz, ny, nx}, probes.valid));
-  if (probes.encoding == ProbeEncoding::zh3)
+  if (probes.encoding.stores_zonal())
     table.arrays.push_back(TableArray::from<double>("zonal", {nz, ny, nx, 3}, probes.zonal));
   return table;
 }
@@ -127,6 +133,7 @@ Table probe_grid_part_table(const ProbeGridSpec& spec, const ProbeBake& part, co
                    {"end_probe", range.end},
                    {"probes", spec.probe_count()}};
   Table table = new_table(kProbeGridKind, spec.order, generator, meta);
+  table.kind_version = kProbeGridKindVersion;
   const std::int64_t rows = static_cast<std::int64_t>(range.end - range.begin);
   const std::int64_t nn = static_cast<std::int64_t>(spec.order) * spec.order;
   table.arrays.push_back(TableArray::from<double>("bounds", {2, 3}, bounds_values(spec)));
@@ -138,10 +145,10 @@ Table probe_grid_part_table(const ProbeGridSpec& spec, const ProbeBake& part, co
 nlohmann::json probe_grid_json(const ProbeGridSpec& spec, const EncodedProbes& bake) {
   nlohmann::json doc;
   doc["order"] = bake.order;
-  if (bake.encoding != ProbeEncoding::l2) doc["encoding"] = probe_encoding_name(bake.encoding);
-  if (bake.encoding == ProbeEncoding::zh3) {
-    doc["zh3_axis"] = zh3_axis_name(kProbeZh3Axis);
-    doc["zh3_fit"] = kZh3Fit;
+  if (bake.encoding.encoding != ProbeEncoding::l2) doc["encoding"] = probe_encoding_name(bake.encoding.encoding);
+  if (bake.encoding.encoding == ProbeEncoding::zh3) {
+    doc["zh3_axis"] = zh3_axis_name(bake.encoding.zh3_axis);
+    doc["zh3_fit"] = zh3_fit_name(bake.encoding.zh3_fit);
   }
   doc["quantity"] = "radiance";
   doc["channels"] = {"r", "g", "b"};
@@ -161,12 +168,39 @@ nlohmann::json probe_grid_json(const ProbeGridSpec& spec, const EncodedProbes& b
                             {"position", {x.x(), x.y(), x.z()}},
                             {"valid", bake.valid[p] != 0},
                             {"coefficients", std::move(rows)}};
-    if (bake.encoding == ProbeEncoding::zh3)
+    if (bake.encoding.stores_zonal())
       probe["zonal"] = {bake.zonal[p * 3], bake.zonal[p * 3 + 1], bake.zonal[p * 3 + 2]};
     probes.push_back(std::move(probe));
   }
   doc["probes"] = std::move(probes);
   return doc;
+}
+
+GridEncoding generator_encoding(const nlohmann::json& parameters, const std::string& name) {
+  // One reading of each name for every record: absent is JSON null, which names nothing.
+  const auto named = [&](const char* key) {
+    const nlohmann::json v = parameters.is_object() ? parameters.value(key, nlohmann::json()) : nlohmann::json();
+    return std::pair<bool, std::string>(v.is_string(), v.is_string() ? v.get<std::string>() : v.dump());
+  };
+  GridEncoding g;
+  const auto [has_encoding, encoding] = named("encoding");
+  const std::optional<ProbeEncoding> e = has_encoding ? parse_probe_encoding(encoding) : std::nullopt;
+  if (!e) fail(name, "generator record's encoding " + encoding + " is not one of l2, l1, zh3");
+  g.encoding = *e;
+  if (g.encoding != ProbeEncoding::zh3) return g;
+  const auto [has_axis, axis] = named("zh3_axis");
+  const auto [has_fit, fit] = named("zh3_fit");
+  if (has_axis || parameters.contains("zh3_axis")) {
+    const std::optional<Zh3Axis> a = has_axis ? parse_zh3_axis(axis) : std::nullopt;
+    if (!a) fail(name, "generator record's zh3_axis " + axis + " is not luminance or per-channel");
+    g.zh3_axis = *a;
+  }
+  if (has_fit || parameters.contains("zh3_fit")) {
+    const std::optional<Zh3Fit> f = has_fit ? parse_zh3_fit(fit) : std::nullopt;
+    if (!f) fail(name, "generator record's zh3_fit " + fit + " is not explicit or hallucinated");
+    g.zh3_fit = *f;
+  }
+  return g;
 }
 
 MergedProbeGrid merge_probe_grid(const std::vector<std::pair<std::string, Table>>& parts) {
@@ -251,17 +285,13 @@ MergedProbeGrid merge_probe_grid(const std::vector<std::pair<std::string, Table>
     bake.valid.insert(bake.valid.end(), v.begin(), v.end());
   }
   bake.unfilled = fill_invalid_probes(spec.resolution, spec.order * spec.order * 3, bake.valid, bake.coefficients);
-  const nlohmann::json encoding_name = gen["parameters"].value("encoding", nlohmann::json());
-  const std::optional<ProbeEncoding> encoding =
-      encoding_name.is_string() ? parse_probe_encoding(encoding_name.get<std::string>()) : std::nullopt;
-  if (!encoding)
-    fail(*read.front().name, "generator record's encoding " + encoding_name.dump() + " is not one of l2, l1, zh3");
+  const GridEncoding encoding = generator_encoding(gen["parameters"], *read.front().name);
   // The scene's meta values, without the grid's (probe_grid_table adds them again).
   for (const char* key : {"quantity", "channels", "resolution", "bounds", "frame", "back_face_threshold", "layout"})
     common_meta.erase(key);
   MergedProbeGrid merged;
   merged.spec = spec;
-  merged.probes = encode_probes(bake, spec.order, *encoding);
+  merged.probes = encode_probes(bake, spec.order, encoding);
   merged.table = probe_grid_table(spec, merged.probes, gen, common_meta);
   return merged;
 }

@@ -17,30 +17,37 @@
 
 namespace shtool::probes {
 
-// The axis of the ZH3 grids bake-probes writes (shared by the three channels).
-inline constexpr Zh3Axis kProbeZh3Axis = Zh3Axis::luminance;
+// What a grid's probes store (bake-probes --encoding, --zh3-fit, --zh3-axis); the ZH3
+// choices mean something for zh3 only.
+struct GridEncoding {
+  ProbeEncoding encoding = ProbeEncoding::l2;
+  Zh3Axis zh3_axis = Zh3Axis::luminance;
+  Zh3Fit zh3_fit = Zh3Fit::explicit_fit;
+
+  bool stores_zonal() const { return encoding == ProbeEncoding::zh3 && zh3_fit == Zh3Fit::explicit_fit; }
+};
 
 // A whole grid's probes as its encoding stores them (docs/probe-encodings.md): l2, the
-// bake's coefficients of its order; l1, bands 0 and 1 (order 2); zh3, bands 0 and 1
-// (order 2) and per probe the explicit fit's zonal coefficient of r, g, b along the
-// luminance-weighted L1 axis.
+// bake's coefficients of its order; l1 and hallucinated zh3, bands 0 and 1 (order 2);
+// explicit zh3, bands 0 and 1 (order 2) and per probe the explicit fit's zonal coefficient
+// of r, g, b along the axis.
 struct EncodedProbes {
-  ProbeEncoding encoding = ProbeEncoding::l2;
+  GridEncoding encoding;
   int order = 0;                       // the table's order
   std::vector<double> coefficients;    // probe-major, then SH index (order^2), then r, g, b
-  std::vector<double> zonal;           // zh3: probe-major, then r, g, b; empty otherwise
+  std::vector<double> zonal;           // explicit zh3: probe-major, then r, g, b; empty otherwise
   std::vector<std::uint8_t> valid;
   std::size_t unfilled = 0;
 };
 
-// The lowest bake order an encoding needs: l1 2 (bands 0 and 1), zh3 3 (band 2 is fitted),
-// l2 1.
-int lowest_bake_order(ProbeEncoding encoding);
+// The lowest bake order an encoding needs: l1 and hallucinated zh3 2 (bands 0 and 1),
+// explicit zh3 3 (band 2 is fitted), l2 1.
+int lowest_bake_order(const GridEncoding& encoding);
 
 // Each probe of a whole, filled bake of order `order` (>= lowest_bake_order) encoded on
 // its own: the encoding is applied after the invalid probes are filled, so a grid's l1 or
 // zh3 table is exactly the encoding of its l2 table.
-EncodedProbes encode_probes(const ProbeBake& bake, int order, ProbeEncoding encoding);
+EncodedProbes encode_probes(const ProbeBake& bake, int order, const GridEncoding& encoding);
 
 // The whole grid. `meta` brings the scene's values (mesh_up, triangles, lights); the grid's
 // own (quantity, encoding, resolution, bounds, invalid and unfilled counts, layout) are
@@ -49,7 +56,8 @@ Table probe_grid_table(const ProbeGridSpec& spec, const EncodedProbes& probes, c
                        nlohmann::json meta);
 // --json: {"order", "quantity", "channels", "resolution", "bounds", "probes": [{"index",
 // "position", "valid", "coefficients"}]} in index order; an l1 or zh3 grid adds
-// "encoding" (and zh3 "zh3_axis", "zh3_fit" and each probe's "zonal": [r, g, b]).
+// "encoding" (and zh3 "zh3_axis", "zh3_fit", and with the explicit fit each probe's
+// "zonal": [r, g, b]).
 nlohmann::json probe_grid_json(const ProbeGridSpec& spec, const EncodedProbes& probes);
 
 // Shard `shard` of the grid: probes [range.begin, range.end) before the fill and before any
@@ -58,6 +66,11 @@ nlohmann::json probe_grid_json(const ProbeGridSpec& spec, const EncodedProbes& p
 // first_probe, end_probe, probes}. The runtime loader refuses it.
 Table probe_grid_part_table(const ProbeGridSpec& spec, const ProbeBake& part, const fit::Shard& shard,
                             const fit::VertexRange& range, const nlohmann::json& generator, nlohmann::json meta);
+
+// The encoding a generator record's parameters name ("encoding"; "zh3_axis" and "zh3_fit"
+// for zh3, absent in parts of kind_version 1.0: luminance, explicit); InputError naming
+// `name` otherwise.
+GridEncoding generator_encoding(const nlohmann::json& parameters, const std::string& name);
 
 // The parts of one bake (in any order) joined, the invalid probes filled, the probes
 // encoded as the generator record says: the table a one-process run writes. Throws

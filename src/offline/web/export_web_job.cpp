@@ -190,6 +190,8 @@ ExportWebResult run_export_web(const ExportWebRequest& r) {
   if (!r.probes.empty()) {
     Result<ProbeGrid<double>> g = ProbeGrid<double>::load(r.probes);
     if (!g) throw InputError("--probes: " + g.error().message);
+    if (g.value().encoding == ProbeEncoding::l1)
+      throw InputError("--probes: an l1 grid: " + std::string(interop::kThreeCannotShowL1));
     probes.emplace(std::move(g).value());
   }
 
@@ -303,8 +305,20 @@ ExportWebResult run_export_web(const ExportWebRequest& r) {
     grid.resolution = probes->resolution;
     grid.min = probes->min;
     grid.max = probes->max;
-    grid.order = probes->order;
-    grid.coefficients = probes->coefficients;
+    // What three.js evaluates linearly: l2 as stored, zh3 as the order-3 SH it stands for.
+    if (probes->encoding == ProbeEncoding::l2) {
+      grid.order = probes->order;
+      grid.coefficients = probes->coefficients;
+    } else {
+      grid.order = 3;
+      const std::size_t count = probes->coefficients.size() / probes->values_per_probe();
+      for (std::size_t p = 0; p < count; ++p) {
+        const std::span<const double> v = probes->coefficients_of(p);
+        const std::array<double, 27> sh = interop::zh3_as_order3_sh(
+            v.first<12>(), probes->stores_zonal() ? v.data() + 12 : nullptr, probes->zh3_axis);
+        grid.coefficients.insert(grid.coefficients.end(), sh.begin(), sh.end());
+      }
+    }
     probe_files = interop::three_probe_grid_files(grid);
   }
 

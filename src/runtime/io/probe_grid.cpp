@@ -43,7 +43,10 @@ Vec3<T> ProbeGrid<T>::irradiance_of(std::span<const T> c, const Vec3<T>& normal)
     if (encoding == ProbeEncoding::l1) return l1_nonlinear_irradiance(l1, normal);
     Zh3Probe<T> zh3;
     zh3.l1 = l1;
-    std::copy_n(c.begin() + l1.coefficients.size(), 3, zh3.zonal.begin());
+    if (zh3_fit == Zh3Fit::hallucinated)
+      for (int ch = 0; ch < 3; ++ch) zh3.zonal[ch] = zh3_hallucinated_zonal(l1, zh3_axis, ch);
+    else
+      std::copy_n(c.begin() + l1.coefficients.size(), 3, zh3.zonal.begin());
     return zh3_irradiance(zh3, zh3_axis, normal);
   }
   T y[kMaxProbeOrder * kMaxProbeOrder];
@@ -100,11 +103,19 @@ template <class T>
 Result<ProbeGrid<T>> ProbeGrid<T>::from_table(const Table& t) {
   if (const auto problem = detail::kind_and_order_problem(t, kProbeGridKind, 1, kMaxProbeOrder))
     return probe_error(*problem);
+  // read_table checks the major when asked to; a Table built in memory comes here unchecked.
+  const std::optional<table_format::Version> version = table_format::parse_version(t.kind_version);
+  const table_format::Version ours = *table_format::parse_version(kProbeGridKindVersion);
+  if (!version || version->major != ours.major)
+    return probe_error("kind_version " + t.kind_version + " is not readable: this reader knows " +
+                       std::to_string(ours.major) + ".x (up to " + std::string(kProbeGridKindVersion) + ")" +
+                       (version && version->major > ours.major ? "; a newer shtool wrote it" : ""));
   const nlohmann::json meta = nlohmann::json::parse(t.meta, nullptr, /*allow_exceptions=*/false);
   if (meta.is_object() && meta.contains("shard"))
     return probe_error("a partial table (bake-probes --shard): join the parts with shtool merge first");
   ProbeEncoding encoding = ProbeEncoding::l2;
   Zh3Axis axis = Zh3Axis::luminance;
+  Zh3Fit fit = Zh3Fit::explicit_fit;
   if (meta.is_object() && meta.contains("encoding")) {
     const auto e = meta["encoding"].is_string() ? parse_probe_encoding(meta["encoding"].get<std::string>())
                                                 : std::nullopt;
@@ -120,7 +131,21 @@ Result<ProbeGrid<T>> ProbeGrid<T>::from_table(const Table& t) {
                        : std::nullopt;
     if (!a) return probe_error("meta.zh3_axis is missing or not 'luminance' or 'per-channel'");
     axis = *a;
+    // 1.0 tables held the explicit fit only (their meta.zh3_fit, when present, says so).
+    if (meta.contains("zh3_fit") || version->minor >= 1) {
+      const auto f = meta.contains("zh3_fit") && meta["zh3_fit"].is_string()
+                         ? parse_zh3_fit(meta["zh3_fit"].get<std::string>())
+                         : std::nullopt;
+      if (!f) return probe_error("meta.zh3_fit is missing or not 'explicit' or 'hallucinated'");
+      fit = *f;
+    }
   }
+  const bool stores_zonal = encoding == ProbeEncoding::zh3 && fit == Zh3Fit::explicit_fit;
+  if (!stores_zonal && t.find("zonal"))
+    return probe_error("array 'zonal' in a grid whose encoding stores none (" +
+                       std::string(probe_encoding_name(encoding)) +
+                       (encoding == ProbeEncoding::zh3 ? ", hallucinated: the zonal coefficient comes from L1" : "") +
+                       ")");
   const TableArray* co = t.find("coefficients");
   if (!co || co->shape.size() != 5) return probe_error("array 'coefficients' is missing or not of shape [NZ, NY, NX, N^2, 3]");
   const std::int64_t nz = co->shape[0], ny = co->shape[1], nx = co->shape[2], nn = t.order * t.order;
@@ -135,7 +160,7 @@ Result<ProbeGrid<T>> ProbeGrid<T>::from_table(const Table& t) {
   if (!va || va->dtype != DType::u8 || va->shape != std::vector<std::int64_t>{nz, ny, nx})
     return probe_error("array 'valid' is missing or not u8 of shape [NZ, NY, NX]");
   std::vector<double> zonal;
-  if (encoding == ProbeEncoding::zh3) {
+  if (stores_zonal) {
     auto z = table_format::finite_f64_array(t, "zonal", {nz, ny, nx, 3}, "probe-grid table: ");
     if (!z) return z.error();
     zonal = std::move(z).value();
@@ -144,6 +169,7 @@ Result<ProbeGrid<T>> ProbeGrid<T>::from_table(const Table& t) {
   g.order = t.order;
   g.encoding = encoding;
   g.zh3_axis = axis;
+  g.zh3_fit = fit;
   g.resolution = {static_cast<int>(nx), static_cast<int>(ny), static_cast<int>(nz)};
   for (int a = 0; a < 3; ++a) {
     const double lo = b.value()[a], hi = b.value()[3 + a];
@@ -157,7 +183,7 @@ Result<ProbeGrid<T>> ProbeGrid<T>::from_table(const Table& t) {
     for (const double v : *values)
       if (std::abs(v) > double(std::numeric_limits<T>::max()))
         return probe_error("a coefficient does not fit the requested precision");
-  if (encoding == ProbeEncoding::zh3) {
+  if (stores_zonal) {
     // One probe's values together: its L1 band, then its zonal coefficients.
     const std::size_t probes = zonal.size() / 3;
     g.coefficients.reserve(probes * 15);

@@ -61,6 +61,16 @@ std::optional<Zh3Axis> parse_zh3_axis(std::string_view name) noexcept {
   return std::nullopt;
 }
 
+std::string_view zh3_fit_name(Zh3Fit fit) noexcept {
+  return fit == Zh3Fit::hallucinated ? "hallucinated" : "explicit";
+}
+
+std::optional<Zh3Fit> parse_zh3_fit(std::string_view name) noexcept {
+  for (const Zh3Fit f : {Zh3Fit::explicit_fit, Zh3Fit::hallucinated})
+    if (zh3_fit_name(f) == name) return f;
+  return std::nullopt;
+}
+
 template <class T>
 L1Probe<T> encode_l1(std::span<const T> radiance) {
   if (radiance.size() < 12) detail::precondition_failed("encode_l1: fewer than 4 RGB coefficients");

@@ -928,12 +928,13 @@ void ShRotation<T>::build_reference(const Mat3<T>& r) {
 
 template <class T>
 std::size_t ShRotation<T>::rotate_lanes(std::span<const Mat3<T>> rotations, const T* in, T* out,
-                                        RotationMethod method, double tolerance) {
+                                        RotationMethod method, double tolerance, int vectors_per_rotation) {
   using P = detail::BatchPack<T>;
   constexpr int B = detail::kBatchLanes<T>;
   constexpr int kMaxBatchOrder = detail::kBandKernelMaxBand + 1;
   if (!helpers_ || order_ > kMaxBatchOrder || method == RotationMethod::reference) return 0;
   const std::size_t n = static_cast<std::size_t>(sh_count(order_)), groups = rotations.size() / B;
+  const std::size_t v = static_cast<std::size_t>(vectors_per_rotation), stride = v * n;
   // Per lane: R column-major, and the tables (and tilt) set() would compute, by the same
   // operations, so each lane's kernel input is bit-identical to set()'s.
   P r[9], tables[6][kMaxBatchOrder];
@@ -945,8 +946,8 @@ std::size_t ShRotation<T>::rotate_lanes(std::span<const Mat3<T>> rotations, cons
     const RotationMethod chosen = choose_method(group[0], method, tolerance);
     bool same = true;  // one method for the whole group
     for (int j = 0; j < B; ++j) {
-      src[j] = in + (g * B + j) * n;
-      dst[j] = out + (g * B + j) * n;
+      src[j] = in + (g * B + j) * stride;
+      dst[j] = out + (g * B + j) * stride;
       same = same && (j == 0 || choose_method(group[j], method, tolerance) == chosen);
     }
     const int k = chosen == RotationMethod::zxzxz      ? 0
@@ -957,7 +958,7 @@ std::size_t ShRotation<T>::rotate_lanes(std::span<const Mat3<T>> rotations, cons
     if (!same || kernels.empty()) {  // one at a time
       for (int j = 0; j < B; ++j) {
         set(group[j], method, tolerance);
-        apply(std::span<const T>(src[j], n), std::span<T>(dst[j], n));
+        for (std::size_t c = 0; c < v; ++c) apply(std::span<const T>(src[j] + c * n, n), std::span<T>(dst[j] + c * n, n));
       }
       continue;
     }
@@ -974,18 +975,26 @@ std::size_t ShRotation<T>::rotate_lanes(std::span<const Mat3<T>> rotations, cons
         state.half_beta2 = T(0.5) * state.beta * state.beta;
       }
     }
-    for (const BatchKernel kernel : kernels) kernel(state, src, dst);  // whole order, then bands
+    for (std::size_t c = 0; c < v; ++c) {  // the lanes' setup above serves all v vectors
+      for (const BatchKernel kernel : kernels) kernel(state, src, dst);  // whole order, then bands
+      for (int j = 0; j < B; ++j) src[j] += n, dst[j] += n;
+    }
   }
   return groups * B;
 }
 
 template <class T>
 bool rotate_batch(ShRotation<T>& rotation, std::span<const Mat3<T>> rotations, std::span<const T> in,
-                  std::span<T> out, RotationMethod method, double tolerance) {
+                  std::span<T> out, RotationMethod method, double tolerance, int vectors_per_rotation) {
+  if (vectors_per_rotation < 1)
+    detail::precondition_failed("rotate_batch: " + std::to_string(vectors_per_rotation) +
+                                " vectors per rotation (at least 1)");
+  const std::size_t v = static_cast<std::size_t>(vectors_per_rotation);
   const std::size_t n = static_cast<std::size_t>(sh_count(rotation.order())), count = rotations.size();
-  if (in.size() < count * n || out.size() < count * n)
+  if (in.size() < count * v * n || out.size() < count * v * n)
     detail::precondition_failed("rotate_batch: " + std::to_string(count) + " rotations of order " +
-                                std::to_string(rotation.order()) + " need " + std::to_string(count * n) +
+                                std::to_string(rotation.order()) +
+                                (v == 1 ? std::string() : " and " + std::to_string(v) + " vectors each") + " need " + std::to_string(count * v * n) +
                                 " coefficients in and out, got " + std::to_string(in.size()) + " and " +
                                 std::to_string(out.size()));
   if (count == 0) return true;
@@ -997,15 +1006,16 @@ bool rotate_batch(ShRotation<T>& rotation, std::span<const Mat3<T>> rotations, s
     // (order2_rotate, which apply() runs too: the same bits).
     const T* src = in.data();
     T* dst = out.data();
-    for (std::size_t k = 0; k < count; ++k, src += 4, dst += 4)
-      detail::order2_rotate<T>(rotations[k].data(), src, dst);
+    for (std::size_t k = 0; k < count; ++k)
+      for (std::size_t c = 0; c < v; ++c, src += 4, dst += 4) detail::order2_rotate<T>(rotations[k].data(), src, dst);
     rotation.set(rotations[count - 1], method, tolerance);
     return true;
   }
-  const std::size_t done = rotation.rotate_lanes(rotations, in.data(), out.data(), method, tolerance);
+  const std::size_t done =
+      rotation.rotate_lanes(rotations, in.data(), out.data(), method, tolerance, vectors_per_rotation);
   for (std::size_t k = done; k < count; ++k) {
     if (!rotation.set(rotations[k], method, tolerance)) return false;
-    rotation.apply(in.subspan(k * n, n), out.subspan(k * n, n));
+    for (std::size_t c = k * v; c < (k + 1) * v; ++c) rotation.apply(in.subspan(c * n, n), out.subspan(c * n, n));
   }
   if (done == count) rotation.set(rotations[count - 1], method, tolerance);
   return true;
@@ -1014,8 +1024,8 @@ bool rotate_batch(ShRotation<T>& rotation, std::span<const Mat3<T>> rotations, s
 template class ShRotation<float>;
 template class ShRotation<double>;
 template bool rotate_batch<float>(ShRotation<float>&, std::span<const Mat3<float>>, std::span<const float>,
-                                  std::span<float>, RotationMethod, double);
+                                  std::span<float>, RotationMethod, double, int);
 template bool rotate_batch<double>(ShRotation<double>&, std::span<const Mat3<double>>,
-                                   std::span<const double>, std::span<double>, RotationMethod, double);
+                                   std::span<const double>, std::span<double>, RotationMethod, double, int);
 
 }  // namespace shtool
