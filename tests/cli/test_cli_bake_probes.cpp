@@ -359,17 +359,10 @@ TEST(CliBakeProbes, RefusesBadScenesGridsBoundsAndOptions) {
 // joined by merge give the one-process table of each encoding.
 namespace {
 
-// A closed room of coloured walls with a coloured point light and a solid block on the floor: the L1 band and band 2 are far from zero and differ per channel,
-// and the probe inside the block is invalid and filled.
+// The encoding room (tests/support/probe_scenes.h).
 fs::path encoding_room() {
   const fs::path path = scratch("enc_room.gltf");
-  ProbeTestScene t;
-  const int red = t.material({{0.8, 0.2, 0.1}}), white = t.material({{0.7, 0.7, 0.7}});
-  t.box(Eigen::Vector3d(-2, 0, -2), Eigen::Vector3d(2, 3, 2), red, true);
-  t.box(Eigen::Vector3d(-0.5, 0, -0.5), Eigen::Vector3d(0.5, 1.2, 0.5), white, false);
-  t.light({{"type", "point"}, {"intensity", 8.0}, {"color", {1.0, 0.8, 0.5}}}, Eigen::Vector3d(1.2, 2.5, 0.8),
-          Eigen::Vector3d(0, -1, 0));
-  t.write(path);
+  write_encoding_room_scene(path);
   return path;
 }
 

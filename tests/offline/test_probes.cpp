@@ -662,13 +662,7 @@ void expect_ordering(const SceneErrors& e, const char* name) {
 // A closed room of coloured walls, a coloured point light near the ceiling and a solid
 // block on the floor (bake-probes' encoding test scene), 3 x 3 x 2 probes.
 TEST(ProbeEncodingErrors, RoomWithAPointLight) {
-  ProbeTestScene t;
-  const int red = t.material({{0.8, 0.2, 0.1}}), white = t.material({{0.7, 0.7, 0.7}});
-  t.box(Eigen::Vector3d(-2, 0, -2), Eigen::Vector3d(2, 3, 2), red, true);
-  t.box(Eigen::Vector3d(-0.5, 0, -0.5), Eigen::Vector3d(0.5, 1.2, 0.5), white, false);
-  t.light({{"type", "point"}, {"intensity", 8.0}, {"color", {1.0, 0.8, 0.5}}}, Eigen::Vector3d(1.2, 2.5, 0.8),
-          Eigen::Vector3d(0, -1, 0));
-  t.write(scratch("encoding_room.gltf"));
+  test::write_encoding_room_scene(scratch("encoding_room.gltf"));
   const scene::Scene sc = scene::load_scene(scratch("encoding_room.gltf"), UpAxis::y);
   const auto spec = grid({3, 3, 2}, Eigen::Vector3d(-1.5, -1.5, 0.3), Eigen::Vector3d(1.5, 1.5, 2.7), 8, 1024, 3);
   expect_ordering(scene_errors(sc, spec, {}, "room, point light"), "room");

@@ -192,4 +192,18 @@ inline void write_solid_cube_scene(const std::filesystem::path& path) {
   t.write(path);
 }
 
+// A closed room of coloured walls [-2, 2] x [0, 3] x [-2, 2] (glTF's frame), a coloured
+// point light near the ceiling and a solid white block on the floor: the L1 band and
+// band 2 are far from zero and differ per channel, and a probe inside the block is
+// invalid and filled. The scene of the encoding tests.
+inline void write_encoding_room_scene(const std::filesystem::path& path) {
+  ProbeTestScene t;
+  const int red = t.material({{0.8, 0.2, 0.1}}), white = t.material({{0.7, 0.7, 0.7}});
+  t.box(Eigen::Vector3d(-2, 0, -2), Eigen::Vector3d(2, 3, 2), red, true);
+  t.box(Eigen::Vector3d(-0.5, 0, -0.5), Eigen::Vector3d(0.5, 1.2, 0.5), white, false);
+  t.light({{"type", "point"}, {"intensity", 8.0}, {"color", {1.0, 0.8, 0.5}}}, Eigen::Vector3d(1.2, 2.5, 0.8),
+          Eigen::Vector3d(0, -1, 0));
+  t.write(path);
+}
+
 }  // namespace shtool::test
