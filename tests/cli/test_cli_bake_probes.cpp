@@ -359,6 +359,13 @@ TEST(CliBakeProbes, RefusesBadScenesGridsBoundsAndOptions) {
 // joined by merge give the one-process table of each encoding.
 namespace {
 
+// The probe-grid loader refuses t, with `needle` in its message.
+void expect_grid_refused(const shtool::Table& t, const std::string& needle) {
+  const auto r = shtool::ProbeGrid<double>::from_table(t);
+  ASSERT_FALSE(r.ok()) << "accepted a table it should refuse (" << needle << ")";
+  EXPECT_NE(r.error().message.find(needle), std::string::npos) << r.error().message;
+}
+
 // The encoding room (tests/support/probe_scenes.h).
 fs::path encoding_room() {
   const fs::path path = scratch("enc_room.gltf");
@@ -373,6 +380,26 @@ std::vector<std::string> bake_args(const fs::path& scene, const std::string& enc
                                 "--out", out.string()};
   a.insert(a.end(), extra.begin(), extra.end());
   return a;
+}
+
+// Shards 1/2 and 0/2 of the bake, each valid against the schema, joined by merge into
+// `merged`: the bytes of the one-process table `whole`.
+void expect_shards_join_to(const fs::path& scene, const std::string& encoding, const std::vector<std::string>& extra,
+                           const std::string& stem, const fs::path& merged, const fs::path& whole) {
+  std::vector<std::string> merge = {"merge"};
+  for (const char* k : {"1", "0"}) {
+    const fs::path part = scratch(stem + k + ".shtb");
+    std::vector<std::string> args = extra;
+    args.insert(args.end(), {"--shard", std::string(k) + "/2"});
+    const CommandResult r = run_shtool(bake_args(scene, encoding, part, args));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    expect_valid_against_schema("probe-grid.schema.json", {part});
+    merge.push_back(part.string());
+  }
+  merge.insert(merge.end(), {"--out", merged.string()});
+  const CommandResult r = run_shtool(merge);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(read_file(merged) == read_file(whole)) << encoding << ": the joined shards differ from one process";
 }
 
 const std::vector<Eigen::Vector3d>& test_normals() {
@@ -493,18 +520,7 @@ TEST(CliBakeProbes, EncodedShardsMergeToTheOneProcessTable) {
     const std::string e = encoding;
     const fs::path whole = scratch("encw_" + e + ".shtb"), merged = scratch("encm_" + e + ".shtb");
     ASSERT_EQ(run_shtool(bake_args(scene, e, whole)).exit_code, 0);
-    std::vector<std::string> merge = {"merge"};
-    for (const char* k : {"1", "0"}) {
-      const fs::path part = scratch("encp_" + e + k + ".shtb");
-      const CommandResult r = run_shtool(bake_args(scene, e, part, {"--shard", std::string(k) + "/2"}));
-      ASSERT_EQ(r.exit_code, 0) << r.err;
-      expect_valid_against_schema("probe-grid.schema.json", {part});
-      merge.push_back(part.string());
-    }
-    merge.insert(merge.end(), {"--out", merged.string()});
-    const CommandResult r = run_shtool(merge);
-    ASSERT_EQ(r.exit_code, 0) << r.err;
-    EXPECT_TRUE(read_file(merged) == read_file(whole)) << encoding << ": the joined shards differ from one process";
+    expect_shards_join_to(scene, e, {}, "encp_" + e, merged, whole);
   }
 }
 
@@ -568,23 +584,17 @@ TEST(CliBakeProbes, RefusesUnknownOrMeaninglessEncodings) {
   ASSERT_TRUE(shtool::ProbeGrid<double>::from_table(t).ok());
   shtool::Table no_zonal = t;
   std::erase_if(no_zonal.arrays, [](const shtool::TableArray& a) { return a.name == "zonal"; });
-  auto bad = shtool::ProbeGrid<double>::from_table(no_zonal);
-  ASSERT_FALSE(bad.ok());
-  EXPECT_NE(bad.error().message.find("zonal"), std::string::npos) << bad.error().message;
+  expect_grid_refused(no_zonal, "zonal");
   shtool::Table unknown = t;
   nlohmann::json meta = nlohmann::json::parse(t.meta);
   meta["encoding"] = "l9";
   unknown.meta = meta.dump();
-  bad = shtool::ProbeGrid<double>::from_table(unknown);
-  ASSERT_FALSE(bad.ok());
-  EXPECT_NE(bad.error().message.find("not one of l2, l1, zh3"), std::string::npos) << bad.error().message;
+  expect_grid_refused(unknown, "not one of l2, l1, zh3");
   shtool::Table l1_order3 = t;
   meta["encoding"] = "l1";
   l1_order3.meta = meta.dump();
   l1_order3.order = 3;
-  bad = shtool::ProbeGrid<double>::from_table(l1_order3);
-  ASSERT_FALSE(bad.ok());
-  EXPECT_NE(bad.error().message.find("stores order 2"), std::string::npos) << bad.error().message;
+  expect_grid_refused(l1_order3, "stores order 2");
 }
 
 // --zh3-fit and --zh3-axis: each choice's table and --json hold exactly the library's
@@ -723,9 +733,7 @@ TEST(CliBakeProbes, LoaderReadsKindVersion10And11AndRefusesANewerMajor) {
 
   shtool::Table unnamed = old;
   unnamed.kind_version = "1.1";
-  auto bad = shtool::ProbeGrid<double>::from_table(unnamed);
-  ASSERT_FALSE(bad.ok());
-  EXPECT_NE(bad.error().message.find("meta.zh3_fit is missing"), std::string::npos) << bad.error().message;
+  expect_grid_refused(unnamed, "meta.zh3_fit is missing");
   // A later minor only adds: read by the same rules.
   shtool::Table later = t;
   later.kind_version = "1.7";
@@ -733,12 +741,8 @@ TEST(CliBakeProbes, LoaderReadsKindVersion10And11AndRefusesANewerMajor) {
 
   shtool::Table newer = t;
   newer.kind_version = "2.0";
-  bad = shtool::ProbeGrid<double>::from_table(newer);
-  ASSERT_FALSE(bad.ok());
-  EXPECT_NE(bad.error().message.find("kind_version 2.0 is not readable: this reader knows 1.x (up to 1.1); a newer "
-                                     "shtool wrote it"),
-            std::string::npos)
-      << bad.error().message;
+  expect_grid_refused(newer, "kind_version 2.0 is not readable: this reader knows 1.x (up to 1.1); a newer "
+                             "shtool wrote it");
   const fs::path newer_file = scratch("kv_2.shtb");
   shtool::write_table(newer, newer_file);
   const auto loaded = shtool::ProbeGrid<float>::load(newer_file);
@@ -749,10 +753,7 @@ TEST(CliBakeProbes, LoaderReadsKindVersion10And11AndRefusesANewerMajor) {
   shtool::Table hal_zonal = h;
   hal_zonal.arrays.push_back(t.arrays.back());
   ASSERT_EQ(hal_zonal.arrays.back().name, "zonal");
-  bad = shtool::ProbeGrid<double>::from_table(hal_zonal);
-  ASSERT_FALSE(bad.ok());
-  EXPECT_NE(bad.error().message.find("array 'zonal' in a grid whose encoding stores none"), std::string::npos)
-      << bad.error().message;
+  expect_grid_refused(hal_zonal, "array 'zonal' in a grid whose encoding stores none");
   // The schema refuses both too (and accepts the 1.0 zh3 table without zh3_fit).
   const std::string source = SHTOOL_SOURCE_DIR;
   for (const auto& [table, valid] : {std::pair<const shtool::Table*, bool>{&hal_zonal, false},
@@ -768,9 +769,7 @@ TEST(CliBakeProbes, LoaderReadsKindVersion10And11AndRefusesANewerMajor) {
   nlohmann::json hm = nlohmann::json::parse(h.meta);
   hm["zh3_fit"] = "solved";
   unknown_fit.meta = hm.dump();
-  bad = shtool::ProbeGrid<double>::from_table(unknown_fit);
-  ASSERT_FALSE(bad.ok());
-  EXPECT_NE(bad.error().message.find("not 'explicit' or 'hallucinated'"), std::string::npos) << bad.error().message;
+  expect_grid_refused(unknown_fit, "not 'explicit' or 'hallucinated'");
 }
 
 TEST(CliBakeProbes, RefusesZh3ChoicesOutsideZh3AndUnknownOnes) {
@@ -805,19 +804,6 @@ TEST(CliBakeProbes, Zh3ChoicesShardsMergeToTheOneProcessTable) {
   const fs::path scene = encoding_room(), whole = scratch("choicew.shtb"), merged = scratch("choicem.shtb");
   const std::vector<std::string> choice = {"--zh3-fit", "hallucinated", "--zh3-axis", "per-channel"};
   ASSERT_EQ(run_shtool(bake_args(scene, "zh3", whole, choice)).exit_code, 0);
-  std::vector<std::string> merge = {"merge"};
-  for (const char* k : {"1", "0"}) {
-    const fs::path part = scratch(std::string("choicep") + k + ".shtb");
-    std::vector<std::string> extra = choice;
-    extra.insert(extra.end(), {"--shard", std::string(k) + "/2"});
-    const CommandResult r = run_shtool(bake_args(scene, "zh3", part, extra));
-    ASSERT_EQ(r.exit_code, 0) << r.err;
-    expect_valid_against_schema("probe-grid.schema.json", {part});
-    merge.push_back(part.string());
-  }
-  merge.insert(merge.end(), {"--out", merged.string()});
-  const CommandResult r = run_shtool(merge);
-  ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_TRUE(read_file(merged) == read_file(whole)) << "the joined shards differ from one process";
+  expect_shards_join_to(scene, "zh3", choice, "choicep", merged, whole);
   EXPECT_EQ(shtool::ProbeGrid<double>::load(merged).value().zh3_axis, shtool::Zh3Axis::per_channel);
 }
