@@ -9,7 +9,10 @@
 #                       on lavapipe are Mesa's code, not ours, and its LLVM compiles them
 #                       once more, so they are not even built here; the shipped tables'
 #                       byte comparison checks results, not memory, and its generators are
-#                       the unit tests' code), and each reader's fuzz target for 20 s (label
+#                       the unit tests' code) and the export-web page comparison in
+#                       Chromium (tests/CMakeLists.txt: three.js's shaders at work; the
+#                       shtool processes it compares run here in the case before it), and
+#                       each reader's fuzz target for 20 s (label
 #                       fuzz) from its committed corpus with a fixed seed.
 #                       One ctest test per GoogleTest program there (its cases in one
 #                       process), and its command-line tests compiled at -O0.

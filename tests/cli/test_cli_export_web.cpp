@@ -130,61 +130,105 @@ fs::path rotated_light(const fs::path& light, const std::string& quat, const std
     }                                                                                           \
   } while (false)
 
-// One Chromium for every view: the sky unrotated and turned two ways, a bent pose, and the
-// probe-lit scene.
+// The pages the browser opens and the renders it is compared with, once per program: the
+// sky unrotated and turned two ways, a bent pose, the probe-lit scene and order 8.
+// Not square: the aspect ratio enters render's framing and the page's projection.
+const std::vector<std::string> kViewOptions = {"--width", "160", "--height", "120", "--exposure", "0.5"};
+
+std::vector<std::string> with_view(std::vector<std::string> args) {
+  args.insert(args.end(), kViewOptions.begin(), kViewOptions.end());
+  return args;
+}
+
+// Two turns of the light: about an oblique axis, and half a turn about x.
+const std::vector<std::string> kQuats = {"0.8,0.2,-0.4,0.4", "0,1,0,0"};
+
+struct Pages {
+  fs::path sky_dir = scratch("page"), pose_dir = scratch("pose"), probe_dir = scratch("probes"),
+           order8_dir = scratch("page8"), bent = scratch("bent.obj"), probes = scratch("probes.shtb"),
+           fit8 = scratch("spot8.shtb"), sky8 = scratch("sky8.json"), white8 = scratch("white8.json"),
+           posed_png = scratch("render-pose.png");
+  std::vector<fs::path> turned_renders;  // under the sky unrotated, then turned by kQuats
+
+  Pages() {
+    for (const fs::path& d : {sky_dir, pose_dir, probe_dir, order8_dir}) fs::remove_all(d);
+    must(run_shtool(with_view({"export-web", kSpotObj, "--fit", bakes().fit.string(), "--light",
+                               bakes().sky.string(), "--out", sky_dir.string()})));
+    must(run_checked({SHTOOL_PYTHON, kSourceDir + "/scripts/pose_mesh.py", kSpotObj, bent.string(), "--bend", "0.8"}));
+    must(run_shtool(with_view({"export-web", kSpotObj, "--fit", bakes().fit.string(), "--pose", bent.string(),
+                               "--light", bakes().sky.string(), "--out", pose_dir.string()})));
+    must(run_shtool({"bake-probes", kSpotObj, "--grid", "4,4,3", "--env", bakes().sky.string(), "--samples", "64",
+                     "--bounces", "1", "--out", probes.string()}));
+    must(run_shtool(with_view({"export-web", kSpotObj, "--fit", bakes().fit.string(), "--light",
+                               bakes().sky.string(), "--probes", probes.string(), "--out", probe_dir.string()})));
+    // Order 8, the largest: 16 texels per channel, one point of 16 varying vectors
+    // (SwiftShader has 31), or two where WebGL2 passes only its guaranteed 15.
+    must(run_shtool({"fit-zh", kSpotObj, "--order", "8", "--lobes", "2", "--rays", "64", "--mode", "shadowed", "--out",
+                     fit8.string()}));
+    make_white_and_sky_lights(8, white8, sky8);
+    must(run_shtool(with_view({"export-web", kSpotObj, "--fit", fit8.string(), "--light", sky8.string(), "--out",
+                               order8_dir.string()})));
+    for (std::size_t k = 0; k <= kQuats.size(); ++k) {
+      const fs::path light =
+          k == 0 ? bakes().sky : rotated_light(bakes().sky, kQuats[k - 1], "sky-" + std::to_string(k) + ".json");
+      turned_renders.push_back(scratch("render-" + std::to_string(k) + ".png"));
+      must(run_shtool(with_view({"render", kSpotObj, "--fit", bakes().fit.string(), "--light", light.string(),
+                                 "--out", turned_renders.back().string()})));
+    }
+    must(run_shtool(with_view({"render", kSpotObj, "--fit", bakes().fit.string(), "--pose", bent.string(), "--light",
+                               bakes().sky.string(), "--out", posed_png.string()})));
+  }
+};
+
+const Pages& pages() {
+  static const Pages p;
+  return p;
+}
+
+// Every page folder holds the page, its scene, mesh, shaders and three.js; the probe-lit one
+// its grid; the renders the browser is compared with are pictures of the size asked. This
+// case runs every shtool process of the comparison below, so the instrumented tree, which
+// leaves the browser's part (three.js's shaders on SwiftShader) to the Release tree, still
+// runs them under its sanitizers.
+TEST(ExportWeb, WritesEveryPageAndTheRendersItIsComparedWith) {
+  SHTOOL_REQUIRE_NODE_CONSUMERS();  // three@0.187.0, which export-web copies
+  const Pages& p = pages();
+  for (const fs::path& dir : {p.sky_dir, p.pose_dir, p.probe_dir, p.order8_dir}) {
+    for (const char* f : {"index.html", "scene.json", "mesh.glb", "shtool-three.js", "shtool-rotate.glsl",
+                          "shtool-zh-shade.glsl", "three/build/three.module.js", "three/build/three.core.js"})
+      EXPECT_TRUE(fs::is_regular_file(dir / f)) << dir / f;
+  }
+  EXPECT_TRUE(fs::is_regular_file(p.probe_dir / "probes/probes.bin"));
+  EXPECT_FALSE(fs::exists(p.sky_dir / "probes"));
+  EXPECT_EQ(read_json(p.order8_dir / "scene.json")["order"], 8);
+  EXPECT_EQ(read_json(p.sky_dir / "scene.json")["order"], 3);
+  std::vector<fs::path> renders = p.turned_renders;
+  renders.push_back(p.posed_png);
+  for (const fs::path& png : renders) {
+    const Rgba image = read_png(png);
+    EXPECT_EQ(image.width, 160) << png;
+    EXPECT_EQ(image.height, 120) << png;
+  }
+}
+
+// One Chromium for every view of the pages above.
 TEST(ExportWeb, PageDrawsWhatRenderDraws) {
   SHTOOL_REQUIRE_NODE_CONSUMERS();  // three@0.187.0, which export-web copies
   REQUIRE_CHROMIUM();
-  const fs::path sky_dir = scratch("page"), pose_dir = scratch("pose"), probe_dir = scratch("probes"),
-                 views = scratch("views"), bent = scratch("bent.obj"), probes = scratch("probes.shtb"),
-                 order8_dir = scratch("page8");
-  for (const fs::path& d : {sky_dir, pose_dir, probe_dir, views, order8_dir}) fs::remove_all(d);
+  const Pages& p = pages();
+  const fs::path &sky_dir = p.sky_dir, &pose_dir = p.pose_dir, &probe_dir = p.probe_dir, &order8_dir = p.order8_dir,
+                 &sky8 = p.sky8, &fit8 = p.fit8;
+  const fs::path views = scratch("views");
+  fs::remove_all(views);
   fs::create_directories(views);
-  // Not square: the aspect ratio enters render's framing and the page's projection.
-  const std::vector<std::string> view_options = {"--width", "160", "--height", "120", "--exposure", "0.5"};
-  const auto with_view = [&](std::vector<std::string> args) {
-    args.insert(args.end(), view_options.begin(), view_options.end());
-    return args;
-  };
-  must(run_shtool(with_view({"export-web", kSpotObj, "--fit", bakes().fit.string(), "--light", bakes().sky.string(),
-                             "--out", sky_dir.string()})));
-  for (const char* f : {"index.html", "scene.json", "mesh.glb", "shtool-three.js", "shtool-rotate.glsl",
-                        "shtool-zh-shade.glsl", "three/build/three.module.js", "three/build/three.core.js"})
-    EXPECT_TRUE(fs::is_regular_file(sky_dir / f)) << f;
-  must(run_checked({SHTOOL_PYTHON, kSourceDir + "/scripts/pose_mesh.py", kSpotObj, bent.string(), "--bend", "0.8"}));
-  must(run_shtool(with_view({"export-web", kSpotObj, "--fit", bakes().fit.string(), "--pose", bent.string(),
-                             "--light", bakes().sky.string(), "--out", pose_dir.string()})));
-  must(run_shtool({"bake-probes", kSpotObj, "--grid", "4,4,3", "--env", bakes().sky.string(), "--samples", "64",
-                   "--bounces", "1", "--out", probes.string()}));
-  must(run_shtool(with_view({"export-web", kSpotObj, "--fit", bakes().fit.string(), "--light", bakes().sky.string(),
-                             "--probes", probes.string(), "--out", probe_dir.string()})));
-  EXPECT_TRUE(fs::is_regular_file(probe_dir / "probes/probes.bin"));
-  // Order 8, the largest: 16 texels per channel, one point of 16 varying vectors (SwiftShader
-  // has 31), or two where WebGL2 passes only its guaranteed 15.
-  const fs::path fit8 = scratch("spot8.shtb"), sky8 = scratch("sky8.json"), white8 = scratch("white8.json");
-  must(run_shtool({"fit-zh", kSpotObj, "--order", "8", "--lobes", "4", "--rays", "64", "--mode", "shadowed", "--out",
-                   fit8.string()}));
-  make_white_and_sky_lights(8, white8, sky8);
-  must(run_shtool(with_view({"export-web", kSpotObj, "--fit", fit8.string(), "--light", sky8.string(), "--out",
-                             order8_dir.string()})));
-
-  // Two turns of the light: about an oblique axis, and half a turn about x.
-  const std::vector<std::string> quats = {"0.8,0.2,-0.4,0.4", "0,1,0,0"};
-  std::vector<fs::path> references;
+  const std::vector<std::string>& quats = kQuats;
+  std::vector<fs::path> references = p.turned_renders;
   std::vector<std::string> specs, labels;
   for (std::size_t k = 0; k <= quats.size(); ++k) {
-    const fs::path light = k == 0 ? bakes().sky : rotated_light(bakes().sky, quats[k - 1], "sky-" + std::to_string(k) + ".json");
-    const fs::path png = scratch("render-" + std::to_string(k) + ".png");
-    must(run_shtool(with_view({"render", kSpotObj, "--fit", bakes().fit.string(), "--light", light.string(), "--out",
-                               png.string()})));
-    references.push_back(png);
     specs.push_back(sky_dir.string() + (k ? "?light-rotation=" + quats[k - 1] : ""));
     labels.push_back(k ? "light-rotation=" + quats[k - 1] : "unrotated");
   }
-  const fs::path posed_png = scratch("render-pose.png");
-  must(run_shtool(with_view({"render", kSpotObj, "--fit", bakes().fit.string(), "--pose", bent.string(), "--light",
-                             bakes().sky.string(), "--out", posed_png.string()})));
-  references.push_back(posed_png);
+  references.push_back(p.posed_png);
   specs.push_back(pose_dir.string());
   labels.push_back("--pose, bent");
   const std::size_t probe_view = specs.size(), drag_view = probe_view + 1, touch_view = probe_view + 2,
