@@ -454,13 +454,14 @@ TEST(ZhFit, DefaultEffortIsNearTheBestKnown) {
       EXPECT_LE(varpro, 1.10) << name;
     } else {
       // Transfer vectors are fitted within the 5 % restart threshold by the deterministic
-      // starts (greedy and split, the better one's last lobe re-seated), so the default
-      // runs no random start for them and stays above the best known at N = 4: 1.427 on
-      // average (1.462 without the re-seat, 1.77 with the greedy start alone), short of the
-      // 1.10 target (docs/fit-zh.md, "Benchmarks"). The fit is deterministic; 1.44 leaves
-      // room for the last bits of another libm, not for a lost re-seat or split start.
-      // --effort 3, which restarts every vector, comes within 6 %.
-      EXPECT_LE(varpro, 1.44) << name;
+      // starts (greedy and split, the better one's last lobe re-seated at up to three
+      // residual peaks), so the default runs no random start for them and stays above the
+      // best known at N = 4: 1.358 on average (1.427 with one re-seat, 1.462 without, 1.77
+      // with the greedy start alone), short of the 1.10 target (docs/fit-zh.md,
+      // "Benchmarks"). The fit is deterministic; 1.37 leaves room for the last bits of
+      // another libm, not for a lost re-seat or split start. --effort 3, which restarts
+      // every vector, comes within 6 %.
+      EXPECT_LE(varpro, 1.37) << name;
       ZhFitOptions high = o;
       apply_effort(high, 3);
       EXPECT_LE(mean_ratio_to_best(b, high, name), 1.06) << name;
