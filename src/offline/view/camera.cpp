@@ -3,8 +3,20 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <string>
+
+#include "common/input_error.h"
 
 namespace shtool::view {
+
+void check_view_options(int width, int height, double fov_degrees, double exposure) {
+  if (width < 1 || height < 1 || width > 16384 || height > 16384)
+    throw InputError("--width and --height must be between 1 and 16384, got " + std::to_string(width) + " x " +
+                     std::to_string(height));
+  // Narrower than 0.01 degrees, the rays' spread vanishes in Embree's float arithmetic.
+  if (!(fov_degrees >= 0.01 && fov_degrees <= 179)) throw InputError("--fov must be between 0.01 and 179 degrees");
+  if (!(std::abs(exposure) <= 64)) throw InputError("--exposure must be between -64 and 64");
+}
 
 MeshBounds mesh_bounds(const fit::Mesh& mesh) {
   using Vec = Eigen::Vector3d;
