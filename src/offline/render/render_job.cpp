@@ -330,16 +330,7 @@ RenderResult run_render(const RenderRequest& r) {
   if (shading != Shading::wrinkle && (!r.wrinkle.empty() || !r.wrinkle_map.empty()))
     throw InputError("--wrinkle and --wrinkle-map apply to --shading wrinkle only");
   if (shading != Shading::normals && r.light.empty()) throw InputError("--light is required");
-  if (r.camera) {
-    const Vec eye = vec(r.camera->eye), target = vec(r.camera->target), up = vec(r.camera->up);
-    // Embree traces in float: coordinates beyond 1e30 would overflow its arithmetic.
-    for (const Vec& v : {eye, target, up})
-      if (!v.allFinite() || v.cwiseAbs().maxCoeff() > 1e30)
-        throw InputError("--camera: every coordinate must be a finite number of magnitude at most 1e30");
-    if ((target - eye).norm() == 0 ||
-        (target - eye).normalized().cross(up).norm() < 1e-9)
-      throw InputError("--camera: eye and target must differ and up must not be parallel to the view");
-  }
+  view::check_camera(r.camera);
   // Checked before any work, so that a bad output name costs nothing.
   JobOutputs io;
   io.input(r.mesh, "the mesh");

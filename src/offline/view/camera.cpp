@@ -18,6 +18,19 @@ void check_view_options(int width, int height, double fov_degrees, double exposu
   if (!(std::abs(exposure) <= 64)) throw InputError("--exposure must be between -64 and 64");
 }
 
+void check_camera(const std::optional<Camera>& camera) {
+  if (!camera) return;
+  using Vec = Eigen::Vector3d;
+  const auto vec = [](const std::array<double, 3>& a) { return Vec(a[0], a[1], a[2]); };
+  const Vec eye = vec(camera->eye), target = vec(camera->target), up = vec(camera->up);
+  // Embree traces in float: coordinates beyond 1e30 would overflow its arithmetic.
+  for (const Vec& v : {eye, target, up})
+    if (!v.allFinite() || v.cwiseAbs().maxCoeff() > 1e30)
+      throw InputError("--camera: every coordinate must be a finite number of magnitude at most 1e30");
+  if ((target - eye).norm() == 0 || (target - eye).normalized().cross(up).norm() < 1e-9)
+    throw InputError("--camera: eye and target must differ and up must not be parallel to the view");
+}
+
 MeshBounds mesh_bounds(const fit::Mesh& mesh) {
   using Vec = Eigen::Vector3d;
   Vec lo = mesh.positions.front(), hi = lo;

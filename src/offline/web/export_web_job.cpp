@@ -86,14 +86,7 @@ ExportWebResult run_export_web(const ExportWebRequest& r) {
   if (r.fit.empty()) throw InputError("--fit is required");
   if (r.light.empty()) throw InputError("--light is required");
   if (r.out.empty()) throw InputError("--out: an output folder is required");
-  if (r.camera) {
-    const Vec eye = vec(r.camera->eye), target = vec(r.camera->target), up = vec(r.camera->up);
-    for (const Vec& v : {eye, target, up})
-      if (!v.allFinite() || v.cwiseAbs().maxCoeff() > 1e30)
-        throw InputError("--camera: every coordinate must be a finite number of magnitude at most 1e30");
-    if ((target - eye).norm() == 0 || (target - eye).normalized().cross(up).norm() < 1e-9)
-      throw InputError("--camera: eye and target must differ and up must not be parallel to the view");
-  }
+  view::check_camera(r.camera);
   const std::filesystem::path parent = std::filesystem::absolute(r.out).parent_path();
   std::error_code ec;
   if (!std::filesystem::is_directory(parent, ec))
