@@ -129,12 +129,9 @@ class ShRotation {
       return;
     }
     if (whole_kernel_) {  // one generated kernel covers the rotation: call it from here
-      const detail::KernelState<T> state{r_,           cos_a_.data(), sin_a_.data(), cos_b_.data(),
-                                         sin_b_.data(), cos_g_.data(), sin_g_.data(), beta_,
-                                         T(0.5) * beta_ * beta_};
       const T* src = in.data();
       T* dst = out.data();
-      whole_kernel_(state, &src, &dst);
+      whole_kernel_(kernel_state(), &src, &dst);
       return;
     }
     apply_general(in.data(), out.data());
@@ -157,12 +154,9 @@ class ShRotation {
       return true;
     }
     if (whole_kernel3_) {  // as in apply()
-      const detail::KernelState<T> state{r_,           cos_a_.data(), sin_a_.data(), cos_b_.data(),
-                                         sin_b_.data(), cos_g_.data(), sin_g_.data(), beta_,
-                                         T(0.5) * beta_ * beta_};
       const T* src = in.data();
       T* dst = out.data();
-      whole_kernel3_(state, &src, &dst);
+      whole_kernel3_(kernel_state(), &src, &dst);
       return true;
     }
     apply_general3(in.data(), out.data());
@@ -182,6 +176,11 @@ class ShRotation {
   void store_matrix(const Mat3<T>& r) {
     Eigen::Map<Mat3<T>> dst(r_);
     dst = r;
+  }
+  // What a generated kernel reads of the current rotation.
+  detail::KernelState<T> kernel_state() const {
+    return {r_, cos_a_.data(), sin_a_.data(), cos_b_.data(), sin_b_.data(), cos_g_.data(), sin_g_.data(), beta_,
+            T(0.5) * beta_ * beta_};
   }
   // The zxzxz kernels. They stay from one zxzxz rotation to the next: one test instead
   // of three stores.

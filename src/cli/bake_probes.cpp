@@ -23,8 +23,8 @@ void setup_bake_probes(CLI::App& app) {
   sub->add_option("--samples", req->samples, "directions per probe")->capture_default_str();
   sub->add_option("--bounces", req->bounces, "surface reflections per path (0: direct light and emitters only)")
       ->capture_default_str();
-  sub->add_option("--seed", req->seed, "seed of the directions and paths")->check(kUnsignedText)->capture_default_str();
-  sub->add_option("--threads", req->threads, "worker threads (0: all cores)")->capture_default_str();
+  add_seed_option(sub, req->seed, "seed of the directions and paths");
+  add_threads_option(sub, req->threads);
   sub->add_option("--encoding", req->encoding,
                   "what each probe stores: l2 (the order-N coefficients), l1 (bands 0 and 1, non-linear L1 "
                   "reconstruction; --order >= 2) or zh3 (bands 0 and 1 and a zonal band-2 coefficient, --zh3-fit, --zh3-axis; "

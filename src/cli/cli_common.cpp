@@ -62,4 +62,20 @@ CLI::Option* add_up_option(CLI::App* app, UpAxis& target) {
                          "y");
 }
 
+CLI::Option* add_seed_option(CLI::App* app, std::uint64_t& target, const std::string& help) {
+  static const CLI::Validator unsigned_text(
+      [](std::string& v) { return v.find('-') == std::string::npos ? std::string() : "must not be negative"; },
+      "UINT");
+  return app->add_option("--seed", target, help)->check(unsigned_text)->capture_default_str();
+}
+
+CLI::Option* add_threads_option(CLI::App* app, int& target) {
+  return app->add_option("--threads", target, "worker threads (0: all cores)")->capture_default_str();
+}
+
+CLI::Option* add_table_format_option(CLI::App* app, TableEncoding& target, const std::string& help) {
+  return add_enum_option(app, "--format", target, {{"binary", TableEncoding::binary}, {"json", TableEncoding::json}},
+                         help, "binary");
+}
+
 }  // namespace shtool::cli

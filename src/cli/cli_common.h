@@ -2,6 +2,7 @@
 // numeric lists, and JSON printing with round-trip precision.
 #pragma once
 
+#include <cstdint>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -12,6 +13,7 @@
 
 #include "common/input_error.h"
 #include "common/mesh_frame.h"
+#include "shtool/table.h"
 #include "view/camera.h"
 
 #include <CLI/CLI.hpp>
@@ -59,11 +61,16 @@ CLI::Option* add_enum_option(CLI::App* app, const std::string& name, E& target,
 // Every command that reads a mesh takes it.
 CLI::Option* add_up_option(CLI::App* app, UpAxis& target);
 
-// For unsigned options (seeds): CLI11 reads "-1" into a std::uint64_t as 2^64 - 1;
-// this refuses a sign instead.
-inline const CLI::Validator kUnsignedText(
-    [](std::string& v) { return v.find('-') == std::string::npos ? std::string() : "must not be negative"; },
-    "UINT");
+// --seed: `help` says what it seeds. CLI11 reads "-1" into a std::uint64_t as 2^64 - 1;
+// this option refuses a sign instead.
+CLI::Option* add_seed_option(CLI::App* app, std::uint64_t& target, const std::string& help);
+
+// --threads: worker threads, 0 for all cores.
+CLI::Option* add_threads_option(CLI::App* app, int& target);
+
+// --format binary|json: the encoding of the table written (default binary).
+CLI::Option* add_table_format_option(CLI::App* app, TableEncoding& target,
+                                     const std::string& help = "table encoding: binary or json");
 
 // Prints JSON to stdout followed by a newline. nlohmann-json writes doubles with the
 // shortest representation that reads back to the same bits (round-trip exact).

@@ -32,11 +32,9 @@ void setup_fit_glossy(CLI::App& app) {
   add_up_option(sub, req->up);
   add_enum_option(sub, "--normals", req->normals, fit::normal_source_names(),
                   "vertex normals: the file's when complete (auto), the file's, or computed", "auto");
-  sub->add_option("--seed", req->seed, "seed of the ray directions and of the fits' starts")
-      ->check(kUnsignedText)
-      ->capture_default_str();
+  add_seed_option(sub, req->seed, "seed of the ray directions and of the fits' starts");
   sub->add_option("--effort", req->effort, "ZH fit effort, 1..4 (as fit-zh)")->capture_default_str();
-  sub->add_option("--threads", req->threads, "worker threads (0: all cores)")->capture_default_str();
+  add_threads_option(sub, req->threads);
   sub->add_option("--out", req->out, "glossy-zh table to write")->required();
   sub->add_option("--json", req->json, "also a JSON summary (singular values, errors)");
   sub->callback([req]() {

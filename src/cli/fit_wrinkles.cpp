@@ -19,10 +19,8 @@ void setup_fit_wrinkles(CLI::App& app) {
   sub->add_option("--samples", req->samples, "simulated samples per cell and axis")->capture_default_str();
   sub->add_option("--max-depth", req->max_depth, "largest groove depth, in periods")->capture_default_str();
   sub->add_option("--rays", req->rays, "rays per sample")->capture_default_str();
-  sub->add_option("--seed", req->seed, "seed of the ray directions and of the per-point fits' starts")
-      ->check(kUnsignedText)
-      ->capture_default_str();
-  sub->add_option("--threads", req->threads, "worker threads (0: all cores)")->capture_default_str();
+  add_seed_option(sub, req->seed, "seed of the ray directions and of the per-point fits' starts");
+  add_threads_option(sub, req->threads);
   sub->add_option("--max-evaluations", req->max_evaluations, "objective evaluations of the global L-BFGS fit")
       ->capture_default_str();
   add_enum_option(sub, "--optimizer", req->optimizer,

@@ -38,8 +38,7 @@ void setup_fit_zh(CLI::App& app) {
   sub->add_option("mesh", opt->mesh, "OBJ or glTF mesh (OBJ polygons are triangulated)");
   sub->add_option("--transfer", opt->transfer, "fit SH vectors from JSON {\"order\": n, \"vectors\": [[n^2], ...]}");
   sub->add_option("--out", opt->out, "output table (default: <input stem>.zh.shtb in the current folder)");
-  add_enum_option(sub, "--format", opt->encoding, {{"binary", TableEncoding::binary}, {"json", TableEncoding::json}},
-                  "table encoding: binary or json", "binary");
+  add_table_format_option(sub, opt->encoding);
   sub->add_option("--json", opt->json, "also write the fits as JSON to this file");
   sub->add_option("--ply", opt->ply, "also write the mesh with per-vertex colours (transfer DC, fit error)");
   sub->add_option("--save-transfer", opt->save_transfer, "also write the simulated transfer vectors (--transfer format)");
@@ -54,9 +53,7 @@ void setup_fit_zh(CLI::App& app) {
   add_up_option(sub, opt->up);
   add_enum_option(sub, "--normals", opt->normals, fit::normal_source_names(),
                   "auto (file if complete, else computed), file or computed", "auto");
-  sub->add_option("--seed", opt->seed, "seed of the ray rotations and multi-start axes")
-      ->check(kUnsignedText)
-      ->capture_default_str();
+  add_seed_option(sub, opt->seed, "seed of the ray rotations and multi-start axes");
   sub->add_option("--effort", opt->effort,
                   "fit effort 1..4: sets --starts and --restart-above, with L = --lobes (1: 0, 0.05; 2: 5 L^2, 0.05; "
                   "3: 12 L^2, 0; 4: 40 L^2, 0)")
@@ -79,7 +76,7 @@ void setup_fit_zh(CLI::App& app) {
       "--texture", *texture,
       "RES: bake per texel of the mesh's RES x RES UV atlas (OBJ vt, glTF TEXCOORD_0) instead of per vertex; "
       "writes <out stem>.dc_linear.exr and <out stem>.lobes.exr beside the table");
-  sub->add_option("--threads", opt->threads, "worker threads (0: all cores)")->capture_default_str();
+  add_threads_option(sub, opt->threads);
   sub->add_flag("--mpi", opt->mpi, "under mpirun: ranks split the vertices, rank 0 writes the table");
   sub->add_option("--shard", opt->shard,
                   "K/N: fit the K-th (0-based) of N vertex ranges into a partial table for shtool merge");

@@ -24,8 +24,7 @@ void setup_gen_tensors(CLI::App& app) {
       ->capture_default_str();
   sub->add_option("--inputs", req->inputs, "fourier: largest number of product inputs covered (2..8)")
       ->capture_default_str();
-  add_enum_option(sub, "--format", req->encoding, {{"binary", TableEncoding::binary}, {"json", TableEncoding::json}},
-                  "binary (.shtb) or json (.json)", "binary");
+  add_table_format_option(sub, req->encoding, "binary (.shtb) or json (.json)");
   sub->callback([req, what]() {
     GenTensorsRequest r = *req;
     r.what = split_list(*what);

@@ -37,8 +37,7 @@ void setup_light(CLI::App& app) {
                   "radiance, or irradiance (clamped-cosine kernel)", "radiance");
   sub->add_option("--json", opt->json, "output lighting JSON")->required();
   sub->add_option("--out", opt->out, "also write the coefficients as a table (kind env-sh)");
-  add_enum_option(sub, "--format", opt->encoding, {{"binary", TableEncoding::binary}, {"json", TableEncoding::json}},
-                  "table encoding: binary or json", "binary");
+  add_table_format_option(sub, opt->encoding);
   sub->callback([=]() {
     const bool any = type->count() || dir->count() || angle->count() || color->count() || ground->count();
     if (any) {

@@ -21,8 +21,7 @@ void setup_merge(CLI::App& app) {
       "merge", "Join the partial tables of fit-zh --shard K/N or bake-probes --shard K/N into one table");
   sub->add_option("parts", opt->parts, "partial tables, every shard 0..N-1 once, in any order")->required();
   sub->add_option("--out", opt->out, "the merged table")->required();
-  add_enum_option(sub, "--format", opt->encoding, {{"binary", TableEncoding::binary}, {"json", TableEncoding::json}},
-                  "table encoding: binary or json", "binary");
+  add_table_format_option(sub, opt->encoding);
   sub->callback([opt]() {
     const auto t0 = std::chrono::steady_clock::now();
     // The first part's kind decides (the merge then checks that every part has it).

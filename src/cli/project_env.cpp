@@ -30,13 +30,12 @@ void setup_project_env(CLI::App& app) {
   CLI::Option* cut = sub->add_option("--cutoff", *cutoff, "window cutoff L (bands l >= L vanish; default: the order)");
   sub->add_option("--json", opt->json, "output lighting JSON")->required();
   sub->add_option("--out", opt->out, "also write the coefficients as a table (kind env-sh)");
-  add_enum_option(sub, "--format", opt->encoding, {{"binary", TableEncoding::binary}, {"json", TableEncoding::json}},
-                  "table encoding: binary or json", "binary");
+  add_table_format_option(sub, opt->encoding);
   sub->add_option("--render-back", opt->render_back, "also write the reconstruction as an equirect .exr or .png");
   sub->add_option("--render-source", opt->render_source,
                   "also write the source image through the render-back's equirect (same size, mapping and tone "
                   "map), to set beside it");
-  sub->add_option("--threads", opt->threads, "worker threads (0: all cores)")->capture_default_str();
+  add_threads_option(sub, opt->threads);
   sub->callback([opt, cutoff, cut]() {
     if (cut->count()) opt->cutoff = *cutoff;
     const lighting::ProjectEnvReport r = lighting::run_project_env(*opt);

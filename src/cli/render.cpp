@@ -44,7 +44,7 @@ void setup_render(CLI::App& app) {
                 "one strip: transfer, ZH fits with 1..4 lobes (fitted here), the N = 4 error; normalized RMS under each");
   sub->add_option("--reference", req->reference,
                   "EXR of the same size: print the image's normalized RMS difference from it");
-  sub->add_option("--threads", req->threads, "worker threads (0: all cores)")->capture_default_str();
+  add_threads_option(sub, req->threads);
   sub->add_option("--out", req->out, "image: .exr (linear RGB, coverage alpha) or .png (tone-mapped sRGB)")
       ->required();
   sub->callback([req, camera]() {

@@ -100,9 +100,7 @@ void setup_search_lobes(CLI::App& app) {
   sub->add_option("--bands", o->bands, "search bands a-b (each independently)");
   sub->add_flag("--shared", o->request.shared, "shared lobes for an order N (2N-1 nested directions, Sec. 6)");
   sub->add_option("--order", o->request.order, "order N for --shared");
-  sub->add_option("--seed", o->request.search.seed, "random seed (results do not depend on --threads)")
-      ->check(kUnsignedText)
-      ->capture_default_str();
+  add_seed_option(sub, o->request.search.seed, "random seed (results do not depend on --threads)");
   sub->add_option("--population", o->request.search.population, "GA population")->capture_default_str();
   sub->add_option("--crossover", o->request.search.crossover, "fraction of children made by uniform crossover")
       ->capture_default_str();

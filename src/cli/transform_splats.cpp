@@ -39,7 +39,7 @@ void setup_transform_splats(CLI::App& app) {
   CLI::Option* bits = sub->add_option("--sh-bits", (*text)[3], "spz output: bits per SH byte, band 1 and bands 2..3 "
                                                                 "(B or B1,B2; 1..8; default 5,4)");
   sub->add_option("--spz-version", opt->spz_version, "spz output version, 3 (gzip) or 4 (zstd)")->capture_default_str();
-  sub->add_option("--threads", opt->threads, "worker threads (0: all cores)")->capture_default_str();
+  add_threads_option(sub, opt->threads);
   sub->callback([=]() {
     if (quat->count()) {
       const std::vector<double> q = parse_number_list((*text)[0], "--quat");

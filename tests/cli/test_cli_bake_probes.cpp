@@ -298,31 +298,28 @@ TEST(CliBakeProbes, RefusesBadScenesGridsBoundsAndOptions) {
   const fs::path scene = furnace(), out = scratch("refused.shtb");
   const std::string s = scene.string();
   const std::vector<std::string> base = {s, "--samples", "8"};
-  auto with = [&](std::vector<std::string> extra) {
-    std::vector<std::string> a = base;
-    a.insert(a.end(), extra.begin(), extra.end());
-    return a;
-  };
-  expect_refused("bake-probes", with({"--grid", "0,2,2"}), "--grid: each count must be in 1..1024", out);
-  expect_refused("bake-probes", with({"--grid", "2,-1,2"}), "--grid: each count must be in 1..1024", out);
-  expect_refused("bake-probes", with({"--grid", "2,x,2"}), "--grid: 'x' is not a whole number", out);
-  expect_refused("bake-probes", with({"--grid", "2,2.5,2"}), "--grid: '2.5' is not a whole number", out);
-  expect_refused("bake-probes", with({"--grid", "2,2"}), "--grid must be NX,NY,NZ", out);
-  expect_refused("bake-probes", with({"--grid", "2,2,2,"}), "--grid must be NX,NY,NZ", out);
-  expect_refused("bake-probes", with({"--grid", "1024,1024,1024"}), "more than 16777216", out);
-  expect_refused("bake-probes", with({"--grid", "2,2,2", "--bounds", "0,0,0,1,1,0"}),
-                 "--bounds: min z (0) must be below max z (0)", out);
-  expect_refused("bake-probes", with({"--grid", "2,2,2", "--bounds", "2,0,0,1,1,1"}),
-                 "--bounds: min x (2) must be below max x (1)", out);
-  expect_refused("bake-probes", with({"--grid", "2,2,2", "--bounds", "0,0,0,1,1"}), "--bounds must be X0,Y0,Z0,X1,Y1,Z1",
-                 out);
-  expect_refused("bake-probes", with({"--grid", "2,2,2", "--bounds", "0,0,0,1,1,nan"}), "is not a finite number", out);
-  expect_refused("bake-probes", with({"--grid", "2,2,2", "--order", "0"}), "--order must be in 1..8", out);
-  expect_refused("bake-probes", with({"--grid", "2,2,2", "--order", "9"}), "--order must be in 1..8", out);
+  expect_all_refused(
+      "bake-probes", base,
+      {
+          {{"--grid", "0,2,2"}, "--grid: each count must be in 1..1024"},
+          {{"--grid", "2,-1,2"}, "--grid: each count must be in 1..1024"},
+          {{"--grid", "2,x,2"}, "--grid: 'x' is not a whole number"},
+          {{"--grid", "2,2.5,2"}, "--grid: '2.5' is not a whole number"},
+          {{"--grid", "2,2"}, "--grid must be NX,NY,NZ"},
+          {{"--grid", "2,2,2,"}, "--grid must be NX,NY,NZ"},
+          {{"--grid", "1024,1024,1024"}, "more than 16777216"},
+          {{"--grid", "2,2,2", "--bounds", "0,0,0,1,1,0"}, "--bounds: min z (0) must be below max z (0)"},
+          {{"--grid", "2,2,2", "--bounds", "2,0,0,1,1,1"}, "--bounds: min x (2) must be below max x (1)"},
+          {{"--grid", "2,2,2", "--bounds", "0,0,0,1,1"}, "--bounds must be X0,Y0,Z0,X1,Y1,Z1"},
+          {{"--grid", "2,2,2", "--bounds", "0,0,0,1,1,nan"}, "is not a finite number"},
+          {{"--grid", "2,2,2", "--order", "0"}, "--order must be in 1..8"},
+          {{"--grid", "2,2,2", "--order", "9"}, "--order must be in 1..8"},
+          {{"--grid", "2,2,2", "--bounces", "-1"}, "--bounces must be in 0..64"},
+          {{"--grid", "2,2,2", "--seed", "-3"}, "must not be negative"},
+          {{"--grid", "2,2,2", "--up", "z"}, "glTF is +Y up"},
+      },
+      out);
   expect_refused("bake-probes", {s, "--grid", "2,2,2", "--samples", "0"}, "--samples must be in 1..1048576", out);
-  expect_refused("bake-probes", with({"--grid", "2,2,2", "--bounces", "-1"}), "--bounces must be in 0..64", out);
-  expect_refused("bake-probes", with({"--grid", "2,2,2", "--seed", "-3"}), "must not be negative", out);
-  expect_refused("bake-probes", with({"--grid", "2,2,2", "--up", "z"}), "glTF is +Y up", out);
   expect_refused("bake-probes", {scratch("missing.gltf").string(), "--grid", "2,2,2"}, "no such file", out);
   write_file(scratch("garbage.obj"), "v 0 0 0\nf 1 2 3\n");
   expect_refused("bake-probes", {scratch("garbage.obj").string(), "--grid", "2,2,2"}, "refers to vertex 2", out);
@@ -338,7 +335,8 @@ TEST(CliBakeProbes, RefusesBadScenesGridsBoundsAndOptions) {
   const fs::path irr = scratch("irr.json");
   write_file(irr, R"({"order": 1, "quantity": "irradiance", "channels": ["r", "g", "b"], "window": {"type": "none"},
                       "coefficients": [[1, 1, 1]]})");
-  expect_refused("bake-probes", with({"--grid", "2,2,2", "--env", irr.string()}), "--env needs radiance", out);
+  expect_refused("bake-probes", {s, "--samples", "8", "--grid", "2,2,2", "--env", irr.string()}, "--env needs radiance",
+                 out);
   // --out must not replace the scene; --json beside a bad request is not written either.
   const fs::path json = scratch("refused.json");
   fs::remove(json);
@@ -561,19 +559,15 @@ TEST(CliBakeProbes, RefusesUnknownOrMeaninglessEncodings) {
   const fs::path scene = furnace(), out = scratch("enc_refused.shtb"), dir = scratch("three_l1");
   fs::create_directories(dir);
   const std::vector<std::string> base = {scene.string(), "--grid", "2,2,2", "--samples", "8"};
-  auto with = [&](std::vector<std::string> extra) {
-    std::vector<std::string> a = base;
-    a.insert(a.end(), extra.begin(), extra.end());
-    return a;
-  };
-  expect_refused("bake-probes", with({"--encoding", "l3"}), "--encoding: 'l3' is not one of l2, l1, zh3", out);
-  expect_refused("bake-probes", with({"--encoding", "ZH3"}), "--encoding: 'ZH3' is not one of l2, l1, zh3", out);
-  expect_refused("bake-probes", with({"--encoding", "l1", "--order", "1"}), "--encoding l1 needs --order 2 or more",
-                 out);
-  expect_refused("bake-probes", with({"--encoding", "zh3", "--order", "2"}), "--encoding zh3 needs --order 3 or more",
-                 out);
-  expect_refused("bake-probes", with({"--encoding", "l1", "--threejs", dir.string()}),
-                 "--threejs with --encoding l1", out);
+  expect_all_refused("bake-probes", base,
+                     {
+                         {{"--encoding", "l3"}, "--encoding: 'l3' is not one of l2, l1, zh3"},
+                         {{"--encoding", "ZH3"}, "--encoding: 'ZH3' is not one of l2, l1, zh3"},
+                         {{"--encoding", "l1", "--order", "1"}, "--encoding l1 needs --order 2 or more"},
+                         {{"--encoding", "zh3", "--order", "2"}, "--encoding zh3 needs --order 3 or more"},
+                         {{"--encoding", "l1", "--threejs", dir.string()}, "--threejs with --encoding l1"},
+                     },
+                     out);
   EXPECT_TRUE(fs::is_empty(dir));
   // The loader refuses an encoded table that does not hold what its encoding says.
   ASSERT_EQ(run_shtool({"bake-probes", scene.string(), "--grid", "2,1,1", "--samples", "8", "--encoding", "zh3",
@@ -775,23 +769,19 @@ TEST(CliBakeProbes, LoaderReadsKindVersion10And11AndRefusesANewerMajor) {
 TEST(CliBakeProbes, RefusesZh3ChoicesOutsideZh3AndUnknownOnes) {
   const fs::path scene = furnace(), out = scratch("choice_refused.shtb");
   const std::vector<std::string> base = {scene.string(), "--grid", "2,2,2", "--samples", "8"};
-  auto with = [&](std::vector<std::string> extra) {
-    std::vector<std::string> a = base;
-    a.insert(a.end(), extra.begin(), extra.end());
-    return a;
-  };
-  expect_refused("bake-probes", with({"--zh3-fit", "hallucinated"}),
-                 "--zh3-fit applies to --encoding zh3 only (the grid's encoding is l2", out);
-  expect_refused("bake-probes", with({"--encoding", "l1", "--zh3-axis", "per-channel"}),
-                 "--zh3-axis applies to --encoding zh3 only (the grid's encoding is l1", out);
-  expect_refused("bake-probes", with({"--encoding", "l2", "--zh3-fit", "explicit"}),
-                 "--zh3-fit applies to --encoding zh3 only", out);
-  expect_refused("bake-probes", with({"--encoding", "zh3", "--zh3-fit", "solved"}),
-                 "--zh3-fit: 'solved' is not one of explicit, hallucinated", out);
-  expect_refused("bake-probes", with({"--encoding", "zh3", "--zh3-axis", "red"}),
-                 "--zh3-axis: 'red' is not one of luminance, per-channel", out);
-  expect_refused("bake-probes", with({"--encoding", "zh3", "--zh3-fit", "explicit", "--order", "2"}),
-                 "--encoding zh3 needs --order 3 or more (its zonal coefficient is fitted to band 2)", out);
+  expect_all_refused(
+      "bake-probes", base,
+      {
+          {{"--zh3-fit", "hallucinated"}, "--zh3-fit applies to --encoding zh3 only (the grid's encoding is l2"},
+          {{"--encoding", "l1", "--zh3-axis", "per-channel"},
+           "--zh3-axis applies to --encoding zh3 only (the grid's encoding is l1"},
+          {{"--encoding", "l2", "--zh3-fit", "explicit"}, "--zh3-fit applies to --encoding zh3 only"},
+          {{"--encoding", "zh3", "--zh3-fit", "solved"}, "--zh3-fit: 'solved' is not one of explicit, hallucinated"},
+          {{"--encoding", "zh3", "--zh3-axis", "red"}, "--zh3-axis: 'red' is not one of luminance, per-channel"},
+          {{"--encoding", "zh3", "--zh3-fit", "explicit", "--order", "2"},
+           "--encoding zh3 needs --order 3 or more (its zonal coefficient is fitted to band 2)"},
+      },
+      out);
   // The hallucinated variant needs the L1 band only.
   const CommandResult r = run_shtool({"bake-probes", scene.string(), "--grid", "2,1,1", "--samples", "8", "--order",
                                       "2", "--encoding", "zh3", "--zh3-fit", "hallucinated", "--out", out.string()});

@@ -10,6 +10,7 @@
 #include <Eigen/Dense>
 
 #include "common/input_error.h"
+#include "common/job_outputs.h"
 #include "shtool/rotation.h"
 
 namespace shtool::fit {
@@ -143,6 +144,18 @@ ZhFitTable<double> fit_for_mesh(ZhFitTable<double> fit, const Mesh& mesh, const 
     std::copy_n(fit.direct.begin() + r * d, d, out.direct.begin() + k * d);
   }
   return out;
+}
+
+PosedMesh load_posed_mesh(JobOutputs& io, const std::filesystem::path& mesh, const std::filesystem::path& pose,
+                          UpAxis up) {
+  PosedMesh m{load_mesh(mesh, NormalSource::automatic, up), std::nullopt, {}};
+  io.inputs(m.rest.files, "a file of the mesh");
+  if (!pose.empty()) {
+    m.posed = load_mesh(pose, NormalSource::automatic, up);
+    io.inputs(m.posed->files, "a file of the --pose mesh");
+    m.rotations = rest_to_pose_rotations(m.rest, *m.posed);
+  }
+  return m;
 }
 
 }  // namespace shtool::fit

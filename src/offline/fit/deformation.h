@@ -5,6 +5,8 @@
 // meshes". Used by deform, render and the glossy bake.
 #pragma once
 
+#include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -12,6 +14,10 @@
 
 #include "fit/mesh.h"
 #include "shtool/zh_fit_table.h"
+
+namespace shtool {
+class JobOutputs;
+}
 
 namespace shtool::fit {
 
@@ -32,6 +38,23 @@ std::vector<Eigen::Matrix3d> rest_to_pose_rotations(const Mesh& rest, const Mesh
 // R_p = vertex_frames(rest, posed)[p] vertex_frames(rest, rest)[p]^T. The glossy bake's
 // local frames (docs/ldprt.md). Throws InputError as vertex_frame does.
 std::vector<Eigen::Matrix3d> vertex_frames(const Mesh& rest, const Mesh& mesh);
+
+// A mesh and, with a --pose mesh, that pose of it and the rotations from the one to the
+// other: what render and export-web draw.
+struct PosedMesh {
+  Mesh rest;
+  std::optional<Mesh> posed;               // none without --pose
+  std::vector<Eigen::Matrix3d> rotations;  // rest frame -> posed frame, per vertex (--pose)
+  // The surface drawn: the pose when there is one.
+  const Mesh& shown() const { return posed ? *posed : rest; }
+};
+
+// Reads `mesh` and, unless `pose` is empty, `pose` (normals computed where the file's are
+// incomplete, OBJ up axis `up`), declaring their files inputs of `io` ("a file of the
+// mesh", "a file of the --pose mesh"). Throws InputError as load_mesh and
+// rest_to_pose_rotations do.
+PosedMesh load_posed_mesh(JobOutputs& io, const std::filesystem::path& mesh, const std::filesystem::path& pose,
+                          UpAxis up);
 
 // The fit carried to the pose: axes s_i -> R_p s_i; lobe coefficients unchanged (a ZH lobe
 // is rotation invariant about its axis); a directly stored linear band rotated as band 1

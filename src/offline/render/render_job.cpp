@@ -304,12 +304,7 @@ const std::vector<std::pair<std::string, Shading>>& shading_names() {
 }
 
 RenderResult run_render(const RenderRequest& r) {
-  if (r.width < 1 || r.height < 1 || r.width > 16384 || r.height > 16384)
-    throw InputError("--width and --height must be between 1 and 16384, got " + std::to_string(r.width) + " x " +
-                     std::to_string(r.height));
-  // Narrower than 0.01 degrees, the rays' spread vanishes in Embree's float arithmetic.
-  if (!(r.fov >= 0.01 && r.fov <= 179)) throw InputError("--fov must be between 0.01 and 179 degrees");
-  if (!(std::abs(r.exposure) <= 64)) throw InputError("--exposure must be between -64 and 64");
+  view::check_view_options(r.width, r.height, r.fov, r.exposure);
   // The image encoders index with int: keep the largest output (the compare strip is six
   // panels wide) far below that.
   if (std::int64_t(r.width) * r.height * (r.compare ? 6 : 1) > (std::int64_t(1) << 26))
@@ -335,16 +330,7 @@ RenderResult run_render(const RenderRequest& r) {
   if (shading != Shading::wrinkle && (!r.wrinkle.empty() || !r.wrinkle_map.empty()))
     throw InputError("--wrinkle and --wrinkle-map apply to --shading wrinkle only");
   if (shading != Shading::normals && r.light.empty()) throw InputError("--light is required");
-  if (r.camera) {
-    const Vec eye = vec(r.camera->eye), target = vec(r.camera->target), up = vec(r.camera->up);
-    // Embree traces in float: coordinates beyond 1e30 would overflow its arithmetic.
-    for (const Vec& v : {eye, target, up})
-      if (!v.allFinite() || v.cwiseAbs().maxCoeff() > 1e30)
-        throw InputError("--camera: every coordinate must be a finite number of magnitude at most 1e30");
-    if ((target - eye).norm() == 0 ||
-        (target - eye).normalized().cross(up).norm() < 1e-9)
-      throw InputError("--camera: eye and target must differ and up must not be parallel to the view");
-  }
+  view::check_camera(r.camera);
   // Checked before any work, so that a bad output name costs nothing.
   JobOutputs io;
   io.input(r.mesh, "the mesh");
@@ -364,16 +350,11 @@ RenderResult run_render(const RenderRequest& r) {
   io.output(r.out, "--out");
   (void)lighting::encode_image_for(r.out, lighting::Image{1, 1, 4, std::vector<float>(4, 0.0f)}, "--out");
 
-  const fit::Mesh rest = fit::load_mesh(r.mesh, fit::NormalSource::automatic, r.up);
-  io.inputs(rest.files, "a file of the mesh");
-  std::vector<Eigen::Matrix3d> rotations;  // rest frame -> posed frame, per vertex (--pose)
-  std::optional<fit::Mesh> posed;
-  if (!r.pose.empty()) {
-    posed = fit::load_mesh(r.pose, fit::NormalSource::automatic, r.up);
-    io.inputs(posed->files, "a file of the --pose mesh");
-    rotations = fit::rest_to_pose_rotations(rest, *posed);
-  }
-  const fit::Mesh& mesh = posed ? *posed : rest;
+  const fit::PosedMesh meshes = fit::load_posed_mesh(io, r.mesh, r.pose, r.up);
+  const fit::Mesh& rest = meshes.rest;
+  const std::optional<fit::Mesh>& posed = meshes.posed;
+  const std::vector<Eigen::Matrix3d>& rotations = meshes.rotations;
+  const fit::Mesh& mesh = meshes.shown();
   VertexData data;
   std::optional<GlossyFit<double>> glossy;
   std::vector<Eigen::Matrix3d> frames;  // glossy: the vertex frames of the mesh rendered

@@ -3,8 +3,33 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <string>
+
+#include "common/input_error.h"
 
 namespace shtool::view {
+
+void check_view_options(int width, int height, double fov_degrees, double exposure) {
+  if (width < 1 || height < 1 || width > 16384 || height > 16384)
+    throw InputError("--width and --height must be between 1 and 16384, got " + std::to_string(width) + " x " +
+                     std::to_string(height));
+  // Narrower than 0.01 degrees, the rays' spread vanishes in Embree's float arithmetic.
+  if (!(fov_degrees >= 0.01 && fov_degrees <= 179)) throw InputError("--fov must be between 0.01 and 179 degrees");
+  if (!(std::abs(exposure) <= 64)) throw InputError("--exposure must be between -64 and 64");
+}
+
+void check_camera(const std::optional<Camera>& camera) {
+  if (!camera) return;
+  using Vec = Eigen::Vector3d;
+  const auto vec = [](const std::array<double, 3>& a) { return Vec(a[0], a[1], a[2]); };
+  const Vec eye = vec(camera->eye), target = vec(camera->target), up = vec(camera->up);
+  // Embree traces in float: coordinates beyond 1e30 would overflow its arithmetic.
+  for (const Vec& v : {eye, target, up})
+    if (!v.allFinite() || v.cwiseAbs().maxCoeff() > 1e30)
+      throw InputError("--camera: every coordinate must be a finite number of magnitude at most 1e30");
+  if ((target - eye).norm() == 0 || (target - eye).normalized().cross(up).norm() < 1e-9)
+    throw InputError("--camera: eye and target must differ and up must not be parallel to the view");
+}
 
 MeshBounds mesh_bounds(const fit::Mesh& mesh) {
   using Vec = Eigen::Vector3d;

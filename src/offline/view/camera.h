@@ -3,6 +3,7 @@
 #pragma once
 
 #include <array>
+#include <optional>
 
 #include "fit/mesh.h"
 
@@ -17,6 +18,14 @@ struct Camera {
 // narrower field of view, seen in three-quarters from the side the model faces
 // (Mesh::front) and a little above, z up. fov_degrees is vertical; aspect is width / height.
 Camera frame_mesh(const fit::Mesh& mesh, double fov_degrees, double aspect);
+
+// The view options of both commands, in range: --width and --height 1..16384, --fov
+// 0.01..179 degrees, --exposure -64..64. Throws InputError naming the option.
+void check_view_options(int width, int height, double fov_degrees, double exposure);
+
+// --camera, when given: finite coordinates of magnitude at most 1e30, eye and target
+// apart, up not along the view. Throws InputError.
+void check_camera(const std::optional<Camera>& camera);
 
 // The mesh's bounding box (lo, hi) and the sphere round the box's centre that holds every
 // vertex: what frame_mesh fits into the view.

@@ -82,22 +82,11 @@ class MadeFolders {
 }  // namespace
 
 ExportWebResult run_export_web(const ExportWebRequest& r) {
-  if (r.width < 1 || r.height < 1 || r.width > 16384 || r.height > 16384)
-    throw InputError("--width and --height must be between 1 and 16384, got " + std::to_string(r.width) + " x " +
-                     std::to_string(r.height));
-  if (!(r.fov >= 0.01 && r.fov <= 179)) throw InputError("--fov must be between 0.01 and 179 degrees");
-  if (!(std::abs(r.exposure) <= 64)) throw InputError("--exposure must be between -64 and 64");
+  view::check_view_options(r.width, r.height, r.fov, r.exposure);
   if (r.fit.empty()) throw InputError("--fit is required");
   if (r.light.empty()) throw InputError("--light is required");
   if (r.out.empty()) throw InputError("--out: an output folder is required");
-  if (r.camera) {
-    const Vec eye = vec(r.camera->eye), target = vec(r.camera->target), up = vec(r.camera->up);
-    for (const Vec& v : {eye, target, up})
-      if (!v.allFinite() || v.cwiseAbs().maxCoeff() > 1e30)
-        throw InputError("--camera: every coordinate must be a finite number of magnitude at most 1e30");
-    if ((target - eye).norm() == 0 || (target - eye).normalized().cross(up).norm() < 1e-9)
-      throw InputError("--camera: eye and target must differ and up must not be parallel to the view");
-  }
+  view::check_camera(r.camera);
   const std::filesystem::path parent = std::filesystem::absolute(r.out).parent_path();
   std::error_code ec;
   if (!std::filesystem::is_directory(parent, ec))
@@ -133,16 +122,8 @@ ExportWebResult run_export_web(const ExportWebRequest& r) {
   io.input(r.light, "the --light");
   io.input(r.probes, "the --probes grid");
 
-  const fit::Mesh rest = fit::load_mesh(r.mesh, fit::NormalSource::automatic, r.up);
-  io.inputs(rest.files, "a file of the mesh");
-  std::optional<fit::Mesh> posed;
-  std::vector<Eigen::Matrix3d> rotations;
-  if (!r.pose.empty()) {
-    posed = fit::load_mesh(r.pose, fit::NormalSource::automatic, r.up);
-    io.inputs(posed->files, "a file of the --pose mesh");
-    rotations = fit::rest_to_pose_rotations(rest, *posed);
-  }
-  const fit::Mesh& mesh = posed ? *posed : rest;
+  const fit::PosedMesh meshes = fit::load_posed_mesh(io, r.mesh, r.pose, r.up);
+  const fit::Mesh& mesh = meshes.shown();
 
   Result<Table> read = read_table(r.fit);
   if (!read) throw InputError("--fit: " + read.error().message);
@@ -150,7 +131,7 @@ ExportWebResult run_export_web(const ExportWebRequest& r) {
   if (table.kind != kZhFitKind)
     throw InputError("--fit " + r.fit.string() + ": a table of kind " + table.kind +
                      "; export-web shades a per-vertex zh-fit (fit-zh --out)");
-  check_same_up(table, rest.up, "--fit " + r.fit.string(), r.mesh.string());
+  check_same_up(table, meshes.rest.up, "--fit " + r.fit.string(), r.mesh.string());
   {
     const nlohmann::json meta = nlohmann::json::parse(table.meta, nullptr, false);
     if (meta.is_object() && meta.contains("texture"))
@@ -159,8 +140,8 @@ ExportWebResult run_export_web(const ExportWebRequest& r) {
   }
   Result<ZhFitTable<double>> z = ZhFitTable<double>::from_table(table);
   if (!z) throw InputError("--fit " + r.fit.string() + ": " + z.error().message);
-  ZhFitTable<double> fit = fit::fit_for_mesh(std::move(z).value(), rest, "--fit " + r.fit.string());
-  if (posed) fit = fit::deform_fit(fit, rotations);
+  ZhFitTable<double> fit = fit::fit_for_mesh(std::move(z).value(), meshes.rest, "--fit " + r.fit.string());
+  if (meshes.posed) fit = fit::deform_fit(fit, meshes.rotations);
   const int order = fit.order, lobes = fit.lobes;
   const int lo = std::max(shader_min_order(ShaderOperation::zxzxz_rotate), shader_min_order(ShaderOperation::zh_shade));
   const int hi = std::min(shader_max_order(ShaderOperation::zxzxz_rotate), shader_max_order(ShaderOperation::zh_shade));

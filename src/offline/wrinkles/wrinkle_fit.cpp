@@ -323,14 +323,23 @@ int minimize_conjugate_gradient(GlobalObjective& objective, std::vector<double>&
     };
     const auto armijo = [&](double a) { return f_a <= f + c1 * a * slope0; };
     const auto curvature = [&](double slope) { return std::abs(slope) <= -c2 * slope0; };
+    // The bracket: lo, the lowest point so far that meets the sufficient decrease, and hi.
     double lo = 0, f_lo = f, slope_lo = slope0, hi = 0, f_hi = 0;
+    const auto move_hi = [&](double to, double f_to) {
+      hi = to;
+      f_hi = f_to;
+    };
+    const auto move_lo = [&](double to, double f_to, double slope_to) {
+      lo = to;
+      f_lo = f_to;
+      slope_lo = slope_to;
+    };
     double a = step_guess;
     bool accepted = false, zoom = false;
     for (int i = 0; evaluations < max_evaluations; ++i) {
       const double slope_a = eval_at(a);
       if (!armijo(a) || (i > 0 && f_a >= f_lo)) {
-        hi = a;
-        f_hi = f_a;
+        move_hi(a, f_a);
         zoom = true;
         break;
       }
@@ -339,17 +348,12 @@ int minimize_conjugate_gradient(GlobalObjective& objective, std::vector<double>&
         break;
       }
       if (slope_a >= 0) {
-        hi = lo;
-        f_hi = f_lo;
-        lo = a;
-        f_lo = f_a;
-        slope_lo = slope_a;
+        move_hi(lo, f_lo);
+        move_lo(a, f_a, slope_a);
         zoom = true;
         break;
       }
-      lo = a;
-      f_lo = f_a;
-      slope_lo = slope_a;
+      move_lo(a, f_a, slope_a);
       a *= 2;
     }
     while (zoom && !accepted && evaluations < max_evaluations) {
@@ -361,21 +365,15 @@ int minimize_conjugate_gradient(GlobalObjective& objective, std::vector<double>&
       a = lo + frac * w;
       const double slope_a = eval_at(a);
       if (!armijo(a) || f_a >= f_lo) {
-        hi = a;
-        f_hi = f_a;
+        move_hi(a, f_a);
         continue;
       }
       if (curvature(slope_a)) {
         accepted = true;
         break;
       }
-      if (slope_a * w >= 0) {
-        hi = lo;
-        f_hi = f_lo;
-      }
-      lo = a;
-      f_lo = f_a;
-      slope_lo = slope_a;
+      if (slope_a * w >= 0) move_hi(lo, f_lo);
+      move_lo(a, f_a, slope_a);
     }
     if (!accepted) {
       // Out of evaluations or a collapsed bracket: keep the best point found.
