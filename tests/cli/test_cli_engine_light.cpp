@@ -35,14 +35,8 @@ constexpr double kPi = std::numbers::pi;
 const Scratch scratch("engine_light");
 
 Lighting random_light(int order, Quantity q, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> g;
-  Lighting l;
-  l.order = order;
+  Lighting l = random_radiance(order, seed, 1.0, {5, 5, 5});
   l.quantity = q;
-  l.coefficients.resize(static_cast<std::size_t>(sh_count(order)) * 3);
-  for (double& v : l.coefficients) v = g(rng);
-  l.coefficients[0] += 5, l.coefficients[1] += 5, l.coefficients[2] += 5;
   if (q == Quantity::irradiance)  // a real irradiance: A_l times a radiance
     for (int i = 0; i < sh_count(order); ++i)
       for (int c = 0; c < 3; ++c) l.coefficients[3 * i + c] *= clamped_cosine_band(sh_band(i));

@@ -7,7 +7,6 @@
 #include <filesystem>
 #include <fstream>
 #include <numbers>
-#include <random>
 #include <string>
 #include <vector>
 
@@ -29,17 +28,8 @@ using lighting::Quantity;
 
 const Scratch scratch("probe_encoding_cli");
 
-Lighting light_of_order(int order, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> g;
-  Lighting l;
-  l.order = order;
-  l.quantity = Quantity::radiance;
-  l.coefficients.resize(static_cast<std::size_t>(sh_count(order)) * 3);
-  for (double& v : l.coefficients) v = 0.3 * g(rng);
-  l.coefficients[0] += 3, l.coefficients[1] += 2, l.coefficients[2] += 1;
-  return l;
-}
+// A light mostly positive, unequal in its channels.
+Lighting light_of_order(int order, unsigned seed) { return random_radiance(order, seed, 0.3, {3, 2, 1}); }
 
 nlohmann::json export_file(const Lighting& l, const std::vector<std::string>& extra, std::string* err = nullptr) {
   const fs::path in = scratch("light.json"), out = scratch("probe.json");

@@ -4,7 +4,9 @@
 // Header-only; SHTOOL_EXE and SHTOOL_SOURCE_DIR come from tests/CMakeLists.txt.
 #pragma once
 
+#include <array>
 #include <filesystem>
+#include <random>
 #include <string>
 #include <system_error>
 #include <utility>
@@ -14,9 +16,11 @@
 #include <nlohmann/json.hpp>
 
 #include "lighting/image_io.h"
+#include "lighting/lighting_output.h"
 #include "run_command.h"
 #include "schema_check.h"
 #include "scratch_files.h"
+#include "shtool/sh.h"
 #include "shtool/table.h"
 
 namespace shtool::test {
@@ -99,6 +103,20 @@ inline void make_white_and_sky_lights(int order, const std::filesystem::path& wh
   const std::string o = std::to_string(order);
   must(run_shtool({"light", "--type", "constant", "--color", "1,1,1", "--order", o, "--json", white.string()}));
   must(run_shtool({"project-env", kSourceDir + "/data/sky.hdr", "--order", o, "--json", sky.string()}));
+}
+
+// An RGB radiance of `order`: seeded standard normal coefficients times `spread`, with
+// `dc` added to each channel's constant term (a light that stays mostly positive).
+inline lighting::Lighting random_radiance(int order, unsigned seed, double spread, const std::array<double, 3>& dc) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g;
+  lighting::Lighting l;
+  l.order = order;
+  l.quantity = lighting::Quantity::radiance;
+  l.coefficients.resize(static_cast<std::size_t>(sh_count(order)) * 3);
+  for (double& v : l.coefficients) v = spread * g(rng);
+  for (int c = 0; c < 3; ++c) l.coefficients[c] += dc[c];
+  return l;
 }
 
 // A test program's scratch files: scratch("x.json") is <temp>/shtool_<suite>_<pid>/x.json.
