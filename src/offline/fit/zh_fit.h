@@ -157,8 +157,8 @@ double zh_varpro_objective(int order, std::span<const double> t, const std::vect
 // methods, every effort); multi-lobe, varpro = the greedy start (and, for 3 <= lobes <
 // order, the split start: the single-lobe axis split into a pair along the lobe's long
 // axis, grown greedily, and the better start's last lobe re-seated at the next one to
-// three grid maxima of what the others leave, more where the residual is higher), then `starts` random axis sets (seeded by options.seed and
-// `stream`), the best polished; multi-lobe, joint = greedy, coefficient refit with axes
+// three grid maxima of what the others leave, more where the residual is higher), then
+// `starts` random axis sets (seeded by options.seed and `stream`), the best polished; multi-lobe, joint = greedy, coefficient refit with axes
 // frozen, joint BFGS, then `starts` random axis sets each refit and BFGS-refined; the best
 // is returned.
 // Axes are returned unit length with z >= 0 (odd-band coefficients flipped with them).

@@ -123,8 +123,6 @@ std::vector<double> vertex_radiance(Shading shading, const VertexData& data, con
   return from_fit;
 }
 
-Vec vec(const std::array<double, 3>& a) { return Vec(a[0], a[1], a[2]); }
-
 // What each pixel's primary ray hit: triangle and barycentric weights (triangle -1: none).
 struct Hits {
   int width = 0, height = 0;
@@ -137,9 +135,9 @@ struct Hits {
 
 Hits cast_primary_rays(const fit::Mesh& mesh, const RenderRequest& r, const Camera& camera, int threads) {
   const double aspect = double(r.width) / r.height;
-  const Vec eye = vec(camera.eye);
-  const Vec forward = (vec(camera.target) - eye).normalized();
-  const Vec right = forward.cross(vec(camera.up)).normalized();
+  const Vec eye = view::as_vector(camera.eye);
+  const Vec forward = (view::as_vector(camera.target) - eye).normalized();
+  const Vec right = forward.cross(view::as_vector(camera.up)).normalized();
   const Vec up = right.cross(forward);
   const double tan_half = std::tan(0.5 * r.fov * std::numbers::pi / 180.0);
   const std::unique_ptr<fit::EmbreeScene> scene = fit::build_scene(mesh);
@@ -485,7 +483,7 @@ RenderResult run_render(const RenderRequest& r) {
   if (glossy) {
     result.shading = shading;
     image = glossy_panel({hits.width, hits.height, hits.triangle, hits.w1, hits.w2}, mesh, frames, *glossy, light,
-                         vec(camera.eye), threads);
+                         view::as_vector(camera.eye), threads);
   } else if (!r.compare) {
     result.shading = shading;
     image = texture ? shade_texture_bake(*texture, mesh, light, hits.width, hits.height, hits.triangle, hits.w1,

@@ -21,8 +21,7 @@ void check_view_options(int width, int height, double fov_degrees, double exposu
 void check_camera(const std::optional<Camera>& camera) {
   if (!camera) return;
   using Vec = Eigen::Vector3d;
-  const auto vec = [](const std::array<double, 3>& a) { return Vec(a[0], a[1], a[2]); };
-  const Vec eye = vec(camera->eye), target = vec(camera->target), up = vec(camera->up);
+  const Vec eye = as_vector(camera->eye), target = as_vector(camera->target), up = as_vector(camera->up);
   // Embree traces in float: coordinates beyond 1e30 would overflow its arithmetic.
   for (const Vec& v : {eye, target, up})
     if (!v.allFinite() || v.cwiseAbs().maxCoeff() > 1e30)

@@ -5,6 +5,8 @@
 #include <array>
 #include <optional>
 
+#include <Eigen/Core>
+
 #include "fit/mesh.h"
 
 namespace shtool::view {
@@ -13,6 +15,9 @@ namespace shtool::view {
 struct Camera {
   std::array<double, 3> eye{}, target{}, up{0, 0, 1};
 };
+
+// A camera point or direction as a vector.
+inline Eigen::Vector3d as_vector(const std::array<double, 3>& a) { return {a[0], a[1], a[2]}; }
 
 // The default view: the mesh's bounding sphere (centred on its bounding box) filling the
 // narrower field of view, seen in three-quarters from the side the model faces

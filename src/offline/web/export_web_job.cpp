@@ -38,8 +38,6 @@ Eigen::Matrix3d to_gltf() {
 }
 
 nlohmann::json vec_json(const Vec& v) { return nlohmann::json::array({v.x(), v.y(), v.z()}); }
-Vec vec(const std::array<double, 3>& a) { return Vec(a[0], a[1], a[2]); }
-
 // WebGL2 guarantees 16 vertex attributes: the position, each lobe's axis and coefficient
 // groups, the stored coefficients.
 constexpr int kMaxVertexAttributes = 16;
@@ -208,7 +206,7 @@ ExportWebResult run_export_web(const ExportWebRequest& r) {
     // A ground under the mesh across the grid's box, and spheres beside the mesh, on the
     // ground, right and left of the view and behind, kept inside the box.
     const double ground = std::clamp(bounds.lo.z(), pmin.z(), pmax.z());
-    const Vec forward = (vec(camera.target) - vec(camera.eye)).normalized();
+    const Vec forward = (view::as_vector(camera.target) - view::as_vector(camera.eye)).normalized();
     Vec right = forward.cross(Vec::UnitZ());
     if (right.norm() < 1e-9) right = Vec::UnitX();
     right.normalize();
@@ -227,12 +225,12 @@ ExportWebResult run_export_web(const ExportWebRequest& r) {
                        {"size", {pmax.x() - pmin.x(), pmax.y() - pmin.y()}}};
     scene["spheres"] = spheres;
   }
-  const double distance = (vec(camera.eye) - centre).norm();
+  const double distance = (view::as_vector(camera.eye) - centre).norm();
   const double near = std::max(0.5 * (distance - extent), 1e-4 * (distance + extent));
   const double far = 2 * (distance + extent);
-  scene["camera"] = {{"eye", vec_json(c * vec(camera.eye))},
-                     {"target", vec_json(c * vec(camera.target))},
-                     {"up", vec_json(c * vec(camera.up))},
+  scene["camera"] = {{"eye", vec_json(c * view::as_vector(camera.eye))},
+                     {"target", vec_json(c * view::as_vector(camera.target))},
+                     {"up", vec_json(c * view::as_vector(camera.up))},
                      {"fov", r.fov},
                      {"near", near},
                      {"far", far}};
