@@ -312,6 +312,8 @@ std::vector<double> best_known_residuals(const std::vector<double>& vectors, int
     o.starts = method == 0 ? kBestKnownVarProStarts : kBestKnownJointStarts;
     o.restart_above = 0;
     o.polish_ftol_rel = 1e-12;
+    o.split_polish_ftol_rel = 1e-12;
+    o.split_polish_evaluations = 2000;
     o.max_evaluations = 2000;
     searches.push_back(o);
   }

@@ -79,6 +79,13 @@ struct ZhFitOptions {
   // order at 1e-2). 1e-3 leaves psi within a few tenths of a percent of its local
   // minimum; with lobes >= order (an exact fit exists) 1e-10 is used whatever this says.
   double polish_ftol_rel = 1e-3;
+  // varpro, 3 <= lobes < order: the polish stops at this relative change instead, after
+  // at most split_polish_evaluations. The deterministic starts' fits of transfer vectors
+  // often end in long, ill-conditioned valleys (near-coincident lobes with large
+  // coefficients of opposite sign) where psi still falls slowly below 1e-3; the cap keeps
+  // the whole-mesh fit within its budget (docs/fit-zh.md).
+  double split_polish_ftol_rel = 1e-4;
+  int split_polish_evaluations = 30;
   std::uint64_t seed = 1;
   // Multi-start runs only while the residual is above this fraction of ||t|| ("we apply
   // further computation when the fit error is high", Sec. 4.1): well-fitted vertices,
