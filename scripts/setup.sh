@@ -2,7 +2,9 @@
 # Installs the Debian packages shtool needs (only those missing), then configures and
 # builds it in Release: every target, or only the TARGETs named (the demo builds the
 # `shtool` executable alone, not the tests and benchmarks it never runs). Idempotent: a
-# second run installs nothing and rebuilds only what changed.
+# second run installs nothing and rebuilds only what changed. CXX, when set, is the
+# compiler of a new tree (CMake reads it at the first configure only): the demo passes
+# clang++, the test suite leaves the system compiler.
 #   scripts/setup.sh [BUILD_DIR [TARGET...]]     (default: build, every target)
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
