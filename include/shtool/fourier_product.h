@@ -12,8 +12,9 @@
 #pragma once
 
 #include <cstddef>
-#include <memory>
 #include <span>
+
+#include "shtool/detail/product_sizes.h"
 
 namespace shtool {
 
@@ -23,18 +24,12 @@ inline constexpr int kMaxFourierProductOrder = 64;
 inline constexpr int kMaxProductInputs = 16;
 
 template <class T>
-class FourierProduct {
+// order(), inputs(); grid_theta() x grid_phi(): the grid of the top-level convolution.
+// Move-only.
+class FourierProduct : public detail::ProductSizes {
  public:
   // Preconditions: 1 <= order <= kMaxFourierProductOrder, 1 <= inputs <= kMaxProductInputs.
   FourierProduct(int order, int inputs);
-  ~FourierProduct();
-  FourierProduct(FourierProduct&&) noexcept;
-  FourierProduct& operator=(FourierProduct&&) noexcept;
-  FourierProduct(const FourierProduct&) = delete;
-  FourierProduct& operator=(const FourierProduct&) = delete;
-
-  int order() const;
-  int inputs() const;
 
   // g = (x)_k(f_1, ..., f_{k-1}) truncated to the order (Eq. 7), k - 1 = inputs().
   // Every span holds N^2 coefficients; g may alias an input.
@@ -42,13 +37,9 @@ class FourierProduct {
   // Triple product g = f1 (x) f2 (only when inputs() == 2).
   void multiply(std::span<const T> f1, std::span<const T> f2, std::span<T> g);
 
-  // Grid sizes (theta x phi) of the top-level convolution, for docs and benchmarks.
-  int grid_theta() const;
-  int grid_phi() const;
-
  private:
   struct Impl;
-  std::unique_ptr<Impl> impl_;
+  detail::ImplPtr<Impl> impl_{nullptr, nullptr};
 };
 
 extern template class FourierProduct<float>;

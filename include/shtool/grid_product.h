@@ -41,19 +41,13 @@ enum class GridAzimuth {
 };
 
 template <class T>
-class GridProduct {
+// order(), inputs(); grid_theta() x grid_phi(): Gauss-Legendre rings x azimuthal points.
+// Move-only.
+class GridProduct : public detail::ProductSizes {
  public:
   // Preconditions: 1 <= order <= kMaxFourierProductOrder, 1 <= inputs <= kMaxProductInputs
   // (std::invalid_argument otherwise).
   GridProduct(int order, int inputs, GridAzimuth azimuth = GridAzimuth::automatic);
-  ~GridProduct();
-  GridProduct(GridProduct&&) noexcept;
-  GridProduct& operator=(GridProduct&&) noexcept;
-  GridProduct(const GridProduct&) = delete;
-  GridProduct& operator=(const GridProduct&) = delete;
-
-  int order() const;
-  int inputs() const;
 
   // g = product of the inputs() functions f truncated to the order ([3] Eq. 7).
   // Every span holds N^2 coefficients; g may alias an input.
@@ -64,15 +58,12 @@ class GridProduct {
   // inputs() == 2): the grid is exact for that degree too.
   T integral(std::span<const std::span<const T>> f);
 
-  // Grid sizes: Gauss-Legendre rings and azimuthal points.
-  int grid_theta() const;
-  int grid_phi() const;
   GridAzimuth azimuth() const;  // never automatic
 
   struct Impl;  // one per azimuthal method, in grid_product.cpp
 
  private:
-  std::unique_ptr<Impl> impl_;
+  detail::ImplPtr<Impl> impl_{nullptr, nullptr};
 };
 
 extern template class GridProduct<float>;

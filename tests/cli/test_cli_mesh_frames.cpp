@@ -16,6 +16,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "fit/gltf_model.h"
 #include "lighting/image_io.h"
 #include "cli_test.h"
 #include "shtool/table.h"
@@ -87,19 +88,8 @@ fs::path write_glb(const Quad& q, const std::string& name) {
   prim.mode = TINYGLTF_MODE_TRIANGLES;
   tinygltf::Mesh mesh;
   mesh.primitives.push_back(prim);
-  m.meshes.push_back(mesh);
-  tinygltf::Node node;
-  node.mesh = 0;
-  m.nodes.push_back(node);
-  tinygltf::Scene scene;
-  scene.nodes = {0};
-  m.scenes.push_back(scene);
-  m.defaultScene = 0;
-  std::ostringstream s;
-  tinygltf::TinyGLTF writer;
-  EXPECT_TRUE(writer.WriteGltfSceneToStream(&m, s, false, true));
   const fs::path path = scratch(name);
-  shtool::test::write_file(path, s.str());
+  shtool::test::write_file(path, shtool::fit::write_single_mesh_gltf(m, mesh, true));
   return path;
 }
 

@@ -89,12 +89,8 @@ Scene random_scene(std::size_t count, int degree, unsigned seed) {
 std::string ply_bytes(const Scene& s) {
   const int rest = (s.degree + 1) * (s.degree + 1) - 1;
   std::ostringstream h;
-  h << "ply\nformat binary_little_endian 1.0\nelement vertex " << s.splats.size() << "\n";
-  for (const char* n : {"x", "y", "z", "nx", "ny", "nz", "f_dc_0", "f_dc_1", "f_dc_2"}) h << "property float " << n << "\n";
-  for (int k = 0; k < 3 * rest; ++k) h << "property float f_rest_" << k << "\n";
-  for (const char* n : {"opacity", "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3"})
-    h << "property float " << n << "\n";
-  h << "end_header\n";
+  h << "ply\nformat binary_little_endian 1.0\nelement vertex " << s.splats.size() << "\n"
+    << ply_3dgs_properties(s.degree) << "end_header\n";
   std::string out = h.str();
   auto put = [&](double v) {
     const float f = static_cast<float>(v);
@@ -258,6 +254,14 @@ struct Format {
   std::vector<std::string> args;  // when writing it
   Eigen::Matrix3d frame;
   bool quantised;
+
+  // transform-splats from `in` to `out` in this format, with `more` options.
+  CommandResult write(const fs::path& in, const fs::path& out, std::vector<std::string> more = {}) const {
+    more.insert(more.end(), args.begin(), args.end());
+    return convert(in, out, more);
+  }
+  // What `out`, written by write(), holds: a PLY as read, anything else as stored.
+  Scene stored(const fs::path& out) const { return name == "ply" ? read_ply(out) : raw_values(out); }
 };
 const std::vector<Format>& formats() {
   static const std::vector<Format> f = {
@@ -305,7 +309,7 @@ TEST(CliSplatFormats, EachFormatStoresItsFrame) {
   for (const Format& f : formats()) {
     if (f.name == "ply") continue;
     const fs::path out = scratch("frame_out" + f.ext);
-    const auto r = convert(in, out, f.args);
+    const auto r = f.write(in, out);
     ASSERT_EQ(r.exit_code, 0) << r.err;
     const Eigen::Matrix3d q = f.frame.transpose() * kRdf;
     EXPECT_TRUE(q.isApprox(Eigen::Vector3d(1, -1, -1).asDiagonal().toDenseMatrix()));
@@ -327,13 +331,10 @@ TEST(CliSplatFormats, ColoursFollowRotationsAndReflections) {
   quat << qr.w() << "," << qr.x() << "," << qr.y() << "," << qr.z();
   for (const Format& f : formats()) {
     const fs::path out = scratch("rot_out" + f.ext);
-    std::vector<std::string> args = {"--quat", quat.str()};
-    args.insert(args.end(), f.args.begin(), f.args.end());
-    const auto r = convert(in, out, args);
+    const auto r = f.write(in, out, {"--quat", quat.str()});
     ASSERT_EQ(r.exit_code, 0) << r.err;
     const Eigen::Matrix3d m = f.frame.transpose() * kRdf * qr.toRotationMatrix();
-    const Scene after = f.name == "ply" ? read_ply(out) : raw_values(out);
-    expect_mapped(scene, after, m, f.quantised ? spz_tolerance(3) : Tolerance{}, "rotated into " + f.name);
+    expect_mapped(scene, f.stored(out), m, f.quantised ? spz_tolerance(3) : Tolerance{}, "rotated into " + f.name);
   }
   // Reflection: the PLY's axes are RUF (left-handed); glTF's RUB: z flips.
   for (const std::string ext : {".glb", ".spz"}) {
@@ -365,13 +366,11 @@ TEST(CliSplatFormats, ReflectingMatrix) {
   for (int k = 0; k < 9; ++k) text << (k ? "," : "") << m(k / 3, k % 3);
   for (const Format& f : formats()) {
     const fs::path out = scratch("mirror_matrix_out" + f.ext);
-    std::vector<std::string> args = {"--matrix", text.str()};
-    args.insert(args.end(), f.args.begin(), f.args.end());
-    const auto r = convert(in, out, args);
+    const auto r = f.write(in, out, {"--matrix", text.str()});
     ASSERT_EQ(r.exit_code, 0) << r.err;
     EXPECT_NE(r.err.find("reflects"), std::string::npos) << r.err;
     const Eigen::Matrix3d frame = f.frame.transpose() * kRdf;
-    const Scene after = f.name == "ply" ? read_ply(out) : raw_values(out);
+    const Scene after = f.stored(out);
     expect_mapped(scene, after, frame * m, f.quantised ? spz_tolerance(3) : Tolerance{}, "mirrored into " + f.name);
     for (const Splat& x : after.splats) ASSERT_NEAR(x.rotation().determinant(), 1, 1e-6);
   }
@@ -799,9 +798,7 @@ TEST(CliSplatFormats, SameBytesWhateverTheThreadCount) {
     std::string bytes[2];
     for (int k = 0; k < 2; ++k) {
       const fs::path out = scratch("threads_" + std::to_string(k) + f.ext);
-      std::vector<std::string> args = {"--quat", "0.5,0.5,-0.5,0.5", "--sh-degree", "3", "--threads", k ? "3" : "1"};
-      args.insert(args.end(), f.args.begin(), f.args.end());
-      const auto r = convert(in, out, args);
+      const auto r = f.write(in, out, {"--quat", "0.5,0.5,-0.5,0.5", "--sh-degree", "3", "--threads", k ? "3" : "1"});
       ASSERT_EQ(r.exit_code, 0) << r.err;
       bytes[k] = read_file(out);
     }

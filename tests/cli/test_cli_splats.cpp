@@ -62,14 +62,9 @@ std::vector<Splat> random_splats(int count, int deg, unsigned seed) {
 // The reference implementation's layout: x y z nx ny nz f_dc_0..2 f_rest_* (channel
 // major) opacity scale_0..2 rot_0..3, plus one extra int property at the end.
 std::string write_ply(const std::vector<Splat>& splats, int deg, const std::string& format) {
-  const int rest = (deg + 1) * (deg + 1) - 1;
   std::ostringstream h;
-  h << "ply\nformat " << format << " 1.0\ncomment made by the test\nelement vertex " << splats.size() << "\n";
-  for (const char* n : {"x", "y", "z", "nx", "ny", "nz", "f_dc_0", "f_dc_1", "f_dc_2"}) h << "property float " << n << "\n";
-  for (int k = 0; k < 3 * rest; ++k) h << "property float f_rest_" << k << "\n";
-  for (const char* n : {"opacity", "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3"})
-    h << "property float " << n << "\n";
-  h << "property int tag\nend_header\n";
+  h << "ply\nformat " << format << " 1.0\ncomment made by the test\nelement vertex " << splats.size() << "\n"
+    << ply_3dgs_properties(deg) << "property int tag\nend_header\n";
   std::string out = h.str();
   for (const Splat& s : splats) {
     std::vector<float> v(s.p.begin(), s.p.end());

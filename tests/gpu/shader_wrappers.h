@@ -196,13 +196,8 @@ inline std::vector<uint32_t> compiled_wrapper(shtool::ShaderLanguage lang, const
 // The request of one case; zhf-rotate takes the shipped shared-lobe table of its order.
 inline shtool::ShaderRequest request_for(shtool::ShaderLanguage language, shtool::ShaderOperation op, int order, int lobes,
                                   shtool::ShaderPrecision precision = shtool::ShaderPrecision::float32) {
-  shtool::ShaderRequest request;
-  request.language = language;
-  request.operation = op;
-  request.order = order;
-  request.zh_lobes = lobes;
-  request.precision = precision;
-  request.command = "test";
+  shtool::ShaderRequest request{
+      .language = language, .operation = op, .order = order, .precision = precision, .zh_lobes = lobes, .command = "test"};
   if (op == shtool::ShaderOperation::zhf_rotate || op == shtool::ShaderOperation::zhf_tailored_rotate) {
     auto loaded = shtool::ZhfLobes::load(shtool::default_zhf_lobes_path(order));
     if (loaded) loaded = loaded.value().bands_below(order);

@@ -13,6 +13,8 @@
 #include <span>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -158,7 +160,21 @@ TEST_P(GridAliasing, AliasingReuseAndDeterminism) {
   std::vector<double> d(sh_count(order));
   GridProduct<double>(order, 2, GetParam()).multiply(f[0], f[1], d);  // fresh object: same bits
   EXPECT_EQ(a, d);
+  // Moved: the new owner has the sizes and gives the same bits.
+  const GridProduct<double> moved = std::move(product);
+  EXPECT_EQ(moved.order(), order);
+  EXPECT_EQ(moved.inputs(), 2);
+  GridProduct<double> assigned(3, 3, GetParam());
+  assigned = GridProduct<double>(order, 2, GetParam());
+  std::vector<double> e(sh_count(order));
+  assigned.multiply(f[0], f[1], e);
+  EXPECT_EQ(a, e);
 }
+static_assert(!std::is_copy_constructible_v<GridProduct<double>> && !std::is_copy_assignable_v<GridProduct<double>>);
+static_assert(std::is_nothrow_move_constructible_v<GridProduct<double>> &&
+              std::is_nothrow_move_assignable_v<GridProduct<double>>);
+static_assert(!std::is_copy_constructible_v<FourierProduct<float>> &&
+              std::is_nothrow_move_constructible_v<FourierProduct<float>>);
 INSTANTIATE_TEST_SUITE_P(Methods, GridAliasing, ::testing::ValuesIn(kMethods),
                          [](const auto& info) { return name(info.param); });
 

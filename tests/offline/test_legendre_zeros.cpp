@@ -1,7 +1,8 @@
 // Zeros of the associated Legendre functions (src/offline/lobes/legendre_zeros.h),
-// checked against a long double evaluation by the textbook unnormalised recurrence
-// (src/runtime/basis/legendre.cpp uses Golub-Welsch plus the normalised recurrence), sign
-// counts on fine grids, closed-form zeros and std::sph_legendre.
+// checked against a long double evaluation by the textbook unnormalised recurrence, its
+// derivative by the next order (src/runtime/basis/legendre.cpp uses Golub-Welsch plus the
+// normalised recurrence and its derivative), sign counts on fine grids, closed-form zeros
+// and std::sph_legendre.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -29,37 +30,33 @@ std::string sci(double v) {
   return buf;
 }
 
-// R(z) = P_l^m(z) / sin^m t up to a constant factor (zeros are what matter here), and
-// dR/dz, by (l-m) R_l = (2l-1) z R_{l-1} - (l+m-1) R_{l-2} from R_m = 1, in long double.
-// R is a polynomial of degree l - m with R(+-1) != 0, so its sign is well defined at and
-// next to the poles, where P_l^m itself vanishes for m > 0.
-void reference_r(int l, int m, LD z, LD& r, LD& dr) {
-  LD r2 = 0, dr2 = 0, r1 = 1, dr1 = 0;
+// R_l^m(z) = P_l^m(z) / ((2m-1)!! sin^m t) = (d/dz)^m P_l(z) / (2m-1)!!, in long double, by
+// (l-m) R_l = (2l-1) z R_{l-1} - (l+m-1) R_{l-2} from R_m = 1. R is a polynomial of degree
+// l - m with R(+-1) != 0, so its sign is well defined at and next to the poles, where
+// P_l^m itself vanishes for m > 0. (The explicit finite sums of P_l lose more digits to
+// cancellation than long double holds beyond l ~ 20, so they cannot check 1e-15 zeros.)
+LD reference_r(int l, int m, LD z) {
+  LD before = 0, r = 1;
   for (int k = m + 1; k <= l; ++k) {
-    const LD r0 = ((2 * k - 1) * z * r1 - (k + m - 1) * r2) / (k - m);
-    const LD dr0 = ((2 * k - 1) * (r1 + z * dr1) - (k + m - 1) * dr2) / (k - m);
-    r2 = r1;
-    dr2 = dr1;
-    r1 = r0;
-    dr1 = dr0;
+    const LD next = ((2 * k - 1) * z * r - (k + m - 1) * before) / (k - m);
+    before = r;
+    r = next;
   }
-  r = r1;
-  dr = dr1;
-}
-
-LD reference_r(int l, int m, LD t) {
-  LD r, dr;
-  reference_r(l, m, std::cos(t), r, dr);
   return r;
 }
+
+// dR_l^m/dz = (2m+1) R_l^{m+1}, from (d/dz)^{m+1} P_l: the derivative is a second
+// evaluation, not the differentiated recurrence the runtime's Newton uses.
+LD reference_dr(int l, int m, LD z) { return l > m ? (2 * m + 1) * reference_r(l, m + 1, z) : 0; }
+
+LD reference_r_at(int l, int m, LD t) { return reference_r(l, m, std::cos(t)); }
 
 // Long double Newton in t on R(cos t), from the implementation's zero.
 LD refine_zero(int l, int m, double t0) {
   LD t = t0;
   for (int it = 0; it < 6; ++it) {
-    LD r, dr;
-    reference_r(l, m, std::cos(t), r, dr);
-    t -= r / (-std::sin(t) * dr);
+    const LD z = std::cos(t);
+    t -= reference_r(l, m, z) / (-std::sin(t) * reference_dr(l, m, z));
   }
   return t;
 }
@@ -129,7 +126,7 @@ void check_zeros(int l, int m, ZeroStats& st) {
       // j = 0 and j = samples sit 1e-7 of the gap inside its ends.
       const LD a = edges[g], b = edges[g + 1];
       const LD t = a + (b - a) * (1e-7L + (1 - 2e-7L) * j / samples);
-      const LD r = reference_r(l, m, t);
+      const LD r = reference_r_at(l, m, t);
       const int s = r > 0 ? 1 : (r < 0 ? -1 : 0);
       ASSERT_NE(s, 0) << "gap " << g << " t " << double(t);
       if (sign == 0) sign = s;
@@ -145,9 +142,9 @@ void check_zeros(int l, int m, ZeroStats& st) {
   // And an independent count: sign changes of R on a uniform grid of 40 l points.
   const int grid = 40 * l + 40;
   int changes = 0;
-  LD prev = reference_r(l, m, LD(0));
+  LD prev = reference_r_at(l, m, LD(0));
   for (int j = 1; j <= grid; ++j) {
-    const LD r = reference_r(l, m, kPiL * j / grid);
+    const LD r = reference_r_at(l, m, kPiL * j / grid);
     if ((r > 0) != (prev > 0)) ++changes;
     prev = r;
   }

@@ -32,16 +32,8 @@ std::filesystem::path scratch(const std::string& name) { return test::scratch_pa
 
 probes::ProbeGridSpec grid(std::array<int, 3> n, Eigen::Vector3d lo, Eigen::Vector3d hi, int order, int samples,
                            int bounces) {
-  probes::ProbeGridSpec s;
-  s.resolution = n;
-  s.lower = lo;
-  s.upper = hi;
-  s.order = order;
-  s.samples = samples;
-  s.bounces = bounces;
-  s.seed = 7;
-  s.threads = 2;
-  return s;
+  return {.resolution = n, .lower = lo, .upper = hi, .order = order, .samples = samples, .bounces = bounces, .seed = 7,
+          .threads = 2};
 }
 
 scene::Scene furnace_scene(double rho, double emitted) {

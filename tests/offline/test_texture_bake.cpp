@@ -126,12 +126,7 @@ TEST(TextureBake, GutterFillsTheRingsWithTheNearestCoveredTexel) {
 TEST(TextureBake, VertexTransferIsTheSamplePointCase) {
   const Mesh spot = load_obj(kSpot);
   for (TransferMode mode : {TransferMode::shadowed, TransferMode::interreflected}) {
-    TransferOptions o;
-    o.order = 3;
-    o.rays = 8;
-    o.mode = mode;
-    o.bounces = 1;
-    o.threads = 2;
+    TransferOptions o{.order = 3, .rays = 8, .mode = mode, .bounces = 1, .threads = 2};
     const std::vector<double> a = compute_transfer(spot, o);
     const std::vector<double> b = compute_transfer_at(spot, spot.positions, spot.normals, {}, o);
     ASSERT_EQ(a.size(), b.size());
@@ -254,10 +249,7 @@ TEST(TextureBake, BytesDoNotDependOnThreads) {
 TEST(TextureBake, TexelBakeAgreesWithVertexBake) {
   const Mesh spot = load_obj(kSpot);
   const TexelSamples s = rasterize_texels(spot, 48, kSpot);
-  TransferOptions o;
-  o.order = 3;
-  o.rays = 256;
-  o.threads = 2;
+  TransferOptions o{.order = 3, .rays = 256, .threads = 2};
   const std::vector<double> texel = compute_transfer_at(spot, s.positions, s.normals, s.texel, o);
   const std::vector<double> vertex = compute_transfer(spot, o);
   double sum = 0, worst = 0, scale = 0;

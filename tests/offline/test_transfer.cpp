@@ -57,11 +57,7 @@ TEST(Transfer, ClampedCosineConstants) {
 TEST(Transfer, OpenPlaneGivesClampedCosine) {
   const fit::Mesh plane = from_obj("plane.obj", kPlane);
   for (TransferMode mode : {TransferMode::unshadowed, TransferMode::shadowed}) {
-    TransferOptions o;
-    o.order = 6;
-    o.rays = 4096;
-    o.mode = mode;
-    o.threads = 1;
+    TransferOptions o{.order = 6, .rays = 4096, .mode = mode, .threads = 1};
     const std::vector<double> t = compute_transfer(plane, o);
     const int n2 = 36;
     for (int v : {0, 4, 8}) {
@@ -86,10 +82,7 @@ TEST(Transfer, ConvexMeshShadowedEqualsUnshadowed) {
   // From a vertex of a convex mesh the vertex normal spans a supporting plane: no ray
   // of the upper hemisphere can hit the mesh, so shadowing and bounces change nothing.
   const fit::Mesh cube = from_obj("cube.obj", kCube);
-  TransferOptions o;
-  o.order = 4;
-  o.rays = 256;
-  o.mode = TransferMode::unshadowed;
+  TransferOptions o{.order = 4, .rays = 256, .mode = TransferMode::unshadowed};
   const std::vector<double> free = compute_transfer(cube, o);
   o.mode = TransferMode::shadowed;
   EXPECT_EQ(compute_transfer(cube, o), free);
@@ -103,9 +96,7 @@ TEST(Transfer, RoofBlocksAlmostEverything) {
   const fit::Mesh m = from_obj("roof.obj", kPlane +
                                                "v -1000 -1000 1\nv 1000 -1000 1\nv 1000 1000 1\nv -1000 1000 1\n"
                                                "f 10 12 11\nf 10 13 12\n");
-  TransferOptions o;
-  o.order = 3;
-  o.rays = 1024;
+  TransferOptions o{.order = 3, .rays = 1024};
   const std::vector<double> shadowed = compute_transfer(m, o);
   // Centre vertex of the plane (index 4): no sample direction escapes.
   for (int i = 0; i < 9; ++i) EXPECT_EQ(shadowed[4 * 9 + i], 0.0) << "coefficient " << i;
@@ -125,10 +116,7 @@ TEST(Transfer, InterreflectionAddsLightInAnOpenCorner) {
   // wall loses light to the wall (shadowed < unshadowed) and gets some back from it.
   const fit::Mesh m = from_obj("corner.obj", kPlane +
                                                  "v -1 1 2\nv 0 1 2\nv 1 1 2\nf 7 9 12\nf 7 12 10\n");
-  TransferOptions o;
-  o.order = 3;
-  o.rays = 1024;
-  o.mode = TransferMode::unshadowed;
+  TransferOptions o{.order = 3, .rays = 1024, .mode = TransferMode::unshadowed};
   const double free = compute_transfer(m, o)[4 * 9];
   o.mode = TransferMode::shadowed;
   const double shadowed = compute_transfer(m, o)[4 * 9];
@@ -142,11 +130,7 @@ TEST(Transfer, InterreflectionAddsLightInAnOpenCorner) {
 TEST(Transfer, DeterministicAndIndependentOfThreads) {
   const fit::Mesh plane = from_obj("plane.obj", kPlane +
                                                     "v 0 0 3\nv 1 0 3\nv 0 1 3\nf 10 12 11\n");
-  TransferOptions o;
-  o.order = 4;
-  o.rays = 64;
-  o.seed = 7;
-  o.threads = 1;
+  TransferOptions o{.order = 4, .rays = 64, .seed = 7, .threads = 1};
   const std::vector<double> one = compute_transfer(plane, o);
   o.threads = 2;
   EXPECT_EQ(compute_transfer(plane, o), one);
@@ -159,10 +143,7 @@ TEST(Transfer, DeterministicAndIndependentOfThreads) {
 TEST(Transfer, RayStreamsGiveTheBytesOfSingleRays) {
   // data/spot.obj shadows itself (ears, legs): thousands of rays blocked, many grazing.
   const fit::Mesh spot = load_obj(std::string(SHTOOL_SOURCE_DIR) + "/data/spot.obj");
-  TransferOptions o;
-  o.order = 4;
-  o.rays = 64;
-  o.ray_streams = false;
+  TransferOptions o{.order = 4, .rays = 64, .ray_streams = false};
   const std::vector<double> single = compute_transfer(spot, o);
   o.ray_streams = true;
   EXPECT_EQ(compute_transfer(spot, o), single);
@@ -182,11 +163,7 @@ TEST(Transfer, InterreflectedRangesWithAGatherMatchTheWholeMesh) {
   // Two ranges simulated side by side, as two MPI ranks would: the gather step waits for
   // both ranges' rows of a bounce and hands each the whole mesh's rows in vertex order.
   const fit::Mesh m = from_obj("corner.obj", kPlane + "v -1 1 2\nv 0 1 2\nv 1 1 2\nf 7 9 12\nf 7 12 10\n");
-  TransferOptions o;
-  o.order = 3;
-  o.rays = 64;
-  o.mode = TransferMode::interreflected;
-  o.albedo = 0.7;
+  TransferOptions o{.order = 3, .rays = 64, .mode = TransferMode::interreflected, .albedo = 0.7};
   o.bounces = 3;
   const std::vector<double> whole = compute_transfer(m, o);
   const std::size_t split = 5;

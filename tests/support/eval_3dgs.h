@@ -4,6 +4,8 @@
 // colour's clamp(eval + 0.5) is left out (it hides nothing at the tests' values).
 #pragma once
 
+#include <string>
+
 #include <Eigen/Core>
 
 namespace shtool::test {
@@ -27,6 +29,19 @@ inline double eval_3dgs(int deg, const double* sh, const Eigen::Vector3d& d) {
        C3[3] * z * (2 * zz - 3 * xx - 3 * yy) * sh[12] + C3[4] * x * (4 * zz - xx - yy) * sh[13] +
        C3[5] * z * (xx - yy) * sh[14] + C3[6] * x * (xx - 3 * yy) * sh[15];
   return r;
+}
+
+// The reference implementation's PLY properties, all float: x y z nx ny nz f_dc_0..2
+// f_rest_* (channel major) opacity scale_0..2 rot_0..3, one "property" line each.
+inline std::string ply_3dgs_properties(int deg) {
+  const int rest = (deg + 1) * (deg + 1) - 1;
+  std::string h;
+  for (const char* n : {"x", "y", "z", "nx", "ny", "nz", "f_dc_0", "f_dc_1", "f_dc_2"})
+    h += std::string("property float ") + n + "\n";
+  for (int k = 0; k < 3 * rest; ++k) h += "property float f_rest_" + std::to_string(k) + "\n";
+  for (const char* n : {"opacity", "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3"})
+    h += std::string("property float ") + n + "\n";
+  return h;
 }
 
 }  // namespace shtool::test

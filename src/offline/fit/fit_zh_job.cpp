@@ -207,15 +207,8 @@ FitZhInputs read_inputs(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJob*
     if (mesh.degenerate_faces) cb.warning("skipped " + std::to_string(mesh.degenerate_faces) + " degenerate faces");
     if (mesh.zero_normals) cb.warning(std::to_string(mesh.zero_normals) + " vertices have no defined normal (+z used)");
   }
-  TransferOptions to;
-  to.order = in.order;
-  to.rays = r.rays;
-  to.seed = r.seed;
-  to.mode = r.mode;
-  to.bounces = r.bounces;
-  to.albedo = r.albedo;
-  to.threads = plan.threads;
-  to.progress = cb.simulate_progress;
+  TransferOptions to{.order = in.order, .rays = r.rays, .seed = r.seed, .mode = r.mode, .bounces = r.bounces,
+                     .albedo = r.albedo, .threads = plan.threads, .progress = cb.simulate_progress};
   const auto t0 = std::chrono::steady_clock::now();
   if (r.texture) {
     in.texels = rasterize_texels(mesh, *r.texture, r.mesh);

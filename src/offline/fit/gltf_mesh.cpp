@@ -9,6 +9,8 @@
 #include <cstdint>
 #include <exception>
 #include <limits>
+#include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -333,6 +335,55 @@ Mesh mesh_from_gltf(const tinygltf::Model& model, const std::string& bytes, cons
 Mesh load_gltf_bytes(const std::string& bytes, const std::filesystem::path& path, NormalSource normal_source) {
   const tinygltf::Model model = parse_gltf(bytes, path, /*keep_images=*/false);
   return mesh_from_gltf(model, bytes, path, normal_source, nullptr);
+}
+
+int append_buffer_view(tinygltf::Model& model, const void* bytes, std::size_t size, int target) {
+  std::vector<unsigned char>& data = model.buffers[0].data;
+  tinygltf::BufferView v;
+  v.buffer = 0;
+  v.byteOffset = data.size();
+  v.byteLength = size;
+  v.target = target;
+  const auto* p = static_cast<const unsigned char*>(bytes);
+  data.insert(data.end(), p, p + size);
+  data.resize((data.size() + 3) / 4 * 4, 0);
+  model.bufferViews.push_back(v);
+  return static_cast<int>(model.bufferViews.size()) - 1;
+}
+
+int append_float_accessor(tinygltf::Model& model, const std::vector<float>& values, int type, bool bounds) {
+  const int components = tinygltf::GetNumComponentsInType(type);
+  tinygltf::Accessor a;
+  a.bufferView = append_buffer_view(model, values.data(), values.size() * sizeof(float), TINYGLTF_TARGET_ARRAY_BUFFER);
+  a.componentType = TINYGLTF_COMPONENT_TYPE_FLOAT;
+  a.type = type;
+  a.count = values.size() / components;
+  if (bounds) {
+    a.minValues.assign(components, std::numeric_limits<double>::infinity());
+    a.maxValues.assign(components, -std::numeric_limits<double>::infinity());
+    for (std::size_t i = 0; i < values.size(); ++i) {
+      a.minValues[i % components] = std::min<double>(a.minValues[i % components], values[i]);
+      a.maxValues[i % components] = std::max<double>(a.maxValues[i % components], values[i]);
+    }
+  }
+  model.accessors.push_back(a);
+  return static_cast<int>(model.accessors.size()) - 1;
+}
+
+std::string write_single_mesh_gltf(tinygltf::Model& model, tinygltf::Mesh mesh, bool binary) {
+  model.meshes.push_back(std::move(mesh));
+  tinygltf::Node node;
+  node.mesh = 0;
+  model.nodes.push_back(node);
+  tinygltf::Scene scene;
+  scene.nodes = {0};
+  model.scenes.push_back(scene);
+  model.defaultScene = 0;
+  std::ostringstream out;
+  tinygltf::TinyGLTF writer;
+  if (!writer.WriteGltfSceneToStream(&model, out, !binary, binary) || !out)
+    throw std::runtime_error("tinygltf could not write the model");
+  return out.str();
 }
 
 }  // namespace shtool::fit

@@ -77,4 +77,16 @@ tinygltf::Model parse_gltf(const std::string& bytes, const std::filesystem::path
 Mesh mesh_from_gltf(const tinygltf::Model& model, const std::string& bytes, const std::filesystem::path& path,
                     NormalSource normals, std::vector<GltfLightNode>* lights);
 
+// Writers share one buffer (model.buffers[0], which must exist) and give every accessor a
+// view of its own, 4-byte aligned as float accessors require, without stride.
+// Appends `size` bytes as a new view for `target`; the view's index.
+int append_buffer_view(tinygltf::Model& model, const void* bytes, std::size_t size, int target);
+// A float accessor of `type` over `values` (whole elements) in a new view; with `bounds`,
+// min and max per component (POSITION must have them), taken from the floats as stored.
+// The accessor's index.
+int append_float_accessor(tinygltf::Model& model, const std::vector<float>& values, int type, bool bounds);
+// `model` with `mesh` as its only mesh, on the one node of its default scene, written as
+// glTF (`binary`: .glb, else indented JSON); std::runtime_error when tinygltf fails.
+std::string write_single_mesh_gltf(tinygltf::Model& model, tinygltf::Mesh mesh, bool binary);
+
 }  // namespace shtool::fit

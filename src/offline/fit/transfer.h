@@ -57,9 +57,9 @@ struct TransferOptions {
   // returns the whole mesh's rows (e.g. every MPI rank's rows, gathered in vertex order).
   // Every process of a job calls it the same number of times. Without it an interreflected
   // range is refused.
-  std::function<std::vector<double>(std::vector<double>)> gather_bounce;
+  std::function<std::vector<double>(std::vector<double>)> gather_bounce{};
   // Called from worker 0 only with (vertices done by all workers, total); may be empty.
-  std::function<void(std::size_t, std::size_t)> progress;
+  std::function<void(std::size_t, std::size_t)> progress{};
 };
 
 // Transfer vectors, vertex-major: result[(v - first_vertex) * order^2 + i]. Bytes do not

@@ -8,12 +8,12 @@
 #include <cstring>
 #include <limits>
 #include <numbers>
-#include <sstream>
 #include <stdexcept>
 
 #include "common/finite.h"
 #include "common/input_error.h"
 #include "common/mesh_frame.h"
+#include "fit/gltf_model.h"
 #include "shtool/orthogonal_map.h"
 #include "shtool/zh_fit_table.h"
 
@@ -32,41 +32,12 @@ class ModelBuilder {
  public:
   explicit ModelBuilder(tinygltf::Model& model) : model_(model) { model_.buffers.emplace_back(); }
 
-  int view(const void* bytes, std::size_t size, int target) {
-    std::vector<unsigned char>& data = model_.buffers[0].data;
-    tinygltf::BufferView v;
-    v.buffer = 0;
-    v.byteOffset = data.size();
-    v.byteLength = size;
-    v.target = target;
-    const auto* p = static_cast<const unsigned char*>(bytes);
-    data.insert(data.end(), p, p + size);
-    data.resize((data.size() + 3) / 4 * 4, 0);
-    model_.bufferViews.push_back(v);
-    return static_cast<int>(model_.bufferViews.size()) - 1;
-  }
+  int view(const void* bytes, std::size_t size, int target) { return append_buffer_view(model_, bytes, size, target); }
 
-  // `values` holds `components` floats per vertex; with `bounds`, min and max per
-  // component (POSITION must have them), taken from the floats as stored.
   int floats(const std::vector<float>& values, int type, bool bounds = false) {
     // A double beyond float's range (a node translation of 1e39) became inf here.
     check_finite(std::span<const float>(values), "--gltf: a vertex attribute's value");
-    const int components = tinygltf::GetNumComponentsInType(type);
-    tinygltf::Accessor a;
-    a.bufferView = view(values.data(), values.size() * sizeof(float), TINYGLTF_TARGET_ARRAY_BUFFER);
-    a.componentType = TINYGLTF_COMPONENT_TYPE_FLOAT;
-    a.type = type;
-    a.count = values.size() / components;
-    if (bounds) {
-      a.minValues.assign(components, std::numeric_limits<double>::infinity());
-      a.maxValues.assign(components, -std::numeric_limits<double>::infinity());
-      for (std::size_t i = 0; i < values.size(); ++i) {
-        a.minValues[i % components] = std::min<double>(a.minValues[i % components], values[i]);
-        a.maxValues[i % components] = std::max<double>(a.maxValues[i % components], values[i]);
-      }
-    }
-    model_.accessors.push_back(a);
-    return static_cast<int>(model_.accessors.size()) - 1;
+    return append_float_accessor(model_, values, type, bounds);
   }
 
   template <typename Index>
@@ -182,22 +153,9 @@ std::string zh_fit_glb(const Mesh& mesh, const ZhFitTable<double>& fits, std::sp
   tinygltf::Value::Object fit{
       {"order", tinygltf::Value(order)}, {"lobes", tinygltf::Value(lobes)}, {"direct", tinygltf::Value(direct)}};
   m.extras = tinygltf::Value(tinygltf::Value::Object{{"shtool_zh_fit", tinygltf::Value(std::move(fit))}});
-  model.meshes.push_back(std::move(m));
-  tinygltf::Node node;
-  node.mesh = 0;
-  model.nodes.push_back(node);
-  tinygltf::Scene scene;
-  scene.nodes = {0};
-  model.scenes.push_back(scene);
-  model.defaultScene = 0;
   model.asset.version = "2.0";
   model.asset.generator = generator;
-
-  std::ostringstream out;
-  tinygltf::TinyGLTF writer;
-  if (!writer.WriteGltfSceneToStream(&model, out, false, true) || !out)
-    throw std::runtime_error("tinygltf could not write the model");
-  return out.str();
+  return write_single_mesh_gltf(model, std::move(m), true);
 }
 
 }  // namespace shtool::fit

@@ -7,7 +7,6 @@
 #include <cstdint>
 #include <cstring>
 #include <limits>
-#include <sstream>
 #include <stdexcept>
 #include <vector>
 
@@ -174,37 +173,6 @@ struct Reader {
   }
 };
 
-// One buffer, one view per accessor (4-byte aligned, no stride).
-struct Builder {
-  tinygltf::Model& model;
-  int floats(const std::vector<float>& v, int type, bool bounds = false) {
-    std::vector<unsigned char>& data = model.buffers[0].data;
-    tinygltf::BufferView view;
-    view.buffer = 0;
-    view.byteOffset = data.size();
-    view.byteLength = v.size() * 4;
-    view.target = TINYGLTF_TARGET_ARRAY_BUFFER;
-    const auto* p = reinterpret_cast<const unsigned char*>(v.data());
-    data.insert(data.end(), p, p + v.size() * 4);
-    model.bufferViews.push_back(view);
-    const int components = tinygltf::GetNumComponentsInType(type);
-    tinygltf::Accessor a;
-    a.bufferView = static_cast<int>(model.bufferViews.size()) - 1;
-    a.componentType = TINYGLTF_COMPONENT_TYPE_FLOAT;
-    a.type = type;
-    a.count = v.size() / components;
-    if (bounds) {
-      a.minValues.assign(components, std::numeric_limits<double>::infinity());
-      a.maxValues.assign(components, -std::numeric_limits<double>::infinity());
-      for (std::size_t i = 0; i < v.size(); ++i) {
-        a.minValues[i % components] = std::min<double>(a.minValues[i % components], v[i]);
-        a.maxValues[i % components] = std::max<double>(a.maxValues[i % components], v[i]);
-      }
-    }
-    model.accessors.push_back(a);
-    return static_cast<int>(model.accessors.size()) - 1;
-  }
-};
 
 }  // namespace
 
@@ -268,7 +236,6 @@ std::string write_gltf_splats(const SplatScene& s, bool binary) {
   model.asset.version = "2.0";
   model.asset.generator = "shtool transform-splats";
   model.buffers.emplace_back();
-  Builder b{model};
   std::vector<float> rot(4 * n), scale(3 * n), opacity(n);
   for (std::size_t i = 0; i < n; ++i) {
     const float* q = &s.rotation[4 * i];
@@ -281,16 +248,16 @@ std::string write_gltf_splats(const SplatScene& s, bool binary) {
   }
   tinygltf::Primitive p;
   p.mode = TINYGLTF_MODE_POINTS;
-  p.attributes["POSITION"] = b.floats(s.position, TINYGLTF_TYPE_VEC3, true);
-  p.attributes[attribute("ROTATION")] = b.floats(rot, TINYGLTF_TYPE_VEC4);
-  p.attributes[attribute("SCALE")] = b.floats(scale, TINYGLTF_TYPE_VEC3);
-  p.attributes[attribute("OPACITY")] = b.floats(opacity, TINYGLTF_TYPE_SCALAR);
+  p.attributes["POSITION"] = fit::append_float_accessor(model, s.position, TINYGLTF_TYPE_VEC3, true);
+  p.attributes[attribute("ROTATION")] = fit::append_float_accessor(model, rot, TINYGLTF_TYPE_VEC4, false);
+  p.attributes[attribute("SCALE")] = fit::append_float_accessor(model, scale, TINYGLTF_TYPE_VEC3, false);
+  p.attributes[attribute("OPACITY")] = fit::append_float_accessor(model, opacity, TINYGLTF_TYPE_SCALAR, false);
   std::vector<float> coef(3 * n);
   for (int l = 0; l <= s.degree; ++l)
     for (int k = 0; k <= 2 * l; ++k) {
       for (std::size_t i = 0; i < n; ++i)
         for (int c = 0; c < 3; ++c) coef[3 * i + c] = s.sh[i * stride + 3 * (l * l + k) + c];
-      p.attributes[sh_attribute(l, k)] = b.floats(coef, TINYGLTF_TYPE_VEC3);
+      p.attributes[sh_attribute(l, k)] = fit::append_float_accessor(model, coef, TINYGLTF_TYPE_VEC3, false);
     }
   p.extensions[kExtension] = tinygltf::Value(tinygltf::Value::Object{
       {"kernel", tinygltf::Value(std::string("ellipse"))},
@@ -300,19 +267,7 @@ std::string write_gltf_splats(const SplatScene& s, bool binary) {
   model.extensionsUsed.push_back(kExtension);
   tinygltf::Mesh mesh;
   mesh.primitives.push_back(std::move(p));
-  model.meshes.push_back(std::move(mesh));
-  tinygltf::Node node;
-  node.mesh = 0;
-  model.nodes.push_back(node);
-  tinygltf::Scene scene;
-  scene.nodes.push_back(0);
-  model.scenes.push_back(scene);
-  model.defaultScene = 0;
-  std::ostringstream out;
-  tinygltf::TinyGLTF writer;
-  if (!writer.WriteGltfSceneToStream(&model, out, !binary, binary) || !out)
-    throw std::runtime_error("tinygltf could not write the model");
-  return out.str();
+  return fit::write_single_mesh_gltf(model, std::move(mesh), binary);
 }
 
 }  // namespace shtool::interop

@@ -36,6 +36,16 @@ void put_u64(std::string& s, std::uint64_t v) {
   put_u32(s, static_cast<std::uint32_t>(v));
   put_u32(s, static_cast<std::uint32_t>(v >> 32));
 }
+// The header bytes versions 3 and 4 share (magic to flags); its last byte differs:
+// reserved in 3, the stream count in 4.
+void put_header_start(std::string& s, std::uint32_t version, std::size_t n, int degree, int fractional_bits) {
+  put_u32(s, kMagic);
+  put_u32(s, version);
+  put_u32(s, static_cast<std::uint32_t>(n));
+  s.push_back(static_cast<char>(degree));
+  s.push_back(static_cast<char>(fractional_bits));
+  s.push_back(0);  // flags
+}
 
 std::size_t sh_dim(int degree) { return static_cast<std::size_t>((degree + 1) * (degree + 1) - 1); }
 
@@ -320,12 +330,7 @@ std::string write_spz(const SplatScene& s, const SpzWriteOptions& o, int threads
   std::string out;
   if (o.version == 3) {
     std::string plain;
-    put_u32(plain, kMagic);
-    put_u32(plain, 3);
-    put_u32(plain, static_cast<std::uint32_t>(n));
-    plain.push_back(static_cast<char>(s.degree));
-    plain.push_back(static_cast<char>(fractional_bits));
-    plain.push_back(0);  // flags
+    put_header_start(plain, 3, n, s.degree, fractional_bits);
     plain.push_back(0);  // reserved
     for (const std::string& b : blocks) plain += b;
     z_stream zs{};
@@ -364,12 +369,7 @@ std::string write_spz(const SplatScene& s, const SpzWriteOptions& o, int threads
   for (const std::string& p : problems)
     if (!p.empty()) throw InputError(p);
   std::erase_if(packed, [](const std::string& z) { return z.empty(); });
-  put_u32(out, kMagic);
-  put_u32(out, 4);
-  put_u32(out, static_cast<std::uint32_t>(n));
-  out.push_back(static_cast<char>(s.degree));
-  out.push_back(static_cast<char>(fractional_bits));
-  out.push_back(0);  // flags
+  put_header_start(out, 4, n, s.degree, fractional_bits);
   out.push_back(static_cast<char>(packed.size()));
   put_u32(out, 32);  // table of contents right after the header: no extensions
   out.append(12, '\0');

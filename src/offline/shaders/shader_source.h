@@ -41,9 +41,9 @@ struct ShaderRequest {
   int order = 3;                                    // SH order N (bands 0..N-1)
   ShaderPrecision precision = ShaderPrecision::float32;
   int zh_lobes = 4;                                 // zh-shade: lobes per point
-  std::string command;                              // recorded in the provenance header
+  std::string command{};                            // recorded in the provenance header
   // zhf-rotate, zhf-tailored-rotate: the lobe table (covering the order) and the CRC-32 of its file.
-  std::shared_ptr<const ZhfLobes> lobes;
+  std::shared_ptr<const ZhfLobes> lobes{};
   std::uint32_t lobes_crc = 0;
 };
 

@@ -102,13 +102,8 @@ WrinkleReport run_fit_wrinkles(const WrinkleRequest& r) {
   PhaseTimer timer;
   const std::vector<double> transfer = simulate_transfer(grid, {r.order, r.rays, r.seed, r.threads});
   report.simulation_seconds = timer.lap();
-  WrinkleFitOptions options;
-  options.order = r.order;
-  options.lobes = r.lobes;
-  options.seed = r.seed;
-  options.threads = r.threads;
-  options.max_evaluations = r.max_evaluations;
-  options.optimizer = r.optimizer;
+  const WrinkleFitOptions options{.order = r.order, .lobes = r.lobes, .seed = r.seed, .threads = r.threads,
+                                  .max_evaluations = r.max_evaluations, .optimizer = r.optimizer};
   const WrinkleFit fit = fit_wrinkles(grid, transfer, options);
   report.fit_seconds = timer.lap();
   report.errors = fit.errors;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <initializer_list>
 #include <numbers>
 
 #include "precondition.h"
@@ -34,6 +35,14 @@ Vec3<T> unit_or_z(const Vec3<T>& v) {
   return v / length;
 }
 
+// The value among `values` that name_of names `name`: the inverse of the *_name functions.
+template <class E, class NameOf>
+std::optional<E> parse_name(std::string_view name, std::initializer_list<E> values, NameOf name_of) noexcept {
+  for (const E e : values)
+    if (name_of(e) == name) return e;
+  return std::nullopt;
+}
+
 }  // namespace
 
 std::string_view probe_encoding_name(ProbeEncoding encoding) noexcept {
@@ -46,9 +55,7 @@ std::string_view probe_encoding_name(ProbeEncoding encoding) noexcept {
 }
 
 std::optional<ProbeEncoding> parse_probe_encoding(std::string_view name) noexcept {
-  for (const ProbeEncoding e : {ProbeEncoding::l2, ProbeEncoding::l1, ProbeEncoding::zh3})
-    if (probe_encoding_name(e) == name) return e;
-  return std::nullopt;
+  return parse_name(name, {ProbeEncoding::l2, ProbeEncoding::l1, ProbeEncoding::zh3}, probe_encoding_name);
 }
 
 std::string_view zh3_axis_name(Zh3Axis axis) noexcept {
@@ -56,9 +63,7 @@ std::string_view zh3_axis_name(Zh3Axis axis) noexcept {
 }
 
 std::optional<Zh3Axis> parse_zh3_axis(std::string_view name) noexcept {
-  for (const Zh3Axis a : {Zh3Axis::luminance, Zh3Axis::per_channel})
-    if (zh3_axis_name(a) == name) return a;
-  return std::nullopt;
+  return parse_name(name, {Zh3Axis::luminance, Zh3Axis::per_channel}, zh3_axis_name);
 }
 
 std::string_view zh3_fit_name(Zh3Fit fit) noexcept {
@@ -66,9 +71,7 @@ std::string_view zh3_fit_name(Zh3Fit fit) noexcept {
 }
 
 std::optional<Zh3Fit> parse_zh3_fit(std::string_view name) noexcept {
-  for (const Zh3Fit f : {Zh3Fit::explicit_fit, Zh3Fit::hallucinated})
-    if (zh3_fit_name(f) == name) return f;
-  return std::nullopt;
+  return parse_name(name, {Zh3Fit::explicit_fit, Zh3Fit::hallucinated}, zh3_fit_name);
 }
 
 template <class T>

@@ -26,56 +26,39 @@ std::mutex& fftw_planner_mutex();
 template <class T>
 struct Fftw;
 
-template <>
-struct Fftw<double> {
-  using Plan = fftw_plan;
-  using Complex = fftw_complex;
-  static void* alloc(std::size_t bytes) { return fftw_malloc(bytes); }
-  static void release(void* p) { fftw_free(p); }
-  // 2D real transforms (Fourier products).
-  static Plan c2r_2d(int n0, int n1, Complex* in, double* out) {
-    return fftw_plan_dft_c2r_2d(n0, n1, in, out, kFftwPlanFlags);
-  }
-  static Plan r2c_2d(int n0, int n1, double* in, Complex* out) {
-    return fftw_plan_dft_r2c_2d(n0, n1, in, out, kFftwPlanFlags);
-  }
-  static void run_c2r(Plan p, Complex* in, double* out) { fftw_execute_dft_c2r(p, in, out); }
-  static void run_r2c(Plan p, double* in, Complex* out) { fftw_execute_dft_r2c(p, in, out); }
-  // `howmany` 1D transforms of length n; complex side strided (stride `cstride`,
-  // distance 1), real side contiguous (distance n) (grid products).
-  static Plan c2r_many(int n, int howmany, Complex* in, int cstride, double* out) {
-    return fftw_plan_many_dft_c2r(1, &n, howmany, in, nullptr, cstride, 1, out, nullptr, 1, n, kFftwPlanFlags);
-  }
-  static Plan r2c_many(int n, int howmany, double* in, Complex* out, int cstride) {
-    return fftw_plan_many_dft_r2c(1, &n, howmany, in, nullptr, 1, n, out, nullptr, cstride, 1, kFftwPlanFlags);
-  }
-  static void execute(Plan p) { fftw_execute(p); }
-  static void destroy(Plan p) { fftw_destroy_plan(p); }
-};
+// One specialisation per FFTW precision, its functions named by FFTW's own prefix (fftw_,
+// fftwf_), the way fftw3.h declares them (FFTW_DEFINE_API): the two stay the same binding.
+//   c2r_2d, r2c_2d: 2D real transforms (Fourier products).
+//   c2r_many, r2c_many: `howmany` 1D transforms of length n; complex side strided (stride
+//   `cstride`, distance 1), real side contiguous (distance n) (grid products).
+#define SHTOOL_FFTW_TRAITS(X, R)                                                                        \
+  template <>                                                                                           \
+  struct Fftw<R> {                                                                                      \
+    using Plan = X##plan;                                                                               \
+    using Complex = X##complex;                                                                         \
+    static void* alloc(std::size_t bytes) { return X##malloc(bytes); }                                  \
+    static void release(void* p) { X##free(p); }                                                        \
+    static Plan c2r_2d(int n0, int n1, Complex* in, R* out) {                                           \
+      return X##plan_dft_c2r_2d(n0, n1, in, out, kFftwPlanFlags);                                       \
+    }                                                                                                   \
+    static Plan r2c_2d(int n0, int n1, R* in, Complex* out) {                                           \
+      return X##plan_dft_r2c_2d(n0, n1, in, out, kFftwPlanFlags);                                       \
+    }                                                                                                   \
+    static void run_c2r(Plan p, Complex* in, R* out) { X##execute_dft_c2r(p, in, out); }                \
+    static void run_r2c(Plan p, R* in, Complex* out) { X##execute_dft_r2c(p, in, out); }                \
+    static Plan c2r_many(int n, int howmany, Complex* in, int cstride, R* out) {                        \
+      return X##plan_many_dft_c2r(1, &n, howmany, in, nullptr, cstride, 1, out, nullptr, 1, n, kFftwPlanFlags); \
+    }                                                                                                   \
+    static Plan r2c_many(int n, int howmany, R* in, Complex* out, int cstride) {                        \
+      return X##plan_many_dft_r2c(1, &n, howmany, in, nullptr, 1, n, out, nullptr, cstride, 1, kFftwPlanFlags); \
+    }                                                                                                   \
+    static void execute(Plan p) { X##execute(p); }                                                      \
+    static void destroy(Plan p) { X##destroy_plan(p); }                                                 \
+  };
 
-template <>
-struct Fftw<float> {
-  using Plan = fftwf_plan;
-  using Complex = fftwf_complex;
-  static void* alloc(std::size_t bytes) { return fftwf_malloc(bytes); }
-  static void release(void* p) { fftwf_free(p); }
-  static Plan c2r_2d(int n0, int n1, Complex* in, float* out) {
-    return fftwf_plan_dft_c2r_2d(n0, n1, in, out, kFftwPlanFlags);
-  }
-  static Plan r2c_2d(int n0, int n1, float* in, Complex* out) {
-    return fftwf_plan_dft_r2c_2d(n0, n1, in, out, kFftwPlanFlags);
-  }
-  static void run_c2r(Plan p, Complex* in, float* out) { fftwf_execute_dft_c2r(p, in, out); }
-  static void run_r2c(Plan p, float* in, Complex* out) { fftwf_execute_dft_r2c(p, in, out); }
-  static Plan c2r_many(int n, int howmany, Complex* in, int cstride, float* out) {
-    return fftwf_plan_many_dft_c2r(1, &n, howmany, in, nullptr, cstride, 1, out, nullptr, 1, n, kFftwPlanFlags);
-  }
-  static Plan r2c_many(int n, int howmany, float* in, Complex* out, int cstride) {
-    return fftwf_plan_many_dft_r2c(1, &n, howmany, in, nullptr, 1, n, out, nullptr, cstride, 1, kFftwPlanFlags);
-  }
-  static void execute(Plan p) { fftwf_execute(p); }
-  static void destroy(Plan p) { fftwf_destroy_plan(p); }
-};
+SHTOOL_FFTW_TRAITS(fftw_, double)
+SHTOOL_FFTW_TRAITS(fftwf_, float)
+#undef SHTOOL_FFTW_TRAITS
 
 // Zero-initialised buffer from fftw_malloc: SIMD-aligned, and equally aligned for every
 // buffer, which the new-array execute interface requires.

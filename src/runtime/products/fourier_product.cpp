@@ -337,30 +337,8 @@ struct FourierProduct<T>::Impl {
 };
 
 template <class T>
-FourierProduct<T>::FourierProduct(int order, int inputs)
-    : impl_(std::make_unique<Impl>(order, inputs)) {}
-template <class T>
-FourierProduct<T>::~FourierProduct() = default;
-template <class T>
-FourierProduct<T>::FourierProduct(FourierProduct&&) noexcept = default;
-template <class T>
-FourierProduct<T>& FourierProduct<T>::operator=(FourierProduct&&) noexcept = default;
-
-template <class T>
-int FourierProduct<T>::order() const {
-  return impl_->n;
-}
-template <class T>
-int FourierProduct<T>::inputs() const {
-  return impl_->inputs;
-}
-template <class T>
-int FourierProduct<T>::grid_theta() const {
-  return impl_->nodes[0].m_theta;
-}
-template <class T>
-int FourierProduct<T>::grid_phi() const {
-  return impl_->nodes[0].m_phi;
+FourierProduct<T>::FourierProduct(int order, int inputs) : impl_(new Impl(order, inputs), detail::delete_impl<Impl>) {
+  set_sizes(impl_->n, impl_->inputs, impl_->nodes[0].m_theta, impl_->nodes[0].m_phi);
 }
 
 template <class T>

@@ -586,35 +586,15 @@ GridProduct<T>::GridProduct(int order, int inputs, GridAzimuth azimuth) {
                                 std::to_string(kMaxProductInputs) + ")");
   if (azimuth == GridAzimuth::automatic)
     azimuth = order <= kDirectAzimuthMaxOrder<T> ? GridAzimuth::direct : GridAzimuth::fft;
+  Impl* impl = nullptr;
   if (azimuth == GridAzimuth::direct)
-    impl_ = std::make_unique<DirectGrid<T>>(order, inputs);
+    impl = new DirectGrid<T>(order, inputs);
   else
-    impl_ = std::make_unique<FftGrid<T>>(order, inputs);
+    impl = new FftGrid<T>(order, inputs);
+  impl_ = detail::ImplPtr<Impl>(impl, detail::delete_impl<Impl>);
+  set_sizes(impl->order, impl->inputs, impl->rings, impl->nphi);
 }
 
-template <class T>
-GridProduct<T>::~GridProduct() = default;
-template <class T>
-GridProduct<T>::GridProduct(GridProduct&&) noexcept = default;
-template <class T>
-GridProduct<T>& GridProduct<T>::operator=(GridProduct&&) noexcept = default;
-
-template <class T>
-int GridProduct<T>::order() const {
-  return impl_->order;
-}
-template <class T>
-int GridProduct<T>::inputs() const {
-  return impl_->inputs;
-}
-template <class T>
-int GridProduct<T>::grid_theta() const {
-  return impl_->rings;
-}
-template <class T>
-int GridProduct<T>::grid_phi() const {
-  return impl_->nphi;
-}
 template <class T>
 GridAzimuth GridProduct<T>::azimuth() const {
   return impl_->azimuth;
