@@ -23,9 +23,9 @@ inline constexpr int kMaxFourierProductOrder = 64;
 // Most inputs of one multiple product (k - 1 <= 16, i.e. k <= 17).
 inline constexpr int kMaxProductInputs = 16;
 
-template <class T>
 // order(), inputs(); grid_theta() x grid_phi(): the grid of the top-level convolution.
 // Move-only.
+template <class T>
 class FourierProduct : public detail::ProductSizes {
  public:
   // Preconditions: 1 <= order <= kMaxFourierProductOrder, 1 <= inputs <= kMaxProductInputs.

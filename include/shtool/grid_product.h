@@ -40,9 +40,9 @@ enum class GridAzimuth {
   fft,        // FFTW real transforms: nphi an FFT-friendly even length >= D + 1
 };
 
-template <class T>
 // order(), inputs(); grid_theta() x grid_phi(): Gauss-Legendre rings x azimuthal points.
 // Move-only.
+template <class T>
 class GridProduct : public detail::ProductSizes {
  public:
   // Preconditions: 1 <= order <= kMaxFourierProductOrder, 1 <= inputs <= kMaxProductInputs
