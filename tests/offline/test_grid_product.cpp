@@ -161,9 +161,12 @@ TEST_P(GridAliasing, AliasingReuseAndDeterminism) {
   GridProduct<double>(order, 2, GetParam()).multiply(f[0], f[1], d);  // fresh object: same bits
   EXPECT_EQ(a, d);
   // Moved: the new owner has the sizes and gives the same bits.
-  const GridProduct<double> moved = std::move(product);
+  GridProduct<double> moved = std::move(product);
   EXPECT_EQ(moved.order(), order);
   EXPECT_EQ(moved.inputs(), 2);
+  std::vector<double> m(sh_count(order));
+  moved.multiply(f[0], f[1], m);
+  EXPECT_EQ(a, m);
   GridProduct<double> assigned(3, 3, GetParam());
   assigned = GridProduct<double>(order, 2, GetParam());
   std::vector<double> e(sh_count(order));

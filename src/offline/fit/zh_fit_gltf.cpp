@@ -32,8 +32,6 @@ class ModelBuilder {
  public:
   explicit ModelBuilder(tinygltf::Model& model) : model_(model) { model_.buffers.emplace_back(); }
 
-  int view(const void* bytes, std::size_t size, int target) { return append_buffer_view(model_, bytes, size, target); }
-
   int floats(const std::vector<float>& values, int type, bool bounds = false) {
     // A double beyond float's range (a node translation of 1e39) became inf here.
     check_finite(std::span<const float>(values), "--gltf: a vertex attribute's value");
@@ -47,7 +45,7 @@ class ModelBuilder {
     for (const Eigen::Vector3i& t : triangles)
       for (int c = 0; c < 3; ++c) index.push_back(static_cast<Index>(t[c]));
     tinygltf::Accessor a;
-    a.bufferView = view(index.data(), index.size() * sizeof(Index), TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER);
+    a.bufferView = append_buffer_view(model_, index.data(), index.size() * sizeof(Index), TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER);
     a.componentType = component_type;
     a.type = TINYGLTF_TYPE_SCALAR;
     a.count = index.size();
