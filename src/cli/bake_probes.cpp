@@ -10,10 +10,8 @@
 
 namespace shtool::cli {
 
-void setup_bake_probes(CLI::App& app) {
+void setup_bake_probes(CLI::App* sub) {
   auto req = std::make_shared<probes::BakeProbesRequest>();
-  CLI::App* sub = app.add_subcommand(
-      "bake-probes", "Bake a grid of SH irradiance probes (incident radiance, RGB) from a glTF or OBJ scene by path tracing");
   sub->add_option("scene", req->scene, "glTF 2.0 (.gltf/.glb) or OBJ scene")->required();
   add_up_option(sub, req->up);
   sub->add_option("--grid", req->grid, "probes along x, y, z: NX,NY,NZ")->required();

@@ -76,26 +76,27 @@ CLI::Option* add_table_format_option(CLI::App* app, TableEncoding& target,
 // shortest representation that reads back to the same bits (round-trip exact).
 void print_json(const nlohmann::json& value);
 
-// Each subcommand registers itself here; see main.cpp.
-void setup_eval(CLI::App& app);
-void setup_inspect(CLI::App& app);
-void setup_gen_tensors(CLI::App& app);
-void setup_gen_shader(CLI::App& app);
-void setup_render(CLI::App& app);
-void setup_deform(CLI::App& app);
-void setup_fit_wrinkles(CLI::App& app);
-void setup_fit_glossy(CLI::App& app);
-void setup_rotate(CLI::App& app);
-void setup_product(CLI::App& app);
-void setup_fit_zh(CLI::App& app);
-void setup_merge(CLI::App& app);
-void setup_search_lobes(CLI::App& app);
-void setup_project_env(CLI::App& app);
-void setup_light(CLI::App& app);
-void setup_transform_splats(CLI::App& app);
-void setup_export_light(CLI::App& app);
-void setup_import_light(CLI::App& app);
-void setup_bake_probes(CLI::App& app);
-void setup_export_web(CLI::App& app);
+// Each subcommand adds its options and callback to `sub`, which main.cpp creates with
+// its name and help.
+void setup_eval(CLI::App* sub);
+void setup_inspect(CLI::App* sub);
+void setup_gen_tensors(CLI::App* sub);
+void setup_gen_shader(CLI::App* sub);
+void setup_render(CLI::App* sub);
+void setup_deform(CLI::App* sub);
+void setup_fit_wrinkles(CLI::App* sub);
+void setup_fit_glossy(CLI::App* sub);
+void setup_rotate(CLI::App* sub);
+void setup_product(CLI::App* sub);
+void setup_fit_zh(CLI::App* sub);
+void setup_merge(CLI::App* sub);
+void setup_search_lobes(CLI::App* sub);
+void setup_project_env(CLI::App* sub);
+void setup_light(CLI::App* sub);
+void setup_transform_splats(CLI::App* sub);
+void setup_export_light(CLI::App* sub);
+void setup_import_light(CLI::App* sub);
+void setup_bake_probes(CLI::App* sub);
+void setup_export_web(CLI::App* sub);
 
 }  // namespace shtool::cli

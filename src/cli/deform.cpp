@@ -9,9 +9,8 @@
 
 namespace shtool::cli {
 
-void setup_deform(CLI::App& app) {
+void setup_deform(CLI::App* sub) {
   auto req = std::make_shared<deform::DeformRequest>();
-  CLI::App* sub = app.add_subcommand("deform", "Rotate a ZH fit's lobes from its rest mesh into a posed mesh's frames");
   sub->add_option("fit", req->fit, "zh-fit table baked on the rest mesh (fit-zh --out)")->required();
   sub->add_option("--rest", req->rest, "the rest mesh (OBJ or glTF) the fit was baked on")->required();
   sub->add_option("--pose", req->pose, "the posed mesh (OBJ or glTF, the rest mesh's topology)")->required();

@@ -34,9 +34,8 @@ void run_eval(const EvalOptions& opt) {
 
 }  // namespace
 
-void setup_eval(CLI::App& app) {
+void setup_eval(CLI::App* sub) {
   auto opt = std::make_shared<EvalOptions>();
-  CLI::App* sub = app.add_subcommand("eval", "Print all N^2 real SH values at a direction (JSON)");
   sub->add_option("--order", opt->order, "SH order N (bands 0..N-1)")->required();
   sub->add_option("--dir", opt->dir, "direction x,y,z (normalised before evaluation)")->required();
   sub->callback([opt]() { run_eval(*opt); });

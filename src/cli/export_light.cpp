@@ -39,12 +39,11 @@ interop::FrameMap frame_of(const LightOptions& o) {
 
 }  // namespace
 
-void setup_export_light(CLI::App& app) {
+void setup_export_light(CLI::App* sub) {
   auto o = std::make_shared<LightOptions>();
   auto in = std::make_shared<std::filesystem::path>();
   auto out = std::make_shared<std::filesystem::path>();
   auto intensity = std::make_shared<double>(1);
-  CLI::App* sub = app.add_subcommand("export-light", "Write SH lighting (project-env / light JSON) in an engine's convention");
   sub->add_option("light", *in, "lighting JSON (shtool project-env / light)")->required();
   sub->add_option("--out", *out, "output file")->required();
   sub->add_option("--intensity", *intensity, "scale (the format's intensity field where it has one)")->capture_default_str();
@@ -65,12 +64,11 @@ void setup_export_light(CLI::App& app) {
   });
 }
 
-void setup_import_light(CLI::App& app) {
+void setup_import_light(CLI::App* sub) {
   auto o = std::make_shared<LightOptions>();
   auto in = std::make_shared<std::filesystem::path>();
   auto json = std::make_shared<std::filesystem::path>();
   auto quantity = std::make_shared<lighting::Quantity>(lighting::Quantity::radiance);
-  CLI::App* sub = app.add_subcommand("import-light", "Read SH lighting in an engine's convention into shtool's lighting JSON");
   sub->add_option("file", *in, "the engine's file (as export-light writes it)")->required();
   sub->add_option("--json", *json, "output lighting JSON")->required();
   add_enum_option(sub, "--quantity", *quantity, lighting::quantity_names(),

@@ -11,11 +11,9 @@
 
 namespace shtool::cli {
 
-void setup_export_web(CLI::App& app) {
+void setup_export_web(CLI::App* sub) {
   auto req = std::make_shared<web::ExportWebRequest>();
   auto camera = std::make_shared<std::string>();
-  CLI::App* sub = app.add_subcommand(
-      "export-web", "Write a folder with a web page (three.js) showing a mesh shaded by its ZH fit, the light turning live");
   sub->add_option("mesh", req->mesh, "mesh, OBJ or glTF (the one the fit was baked on)")->required();
   sub->add_option("--fit", req->fit, "zh-fit table (fit-zh --out), per vertex")->required();
   sub->add_option("--light", req->light, "lighting JSON (project-env --json, light --json), radiance, RGB")

@@ -10,10 +10,8 @@
 
 namespace shtool::cli {
 
-void setup_fit_glossy(CLI::App& app) {
+void setup_fit_glossy(CLI::App* sub) {
   auto req = std::make_shared<glossy::GlossyRequest>();
-  CLI::App* sub = app.add_subcommand(
-      "fit-glossy", "Glossy PRT on a mesh: transfer matrices, BRDF-specialised by an SVD, each row fitted with ZH lobes");
   sub->add_option("mesh", req->mesh, "OBJ or glTF mesh")->required();
   add_enum_option(sub, "--brdf", req->brdf.model, glossy::brdf_model_names(), "phong or cook-torrance",
                   "cook-torrance");

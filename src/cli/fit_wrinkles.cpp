@@ -9,10 +9,8 @@
 
 namespace shtool::cli {
 
-void setup_fit_wrinkles(CLI::App& app) {
+void setup_fit_wrinkles(CLI::App* sub) {
   auto req = std::make_shared<wrinkles::WrinkleRequest>();
-  CLI::App* sub = app.add_subcommand(
-      "fit-wrinkles", "Simulate the sinusoidal-groove wrinkle model and fit its (x, d) map of ZH lobes");
   sub->add_option("--order", req->order, "SH order n (3..8)")->capture_default_str();
   sub->add_option("--lobes", req->lobes, "ZH lobes per point (1..4)")->capture_default_str();
   sub->add_option("--grid", req->grid, "nodes per axis of the (x, d) map")->capture_default_str();

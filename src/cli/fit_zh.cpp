@@ -32,9 +32,8 @@ std::function<void(std::size_t, std::size_t)> progress_bar(const std::string& la
 
 }  // namespace
 
-void setup_fit_zh(CLI::App& app) {
+void setup_fit_zh(CLI::App* sub) {
   auto opt = std::make_shared<fit::FitZhRequest>();
-  CLI::App* sub = app.add_subcommand("fit-zh", "Simulate diffuse PRT transfer on a mesh and fit ZH lobes per vertex");
   sub->add_option("mesh", opt->mesh, "OBJ or glTF mesh (OBJ polygons are triangulated)");
   sub->add_option("--transfer", opt->transfer, "fit SH vectors from JSON {\"order\": n, \"vectors\": [[n^2], ...]}");
   sub->add_option("--out", opt->out, "output table (default: <input stem>.zh.shtb in the current folder)");

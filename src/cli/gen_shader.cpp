@@ -12,10 +12,9 @@
 
 namespace shtool::cli {
 
-void setup_gen_shader(CLI::App& app) {
+void setup_gen_shader(CLI::App* sub) {
   auto req = std::make_shared<GenShaderRequest>();
   auto lobes_given = std::make_shared<bool>(false);
-  CLI::App* sub = app.add_subcommand("gen-shader", "Generate a GLSL or HLSL include file of an SH operation");
   add_enum_option(sub, "--lang", req->shader.language,
                   {{"glsl", ShaderLanguage::glsl}, {"hlsl", ShaderLanguage::hlsl}}, "shader language", "")
       ->required();

@@ -10,10 +10,9 @@
 
 namespace shtool::cli {
 
-void setup_gen_tensors(CLI::App& app) {
+void setup_gen_tensors(CLI::App* sub) {
   auto req = std::make_shared<GenTensorsRequest>();
   auto what = std::make_shared<std::string>("rotation,tripling,fourier");
-  CLI::App* sub = app.add_subcommand("gen-tensors", "Generate tensor and rotation tables");
   sub->add_option("--order", req->order, "SH order N (bands 0..N-1)")->capture_default_str();
   sub->add_option("--out", req->out, "output folder")->capture_default_str();
   sub->add_option("--what", *what,

@@ -113,10 +113,8 @@ void run_inspect(const InspectOptions& opt) {
 
 }  // namespace
 
-void setup_inspect(CLI::App& app) {
+void setup_inspect(CLI::App* sub) {
   auto opt = std::make_shared<InspectOptions>();
-  CLI::App* sub = app.add_subcommand(
-      "inspect", "Print a table's header and a summary of its arrays, verifying every checksum");
   sub->add_option("table", opt->table, "table file (binary or JSON encoding)")->required();
   sub->add_flag("--json", opt->as_json, "print one JSON object: header, summary, checksums_ok");
   sub->callback([opt]() { run_inspect(*opt); });

@@ -19,12 +19,11 @@ std::array<double, 3> triple(const std::string& text, const std::string& what) {
 
 }  // namespace
 
-void setup_light(CLI::App& app) {
+void setup_light(CLI::App* sub) {
   auto opt = std::make_shared<lighting::LightRequest>();
   auto spec = std::make_shared<lighting::LightSpec>();
   auto text = std::make_shared<std::array<std::string, 3>>();  // dir, color, ground
   auto half = std::make_shared<double>(0);
-  CLI::App* sub = app.add_subcommand("light", "Analytic lights (directional, cone, sphere, hemisphere, constant) as SH");
   CLI::Option* type = add_enum_option(sub, "--type", spec->type, lighting::light_type_names(),
                                       "directional, cone, sphere, hemisphere or constant", "directional");
   CLI::Option* dir = sub->add_option("--dir", (*text)[0], "light direction x,y,z (shtool's z-up frame)");

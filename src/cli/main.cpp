@@ -1,5 +1,5 @@
 // shtool: one executable, one subcommand per file in src/cli/. Each file registers its
-// options with setup_<name>(app) and does its work through the libraries; errors are
+// options with setup_<name>(sub) and does its work through the libraries; errors are
 // turned into a message and an exit code here, in one place.
 #include <exception>
 #include <iostream>
@@ -16,26 +16,37 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", std::string("shtool ") + shtool::kVersion);
   // 0..1 rather than exactly 1, so that an unknown subcommand is reported by name.
   app.require_subcommand(0, 1);
-  shtool::cli::setup_eval(app);
-  shtool::cli::setup_inspect(app);
-  shtool::cli::setup_gen_tensors(app);
-  shtool::cli::setup_gen_shader(app);
-  shtool::cli::setup_render(app);
-  shtool::cli::setup_deform(app);
-  shtool::cli::setup_fit_wrinkles(app);
-  shtool::cli::setup_fit_glossy(app);
-  shtool::cli::setup_rotate(app);
-  shtool::cli::setup_product(app);
-  shtool::cli::setup_fit_zh(app);
-  shtool::cli::setup_merge(app);
-  shtool::cli::setup_search_lobes(app);
-  shtool::cli::setup_project_env(app);
-  shtool::cli::setup_light(app);
-  shtool::cli::setup_transform_splats(app);
-  shtool::cli::setup_export_light(app);
-  shtool::cli::setup_import_light(app);
-  shtool::cli::setup_bake_probes(app);
-  shtool::cli::setup_export_web(app);
+  // The subcommands in the order --help lists them, each with its one-line help; each
+  // file's setup_<name> adds its options and its callback.
+  struct Subcommand {
+    const char* name;
+    const char* help;
+    void (*setup)(CLI::App*);
+  };
+  using namespace shtool::cli;
+  static constexpr Subcommand kSubcommands[] = {
+      {"eval", "Print all N^2 real SH values at a direction (JSON)", setup_eval},
+      {"inspect", "Print a table's header and a summary of its arrays, verifying every checksum", setup_inspect},
+      {"gen-tensors", "Generate tensor and rotation tables", setup_gen_tensors},
+      {"gen-shader", "Generate a GLSL or HLSL include file of an SH operation", setup_gen_shader},
+      {"render", "Render a mesh shaded by its transfer or ZH fit under SH lighting", setup_render},
+      {"deform", "Rotate a ZH fit's lobes from its rest mesh into a posed mesh's frames", setup_deform},
+      {"fit-wrinkles", "Simulate the sinusoidal-groove wrinkle model and fit its (x, d) map of ZH lobes", setup_fit_wrinkles},
+      {"fit-glossy", "Glossy PRT on a mesh: transfer matrices, BRDF-specialised by an SVD, each row fitted with ZH lobes", setup_fit_glossy},
+      {"rotate", "Rotate an SH vector: g(w) = f(R^-1 w) (JSON)", setup_rotate},
+      {"product", "Product of 2 to 8 SH functions truncated to order N (JSON in, JSON out). Input: {\"inputs\": [[N^2 coefficients], ...]}; output: {\"order\": N, \"coefficients\": [...]}", setup_product},
+      {"fit-zh", "Simulate diffuse PRT transfer on a mesh and fit ZH lobes per vertex", setup_fit_zh},
+      {"merge", "Join the partial tables of fit-zh --shard K/N or bake-probes --shard K/N into one table", setup_merge},
+      {"search-lobes", "Genetic search for sparse zonal-harmonic factorisations ([1]): lobe directions whose A^_l = Y_l^-1 has many zeros, per band or shared across bands. See docs/lobes.md.", setup_search_lobes},
+      {"project-env", "Project an HDR environment image (equirect or cubemap) onto SH", setup_project_env},
+      {"light", "Analytic lights (directional, cone, sphere, hemisphere, constant) as SH", setup_light},
+      {"transform-splats", "Convert a 3D Gaussian Splatting scene between .ply, .spz, .gltf and .glb, optionally rotated, scaled and moved, its SH colours included", setup_transform_splats},
+      {"export-light", "Write SH lighting (project-env / light JSON) in an engine's convention", setup_export_light},
+      {"import-light", "Read SH lighting in an engine's convention into shtool's lighting JSON", setup_import_light},
+      {"bake-probes", "Bake a grid of SH irradiance probes (incident radiance, RGB) from a glTF or OBJ scene by path tracing", setup_bake_probes},
+      {"export-web", "Write a folder with a web page (three.js) showing a mesh shaded by its ZH fit, the light turning live", setup_export_web},
+  };
+  for (const Subcommand& s : kSubcommands) s.setup(app.add_subcommand(s.name, s.help));
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -15,10 +15,8 @@
 
 namespace shtool::cli {
 
-void setup_merge(CLI::App& app) {
+void setup_merge(CLI::App* sub) {
   auto opt = std::make_shared<fit::MergeRequest>();
-  CLI::App* sub = app.add_subcommand(
-      "merge", "Join the partial tables of fit-zh --shard K/N or bake-probes --shard K/N into one table");
   sub->add_option("parts", opt->parts, "partial tables, every shard 0..N-1 once, in any order")->required();
   sub->add_option("--out", opt->out, "the merged table")->required();
   add_table_format_option(sub, opt->encoding);

@@ -80,12 +80,8 @@ void run_product(const ProductOptions& opt) {
 
 }  // namespace
 
-void setup_product(CLI::App& app) {
+void setup_product(CLI::App* sub) {
   auto opt = std::make_shared<ProductOptions>();
-  CLI::App* sub = app.add_subcommand(
-      "product",
-      "Product of 2 to 8 SH functions truncated to order N (JSON in, JSON out). Input: "
-      "{\"inputs\": [[N^2 coefficients], ...]}; output: {\"order\": N, \"coefficients\": [...]}");
   sub->add_option("--order", opt->order, "SH order N (bands 0..N-1)")->required();
   sub->add_option("--method", opt->method,
                   "auto (fastest at this order: tripling below order 7, grid from 7 on), tripling "

@@ -11,10 +11,9 @@
 
 namespace shtool::cli {
 
-void setup_project_env(CLI::App& app) {
+void setup_project_env(CLI::App* sub) {
   auto opt = std::make_shared<lighting::ProjectEnvRequest>();
   auto cutoff = std::make_shared<double>(0);
-  CLI::App* sub = app.add_subcommand("project-env", "Project an HDR environment image (equirect or cubemap) onto SH");
   sub->add_option("image", opt->image, "EXR, HDR, PNG or JPEG; for --layout faces a pattern with %s (px nx py ny pz nz)")
       ->required();
   sub->add_option("--order", opt->order, "SH order N (bands 0..N-1)")->capture_default_str();

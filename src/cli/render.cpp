@@ -11,10 +11,9 @@
 
 namespace shtool::cli {
 
-void setup_render(CLI::App& app) {
+void setup_render(CLI::App* sub) {
   auto req = std::make_shared<render::RenderRequest>();
   auto camera = std::make_shared<std::string>();
-  CLI::App* sub = app.add_subcommand("render", "Render a mesh shaded by its transfer or ZH fit under SH lighting");
   sub->add_option("mesh", req->mesh, "mesh, OBJ or glTF (the one the transfer or fit was baked on)")->required();
   sub->add_option("--pose", req->pose, "posed mesh (OBJ or glTF, the rest mesh's topology): render it with the fit or "
                                        "transfer rotated into its frames, without re-simulation");

@@ -108,9 +108,8 @@ void run_rotate(const RotateOptions& opt) {
 
 }  // namespace
 
-void setup_rotate(CLI::App& app) {
+void setup_rotate(CLI::App* sub) {
   auto opt = std::make_shared<RotateOptions>();
-  CLI::App* sub = app.add_subcommand("rotate", "Rotate an SH vector: g(w) = f(R^-1 w) (JSON)");
   sub->add_option("--order", opt->order, "SH order N (bands 0..N-1)")->required();
   sub->add_option("--method", opt->method,
                   "auto|reference|zxzxz|taylor1|taylor1.5|taylor2|zhf|zhf-tailored")

@@ -88,12 +88,8 @@ void run(SearchLobesOptions o) {
 
 }  // namespace
 
-void setup_search_lobes(CLI::App& app) {
+void setup_search_lobes(CLI::App* sub) {
   auto o = std::make_shared<SearchLobesOptions>();
-  CLI::App* sub = app.add_subcommand(
-      "search-lobes",
-      "Genetic search for sparse zonal-harmonic factorisations ([1]): lobe directions whose "
-      "A^_l = Y_l^-1 has many zeros, per band or shared across bands. See docs/lobes.md.");
   sub->add_option("--band", o->band,
                   "search one band l (1..127; the candidate table grows as l^5: about 3 GiB at l = 50, "
                   "91 GiB at l = 100, refused beyond half the machine's memory)");

@@ -11,14 +11,10 @@
 
 namespace shtool::cli {
 
-void setup_transform_splats(CLI::App& app) {
+void setup_transform_splats(CLI::App* sub) {
   auto opt = std::make_shared<interop::TransformSplatsRequest>();
   auto text = std::make_shared<std::array<std::string, 4>>();  // quat, matrix, translate, sh bits
   auto degree = std::make_shared<int>(-1);
-  CLI::App* sub = app.add_subcommand(
-      "transform-splats",
-      "Convert a 3D Gaussian Splatting scene between .ply, .spz, .gltf and .glb, optionally rotated, scaled and moved, "
-      "its SH colours included");
   sub->add_option("in", opt->in, "input scene: .ply (binary or ASCII), .spz (versions 2..4), .gltf/.glb "
                                  "(KHR_gaussian_splatting)")->required();
   CLI::Option* quat = sub->add_option("--quat", (*text)[0], "rotation as a unit quaternion w,x,y,z (input coordinates)");
