@@ -11,6 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "common/enum_names.h"
 #include "common/input_error.h"
 #include "common/mesh_frame.h"
 #include "shtool/table.h"
@@ -41,7 +42,7 @@ std::vector<std::string> split_list(const std::string& text);
 // the list is a CLI11 error naming the option and the accepted values.
 template <class E>
 CLI::Option* add_enum_option(CLI::App* app, const std::string& name, E& target,
-                             const std::vector<std::pair<std::string, E>>& names, const std::string& help,
+                             const EnumNames<E>& names, const std::string& help,
                              const std::string& default_name) {
   std::vector<std::string> accepted;
   for (const auto& n : names) accepted.push_back(n.first);

@@ -18,7 +18,7 @@ void setup_gen_shader(CLI::App* sub) {
   add_enum_option(sub, "--lang", req->shader.language,
                   {{"glsl", ShaderLanguage::glsl}, {"hlsl", ShaderLanguage::hlsl}}, "shader language", "")
       ->required();
-  std::vector<std::pair<std::string, ShaderOperation>> names;
+  EnumNames<ShaderOperation> names;
   for (ShaderOperation op : shader_operations()) names.emplace_back(std::string(shader_operation_name(op)), op);
   add_enum_option(sub, "--what", req->shader.operation, names,
                   "operation: sh-eval, sh-irradiance, zxzxz-rotate, zhf-rotate, zhf-tailored-rotate, triple-product, "

@@ -28,7 +28,7 @@ void setup_render(CLI::App* sub) {
   sub->add_option("--fov", req->fov, "vertical field of view, degrees")->capture_default_str();
   sub->add_option("--width", req->width, "image width")->capture_default_str();
   sub->add_option("--height", req->height, "image height")->capture_default_str();
-  std::vector<std::pair<std::string, render::Shading>> names = render::shading_names();
+  EnumNames<render::Shading> names = render::shading_names();
   add_enum_option(sub, "--shading", req->shading, names,
                   "transfer (t . e), zh (Eq. 13), zh-table (Eq. 24-25), error (|zh - transfer|), normals, "
                   "membrane (thin-membrane model, Eq. 22-23), wrinkle (wrinkle map, Sec. 4.2), glossy (Eq. 16)",

@@ -8,8 +8,12 @@
 
 namespace shtool {
 
+// An enum option's accepted names, each with its value, in the order --help lists them.
 template <class E>
-const std::string& name_of(E value, const std::vector<std::pair<std::string, E>>& names) {
+using EnumNames = std::vector<std::pair<std::string, E>>;
+
+template <class E>
+const std::string& name_of(E value, const EnumNames<E>& names) {
   for (const auto& n : names)
     if (n.second == value) return n.first;
   static const std::string unknown = "?";

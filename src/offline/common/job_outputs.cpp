@@ -35,6 +35,14 @@ void JobOutputs::inputs(const std::vector<std::filesystem::path>& paths, const s
   for (const std::filesystem::path& p : paths) input(p, what);
 }
 
+void JobOutputs::input(std::initializer_list<Named> files) {
+  for (const Named& f : files) input(f.first, f.second);
+}
+
+void JobOutputs::output(std::initializer_list<Named> files) {
+  for (const Named& f : files) output(f.first, f.second);
+}
+
 void JobOutputs::output(const std::filesystem::path& path, std::string option) {
   if (path.empty()) return;
   if (find_if(option)) throw std::logic_error("output " + option + " declared twice");

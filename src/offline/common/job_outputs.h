@@ -21,9 +21,11 @@
 #pragma once
 
 #include <filesystem>
+#include <initializer_list>
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "common/atomic_file.h"
@@ -40,6 +42,10 @@ class JobOutputs {
   // when the path cannot be written (no folder, a folder), is one of the inputs (by real
   // path or hard link) or another output.
   void output(const std::filesystem::path& path, std::string option);
+  // Several inputs or outputs at once, as (path, what or option) pairs, in order.
+  using Named = std::pair<std::filesystem::path, std::string>;
+  void input(std::initializer_list<Named> files);
+  void output(std::initializer_list<Named> files);
 
   bool requested(std::string_view option) const;
   const std::filesystem::path& path(std::string_view option) const;

@@ -6,8 +6,9 @@
 
 namespace shtool {
 
-const std::vector<std::pair<std::string, UpAxis>>& up_axis_names() {
-  static const std::vector<std::pair<std::string, UpAxis>> names = {{"y", UpAxis::y}, {"z", UpAxis::z}};
+const EnumNames<UpAxis>& up_axis_names() {
+  using enum UpAxis;
+  static const EnumNames<UpAxis> names = {{"y", y}, {"z", z}};
   return names;
 }
 

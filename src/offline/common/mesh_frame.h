@@ -10,13 +10,14 @@
 
 #include <Eigen/Core>
 
+#include "common/enum_names.h"
 #include "shtool/table.h"
 
 namespace shtool {
 
 // The up axis of a mesh file. glTF is always y; an OBJ is what the user says.
 enum class UpAxis { y, z };
-const std::vector<std::pair<std::string, UpAxis>>& up_axis_names();  // "y", "z"
+const EnumNames<UpAxis>& up_axis_names();  // "y", "z"
 const char* up_axis_name(UpAxis up);
 
 // shtool's frame from a y-up file's: shtool = (X, -Z, Y), a quarter turn about x (a

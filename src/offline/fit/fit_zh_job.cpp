@@ -340,13 +340,8 @@ FitZhReport run_fit_zh_on(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJo
   // (only rank 0 writes).
   JobOutputs io;
   io.input(input_path, r.mesh.empty() ? "the --transfer input" : "the mesh");
-  io.output(plan.out, "--out");
-  io.output(r.json, "--json");
-  io.output(r.ply, "--ply");
-  io.output(r.save_transfer, "--save-transfer");
-  io.output(r.gltf, "--gltf");
-  io.output(plan.dc_linear_map, "the DC and linear map");
-  io.output(plan.lobes_map, "the lobe map");
+  io.output({{plan.out, "--out"}, {r.json, "--json"}, {r.ply, "--ply"}, {r.save_transfer, "--save-transfer"},
+             {r.gltf, "--gltf"}, {plan.dc_linear_map, "the DC and linear map"}, {plan.lobes_map, "the lobe map"}});
 
   FitZhReport report;
   report.threads = plan.threads;

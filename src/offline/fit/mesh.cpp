@@ -371,9 +371,9 @@ Mesh load_obj_text(const std::string& text, const std::filesystem::path& path, N
 }
 
 
-const std::vector<std::pair<std::string, NormalSource>>& normal_source_names() {
-  static const std::vector<std::pair<std::string, NormalSource>> names = {
-      {"auto", NormalSource::automatic}, {"file", NormalSource::file}, {"computed", NormalSource::computed}};
+const EnumNames<NormalSource>& normal_source_names() {
+  using enum NormalSource;
+  static const EnumNames<NormalSource> names = {{"auto", automatic}, {"file", file}, {"computed", computed}};
   return names;
 }
 

@@ -10,6 +10,7 @@
 // the surface). `source_index` maps each kept vertex back to its 0-based OBJ index.
 #pragma once
 
+#include "common/enum_names.h"
 #include "common/input_error.h"
 #include "common/mesh_frame.h"
 
@@ -85,7 +86,7 @@ std::uint32_t loaded_mesh_crc32(const Mesh& mesh);
 std::uint32_t uv_layout_crc32(const Mesh& mesh);
 
 enum class NormalSource { automatic, file, computed };
-const std::vector<std::pair<std::string, NormalSource>>& normal_source_names();  // auto, file, computed
+const EnumNames<NormalSource>& normal_source_names();  // auto, file, computed
 
 // Loads an OBJ file, whose up axis is `up` (positions and normals turned into shtool's
 // frame when it is y). Throws MeshError on: missing/unreadable file, parse failure,

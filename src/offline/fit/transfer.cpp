@@ -291,12 +291,12 @@ std::vector<double> compute_transfer_at(const Mesh& mesh, std::span<const Eigen:
   return result;
 }
 
-
-const std::vector<std::pair<std::string, TransferMode>>& transfer_mode_names() {
-  static const std::vector<std::pair<std::string, TransferMode>> names = {
-      {"unshadowed", TransferMode::unshadowed},
-      {"shadowed", TransferMode::shadowed},
-      {"interreflected", TransferMode::interreflected}};
+const EnumNames<TransferMode>& transfer_mode_names() {
+  using enum TransferMode;
+  static const EnumNames<TransferMode> names = {
+      {"unshadowed", unshadowed},
+      {"shadowed", shadowed},
+      {"interreflected", interreflected}};
   return names;
 }
 

@@ -19,13 +19,14 @@
 #include <utility>
 #include <vector>
 
+#include "common/enum_names.h"
 #include "common/input_error.h"
 #include "fit/mesh.h"
 
 namespace shtool::fit {
 
 enum class TransferMode { unshadowed, shadowed, interreflected };
-const std::vector<std::pair<std::string, TransferMode>>& transfer_mode_names();
+const EnumNames<TransferMode>& transfer_mode_names();
 
 // Most diffuse bounces an interreflected simulation runs.
 inline constexpr int kMaxBounces = 64;

@@ -17,9 +17,9 @@
 
 namespace shtool::glossy {
 
-const std::vector<std::pair<std::string, BrdfModel>>& brdf_model_names() {
-  static const std::vector<std::pair<std::string, BrdfModel>> names = {{"phong", BrdfModel::phong},
-                                                                       {"cook-torrance", BrdfModel::cook_torrance}};
+const EnumNames<BrdfModel>& brdf_model_names() {
+  using enum BrdfModel;
+  static const EnumNames<BrdfModel> names = {{"phong", phong}, {"cook-torrance", cook_torrance}};
   return names;
 }
 

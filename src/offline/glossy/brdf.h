@@ -10,10 +10,12 @@
 
 #include <Eigen/Core>
 
+#include "common/enum_names.h"
+
 namespace shtool::glossy {
 
 enum class BrdfModel { phong, cook_torrance };
-const std::vector<std::pair<std::string, BrdfModel>>& brdf_model_names();
+const EnumNames<BrdfModel>& brdf_model_names();
 
 struct Brdf {
   BrdfModel model = BrdfModel::cook_torrance;

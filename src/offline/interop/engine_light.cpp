@@ -162,18 +162,17 @@ double raw_scale(int l, RawNormalization n) {
 
 }  // namespace
 
-const std::vector<std::pair<std::string, LightFormat>>& light_format_names() {
-  static const std::vector<std::pair<std::string, LightFormat>> names = {
-      {"threejs", LightFormat::threejs}, {"filament", LightFormat::filament},
-      {"filament-radiance", LightFormat::filament_radiance}, {"unity", LightFormat::unity},
-      {"gltf", LightFormat::gltf}, {"gltf-khr", LightFormat::gltf_khr}, {"babylon", LightFormat::babylon},
-      {"godot", LightFormat::godot}, {"raw", LightFormat::raw}};
+const EnumNames<LightFormat>& light_format_names() {
+  using enum LightFormat;
+  static const EnumNames<LightFormat> names = {
+      {"threejs", threejs}, {"filament", filament}, {"filament-radiance", filament_radiance}, {"unity", unity},
+      {"gltf", gltf}, {"gltf-khr", gltf_khr}, {"babylon", babylon}, {"godot", godot}, {"raw", raw}};
   return names;
 }
 
-const std::vector<std::pair<std::string, LightFormat>>& export_format_names() {
-  static const std::vector<std::pair<std::string, LightFormat>> names = [] {
-    std::vector<std::pair<std::string, LightFormat>> n = light_format_names();
+const EnumNames<LightFormat>& export_format_names() {
+  static const EnumNames<LightFormat> names = [] {
+    EnumNames<LightFormat> n = light_format_names();
     n.emplace_back("l1", LightFormat::l1);
     n.emplace_back("zh3", LightFormat::zh3);
     return n;
@@ -181,17 +180,17 @@ const std::vector<std::pair<std::string, LightFormat>>& export_format_names() {
   return names;
 }
 
-const std::vector<std::pair<std::string, Zh3Axis>>& zh3_axis_names() {
-  static const std::vector<std::pair<std::string, Zh3Axis>> names = {
+const EnumNames<Zh3Axis>& zh3_axis_names() {
+  static const EnumNames<Zh3Axis> names = {
       {std::string(zh3_axis_name(Zh3Axis::luminance)), Zh3Axis::luminance},
       {std::string(zh3_axis_name(Zh3Axis::per_channel)), Zh3Axis::per_channel}};
   return names;
 }
 
-const std::vector<std::pair<std::string, RawNormalization>>& raw_normalization_names() {
-  static const std::vector<std::pair<std::string, RawNormalization>> names = {
-      {"orthonormal", RawNormalization::orthonormal}, {"4pi", RawNormalization::four_pi},
-      {"schmidt", RawNormalization::schmidt}};
+const EnumNames<RawNormalization>& raw_normalization_names() {
+  using enum RawNormalization;
+  static const EnumNames<RawNormalization> names = {
+      {"orthonormal", orthonormal}, {"4pi", four_pi}, {"schmidt", schmidt}};
   return names;
 }
 

@@ -15,6 +15,7 @@
 
 #include <Eigen/Core>
 
+#include "common/enum_names.h"
 #include "lighting/lighting_output.h"
 #include "shtool/probe_encoding.h"
 
@@ -24,8 +25,8 @@ namespace shtool::interop {
 // export-light only: they keep less than the light, so there is nothing to import.
 enum class LightFormat { threejs, filament, filament_radiance, unity, gltf, gltf_khr, babylon, godot, raw, l1, zh3 };
 // The formats import-light reads (all but l1 and zh3) and those export-light writes.
-const std::vector<std::pair<std::string, LightFormat>>& light_format_names();
-const std::vector<std::pair<std::string, LightFormat>>& export_format_names();
+const EnumNames<LightFormat>& light_format_names();
+const EnumNames<LightFormat>& export_format_names();
 
 // engine = Q w for shtool's w, written as three signed axis names: "x,z,-y" means
 // engine x = shtool x, engine y = shtool z, engine z = -shtool y. Q may be a reflection
@@ -44,8 +45,8 @@ struct RawOptions {
   RawNormalization normalization = RawNormalization::orthonormal;
   Zh3Axis zh3_axis = Zh3Axis::luminance;
 };
-const std::vector<std::pair<std::string, RawNormalization>>& raw_normalization_names();
-const std::vector<std::pair<std::string, Zh3Axis>>& zh3_axis_names();
+const EnumNames<RawNormalization>& raw_normalization_names();
+const EnumNames<Zh3Axis>& zh3_axis_names();
 
 struct ExportedLight {
   std::string text;                // the file's contents

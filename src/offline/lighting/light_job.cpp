@@ -29,12 +29,11 @@ nlohmann::json spec_json(const LightSpec& s) {
 
 }  // namespace
 
-const std::vector<std::pair<std::string, LightType>>& light_type_names() {
-  static const std::vector<std::pair<std::string, LightType>> names = {{"directional", LightType::directional},
-                                                                       {"cone", LightType::cone},
-                                                                       {"sphere", LightType::sphere},
-                                                                       {"hemisphere", LightType::hemisphere},
-                                                                       {"constant", LightType::constant}};
+const EnumNames<LightType>& light_type_names() {
+  using enum LightType;
+  static const EnumNames<LightType> names = {
+      {"directional", directional}, {"cone", cone}, {"sphere", sphere}, {"hemisphere", hemisphere},
+      {"constant", constant}};
   return names;
 }
 

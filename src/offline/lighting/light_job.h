@@ -10,12 +10,13 @@
 #include <utility>
 #include <vector>
 
+#include "common/enum_names.h"
 #include "lighting/lighting_output.h"
 
 namespace shtool::lighting {
 
 enum class LightType { directional, cone, sphere, hemisphere, constant };
-const std::vector<std::pair<std::string, LightType>>& light_type_names();
+const EnumNames<LightType>& light_type_names();
 
 struct LightSpec {
   LightType type = LightType::directional;

@@ -14,9 +14,9 @@ namespace shtool::lighting {
 
 const char* quantity_name(Quantity q) { return q == Quantity::radiance ? "radiance" : "irradiance"; }
 
-const std::vector<std::pair<std::string, Quantity>>& quantity_names() {
-  static const std::vector<std::pair<std::string, Quantity>> names = {{"radiance", Quantity::radiance},
-                                                                      {"irradiance", Quantity::irradiance}};
+const EnumNames<Quantity>& quantity_names() {
+  using enum Quantity;
+  static const EnumNames<Quantity> names = {{"radiance", radiance}, {"irradiance", irradiance}};
   return names;
 }
 

@@ -13,6 +13,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "common/enum_names.h"
 #include "shtool/table.h"
 
 namespace shtool::lighting {
@@ -20,7 +21,7 @@ namespace shtool::lighting {
 enum class Quantity { radiance, irradiance };
 const char* quantity_name(Quantity q);
 // The (name, value) list of --quantity.
-const std::vector<std::pair<std::string, Quantity>>& quantity_names();
+const EnumNames<Quantity>& quantity_names();
 
 struct Lighting {
   int order = 0;

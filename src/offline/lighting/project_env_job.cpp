@@ -101,26 +101,24 @@ std::array<Image, 6> faces_from_cross(const Image& cross, const std::filesystem:
 constexpr std::array<const char*, 6> kFaceSuffix = {"px", "nx", "py", "ny", "pz", "nz"};
 
 
-const std::vector<std::pair<std::string, Layout>>& layout_names() {
-  static const std::vector<std::pair<std::string, Layout>> names = {
-      {"auto", Layout::automatic}, {"equirect", Layout::equirect}, {"cross", Layout::cross}, {"faces", Layout::faces}};
+const EnumNames<Layout>& layout_names() {
+  using enum Layout;
+  static const EnumNames<Layout> names = {
+      {"auto", automatic}, {"equirect", equirect}, {"cross", cross}, {"faces", faces}};
   return names;
 }
 
-const std::vector<std::pair<std::string, EquirectPreset>>& equirect_preset_names() {
-  static const std::vector<std::pair<std::string, EquirectPreset>> names = {{"shtool", EquirectPreset::shtool},
-                                                                            {"three", EquirectPreset::three},
-                                                                            {"filament", EquirectPreset::filament},
-                                                                            {"google", EquirectPreset::google}};
+const EnumNames<EquirectPreset>& equirect_preset_names() {
+  using enum EquirectPreset;
+  static const EnumNames<EquirectPreset> names = {
+      {"shtool", shtool}, {"three", three}, {"filament", filament}, {"google", google}};
   return names;
 }
 
-const std::vector<std::pair<std::string, WindowChoice>>& window_names() {
-  static const std::vector<std::pair<std::string, WindowChoice>> names = {{"none", WindowChoice::none},
-                                                                          {"hann", WindowChoice::hann},
-                                                                          {"lanczos", WindowChoice::lanczos},
-                                                                          {"sinc4", WindowChoice::sinc4},
-                                                                          {"auto", WindowChoice::automatic}};
+const EnumNames<WindowChoice>& window_names() {
+  using enum WindowChoice;
+  static const EnumNames<WindowChoice> names = {
+      {"none", none}, {"hann", hann}, {"lanczos", lanczos}, {"sinc4", sinc4}, {"auto", automatic}};
   return names;
 }
 

@@ -13,6 +13,7 @@
 
 #include <Eigen/Core>
 
+#include "common/enum_names.h"
 #include "lighting/image_io.h"
 #include "lighting/lighting_output.h"
 #include "shtool/sh_window.h"
@@ -20,16 +21,16 @@
 namespace shtool::lighting {
 
 enum class Layout { automatic, equirect, cross, faces };
-const std::vector<std::pair<std::string, Layout>>& layout_names();
+const EnumNames<Layout>& layout_names();
 
 // Equirect mappings of other tools, each an orthogonal map from shtool's own mapping
 // (docs/lighting.md has the sources).
 enum class EquirectPreset { shtool, three, filament, google };
-const std::vector<std::pair<std::string, EquirectPreset>>& equirect_preset_names();
+const EnumNames<EquirectPreset>& equirect_preset_names();
 
 // "auto" joins the windows of the runtime (sh_window.h).
 enum class WindowChoice { none, hann, lanczos, sinc4, automatic };
-const std::vector<std::pair<std::string, WindowChoice>>& window_names();
+const EnumNames<WindowChoice>& window_names();
 
 struct ProjectEnvRequest {
   std::filesystem::path image;  // for --layout faces: a pattern with %s (px nx py ny pz nz)

@@ -293,11 +293,11 @@ lighting::Image compare_strip(const Hits& hits, const fit::Mesh& mesh, VertexDat
 
 }  // namespace
 
-const std::vector<std::pair<std::string, Shading>>& shading_names() {
-  static const std::vector<std::pair<std::string, Shading>> names = {
-      {"transfer", Shading::transfer}, {"zh", Shading::zh},         {"zh-table", Shading::zh_table},
-      {"error", Shading::error},       {"normals", Shading::normals},   {"membrane", Shading::membrane},
-      {"wrinkle", Shading::wrinkle},   {"glossy", Shading::glossy}};
+const EnumNames<Shading>& shading_names() {
+  using enum Shading;
+  static const EnumNames<Shading> names = {
+      {"transfer", transfer}, {"zh", zh}, {"zh-table", zh_table}, {"error", error}, {"normals", normals},
+      {"membrane", membrane}, {"wrinkle", wrinkle}, {"glossy", glossy}};
   return names;
 }
 
@@ -339,12 +339,9 @@ RenderResult run_render(const RenderRequest& r) {
     io.input(fit::dc_linear_map_path(r.fit), "a map of the --fit bake");
     io.input(fit::lobes_map_path(r.fit), "a map of the --fit bake");
   }
-  io.input(r.transfer, "the --transfer vectors");
-  io.input(r.light, "the --light");
-  io.input(r.alpha_map, "the --alpha-map");
-  io.input(r.wrinkle, "the --wrinkle table");
-  io.input(r.wrinkle_map, "the --wrinkle-map");
-  io.input(r.reference, "the --reference");
+  io.input({{r.transfer, "the --transfer vectors"}, {r.light, "the --light"}, {r.alpha_map, "the --alpha-map"},
+            {r.wrinkle, "the --wrinkle table"}, {r.wrinkle_map, "the --wrinkle-map"},
+            {r.reference, "the --reference"}});
   io.output(r.out, "--out");
   (void)lighting::encode_image_for(r.out, lighting::Image{1, 1, 4, std::vector<float>(4, 0.0f)}, "--out");
 

@@ -11,13 +11,14 @@
 #include <utility>
 #include <vector>
 
+#include "common/enum_names.h"
 #include "common/mesh_frame.h"
 #include "view/camera.h"
 
 namespace shtool::render {
 
 enum class Shading { automatic, transfer, zh, zh_table, error, normals, membrane, wrinkle, glossy };
-const std::vector<std::pair<std::string, Shading>>& shading_names();
+const EnumNames<Shading>& shading_names();
 
 using Camera = view::Camera;  // in shtool's frame (z up)
 
