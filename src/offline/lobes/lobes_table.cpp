@@ -10,6 +10,13 @@
 
 namespace shtool::lobes {
 
+// The summary's fields of a band and of a run are the structs' members of the same names
+// (the band's directions and the run's band list are added beside them).
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(BandReport, l, sparsity, zeros, entries, cond, largest_zero, smallest_nonzero,
+                                   lobes_per_function)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(SearchResult, sparsity, zeros, entries, generations, evaluations, best_restart,
+                                   restart_sparsity)
+
 namespace {
 
 struct Layout {
@@ -41,15 +48,9 @@ nlohmann::json band_json(const BandReport& b, std::span<const double> theta, std
                          int offset) {
   nlohmann::json dirs = nlohmann::json::array();
   for (int d = 0; d < 2 * b.l + 1; ++d) dirs.push_back({theta[offset + d], phi[offset + d]});
-  return {{"l", b.l},
-          {"directions", dirs},
-          {"sparsity", b.sparsity},
-          {"zeros", b.zeros},
-          {"entries", b.entries},
-          {"cond", b.cond},
-          {"largest_zero", b.largest_zero},
-          {"smallest_nonzero", b.smallest_nonzero},
-          {"lobes_per_function", b.lobes_per_function}};
+  nlohmann::json j = b;
+  j["directions"] = dirs;
+  return j;
 }
 
 }  // namespace
@@ -111,14 +112,9 @@ Table make_lobes_table(const std::vector<SearchResult>& searches, const nlohmann
   for (const SearchResult& s : searches) {
     nlohmann::json sb = nlohmann::json::array();
     for (const BandReport& b : s.bands) sb.push_back(b.l);
-    runs.push_back({{"bands", sb},
-                    {"sparsity", s.sparsity},
-                    {"zeros", s.zeros},
-                    {"entries", s.entries},
-                    {"generations", s.generations},
-                    {"evaluations", s.evaluations},
-                    {"best_restart", s.best_restart},
-                    {"restart_sparsity", s.restart_sparsity}});
+    nlohmann::json run = s;
+    run["bands"] = sb;
+    runs.push_back(run);
   }
   nlohmann::json meta = {{"mode", shared ? "shared" : "band"},
                          {"zero_threshold", kZeroThreshold},
