@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "products/fftw.h"
+#include "products/fft_products.h"
 #include "shtool/fourier_tensors.h"
 #include "shtool/sh.h"
 #include "precondition.h"
@@ -91,12 +92,7 @@ struct FourierProduct<T>::Impl {
   std::vector<T> acc_p, acc_m;
 
   Impl(int order, int count) : n(order), inputs(count) {
-    if (order < 1 || order > kMaxFourierProductOrder)
-      detail::precondition_failed("FourierProduct: order " + std::to_string(order) + " outside 1.." +
-                                  std::to_string(kMaxFourierProductOrder));
-    if (count < 1 || count > kMaxProductInputs)
-      detail::precondition_failed("FourierProduct: " + std::to_string(count) + " inputs (1.." +
-                                  std::to_string(kMaxProductInputs) + ")");
+    detail::check_product_sizes("FourierProduct", order, count);
     nodes.reserve(2 * count);
     build_node(0, count, true);
     const int degree = std::max(nodes[0].degree, n - 1);
@@ -259,11 +255,7 @@ struct FourierProduct<T>::Impl {
         std::fill(aim, aim + count_l, T(0));
         const T* w = to_sh.data() + to_sh_start[2 * t + p];
         for (int s = p; s <= d; s += 2, w += count_l) {
-          const T re = row[2 * s], im = row[2 * s + 1];
-          for (int j = 0; j < count_l; ++j) {
-            are[j] += w[j] * re;
-            aim[j] += w[j] * im;
-          }
+          detail::accumulate_scaled_complex(w, count_l, row[2 * s], row[2 * s + 1], are, aim);
         }
         for (int j = 0; j < count_l; ++j) {
           const int l = l0 + 2 * j;

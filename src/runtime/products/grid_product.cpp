@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "products/fftw.h"
+#include "products/fft_products.h"
 #include "shtool/legendre.h"
 #include "shtool/quadrature.h"
 #include "shtool/sh.h"
@@ -291,22 +292,11 @@ struct FftGrid final : GridProduct<T>::Impl {
       for (int t = 0; t < p; ++t, row += ne + no) {
         const T nr = o[2 * t], ni = o[2 * t + 1], sr = o[2 * (p + t)], si = o[2 * (p + t) + 1];
         const T ar = nr + sr, ai = ni + si, dr = nr - sr, di = ni - si;
-        for (int j = 0; j < ne; ++j) {
-          ger[j] += row[j] * ar;
-          gei[j] += row[j] * ai;
-        }
-        const T* rowo = row + ne;
-        for (int j = 0; j < no; ++j) {
-          gor[j] += rowo[j] * dr;
-          goi[j] += rowo[j] * di;
-        }
+        detail::accumulate_scaled_complex(row, ne, ar, ai, ger, gei);
+        detail::accumulate_scaled_complex(row + ne, no, dr, di, gor, goi);
       }
       if (equator) {  // odd l - m vanish at x = 0
-        const T er = o[4 * p], ei = o[4 * p + 1];
-        for (int j = 0; j < ne; ++j) {
-          ger[j] += row[j] * er;
-          gei[j] += row[j] * ei;
-        }
+        detail::accumulate_scaled_complex(row, ne, o[4 * p], o[4 * p + 1], ger, gei);
       }
       // cos m p takes Re H[m], sin m p takes -Im H[m] (H = sum_j h_j e^{-i m p_j})
       for (int j = 0; j < ne; ++j) {
@@ -578,12 +568,7 @@ constexpr int kDirectAzimuthMaxOrder = std::is_same_v<T, float> ? 20 : 11;
 
 template <class T>
 GridProduct<T>::GridProduct(int order, int inputs, GridAzimuth azimuth) {
-  if (order < 1 || order > kMaxFourierProductOrder)
-    detail::precondition_failed("GridProduct: order " + std::to_string(order) + " outside 1.." +
-                                std::to_string(kMaxFourierProductOrder));
-  if (inputs < 1 || inputs > kMaxProductInputs)
-    detail::precondition_failed("GridProduct: " + std::to_string(inputs) + " inputs (1.." +
-                                std::to_string(kMaxProductInputs) + ")");
+  detail::check_product_sizes("GridProduct", order, inputs);
   if (azimuth == GridAzimuth::automatic)
     azimuth = order <= kDirectAzimuthMaxOrder<T> ? GridAzimuth::direct : GridAzimuth::fft;
   Impl* impl = nullptr;
