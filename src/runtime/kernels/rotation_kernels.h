@@ -491,6 +491,10 @@ SHTOOL_KERNEL_INLINE RColumnLanes r_column_lanes(const float* __restrict r) {
   return {{a, __builtin_shufflevector(a, b, 3, 4, 5, 6), __builtin_shufflevector(b, c, 2, 3, 4, 5)}};
 }
 
+// Rotations whose table, input and output are all float take the lane-parallel forms below.
+template <class T, class P, class R>
+inline constexpr bool kAllFloat = std::is_same_v<T, float> && std::is_same_v<P, float> && std::is_same_v<R, float>;
+
 // band2_closed for one float vector. Lanes j of C_i = R_i. A are c_ij; lanes j of
 // B_0 = sum_b C_0b R_.b are b_0j; and (b11, b12, b22) come from one more vector whose
 // lanes pair C_1 and C_2 with rows 1, 2 of R.
@@ -560,10 +564,7 @@ SHTOOL_KERNEL_INLINE void band3_closed_lanes(const float* __restrict r, const fl
 // g2 = (B00 - B11) / 2.
 template <bool F, class T, class P, class R = T>
 SHTOOL_KERNEL_INLINE void band2_closed(const R* __restrict r, const P* __restrict x, P* __restrict y) {
-  if constexpr (std::is_same_v<T, float> && std::is_same_v<P, float> && std::is_same_v<R, float>) {
-    band2_closed_lanes<F>(r, x, y);
-    return;
-  }
+  if constexpr (kAllFloat<T, P, R>) return band2_closed_lanes<F>(r, x, y);
   const Band2Matrix<P> m = band2_matrix<T, P>(x);
   const P a00 = m.a00, a11 = m.a11, a22 = m.a22, a01 = m.a01, a12 = m.a12, a02 = m.a02;
   // C = R A (A symmetric), then the needed entries of B = C R^T.
@@ -604,10 +605,7 @@ SHTOOL_KERNEL_INLINE void band2_closed(const R* __restrict r, const P* __restric
 //   g1 = 3 (B_xxx + B_xyy) / (4 k1), g3 = (3 B_xyy - B_xxx) / (4 k3).
 template <bool F, class T, class P, class R = T>
 SHTOOL_KERNEL_INLINE void band3_closed(const R* __restrict r, const P* __restrict x, P* __restrict y) {
-  if constexpr (std::is_same_v<T, float> && std::is_same_v<P, float> && std::is_same_v<R, float>) {
-    band3_closed_lanes<F>(r, x, y);
-    return;
-  }
+  if constexpr (kAllFloat<T, P, R>) return band3_closed_lanes<F>(r, x, y);
   const Band3Tensor<P> a = band3_tensor<T, P>(x);
   const P axxx = a.axxx, axxy = a.axxy, axxz = a.axxz, axyy = a.axyy, axyz = a.axyz;
   const P axzz = a.axzz, ayyy = a.ayyy, ayyz = a.ayyz, ayzz = a.ayzz, azzz = a.azzz;
