@@ -379,6 +379,14 @@ void zxzxz_rotate(const Syntax& s, int n, std::ostringstream& o, ShaderSource& o
       << bij(0, 0) << " - (" << bij(1, 1) << "));\n";
   }
   if (n >= 4) {
+    // Declares c and sn in the shader: the unit vector along (c_value, s_value).
+    auto unit_pair = [&](const std::string& c, const std::string& sn, const std::string& c_value,
+                         const std::string& s_value) {
+      b << "    " << real << " " << c << " = " << c_value << ";\n"
+        << "    " << real << " " << sn << " = " << s_value << ";\n"
+        << "    " << real << " inv = 1.0 / sqrt(" << c << " * " << c << " + " << sn << " * " << sn << ");\n"
+        << "    " << c << " = " << c << " * inv;\n    " << sn << " = " << sn << " * inv;\n";
+    };
     // R = Rz(a) Ry(b) Rz(g): (R02, R12) = sin b (cos a, sin a), R22 = cos b, and the
     // well-conditioned a + g (b < pi/2) or a - g combination gives g, exact at the locks.
     b << "  " << real << " cb = " << r(2, 2) << ";\n  " << real << " sb = sqrt(" << r(0, 2) << " * " << r(0, 2)
@@ -386,18 +394,12 @@ void zxzxz_rotate(const Syntax& s, int n, std::ostringstream& o, ShaderSource& o
       << "  " << real << " ac1 = 1.0;\n  " << real << " as1 = 0.0;\n"
       << "  if (sb > 0.0) {\n    ac1 = " << r(0, 2) << " / sb;\n    as1 = " << r(1, 2) << " / sb;\n  }\n"
       << "  " << real << " gc1;\n  " << real << " gs1;\n"
-      << "  if (cb >= 0.0) {\n"
-      << "    " << real << " cs = " << r(0, 0) << " + " << r(1, 1) << ";\n"
-      << "    " << real << " ss = " << r(1, 0) << " - " << r(0, 1) << ";\n"
-      << "    " << real << " inv = 1.0 / sqrt(cs * cs + ss * ss);\n"
-      << "    cs = cs * inv;\n    ss = ss * inv;\n"
-      << "    gc1 = cs * ac1 + ss * as1;\n    gs1 = ss * ac1 - cs * as1;\n"
-      << "  } else {\n"
-      << "    " << real << " cd = " << r(1, 1) << " - " << r(0, 0) << ";\n"
-      << "    " << real << " sd = -(" << r(1, 0) << " + " << r(0, 1) << ");\n"
-      << "    " << real << " inv = 1.0 / sqrt(cd * cd + sd * sd);\n"
-      << "    cd = cd * inv;\n    sd = sd * inv;\n"
-      << "    gc1 = ac1 * cd + as1 * sd;\n    gs1 = as1 * cd - ac1 * sd;\n"
+      << "  if (cb >= 0.0) {\n";
+    unit_pair("cs", "ss", r(0, 0) + " + " + r(1, 1), r(1, 0) + " - " + r(0, 1));
+    b << "    gc1 = cs * ac1 + ss * as1;\n    gs1 = ss * ac1 - cs * as1;\n"
+      << "  } else {\n";
+    unit_pair("cd", "sd", r(1, 1) + " - " + r(0, 0), "-(" + r(1, 0) + " + " + r(0, 1) + ")");
+    b << "    gc1 = ac1 * cd + as1 * sd;\n    gs1 = as1 * cd - ac1 * sd;\n"
       << "  }\n"
       << "  " << real << " bc1 = cb;\n  " << real << " bs1 = sb;\n";
     for (const char* angle : {"a", "b", "g"})
