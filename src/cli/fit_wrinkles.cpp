@@ -11,16 +11,17 @@ namespace shtool::cli {
 
 void setup_fit_wrinkles(CLI::App* sub) {
   auto req = std::make_shared<wrinkles::WrinkleRequest>();
-  sub->add_option("--order", req->order, "SH order n (3..8)")->capture_default_str();
-  sub->add_option("--lobes", req->lobes, "ZH lobes per point (1..4)")->capture_default_str();
-  sub->add_option("--grid", req->grid, "nodes per axis of the (x, d) map")->capture_default_str();
-  sub->add_option("--samples", req->samples, "simulated samples per cell and axis")->capture_default_str();
-  sub->add_option("--max-depth", req->max_depth, "largest groove depth, in periods")->capture_default_str();
-  sub->add_option("--rays", req->rays, "rays per sample")->capture_default_str();
+  // Every option has a working default: --help shows each.
+  sub->option_defaults()->always_capture_default();
+  sub->add_option("--order", req->order, "SH order n (3..8)");
+  sub->add_option("--lobes", req->lobes, "ZH lobes per point (1..4)");
+  sub->add_option("--grid", req->grid, "nodes per axis of the (x, d) map");
+  sub->add_option("--samples", req->samples, "simulated samples per cell and axis");
+  sub->add_option("--max-depth", req->max_depth, "largest groove depth, in periods");
+  sub->add_option("--rays", req->rays, "rays per sample");
   add_seed_option(sub, req->seed, "seed of the ray directions and of the per-point fits' starts");
   add_threads_option(sub, req->threads);
-  sub->add_option("--max-evaluations", req->max_evaluations, "objective evaluations of the global L-BFGS fit")
-      ->capture_default_str();
+  sub->add_option("--max-evaluations", req->max_evaluations, "objective evaluations of the global L-BFGS fit");
   add_enum_option(sub, "--optimizer", req->optimizer,
                   {{"lbfgs", wrinkles::WrinkleOptimizer::lbfgs}, {"cg", wrinkles::WrinkleOptimizer::cg}},
                   "the global fit's optimiser: L-BFGS, or conjugate gradients (for comparison)", "lbfgs");
