@@ -25,7 +25,6 @@
 
 namespace {
 
-namespace fs = std::filesystem;
 using namespace shtool::test;
 constexpr double kPi = std::numbers::pi;
 

@@ -14,7 +14,6 @@
 
 namespace {
 
-namespace fs = std::filesystem;
 using namespace shtool::test;
 
 const Scratch scratch("cli_fit_wrinkles");

@@ -25,6 +25,9 @@
 
 namespace shtool::test {
 
+// Paths are what these tests pass around most: their `using namespace` brings fs along.
+namespace fs = std::filesystem;
+
 inline const std::string kShtoolExe = SHTOOL_EXE;
 inline const std::string kSourceDir = SHTOOL_SOURCE_DIR;
 inline const std::string kSpotObj = kSourceDir + "/data/spot.obj";
