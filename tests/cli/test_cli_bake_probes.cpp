@@ -25,7 +25,6 @@
 
 namespace {
 
-namespace fs = std::filesystem;
 using namespace shtool::test;
 constexpr double kPi = std::numbers::pi;
 
@@ -212,16 +211,10 @@ TEST(CliBakeProbes, SameBytesOnOneAndTwoThreads) {
   t.light({{"type", "point"}, {"intensity", 5.0}}, Eigen::Vector3d(1, 2, 1), Eigen::Vector3d(0, -1, 0));
   const fs::path scene = scratch("room.gltf");
   t.write(scene);
-  std::vector<std::string> bytes;
-  for (const char* threads : {"1", "2"}) {
-    const fs::path out = scratch(std::string("room") + threads + ".shtb"), json = scratch(std::string("room") + threads + ".json");
-    const CommandResult r = run_shtool({"bake-probes", scene.string(), "--grid", "3,2,3", "--samples", "64",
-                                        "--threads", threads, "--seed", "11", "--out", out.string(), "--json",
-                                        json.string()});
-    ASSERT_EQ(r.exit_code, 0) << r.err;
-    bytes.push_back(read_file(out) + read_file(json));
-  }
-  EXPECT_EQ(bytes[0], bytes[1]);
+  expect_same_bytes_on_one_and_two_threads(scratch, [&](const fs::path& out, const fs::path& json, int threads) {
+    return std::vector<std::string>{"bake-probes", scene.string(), "--grid", "3,2,3", "--samples", "64", "--threads",
+                                    std::to_string(threads), "--seed", "11", "--out", out.string(), "--json", json.string()};
+  });
 }
 
 // Three shards joined by merge: the one-process table byte for byte, with a probe inside

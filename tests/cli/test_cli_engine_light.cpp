@@ -26,7 +26,6 @@
 namespace shtool {
 namespace {
 
-namespace fs = std::filesystem;
 using namespace test;
 using lighting::Lighting;
 using lighting::Quantity;

@@ -26,7 +26,6 @@
 
 namespace {
 
-namespace fs = std::filesystem;
 using namespace shtool::test;
 
 const Scratch scratch("export_web");

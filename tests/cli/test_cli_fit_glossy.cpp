@@ -20,7 +20,6 @@
 
 namespace {
 
-namespace fs = std::filesystem;
 using namespace shtool::test;
 
 const Scratch scratch("cli_fit_glossy");
@@ -31,19 +30,17 @@ std::vector<std::string> small(const fs::path& out, const fs::path& json, int th
 }
 
 TEST(CliFitGlossy, WritesTheTableAndTheSummary) {
-  const fs::path out = scratch("g.shtb"), json = scratch("g.json");
-  const shtool::Result<shtool::Table> t =
-      run_and_read_table(small(out, json, 2), "normalized RMS: SVD", out, {"glossy-zh", 1, 4});
-  ASSERT_TRUE(t.ok()) << t.error().message;
-  const shtool::Result<shtool::GlossyFit<double>> fit = shtool::GlossyFit<double>::from_table(t.value());
+  const shtool::Result<TableAndSummary> written =
+      run_table_and_summary(scratch, small, "normalized RMS: SVD", {"glossy-zh", 1, 4});
+  ASSERT_TRUE(written.ok()) << written.error().message;
+  const nlohmann::json &summary = written.value().summary, &meta = written.value().meta;
+  const shtool::Result<shtool::GlossyFit<double>> fit = shtool::GlossyFit<double>::from_table(written.value().table);
   ASSERT_TRUE(fit.ok()) << fit.error().message;
   EXPECT_EQ(fit.value().vertices, 2930u);
   EXPECT_EQ(fit.value().terms, 6);
   EXPECT_EQ(fit.value().view_resolution, 8);
   EXPECT_EQ(fit.value().rows.lobes, 3);
   EXPECT_EQ(fit.value().rows.direct_count, 4);  // DC and the linear band, stored from 3 lobes on
-  const nlohmann::json summary = nlohmann::json::parse(read_file(json));
-  const nlohmann::json meta = nlohmann::json::parse(t.value().meta);
   EXPECT_EQ(summary["normalized_rms"]["svd"], meta["svd_normalized_rms"]);
   EXPECT_EQ(summary["normalized_rms"]["zh"], meta["zh_normalized_rms"]);
   EXPECT_EQ(summary["singular_values"].size(), 16u);
@@ -54,16 +51,10 @@ TEST(CliFitGlossy, WritesTheTableAndTheSummary) {
   EXPECT_LT(svd, 0.45);
   EXPECT_LT(zh, 0.05);
   EXPECT_NEAR(summary["normalized_rms"]["total"].get<double>(), std::hypot(svd, zh), 1e-15);
-  expect_valid_against_schema("glossy-zh.schema.json", {out});
+  expect_valid_against_schema("glossy-zh.schema.json", {written.value().out});
 }
 
-TEST(CliFitGlossy, SameBytesOnOneAndTwoThreads) {
-  const fs::path a = scratch("t1.shtb"), aj = scratch("t1.json"), b = scratch("t2.shtb"), bj = scratch("t2.json");
-  ASSERT_EQ(run_shtool(small(a, aj, 1)).exit_code, 0);
-  ASSERT_EQ(run_shtool(small(b, bj, 2)).exit_code, 0);
-  EXPECT_EQ(read_file(a), read_file(b));
-  EXPECT_EQ(read_file(aj), read_file(bj));
-}
+TEST(CliFitGlossy, SameBytesOnOneAndTwoThreads) { expect_same_bytes_on_one_and_two_threads(scratch, small); }
 
 TEST(CliFitGlossy, FlatPhongSurfaceSeenAlongItsNormalHasAlbedoOne) {
   // A square facing +z under constant radiance 1, seen from 5 units up with a 2 degree

@@ -14,24 +14,25 @@
 
 namespace {
 
-namespace fs = std::filesystem;
 using namespace shtool::test;
 
 const Scratch scratch("cli_fit_wrinkles");
 
-std::vector<std::string> small(const fs::path& out, const fs::path& json, int threads,
-                               const std::string& optimizer = "lbfgs") {
-  return {"fit-wrinkles", "--grid", "4", "--samples", "2", "--rays", "64", "--order", "4", "--max-evaluations", "200",
-          "--optimizer", optimizer,
-          "--threads", std::to_string(threads), "--out", out.string(), "--json", json.string()};
+// The small map's command with this optimizer.
+TableAndSummaryCommand small(const std::string& optimizer) {
+  return [optimizer](const fs::path& out, const fs::path& json, int threads) -> std::vector<std::string> {
+    return {"fit-wrinkles", "--grid", "4", "--samples", "2", "--rays", "64", "--order", "4", "--max-evaluations", "200",
+            "--optimizer", optimizer,
+            "--threads", std::to_string(threads), "--out", out.string(), "--json", json.string()};
+  };
 }
 
 TEST(CliFitWrinkles, WritesTheMapAndTheSummary) {
-  const fs::path out = scratch("w.shtb"), json = scratch("w.json");
-  const shtool::Result<shtool::Table> t =
-      run_and_read_table(small(out, json, 2), "normalized RMS: global", out, {"wrinkle-zh", 1, 4});
-  ASSERT_TRUE(t.ok()) << t.error().message;
-  const shtool::Table& table = t.value();
+  const shtool::Result<TableAndSummary> written =
+      run_table_and_summary(scratch, small("lbfgs"), "normalized RMS: global", {"wrinkle-zh", 1, 4});
+  ASSERT_TRUE(written.ok()) << written.error().message;
+  const shtool::Table& table = written.value().table;
+  const nlohmann::json &summary = written.value().summary, &meta = written.value().meta;
   const auto shape = [&](const char* name) { return table.find(name)->shape; };
   ASSERT_NE(table.find("axes"), nullptr);
   EXPECT_EQ(shape("axes"), (std::vector<std::int64_t>{4, 4, 3, 3}));
@@ -45,24 +46,19 @@ TEST(CliFitWrinkles, WritesTheMapAndTheSummary) {
     EXPECT_EQ(coeffs[i], 0.0);
     EXPECT_EQ(coeffs[i + 1], 0.0);
   }
-  const nlohmann::json summary = nlohmann::json::parse(read_file(json));
-  const nlohmann::json meta = nlohmann::json::parse(table.meta);
   EXPECT_EQ(summary["normalized_rms"]["global"], meta["normalized_rms"]);
   EXPECT_EQ(summary["normalized_rms"]["per_point"], meta["per_point_normalized_rms"]);
   EXPECT_GT(summary["normalized_rms"]["global"].get<double>(), 0.0);
   EXPECT_EQ(summary["samples"], 8 * 7);
   EXPECT_EQ(summary["by_depth"].size(), 7u);
   // The header follows schemas/wrinkle-zh.schema.json (python3-jsonschema).
-  expect_valid_against_schema("wrinkle-zh.schema.json", {out});
+  expect_valid_against_schema("wrinkle-zh.schema.json", {written.value().out});
 }
 
 TEST(CliFitWrinkles, SameBytesOnOneAndTwoThreads) {
   for (const std::string optimizer : {"lbfgs", "cg"}) {
-    const fs::path a = scratch("t1.shtb"), aj = scratch("t1.json"), b = scratch("t2.shtb"), bj = scratch("t2.json");
-    ASSERT_EQ(run_shtool(small(a, aj, 1, optimizer)).exit_code, 0);
-    ASSERT_EQ(run_shtool(small(b, bj, 2, optimizer)).exit_code, 0);
-    EXPECT_EQ(read_file(a), read_file(b)) << optimizer;
-    EXPECT_EQ(read_file(aj), read_file(bj)) << optimizer;
+    SCOPED_TRACE(optimizer);
+    expect_same_bytes_on_one_and_two_threads(scratch, small(optimizer));
   }
 }
 

@@ -35,7 +35,6 @@
 namespace shtool {
 namespace {
 
-namespace fs = std::filesystem;
 using namespace test;
 constexpr double kPi = std::numbers::pi;
 

@@ -19,7 +19,6 @@
 
 namespace {
 
-namespace fs = std::filesystem;
 using namespace shtool::test;
 
 // Every random path runs: rays rotated per vertex, a multi-start on every vertex.

@@ -17,7 +17,6 @@
 
 namespace {
 
-namespace fs = std::filesystem;
 using namespace shtool::test;
 
 const Scratch scratch("texture_render");

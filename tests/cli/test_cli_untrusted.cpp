@@ -17,7 +17,6 @@
 namespace shtool {
 namespace {
 
-namespace fs = std::filesystem;
 using namespace test;
 
 class CliUntrusted : public ::testing::Test {

@@ -24,66 +24,66 @@ constexpr uint32_t kCount = 10000;  // not a multiple of 64: the last work group
 constexpr uint32_t kPad = 300;      // sentinel elements after kCount, more than a work group
 constexpr float kSentinel = -1234.5f;
 
-// `precise` keeps the device from fusing a * b + i into one rounding, which the CPU
-// reference (below) does not do either.
-const char* const kGlslMultiplyAdd = R"(#version 450
-layout(local_size_x = 64) in;
-layout(push_constant) uniform Push { uint count; } pc;
-layout(std430, set = 0, binding = 0) readonly buffer A { float a[]; };
-layout(std430, set = 0, binding = 1) readonly buffer B { float b[]; };
-layout(std430, set = 0, binding = 2) writeonly buffer Out { float o[]; };
-void main() {
-  uint i = gl_GlobalInvocationID.x;
-  if (i >= pc.count) return;
-  precise float r = a[i] * b[i] + float(i);
-  o[i] = r;
+// A compute kernel over the elements i < count, 64 invocations a work group, in GLSL: the
+// buffers' declarations, then main's body.
+std::string glsl_kernel(const std::string& buffers, const std::string& body) {
+  return "#version 450\n"
+         "layout(local_size_x = 64) in;\n"
+         "layout(push_constant) uniform Push { uint count; } pc;\n" +
+         buffers +
+         "void main() {\n"
+         "  uint i = gl_GlobalInvocationID.x;\n"
+         "  if (i >= pc.count) return;\n" +
+         body + "}\n";
 }
+
+// The same in HLSL: the push constant's and the buffers' declarations, `count` the
+// expression of the push constant's count, then main's body.
+std::string hlsl_kernel(const std::string& declarations, const std::string& count, const std::string& body) {
+  return declarations +
+         "[numthreads(64, 1, 1)]\n"
+         "void main(uint3 id : SV_DispatchThreadID) {\n"
+         "  uint i = id.x;\n"
+         "  if (i >= " + count + ") return;\n" +
+         body + "}\n";
+}
+
+// Each kernel's body is written once, for both languages. `precise` keeps the device from
+// fusing a * b + i into one rounding, which the CPU reference (below) does not do either.
+const std::string kMultiplyAdd = R"(  precise float r = a[i] * b[i] + float(i);
+  o[i] = r;
 )";
 
-const char* const kHlslMultiplyAdd = R"(struct Push { uint count; };
+const std::string kGlslMultiplyAdd = glsl_kernel(R"(layout(std430, set = 0, binding = 0) readonly buffer A { float a[]; };
+layout(std430, set = 0, binding = 1) readonly buffer B { float b[]; };
+layout(std430, set = 0, binding = 2) writeonly buffer Out { float o[]; };
+)", kMultiplyAdd);
+
+const std::string kHlslMultiplyAdd = hlsl_kernel(R"(struct Push { uint count; };
 [[vk::push_constant]] ConstantBuffer<Push> pc;
 RWStructuredBuffer<float> a : register(u0);
 RWStructuredBuffer<float> b : register(u1);
 RWStructuredBuffer<float> o : register(u2);
-[numthreads(64, 1, 1)]
-void main(uint3 id : SV_DispatchThreadID) {
-  uint i = id.x;
-  if (i >= pc.count) return;
-  precise float r = a[i] * b[i] + float(i);
-  o[i] = r;
-}
-)";
+)", "pc.count", kMultiplyAdd);
 
 // Asymmetric in every buffer, so a harness that bound buffers in another order (or
 // read-only HLSL t registers elsewhere than u registers) gives different numbers.
-const char* const kGlslFourBuffers = R"(#version 450
-layout(local_size_x = 64) in;
-layout(push_constant) uniform Push { uint count; } pc;
-layout(std430, set = 0, binding = 0) readonly buffer A { float a[]; };
+const std::string kFourBuffers = R"(  c[i] = a[i] - 2.0 * b[i] + c[i];
+  d[i] = 3.0 * a[i] + b[i] - d[i];
+)";
+
+const std::string kGlslFourBuffers = glsl_kernel(R"(layout(std430, set = 0, binding = 0) readonly buffer A { float a[]; };
 layout(std430, set = 0, binding = 1) readonly buffer B { float b[]; };
 layout(std430, set = 0, binding = 2) buffer C { float c[]; };
 layout(std430, set = 0, binding = 3) buffer D { float d[]; };
-void main() {
-  uint i = gl_GlobalInvocationID.x;
-  if (i >= pc.count) return;
-  c[i] = a[i] - 2.0 * b[i] + c[i];
-  d[i] = 3.0 * a[i] + b[i] - d[i];
-}
-)";
+)", kFourBuffers);
 
-const char* const kHlslFourBuffers = R"([[vk::push_constant]] cbuffer Push { uint count; };
+const std::string kHlslFourBuffers = hlsl_kernel(R"([[vk::push_constant]] cbuffer Push { uint count; };
 StructuredBuffer<float> a : register(t0);
 StructuredBuffer<float> b : register(t1);
 RWStructuredBuffer<float> c : register(u2);
 RWStructuredBuffer<float> d : register(u3);
-[numthreads(64, 1, 1)]
-void main(uint3 id : SV_DispatchThreadID) {
-  uint i = id.x;
-  if (i >= count) return;
-  c[i] = a[i] - 2.0 * b[i] + c[i];
-  d[i] = 3.0 * a[i] + b[i] - d[i];
-}
-)";
+)", "count", kFourBuffers);
 
 // Bit for bit, so -0 against +0 or a different rounding counts; reports the first few.
 void expect_bits_equal(const std::vector<float>& got, const std::vector<float>& want, const std::string& what) {
@@ -118,7 +118,7 @@ std::vector<float> multiply_add_expected(const std::vector<float>& a, const std:
   return out;
 }
 
-void check_multiply_add(const char* source, ShaderLanguage lang) {
+void check_multiply_add(const std::string& source, ShaderLanguage lang) {
   VulkanCompute& gpu = *shared_device();
   const std::vector<uint32_t> spirv = compile_compute(source, lang);
   const std::vector<std::vector<float>> inputs = multiply_add_buffers();

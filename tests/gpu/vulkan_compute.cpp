@@ -870,23 +870,11 @@ void VulkanCompute::run(const std::vector<uint32_t>& spirv, std::vector<std::vec
     }
 
     // Linear filtering within the one mip level, clamped to the edge (which seamless
-    // cube filtering makes moot), normalised coordinates.
+    // cube filtering makes moot). vk_struct zeroes the rest: nearest mip selection, no LOD
+    // bias, anisotropy or depth comparison, LOD 0 to 0, normalised coordinates.
     auto sci = vk_struct<VkSamplerCreateInfo>(VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO);
-    sci.magFilter = VK_FILTER_LINEAR;
-    sci.minFilter = VK_FILTER_LINEAR;
-    sci.mipmapMode = VK_SAMPLER_MIPMAP_MODE_NEAREST;
-    sci.addressModeU = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
-    sci.addressModeV = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
-    sci.addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
-    sci.mipLodBias = 0.0f;
-    sci.anisotropyEnable = VK_FALSE;
-    sci.maxAnisotropy = 1.0f;
-    sci.compareEnable = VK_FALSE;
-    sci.compareOp = VK_COMPARE_OP_ALWAYS;
-    sci.minLod = 0.0f;
-    sci.maxLod = 0.0f;
-    sci.borderColor = VK_BORDER_COLOR_FLOAT_TRANSPARENT_BLACK;
-    sci.unnormalizedCoordinates = VK_FALSE;
+    sci.magFilter = sci.minFilter = VK_FILTER_LINEAR;
+    sci.addressModeU = sci.addressModeV = sci.addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
     check(vkCreateSampler(device_, &sci, nullptr, sampler.out()), "vkCreateSampler");
   }
 

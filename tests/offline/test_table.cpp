@@ -31,6 +31,7 @@
 
 namespace fs = std::filesystem;
 using nlohmann::json;
+using shtool::test::expect_same_table;
 using shtool::test::try_write;
 using namespace shtool;
 
@@ -162,23 +163,6 @@ Table make_table() {
   t.arrays.push_back(TableArray::from<float>("empty_2d", {3, 0}, std::vector<float>{}));
   t.arrays.push_back(TableArray::from<double>("scalar", {}, std::vector<double>{-0.0}));
   return t;
-}
-
-void expect_same_table(const Table& a, const Table& b) {
-  EXPECT_EQ(a.kind, b.kind);
-  EXPECT_EQ(a.kind_version, b.kind_version);
-  EXPECT_EQ(a.order, b.order);
-  EXPECT_EQ(a.generator, b.generator);
-  EXPECT_EQ(a.meta, b.meta);
-  ASSERT_EQ(a.arrays.size(), b.arrays.size());
-  for (std::size_t i = 0; i < a.arrays.size(); ++i) {
-    const TableArray &x = a.arrays[i], &y = b.arrays[i];
-    EXPECT_EQ(x.name, y.name);
-    EXPECT_EQ(x.dtype, y.dtype) << x.name;
-    EXPECT_EQ(x.shape, y.shape) << x.name;
-    // Byte equality = every value's exact bits (sign of zero, denormals, NaN payloads).
-    EXPECT_TRUE(x.data == y.data) << "array '" << x.name << "' bytes differ after the round trip";
-  }
 }
 
 class TableTest : public ::testing::Test {

@@ -3,6 +3,7 @@
 // is the offline model's bit for bit, shading equals the rotated SH transfer dotted with
 // the lighting, turning light and frame together changes nothing, and the flat groove
 // shades as the unshadowed plane.
+#include <array>
 #include <cmath>
 #include <functional>
 #include <numbers>
@@ -215,53 +216,71 @@ TEST(WrinkleMap, BlendIsTheOfflineModelsBitForBit) {
   }
 }
 
+// What the tests of shading in turned frames share: the map of a smooth random model of
+// order n, seeded draws of its points, of frames and of lights, and an exact SH rotation
+// of order n.
+struct TurnedFrameTrials {
+  int n;
+  WrinkleModel model;
+  WrinkleMap<double> map;
+  std::mt19937_64 rng;
+  std::uniform_real_distribution<double> u{0.0, 1.0};
+  ShRotation<double> rotation;
+
+  TurnedFrameTrials(int order, int lobes, unsigned model_seed, unsigned draw_seed)
+      : n(order),
+        model(smooth_random_model(kGrid, order, lobes, model_seed)),
+        map(WrinkleMap<double>::from_table(table_of(model)).value()),
+        rng(draw_seed),
+        rotation(order, nullptr) {}
+
+  // (x, d) with d below the deepest node.
+  std::array<double, 2> point() {
+    const double x = u(rng);
+    return {x, 0.8 * u(rng)};
+  }
+  Eigen::Matrix3d frame() { return random_rotation(rng); }
+  std::vector<double> light() { return random_light(n, rng); }
+};
+
 // The SH transfer of the groove frame, rotated into the surface frame by an exact SH
 // rotation and dotted with the lighting, is what shading gives: this pins the turned axes
 // and the turned linear band (a transposed frame or a band-1 sign slip is off by O(1)).
 TEST(WrinkleMap, ShadingIsTheRotatedTransferDottedWithTheLight) {
-  const int n = 5;
-  const WrinkleModel m = smooth_random_model(kGrid, n, 2, 6);
-  const WrinkleMap<double> map = WrinkleMap<double>::from_table(table_of(m)).value();
-  std::mt19937_64 rng(7);
-  std::uniform_real_distribution<double> u(0.0, 1.0);
+  TurnedFrameTrials s(5, 2, 6, 7);
+  const int n = s.n;
   std::vector<double> t(n * n), turned(n * n);
-  ShRotation<double> rotation(n, nullptr);
   for (int trial = 0; trial < 50; ++trial) {
-    const double x = u(rng), d = 0.8 * u(rng);
-    const Eigen::Matrix3d frame = random_rotation(rng);
-    const std::vector<double> e = random_light(n, rng);
-    evaluate_model(m, bilinear_weights(m.grid, x, d), t);
-    ASSERT_TRUE(rotation.set(frame, RotationMethod::reference));
-    rotation.apply(std::span<const double>(t), turned);
+    const auto [x, d] = s.point();
+    const Eigen::Matrix3d frame = s.frame();
+    const std::vector<double> e = s.light();
+    evaluate_model(s.model, bilinear_weights(s.model.grid, x, d), t);
+    ASSERT_TRUE(s.rotation.set(frame, RotationMethod::reference));
+    s.rotation.apply(std::span<const double>(t), turned);
     double expected = 0;
     for (int i = 0; i < n * n; ++i) expected += turned[i] * e[i];
     // Two evaluations of the same sum in different orders, |terms| ~ 1: 1e-12.
-    EXPECT_NEAR(map.shade(e, frame, x, d), expected, 1e-12) << "x " << x << " d " << d;
+    EXPECT_NEAR(s.map.shade(e, frame, x, d), expected, 1e-12) << "x " << x << " d " << d;
   }
   const std::vector<double> short_light(9, 1.0);
-  EXPECT_TRUE(std::isnan(map.shade(short_light, Eigen::Matrix3d::Identity(), 0.5, 0.5)));
-  EXPECT_TRUE(std::isnan(map.shade(std::vector<double>(25, 1.0), Eigen::Matrix3d::Identity(), NAN, 0.5)));
+  EXPECT_TRUE(std::isnan(s.map.shade(short_light, Eigen::Matrix3d::Identity(), 0.5, 0.5)));
+  EXPECT_TRUE(std::isnan(s.map.shade(std::vector<double>(25, 1.0), Eigen::Matrix3d::Identity(), NAN, 0.5)));
 }
 
 TEST(WrinkleMap, TurningLightAndFrameTogetherChangesNothing) {
-  const int n = 6;
-  const WrinkleModel m = smooth_random_model(kGrid, n, 3, 8);
-  const WrinkleMap<double> map = WrinkleMap<double>::from_table(table_of(m)).value();
-  std::mt19937_64 rng(9);
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  std::vector<double> turned(n * n);
-  ShRotation<double> rotation(n, nullptr);
+  TurnedFrameTrials s(6, 3, 8, 9);
+  std::vector<double> turned(s.n * s.n);
   for (int trial = 0; trial < 50; ++trial) {
-    const double x = u(rng), d = 0.8 * u(rng);
-    const Eigen::Matrix3d frame = random_rotation(rng), q = random_rotation(rng);
-    const std::vector<double> e = random_light(n, rng);
-    ASSERT_TRUE(rotation.set(q, RotationMethod::reference));
-    rotation.apply(std::span<const double>(e), turned);
-    const double before = map.shade(e, frame, x, d), after = map.shade(turned, q * frame, x, d);
+    const auto [x, d] = s.point();
+    const Eigen::Matrix3d frame = s.frame(), q = s.frame();
+    const std::vector<double> e = s.light();
+    ASSERT_TRUE(s.rotation.set(q, RotationMethod::reference));
+    s.rotation.apply(std::span<const double>(e), turned);
+    const double before = s.map.shade(e, frame, x, d), after = s.map.shade(turned, q * frame, x, d);
     // The reference rotation's rounding at order 6 over |terms| ~ 1: 1e-11. A light turned
     // by Q^T instead of Q, or the frame left alone, changes the value by O(1).
     EXPECT_NEAR(after, before, 1e-11) << "x " << x << " d " << d;
-    EXPECT_GT(std::abs(map.shade(turned, frame, x, d) - before), 1e-6) << "the light's turn must matter";
+    EXPECT_GT(std::abs(s.map.shade(turned, frame, x, d) - before), 1e-6) << "the light's turn must matter";
   }
 }
 

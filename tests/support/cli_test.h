@@ -6,6 +6,7 @@
 
 #include <array>
 #include <filesystem>
+#include <functional>
 #include <random>
 #include <string>
 #include <system_error>
@@ -24,6 +25,9 @@
 #include "shtool/table.h"
 
 namespace shtool::test {
+
+// Paths are what these tests pass around most: their `using namespace` brings fs along.
+namespace fs = std::filesystem;
 
 inline const std::string kShtoolExe = SHTOOL_EXE;
 inline const std::string kSourceDir = SHTOOL_SOURCE_DIR;
@@ -137,6 +141,40 @@ inline std::filesystem::path empty_folder_for_this_test(const Scratch& scratch) 
   std::filesystem::remove_all(dir, ignored);
   std::filesystem::create_directories(dir);
   return dir;
+}
+
+// A command that writes a table at `out` and its JSON summary at `json` on `threads`
+// threads: a fit command as its tests run it, small.
+using TableAndSummaryCommand = std::function<std::vector<std::string>(const fs::path& out, const fs::path& json, int threads)>;
+
+// What such a command wrote: the table (read as expected) and where, its summary, and the
+// table's metadata.
+struct TableAndSummary {
+  fs::path out;
+  Table table;
+  nlohmann::json summary, meta;
+};
+
+// `command` on 2 threads, which has to exit 0 with `report` in its stderr and write a table
+// that reads as `expect` says.
+inline Result<TableAndSummary> run_table_and_summary(const Scratch& scratch, const TableAndSummaryCommand& command,
+                                                     const std::string& report, const TableExpectation& expect) {
+  const fs::path out = scratch("written.shtb"), json = scratch("written.json");
+  Result<Table> table = run_and_read_table(command(out, json, 2), report, out, expect);
+  if (!table) return table.error();
+  nlohmann::json meta = nlohmann::json::parse(table.value().meta);
+  return TableAndSummary{out, std::move(table).value(), read_json(json), std::move(meta)};
+}
+
+// `command` writes the same table and summary, byte for byte, on 1 thread as on 2.
+inline void expect_same_bytes_on_one_and_two_threads(const Scratch& scratch, const TableAndSummaryCommand& command) {
+  const fs::path a = scratch("t1.shtb"), aj = scratch("t1.json"), b = scratch("t2.shtb"), bj = scratch("t2.json");
+  CommandResult r = run_shtool(command(a, aj, 1));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = run_shtool(command(b, bj, 2));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(read_file(a), read_file(b)) << "the table";
+  EXPECT_EQ(read_file(aj), read_file(bj)) << "the summary";
 }
 
 }  // namespace shtool::test
