@@ -156,7 +156,7 @@ std::set<std::string> declared_subcommands() {
   text << in.rdbuf();
   const std::string s = text.str();
   std::set<std::string> names;
-  const std::regex decl(R"(void\s+setup_(\w+)\s*\(\s*CLI::App\s*&)");
+  const std::regex decl(R"(void\s+setup_(\w+)\s*\(\s*CLI::App\s*\*)");
   for (auto it = std::sregex_iterator(s.begin(), s.end(), decl); it != std::sregex_iterator(); ++it) {
     std::string name = (*it)[1];
     for (char& c : name)
