@@ -85,7 +85,7 @@ struct ZhFitOptions {
   // coefficients of opposite sign) where psi still falls slowly below 1e-3; a cap below
   // max_evaluations trades that for fit time (docs/fit-zh.md).
   double split_polish_ftol_rel = 1e-4;
-  int split_polish_evaluations = 300;
+  int split_polish_evaluations = 50;
   std::uint64_t seed = 1;
   // Multi-start runs only while the residual is above this fraction of ||t|| ("we apply
   // further computation when the fit error is high", Sec. 4.1): well-fitted vertices,
