@@ -58,8 +58,8 @@ struct ZhFitOptions {
   // ([4] Sec. 3.3).
   bool direct = false;
   // Random axis sets tried after the deterministic starts (the greedy start, and for the
-  // varpro method with 3 <= lobes < order the split start as well; the multi-start of
-  // Sec. 4.1); the effort/quality knob. kStartsByEffort: the default level's count for
+  // varpro method with 3 <= lobes < order the split and low-order starts as well; the
+  // multi-start of Sec. 4.1); the effort/quality knob. kStartsByEffort: the default level's count for
   // `lobes` (apply_effort); 0: the deterministic starts only.
   int starts = kStartsByEffort;
   // Axes of the well-spread set scanned with the closed form of Eq. 18 for each greedy
