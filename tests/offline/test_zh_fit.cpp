@@ -455,14 +455,15 @@ TEST(ZhFit, DefaultEffortIsNearTheBestKnown) {
     } else {
       // Transfer vectors are fitted within the 5 % restart threshold by the deterministic
       // starts (greedy and split, the better one's last lobe re-seated at up to three
-      // residual peaks, the winner polished to 1e-4 within 30 evaluations), so the default
-      // runs no random start for them and stays above the best known at N = 4: 1.352 on
-      // average (1.358 polished to 1e-3, 1.427 with one re-seat, 1.462 without, 1.77 with
-      // the greedy start alone), short of the 1.10 target (docs/fit-zh.md, "Benchmarks").
-      // The fit is deterministic; 1.36 leaves room for the last bits of another libm, not
-      // for a lost re-seat, split start or polish. --effort 3, which restarts every
-      // vector, comes within 6 %.
-      EXPECT_LE(varpro, 1.36) << name;
+      // residual peaks, the low-order start, the winner polished to 1e-4 within 50
+      // evaluations), so the default runs no random start for them and stays above the
+      // best known at N = 4: 1.331 on average (without the low-order start 1.346 with
+      // the polish within 40, 1.352 within 30, 1.427 with one re-seat, 1.77 with the
+      // greedy start alone), short of the 1.10 target (docs/fit-zh.md, "Benchmarks"). The fit is
+      // deterministic; 1.335 leaves room for the last bits of another libm, not for a
+      // lost start, re-seat or polish. --effort 3, which restarts every vector, comes
+      // within 6 %.
+      EXPECT_LE(varpro, 1.335) << name;
       ZhFitOptions high = o;
       apply_effort(high, 3);
       EXPECT_LE(mean_ratio_to_best(b, high, name), 1.06) << name;

@@ -58,8 +58,8 @@ struct ZhFitOptions {
   // ([4] Sec. 3.3).
   bool direct = false;
   // Random axis sets tried after the deterministic starts (the greedy start, and for the
-  // varpro method with 3 <= lobes < order the split start as well; the multi-start of
-  // Sec. 4.1); the effort/quality knob. kStartsByEffort: the default level's count for
+  // varpro method with 3 <= lobes < order the split and low-order starts as well; the
+  // multi-start of Sec. 4.1); the effort/quality knob. kStartsByEffort: the default level's count for
   // `lobes` (apply_effort); 0: the deterministic starts only.
   int starts = kStartsByEffort;
   // Axes of the well-spread set scanned with the closed form of Eq. 18 for each greedy
@@ -82,10 +82,10 @@ struct ZhFitOptions {
   // varpro, 3 <= lobes < order: the polish stops at this relative change instead, after
   // at most split_polish_evaluations. The deterministic starts' fits of transfer vectors
   // often end in long, ill-conditioned valleys (near-coincident lobes with large
-  // coefficients of opposite sign) where psi still falls slowly below 1e-3; the cap keeps
-  // the whole-mesh fit within its budget (docs/fit-zh.md).
+  // coefficients of opposite sign) where psi still falls slowly below 1e-3; a cap below
+  // max_evaluations trades that for fit time (docs/fit-zh.md).
   double split_polish_ftol_rel = 1e-4;
-  int split_polish_evaluations = 30;
+  int split_polish_evaluations = 50;
   std::uint64_t seed = 1;
   // Multi-start runs only while the residual is above this fraction of ||t|| ("we apply
   // further computation when the fit error is high", Sec. 4.1): well-fitted vertices,
@@ -164,10 +164,11 @@ double zh_varpro_objective(int order, std::span<const double> t, const std::vect
 // methods, every effort); multi-lobe, varpro = the greedy start (and, for 3 <= lobes <
 // order, the split start: the single-lobe axis split into a pair along the lobe's long
 // axis, grown greedily, and the better start's last lobe re-seated at the next one to
-// three grid maxima of what the others leave, more where the residual is higher), then
-// `starts` random axis sets (seeded by options.seed and `stream`), the best polished; multi-lobe, joint = greedy, coefficient refit with axes
-// frozen, joint BFGS, then `starts` random axis sets each refit and BFGS-refined; the best
-// is returned.
+// three grid maxima of what the others leave, more where the residual is higher, and
+// where it is still high the low-order start: grown greedily on every band but the
+// highest), then `starts` random axis sets (seeded by options.seed and `stream`), the best
+// polished; multi-lobe, joint = greedy, coefficient refit with axes frozen, joint BFGS,
+// then `starts` random axis sets each refit and BFGS-refined; the best is returned.
 // Axes are returned unit length with z >= 0 (odd-band coefficients flipped with them).
 ZhFit fit_zh(std::span<const double> t, const ZhFitOptions& options, std::uint64_t stream = 0);
 
