@@ -1080,9 +1080,9 @@ int direct_count(const ZhFitOptions& options) {
 
 
 
-const std::vector<std::pair<std::string, ZhFitMethod>>& fit_method_names() {
-  static const std::vector<std::pair<std::string, ZhFitMethod>> names = {{"varpro", ZhFitMethod::varpro},
-                                                                         {"joint", ZhFitMethod::joint}};
+const EnumNames<ZhFitMethod>& fit_method_names() {
+  using enum ZhFitMethod;
+  static const EnumNames<ZhFitMethod> names = {{"varpro", varpro}, {"joint", joint}};
   return names;
 }
 

@@ -22,6 +22,7 @@
 
 #include <Eigen/Core>
 
+#include "common/enum_names.h"
 #include "shtool/zh_fit_table.h"
 
 namespace shtool::fit {
@@ -39,7 +40,7 @@ struct ZhFit {
 };
 
 enum class ZhFitMethod { varpro, joint };
-const std::vector<std::pair<std::string, ZhFitMethod>>& fit_method_names();
+const EnumNames<ZhFitMethod>& fit_method_names();
 
 inline constexpr int kStartsByEffort = -1;
 
