@@ -358,7 +358,7 @@ void BM_Fit(benchmark::State& state) {
   if (state.range(3) >= 0) options.starts = static_cast<int>(state.range(3));
   const auto best = set.best.find(options.lobes);
   const std::size_t n2 = shtool::sh_count(kOrder);
-  double residual2 = 0, norm2 = 0, ratio_sum = 0, ratio_max = 0;
+  double residual2 = 0, norm2 = 0, ratio_sum = 0, ratio_max = 0, residual_sum = 0, best_sum = 0;
   std::size_t k = 0;
   for (auto _ : state) {
     const std::size_t v = k % set.count();
@@ -370,6 +370,8 @@ void BM_Fit(benchmark::State& state) {
       const double ratio = fit.residual / best->second[v];
       ratio_sum += ratio;
       ratio_max = std::max(ratio_max, ratio);
+      residual_sum += fit.residual;
+      best_sum += best->second[v];
     }
     ++k;
   }
@@ -380,6 +382,7 @@ void BM_Fit(benchmark::State& state) {
   if (best != set.best.end()) {
     state.counters["vs_best_mean"] = ratio_sum / static_cast<double>(k);
     state.counters["vs_best_max"] = ratio_max;
+    state.counters["mean_vs_best"] = residual_sum / best_sum;
   }
 }
 

@@ -268,39 +268,90 @@ TEST(ZhFit, VarProGradientMatchesFiniteDifferences) {
 }
 
 TEST(ZhFit, VarProCoefficientsAreTheLeastSquaresSolution) {
-  // Against Eigen's complete orthogonal decomposition (the minimum-norm least-squares
-  // solution) of each band's system, and psi against the joint objective at them.
+  // Per band, the coefficients must solve the ridge normal equations
+  // (Y^T Y + lambda I) g = Y^T t; their fit Y g must be the least-squares one, which Eigen's
+  // complete orthogonal decomposition gives independently (the coefficients themselves
+  // differ from its minimum-norm solution where a band's columns are dependent, as in
+  // band 0, by about the ridge over the smallest singular value squared); and psi must be
+  // the joint objective at them plus the ridge term. Order 6 with 1 and 3 axes runs the
+  // instances compiled for fixed sizes, orders 5 and 6 with 5 axes the run-time-size one.
   Lcg rng{13};
-  const int order = 6;
-  const std::vector<double> t = random_unit_vector(rng, order);
-  const std::vector<Eigen::Vector3d> axes = {rng.unit(), rng.unit(), rng.unit()};
-  std::vector<double> coeffs(3 * order);
-  double squared_residual = 0;
-  const double psi = zh_varpro_objective(order, t, {}, axes, {}, coeffs, &squared_residual);
-  std::vector<ZhLobe> lobes(3);
-  double ridge_term = 0;
-  for (int l = 0; l < order; ++l) {
-    Eigen::MatrixXd a(2 * l + 1, 3);
-    Eigen::VectorXd b(2 * l + 1);
-    for (int k = 0; k < 3; ++k) {
-      std::vector<double> y(sh_count(order));
-      eval_sh<double>(order, axes[k], y);
-      for (int m = -l; m <= l; ++m) a(m + l, k) = y[sh_index(l, m)];
+  for (const auto& [order, count] : std::vector<std::pair<int, int>>{{6, 1}, {6, 3}, {5, 3}, {6, 5}}) {
+    const std::vector<double> t = random_unit_vector(rng, order);
+    std::vector<Eigen::Vector3d> axes;
+    for (int k = 0; k < count; ++k) axes.push_back(rng.unit());
+    std::vector<double> coeffs(count * order);
+    double squared_residual = 0;
+    const double psi = zh_varpro_objective(order, t, {}, axes, {}, coeffs, &squared_residual);
+    std::vector<ZhLobe> lobes(count);
+    double ridge_term = 0;
+    for (int l = 0; l < order; ++l) {
+      Eigen::MatrixXd a(2 * l + 1, count);
+      Eigen::VectorXd b(2 * l + 1), g(count);
+      for (int k = 0; k < count; ++k) {
+        std::vector<double> y(sh_count(order));
+        eval_sh<double>(order, axes[k], y);
+        for (int m = -l; m <= l; ++m) a(m + l, k) = y[sh_index(l, m)];
+        g[k] = coeffs[k * order + l];
+      }
+      for (int m = -l; m <= l; ++m) b[m + l] = t[sh_index(l, m)];
+      const double lambda = kVarProRidge * (2 * l + 1) / (4 * std::numbers::pi);
+      const Eigen::VectorXd normal = a.transpose() * (a * g - b) + lambda * g;
+      EXPECT_LT(normal.norm(), 1e-14 * (1 + g.norm())) << "order " << order << " axes " << count << " band " << l;
+      // With A = U S V^T, the ridge fit differs from the least-squares one by
+      // U diag(lambda / (s^2 + lambda)) U^T t, whose part along each singular vector is
+      // lambda / s times the coefficients' part: at most lambda / s_min ||g|| (s_min the
+      // smallest non-zero singular value), plus rounding.
+      const Eigen::VectorXd fit = a * a.completeOrthogonalDecomposition().solve(b);
+      const Eigen::JacobiSVD<Eigen::MatrixXd> svd(a);
+      double s_min = svd.singularValues()[0];
+      for (const double s : svd.singularValues())
+        if (s > 1e-10 * svd.singularValues()[0]) s_min = s;
+      EXPECT_LT((a * g - fit).norm(), 1.01 * lambda / s_min * g.norm() + 1e-14)
+          << "order " << order << " axes " << count << " band " << l;
+      for (int k = 0; k < count; ++k) {
+        lobes[k].axis = axes[k];
+        lobes[k].coeffs.push_back(g[k]);
+        ridge_term += lambda * g[k] * g[k];
+      }
     }
-    for (int m = -l; m <= l; ++m) b[m + l] = t[sh_index(l, m)];
-    const Eigen::VectorXd g = a.completeOrthogonalDecomposition().solve(b);
-    for (int k = 0; k < 3; ++k) {
-      // The ridge (1e-10 of the Gram diagonal) moves a solution by about that much
-      // relative to the system's smallest singular value squared.
-      EXPECT_NEAR(coeffs[k * order + l], g[k], 1e-7 * std::max(1.0, std::abs(g[k]))) << "band " << l << " lobe " << k;
-      lobes[k].axis = axes[k];
-      lobes[k].coeffs.push_back(coeffs[k * order + l]);
-      ridge_term += kVarProRidge * (2 * l + 1) / (4 * std::numbers::pi) * coeffs[k * order + l] * coeffs[k * order + l];
-    }
+    EXPECT_NEAR(squared_residual, zh_objective(order, t, lobes, {}), 1e-14) << "order " << order << " axes " << count;
+    EXPECT_NEAR(psi, squared_residual + ridge_term, 1e-14) << "order " << order << " axes " << count;
+    EXPECT_GT(ridge_term, 0.0);
   }
-  EXPECT_NEAR(squared_residual, zh_objective(order, t, lobes, {}), 1e-14);
-  EXPECT_NEAR(psi, squared_residual + ridge_term, 1e-14);
-  EXPECT_GT(ridge_term, 0.0);
+}
+
+TEST(ZhFit, VarProFixedSizesMatchTheAnySizeReference) {
+  // The instances compiled for order 6 and 1-4 axes repeat the run-time-size objective's
+  // operations in the same order: value, coefficients, residual and gradient agree bit for
+  // bit, also with a pair of nearly coincident axes (the ill-conditioned case), non-unit
+  // axes and bands stored directly.
+  Lcg rng{17};
+  const int order = 6;
+  for (int count = 1; count <= 4; ++count)
+    for (const std::vector<bool>& mask :
+         {std::vector<bool>{}, std::vector<bool>{false, false, true, true, true, true}})
+      for (int trial = 0; trial < 3; ++trial) {
+        const std::vector<double> t = random_unit_vector(rng, order);
+        std::vector<Eigen::Vector3d> axes;
+        for (int k = 0; k < count; ++k) axes.push_back((0.5 + rng.uniform()) * rng.unit());
+        if (count >= 2 && trial == 2) axes[1] = axes[0] + 1e-4 * rng.unit();
+        std::vector<double> grad[2], coeffs[2];
+        double value[2], squared_residual[2];
+        for (int reference = 0; reference < 2; ++reference) {
+          grad[reference].assign(3 * count, 0.0);
+          coeffs[reference].assign(count * order, 0.0);
+          value[reference] = (reference ? zh_varpro_objective_any_size : zh_varpro_objective)(
+              order, t, mask, axes, grad[reference], coeffs[reference], &squared_residual[reference]);
+        }
+        const std::string what =
+            "axes " + std::to_string(count) + " trial " + std::to_string(trial) + " masked " + std::to_string(!mask.empty());
+        EXPECT_EQ(value[0], value[1]) << what;
+        EXPECT_EQ(squared_residual[0], squared_residual[1]) << what;
+        EXPECT_EQ(coeffs[0], coeffs[1]) << what;
+        EXPECT_EQ(grad[0], grad[1]) << what;
+        EXPECT_GT(value[0], 0.0) << what;
+      }
 }
 
 TEST(ZhFit, VarProFitsMeshTransferAtLeastAsWellAsTheReference) {

@@ -980,6 +980,12 @@ double zh_varpro_objective(int order, std::span<const double> t, const std::vect
       default: break;
     }
   }
+  return zh_varpro_objective_any_size(order, t, mask, axes, grad, coeffs, squared_residual);
+}
+
+double zh_varpro_objective_any_size(int order, std::span<const double> t, const std::vector<bool>& mask,
+                                    std::span<const Eigen::Vector3d> axes, std::span<double> grad,
+                                    std::span<double> coeffs, double* squared_residual) {
   return varpro_objective<0, 0>(order, t, mask, axes, grad, coeffs, squared_residual);
 }
 

@@ -160,6 +160,12 @@ inline constexpr double kVarProRidge = 1e-10;
 double zh_varpro_objective(int order, std::span<const double> t, const std::vector<bool>& mask,
                            std::span<const Eigen::Vector3d> axes, std::span<double> grad,
                            std::span<double> coeffs = {}, double* squared_residual = nullptr);
+// The same objective with every size read at run time. zh_varpro_objective compiles the
+// sizes a default fit uses (order 6, 1-4 axes) as constants with the same operations in
+// the same order; this is the reference those instances are tested against bit for bit.
+double zh_varpro_objective_any_size(int order, std::span<const double> t, const std::vector<bool>& mask,
+                                    std::span<const Eigen::Vector3d> axes, std::span<double> grad,
+                                    std::span<double> coeffs = {}, double* squared_residual = nullptr);
 
 // Full fit of one vector (t.size() == order^2): single lobe = best_single_lobe (both
 // methods, every effort); multi-lobe, varpro = the greedy start (and, for 3 <= lobes <
