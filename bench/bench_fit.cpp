@@ -33,7 +33,8 @@
 //                               1 joint (the reference); --effort E; S >= 0 overrides the
 //                               starts. per_vector = time per fit, nrms = sqrt(sum
 //                               residual^2 / sum |t|^2); vs_best_mean / vs_best_max =
-//                               residual over the fixture's best known fit of the vector.
+//                               residual over the fixture's best known fit of the vector;
+//                               mean_vs_best = the mean residual over the best knowns' mean.
 //   --write-best-known=PATH     computes that fixture (vectors, best-known residuals for
 //                               N = 1, 2, 4; minutes on 2 cores) and writes it, then exits.
 //   BM_Shade/<type>/<method>/lobes:N[/res:R]
