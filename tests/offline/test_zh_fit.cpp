@@ -284,14 +284,14 @@ TEST(ZhFit, VarProCoefficientsAreTheLeastSquaresSolution) {
     double squared_residual = 0;
     const double psi = zh_varpro_objective(order, t, {}, axes, {}, coeffs, &squared_residual);
     std::vector<ZhLobe> lobes(count);
+    std::vector<std::vector<double>> y(count, std::vector<double>(sh_count(order)));
+    for (int k = 0; k < count; ++k) eval_sh<double>(order, axes[k], y[k]);
     double ridge_term = 0;
     for (int l = 0; l < order; ++l) {
       Eigen::MatrixXd a(2 * l + 1, count);
       Eigen::VectorXd b(2 * l + 1), g(count);
       for (int k = 0; k < count; ++k) {
-        std::vector<double> y(sh_count(order));
-        eval_sh<double>(order, axes[k], y);
-        for (int m = -l; m <= l; ++m) a(m + l, k) = y[sh_index(l, m)];
+        for (int m = -l; m <= l; ++m) a(m + l, k) = y[k][sh_index(l, m)];
         g[k] = coeffs[k * order + l];
       }
       for (int m = -l; m <= l; ++m) b[m + l] = t[sh_index(l, m)];
@@ -344,8 +344,8 @@ TEST(ZhFit, VarProFixedSizesMatchTheAnySizeReference) {
           value[reference] = (reference ? zh_varpro_objective_any_size : zh_varpro_objective)(
               order, t, mask, axes, grad[reference], coeffs[reference], &squared_residual[reference]);
         }
-        const std::string what =
-            "axes " + std::to_string(count) + " trial " + std::to_string(trial) + " masked " + std::to_string(!mask.empty());
+        const std::string what = "axes " + std::to_string(count) + " trial " + std::to_string(trial) +
+                                 " masked " + std::to_string(!mask.empty());
         EXPECT_EQ(value[0], value[1]) << what;
         EXPECT_EQ(squared_residual[0], squared_residual[1]) << what;
         EXPECT_EQ(coeffs[0], coeffs[1]) << what;
@@ -510,10 +510,10 @@ TEST(ZhFit, DefaultEffortIsNearTheBestKnown) {
       // evaluations), so the default runs no random start for them and stays above the
       // best known at N = 4: 1.331 on average (without the low-order start 1.346 with
       // the polish within 40, 1.352 within 30, 1.427 with one re-seat, 1.77 with the
-      // greedy start alone), short of the 1.10 target (docs/fit-zh.md, "Benchmarks"). The fit is
-      // deterministic; 1.335 leaves room for the last bits of another libm, not for a
-      // lost start, re-seat or polish. --effort 3, which restarts every vector, comes
-      // within 6 %.
+      // greedy start alone), short of the 1.10 target (docs/fit-zh.md, "Benchmarks").
+      // The fit is deterministic; 1.335 leaves room for the last bits of another libm,
+      // not for a lost start, re-seat or polish. --effort 3, which restarts every
+      // vector, comes within 6 %.
       EXPECT_LE(varpro, 1.335) << name;
       ZhFitOptions high = o;
       apply_effort(high, 3);

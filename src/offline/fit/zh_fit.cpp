@@ -178,9 +178,9 @@ constexpr double kReseatMinAngle = 0.25;
 // and split starts. On the fit fixture's transfer vectors at N = 4 (with the polish
 // within 300 evaluations) it lowers the mean residual over the best known from 1.336 to
 // 1.322 for 26 % more evaluations a vector there and 14 % more on the bunny; run above
-// 0.75 % or 1 % of ||t|| instead, 1.333. Started on
-// bands 0..order-3 instead it finds nothing the other starts miss; started from the
-// best axes so far (band order-1 dropped, then restored) it moves them too little.
+// 0.75 % or 1 % of ||t|| instead, 1.333. Started on bands 0..order-3 instead it finds
+// nothing the other starts miss; started from the best axes so far (band order-1
+// dropped, then restored) it moves them too little.
 constexpr double kLowOrderStartAbove = 0.005;
 constexpr int kLowOrderPolishEvaluations = 20;
 // A single lobe's refinement from a grid peak: two angles, converged in far fewer.

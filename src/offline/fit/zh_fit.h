@@ -60,8 +60,8 @@ struct ZhFitOptions {
   bool direct = false;
   // Random axis sets tried after the deterministic starts (the greedy start, and for the
   // varpro method with 3 <= lobes < order the split and low-order starts as well; the
-  // multi-start of Sec. 4.1); the effort/quality knob. kStartsByEffort: the default level's count for
-  // `lobes` (apply_effort); 0: the deterministic starts only.
+  // multi-start of Sec. 4.1); the effort/quality knob. kStartsByEffort: the default
+  // level's count for `lobes` (apply_effort); 0: the deterministic starts only.
   int starts = kStartsByEffort;
   // Axes of the well-spread set scanned with the closed form of Eq. 18 for each greedy
   // stage of a multi-lobe fit (a spherical-Fibonacci set on the upper hemisphere: s and
