@@ -7,6 +7,7 @@
 #include <tiny_gltf.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <sstream>
@@ -271,6 +272,60 @@ TEST(MeshFrames, RenderAndDeformRefuseToMixFrames) {
   must(run_shtool({"deform", scratch("mix.shtb").string(), "--rest", mesh.string(), "--pose", mesh.string(), "--out",
             posed.string()}));
   EXPECT_EQ(meta_of(posed)["mesh_up"], "y");
+}
+
+// A bake is put back only on the mesh it was made on: another mesh with as many vertices
+// (the same quad turned to face the front) is refused by render, deform and export-web,
+// which name it and write nothing, through the loaded mesh's checksum the table records.
+// A bake that computed its normals from a file with its own is still its mesh's. A table
+// read z-up put on a glTF (which takes no --up) is refused with the advice that applies.
+TEST(MeshFrames, RenderDeformAndExportWebRefuseAnotherMesh) {
+  const fs::path mesh = write_obj(quad({1, 0, 0}, {0, 0, -1}), "same_a.obj");
+  const fs::path other = write_obj(quad({1, 0, 0}, {0, 1, 0}), "same_b.obj");
+  bake(mesh, "same");
+  must(run_shtool({"light", "--type", "directional", "--dir", "0,0,1", "--order", "2", "--json",
+                   scratch("zenith.json").string()}));
+  const std::string table = scratch("same.shtb").string(), light = scratch("zenith.json").string();
+  const fs::path image = scratch("same_refused.png"), posed = scratch("same_refused.shtb"),
+                 folder = scratch("same_refused_web");
+  const std::vector<std::pair<std::vector<std::string>, fs::path>> runs = {
+      {{"render", other.string(), "--fit", table, "--light", light, "--out", image.string()}, image},
+      {{"deform", table, "--rest", other.string(), "--pose", other.string(), "--out", posed.string()}, posed},
+      {{"export-web", other.string(), "--fit", table, "--light", light, "--out", folder.string()}, folder}};
+  for (const auto& [args, out] : runs) {
+    const CommandResult r = run_shtool(args);
+    EXPECT_EQ(r.exit_code, 1) << args[0];
+    EXPECT_NE(r.err.find("another mesh"), std::string::npos) << args[0] << ": " << r.err;
+    EXPECT_NE(r.err.find("same_b.obj"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out)) << args[0];
+  }
+  must(run_shtool({"render", mesh.string(), "--fit", table, "--light", light, "--width", "16", "--height", "16", "--out",
+                   image.string()}));
+
+  // The same quad with tilted normals in the file, baked with --normals computed: render
+  // loads the file's normals, so the checksum needs the mesh read again as it was baked.
+  const fs::path with_normals = scratch("same_n.obj");
+  std::string text = read_file(mesh);
+  std::string faces;
+  for (std::size_t pos = text.find("f "); pos != std::string::npos; pos = text.find("f ", pos + 1)) {
+    int a = 0, b = 0, c = 0;
+    std::sscanf(text.c_str() + pos, "f %d %d %d", &a, &b, &c);
+    faces += "f " + std::to_string(a) + "//1 " + std::to_string(b) + "//1 " + std::to_string(c) + "//1\n";
+  }
+  shtool::test::write_file(with_normals, text.substr(0, text.find("f ")) + "vn 0.6 0.8 0\n" + faces);
+  bake(with_normals, "same_n", {"--normals", "computed"});
+  must(run_shtool({"render", with_normals.string(), "--fit", scratch("same_n.shtb").string(), "--light", light,
+                   "--width", "16", "--height", "16", "--out", scratch("same_n.png").string()}));
+
+  // A table read z-up on a glTF.
+  bake(mesh, "same_z", {"--up", "z"});
+  const fs::path glb = write_glb(quad({1, 0, 0}, {0, 0, -1}), "same.glb");
+  const fs::path glb_image = scratch("same_glb_refused.png");
+  const CommandResult r = run_shtool({"render", glb.string(), "--fit", scratch("same_z.shtb").string(), "--light",
+                                      light, "--out", glb_image.string()});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("a glTF is always read y-up"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(glb_image));
 }
 
 }  // namespace

@@ -1,5 +1,8 @@
 #include "common/mesh_frame.h"
 
+#include <cctype>
+#include <filesystem>
+
 #include <nlohmann/json.hpp>
 
 #include "common/input_error.h"
@@ -40,9 +43,14 @@ void check_same_up(const Table& table, UpAxis mesh_up, const std::string& what, 
     table_up = up.get<std::string>();
   }
   if (table_up == up_axis_name(mesh_up)) return;
+  // A glTF takes no --up: the advice is then the mesh the table was baked on.
+  std::string ext = std::filesystem::path(mesh).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  const std::string advice = ext == ".gltf" || ext == ".glb"
+                                 ? "a glTF is always read y-up: give the mesh the bake was made on"
+                                 : "give the --up the bake was made with, " + table_up;
   throw InputError(what + " was baked on a mesh read " + table_up + "-up, but " + mesh + " is read " +
-                   up_axis_name(mesh_up) + "-up: the lobes would light it from the wrong side (give the " +
-                   "--up the bake was made with, " + table_up + ")");
+                   up_axis_name(mesh_up) + "-up: the lobes would light it from the wrong side (" + advice + ")");
 }
 
 }  // namespace shtool

@@ -41,6 +41,7 @@ DeformReport run_deform(const DeformRequest& r) {
   if (input_meta.is_object() && input_meta.contains("texture"))
     throw InputError(r.fit.string() + ": a texture-space bake (fit-zh --texture); deform takes per-vertex bakes");
   check_same_up(input.value(), rest.up, r.fit.string(), r.rest.string());
+  fit::check_same_mesh(input.value(), rest, r.rest, r.fit.string());
   Result<ZhFitTable<double>> loaded = ZhFitTable<double>::from_table(input.value());
   if (!loaded) throw InputError(r.fit.string() + ": " + loaded.error().message);
   const ZhFitTable<double> fit = fit_for_mesh(std::move(loaded).value(), rest, r.fit.string());

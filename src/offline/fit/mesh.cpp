@@ -8,6 +8,7 @@
 #include <numbers>
 #include <sstream>
 
+#include <nlohmann/json.hpp>
 #include <tiny_obj_loader.h>
 
 #include "common/input_error.h"
@@ -261,6 +262,25 @@ Mesh load_mesh(const std::filesystem::path& path, NormalSource normal_source, Up
     return load_gltf_bytes(bytes, path, normal_source);
   }
   return load_obj_text(bytes, path, normal_source, up);
+}
+
+void check_same_mesh(const Table& table, const Mesh& mesh, const std::filesystem::path& file, const std::string& what) {
+  const nlohmann::json generator = nlohmann::json::parse(table.generator, nullptr, false);
+  if (!generator.is_object() || !generator.contains("parameters") || !generator["parameters"].is_object()) return;
+  const nlohmann::json& params = generator["parameters"];
+  if (!params.contains("mesh_crc32")) return;
+  if (!params["mesh_crc32"].is_number_unsigned())
+    throw InputError(what + ": generator.parameters.mesh_crc32 must be an unsigned integer");
+  const std::uint64_t baked = params["mesh_crc32"].get<std::uint64_t>();
+  std::uint32_t loaded = loaded_mesh_crc32(mesh);
+  // Normals are part of the checksum: a bake that computed them from a file that has its
+  // own saw other normals than the automatic loading here.
+  if (loaded != baked && mesh.normals_from_file && params.contains("normals") && params["normals"] == "computed")
+    loaded = loaded_mesh_crc32(load_mesh(file, NormalSource::computed, mesh.up));
+  if (loaded == baked) return;
+  throw InputError(what + " was baked on another mesh: it records mesh_crc32 " + std::to_string(baked) + ", and " +
+                   file.string() + " loads as " + std::to_string(loaded) +
+                   " (positions, normals and triangles in shtool's frame); give the mesh it was baked on");
 }
 
 Mesh load_obj_text(const std::string& text, const std::filesystem::path& path, NormalSource normal_source,

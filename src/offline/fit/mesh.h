@@ -13,6 +13,7 @@
 #include "common/enum_names.h"
 #include "common/input_error.h"
 #include "common/mesh_frame.h"
+#include "shtool/table.h"
 
 #include <array>
 #include <cstddef>
@@ -113,6 +114,15 @@ Mesh load_gltf_bytes(const std::string& bytes, const std::filesystem::path& path
 // `up`. A glTF with `up` z is refused (InputError): glTF is +Y up by its specification.
 Mesh load_mesh(const std::filesystem::path& path, NormalSource normals = NormalSource::automatic,
                UpAxis up = UpAxis::y);
+
+// A bake of a mesh records the CRC-32 of the mesh as loaded (generator
+// parameters.mesh_crc32, loaded_mesh_crc32) and the normals it was loaded with
+// (parameters.normals). A command that puts the table's rows back on `mesh` (read from
+// `file` with automatic normals) refuses another mesh, even one with as many vertices:
+// InputError naming `what` (the table) and `file`. The mesh is read again from `file`
+// when the bake computed its normals and the file has its own. A table without the
+// record (fit-zh --transfer, deform, older versions) is not checked.
+void check_same_mesh(const Table& table, const Mesh& mesh, const std::filesystem::path& file, const std::string& what);
 
 // The same for OBJ text already in memory; `path` names it in messages.
 // `mtl_text`, when not empty, is the .mtl the OBJ's usemtl lines name (Mesh::obj_materials,

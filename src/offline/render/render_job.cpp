@@ -363,6 +363,7 @@ RenderResult run_render(const RenderRequest& r) {
     if (table.kind_version.rfind("1.", 0) != 0)
       throw InputError("--fit " + r.fit.string() + ": kind_version " + table.kind_version + " is not supported");
     check_same_up(table, rest.up, "--fit " + r.fit.string(), r.mesh.string());
+    fit::check_same_mesh(table, rest, r.mesh, "--fit " + r.fit.string());
     if (table.kind == kGlossyZhKind && r.shading == Shading::automatic) {
       // A fit-glossy table given without --shading is shaded as what it is.
       Result<GlossyFit<double>> g = GlossyFit<double>::from_table(table);
@@ -384,6 +385,7 @@ RenderResult run_render(const RenderRequest& r) {
       Result<GlossyFit<double>> g = GlossyFit<double>::from_table(read.value());
       if (!g) throw InputError("--fit " + r.fit.string() + ": " + g.error().message);
       check_same_up(read.value(), rest.up, "--fit " + r.fit.string(), r.mesh.string());
+      fit::check_same_mesh(read.value(), rest, r.mesh, "--fit " + r.fit.string());
       glossy.emplace(std::move(g).value());
     }
     glossy = glossy_fit_for_mesh(std::move(*glossy), rest, "--fit " + r.fit.string());

@@ -130,6 +130,7 @@ ExportWebResult run_export_web(const ExportWebRequest& r) {
     throw InputError("--fit " + r.fit.string() + ": a table of kind " + table.kind +
                      "; export-web shades a per-vertex zh-fit (fit-zh --out)");
   check_same_up(table, meshes.rest.up, "--fit " + r.fit.string(), r.mesh.string());
+  fit::check_same_mesh(table, meshes.rest, r.mesh, "--fit " + r.fit.string());
   {
     const nlohmann::json meta = nlohmann::json::parse(table.meta, nullptr, false);
     if (meta.is_object() && meta.contains("texture"))
