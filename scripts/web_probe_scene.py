@@ -25,10 +25,13 @@ SPOT = ROOT / "data" / "spot.obj"
 SKY = ROOT / "data" / "sky.hdr"
 BROWSER = ROOT / "tests" / "consumer" / "node" / "export_web_browser.mjs"
 
-# The probe grid's box in shtool's frame (z up): the quad's extent, from the ground to a
-# little above spot's head.
+# The probe grid's box in shtool's frame (z up): the quad's extent, from one cell below the
+# ground to a little above spot's head, in LAYERS layers of probes. three samples the grid
+# half a cell along a surface's normal and leaves a point unlit where that falls outside
+# the box: the cell below the ground keeps the spheres' undersides inside it.
 BOX_XY = 2.0
 BOX_TOP = 1.3
+LAYERS = 7
 
 
 def run(*args):
@@ -84,8 +87,9 @@ def main():
     fit, sky, probes, page = out / "fit4.shtb", out / "sky4.json", out / "probes.shtb", out / "page"
     run(shtool, "fit-zh", SPOT, "--order", 4, "--lobes", 3, "--rays", 256, "--out", fit)
     run(shtool, "project-env", SKY, "--order", 4, "--json", sky)
-    bounds = f"--bounds={-BOX_XY},{-BOX_XY},{floor - 0.005:.4f},{BOX_XY},{BOX_XY},{BOX_TOP}"
-    run(shtool, "bake-probes", scene, "--grid", "16,16,6", bounds, "--env", sky, "--order", 3, "--samples", 512,
+    bottom = floor - (BOX_TOP - floor) / (LAYERS - 1)
+    bounds = f"--bounds={-BOX_XY},{-BOX_XY},{bottom:.4f},{BOX_XY},{BOX_XY},{BOX_TOP}"
+    run(shtool, "bake-probes", scene, "--grid", f"16,16,{LAYERS}", bounds, "--env", sky, "--order", 3, "--samples", 512,
         "--bounces", 2, "--out", probes)
     eye, target = front_camera(floor)
     camera = ",".join(f"{v:.4f}" for v in (*eye, *target, 0, 0, 1))

@@ -101,6 +101,20 @@ export function probeGridFromData( doc, atlasBytes, what = 'probes.json' ) {
 
 }
 
+// Throws when this WebGL cannot hold the grid's atlas. A 3D texture past
+// MAX_3D_TEXTURE_SIZE fails to upload, and three then lights the scene with zeros without
+// a word. WebGL2 guarantees 256 texels: 34 probes along three's z (shtool's y), since the
+// atlas stacks 7 (nz + 2) slices.
+export function checkProbeGridFits( renderer, grid, what = 'probes.json' ) {
+
+	const gl = renderer.getContext();
+	const limit = gl.getParameter( gl.MAX_3D_TEXTURE_SIZE );
+	const { width, height, depth } = grid.texture.image;
+	if ( Math.max( width, height, depth ) > limit )
+		fail( what, `its atlas is ${width} x ${height} x ${depth} texels, past this WebGL's MAX_3D_TEXTURE_SIZE ${limit} (WebGL2 guarantees 256: at most 34 probes along three's z, shtool's y)` );
+
+}
+
 async function fetchBytes( url ) {
 
 	const response = await fetch( url );
@@ -111,6 +125,7 @@ async function fetchBytes( url ) {
 
 // Loads DIR/probes.json and its atlas. `options.load(url)` returns a Promise of an
 // ArrayBuffer (default: fetch); node, whose fetch reads no file: URL, passes its own.
+// `options.renderer`, when given, is checked to hold the atlas (checkProbeGridFits).
 export async function loadProbeGrid( url, options = {} ) {
 
 	const load = options.load || fetchBytes;
@@ -130,7 +145,9 @@ export async function loadProbeGrid( url, options = {} ) {
 	if ( doc === null || typeof doc !== 'object' || typeof doc.atlas !== 'string' || doc.atlas === '' )
 		fail( jsonUrl.href, '"atlas" (the name of the .bin beside it) is missing' );
 	const atlas = await load( new URL( doc.atlas, jsonUrl ).href );
-	return probeGridFromData( doc, atlas, jsonUrl.href );
+	const grid = probeGridFromData( doc, atlas, jsonUrl.href );
+	if ( options.renderer ) checkProbeGridFits( options.renderer, grid, jsonUrl.href );
+	return grid;
 
 }
 

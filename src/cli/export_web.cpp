@@ -36,6 +36,7 @@ void setup_export_web(CLI::App* sub) {
     web::ExportWebRequest r = *req;
     r.camera = parse_camera(*camera);
     const web::ExportWebResult result = web::run_export_web(r);
+    for (const std::string& w : result.warnings) std::cerr << "export-web: warning: " << w << '\n';
     std::cerr << "export-web: wrote " << result.files.size() << " files to " << r.out.string() << " (order "
               << result.order << ", " << result.lobes << " lobes, " << result.vertices << " vertices, "
               << result.triangles << " triangles); serve it with: python3 -m http.server -d " << r.out.string()

@@ -353,6 +353,25 @@ TEST(ThreeProbeGrid, ChromiumRendersALambertSphereWithEOverPi) {
     std::printf("%s grid, %s: %zu pixels, worst |pixel - E/pi| %.3g\n", affine ? "affine" : "uniform",
                 out["renderer"].get<std::string>().c_str(), out["pixels"].size(), worst);
   }
+  // A grid whose atlas no WebGL holds (4096 probes along shtool's y: 28,686 slices, past
+  // every GPU's MAX_3D_TEXTURE_SIZE, SwiftShader's 2048 included) is refused by the loader
+  // given the renderer, instead of lighting the sphere with the zeros of a failed upload.
+  ThreeProbeGridInput tall;
+  tall.resolution = {1, 4096, 1};
+  tall.min = Eigen::Vector3d(-8, -8, -8);
+  tall.max = Eigen::Vector3d(8, 8, 8);
+  for (int p = 0; p < 4096; ++p) tall.coefficients.insert(tall.coefficients.end(), light.begin(), light.end());
+  const fs::path dir = scratch_dir("browser_tall");
+  interop::write_three_probe_grid(dir, tall);
+  test::CommandOptions o;
+  o.timeout_seconds = 300;
+  const test::CommandResult r =
+      test::run_command({"node", (consumers / "probe_grid_browser.mjs").string(), "chromium", dir.string()}, o);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json out = nlohmann::json::parse(r.out);
+  ASSERT_TRUE(out.contains("error")) << r.out.substr(0, 200);
+  EXPECT_NE(out["error"].get<std::string>().find("MAX_3D_TEXTURE_SIZE"), std::string::npos) << out["error"];
+  EXPECT_NE(out["error"].get<std::string>().find("1 x 1 x 28686"), std::string::npos) << out["error"];
 }
 
 }  // namespace

@@ -198,6 +198,12 @@ Mesh finish_mesh(Mesh mesh, const std::vector<Eigen::Vector3d>& positions, const
       ++mesh.unreferenced_vertices;
       continue;
     }
+    if (positions[v].cwiseAbs().maxCoeff() > kMaxCoordinate) {
+      std::ostringstream where;
+      where << "vertex " << v + 1 << " (" << positions[v].x() << ", " << positions[v].y() << ", " << positions[v].z()
+            << ") lies beyond +-1e15, which single-precision ray tracing cannot reach";
+      fail_input(path, where.str());
+    }
     remap[v] = static_cast<int>(mesh.positions.size());
     mesh.positions.push_back(position(static_cast<int>(v)));
     mesh.source_index.push_back(static_cast<std::uint32_t>(v));

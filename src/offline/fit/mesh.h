@@ -86,6 +86,11 @@ std::uint32_t loaded_mesh_crc32(const Mesh& mesh);
 // through another mesh's UVs. 0 for a mesh without UVs.
 std::uint32_t uv_layout_crc32(const Mesh& mesh);
 
+// The largest coordinate a mesh (or a probe box) may have, in shtool's units: rays are
+// traced in single precision, and Embree refuses a ray origin beyond about 1.8e18; 1e15
+// leaves room for the offsets and extents added to it. Beyond it is refused as bad input.
+inline constexpr double kMaxCoordinate = 1e15;
+
 enum class NormalSource { automatic, file, computed };
 const EnumNames<NormalSource>& normal_source_names();  // auto, file, computed
 

@@ -120,6 +120,9 @@ std::pair<Eigen::Vector3d, Eigen::Vector3d> parse_bounds(const std::string& text
   for (int a = 0; a < 3; ++a) {
     lo[a] = parse_double(f[a], "--bounds");
     hi[a] = parse_double(f[3 + a], "--bounds");
+    if (std::max(std::abs(lo[a]), std::abs(hi[a])) > fit::kMaxCoordinate)
+      throw InputError("--bounds: " + f[std::abs(lo[a]) > fit::kMaxCoordinate ? a : 3 + a] +
+                       " lies beyond +-1e15, which single-precision ray tracing cannot reach");
   }
   for (int a = 0; a < 3; ++a)
     if (!(lo[a] < hi[a]))

@@ -8,6 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "common/finite.h"
 #include "common/input_error.h"
 #include "common/input_file.h"
 #include "common/job_outputs.h"
@@ -187,6 +188,11 @@ ExportWebResult run_export_web(const ExportWebRequest& r) {
       const std::vector<double> e = lighting::light_channel(light, ch, order);
       std::vector<double> turned(e.size());
       rotation.apply(std::span<const double>(e), std::span<double>(turned));
+      for (std::size_t i = 0; i < turned.size(); ++i)
+        if (!finite_as_float(turned[i]))
+          throw InputError("--light " + r.light.string() + ": coefficient " + std::to_string(i) + " of channel " +
+                           names[ch] + " is " + std::to_string(turned[i]) +
+                           " in three's frame, beyond float32's range: the page shades in float");
       light_json[names[ch]] = turned;
     }
   }
@@ -198,6 +204,7 @@ ExportWebResult run_export_web(const ExportWebRequest& r) {
   const double radius = bounds.radius;
   double extent = radius;  // of everything drawn, round the mesh's centre
   nlohmann::json scene = nlohmann::json::object();
+  std::vector<std::string> warnings;  // printed by the caller
   if (probes) {
     const Vec pmin = probes->min, pmax = probes->max;
     for (int k = 0; k < 8; ++k) {
@@ -207,6 +214,23 @@ ExportWebResult run_export_web(const ExportWebRequest& r) {
     // A ground under the mesh across the grid's box, and spheres beside the mesh, on the
     // ground, right and left of the view and behind, kept inside the box.
     const double ground = std::clamp(bounds.lo.z(), pmin.z(), pmax.z());
+    // three samples the grid half a cell along the normal and leaves a point whose sample
+    // falls outside the box unlit: the spheres' undersides go black where the box ends
+    // less than half a cell below the ground.
+    const Vec cell = (pmax - pmin).cwiseQuotient(
+        Vec(probes->resolution[0], probes->resolution[1], probes->resolution[2]));
+    if (ground - 0.5 * cell.z() < pmin.z() - 0.01 * cell.z())
+      warnings.push_back("the probe grid's box ends " + std::to_string(ground - pmin.z()) +
+                                " below the ground, less than half a cell (" + std::to_string(0.5 * cell.z()) +
+                                "): three.js leaves the spheres' undersides unlit; bake with --bounds reaching at "
+                                "least half a cell below the ground");
+    // The atlas stacks 7 (NY + 2) slices of a 3D texture (three's z is shtool's y).
+    const int depth = 7 * (probes->resolution[1] + 2);
+    if (std::max({probes->resolution[0], probes->resolution[2], depth}) > 256)
+      warnings.push_back("the probe atlas is " + std::to_string(probes->resolution[0]) + " x " +
+                                std::to_string(probes->resolution[2]) + " x " + std::to_string(depth) +
+                                " texels; WebGL2 guarantees 3D textures of 256 (34 probes along y): a WebGL with a "
+                                "smaller MAX_3D_TEXTURE_SIZE refuses the page");
     const Vec forward = (view::as_vector(camera.target) - view::as_vector(camera.eye)).normalized();
     Vec right = forward.cross(Vec::UnitZ());
     if (right.norm() < 1e-9) right = Vec::UnitX();
@@ -242,6 +266,10 @@ ExportWebResult run_export_web(const ExportWebRequest& r) {
   scene["lobes"] = lobes;
   scene["direct"] = fit.direct_count;
   scene["mesh"] = "mesh.glb";
+  scene["source"] = {{"mesh", r.mesh.filename().string()}, {"up", up_axis_name(meshes.rest.up)},
+                     {"fit", r.fit.filename().string()}, {"light", r.light.filename().string()}};
+  if (!r.pose.empty()) scene["source"]["pose"] = r.pose.filename().string();
+  if (!r.probes.empty()) scene["source"]["probes"] = r.probes.filename().string();
   scene["light"] = light_json;
   scene["shaders"] = {{"rotate", "shtool-rotate.glsl"}, {"shade", "shtool-zh-shade.glsl"}};
   scene["three"] = interop::kThreeVersion;
@@ -324,6 +352,7 @@ ExportWebResult run_export_web(const ExportWebRequest& r) {
   result.lobes = lobes;
   result.vertices = mesh.positions.size();
   result.triangles = mesh.triangles.size();
+  result.warnings = std::move(warnings);
   return result;
 }
 

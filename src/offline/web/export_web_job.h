@@ -34,6 +34,7 @@ struct ExportWebResult {
   std::vector<std::filesystem::path> files;  // written, relative to out
   int order = 0, lobes = 0;                   // of the shader
   std::size_t vertices = 0, triangles = 0;
+  std::vector<std::string> warnings;         // what the page may draw wrong (a probe box ending at the ground)
 };
 
 // Checks everything before writing (InputError naming the problem: a fit of another mesh
