@@ -305,6 +305,7 @@ TEST(CliBakeProbes, RefusesBadScenesGridsBoundsAndOptions) {
           {{"--grid", "2,2,2", "--bounds", "2,0,0,1,1,1"}, "--bounds: min x (2) must be below max x (1)"},
           {{"--grid", "2,2,2", "--bounds", "0,0,0,1,1"}, "--bounds must be X0,Y0,Z0,X1,Y1,Z1"},
           {{"--grid", "2,2,2", "--bounds", "0,0,0,1,1,nan"}, "is not a finite number"},
+          {{"--grid", "2,2,2", "--bounds=-1e19,-1,0.5,1e19,1,1.5"}, "--bounds: -1e19 lies beyond +-1e15"},
           {{"--grid", "2,2,2", "--order", "0"}, "--order must be in 1..8"},
           {{"--grid", "2,2,2", "--order", "9"}, "--order must be in 1..8"},
           {{"--grid", "2,2,2", "--bounces", "-1"}, "--bounces must be in 0..64"},
@@ -316,6 +317,10 @@ TEST(CliBakeProbes, RefusesBadScenesGridsBoundsAndOptions) {
   expect_refused("bake-probes", {scratch("missing.gltf").string(), "--grid", "2,2,2"}, "no such file", out);
   write_file(scratch("garbage.obj"), "v 0 0 0\nf 1 2 3\n");
   expect_refused("bake-probes", {scratch("garbage.obj").string(), "--grid", "2,2,2"}, "refers to vertex 2", out);
+  // Embree traces in single precision and refuses ray origins past about 1.8e18.
+  write_file(scratch("far.obj"), "v -1 0 -1\nv -1 0 1\nv 1e19 0 1\nf 1 2 3\n");
+  expect_refused("bake-probes", {scratch("far.obj").string(), "--grid", "2,2,2"},
+                 "vertex 3 (1e+19, -1, 0) lies beyond +-1e15", out);
   write_file(scratch("broken.gltf"), "{\"asset\": {\"version\": \"2.0\"}, \"scenes\": [");
   expect_refused("bake-probes", {scratch("broken.gltf").string(), "--grid", "2,2,2"}, "cannot read glTF", out);
   // A flat scene needs --bounds.

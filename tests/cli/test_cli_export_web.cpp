@@ -442,6 +442,33 @@ TEST(ExportWeb, EncodedProbeGridsAsBakeProbesWritesThemForThree) {
   EXPECT_FALSE(fs::exists(page));
 }
 
+// three samples a probe grid half a cell along the normal and leaves a point unlit where
+// that falls outside the box: a box ending at the ground (bake-probes' default bounds, the
+// mesh's own) blackens the spheres' undersides, and export-web says so; a box reaching a
+// cell below does not. scene.json names its inputs and the mesh's up axis.
+TEST(ExportWeb, WarnsWhenTheProbeBoxEndsAtTheGround) {
+  SHTOOL_REQUIRE_NODE_CONSUMERS();
+  const fs::path tight = scratch("tight.shtb"), deep = scratch("deep.shtb");
+  must(run_shtool({"bake-probes", kSpotObj, "--grid", "2,2,2", "--env", bakes().sky.string(), "--samples", "8",
+                   "--bounces", "0", "--out", tight.string()}));
+  // spot's lowest point is at z = -0.7368 (file y); a cell of this box is 1.2 high.
+  must(run_shtool({"bake-probes", kSpotObj, "--grid", "2,2,2", "--bounds=-1.5,-1.5,-1.94,1.5,1.5,0.46", "--env",
+                   bakes().sky.string(), "--samples", "8", "--bounces", "0", "--out", deep.string()}));
+  for (const bool ends_at_ground : {true, false}) {
+    const fs::path page = scratch(ends_at_ground ? "tight_page" : "deep_page");
+    fs::remove_all(page);
+    const CommandResult r = run_shtool({"export-web", kSpotObj, "--fit", bakes().fit.string(), "--light",
+                                        bakes().sky.string(), "--probes", (ends_at_ground ? tight : deep).string(),
+                                        "--out", page.string()});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_EQ(r.err.find("below the ground, less than half a cell") != std::string::npos, ends_at_ground) << r.err;
+    const nlohmann::json scene = read_json(page / "scene.json");
+    EXPECT_EQ(scene["source"]["mesh"], fs::path(kSpotObj).filename().string());
+    EXPECT_EQ(scene["source"]["up"], "y");
+    EXPECT_EQ(scene["source"]["probes"], (ends_at_ground ? tight : deep).filename().string());
+  }
+}
+
 TEST(ExportWeb, RefusesBadInputsAndWritesNothing) {
   SHTOOL_REQUIRE_NODE_CONSUMERS();  // with three.js present, only the input is at fault
   const fs::path tetra = scratch("tetra.obj"), tetra_fit = scratch("tetra.shtb"), light9 = scratch("light9.json");
@@ -455,6 +482,12 @@ TEST(ExportWeb, RefusesBadInputsAndWritesNothing) {
                       {{"--fit", bakes().fit.string(), "--light", light9.string()}, "order 9"},
                       {{"--fit", bakes().sky.string(), "--light", bakes().sky.string()}, "--fit"}},
                      dir);
+  // A light the page's float32 cannot hold.
+  const fs::path huge = scratch("huge.json");
+  write_file(huge, R"({"order": 1, "quantity": "radiance", "channels": ["r", "g", "b"], "window": {"type": "none"},
+                       "coefficients": [[1e39, 1, 1]]})");
+  expect_refused("export-web", {kSpotObj, "--fit", bakes().fit.string(), "--light", huge.string()},
+                 "beyond float32's range", dir);
   // An existing folder is left as it was.
   fs::create_directories(dir);
   const CommandResult r = run_shtool({"export-web", kSpotObj, "--fit", tetra_fit.string(), "--light",
