@@ -43,6 +43,9 @@ void setup_bake_probes(CLI::App* sub) {
   sub->callback([req]() {
     const probes::BakeProbesReport r = probes::run_bake_probes(*req);
     if (r.mpi_rank != 0) return;  // rank 0 reports the job
+    if (r.unsupported_lights)
+      std::cerr << "bake-probes: warning: " << r.unsupported_lights
+                << " KHR_lights_punctual light(s) of a type other than directional, point or spot left out\n";
     if (r.sharded) std::cerr << "bake-probes: shard of probes [" << r.first_probe << ", " << r.end_probe << ")\n";
     std::cerr << "bake-probes: " << r.probes << " probes (" << r.resolution[0] << " x " << r.resolution[1] << " x "
               << r.resolution[2] << ", encoding " << r.encoding << "), " << r.triangles << " triangles, " << r.lights << " lights; " << r.rays

@@ -1,5 +1,6 @@
 #include "cli_common.h"
 
+#include <cerrno>
 #include <cmath>
 #include <cstdlib>
 #include <iostream>
@@ -63,8 +64,17 @@ CLI::Option* add_up_option(CLI::App* app, UpAxis& target) {
 }
 
 CLI::Option* add_seed_option(CLI::App* app, std::uint64_t& target, const std::string& help) {
+  // CLI11 saturates a number past 2^64 - 1 to that value: two different seeds would bake
+  // the same. Digits only, and within range.
   static const CLI::Validator unsigned_text(
-      [](std::string& v) { return v.find('-') == std::string::npos ? std::string() : "must not be negative"; },
+      [](std::string& v) {
+        if (v.find('-') != std::string::npos) return std::string("must not be negative");
+        errno = 0;
+        char* end = nullptr;
+        std::strtoull(v.c_str(), &end, 10);
+        if (errno == ERANGE) return std::string("must be at most 18446744073709551615 (2^64 - 1)");
+        return std::string();
+      },
       "UINT");
   return app->add_option("--seed", target, help)->check(unsigned_text)->capture_default_str();
 }

@@ -104,6 +104,8 @@ void setup_fit_zh(CLI::App* sub) {
     summary << "), order " << r.order << ", " << r.lobes
             << " lobes, normalized RMS " << r.normalized_rms << ", wrote " << r.out.string();
     if (r.texture_resolution) summary << ", " << r.dc_linear_map.string() << ", " << r.lobes_map.string();
+    for (const std::filesystem::path* written : {&opt->json, &opt->ply, &opt->save_transfer, &opt->gltf})
+      if (!written->empty()) summary << ", " << written->string();
     summary << '\n';
     std::cerr << summary.str();
   });

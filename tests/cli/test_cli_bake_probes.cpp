@@ -310,6 +310,7 @@ TEST(CliBakeProbes, RefusesBadScenesGridsBoundsAndOptions) {
           {{"--grid", "2,2,2", "--order", "9"}, "--order must be in 1..8"},
           {{"--grid", "2,2,2", "--bounces", "-1"}, "--bounces must be in 0..64"},
           {{"--grid", "2,2,2", "--seed", "-3"}, "must not be negative"},
+          {{"--grid", "2,2,2", "--seed", "18446744073709551616"}, "must be at most 18446744073709551615"},
           {{"--grid", "2,2,2", "--up", "z"}, "glTF is +Y up"},
       },
       out);
@@ -323,6 +324,19 @@ TEST(CliBakeProbes, RefusesBadScenesGridsBoundsAndOptions) {
                  "vertex 3 (1e+19, -1, 0) lies beyond +-1e15", out);
   write_file(scratch("broken.gltf"), "{\"asset\": {\"version\": \"2.0\"}, \"scenes\": [");
   expect_refused("bake-probes", {scratch("broken.gltf").string(), "--grid", "2,2,2"}, "cannot read glTF", out);
+  // A light of a type the bake does not know is left out, and said so.
+  ProbeTestScene area;
+  area.quad(Eigen::Vector3d(-1, 0, 1), Eigen::Vector3d(1, 0, 1), Eigen::Vector3d(1, 0, -1), Eigen::Vector3d(-1, 0, -1),
+            area.material({}));
+  area.light({{"type", "area"}, {"intensity", 5.0}}, Eigen::Vector3d(0, 1, 0), Eigen::Vector3d(0, -1, 0));
+  area.write(scratch("area.gltf"));
+  const fs::path area_out = scratch("area.shtb");
+  const CommandResult lit = run_shtool({"bake-probes", scratch("area.gltf").string(), "--grid", "2,2,2", "--samples", "4",
+                                        "--bounds=-1,-1,-1,1,1,1", "--out", area_out.string()});
+  EXPECT_EQ(lit.exit_code, 0) << lit.err;
+  EXPECT_NE(lit.err.find("1 KHR_lights_punctual light(s) of a type other than directional, point or spot left out"),
+            std::string::npos)
+      << lit.err;
   // A flat scene needs --bounds.
   ProbeTestScene flat;
   flat.quad(Eigen::Vector3d(-1, 0, 1), Eigen::Vector3d(1, 0, 1), Eigen::Vector3d(1, 0, -1), Eigen::Vector3d(-1, 0, -1),

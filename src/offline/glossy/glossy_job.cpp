@@ -146,7 +146,7 @@ GlossyReport run_fit_glossy(const GlossyRequest& r) {
 
   io.set("--out", encode_table(table));
   if (io.requested("--json")) {
-    const nlohmann::json summary = {{"parameters", parameters(r)},
+    nlohmann::json summary = {{"parameters", parameters(r)},
                                     {"vertices", report.vertices},
                                     {"singular_values", report.singular_values},
                                     {"normalized_rms",
@@ -154,6 +154,7 @@ GlossyReport run_fit_glossy(const GlossyRequest& r) {
                                       {"zh", report.zh_nrms},
                                       {"total", report.total_nrms},
                                       {"zh_of_rows", report.rows_nrms}}}};
+    summary["parameters"]["up"] = up_axis_name(mesh.up);
     io.set("--json", dump_finite(summary, "--json", 2) + "\n");
   }
   io.commit();

@@ -293,6 +293,7 @@ BakeProbesReport run_bake_probes(const BakeProbesRequest& r) {
   report.upper = spec.upper;
   report.triangles = s.mesh.triangles.size();
   report.lights = s.lights.size();
+  report.unsupported_lights = s.unsupported_lights;
   report.rays = bake.rays;
   report.sharded = shard.has_value() && !mpi;
   report.first_probe = range.begin;

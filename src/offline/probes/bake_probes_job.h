@@ -52,6 +52,7 @@ struct BakeProbesReport {
   std::array<int, 3> resolution{0, 0, 0};
   Eigen::Vector3d lower, upper;
   std::size_t triangles = 0, lights = 0;
+  std::size_t unsupported_lights = 0;  // KHR_lights_punctual lights of a type the bake does not know, left out
   std::uint64_t rays = 0;
   double seconds = 0;
   bool sharded = false;
