@@ -229,8 +229,10 @@ TEST(CliBakeProbes, ShardsMergeToTheOneProcessTable) {
     a.insert(a.end(), extra.begin(), extra.end());
     return run_shtool(a);
   };
-  const fs::path whole = scratch("whole.shtb");
-  ASSERT_EQ(run({"--out", whole.string()}).exit_code, 0);
+  const fs::path whole = scratch("whole.shtb"), whole_json = scratch("whole.json"), whole_three = scratch("whole3");
+  fs::create_directories(whole_three);
+  ASSERT_EQ(run({"--out", whole.string(), "--json", whole_json.string(), "--threejs", whole_three.string()}).exit_code,
+            0);
   std::vector<std::string> merge = {"merge"};
   for (const char* k : {"2", "0", "1"}) {
     const fs::path part = scratch(std::string("part") + k + ".shtb");
@@ -240,11 +242,26 @@ TEST(CliBakeProbes, ShardsMergeToTheOneProcessTable) {
     EXPECT_FALSE(shtool::ProbeGrid<double>::load(part).ok()) << "a partial table must not load as a grid";
     merge.push_back(part.string());
   }
-  const fs::path merged = scratch("merged.shtb");
-  merge.insert(merge.end(), {"--out", merged.string()});
+  const fs::path merged = scratch("merged.shtb"), merged_json = scratch("merged.json"), merged_three = scratch("merged3");
+  fs::remove_all(merged_three);
+  fs::create_directories(merged_three);
+  merge.insert(merge.end(), {"--out", merged.string(), "--json", merged_json.string(), "--threejs", merged_three.string()});
   const CommandResult r = run_shtool(merge);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(read_file(merged), read_file(whole));
+  // The whole grid's other outputs, as the one process writes them.
+  EXPECT_EQ(read_file(merged_json), read_file(whole_json));
+  for (const char* f : {"probes.json", "probes.bin"})
+    EXPECT_EQ(read_file(merged_three / f), read_file(whole_three / f)) << f;
+  // fit-zh's parts take neither.
+  const fs::path tetra = scratch("tetra.obj"), tetra_part = scratch("tetra.part.shtb");
+  write_file(tetra, "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
+  ASSERT_EQ(run_shtool({"fit-zh", tetra.string(), "--order", "2", "--lobes", "1", "--rays", "16", "--shard", "0/1",
+                        "--out", tetra_part.string()})
+                .exit_code,
+            0);
+  expect_refused("merge", {tetra_part.string(), "--json", scratch("zh.json").string()}, "--json: only for the parts",
+                 scratch("zh_merged.shtb"));
   const shtool::ProbeGrid<double> g = shtool::ProbeGrid<double>::load(merged).value();
   EXPECT_FALSE(g.is_valid(13));
   // A shard missing: refused, nothing written.

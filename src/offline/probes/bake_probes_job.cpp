@@ -74,24 +74,6 @@ const std::string kThreeL1 = std::string("--threejs with --encoding l1: ") + int
 
 }  // namespace
 
-std::vector<double> three_coefficients(const EncodedProbes& probes, int& order) {
-  const GridEncoding& e = probes.encoding;
-  if (e.encoding == ProbeEncoding::l1) throw InputError(kThreeL1);
-  order = probes.order;
-  if (e.encoding == ProbeEncoding::l2) return probes.coefficients;
-  order = 3;
-  const std::size_t count = probes.valid.size();
-  std::vector<double> out;
-  out.reserve(count * 27);
-  for (std::size_t p = 0; p < count; ++p) {
-    const std::array<double, 27> sh = interop::zh3_as_order3_sh(
-        std::span<const double, 12>(probes.coefficients.data() + p * 12, 12),
-        e.stores_zonal() ? probes.zonal.data() + p * 3 : nullptr, e.zh3_axis);
-    out.insert(out.end(), sh.begin(), sh.end());
-  }
-  return out;
-}
-
 std::array<int, 3> parse_grid(const std::string& text) {
   const std::vector<std::string> f = fields(text);
   if (f.size() != 3) throw InputError("--grid must be NX,NY,NZ (three whole numbers), got '" + text + "'");
@@ -159,9 +141,9 @@ BakeProbesReport run_bake_probes(const BakeProbesRequest& r) {
     if (r.mpi) throw InputError("--mpi and --shard both split the probes: give one of them");
     shard = fit::parse_shard(r.shard);
     if (!r.json.empty())
-      throw InputError("--json needs the whole grid: not with --shard (join the parts with shtool merge)");
+      throw InputError("--json needs the whole grid: not with --shard (shtool merge --json writes it from the parts)");
     if (!r.threejs.empty())
-      throw InputError("--threejs needs the whole grid: not with --shard (join the parts with shtool merge)");
+      throw InputError("--threejs needs the whole grid: not with --shard (shtool merge --threejs writes it from the parts)");
     if (shard->count > spec.probe_count())
       throw InputError("--shard " + r.shard + ": more shards than the grid's " + std::to_string(spec.probe_count()) +
                        " probes");
@@ -252,7 +234,7 @@ BakeProbesReport run_bake_probes(const BakeProbesRequest& r) {
     three.resolution = spec.resolution;
     three.min = spec.lower;
     three.max = spec.upper;
-    three.coefficients = three_coefficients(probes, three.order);
+    three.coefficients = three_coefficients(probes, three.order, "--threejs");
     interop::set_three_probe_grid(io, "--threejs", interop::three_probe_grid_files(three));
   };
 

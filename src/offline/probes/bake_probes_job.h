@@ -68,12 +68,5 @@ std::pair<Eigen::Vector3d, Eigen::Vector3d> parse_bounds(const std::string& text
 // Checks every option before reading anything large, bakes, writes both outputs or none.
 BakeProbesReport run_bake_probes(const BakeProbesRequest& request);
 
-// The order-3 radiance coefficients three.js's LightProbeGridWebGL takes for an encoded
-// grid: l2's own (bands above 2 dropped by the writer), zh3's L1 band with the band 2 its
-// zonal coefficient stands for (zh3_band2 along the grid's axis, of the stored f or, for
-// the hallucinated variant, of the f each probe's L1 band gives; three's linear irradiance
-// of them is exactly the ZH3 irradiance at the probe). l1 has none: its non-linear
-// reconstruction is not a linear function of SH coefficients (InputError).
-std::vector<double> three_coefficients(const EncodedProbes& probes, int& order);
 
 }  // namespace shtool::probes

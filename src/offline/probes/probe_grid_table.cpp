@@ -5,9 +5,11 @@
 #include <span>
 
 #include "common/atomic_file.h"
+#include "common/finite.h"
 #include "common/input_error.h"
 #include "common/job_outputs.h"
 #include "common/table_writer.h"
+#include "interop/three_probe_grid.h"
 #include "shtool/probe_grid.h"
 
 namespace shtool::probes {
@@ -305,22 +307,53 @@ bool is_probe_grid_file(const std::filesystem::path& path) {
   return t.ok() && t.value().kind == kProbeGridKind;
 }
 
+std::vector<double> three_coefficients(const EncodedProbes& probes, int& order, const std::string& option) {
+  const GridEncoding& e = probes.encoding;
+  if (e.encoding == ProbeEncoding::l1)
+    throw InputError(option + " of an l1 grid: " + interop::kThreeCannotShowL1);
+  order = probes.order;
+  if (e.encoding == ProbeEncoding::l2) return probes.coefficients;
+  order = 3;
+  const std::size_t count = probes.valid.size();
+  std::vector<double> out;
+  out.reserve(count * 27);
+  for (std::size_t p = 0; p < count; ++p) {
+    const std::array<double, 27> sh = interop::zh3_as_order3_sh(
+        std::span<const double, 12>(probes.coefficients.data() + p * 12, 12),
+        e.stores_zonal() ? probes.zonal.data() + p * 3 : nullptr, e.zh3_axis);
+    out.insert(out.end(), sh.begin(), sh.end());
+  }
+  return out;
+}
+
 ProbeMergeReport merge_probe_grid_parts(const std::vector<std::filesystem::path>& paths,
-                                        const std::filesystem::path& out, TableEncoding encoding) {
+                                        const std::filesystem::path& out, TableEncoding encoding,
+                                        const std::filesystem::path& json, const std::filesystem::path& threejs) {
   JobOutputs io;
   for (const std::filesystem::path& p : paths) io.input(p, "a part");
   io.output(out, "--out");
+  io.output(json, "--json");
+  if (!threejs.empty()) interop::declare_three_probe_grid(io, threejs, "--threejs");
   std::vector<std::pair<std::string, Table>> parts;
   for (const std::filesystem::path& p : paths) {
     Result<Table> t = read_table(p, TableExpectation{std::string(kProbeGridKind), 1, 0});
     if (!t) throw InputError(t.error().message);
     parts.emplace_back(p.string(), std::move(t).value());
   }
-  const Table merged = merge_probe_grid_tables(parts);
+  const MergedProbeGrid merged = merge_probe_grid(parts);
   ProbeMergeReport report;
   report.parts = parts.size();
-  report.probes = merged.find("valid")->element_count();
-  io.set("--out", encode_table(merged, encoding));
+  report.probes = merged.table.find("valid")->element_count();
+  io.set("--out", encode_table(merged.table, encoding));
+  if (io.requested("--json")) io.set("--json", dump_finite(probe_grid_json(merged.spec, merged.probes), "--json") + "\n");
+  if (!threejs.empty()) {
+    interop::ThreeProbeGridInput three;
+    three.resolution = merged.spec.resolution;
+    three.min = merged.spec.lower;
+    three.max = merged.spec.upper;
+    three.coefficients = three_coefficients(merged.probes, three.order, "--threejs");
+    interop::set_three_probe_grid(io, "--threejs", interop::three_probe_grid_files(three));
+  }
   io.commit();
   return report;
 }

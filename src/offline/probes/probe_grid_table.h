@@ -88,12 +88,23 @@ Table merge_probe_grid_tables(const std::vector<std::pair<std::string, Table>>& 
 // Whether a table file holds a probe-grid (merge dispatches on it).
 bool is_probe_grid_file(const std::filesystem::path& path);
 
+// The order-3 radiance coefficients three.js's LightProbeGridWebGL takes for an encoded
+// grid: l2's own (bands above 2 dropped by the writer), zh3's L1 band with the band 2 its
+// zonal coefficient stands for (zh3_band2 along the grid's axis, of the stored f or, for
+// the hallucinated variant, of the f each probe's L1 band gives; three's linear irradiance
+// of them is exactly the ZH3 irradiance at the probe). l1 has none: its non-linear
+// reconstruction is not a linear function of SH coefficients (InputError naming `option`).
+std::vector<double> three_coefficients(const EncodedProbes& probes, int& order, const std::string& option);
+
 struct ProbeMergeReport {
   std::size_t parts = 0, probes = 0;
 };
-// Reads every part (checksums included), joins, writes `out` atomically (InputError
-// before anything is written).
+// Reads every part (checksums included), joins, writes `out` and, when not empty, `json`
+// (as bake-probes --json) and the three.js files in `threejs` (as --threejs) together
+// (InputError before anything is written).
 ProbeMergeReport merge_probe_grid_parts(const std::vector<std::filesystem::path>& parts,
-                                        const std::filesystem::path& out, TableEncoding encoding);
+                                        const std::filesystem::path& out, TableEncoding encoding,
+                                        const std::filesystem::path& json = {},
+                                        const std::filesystem::path& threejs = {});
 
 }  // namespace shtool::probes
