@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -127,9 +128,24 @@ TEST(TextureRender, BadRequestsAreRefusedByName) {
   // Nor does deform carry a texel bake onto a pose.
   refused({"deform", bakes().texture.string(), "--rest", kSpotObj, "--pose", kSpotObj, "--out", out.string()},
           "texture-space bake");
-  // A mesh without texture coordinates cannot be sampled.
+  // The same mesh without texture coordinates cannot be sampled: spot with its vt lines
+  // and face texcoord indices taken out.
   const fs::path bare = scratch("bare.obj");
-  shtool::test::write_file(bare, "v -1 -1 0\nv 1 -1 0\nv 0 1 0\nf 1 2 3\n");
+  {
+    std::istringstream in(read_file(kSpotObj));
+    std::string line, kept;
+    while (std::getline(in, line)) {
+      if (line.rfind("vt ", 0) == 0) continue;
+      if (line.rfind("f ", 0) == 0) {
+        std::istringstream corners(line.substr(2));
+        std::string corner;
+        line = "f";
+        while (corners >> corner) line += " " + corner.substr(0, corner.find('/'));
+      }
+      kept += line + "\n";
+    }
+    shtool::test::write_file(bare, kept);
+  }
   refused({"render", bare.string(), "--fit", bakes().texture.string(), "--light", bakes().sky.string(), "--out",
            out.string()},
           "no texture coordinates");
