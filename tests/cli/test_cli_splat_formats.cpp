@@ -625,6 +625,129 @@ TEST(CliSplatFormats, SpzWriterBytes) {
   EXPECT_NE(r.err.find("spz quantisation"), std::string::npos) << r.err;
 }
 
+namespace {
+
+// An spz extension record: [u32 type][u32 byteLength][payload].
+std::string spz_record(std::uint32_t type, const std::string& payload) {
+  std::string s;
+  put32(s, type), put32(s, static_cast<std::uint32_t>(payload.size()));
+  return s + payload;
+}
+std::string u32_bytes(std::uint32_t v) {
+  std::string s;
+  put32(s, v);
+  return s;
+}
+// A v4 file with `records` between its header and its table of contents (flag 0x2).
+std::string with_records_v4(std::string v4, const std::string& records) {
+  v4[14] = static_cast<char>(v4[14] | 2);
+  std::string toc;
+  put32(toc, static_cast<std::uint32_t>(32 + records.size()));
+  v4.replace(16, 4, toc);
+  return v4.insert(32, records);
+}
+// A v2/v3 payload with `records` after the SH (flag 0x2).
+std::string with_records_legacy(std::string plain, const std::string& records) {
+  plain[14] = static_cast<char>(plain[14] | 2);
+  return plain + records;
+}
+
+}  // namespace
+
+// spz extension records (flag 0x2: v4 between the header and the table of contents, v3
+// after the SH): SPZ_ADOBE_coordinate_system (0xADBE0003, a u32, RDF = 6) names the
+// frame the values are in, and the file is read in it whatever --spz-frame says; other
+// types are skipped with a warning naming them; spz written in a frame other than RUB
+// records it, and reads back without --spz-frame.
+TEST(CliSplatFormats, SpzExtensionRecords) {
+  const std::string rdf = spz_record(0xADBE0003, u32_bytes(6)), other = spz_record(0x12340001, "abc");
+  const std::string plain3 = legacy_payload(3), v4 = hand_v4();
+  // The reference: the files without records, read with --spz-frame RDF.
+  const fs::path ref3 = scratch("ext_ref3.ply"), ref4 = scratch("ext_ref4.ply");
+  write_bytes(scratch("ext_plain3.spz"), compress_with("gzip", plain3));
+  write_bytes(scratch("ext_plain4.spz"), v4);
+  ASSERT_EQ(convert(scratch("ext_plain3.spz"), ref3, {"--spz-frame", "RDF"}).exit_code, 0);
+  ASSERT_EQ(convert(scratch("ext_plain4.spz"), ref4, {"--spz-frame", "RDF"}).exit_code, 0);
+  struct Case {
+    std::string name, bytes;
+    fs::path reference;
+    std::vector<std::string> args;
+    std::string warning;
+  };
+  const std::vector<Case> cases = {
+      {"v4 RDF", with_records_v4(v4, rdf), ref4, {}, ""},
+      {"v4 RDF and an unknown record", with_records_v4(v4, other + rdf), ref4, {}, "0x12340001 (3 bytes)"},
+      {"v4 RDF over --spz-frame", with_records_v4(v4, rdf), ref4, {"--spz-frame", "LUF"}, "not in --spz-frame LUF"},
+      {"v3 RDF", compress_with("gzip", with_records_legacy(plain3, rdf)), ref3, {}, ""},
+      {"v3 RDF and an unknown record", compress_with("gzip", with_records_legacy(plain3, rdf + other)), ref3, {},
+       "0x12340001 (3 bytes)"},
+  };
+  for (const Case& c : cases) {
+    const fs::path spz = scratch("ext_in.spz"), ply = scratch("ext_out.ply");
+    write_bytes(spz, c.bytes);
+    const auto r = convert(spz, ply, c.args);
+    ASSERT_EQ(r.exit_code, 0) << c.name << ": " << r.err;
+    EXPECT_TRUE(read_file(ply) == read_file(c.reference)) << c.name << ": not read in the recorded frame";
+    if (c.warning.empty())
+      EXPECT_EQ(r.err.find("warning"), std::string::npos) << c.name << ": " << r.err;
+    else
+      EXPECT_NE(r.err.find("warning: " + spz.string()), std::string::npos) << c.name << ": " << r.err;
+    EXPECT_NE(r.err.find(c.warning), std::string::npos) << c.name << ": " << r.err;
+  }
+  // Unknown records alone: read in the default frame, with the warning.
+  {
+    const fs::path spz = scratch("ext_other.spz"), ply = scratch("ext_other.ply"), ref = scratch("ext_other_ref.ply");
+    write_bytes(spz, with_records_v4(v4, other));
+    const auto r = convert(spz, ply);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE(r.err.find("skipped an spz extension record of type 0x12340001"), std::string::npos) << r.err;
+    ASSERT_EQ(convert(scratch("ext_plain4.spz"), ref).exit_code, 0);
+    EXPECT_TRUE(read_file(ply) == read_file(ref));
+  }
+  // Written in RDF: the record (v4 in the header zone, v3 after the SH), read back
+  // without --spz-frame.
+  const Scene scene = random_scene(200, 2, 71);
+  const fs::path in = scratch("ext_scene.ply");
+  write_bytes(in, ply_bytes(scene));
+  for (const std::string version : {"4", "3"}) {
+    const fs::path spz = scratch("ext_rdf.spz"), back = scratch("ext_rdf_back.ply");
+    auto r = convert(in, spz, {"--spz-frame", "RDF", "--spz-version", version});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    std::string bytes = read_file(spz);
+    if (version == "3") {
+      write_bytes(scratch("ext_rdf.gz"), bytes);
+      fs::remove(scratch("ext_rdf"));
+      ASSERT_EQ(run_command({"gzip", "-d", "-k", "-f", scratch("ext_rdf.gz").string()}).exit_code, 0);
+      bytes = read_file(scratch("ext_rdf"));
+      EXPECT_EQ(bytes.substr(bytes.size() - 12), rdf);
+    } else {
+      EXPECT_EQ(bytes.substr(16, 4), u32_bytes(44));  // the table of contents after the record
+      EXPECT_EQ(bytes.substr(32, 12), rdf);
+    }
+    EXPECT_EQ(bytes[14], 2) << "flags";
+    r = convert(spz, back);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    expect_mapped(scene, read_ply(back), Eigen::Matrix3d::Identity(), spz_tolerance(2), "RDF spz v" + version);
+  }
+  // Malformed records are refused, nothing written.
+  const std::vector<std::pair<std::string, std::string>> bad = {
+      {with_records_v4(v4, spz_record(0xADBE0003, u32_bytes(17))), "coordinate system 17"},
+      {with_records_v4(v4, spz_record(0xADBE0003, std::string(2, '\x06'))), "record of 2 bytes"},
+      {with_records_v4(v4, rdf + rdf), "two SPZ_ADOBE_coordinate_system records"},
+      {with_records_v4(v4, rdf.substr(0, 10)), "truncated extension record"},
+      {compress_with("gzip", with_records_legacy(plain3, rdf.substr(0, 5))), "truncated extension record"},
+  };
+  for (const auto& [bytes, message] : bad) {
+    const fs::path spz = scratch("ext_bad.spz"), out = scratch("ext_bad.ply");
+    write_bytes(spz, bytes);
+    fs::remove(out);
+    const auto r = convert(spz, out);
+    EXPECT_EQ(r.exit_code, 1) << message << ": " << r.err;
+    EXPECT_NE(r.err.find(message), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out)) << message;
+  }
+}
+
 // The bound that transform-splats reports for --sh-bits, from the bucket sizes.
 TEST(CliSplatFormats, QuantisationReport) {
   const Scene scene = random_scene(50, 3, 41);

@@ -45,6 +45,12 @@ Eigen::Matrix3d splat_rotation(const TransformSplatsRequest& r) {
 
 namespace {
 
+std::string upper(std::string_view letters) {
+  std::string up;
+  for (char c : letters) up.push_back(static_cast<char>(std::toupper(static_cast<unsigned char>(c))));
+  return up;
+}
+
 // What PLY in, PLY out applies to every splat, in the file's own coordinates.
 struct PlyMotion {
   const OrthogonalMap map;
@@ -299,8 +305,7 @@ void transform_ply_in_place(const TransformSplatsRequest& r, const Eigen::Matrix
 }  // namespace
 
 Eigen::Matrix3d splat_frame(std::string_view letters) {
-  std::string up;
-  for (char c : letters) up.push_back(static_cast<char>(std::toupper(static_cast<unsigned char>(c))));
+  const std::string up = upper(letters);
   auto bad = [&] {
     return InputError("frame '" + std::string(letters) +
                       "': three letters, one of R/L, one of U/D and one of F/B, for the file's x, y, z axes (e.g. RDF, RUB)");
@@ -342,7 +347,6 @@ TransformSplatsReport run_transform_splats(const TransformSplatsRequest& r) {
     return f == SplatFormat::ply ? splat_frame(r.ply_frame) : f == SplatFormat::spz ? splat_frame(r.spz_frame)
                                                                                     : splat_frame(r.gltf_frame);
   };
-  const Eigen::Matrix3d frame_change = frame_of(out_format).transpose() * frame_of(in_format);
   SpzWriteOptions spz;
   spz.version = r.spz_version;
   spz.sh1_bits = r.sh_bits[0];
@@ -359,8 +363,8 @@ TransformSplatsReport run_transform_splats(const TransformSplatsRequest& r) {
   const auto t0 = std::chrono::steady_clock::now();
   TransformSplatsReport report;
   report.threads = threads;
-  report.reflects = (frame_change * rot).determinant() < 0;
   if (in_format == SplatFormat::ply && out_format == SplatFormat::ply && !r.sh_degree) {
+    report.reflects = rot.determinant() < 0;
     // Mapped, not read: the common file is streamed from the page cache to the output.
     const MappedInput in(r.in, "input");
     const PlyFile header = PlyFile::parse_header(in.bytes(), r.in);
@@ -372,13 +376,29 @@ TransformSplatsReport run_transform_splats(const TransformSplatsRequest& r) {
   } else {
     std::string bytes = read_input_file(r.in, "input");
     SplatScene scene;
+    Eigen::Matrix3d in_frame = frame_of(in_format);
     switch (in_format) {
       case SplatFormat::ply: scene = read_ply_splats(PlyFile::parse(std::move(bytes), r.in), r.in, threads); break;
-      case SplatFormat::spz: scene = read_spz(bytes, r.in.string(), nullptr, threads); break;
+      case SplatFormat::spz: {
+        SpzHeader header;
+        scene = read_spz(bytes, r.in.string(), &header, threads);
+        report.warnings.insert(report.warnings.end(), header.warnings.begin(), header.warnings.end());
+        if (!header.frame.empty()) {
+          // The file names the frame its values are in: that one, not --spz-frame.
+          const std::string asked = upper(r.spz_frame);
+          if (asked != header.frame && asked != "RUB")
+            report.warnings.push_back(r.in.string() + " records its frame, " + header.frame +
+                                      " (SPZ_ADOBE_coordinate_system): read in it, not in --spz-frame " + r.spz_frame);
+          in_frame = splat_frame(header.frame);
+        }
+        break;
+      }
       case SplatFormat::gltf:
       case SplatFormat::glb: scene = read_gltf_splats(bytes, r.in, threads); break;
     }
     report.degree_in = scene.degree;
+    const Eigen::Matrix3d frame_change = frame_of(out_format).transpose() * in_frame;
+    report.reflects = (frame_change * rot).determinant() < 0;
     const Eigen::Vector3d t(r.translate[0], r.translate[1], r.translate[2]);
     // The user's transform acts in the input's coordinates, then the frame changes.
     transform_splat_scene(scene, frame_change * rot, r.scale, frame_change * t, threads);
@@ -392,6 +412,14 @@ TransformSplatsReport run_transform_splats(const TransformSplatsRequest& r) {
     switch (out_format) {
       case SplatFormat::ply: out = write_ply_splats(scene); break;
       case SplatFormat::spz:
+        // A frame other than spz's default is recorded in the file (when the record can name it).
+        if (const std::string frame = upper(r.spz_frame); frame != "RUB") {
+          spz.coordinate_system = spz_coordinate_system_value(frame);
+          if (spz.coordinate_system == 0)
+            report.warnings.push_back("--spz-frame " + frame + ": spz's coordinate-system record names no such frame "
+                                      "(only those with x along R or L), so " + r.out.string() +
+                                      " records none and readers will take its axes as RUB");
+        }
         out = write_spz(scene, spz, threads);
         report.spz_sh_bound = spz_sh_error_bound(scene.degree, spz);
         report.spz_sh_scene = spz_sh_error_of(scene, spz, threads);
