@@ -748,6 +748,56 @@ TEST(CliSplatFormats, SpzExtensionRecords) {
   }
 }
 
+// KHR_gaussian_splatting's colorSpace is carried from glTF to glTF; PLY and spz, which
+// hold 3DGS's sRGB display colours, refuse a linear scene (its SH have no exact image);
+// an unknown kernel or colour space is refused, nothing written.
+TEST(CliSplatFormats, GltfColourSpaceAndKernel) {
+  const Scene scene = random_scene(20, 1, 73);
+  const fs::path in = scratch("cs_in.ply"), gltf = scratch("cs.gltf");
+  write_bytes(in, ply_bytes(scene));
+  ASSERT_EQ(convert(in, gltf).exit_code, 0);
+  const nlohmann::json doc = nlohmann::json::parse(read_file(gltf));
+  auto splat_object = [](const nlohmann::json& j) {
+    return j["meshes"][0]["primitives"][0]["extensions"]["KHR_gaussian_splatting"];
+  };
+  EXPECT_EQ(splat_object(doc)["colorSpace"], "srgb_rec709_display");
+  auto variant = [&](const std::string& name, const std::string& key, const std::string& value) {
+    nlohmann::json j = doc;
+    j["meshes"][0]["primitives"][0]["extensions"]["KHR_gaussian_splatting"][key] = value;
+    const fs::path p = scratch(name);
+    write_bytes(p, j.dump());
+    return p;
+  };
+  const fs::path linear = variant("cs_lin.gltf", "colorSpace", "lin_rec709_display");
+  for (const std::string ext : {".gltf", ".glb"}) {
+    const fs::path out = scratch("cs_out" + ext), back = scratch("cs_back.gltf");
+    auto r = convert(linear, out, {"--quat", "0.8,0.6,0,0"});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    r = convert(out, back);  // through .glb too
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_EQ(splat_object(nlohmann::json::parse(read_file(back)))["colorSpace"], "lin_rec709_display") << ext;
+  }
+  struct Case {
+    fs::path in;
+    std::string ext, message;
+  };
+  const std::vector<Case> cases = {
+      {linear, ".ply", "colour space lin_rec709_display"},
+      {linear, ".spz", "colour space lin_rec709_display"},
+      {variant("cs_unknown.gltf", "colorSpace", "acescg_display"), ".glb", "colorSpace 'acescg_display'"},
+      {variant("cs_kernel.gltf", "kernel", "customShape"), ".ply", "kernel 'customShape'"},
+      {variant("cs_kernel.gltf", "kernel", "customShape"), ".glb", "kernel 'customShape'"},
+  };
+  for (const Case& c : cases) {
+    const fs::path out = scratch("cs_refused" + c.ext);
+    fs::remove(out);
+    const auto r = convert(c.in, out);
+    EXPECT_EQ(r.exit_code, 1) << c.message << ": " << r.err;
+    EXPECT_NE(r.err.find(c.message), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out)) << c.message;
+  }
+}
+
 // The bound that transform-splats reports for --sh-bits, from the bucket sizes.
 TEST(CliSplatFormats, QuantisationReport) {
   const Scene scene = random_scene(50, 3, 41);

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <cstring>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 #include <vector>
 
@@ -72,6 +73,28 @@ struct Reader {
   void primitive(const tinygltf::Primitive& p) {
     if (!p.extensions.count(kExtension)) return;
     if (p.mode != TINYGLTF_MODE_POINTS) fail_input(path, "a KHR_gaussian_splatting primitive whose mode is not POINTS");
+    // The extension object: the kernel must be the 3DGS ellipse (another kernel gives the
+    // attributes another meaning); the colour space is carried with the splats. Both are
+    // required by the extension; files without them (older drafts) are taken as 3DGS's.
+    const tinygltf::Value& object = p.extensions.at(kExtension);
+    auto text = [&](const char* key) -> std::optional<std::string> {
+      if (!object.IsObject() || !object.Has(key)) return std::nullopt;
+      const tinygltf::Value& v = object.Get(key);
+      if (!v.IsString()) fail_input(path, std::string("KHR_gaussian_splatting: '") + key + "' is not a string");
+      return v.Get<std::string>();
+    };
+    if (const std::optional<std::string> kernel = text("kernel"); kernel && *kernel != "ellipse")
+      fail_input(path, "KHR_gaussian_splatting kernel '" + *kernel +
+                           "': shtool implements only the 'ellipse' kernel of 3DGS (another kernel's splats are not "
+                           "Gaussians it can convert)");
+    SplatColourSpace colour_space = SplatColourSpace::srgb_rec709_display;
+    if (const std::optional<std::string> name = text("colorSpace")) {
+      const std::optional<SplatColourSpace> known = parse_splat_colour_space(*name);
+      if (!known)
+        fail_input(path, "KHR_gaussian_splatting colorSpace '" + *name +
+                             "': shtool knows srgb_rec709_display and lin_rec709_display");
+      colour_space = *known;
+    }
     auto find = [&](const std::string& name) -> int {
       const auto it = p.attributes.find(name);
       return it == p.attributes.end() ? -1 : it->second;
@@ -101,6 +124,7 @@ struct Reader {
     const std::size_t count = pos.size() / 3;
     SplatScene s;
     s.resize(count, degree);
+    s.colour_space = colour_space;
     const std::size_t stride = s.sh_stride();
     for (int l = 0; l <= degree; ++l)
       for (int n = 0; n <= 2 * l; ++n) {
@@ -215,6 +239,10 @@ SplatScene read_gltf_splats(const std::string& bytes, const std::filesystem::pat
   for (std::size_t k = 1; k < r.parts.size(); ++k) {
     const SplatScene& p = r.parts[k];
     if (p.degree != out.degree) fail_input(path, "splat primitives of different SH degrees");
+    if (p.colour_space != out.colour_space)
+      fail_input(path, std::string("splat primitives of different colour spaces (") +
+                           splat_colour_space_name(out.colour_space) + ", " + splat_colour_space_name(p.colour_space) +
+                           ")");
     out.count += p.count;
     out.position.insert(out.position.end(), p.position.begin(), p.position.end());
     out.log_scale.insert(out.log_scale.end(), p.log_scale.begin(), p.log_scale.end());
@@ -261,7 +289,7 @@ std::string write_gltf_splats(const SplatScene& s, bool binary) {
     }
   p.extensions[kExtension] = tinygltf::Value(tinygltf::Value::Object{
       {"kernel", tinygltf::Value(std::string("ellipse"))},
-      {"colorSpace", tinygltf::Value(std::string("srgb_rec709_display"))},
+      {"colorSpace", tinygltf::Value(std::string(splat_colour_space_name(s.colour_space)))},
       {"projection", tinygltf::Value(std::string("perspective"))},
       {"sortingMethod", tinygltf::Value(std::string("cameraDistance"))}});
   model.extensionsUsed.push_back(kExtension);

@@ -397,6 +397,16 @@ TransformSplatsReport run_transform_splats(const TransformSplatsRequest& r) {
       case SplatFormat::glb: scene = read_gltf_splats(bytes, r.in, threads); break;
     }
     report.degree_in = scene.degree;
+    // PLY and spz hold 3DGS's colours, BT.709 sRGB display-referred. The SH of colours in
+    // another transfer function have no exact image in it (the transfer function is not
+    // linear, the SH are), so such a scene stays in glTF.
+    if (scene.colour_space != SplatColourSpace::srgb_rec709_display &&
+        (out_format == SplatFormat::ply || out_format == SplatFormat::spz))
+      throw InputError(r.in.string() + ": its splats are in the colour space " +
+                       splat_colour_space_name(scene.colour_space) + " (KHR_gaussian_splatting colorSpace), and " +
+                       splat_format_name(out_format) +
+                       " holds SH colours in 3DGS's srgb_rec709_display: SH coefficients cannot be converted between "
+                       "transfer functions exactly (write .glb or .gltf, which keep the colour space)");
     const Eigen::Matrix3d frame_change = frame_of(out_format).transpose() * in_frame;
     report.reflects = (frame_change * rot).determinant() < 0;
     const Eigen::Vector3d t(r.translate[0], r.translate[1], r.translate[2]);
