@@ -625,6 +625,27 @@ TEST(CliSplatFormats, SpzWriterBytes) {
   EXPECT_NE(r.err.find("spz quantisation"), std::string::npos) << r.err;
 }
 
+// SH coefficients far past spz's [-1, 127/128] saturate at the end bytes, whatever their
+// size (128 x would overflow an int past 2^24).
+TEST(CliSplatFormats, SpzShSaturates) {
+  Scene s = random_scene(1, 1, 5);
+  for (int c = 0; c < 3; ++c) s.splats[0].sh[c] = {0.2, 3e9, -3e9, 2.0};
+  const fs::path in = scratch("sat_in.ply");
+  write_bytes(in, ply_bytes(s));
+  for (const std::string version : {"4", "3"}) {
+    const fs::path out = scratch("sat_out.spz");
+    const auto r = convert(in, out, {"--frame", "RUB", "--spz-version", version});  // no frame change
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const Scene back = raw_values(out);
+    ASSERT_EQ(back.splats.size(), 1u);
+    for (int c = 0; c < 3; ++c) {
+      EXPECT_EQ(back.splats[0].sh[c][1], 127.0 / 128) << "3e9, channel " << c << ", v" << version;
+      EXPECT_EQ(back.splats[0].sh[c][2], -1.0) << "-3e9, channel " << c << ", v" << version;
+      EXPECT_EQ(back.splats[0].sh[c][3], 127.0 / 128) << "2, channel " << c << ", v" << version;
+    }
+  }
+}
+
 namespace {
 
 // An spz extension record: [u32 type][u32 byteLength][payload].

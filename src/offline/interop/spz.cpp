@@ -108,8 +108,13 @@ std::array<std::uint64_t, 6> block_sizes(std::uint64_t n, int degree, int versio
 float sigmoid(float x) { return 1.0f / (1.0f + std::exp(-x)); }
 std::uint8_t to_u8(float x) { return static_cast<std::uint8_t>(std::clamp(std::round(x), 0.0f, 255.0f)); }
 
+// The byte of an SH coefficient: round(128 x) + 128 to the nearest multiple of the bucket,
+// clamped to a byte. 128 x is clamped to [-129, 128] before the conversion to int (past
+// that every value gives the end byte anyway), so that a huge coefficient saturates and
+// never overflows the int (fmax and fmin also take a NaN to the low end).
 std::uint8_t quantise_sh(float x, int bucket) {
-  int q = static_cast<int>(std::round(x * 128.0f) + 128.0f);
+  const float scaled = std::fmin(std::fmax(x * 128.0f, -129.0f), 128.0f);
+  int q = static_cast<int>(std::round(scaled) + 128.0f);
   q = (q + bucket / 2) / bucket * bucket;
   return static_cast<std::uint8_t>(std::clamp(q, 0, 255));
 }
