@@ -898,6 +898,40 @@ TEST(CliSplatFormats, BadFilesAreRefusedWithNothingWritten) {
   }
 }
 
+// A v4 file whose streams claim more splats than its size makes plausible (the reference
+// loader's numPoints <= file size x 1024 / 9) is refused before anything is allocated:
+// here a million splats of zeros in about a kilobyte (each stream within zstd's own
+// 32768:1).
+TEST(CliSplatFormats, SpzPointCountBoundedByFileSize) {
+  auto file = [](std::uint32_t n) {
+    const std::uint64_t sizes[5] = {9ull * n, n, 3ull * n, 3ull * n, 4ull * n};  // degree 0: no SH stream
+    std::string s;
+    put32(s, 0x5053474e), put32(s, 4), put32(s, n);
+    s += std::string("\x00\x0c\x00\x05", 4);  // degree 0, 12 bits, flags, 5 streams
+    put32(s, 32);
+    s.append(12, '\0');
+    std::vector<std::string> z;
+    for (std::uint64_t size : sizes) z.push_back(compress_with("zstd", std::string(size, '\0')));
+    for (int k = 0; k < 5; ++k) put64(s, z[k].size()), put64(s, sizes[k]);
+    for (const std::string& x : z) s += x;
+    return s;
+  };
+  const fs::path spz = scratch("bomb.spz"), out = scratch("bomb.ply");
+  const std::string bomb = file(1000000);
+  ASSERT_LT(bomb.size() * 1024 / 9, 1000000u) << bomb.size();
+  write_bytes(spz, bomb);
+  fs::remove(out);
+  auto r = convert(spz, out);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("implausible: 1000000 splats claimed"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out));
+  // The same streams for as many splats as the bound allows are read.
+  const std::string small = file(100);
+  write_bytes(spz, small);
+  r = convert(spz, out);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+}
+
 // The Khronos validator on the glTF outputs: no error but its verdict on the extension's
 // attribute names, which it does not know (the messages are printed).
 TEST(CliSplatFormats, GltfValidatorFaultsOnlyTheExtensionAttributeNames) {

@@ -32,6 +32,8 @@ constexpr std::string_view kCoordinateSystems[17] = {"",    "LDB", "RDB", "LUB",
 // Largest expansion of the decompressors: deflate's 258-byte match per 2 bits, 1032:1;
 // a zstd RLE block (4 bytes) stands for at most 128 KiB.
 constexpr double kDeflateRatio = 1032, kZstdRatio = 32768;
+// The plausible splats of a v4 file: at most its size x 1024 / 9 (the reference loader's).
+constexpr std::uint64_t kMaxCompressionRatio = 1024, kMinBytesPerSplat = 9;
 
 std::uint32_t get_u32(const unsigned char* p) {
   return std::uint32_t(p[0]) | std::uint32_t(p[1]) << 8 | std::uint32_t(p[2]) << 16 | std::uint32_t(p[3]) << 24;
@@ -260,6 +262,16 @@ SplatScene read_ngsp(std::string_view bytes, const std::string& name, SpzHeader*
   if (version != 4) throw fail("spz version " + std::to_string(version) + " with the NGSP header: version 4 is read");
   if (degree > 3) throw fail("SH degree " + std::to_string(degree) + ": degrees 0..3 are read");
   if (fractional_bits > 23) throw fail("fractional bits " + std::to_string(fractional_bits) + " past 23");
+  // A point count the file cannot hold is refused before anything is allocated. The
+  // bound is the reference loader's (load-spz.cc: kMaxCompressionRatio 1024,
+  // kMinBytesPerPoint 9, numPoints <= fileSize x 1024 / 9): the positions alone take 9
+  // bytes a splat, and no real stream shrinks more than 1024:1 (zstd's own limit, 32768:1
+  // for a run of one byte, would let a 40 KB file claim 20 million splats).
+  if (std::uint64_t(n) * kMinBytesPerSplat > std::uint64_t(bytes.size()) * kMaxCompressionRatio)
+    throw fail("implausible: " + std::to_string(n) + " splats claimed, more than the " + std::to_string(bytes.size()) +
+               " bytes of its streams can hold (at most file size x " + std::to_string(kMaxCompressionRatio) + " / " +
+               std::to_string(kMinBytesPerSplat) + " = " +
+               std::to_string(std::uint64_t(bytes.size()) * kMaxCompressionRatio / kMinBytesPerSplat) + ")");
   const std::array<std::uint64_t, 6> sizes = block_sizes(n, degree, 4);
   // Empty streams are left out: the SH's at degree 0, every one of an empty scene.
   std::vector<int> present;
