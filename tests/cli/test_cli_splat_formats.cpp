@@ -932,6 +932,32 @@ TEST(CliSplatFormats, SpzPointCountBoundedByFileSize) {
   EXPECT_EQ(r.exit_code, 0) << r.err;
 }
 
+// glTF stores linear scales: a log-scale past log(FLT_MAX) = 88.72 (here 89, in the
+// input; and 50 under --scale 1e20, +46) has no float, and is refused naming the splat,
+// nothing written.
+TEST(CliSplatFormats, GlbScaleOverflowIsRefused) {
+  Scene s = random_scene(3, 0, 7);
+  s.splats[2].log_scale[0] = 89;
+  const fs::path in = scratch("big_scale.ply");
+  write_bytes(in, ply_bytes(s));
+  Scene t = random_scene(3, 0, 7);
+  t.splats[1].log_scale[2] = 50;
+  const fs::path in2 = scratch("big_scale2.ply");
+  write_bytes(in2, ply_bytes(t));
+  for (const std::string ext : {".glb", ".gltf"}) {
+    const fs::path out = scratch("big_scale" + ext);
+    fs::remove(out);
+    auto r = convert(in, out);
+    EXPECT_EQ(r.exit_code, 1) << r.err;
+    EXPECT_NE(r.err.find("splat 2: its log-scale 89"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out));
+    r = convert(in2, out, {"--scale", "1e20"});
+    EXPECT_EQ(r.exit_code, 1) << r.err;
+    EXPECT_NE(r.err.find("splat 1: its log-scale 96.05"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out));
+  }
+}
+
 // The Khronos validator on the glTF outputs: no error but its verdict on the extension's
 // attribute names, which it does not know (the messages are printed).
 TEST(CliSplatFormats, GltfValidatorFaultsOnlyTheExtensionAttributeNames) {

@@ -271,7 +271,14 @@ std::string write_gltf_splats(const SplatScene& s, bool binary) {
     const float w = norm > 0 ? q[0] / norm : 1.0f;
     for (int c = 0; c < 3; ++c) rot[4 * i + c] = norm > 0 ? q[1 + c] / norm : 0.0f;
     rot[4 * i + 3] = w;
-    for (int c = 0; c < 3; ++c) scale[3 * i + c] = std::exp(s.log_scale[3 * i + c]);
+    for (int c = 0; c < 3; ++c) {
+      scale[3 * i + c] = std::exp(s.log_scale[3 * i + c]);
+      // glTF holds no infinity; a log-scale past log(FLT_MAX) = 88.72 has no linear float.
+      if (!std::isfinite(scale[3 * i + c]))
+        throw InputError("splat " + std::to_string(i) + ": its log-scale " + std::to_string(s.log_scale[3 * i + c]) +
+                         " gives a linear scale exp(" + std::to_string(s.log_scale[3 * i + c]) +
+                         ") past float's range (3.4e38), which glTF's KHR_gaussian_splatting:SCALE cannot hold");
+    }
     opacity[i] = 1.0f / (1.0f + std::exp(-s.opacity[i]));
   }
   tinygltf::Primitive p;

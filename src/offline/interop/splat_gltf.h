@@ -24,7 +24,8 @@ namespace shtool::interop {
 SplatScene read_gltf_splats(const std::string& bytes, const std::filesystem::path& path, int threads = 1);
 
 // One node, one mesh, one POINTS primitive, float attributes, the scene's colour space;
-// binary (.glb) or text with the buffer embedded (.gltf).
+// binary (.glb) or text with the buffer embedded (.gltf). InputError naming the splat
+// when a linear scale exp(log-scale) overflows float (glTF allows no infinity).
 std::string write_gltf_splats(const SplatScene& scene, bool binary);
 
 }  // namespace shtool::interop
