@@ -932,6 +932,34 @@ TEST(CliSplatFormats, SpzPointCountBoundedByFileSize) {
   EXPECT_EQ(r.exit_code, 0) << r.err;
 }
 
+// A glTF whose extensionsRequired lists an extension shtool does not implement (here
+// EXT_meshopt_compression, whose buffer views would hold fallback data) is refused naming
+// it; KHR_gaussian_splatting itself may be required.
+TEST(CliSplatFormats, GltfRequiredExtensionsAreChecked) {
+  const Scene scene = random_scene(10, 1, 79);
+  const fs::path in = scratch("req_in.ply"), gltf = scratch("req.gltf");
+  write_bytes(in, ply_bytes(scene));
+  ASSERT_EQ(convert(in, gltf).exit_code, 0);
+  nlohmann::json doc = nlohmann::json::parse(read_file(gltf));
+  doc["extensionsRequired"] = {"KHR_gaussian_splatting"};
+  const fs::path ok = scratch("req_ok.gltf"), ok_out = scratch("req_ok.ply");
+  write_bytes(ok, doc.dump());
+  const auto r = convert(ok, ok_out);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  doc["extensionsUsed"].push_back("EXT_meshopt_compression");
+  doc["extensionsRequired"].push_back("EXT_meshopt_compression");
+  const fs::path bad = scratch("req_bad.gltf");
+  write_bytes(bad, doc.dump());
+  for (const std::string ext : {".ply", ".glb", ".spz"}) {
+    const fs::path out = scratch("req_out" + ext);
+    fs::remove(out);
+    const auto b = convert(bad, out);
+    EXPECT_EQ(b.exit_code, 1) << b.err;
+    EXPECT_NE(b.err.find("requires the glTF extension EXT_meshopt_compression"), std::string::npos) << b.err;
+    EXPECT_FALSE(fs::exists(out));
+  }
+}
+
 // glTF stores linear scales: a log-scale past log(FLT_MAX) = 88.72 (here 89, in the
 // input; and 50 under --scale 1e20, +46) has no float, and is refused naming the splat,
 // nothing written.

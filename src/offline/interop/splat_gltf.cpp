@@ -228,6 +228,12 @@ SplatScene read_gltf_splats(const std::string& bytes, const std::filesystem::pat
     while (!err.empty() && (err.back() == '\n' || err.back() == ' ')) err.pop_back();
     fail_input(path, "cannot read glTF" + (err.empty() ? std::string() : ": " + err));
   }
+  // An extension listed as required changes what the file means (compressed or moved
+  // data, other attributes): read as plain glTF its values would be wrong.
+  for (const std::string& required : model.extensionsRequired)
+    if (required != kExtension)
+      fail_input(path, "it requires the glTF extension " + required +
+                           " (extensionsRequired), which shtool does not implement: only " + kExtension + " is read");
   if (model.scenes.empty()) fail_input(path, "no scene");
   const int scene = model.defaultScene >= 0 ? model.defaultScene : 0;
   if (static_cast<std::size_t>(scene) >= model.scenes.size()) fail_input(path, "the default scene does not exist");
