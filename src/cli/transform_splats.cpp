@@ -74,7 +74,8 @@ void setup_transform_splats(CLI::App* sub) {
     if (r.spz_sh_bound > 0 || r.spz_dc_bound > 0)
       std::cerr << "transform-splats: spz quantisation, largest colour change over the sphere (one channel): SH bands "
                 << r.spz_sh_bound << " from the bucket sizes (coefficients in [-1, 1]), " << r.spz_sh_scene
-                << " for this scene's coefficients; DC " << r.spz_dc_bound << '\n';
+                << " for this scene's coefficients; DC " << r.spz_dc_bound
+                << " from the byte step (coefficients in [-3.33, 3.33]), " << r.spz_dc_scene << " for this scene's\n";
   });
 }
 

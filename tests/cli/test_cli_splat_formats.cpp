@@ -835,6 +835,31 @@ TEST(CliSplatFormats, QuantisationReport) {
   }
 }
 
+// The DC byte holds coefficients in [-0.5, 0.5] / 0.15 = +-3.33: the scene's DC figure
+// counts what the clipping of larger ones changes (here -6 and 5 read back as -3.33 and
+// 3.33: (6 - 10/3) y_0^0 = 0.752), where the byte step's bound is 0.0037.
+TEST(CliSplatFormats, QuantisationReportCountsDcClipping) {
+  Scene s = random_scene(2, 1, 83);
+  for (int c = 0; c < 3; ++c) s.splats[0].sh[c][0] = s.splats[1].sh[c][0] = 0.1;
+  s.splats[0].sh[0][0] = -6;
+  s.splats[1].sh[1][0] = 5;
+  const fs::path in = scratch("dc_in.ply"), out = scratch("dc_out.spz");
+  write_bytes(in, ply_bytes(s));
+  const auto r = convert(in, out);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string key = " from the byte step (coefficients in [-3.33, 3.33]), ";
+  const std::size_t at = r.err.find(key);
+  ASSERT_NE(at, std::string::npos) << r.err;
+  const double scene_dc = std::stod(r.err.substr(at + key.size()));
+  EXPECT_NEAR(scene_dc, (6 - 0.5 / 0.15) * C0, 1e-4) << r.err;
+  const Scene back = read_ply([&] {
+    const fs::path p = scratch("dc_back.ply");
+    EXPECT_EQ(convert(out, p).exit_code, 0);
+    return p;
+  }());
+  EXPECT_NEAR(std::abs(back.splats[0].sh[0][0] - s.splats[0].sh[0][0]) * C0, scene_dc, 1e-4);
+}
+
 TEST(CliSplatFormats, BadFilesAreRefusedWithNothingWritten) {
   const Scene scene = random_scene(20, 1, 43);
   const fs::path in = scratch("bad_src.ply"), v4 = scratch("bad_src.spz"), v3 = scratch("bad_src3.spz"),

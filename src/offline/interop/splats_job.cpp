@@ -434,6 +434,7 @@ TransformSplatsReport run_transform_splats(const TransformSplatsRequest& r) {
         report.spz_sh_bound = spz_sh_error_bound(scene.degree, spz);
         report.spz_sh_scene = spz_sh_error_of(scene, spz, threads);
         report.spz_dc_bound = spz_dc_error_bound();
+        report.spz_dc_scene = spz_dc_error_of(scene, threads);
         break;
       case SplatFormat::gltf: out = write_gltf_splats(scene, false); break;
       case SplatFormat::glb: out = write_gltf_splats(scene, true); break;

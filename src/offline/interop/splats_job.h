@@ -46,9 +46,9 @@ struct TransformSplatsReport {
   int threads = 1;
   double seconds = 0;
   // spz output: the colour error bounds of its quantisation (one channel, any
-  // direction): the SH bands' from the bucket sizes, the same for this scene's
-  // coefficients, the DC's.
-  double spz_sh_bound = 0, spz_sh_scene = 0, spz_dc_bound = 0;
+  // direction): the SH bands' from the bucket sizes and for this scene's coefficients,
+  // the DC's from the byte step and for this scene's (clipping included).
+  double spz_sh_bound = 0, spz_sh_scene = 0, spz_dc_bound = 0, spz_dc_scene = 0;
   // What the job did that the user may not expect, one line each (the CLI prints them as
   // warnings): extension records skipped, a frame taken from the file.
   std::vector<std::string> warnings;

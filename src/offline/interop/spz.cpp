@@ -518,6 +518,26 @@ double spz_sh_error_of(const SplatScene& s, const SpzWriteOptions& o, int thread
   return worst;
 }
 
+double spz_dc_error_of(const SplatScene& s, int threads) {
+  const std::size_t stride = s.sh_stride();
+  std::vector<double> worst_of((s.count + kChunk - 1) / kChunk, 0.0);
+  parallel_for(worst_of.size(), threads, [&](std::size_t chunk) {
+    double& worst = worst_of[chunk];
+    const std::size_t end = std::min(s.count, (chunk + 1) * kChunk);
+    for (std::size_t i = chunk * kChunk; i < end; ++i)
+      for (int c = 0; c < 3; ++c) {
+        // The colour byte as written and its value as read (clipped past +-0.5 / 0.15).
+        const float x = s.sh[i * stride + c];
+        const float decoded = (static_cast<float>(to_u8(x * kColorScale * 255.0f + 0.5f * 255.0f)) / 255.0f - 0.5f) /
+                              kColorScale;
+        worst = std::max(worst, std::abs(double(x) - double(decoded)));
+      }
+  });
+  double worst = 0;
+  for (double w : worst_of) worst = std::max(worst, w);
+  return worst * 0.5 / std::sqrt(std::numbers::pi);
+}
+
 double spz_dc_error_bound() { return 0.5 / (kColorScale * 255.0) * 0.5 / std::sqrt(std::numbers::pi); }
 
 }  // namespace shtool::interop

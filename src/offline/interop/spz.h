@@ -67,7 +67,11 @@ double spz_sh_error_bound(int degree, const SpzWriteOptions& options);
 // error vector (clipping of coefficients beyond [-1, 1] included).
 double spz_sh_error_of(const SplatScene& scene, const SpzWriteOptions& options, int threads = 1);
 
-// The largest change of the DC colour: half a step of the colour byte, times y_0^0.
+// The largest change of the DC colour: half a step of the colour byte, times y_0^0, for
+// coefficients within the byte's range, [-0.5, 0.5] / 0.15 = +-3.33.
 double spz_dc_error_bound();
+// The same for the scene's own DC coefficients: max over splats and channels of
+// |c - decoded| y_0^0, coefficients clipped at +-3.33 included.
+double spz_dc_error_of(const SplatScene& scene, int threads = 1);
 
 }  // namespace shtool::interop
