@@ -835,6 +835,46 @@ TEST(CliSplatFormats, QuantisationReport) {
   }
 }
 
+// An empty scene has no spz (the reference loader refuses numPoints 0) and no glTF
+// (accessors need a count of at least 1): refused alike, nothing written; PLY holds it.
+TEST(CliSplatFormats, EmptySceneIsRefusedBySpzAndGltf) {
+  const fs::path in = scratch("empty.ply");
+  write_bytes(in, ply_bytes(Scene{1, {}}));
+  for (const std::string ext : {".spz", ".glb", ".gltf"}) {
+    const fs::path out = scratch("empty_out" + ext);
+    fs::remove(out);
+    const auto r = convert(in, out);
+    EXPECT_EQ(r.exit_code, 1) << ext << ": " << r.err;
+    EXPECT_NE(r.err.find("cannot hold an empty splat scene"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out)) << ext;
+  }
+  for (const std::string version : {"3", "4"}) {
+    const fs::path out = scratch("empty_out.spz");
+    const auto r = convert(in, out, {"--spz-version", version});
+    EXPECT_EQ(r.exit_code, 1) << r.err;
+    EXPECT_FALSE(fs::exists(out));
+  }
+  const auto r = convert(in, scratch("empty_out.ply"), {"--sh-degree", "0"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  // Nor is an spz of no splats read, in either container.
+  std::string v4, v3;
+  put32(v4, 0x5053474e), put32(v4, 4), put32(v4, 0);
+  v4 += std::string("\x00\x0c\x00\x00", 4);  // degree 0, 12 bits, no flags, no streams
+  put32(v4, 32);
+  v4.append(12, '\0');
+  put32(v3, 0x5053474e), put32(v3, 3), put32(v3, 0);
+  v3 += std::string("\x00\x0c\x00\x00", 4);
+  for (const std::string& bytes : {v4, compress_with("gzip", v3)}) {
+    const fs::path spz = scratch("empty_in.spz"), out = scratch("empty_back.ply");
+    write_bytes(spz, bytes);
+    fs::remove(out);
+    const auto e = convert(spz, out);
+    EXPECT_EQ(e.exit_code, 1) << e.err;
+    EXPECT_NE(e.err.find("no splats"), std::string::npos) << e.err;
+    EXPECT_FALSE(fs::exists(out));
+  }
+}
+
 // The DC byte holds coefficients in [-0.5, 0.5] / 0.15 = +-3.33: the scene's DC figure
 // counts what the clipping of larger ones changes (here -6 and 5 read back as -3.33 and
 // 3.33: (6 - 10/3) y_0^0 = 0.752), where the byte step's bound is 0.0037.

@@ -214,6 +214,7 @@ SplatScene read_gzip(std::string_view bytes, const std::string& name, SpzHeader*
   const int degree = h[12], fractional_bits = h[13], flags = h[14];
   if (version < 2 || version > 3)
     throw fail("spz version " + std::to_string(version) + " in a gzip stream: versions 2 and 3 are read there");
+  if (n == 0) throw fail("no splats (a point count of 0, which spz readers refuse)");
   if (degree > 3) throw fail("SH degree " + std::to_string(degree) + ": degrees 0..3 are read");
   if (fractional_bits > 23) throw fail("fractional bits " + std::to_string(fractional_bits) + " past 23");
   const std::array<std::uint64_t, 6> sizes = block_sizes(n, degree, static_cast<int>(version));
@@ -267,6 +268,7 @@ SplatScene read_ngsp(std::string_view bytes, const std::string& name, SpzHeader*
   // kMinBytesPerPoint 9, numPoints <= fileSize x 1024 / 9): the positions alone take 9
   // bytes a splat, and no real stream shrinks more than 1024:1 (zstd's own limit, 32768:1
   // for a run of one byte, would let a 40 KB file claim 20 million splats).
+  if (n == 0) throw fail("no splats (a point count of 0, which spz readers refuse)");
   if (std::uint64_t(n) * kMinBytesPerSplat > std::uint64_t(bytes.size()) * kMaxCompressionRatio)
     throw fail("implausible: " + std::to_string(n) + " splats claimed, more than the " + std::to_string(bytes.size()) +
                " bytes of its streams can hold (at most file size x " + std::to_string(kMaxCompressionRatio) + " / " +
@@ -348,6 +350,7 @@ std::string write_spz(const SplatScene& s, const SpzWriteOptions& o, int threads
   for (int bits : {o.sh1_bits, o.sh_rest_bits})
     if (bits < 1 || bits > 8) throw InputError("--sh-bits must be in 1..8, got " + std::to_string(bits));
   if (s.count > 0xffffffffu) throw InputError("spz holds at most 2^32 - 1 splats");
+  if (s.count == 0) throw InputError("spz cannot hold an empty splat scene (readers refuse a point count of 0)");
   float high = 0, low = 0;
   for (float p : s.position) high = std::max(high, p), low = std::min(low, p);
   // The finest fixed point whose 24 bits (two's complement) reach every position.
@@ -466,6 +469,13 @@ std::string write_spz(const SplatScene& s, const SpzWriteOptions& o, int threads
   for (int k = 0; k < 6; ++k)
     if (sizes[k] > 0) put_u64(out, packed[j].size()), put_u64(out, sizes[k]), ++j;
   for (const std::string& z : packed) out += z;
+  // What readers accept (read_ngsp): a scene that compresses past it (a great many
+  // identical splats) is refused rather than written unreadable.
+  if (std::uint64_t(n) * kMinBytesPerSplat > std::uint64_t(out.size()) * kMaxCompressionRatio)
+    throw InputError("the " + std::to_string(n) + " splats compress to " + std::to_string(out.size()) +
+                     " bytes, fewer than spz readers accept for them (file size x " +
+                     std::to_string(kMaxCompressionRatio) + " / " + std::to_string(kMinBytesPerSplat) +
+                     " splats at most): write --spz-version 3");
   return out;
 }
 

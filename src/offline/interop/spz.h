@@ -43,15 +43,16 @@ std::string_view spz_coordinate_system_frame(std::uint32_t value);
 // frame (the 16 have x along R or L).
 std::uint32_t spz_coordinate_system_value(std::string_view letters);
 
-// InputError naming `name` on a truncated, oversized or inconsistent file, an unknown
+// InputError naming `name` on an empty, truncated, oversized or inconsistent file, an unknown
 // version, SH degree 4 (not held by SplatScene), a size past what the compressed bytes
 // could hold or a malformed extension record. Extension records (flag 0x2; v4 between
 // the header and the table of contents, v2/v3 after the SH) are read: the coordinate
 // system's into header->frame, any other type skipped with a line in header->warnings.
 SplatScene read_spz(std::string_view bytes, const std::string& name, SpzHeader* header = nullptr, int threads = 1);
 
-// InputError when a position is beyond the 24-bit fixed point at any fractional bits or
-// the options are out of range. Positions use 12 fractional bits (the reference
+// InputError when the scene is empty, a position is beyond the 24-bit fixed point at any
+// fractional bits, the options are out of range, or (v4) the file would hold more splats
+// than readers accept for its size. Positions use 12 fractional bits (the reference
 // writer's) or fewer when the scene is larger than 2048 units. No extension record but an
 // SPZ_ADOBE_coordinate_system one when options.coordinate_system is not 0 (flag 0x2).
 std::string write_spz(const SplatScene& scene, const SpzWriteOptions& options, int threads = 1);
