@@ -304,6 +304,36 @@ TEST(CliTransformSplats, StreamedPathRefusesNonFiniteValues) {
   }
 }
 
+// Normals are not splat data: one that is not finite is carried (turned) into PLY, as it
+// is dropped on the way into spz and glb, in every encoding; a splat value that is not
+// finite is refused on every path.
+TEST(CliTransformSplats, NonFiniteNormalsAreCarriedSplatValuesRefused) {
+  for (const std::string format : {"binary_little_endian", "binary_big_endian", "ascii"}) {
+    std::vector<Splat> s = random_splats(50, 1, 29);
+    s[3].n[0] = std::nanf("");
+    s[7].n[2] = INFINITY;
+    const fs::path in = scratch("nan_normal.ply");
+    std::ofstream(in, std::ios::binary) << write_ply(s, 1, format);
+    for (const std::string ext : {".ply", ".spz", ".glb"}) {
+      const fs::path out = scratch("nan_normal_out" + ext);
+      fs::remove(out);
+      const auto r = run_shtool({"transform-splats", in.string(), "--quat", "0.8,0.6,0,0", "--out", out.string()});
+      EXPECT_EQ(r.exit_code, 0) << format << " -> " << ext << ": " << r.err;
+      EXPECT_TRUE(fs::exists(out)) << format << " -> " << ext;
+    }
+    s[5].sh[1][2] = std::nanf("");  // f_rest_4 (G, coefficient 2)
+    std::ofstream(in, std::ios::binary | std::ios::trunc) << write_ply(s, 1, format);
+    for (const std::string ext : {".ply", ".spz", ".glb"}) {
+      const fs::path out = scratch("nan_normal_out" + ext);
+      fs::remove(out);
+      const auto r = run_shtool({"transform-splats", in.string(), "--quat", "0.8,0.6,0,0", "--out", out.string()});
+      EXPECT_EQ(r.exit_code, 1) << format << " -> " << ext << ": " << r.err;
+      EXPECT_NE(r.err.find("splat 5"), std::string::npos) << format << " -> " << ext << ": " << r.err;
+      EXPECT_FALSE(fs::exists(out)) << format << " -> " << ext;
+    }
+  }
+}
+
 TEST(CliTransformSplats, BadInputIsAnErrorWithNoOutput) {
   const std::string good = write_ply(random_splats(10, 1, 3), 1, "binary_little_endian");
   auto replace = [&](const std::string& from, const std::string& to) {

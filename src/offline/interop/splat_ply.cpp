@@ -59,6 +59,17 @@ SplatLayout find_splat_layout(const PlyElement& v, const std::filesystem::path& 
   return l;
 }
 
+std::vector<std::size_t> splat_value_properties(const SplatLayout& l) {
+  std::vector<std::size_t> out(l.position.begin(), l.position.end());
+  if (l.rotation) out.insert(out.end(), l.rotation->begin(), l.rotation->end());
+  if (l.scale) out.insert(out.end(), l.scale->begin(), l.scale->end());
+  if (l.dc) out.insert(out.end(), l.dc->begin(), l.dc->end());
+  if (l.opacity) out.push_back(*l.opacity);
+  out.insert(out.end(), l.rest.begin(), l.rest.end());
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
 SplatScene read_ply_splats(const PlyFile& ply, const std::filesystem::path& name, int threads) {
   const PlyElement* vertex = ply.element("vertex");
   if (!vertex) throw InputError(name.string() + ": no 'vertex' element");

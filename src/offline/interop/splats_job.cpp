@@ -99,9 +99,15 @@ void transform_ply_streamed(const TransformSplatsRequest& r, const Eigen::Matrix
   const SplatShLanes lanes(motion.map);
   const std::size_t size = v.record_size;
   auto at = [&](std::size_t p) { return v.properties[p].offset; };
-  std::vector<std::size_t> floats;  // every float property's offset: each must be finite
+  std::vector<std::size_t> floats;  // every float property's offset
   for (const PlyProperty& p : v.properties)
     if (p.type == PlyType::float32) floats.push_back(p.offset);
+  // The splat values' offsets (all float32 here): each must be finite. Normals and other
+  // properties are not splat data and are carried whatever they hold, as into the other
+  // formats (which drop them).
+  const std::vector<std::size_t> values = splat_value_properties(layout);
+  std::vector<std::size_t> checked;
+  for (std::size_t p : values) checked.push_back(at(p));
   const std::array<std::size_t, 3> position{at(layout.position[0]), at(layout.position[1]), at(layout.position[2])};
   std::vector<std::size_t> rest;  // f_rest_0.., channel-major as SplatShLanes takes them
   for (std::size_t p : layout.rest) rest.push_back(at(p));
@@ -114,7 +120,8 @@ void transform_ply_streamed(const TransformSplatsRequest& r, const Eigen::Matrix
     const float f = static_cast<float>(value);
     std::memcpy(record + offset, &f, 4);
   };
-  // Records of float32 alone (3DGS's) are checked as one run of words, in SIMD lanes.
+  // Records of float32 alone (3DGS's) are checked as one run of words, in SIMD lanes;
+  // only a run with a value that is not finite is looked at value by value.
   const bool all_float = floats.size() * 4 == size;
   auto finite_run = [](const char* from, std::size_t words) {
     std::uint32_t bad = 0;
@@ -126,9 +133,8 @@ void transform_ply_streamed(const TransformSplatsRequest& r, const Eigen::Matrix
     return bad == 0;
   };
   auto finite = [&](const char* record) {
-    if (all_float) return finite_run(record, floats.size());
     std::uint32_t bad = 0;
-    for (std::size_t o : floats) {
+    for (std::size_t o : checked) {
       std::uint32_t b;
       std::memcpy(&b, record + o, 4);
       bad |= static_cast<std::uint32_t>((b & 0x7f800000u) == 0x7f800000u);
@@ -142,10 +148,10 @@ void transform_ply_streamed(const TransformSplatsRequest& r, const Eigen::Matrix
     while (j < count && finite(records + j * size)) ++j;
     return j;
   };
-  // The name of the first property of a record that is not finite (its message).
+  // The name of the first splat value of a record that is not finite (its message).
   auto non_finite = [&](const char* record) -> const std::string& {
-    for (const PlyProperty& p : v.properties)
-      if (p.type == PlyType::float32 && !std::isfinite(get(record, p.offset))) return p.name;
+    for (std::size_t p : values)
+      if (!std::isfinite(get(record, at(p)))) return v.properties[p].name;
     return v.properties.front().name;
   };
   PendingFile out(io.path("--out"));
@@ -243,9 +249,11 @@ void transform_ply_in_place(const TransformSplatsRequest& r, const Eigen::Matrix
   const std::size_t chunks = (count + kChunk - 1) / kChunk;
   // The first problem of each chunk; the first chunk's is reported, whatever the threads.
   std::vector<std::string> problems(chunks);
-  // The name of the first property of splat i that is not finite, or null.
+  // The name of the first splat value of splat i that is not finite, or null (normals and
+  // other properties are carried whatever they hold).
+  const std::vector<std::size_t> values = splat_value_properties(layout);
   auto non_finite = [&](std::size_t i) -> const std::string* {
-    for (std::size_t p = 0; p < v.properties.size(); ++p)
+    for (std::size_t p : values)
       if (!std::isfinite(ply.get(v, i, p))) return &v.properties[p].name;
     return nullptr;
   };
