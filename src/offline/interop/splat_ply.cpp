@@ -33,6 +33,12 @@ SplatLayout find_splat_layout(const PlyElement& v, const std::filesystem::path& 
     for (std::size_t k = 0; k < N; ++k) out[k] = floats(need(names[k]));
     return out;
   };
+  // SuperSplat's (PlayCanvas's) compressed PLY: chunks of bounds, and vertices of packed
+  // 32-bit words (packed_position, packed_rotation, packed_scale, packed_color).
+  if (!v.find("x") && v.find("packed_position"))
+    throw fail("a compressed PLY (SuperSplat / PlayCanvas: element 'chunk', vertex property 'packed_position'), "
+               "which shtool does not support: it reads the 3DGS layout (x, y, z, f_dc_*, ...); decompress the "
+               "file first (for example with @playcanvas/splat-transform into .ply)");
   SplatLayout l;
   for (int k = 0; k < 3; ++k) l.position[k] = floats(need(std::string(1, "xyz"[k])));
   l.normal = group(std::array<const char*, 3>{"nx", "ny", "nz"});

@@ -6,6 +6,7 @@
 #include <cstring>
 #include <chrono>
 #include <cmath>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -44,6 +45,15 @@ Eigen::Matrix3d splat_rotation(const TransformSplatsRequest& r) {
 }
 
 namespace {
+
+// Why a value that was finite may overflow after the transform: the user's scale or
+// translation when there is one, else the rotation itself (|R p| per axis can reach
+// sqrt(3) max |p_k|).
+std::string overflow_cause(const TransformSplatsRequest& r) {
+  const bool moved = r.scale != 1 || r.translate[0] != 0 || r.translate[1] != 0 || r.translate[2] != 0;
+  return moved ? "--scale or --translate too large for " + r.in.string()
+               : "a value of " + r.in.string() + " too close to its type's limit to be rotated";
+}
 
 std::string upper(std::string_view letters) {
   std::string up;
@@ -213,7 +223,7 @@ void transform_ply_streamed(const TransformSplatsRequest& r, const Eigen::Matrix
     for (std::size_t j = overflow; j < limit; ++j)
       if (!finite(records + j * size))
         return "splat " + std::to_string(first + j) + ": '" + non_finite(records + j * size) +
-               "' overflows its type after the transform (--scale or --translate too large for " + r.in.string() + ")";
+               "' overflows its type after the transform (" + overflow_cause(r) + ")";
     if (limit < count)
       return r.in.string() + ": splat " + std::to_string(first + limit) + ": '" + non_finite(records + limit * size) +
              "' is not finite";
@@ -265,6 +275,16 @@ void transform_ply_in_place(const TransformSplatsRequest& r, const Eigen::Matrix
         problems[chunk] = r.in.string() + ": splat " + std::to_string(i) + ": '" + *name + "' is not finite";
         return;
       }
+      // A text value past its float property's range (an ASCII 1e39) is the input's problem.
+      for (std::size_t p : values)
+        if (v.properties[p].type == PlyType::float32 && !std::isfinite(static_cast<float>(ply.get(v, i, p)))) {
+          std::ostringstream value;
+          value.precision(9);
+          value << ply.get(v, i, p);
+          problems[chunk] = r.in.string() + ": splat " + std::to_string(i) + ": '" + v.properties[p].name + "' = " +
+                            value.str() + " is past the range of its type, float";
+          return;
+        }
       Eigen::Vector3d p;
       for (int k = 0; k < 3; ++k) p[k] = ply.get(v, i, layout.position[k]);
       const Eigen::Vector3d moved = moves ? Eigen::Vector3d(r.scale * (rot * p) + t) : p;
@@ -296,9 +316,8 @@ void transform_ply_in_place(const TransformSplatsRequest& r, const Eigen::Matrix
       }
       // A finite value beyond the property's type (float32 past 3.4e38) was stored as inf.
       if (const std::string* name = non_finite(i)) {
-        problems[chunk] = "splat " + std::to_string(i) + ": '" + *name +
-                          "' overflows its type after the transform (--scale or --translate too large for " +
-                          r.in.string() + ")";
+        problems[chunk] = "splat " + std::to_string(i) + ": '" + *name + "' overflows its type after the transform (" +
+                          overflow_cause(r) + ")";
         return;
       }
     }
@@ -424,8 +443,7 @@ TransformSplatsReport run_transform_splats(const TransformSplatsRequest& r) {
     for (std::size_t i = 0; i < scene.position.size(); ++i)
       if (!std::isfinite(scene.position[i]) || !std::isfinite(scene.log_scale[i]))
         throw InputError("splat " + std::to_string(i / 3) +
-                         ": a position or scale overflows float after the transform (--scale or --translate too large for " +
-                         r.in.string() + ")");
+                         ": a position or scale overflows float after the transform (" + overflow_cause(r) + ")");
     std::string out;
     switch (out_format) {
       case SplatFormat::ply: out = write_ply_splats(scene); break;
