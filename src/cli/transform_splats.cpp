@@ -27,7 +27,10 @@ void setup_transform_splats(CLI::App* sub) {
   sub->add_option("--frame", opt->ply_frame,
                   "axes of PLY files, one letter per x, y, z from R/L, U/D, F/B (3DGS, COLMAP: RDF)")
       ->capture_default_str();
-  sub->add_option("--spz-frame", opt->spz_frame, "axes of spz files (the specification: RUB)")->capture_default_str();
+  sub->add_option("--spz-frame", opt->spz_frame,
+                  "axes of spz files without a coordinate-system record (the specification: RUB); "
+                  "spz written in another frame record it")
+      ->capture_default_str();
   sub->add_option("--gltf-frame", opt->gltf_frame,
                   "axes of glTF files (RUB: +Y up, the asset's front +Z; splat-transform's .glb: LUF)")
       ->capture_default_str();
@@ -63,6 +66,7 @@ void setup_transform_splats(CLI::App* sub) {
     }
     if (*degree >= 0 || sub->get_option("--sh-degree")->count()) opt->sh_degree = *degree;
     const interop::TransformSplatsReport r = interop::run_transform_splats(*opt);
+    for (const std::string& w : r.warnings) std::cerr << "transform-splats: warning: " << w << '\n';
     std::cerr << "transform-splats: " << r.splats << " splats, SH degree " << r.degree;
     if (r.degree_in >= 0 && r.degree_in != r.degree) std::cerr << " (from " << r.degree_in << ")";
     if (r.reflects) std::cerr << ", the map reflects";
@@ -70,7 +74,8 @@ void setup_transform_splats(CLI::App* sub) {
     if (r.spz_sh_bound > 0 || r.spz_dc_bound > 0)
       std::cerr << "transform-splats: spz quantisation, largest colour change over the sphere (one channel): SH bands "
                 << r.spz_sh_bound << " from the bucket sizes (coefficients in [-1, 1]), " << r.spz_sh_scene
-                << " for this scene's coefficients; DC " << r.spz_dc_bound << '\n';
+                << " for this scene's coefficients; DC " << r.spz_dc_bound
+                << " from the byte step (coefficients in [-3.33, 3.33]), " << r.spz_dc_scene << " for this scene's\n";
   });
 }
 

@@ -625,6 +625,200 @@ TEST(CliSplatFormats, SpzWriterBytes) {
   EXPECT_NE(r.err.find("spz quantisation"), std::string::npos) << r.err;
 }
 
+// SH coefficients far past spz's [-1, 127/128] saturate at the end bytes, whatever their
+// size (128 x would overflow an int past 2^24).
+TEST(CliSplatFormats, SpzShSaturates) {
+  Scene s = random_scene(1, 1, 5);
+  for (int c = 0; c < 3; ++c) s.splats[0].sh[c] = {0.2, 3e9, -3e9, 2.0};
+  const fs::path in = scratch("sat_in.ply");
+  write_bytes(in, ply_bytes(s));
+  for (const std::string version : {"4", "3"}) {
+    const fs::path out = scratch("sat_out.spz");
+    const auto r = convert(in, out, {"--frame", "RUB", "--spz-version", version});  // no frame change
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const Scene back = raw_values(out);
+    ASSERT_EQ(back.splats.size(), 1u);
+    for (int c = 0; c < 3; ++c) {
+      EXPECT_EQ(back.splats[0].sh[c][1], 127.0 / 128) << "3e9, channel " << c << ", v" << version;
+      EXPECT_EQ(back.splats[0].sh[c][2], -1.0) << "-3e9, channel " << c << ", v" << version;
+      EXPECT_EQ(back.splats[0].sh[c][3], 127.0 / 128) << "2, channel " << c << ", v" << version;
+    }
+  }
+}
+
+namespace {
+
+// An spz extension record: [u32 type][u32 byteLength][payload].
+std::string spz_record(std::uint32_t type, const std::string& payload) {
+  std::string s;
+  put32(s, type), put32(s, static_cast<std::uint32_t>(payload.size()));
+  return s + payload;
+}
+std::string u32_bytes(std::uint32_t v) {
+  std::string s;
+  put32(s, v);
+  return s;
+}
+// A v4 file with `records` between its header and its table of contents (flag 0x2).
+std::string with_records_v4(std::string v4, const std::string& records) {
+  v4[14] = static_cast<char>(v4[14] | 2);
+  std::string toc;
+  put32(toc, static_cast<std::uint32_t>(32 + records.size()));
+  v4.replace(16, 4, toc);
+  return v4.insert(32, records);
+}
+// A v2/v3 payload with `records` after the SH (flag 0x2).
+std::string with_records_legacy(std::string plain, const std::string& records) {
+  plain[14] = static_cast<char>(plain[14] | 2);
+  return plain + records;
+}
+
+}  // namespace
+
+// spz extension records (flag 0x2: v4 between the header and the table of contents, v3
+// after the SH): SPZ_ADOBE_coordinate_system (0xADBE0003, a u32, RDF = 6) names the
+// frame the values are in, and the file is read in it whatever --spz-frame says; other
+// types are skipped with a warning naming them; spz written in a frame other than RUB
+// records it, and reads back without --spz-frame.
+TEST(CliSplatFormats, SpzExtensionRecords) {
+  const std::string rdf = spz_record(0xADBE0003, u32_bytes(6)), other = spz_record(0x12340001, "abc");
+  const std::string plain3 = legacy_payload(3), v4 = hand_v4();
+  // The reference: the files without records, read with --spz-frame RDF.
+  const fs::path ref3 = scratch("ext_ref3.ply"), ref4 = scratch("ext_ref4.ply");
+  write_bytes(scratch("ext_plain3.spz"), compress_with("gzip", plain3));
+  write_bytes(scratch("ext_plain4.spz"), v4);
+  ASSERT_EQ(convert(scratch("ext_plain3.spz"), ref3, {"--spz-frame", "RDF"}).exit_code, 0);
+  ASSERT_EQ(convert(scratch("ext_plain4.spz"), ref4, {"--spz-frame", "RDF"}).exit_code, 0);
+  struct Case {
+    std::string name, bytes;
+    fs::path reference;
+    std::vector<std::string> args;
+    std::string warning;
+  };
+  const std::vector<Case> cases = {
+      {"v4 RDF", with_records_v4(v4, rdf), ref4, {}, ""},
+      {"v4 RDF and an unknown record", with_records_v4(v4, other + rdf), ref4, {}, "0x12340001 (3 bytes)"},
+      {"v4 RDF over --spz-frame", with_records_v4(v4, rdf), ref4, {"--spz-frame", "LUF"}, "not in --spz-frame LUF"},
+      {"v3 RDF", compress_with("gzip", with_records_legacy(plain3, rdf)), ref3, {}, ""},
+      {"v3 RDF and an unknown record", compress_with("gzip", with_records_legacy(plain3, rdf + other)), ref3, {},
+       "0x12340001 (3 bytes)"},
+  };
+  for (const Case& c : cases) {
+    const fs::path spz = scratch("ext_in.spz"), ply = scratch("ext_out.ply");
+    write_bytes(spz, c.bytes);
+    const auto r = convert(spz, ply, c.args);
+    ASSERT_EQ(r.exit_code, 0) << c.name << ": " << r.err;
+    EXPECT_TRUE(read_file(ply) == read_file(c.reference)) << c.name << ": not read in the recorded frame";
+    if (c.warning.empty())
+      EXPECT_EQ(r.err.find("warning"), std::string::npos) << c.name << ": " << r.err;
+    else
+      EXPECT_NE(r.err.find("warning: " + spz.string()), std::string::npos) << c.name << ": " << r.err;
+    EXPECT_NE(r.err.find(c.warning), std::string::npos) << c.name << ": " << r.err;
+  }
+  // Unknown records alone: read in the default frame, with the warning.
+  {
+    const fs::path spz = scratch("ext_other.spz"), ply = scratch("ext_other.ply"), ref = scratch("ext_other_ref.ply");
+    write_bytes(spz, with_records_v4(v4, other));
+    const auto r = convert(spz, ply);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE(r.err.find("skipped an spz extension record of type 0x12340001"), std::string::npos) << r.err;
+    ASSERT_EQ(convert(scratch("ext_plain4.spz"), ref).exit_code, 0);
+    EXPECT_TRUE(read_file(ply) == read_file(ref));
+  }
+  // Written in RDF: the record (v4 in the header zone, v3 after the SH), read back
+  // without --spz-frame.
+  const Scene scene = random_scene(200, 2, 71);
+  const fs::path in = scratch("ext_scene.ply");
+  write_bytes(in, ply_bytes(scene));
+  for (const std::string version : {"4", "3"}) {
+    const fs::path spz = scratch("ext_rdf.spz"), back = scratch("ext_rdf_back.ply");
+    auto r = convert(in, spz, {"--spz-frame", "RDF", "--spz-version", version});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    std::string bytes = read_file(spz);
+    if (version == "3") {
+      write_bytes(scratch("ext_rdf.gz"), bytes);
+      fs::remove(scratch("ext_rdf"));
+      ASSERT_EQ(run_command({"gzip", "-d", "-k", "-f", scratch("ext_rdf.gz").string()}).exit_code, 0);
+      bytes = read_file(scratch("ext_rdf"));
+      EXPECT_EQ(bytes.substr(bytes.size() - 12), rdf);
+    } else {
+      EXPECT_EQ(bytes.substr(16, 4), u32_bytes(44));  // the table of contents after the record
+      EXPECT_EQ(bytes.substr(32, 12), rdf);
+    }
+    EXPECT_EQ(bytes[14], 2) << "flags";
+    r = convert(spz, back);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    expect_mapped(scene, read_ply(back), Eigen::Matrix3d::Identity(), spz_tolerance(2), "RDF spz v" + version);
+  }
+  // Malformed records are refused, nothing written.
+  const std::vector<std::pair<std::string, std::string>> bad = {
+      {with_records_v4(v4, spz_record(0xADBE0003, u32_bytes(17))), "coordinate system 17"},
+      {with_records_v4(v4, spz_record(0xADBE0003, std::string(2, '\x06'))), "record of 2 bytes"},
+      {with_records_v4(v4, rdf + rdf), "two SPZ_ADOBE_coordinate_system records"},
+      {with_records_v4(v4, rdf.substr(0, 10)), "truncated extension record"},
+      {compress_with("gzip", with_records_legacy(plain3, rdf.substr(0, 5))), "truncated extension record"},
+  };
+  for (const auto& [bytes, message] : bad) {
+    const fs::path spz = scratch("ext_bad.spz"), out = scratch("ext_bad.ply");
+    write_bytes(spz, bytes);
+    fs::remove(out);
+    const auto r = convert(spz, out);
+    EXPECT_EQ(r.exit_code, 1) << message << ": " << r.err;
+    EXPECT_NE(r.err.find(message), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out)) << message;
+  }
+}
+
+// KHR_gaussian_splatting's colorSpace is carried from glTF to glTF; PLY and spz, which
+// hold 3DGS's sRGB display colours, refuse a linear scene (its SH have no exact image);
+// an unknown kernel or colour space is refused, nothing written.
+TEST(CliSplatFormats, GltfColourSpaceAndKernel) {
+  const Scene scene = random_scene(20, 1, 73);
+  const fs::path in = scratch("cs_in.ply"), gltf = scratch("cs.gltf");
+  write_bytes(in, ply_bytes(scene));
+  ASSERT_EQ(convert(in, gltf).exit_code, 0);
+  const nlohmann::json doc = nlohmann::json::parse(read_file(gltf));
+  auto splat_object = [](const nlohmann::json& j) {
+    return j["meshes"][0]["primitives"][0]["extensions"]["KHR_gaussian_splatting"];
+  };
+  EXPECT_EQ(splat_object(doc)["colorSpace"], "srgb_rec709_display");
+  auto variant = [&](const std::string& name, const std::string& key, const std::string& value) {
+    nlohmann::json j = doc;
+    j["meshes"][0]["primitives"][0]["extensions"]["KHR_gaussian_splatting"][key] = value;
+    const fs::path p = scratch(name);
+    write_bytes(p, j.dump());
+    return p;
+  };
+  const fs::path linear = variant("cs_lin.gltf", "colorSpace", "lin_rec709_display");
+  for (const std::string ext : {".gltf", ".glb"}) {
+    const fs::path out = scratch("cs_out" + ext), back = scratch("cs_back.gltf");
+    auto r = convert(linear, out, {"--quat", "0.8,0.6,0,0"});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    r = convert(out, back);  // through .glb too
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_EQ(splat_object(nlohmann::json::parse(read_file(back)))["colorSpace"], "lin_rec709_display") << ext;
+  }
+  struct Case {
+    fs::path in;
+    std::string ext, message;
+  };
+  const std::vector<Case> cases = {
+      {linear, ".ply", "colour space lin_rec709_display"},
+      {linear, ".spz", "colour space lin_rec709_display"},
+      {variant("cs_unknown.gltf", "colorSpace", "acescg_display"), ".glb", "colorSpace 'acescg_display'"},
+      {variant("cs_kernel.gltf", "kernel", "customShape"), ".ply", "kernel 'customShape'"},
+      {variant("cs_kernel.gltf", "kernel", "customShape"), ".glb", "kernel 'customShape'"},
+  };
+  for (const Case& c : cases) {
+    const fs::path out = scratch("cs_refused" + c.ext);
+    fs::remove(out);
+    const auto r = convert(c.in, out);
+    EXPECT_EQ(r.exit_code, 1) << c.message << ": " << r.err;
+    EXPECT_NE(r.err.find(c.message), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out)) << c.message;
+  }
+}
+
 // The bound that transform-splats reports for --sh-bits, from the bucket sizes.
 TEST(CliSplatFormats, QuantisationReport) {
   const Scene scene = random_scene(50, 3, 41);
@@ -639,6 +833,71 @@ TEST(CliSplatFormats, QuantisationReport) {
     text << "SH bands " << bound;
     EXPECT_NE(r.err.find(text.str()), std::string::npos) << bits << ": " << r.err << " wanted " << text.str();
   }
+}
+
+// An empty scene has no spz (the reference loader refuses numPoints 0) and no glTF
+// (accessors need a count of at least 1): refused alike, nothing written; PLY holds it.
+TEST(CliSplatFormats, EmptySceneIsRefusedBySpzAndGltf) {
+  const fs::path in = scratch("empty.ply");
+  write_bytes(in, ply_bytes(Scene{1, {}}));
+  for (const std::string ext : {".spz", ".glb", ".gltf"}) {
+    const fs::path out = scratch("empty_out" + ext);
+    fs::remove(out);
+    const auto r = convert(in, out);
+    EXPECT_EQ(r.exit_code, 1) << ext << ": " << r.err;
+    EXPECT_NE(r.err.find("cannot hold an empty splat scene"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out)) << ext;
+  }
+  for (const std::string version : {"3", "4"}) {
+    const fs::path out = scratch("empty_out.spz");
+    const auto r = convert(in, out, {"--spz-version", version});
+    EXPECT_EQ(r.exit_code, 1) << r.err;
+    EXPECT_FALSE(fs::exists(out));
+  }
+  const auto r = convert(in, scratch("empty_out.ply"), {"--sh-degree", "0"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  // Nor is an spz of no splats read, in either container.
+  std::string v4, v3;
+  put32(v4, 0x5053474e), put32(v4, 4), put32(v4, 0);
+  v4 += std::string("\x00\x0c\x00\x00", 4);  // degree 0, 12 bits, no flags, no streams
+  put32(v4, 32);
+  v4.append(12, '\0');
+  put32(v3, 0x5053474e), put32(v3, 3), put32(v3, 0);
+  v3 += std::string("\x00\x0c\x00\x00", 4);
+  for (const std::string& bytes : {v4, compress_with("gzip", v3)}) {
+    const fs::path spz = scratch("empty_in.spz"), out = scratch("empty_back.ply");
+    write_bytes(spz, bytes);
+    fs::remove(out);
+    const auto e = convert(spz, out);
+    EXPECT_EQ(e.exit_code, 1) << e.err;
+    EXPECT_NE(e.err.find("no splats"), std::string::npos) << e.err;
+    EXPECT_FALSE(fs::exists(out));
+  }
+}
+
+// The DC byte holds coefficients in [-0.5, 0.5] / 0.15 = +-3.33: the scene's DC figure
+// counts what the clipping of larger ones changes (here -6 and 5 read back as -3.33 and
+// 3.33: (6 - 10/3) y_0^0 = 0.752), where the byte step's bound is 0.0037.
+TEST(CliSplatFormats, QuantisationReportCountsDcClipping) {
+  Scene s = random_scene(2, 1, 83);
+  for (int c = 0; c < 3; ++c) s.splats[0].sh[c][0] = s.splats[1].sh[c][0] = 0.1;
+  s.splats[0].sh[0][0] = -6;
+  s.splats[1].sh[1][0] = 5;
+  const fs::path in = scratch("dc_in.ply"), out = scratch("dc_out.spz");
+  write_bytes(in, ply_bytes(s));
+  const auto r = convert(in, out);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string key = " from the byte step (coefficients in [-3.33, 3.33]), ";
+  const std::size_t at = r.err.find(key);
+  ASSERT_NE(at, std::string::npos) << r.err;
+  const double scene_dc = std::stod(r.err.substr(at + key.size()));
+  EXPECT_NEAR(scene_dc, (6 - 0.5 / 0.15) * C0, 1e-4) << r.err;
+  const Scene back = read_ply([&] {
+    const fs::path p = scratch("dc_back.ply");
+    EXPECT_EQ(convert(out, p).exit_code, 0);
+    return p;
+  }());
+  EXPECT_NEAR(std::abs(back.splats[0].sh[0][0] - s.splats[0].sh[0][0]) * C0, scene_dc, 1e-4);
 }
 
 TEST(CliSplatFormats, BadFilesAreRefusedWithNothingWritten) {
@@ -701,6 +960,94 @@ TEST(CliSplatFormats, BadFilesAreRefusedWithNothingWritten) {
     EXPECT_EQ(r.exit_code, 1) << c.name << ": " << r.err;
     EXPECT_NE(r.err.find(c.message), std::string::npos) << c.name << ": " << r.err;
     EXPECT_FALSE(fs::exists(out)) << c.name;
+  }
+}
+
+// A v4 file whose streams claim more splats than its size makes plausible (the reference
+// loader's numPoints <= file size x 1024 / 9) is refused before anything is allocated:
+// here a million splats of zeros in about a kilobyte (each stream within zstd's own
+// 32768:1).
+TEST(CliSplatFormats, SpzPointCountBoundedByFileSize) {
+  auto file = [](std::uint32_t n) {
+    const std::uint64_t sizes[5] = {9ull * n, n, 3ull * n, 3ull * n, 4ull * n};  // degree 0: no SH stream
+    std::string s;
+    put32(s, 0x5053474e), put32(s, 4), put32(s, n);
+    s += std::string("\x00\x0c\x00\x05", 4);  // degree 0, 12 bits, flags, 5 streams
+    put32(s, 32);
+    s.append(12, '\0');
+    std::vector<std::string> z;
+    for (std::uint64_t size : sizes) z.push_back(compress_with("zstd", std::string(size, '\0')));
+    for (int k = 0; k < 5; ++k) put64(s, z[k].size()), put64(s, sizes[k]);
+    for (const std::string& x : z) s += x;
+    return s;
+  };
+  const fs::path spz = scratch("bomb.spz"), out = scratch("bomb.ply");
+  const std::string bomb = file(1000000);
+  ASSERT_LT(bomb.size() * 1024 / 9, 1000000u) << bomb.size();
+  write_bytes(spz, bomb);
+  fs::remove(out);
+  auto r = convert(spz, out);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("implausible: 1000000 splats claimed"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out));
+  // The same streams for as many splats as the bound allows are read.
+  const std::string small = file(100);
+  write_bytes(spz, small);
+  r = convert(spz, out);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+}
+
+// A glTF whose extensionsRequired lists an extension shtool does not implement (here
+// EXT_meshopt_compression, whose buffer views would hold fallback data) is refused naming
+// it; KHR_gaussian_splatting itself may be required.
+TEST(CliSplatFormats, GltfRequiredExtensionsAreChecked) {
+  const Scene scene = random_scene(10, 1, 79);
+  const fs::path in = scratch("req_in.ply"), gltf = scratch("req.gltf");
+  write_bytes(in, ply_bytes(scene));
+  ASSERT_EQ(convert(in, gltf).exit_code, 0);
+  nlohmann::json doc = nlohmann::json::parse(read_file(gltf));
+  doc["extensionsRequired"] = {"KHR_gaussian_splatting"};
+  const fs::path ok = scratch("req_ok.gltf"), ok_out = scratch("req_ok.ply");
+  write_bytes(ok, doc.dump());
+  const auto r = convert(ok, ok_out);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  doc["extensionsUsed"].push_back("EXT_meshopt_compression");
+  doc["extensionsRequired"].push_back("EXT_meshopt_compression");
+  const fs::path bad = scratch("req_bad.gltf");
+  write_bytes(bad, doc.dump());
+  for (const std::string ext : {".ply", ".glb", ".spz"}) {
+    const fs::path out = scratch("req_out" + ext);
+    fs::remove(out);
+    const auto b = convert(bad, out);
+    EXPECT_EQ(b.exit_code, 1) << b.err;
+    EXPECT_NE(b.err.find("requires the glTF extension EXT_meshopt_compression"), std::string::npos) << b.err;
+    EXPECT_FALSE(fs::exists(out));
+  }
+}
+
+// glTF stores linear scales: a log-scale past log(FLT_MAX) = 88.72 (here 89, in the
+// input; and 50 under --scale 1e20, +46) has no float, and is refused naming the splat,
+// nothing written.
+TEST(CliSplatFormats, GlbScaleOverflowIsRefused) {
+  Scene s = random_scene(3, 0, 7);
+  s.splats[2].log_scale[0] = 89;
+  const fs::path in = scratch("big_scale.ply");
+  write_bytes(in, ply_bytes(s));
+  Scene t = random_scene(3, 0, 7);
+  t.splats[1].log_scale[2] = 50;
+  const fs::path in2 = scratch("big_scale2.ply");
+  write_bytes(in2, ply_bytes(t));
+  for (const std::string ext : {".glb", ".gltf"}) {
+    const fs::path out = scratch("big_scale" + ext);
+    fs::remove(out);
+    auto r = convert(in, out);
+    EXPECT_EQ(r.exit_code, 1) << r.err;
+    EXPECT_NE(r.err.find("splat 2: its log-scale 89"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out));
+    r = convert(in2, out, {"--scale", "1e20"});
+    EXPECT_EQ(r.exit_code, 1) << r.err;
+    EXPECT_NE(r.err.find("splat 1: its log-scale 96.05"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out));
   }
 }
 

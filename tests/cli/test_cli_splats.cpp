@@ -304,6 +304,81 @@ TEST(CliTransformSplats, StreamedPathRefusesNonFiniteValues) {
   }
 }
 
+// Normals are not splat data: one that is not finite is carried (turned) into PLY, as it
+// is dropped on the way into spz and glb, in every encoding; a splat value that is not
+// finite is refused on every path.
+TEST(CliTransformSplats, NonFiniteNormalsAreCarriedSplatValuesRefused) {
+  for (const std::string format : {"binary_little_endian", "binary_big_endian", "ascii"}) {
+    std::vector<Splat> s = random_splats(50, 1, 29);
+    s[3].n[0] = std::nanf("");
+    s[7].n[2] = INFINITY;
+    const fs::path in = scratch("nan_normal.ply");
+    std::ofstream(in, std::ios::binary) << write_ply(s, 1, format);
+    for (const std::string ext : {".ply", ".spz", ".glb"}) {
+      const fs::path out = scratch("nan_normal_out" + ext);
+      fs::remove(out);
+      const auto r = run_shtool({"transform-splats", in.string(), "--quat", "0.8,0.6,0,0", "--out", out.string()});
+      EXPECT_EQ(r.exit_code, 0) << format << " -> " << ext << ": " << r.err;
+      EXPECT_TRUE(fs::exists(out)) << format << " -> " << ext;
+    }
+    s[5].sh[1][2] = std::nanf("");  // f_rest_4 (G, coefficient 2)
+    std::ofstream(in, std::ios::binary | std::ios::trunc) << write_ply(s, 1, format);
+    for (const std::string ext : {".ply", ".spz", ".glb"}) {
+      const fs::path out = scratch("nan_normal_out" + ext);
+      fs::remove(out);
+      const auto r = run_shtool({"transform-splats", in.string(), "--quat", "0.8,0.6,0,0", "--out", out.string()});
+      EXPECT_EQ(r.exit_code, 1) << format << " -> " << ext << ": " << r.err;
+      EXPECT_NE(r.err.find("splat 5"), std::string::npos) << format << " -> " << ext << ": " << r.err;
+      EXPECT_FALSE(fs::exists(out)) << format << " -> " << ext;
+    }
+  }
+}
+
+// The messages name the problem: a compressed PLY (SuperSplat's packed layout) is named
+// as such; an ASCII value past float's range is the input's, and an overflow under a
+// rotation alone does not blame --scale or --translate.
+TEST(CliTransformSplats, MessagesNameTheProblem) {
+  struct Case {
+    std::string name, bytes;
+    std::vector<std::string> args;
+    std::string ext, message;
+  };
+  std::string packed = "ply\nformat binary_little_endian 1.0\nelement chunk 1\n";
+  for (const char* p : {"min_x", "min_y", "min_z", "max_x", "max_y", "max_z"}) packed += std::string("property float ") + p + "\n";
+  packed += "element vertex 1\n";
+  for (const char* p : {"packed_position", "packed_rotation", "packed_scale", "packed_color"})
+    packed += std::string("property uint ") + p + "\n";
+  packed += "end_header\n" + std::string(6 * 4 + 4 * 4, '\x01');
+  std::vector<Splat> s = random_splats(4, 0, 31);
+  std::string ascii = write_ply(s, 0, "ascii");
+  const std::size_t line = ascii.find("end_header\n") + 11;
+  ascii.replace(line, ascii.find(' ', line) - line, "1e39");  // splat 0's x
+  s[2].p = {3e38f, 3e38f, 0};
+  const std::string far = write_ply(s, 0, "binary_little_endian");
+  const std::string turn = "0.9238795,0,0,0.3826834";  // 45 degrees about z: y -> (x + y) / sqrt(2) = 4.2e38
+  const std::vector<Case> cases = {
+      {"compressed PLY", packed, {}, ".ply", "a compressed PLY (SuperSplat"},
+      {"compressed PLY to spz", packed, {}, ".spz", "which shtool does not support"},
+      {"ASCII past float", ascii, {"--quat", turn}, ".ply", "splat 0: 'x' = 1e+39 is past the range of its type, float"},
+      {"rotation overflows (streamed)", far, {"--quat", turn}, ".ply", "too close to its type's limit to be rotated"},
+      {"rotation overflows (glb)", far, {"--quat", turn}, ".glb", "too close to its type's limit to be rotated"},
+      {"scale overflows (glb)", far, {"--scale", "2"}, ".glb", "(--scale or --translate too large"},
+  };
+  for (const Case& c : cases) {
+    const fs::path in = scratch("msg.ply"), out = scratch("msg_out" + c.ext);
+    std::ofstream(in, std::ios::binary) << c.bytes;
+    fs::remove(out);
+    std::vector<std::string> argv = {"transform-splats", in.string(), "--out", out.string()};
+    argv.insert(argv.end(), c.args.begin(), c.args.end());
+    const auto r = run_shtool(argv);
+    EXPECT_EQ(r.exit_code, 1) << c.name << ": " << r.err;
+    EXPECT_NE(r.err.find(c.message), std::string::npos) << c.name << ": " << r.err;
+    if (c.args.empty() || c.args[0] == "--quat")
+      EXPECT_EQ(r.err.find("--scale"), std::string::npos) << c.name << ": " << r.err;
+    EXPECT_FALSE(fs::exists(out)) << c.name;
+  }
+}
+
 TEST(CliTransformSplats, BadInputIsAnErrorWithNoOutput) {
   const std::string good = write_ply(random_splats(10, 1, 3), 1, "binary_little_endian");
   auto replace = [&](const std::string& from, const std::string& to) {

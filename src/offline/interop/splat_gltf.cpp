@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <cstring>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 #include <vector>
 
@@ -72,6 +73,28 @@ struct Reader {
   void primitive(const tinygltf::Primitive& p) {
     if (!p.extensions.count(kExtension)) return;
     if (p.mode != TINYGLTF_MODE_POINTS) fail_input(path, "a KHR_gaussian_splatting primitive whose mode is not POINTS");
+    // The extension object: the kernel must be the 3DGS ellipse (another kernel gives the
+    // attributes another meaning); the colour space is carried with the splats. Both are
+    // required by the extension; files without them (older drafts) are taken as 3DGS's.
+    const tinygltf::Value& object = p.extensions.at(kExtension);
+    auto text = [&](const char* key) -> std::optional<std::string> {
+      if (!object.IsObject() || !object.Has(key)) return std::nullopt;
+      const tinygltf::Value& v = object.Get(key);
+      if (!v.IsString()) fail_input(path, std::string("KHR_gaussian_splatting: '") + key + "' is not a string");
+      return v.Get<std::string>();
+    };
+    if (const std::optional<std::string> kernel = text("kernel"); kernel && *kernel != "ellipse")
+      fail_input(path, "KHR_gaussian_splatting kernel '" + *kernel +
+                           "': shtool implements only the 'ellipse' kernel of 3DGS (another kernel's splats are not "
+                           "Gaussians it can convert)");
+    SplatColourSpace colour_space = SplatColourSpace::srgb_rec709_display;
+    if (const std::optional<std::string> name = text("colorSpace")) {
+      const std::optional<SplatColourSpace> known = parse_splat_colour_space(*name);
+      if (!known)
+        fail_input(path, "KHR_gaussian_splatting colorSpace '" + *name +
+                             "': shtool knows srgb_rec709_display and lin_rec709_display");
+      colour_space = *known;
+    }
     auto find = [&](const std::string& name) -> int {
       const auto it = p.attributes.find(name);
       return it == p.attributes.end() ? -1 : it->second;
@@ -101,6 +124,7 @@ struct Reader {
     const std::size_t count = pos.size() / 3;
     SplatScene s;
     s.resize(count, degree);
+    s.colour_space = colour_space;
     const std::size_t stride = s.sh_stride();
     for (int l = 0; l <= degree; ++l)
       for (int n = 0; n <= 2 * l; ++n) {
@@ -204,6 +228,12 @@ SplatScene read_gltf_splats(const std::string& bytes, const std::filesystem::pat
     while (!err.empty() && (err.back() == '\n' || err.back() == ' ')) err.pop_back();
     fail_input(path, "cannot read glTF" + (err.empty() ? std::string() : ": " + err));
   }
+  // An extension listed as required changes what the file means (compressed or moved
+  // data, other attributes): read as plain glTF its values would be wrong.
+  for (const std::string& required : model.extensionsRequired)
+    if (required != kExtension)
+      fail_input(path, "it requires the glTF extension " + required +
+                           " (extensionsRequired), which shtool does not implement: only " + kExtension + " is read");
   if (model.scenes.empty()) fail_input(path, "no scene");
   const int scene = model.defaultScene >= 0 ? model.defaultScene : 0;
   if (static_cast<std::size_t>(scene) >= model.scenes.size()) fail_input(path, "the default scene does not exist");
@@ -215,6 +245,10 @@ SplatScene read_gltf_splats(const std::string& bytes, const std::filesystem::pat
   for (std::size_t k = 1; k < r.parts.size(); ++k) {
     const SplatScene& p = r.parts[k];
     if (p.degree != out.degree) fail_input(path, "splat primitives of different SH degrees");
+    if (p.colour_space != out.colour_space)
+      fail_input(path, std::string("splat primitives of different colour spaces (") +
+                           splat_colour_space_name(out.colour_space) + ", " + splat_colour_space_name(p.colour_space) +
+                           ")");
     out.count += p.count;
     out.position.insert(out.position.end(), p.position.begin(), p.position.end());
     out.log_scale.insert(out.log_scale.end(), p.log_scale.begin(), p.log_scale.end());
@@ -243,7 +277,14 @@ std::string write_gltf_splats(const SplatScene& s, bool binary) {
     const float w = norm > 0 ? q[0] / norm : 1.0f;
     for (int c = 0; c < 3; ++c) rot[4 * i + c] = norm > 0 ? q[1 + c] / norm : 0.0f;
     rot[4 * i + 3] = w;
-    for (int c = 0; c < 3; ++c) scale[3 * i + c] = std::exp(s.log_scale[3 * i + c]);
+    for (int c = 0; c < 3; ++c) {
+      scale[3 * i + c] = std::exp(s.log_scale[3 * i + c]);
+      // glTF holds no infinity; a log-scale past log(FLT_MAX) = 88.72 has no linear float.
+      if (!std::isfinite(scale[3 * i + c]))
+        throw InputError("splat " + std::to_string(i) + ": its log-scale " + std::to_string(s.log_scale[3 * i + c]) +
+                         " gives a linear scale exp(" + std::to_string(s.log_scale[3 * i + c]) +
+                         ") past float's range (3.4e38), which glTF's KHR_gaussian_splatting:SCALE cannot hold");
+    }
     opacity[i] = 1.0f / (1.0f + std::exp(-s.opacity[i]));
   }
   tinygltf::Primitive p;
@@ -261,7 +302,7 @@ std::string write_gltf_splats(const SplatScene& s, bool binary) {
     }
   p.extensions[kExtension] = tinygltf::Value(tinygltf::Value::Object{
       {"kernel", tinygltf::Value(std::string("ellipse"))},
-      {"colorSpace", tinygltf::Value(std::string("srgb_rec709_display"))},
+      {"colorSpace", tinygltf::Value(std::string(splat_colour_space_name(s.colour_space)))},
       {"projection", tinygltf::Value(std::string("perspective"))},
       {"sortingMethod", tinygltf::Value(std::string("cameraDistance"))}});
   model.extensionsUsed.push_back(kExtension);

@@ -18,11 +18,14 @@ namespace shtool::interop {
 // similarity (non-uniform scale, shear) is refused: its SH colours have no exact image.
 // Linear scales
 // of 0 and opacities of 0 or 1 get the nearest finite log / logit (1e-30; 1e-7 from
-// the ends). InputError naming `path` on anything malformed.
+// the ends). The extension object's colorSpace becomes the scene's colour_space (absent:
+// srgb_rec709_display); a kernel other than "ellipse" is refused. InputError naming
+// `path` on anything malformed.
 SplatScene read_gltf_splats(const std::string& bytes, const std::filesystem::path& path, int threads = 1);
 
-// One node, one mesh, one POINTS primitive, float attributes; binary (.glb) or text
-// with the buffer embedded (.gltf).
+// One node, one mesh, one POINTS primitive, float attributes, the scene's colour space;
+// binary (.glb) or text with the buffer embedded (.gltf). InputError naming the splat
+// when a linear scale exp(log-scale) overflows float (glTF allows no infinity).
 std::string write_gltf_splats(const SplatScene& scene, bool binary);
 
 }  // namespace shtool::interop

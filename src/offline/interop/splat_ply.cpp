@@ -33,6 +33,12 @@ SplatLayout find_splat_layout(const PlyElement& v, const std::filesystem::path& 
     for (std::size_t k = 0; k < N; ++k) out[k] = floats(need(names[k]));
     return out;
   };
+  // SuperSplat's (PlayCanvas's) compressed PLY: chunks of bounds, and vertices of packed
+  // 32-bit words (packed_position, packed_rotation, packed_scale, packed_color).
+  if (!v.find("x") && v.find("packed_position"))
+    throw fail("a compressed PLY (SuperSplat / PlayCanvas: element 'chunk', vertex property 'packed_position'), "
+               "which shtool does not support: it reads the 3DGS layout (x, y, z, f_dc_*, ...); decompress the "
+               "file first (for example with @playcanvas/splat-transform into .ply)");
   SplatLayout l;
   for (int k = 0; k < 3; ++k) l.position[k] = floats(need(std::string(1, "xyz"[k])));
   l.normal = group(std::array<const char*, 3>{"nx", "ny", "nz"});
@@ -57,6 +63,17 @@ SplatLayout find_splat_layout(const PlyElement& v, const std::filesystem::path& 
   if (!l.rest.empty() && !l.dc) throw fail("f_rest properties without f_dc_0..2");
   l.degree = per_channel == 0 ? 0 : per_channel == 3 ? 1 : per_channel == 8 ? 2 : 3;
   return l;
+}
+
+std::vector<std::size_t> splat_value_properties(const SplatLayout& l) {
+  std::vector<std::size_t> out(l.position.begin(), l.position.end());
+  if (l.rotation) out.insert(out.end(), l.rotation->begin(), l.rotation->end());
+  if (l.scale) out.insert(out.end(), l.scale->begin(), l.scale->end());
+  if (l.dc) out.insert(out.end(), l.dc->begin(), l.dc->end());
+  if (l.opacity) out.push_back(*l.opacity);
+  out.insert(out.end(), l.rest.begin(), l.rest.end());
+  std::sort(out.begin(), out.end());
+  return out;
 }
 
 SplatScene read_ply_splats(const PlyFile& ply, const std::filesystem::path& name, int threads) {

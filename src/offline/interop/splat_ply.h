@@ -36,6 +36,11 @@ struct SplatLayout {
 // not that of degree 0..3.
 SplatLayout find_splat_layout(const PlyElement& vertex, const std::filesystem::path& name);
 
+// The properties that hold splat values (position, rotation, scale, f_dc, f_rest,
+// opacity), ascending: the ones that must be finite. Normals and other properties are not
+// splat data: they are carried (normals turned) whatever they hold.
+std::vector<std::size_t> splat_value_properties(const SplatLayout& layout);
+
 // The whole scene (every splat property required but the normals); InputError naming
 // `name` on a missing property or a value that is not finite.
 SplatScene read_ply_splats(const PlyFile& ply, const std::filesystem::path& name, int threads);

@@ -39,6 +39,16 @@ SplatFormat splat_format_of(const std::filesystem::path& path, const std::string
                    "' (.ply, .spz, .gltf or .glb by extension)");
 }
 
+const char* splat_colour_space_name(SplatColourSpace space) {
+  return space == SplatColourSpace::lin_rec709_display ? "lin_rec709_display" : "srgb_rec709_display";
+}
+
+std::optional<SplatColourSpace> parse_splat_colour_space(std::string_view name) {
+  if (name == "srgb_rec709_display") return SplatColourSpace::srgb_rec709_display;
+  if (name == "lin_rec709_display") return SplatColourSpace::lin_rec709_display;
+  return std::nullopt;
+}
+
 const char* splat_format_name(SplatFormat format) {
   switch (format) {
     case SplatFormat::ply: return "PLY";

@@ -6,7 +6,9 @@
 
 #include <cstddef>
 #include <filesystem>
+#include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <Eigen/Core>
@@ -14,6 +16,14 @@
 #include "shtool/orthogonal_map.h"
 
 namespace shtool::interop {
+
+// The colour space of the colours the SH reconstruct (KHR_gaussian_splatting's
+// `colorSpace`): 3DGS trains in BT.709 sRGB, display-referred, the only one PLY and spz
+// hold.
+enum class SplatColourSpace { srgb_rec709_display, lin_rec709_display };
+// The extension's name of a colour space ("srgb_rec709_display"); parse: null when unknown.
+const char* splat_colour_space_name(SplatColourSpace space);
+std::optional<SplatColourSpace> parse_splat_colour_space(std::string_view name);
 
 struct SplatScene {
   std::size_t count = 0;
@@ -26,6 +36,7 @@ struct SplatScene {
   // k = l(l+1)+m, k = 0 the DC), 3DGS's basis (Condon-Shortley phase), colour =
   // 0.5 + sum_k sh_k y_k(d).
   std::vector<float> sh;
+  SplatColourSpace colour_space = SplatColourSpace::srgb_rec709_display;
 
   std::size_t sh_stride() const { return 3 * static_cast<std::size_t>((degree + 1) * (degree + 1)); }
   void resize(std::size_t n, int deg) {

@@ -6,6 +6,7 @@
 #include <cstring>
 #include <chrono>
 #include <cmath>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -44,6 +45,21 @@ Eigen::Matrix3d splat_rotation(const TransformSplatsRequest& r) {
 }
 
 namespace {
+
+// Why a value that was finite may overflow after the transform: the user's scale or
+// translation when there is one, else the rotation itself (|R p| per axis can reach
+// sqrt(3) max |p_k|).
+std::string overflow_cause(const TransformSplatsRequest& r) {
+  const bool moved = r.scale != 1 || r.translate[0] != 0 || r.translate[1] != 0 || r.translate[2] != 0;
+  return moved ? "--scale or --translate too large for " + r.in.string()
+               : "a value of " + r.in.string() + " too close to its type's limit to be rotated";
+}
+
+std::string upper(std::string_view letters) {
+  std::string up;
+  for (char c : letters) up.push_back(static_cast<char>(std::toupper(static_cast<unsigned char>(c))));
+  return up;
+}
 
 // What PLY in, PLY out applies to every splat, in the file's own coordinates.
 struct PlyMotion {
@@ -93,9 +109,15 @@ void transform_ply_streamed(const TransformSplatsRequest& r, const Eigen::Matrix
   const SplatShLanes lanes(motion.map);
   const std::size_t size = v.record_size;
   auto at = [&](std::size_t p) { return v.properties[p].offset; };
-  std::vector<std::size_t> floats;  // every float property's offset: each must be finite
+  std::vector<std::size_t> floats;  // every float property's offset
   for (const PlyProperty& p : v.properties)
     if (p.type == PlyType::float32) floats.push_back(p.offset);
+  // The splat values' offsets (all float32 here): each must be finite. Normals and other
+  // properties are not splat data and are carried whatever they hold, as into the other
+  // formats (which drop them).
+  const std::vector<std::size_t> values = splat_value_properties(layout);
+  std::vector<std::size_t> checked;
+  for (std::size_t p : values) checked.push_back(at(p));
   const std::array<std::size_t, 3> position{at(layout.position[0]), at(layout.position[1]), at(layout.position[2])};
   std::vector<std::size_t> rest;  // f_rest_0.., channel-major as SplatShLanes takes them
   for (std::size_t p : layout.rest) rest.push_back(at(p));
@@ -108,7 +130,8 @@ void transform_ply_streamed(const TransformSplatsRequest& r, const Eigen::Matrix
     const float f = static_cast<float>(value);
     std::memcpy(record + offset, &f, 4);
   };
-  // Records of float32 alone (3DGS's) are checked as one run of words, in SIMD lanes.
+  // Records of float32 alone (3DGS's) are checked as one run of words, in SIMD lanes;
+  // only a run with a value that is not finite is looked at value by value.
   const bool all_float = floats.size() * 4 == size;
   auto finite_run = [](const char* from, std::size_t words) {
     std::uint32_t bad = 0;
@@ -120,9 +143,8 @@ void transform_ply_streamed(const TransformSplatsRequest& r, const Eigen::Matrix
     return bad == 0;
   };
   auto finite = [&](const char* record) {
-    if (all_float) return finite_run(record, floats.size());
     std::uint32_t bad = 0;
-    for (std::size_t o : floats) {
+    for (std::size_t o : checked) {
       std::uint32_t b;
       std::memcpy(&b, record + o, 4);
       bad |= static_cast<std::uint32_t>((b & 0x7f800000u) == 0x7f800000u);
@@ -136,10 +158,10 @@ void transform_ply_streamed(const TransformSplatsRequest& r, const Eigen::Matrix
     while (j < count && finite(records + j * size)) ++j;
     return j;
   };
-  // The name of the first property of a record that is not finite (its message).
+  // The name of the first splat value of a record that is not finite (its message).
   auto non_finite = [&](const char* record) -> const std::string& {
-    for (const PlyProperty& p : v.properties)
-      if (p.type == PlyType::float32 && !std::isfinite(get(record, p.offset))) return p.name;
+    for (std::size_t p : values)
+      if (!std::isfinite(get(record, at(p)))) return v.properties[p].name;
     return v.properties.front().name;
   };
   PendingFile out(io.path("--out"));
@@ -201,7 +223,7 @@ void transform_ply_streamed(const TransformSplatsRequest& r, const Eigen::Matrix
     for (std::size_t j = overflow; j < limit; ++j)
       if (!finite(records + j * size))
         return "splat " + std::to_string(first + j) + ": '" + non_finite(records + j * size) +
-               "' overflows its type after the transform (--scale or --translate too large for " + r.in.string() + ")";
+               "' overflows its type after the transform (" + overflow_cause(r) + ")";
     if (limit < count)
       return r.in.string() + ": splat " + std::to_string(first + limit) + ": '" + non_finite(records + limit * size) +
              "' is not finite";
@@ -237,9 +259,11 @@ void transform_ply_in_place(const TransformSplatsRequest& r, const Eigen::Matrix
   const std::size_t chunks = (count + kChunk - 1) / kChunk;
   // The first problem of each chunk; the first chunk's is reported, whatever the threads.
   std::vector<std::string> problems(chunks);
-  // The name of the first property of splat i that is not finite, or null.
+  // The name of the first splat value of splat i that is not finite, or null (normals and
+  // other properties are carried whatever they hold).
+  const std::vector<std::size_t> values = splat_value_properties(layout);
   auto non_finite = [&](std::size_t i) -> const std::string* {
-    for (std::size_t p = 0; p < v.properties.size(); ++p)
+    for (std::size_t p : values)
       if (!std::isfinite(ply.get(v, i, p))) return &v.properties[p].name;
     return nullptr;
   };
@@ -251,6 +275,16 @@ void transform_ply_in_place(const TransformSplatsRequest& r, const Eigen::Matrix
         problems[chunk] = r.in.string() + ": splat " + std::to_string(i) + ": '" + *name + "' is not finite";
         return;
       }
+      // A text value past its float property's range (an ASCII 1e39) is the input's problem.
+      for (std::size_t p : values)
+        if (v.properties[p].type == PlyType::float32 && !std::isfinite(static_cast<float>(ply.get(v, i, p)))) {
+          std::ostringstream value;
+          value.precision(9);
+          value << ply.get(v, i, p);
+          problems[chunk] = r.in.string() + ": splat " + std::to_string(i) + ": '" + v.properties[p].name + "' = " +
+                            value.str() + " is past the range of its type, float";
+          return;
+        }
       Eigen::Vector3d p;
       for (int k = 0; k < 3; ++k) p[k] = ply.get(v, i, layout.position[k]);
       const Eigen::Vector3d moved = moves ? Eigen::Vector3d(r.scale * (rot * p) + t) : p;
@@ -282,9 +316,8 @@ void transform_ply_in_place(const TransformSplatsRequest& r, const Eigen::Matrix
       }
       // A finite value beyond the property's type (float32 past 3.4e38) was stored as inf.
       if (const std::string* name = non_finite(i)) {
-        problems[chunk] = "splat " + std::to_string(i) + ": '" + *name +
-                          "' overflows its type after the transform (--scale or --translate too large for " +
-                          r.in.string() + ")";
+        problems[chunk] = "splat " + std::to_string(i) + ": '" + *name + "' overflows its type after the transform (" +
+                          overflow_cause(r) + ")";
         return;
       }
     }
@@ -299,8 +332,7 @@ void transform_ply_in_place(const TransformSplatsRequest& r, const Eigen::Matrix
 }  // namespace
 
 Eigen::Matrix3d splat_frame(std::string_view letters) {
-  std::string up;
-  for (char c : letters) up.push_back(static_cast<char>(std::toupper(static_cast<unsigned char>(c))));
+  const std::string up = upper(letters);
   auto bad = [&] {
     return InputError("frame '" + std::string(letters) +
                       "': three letters, one of R/L, one of U/D and one of F/B, for the file's x, y, z axes (e.g. RDF, RUB)");
@@ -342,7 +374,6 @@ TransformSplatsReport run_transform_splats(const TransformSplatsRequest& r) {
     return f == SplatFormat::ply ? splat_frame(r.ply_frame) : f == SplatFormat::spz ? splat_frame(r.spz_frame)
                                                                                     : splat_frame(r.gltf_frame);
   };
-  const Eigen::Matrix3d frame_change = frame_of(out_format).transpose() * frame_of(in_format);
   SpzWriteOptions spz;
   spz.version = r.spz_version;
   spz.sh1_bits = r.sh_bits[0];
@@ -359,8 +390,8 @@ TransformSplatsReport run_transform_splats(const TransformSplatsRequest& r) {
   const auto t0 = std::chrono::steady_clock::now();
   TransformSplatsReport report;
   report.threads = threads;
-  report.reflects = (frame_change * rot).determinant() < 0;
   if (in_format == SplatFormat::ply && out_format == SplatFormat::ply && !r.sh_degree) {
+    report.reflects = rot.determinant() < 0;
     // Mapped, not read: the common file is streamed from the page cache to the output.
     const MappedInput in(r.in, "input");
     const PlyFile header = PlyFile::parse_header(in.bytes(), r.in);
@@ -372,13 +403,39 @@ TransformSplatsReport run_transform_splats(const TransformSplatsRequest& r) {
   } else {
     std::string bytes = read_input_file(r.in, "input");
     SplatScene scene;
+    Eigen::Matrix3d in_frame = frame_of(in_format);
     switch (in_format) {
       case SplatFormat::ply: scene = read_ply_splats(PlyFile::parse(std::move(bytes), r.in), r.in, threads); break;
-      case SplatFormat::spz: scene = read_spz(bytes, r.in.string(), nullptr, threads); break;
+      case SplatFormat::spz: {
+        SpzHeader header;
+        scene = read_spz(bytes, r.in.string(), &header, threads);
+        report.warnings.insert(report.warnings.end(), header.warnings.begin(), header.warnings.end());
+        if (!header.frame.empty()) {
+          // The file names the frame its values are in: that one, not --spz-frame.
+          const std::string asked = upper(r.spz_frame);
+          if (asked != header.frame && asked != "RUB")
+            report.warnings.push_back(r.in.string() + " records its frame, " + header.frame +
+                                      " (SPZ_ADOBE_coordinate_system): read in it, not in --spz-frame " + r.spz_frame);
+          in_frame = splat_frame(header.frame);
+        }
+        break;
+      }
       case SplatFormat::gltf:
       case SplatFormat::glb: scene = read_gltf_splats(bytes, r.in, threads); break;
     }
     report.degree_in = scene.degree;
+    // PLY and spz hold 3DGS's colours, BT.709 sRGB display-referred. The SH of colours in
+    // another transfer function have no exact image in it (the transfer function is not
+    // linear, the SH are), so such a scene stays in glTF.
+    if (scene.colour_space != SplatColourSpace::srgb_rec709_display &&
+        (out_format == SplatFormat::ply || out_format == SplatFormat::spz))
+      throw InputError(r.in.string() + ": its splats are in the colour space " +
+                       splat_colour_space_name(scene.colour_space) + " (KHR_gaussian_splatting colorSpace), and " +
+                       splat_format_name(out_format) +
+                       " holds SH colours in 3DGS's srgb_rec709_display: SH coefficients cannot be converted between "
+                       "transfer functions exactly (write .glb or .gltf, which keep the colour space)");
+    const Eigen::Matrix3d frame_change = frame_of(out_format).transpose() * in_frame;
+    report.reflects = (frame_change * rot).determinant() < 0;
     const Eigen::Vector3d t(r.translate[0], r.translate[1], r.translate[2]);
     // The user's transform acts in the input's coordinates, then the frame changes.
     transform_splat_scene(scene, frame_change * rot, r.scale, frame_change * t, threads);
@@ -386,16 +443,24 @@ TransformSplatsReport run_transform_splats(const TransformSplatsRequest& r) {
     for (std::size_t i = 0; i < scene.position.size(); ++i)
       if (!std::isfinite(scene.position[i]) || !std::isfinite(scene.log_scale[i]))
         throw InputError("splat " + std::to_string(i / 3) +
-                         ": a position or scale overflows float after the transform (--scale or --translate too large for " +
-                         r.in.string() + ")");
+                         ": a position or scale overflows float after the transform (" + overflow_cause(r) + ")");
     std::string out;
     switch (out_format) {
       case SplatFormat::ply: out = write_ply_splats(scene); break;
       case SplatFormat::spz:
+        // A frame other than spz's default is recorded in the file (when the record can name it).
+        if (const std::string frame = upper(r.spz_frame); frame != "RUB") {
+          spz.coordinate_system = spz_coordinate_system_value(frame);
+          if (spz.coordinate_system == 0)
+            report.warnings.push_back("--spz-frame " + frame + ": spz's coordinate-system record names no such frame "
+                                      "(only those with x along R or L), so " + r.out.string() +
+                                      " records none and readers will take its axes as RUB");
+        }
         out = write_spz(scene, spz, threads);
         report.spz_sh_bound = spz_sh_error_bound(scene.degree, spz);
         report.spz_sh_scene = spz_sh_error_of(scene, spz, threads);
         report.spz_dc_bound = spz_dc_error_bound();
+        report.spz_dc_scene = spz_dc_error_of(scene, threads);
         break;
       case SplatFormat::gltf: out = write_gltf_splats(scene, false); break;
       case SplatFormat::glb: out = write_gltf_splats(scene, true); break;

@@ -15,6 +15,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -29,7 +30,7 @@ struct TransformSplatsRequest {
   std::array<double, 3> translate{0, 0, 0};
   double scale = 1;
   std::string ply_frame = "RDF";  // the axes of PLY files (COLMAP's, 3DGS's)
-  std::string spz_frame = "RUB";  // of spz files (the specification's)
+  std::string spz_frame = "RUB";  // of spz files (the specification's) that do not record theirs
   std::string gltf_frame = "RUB"; // of glTF files (+Y up, the asset's front +Z toward the viewer)
   std::optional<int> sh_degree;   // the output's SH degree, 0..3
   int spz_version = 4;
@@ -45,9 +46,12 @@ struct TransformSplatsReport {
   int threads = 1;
   double seconds = 0;
   // spz output: the colour error bounds of its quantisation (one channel, any
-  // direction): the SH bands' from the bucket sizes, the same for this scene's
-  // coefficients, the DC's.
-  double spz_sh_bound = 0, spz_sh_scene = 0, spz_dc_bound = 0;
+  // direction): the SH bands' from the bucket sizes and for this scene's coefficients,
+  // the DC's from the byte step and for this scene's (clipping included).
+  double spz_sh_bound = 0, spz_sh_scene = 0, spz_dc_bound = 0, spz_dc_scene = 0;
+  // What the job did that the user may not expect, one line each (the CLI prints them as
+  // warnings): extension records skipped, a frame taken from the file.
+  std::vector<std::string> warnings;
 };
 
 // The orthogonal map of a request: the unit quaternion's rotation (normalised; zero

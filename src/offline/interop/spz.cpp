@@ -5,8 +5,10 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <numbers>
 #include <vector>
@@ -21,9 +23,17 @@ constexpr std::uint32_t kMagic = 0x5053474e;  // "NGSP" little endian
 constexpr float kColorScale = 0.15f;
 constexpr int kFractionalBits = 12;
 constexpr int kZstdLevel = 12;  // the reference writer's
+constexpr std::uint8_t kFlagExtensions = 0x2;
+// Extension record types (spz extensions/README.md): vendor 0xADBE (Adobe), extension 3.
+constexpr std::uint32_t kCoordinateSystemRecord = 0xADBE0003;
+// The CoordinateSystem values 1..16 of the spz library (splat-types.h), as frame letters.
+constexpr std::string_view kCoordinateSystems[17] = {"",    "LDB", "RDB", "LUB", "RUB", "LDF", "RDF", "LUF", "RUF",
+                                                     "LFD", "RFD", "LFU", "RFU", "LBD", "RBD", "LBU", "RBU"};
 // Largest expansion of the decompressors: deflate's 258-byte match per 2 bits, 1032:1;
 // a zstd RLE block (4 bytes) stands for at most 128 KiB.
 constexpr double kDeflateRatio = 1032, kZstdRatio = 32768;
+// The plausible splats of a v4 file: at most its size x 1024 / 9 (the reference loader's).
+constexpr std::uint64_t kMaxCompressionRatio = 1024, kMinBytesPerSplat = 9;
 
 std::uint32_t get_u32(const unsigned char* p) {
   return std::uint32_t(p[0]) | std::uint32_t(p[1]) << 8 | std::uint32_t(p[2]) << 16 | std::uint32_t(p[3]) << 24;
@@ -38,13 +48,56 @@ void put_u64(std::string& s, std::uint64_t v) {
 }
 // The header bytes versions 3 and 4 share (magic to flags); its last byte differs:
 // reserved in 3, the stream count in 4.
-void put_header_start(std::string& s, std::uint32_t version, std::size_t n, int degree, int fractional_bits) {
+void put_header_start(std::string& s, std::uint32_t version, std::size_t n, int degree, int fractional_bits,
+                      std::uint8_t flags) {
   put_u32(s, kMagic);
   put_u32(s, version);
   put_u32(s, static_cast<std::uint32_t>(n));
   s.push_back(static_cast<char>(degree));
   s.push_back(static_cast<char>(fractional_bits));
-  s.push_back(0);  // flags
+  s.push_back(static_cast<char>(flags));
+}
+
+// The extension records of a file, [u32 type][u32 byteLength][payload] back to back
+// until the end of `zone`: the coordinate system's read into header.frame, any other
+// type skipped (its payload is vendor data the splats do not depend on; the reference
+// loader skips it too, with a warning naming the type).
+void read_extension_records(std::string_view zone, const std::string& name, SpzHeader& header) {
+  auto fail = [&](const std::string& why) { return InputError(name + ": " + why); };
+  const auto* p = reinterpret_cast<const unsigned char*>(zone.data());
+  std::size_t at = 0;
+  bool seen_frame = false;
+  while (at < zone.size()) {
+    if (zone.size() - at < 8)
+      throw fail("truncated extension record: " + std::to_string(zone.size() - at) +
+                 " bytes left where a record's 8-byte type and length go");
+    const std::uint32_t type = get_u32(p + at), length = get_u32(p + at + 4);
+    at += 8;
+    char hex[16];
+    std::snprintf(hex, sizeof hex, "0x%08X", static_cast<unsigned>(type));
+    if (length > zone.size() - at)
+      throw fail(std::string("truncated extension record of type ") + hex + ": " + std::to_string(length) +
+                 " bytes claimed, " + std::to_string(zone.size() - at) + " left");
+    if (type == kCoordinateSystemRecord) {
+      if (length != 4)
+        throw fail("an SPZ_ADOBE_coordinate_system record of " + std::to_string(length) + " bytes (4 expected)");
+      if (seen_frame) throw fail("two SPZ_ADOBE_coordinate_system records");
+      seen_frame = true;
+      const std::uint32_t value = get_u32(p + at);
+      if (value > 16)
+        throw fail("SPZ_ADOBE_coordinate_system names coordinate system " + std::to_string(value) +
+                   ": 1..16 are defined (0 unspecified)");
+      if (value == 0)
+        header.warnings.push_back(name +
+                                  ": its SPZ_ADOBE_coordinate_system record says UNSPECIFIED: read in the spz default frame");
+      else
+        header.frame = std::string(kCoordinateSystems[value]);
+    } else {
+      header.warnings.push_back(name + ": skipped an spz extension record of type " + hex + " (" +
+                                std::to_string(length) + " bytes) that shtool does not know");
+    }
+    at += length;
+  }
 }
 
 std::size_t sh_dim(int degree) { return static_cast<std::size_t>((degree + 1) * (degree + 1) - 1); }
@@ -57,8 +110,13 @@ std::array<std::uint64_t, 6> block_sizes(std::uint64_t n, int degree, int versio
 float sigmoid(float x) { return 1.0f / (1.0f + std::exp(-x)); }
 std::uint8_t to_u8(float x) { return static_cast<std::uint8_t>(std::clamp(std::round(x), 0.0f, 255.0f)); }
 
+// The byte of an SH coefficient: round(128 x) + 128 to the nearest multiple of the bucket,
+// clamped to a byte. 128 x is clamped to [-129, 128] before the conversion to int (past
+// that every value gives the end byte anyway), so that a huge coefficient saturates and
+// never overflows the int (fmax and fmin also take a NaN to the low end).
 std::uint8_t quantise_sh(float x, int bucket) {
-  int q = static_cast<int>(std::round(x * 128.0f) + 128.0f);
+  const float scaled = std::fmin(std::fmax(x * 128.0f, -129.0f), 128.0f);
+  int q = static_cast<int>(std::round(scaled) + 128.0f);
   q = (q + bucket / 2) / bucket * bucket;
   return static_cast<std::uint8_t>(std::clamp(q, 0, 255));
 }
@@ -156,6 +214,7 @@ SplatScene read_gzip(std::string_view bytes, const std::string& name, SpzHeader*
   const int degree = h[12], fractional_bits = h[13], flags = h[14];
   if (version < 2 || version > 3)
     throw fail("spz version " + std::to_string(version) + " in a gzip stream: versions 2 and 3 are read there");
+  if (n == 0) throw fail("no splats (a point count of 0, which spz readers refuse)");
   if (degree > 3) throw fail("SH degree " + std::to_string(degree) + ": degrees 0..3 are read");
   if (fractional_bits > 23) throw fail("fractional bits " + std::to_string(fractional_bits) + " past 23");
   const std::array<std::uint64_t, 6> sizes = block_sizes(n, degree, static_cast<int>(version));
@@ -169,21 +228,28 @@ SplatScene read_gzip(std::string_view bytes, const std::string& name, SpzHeader*
   if (data.size() < total) throw fail("truncated: " + std::to_string(n) + " splats need " + std::to_string(total) +
                                       " bytes after the header, the stream holds " + std::to_string(data.size()));
   if (status != Z_OK && status != Z_STREAM_END) throw fail("corrupt gzip stream (" + std::string(zs.msg ? zs.msg : "zlib error") + ")");
-  if (!(flags & 2)) {
-    // Nothing may follow the splats but the end of the stream.
-    std::string more;
-    if (status != Z_STREAM_END) status = inflate_some(zs, more, 1);
-    if (!more.empty()) throw fail("the stream is longer than its " + std::to_string(n) + " splats");
-    if (status != Z_STREAM_END) throw fail("truncated: the gzip stream does not end");
-    if (zs.avail_in != 0) throw fail("bytes after the end of the gzip stream");
+  // After the splats: the extension records when flag 0x2 says so (up to the end of the
+  // stream, bounded as the stream is), else nothing.
+  std::string more;
+  while (status == Z_OK) {
+    const std::size_t before = more.size();
+    status = inflate_some(zs, more, (flags & kFlagExtensions) ? std::size_t(1) << 16 : 1);
+    if (!(flags & kFlagExtensions) && !more.empty()) break;
+    if (status == Z_OK && more.size() == before) break;  // the input ended
   }
+  if (!(flags & kFlagExtensions) && !more.empty())
+    throw fail("the stream is longer than its " + std::to_string(n) + " splats");
+  if (status != Z_STREAM_END) throw fail("truncated: the gzip stream does not end");
+  if (zs.avail_in != 0) throw fail("bytes after the end of the gzip stream");
+  SpzHeader read{static_cast<int>(version), fractional_bits, (flags & 1) != 0, {}, {}};
+  if (flags & kFlagExtensions) read_extension_records(more, name, read);
   SplatScene s;
   s.resize(n, degree);
   std::array<const unsigned char*, 6> at{};
   const auto* p = reinterpret_cast<const unsigned char*>(data.data());
   for (int k = 0; k < 6; ++k) at[k] = p, p += sizes[k];
   decode_blocks(at, static_cast<int>(version), fractional_bits, s, threads);
-  if (header) *header = {static_cast<int>(version), fractional_bits, (flags & 1) != 0};
+  if (header) *header = std::move(read);
   return s;
 }
 
@@ -197,6 +263,17 @@ SplatScene read_ngsp(std::string_view bytes, const std::string& name, SpzHeader*
   if (version != 4) throw fail("spz version " + std::to_string(version) + " with the NGSP header: version 4 is read");
   if (degree > 3) throw fail("SH degree " + std::to_string(degree) + ": degrees 0..3 are read");
   if (fractional_bits > 23) throw fail("fractional bits " + std::to_string(fractional_bits) + " past 23");
+  // A point count the file cannot hold is refused before anything is allocated. The
+  // bound is the reference loader's (load-spz.cc: kMaxCompressionRatio 1024,
+  // kMinBytesPerPoint 9, numPoints <= fileSize x 1024 / 9): the positions alone take 9
+  // bytes a splat, and no real stream shrinks more than 1024:1 (zstd's own limit, 32768:1
+  // for a run of one byte, would let a 40 KB file claim 20 million splats).
+  if (n == 0) throw fail("no splats (a point count of 0, which spz readers refuse)");
+  if (std::uint64_t(n) * kMinBytesPerSplat > std::uint64_t(bytes.size()) * kMaxCompressionRatio)
+    throw fail("implausible: " + std::to_string(n) + " splats claimed, more than the " + std::to_string(bytes.size()) +
+               " bytes of its streams can hold (at most file size x " + std::to_string(kMaxCompressionRatio) + " / " +
+               std::to_string(kMinBytesPerSplat) + " = " +
+               std::to_string(std::uint64_t(bytes.size()) * kMaxCompressionRatio / kMinBytesPerSplat) + ")");
   const std::array<std::uint64_t, 6> sizes = block_sizes(n, degree, 4);
   // Empty streams are left out: the SH's at degree 0, every one of an empty scene.
   std::vector<int> present;
@@ -205,8 +282,10 @@ SplatScene read_ngsp(std::string_view bytes, const std::string& name, SpzHeader*
   if (streams != static_cast<int>(present.size()))
     throw fail("inconsistent: " + std::to_string(streams) + " streams for " + std::to_string(n) + " splats of SH degree " +
                std::to_string(degree) + " (" + std::to_string(present.size()) + " expected)");
-  if (toc < 32 || toc > bytes.size() || (!(flags & 2) && toc != 32))
+  if (toc < 32 || toc > bytes.size() || (!(flags & kFlagExtensions) && toc != 32))
     throw fail("inconsistent: table of contents at byte " + std::to_string(toc));
+  SpzHeader read{4, fractional_bits, (flags & 1) != 0, {}, {}};
+  if (flags & kFlagExtensions) read_extension_records(bytes.substr(32, toc - 32), name, read);
   const std::uint64_t toc_end = std::uint64_t(toc) + 16ull * streams;
   if (toc_end > bytes.size()) throw fail("truncated: the file ends inside its table of contents");
   std::uint64_t at = toc_end;
@@ -250,7 +329,7 @@ SplatScene read_ngsp(std::string_view bytes, const std::string& name, SpzHeader*
   std::array<const unsigned char*, 6> ptr{};
   for (int k = 0; k < 6; ++k) ptr[k] = reinterpret_cast<const unsigned char*>(blocks[k].data());
   decode_blocks(ptr, 4, fractional_bits, s, threads);
-  if (header) *header = {4, fractional_bits, (flags & 1) != 0};
+  if (header) *header = std::move(read);
   return s;
 }
 
@@ -271,6 +350,7 @@ std::string write_spz(const SplatScene& s, const SpzWriteOptions& o, int threads
   for (int bits : {o.sh1_bits, o.sh_rest_bits})
     if (bits < 1 || bits > 8) throw InputError("--sh-bits must be in 1..8, got " + std::to_string(bits));
   if (s.count > 0xffffffffu) throw InputError("spz holds at most 2^32 - 1 splats");
+  if (s.count == 0) throw InputError("spz cannot hold an empty splat scene (readers refuse a point count of 0)");
   float high = 0, low = 0;
   for (float p : s.position) high = std::max(high, p), low = std::min(low, p);
   // The finest fixed point whose 24 bits (two's complement) reach every position.
@@ -327,12 +407,23 @@ std::string write_spz(const SplatScene& s, const SpzWriteOptions& o, int threads
       sh[3 * dim * i + k] = quantise_sh(s.sh[i * stride + 3 + k], k < 9 ? b1 : b_rest);
   }
   });
+  if (o.coordinate_system > 16)
+    throw InputError("spz coordinate system " + std::to_string(o.coordinate_system) + ": 0..16");
+  // Extension records: the coordinate system's when the scene is not in spz's default RUB.
+  std::string records;
+  if (o.coordinate_system != 0) {
+    put_u32(records, kCoordinateSystemRecord);
+    put_u32(records, 4);  // the payload: one u32
+    put_u32(records, o.coordinate_system);
+  }
+  const std::uint8_t flags = records.empty() ? 0 : kFlagExtensions;
   std::string out;
   if (o.version == 3) {
     std::string plain;
-    put_header_start(plain, 3, n, s.degree, fractional_bits);
+    put_header_start(plain, 3, n, s.degree, fractional_bits, flags);
     plain.push_back(0);  // reserved
     for (const std::string& b : blocks) plain += b;
+    plain += records;  // after the SH
     z_stream zs{};
     if (deflateInit2(&zs, Z_DEFAULT_COMPRESSION, Z_DEFLATED, 16 + MAX_WBITS, 8, Z_DEFAULT_STRATEGY) != Z_OK)
       throw InputError("zlib could not start");
@@ -369,15 +460,35 @@ std::string write_spz(const SplatScene& s, const SpzWriteOptions& o, int threads
   for (const std::string& p : problems)
     if (!p.empty()) throw InputError(p);
   std::erase_if(packed, [](const std::string& z) { return z.empty(); });
-  put_header_start(out, 4, n, s.degree, fractional_bits);
+  put_header_start(out, 4, n, s.degree, fractional_bits, flags);
   out.push_back(static_cast<char>(packed.size()));
-  put_u32(out, 32);  // table of contents right after the header: no extensions
+  put_u32(out, static_cast<std::uint32_t>(32 + records.size()));  // the table of contents after the records
   out.append(12, '\0');
+  out += records;
   std::size_t j = 0;
   for (int k = 0; k < 6; ++k)
     if (sizes[k] > 0) put_u64(out, packed[j].size()), put_u64(out, sizes[k]), ++j;
   for (const std::string& z : packed) out += z;
+  // What readers accept (read_ngsp): a scene that compresses past it (a great many
+  // identical splats) is refused rather than written unreadable.
+  if (std::uint64_t(n) * kMinBytesPerSplat > std::uint64_t(out.size()) * kMaxCompressionRatio)
+    throw InputError("the " + std::to_string(n) + " splats compress to " + std::to_string(out.size()) +
+                     " bytes, fewer than spz readers accept for them (file size x " +
+                     std::to_string(kMaxCompressionRatio) + " / " + std::to_string(kMinBytesPerSplat) +
+                     " splats at most): write --spz-version 3");
   return out;
+}
+
+std::string_view spz_coordinate_system_frame(std::uint32_t value) {
+  return value >= 1 && value <= 16 ? kCoordinateSystems[value] : std::string_view();
+}
+
+std::uint32_t spz_coordinate_system_value(std::string_view letters) {
+  std::string up;
+  for (char c : letters) up.push_back(static_cast<char>(std::toupper(static_cast<unsigned char>(c))));
+  for (std::uint32_t v = 1; v <= 16; ++v)
+    if (kCoordinateSystems[v] == up) return v;
+  return 0;
 }
 
 double spz_sh_error_bound(int degree, const SpzWriteOptions& o) {
@@ -415,6 +526,26 @@ double spz_sh_error_of(const SplatScene& s, const SpzWriteOptions& o, int thread
   double worst = 0;
   for (double w : worst_of) worst = std::max(worst, w);
   return worst;
+}
+
+double spz_dc_error_of(const SplatScene& s, int threads) {
+  const std::size_t stride = s.sh_stride();
+  std::vector<double> worst_of((s.count + kChunk - 1) / kChunk, 0.0);
+  parallel_for(worst_of.size(), threads, [&](std::size_t chunk) {
+    double& worst = worst_of[chunk];
+    const std::size_t end = std::min(s.count, (chunk + 1) * kChunk);
+    for (std::size_t i = chunk * kChunk; i < end; ++i)
+      for (int c = 0; c < 3; ++c) {
+        // The colour byte as written and its value as read (clipped past +-0.5 / 0.15).
+        const float x = s.sh[i * stride + c];
+        const float decoded = (static_cast<float>(to_u8(x * kColorScale * 255.0f + 0.5f * 255.0f)) / 255.0f - 0.5f) /
+                              kColorScale;
+        worst = std::max(worst, std::abs(double(x) - double(decoded)));
+      }
+  });
+  double worst = 0;
+  for (double w : worst_of) worst = std::max(worst, w);
+  return worst * 0.5 / std::sqrt(std::numbers::pi);
 }
 
 double spz_dc_error_bound() { return 0.5 / (kColorScale * 255.0) * 0.5 / std::sqrt(std::numbers::pi); }

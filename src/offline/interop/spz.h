@@ -5,8 +5,10 @@
 // widths (bits per coefficient) are the writer's choice and are not recorded.
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "interop/splat_scene.h"
 
@@ -16,6 +18,9 @@ struct SpzWriteOptions {
   int version = 4;       // 3 or 4
   int sh1_bits = 5;      // bits kept of each band-1 SH byte, 1..8
   int sh_rest_bits = 4;  // bands 2 and 3
+  // The value of an SPZ_ADOBE_coordinate_system record naming the frame the scene is in
+  // (spz_coordinate_system_value); 0 writes no record, the file then being RUB.
+  std::uint32_t coordinate_system = 0;
 };
 
 // What a file says about itself beyond the splats.
@@ -23,16 +28,33 @@ struct SpzHeader {
   int version = 0;
   int fractional_bits = 0;
   bool antialiased = false;
+  // The frame an SPZ_ADOBE_coordinate_system record (type 0xADBE0003) names, as three
+  // letters ("RDF"); empty when there is none or it says UNSPECIFIED.
+  std::string frame;
+  // One line for each extension record skipped (its type and size) and for a
+  // coordinate-system record that names no frame.
+  std::vector<std::string> warnings;
 };
 
-// InputError naming `name` on a truncated, oversized or inconsistent file, an unknown
-// version, SH degree 4 (not held by SplatScene) or a size past what the compressed
-// bytes could hold.
+// SPZ_ADOBE_coordinate_system's values 1..16 as frame letters (LDB, RDB, LUB, RUB, LDF,
+// RDF, LUF, RUF, LFD, RFD, LFU, RFU, LBD, RBD, LBU, RBU); empty for any other value.
+std::string_view spz_coordinate_system_frame(std::uint32_t value);
+// The value naming a frame given by letters (any case); 0 when the record names no such
+// frame (the 16 have x along R or L).
+std::uint32_t spz_coordinate_system_value(std::string_view letters);
+
+// InputError naming `name` on an empty, truncated, oversized or inconsistent file, an unknown
+// version, SH degree 4 (not held by SplatScene), a size past what the compressed bytes
+// could hold or a malformed extension record. Extension records (flag 0x2; v4 between
+// the header and the table of contents, v2/v3 after the SH) are read: the coordinate
+// system's into header->frame, any other type skipped with a line in header->warnings.
 SplatScene read_spz(std::string_view bytes, const std::string& name, SpzHeader* header = nullptr, int threads = 1);
 
-// InputError when a position is beyond the 24-bit fixed point at any fractional bits or
-// the options are out of range. Positions use 12 fractional bits (the reference
-// writer's) or fewer when the scene is larger than 2048 units.
+// InputError when the scene is empty, a position is beyond the 24-bit fixed point at any
+// fractional bits, the options are out of range, or (v4) the file would hold more splats
+// than readers accept for its size. Positions use 12 fractional bits (the reference
+// writer's) or fewer when the scene is larger than 2048 units. No extension record but an
+// SPZ_ADOBE_coordinate_system one when options.coordinate_system is not 0 (flag 0x2).
 std::string write_spz(const SplatScene& scene, const SpzWriteOptions& options, int threads = 1);
 
 // The largest change of a splat's colour (one channel, any direction) that the SH
@@ -46,7 +68,11 @@ double spz_sh_error_bound(int degree, const SpzWriteOptions& options);
 // error vector (clipping of coefficients beyond [-1, 1] included).
 double spz_sh_error_of(const SplatScene& scene, const SpzWriteOptions& options, int threads = 1);
 
-// The largest change of the DC colour: half a step of the colour byte, times y_0^0.
+// The largest change of the DC colour: half a step of the colour byte, times y_0^0, for
+// coefficients within the byte's range, [-0.5, 0.5] / 0.15 = +-3.33.
 double spz_dc_error_bound();
+// The same for the scene's own DC coefficients: max over splats and channels of
+// |c - decoded| y_0^0, coefficients clipped at +-3.33 included.
+double spz_dc_error_of(const SplatScene& scene, int threads = 1);
 
 }  // namespace shtool::interop
