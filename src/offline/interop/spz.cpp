@@ -501,14 +501,25 @@ double spz_sh_error_bound(int degree, const SpzWriteOptions& o) {
   return bound;
 }
 
+// The largest of worst_of_splat(i) over every splat, in chunks of kChunk splats on
+// `threads` workers (a maximum: the same on any thread count).
+template <class F>
+double largest_over_splats(std::size_t count, int threads, F worst_of_splat) {
+  std::vector<double> worst_of((count + kChunk - 1) / kChunk, 0.0);
+  parallel_for(worst_of.size(), threads, [&](std::size_t chunk) {
+    const std::size_t end = std::min(count, (chunk + 1) * kChunk);
+    for (std::size_t i = chunk * kChunk; i < end; ++i) worst_of[chunk] = std::max(worst_of[chunk], worst_of_splat(i));
+  });
+  double worst = 0;
+  for (double w : worst_of) worst = std::max(worst, w);
+  return worst;
+}
+
 double spz_sh_error_of(const SplatScene& s, const SpzWriteOptions& o, int threads) {
   const std::size_t stride = s.sh_stride();
   const int b1 = bucket(o.sh1_bits), b_rest = bucket(o.sh_rest_bits);
-  std::vector<double> worst_of((s.count + kChunk - 1) / kChunk, 0.0);
-  parallel_for(worst_of.size(), threads, [&](std::size_t chunk) {
-  double& worst = worst_of[chunk];
-  const std::size_t end = std::min(s.count, (chunk + 1) * kChunk);
-  for (std::size_t i = chunk * kChunk; i < end; ++i)
+  return largest_over_splats(s.count, threads, [&](std::size_t i) {
+    double worst = 0;
     for (int c = 0; c < 3; ++c) {
       double sum = 0;
       for (int l = 1; l <= s.degree; ++l) {
@@ -522,29 +533,23 @@ double spz_sh_error_of(const SplatScene& s, const SpzWriteOptions& o, int thread
       }
       worst = std::max(worst, sum);
     }
+    return worst;
   });
-  double worst = 0;
-  for (double w : worst_of) worst = std::max(worst, w);
-  return worst;
 }
 
 double spz_dc_error_of(const SplatScene& s, int threads) {
   const std::size_t stride = s.sh_stride();
-  std::vector<double> worst_of((s.count + kChunk - 1) / kChunk, 0.0);
-  parallel_for(worst_of.size(), threads, [&](std::size_t chunk) {
-    double& worst = worst_of[chunk];
-    const std::size_t end = std::min(s.count, (chunk + 1) * kChunk);
-    for (std::size_t i = chunk * kChunk; i < end; ++i)
-      for (int c = 0; c < 3; ++c) {
-        // The colour byte as written and its value as read (clipped past +-0.5 / 0.15).
-        const float x = s.sh[i * stride + c];
-        const float decoded = (static_cast<float>(to_u8(x * kColorScale * 255.0f + 0.5f * 255.0f)) / 255.0f - 0.5f) /
-                              kColorScale;
-        worst = std::max(worst, std::abs(double(x) - double(decoded)));
-      }
+  const double worst = largest_over_splats(s.count, threads, [&](std::size_t i) {
+    double w = 0;
+    for (int c = 0; c < 3; ++c) {
+      // The colour byte as written and its value as read (clipped past +-0.5 / 0.15).
+      const float x = s.sh[i * stride + c];
+      const float decoded =
+          (static_cast<float>(to_u8(x * kColorScale * 255.0f + 0.5f * 255.0f)) / 255.0f - 0.5f) / kColorScale;
+      w = std::max(w, std::abs(double(x) - double(decoded)));
+    }
+    return w;
   });
-  double worst = 0;
-  for (double w : worst_of) worst = std::max(worst, w);
   return worst * 0.5 / std::sqrt(std::numbers::pi);
 }
 
