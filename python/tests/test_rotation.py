@@ -182,3 +182,17 @@ def test_empty_batches():
     assert shtool.rotate(np.zeros((0, 9)), np.zeros((0, 3, 3))).shape == (0, 9)
     assert shtool.eval_sh(3, np.zeros((0, 3))).shape == (0, 9)
     assert shtool.product(np.ones(9), np.ones((0, 9))).shape == (0, 9)
+
+
+def test_orders_above_the_shipped_helpers_table(cli):
+    # The shipped rotation-helpers table covers order 30: above it the default method
+    # computes the helpers (the CLI as well), it does not refuse.
+    f = np.random.default_rng(13).normal(size=31 * 31)
+    r = random_rotation(13)
+    reference = shtool.rotate(f, r, method="reference")
+    for method in ("auto", "zxzxz"):
+        np.testing.assert_allclose(shtool.rotate(f, r, method=method), reference, atol=1e-9 * np.abs(f).max())
+    printed = json.loads(cli("rotate", "--order", 31, "--method", "zxzxz", "--matrix",
+                             ",".join(repr(float(x)) for x in r.ravel()),
+                             "--coeffs", ",".join(repr(float(x)) for x in f)))
+    np.testing.assert_array_equal(printed["coefficients"], shtool.rotate(f, r, method="zxzxz"))
