@@ -1,6 +1,8 @@
 """fit_zh against the CLI's fit-zh, load_table against the CLI's JSON encoding, the
 offline jobs' files against the CLI's bytes."""
 import json
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -148,3 +150,18 @@ def test_typed_loaders_refuse_other_kinds(tmp_path, cli):
     cli("light", "--type", "constant", "--order", 2, "--json", tmp_path / "l.json", "--out", tmp_path / "l.shtb")
     env = shtool.EnvSh.load(tmp_path / "l.shtb")
     assert env.coefficients.shape == (4, 3)
+
+
+def test_gen_tensors_that_fails_leaves_no_folder(tmp_path):
+    # Out of memory while computing (the address space limited in a child process): the
+    # job fails, and the folder it would have made is not there.
+    code = ("import resource, sys, numpy, shtool\n"
+            "vm = [int(l.split()[1]) for l in open('/proc/self/status') if l.startswith('VmSize:')][0] * 1024\n"
+            "resource.setrlimit(resource.RLIMIT_AS, (vm + 2**22, vm + 2**22))\n"
+            "try:\n"
+            "    shtool.gen_tensors(16, sys.argv[1], what=['tripling'])\n"
+            "except MemoryError:\n"
+            "    print('failed')\n")
+    r = subprocess.run([sys.executable, "-c", code, str(tmp_path / "new" / "tables")], capture_output=True, text=True)
+    assert r.stdout == "failed\n", r.stderr
+    assert not (tmp_path / "new").exists()
