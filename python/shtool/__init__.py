@@ -16,12 +16,24 @@ import numpy as _np
 from . import _shtool
 from ._shtool import __version__, gen_tensors, light, transform_splats
 
+# The tables the module reads (rotation helpers, zhf lobes) ship in the package's tables/
+# folder (the build tree's package and the wheel): looked for after $SHTOOL_TABLES.
+_shtool._set_package_tables(_os.path.join(_os.path.dirname(_os.path.abspath(__file__)), "tables"))
+
 __all__ = [
     "eval_sh", "rotate", "quat_to_matrix", "product", "project_env", "project_env_file", "irradiance",
     "window", "light", "fit_zh", "fit_zh_mesh", "load_table", "load_zh_fit", "transform_splats", "transform_splat_arrays",
     "gen_tensors", "search_lobes", "Table", "ZhFit", "ZhFitTable", "GlossyFit", "WrinkleMap", "EnvSh",
     "RotationHelpers", "TriplingTensor", "ShFourierTensors", "ZhfLobes",
 ]
+
+
+def _path(p, name):
+    """A path argument as str: str, bytes (decoded as os.fsdecode does) or os.PathLike."""
+    try:
+        return _os.fsdecode(p)
+    except TypeError:
+        raise TypeError(f"{name} must be a path (str, bytes or os.PathLike), got {type(p).__name__}") from None
 
 
 def _float_array(x, name):
@@ -55,25 +67,28 @@ def _back(r, axis):
     return r if axis == -1 or axis == r.ndim - 1 else _np.moveaxis(r, -1, axis)
 
 
-def rotate(coeffs, matrix, method="auto", axis=-1, out=None, tol=None, threads=0):
+def rotate(coeffs, matrix, method="auto", axis=-1, out=None, tol=None, threads=0, tables=None):
     """Rotated coefficients g(w) = f(R^-1 w), same shape and dtype as `coeffs`.
 
     `matrix` is a 3x3 rotation (orthonormal to 1e-6, det +1; ValueError otherwise) or one
     per leading index, shape (..., 3, 3). `method`: auto, reference, zxzxz, taylor1,
     taylor1.5, taylor2, zhf, zhf-tailored (as ``shtool rotate --method``; the zhf methods
-    take one matrix and the shipped shared lobes). `out` (axis=-1 only): a
+    take one matrix and the shipped shared lobes, orders 1 to 10). `out` (axis=-1 only): a
     C-contiguous array of the same shape and dtype, written in place. `threads`: 0 for
-    every core.
+    every core. `tables` (``--tables``): a rotation-helpers table, or a zhf-lobes table for
+    the zhf methods, instead of the shipped one (helpers for an order the shipped table
+    does not cover are computed on first use, with the GIL released).
     """
     a = _on_last_axis(_float_array(coeffs, "coeffs"), axis, "coeffs")
     if out is not None and axis not in (-1, a.ndim - 1):
         raise ValueError("out= needs axis=-1")
-    return _back(_shtool._rotate(a, matrix, method, tol, out, threads), axis)
+    path = "" if tables is None else _path(tables, "tables")
+    return _back(_shtool._rotate(a, matrix, method, tol, out, threads, path), axis)
 
 
-def quat_to_matrix(q):
+def quat_to_matrix(q, threads=0):
     """Rotation matrix (..., 3, 3) of unit quaternions q = (w, x, y, z) (Hamilton)."""
-    return _shtool._quat_to_matrix(_float_array(q, "q"))
+    return _shtool._quat_to_matrix(_float_array(q, "q"), threads)
 
 
 def product(a, b, order=None, method="auto", axis=-1, threads=0):
@@ -87,13 +102,13 @@ def product(a, b, order=None, method="auto", axis=-1, threads=0):
     return _back(_shtool._product(fa, fb, order, method, threads), axis)
 
 
-def irradiance(coeffs, axis=-1):
+def irradiance(coeffs, axis=-1, threads=0):
     """Irradiance coefficients E_lm = A_l L_lm (clamped cosine, no 1/pi) of radiance."""
     a = _on_last_axis(_float_array(coeffs, "coeffs"), axis, "coeffs")
-    return _back(_shtool._irradiance(a), axis)
+    return _back(_shtool._irradiance(a, threads), axis)
 
 
-def window(coeffs, kind, cutoff=None, axis=-1, return_factors=False):
+def window(coeffs, kind, cutoff=None, axis=-1, return_factors=False, threads=0):
     """Windowed coefficients: kind none, hann, lanczos, sinc4 or auto (as project-env).
 
     "auto" treats every vector of `coeffs` as one channel of one lighting (so an RGB
@@ -101,7 +116,7 @@ def window(coeffs, kind, cutoff=None, axis=-1, return_factors=False):
     cutoff used).
     """
     a = _on_last_axis(_float_array(coeffs, "coeffs"), axis, "coeffs")
-    r, factors, used = _shtool._window(a, kind, cutoff)
+    r, factors, used = _shtool._window(a, kind, cutoff, threads)
     r = _back(r, axis)
     return (r, factors, used) if return_factors else r
 

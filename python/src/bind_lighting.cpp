@@ -17,22 +17,28 @@
 namespace shtool::python {
 namespace {
 
-// Coefficients (..., N^2) times factors[band], in the array's own dtype.
+// Coefficients (..., N^2) times factors[band], in the array's own dtype, in chunks of
+// vectors on `threads` workers with the GIL released.
 template <class T>
-py::array scale_by_band(const py::array& coeffs_in, const std::vector<double>& factors) {
+py::array scale_by_band(const py::array& coeffs_in, const std::vector<double>& factors, int threads) {
   const auto coeffs = contiguous<T>(coeffs_in);
   const std::size_t n2 = coeffs.shape(coeffs.ndim() - 1);
   py::array_t<T, py::array::c_style> out(shape_of(coeffs));
   const T* in = coeffs.data();
   T* o = out.mutable_data();
-  for (std::size_t k = 0; k < static_cast<std::size_t>(coeffs.size()); ++k)
-    o[k] = static_cast<T>(in[k] * factors[sh_band(static_cast<int>(k % n2))]);
+  std::vector<double> per_index(n2);
+  for (std::size_t i = 0; i < n2; ++i) per_index[i] = factors[sh_band(static_cast<int>(i))];
+  const std::size_t count = n2 ? static_cast<std::size_t>(coeffs.size()) / n2 : 0;
+  py::gil_scoped_release release;
+  for_chunks(count, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t k = begin * n2; k < end * n2; ++k) o[k] = static_cast<T>(in[k] * per_index[k % n2]);
+  });
   return out;
 }
 
-py::array scale_any(const py::array& coeffs, const std::vector<double>& factors) {
-  return precision_of(coeffs, "coeffs") == Precision::f32 ? scale_by_band<float>(coeffs, factors)
-                                                          : scale_by_band<double>(coeffs, factors);
+py::array scale_any(const py::array& coeffs, const std::vector<double>& factors, int threads) {
+  return precision_of(coeffs, "coeffs") == Precision::f32 ? scale_by_band<float>(coeffs, factors, threads)
+                                                          : scale_by_band<double>(coeffs, factors, threads);
 }
 
 int coeffs_order(const py::array& coeffs) {
@@ -42,7 +48,8 @@ int coeffs_order(const py::array& coeffs) {
 
 // The windows of sh_window.h, "auto" included: every vector of `coeffs` is one channel
 // of one lighting, as the auto window of project-env treats r, g and b.
-py::tuple window(const py::array& coeffs, const std::string& kind, std::optional<double> cutoff) {
+py::tuple window(const py::array& coeffs, const std::string& kind, std::optional<double> cutoff, int threads) {
+  check_threads(threads);
   precision_of(coeffs, "coeffs");
   const int order = coeffs_order(coeffs);
   if (cutoff && !(*cutoff > 0 && std::isfinite(*cutoff))) throw py::value_error("cutoff must be a positive number");
@@ -52,12 +59,12 @@ py::tuple window(const py::array& coeffs, const std::string& kind, std::optional
     if (cutoff) throw py::value_error("cutoff applies to the windows hann, lanczos and sinc4");
     const auto d = as_f64(coeffs, "coeffs");
     const std::size_t n2 = sh_count(order), channels = d.size() / n2;
-    std::vector<double> interleaved(d.size());
-    for (std::size_t c = 0; c < channels; ++c)
-      for (std::size_t i = 0; i < n2; ++i) interleaved[i * channels + c] = d.data()[c * n2 + i];
     AutoWindow w;
     {
       py::gil_scoped_release release;
+      std::vector<double> interleaved(d.size());
+      for (std::size_t c = 0; c < channels; ++c)
+        for (std::size_t i = 0; i < n2; ++i) interleaved[i * channels + c] = d.data()[c * n2 + i];
       w = value_or_raise(choose_auto_window(interleaved, static_cast<int>(channels)));
     }
     factors = w.factors;
@@ -70,15 +77,17 @@ py::tuple window(const py::array& coeffs, const std::string& kind, std::optional
     factors = sh_window_factors(*shape, c, order);
     if (*shape != ShWindow::none) used_cutoff = py::float_(c);
   }
-  return py::make_tuple(scale_any(coeffs, factors), py::array_t<double>(factors.size(), factors.data()), used_cutoff);
+  return py::make_tuple(scale_any(coeffs, factors, threads), py::array_t<double>(factors.size(), factors.data()),
+                        used_cutoff);
 }
 
-py::array irradiance(const py::array& coeffs) {
+py::array irradiance(const py::array& coeffs, int threads) {
+  check_threads(threads);
   precision_of(coeffs, "coeffs");
   const int order = coeffs_order(coeffs);
   std::vector<double> factors(order);
   for (int l = 0; l < order; ++l) factors[l] = clamped_cosine_band(l);
-  return scale_any(coeffs, factors);
+  return scale_any(coeffs, factors, threads);
 }
 
 py::array light(const std::string& kind, int order, const py::object& direction, std::optional<double> half_angle,
@@ -144,6 +153,7 @@ py::tuple project_env(const py::array& image, int order, const std::string& layo
     throw py::value_error("preset applies to equirect images");
   if (mirror_x && layout == lighting::Layout::equirect)
     throw py::value_error("mirror_x applies to cubemaps, not to equirect images");
+  check_threads(threads);
   const int resolved_threads = resolve_threads(threads);
   const int channels = static_cast<int>(texels.shape(texels.ndim() - 1));
   std::vector<double> coefficients;
@@ -175,8 +185,8 @@ py::tuple project_env(const py::array& image, int order, const std::string& layo
 }  // namespace
 
 void bind_lighting(py::module_& m) {
-  m.def("_window", &window, py::arg("coeffs").noconvert(), py::arg("kind"), py::arg("cutoff"));
-  m.def("_irradiance", &irradiance, py::arg("coeffs").noconvert());
+  m.def("_window", &window, py::arg("coeffs").noconvert(), py::arg("kind"), py::arg("cutoff"), py::arg("threads") = 0);
+  m.def("_irradiance", &irradiance, py::arg("coeffs").noconvert(), py::arg("threads") = 0);
   m.def("light", &light, py::arg("kind"), py::arg("order"), py::arg("direction") = py::make_tuple(0, 0, 1),
         py::arg("half_angle") = py::none(), py::arg("color") = py::make_tuple(1, 1, 1), py::arg("ground") = py::none(),
         py::arg("quantity") = "radiance",

@@ -7,6 +7,7 @@ import pytest
 
 import shtool
 from conftest import SOURCE_DIR
+from test_rotation import gil_stall
 
 
 def sphere_quadrature(nodes):
@@ -135,3 +136,23 @@ def test_project_env_bad_input(image, kw):
     order = kw.pop("order", 3)
     with pytest.raises(ValueError):
         shtool.project_env(image, order, **kw)
+
+
+@pytest.mark.parametrize("call", [
+    lambda c: shtool.irradiance(c, threads=1),
+    lambda c: shtool.window(c, "hann", threads=1),
+])
+def test_irradiance_and_window_release_the_gil(call):
+    c = np.random.default_rng(5).normal(size=(40_000, 256))
+    stall, took = gil_stall(lambda: call(c), 3)
+    assert stall < took / 2
+
+
+def test_irradiance_and_window_in_chunks_equal_one_call():
+    c = np.random.default_rng(6).normal(size=(9000, 16)).astype(np.float32)
+    for threads in (1, 2, 0):
+        np.testing.assert_array_equal(shtool.irradiance(c, threads=threads),
+                                      np.concatenate([shtool.irradiance(c[k:k + 10]) for k in range(0, 9000, 10)]))
+        np.testing.assert_array_equal(shtool.window(c, "lanczos", threads=threads),
+                                      np.concatenate([shtool.window(c[k:k + 10], "lanczos") for k in
+                                                      range(0, 9000, 10)]))
