@@ -126,8 +126,9 @@ def project_env(image, order, layout="equirect", quantity="radiance", window="no
     """Exact SH projection (order**2, C) float64 of an environment image in memory.
 
     `image`: float32/float64 (H, W, C) equirect (2:1, docs/lighting.md's mapping) or cross
-    (4:3 / 3:4), or (6, S, S, C) faces in the order +X -X +Y -Y +Z -Z. The same texel
-    integrals, window and quantity as ``shtool project-env``.
+    (4:3 / 3:4), or (6, S, S, C) faces in the order +X -X +Y -Y +Z -Z; C from 1 to 4. The
+    same texel integrals, window and quantity as ``shtool project-env``: texels are read as
+    float32 (float64 images are rounded to float32), sums are float64.
     """
     img = _float_array(image, "image")
     coeffs, win = _shtool._project_env(img, order, layout, quantity, window, cutoff, preset, mirror_x, threads)

@@ -1,5 +1,6 @@
 // project_env, irradiance, window, light: the lighting side of the runtime and of the
 // project-env and light jobs, on arrays.
+#include <charconv>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -113,11 +114,47 @@ py::array light(const std::string& kind, int order, const py::object& direction,
   return out;
 }
 
-// An image as float32 texels: the caller's memory when it is C-contiguous float32 (the
-// CLI projects float images; float64 is rounded to float32 as a file's texels are).
+// The texel index (i, j, ...) of flat index k of an array of `shape`, as numpy prints it.
+std::string index_text(std::size_t k, const std::vector<py::ssize_t>& shape) {
+  std::vector<std::size_t> index(shape.size());
+  for (std::size_t a = shape.size(); a-- > 0;) {
+    index[a] = k % static_cast<std::size_t>(shape[a]);
+    k /= static_cast<std::size_t>(shape[a]);
+  }
+  std::string text;
+  for (std::size_t i : index) {
+    if (!text.empty()) text += ", ";
+    text += std::to_string(i);
+  }
+  return text;
+}
+
+// An image as float32 texels (the projection reads float texels, as the CLI reads a
+// file's): the caller's memory when it is C-contiguous float32; float64 rounded to
+// float32, with a ValueError for a finite value beyond float32's range (it would become
+// infinite). NaN and infinities are left to the projection's own message.
 py::array_t<float, py::array::c_style> float_texels(const py::array& image) {
-  precision_of(image, "image");
-  return py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(image);
+  if (precision_of(image, "image") == Precision::f32) return contiguous<float>(image);
+  const auto d = contiguous<double>(image);
+  py::array_t<float, py::array::c_style> f(shape_of(d));
+  const double* in = d.data();
+  float* o = f.mutable_data();
+  const std::size_t count = static_cast<std::size_t>(d.size());
+  std::size_t bad = count;
+  {
+    py::gil_scoped_release release;
+    for (std::size_t k = 0; k < count; ++k) {
+      o[k] = static_cast<float>(in[k]);
+      if (std::isinf(o[k]) && std::isfinite(in[k]) && bad == count) bad = k;
+    }
+  }
+  if (bad < count) {
+    char value[32];
+    const auto end = std::to_chars(value, value + sizeof value, in[bad]).ptr;  // the shortest round trip
+    throw py::value_error("image[" + index_text(bad, shape_of(d)) + "] = " + std::string(value, end) +
+                          " is beyond float32's range (|x| <= 3.4028235e38): project_env computes in float32");
+  }
+  return f;
 }
 
 py::tuple project_env(const py::array& image, int order, const std::string& layout_name, const std::string& quantity,
@@ -134,26 +171,27 @@ py::tuple project_env(const py::array& image, int order, const std::string& layo
   if (cutoff && (r.window == lighting::WindowChoice::none || r.window == lighting::WindowChoice::automatic))
     throw py::value_error("cutoff applies to the windows hann, lanczos and sinc4");
   lighting::Layout layout = choice(layout_name, lighting::layout_names(), "layout");
-  const auto texels = float_texels(image);
-  if (texels.ndim() != 3 && texels.ndim() != 4)
-    throw py::value_error("image must have shape (H, W, C) or (6, S, S, C)");
+  if (image.ndim() != 3 && image.ndim() != 4) throw py::value_error("image must have shape (H, W, C) or (6, S, S, C)");
   if (layout == lighting::Layout::automatic)
-    layout = texels.ndim() == 4                         ? lighting::Layout::faces
-             : texels.shape(1) == 2 * texels.shape(0) ? lighting::Layout::equirect
-                                                        : lighting::Layout::cross;
-  if ((layout == lighting::Layout::faces) != (texels.ndim() == 4))
+    layout = image.ndim() == 4                      ? lighting::Layout::faces
+             : image.shape(1) == 2 * image.shape(0) ? lighting::Layout::equirect
+                                                    : lighting::Layout::cross;
+  if ((layout == lighting::Layout::faces) != (image.ndim() == 4))
     throw py::value_error("layout faces takes an array (6, S, S, C); equirect and cross an array (H, W, C)");
-  if (texels.shape(texels.ndim() - 1) < 1 || texels.size() == 0) throw py::value_error("image is empty");
-  if (layout == lighting::Layout::equirect && texels.shape(1) != 2 * texels.shape(0))
-    throw py::value_error("an equirect image must be 2:1 (W = 2 H), got " + std::to_string(texels.shape(1)) + " x " +
-                          std::to_string(texels.shape(0)));
-  if (layout == lighting::Layout::faces && (texels.shape(0) != 6 || texels.shape(1) != texels.shape(2)))
+  if (image.shape(image.ndim() - 1) < 1 || image.size() == 0) throw py::value_error("image is empty");
+  if (const py::ssize_t c = image.shape(image.ndim() - 1); c > 4)
+    throw py::value_error("image has " + std::to_string(c) + " channels; 1 to 4 supported");
+  if (layout == lighting::Layout::equirect && image.shape(1) != 2 * image.shape(0))
+    throw py::value_error("an equirect image must be 2:1 (W = 2 H), got " + std::to_string(image.shape(1)) + " x " +
+                          std::to_string(image.shape(0)));
+  if (layout == lighting::Layout::faces && (image.shape(0) != 6 || image.shape(1) != image.shape(2)))
     throw py::value_error("faces must have shape (6, S, S, C)");
   if (r.preset != lighting::EquirectPreset::shtool && layout != lighting::Layout::equirect)
     throw py::value_error("preset applies to equirect images");
   if (mirror_x && layout == lighting::Layout::equirect)
     throw py::value_error("mirror_x applies to cubemaps, not to equirect images");
   check_threads(threads);
+  const auto texels = float_texels(image);
   const int resolved_threads = resolve_threads(threads);
   const int channels = static_cast<int>(texels.shape(texels.ndim() - 1));
   std::vector<double> coefficients;
