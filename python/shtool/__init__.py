@@ -6,15 +6,17 @@ The runtime (evaluation, rotation, products, lighting) and the offline jobs of t
 z up, rotation g(w) = f(R^-1 w). Coefficients lie on the last axis (``axis=`` picks
 another); float32 stays float32, float64 stays float64. See docs/python.md.
 """
+import functools as _functools
 import json as _json
 import os as _os
+import re as _re
 import tempfile as _tempfile
 from dataclasses import dataclass as _dataclass
 
 import numpy as _np
 
 from . import _shtool
-from ._shtool import __version__, gen_tensors, light, transform_splats
+from ._shtool import __version__
 
 # The tables the module reads (rotation helpers, zhf lobes) ship in the package's tables/
 # folder (the build tree's package and the wheel): looked for after $SHTOOL_TABLES.
@@ -28,6 +30,43 @@ __all__ = [
 ]
 
 
+# A CLI option in a library message ("--threads 9", "--lobes"), not inside a quoted
+# shell command (`shtool ... --out FILE`); its value when one follows.
+_CLI_OPTION = _re.compile(r"`[^`]*`"
+                          r"|(?<![\w-])--([a-z][a-z0-9-]*)(?: (-?[0-9.][^\s,;)]*|'[^']*'|[a-z0-9/]+(?=:)))?(:?)")
+
+
+def _python_message(text, aliases):
+    """The library's message with its CLI options named as this call's keywords:
+    "--threads 9 is ..." -> "threads=9 is ...", "needs --half-angle" -> "needs half_angle="."""
+    def keyword(m):
+        if m.group(1) is None:
+            return m.group(0)
+        name = aliases.get(m.group(1), m.group(1).replace("-", "_"))
+        if m.group(2):
+            return f"{name}={m.group(2)}{m.group(3)}"
+        return f"{name}{m.group(3)}" if m.group(3) else f"{name}="
+    return _CLI_OPTION.sub(keyword, text)
+
+
+def _keywords(**aliases):
+    """Bad-value errors of the decorated call name its keywords, not the CLI's options
+    (`aliases`: CLI option -> keyword where they differ)."""
+    def wrap(f):
+        @_functools.wraps(f)
+        def call(*args, **kwargs):
+            try:
+                return f(*args, **kwargs)
+            except ValueError as e:
+                text = str(e)
+                renamed = _python_message(text, aliases)
+                if renamed == text:
+                    raise
+                raise ValueError(renamed) from None
+        return call
+    return wrap
+
+
 def _path(p, name):
     """A path argument as str: str, bytes (decoded as os.fsdecode does) or os.PathLike."""
     try:
@@ -38,7 +77,13 @@ def _path(p, name):
 
 def _float_array(x, name):
     """x as an ndarray without copying; lists become float64 (other dtypes: TypeError)."""
-    a = x if isinstance(x, _np.ndarray) else _np.asarray(x, dtype=_np.float64)
+    if isinstance(x, _np.ndarray):
+        a = x
+    else:
+        try:
+            a = _np.asarray(x, dtype=_np.float64)
+        except (TypeError, ValueError):
+            raise TypeError(f"{name} must be an array of numbers, got {type(x).__name__}") from None
     if a.dtype not in (_np.float32, _np.float64):
         raise TypeError(f"{name} must be float32 or float64, got {a.dtype}")
     return a
@@ -55,6 +100,7 @@ def _on_last_axis(a, axis, name):
         raise ValueError(f"axis: {e}") from None
 
 
+@_keywords()
 def eval_sh(order, dirs, out=None, threads=0):
     """Real SH values (..., order**2) at `dirs` (..., 3), normalised inside (a zero or
     non-finite direction: ValueError); float32 or float64 as `dirs`. `out`: a C-contiguous
@@ -67,6 +113,7 @@ def _back(r, axis):
     return r if axis == -1 or axis == r.ndim - 1 else _np.moveaxis(r, -1, axis)
 
 
+@_keywords()
 def rotate(coeffs, matrix, method="auto", axis=-1, out=None, tol=None, threads=0, tables=None):
     """Rotated coefficients g(w) = f(R^-1 w), same shape and dtype as `coeffs`.
 
@@ -86,11 +133,13 @@ def rotate(coeffs, matrix, method="auto", axis=-1, out=None, tol=None, threads=0
     return _back(_shtool._rotate(a, matrix, method, tol, out, threads, path), axis)
 
 
+@_keywords()
 def quat_to_matrix(q, threads=0):
     """Rotation matrix (..., 3, 3) of unit quaternions q = (w, x, y, z) (Hamilton)."""
     return _shtool._quat_to_matrix(_float_array(q, "q"), threads)
 
 
+@_keywords()
 def product(a, b, order=None, method="auto", axis=-1, threads=0):
     """The SH product of a and b truncated to `order` (default: a's order).
 
@@ -102,12 +151,14 @@ def product(a, b, order=None, method="auto", axis=-1, threads=0):
     return _back(_shtool._product(fa, fb, order, method, threads), axis)
 
 
+@_keywords()
 def irradiance(coeffs, axis=-1, threads=0):
     """Irradiance coefficients E_lm = A_l L_lm (clamped cosine, no 1/pi) of radiance."""
     a = _on_last_axis(_float_array(coeffs, "coeffs"), axis, "coeffs")
     return _back(_shtool._irradiance(a, threads), axis)
 
 
+@_keywords()
 def window(coeffs, kind, cutoff=None, axis=-1, return_factors=False, threads=0):
     """Windowed coefficients: kind none, hann, lanczos, sinc4 or auto (as project-env).
 
@@ -121,6 +172,7 @@ def window(coeffs, kind, cutoff=None, axis=-1, return_factors=False, threads=0):
     return (r, factors, used) if return_factors else r
 
 
+@_keywords(**{"equirect-preset": "preset"})
 def project_env(image, order, layout="equirect", quantity="radiance", window="none", cutoff=None,
                 preset="shtool", mirror_x=False, threads=0, return_window=False):
     """Exact SH projection (order**2, C) float64 of an environment image in memory.
@@ -135,15 +187,43 @@ def project_env(image, order, layout="equirect", quantity="radiance", window="no
     return (coeffs, _json.loads(win)) if return_window else coeffs
 
 
+@_keywords()
 def project_env_file(image, order=3, json=None, **options):
-    """``shtool project-env`` on an image file; options as the CLI's (out=, window=, ...).
-
-    Returns the coefficients (order**2, 3); writes `json` (and `out`) when given.
+    """``shtool project-env`` on an image file; options as the CLI's (out=, window=,
+    render_back=, ...). Returns the coefficients (order**2, 3); writes `json` (and `out`)
+    when given.
     """
     with _tempfile.TemporaryDirectory() as tmp:
-        path = json if json is not None else _os.path.join(tmp, "lighting.json")
-        r = _shtool._project_env_file(str(image), str(path), order=order, **options)
+        path = _path(json, "json") if json is not None else _os.path.join(tmp, "lighting.json")
+        r = _shtool._project_env_file(image, path, order=order, **options)
     return r["coefficients"]
+
+
+@_keywords(quat="quaternion")
+def transform_splats(path_in, path_out, **options):
+    """``shtool transform-splats``: writes `path_out` as the CLI does. Keyword arguments:
+    quaternion=(w, x, y, z) (or quat=) or matrix= (3x3, or 9 numbers row-major; a
+    reflection is allowed), translate=(x, y, z), scale=, threads=, frame=, spz_frame=,
+    gltf_frame=, sh_degree=, sh_bits=, spz_version=. Returns a dict (splats, degree,
+    seconds, reflects).
+    """
+    return _shtool._transform_splats(path_in, path_out, **options)
+
+
+@_keywords()
+def gen_tensors(order, out, **options):
+    """``shtool gen-tensors``: writes the tables into the folder `out` (made if missing;
+    removed again if the job fails); what=[...] (or "rotation,tripling"), inputs=,
+    format=. Returns the paths written."""
+    return _shtool._gen_tensors(order, out, **options)
+
+
+@_keywords(dir="direction", type="kind")
+def light(kind, order, direction=(0, 0, 1), half_angle=None, color=(1, 1, 1), ground=None, quantity="radiance"):
+    """Analytic light as radiance (or irradiance) coefficients (order**2, 3), as
+    ``shtool light``: kind directional, cone, sphere, hemisphere or constant; half_angle in
+    degrees."""
+    return _shtool.light(kind, order, direction, half_angle, color, ground, quantity)
 
 
 def _quaternion_of(r):
@@ -216,6 +296,7 @@ class ZhFit:
     direct: _np.ndarray
 
 
+@_keywords()
 def fit_zh(transfer, lobes=4, effort=None, seed=None, starts=None, restart_above=None, direct=False,
            method="varpro", threads=0):
     """The ZH fits ``shtool fit-zh --transfer`` makes for the vectors `transfer` (V, N**2)."""
@@ -227,24 +308,31 @@ def fit_zh(transfer, lobes=4, effort=None, seed=None, starts=None, restart_above
 
 def load_zh_fit(path):
     """A zh-fit table (``fit-zh --out``) as a ZhFit, checked as the runtime's loader checks it."""
-    return ZhFit(*_shtool._load_zh_fit(str(path)))
+    return ZhFit(*_shtool._load_zh_fit(_path(path, "path")))
 
 
+@_keywords()
 def fit_zh_mesh(mesh, out=None, **options):
     """``shtool fit-zh MESH``: simulates the transfer and fits it; options as the CLI's
-    (order=, lobes=, rays=, mode=, seed=, effort=, threads=, json=, ply=, ...).
+    (order=, lobes=, rays=, mode=, up=, seed=, effort=, threads=, json=, ply=, shard=, ...).
 
-    Writes `out` when given (the CLI's bytes) and returns the fits as a ZhFit.
+    Writes `out` when given (the CLI's bytes) and returns the fits as a ZhFit; with
+    shard="K/N", the partial table (a Table with `vertex_index`) for ``shtool merge``.
     """
     with _tempfile.TemporaryDirectory() as tmp:
-        path = out if out is not None else _os.path.join(tmp, "fit.zh.shtb")
-        _shtool._fit_zh_mesh(str(mesh), out=str(path), **options)
+        path = _path(out, "out") if out is not None else _os.path.join(tmp, "fit.zh.shtb")
+        _shtool._fit_zh_mesh(mesh, out=path, **options)
+        if options.get("shard") is not None:
+            return load_table(path)
         return load_zh_fit(path)
 
 
+@_keywords()
 def search_lobes(**options):
-    """``shtool search-lobes``: bands=[...] or shared=True with order=N; out=, json=,
-    seed=, threads=, population=, stall=, restarts=, ... Returns the JSON summary as a dict."""
+    """``shtool search-lobes``: bands=[...] (or band=l, or "a-b") or shared=True with
+    order=N; out=, json=, seed=, threads=, population=, stall=, restarts=, crossover=,
+    mutation=, elitism=, max_generations=, theta_candidates=, max_cond=,
+    no_local_search=, no_secondary=, paper=. Returns the JSON summary as a dict."""
     return _json.loads(_shtool._search_lobes(**options))
 
 
@@ -267,8 +355,9 @@ class Table:
 
 
 def load_table(path):
-    """Any shtool table (binary or JSON encoding), checked as the runtime checks it."""
-    kind, order, header, arrays = _shtool._load_table(str(path))
+    """Any shtool table (binary or JSON encoding), checked as the runtime checks it. `path`:
+    str, bytes or os.PathLike."""
+    kind, order, header, arrays = _shtool._load_table(_path(path, "path"))
     return Table(kind, order, _json.loads(header), dict(arrays))
 
 
@@ -279,7 +368,7 @@ class _TypedTable(Table):
     def load(cls, path):
         """The table at `path`, which must be of this kind and pass the checks of the
         engine API's loader of that kind (ValueError otherwise)."""
-        kind, order, header, arrays = _shtool._load_table(str(path), cls.KIND)
+        kind, order, header, arrays = _shtool._load_table(_path(path, "path"), cls.KIND)
         return cls(kind, order, _json.loads(header), dict(arrays))
 
 
