@@ -76,7 +76,8 @@ def _path(p, name):
 
 
 def _float_array(x, name):
-    """x as an ndarray without copying; lists become float64 (other dtypes: TypeError)."""
+    """x as an ndarray without copying; lists become float64, float arrays of the other byte
+    order are converted to the machine's (other dtypes: TypeError)."""
     if isinstance(x, _np.ndarray):
         a = x
     else:
@@ -84,6 +85,8 @@ def _float_array(x, name):
             a = _np.asarray(x, dtype=_np.float64)
         except (TypeError, ValueError):
             raise TypeError(f"{name} must be an array of numbers, got {type(x).__name__}") from None
+    if a.dtype.kind == "f" and a.dtype.itemsize in (4, 8) and not a.dtype.isnative:
+        a = a.astype(_np.float32 if a.dtype.itemsize == 4 else _np.float64)
     if a.dtype not in (_np.float32, _np.float64):
         raise TypeError(f"{name} must be float32 or float64, got {a.dtype}")
     return a
@@ -242,46 +245,96 @@ def _quaternion_of(r):
     return _np.array(q)
 
 
+def _numbers(x, count, name):
+    """`count` numbers from any array-like (a 3x3 matrix for 9) as float64."""
+    try:
+        a = _np.asarray(x, dtype=_np.float64)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name} must be {count} numbers, got {type(x).__name__}") from None
+    if a.size != count:
+        raise ValueError(f"{name} must hold {count} numbers, got shape {a.shape}")
+    return a.reshape(-1)
+
+
+def _splat_array(x, name):
+    """(array as float64, dtype of the result): float32 and float64 are kept, integers and
+    bools are taken as float64 (never truncated on the way back)."""
+    a = _np.asarray(x)
+    if a.dtype.kind in "iub":
+        return a.astype(_np.float64), _np.dtype(_np.float64)
+    if a.dtype.kind != "f":
+        raise TypeError(f"{name} must be an array of numbers, got {a.dtype}")
+    out = _np.dtype(_np.float32 if a.dtype.itemsize == 4 else _np.float64)
+    return a.astype(_np.float64), out
+
+
+@_keywords(quat="quaternion")
 def transform_splat_arrays(sh=None, positions=None, rotations=None, log_scales=None, normals=None,
                            quaternion=None, matrix=None, translate=(0.0, 0.0, 0.0), scale=1.0):
     """``transform-splats`` on arrays already in memory, each optional, new arrays returned
-    in a dict: positions (S, 3) -> s R p + t; rotations (S, 4) (w, x, y, z) -> q_R q (the
-    Hamilton product; lengths kept); log_scales (S, 3) + log s; normals (S, 3) -> R n; sh
-    (S, 3, N**2) rotated exactly (method "reference", as the job), g(w) = f(R^-1 w).
-    Give the rotation as quaternion=(w, x, y, z) or matrix= (3x3), as the job takes them.
+    in a dict: positions (S, 3) -> s M p + t; rotations (S, 4) (w, x, y, z) -> q_R q (the
+    Hamilton product; lengths kept); log_scales (S, 3) + log s; normals (S, 3) -> M n; sh
+    (S, 3, N**2) carried along exactly (method "reference", as the job), g(w) = f(M^-1 w).
+    The map as the job takes it: quaternion=(w, x, y, z) (normalised; zero refused) or
+    matrix= (3x3 or 9 numbers, orthogonal to 1e-6: a rotation, or a reflection, whose
+    orientations turn by its rotation part -M and whose SH get their odd bands negated), or
+    neither (no turn). float32 and float64 arrays keep their dtype; integer arrays give
+    float64.
     """
-    if (quaternion is None) == (matrix is None):
-        raise ValueError("give exactly one of quaternion, matrix")
-    if matrix is not None:
-        r = _np.asarray(matrix, dtype=_np.float64)
-        _shtool._rotate(_np.zeros(1), r, "reference", None, None, 1)  # the CLI's checks of a matrix
-        qr = _quaternion_of(r)
+    if quaternion is not None and matrix is not None:
+        raise ValueError("give exactly one of quaternion= and matrix=, or neither")
+    reflects = False
+    if quaternion is not None:
+        q = _numbers(quaternion, 4, "quaternion")
+        n = _np.sqrt(_np.sum(q * q))
+        if not (n > 0 and _np.isfinite(n)):
+            raise ValueError("quaternion must be a finite, non-zero quaternion (w, x, y, z)")
+        qr = q / n
+        m = _shtool._quat_to_matrix(qr, 1)
+    elif matrix is not None:
+        m = _numbers(matrix, 9, "matrix").reshape(3, 3)
+        g, eye = m.T @ m, _np.eye(3)
+        # Eigen's isApprox(I, 1e-6), as the job checks it.
+        if not (_np.isfinite(m).all() and
+                _np.sum((g - eye) ** 2) <= 1e-12 * min(_np.sum(g * g), 3.0)):
+            raise ValueError("matrix must be orthogonal (a rotation or a reflection: orthonormal rows to 1e-6)")
+        reflects = bool(_np.linalg.det(m) < 0)
+        qr = _quaternion_of(-m if reflects else m)
     else:
-        qr = _np.asarray(quaternion, dtype=_np.float64)
-        r = quat_to_matrix(qr)
-        qr = qr / _np.linalg.norm(qr)
+        m, qr = _np.eye(3), _np.array([1.0, 0.0, 0.0, 0.0])
+    if isinstance(scale, (bool, _np.bool_)) or not isinstance(scale, (int, float, _np.integer, _np.floating)):
+        raise TypeError(f"scale must be a number, got {type(scale).__name__}")
     if not (scale > 0 and _np.isfinite(scale)):
         raise ValueError("scale must be a positive number")
-    t = _np.asarray(translate, dtype=_np.float64)
+    t = _numbers(translate, 3, "translate")
+    if not _np.isfinite(t).all():
+        raise ValueError("translate must be finite")
     out = {}
     if positions is not None:
-        p = _np.asarray(positions)
-        out["positions"] = (scale * (p.astype(_np.float64) @ r.T) + t).astype(p.dtype)
+        p, dtype = _splat_array(positions, "positions")
+        out["positions"] = (scale * (p @ m.T) + t).astype(dtype)
     if normals is not None:
-        n = _np.asarray(normals)
-        out["normals"] = (n.astype(_np.float64) @ r.T).astype(n.dtype)
+        n, dtype = _splat_array(normals, "normals")
+        out["normals"] = (n @ m.T).astype(dtype)
     if rotations is not None:
-        q = _np.asarray(rotations)
-        w2, x2, y2, z2 = q.astype(_np.float64).T
+        q, dtype = _splat_array(rotations, "rotations")
+        w2, x2, y2, z2 = _np.moveaxis(q, -1, 0)
         w1, x1, y1, z1 = qr
         out["rotations"] = _np.stack([w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2, w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
                                       w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2, w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2],
-                                     axis=-1).astype(q.dtype)
+                                     axis=-1).astype(dtype)
     if log_scales is not None:
-        ls = _np.asarray(log_scales)
-        out["log_scales"] = (ls.astype(_np.float64) + _np.log(scale)).astype(ls.dtype)
+        ls, dtype = _splat_array(log_scales, "log_scales")
+        out["log_scales"] = (ls + _np.log(scale)).astype(dtype)
     if sh is not None:
-        out["sh"] = rotate(_float_array(sh, "sh"), r.astype(_np.asarray(sh).dtype), method="reference")
+        c, dtype = _splat_array(sh, "sh")
+        if dtype == _np.float32:
+            c = _np.asarray(sh).astype(_np.float32)  # rotated in float32, as float32 input is
+        r = rotate(c, (-m if reflects else m).astype(c.dtype), method="reference")
+        if reflects:
+            band = _np.floor(_np.sqrt(_np.arange(r.shape[-1]) + 0.5)).astype(int)
+            r[..., band % 2 == 1] *= -1
+        out["sh"] = r.astype(dtype, copy=False)
     return out
 
 
@@ -299,11 +352,11 @@ class ZhFit:
 @_keywords()
 def fit_zh(transfer, lobes=4, effort=None, seed=None, starts=None, restart_above=None, direct=False,
            method="varpro", threads=0):
-    """The ZH fits ``shtool fit-zh --transfer`` makes for the vectors `transfer` (V, N**2)."""
-    t = _np.asarray(transfer)
-    if t.dtype not in (_np.float32, _np.float64):
-        raise TypeError(f"transfer must be float32 or float64, got {t.dtype}")
-    return ZhFit(*_shtool._fit_zh(t, lobes, effort, seed, starts, restart_above, direct, method, threads))
+    """The ZH fits ``shtool fit-zh --transfer`` makes for the vectors `transfer` (V, N**2),
+    computed in float64 (as the CLI) and returned in the dtype of `transfer`."""
+    t = _float_array(transfer, "transfer")
+    fits = _shtool._fit_zh(t, lobes, effort, seed, starts, restart_above, direct, method, threads)
+    return ZhFit(*(a.astype(t.dtype, copy=False) for a in fits))
 
 
 def load_zh_fit(path):

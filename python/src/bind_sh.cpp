@@ -198,7 +198,7 @@ py::array rotate_t(const py::array& coeffs_in, const py::object& matrix, const s
   // float32 matrices are read as they are (a float64 copy of a million would cost more
   // than rotating with them); anything else as float64.
   const bool f32 = py::isinstance<py::array>(matrix) &&
-                   py::reinterpret_borrow<py::array>(matrix).dtype().is(py::dtype::of<float>());
+                   py::reinterpret_borrow<py::array>(matrix).dtype().equal(py::dtype::of<float>());
   const py::array m = f32 ? py::array(contiguous<float>(matrix)) : py::array(as_f64(matrix, "matrix"));
   if (m.ndim() == 2) {
     ShRotation<T> rotation(order, helpers);

@@ -15,8 +15,8 @@
 namespace shtool::python {
 
 Precision precision_of(const py::array& a, const std::string& what) {
-  if (a.dtype().is(py::dtype::of<float>())) return Precision::f32;
-  if (a.dtype().is(py::dtype::of<double>())) return Precision::f64;
+  if (a.dtype().equal(py::dtype::of<float>())) return Precision::f32;
+  if (a.dtype().equal(py::dtype::of<double>())) return Precision::f64;
   throw py::type_error(what + " must be float32 or float64, got " + std::string(py::str(a.dtype())));
 }
 

@@ -44,7 +44,7 @@ py::array_t<T, py::array::c_style> output(const std::vector<py::ssize_t>& shape,
   if (out.is_none()) return py::array_t<T, py::array::c_style>(shape);
   if (!py::isinstance<py::array>(out)) throw py::type_error("out must be a numpy array");
   py::array a = py::reinterpret_borrow<py::array>(out);
-  if (!a.dtype().is(py::dtype::of<T>()))
+  if (!a.dtype().equal(py::dtype::of<T>()))
     throw py::type_error(std::string("out must have dtype ") + (sizeof(T) == 4 ? "float32" : "float64"));
   if (!(a.flags() & py::array::c_style)) throw py::value_error("out must be C-contiguous");
   if (!a.writeable()) throw py::value_error("out is read-only");

@@ -159,6 +159,18 @@ def test_typed_loaders_refuse_other_kinds(tmp_path, cli):
     assert env.coefficients.shape == (4, 3)
 
 
+def test_fit_zh_keeps_float32():
+    t = transfer_vectors()
+    fit64 = shtool.fit_zh(t, lobes=2, effort=1)
+    fit32 = shtool.fit_zh(t.astype(np.float32), lobes=2, effort=1, direct=True)
+    for name in ("axes", "coeffs", "residual", "norm", "direct"):
+        assert getattr(fit32, name).dtype == np.float32
+        assert getattr(fit64, name).dtype == np.float64
+    # Fitted in float64 (as the CLI) from the float32 values, then rounded.
+    again = shtool.fit_zh(t.astype(np.float32).astype(np.float64), lobes=2, effort=1, direct=True)
+    np.testing.assert_array_equal(fit32.axes, again.axes.astype(np.float32))
+
+
 def test_job_keywords_of_the_wrong_type_are_type_errors(tmp_path):
     mesh = SOURCE_DIR / "data" / "spot.obj"
     sky = SOURCE_DIR / "data" / "sky.hdr"
@@ -270,3 +282,38 @@ def test_gen_tensors_that_fails_leaves_no_folder(tmp_path):
     r = subprocess.run([sys.executable, "-c", code, str(tmp_path / "new" / "tables")], capture_output=True, text=True)
     assert r.stdout == "failed\n", r.stderr
     assert not (tmp_path / "new").exists()
+
+
+def test_transform_splat_arrays_as_the_job(cli, tmp_path):
+    names, data, header = write_splats(tmp_path / "in.ply")
+    sh = np.stack([np.concatenate([data[:, 3 + c:4 + c], data[:, 6 + 3 * c:9 + 3 * c]], axis=1) for c in range(3)],
+                  axis=1)  # (S, 3, 4)
+    arrays = dict(sh=sh, positions=data[:, :3], rotations=data[:, 19:23], log_scales=data[:, 16:19])
+    # A reflection (det -1) and a quaternion of length 2, both taken by the job.
+    q = 2 * np.array([0.8, 0.2, -0.4, 0.4]) / np.linalg.norm([0.8, 0.2, -0.4, 0.4])
+    mirror = np.diag([1.0, 1.0, -1.0]) @ shtool.quat_to_matrix(q / 2)
+    for flag, value, given in [("--matrix", mirror.ravel(), dict(matrix=mirror)), ("--quat", q, dict(quaternion=q))]:
+        cli("transform-splats", tmp_path / "in.ply", "--out", tmp_path / "cli.ply", flag,
+            ",".join(repr(float(x)) for x in value), "--scale", 2, "--translate", "1,2,3")
+        written = np.frombuffer((tmp_path / "cli.ply").read_bytes()[len(header):], "<f4").reshape(5, len(names))
+        moved = shtool.transform_splat_arrays(**arrays, scale=2.0, translate=(1, 2, 3), **given)
+        np.testing.assert_allclose(moved["positions"], written[:, :3], rtol=1e-6, atol=1e-6)
+        np.testing.assert_allclose(moved["rotations"], written[:, 19:23], rtol=1e-6, atol=1e-6)
+        np.testing.assert_allclose(moved["log_scales"], written[:, 16:19], rtol=1e-6)
+        for c in range(3):
+            np.testing.assert_allclose(moved["sh"][:, c, 1:], written[:, 6 + 3 * c:9 + 3 * c], atol=1e-6)
+    with pytest.raises(ValueError, match="quaternion"):
+        shtool.transform_splat_arrays(positions=data[:, :3], quaternion=(0, 0, 0, 0))
+    with pytest.raises(ValueError, match="orthogonal"):
+        shtool.transform_splat_arrays(positions=data[:, :3], matrix=2 * np.eye(3))
+
+
+def test_transform_splat_arrays_converts_integers_to_float():
+    moved = shtool.transform_splat_arrays(positions=np.array([[1, 1, 1]]), normals=np.array([[0, 0, 1]]),
+                                          log_scales=np.zeros((1, 3), np.int32), rotations=np.array([[1, 0, 0, 0]]),
+                                          sh=np.ones((1, 3, 4), np.int64), quaternion=(1, 0, 0, 0), scale=1.5)
+    np.testing.assert_array_equal(moved["positions"], [[1.5, 1.5, 1.5]])
+    np.testing.assert_allclose(moved["log_scales"], np.log(1.5))
+    for name, a in moved.items():
+        assert a.dtype == np.float64, name
+    assert shtool.transform_splat_arrays(positions=np.ones((1, 3), np.float32))["positions"].dtype == np.float32
