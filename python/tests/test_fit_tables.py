@@ -11,6 +11,7 @@ import pytest
 
 import shtool
 from conftest import SOURCE_DIR
+from test_rotation import gil_stall
 
 
 def transfer_vectors(count=12, order=4, seed=1):
@@ -317,3 +318,13 @@ def test_transform_splat_arrays_converts_integers_to_float():
     for name, a in moved.items():
         assert a.dtype == np.float64, name
     assert shtool.transform_splat_arrays(positions=np.ones((1, 3), np.float32))["positions"].dtype == np.float32
+
+
+def test_table_loaders_release_the_gil(cli, tmp_path):
+    t = np.random.default_rng(8).normal(size=(300_000, 4))
+    t[:, 0] += 3
+    (tmp_path / "t.json").write_text(json.dumps({"order": 2, "vectors": t.tolist()}))
+    cli("fit-zh", "--transfer", tmp_path / "t.json", "--out", tmp_path / "big.shtb", "--lobes", 1, "--effort", 1)
+    for load in (shtool.load_zh_fit, shtool.ZhFitTable.load, shtool.load_table):
+        stall, took = gil_stall(lambda: load(tmp_path / "big.shtb"), 3)
+        assert stall < took / 2, load
