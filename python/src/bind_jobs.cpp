@@ -102,8 +102,14 @@ class Kwargs {
   }
   void get(const char* key, std::uint64_t& field) {
     if (const py::object v = take(key)) {
-      const long long n = integer(v, key, 0);
-      field = static_cast<std::uint64_t>(n);
+      if (py::isinstance<py::bool_>(v) || is_numpy_bool(v) || !PyIndex_Check(v.ptr())) throw type(key, "an int", v);
+      const py::int_ i = py::reinterpret_steal<py::int_>(PyNumber_Index(v.ptr()));
+      const unsigned long long n = PyLong_AsUnsignedLongLong(i.ptr());
+      if (PyErr_Occurred()) {
+        PyErr_Clear();
+        throw py::value_error(name(key) + " = " + std::string(py::repr(v)) + " is out of range (0..2^64-1)");
+      }
+      field = n;
     }
   }
   void get(const char* key, double& field) {

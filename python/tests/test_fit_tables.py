@@ -109,6 +109,13 @@ def test_fit_zh_mesh_writes_the_cli_bytes(cli, tmp_path):
     fit = shtool.fit_zh_mesh(mesh, out=str(tmp_path / "py.shtb"), order=3, lobes=2, rays=64, effort=1)
     assert (tmp_path / "py.shtb").read_bytes() == (tmp_path / "cli.shtb").read_bytes()
     assert fit.axes.shape[1:] == (2, 3)
+    # Seeds take the CLI's whole range (unsigned 64 bits).
+    cli("fit-zh", mesh, "--out", tmp_path / "cli-seed.shtb", "--seed", 2**64 - 5, *opts)
+    shtool.fit_zh_mesh(mesh, out=tmp_path / "py-seed.shtb", seed=2**64 - 5, order=3, lobes=2, rays=64, effort=1)
+    assert (tmp_path / "py-seed.shtb").read_bytes() == (tmp_path / "cli-seed.shtb").read_bytes()
+    for seed in (-1, 2**64):
+        with pytest.raises(ValueError, match="seed"):
+            shtool.fit_zh_mesh(mesh, seed=seed)
 
 
 def test_transform_splats_writes_the_cli_bytes(cli, tmp_path):
