@@ -88,6 +88,8 @@ def build_wheel(wheel_directory, config_settings=None, metadata_directory=None):
     info = f"{NAME}-{version}.dist-info"
     files = {f"{NAME}/{p.name}": p.read_bytes() for p in sorted(package.iterdir())
              if p.is_file() and (p.suffix in (".py", ".so"))}
+    # The shipped tables the module reads (rotation helpers, zhf lobes), found beside it.
+    files.update({f"{NAME}/tables/{p.name}": p.read_bytes() for p in sorted((package / "tables").glob("*.shtb"))})
     files[f"{info}/METADATA"] = _metadata().encode()
     files[f"{info}/WHEEL"] = (f"Wheel-Version: 1.0\nGenerator: {NAME} build_backend\nRoot-Is-Purelib: false\n"
                               f"Tag: {tag}\n").encode()

@@ -6,15 +6,21 @@ The runtime (evaluation, rotation, products, lighting) and the offline jobs of t
 z up, rotation g(w) = f(R^-1 w). Coefficients lie on the last axis (``axis=`` picks
 another); float32 stays float32, float64 stays float64. See docs/python.md.
 """
+import functools as _functools
 import json as _json
 import os as _os
+import re as _re
 import tempfile as _tempfile
 from dataclasses import dataclass as _dataclass
 
 import numpy as _np
 
 from . import _shtool
-from ._shtool import __version__, gen_tensors, light, transform_splats
+from ._shtool import __version__
+
+# The tables the module reads (rotation helpers, zhf lobes) ship in the package's tables/
+# folder (the build tree's package and the wheel): looked for after $SHTOOL_TABLES.
+_shtool._set_package_tables(_os.path.join(_os.path.dirname(_os.path.abspath(__file__)), "tables"))
 
 __all__ = [
     "eval_sh", "rotate", "quat_to_matrix", "product", "project_env", "project_env_file", "irradiance",
@@ -24,9 +30,63 @@ __all__ = [
 ]
 
 
+# A CLI option in a library message ("--threads 9", "--lobes"), not inside a quoted
+# shell command (`shtool ... --out FILE`); its value when one follows.
+_CLI_OPTION = _re.compile(r"`[^`]*`"
+                          r"|(?<![\w-])--([a-z][a-z0-9-]*)(?: (-?[0-9.][^\s,;)]*|'[^']*'|[a-z0-9/]+(?=:)))?(:?)")
+
+
+def _python_message(text, aliases):
+    """The library's message with its CLI options named as this call's keywords:
+    "--threads 9 is ..." -> "threads=9 is ...", "needs --half-angle" -> "needs half_angle="."""
+    def keyword(m):
+        if m.group(1) is None:
+            return m.group(0)
+        name = aliases.get(m.group(1), m.group(1).replace("-", "_"))
+        if m.group(2):
+            return f"{name}={m.group(2)}{m.group(3)}"
+        return f"{name}{m.group(3)}" if m.group(3) else f"{name}="
+    return _CLI_OPTION.sub(keyword, text)
+
+
+def _keywords(**aliases):
+    """Bad-value errors of the decorated call name its keywords, not the CLI's options
+    (`aliases`: CLI option -> keyword where they differ)."""
+    def wrap(f):
+        @_functools.wraps(f)
+        def call(*args, **kwargs):
+            try:
+                return f(*args, **kwargs)
+            except ValueError as e:
+                text = str(e)
+                renamed = _python_message(text, aliases)
+                if renamed == text:
+                    raise
+                raise ValueError(renamed) from None
+        return call
+    return wrap
+
+
+def _path(p, name):
+    """A path argument as str: str, bytes (decoded as os.fsdecode does) or os.PathLike."""
+    try:
+        return _os.fsdecode(p)
+    except TypeError:
+        raise TypeError(f"{name} must be a path (str, bytes or os.PathLike), got {type(p).__name__}") from None
+
+
 def _float_array(x, name):
-    """x as an ndarray without copying; lists become float64 (other dtypes: TypeError)."""
-    a = x if isinstance(x, _np.ndarray) else _np.asarray(x, dtype=_np.float64)
+    """x as an ndarray without copying; lists become float64, float arrays of the other byte
+    order are converted to the machine's (other dtypes: TypeError)."""
+    if isinstance(x, _np.ndarray):
+        a = x
+    else:
+        try:
+            a = _np.asarray(x, dtype=_np.float64)
+        except (TypeError, ValueError):
+            raise TypeError(f"{name} must be an array of numbers, got {type(x).__name__}") from None
+    if a.dtype.kind == "f" and a.dtype.itemsize in (4, 8) and not a.dtype.isnative:
+        a = a.astype(_np.float32 if a.dtype.itemsize == 4 else _np.float64)
     if a.dtype not in (_np.float32, _np.float64):
         raise TypeError(f"{name} must be float32 or float64, got {a.dtype}")
     return a
@@ -43,6 +103,7 @@ def _on_last_axis(a, axis, name):
         raise ValueError(f"axis: {e}") from None
 
 
+@_keywords()
 def eval_sh(order, dirs, out=None, threads=0):
     """Real SH values (..., order**2) at `dirs` (..., 3), normalised inside (a zero or
     non-finite direction: ValueError); float32 or float64 as `dirs`. `out`: a C-contiguous
@@ -55,27 +116,33 @@ def _back(r, axis):
     return r if axis == -1 or axis == r.ndim - 1 else _np.moveaxis(r, -1, axis)
 
 
-def rotate(coeffs, matrix, method="auto", axis=-1, out=None, tol=None, threads=0):
+@_keywords()
+def rotate(coeffs, matrix, method="auto", axis=-1, out=None, tol=None, threads=0, tables=None):
     """Rotated coefficients g(w) = f(R^-1 w), same shape and dtype as `coeffs`.
 
     `matrix` is a 3x3 rotation (orthonormal to 1e-6, det +1; ValueError otherwise) or one
     per leading index, shape (..., 3, 3). `method`: auto, reference, zxzxz, taylor1,
     taylor1.5, taylor2, zhf, zhf-tailored (as ``shtool rotate --method``; the zhf methods
-    take one matrix and the shipped shared lobes). `out` (axis=-1 only): a
+    take one matrix and the shipped shared lobes, orders 1 to 10). `out` (axis=-1 only): a
     C-contiguous array of the same shape and dtype, written in place. `threads`: 0 for
-    every core.
+    every core. `tables` (``--tables``): a rotation-helpers table, or a zhf-lobes table for
+    the zhf methods, instead of the shipped one (helpers for an order the shipped table
+    does not cover are computed on first use, with the GIL released).
     """
     a = _on_last_axis(_float_array(coeffs, "coeffs"), axis, "coeffs")
     if out is not None and axis not in (-1, a.ndim - 1):
         raise ValueError("out= needs axis=-1")
-    return _back(_shtool._rotate(a, matrix, method, tol, out, threads), axis)
+    path = "" if tables is None else _path(tables, "tables")
+    return _back(_shtool._rotate(a, matrix, method, tol, out, threads, path), axis)
 
 
-def quat_to_matrix(q):
+@_keywords()
+def quat_to_matrix(q, threads=0):
     """Rotation matrix (..., 3, 3) of unit quaternions q = (w, x, y, z) (Hamilton)."""
-    return _shtool._quat_to_matrix(_float_array(q, "q"))
+    return _shtool._quat_to_matrix(_float_array(q, "q"), threads)
 
 
+@_keywords()
 def product(a, b, order=None, method="auto", axis=-1, threads=0):
     """The SH product of a and b truncated to `order` (default: a's order).
 
@@ -87,13 +154,15 @@ def product(a, b, order=None, method="auto", axis=-1, threads=0):
     return _back(_shtool._product(fa, fb, order, method, threads), axis)
 
 
-def irradiance(coeffs, axis=-1):
+@_keywords()
+def irradiance(coeffs, axis=-1, threads=0):
     """Irradiance coefficients E_lm = A_l L_lm (clamped cosine, no 1/pi) of radiance."""
     a = _on_last_axis(_float_array(coeffs, "coeffs"), axis, "coeffs")
-    return _back(_shtool._irradiance(a), axis)
+    return _back(_shtool._irradiance(a, threads), axis)
 
 
-def window(coeffs, kind, cutoff=None, axis=-1, return_factors=False):
+@_keywords()
+def window(coeffs, kind, cutoff=None, axis=-1, return_factors=False, threads=0):
     """Windowed coefficients: kind none, hann, lanczos, sinc4 or auto (as project-env).
 
     "auto" treats every vector of `coeffs` as one channel of one lighting (so an RGB
@@ -101,33 +170,63 @@ def window(coeffs, kind, cutoff=None, axis=-1, return_factors=False):
     cutoff used).
     """
     a = _on_last_axis(_float_array(coeffs, "coeffs"), axis, "coeffs")
-    r, factors, used = _shtool._window(a, kind, cutoff)
+    r, factors, used = _shtool._window(a, kind, cutoff, threads)
     r = _back(r, axis)
     return (r, factors, used) if return_factors else r
 
 
+@_keywords(**{"equirect-preset": "preset"})
 def project_env(image, order, layout="equirect", quantity="radiance", window="none", cutoff=None,
                 preset="shtool", mirror_x=False, threads=0, return_window=False):
     """Exact SH projection (order**2, C) float64 of an environment image in memory.
 
     `image`: float32/float64 (H, W, C) equirect (2:1, docs/lighting.md's mapping) or cross
-    (4:3 / 3:4), or (6, S, S, C) faces in the order +X -X +Y -Y +Z -Z. The same texel
-    integrals, window and quantity as ``shtool project-env``.
+    (4:3 / 3:4), or (6, S, S, C) faces in the order +X -X +Y -Y +Z -Z; C from 1 to 4. The
+    same texel integrals, window and quantity as ``shtool project-env``: texels are read as
+    float32 (float64 images are rounded to float32), sums are float64.
     """
     img = _float_array(image, "image")
     coeffs, win = _shtool._project_env(img, order, layout, quantity, window, cutoff, preset, mirror_x, threads)
     return (coeffs, _json.loads(win)) if return_window else coeffs
 
 
+@_keywords()
 def project_env_file(image, order=3, json=None, **options):
-    """``shtool project-env`` on an image file; options as the CLI's (out=, window=, ...).
-
-    Returns the coefficients (order**2, 3); writes `json` (and `out`) when given.
+    """``shtool project-env`` on an image file; options as the CLI's (out=, window=,
+    render_back=, ...). Returns the coefficients (order**2, 3); writes `json` (and `out`)
+    when given.
     """
     with _tempfile.TemporaryDirectory() as tmp:
-        path = json if json is not None else _os.path.join(tmp, "lighting.json")
-        r = _shtool._project_env_file(str(image), str(path), order=order, **options)
+        path = _path(json, "json") if json is not None else _os.path.join(tmp, "lighting.json")
+        r = _shtool._project_env_file(image, path, order=order, **options)
     return r["coefficients"]
+
+
+@_keywords(quat="quaternion")
+def transform_splats(path_in, path_out, **options):
+    """``shtool transform-splats``: writes `path_out` as the CLI does. Keyword arguments:
+    quaternion=(w, x, y, z) (or quat=) or matrix= (3x3, or 9 numbers row-major; a
+    reflection is allowed), translate=(x, y, z), scale=, threads=, frame=, spz_frame=,
+    gltf_frame=, sh_degree=, sh_bits=, spz_version=. Returns a dict (splats, degree,
+    seconds, reflects).
+    """
+    return _shtool._transform_splats(path_in, path_out, **options)
+
+
+@_keywords()
+def gen_tensors(order, out, **options):
+    """``shtool gen-tensors``: writes the tables into the folder `out` (made if missing;
+    removed again if the job fails); what=[...] (or "rotation,tripling"), inputs=,
+    format=. Returns the paths written."""
+    return _shtool._gen_tensors(order, out, **options)
+
+
+@_keywords(dir="direction", type="kind")
+def light(kind, order, direction=(0, 0, 1), half_angle=None, color=(1, 1, 1), ground=None, quantity="radiance"):
+    """Analytic light as radiance (or irradiance) coefficients (order**2, 3), as
+    ``shtool light``: kind directional, cone, sphere, hemisphere or constant; half_angle in
+    degrees."""
+    return _shtool.light(kind, order, direction, half_angle, color, ground, quantity)
 
 
 def _quaternion_of(r):
@@ -146,46 +245,96 @@ def _quaternion_of(r):
     return _np.array(q)
 
 
+def _numbers(x, count, name):
+    """`count` numbers from any array-like (a 3x3 matrix for 9) as float64."""
+    try:
+        a = _np.asarray(x, dtype=_np.float64)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name} must be {count} numbers, got {type(x).__name__}") from None
+    if a.size != count:
+        raise ValueError(f"{name} must hold {count} numbers, got shape {a.shape}")
+    return a.reshape(-1)
+
+
+def _splat_array(x, name):
+    """(array as float64, dtype of the result): float32 and float64 are kept, integers and
+    bools are taken as float64 (never truncated on the way back)."""
+    a = _np.asarray(x)
+    if a.dtype.kind in "iub":
+        return a.astype(_np.float64), _np.dtype(_np.float64)
+    if a.dtype.kind != "f":
+        raise TypeError(f"{name} must be an array of numbers, got {a.dtype}")
+    out = _np.dtype(_np.float32 if a.dtype.itemsize == 4 else _np.float64)
+    return a.astype(_np.float64), out
+
+
+@_keywords(quat="quaternion")
 def transform_splat_arrays(sh=None, positions=None, rotations=None, log_scales=None, normals=None,
                            quaternion=None, matrix=None, translate=(0.0, 0.0, 0.0), scale=1.0):
     """``transform-splats`` on arrays already in memory, each optional, new arrays returned
-    in a dict: positions (S, 3) -> s R p + t; rotations (S, 4) (w, x, y, z) -> q_R q (the
-    Hamilton product; lengths kept); log_scales (S, 3) + log s; normals (S, 3) -> R n; sh
-    (S, 3, N**2) rotated exactly (method "reference", as the job), g(w) = f(R^-1 w).
-    Give the rotation as quaternion=(w, x, y, z) or matrix= (3x3), as the job takes them.
+    in a dict: positions (S, 3) -> s M p + t; rotations (S, 4) (w, x, y, z) -> q_R q (the
+    Hamilton product; lengths kept); log_scales (S, 3) + log s; normals (S, 3) -> M n; sh
+    (S, 3, N**2) carried along exactly (method "reference", as the job), g(w) = f(M^-1 w).
+    The map as the job takes it: quaternion=(w, x, y, z) (normalised; zero refused) or
+    matrix= (3x3 or 9 numbers, orthogonal to 1e-6: a rotation, or a reflection, whose
+    orientations turn by its rotation part -M and whose SH get their odd bands negated), or
+    neither (no turn). float32 and float64 arrays keep their dtype; integer arrays give
+    float64.
     """
-    if (quaternion is None) == (matrix is None):
-        raise ValueError("give exactly one of quaternion, matrix")
-    if matrix is not None:
-        r = _np.asarray(matrix, dtype=_np.float64)
-        _shtool._rotate(_np.zeros(1), r, "reference", None, None, 1)  # the CLI's checks of a matrix
-        qr = _quaternion_of(r)
+    if quaternion is not None and matrix is not None:
+        raise ValueError("give exactly one of quaternion= and matrix=, or neither")
+    reflects = False
+    if quaternion is not None:
+        q = _numbers(quaternion, 4, "quaternion")
+        n = _np.sqrt(_np.sum(q * q))
+        if not (n > 0 and _np.isfinite(n)):
+            raise ValueError("quaternion must be a finite, non-zero quaternion (w, x, y, z)")
+        qr = q / n
+        m = _shtool._quat_to_matrix(qr, 1)
+    elif matrix is not None:
+        m = _numbers(matrix, 9, "matrix").reshape(3, 3)
+        g, eye = m.T @ m, _np.eye(3)
+        # Eigen's isApprox(I, 1e-6), as the job checks it.
+        if not (_np.isfinite(m).all() and
+                _np.sum((g - eye) ** 2) <= 1e-12 * min(_np.sum(g * g), 3.0)):
+            raise ValueError("matrix must be orthogonal (a rotation or a reflection: orthonormal rows to 1e-6)")
+        reflects = bool(_np.linalg.det(m) < 0)
+        qr = _quaternion_of(-m if reflects else m)
     else:
-        qr = _np.asarray(quaternion, dtype=_np.float64)
-        r = quat_to_matrix(qr)
-        qr = qr / _np.linalg.norm(qr)
+        m, qr = _np.eye(3), _np.array([1.0, 0.0, 0.0, 0.0])
+    if isinstance(scale, (bool, _np.bool_)) or not isinstance(scale, (int, float, _np.integer, _np.floating)):
+        raise TypeError(f"scale must be a number, got {type(scale).__name__}")
     if not (scale > 0 and _np.isfinite(scale)):
         raise ValueError("scale must be a positive number")
-    t = _np.asarray(translate, dtype=_np.float64)
+    t = _numbers(translate, 3, "translate")
+    if not _np.isfinite(t).all():
+        raise ValueError("translate must be finite")
     out = {}
     if positions is not None:
-        p = _np.asarray(positions)
-        out["positions"] = (scale * (p.astype(_np.float64) @ r.T) + t).astype(p.dtype)
+        p, dtype = _splat_array(positions, "positions")
+        out["positions"] = (scale * (p @ m.T) + t).astype(dtype)
     if normals is not None:
-        n = _np.asarray(normals)
-        out["normals"] = (n.astype(_np.float64) @ r.T).astype(n.dtype)
+        n, dtype = _splat_array(normals, "normals")
+        out["normals"] = (n @ m.T).astype(dtype)
     if rotations is not None:
-        q = _np.asarray(rotations)
-        w2, x2, y2, z2 = q.astype(_np.float64).T
+        q, dtype = _splat_array(rotations, "rotations")
+        w2, x2, y2, z2 = _np.moveaxis(q, -1, 0)
         w1, x1, y1, z1 = qr
         out["rotations"] = _np.stack([w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2, w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
                                       w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2, w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2],
-                                     axis=-1).astype(q.dtype)
+                                     axis=-1).astype(dtype)
     if log_scales is not None:
-        ls = _np.asarray(log_scales)
-        out["log_scales"] = (ls.astype(_np.float64) + _np.log(scale)).astype(ls.dtype)
+        ls, dtype = _splat_array(log_scales, "log_scales")
+        out["log_scales"] = (ls + _np.log(scale)).astype(dtype)
     if sh is not None:
-        out["sh"] = rotate(_float_array(sh, "sh"), r.astype(_np.asarray(sh).dtype), method="reference")
+        c, dtype = _splat_array(sh, "sh")
+        if dtype == _np.float32:
+            c = _np.asarray(sh).astype(_np.float32)  # rotated in float32, as float32 input is
+        r = rotate(c, (-m if reflects else m).astype(c.dtype), method="reference")
+        if reflects:
+            band = _np.floor(_np.sqrt(_np.arange(r.shape[-1]) + 0.5)).astype(int)
+            r[..., band % 2 == 1] *= -1
+        out["sh"] = r.astype(dtype, copy=False)
     return out
 
 
@@ -200,35 +349,43 @@ class ZhFit:
     direct: _np.ndarray
 
 
+@_keywords()
 def fit_zh(transfer, lobes=4, effort=None, seed=None, starts=None, restart_above=None, direct=False,
            method="varpro", threads=0):
-    """The ZH fits ``shtool fit-zh --transfer`` makes for the vectors `transfer` (V, N**2)."""
-    t = _np.asarray(transfer)
-    if t.dtype not in (_np.float32, _np.float64):
-        raise TypeError(f"transfer must be float32 or float64, got {t.dtype}")
-    return ZhFit(*_shtool._fit_zh(t, lobes, effort, seed, starts, restart_above, direct, method, threads))
+    """The ZH fits ``shtool fit-zh --transfer`` makes for the vectors `transfer` (V, N**2),
+    computed in float64 (as the CLI) and returned in the dtype of `transfer`."""
+    t = _float_array(transfer, "transfer")
+    fits = _shtool._fit_zh(t, lobes, effort, seed, starts, restart_above, direct, method, threads)
+    return ZhFit(*(a.astype(t.dtype, copy=False) for a in fits))
 
 
 def load_zh_fit(path):
     """A zh-fit table (``fit-zh --out``) as a ZhFit, checked as the runtime's loader checks it."""
-    return ZhFit(*_shtool._load_zh_fit(str(path)))
+    return ZhFit(*_shtool._load_zh_fit(_path(path, "path")))
 
 
+@_keywords()
 def fit_zh_mesh(mesh, out=None, **options):
     """``shtool fit-zh MESH``: simulates the transfer and fits it; options as the CLI's
-    (order=, lobes=, rays=, mode=, seed=, effort=, threads=, json=, ply=, ...).
+    (order=, lobes=, rays=, mode=, up=, seed=, effort=, threads=, json=, ply=, shard=, ...).
 
-    Writes `out` when given (the CLI's bytes) and returns the fits as a ZhFit.
+    Writes `out` when given (the CLI's bytes) and returns the fits as a ZhFit; with
+    shard="K/N", the partial table (a Table with `vertex_index`) for ``shtool merge``.
     """
     with _tempfile.TemporaryDirectory() as tmp:
-        path = out if out is not None else _os.path.join(tmp, "fit.zh.shtb")
-        _shtool._fit_zh_mesh(str(mesh), out=str(path), **options)
+        path = _path(out, "out") if out is not None else _os.path.join(tmp, "fit.zh.shtb")
+        _shtool._fit_zh_mesh(mesh, out=path, **options)
+        if options.get("shard") is not None:
+            return load_table(path)
         return load_zh_fit(path)
 
 
+@_keywords()
 def search_lobes(**options):
-    """``shtool search-lobes``: bands=[...] or shared=True with order=N; out=, json=,
-    seed=, threads=, population=, stall=, restarts=, ... Returns the JSON summary as a dict."""
+    """``shtool search-lobes``: bands=[...] (or band=l, or "a-b") or shared=True with
+    order=N; out=, json=, seed=, threads=, population=, stall=, restarts=, crossover=,
+    mutation=, elitism=, max_generations=, theta_candidates=, max_cond=,
+    no_local_search=, no_secondary=, paper=. Returns the JSON summary as a dict."""
     return _json.loads(_shtool._search_lobes(**options))
 
 
@@ -251,8 +408,9 @@ class Table:
 
 
 def load_table(path):
-    """Any shtool table (binary or JSON encoding), checked as the runtime checks it."""
-    kind, order, header, arrays = _shtool._load_table(str(path))
+    """Any shtool table (binary or JSON encoding), checked as the runtime checks it. `path`:
+    str, bytes or os.PathLike."""
+    kind, order, header, arrays = _shtool._load_table(_path(path, "path"))
     return Table(kind, order, _json.loads(header), dict(arrays))
 
 
@@ -263,7 +421,7 @@ class _TypedTable(Table):
     def load(cls, path):
         """The table at `path`, which must be of this kind and pass the checks of the
         engine API's loader of that kind (ValueError otherwise)."""
-        kind, order, header, arrays = _shtool._load_table(str(path), cls.KIND)
+        kind, order, header, arrays = _shtool._load_table(_path(path, "path"), cls.KIND)
         return cls(kind, order, _json.loads(header), dict(arrays))
 
 

@@ -2,9 +2,15 @@
 // project-env on an image file, transform-splats, gen-tensors, search-lobes): each
 // builds the job's request from keyword arguments named as the CLI's options and calls
 // the job, which checks it as the CLI's run does.
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "common/mesh_frame.h"
 #include "common/parallel_for.h"
 #include "fit/fit_zh_job.h"
 #include "fit/zh_fit.h"
@@ -35,6 +41,7 @@ py::array_t<double> array_of(const std::vector<A>& v, std::vector<py::ssize_t> s
 py::tuple fit_zh(const py::array& transfer_in, int lobes, std::optional<int> effort, std::optional<std::uint64_t> seed,
                  std::optional<int> starts, std::optional<double> restart_above, bool direct, const std::string& method,
                  int threads) {
+  check_threads(threads);
   const auto t = as_f64(transfer_in, "transfer");
   if (t.ndim() != 2) throw py::value_error("transfer must have shape (V, N^2)");
   const int order = order_of_count(t.shape(1), "transfer");
@@ -62,50 +69,198 @@ py::tuple fit_zh(const py::array& transfer_in, int lobes, std::optional<int> eff
                         array_of(fits.direct, {v, py::ssize_t(fits.direct_count)}));
 }
 
-// Keyword arguments as a request's fields; a TypeError for any the job does not take.
+// A Python value's type name and short repr, for messages.
+std::string given(const py::handle& v) {
+  std::string r = py::repr(v);
+  if (r.size() > 40) r = r.substr(0, 37) + "...";
+  return std::string(py::str(py::type::handle_of(v).attr("__name__"))) + " " + r;
+}
+
+// A path argument: str, bytes or os.PathLike (os.fsdecode); TypeError naming `what`.
+std::filesystem::path path_arg(const py::handle& v, const std::string& what) {
+  if (py::isinstance<py::str>(v) || py::isinstance<py::bytes>(v) || py::hasattr(v, "__fspath__")) {
+    try {
+      return std::filesystem::path(py::module_::import("os").attr("fsdecode")(v).cast<std::string>());
+    } catch (const py::error_already_set&) {
+    }
+  }
+  throw py::type_error(what + " must be a path (str, bytes or os.PathLike), got " + given(v));
+}
+
+// Keyword arguments as a request's fields, each converted from the Python value or a
+// TypeError naming the argument and the type it takes; a TypeError for any the job does
+// not take. None stands for "not given" (the request's default).
 class Kwargs {
  public:
-  explicit Kwargs(py::kwargs kw) : kw_(std::move(kw)) {}
-  template <class T>
-  void get(const char* key, T& field) {
-    if (!kw_.contains(key)) return;
-    field = kw_[key].cast<T>();
-    PyDict_DelItemString(kw_.ptr(), key);
+  Kwargs(const char* job, py::kwargs kw) : job_(job), kw_(std::move(kw)) {}
+
+  void get(const char* key, int& field) {
+    if (const py::object v = take(key)) field = integer(v, key);
+  }
+  void get(const char* key, std::optional<int>& field) {
+    if (const py::object v = take(key)) field = integer(v, key);
+  }
+  void get(const char* key, std::uint64_t& field) {
+    if (const py::object v = take(key)) {
+      if (py::isinstance<py::bool_>(v) || is_numpy_bool(v) || !PyIndex_Check(v.ptr())) throw type(key, "an int", v);
+      const py::int_ i = py::reinterpret_steal<py::int_>(PyNumber_Index(v.ptr()));
+      const unsigned long long n = PyLong_AsUnsignedLongLong(i.ptr());
+      if (PyErr_Occurred()) {
+        PyErr_Clear();
+        throw py::value_error(name(key) + " = " + std::string(py::repr(v)) + " is out of range (0..2^64-1)");
+      }
+      field = n;
+    }
+  }
+  void get(const char* key, double& field) {
+    if (const py::object v = take(key)) field = number(v, key);
+  }
+  void get(const char* key, std::optional<double>& field) {
+    if (const py::object v = take(key)) field = number(v, key);
+  }
+  void get(const char* key, bool& field) {
+    if (const py::object v = take(key)) {
+      if (!py::isinstance<py::bool_>(v) && !is_numpy_bool(v)) throw type(key, "a bool", v);
+      field = v.cast<bool>();
+    }
+  }
+  void get(const char* key, std::string& field) {
+    if (const py::object v = take(key)) {
+      if (!py::isinstance<py::str>(v)) throw type(key, "a str", v);
+      field = v.cast<std::string>();
+    }
+  }
+  void get(const char* key, std::filesystem::path& field) {
+    if (const py::object v = take(key)) field = path_arg(v, name(key));
+  }
+  // A list of names: a list or tuple of str, or one str of comma-separated names (the CLI's).
+  void get(const char* key, std::vector<std::string>& field) {
+    if (const py::object v = take(key)) {
+      std::vector<std::string> names;
+      if (py::isinstance<py::str>(v)) {
+        std::string item;
+        for (char c : v.cast<std::string>() + ",") {
+          if (c != ',') {
+            item += c;
+          } else if (!item.empty()) {
+            names.push_back(item);
+            item.clear();
+          }
+        }
+      } else if (py::isinstance<py::list>(v) || py::isinstance<py::tuple>(v)) {
+        for (const py::handle& item : v) {
+          if (!py::isinstance<py::str>(item)) throw type(key, "a list of str (or one comma-separated str)", v);
+          names.push_back(item.cast<std::string>());
+        }
+      } else {
+        throw type(key, "a list of str (or one comma-separated str)", v);
+      }
+      field = names;
+    }
+  }
+  // N numbers: any array-like of N numbers (a 3x3 matrix for 9).
+  template <std::size_t N>
+  void get(const char* key, std::array<double, N>& field) {
+    if (const py::object v = take(key)) field = numbers<N>(v, key);
+  }
+  template <std::size_t N>
+  void get(const char* key, std::optional<std::array<double, N>>& field) {
+    if (const py::object v = take(key)) field = numbers<N>(v, key);
   }
   template <class E>
   void get_enum(const char* key, E& field, const std::vector<std::pair<std::string, E>>& names) {
-    std::string name;
-    get(key, name);
-    if (!name.empty()) field = choice(name, names, key);
+    std::string value;
+    get(key, value);
+    if (!value.empty()) field = choice(value, names, key);
   }
-  void done(const char* job) const {
+  // threads=, checked as every call checks it.
+  void threads(const char* key, int& field) {
+    get(key, field);
+    check_threads(field);
+  }
+  // The value of `key`, removed (so that done() sees only unknown ones); null when not
+  // given or None.
+  py::object take(const char* key) {
+    if (!kw_.contains(key)) return {};
+    py::object v = kw_[key];
+    PyDict_DelItemString(kw_.ptr(), key);
+    return v.is_none() ? py::object() : v;
+  }
+  bool has(const char* key) const { return kw_.contains(key) && !py::object(kw_[key]).is_none(); }
+  void done() const {
     if (py::len(kw_) == 0) return;
-    throw py::type_error(std::string(job) + ": unexpected keyword argument '" +
-                         std::string(py::str(*kw_.begin()->first)) + "'");
+    throw py::type_error(job_ + ": unexpected keyword argument '" + std::string(py::str(*kw_.begin()->first)) + "'");
+  }
+  std::string name(const char* key) const { return job_ + ": " + key; }
+  py::type_error type(const char* key, const std::string& expected, const py::handle& v) const {
+    return py::type_error(name(key) + " must be " + expected + ", got " + given(v));
+  }
+  long long integer(const py::handle& v, const char* key, long long low = std::numeric_limits<int>::min(),
+                    long long high = std::numeric_limits<int>::max()) const {
+    // int and numpy's integers (__index__), not bool, float or str.
+    if (py::isinstance<py::bool_>(v) || is_numpy_bool(v) || !PyIndex_Check(v.ptr())) throw type(key, "an int", v);
+    const py::int_ i = py::reinterpret_steal<py::int_>(PyNumber_Index(v.ptr()));
+    int overflow = 0;
+    const long long n = PyLong_AsLongLongAndOverflow(i.ptr(), &overflow);
+    if (overflow || n < low || n > high)
+      throw py::value_error(name(key) + " = " + std::string(py::repr(v)) + " is out of range (" + std::to_string(low) +
+                            ".." + std::to_string(high) + ")");
+    return n;
   }
 
  private:
+  static bool is_numpy_bool(const py::handle& v) {
+    return std::string(py::str(py::type::handle_of(v).attr("__name__"))) == "bool_";
+  }
+  double number(const py::handle& v, const char* key) const {
+    // int, float and numpy's scalars; not bool or str.
+    if (py::isinstance<py::bool_>(v) || is_numpy_bool(v) || py::isinstance<py::str>(v) ||
+        py::isinstance<py::bytes>(v) || !PyNumber_Check(v.ptr()) || py::isinstance<py::array>(v))
+      throw type(key, "a number", v);
+    const double d = PyFloat_AsDouble(v.ptr());
+    if (d == -1.0 && PyErr_Occurred()) {
+      PyErr_Clear();
+      throw type(key, "a number", v);
+    }
+    return d;
+  }
+  template <std::size_t N>
+  std::array<double, N> numbers(const py::handle& v, const char* key) const {
+    const std::string expected = N == 9 ? "9 numbers (or a 3x3 matrix)" : std::to_string(N) + " numbers";
+    if (py::isinstance<py::str>(v) || py::isinstance<py::bytes>(v)) throw type(key, expected, v);
+    py::array_t<double, py::array::c_style> a;
+    try {
+      a = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(v);
+    } catch (const py::error_already_set&) {
+    }
+    if (!a || static_cast<std::size_t>(a.size()) != N || (N == 9 && a.ndim() == 2 && a.shape(0) != 3))
+      throw type(key, expected, v);
+    std::array<double, N> out{};
+    std::copy(a.data(), a.data() + N, out.begin());
+    return out;
+  }
+
+  std::string job_;
   py::dict kw_;
 };
 
-py::dict fit_zh_mesh(const std::string& mesh, py::kwargs kwargs) {
+py::dict fit_zh_mesh(const py::object& mesh, py::kwargs kwargs) {
   fit::FitZhRequest r;
-  r.mesh = mesh;
-  Kwargs kw(std::move(kwargs));
-  std::string out, json, ply, save_transfer, gltf;
-  kw.get("out", out), kw.get("json", json), kw.get("ply", ply), kw.get("save_transfer", save_transfer);
-  kw.get("gltf", gltf);
-  r.out = out, r.json = json, r.ply = ply, r.save_transfer = save_transfer, r.gltf = gltf;
+  r.mesh = path_arg(mesh, "fit_zh_mesh: mesh");
+  Kwargs kw("fit_zh_mesh", std::move(kwargs));
+  kw.get("out", r.out), kw.get("json", r.json), kw.get("ply", r.ply), kw.get("save_transfer", r.save_transfer);
+  kw.get("gltf", r.gltf);
   kw.get_enum("format", r.encoding, encoding_names());
   kw.get_enum("mode", r.mode, fit::transfer_mode_names());
   kw.get_enum("normals", r.normals, fit::normal_source_names());
+  kw.get_enum("up", r.up, up_axis_names());
   kw.get("order", r.order);
   kw.get("lobes", r.lobes), kw.get("rays", r.rays), kw.get("bounces", r.bounces), kw.get("albedo", r.albedo);
   kw.get("seed", r.seed), kw.get("effort", r.effort), kw.get("starts", r.starts);
-  kw.get("restart_above", r.restart_above), kw.get("direct", r.direct), kw.get("threads", r.threads);
-  kw.get("texture", r.texture);
+  kw.get("restart_above", r.restart_above), kw.get("direct", r.direct), kw.threads("threads", r.threads);
+  kw.get("texture", r.texture), kw.get("shard", r.shard);
   kw.get_enum("fit_method", r.fit_method, fit::fit_method_names());
-  kw.done("fit_zh_mesh");
+  kw.done();
   r.order_given = true;
   fit::FitZhReport report;
   {
@@ -114,24 +269,24 @@ py::dict fit_zh_mesh(const std::string& mesh, py::kwargs kwargs) {
   }
   return py::dict(py::arg("count") = report.count, py::arg("out") = report.out.string(),
                   py::arg("simulate_seconds") = report.simulate_seconds, py::arg("fit_seconds") = report.fit_seconds,
-                  py::arg("normalized_rms") = report.normalized_rms, py::arg("threads") = report.threads);
+                  py::arg("normalized_rms") = report.normalized_rms, py::arg("threads") = report.threads,
+                  py::arg("sharded") = report.sharded);
 }
 
-py::dict project_env_file(const std::string& image, const std::string& json, py::kwargs kwargs) {
+py::dict project_env_file(const py::object& image, const py::object& json, py::kwargs kwargs) {
   lighting::ProjectEnvRequest r;
-  r.image = image;
-  r.json = json;
-  Kwargs kw(std::move(kwargs));
-  std::string out;
-  kw.get("out", out);
-  r.out = out;
-  kw.get("order", r.order), kw.get("mirror_x", r.mirror_x), kw.get("cutoff", r.cutoff), kw.get("threads", r.threads);
+  r.image = path_arg(image, "project_env_file: image");
+  r.json = path_arg(json, "project_env_file: json");
+  Kwargs kw("project_env_file", std::move(kwargs));
+  kw.get("out", r.out), kw.get("render_back", r.render_back), kw.get("render_source", r.render_source);
+  kw.get("order", r.order), kw.get("mirror_x", r.mirror_x), kw.get("cutoff", r.cutoff);
+  kw.threads("threads", r.threads);
   kw.get_enum("layout", r.layout, lighting::layout_names());
   kw.get_enum("equirect_preset", r.preset, lighting::equirect_preset_names());
   kw.get_enum("window", r.window, lighting::window_names());
   kw.get_enum("format", r.encoding, encoding_names());
   kw.get_enum("quantity", r.quantity, lighting::quantity_names());
-  kw.done("project_env_file");
+  kw.done();
   lighting::ProjectEnvReport report;
   {
     py::gil_scoped_release release;
@@ -144,31 +299,48 @@ py::dict project_env_file(const std::string& image, const std::string& json, py:
                   py::arg("window") = report.lighting.window.dump());
 }
 
-py::dict transform_splats(const std::string& in, const std::string& out, py::kwargs kwargs) {
+py::dict transform_splats(const py::object& in, const py::object& out, py::kwargs kwargs) {
   interop::TransformSplatsRequest r;
-  r.in = in;
-  r.out = out;
-  Kwargs kw(std::move(kwargs));
-  kw.get("quaternion", r.quaternion), kw.get("matrix", r.matrix), kw.get("translate", r.translate);
-  kw.get("scale", r.scale), kw.get("threads", r.threads);
-  kw.done("transform_splats");
+  r.in = path_arg(in, "transform_splats: path_in");
+  r.out = path_arg(out, "transform_splats: path_out");
+  Kwargs kw("transform_splats", std::move(kwargs));
+  if (kw.has("quat") && kw.has("quaternion"))
+    throw py::type_error("transform_splats: give quaternion= or its CLI name quat=, not both");
+  kw.get("quaternion", r.quaternion), kw.get("quat", r.quaternion), kw.get("matrix", r.matrix);
+  kw.get("translate", r.translate), kw.get("scale", r.scale), kw.threads("threads", r.threads);
+  kw.get("frame", r.ply_frame), kw.get("spz_frame", r.spz_frame), kw.get("gltf_frame", r.gltf_frame);
+  kw.get("sh_degree", r.sh_degree), kw.get("spz_version", r.spz_version);
+  if (const py::object bits = kw.take("sh_bits")) {
+    // One number for every band, or (band 1, bands 2..3), as --sh-bits B or B1,B2.
+    std::vector<int> b;
+    if (PyIndex_Check(bits.ptr()) && !py::isinstance<py::bool_>(bits)) {
+      b.push_back(static_cast<int>(kw.integer(bits, "sh_bits")));
+    } else if (py::isinstance<py::list>(bits) || py::isinstance<py::tuple>(bits)) {
+      for (const py::handle& x : bits) b.push_back(static_cast<int>(kw.integer(x, "sh_bits")));
+    } else {
+      throw kw.type("sh_bits", "an int or two ints", bits);
+    }
+    if (b.empty() || b.size() > 2) throw kw.type("sh_bits", "an int or two ints", bits);
+    r.sh_bits = {b[0], b.back()};
+  }
+  kw.done();
   interop::TransformSplatsReport report;
   {
     py::gil_scoped_release release;
     report = interop::run_transform_splats(r);
   }
   return py::dict(py::arg("splats") = report.splats, py::arg("degree") = report.degree,
-                  py::arg("seconds") = report.seconds);
+                  py::arg("seconds") = report.seconds, py::arg("reflects") = report.reflects);
 }
 
-std::vector<std::string> gen_tensors(int order, const std::string& out, py::kwargs kwargs) {
+std::vector<std::string> gen_tensors(int order, const py::object& out, py::kwargs kwargs) {
   GenTensorsRequest r;
   r.order = order;
-  r.out = out;
-  Kwargs kw(std::move(kwargs));
+  r.out = path_arg(out, "gen_tensors: out");
+  Kwargs kw("gen_tensors", std::move(kwargs));
   kw.get("what", r.what), kw.get("inputs", r.inputs);
   kw.get_enum("format", r.encoding, encoding_names());
-  kw.done("gen_tensors");
+  kw.done();
   std::vector<GeneratedFile> files;
   {
     py::gil_scoped_release release;
@@ -181,18 +353,60 @@ std::vector<std::string> gen_tensors(int order, const std::string& out, py::kwar
 
 std::string search_lobes(py::kwargs kwargs) {
   lobes::SearchLobesRequest r;
-  Kwargs kw(std::move(kwargs));
-  std::string out, json;
-  kw.get("bands", r.bands), kw.get("shared", r.shared), kw.get("order", r.order), kw.get("paper", r.paper);
-  kw.get("out", out), kw.get("json", json);
-  r.out = out, r.json = json;
+  Kwargs kw("search_lobes", std::move(kwargs));
+  // bands: a list of bands, one band, or the CLI's 'a-b'; band: one band (--band l).
+  if (const py::object bands = kw.take("bands")) {
+    if (py::isinstance<py::str>(bands)) {
+      const std::string text = bands.cast<std::string>();
+      const std::size_t dash = text.find('-');
+      try {
+        std::size_t used = 0;
+        const int a = std::stoi(text.substr(0, dash), &used);
+        if (used != text.substr(0, dash).size()) throw std::invalid_argument("trailing");
+        int b = a;
+        if (dash != std::string::npos) {
+          b = std::stoi(text.substr(dash + 1), &used);
+          if (used != text.size() - dash - 1) throw std::invalid_argument("trailing");
+        }
+        for (int l = a; l <= b; ++l) r.bands.push_back(l);
+        if (b < a) throw std::invalid_argument("empty");
+      } catch (const std::exception&) {
+        throw py::value_error("search_lobes: bands '" + text + "': expected 'a-b' (a <= b), one band, or a list");
+      }
+    } else if (PyIndex_Check(bands.ptr()) && !py::isinstance<py::bool_>(bands)) {
+      r.bands.push_back(static_cast<int>(kw.integer(bands, "bands")));
+    } else if (py::isinstance<py::list>(bands) || py::isinstance<py::tuple>(bands) ||
+               py::isinstance<py::array>(bands)) {
+      for (const py::handle& b : bands) r.bands.push_back(static_cast<int>(kw.integer(b, "bands")));
+    } else {
+      throw kw.type("bands", "a list of ints, an int or a str 'a-b'", bands);
+    }
+  }
+  if (const py::object band = kw.take("band")) {
+    if (!r.bands.empty()) throw py::value_error("search_lobes: give band= or bands=, not both");
+    r.bands.push_back(static_cast<int>(kw.integer(band, "band")));
+  }
+  kw.get("shared", r.shared), kw.get("order", r.order), kw.get("paper", r.paper);
+  kw.get("out", r.out), kw.get("json", r.json);
   kw.get("population", r.search.population), kw.get("stall", r.search.stall);
+  kw.get("crossover", r.search.crossover), kw.get("mutation", r.search.mutation);
+  kw.get("elitism", r.search.elitism), kw.get("max_cond", r.search.max_cond);
   kw.get("max_generations", r.search.max_generations), kw.get("seed", r.search.seed);
-  kw.get("threads", r.search.threads);
+  kw.threads("threads", r.search.threads);
   std::optional<int> restarts;
   kw.get("restarts", restarts);
   if (restarts) r.search.restarts = *restarts, r.restarts_given = true;
-  kw.done("search_lobes");
+  if (kw.has("theta_candidates")) {
+    kw.get_enum("theta_candidates", r.search.theta,
+                std::vector<std::pair<std::string, lobes::ThetaCandidates>>{
+                    {"band", lobes::ThetaCandidates::band}, {"pooled", lobes::ThetaCandidates::pooled}});
+    r.theta_given = true;
+  }
+  bool no_local_search = false, no_secondary = false;
+  kw.get("no_local_search", no_local_search), kw.get("no_secondary", no_secondary);
+  if (no_local_search) r.search.local_search = false;
+  if (no_secondary) r.search.secondary = false;
+  kw.done();
   lobes::SearchLobesReport report;
   {
     py::gil_scoped_release release;
@@ -208,12 +422,8 @@ void bind_jobs(py::module_& m) {
         py::arg("starts"), py::arg("restart_above"), py::arg("direct"), py::arg("method"), py::arg("threads"));
   m.def("_fit_zh_mesh", &fit_zh_mesh, py::arg("mesh"));
   m.def("_project_env_file", &project_env_file, py::arg("image"), py::arg("json"));
-  m.def("transform_splats", &transform_splats, py::arg("path_in"), py::arg("path_out"),
-        "transform-splats on a PLY file: keyword arguments quaternion=(w, x, y, z) or matrix=(9 numbers, "
-        "row-major), translate=(x, y, z), scale, threads; writes path_out as the CLI does.");
-  m.def("gen_tensors", &gen_tensors, py::arg("order"), py::arg("out"),
-        "gen-tensors: writes the tables into the folder `out`; keyword arguments what=[...], inputs, format. "
-        "Returns the paths written.");
+  m.def("_transform_splats", &transform_splats, py::arg("path_in"), py::arg("path_out"));
+  m.def("_gen_tensors", &gen_tensors, py::arg("order"), py::arg("out"));
   m.def("_search_lobes", &search_lobes);
 }
 

@@ -1,5 +1,6 @@
 // project_env, irradiance, window, light: the lighting side of the runtime and of the
 // project-env and light jobs, on arrays.
+#include <charconv>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -17,22 +18,28 @@
 namespace shtool::python {
 namespace {
 
-// Coefficients (..., N^2) times factors[band], in the array's own dtype.
+// Coefficients (..., N^2) times factors[band], in the array's own dtype, in chunks of
+// vectors on `threads` workers with the GIL released.
 template <class T>
-py::array scale_by_band(const py::array& coeffs_in, const std::vector<double>& factors) {
+py::array scale_by_band(const py::array& coeffs_in, const std::vector<double>& factors, int threads) {
   const auto coeffs = contiguous<T>(coeffs_in);
   const std::size_t n2 = coeffs.shape(coeffs.ndim() - 1);
   py::array_t<T, py::array::c_style> out(shape_of(coeffs));
   const T* in = coeffs.data();
   T* o = out.mutable_data();
-  for (std::size_t k = 0; k < static_cast<std::size_t>(coeffs.size()); ++k)
-    o[k] = static_cast<T>(in[k] * factors[sh_band(static_cast<int>(k % n2))]);
+  std::vector<double> per_index(n2);
+  for (std::size_t i = 0; i < n2; ++i) per_index[i] = factors[sh_band(static_cast<int>(i))];
+  const std::size_t count = n2 ? static_cast<std::size_t>(coeffs.size()) / n2 : 0;
+  py::gil_scoped_release release;
+  for_chunks(count, threads, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t k = begin * n2; k < end * n2; ++k) o[k] = static_cast<T>(in[k] * per_index[k % n2]);
+  });
   return out;
 }
 
-py::array scale_any(const py::array& coeffs, const std::vector<double>& factors) {
-  return precision_of(coeffs, "coeffs") == Precision::f32 ? scale_by_band<float>(coeffs, factors)
-                                                          : scale_by_band<double>(coeffs, factors);
+py::array scale_any(const py::array& coeffs, const std::vector<double>& factors, int threads) {
+  return precision_of(coeffs, "coeffs") == Precision::f32 ? scale_by_band<float>(coeffs, factors, threads)
+                                                          : scale_by_band<double>(coeffs, factors, threads);
 }
 
 int coeffs_order(const py::array& coeffs) {
@@ -42,7 +49,8 @@ int coeffs_order(const py::array& coeffs) {
 
 // The windows of sh_window.h, "auto" included: every vector of `coeffs` is one channel
 // of one lighting, as the auto window of project-env treats r, g and b.
-py::tuple window(const py::array& coeffs, const std::string& kind, std::optional<double> cutoff) {
+py::tuple window(const py::array& coeffs, const std::string& kind, std::optional<double> cutoff, int threads) {
+  check_threads(threads);
   precision_of(coeffs, "coeffs");
   const int order = coeffs_order(coeffs);
   if (cutoff && !(*cutoff > 0 && std::isfinite(*cutoff))) throw py::value_error("cutoff must be a positive number");
@@ -52,12 +60,12 @@ py::tuple window(const py::array& coeffs, const std::string& kind, std::optional
     if (cutoff) throw py::value_error("cutoff applies to the windows hann, lanczos and sinc4");
     const auto d = as_f64(coeffs, "coeffs");
     const std::size_t n2 = sh_count(order), channels = d.size() / n2;
-    std::vector<double> interleaved(d.size());
-    for (std::size_t c = 0; c < channels; ++c)
-      for (std::size_t i = 0; i < n2; ++i) interleaved[i * channels + c] = d.data()[c * n2 + i];
     AutoWindow w;
     {
       py::gil_scoped_release release;
+      std::vector<double> interleaved(d.size());
+      for (std::size_t c = 0; c < channels; ++c)
+        for (std::size_t i = 0; i < n2; ++i) interleaved[i * channels + c] = d.data()[c * n2 + i];
       w = value_or_raise(choose_auto_window(interleaved, static_cast<int>(channels)));
     }
     factors = w.factors;
@@ -70,15 +78,17 @@ py::tuple window(const py::array& coeffs, const std::string& kind, std::optional
     factors = sh_window_factors(*shape, c, order);
     if (*shape != ShWindow::none) used_cutoff = py::float_(c);
   }
-  return py::make_tuple(scale_any(coeffs, factors), py::array_t<double>(factors.size(), factors.data()), used_cutoff);
+  return py::make_tuple(scale_any(coeffs, factors, threads), py::array_t<double>(factors.size(), factors.data()),
+                        used_cutoff);
 }
 
-py::array irradiance(const py::array& coeffs) {
+py::array irradiance(const py::array& coeffs, int threads) {
+  check_threads(threads);
   precision_of(coeffs, "coeffs");
   const int order = coeffs_order(coeffs);
   std::vector<double> factors(order);
   for (int l = 0; l < order; ++l) factors[l] = clamped_cosine_band(l);
-  return scale_any(coeffs, factors);
+  return scale_any(coeffs, factors, threads);
 }
 
 py::array light(const std::string& kind, int order, const py::object& direction, std::optional<double> half_angle,
@@ -104,11 +114,47 @@ py::array light(const std::string& kind, int order, const py::object& direction,
   return out;
 }
 
-// An image as float32 texels: the caller's memory when it is C-contiguous float32 (the
-// CLI projects float images; float64 is rounded to float32 as a file's texels are).
+// The texel index (i, j, ...) of flat index k of an array of `shape`, as numpy prints it.
+std::string index_text(std::size_t k, const std::vector<py::ssize_t>& shape) {
+  std::vector<std::size_t> index(shape.size());
+  for (std::size_t a = shape.size(); a-- > 0;) {
+    index[a] = k % static_cast<std::size_t>(shape[a]);
+    k /= static_cast<std::size_t>(shape[a]);
+  }
+  std::string text;
+  for (std::size_t i : index) {
+    if (!text.empty()) text += ", ";
+    text += std::to_string(i);
+  }
+  return text;
+}
+
+// An image as float32 texels (the projection reads float texels, as the CLI reads a
+// file's): the caller's memory when it is C-contiguous float32; float64 rounded to
+// float32, with a ValueError for a finite value beyond float32's range (it would become
+// infinite). NaN and infinities are left to the projection's own message.
 py::array_t<float, py::array::c_style> float_texels(const py::array& image) {
-  precision_of(image, "image");
-  return py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(image);
+  if (precision_of(image, "image") == Precision::f32) return contiguous<float>(image);
+  const auto d = contiguous<double>(image);
+  py::array_t<float, py::array::c_style> f(shape_of(d));
+  const double* in = d.data();
+  float* o = f.mutable_data();
+  const std::size_t count = static_cast<std::size_t>(d.size());
+  std::size_t bad = count;
+  {
+    py::gil_scoped_release release;
+    for (std::size_t k = 0; k < count; ++k) {
+      o[k] = static_cast<float>(in[k]);
+      if (std::isinf(o[k]) && std::isfinite(in[k]) && bad == count) bad = k;
+    }
+  }
+  if (bad < count) {
+    char value[32];
+    const auto end = std::to_chars(value, value + sizeof value, in[bad]).ptr;  // the shortest round trip
+    throw py::value_error("image[" + index_text(bad, shape_of(d)) + "] = " + std::string(value, end) +
+                          " is beyond float32's range (|x| <= 3.4028235e38): project_env computes in float32");
+  }
+  return f;
 }
 
 py::tuple project_env(const py::array& image, int order, const std::string& layout_name, const std::string& quantity,
@@ -125,25 +171,27 @@ py::tuple project_env(const py::array& image, int order, const std::string& layo
   if (cutoff && (r.window == lighting::WindowChoice::none || r.window == lighting::WindowChoice::automatic))
     throw py::value_error("cutoff applies to the windows hann, lanczos and sinc4");
   lighting::Layout layout = choice(layout_name, lighting::layout_names(), "layout");
-  const auto texels = float_texels(image);
-  if (texels.ndim() != 3 && texels.ndim() != 4)
-    throw py::value_error("image must have shape (H, W, C) or (6, S, S, C)");
+  if (image.ndim() != 3 && image.ndim() != 4) throw py::value_error("image must have shape (H, W, C) or (6, S, S, C)");
   if (layout == lighting::Layout::automatic)
-    layout = texels.ndim() == 4                         ? lighting::Layout::faces
-             : texels.shape(1) == 2 * texels.shape(0) ? lighting::Layout::equirect
-                                                        : lighting::Layout::cross;
-  if ((layout == lighting::Layout::faces) != (texels.ndim() == 4))
+    layout = image.ndim() == 4                      ? lighting::Layout::faces
+             : image.shape(1) == 2 * image.shape(0) ? lighting::Layout::equirect
+                                                    : lighting::Layout::cross;
+  if ((layout == lighting::Layout::faces) != (image.ndim() == 4))
     throw py::value_error("layout faces takes an array (6, S, S, C); equirect and cross an array (H, W, C)");
-  if (texels.shape(texels.ndim() - 1) < 1 || texels.size() == 0) throw py::value_error("image is empty");
-  if (layout == lighting::Layout::equirect && texels.shape(1) != 2 * texels.shape(0))
-    throw py::value_error("an equirect image must be 2:1 (W = 2 H), got " + std::to_string(texels.shape(1)) + " x " +
-                          std::to_string(texels.shape(0)));
-  if (layout == lighting::Layout::faces && (texels.shape(0) != 6 || texels.shape(1) != texels.shape(2)))
+  if (image.shape(image.ndim() - 1) < 1 || image.size() == 0) throw py::value_error("image is empty");
+  if (const py::ssize_t c = image.shape(image.ndim() - 1); c > 4)
+    throw py::value_error("image has " + std::to_string(c) + " channels; 1 to 4 supported");
+  if (layout == lighting::Layout::equirect && image.shape(1) != 2 * image.shape(0))
+    throw py::value_error("an equirect image must be 2:1 (W = 2 H), got " + std::to_string(image.shape(1)) + " x " +
+                          std::to_string(image.shape(0)));
+  if (layout == lighting::Layout::faces && (image.shape(0) != 6 || image.shape(1) != image.shape(2)))
     throw py::value_error("faces must have shape (6, S, S, C)");
   if (r.preset != lighting::EquirectPreset::shtool && layout != lighting::Layout::equirect)
     throw py::value_error("preset applies to equirect images");
   if (mirror_x && layout == lighting::Layout::equirect)
     throw py::value_error("mirror_x applies to cubemaps, not to equirect images");
+  check_threads(threads);
+  const auto texels = float_texels(image);
   const int resolved_threads = resolve_threads(threads);
   const int channels = static_cast<int>(texels.shape(texels.ndim() - 1));
   std::vector<double> coefficients;
@@ -175,8 +223,8 @@ py::tuple project_env(const py::array& image, int order, const std::string& layo
 }  // namespace
 
 void bind_lighting(py::module_& m) {
-  m.def("_window", &window, py::arg("coeffs").noconvert(), py::arg("kind"), py::arg("cutoff"));
-  m.def("_irradiance", &irradiance, py::arg("coeffs").noconvert());
+  m.def("_window", &window, py::arg("coeffs").noconvert(), py::arg("kind"), py::arg("cutoff"), py::arg("threads") = 0);
+  m.def("_irradiance", &irradiance, py::arg("coeffs").noconvert(), py::arg("threads") = 0);
   m.def("light", &light, py::arg("kind"), py::arg("order"), py::arg("direction") = py::make_tuple(0, 0, 1),
         py::arg("half_angle") = py::none(), py::arg("color") = py::make_tuple(1, 1, 1), py::arg("ground") = py::none(),
         py::arg("quantity") = "radiance",

@@ -1,6 +1,7 @@
 // eval_sh, rotate, quat_to_matrix, product: the runtime's basis, rotations and products
 // over batches of coefficient vectors (the last axis; the Python layer moves `axis=`).
 #include <algorithm>
+#include <filesystem>
 #include <limits>
 #include <map>
 #include <memory>
@@ -17,37 +18,12 @@
 #include "shtool/product.h"
 #include "shtool/rotation.h"
 #include "shtool/sh.h"
+#include "shtool/table.h"
 #include "shtool/zhf_rotation.h"
 #include "tensors/rotation_helpers_gen.h"
 
 namespace shtool::python {
 namespace {
-
-// Batches below this many vectors run on the calling thread: starting workers costs
-// more than the work.
-constexpr std::size_t kChunk = 4096;
-
-// body(begin, end) over [0, count) in chunks, on `threads` workers (0: every core) when
-// there is more than one chunk. The thread count is resolved only then: asking the system
-// for its cores reads a file, which would be most of a one-vector call. The caller has
-// released the GIL.
-void for_chunks(std::size_t count, int threads, const std::function<void(std::size_t, std::size_t)>& body) {
-  const std::size_t chunks = (count + kChunk - 1) / kChunk;
-  if (chunks <= 1) {
-    body(0, count);
-    return;
-  }
-  if (threads == 1) {  // still in chunks: each chunk's scratch stays in cache
-    for (std::size_t c = 0; c < chunks; ++c) body(c * kChunk, std::min(count, (c + 1) * kChunk));
-    return;
-  }
-  parallel_for(chunks, resolve_threads(threads),
-               [&](std::size_t c) { body(c * kChunk, std::min(count, (c + 1) * kChunk)); });
-}
-
-void check_threads(int threads) {
-  if (threads < 0) throw py::value_error("threads must be >= 0");
-}
 
 void check_order(int order) {
   if (!is_supported_order(order))
@@ -87,30 +63,79 @@ py::array eval_sh_t(int order, const py::array& dirs_in, const py::object& out_a
   return out;
 }
 
-// One V per order, made by make(order) once per process (callers on several threads).
+// One V per key, made by make() once per process. Callers on several threads, with the
+// GIL released: a slow make (helpers for a high order take seconds) holds only its own
+// key, and a make that throws is tried again by the next call.
 template <class V, class Make>
-std::shared_ptr<const V> once_per_order(int order, Make make) {
+std::shared_ptr<const V> once_per_key(const std::string& key, Make make) {
+  struct Slot {
+    std::mutex mutex;
+    std::shared_ptr<const V> value;
+  };
   static std::mutex mutex;
-  static std::map<int, std::shared_ptr<const V>> made;
-  std::lock_guard<std::mutex> lock(mutex);
-  auto& v = made[order];
-  if (!v) v = make(order);
-  return v;
+  static std::map<std::string, std::shared_ptr<Slot>> slots;
+  std::shared_ptr<Slot> slot;
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    auto& s = slots[key];
+    if (!s) s = std::make_shared<Slot>();
+    slot = s;
+  }
+  std::lock_guard<std::mutex> lock(slot->mutex);
+  if (!slot->value) slot->value = make();
+  return slot->value;
 }
 
-std::shared_ptr<const RotationHelpers> helpers_for(int order) {
-  return once_per_order<RotationHelpers>(order, [](int n) { return rotation_helpers_for(n); });
+// The key of a table given by path: the file as it is now (a rewritten file is read again).
+std::string file_key(int order, const std::string& path) {
+  std::error_code ec;
+  const auto size = std::filesystem::file_size(path, ec);
+  const auto time = std::filesystem::last_write_time(path, ec);
+  return std::to_string(order) + "\n" + path + "\n" + std::to_string(ec ? 0 : size) + "\n" +
+         std::to_string(ec ? 0 : time.time_since_epoch().count());
 }
 
-std::shared_ptr<const ZhfLobes> zhf_lobes(int order) {
-  return once_per_order<ZhfLobes>(order, [](int n) { return lobes::zhf_lobes_for(n); });
+// The helpers of the fast methods: from `tables` when given (covering the order), else
+// the shipped table when it covers the order, else computed (seconds from order 40 on).
+// Called with the GIL released.
+std::shared_ptr<const RotationHelpers> helpers_for(int order, const std::string& tables) {
+  if (!tables.empty())
+    return once_per_key<RotationHelpers>(file_key(order, tables), [&] { return rotation_helpers_for(order, tables); });
+  return once_per_key<RotationHelpers>(std::to_string(order), [&] {
+    return shipped_rotation_helpers_for(order, find_module_table("rotation-helpers.shtb"));
+  });
+}
+
+// The shared lobes of the zhf methods: from `tables` when given, else the shipped
+// zhf-shared-N<n>.shtb of the smallest n >= order. Called with the GIL released.
+std::shared_ptr<const ZhfLobes> zhf_lobes(int order, const std::string& tables) {
+  if (!tables.empty())
+    return once_per_key<ZhfLobes>(file_key(order, tables), [&] { return lobes::zhf_lobes_for(order, tables); });
+  return once_per_key<ZhfLobes>(std::to_string(order), [&] {
+    for (int n = order; n <= kMaxOrder; ++n)
+      if (const std::filesystem::path p = find_module_table("zhf-shared-N" + std::to_string(n) + ".shtb"); !p.empty())
+        return lobes::zhf_lobes_for(order, p);
+    int highest = 0;
+    for (int n = order - 1; n >= 1 && !highest; --n)
+      if (!find_module_table("zhf-shared-N" + std::to_string(n) + ".shtb").empty()) highest = n;
+    const std::string make =
+        " (made by `shtool search-lobes --shared --order " + std::to_string(order) + " --out FILE`)";
+    if (highest)
+      throw InputError("no shipped zhf-lobes table covers order " + std::to_string(order) +
+                       " (the shipped ones cover orders 1 to " + std::to_string(highest) +
+                       "): give one with tables=" + make);
+    throw InputError("no zhf-lobes table found for order " + std::to_string(order) +
+                     " in $SHTOOL_TABLES, the package's tables folder or the install prefix: set SHTOOL_TABLES to "
+                     "shtool's tables folder, or give one with tables=" +
+                     make);
+  });
 }
 
 // Zonal-harmonic factorisation with the shipped shared lobes, as `shtool rotate --method
 // zhf | zhf-tailored`: one matrix for every vector.
 template <class T>
-void rotate_zhf(bool tailored, int order, const Mat3<T>& r, const T* in, T* out, std::size_t count, int threads) {
-  const auto lobes = zhf_lobes(order);
+void rotate_zhf(bool tailored, int order, const std::shared_ptr<const ZhfLobes>& lobes, const Mat3<T>& r, const T* in,
+                T* out, std::size_t count, int threads) {
   const std::size_t n2 = sh_count(order);
   for_chunks(count, threads, [&](std::size_t begin, std::size_t end) {
     if (tailored) {
@@ -138,10 +163,12 @@ RotationMethod method_from(const std::string& name) {
 
 template <class T>
 py::array rotate_t(const py::array& coeffs_in, const py::object& matrix, const std::string& method_name,
-                   std::optional<double> tol, const py::object& out_arg, int threads) {
+                   std::optional<double> tol, const py::object& out_arg, int threads, const std::string& tables) {
   const auto coeffs = contiguous<T>(coeffs_in);
   if (coeffs.ndim() < 1) throw py::value_error("coeffs must have at least one axis");
   const int order = order_of_count(coeffs.shape(coeffs.ndim() - 1), "coeffs");
+  // Checked for every method, those that do not use it included.
+  if (tol && (!(*tol > 0) || !std::isfinite(*tol))) throw py::value_error("tol must be a positive number");
   if (method_name == "zhf" || method_name == "zhf-tailored") {
     auto out = output<T>(shape_of(coeffs), out_arg);
     if (overlaps(out, coeffs)) throw py::value_error("out must not overlap coeffs");
@@ -151,23 +178,27 @@ py::array rotate_t(const py::array& coeffs_in, const py::object& matrix, const s
     const T* in = coeffs.data();
     T* o = out.mutable_data();
     py::gil_scoped_release release;
-    rotate_zhf<T>(method_name == "zhf-tailored", order, r, in, o, coeffs.size() / sh_count(order), threads);
+    const auto lobes = zhf_lobes(order, tables);
+    rotate_zhf<T>(method_name == "zhf-tailored", order, lobes, r, in, o, coeffs.size() / sh_count(order), threads);
     return out;
   }
   const RotationMethod method = method_from(method_name);
   const double tolerance = tol ? *tol : default_rotation_tolerance<T>();
-  if (!(tolerance > 0) || !std::isfinite(tolerance)) throw py::value_error("tol must be a positive number");
   auto out = output<T>(shape_of(coeffs), out_arg);
   if (overlaps(out, coeffs)) throw py::value_error("out must not overlap coeffs");
   const std::size_t n2 = sh_count(order), count = coeffs.size() / n2;
-  const auto helpers = method == RotationMethod::reference ? nullptr : helpers_for(order);
+  std::shared_ptr<const RotationHelpers> helpers;
+  if (method != RotationMethod::reference) {
+    py::gil_scoped_release release;  // reading the table, or computing the helpers
+    helpers = helpers_for(order, tables);
+  }
 
   // One matrix for every vector, or one per leading index of coeffs (shape (..., 3, 3)
   // with the leading axes of coeffs' first axes).
   // float32 matrices are read as they are (a float64 copy of a million would cost more
   // than rotating with them); anything else as float64.
   const bool f32 = py::isinstance<py::array>(matrix) &&
-                   py::reinterpret_borrow<py::array>(matrix).dtype().is(py::dtype::of<float>());
+                   py::reinterpret_borrow<py::array>(matrix).dtype().equal(py::dtype::of<float>());
   const py::array m = f32 ? py::array(contiguous<float>(matrix)) : py::array(as_f64(matrix, "matrix"));
   if (m.ndim() == 2) {
     ShRotation<T> rotation(order, helpers);
@@ -238,7 +269,7 @@ py::array rotate_t(const py::array& coeffs_in, const py::object& matrix, const s
 }
 
 template <class T>
-py::array quat_to_matrix_t(const py::array& q_in) {
+py::array quat_to_matrix_t(const py::array& q_in, int threads) {
   const auto q = contiguous<T>(q_in);
   if (q.ndim() < 1 || q.shape(q.ndim() - 1) != 4) throw py::value_error("q must have shape (..., 4): (w, x, y, z)");
   std::vector<py::ssize_t> shape = shape_of(q);
@@ -247,12 +278,31 @@ py::array quat_to_matrix_t(const py::array& q_in) {
   py::array_t<T, py::array::c_style> out(shape);
   const T* s = q.data();
   T* o = out.mutable_data();
-  for (py::ssize_t k = 0; k < q.size() / 4; ++k) {
-    const Mat3<double> r = checked_quaternion_matrix({s[4 * k], s[4 * k + 1], s[4 * k + 2], s[4 * k + 3]},
-                                                     "q[" + std::to_string(k) + "]");
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j) o[9 * k + 3 * i + j] = static_cast<T>(r(i, j));
+  const std::size_t count = static_cast<std::size_t>(q.size() / 4);
+  auto quaternion = [&](std::size_t k) {
+    return std::array<double, 4>{s[4 * k], s[4 * k + 1], s[4 * k + 2], s[4 * k + 3]};
+  };
+  std::size_t bad = count;  // the first quaternion that is not unit
+  {
+    py::gil_scoped_release release;
+    std::vector<std::size_t> first_bad((count + kChunk - 1) / kChunk, count);
+    for_chunks(count, threads, [&](std::size_t begin, std::size_t end) {
+      const std::string what = "q";  // the message is made again, with the index, for the first bad one
+      for (std::size_t k = begin; k < end; ++k) {
+        Mat3<double> r;
+        try {
+          r = checked_quaternion_matrix(quaternion(k), what);
+        } catch (const InputError&) {
+          first_bad[begin / kChunk] = k;
+          return;
+        }
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 3; ++j) o[9 * k + 3 * i + j] = static_cast<T>(r(i, j));
+      }
+    });
+    for (std::size_t b : first_bad) bad = std::min(bad, b);
   }
+  if (bad < count) checked_quaternion_matrix(quaternion(bad), "q[" + std::to_string(bad) + "]");  // throws
   return out;
 }
 
@@ -319,20 +369,22 @@ void bind_sh(py::module_& m) {
   m.def(
       "_rotate",
       [](const py::array& coeffs, const py::object& matrix, const std::string& method, std::optional<double> tol,
-         const py::object& out, int threads) {
+         const py::object& out, int threads, const std::string& tables) {
         check_threads(threads);
         return precision_of(coeffs, "coeffs") == Precision::f32
-                   ? rotate_t<float>(coeffs, matrix, method, tol, out, threads)
-                   : rotate_t<double>(coeffs, matrix, method, tol, out, threads);
+                   ? rotate_t<float>(coeffs, matrix, method, tol, out, threads, tables)
+                   : rotate_t<double>(coeffs, matrix, method, tol, out, threads, tables);
       },
       py::arg("coeffs").noconvert(), py::arg("matrix"), py::arg("method"), py::arg("tol"), py::arg("out"),
-      py::arg("threads"));
+      py::arg("threads"), py::arg("tables") = "");
   m.def(
       "_quat_to_matrix",
-      [](const py::array& q) {
-        return precision_of(q, "q") == Precision::f32 ? quat_to_matrix_t<float>(q) : quat_to_matrix_t<double>(q);
+      [](const py::array& q, int threads) {
+        check_threads(threads);
+        return precision_of(q, "q") == Precision::f32 ? quat_to_matrix_t<float>(q, threads)
+                                                      : quat_to_matrix_t<double>(q, threads);
       },
-      py::arg("q").noconvert());
+      py::arg("q").noconvert(), py::arg("threads") = 0);
   m.def(
       "_product",
       [](const py::array& a, const py::array& b, std::optional<int> order, const std::string& method, int threads) {

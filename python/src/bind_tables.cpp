@@ -59,8 +59,14 @@ py::tuple load_table(const std::string& path, const std::string& kind) {
     return read_table(path, expect, &info);
   }();
   auto table = std::make_shared<Table>(value_or_raise(std::move(loaded)));
-  if (!kind.empty())
-    if (const std::optional<std::string> p = typed_problem(*table, path)) throw py::value_error(*p);
+  if (!kind.empty()) {
+    std::optional<std::string> problem;
+    {
+      py::gil_scoped_release release;  // the typed loader's checks go over every value
+      problem = typed_problem(*table, path);
+    }
+    if (problem) throw py::value_error(*problem);
+  }
   py::capsule owner(new std::shared_ptr<Table>(table),
                     [](void* p) { delete static_cast<std::shared_ptr<Table>*>(p); });
   py::dict arrays;
@@ -74,7 +80,11 @@ py::tuple load_table(const std::string& path, const std::string& kind) {
 }
 
 py::tuple load_zh_fit_table(const std::string& path) {
-  ZhFitTable<double> t = value_or_raise(ZhFitTable<double>::load(path));
+  Result<ZhFitTable<double>> loaded = [&] {
+    py::gil_scoped_release release;
+    return ZhFitTable<double>::load(path);
+  }();
+  ZhFitTable<double> t = value_or_raise(std::move(loaded));
   const py::ssize_t v = static_cast<py::ssize_t>(t.vertices), n = t.lobes;
   auto copy = [](const double* p, std::vector<py::ssize_t> shape) {
     py::array_t<double> out(shape);

@@ -1,17 +1,22 @@
 // The extension module shtool._shtool and the helpers every binding shares.
+#include <algorithm>
+#include <cstdlib>
+#include <mutex>
 #include <stdexcept>
 #include <string>
 
 #include "common/input_error.h"
+#include "common/parallel_for.h"
 #include "common/sh_inputs.h"
 #include "py_arrays.h"
+#include "shtool/table.h"
 #include "shtool/version.h"
 
 namespace shtool::python {
 
 Precision precision_of(const py::array& a, const std::string& what) {
-  if (a.dtype().is(py::dtype::of<float>())) return Precision::f32;
-  if (a.dtype().is(py::dtype::of<double>())) return Precision::f64;
+  if (a.dtype().equal(py::dtype::of<float>())) return Precision::f32;
+  if (a.dtype().equal(py::dtype::of<double>())) return Precision::f64;
   throw py::type_error(what + " must be float32 or float64, got " + std::string(py::str(a.dtype())));
 }
 
@@ -29,6 +34,55 @@ bool overlaps(const py::array& a, const py::array& b) {
   const auto* a0 = static_cast<const char*>(a.data());
   const auto* b0 = static_cast<const char*>(b.data());
   return a.nbytes() > 0 && b.nbytes() > 0 && a0 < b0 + b.nbytes() && b0 < a0 + a.nbytes();
+}
+
+void for_chunks(std::size_t count, int threads, const std::function<void(std::size_t, std::size_t)>& body) {
+  const std::size_t chunks = (count + kChunk - 1) / kChunk;
+  if (chunks <= 1) {
+    body(0, count);
+    return;
+  }
+  if (threads == 1) {  // still in chunks: each chunk's scratch stays in cache
+    for (std::size_t c = 0; c < chunks; ++c) body(c * kChunk, std::min(count, (c + 1) * kChunk));
+    return;
+  }
+  parallel_for(chunks, resolve_threads(threads),
+               [&](std::size_t c) { body(c * kChunk, std::min(count, (c + 1) * kChunk)); });
+}
+
+void check_threads(int threads) {
+  // Asked once: the system's core count is read from a file, which would be most of a
+  // one-vector call.
+  static const int most = max_threads();
+  if (threads < 0) throw py::value_error("threads=" + std::to_string(threads) + ": must be 0 (every core) or more");
+  if (threads > most)
+    throw py::value_error("threads=" + std::to_string(threads) + " is more than this machine can use (at most " +
+                          std::to_string(most) + ")");
+}
+
+namespace {
+std::mutex package_tables_mutex;
+std::filesystem::path package_tables;
+}  // namespace
+
+void set_package_tables(const std::string& dir) {
+  std::lock_guard<std::mutex> lock(package_tables_mutex);
+  package_tables = dir;
+}
+
+std::filesystem::path find_module_table(const std::string& file_name) {
+  std::vector<std::filesystem::path> dirs;
+  if (const char* env = std::getenv("SHTOOL_TABLES"); env && *env) dirs.emplace_back(env);
+  {
+    std::lock_guard<std::mutex> lock(package_tables_mutex);
+    if (!package_tables.empty()) dirs.push_back(package_tables);
+  }
+  for (const std::filesystem::path& dir : dirs) {
+    std::error_code ec;
+    const std::filesystem::path p = dir / file_name;
+    if (std::filesystem::is_regular_file(p, ec)) return p;
+  }
+  return find_shipped_table(file_name);
 }
 
 int order_of_count(py::ssize_t count, const std::string& what) {
@@ -66,6 +120,7 @@ PYBIND11_MODULE(_shtool, m) {
       PyErr_SetString(PyExc_ValueError, e.what());
     }
   });
+  m.def("_set_package_tables", &sp::set_package_tables, pybind11::arg("dir"));
   sp::bind_sh(m);
   sp::bind_lighting(m);
   sp::bind_jobs(m);

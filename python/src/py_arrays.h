@@ -4,6 +4,8 @@
 #pragma once
 
 #include <cstddef>
+#include <filesystem>
+#include <functional>
 #include <span>
 #include <string>
 #include <utility>
@@ -42,7 +44,7 @@ py::array_t<T, py::array::c_style> output(const std::vector<py::ssize_t>& shape,
   if (out.is_none()) return py::array_t<T, py::array::c_style>(shape);
   if (!py::isinstance<py::array>(out)) throw py::type_error("out must be a numpy array");
   py::array a = py::reinterpret_borrow<py::array>(out);
-  if (!a.dtype().is(py::dtype::of<T>()))
+  if (!a.dtype().equal(py::dtype::of<T>()))
     throw py::type_error(std::string("out must have dtype ") + (sizeof(T) == 4 ? "float32" : "float64"));
   if (!(a.flags() & py::array::c_style)) throw py::value_error("out must be C-contiguous");
   if (!a.writeable()) throw py::value_error("out is read-only");
@@ -64,6 +66,26 @@ std::vector<py::ssize_t> shape_of(const py::array& a);
 
 // Whether two arrays' bytes overlap (kernels that read and write must not alias).
 bool overlaps(const py::array& a, const py::array& b);
+
+// Batches below this many vectors run on the calling thread: starting workers costs
+// more than the work.
+constexpr std::size_t kChunk = 4096;
+
+// body(begin, end) over [0, count) in chunks of kChunk, on `threads` workers (0: every
+// core) when there is more than one chunk. The caller has checked `threads`
+// (check_threads) and released the GIL.
+void for_chunks(std::size_t count, int threads, const std::function<void(std::size_t, std::size_t)>& body);
+
+// threads= as every call checks it, whatever the batch size: 0 (every core) up to the
+// most the jobs allow (common/parallel_for.h); ValueError naming threads= otherwise.
+void check_threads(int threads);
+
+// A shipped table the module reads (rotation helpers, zhf lobes), looked for in
+// $SHTOOL_TABLES, then the package's own tables/ folder (set_package_tables, at import:
+// a wheel and the build tree's package carry the tables the module needs), then
+// <prefix>/share/shtool/tables (find_shipped_table). Empty if none has it.
+std::filesystem::path find_module_table(const std::string& file_name);
+void set_package_tables(const std::string& dir);
 
 // The order N of a last axis of N^2 coefficients; ValueError otherwise.
 int order_of_count(py::ssize_t count, const std::string& what);

@@ -7,6 +7,7 @@ import pytest
 
 import shtool
 from conftest import SOURCE_DIR
+from test_rotation import gil_stall
 
 
 def sphere_quadrature(nodes):
@@ -135,3 +136,45 @@ def test_project_env_bad_input(image, kw):
     order = kw.pop("order", 3)
     with pytest.raises(ValueError):
         shtool.project_env(image, order, **kw)
+
+
+@pytest.mark.parametrize("call", [
+    lambda c: shtool.irradiance(c, threads=1),
+    lambda c: shtool.window(c, "hann", threads=1),
+])
+def test_irradiance_and_window_release_the_gil(call):
+    c = np.random.default_rng(5).normal(size=(40_000, 256))
+    stall, took = gil_stall(lambda: call(c), 3)
+    assert stall < took / 2
+
+
+def test_irradiance_and_window_in_chunks_equal_one_call():
+    c = np.random.default_rng(6).normal(size=(9000, 16)).astype(np.float32)
+    for threads in (1, 2, 0):
+        np.testing.assert_array_equal(shtool.irradiance(c, threads=threads),
+                                      np.concatenate([shtool.irradiance(c[k:k + 10]) for k in range(0, 9000, 10)]))
+        np.testing.assert_array_equal(shtool.window(c, "lanczos", threads=threads),
+                                      np.concatenate([shtool.window(c[k:k + 10], "lanczos") for k in
+                                                      range(0, 9000, 10)]))
+
+
+def test_project_env_channels_are_1_to_4():
+    for channels in (1, 4):
+        assert shtool.project_env(np.ones((4, 8, channels), np.float32), 2).shape == (4, channels)
+    with pytest.raises(ValueError, match="image has 5 channels; 1 to 4 supported"):
+        shtool.project_env(np.ones((4, 8, 5), np.float32), 2)
+    with pytest.raises(ValueError, match="image has 6 channels; 1 to 4 supported"):
+        shtool.project_env(np.ones((6, 4, 4, 6), np.float32), 2, layout="faces")
+
+
+def test_project_env_float64_beyond_float32():
+    image = np.ones((4, 8, 2))
+    image[1, 3, 1] = -1e39
+    with pytest.raises(ValueError, match=r"image\[1, 3, 1\] = -1e\+39.* beyond float32's range"):
+        shtool.project_env(image, 2)
+    image[1, 3, 1] = np.inf  # infinite as given: the projection's own message
+    with pytest.raises(ValueError, match="infinite"):
+        shtool.project_env(image, 2)
+    # float64 texels are rounded to float32, as a file's are.
+    image = np.random.default_rng(7).uniform(size=(4, 8, 3))
+    np.testing.assert_array_equal(shtool.project_env(image, 3), shtool.project_env(image.astype(np.float32), 3))

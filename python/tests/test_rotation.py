@@ -1,13 +1,17 @@
 """rotate: g(w) = f(R^-1 w), checked as f(w) == rotate(f, R)(R w)."""
 import json
+import os
+import subprocess
 import sys
 import threading
+import time
 
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
 import shtool
+from conftest import SOURCE_DIR
 
 # Largest error allowed per unit of the coefficients' size: the methods' default
 # tolerance (1e-10 double, 1e-6 float) plus rounding over up to 144 coefficients.
@@ -182,3 +186,150 @@ def test_empty_batches():
     assert shtool.rotate(np.zeros((0, 9)), np.zeros((0, 3, 3))).shape == (0, 9)
     assert shtool.eval_sh(3, np.zeros((0, 3))).shape == (0, 9)
     assert shtool.product(np.ones(9), np.ones((0, 9))).shape == (0, 9)
+
+
+def gil_stall(work, repeat=1):
+    """(the longest time this thread could not run, the shortest call) while `work` runs
+    `repeat` times on another thread. Holding the GIL, a call stalls this thread for its
+    whole length; released, the stalls are the scheduler's (a few ms on a busy machine)."""
+    done = threading.Event()
+    calls, error = [], []
+
+    def run():
+        try:
+            for _ in range(repeat):
+                t0 = time.perf_counter()
+                work()
+                calls.append(time.perf_counter() - t0)
+        except Exception as e:  # raised here, after the measurement
+            error.append(e)
+        finally:
+            done.set()
+
+    interval = sys.getswitchinterval()
+    sys.setswitchinterval(1e-4)
+    try:
+        longest = 0.0
+        last = time.perf_counter()
+        t = threading.Thread(target=run)
+        t.start()
+        while not done.is_set():
+            now = time.perf_counter()
+            longest = max(longest, now - last)
+            last = now
+        t.join()
+    finally:
+        sys.setswitchinterval(interval)
+    if error:
+        raise error[0]
+    return longest, min(calls)
+
+
+def test_orders_above_the_shipped_helpers_table(cli):
+    # The shipped rotation-helpers table covers order 30: above it the default method
+    # computes the helpers (the CLI as well), it does not refuse.
+    f = np.random.default_rng(13).normal(size=31 * 31)
+    r = random_rotation(13)
+    reference = shtool.rotate(f, r, method="reference")
+    for method in ("auto", "zxzxz"):
+        np.testing.assert_allclose(shtool.rotate(f, r, method=method), reference, atol=1e-9 * np.abs(f).max())
+    printed = json.loads(cli("rotate", "--order", 31, "--method", "zxzxz", "--matrix",
+                             ",".join(repr(float(x)) for x in r.ravel()),
+                             "--coeffs", ",".join(repr(float(x)) for x in f)))
+    np.testing.assert_array_equal(printed["coefficients"], shtool.rotate(f, r, method="zxzxz"))
+
+
+def test_helpers_are_built_with_the_gil_released():
+    # Order 37's helpers are made by the first call (about a second): not with the GIL held.
+    f = np.ones(37 * 37)
+    stall, call = gil_stall(lambda: shtool.rotate(f, np.eye(3), method="zxzxz", threads=1))
+    assert call > 0.2 and stall < call / 2
+
+
+def test_a_given_helpers_table_must_cover_the_order(tmp_path):
+    shtool.gen_tensors(3, str(tmp_path), what=["rotation"])
+    table = tmp_path / "rotation-helpers.shtb"
+    f = np.random.default_rng(14).normal(size=(2, 9))
+    r = random_rotation(14)
+    np.testing.assert_allclose(shtool.rotate(f, r, method="zxzxz", tables=table), shtool.rotate(f, r), atol=1e-12)
+    with pytest.raises(ValueError, match="covers order 3"):
+        shtool.rotate(np.ones(16), r, method="zxzxz", tables=table)
+    (tmp_path / "bad.shtb").write_bytes(table.read_bytes()[:-9])
+    with pytest.raises(ValueError, match="bad.shtb"):
+        shtool.rotate(np.ones(9), r, method="zxzxz", tables=tmp_path / "bad.shtb")
+
+
+def test_a_shipped_helpers_table_of_fewer_bands_is_no_error_a_damaged_one_is(tmp_path):
+    # SHTOOL_TABLES naming a folder whose rotation-helpers table covers order 3: order 5
+    # is computed. The same table cut short: a ValueError naming it.
+    shtool.gen_tensors(3, str(tmp_path / "short"), what=["rotation"])
+    (tmp_path / "damaged").mkdir()
+    (tmp_path / "damaged" / "rotation-helpers.shtb").write_bytes(
+        (tmp_path / "short" / "rotation-helpers.shtb").read_bytes()[:-9])
+    code = ("import numpy as np, shtool\n"
+            "f, r = np.arange(25.0), shtool.quat_to_matrix([0.8, 0.6, 0.0, 0.0])\n"
+            "try:\n"
+            "    g = shtool.rotate(f, r, method='zxzxz')\n"
+            "    print(np.abs(g - shtool.rotate(f, r, method='reference')).max() < 1e-12)\n"
+            "except ValueError as e:\n"
+            "    print(e)\n")
+    for folder, printed in (("short", "True"), ("damaged", str(tmp_path / "damaged" / "rotation-helpers.shtb"))):
+        env = dict(os.environ, SHTOOL_TABLES=str(tmp_path / folder))
+        r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
+        assert r.returncode == 0 and printed in r.stdout, r.stdout + r.stderr
+
+
+def test_zhf_finds_the_shipped_tables_without_shtool_tables(tmp_path):
+    # From the build tree (or an install) with no SHTOOL_TABLES: the package's own tables.
+    env = {k: v for k, v in os.environ.items() if k != "SHTOOL_TABLES"}
+    code = ("import numpy as np, shtool\n"
+            "f = np.random.default_rng(1).normal(size=100)\n"
+            "r = shtool.quat_to_matrix([0.8, 0.2, -0.4, 0.4] / np.linalg.norm([0.8, 0.2, -0.4, 0.4]))\n"
+            "for m in ('zhf', 'zhf-tailored'):\n"
+            "    g = shtool.rotate(f, r, method='reference')\n"
+            "    assert np.allclose(shtool.rotate(f, r, method=m), g, atol=1e-10)\n"
+            "print('ok')\n")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, cwd=tmp_path)
+    assert r.returncode == 0 and r.stdout == "ok\n", r.stderr
+
+
+def test_zhf_orders_and_the_tables_keyword():
+    f = np.random.default_rng(15).normal(size=(3, 100))
+    r = random_rotation(15)
+    reference = shtool.rotate(f, r, method="reference")
+    for order in (1, 2, 3, 10):
+        n2 = order * order
+        np.testing.assert_allclose(shtool.rotate(f[:, :n2], r, method="zhf"), reference[:, :n2], atol=1e-10)
+    with pytest.raises(ValueError, match="orders 1 to 10") as e:
+        shtool.rotate(np.ones(121), r, method="zhf")
+    assert "tables=" in str(e.value) and "--tables" not in str(e.value)
+    table = SOURCE_DIR / "tables" / "zhf-shared-N10.shtb"
+    for given in (table, str(table), os.fsencode(table)):
+        np.testing.assert_allclose(shtool.rotate(f[:, :36], r, method="zhf", tables=given), reference[:, :36],
+                                   atol=1e-10)
+    with pytest.raises(ValueError):
+        shtool.rotate(np.ones(121), r, method="zhf", tables=table)  # the table has 10 bands
+
+
+@pytest.mark.parametrize("method", ["zhf", "zhf-tailored", "reference", "auto"])
+def test_tol_is_checked_for_every_method(method):
+    for tol in (-1.0, 0.0, np.nan, np.inf):
+        with pytest.raises(ValueError, match="tol"):
+            shtool.rotate(np.ones(16), np.eye(3), method=method, tol=tol)
+
+
+def test_quat_to_matrix_releases_the_gil():
+    q = np.random.default_rng(16).normal(size=(2_000_000, 4))
+    q /= np.linalg.norm(q, axis=1, keepdims=True)
+    stall, call = gil_stall(lambda: shtool.quat_to_matrix(q, threads=1), 3)
+    assert stall < call / 2
+
+
+def test_quat_to_matrix_names_the_first_bad_quaternion():
+    q = np.tile([1.0, 0, 0, 0], (10_000, 1))
+    q[9000] = (1, 1, 0, 0)
+    q[5000] = (0, 0, 0, 0)
+    for threads in (1, 2):
+        with pytest.raises(ValueError, match=r"q\[5000\]"):
+            shtool.quat_to_matrix(q, threads=threads)
+    np.testing.assert_array_equal(shtool.quat_to_matrix(q[:5000], threads=2), np.tile(np.eye(3), (5000, 1, 1)))

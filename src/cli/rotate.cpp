@@ -123,7 +123,8 @@ void setup_rotate(CLI::App* sub) {
   sub->add_option("--coeffs", opt->coeffs, "N^2 coefficients c0,c1,...");
   sub->add_option("--in", opt->in, "JSON file {\"coefficients\": [...]}, or - for stdin");
   sub->add_option("--tables", opt->tables,
-                  "rotation-helpers table, or zhf-lobes table for zhf methods (default: the shipped one)");
+                  "rotation-helpers table, or zhf-lobes table for zhf methods (default: the shipped one; "
+                  "helpers computed for an order the shipped table does not cover)");
   sub->callback([opt]() {
     if (opt->coeffs.empty() == opt->in.empty()) throw InputError("give exactly one of --coeffs, --in");
     run_rotate(*opt);

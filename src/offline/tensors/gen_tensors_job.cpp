@@ -40,10 +40,6 @@ std::vector<GeneratedFile> run_gen_tensors(const GenTensorsRequest& r) {
     throw InputError("--inputs must be between 2 and 8, got " + std::to_string(r.inputs));
   if (wanted("tripling") && r.order > kMaxTriplingOrder)
     throw InputError("--what tripling supports orders up to " + std::to_string(kMaxTriplingOrder));
-  std::error_code ec;
-  std::filesystem::create_directories(r.out, ec);
-  if (ec) throw InputError("cannot create output folder '" + r.out.string() + "': " + ec.message());
-
   const bool json = r.encoding == TableEncoding::json;
   const std::string ext = json ? ".json" : ".shtb";
   std::string what_text;
@@ -52,12 +48,42 @@ std::vector<GeneratedFile> run_gen_tensors(const GenTensorsRequest& r) {
   if (wanted("fourier")) params["inputs"] = r.inputs;
   const nlohmann::json generator = generator_record("shtool gen-tensors", params);
 
-  std::vector<GeneratedFile> files;
+  // An existing folder: the outputs are declared (and checked) before the work, as every
+  // job does. A missing one is made only once every file's bytes are ready, so that a
+  // computation that fails (out of memory, say) leaves no folder behind.
+  std::error_code ec;
+  const bool folder_exists = std::filesystem::exists(r.out, ec);
+  if (folder_exists && !std::filesystem::is_directory(r.out, ec))
+    throw InputError("cannot create output folder '" + r.out.string() + "': a file of that name exists");
+  if (!folder_exists)  // the nearest existing parent must be a folder
+    for (std::filesystem::path p = r.out.parent_path(); !p.empty(); p = p.parent_path()) {
+      if (std::filesystem::exists(p, ec)) {
+        if (!std::filesystem::is_directory(p, ec))
+          throw InputError("cannot create output folder '" + r.out.string() + "': '" + p.string() + "' is a file");
+        break;
+      }
+      if (p == p.parent_path()) break;
+    }
+  const std::vector<std::string> names = [&] {
+    std::vector<std::string> n;
+    if (wanted("rotation")) n.push_back("rotation-helpers" + ext);
+    if (wanted("rotation-kernels")) n.push_back(kRotationKernelsFile);
+    if (wanted("tripling-kernels")) n.push_back(kTriplingKernelsFile);
+    if (wanted("tripling")) n.push_back("tripling-tensor" + ext);
+    if (wanted("fourier")) n.push_back("sh-fourier-tensors" + ext);
+    return n;
+  }();
   JobOutputs io;
+  auto declare = [&] {
+    for (const std::string& name : names) io.output(r.out / name, name);
+  };
+  if (folder_exists) declare();
+
+  std::vector<GeneratedFile> files;
+  std::vector<std::string> contents;  // in the order of `names`
   auto add = [&](const std::string& name, std::string bytes, std::string summary) {
     files.push_back({r.out / name, std::move(summary)});
-    io.output(files.back().path, name);
-    io.set(name, std::move(bytes));
+    contents.push_back(std::move(bytes));
   };
   if (wanted("rotation")) {
     const RotationHelpers h = compute_rotation_helpers(r.order);
@@ -76,7 +102,29 @@ std::vector<GeneratedFile> run_gen_tensors(const GenTensorsRequest& r) {
     add("sh-fourier-tensors" + ext, encode_table(sh_fourier_tensors_table(r.order, r.inputs, generator), r.encoding),
         "order " + std::to_string(r.order) + ", products of up to " + std::to_string(r.inputs) + " inputs");
 
-  io.commit();
+  // The missing folder and its missing parents, removed again (when still empty) if the
+  // files cannot be written.
+  std::vector<std::filesystem::path> made;  // innermost first
+  if (!folder_exists) {
+    for (std::filesystem::path p = r.out; !p.empty() && !std::filesystem::exists(p, ec); p = p.parent_path()) {
+      made.push_back(p);
+      if (p == p.parent_path()) break;
+    }
+    std::filesystem::create_directories(r.out, ec);
+    if (ec) {
+      const std::string problem = ec.message();
+      for (const std::filesystem::path& p : made) std::filesystem::remove(p, ec);
+      throw InputError("cannot create output folder '" + r.out.string() + "': " + problem);
+    }
+  }
+  try {
+    if (!folder_exists) declare();
+    for (std::size_t i = 0; i < names.size(); ++i) io.set(names[i], std::move(contents[i]));
+    io.commit();
+  } catch (...) {
+    for (const std::filesystem::path& p : made) std::filesystem::remove(p, ec);
+    throw;
+  }
   return files;
 }
 

@@ -21,14 +21,22 @@ constexpr double kStructuralZero = 1e-13;
 }  // namespace
 
 std::shared_ptr<const RotationHelpers> rotation_helpers_for(int order, const std::filesystem::path& table) {
-  const std::filesystem::path path = table.empty() ? default_rotation_helpers_path() : table;
-  if (path.empty()) return std::make_shared<const RotationHelpers>(compute_rotation_helpers(order));
-  Result<RotationHelpers> loaded = RotationHelpers::load(path);
+  if (table.empty()) return shipped_rotation_helpers_for(order, default_rotation_helpers_path());
+  Result<RotationHelpers> loaded = RotationHelpers::load(table);
   if (!loaded) throw InputError(loaded.error().message);
   if (loaded.value().order < order)
-    throw InputError(path.string() + ": rotation-helpers table covers order " + std::to_string(loaded.value().order) +
+    throw InputError(table.string() + ": rotation-helpers table covers order " + std::to_string(loaded.value().order) +
                      ", order " + std::to_string(order) + " was asked for");
   return std::make_shared<const RotationHelpers>(std::move(loaded).value());
+}
+
+std::shared_ptr<const RotationHelpers> shipped_rotation_helpers_for(int order, const std::filesystem::path& shipped) {
+  if (!shipped.empty()) {
+    Result<RotationHelpers> loaded = RotationHelpers::load(shipped);
+    if (!loaded) throw InputError(loaded.error().message);  // a damaged table is not skipped
+    if (loaded.value().order >= order) return std::make_shared<const RotationHelpers>(std::move(loaded).value());
+  }
+  return std::make_shared<const RotationHelpers>(compute_rotation_helpers(order));
 }
 
 RotationHelpers compute_rotation_helpers(int order) {

@@ -22,10 +22,17 @@ namespace shtool {
 // which would mean a convention error.
 RotationHelpers compute_rotation_helpers(int order);
 
-// The helpers of the fast rotation methods for `order`: read from `table` (empty: the
-// shipped table, shtool/rotation_helpers.h), or computed when none is given or shipped
-// (the same bytes gen-tensors writes). InputError with the loader's message otherwise.
+// The helpers of the fast rotation methods for `order`. From `table` when one is given
+// (InputError with the loader's message, or when it covers fewer bands than `order`);
+// otherwise as shipped_rotation_helpers_for with the shipped table
+// (shtool/rotation_helpers.h).
 std::shared_ptr<const RotationHelpers> rotation_helpers_for(int order, const std::filesystem::path& table = {});
+
+// The helpers for `order` given the shipped table `shipped` (empty: none found): read from
+// it when it covers the order, computed otherwise (the bytes gen-tensors writes: seconds
+// from order 40 on, minutes above 100, growing as N^5). A shipped table that does not load
+// (damaged, not a rotation-helpers table) is an InputError, not a reason to compute.
+std::shared_ptr<const RotationHelpers> shipped_rotation_helpers_for(int order, const std::filesystem::path& shipped);
 
 // Band l of X90 as a dense (2l+1) x (2l+1) block, [row][column], from the compressed rows:
 // what the kernel generators (C++ and shaders) write out as literals.

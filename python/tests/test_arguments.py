@@ -1,0 +1,89 @@
+"""Arguments as every call checks them: threads= whatever the batch size, messages that
+name the Python keywords (not the CLI's options), byte order, wrong types."""
+import numpy as np
+import pytest
+
+import shtool
+from conftest import SOURCE_DIR
+
+SMALL = {
+    "eval_sh": lambda **kw: shtool.eval_sh(2, np.ones((10, 3)), **kw),
+    "rotate": lambda **kw: shtool.rotate(np.ones((10, 9)), np.eye(3), **kw),
+    "rotate_batch": lambda **kw: shtool.rotate(np.ones((10, 9)), np.tile(np.eye(3), (10, 1, 1)), **kw),
+    "product": lambda **kw: shtool.product(np.ones(9), np.ones(9), **kw),
+    "quat_to_matrix": lambda **kw: shtool.quat_to_matrix([1.0, 0, 0, 0], **kw),
+    "irradiance": lambda **kw: shtool.irradiance(np.ones(9), **kw),
+    "window": lambda **kw: shtool.window(np.ones(9), "hann", **kw),
+    "project_env": lambda **kw: shtool.project_env(np.ones((4, 8, 3), np.float32), 2, **kw),
+    "fit_zh": lambda **kw: shtool.fit_zh(np.ones((2, 9)), lobes=1, **kw),
+    "fit_zh_mesh": lambda **kw: shtool.fit_zh_mesh(SOURCE_DIR / "data" / "spot.obj", order=2, lobes=1, rays=8, **kw),
+    "project_env_file": lambda **kw: shtool.project_env_file(SOURCE_DIR / "data" / "sky.hdr", **kw),
+    "search_lobes": lambda **kw: shtool.search_lobes(bands=[2], population=20, stall=2, restarts=1, **kw),
+}
+
+
+@pytest.mark.parametrize("name", sorted(SMALL))
+def test_threads_is_checked_for_every_call(name):
+    call = SMALL[name]
+    with pytest.raises(ValueError, match=r"threads=100000 is more than this machine can use") as e:
+        call(threads=100000)
+    assert "--" not in str(e.value)
+    with pytest.raises(ValueError, match=r"threads=-1") as e:
+        call(threads=-1)
+    assert "--" not in str(e.value)
+    call(threads=1)
+
+
+@pytest.mark.parametrize("call, words", [
+    (lambda: shtool.fit_zh(np.ones((2, 9)), lobes=0), ["lobes"]),
+    (lambda: shtool.fit_zh(np.ones((2, 9)), effort=9), ["effort"]),
+    (lambda: shtool.light("cone", 3), ["half_angle"]),
+    (lambda: shtool.gen_tensors(0, "unused"), ["order=0"]),
+    (lambda: shtool.search_lobes(shared=True), ["shared", "order"]),
+    (lambda: shtool.transform_splats(SOURCE_DIR / "data" / "spot.obj", "o.ply", quat=(0, 0, 0, 0)), ["quaternion"]),
+    (lambda: shtool.project_env_file(SOURCE_DIR / "data" / "sky.hdr", cutoff=2), ["cutoff", "window"]),
+])
+def test_messages_name_the_python_keywords(call, words):
+    with pytest.raises(ValueError) as e:
+        call()
+    assert "--" not in str(e.value)
+    for word in words:
+        assert word in str(e.value)
+
+
+@pytest.mark.parametrize("dtype", [">f8", ">f4"])
+def test_big_endian_arrays_are_converted(dtype):
+    rng = np.random.default_rng(1)
+    dirs, coeffs = rng.normal(size=(20, 3)), rng.normal(size=(20, 16))
+    native = np.dtype(dtype).newbyteorder("=").type
+    swapped = [a.astype(dtype) for a in (dirs, coeffs)]
+    d, c = [a.astype(native) for a in (dirs, coeffs)]
+    r = shtool.quat_to_matrix([0.8, 0.6, 0.0, 0.0])
+    got = shtool.eval_sh(4, swapped[0])
+    assert got.dtype == native and got.dtype.isnative
+    np.testing.assert_array_equal(got, shtool.eval_sh(4, d))
+    np.testing.assert_array_equal(shtool.rotate(swapped[1], r), shtool.rotate(c, r))
+    np.testing.assert_array_equal(shtool.product(swapped[1], swapped[1]), shtool.product(c, c))
+    np.testing.assert_array_equal(shtool.irradiance(swapped[1]), shtool.irradiance(c))
+    np.testing.assert_array_equal(shtool.window(swapped[1], "hann"), shtool.window(c, "hann"))
+    np.testing.assert_array_equal(shtool.quat_to_matrix(np.array([0.8, 0.6, 0, 0], dtype)),
+                                  shtool.quat_to_matrix(np.array([0.8, 0.6, 0, 0], native)))
+    image = rng.uniform(size=(4, 8, 3))
+    np.testing.assert_array_equal(shtool.project_env(image.astype(dtype), 3),
+                                  shtool.project_env(image.astype(native), 3))
+    np.testing.assert_array_equal(shtool.fit_zh(swapped[1][:2], lobes=1, effort=1).axes,
+                                  shtool.fit_zh(c[:2], lobes=1, effort=1).axes)
+
+
+@pytest.mark.parametrize("call", [
+    lambda: shtool.eval_sh(2, "up"),
+    lambda: shtool.eval_sh(2, np.ones((2, 3), np.int64)),
+    lambda: shtool.rotate(np.ones(9), np.eye(3), tables=3),
+    lambda: shtool.load_table(None),
+    lambda: shtool.fit_zh(np.ones((2, 9), np.int32)),
+    lambda: shtool.transform_splat_arrays(positions=np.array([["a", "b", "c"]]), quaternion=(1, 0, 0, 0)),
+    lambda: shtool.transform_splat_arrays(positions=np.ones((1, 3)), scale="2"),
+])
+def test_wrong_types_are_type_errors(call):
+    with pytest.raises(TypeError):
+        call()
