@@ -168,4 +168,24 @@ void JobOutputs::publish() {
   remove_backups();
 }
 
+void MadeFolders::make(const std::filesystem::path& dir, const std::string& option) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(dir, ec)) return;
+  if (std::filesystem::exists(dir, ec))
+    throw InputError(option + " " + dir.string() + ": exists and is not a folder");
+  const std::filesystem::path parent = dir.parent_path();
+  if (!parent.empty() && parent != dir) make(parent, option);
+  if (!std::filesystem::create_directory(dir, ec) || ec)
+    throw InputError(option + ": cannot create the folder " + dir.string() + ": " +
+                     (ec ? ec.message() : std::string("unknown error")));
+  made_.push_back(dir);
+}
+
+MadeFolders::~MadeFolders() {
+  for (auto it = made_.rbegin(); it != made_.rend(); ++it) {
+    std::error_code ec;
+    std::filesystem::remove(*it, ec);  // only an empty one
+  }
+}
+
 }  // namespace shtool

@@ -87,4 +87,18 @@ class JobOutputs {
   std::vector<PendingFile> pending_;  // between stage() and publish()
 };
 
+// Folders a job makes for its outputs, removed again (innermost first, and only when still
+// empty) unless keep() is called after the commit: a job that fails leaves no folder.
+class MadeFolders {
+ public:
+  // Makes `dir` and every missing parent. InputError naming `option` when one of them
+  // exists and is not a folder, or cannot be made.
+  void make(const std::filesystem::path& dir, const std::string& option);
+  void keep() { made_.clear(); }
+  ~MadeFolders();
+
+ private:
+  std::vector<std::filesystem::path> made_;  // outermost first
+};
+
 }  // namespace shtool

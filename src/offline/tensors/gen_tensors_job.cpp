@@ -102,29 +102,16 @@ std::vector<GeneratedFile> run_gen_tensors(const GenTensorsRequest& r) {
     add("sh-fourier-tensors" + ext, encode_table(sh_fourier_tensors_table(r.order, r.inputs, generator), r.encoding),
         "order " + std::to_string(r.order) + ", products of up to " + std::to_string(r.inputs) + " inputs");
 
-  // The missing folder and its missing parents, removed again (when still empty) if the
-  // files cannot be written.
-  std::vector<std::filesystem::path> made;  // innermost first
+  // The missing folder (and its missing parents), removed again if the files cannot be
+  // written.
+  MadeFolders folders;
   if (!folder_exists) {
-    for (std::filesystem::path p = r.out; !p.empty() && !std::filesystem::exists(p, ec); p = p.parent_path()) {
-      made.push_back(p);
-      if (p == p.parent_path()) break;
-    }
-    std::filesystem::create_directories(r.out, ec);
-    if (ec) {
-      const std::string problem = ec.message();
-      for (const std::filesystem::path& p : made) std::filesystem::remove(p, ec);
-      throw InputError("cannot create output folder '" + r.out.string() + "': " + problem);
-    }
+    folders.make(r.out, "--out");
+    declare();
   }
-  try {
-    if (!folder_exists) declare();
-    for (std::size_t i = 0; i < names.size(); ++i) io.set(names[i], std::move(contents[i]));
-    io.commit();
-  } catch (...) {
-    for (const std::filesystem::path& p : made) std::filesystem::remove(p, ec);
-    throw;
-  }
+  for (std::size_t i = 0; i < names.size(); ++i) io.set(names[i], std::move(contents[i]));
+  io.commit();
+  folders.keep();
   return files;
 }
 

@@ -52,32 +52,6 @@ const std::vector<std::string>& three_files() {
   return files;
 }
 
-// Folders the job makes before declaring its outputs in them, removed again (when still
-// empty) if the job does not commit.
-class MadeFolders {
- public:
-  void make(const std::filesystem::path& dir) {
-    std::error_code ec;
-    if (std::filesystem::is_directory(dir, ec)) return;
-    if (std::filesystem::exists(dir, ec))
-      throw InputError("--out " + dir.string() + ": exists and is not a folder");
-    if (!std::filesystem::create_directory(dir, ec) || ec)
-      throw InputError("--out: cannot create the folder " + dir.string() + ": " +
-                       (ec ? ec.message() : std::string("unknown error")));
-    made_.push_back(dir);
-  }
-  void keep() { made_.clear(); }
-  ~MadeFolders() {
-    for (auto it = made_.rbegin(); it != made_.rend(); ++it) {
-      std::error_code ec;
-      std::filesystem::remove(*it, ec);  // only an empty one
-    }
-  }
-
- private:
-  std::vector<std::filesystem::path> made_;
-};
-
 }  // namespace
 
 ExportWebResult run_export_web(const ExportWebRequest& r) {
@@ -331,10 +305,10 @@ ExportWebResult run_export_web(const ExportWebRequest& r) {
   }
 
   MadeFolders folders;
-  folders.make(r.out);
+  folders.make(r.out, "--out");
   for (const char* d : {"three", "three/build", "three/examples", "three/examples/jsm", "three/examples/jsm/lighting"})
-    folders.make(r.out / d);
-  if (probes) folders.make(r.out / "probes");
+    folders.make(r.out / d, "--out");
+  if (probes) folders.make(r.out / "probes", "--out");
   for (const auto& [name, bytes] : files) io.output(r.out / name, "--out " + name.string());
   if (probes) interop::declare_three_probe_grid(io, r.out / "probes", "--probes");
   for (auto& [name, bytes] : files) io.set("--out " + name.string(), std::move(bytes));
