@@ -26,6 +26,10 @@
 //     items_per_second = RGB lights per second. The cost of the colour layout, without
 //     set() in the time.
 //
+//   BM_ComputeRotationHelpers/N/threads: the helpers of an order past the shipped table,
+//     as `shtool rotate` and the Python module compute them (the N^5 quadrature sums on
+//     `threads` threads, 0 = every core); with the offline library only.
+//
 // Run: build/bench/bench_rotation --benchmark_filter='BM_Rotate/double/.*/1/'
 // Figures, the machine and the peer comparison: docs/benchmarks.md, "Rotations".
 #include <array>
@@ -193,10 +197,23 @@ void register_all(const char* type) {
   }
 }
 
+#ifdef SHTOOL_BENCH_HAVE_OFFLINE
+void BM_ComputeRotationHelpers(benchmark::State& state) {
+  const int order = static_cast<int>(state.range(0)), threads = static_cast<int>(state.range(1));
+  for (auto _ : state) benchmark::DoNotOptimize(shtool::compute_rotation_helpers(order, threads));
+}
+#endif
+
 }  // namespace
 
 int main(int argc, char** argv) {
   register_all<float>("float");
   register_all<double>("double");
+#ifdef SHTOOL_BENCH_HAVE_OFFLINE
+  benchmark::RegisterBenchmark("BM_ComputeRotationHelpers", BM_ComputeRotationHelpers)
+      ->ArgsProduct({{40, 64}, {1, 0}})
+      ->Unit(benchmark::kSecond)
+      ->UseRealTime();
+#endif
   return shtool::bench::run_benchmarks(argc, argv);
 }

@@ -1292,6 +1292,18 @@ TEST(RotationHelpersTable, WriteReadRoundTripIsExact) {
   expect_same_helpers(compute_rotation_helpers(9));
 }
 
+// The quadrature sums run on several threads, a group of bands each: every band's sum
+// keeps its node order, so the values are the same bytes whatever the thread count
+// (and so are the shipped table's: gen-tensors runs on every core).
+TEST(RotationHelpersTable, SameBytesWhateverTheThreadCount) {
+  const nlohmann::json generator = generator_record("test_rotation", {{"order", 13}});
+  const Table one = to_table(compute_rotation_helpers(13, 1), generator);
+  for (int threads : {2, 3, 5, 0}) {
+    SCOPED_TRACE(threads);
+    test::expect_same_table(one, to_table(compute_rotation_helpers(13, threads), generator));
+  }
+}
+
 // Replaces array `name` of a table.
 template <class T>
 void replace_array(Table& t, const std::string& name, const std::vector<T>& values) {

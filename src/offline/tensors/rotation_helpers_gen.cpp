@@ -1,8 +1,10 @@
 #include "tensors/rotation_helpers_gen.h"
 
 #include "common/input_error.h"
+#include "common/parallel_for.h"
 #include "common/table_writer.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -39,7 +41,7 @@ std::shared_ptr<const RotationHelpers> shipped_rotation_helpers_for(int order, c
   return std::make_shared<const RotationHelpers>(compute_rotation_helpers(order));
 }
 
-RotationHelpers compute_rotation_helpers(int order) {
+RotationHelpers compute_rotation_helpers(int order, int threads) {
   if (!is_supported_order(order)) throw InputError("unsupported order " + std::to_string(order));
   const int n = sh_count(order);
   // Rx(+90): y -> z, z -> -y. g(w) = f(R^-1 w) gives X[i][j] = integral y_i(w) y_j(R^-1 w).
@@ -48,21 +50,44 @@ RotationHelpers compute_rotation_helpers(int order) {
   const Mat3<double> rx_inv = rx.transpose();
   const SphereQuadrature q = sphere_quadrature(2 * order - 2);
   // Accumulated in long double: the sums run over ~2 N^2 nodes and a double sum would
-  // leave errors of ~1e-14 on exact values such as X90[0][0] = 1.
-  using Accum = Eigen::Matrix<long double, Eigen::Dynamic, Eigen::Dynamic>;
-  std::vector<Accum> sums(order);
-  for (int l = 0; l < order; ++l) sums[l] = Accum::Zero(2 * l + 1, 2 * l + 1);
-  std::vector<double> yw(n), yr(n);
-  for (std::size_t k = 0; k < q.directions.size(); ++k) {
-    eval_sh<double>(order, q.directions[k], yw);
-    eval_sh<double>(order, rx_inv * q.directions[k], yr);
-    for (int l = 0; l < order; ++l)
-      for (int a = 0; a <= 2 * l; ++a)
-        for (int b = 0; b <= 2 * l; ++b)
-          sums[l](a, b) += static_cast<long double>(q.weights[k] * yw[l * l + a]) * yr[l * l + b];
+  // leave errors of ~1e-14 on exact values such as X90[0][0] = 1. The bands' sums are
+  // independent, so groups of bands of about equal cost ((2l+1)^2 a node) run on separate
+  // threads, each over every node in node order: every sum, and so every value, is the
+  // same whatever the thread count.
+  std::vector<std::vector<long double>> sums(order);  // sums[l][a * (2l+1) + b]
+  for (int l = 0; l < order; ++l) sums[l].assign(static_cast<std::size_t>(2 * l + 1) * (2 * l + 1), 0.0L);
+  const int workers = std::min(resolve_threads(threads), order);
+  std::vector<std::vector<int>> groups(workers);
+  std::vector<long long> load(workers, 0);
+  for (int l = order - 1; l >= 0; --l) {  // largest first, each to the least-loaded group
+    const int w = static_cast<int>(std::min_element(load.begin(), load.end()) - load.begin());
+    groups[w].push_back(l);
+    load[w] += static_cast<long long>(2 * l + 1) * (2 * l + 1);
   }
+  parallel_for(groups.size(), workers, [&](std::size_t w) {
+    const int top = groups[w].empty() ? 0 : groups[w].front() + 1;  // the group's highest band + 1
+    std::vector<double> yw(sh_count(top)), yr(sh_count(top));
+    for (std::size_t k = 0; k < q.directions.size(); ++k) {
+      eval_sh<double>(top, q.directions[k], yw);
+      eval_sh<double>(top, rx_inv * q.directions[k], yr);
+      for (const int l : groups[w]) {
+        const int size = 2 * l + 1;
+        const double* const r = yr.data() + l * l;
+        long double* row = sums[l].data();
+        for (int a = 0; a < size; ++a, row += size) {
+          const long double wa = q.weights[k] * yw[l * l + a];
+          for (int b = 0; b < size; ++b) row[b] += wa * r[b];
+        }
+      }
+    }
+  });
   std::vector<Eigen::MatrixXd> x90(order);
-  for (int l = 0; l < order; ++l) x90[l] = sums[l].cast<double>();
+  for (int l = 0; l < order; ++l) {
+    const int size = 2 * l + 1;
+    x90[l].resize(size, size);
+    for (int a = 0; a < size; ++a)
+      for (int b = 0; b < size; ++b) x90[l](a, b) = static_cast<double>(sums[l][a * size + b]);
+  }
 
   RotationHelpers h;
   h.order = order;

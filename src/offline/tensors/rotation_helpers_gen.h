@@ -19,8 +19,9 @@ namespace shtool {
 // z-rotations (Ry(b) = Rx(-90) Rz(b) Rx(+90)); D2 = D1^2 (M(Ry(b)) = exp(b D1)).
 // X90 entries below 1e-13 in magnitude are structural zeros (exact zeros by parity) and
 // are dropped. Throws std::logic_error if the closed form and the X90 table disagree,
-// which would mean a convention error.
-RotationHelpers compute_rotation_helpers(int order);
+// which would mean a convention error. The quadrature sums (the N^5 part) run on
+// `threads` threads (0: every core), the same values whatever the count.
+RotationHelpers compute_rotation_helpers(int order, int threads = 0);
 
 // The helpers of the fast rotation methods for `order`. From `table` when one is given
 // (InputError with the loader's message, or when it covers fewer bands than `order`);
