@@ -835,6 +835,47 @@ TEST(CliSplatFormats, QuantisationReport) {
   }
 }
 
+// spz's positions share one 24-bit fixed point: a splat past 2048 units lowers the
+// fractional bits of every position. The writer does it and says so, naming the splat,
+// how many lie that far and the step; a scene within 2048 units keeps 12 bits silently.
+TEST(CliSplatFormats, FarSplatsCoarsenEverySpzPositionAndSaySo) {
+  Scene scene = random_scene(20, 1, 7);
+  const fs::path in = scratch("far_in.ply"), out = scratch("far_out.spz");
+  const auto fractional_bits = [&] {
+    std::ifstream f(out, std::ios::binary);
+    std::string header(16, '\0');
+    f.read(header.data(), 16);
+    return static_cast<int>(static_cast<unsigned char>(header[13]));  // NGSP v4: degree, then fractionalBits
+  };
+  write_bytes(in, ply_bytes(scene));
+  auto r = convert(in, out);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(fractional_bits(), 12);
+  EXPECT_EQ(r.err.find("fractional bits"), std::string::npos) << r.err;
+
+  Splat far = scene.splats[0];
+  far.p = Eigen::Vector3d(5000, 1, -2);  // needs 10 bits: 5000 * 2^11 is past 2^23
+  scene.splats.push_back(far);
+  write_bytes(in, ply_bytes(scene));
+  r = convert(in, out);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(fractional_bits(), 10);
+  for (const char* part : {"splat 20 lies 5000 units", "1 of 21 splats", "stored with 10 fractional bits",
+                           "a step of 0.000976562 units instead of 0.000244141"})
+    EXPECT_NE(r.err.find(part), std::string::npos) << part << " not in: " << r.err;
+  // The step is real: the near splats move by up to half of it, more than 12 bits allow.
+  const Scene back = raw_values(out);
+  ASSERT_EQ(back.splats.size(), scene.splats.size());
+  double worst = 0;
+  for (std::size_t i = 0; i < scene.splats.size(); ++i) {
+    const Eigen::Vector3d p = scene.splats[i].p, q = back.splats[i].p;
+    // PLY's RDF to spz's RUB: y and z change sign.
+    worst = std::max(worst, (Eigen::Vector3d(p.x(), -p.y(), -p.z()) - q).cwiseAbs().maxCoeff());
+  }
+  EXPECT_LE(worst, std::ldexp(1.0, -11) + 1e-6);
+  EXPECT_GT(worst, std::ldexp(1.0, -13));
+}
+
 // An empty scene has no spz (the reference loader refuses numPoints 0) and no glTF
 // (accessors need a count of at least 1): refused alike, nothing written; PLY holds it.
 TEST(CliSplatFormats, EmptySceneIsRefusedBySpzAndGltf) {

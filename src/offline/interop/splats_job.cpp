@@ -329,6 +329,36 @@ void transform_ply_in_place(const TransformSplatsRequest& r, const Eigen::Matrix
   report.degree = layout.degree;
 }
 
+// spz's positions share one fixed point: a scene reaching past 2048 units stores every
+// position with fewer fractional bits, so a few far splats (often stray outliers of a
+// capture) coarsen the whole scene. Says how far, how many, and the step it costs.
+std::string coarse_positions_warning(const SplatScene& scene, int bits) {
+  // What 12 fractional bits reach: round(p 2^12) within -8388608..8388607, as write_spz.
+  const auto fits = [](float p) {
+    const float q = std::round(std::ldexp(p, kSpzFractionalBits));
+    return q <= 8388607.0f && q >= -8388608.0f;
+  };
+  std::size_t beyond = 0, farthest = 0;
+  float reach = 0;
+  for (std::size_t i = 0; i < scene.count; ++i) {
+    bool in = true;
+    for (int c = 0; c < 3; ++c) {
+      const float p = scene.position[3 * i + c];
+      in = in && fits(p);
+      if (std::abs(p) > reach) reach = std::abs(p), farthest = i;
+    }
+    if (!in) ++beyond;
+  }
+  std::ostringstream w;
+  w << "spz stores positions in 24-bit fixed point: splat " << farthest << " lies " << reach
+    << " units from the origin along an axis, and " << beyond << " of " << scene.count
+    << " splats lie beyond the 2048 units that " << kSpzFractionalBits << " fractional bits reach, "
+    << "so every position is stored with " << bits << " fractional bits, a step of " << std::ldexp(1.0, -bits)
+    << " units instead of " << std::ldexp(1.0, -kSpzFractionalBits)
+    << " (remove the far splats, or --scale the scene down, to keep the finer step)";
+  return w.str();
+}
+
 }  // namespace
 
 Eigen::Matrix3d splat_frame(std::string_view letters) {
@@ -457,6 +487,8 @@ TransformSplatsReport run_transform_splats(const TransformSplatsRequest& r) {
                                       " records none and readers will take its axes as RUB");
         }
         out = write_spz(scene, spz, threads);
+        if (const int bits = spz_fractional_bits(scene); bits < kSpzFractionalBits)
+          report.warnings.push_back(coarse_positions_warning(scene, bits));
         report.spz_sh_bound = spz_sh_error_bound(scene.degree, spz);
         report.spz_sh_scene = spz_sh_error_of(scene, spz, threads);
         report.spz_dc_bound = spz_dc_error_bound();

@@ -21,7 +21,7 @@ namespace {
 
 constexpr std::uint32_t kMagic = 0x5053474e;  // "NGSP" little endian
 constexpr float kColorScale = 0.15f;
-constexpr int kFractionalBits = 12;
+
 constexpr int kZstdLevel = 12;  // the reference writer's
 constexpr std::uint8_t kFlagExtensions = 0x2;
 // Extension record types (spz extensions/README.md): vendor 0xADBE (Adobe), extension 3.
@@ -345,23 +345,28 @@ SplatScene read_spz(std::string_view bytes, const std::string& name, SpzHeader* 
   throw InputError(name + ": not an spz file (neither the NGSP header of version 4 nor a gzip stream)");
 }
 
-std::string write_spz(const SplatScene& s, const SpzWriteOptions& o, int threads) {
-  if (o.version != 3 && o.version != 4) throw InputError("spz version " + std::to_string(o.version) + ": 3 or 4 is written");
-  for (int bits : {o.sh1_bits, o.sh_rest_bits})
-    if (bits < 1 || bits > 8) throw InputError("--sh-bits must be in 1..8, got " + std::to_string(bits));
-  if (s.count > 0xffffffffu) throw InputError("spz holds at most 2^32 - 1 splats");
-  if (s.count == 0) throw InputError("spz cannot hold an empty splat scene (readers refuse a point count of 0)");
+int spz_fractional_bits(const SplatScene& s) {
   float high = 0, low = 0;
   for (float p : s.position) high = std::max(high, p), low = std::min(low, p);
   // The finest fixed point whose 24 bits (two's complement) reach every position.
   auto fits = [&](int bits) {
     return std::round(std::ldexp(high, bits)) <= 8388607.0f && std::round(std::ldexp(low, bits)) >= -8388608.0f;
   };
-  int fractional_bits = kFractionalBits;
+  int fractional_bits = kSpzFractionalBits;
   while (fractional_bits > 0 && !fits(fractional_bits)) --fractional_bits;
   if (!fits(fractional_bits))
     throw InputError("a splat position (" + std::to_string(high > -low ? high : low) +
                      ") is past spz's 24-bit fixed point (-8388608..8388607)");
+  return fractional_bits;
+}
+
+std::string write_spz(const SplatScene& s, const SpzWriteOptions& o, int threads) {
+  if (o.version != 3 && o.version != 4) throw InputError("spz version " + std::to_string(o.version) + ": 3 or 4 is written");
+  for (int bits : {o.sh1_bits, o.sh_rest_bits})
+    if (bits < 1 || bits > 8) throw InputError("--sh-bits must be in 1..8, got " + std::to_string(bits));
+  if (s.count > 0xffffffffu) throw InputError("spz holds at most 2^32 - 1 splats");
+  if (s.count == 0) throw InputError("spz cannot hold an empty splat scene (readers refuse a point count of 0)");
+  const int fractional_bits = spz_fractional_bits(s);
   const std::size_t n = s.count, stride = s.sh_stride(), dim = sh_dim(s.degree);
   const std::array<std::uint64_t, 6> sizes = block_sizes(n, s.degree, o.version);
   std::array<std::string, 6> blocks;

@@ -57,6 +57,14 @@ SplatScene read_spz(std::string_view bytes, const std::string& name, SpzHeader* 
 // SPZ_ADOBE_coordinate_system one when options.coordinate_system is not 0 (flag 0x2).
 std::string write_spz(const SplatScene& scene, const SpzWriteOptions& options, int threads = 1);
 
+inline constexpr int kSpzFractionalBits = 12;
+
+// The fractional bits write_spz stores positions with: kSpzFractionalBits (12, the
+// reference writer's: a step of 2^-12 units), or fewer when a coordinate lies beyond
+// 2048 units, one bit fewer per doubling; one far splat coarsens every position.
+// InputError when a coordinate is past the 24-bit fixed point at 0 bits.
+int spz_fractional_bits(const SplatScene& scene);
+
 // The largest change of a splat's colour (one channel, any direction) that the SH
 // quantisation of bands 1..D can make, for coefficients within the representable
 // [-1, 127/128]: sum_l e_l (2l+1) / sqrt(4 pi), e_l = (floor(b_l/2) + 1/2) / 128,
