@@ -433,9 +433,8 @@ const AxisScan& axis_scan(int order, int count) {
 // as (-energy, axis index), the best `keep` first (keep <= 0: all sorted). Ties between
 // neighbours go to the lower index.
 void grid_peaks(int order, std::span<const double> t, const std::vector<bool>& mask, const AxisScan& scan, int keep,
-                std::vector<std::pair<double, int>>& peaks) {
+                std::vector<std::pair<double, int>>& peaks, std::vector<double>& energy) {
   const int n2 = sh_count(order), count = static_cast<int>(scan.axes.size());
-  thread_local std::vector<double> energy;
   energy.resize(count);
   for (int a = 0; a < count; ++a) {
     const double* y = scan.y.data() + static_cast<std::size_t>(a) * n2;
@@ -460,6 +459,12 @@ void grid_peaks(int order, std::span<const double> t, const std::vector<bool>& m
   const int sorted = keep <= 0 ? static_cast<int>(peaks.size()) : std::min<int>(keep, peaks.size());
   std::partial_sort(peaks.begin(), peaks.begin() + sorted, peaks.end());
   peaks.resize(sorted);
+}
+
+void grid_peaks(int order, std::span<const double> t, const std::vector<bool>& mask, const AxisScan& scan, int keep,
+                std::vector<std::pair<double, int>>& peaks) {
+  thread_local std::vector<double> energy;
+  grid_peaks(order, t, mask, scan, keep, peaks, energy);
 }
 
 // The axis whose single lobe (Eq. 18) best fits `t`, among the scan set and the optimal
@@ -730,12 +735,30 @@ double single_lobe_closed_form(int order, std::span<const double> t, const Eigen
   return std::max(0.0, psi);
 }
 
+int single_lobe_axes_for(int order) {
+  const double degrees = (order - 1) / 5.0;  // the energy's degree 2(n - 1) over order 6's 10
+  return std::max(kSingleLobeAxes, static_cast<int>(std::lround(kSingleLobeAxes * degrees * degrees)));
+}
+
 double best_single_lobe(int order, std::span<const double> t, const std::vector<bool>& mask, int axis_count,
                         int maxima, Eigen::Vector3d& axis, std::span<double> coeffs) {
   const AxisScan& scan = axis_scan(order, axis_count);
   const int n2 = sh_count(order);
-  thread_local std::vector<std::pair<double, int>> peaks;
-  grid_peaks(order, t, mask, scan, maxima, peaks);
+  thread_local std::vector<std::pair<double, int>> peaks, highest;
+  thread_local std::vector<double> energy;
+  grid_peaks(order, t, mask, scan, maxima, peaks, energy);
+  if (maxima > 0) {
+    // Two maxima closer than about three grid spacings, with energies a few 1e-5 apart,
+    // can share one grid maximum (the neighbourhood that defines one spans 2.2 spacings):
+    // so the highest grid axes are refined too, whether or not they are maxima.
+    highest.clear();
+    for (int a = 0; a < static_cast<int>(energy.size()); ++a) highest.emplace_back(-energy[a], a);
+    const int top = std::min<int>(kSingleLobeHighestAxes, highest.size());
+    std::partial_sort(highest.begin(), highest.begin() + top, highest.end());
+    for (int k = 0; k < top; ++k)
+      if (std::none_of(peaks.begin(), peaks.end(), [&](const auto& p) { return p.second == highest[k].second; }))
+        peaks.push_back(highest[k]);
+  }
   const int refine = static_cast<int>(peaks.size());
   double best = std::numeric_limits<double>::infinity();
   std::vector<double> c(order);
@@ -1022,7 +1045,8 @@ ZhFit fit_zh(std::span<const double> t_in, const ZhFitOptions& o, std::uint64_t 
     // Exact at every effort: random starts could not improve on it.
     best.resize(1);
     best[0].coeffs.assign(order, 0.0);
-    best_single_lobe(order, t, mask, o.single_lobe_axes, o.single_lobe_maxima, best[0].axis, best[0].coeffs);
+    best_single_lobe(order, t, mask, o.single_lobe_axes > 0 ? o.single_lobe_axes : single_lobe_axes_for(order),
+                     o.single_lobe_maxima, best[0].axis, best[0].coeffs);
   } else if (o.method == ZhFitMethod::joint) {
     best = joint_search(order, t, mask, resolved, stream, good);
   } else {

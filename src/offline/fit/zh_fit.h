@@ -44,12 +44,19 @@ const EnumNames<ZhFitMethod>& fit_method_names();
 
 inline constexpr int kStartsByEffort = -1;
 
-// The single-lobe search's defaults (best_single_lobe): a lobe's energy is a degree-10
-// polynomial on the sphere at order 6, whose distinct maxima lie tenths of a radian
-// apart, and 1024 axes are 0.08 rad apart; checked against every grid maximum of 16
-// times as many axes (ZhFit.SingleLobeSearchFindsTheOptimumOfADenserGrid).
+// The single-lobe search's defaults (best_single_lobe): a lobe's energy is a polynomial
+// of degree 2(n - 1) on the sphere (10 at order 6), whose distinct maxima lie tenths of a
+// radian apart; at order 6, 1024 axes are 0.08 rad apart, and higher orders get as many
+// more as keep the spacing times the degree (single_lobe_axes_for). The best
+// kSingleLobeMaxima grid maxima and the kSingleLobeHighestAxes highest axes are refined.
+// Checked against every grid maximum of 16 times as many axes at order 6, and against
+// 4 times as many at orders 8 to 16 (ZhFit.SingleLobeSearchFindsTheOptimumOfADenserGrid).
 inline constexpr int kSingleLobeAxes = 1024;
 inline constexpr int kSingleLobeMaxima = 4;
+inline constexpr int kSingleLobeHighestAxes = 8;
+// The axes best_single_lobe scans at `order`: kSingleLobeAxes up to order 6, then
+// kSingleLobeAxes ((order - 1) / 5)^2 (2007 at order 8, 9216 at order 16).
+int single_lobe_axes_for(int order);
 
 struct ZhFitOptions {
   int order = 6;
@@ -70,9 +77,10 @@ struct ZhFitOptions {
   // Joint method, greedy stages: local refinements started from the best scanned axes
   // (plus the optimal linear lobe).
   int single_lobe_refinements = 2;
-  // A single lobe (lobes == 1, both methods): best_single_lobe over this many axes,
-  // refining this many grid maxima (<= 0: every one, the slow reference).
-  int single_lobe_axes = kSingleLobeAxes;
+  // A single lobe (lobes == 1, both methods): best_single_lobe over this many axes (0:
+  // single_lobe_axes_for(order)), refining this many grid maxima (<= 0: every one, the
+  // slow reference).
+  int single_lobe_axes = 0;
   int single_lobe_maxima = kSingleLobeMaxima;
   int max_evaluations = 300;  // per BFGS run
   // varpro: the relative change of psi at which the polish of the best start stops
@@ -123,7 +131,8 @@ double single_lobe_closed_form(int order, std::span<const double> t, const Eigen
 // The globally best single lobe ([4] Eq. 18 leaves psi a function of the axis s alone,
 // and psi(s) = psi(-s)): the closed form on `axis_count` spherical-Fibonacci axes of the
 // upper hemisphere, the grid's local maxima of captured energy ranked, and the best
-// `maxima` of them (<= 0: all) refined by L-BFGS to a relative change of 1e-10 in psi.
+// `maxima` of them and the kSingleLobeHighestAxes highest axes (maxima <= 0: every grid
+// maximum, nothing else) refined by L-BFGS to a relative change of 1e-10 in psi.
 // Writes the axis (unit) and its Eq. 18 coefficients (order values; bands with mask[l]
 // false get 0) and returns the squared residual.
 double best_single_lobe(int order, std::span<const double> t, const std::vector<bool>& mask, int axis_count,
