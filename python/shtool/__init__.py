@@ -7,7 +7,10 @@ z up, rotation g(w) = f(R^-1 w). Coefficients lie on the last axis (``axis=`` pi
 another); float32 stays float32, float64 stays float64. See docs/python.md.
 """
 import functools as _functools
+import inspect as _inspect
 import json as _json
+import numbers as _number_types
+import operator as _operator
 import os as _os
 import re as _re
 import tempfile as _tempfile
@@ -49,9 +52,56 @@ def _python_message(text, aliases):
     return _CLI_OPTION.sub(keyword, text)
 
 
+# One parameter of pybind11's "incompatible function arguments" signature line:
+# "name: type" or "name: type = default", types such as str, int, Optional[float].
+_PYBIND_PARAMETER = _re.compile(r"(\w+): ([\w.]+(?:\[[\w.]+\])?)")
+
+
+def _is_a(value, kind):
+    """Whether pybind11 would take `value` for a parameter of the scalar type `kind`."""
+    if kind == "str":
+        return isinstance(value, str)
+    if kind == "bool":
+        return isinstance(value, (bool, _np.bool_))
+    if kind == "int":
+        try:
+            _operator.index(value)
+            return not isinstance(value, (bool, _np.bool_))
+        except TypeError:
+            return False
+    if kind == "float":
+        return isinstance(value, _number_types.Real) and not isinstance(value, (bool, _np.bool_))
+    return True
+
+
+def _argument_type_error(f, args, kwargs, text):
+    """pybind11's "incompatible function arguments" as a TypeError naming the argument:
+    the binding's scalar parameters share their names with the wrapper's."""
+    listed = _re.search(r"1\. \((.*)\) ->", text)
+    if listed is None:
+        return None
+    try:
+        given = _inspect.signature(f).bind_partial(*args, **kwargs).arguments
+    except TypeError:
+        return None
+    for name, kind in _PYBIND_PARAMETER.findall(listed.group(1)):
+        optional = kind.startswith("Optional[")
+        base = kind[len("Optional["):-1] if optional else kind
+        if name not in given or base not in ("str", "int", "float", "bool"):
+            continue
+        value = given[name]
+        if (value is None and optional) or _is_a(value, base):
+            continue
+        wanted = {"str": "a str", "int": "an int", "float": "a number", "bool": "a bool"}[base]
+        return TypeError(f"{f.__name__}: {name} must be {wanted}{' or None' if optional else ''}, "
+                         f"got {type(value).__name__}")
+    return None
+
+
 def _keywords(**aliases):
     """Bad-value errors of the decorated call name its keywords, not the CLI's options
-    (`aliases`: CLI option -> keyword where they differ)."""
+    (`aliases`: CLI option -> keyword where they differ); a scalar argument of the wrong
+    type is a TypeError naming it, not pybind11's list of signatures."""
     def wrap(f):
         @_functools.wraps(f)
         def call(*args, **kwargs):
@@ -63,6 +113,13 @@ def _keywords(**aliases):
                 if renamed == text:
                     raise
                 raise ValueError(renamed) from None
+            except TypeError as e:
+                if "incompatible function arguments" not in str(e):
+                    raise
+                named = _argument_type_error(f, args, kwargs, str(e))
+                if named is None:
+                    raise
+                raise named from None
         return call
     return wrap
 
@@ -95,6 +152,10 @@ def _float_array(x, name):
 def _on_last_axis(a, axis, name):
     if a.ndim == 0:
         raise ValueError(f"{name} must have at least one axis")
+    try:
+        _operator.index(axis)
+    except TypeError:
+        raise TypeError(f"axis must be an int, got {type(axis).__name__}") from None
     if axis == -1 or axis == a.ndim - 1:
         return a
     try:

@@ -75,6 +75,32 @@ def test_big_endian_arrays_are_converted(dtype):
                                   shtool.fit_zh(c[:2], lobes=1, effort=1).axes)
 
 
+@pytest.mark.parametrize("call, message", [
+    (lambda: shtool.rotate(np.ones(9), np.eye(3), method=3), "rotate: method must be a str, got int"),
+    (lambda: shtool.rotate(np.ones(9), np.eye(3), tol="x"), "rotate: tol must be a number or None, got str"),
+    (lambda: shtool.rotate(np.ones(9), np.eye(3), threads=1.5), "rotate: threads must be an int, got float"),
+    (lambda: shtool.irradiance(np.ones(9), "n"), "axis must be an int, got str"),
+    (lambda: shtool.window(np.ones(9), 5), "window: kind must be a str, got int"),
+    (lambda: shtool.eval_sh("2", np.ones(3)), "eval_sh: order must be an int, got str"),
+    (lambda: shtool.product(np.ones(9), np.ones(9), order="3"), "product: order must be an int or None, got str"),
+    (lambda: shtool.project_env(np.ones((8, 16, 3), np.float32), 3, mirror_x="yes"),
+     "project_env: mirror_x must be a bool, got str"),
+    (lambda: shtool.fit_zh(np.ones(36), lobes="4"), "fit_zh: lobes must be an int, got str"),
+])
+def test_scalar_arguments_of_the_wrong_type_are_named(call, message):
+    # Not pybind11's list of signatures: the argument, what it must be and what it was.
+    with pytest.raises(TypeError) as e:
+        call()
+    assert str(e.value) == message
+
+
+def test_numpy_scalars_pass_where_python_ones_do():
+    c = np.arange(9.0)
+    want = shtool.rotate(c, np.eye(3), tol=1e-6, threads=1)
+    got = shtool.rotate(c, np.eye(3), tol=np.float32(1e-6), threads=np.int64(1))
+    np.testing.assert_array_equal(got, want)
+
+
 @pytest.mark.parametrize("call", [
     lambda: shtool.eval_sh(2, "up"),
     lambda: shtool.eval_sh(2, np.ones((2, 3), np.int64)),
