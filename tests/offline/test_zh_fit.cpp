@@ -514,6 +514,8 @@ TEST(ZhFit, SingleLobeSearchScalesWithTheOrder) {
     Eigen::Vector3d axis;
     const double psi = best_single_lobe(order, t, {}, single_lobe_axes_for(order), kSingleLobeMaxima, axis, c);
     EXPECT_NEAR(fit_zh(t, o).residual, std::sqrt(psi), 1e-12) << "order " << order;
+    // An axis count of 0 is the count for the order, not an empty scan.
+    EXPECT_EQ(best_single_lobe(order, t, {}, 0, kSingleLobeMaxima, axis, c), psi) << "order " << order;
   }
 }
 

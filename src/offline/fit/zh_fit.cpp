@@ -742,7 +742,7 @@ int single_lobe_axes_for(int order) {
 
 double best_single_lobe(int order, std::span<const double> t, const std::vector<bool>& mask, int axis_count,
                         int maxima, Eigen::Vector3d& axis, std::span<double> coeffs) {
-  const AxisScan& scan = axis_scan(order, axis_count);
+  const AxisScan& scan = axis_scan(order, axis_count > 0 ? axis_count : single_lobe_axes_for(order));
   const int n2 = sh_count(order);
   thread_local std::vector<std::pair<double, int>> peaks, highest;
   thread_local std::vector<double> energy;
@@ -1045,8 +1045,7 @@ ZhFit fit_zh(std::span<const double> t_in, const ZhFitOptions& o, std::uint64_t 
     // Exact at every effort: random starts could not improve on it.
     best.resize(1);
     best[0].coeffs.assign(order, 0.0);
-    best_single_lobe(order, t, mask, o.single_lobe_axes > 0 ? o.single_lobe_axes : single_lobe_axes_for(order),
-                     o.single_lobe_maxima, best[0].axis, best[0].coeffs);
+    best_single_lobe(order, t, mask, o.single_lobe_axes, o.single_lobe_maxima, best[0].axis, best[0].coeffs);
   } else if (o.method == ZhFitMethod::joint) {
     best = joint_search(order, t, mask, resolved, stream, good);
   } else {

@@ -130,11 +130,11 @@ double single_lobe_closed_form(int order, std::span<const double> t, const Eigen
 
 // The globally best single lobe ([4] Eq. 18 leaves psi a function of the axis s alone,
 // and psi(s) = psi(-s)): the closed form on `axis_count` spherical-Fibonacci axes of the
-// upper hemisphere, the grid's local maxima of captured energy ranked, and the best
-// `maxima` of them and the kSingleLobeHighestAxes highest axes (maxima <= 0: every grid
-// maximum, nothing else) refined by L-BFGS to a relative change of 1e-10 in psi.
-// Writes the axis (unit) and its Eq. 18 coefficients (order values; bands with mask[l]
-// false get 0) and returns the squared residual.
+// upper hemisphere (<= 0: single_lobe_axes_for(order)), the grid's local maxima of
+// captured energy ranked, and the best `maxima` of them and the kSingleLobeHighestAxes
+// highest axes (maxima <= 0: every grid maximum, nothing else) refined by L-BFGS to a
+// relative change of 1e-10 in psi. Writes the axis (unit) and its Eq. 18 coefficients
+// (order values; bands with mask[l] false get 0) and returns the squared residual.
 double best_single_lobe(int order, std::span<const double> t, const std::vector<bool>& mask, int axis_count,
                         int maxima, Eigen::Vector3d& axis, std::span<double> coeffs);
 
