@@ -333,18 +333,13 @@ void transform_ply_in_place(const TransformSplatsRequest& r, const Eigen::Matrix
 // position with fewer fractional bits, so a few far splats (often stray outliers of a
 // capture) coarsen the whole scene. Says how far, how many, and the step it costs.
 std::string coarse_positions_warning(const SplatScene& scene, int bits) {
-  // What 12 fractional bits reach: round(p 2^12) within -8388608..8388607, as write_spz.
-  const auto fits = [](float p) {
-    const float q = std::round(std::ldexp(p, kSpzFractionalBits));
-    return q <= 8388607.0f && q >= -8388608.0f;
-  };
   std::size_t beyond = 0, farthest = 0;
   float reach = 0;
   for (std::size_t i = 0; i < scene.count; ++i) {
     bool in = true;
     for (int c = 0; c < 3; ++c) {
       const float p = scene.position[3 * i + c];
-      in = in && fits(p);
+      in = in && spz_fixed_point_holds(p, kSpzFractionalBits);
       if (std::abs(p) > reach) reach = std::abs(p), farthest = i;
     }
     if (!in) ++beyond;

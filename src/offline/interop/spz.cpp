@@ -21,7 +21,6 @@ namespace {
 
 constexpr std::uint32_t kMagic = 0x5053474e;  // "NGSP" little endian
 constexpr float kColorScale = 0.15f;
-
 constexpr int kZstdLevel = 12;  // the reference writer's
 constexpr std::uint8_t kFlagExtensions = 0x2;
 // Extension record types (spz extensions/README.md): vendor 0xADBE (Adobe), extension 3.
@@ -345,13 +344,16 @@ SplatScene read_spz(std::string_view bytes, const std::string& name, SpzHeader* 
   throw InputError(name + ": not an spz file (neither the NGSP header of version 4 nor a gzip stream)");
 }
 
+bool spz_fixed_point_holds(float coordinate, int fractional_bits) {
+  const float q = std::round(std::ldexp(coordinate, fractional_bits));
+  return q <= 8388607.0f && q >= -8388608.0f;
+}
+
 int spz_fractional_bits(const SplatScene& s) {
   float high = 0, low = 0;
   for (float p : s.position) high = std::max(high, p), low = std::min(low, p);
   // The finest fixed point whose 24 bits (two's complement) reach every position.
-  auto fits = [&](int bits) {
-    return std::round(std::ldexp(high, bits)) <= 8388607.0f && std::round(std::ldexp(low, bits)) >= -8388608.0f;
-  };
+  auto fits = [&](int bits) { return spz_fixed_point_holds(high, bits) && spz_fixed_point_holds(low, bits); };
   int fractional_bits = kSpzFractionalBits;
   while (fractional_bits > 0 && !fits(fractional_bits)) --fractional_bits;
   if (!fits(fractional_bits))

@@ -59,6 +59,10 @@ std::string write_spz(const SplatScene& scene, const SpzWriteOptions& options, i
 
 inline constexpr int kSpzFractionalBits = 12;
 
+// Whether a coordinate fits spz's 24-bit two's complement fixed point with these
+// fractional bits: round(coordinate 2^bits) within -8388608..8388607.
+bool spz_fixed_point_holds(float coordinate, int fractional_bits);
+
 // The fractional bits write_spz stores positions with: kSpzFractionalBits (12, the
 // reference writer's: a step of 2^-12 units), or fewer when a coordinate lies beyond
 // 2048 units, one bit fewer per doubling; one far splat coarsens every position.
