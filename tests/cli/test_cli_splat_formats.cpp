@@ -168,6 +168,17 @@ CommandResult convert(const fs::path& in, const fs::path& out, std::vector<std::
   return run_shtool(argv);
 }
 
+// A refused conversion: exit 1, `message` in the error, and no output (`out` is removed
+// first, so a file left by an earlier case does not count).
+void expect_refused(const fs::path& in, const fs::path& out, const std::string& message,
+                    std::vector<std::string> more = {}) {
+  fs::remove(out);
+  const auto r = convert(in, out, std::move(more));
+  EXPECT_EQ(r.exit_code, 1) << message << ": " << r.err;
+  EXPECT_NE(r.err.find(message), std::string::npos) << message << " not in: " << r.err;
+  EXPECT_FALSE(fs::exists(out)) << message;
+}
+
 // A file's values as stored (no frame change on the way to PLY).
 Scene raw_values(const fs::path& file) {
   const fs::path ply = scratch("raw_" + file.filename().string() + ".ply");
@@ -761,11 +772,7 @@ TEST(CliSplatFormats, SpzExtensionRecords) {
   for (const auto& [bytes, message] : bad) {
     const fs::path spz = scratch("ext_bad.spz"), out = scratch("ext_bad.ply");
     write_bytes(spz, bytes);
-    fs::remove(out);
-    const auto r = convert(spz, out);
-    EXPECT_EQ(r.exit_code, 1) << message << ": " << r.err;
-    EXPECT_NE(r.err.find(message), std::string::npos) << r.err;
-    EXPECT_FALSE(fs::exists(out)) << message;
+    expect_refused(spz, out, message);
   }
 }
 
@@ -810,12 +817,7 @@ TEST(CliSplatFormats, GltfColourSpaceAndKernel) {
       {variant("cs_kernel.gltf", "kernel", "customShape"), ".glb", "kernel 'customShape'"},
   };
   for (const Case& c : cases) {
-    const fs::path out = scratch("cs_refused" + c.ext);
-    fs::remove(out);
-    const auto r = convert(c.in, out);
-    EXPECT_EQ(r.exit_code, 1) << c.message << ": " << r.err;
-    EXPECT_NE(r.err.find(c.message), std::string::npos) << r.err;
-    EXPECT_FALSE(fs::exists(out)) << c.message;
+    expect_refused(c.in, scratch("cs_refused" + c.ext), c.message);
   }
 }
 
@@ -882,12 +884,8 @@ TEST(CliSplatFormats, EmptySceneIsRefusedBySpzAndGltf) {
   const fs::path in = scratch("empty.ply");
   write_bytes(in, ply_bytes(Scene{1, {}}));
   for (const std::string ext : {".spz", ".glb", ".gltf"}) {
-    const fs::path out = scratch("empty_out" + ext);
-    fs::remove(out);
-    const auto r = convert(in, out);
-    EXPECT_EQ(r.exit_code, 1) << ext << ": " << r.err;
-    EXPECT_NE(r.err.find("cannot hold an empty splat scene"), std::string::npos) << r.err;
-    EXPECT_FALSE(fs::exists(out)) << ext;
+    SCOPED_TRACE(ext);
+    expect_refused(in, scratch("empty_out" + ext), "cannot hold an empty splat scene");
   }
   for (const std::string version : {"3", "4"}) {
     const fs::path out = scratch("empty_out.spz");
@@ -906,13 +904,9 @@ TEST(CliSplatFormats, EmptySceneIsRefusedBySpzAndGltf) {
   put32(v3, 0x5053474e), put32(v3, 3), put32(v3, 0);
   v3 += std::string("\x00\x0c\x00\x00", 4);
   for (const std::string& bytes : {v4, compress_with("gzip", v3)}) {
-    const fs::path spz = scratch("empty_in.spz"), out = scratch("empty_back.ply");
+    const fs::path spz = scratch("empty_in.spz");
     write_bytes(spz, bytes);
-    fs::remove(out);
-    const auto e = convert(spz, out);
-    EXPECT_EQ(e.exit_code, 1) << e.err;
-    EXPECT_NE(e.err.find("no splats"), std::string::npos) << e.err;
-    EXPECT_FALSE(fs::exists(out));
+    expect_refused(spz, scratch("empty_back.ply"), "no splats");
   }
 }
 
@@ -994,13 +988,10 @@ TEST(CliSplatFormats, BadFilesAreRefusedWithNothingWritten) {
       {"spz version", ".spz", s4, {"--spz-version", "2"}, "--spz-version"},
   };
   for (const Case& c : cases) {
-    const fs::path bad = scratch("bad" + c.ext), out = scratch("bad_out.spz");
+    SCOPED_TRACE(c.name);
+    const fs::path bad = scratch("bad" + c.ext);
     write_bytes(bad, c.bytes);
-    fs::remove(out);
-    const auto r = convert(bad, out, c.args);
-    EXPECT_EQ(r.exit_code, 1) << c.name << ": " << r.err;
-    EXPECT_NE(r.err.find(c.message), std::string::npos) << c.name << ": " << r.err;
-    EXPECT_FALSE(fs::exists(out)) << c.name;
+    expect_refused(bad, scratch("bad_out.spz"), c.message, c.args);
   }
 }
 
@@ -1026,15 +1017,11 @@ TEST(CliSplatFormats, SpzPointCountBoundedByFileSize) {
   const std::string bomb = file(1000000);
   ASSERT_LT(bomb.size() * 1024 / 9, 1000000u) << bomb.size();
   write_bytes(spz, bomb);
-  fs::remove(out);
-  auto r = convert(spz, out);
-  EXPECT_EQ(r.exit_code, 1) << r.err;
-  EXPECT_NE(r.err.find("implausible: 1000000 splats claimed"), std::string::npos) << r.err;
-  EXPECT_FALSE(fs::exists(out));
+  expect_refused(spz, out, "implausible: 1000000 splats claimed");
   // The same streams for as many splats as the bound allows are read.
   const std::string small = file(100);
   write_bytes(spz, small);
-  r = convert(spz, out);
+  const auto r = convert(spz, out);
   EXPECT_EQ(r.exit_code, 0) << r.err;
 }
 
@@ -1057,12 +1044,8 @@ TEST(CliSplatFormats, GltfRequiredExtensionsAreChecked) {
   const fs::path bad = scratch("req_bad.gltf");
   write_bytes(bad, doc.dump());
   for (const std::string ext : {".ply", ".glb", ".spz"}) {
-    const fs::path out = scratch("req_out" + ext);
-    fs::remove(out);
-    const auto b = convert(bad, out);
-    EXPECT_EQ(b.exit_code, 1) << b.err;
-    EXPECT_NE(b.err.find("requires the glTF extension EXT_meshopt_compression"), std::string::npos) << b.err;
-    EXPECT_FALSE(fs::exists(out));
+    SCOPED_TRACE(ext);
+    expect_refused(bad, scratch("req_out" + ext), "requires the glTF extension EXT_meshopt_compression");
   }
 }
 
@@ -1079,16 +1062,10 @@ TEST(CliSplatFormats, GlbScaleOverflowIsRefused) {
   const fs::path in2 = scratch("big_scale2.ply");
   write_bytes(in2, ply_bytes(t));
   for (const std::string ext : {".glb", ".gltf"}) {
+    SCOPED_TRACE(ext);
     const fs::path out = scratch("big_scale" + ext);
-    fs::remove(out);
-    auto r = convert(in, out);
-    EXPECT_EQ(r.exit_code, 1) << r.err;
-    EXPECT_NE(r.err.find("splat 2: its log-scale 89"), std::string::npos) << r.err;
-    EXPECT_FALSE(fs::exists(out));
-    r = convert(in2, out, {"--scale", "1e20"});
-    EXPECT_EQ(r.exit_code, 1) << r.err;
-    EXPECT_NE(r.err.find("splat 1: its log-scale 96.05"), std::string::npos) << r.err;
-    EXPECT_FALSE(fs::exists(out));
+    expect_refused(in, out, "splat 2: its log-scale 89");
+    expect_refused(in2, out, "splat 1: its log-scale 96.05", {"--scale", "1e20"});
   }
 }
 
