@@ -3,7 +3,6 @@ library's basis transcribed from its source, against shtool.eval_sh."""
 import math
 
 import numpy as np
-import pytest
 from scipy.spatial.transform import Rotation
 
 import shtool
