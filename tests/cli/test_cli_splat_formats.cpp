@@ -1069,6 +1069,57 @@ TEST(CliSplatFormats, GlbScaleOverflowIsRefused) {
   }
 }
 
+// A finite value that a rotation alone takes past float (an SH coefficient or an
+// orientation component near 3.4e38) is refused on every path, naming the splat, not
+// written as inf: PLY streamed, PLY through the scene (--sh-degree), spz, glTF.
+TEST(CliSplatFormats, OverflowUnderTheTurnIsRefusedOnEveryPath) {
+  const std::vector<std::string> turn = {"--quat", "0.92388,0.38268,0,0"};  // 45 degrees about x
+  Scene sh = random_scene(20, 3, 41);
+  sh.splats[9].sh[0][1] = 3e38;  // red, band 1: the turn mixes it with its band's others
+  sh.splats[9].sh[0][2] = 3e38;
+  Scene rot = random_scene(20, 3, 43);
+  rot.splats[11].rot = Eigen::Vector4d(3e38, -3e38, 0, 0);
+  const fs::path in_sh = scratch("overflow_sh.ply"), in_rot = scratch("overflow_rot.ply");
+  write_bytes(in_sh, ply_bytes(sh));
+  write_bytes(in_rot, ply_bytes(rot));
+  for (const auto& [ext, more] : std::vector<std::pair<std::string, std::vector<std::string>>>{
+           {".ply", {}}, {".ply", {"--sh-degree", "3"}}, {".spz", {}}, {".glb", {}}, {".gltf", {}}}) {
+    SCOPED_TRACE(ext + (more.empty() ? "" : " " + more[0]));
+    std::vector<std::string> argv = turn;
+    argv.insert(argv.end(), more.begin(), more.end());
+    const fs::path out = scratch("overflow_out" + ext);
+    expect_refused(in_sh, out, "splat 9: ", argv);
+    expect_refused(in_sh, out, "overflows its type after the transform (a value of", argv);
+    expect_refused(in_rot, out, "splat 11: ", argv);
+  }
+}
+
+// The glTF and spz writers store unit orientations whatever the stored length: four
+// quaternions of one turn (90 degrees about x), of lengths 1.4e20, 1.4e-25, 4.2e38 and
+// 0.99, come out as one unit quaternion (up to sign; spz within its 10-bit step).
+TEST(CliSplatFormats, OrientationsOfAnyLengthAreStoredAsUnitQuaternions) {
+  Scene s = random_scene(4, 0, 47);
+  const double lengths[4] = {1e20, 1e-25, 3e38, 0.7};
+  for (int i = 0; i < 4; ++i) s.splats[i].rot = Eigen::Vector4d(lengths[i], lengths[i], 0, 0);
+  const fs::path in = scratch("quat_lengths.ply");
+  write_bytes(in, ply_bytes(s));
+  for (const auto& [ext, tolerance] : std::vector<std::pair<std::string, double>>{{".glb", 1e-6}, {".spz", 2e-3}}) {
+    SCOPED_TRACE(ext);
+    const fs::path out = scratch("quat_lengths" + ext);
+    const auto r = convert(in, out);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const Scene back = raw_values(out);
+    ASSERT_EQ(back.splats.size(), 4u);
+    // The last (length 0.99) as the reference: the frame change turns all four alike.
+    const Eigen::Vector4d unit = back.splats[3].rot;
+    for (int i = 0; i < 4; ++i) {
+      const Eigen::Vector4d q = back.splats[i].rot;
+      EXPECT_NEAR(q.norm(), 1.0, tolerance) << i;
+      EXPECT_NEAR(std::abs(q.dot(unit)), 1.0, tolerance) << i << ": " << q.transpose() << " against " << unit.transpose();
+    }
+  }
+}
+
 // The Khronos validator on the glTF outputs: no error but its verdict on the extension's
 // attribute names, which it does not know (the messages are printed).
 TEST(CliSplatFormats, GltfValidatorFaultsOnlyTheExtensionAttributeNames) {

@@ -331,6 +331,25 @@ TEST(CliTransformSplats, NonFiniteNormalsAreCarriedSplatValuesRefused) {
       EXPECT_NE(r.err.find("splat 5"), std::string::npos) << format << " -> " << ext << ": " << r.err;
       EXPECT_FALSE(fs::exists(out)) << format << " -> " << ext;
     }
+    // A finite normal that the turn takes past float is not carried as inf: refused into
+    // PLY, dropped (as every normal) on the way into spz and glb.
+    s = random_splats(50, 1, 29);
+    s[6].n = {3e38f, 3e38f, 0};  // 45 degrees about z: ny = 4.2e38
+    std::ofstream(in, std::ios::binary | std::ios::trunc) << write_ply(s, 1, format);
+    for (const std::string ext : {".ply", ".spz", ".glb"}) {
+      const fs::path out = scratch("big_normal_out" + ext);
+      fs::remove(out);
+      const auto r = run_shtool(
+          {"transform-splats", in.string(), "--quat", "0.9238795,0,0,0.3826834", "--out", out.string()});
+      if (ext == ".ply") {
+        EXPECT_EQ(r.exit_code, 1) << format << ": " << r.err;
+        EXPECT_NE(r.err.find("splat 6: 'n"), std::string::npos) << format << ": " << r.err;
+        EXPECT_NE(r.err.find("overflows its type after the transform"), std::string::npos) << format << ": " << r.err;
+        EXPECT_FALSE(fs::exists(out)) << format;
+      } else {
+        EXPECT_EQ(r.exit_code, 0) << format << " -> " << ext << ": " << r.err;
+      }
+    }
   }
 }
 
@@ -376,6 +395,36 @@ TEST(CliTransformSplats, MessagesNameTheProblem) {
     if (c.args.empty() || c.args[0] == "--quat")
       EXPECT_EQ(r.err.find("--scale"), std::string::npos) << c.name << ": " << r.err;
     EXPECT_FALSE(fs::exists(out)) << c.name;
+  }
+}
+
+// ASCII values are read as C's strtod reads them (PLY writers print with printf): a
+// leading '+' is a sign, so "+1.5" is the scene "1.5" is; a second sign is no number.
+TEST(CliTransformSplats, AsciiValuesMayCarryAPlusSign) {
+  const std::string plain = write_ply(random_splats(3, 1, 37), 1, "ascii");
+  const std::size_t body = plain.find("end_header\n") + 11;
+  auto with_first_value = [&](const std::string& text) {
+    std::string b = plain;
+    b.replace(body, b.find(' ', body) - body, text);  // splat 0's x
+    return b;
+  };
+  std::string outputs[2];
+  for (int k = 0; k < 2; ++k) {
+    const fs::path in = scratch("plus.ply"), out = scratch("plus_out.glb");
+    std::ofstream(in, std::ios::binary) << with_first_value(k ? "+1.5" : "1.5");
+    const auto r = run_shtool({"transform-splats", in.string(), "--out", out.string()});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    outputs[k] = read_file(out);
+  }
+  EXPECT_TRUE(outputs[0] == outputs[1]);
+  for (const std::string bad : {"+-1.5", "++1.5", "+"}) {
+    const fs::path in = scratch("plus.ply"), out = scratch("plus_out.glb");
+    std::ofstream(in, std::ios::binary) << with_first_value(bad);
+    fs::remove(out);
+    const auto r = run_shtool({"transform-splats", in.string(), "--out", out.string()});
+    EXPECT_EQ(r.exit_code, 1) << bad;
+    EXPECT_NE(r.err.find("'" + bad + "' in element 'vertex' is not a number"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out)) << bad;
   }
 }
 

@@ -55,6 +55,14 @@ void store(char* p, T v, bool swap) {
   std::memcpy(p, b.data(), sizeof(T));
 }
 
+// An ASCII value as C's strtod reads it (PLY's writers print with printf): from_chars
+// with an optional leading '+' (not a second sign). False unless the whole token is one number.
+bool parse_ascii_value(std::string_view token, double& v) {
+  if (token.size() > 1 && token[0] == '+' && token[1] != '+' && token[1] != '-') token.remove_prefix(1);
+  const auto [ptr, ec] = std::from_chars(token.data(), token.data() + token.size(), v);
+  return ec == std::errc() && ptr == token.data() + token.size();
+}
+
 }  // namespace
 
 std::optional<std::size_t> PlyElement::find(std::string_view property) const {
@@ -195,8 +203,7 @@ PlyFile PlyFile::parse(std::string bytes, const std::filesystem::path& name) {
         f.ascii_values_.push_back(bytes.substr(at, stop - at));  // leading whitespace included
         const std::string token = bytes.substr(start, stop - start);
         double v = 0;
-        const auto [ptr, ec] = std::from_chars(token.data(), token.data() + token.size(), v);
-        if (ec != std::errc() || ptr != token.data() + token.size())
+        if (!parse_ascii_value(token, v))
           throw fail("'" + token + "' in element '" + e.name + "' is not a number");
         at = stop;
       }
@@ -214,7 +221,7 @@ double PlyFile::get_ascii(const PlyElement& e, std::size_t i, std::size_t p) con
   const std::string& s = ascii_values_[ascii_first_[e_index] + i * e.properties.size() + p];
   const std::size_t start = s.find_first_not_of(" \t\r\n");
   double v = 0;
-  std::from_chars(s.data() + start, s.data() + s.size(), v);
+  parse_ascii_value(std::string_view(s).substr(start), v);
   return v;
 }
 

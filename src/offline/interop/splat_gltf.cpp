@@ -272,11 +272,9 @@ std::string write_gltf_splats(const SplatScene& s, bool binary) {
   model.buffers.emplace_back();
   std::vector<float> rot(4 * n), scale(3 * n), opacity(n);
   for (std::size_t i = 0; i < n; ++i) {
-    const float* q = &s.rotation[4 * i];
-    float norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-    const float w = norm > 0 ? q[0] / norm : 1.0f;
-    for (int c = 0; c < 3; ++c) rot[4 * i + c] = norm > 0 ? q[1 + c] / norm : 0.0f;
-    rot[4 * i + 3] = w;
+    const std::array<float, 4> q = unit_rotation(&s.rotation[4 * i]);  // w x y z; glTF's order is x y z w
+    for (int c = 0; c < 3; ++c) rot[4 * i + c] = q[1 + c];
+    rot[4 * i + 3] = q[0];
     for (int c = 0; c < 3; ++c) {
       scale[3 * i + c] = std::exp(s.log_scale[3 * i + c]);
       // glTF holds no infinity; a log-scale past log(FLT_MAX) = 88.72 has no linear float.

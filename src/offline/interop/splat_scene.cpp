@@ -59,20 +59,34 @@ const char* splat_format_name(SplatFormat format) {
   return "?";
 }
 
-void check_scene_finite(const SplatScene& s, const std::string& name) {
+std::optional<NonFiniteValue> first_non_finite(const SplatScene& s) {
   const std::size_t stride = s.sh_stride();
   for (std::size_t i = 0; i < s.count; ++i) {
-    auto bad = [&](const std::vector<float>& v, std::size_t per, const char* what) {
+    auto finite = [&](const std::vector<float>& v, std::size_t per) {
       for (std::size_t k = 0; k < per; ++k)
-        if (!std::isfinite(v[i * per + k]))
-          throw InputError(name + ": splat " + std::to_string(i) + ": its " + what + " is not finite");
+        if (!std::isfinite(v[i * per + k])) return false;
+      return true;
     };
-    bad(s.position, 3, "position");
-    bad(s.log_scale, 3, "scale");
-    bad(s.rotation, 4, "rotation");
-    bad(s.opacity, 1, "opacity");
-    bad(s.sh, stride, "SH colour");
+    if (!finite(s.position, 3)) return NonFiniteValue{i, "position"};
+    if (!finite(s.log_scale, 3)) return NonFiniteValue{i, "scale"};
+    if (!finite(s.rotation, 4)) return NonFiniteValue{i, "rotation"};
+    if (!finite(s.opacity, 1)) return NonFiniteValue{i, "opacity"};
+    if (!finite(s.sh, stride)) return NonFiniteValue{i, "SH colour"};
   }
+  return std::nullopt;
+}
+
+void check_scene_finite(const SplatScene& s, const std::string& name) {
+  if (const auto bad = first_non_finite(s))
+    throw InputError(name + ": splat " + std::to_string(bad->splat) + ": its " + bad->what + " is not finite");
+}
+
+std::array<float, 4> unit_rotation(const float* wxyz) {
+  const double q[4] = {wxyz[0], wxyz[1], wxyz[2], wxyz[3]};
+  const double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+  if (!(norm > 0)) return {1.0f, 0.0f, 0.0f, 0.0f};
+  return {static_cast<float>(q[0] / norm), static_cast<float>(q[1] / norm), static_cast<float>(q[2] / norm),
+          static_cast<float>(q[3] / norm)};
 }
 
 SplatShLanes::SplatShLanes(const OrthogonalMap& map) : order_(map.order()), reflects_(map.reflects()) {

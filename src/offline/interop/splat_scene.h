@@ -4,6 +4,7 @@
 // splat_gltf.h); frames are turned by transform_splat_scene.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <filesystem>
 #include <optional>
@@ -58,9 +59,22 @@ enum class SplatFormat { ply, spz, gltf, glb };
 SplatFormat splat_format_of(const std::filesystem::path& path, const std::string& what);
 const char* splat_format_name(SplatFormat format);
 
+// The first splat value that is not finite, in splat order: the splat and what the value
+// is ("position", "scale", "rotation", "opacity", "SH colour"); nullopt when all are.
+struct NonFiniteValue {
+  std::size_t splat = 0;
+  const char* what = "";
+};
+std::optional<NonFiniteValue> first_non_finite(const SplatScene& scene);
+
 // InputError naming `name` when a value that every format needs finite is not (the
 // first one found, in splat order).
 void check_scene_finite(const SplatScene& scene, const std::string& name);
+
+// A splat's rotation (w x y z, any length) divided by its length, computed in double:
+// components past 1.8e19 or below 1e-19 square out of float's range. A zero
+// quaternion gives the identity.
+std::array<float, 4> unit_rotation(const float* wxyz);
 
 // One orthogonal map of SH colours for many splats (a whole scene turned by one matrix):
 // the reference rotation's band blocks, OrthogonalMap's own, applied to kLanes splats at

@@ -46,13 +46,16 @@ Eigen::Matrix3d splat_rotation(const TransformSplatsRequest& r) {
 
 namespace {
 
-// Why a value that was finite may overflow after the transform: the user's scale or
-// translation when there is one, else the rotation itself (|R p| per axis can reach
-// sqrt(3) max |p_k|).
-std::string overflow_cause(const TransformSplatsRequest& r) {
+// Why the value `what` (a PLY property's name, or a SplatScene field's) that was finite
+// may overflow after the transform: the user's scale or translation when there is one and
+// it changes the value (positions, scales), else the rotation itself (|R p| per axis can
+// reach sqrt(3) max |p_k|; SH colours, orientations and normals turn alike).
+std::string overflow_cause(const TransformSplatsRequest& r, std::string_view what) {
+  const bool scaled_or_moved = what == "x" || what == "y" || what == "z" || what == "position" ||
+                               what == "scale" || what.starts_with("scale_");
   const bool moved = r.scale != 1 || r.translate[0] != 0 || r.translate[1] != 0 || r.translate[2] != 0;
-  return moved ? "--scale or --translate too large for " + r.in.string()
-               : "a value of " + r.in.string() + " too close to its type's limit to be rotated";
+  return moved && scaled_or_moved ? "--scale or --translate too large for " + r.in.string()
+                                  : "a value of " + r.in.string() + " too close to its type's limit to be rotated";
 }
 
 std::string upper(std::string_view letters) {
@@ -169,6 +172,7 @@ void transform_ply_streamed(const TransformSplatsRequest& r, const Eigen::Matrix
     // Up to the first splat whose input is not finite; a splat before it that overflows
     // after the transform is the problem reported, as one splat after another would find.
     const std::size_t limit = first_non_finite(records, count);
+    std::size_t normal_overflow = limit;  // the first splat whose finite normal the turn took past float
     for (std::size_t j = 0; j < limit; ++j) {
       char* s = records + j * size;
       const Eigen::Vector3d p(get(s, position[0]), get(s, position[1]), get(s, position[2]));
@@ -179,6 +183,7 @@ void transform_ply_streamed(const TransformSplatsRequest& r, const Eigen::Matrix
         const Eigen::Vector3d n(get(s, at(idx[0])), get(s, at(idx[1])), get(s, at(idx[2])));
         const Eigen::Vector3d turned = rot * n;
         for (int k = 0; k < 3; ++k) put(s, at(idx[k]), turned[k]);
+        if (normal_overflow == limit && n.allFinite() && !turned.cast<float>().allFinite()) normal_overflow = j;
       }
       if (layout.rotation) {
         const auto& idx = *layout.rotation;
@@ -219,11 +224,14 @@ void transform_ply_streamed(const TransformSplatsRequest& r, const Eigen::Matrix
       }
     }
     // A finite value beyond float32 (3.4e38) was stored as inf.
-    const std::size_t overflow = first_non_finite(records, limit);
+    const std::size_t overflow = std::min(first_non_finite(records, limit), normal_overflow);
     for (std::size_t j = overflow; j < limit; ++j)
-      if (!finite(records + j * size))
-        return "splat " + std::to_string(first + j) + ": '" + non_finite(records + j * size) +
-               "' overflows its type after the transform (" + overflow_cause(r) + ")";
+      if (!finite(records + j * size) || j == normal_overflow) {
+        const std::string& name = finite(records + j * size) ? v.properties[(*layout.normal)[0]].name
+                                                             : non_finite(records + j * size);
+        return "splat " + std::to_string(first + j) + ": '" + name + "' overflows its type after the transform (" +
+               overflow_cause(r, name) + ")";
+      }
     if (limit < count)
       return r.in.string() + ": splat " + std::to_string(first + limit) + ": '" + non_finite(records + limit * size) +
              "' is not finite";
@@ -294,6 +302,14 @@ void transform_ply_in_place(const TransformSplatsRequest& r, const Eigen::Matrix
         for (int k = 0; k < 3; ++k) n[k] = ply.get(v, i, (*layout.normal)[k]);
         const Eigen::Vector3d turned = rot * n;
         for (int k = 0; k < 3; ++k) ply.set(v, i, (*layout.normal)[k], turned[k]);
+        // Carried as they are when not finite, but the turn must not make them so.
+        for (int k = 0; k < 3 && n.allFinite(); ++k)
+          if (!std::isfinite(ply.get(v, i, (*layout.normal)[k]))) {
+            const std::string& name = v.properties[(*layout.normal)[k]].name;
+            problems[chunk] = "splat " + std::to_string(i) + ": '" + name +
+                              "' overflows its type after the transform (" + overflow_cause(r, name) + ")";
+            return;
+          }
       }
       if (layout.rotation) {
         const auto& idx = *layout.rotation;
@@ -317,7 +333,7 @@ void transform_ply_in_place(const TransformSplatsRequest& r, const Eigen::Matrix
       // A finite value beyond the property's type (float32 past 3.4e38) was stored as inf.
       if (const std::string* name = non_finite(i)) {
         problems[chunk] = "splat " + std::to_string(i) + ": '" + *name + "' overflows its type after the transform (" +
-                          overflow_cause(r) + ")";
+                          overflow_cause(r, *name) + ")";
         return;
       }
     }
@@ -465,10 +481,10 @@ TransformSplatsReport run_transform_splats(const TransformSplatsRequest& r) {
     // The user's transform acts in the input's coordinates, then the frame changes.
     transform_splat_scene(scene, frame_change * rot, r.scale, frame_change * t, threads);
     if (r.sh_degree) scene.set_degree(*r.sh_degree);
-    for (std::size_t i = 0; i < scene.position.size(); ++i)
-      if (!std::isfinite(scene.position[i]) || !std::isfinite(scene.log_scale[i]))
-        throw InputError("splat " + std::to_string(i / 3) +
-                         ": a position or scale overflows float after the transform (" + overflow_cause(r) + ")");
+    // Read values are finite (each reader checks): one that is not was taken past float.
+    if (const auto bad = first_non_finite(scene))
+      throw InputError("splat " + std::to_string(bad->splat) + ": its " + bad->what +
+                       " overflows its type after the transform (" + overflow_cause(r, bad->what) + ")");
     std::string out;
     switch (out_format) {
       case SplatFormat::ply: out = write_ply_splats(scene); break;

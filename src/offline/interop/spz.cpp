@@ -392,12 +392,8 @@ std::string write_spz(const SplatScene& s, const SpzWriteOptions& o, int threads
     }
     alpha[i] = to_u8(sigmoid(s.opacity[i]) * 255.0f);
     // Quaternion x y z w, normalised.
-    float q[4] = {s.rotation[4 * i + 1], s.rotation[4 * i + 2], s.rotation[4 * i + 3], s.rotation[4 * i]};
-    const float norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-    if (norm > 0)
-      for (float& x : q) x /= norm;
-    else
-      q[0] = q[1] = q[2] = 0, q[3] = 1;
+    const std::array<float, 4> unit = unit_rotation(&s.rotation[4 * i]);
+    const float q[4] = {unit[1], unit[2], unit[3], unit[0]};
     int largest_index = 0;
     for (int j = 1; j < 4; ++j)
       if (std::abs(q[j]) > std::abs(q[largest_index])) largest_index = j;
