@@ -84,6 +84,7 @@ def _argument_type_error(f, args, kwargs, text):
         given = _inspect.signature(f).bind_partial(*args, **kwargs).arguments
     except TypeError:
         return None
+    ints = []  # (name, value) of the integer arguments, each of the right type
     for name, kind in _PYBIND_PARAMETER.findall(listed.group(1)):
         optional = kind.startswith("Optional[")
         base = kind[len("Optional["):-1] if optional else kind
@@ -91,20 +92,57 @@ def _argument_type_error(f, args, kwargs, text):
             continue
         value = given[name]
         if (value is None and optional) or _is_a(value, base):
+            if base == "int" and value is not None:
+                ints.append((name, _operator.index(value)))
             continue
         wanted = {"str": "a str", "int": "an int", "float": "a number", "bool": "a bool"}[base]
         return TypeError(f"{f.__name__}: {name} must be {wanted}{' or None' if optional else ''}, "
                          f"got {type(value).__name__}")
+    # Every type right: pybind11 refused an integer its C type cannot hold; one past a C
+    # int first, else a negative one (an unsigned parameter).
+    for bad in (lambda v: not -2**31 <= v < 2**31, lambda v: v < 0):
+        for name, value in ints:
+            if bad(value):
+                return ValueError(f"{f.__name__}: {name} = {value} is out of range")
     return None
+
+
+_BOOLS = (bool, _np.bool_)
+
+
+def _refuse_bools(f, signature, args, kwargs):
+    """TypeError naming an argument given a bool where the parameter is not one (its
+    default is not a bool): True would pass as 1 (order=True, an order-1 call)."""
+    try:
+        given = signature.bind_partial(*args, **kwargs).arguments
+    except TypeError:
+        return  # the call itself reports it
+    for name, value in given.items():
+        parameter = signature.parameters[name]
+        if parameter.kind is _inspect.Parameter.VAR_KEYWORD or not isinstance(value, _BOOLS):
+            continue
+        default = parameter.default
+        if isinstance(default, bool):
+            continue
+        if type(default) is int or name == "order":
+            raise TypeError(f"{f.__name__}: {name} must be an int, got bool")
+        if type(default) is float:
+            raise TypeError(f"{f.__name__}: {name} must be a number, got bool")
+        raise TypeError(f"{f.__name__}: {name} cannot be a bool, got {value!r}")
 
 
 def _keywords(**aliases):
     """Bad-value errors of the decorated call name its keywords, not the CLI's options
     (`aliases`: CLI option -> keyword where they differ); a scalar argument of the wrong
-    type is a TypeError naming it, not pybind11's list of signatures."""
+    type is a TypeError naming it, not pybind11's list of signatures, and a bool is
+    refused where the parameter is not one."""
     def wrap(f):
+        signature = _inspect.signature(f)
+
         @_functools.wraps(f)
         def call(*args, **kwargs):
+            if any(isinstance(v, _BOOLS) for v in args) or any(isinstance(v, _BOOLS) for v in kwargs.values()):
+                _refuse_bools(f, signature, args, kwargs)
             try:
                 return f(*args, **kwargs)
             except ValueError as e:
@@ -317,16 +355,25 @@ def _numbers(x, count, name):
     return a.reshape(-1)
 
 
-def _splat_array(x, name):
+def _splat_array(x, name, width):
     """(array as float64, dtype of the result): float32 and float64 are kept, integers and
-    bools are taken as float64 (never truncated on the way back)."""
+    bools are taken as float64 (never truncated on the way back). Shape (S, width), or
+    (S, 3, N**2) for SH colours (width None)."""
     a = _np.asarray(x)
     if a.dtype.kind in "iub":
-        return a.astype(_np.float64), _np.dtype(_np.float64)
-    if a.dtype.kind != "f":
+        a, out = a.astype(_np.float64), _np.dtype(_np.float64)
+    elif a.dtype.kind != "f":
         raise TypeError(f"{name} must be an array of numbers, got {a.dtype}")
-    out = _np.dtype(_np.float32 if a.dtype.itemsize == 4 else _np.float64)
-    return a.astype(_np.float64), out
+    else:
+        a, out = a.astype(_np.float64), _np.dtype(_np.float32 if a.dtype.itemsize == 4 else _np.float64)
+    if width is None:
+        k = a.shape[-1] if a.ndim == 3 else 0
+        ok, text = a.ndim == 3 and a.shape[1] == 3 and k > 0 and round(k ** 0.5) ** 2 == k, "(S, 3, N**2)"
+    else:
+        ok, text = a.ndim == 2 and a.shape[1] == width, f"(S, {width})"
+    if not ok:
+        raise ValueError(f"{name} must have shape {text}, got {a.shape}")
+    return a, out
 
 
 @_keywords(quat="quaternion")
@@ -372,26 +419,25 @@ def transform_splat_arrays(sh=None, positions=None, rotations=None, log_scales=N
         raise ValueError("translate must be finite")
     out = {}
     if positions is not None:
-        p, dtype = _splat_array(positions, "positions")
+        p, dtype = _splat_array(positions, "positions", 3)
         out["positions"] = (scale * (p @ m.T) + t).astype(dtype)
     if normals is not None:
-        n, dtype = _splat_array(normals, "normals")
+        n, dtype = _splat_array(normals, "normals", 3)
         out["normals"] = (n @ m.T).astype(dtype)
     if rotations is not None:
-        q, dtype = _splat_array(rotations, "rotations")
+        q, dtype = _splat_array(rotations, "rotations", 4)
         w2, x2, y2, z2 = _np.moveaxis(q, -1, 0)
         w1, x1, y1, z1 = qr
         out["rotations"] = _np.stack([w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2, w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
                                       w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2, w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2],
                                      axis=-1).astype(dtype)
     if log_scales is not None:
-        ls, dtype = _splat_array(log_scales, "log_scales")
+        ls, dtype = _splat_array(log_scales, "log_scales", 3)
         out["log_scales"] = (ls + _np.log(scale)).astype(dtype)
     if sh is not None:
-        c, dtype = _splat_array(sh, "sh")
-        if dtype == _np.float32:
-            c = _np.asarray(sh).astype(_np.float32)  # rotated in float32, as float32 input is
-        r = rotate(c, (-m if reflects else m).astype(c.dtype), method="reference")
+        c, dtype = _splat_array(sh, "sh", None)
+        # In float64 and rounded once, as the job: float32 in, the job's bits out.
+        r = rotate(c, -m if reflects else m, method="reference")
         if reflects:
             band = _np.floor(_np.sqrt(_np.arange(r.shape[-1]) + 0.5)).astype(int)
             r[..., band % 2 == 1] *= -1

@@ -357,22 +357,7 @@ std::string search_lobes(py::kwargs kwargs) {
   // bands: a list of bands, one band, or the CLI's 'a-b'; band: one band (--band l).
   if (const py::object bands = kw.take("bands")) {
     if (py::isinstance<py::str>(bands)) {
-      const std::string text = bands.cast<std::string>();
-      const std::size_t dash = text.find('-');
-      try {
-        std::size_t used = 0;
-        const int a = std::stoi(text.substr(0, dash), &used);
-        if (used != text.substr(0, dash).size()) throw std::invalid_argument("trailing");
-        int b = a;
-        if (dash != std::string::npos) {
-          b = std::stoi(text.substr(dash + 1), &used);
-          if (used != text.size() - dash - 1) throw std::invalid_argument("trailing");
-        }
-        for (int l = a; l <= b; ++l) r.bands.push_back(l);
-        if (b < a) throw std::invalid_argument("empty");
-      } catch (const std::exception&) {
-        throw py::value_error("search_lobes: bands '" + text + "': expected 'a-b' (a <= b), one band, or a list");
-      }
+      r.bands = lobes::parse_band_range(bands.cast<std::string>());
     } else if (PyIndex_Check(bands.ptr()) && !py::isinstance<py::bool_>(bands)) {
       r.bands.push_back(static_cast<int>(kw.integer(bands, "bands")));
     } else if (py::isinstance<py::list>(bands) || py::isinstance<py::tuple>(bands) ||

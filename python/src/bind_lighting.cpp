@@ -60,6 +60,7 @@ py::tuple window(const py::array& coeffs, const std::string& kind, std::optional
     if (cutoff) throw py::value_error("cutoff applies to the windows hann, lanczos and sinc4");
     const auto d = as_f64(coeffs, "coeffs");
     const std::size_t n2 = sh_count(order), channels = d.size() / n2;
+    if (channels == 0) throw py::value_error("coeffs holds no vector: the auto window is chosen from at least one");
     AutoWindow w;
     {
       py::gil_scoped_release release;

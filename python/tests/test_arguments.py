@@ -113,3 +113,71 @@ def test_numpy_scalars_pass_where_python_ones_do():
 def test_wrong_types_are_type_errors(call):
     with pytest.raises(TypeError):
         call()
+
+
+@pytest.mark.parametrize("call, message", [
+    (lambda: shtool.eval_sh(True, np.ones((1, 3))), "eval_sh: order must be an int, got bool"),
+    (lambda: shtool.product(np.ones(9), np.ones(9), order=np.True_), "product: order must be an int, got bool"),
+    (lambda: shtool.rotate(np.ones(9), np.eye(3), threads=True), "rotate: threads must be an int, got bool"),
+    (lambda: shtool.rotate(np.ones(9), np.eye(3), tol=True), "rotate: tol cannot be a bool, got True"),
+    (lambda: shtool.fit_zh(np.ones((1, 9)), lobes=True), "fit_zh: lobes must be an int, got bool"),
+    (lambda: shtool.light("directional", True), "light: order must be an int, got bool"),
+    (lambda: shtool.gen_tensors(True, "unused"), "gen_tensors: order must be an int, got bool"),
+])
+def test_bools_are_refused_where_the_parameter_is_not_one(call, message):
+    # True is an int to Python and to pybind11: order=True would be an order-1 call.
+    with pytest.raises(TypeError) as e:
+        call()
+    assert str(e.value) == message
+
+
+def test_bools_pass_where_the_parameter_is_one():
+    r, factors, cutoff = shtool.window(np.ones(9), "hann", return_factors=True)
+    assert r.shape == (9,) and factors.shape == (3,)
+    assert shtool.fit_zh(np.ones((1, 9)), lobes=1, direct=False).axes.shape == (1, 1, 3)
+
+
+@pytest.mark.parametrize("call, message", [
+    (lambda: shtool.eval_sh(2**31, np.ones((1, 3))), "eval_sh: order = 2147483648 is out of range"),
+    (lambda: shtool.eval_sh(2, np.ones((1, 3)), threads=2**40), "eval_sh: threads = 1099511627776 is out of range"),
+    (lambda: shtool.light("directional", -2**31 - 1), "light: order = -2147483649 is out of range"),
+    (lambda: shtool.fit_zh(np.ones((1, 9)), seed=-1), "fit_zh: seed = -1 is out of range"),
+])
+def test_integers_past_their_c_type_are_value_errors(call, message):
+    with pytest.raises(ValueError) as e:
+        call()
+    assert str(e.value) == message
+
+
+@pytest.mark.parametrize("call, message", [
+    (lambda: shtool.rotate(np.ones(9), np.eye(3, dtype=complex)), "matrix must be an array of real numbers, got dtype complex128"),
+    (lambda: shtool.rotate(np.ones(9), "eye"), "matrix must be an array of real numbers, got str"),
+    (lambda: shtool.light("directional", 3, direction="up"), "direction must be an array of real numbers, got str"),
+    (lambda: shtool.light("directional", 3, color=(1j, 1, 1)), "color must be an array of real numbers, got dtype complex128"),
+])
+def test_arrays_of_complex_numbers_or_text_are_type_errors(call, message):
+    # numpy would take a complex array's real part, with only a warning.
+    with pytest.raises(TypeError) as e:
+        call()
+    assert str(e.value) == message
+    # Integer arrays are numbers.
+    np.testing.assert_array_equal(shtool.rotate(np.arange(9.0), np.eye(3, dtype=int)),
+                                  shtool.rotate(np.arange(9.0), np.eye(3)))
+
+
+@pytest.mark.parametrize("bands, message", [
+    ("1-200", "bands: need 1 <= a <= b < 128, got '1-200'"),
+    ("1-2000000000", "bands: need 1 <= a <= b < 128, got '1-2000000000'"),
+    ([1, 200], "band 200: bands are 1..127"),
+])
+def test_search_lobes_checks_every_band_before_searching(bands, message):
+    # At once: the first band's search would take a second, band 200's table gigabytes.
+    with pytest.raises(ValueError) as e:
+        shtool.search_lobes(bands=bands)
+    assert str(e.value) == message
+
+
+def test_window_auto_needs_a_vector():
+    with pytest.raises(ValueError, match="coeffs holds no vector"):
+        shtool.window(np.zeros((0, 9)), "auto")
+    assert shtool.window(np.zeros((0, 9)), "hann").shape == (0, 9)

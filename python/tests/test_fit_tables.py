@@ -316,6 +316,33 @@ def test_transform_splat_arrays_as_the_job(cli, tmp_path):
         shtool.transform_splat_arrays(positions=data[:, :3], matrix=2 * np.eye(3))
 
 
+def test_transform_splat_arrays_float32_sh_are_the_jobs_bits(cli, tmp_path):
+    # float32 SH are rotated in float64 and rounded once, as the job does.
+    names, data, header = write_splats(tmp_path / "in.ply")
+    cli("transform-splats", tmp_path / "in.ply", "--out", tmp_path / "cli.ply", "--quat", "0.3,0.5,-0.7,0.2")
+    written = np.frombuffer((tmp_path / "cli.ply").read_bytes()[len(header):], "<f4").reshape(5, len(names))
+    sh = np.stack([np.concatenate([data[:, 3 + c:4 + c], data[:, 6 + 3 * c:9 + 3 * c]], axis=1) for c in range(3)],
+                  axis=1)
+    assert sh.dtype == np.float32
+    moved = shtool.transform_splat_arrays(sh=sh, quaternion=(0.3, 0.5, -0.7, 0.2))["sh"]
+    assert moved.dtype == np.float32
+    for c in range(3):
+        np.testing.assert_array_equal(moved[:, c, 1:], written[:, 6 + 3 * c:9 + 3 * c])
+
+
+@pytest.mark.parametrize("arrays, message", [
+    (dict(positions=np.ones((2, 2))), r"positions must have shape \(S, 3\), got \(2, 2\)"),
+    (dict(normals=np.ones(3)), r"normals must have shape \(S, 3\), got \(3,\)"),
+    (dict(rotations=np.ones((2, 3))), r"rotations must have shape \(S, 4\), got \(2, 3\)"),
+    (dict(log_scales=np.ones((2, 2))), r"log_scales must have shape \(S, 3\), got \(2, 2\)"),
+    (dict(sh=np.ones((2, 3, 5))), r"sh must have shape \(S, 3, N\*\*2\), got \(2, 3, 5\)"),
+    (dict(sh=np.ones((2, 16))), r"sh must have shape \(S, 3, N\*\*2\), got \(2, 16\)"),
+])
+def test_transform_splat_arrays_checks_shapes(arrays, message):
+    with pytest.raises(ValueError, match=message):
+        shtool.transform_splat_arrays(**arrays, quaternion=(0.8, 0.6, 0, 0))
+
+
 def test_transform_splat_arrays_converts_integers_to_float():
     moved = shtool.transform_splat_arrays(positions=np.array([[1, 1, 1]]), normals=np.array([[0, 0, 1]]),
                                           log_scales=np.zeros((1, 3), np.int32), rotations=np.array([[1, 0, 0, 0]]),

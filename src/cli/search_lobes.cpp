@@ -33,28 +33,7 @@ std::vector<int> band_list(const SearchLobesOptions& o) {
     if (o.band < 1 || o.band >= kMaxOrder) throw InputError("--band must be in 1.." + std::to_string(kMaxOrder - 1));
     return {o.band};
   }
-  const auto dash = o.bands.find('-');
-  int a = 0, b = 0;
-  try {
-    std::size_t used = 0;
-    if (dash == std::string::npos) {
-      a = b = std::stoi(o.bands, &used);
-      if (used != o.bands.size()) throw std::invalid_argument("trailing");
-    } else {
-      const std::string sa = o.bands.substr(0, dash), sb = o.bands.substr(dash + 1);
-      a = std::stoi(sa, &used);
-      if (used != sa.size()) throw std::invalid_argument("trailing");
-      b = std::stoi(sb, &used);
-      if (used != sb.size()) throw std::invalid_argument("trailing");
-    }
-  } catch (const std::exception&) {
-    throw InputError("--bands: expected 'a-b' or a single band, got '" + o.bands + "'");
-  }
-  if (a < 1 || b < a || b >= kMaxOrder)
-    throw InputError("--bands: need 1 <= a <= b < " + std::to_string(kMaxOrder) + ", got '" + o.bands + "'");
-  std::vector<int> v;
-  for (int l = a; l <= b; ++l) v.push_back(l);
-  return v;
+  return lobes::parse_band_range(o.bands);
 }
 
 void run(SearchLobesOptions o) {

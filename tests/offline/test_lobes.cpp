@@ -17,6 +17,7 @@
 #include "lobes/lobes.h"
 #include "common/generator_record.h"
 #include "lobes/legendre_zeros.h"
+#include "lobes/search_lobes_job.h"
 #include "shtool/legendre.h"
 #include "shtool/sh.h"
 #include "shtool/table.h"
@@ -268,6 +269,29 @@ TEST(LobeSearch, RejectsBadOptions) {
   EXPECT_THROW(lobes::search_band(3, o), shtool::InputError);
   EXPECT_THROW(lobes::search_band(0, small_options()), shtool::InputError);
   EXPECT_THROW(lobes::search_shared(2, small_options()), shtool::InputError);
+}
+
+// Every band is checked before the first search starts: a list ending in band 200 is
+// refused at once, not after the searches of the bands before it (the progress callback
+// would see them).
+TEST(LobeSearch, EveryBandIsCheckedBeforeSearching) {
+  lobes::SearchLobesRequest r;
+  r.bands = {1, 2, 200};
+  r.search = small_options();
+  int searched = 0;
+  lobes::SearchLobesCallbacks cb;
+  cb.band_done = [&](const lobes::SearchResult&, double) { ++searched; };
+  try {
+    lobes::run_search_lobes(r, cb);
+    ADD_FAILURE() << "band 200 accepted";
+  } catch (const shtool::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("band 200"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(searched, 0);
+  EXPECT_EQ(lobes::parse_band_range("2-4"), (std::vector<int>{2, 3, 4}));
+  EXPECT_EQ(lobes::parse_band_range("7"), (std::vector<int>{7}));
+  for (const char* bad : {"1-200", "0-3", "4-2", "1-2000000000", "x", "1-", "-3", "2-3x", "99999999999"})
+    EXPECT_THROW(lobes::parse_band_range(bad), shtool::InputError) << bad;
 }
 
 // ---------------------------------------------------------------------------

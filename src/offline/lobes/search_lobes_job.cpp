@@ -1,7 +1,9 @@
 #include "lobes/search_lobes_job.h"
 
 #include <chrono>
+#include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "common/finite.h"
 #include "common/job_outputs.h"
@@ -11,6 +13,31 @@
 #include "shtool/sh.h"
 
 namespace shtool::lobes {
+
+std::vector<int> parse_band_range(const std::string& text) {
+  const auto dash = text.find('-');
+  int a = 0, b = 0;
+  try {
+    std::size_t used = 0;
+    if (dash == std::string::npos) {
+      a = b = std::stoi(text, &used);
+      if (used != text.size()) throw std::invalid_argument("trailing");
+    } else {
+      const std::string sa = text.substr(0, dash), sb = text.substr(dash + 1);
+      a = std::stoi(sa, &used);
+      if (used != sa.size()) throw std::invalid_argument("trailing");
+      b = std::stoi(sb, &used);
+      if (used != sb.size()) throw std::invalid_argument("trailing");
+    }
+  } catch (const std::exception&) {
+    throw InputError("--bands: expected 'a-b' or a single band, got '" + text + "'");
+  }
+  if (a < 1 || b < a || b >= kMaxOrder)
+    throw InputError("--bands: need 1 <= a <= b < " + std::to_string(kMaxOrder) + ", got '" + text + "'");
+  std::vector<int> v;
+  for (int l = a; l <= b; ++l) v.push_back(l);
+  return v;
+}
 
 SearchLobesReport run_search_lobes(SearchLobesRequest r, const SearchLobesCallbacks& cb) {
   SearchOptions& s = r.search;
@@ -27,6 +54,9 @@ SearchLobesReport run_search_lobes(SearchLobesRequest r, const SearchLobesCallba
   } else {
     if (r.order) throw InputError("--order is for --shared; per-band searches take --band or --bands");
     if (r.bands.empty()) throw InputError("give --band l, --bands a-b, or --shared --order N");
+    for (int l : r.bands)
+      if (l < 1 || l >= kMaxOrder)
+        throw InputError("band " + std::to_string(l) + ": bands are 1.." + std::to_string(kMaxOrder - 1));
   }
   // Fail before a long search, not after it.
   JobOutputs io;

@@ -42,4 +42,7 @@ struct SearchLobesReport {
 // candidates pooled over bands 1..l (unless restarts / theta were given explicitly).
 SearchLobesReport run_search_lobes(SearchLobesRequest request, const SearchLobesCallbacks& callbacks = {});
 
+// The bands of "--bands a-b" (or one band "l"): InputError unless 1 <= a <= b < kMaxOrder.
+std::vector<int> parse_band_range(const std::string& text);
+
 }  // namespace shtool::lobes
