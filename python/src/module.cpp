@@ -23,15 +23,16 @@ Precision precision_of(const py::array& a, const std::string& what) {
 py::array_t<double, py::array::c_style> as_f64(const py::handle& obj, const std::string& what) {
   // Real numbers only: numpy would take a complex array's real part (with a warning), a
   // bool as 0 or 1, and fail on strings with its own message.
+  const std::string type_name = py::str(obj.get_type().attr("__name__"));
   py::array a = py::array::ensure(obj);
   if (!a) {
     PyErr_Clear();
-    throw py::type_error(what + " must be an array of numbers, got " + std::string(py::str(obj.get_type().attr("__name__"))));
+    throw py::type_error(what + " must be an array of numbers, got " + type_name);
   }
   const char kind = a.dtype().kind();
   if (kind != 'f' && kind != 'i' && kind != 'u')
     throw py::type_error(what + " must be an array of real numbers, got " +
-                         (kind == 'O' || kind == 'U' || kind == 'S' ? std::string(py::str(obj.get_type().attr("__name__")))
+                         (kind == 'O' || kind == 'U' || kind == 'S' ? type_name
                                                                     : "dtype " + std::string(py::str(a.dtype()))));
   return py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(a);
 }

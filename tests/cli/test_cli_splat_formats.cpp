@@ -1115,7 +1115,8 @@ TEST(CliSplatFormats, OrientationsOfAnyLengthAreStoredAsUnitQuaternions) {
     for (int i = 0; i < 4; ++i) {
       const Eigen::Vector4d q = back.splats[i].rot;
       EXPECT_NEAR(q.norm(), 1.0, tolerance) << i;
-      EXPECT_NEAR(std::abs(q.dot(unit)), 1.0, tolerance) << i << ": " << q.transpose() << " against " << unit.transpose();
+      EXPECT_NEAR(std::abs(q.dot(unit)), 1.0, tolerance)
+          << i << ": " << q.transpose() << " against " << unit.transpose();
     }
   }
 }

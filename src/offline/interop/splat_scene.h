@@ -72,8 +72,8 @@ std::optional<NonFiniteValue> first_non_finite(const SplatScene& scene);
 void check_scene_finite(const SplatScene& scene, const std::string& name);
 
 // A splat's rotation (w x y z, any length) divided by its length, computed in double:
-// components past 1.8e19 or below 1e-19 square out of float's range. A zero
-// quaternion gives the identity.
+// in float, components past 1.8e19 square to infinity and those below 1e-19 lose their
+// squares to underflow. A zero quaternion gives the identity.
 std::array<float, 4> unit_rotation(const float* wxyz);
 
 // One orthogonal map of SH colours for many splats (a whole scene turned by one matrix):
