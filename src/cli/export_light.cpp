@@ -53,6 +53,8 @@ void setup_export_light(CLI::App* sub) {
       ->check(CLI::IsMember({"luminance", "per-channel"}));
   sub->callback([=]() {
     o->raw.condon_shortley = o->cs == "on";
+    if (o->format != interop::LightFormat::raw && (sub->count("--cs") || sub->count("--norm")))
+      throw InputError("--cs and --norm apply to --format raw only (the other formats fix their own)");
     if (!axis->empty()) {
       if (o->format != interop::LightFormat::zh3) throw InputError("--axis applies to --format zh3 only");
       o->raw.zh3_axis = *axis == "luminance" ? Zh3Axis::luminance : Zh3Axis::per_channel;
@@ -75,6 +77,8 @@ void setup_import_light(CLI::App* sub) {
                   "radiance or irradiance", "radiance");
   add_common(sub, *o, false);
   sub->callback([=]() {
+    if (sub->count("--cs") || sub->count("--norm"))
+      throw InputError("import-light takes no --cs or --norm: a raw file says its own (condon_shortley, normalization)");
     const lighting::Lighting l = interop::run_import_light({*in, *json, o->format, frame_of(*o), *quantity});
     std::cerr << "import-light: order " << l.order << ", " << lighting::quantity_name(l.quantity) << ", wrote "
               << json->string() << '\n';

@@ -300,8 +300,24 @@ TEST(EngineLight, BadInput) {
     std::vector<std::string> args;
     std::string message;
   };
+  // A raw file in another index order or with a malformed frame; a glTF light turned by
+  // a rotation (read as if unrotated, it would light another scene).
+  const fs::path raw = scratch("bad_raw.json"), raw_frame = scratch("bad_raw_frame.json");
+  std::ofstream(raw) << R"({"order": 1, "index": "fuma", "coefficients": [[1, 1, 1]]})";
+  std::ofstream(raw_frame) << R"({"order": 1, "frame": "x,q,z", "coefficients": [[1, 1, 1]]})";
+  const fs::path turned = scratch("turned.gltf");
+  std::ofstream(turned) << R"({"asset": {"version": "2.0"}, "extensions": {"EXT_lights_image_based": {"lights": [)"
+                        << R"({"rotation": [0, 0.7071068, 0, 0.7071068], "irradianceCoefficients": [)"
+                        << R"([1,1,1],[0,0,0],[0,0,0],[0,0,0],[0,0,0],[0,0,0],[0,0,0],[0,0,0],[0,0,0]]}]}}})";
   const fs::path out = scratch("bad_out");
   const std::vector<Case> cases = {
+      {{"export-light", in.string(), "--format", "threejs", "--frame", "x,y,z,", "--out", out.string()}, "--frame"},
+      {{"export-light", in.string(), "--format", "threejs", "--cs", "off", "--out", out.string()}, "--format raw only"},
+      {{"export-light", in.string(), "--format", "unity", "--norm", "4pi", "--out", out.string()}, "--format raw only"},
+      {{"import-light", in.string(), "--format", "raw", "--cs", "off", "--json", out.string()}, "takes no --cs"},
+      {{"import-light", raw.string(), "--format", "raw", "--json", out.string()}, "\"index\" must be \"acn\""},
+      {{"import-light", raw_frame.string(), "--format", "raw", "--json", out.string()}, "bad_raw_frame.json: \"frame\""},
+      {{"import-light", turned.string(), "--format", "gltf", "--json", out.string()}, "rotation is not the identity"},
       {{"export-light", in.string(), "--format", "unreal", "--out", out.string()}, "--format"},
       {{"export-light", in.string(), "--format", "threejs", "--frame", "x,x,y", "--out", out.string()}, "--frame"},
       {{"export-light", in.string(), "--format", "threejs", "--frame", "x,z", "--out", out.string()}, "--frame"},

@@ -463,6 +463,11 @@ TEST(CliProjectEnv, BadInputIsAnErrorWithNoOutput) {
     const std::string bytes = read_file(scratch(name));
     write_file(scratch(std::string("cut_") + name), bytes.substr(0, bytes.size() - 20));
   }
+  // A PNG cut between chunks (after its IHDR, or before its IEND): stb_image gives no reason.
+  write_stb(scratch("full.png"), 16, 8, grey);
+  const std::string png = read_file(scratch("full.png"));
+  write_file(scratch("cut_ihdr.png"), png.substr(0, 33));
+  write_file(scratch("cut_iend.png"), png.substr(0, png.size() - 12));
   const fs::path cross43 = scratch("cross43.exr"), windowed_ok = scratch("ok.exr");
   write_exr(cross43, 64, 48, Texels(64 * 48 * 3, 1.0f), false);
   write_exr(windowed_ok, 16, 8, Texels(16 * 8 * 3, 1.0f), false);
@@ -491,6 +496,8 @@ TEST(CliProjectEnv, BadInputIsAnErrorWithNoOutput) {
       {"truncated run-length HDR", {scratch("cut_full_rle.hdr").string()}, "data ends before"},
       {"truncated flat HDR", {scratch("cut_full_flat.hdr").string()}, "data ends before"},
       {"truncated JPEG", {scratch("cut_full.jpg").string()}, "truncated"},
+      {"PNG cut after its IHDR", {scratch("cut_ihdr.png").string()}, "PNG: the file ends without its IEND chunk"},
+      {"PNG cut before its IEND", {scratch("cut_iend.png").string()}, "PNG: the file ends without its IEND chunk"},
       {"missing file", {scratch("nope.exr").string()}, "nope.exr"},
       {"text named .exr", {text.string()}, "not a OpenEXR file"},
       {"png named .exr", {png_named_exr.string()}, "content is PNG"},
@@ -571,6 +578,10 @@ TEST(CliLight, ClosedFormsAndSums) {
 TEST(CliLight, BadInput) {
   const fs::path list = scratch("bad_lights.json");
   write_file(list, R"([{"type": "cone", "dir": [0, 0, 1]}])");
+  const fs::path grounded = scratch("grounded_lights.json");
+  write_file(grounded, R"([{"type": "directional", "dir": [0, 0, 1], "ground": [5, 5, 5]}])");
+  const fs::path aimed = scratch("aimed_lights.json");
+  write_file(aimed, R"([{"type": "constant", "dir": [0, 0, 1]}])");
   const std::vector<BadCase> cases = {
       {"no light", {"--order", "3"}, "no light"},
       {"zero direction", {"--type", "directional", "--dir", "0,0,0"}, "not zero"},
@@ -581,11 +592,29 @@ TEST(CliLight, BadInput) {
       {"ground on a cone", {"--type", "cone", "--dir", "0,0,1", "--half-angle", "5", "--ground", "1,1,1"}, "--ground"},
       {"list without angle", {"--lights", list.string()}, "light 0"},
       {"order 40", {"--type", "constant", "--order", "40"}, "--order"},
+      {"ground in a list", {"--lights", grounded.string()}, "\"ground\" is a hemisphere light's"},
+      {"constant with a direction", {"--type", "constant", "--dir", "0,0,1"}, "takes no direction"},
+      {"constant with a direction in a list", {"--lights", aimed.string()}, "takes no direction"},
   };
   for (const BadCase& c : cases) {
     std::string err;
     light(c.args, 1, &err);
     EXPECT_NE(err.find(c.message), std::string::npos) << c.name << ": " << err;
+  }
+}
+
+// A direction is a direction at any length a double holds: (1e200, 1e200, 1e200) and
+// (1e-200, ...) are (1, 1, 1), though their norms leave a double's range.
+TEST(CliLight, DirectionsOfAnyLength) {
+  const fs::path unit = scratch("dir_unit.json");
+  ASSERT_EQ(run_shtool({"light", "--type", "cone", "--half-angle", "20", "--dir", "1,1,1", "--json", unit.string()})
+                .exit_code,
+            0);
+  for (const char* dir : {"1e200,1e200,1e200", "1e-200,1e-200,1e-200", "3,3,3"}) {
+    const fs::path out = scratch("dir_scaled.json");
+    const auto r = run_shtool({"light", "--type", "cone", "--half-angle", "20", "--dir", dir, "--json", out.string()});
+    ASSERT_EQ(r.exit_code, 0) << dir << ": " << r.err;
+    EXPECT_EQ(read_file(out), read_file(unit)) << dir;
   }
 }
 

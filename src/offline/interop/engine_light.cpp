@@ -212,7 +212,7 @@ FrameMap parse_frame_map(std::string_view text) {
     used[item[0] - 'x'] = true;
     f.q(row++, item[0] - 'x') = sign;
   }
-  if (row != 3 || std::getline(s, item, ','))
+  if (row != 3 || std::getline(s, item, ',') || text.back() == ',')
     throw InputError("--frame '" + std::string(text) + "': expected three signed axes such as x,z,-y");
   return f;
 }
@@ -508,6 +508,21 @@ Lighting import_light_as_read(std::string_view text, const std::filesystem::path
       const nlohmann::json& light = (*lights)[0];
       if (!light.contains("irradianceCoefficients")) bad(name, "the light has no irradianceCoefficients");
       Nine g = rows_of(light["irradianceCoefficients"], name, "irradianceCoefficients");
+      // EXT_lights_image_based's rotation turns the environment; which way in Babylon's
+      // left-handed frame is not settled here, so only the identity (what export-light
+      // writes) is read: any other would be a differently lit scene.
+      if (light.contains("rotation")) {
+        const nlohmann::json& q = light["rotation"];
+        if (!q.is_array() || q.size() != 4) bad(name, "the light's rotation must be a quaternion [x, y, z, w]");
+        double w = 0, xyz = 0;
+        for (int i = 0; i < 4; ++i) {
+          const double v = finite_number(q[i], name, "rotation");
+          (i == 3 ? w : xyz) += i == 3 ? v : v * v;
+        }
+        if (std::abs(std::abs(w) - 1) > 1e-9 || xyz > 1e-18)
+          bad(name, "the light's rotation is not the identity [0, 0, 0, 1]: shtool reads unrotated environments only "
+                    "(import the coefficients without it, then turn them with shtool rotate)");
+      }
       const double s = light.contains("intensity") ? finite_number(light["intensity"], name, "intensity") : 1;
       for (double& v : g) v *= s;
       return from_nine(frame, g, Quantity::irradiance, quantity);
@@ -549,8 +564,16 @@ Lighting import_light_as_read(std::string_view text, const std::filesystem::path
           if (doc["normalization"] == k) norm = v, known = true;
         if (!known) bad(name, "\"normalization\" must be orthonormal, 4pi or schmidt");
       }
+      if (doc.contains("index") && doc["index"] != "acn")
+        bad(name, "\"index\" must be \"acn\" (raw files hold ACN order: index l(l+1)+m)");
       FrameMap f = frame;
-      if (doc.contains("frame") && doc["frame"].is_string()) f = parse_frame_map(doc["frame"].get<std::string>());
+      if (doc.contains("frame") && doc["frame"].is_string()) {
+        try {
+          f = parse_frame_map(doc["frame"].get<std::string>());
+        } catch (const InputError& e) {
+          bad(name, std::string("\"frame\": ") + e.what());
+        }
+      }
       Quantity stored = Quantity::radiance;
       if (doc.contains("quantity")) {
         if (doc["quantity"] == "irradiance") stored = Quantity::irradiance;

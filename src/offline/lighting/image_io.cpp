@@ -394,6 +394,14 @@ void check_png_chunks(std::string_view b, const std::filesystem::path& name) {
     at += 12 + std::size_t(length);
     if (type == "IEND") return;
   }
+  // stb_image gives no reason for a file that stops between chunks.
+  fail_input(name, "PNG: the file ends without its IEND chunk (it is cut short)");
+}
+
+// stb_image's reason for its last failure, or a general one where it records none.
+std::string stb_reason() {
+  const char* reason = stbi_failure_reason();
+  return reason && *reason ? reason : "the file is cut short or malformed";
 }
 
 // Whether `size` bytes can hold a w x h image at all, checked before a decoder allocates
@@ -419,7 +427,7 @@ Image decode_stb(std::string_view bytes, const std::filesystem::path& name, Form
   const int size = static_cast<int>(std::min<std::size_t>(bytes.size(), INT32_MAX));
   int w = 0, h = 0, comp = 0;
   if (!stbi_info_from_memory(data, size, &w, &h, &comp))
-    fail_input(name, std::string(format_name(format)) + ": " + stbi_failure_reason());
+    fail_input(name, std::string(format_name(format)) + ": " + stb_reason());
   check_size(name, w, h, max_texels);
   check_bytes_can_hold(bytes, format, w, h, name);
   Image img;
@@ -427,7 +435,7 @@ Image decode_stb(std::string_view bytes, const std::filesystem::path& name, Form
   img.height = h;
   img.texels.resize(static_cast<std::size_t>(w) * h * 3);
   auto take = [&](auto* pixels, auto convert) {
-    if (!pixels) fail_input(name, std::string(format_name(format)) + ": " + stbi_failure_reason());
+    if (!pixels) fail_input(name, std::string(format_name(format)) + ": " + stb_reason());
     std::unique_ptr<void, void (*)(void*)> owner(pixels, stbi_image_free);
     for (std::size_t i = 0; i < img.texels.size(); ++i) img.texels[i] = convert(pixels[i]);
   };

@@ -68,7 +68,11 @@ std::vector<LightSpec> parse_light_list(std::string_view text, const std::filesy
       if (key == "type") continue;
       if (key == "dir") s.direction = triple("dir");
       else if (key == "color") s.color = triple("color");
-      else if (key == "ground") s.ground = triple("ground");
+      else if (key == "ground") {
+        if (s.type != LightType::hemisphere)
+          throw bad(k, "\"ground\" is a hemisphere light's (its lower half's colour)");
+        s.ground = triple("ground");
+      }
       else if (key == "half_angle") {
         if (!value.is_number()) throw bad(k, "\"half_angle\" must be a number (degrees)");
         s.half_angle_degrees = value.get<double>();
@@ -95,12 +99,16 @@ Lighting light_coefficients(const std::vector<LightSpec>& lights, int order, Qua
     for (double v : s.ground)
       if (!std::isfinite(v)) throw InputError(who + "the ground colour must be finite");
     Eigen::Vector3d d = Eigen::Vector3d::UnitZ();
+    if (s.type == LightType::constant && s.direction)
+      throw InputError(who + "takes no direction (it is the same from all)");
     if (s.type != LightType::constant) {
       if (!s.direction) throw InputError(who + "needs a direction (--dir x,y,z)");
       d = Eigen::Vector3d((*s.direction)[0], (*s.direction)[1], (*s.direction)[2]);
-      if (!d.allFinite() || d.norm() == 0 || !std::isfinite(d.norm()))
-        throw InputError(who + "the direction must be finite and not zero");
-      d.normalize();
+      // Scaled by its largest component first: the norm of (1e200, 1e200, 1e200) or of
+      // (1e-200, ...) is out of a double's range, the direction is not.
+      const double largest = d.cwiseAbs().maxCoeff();
+      if (!d.allFinite() || largest == 0) throw InputError(who + "the direction must be finite and not zero");
+      d = (d / largest).normalized();
     }
     const bool angled = s.type == LightType::cone || s.type == LightType::sphere;
     if (angled && !s.half_angle_degrees) throw InputError(who + "needs --half-angle (degrees)");
