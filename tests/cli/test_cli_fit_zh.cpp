@@ -163,6 +163,13 @@ TEST(CliFitZh, BadInputExitsOneWithAMessageAndNoOutput) {
   const CommandResult mode = run_shtool({"fit-zh", kSpotObj, "--mode", "glossy"});
   EXPECT_EQ(mode.exit_code, 1);
   EXPECT_NE(mode.err.find("--mode"), std::string::npos) << mode.err;
+  // Refused before the bake (which would take a while), naming the option.
+  for (const char* above : {"inf", "1e400", "-1", "nan"}) {
+    const CommandResult r = run_shtool({"fit-zh", kSpotObj, "--restart-above", above, "--out", scratch("ra.shtb").string()});
+    EXPECT_EQ(r.exit_code, 1) << above;
+    EXPECT_NE(r.err.find("--restart-above must be a finite number >= 0"), std::string::npos) << above << ": " << r.err;
+    EXPECT_FALSE(fs::exists(scratch("ra.shtb"))) << above;
+  }
 }
 
 TEST(CliFitZh, HeaderRecordsRayTracerAndLoadedMesh) {

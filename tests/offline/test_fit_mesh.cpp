@@ -127,6 +127,12 @@ TEST(FitMesh, BadInputGivesClearErrors) {
       {"qrange.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3 99\n", "refers to vertex 99"},
       {"none.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n", "no faces"},
       {"flat.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n", "no usable triangle"},
+      // tinyobjloader would read these as 0: a hexadecimal coordinate, a texture coordinate
+      // that is not a finite number.
+      {"hex.obj", "v 0 0 0\nv 0x10 0 0\nv 0 1 0\nf 1 2 3\n", "line 2: missing or unreadable coordinate"},
+      {"uvnan.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt nan 0\nf 1/1 2/1 3/1\n", "line 4: non-finite coordinate"},
+      {"uvinf.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0.5 inf\nf 1/1 2/1 3/1\n", "line 4: non-finite coordinate"},
+      {"uvword.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt u 0\nf 1/1 2/1 3/1\n", "line 4: missing or unreadable"},
   };
   for (const auto& [name, text, needle] : cases) {
     const std::string error = load_error(write_obj(name, text));
@@ -134,6 +140,11 @@ TEST(FitMesh, BadInputGivesClearErrors) {
   }
   const std::string empty = load_error(write_obj("empty.obj", ""));
   EXPECT_FALSE(empty.empty());
+  // One, two or three texture coordinates are all a vt line may hold.
+  for (const char* vt : {"vt 0.5", "vt 0.5 0.25", "vt 0.5 0.25 0 ", "vt 1e-3\t2E+0"}) {
+    const std::string text = std::string("v 0 0 0\nv 1 0 0\nv 0 1 0\n") + vt + "\nf 1/1 2/1 3/1\n";
+    EXPECT_EQ(load_error(write_obj("uv_ok.obj", text)), "") << vt;
+  }
 }
 
 }  // namespace

@@ -38,7 +38,9 @@ void check_fit_options(const FitZhRequest& r) {
     throw InputError("--effort must be in " + std::to_string(kMinEffort) + ".." + std::to_string(kMaxEffort) +
                      ", got " + std::to_string(r.effort));
   if (r.starts && *r.starts < 0) throw InputError("--starts must be >= 0, got " + std::to_string(*r.starts));
-  if (r.restart_above && !(*r.restart_above >= 0)) throw InputError("--restart-above must be >= 0");
+  // Recorded in the table's generator record, which holds finite numbers only.
+  if (r.restart_above && !(*r.restart_above >= 0 && std::isfinite(*r.restart_above)))
+    throw InputError("--restart-above must be a finite number >= 0");
   if (r.threads < 0) throw InputError("--threads must be >= 0");
 }
 

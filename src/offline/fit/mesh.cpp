@@ -1,9 +1,11 @@
 #include "fit/mesh.h"
 
+#include <algorithm>
 #include <array>
 #include <cctype>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <limits>
 #include <numbers>
 #include <sstream>
@@ -18,10 +20,11 @@
 namespace shtool::fit {
 namespace {
 
-// tinyobjloader reads a coordinate it cannot parse ("nan", "inf") as 0 without a
-// warning, and a face index beyond int as a wrapped value, so both would pass silently.
-// Scan the text first: "v" and "vn" coordinates must parse and be finite, "f" indices must
-// fit an int. Lines end at LF, CR or CR LF, as tinyobjloader splits them.
+// tinyobjloader reads a coordinate it cannot parse ("nan", "inf", hexadecimal "0x10") as
+// 0 without a warning, and a face index beyond int as a wrapped value, so both would pass
+// silently. Scan the text first: "v" and "vn" coordinates (three) and "vt" coordinates
+// (one to three) must be decimal numbers and finite, "f" indices must fit an int. Lines
+// end at LF, CR or CR LF, as tinyobjloader splits them.
 void check_obj_text(const std::filesystem::path& path, const std::string& text) {
   std::size_t number = 0, pos = 0;
   while (pos < text.size()) {
@@ -35,14 +38,18 @@ void check_obj_text(const std::filesystem::path& path, const std::string& text) 
     if (p == std::string::npos) continue;
     const bool is_v = line.compare(p, 2, "v ") == 0 || line.compare(p, 2, "v\t") == 0;
     const bool is_vn = line.compare(p, 3, "vn ") == 0 || line.compare(p, 3, "vn\t") == 0;
+    const bool is_vt = line.compare(p, 3, "vt ") == 0 || line.compare(p, 3, "vt\t") == 0;
     const bool is_f = line.compare(p, 2, "f ") == 0 || line.compare(p, 2, "f\t") == 0;
     const std::string shown = line.size() > 80 ? line.substr(0, 80) + "..." : line;
-    if (is_v || is_vn) {
+    if (is_v || is_vn || is_vt) {
       const char* s = line.c_str() + p + (is_v ? 1 : 2);
       for (int c = 0; c < 3; ++c) {
+        if (is_vt && c > 0 && s[std::strspn(s, " \t")] == '\0') break;  // v and w are optional
         char* stop = nullptr;
         const double value = std::strtod(s, &stop);
-        if (stop == s)
+        if (stop == s || std::find_if(static_cast<const char*>(s), static_cast<const char*>(stop), [](char ch) {
+                           return ch == 'x' || ch == 'X';
+                         }) != stop)
           fail_input(path, "line " + std::to_string(number) + ": missing or unreadable coordinate in '" + shown + "'");
         // Stored as float: a double beyond float's range would become infinite.
         if (!std::isfinite(value) || std::abs(value) > std::numeric_limits<float>::max())
