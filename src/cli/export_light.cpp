@@ -78,7 +78,8 @@ void setup_import_light(CLI::App* sub) {
   add_common(sub, *o, false);
   sub->callback([=]() {
     if (sub->count("--cs") || sub->count("--norm"))
-      throw InputError("import-light takes no --cs or --norm: a raw file says its own (condon_shortley, normalization)");
+      throw InputError(
+          "import-light takes no --cs or --norm: a raw file says its own (condon_shortley, normalization)");
     const lighting::Lighting l = interop::run_import_light({*in, *json, o->format, frame_of(*o), *quantity});
     std::cerr << "import-light: order " << l.order << ", " << lighting::quantity_name(l.quantity) << ", wrote "
               << json->string() << '\n';

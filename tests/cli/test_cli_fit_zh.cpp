@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <iterator>
 #include <numbers>
 #include <filesystem>
@@ -23,6 +24,7 @@
 #include "shtool/table.h"
 #include "shtool/zh.h"
 #include "shtool/zh_fit_table.h"
+#include "common/table_writer.h"
 
 namespace {
 
@@ -165,7 +167,8 @@ TEST(CliFitZh, BadInputExitsOneWithAMessageAndNoOutput) {
   EXPECT_NE(mode.err.find("--mode"), std::string::npos) << mode.err;
   // Refused before the bake (which would take a while), naming the option.
   for (const char* above : {"inf", "1e400", "-1", "nan"}) {
-    const CommandResult r = run_shtool({"fit-zh", kSpotObj, "--restart-above", above, "--out", scratch("ra.shtb").string()});
+    const CommandResult r =
+        run_shtool({"fit-zh", kSpotObj, "--restart-above", above, "--out", scratch("ra.shtb").string()});
     EXPECT_EQ(r.exit_code, 1) << above;
     EXPECT_NE(r.err.find("--restart-above must be a finite number >= 0"), std::string::npos) << above << ": " << r.err;
     EXPECT_FALSE(fs::exists(scratch("ra.shtb"))) << above;
@@ -349,6 +352,18 @@ TEST(CliFitZh, MergeRefusesPartsThatDoNotMakeOneBake) {
   ASSERT_NE(at, std::string::npos);
   json_part.replace(at, 18, "\"first_vertex\":975");
   std::ofstream(edited_range, std::ios::binary | std::ios::trunc) << json_part;
+  // A part edited with a valid checksum: a residual that is not finite, named with its part.
+  const fs::path holds_nan = scratch("refuse_nan.part");
+  {
+    shtool::Table t = shtool::read_table(parts[2]).value();
+    for (shtool::TableArray& a : t.arrays)
+      if (a.name == "residual") {
+        const double nan = std::nan("");
+        std::memcpy(a.data.data() + 8 * 3, &nan, 8);
+      }
+    std::ofstream(holds_nan, std::ios::binary)
+        << shtool::encode_table(t, shtool::TableEncoding::binary, shtool::NonFinite::keep);
+  }
 
   struct Case {
     std::string name;
@@ -367,6 +382,7 @@ TEST(CliFitZh, MergeRefusesPartsThatDoNotMakeOneBake) {
       {"whole table", {parts[0], whole}, "not a partial table"},
       {"edited range", {parts[0], edited_range, parts[2]}, "shard 1 of 3 covers vertices [976, 1953)"},
       {"not a table", {parts[0], kSpotObj}, "spot.obj"},
+      {"not finite", {parts[0], parts[1], holds_nan}, "refuse_nan.part': array 'residual' value 3 is not finite"},
   };
   for (const Case& c : cases) {
     const fs::path out = scratch("refused.shtb");

@@ -1,6 +1,7 @@
 #include "fit/zh_fit_merge.h"
 
 #include <algorithm>
+#include <cmath>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -184,6 +185,16 @@ MergeReport merge_zh_fit_parts(const MergeRequest& r) {
   for (const std::filesystem::path& path : r.parts) {
     Result<Table> t = read_table(path, {std::string(kZhFitKind), 1});
     if (!t) throw InputError(t.error().message);
+    // A part edited by hand (or damaged with a valid checksum) is named here, not as an
+    // overflow of the merged table.
+    for (const TableArray& a : t.value().arrays) {
+      if (a.dtype != DType::f64) continue;
+      const std::vector<double> values = a.values<double>();
+      for (std::size_t k = 0; k < values.size(); ++k)
+        if (!std::isfinite(values[k]))
+          throw InputError("merge: '" + path.string() + "': array '" + a.name + "' value " + std::to_string(k) +
+                           " is not finite");
+    }
     tables.push_back({path.string(), std::move(t).value()});
   }
   MergedFits merged;
