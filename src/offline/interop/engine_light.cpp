@@ -1,5 +1,6 @@
 #include "interop/engine_light.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -514,12 +515,10 @@ Lighting import_light_as_read(std::string_view text, const std::filesystem::path
       if (light.contains("rotation")) {
         const nlohmann::json& q = light["rotation"];
         if (!q.is_array() || q.size() != 4) bad(name, "the light's rotation must be a quaternion [x, y, z, w]");
-        double w = 0, xyz = 0;
-        for (int i = 0; i < 4; ++i) {
-          const double v = finite_number(q[i], name, "rotation");
-          (i == 3 ? w : xyz) += i == 3 ? v : v * v;
-        }
-        if (std::abs(std::abs(w) - 1) > 1e-9 || xyz > 1e-18)
+        double axis = 0;  // the largest of x, y, z
+        for (int i = 0; i < 3; ++i) axis = std::max(axis, std::abs(finite_number(q[i], name, "rotation")));
+        const double w = std::abs(finite_number(q[3], name, "rotation"));
+        if (axis > 1e-9 || std::abs(w - 1) > 1e-9)
           bad(name, "the light's rotation is not the identity [0, 0, 0, 1]: shtool reads unrotated environments only "
                     "(import the coefficients without it, then turn them with shtool rotate)");
       }
