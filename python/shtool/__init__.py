@@ -360,12 +360,10 @@ def _splat_array(x, name, width):
     bools are taken as float64 (never truncated on the way back). Shape (S, width), or
     (S, 3, N**2) for SH colours (width None)."""
     a = _np.asarray(x)
-    if a.dtype.kind in "iub":
-        a, out = a.astype(_np.float64), _np.dtype(_np.float64)
-    elif a.dtype.kind != "f":
+    if a.dtype.kind not in "iubf":
         raise TypeError(f"{name} must be an array of numbers, got {a.dtype}")
-    else:
-        a, out = a.astype(_np.float64), _np.dtype(_np.float32 if a.dtype.itemsize == 4 else _np.float64)
+    out = _np.dtype(_np.float32 if a.dtype.kind == "f" and a.dtype.itemsize == 4 else _np.float64)
+    a = a.astype(_np.float64)
     if width is None:
         k = a.shape[-1] if a.ndim == 3 else 0
         ok, text = a.ndim == 3 and a.shape[1] == 3 and k > 0 and round(k ** 0.5) ** 2 == k, "(S, 3, N**2)"

@@ -172,7 +172,9 @@ void transform_ply_streamed(const TransformSplatsRequest& r, const Eigen::Matrix
     // Up to the first splat whose input is not finite; a splat before it that overflows
     // after the transform is the problem reported, as one splat after another would find.
     const std::size_t limit = first_non_finite(records, count);
-    std::size_t normal_overflow = limit;  // the first splat whose finite normal the turn took past float
+    // The first splat whose finite normal the turn took past float, and that component.
+    std::size_t normal_overflow = limit;
+    int normal_component = 0;
     for (std::size_t j = 0; j < limit; ++j) {
       char* s = records + j * size;
       const Eigen::Vector3d p(get(s, position[0]), get(s, position[1]), get(s, position[2]));
@@ -183,7 +185,8 @@ void transform_ply_streamed(const TransformSplatsRequest& r, const Eigen::Matrix
         const Eigen::Vector3d n(get(s, at(idx[0])), get(s, at(idx[1])), get(s, at(idx[2])));
         const Eigen::Vector3d turned = rot * n;
         for (int k = 0; k < 3; ++k) put(s, at(idx[k]), turned[k]);
-        if (normal_overflow == limit && n.allFinite() && !turned.cast<float>().allFinite()) normal_overflow = j;
+        for (int k = 0; k < 3 && normal_overflow == limit && n.allFinite(); ++k)
+          if (!std::isfinite(get(s, at(idx[k])))) normal_overflow = j, normal_component = k;
       }
       if (layout.rotation) {
         const auto& idx = *layout.rotation;
@@ -227,7 +230,7 @@ void transform_ply_streamed(const TransformSplatsRequest& r, const Eigen::Matrix
     const std::size_t overflow = std::min(first_non_finite(records, limit), normal_overflow);
     for (std::size_t j = overflow; j < limit; ++j)
       if (!finite(records + j * size) || j == normal_overflow) {
-        const std::string& name = finite(records + j * size) ? v.properties[(*layout.normal)[0]].name
+        const std::string& name = finite(records + j * size) ? v.properties[(*layout.normal)[normal_component]].name
                                                              : non_finite(records + j * size);
         return "splat " + std::to_string(first + j) + ": '" + name + "' overflows its type after the transform (" +
                overflow_cause(r, name) + ")";
