@@ -39,6 +39,17 @@ double squared_norm(std::span<const double> v) {
   return s;
 }
 
+// ||v|| without underflow or overflow in the squares (a transfer vector of 1e-160 has
+// squares below the smallest double).
+double scaled_norm(std::span<const double> v) {
+  double largest = 0;
+  for (double x : v) largest = std::max(largest, std::abs(x));
+  if (largest == 0) return 0;
+  double s = 0;
+  for (double x : v) s += (x / largest) * (x / largest);
+  return largest * std::sqrt(s);
+}
+
 void check_options(const ZhFitOptions& o) {
   if (!is_supported_order(o.order)) throw InputError("fit_zh: unsupported order " + std::to_string(o.order));
   if (o.lobes < 1) throw InputError("fit_zh: need at least one lobe");
@@ -1019,14 +1030,20 @@ ZhFit fit_zh(std::span<const double> t_in, const ZhFitOptions& o, std::uint64_t 
     throw InputError("fit_zh: vector has " + std::to_string(t_in.size()) + " values, order " +
                                 std::to_string(order) + " needs " + std::to_string(n2));
   ZhFit fit;
-  fit.norm = std::sqrt(squared_norm(t_in));
+  fit.norm = scaled_norm(t_in);
+  // L-BFGS's first steps and the absolute tolerances see the size of psi, so the search
+  // runs on t / ||t|| and its coefficients and residual are scaled back: c t is fitted as
+  // c times t's fit (to rounding), whatever c (at 1e3 or 1e-3 the raw vector's fit used
+  // to land in another local minimum, at 1e-20 to stop before its first step).
+  const double scale = fit.norm > 0 ? fit.norm : 1.0;
   const std::vector<bool> mask = free_bands(o);
   // Target for the lobes: t without the directly stored bands.
-  std::vector<double> t(t_in.begin(), t_in.end());
+  std::vector<double> t(t_in.size());
+  for (std::size_t i = 0; i < t.size(); ++i) t[i] = t_in[i] / scale;
   for (int l = 0; l < order; ++l)
     if (!mask[l])
       for (int m = -l; m <= l; ++m) {
-        fit.direct.push_back(t[sh_index(l, m)]);
+        fit.direct.push_back(t_in[sh_index(l, m)]);
         t[sh_index(l, m)] = 0.0;
       }
   // With at least as many lobes as bands an exact fit exists ([4] Fig. 2: six
@@ -1034,7 +1051,7 @@ ZhFit fit_zh(std::span<const double> t_in, const ZhFitOptions& o, std::uint64_t 
   // the paper's few-percent level: keep restarting until the fit is exact, and no longer
   // (further starts could only move rounding).
   const double restart = o.lobes >= order ? kExactFitResidual : o.restart_above;
-  const double good = restart * restart * squared_norm(t_in);
+  const double good = fit.norm > 0 ? restart * restart : 0.0;  // psi at the threshold, ||t|| = 1
   std::vector<ZhLobe> best;
   ZhFitOptions resolved = o;
   if (resolved.starts == kStartsByEffort) {
@@ -1060,8 +1077,10 @@ ZhFit fit_zh(std::span<const double> t_in, const ZhFitOptions& o, std::uint64_t 
     refit_coefficients(order, t, mask, best);
   }
   canonicalize(best);
+  fit.residual = std::sqrt(zh_objective(order, t, best, {})) * scale;
+  for (ZhLobe& lobe : best)
+    for (double& g : lobe.coeffs) g *= scale;
   fit.lobes = best;
-  fit.residual = std::sqrt(zh_objective(order, t, best, {}));
   return fit;
 }
 
