@@ -401,6 +401,120 @@ int minimize_conjugate_gradient(GlobalObjective& objective, std::vector<double>&
   return evaluations;
 }
 
+namespace {
+
+// A lobe and its reverse with the odd bands negated are the same lobe at a node, but the
+// bilinear blend between nodes sees the axis: where a lobe carries next to nothing (the
+// flat groove at depth 0) the search leaves its axis pointing anywhere, and neighbours
+// pointing apart blend through zero, which the runtime refuses. Each node's lobe is
+// turned to agree with the neighbours already visited (left, below).
+void align_lobe_signs(WrinkleModel& m) {
+  const int g = m.grid.grid;
+  auto axis = [&](int node, int lobe) {
+    return Eigen::Map<Eigen::Vector3d>(m.axes.data() + (static_cast<std::size_t>(node) * m.lobes + lobe) * 3);
+  };
+  for (int lobe = 0; lobe < m.lobes; ++lobe)
+    for (int k = 0; k < g; ++k)
+      for (int j = 0; j < g; ++j) {
+        const int node = k * g + j;
+        Eigen::Vector3d seen = Eigen::Vector3d::Zero();
+        if (j > 0) seen += axis(node - 1, lobe).normalized();
+        if (k > 0) seen += axis(node - g, lobe).normalized();
+        if (axis(node, lobe).dot(seen) >= 0) continue;
+        axis(node, lobe) = -axis(node, lobe);
+        double* coeffs = m.coeffs.data() + (static_cast<std::size_t>(node) * m.lobes + lobe) * m.order;
+        for (int l = 1; l < m.order; l += 2) coeffs[l] = -coeffs[l];
+      }
+}
+
+// A map the runtime would refuse (a lobe's axes around a cell spread past 90 degrees of
+// their sum) is mended: first every node's lobe is turned to agree with its neighbours
+// (align_lobe_signs); where a cell still spreads (a lobe weak at one node and strong at
+// its neighbours turns freely at the weak one), the weakest of the four is moved to its
+// neighbours' mean axis, weighted by their coefficients, and that node's coefficients are
+// solved again for its axes (its own sample, bands 2..n-1). The fit's error is measured
+// afterwards on the mended model; a map that still spreads is refused by the job.
+void repair_spread_cells(WrinkleModel& m, std::span<const double> transfer) {
+  const int g = m.grid.grid, n2 = sh_count(m.order);
+  auto axis = [&](int node, int lobe) {
+    return Eigen::Map<Eigen::Vector3d>(m.axes.data() + (static_cast<std::size_t>(node) * m.lobes + lobe) * 3);
+  };
+  auto strength = [&](int node, int lobe) {
+    const double* c = m.coeffs.data() + (static_cast<std::size_t>(node) * m.lobes + lobe) * m.order;
+    double s = 0;
+    for (int l = 2; l < m.order; ++l) s += c[l] * c[l];
+    return std::sqrt(s);
+  };
+  auto spread = [&](const int (&cell)[4], int lobe) {
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    for (int q : cell) sum += axis(q, lobe).normalized();
+    bool out = false;
+    for (int q : cell) out = out || !(axis(q, lobe).normalized().dot(sum) > 0);
+    return out;
+  };
+  auto cell_at = [&](int k, int j, int (&cell)[4]) {
+    cell[0] = k * g + j;
+    cell[1] = k * g + (j + 1) % g;
+    cell[2] = (k + 1) * g + j;
+    cell[3] = (k + 1) * g + (j + 1) % g;
+  };
+  // A map the runtime loads is left as the search made it, bit for bit.
+  bool any = false;
+  for (int lobe = 0; lobe < m.lobes && !any; ++lobe)
+    for (int k = 0; k + 1 < g && !any; ++k)
+      for (int j = 0; j < g && !any; ++j) {
+        int cell[4];
+        cell_at(k, j, cell);
+        any = spread(cell, lobe);
+      }
+  if (!any) return;
+  align_lobe_signs(m);
+  std::vector<bool> mask(m.order, true);
+  mask[0] = mask[1] = false;
+  // Each pass fixes every spread cell it finds; a move can spread a neighbouring cell,
+  // so a few passes, bounded.
+  for (int pass = 0; pass < 4 * g; ++pass) {
+    bool moved = false;
+    for (int lobe = 0; lobe < m.lobes; ++lobe)
+      for (int k = 0; k + 1 < g; ++k)
+        for (int j = 0; j < g; ++j) {
+          int cell[4];
+          cell_at(k, j, cell);
+          if (!spread(cell, lobe)) continue;
+          const int weak = *std::min_element(std::begin(cell), std::end(cell),
+                                             [&](int a, int b) { return strength(a, lobe) < strength(b, lobe); });
+          const int wj = weak % g, wk = weak / g;
+          Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+          const int around[4] = {wk * g + (wj + 1) % g, wk * g + (wj + g - 1) % g, wk > 0 ? weak - g : -1,
+                                 wk + 1 < g ? weak + g : -1};
+          for (int q : around)
+            if (q >= 0) {
+              const Eigen::Vector3d a = axis(q, lobe).normalized();
+              // Sign-free: a lobe's axis and its reverse are the same lobe.
+              mean += strength(q, lobe) * (a.dot(mean) < 0 ? -a : a);
+            }
+          if (!(mean.norm() > 0)) continue;
+          axis(weak, lobe) = mean.normalized();
+          std::vector<Eigen::Vector3d> axes(m.lobes);
+          for (int i = 0; i < m.lobes; ++i) axes[i] = axis(weak, i);
+          std::array<double, kMaxWrinkleOrder * kMaxWrinkleOrder> high{};
+          const std::span<const double> full =
+              transfer.subspan(m.grid.sample_index(wj * m.grid.samples, wk * m.grid.samples) * n2, n2);
+          std::copy(full.begin() + kDirectCoefficients, full.end(), high.begin() + kDirectCoefficients);
+          std::vector<double> coeffs(static_cast<std::size_t>(m.lobes) * m.order);
+          fit::zh_varpro_objective(m.order, std::span<const double>(high.data(), n2), mask, axes, {}, coeffs);
+          for (int i = 0; i < m.lobes; ++i)
+            for (int l = 2; l < m.order; ++l)
+              m.coeffs[(static_cast<std::size_t>(weak) * m.lobes + i) * m.order + l] = coeffs[i * m.order + l];
+          moved = true;
+        }
+    if (!moved) return;
+    align_lobe_signs(m);
+  }
+}
+
+}  // namespace
+
 WrinkleFit fit_wrinkles(const WrinkleGrid& grid, std::span<const double> transfer, const WrinkleFitOptions& options) {
   const int n2 = sh_count(options.order);
   const int threads = resolve_threads(options.threads);
@@ -464,6 +578,7 @@ WrinkleFit fit_wrinkles(const WrinkleGrid& grid, std::span<const double> transfe
     objective.unpack(state.best, model);
     out.evaluations = state.evaluations;
   }
+  repair_spread_cells(model, transfer);
   out.global_residual2 = model_residuals(model, transfer);
   out.errors.global = normalized_rms(out.global_residual2, out.norm2);
   return out;

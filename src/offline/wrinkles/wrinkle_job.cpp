@@ -111,7 +111,12 @@ WrinkleReport run_fit_wrinkles(const WrinkleRequest& r) {
   report.samples = grid.sample_count();
   report.parameters = static_cast<std::size_t>(grid.nodes()) * r.lobes * (3 + r.order - 2);
 
-  io.set("--out", encode_table(wrinkle_table(fit, r)));
+  const Table table = wrinkle_table(fit, r);
+  // The map as an engine loads it: a fit the runtime would refuse is an error, not a file.
+  if (const Result<WrinkleMap<double>> loads = WrinkleMap<double>::from_table(table); !loads)
+    throw InputError("fit-wrinkles: the fitted map would not load: " + loads.error().message +
+                     " (nothing written; another --grid, --samples or --lobes may fit)");
+  io.set("--out", encode_table(table));
   if (io.requested("--json")) io.set("--json", dump_finite(wrinkle_summary(fit, r), "--json", 2) + "\n");
   io.commit();
   return report;
