@@ -140,8 +140,11 @@ struct TableFileInfo {
 
 // Reads and validates: magic, format major version, header CRC, header fields and
 // conventions id, the expectation (kind, kind major, order), array bounds, padding, array
-// CRCs. Never throws, never returns partial data; memory use is bounded by about twice the
-// file size (the file is read whole, then its arrays are copied out).
+// CRCs. Never throws, never returns partial data. Memory: the file read whole, its arrays
+// copied out (about twice a binary file's size), plus the parsed JSON of its header (of
+// the whole document for the JSON encoding), which takes up to about 30 bytes for each
+// byte of JSON text: a binary table's header of a few kilobytes costs nothing, a 10 MB
+// JSON table about 250 MB (the header is capped at 64 MiB).
 // (The writer is offline: `shtool` writes tables, engines read them.)
 Result<Table> read_table(const std::filesystem::path& path, const TableExpectation& expect = {},
                          TableFileInfo* info = nullptr);
@@ -155,7 +158,7 @@ struct TableReadOptions {
 
 // read_table for bytes already in memory (an asset archive, a network buffer); `name`
 // stands for the path in messages. Same guarantees: never throws, never returns partial
-// data, memory bounded by the input size.
+// data, memory as read_table's.
 Result<Table> read_table_bytes(std::span<const std::byte> bytes, std::string_view name,
                                const TableExpectation& expect = {}, TableFileInfo* info = nullptr,
                                const TableReadOptions& options = {});

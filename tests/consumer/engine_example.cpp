@@ -29,13 +29,18 @@ bool loaded(const shtool::Result<X>& x) {
 
 // Exit radiance of vertex 0 of `fit_path` (a `shtool fit-zh` table) under the lighting of
 // `lighting_path` (a `shtool light` or `project-env` table) turned by `object`: rgb[c].
-// Returns false when a table does not load.
+// Returns false when a table does not load or the lighting has fewer bands than the fit.
 bool shade_vertex(const char* fit_path, const char* lighting_path, const shtool::Mat3<T>& object, T rgb[3]) {
   const auto fit = shtool::ZhFitTable<T>::load(fit_path);
   const auto light = shtool::ShLighting<T>::load(lighting_path);
   const auto helpers = shtool::RotationHelpers::load(shtool::default_rotation_helpers_path());
   if (!loaded(fit) || !loaded(light) || !loaded(helpers)) return false;
   const shtool::ZhFitTable<T>& z = fit.value();
+  // Each band of the fit is shaded by the same band of the lighting.
+  if (light.value().order < z.order) {
+    std::fprintf(stderr, "%s: order %d lighting, the fit needs %d\n", lighting_path, light.value().order, z.order);
+    return false;
+  }
 
   // The lobes live in the object's frame: turn the lighting by the inverse of the object's
   // rotation (g(w) = f(R^-1 w), docs/conventions.md), its three channels in one call.

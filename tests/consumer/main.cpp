@@ -1,7 +1,7 @@
 // An engine's view of shtool: built against the installed package with -fno-exceptions
 // and -fno-rtti, it loads every table kind it is given through X::load, in float and in
 // double (the shipped tables through SHTOOL_TABLES; argv[1] a fit-zh output, argv[2]
-// an env-sh lighting and argv[3] a probe-grid, when given), rotates by three methods, multiplies, maps glossy view
+// an env-sh lighting, argv[3] a probe-grid and argv[4] lighting of a lower order than the fit, when given), rotates by three methods, multiplies, maps glossy view
 // directions and blends wrinkle weights, shades the fit-zh output, and runs the program
 // of docs/engine.md (engine_example.cpp). Every result is checked against an independent route (closed forms,
 // evaluation at rotated directions, pointwise products, the lobes summed into SH), so a
@@ -218,7 +218,8 @@ void check_every_kind(const char* fit, const char* lighting, const char* probes)
 
 // The program of docs/engine.md against the same shading of the lighting turned in double
 // by the reference method (no tables), and a product by 1 against its input.
-void check_engine_example(const char* fit, const char* lighting, const shtool::Mat3<double>& r) {
+void check_engine_example(const char* fit, const char* lighting, const char* low_lighting,
+                          const shtool::Mat3<double>& r) {
   float rgb[3];
   require(shade_vertex(fit, lighting, r.cast<float>(), rgb), "engine_example: shade_vertex failed");
   const auto z = shtool::ZhFitTable<double>::load(fit);
@@ -237,6 +238,9 @@ void check_engine_example(const char* fit, const char* lighting, const shtool::M
   }
   std::vector<float> f(channel.begin(), channel.end());
   const float worst = multiply_by_one(f);
+  // Lighting of a lower order than the fit is refused, not read past its end.
+  if (low_lighting)
+    require(!shade_vertex(fit, low_lighting, r.cast<float>(), rgb), "engine_example: shaded a fit with lower-order lighting");
   require(worst >= 0, "engine_example: the tripling tensor did not load");
   check("engine_example f * 1 - f", worst, 0.0, 1e-5);
 }
@@ -274,9 +278,10 @@ int main(int argc, char** argv) {
   const char* fit = argc > 1 ? argv[1] : nullptr;
   const char* lighting = argc > 2 ? argv[2] : nullptr;
   const char* probes = argc > 3 ? argv[3] : nullptr;
+  const char* low_lighting = argc > 4 ? argv[4] : nullptr;
   check_every_kind<float>(fit, lighting, probes);
   check_every_kind<double>(fit, lighting, probes);
-  if (fit && lighting) check_engine_example(fit, lighting, r);
+  if (fit && lighting) check_engine_example(fit, lighting, low_lighting, r);
 
   if (failures != 0) {
     std::fprintf(stderr, "consumer: %d check(s) failed\n", failures);

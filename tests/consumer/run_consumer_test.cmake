@@ -126,7 +126,10 @@ elseif(STEP STREQUAL "consumer")
     set(probes "${CONSUMER_BINARY_DIR}/spot.probes.shtb")
     run_step("bake-probes for the consumer" "${SHTOOL}" bake-probes "${SOURCE_DIR}/data/spot.obj" --grid 2,2,2
              --samples 16 --bounces 1 --out "${probes}")
-    set(fit_args "${fit}" "${lighting}" "${probes}")
+    set(low_lighting "${CONSUMER_BINARY_DIR}/low.env.shtb")
+    run_step("lower-order light for the consumer" "${SHTOOL}" light --type directional --dir 0,0,1 --order 3
+             --json "${CONSUMER_BINARY_DIR}/low.json" --out "${low_lighting}")
+    set(fit_args "${fit}" "${lighting}" "${probes}" "${low_lighting}")
   endif()
   run_step("run consumer" "${CMAKE_COMMAND}" -E env "SHTOOL_TABLES=${tables}" "${consumer_exe}" ${fit_args})
   message(STATUS "${step_output}")

@@ -144,6 +144,22 @@ TEST(WrinkleMap, BadTablesAreRefusedByName) {
   set_value(big, "direct", 0, 1e300);
   EXPECT_FALSE(WrinkleMap<float>::from_table(big).ok());
   EXPECT_TRUE(WrinkleMap<double>::from_table(big).ok());
+  // Axes a float cannot normalise: 1e20 (its square overflows) and 3e-23 (its square is
+  // below the smallest normal float, and the normalised axis came out 0.8 long).
+  for (const double length : {1e20, 3e-23}) {
+    Table t = good;
+    const std::vector<double> axes = array(t, "axes")->values<double>();
+    for (int c = 0; c < 3; ++c) set_value(t, "axes", 9 * 3 + c, axes[9 * 3 + c] / std::sqrt(axes[27] * axes[27] +
+                                                                     axes[28] * axes[28] + axes[29] * axes[29]) * length);
+    const Result<WrinkleMap<float>> f = WrinkleMap<float>::from_table(t);
+    ASSERT_FALSE(f.ok()) << length;
+    // 3e-23 squared may flush to float zero: "is zero" then says the same.
+    const std::string& m = f.error().message;
+    EXPECT_TRUE(m.find("cannot be normalised in the requested precision") != std::string::npos ||
+                (length < 1 && m.find("axis of lobe 1 at node 4 is zero") != std::string::npos))
+        << m;
+    EXPECT_TRUE(WrinkleMap<double>::from_table(t).ok()) << length;
+  }
 }
 
 TEST(WrinkleMap, NodesGiveTheStoredValues) {

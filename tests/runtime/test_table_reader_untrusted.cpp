@@ -10,8 +10,10 @@
 
 #include <gtest/gtest.h>
 
+#include "shtool/lighting.h"
 #include "shtool/rotation_helpers.h"
 #include "shtool/table.h"
+#include "shtool/tripling_product.h"
 #include "shtool/zhf_rotation.h"
 
 namespace shtool {
@@ -41,6 +43,74 @@ std::string binary_with_header(const std::string& header) {
 std::string message_of(const std::string& bytes, const TableReadOptions& o = {}) {
   const Result<Table> t = read_table_bytes(as_bytes(bytes), "hostile", {}, nullptr, o);
   return t ? std::string() : t.error().message;
+}
+
+// One value of array `name` replaced, the table otherwise as it was.
+void set_value(Table& t, const char* name, std::size_t i, double v) {
+  for (TableArray& a : t.arrays)
+    if (a.name == name) {
+      std::vector<double> values = a.values<double>();
+      values.at(i) = v;
+      a = TableArray::from<double>(a.name, a.shape, values);
+    }
+}
+
+TEST(UntrustedTables, FiniteValuesTooLargeToComputeWithAreRefused) {
+  // Finite values a table of that kind cannot hold: taken, they turned a float lighting
+  // into infinities (1e300 cast to float) and products and rotations into inf or NaN.
+  Table light;
+  light.kind = std::string(kEnvShKind);
+  light.order = 2;
+  light.meta = R"({"quantity": "radiance"})";
+  light.arrays.push_back(TableArray::from<double>("coefficients", {4, 3}, std::vector<double>(12, 0.5)));
+  ASSERT_TRUE(ShLighting<float>::from_table(light).ok());
+  set_value(light, "coefficients", 5, 1e30);
+  EXPECT_FALSE(ShLighting<float>::from_table(light).ok());
+  EXPECT_TRUE(ShLighting<double>::from_table(light).ok());
+  set_value(light, "coefficients", 5, 1e300);
+  const Result<ShLighting<double>> huge = ShLighting<double>::from_table(light);
+  ASSERT_FALSE(huge.ok());
+  EXPECT_NE(huge.error().message.find("too large for the requested precision"), std::string::npos)
+      << huge.error().message;
+
+  // A triple integral of SH is at most max |y| = sqrt((2l + 1) / (4 pi)).
+  Result<Table> tripling = read_table(find_shipped_table("tripling-tensor.shtb"));
+  ASSERT_TRUE(tripling.ok()) << tripling.error().message;
+  ASSERT_TRUE(TriplingTensor::from_table(tripling.value()).ok());
+  set_value(tripling.value(), "value", 3, 1e300);
+  const Result<TriplingTensor> product = TriplingTensor::from_table(tripling.value());
+  ASSERT_FALSE(product.ok());
+  EXPECT_NE(product.error().message.find("exceeds the bound of any SH triple integral"), std::string::npos)
+      << product.error().message;
+
+  Result<Table> zhf = read_table(find_shipped_table("zhf-shared-N4.shtb"));
+  ASSERT_TRUE(zhf.ok()) << zhf.error().message;
+  ASSERT_TRUE(ZhfLobes::from_table(zhf.value()).ok());
+  set_value(zhf.value(), "sparse_val", 2, 1e30);
+  const Result<ZhfLobes> lobes = ZhfLobes::from_table(zhf.value());
+  ASSERT_FALSE(lobes.ok());
+  EXPECT_NE(lobes.error().message.find("A^ value too large"), std::string::npos) << lobes.error().message;
+}
+
+TEST(UntrustedTables, AnInMemoryTableWhoseShapeOutrunsItsDataIsRefused) {
+  // TableArray::from does not check the shape against the values; read_table always does.
+  // A loader given such a table in memory once read past its data.
+  Table light;
+  light.kind = std::string(kEnvShKind);
+  light.order = 2;
+  light.meta = R"({"quantity": "radiance"})";
+  light.arrays.push_back(TableArray::from<double>("coefficients", {4, 3}, std::vector<double>(1, 0.5)));
+  const Result<ShLighting<double>> l = ShLighting<double>::from_table(light);
+  ASSERT_FALSE(l.ok());
+  EXPECT_NE(l.error().message.find("array 'coefficients' holds 8 bytes, its dtype and shape need 96"),
+            std::string::npos)
+      << l.error().message;
+  Result<Table> tripling = read_table(find_shipped_table("tripling-tensor.shtb"));
+  ASSERT_TRUE(tripling.ok()) << tripling.error().message;
+  for (TableArray& a : tripling.value().arrays) a.shape[0] *= 1000;
+  const Result<TriplingTensor> t = TriplingTensor::from_table(tripling.value());
+  ASSERT_FALSE(t.ok());
+  EXPECT_NE(t.error().message.find("its dtype and shape need"), std::string::npos) << t.error().message;
 }
 
 TEST(UntrustedTables, DeepJsonIsRefusedNotRecursedInto) {

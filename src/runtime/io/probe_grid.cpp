@@ -174,15 +174,15 @@ Result<ProbeGrid<T>> ProbeGrid<T>::from_table(const Table& t) {
   for (int a = 0; a < 3; ++a) {
     const double lo = b.value()[a], hi = b.value()[3 + a];
     if (!(lo < hi)) return probe_error("bounds: min " + std::to_string(lo) + " is not below max " + std::to_string(hi));
-    if (std::abs(lo) > double(std::numeric_limits<T>::max()) || std::abs(hi) > double(std::numeric_limits<T>::max()))
+    if (std::abs(lo) > double(std::numeric_limits<T>::max()) || std::abs(hi) > double(std::numeric_limits<T>::max()) ||
+        !std::isfinite(static_cast<T>(hi) - static_cast<T>(lo)))
       return probe_error("bounds do not fit the requested precision");
     g.min[a] = static_cast<T>(lo);
     g.max[a] = static_cast<T>(hi);
   }
   for (const std::vector<double>* values : {&c.value(), &zonal})
     for (const double v : *values)
-      if (std::abs(v) > double(std::numeric_limits<T>::max()))
-        return probe_error("a coefficient does not fit the requested precision");
+      if (!detail::within_headroom<T>(v)) return probe_error("a coefficient is too large for the requested precision");
   if (stores_zonal) {
     // One probe's values together: its L1 band, then its zonal coefficients.
     const std::size_t probes = zonal.size() / 3;

@@ -142,6 +142,12 @@ Result<WrinkleMap<T>> WrinkleMap<T>::from_table(const Table& t) {
       const Vec3<T> stored = axis(node, lobe).template cast<T>();
       if (!(axis(node, lobe).norm() > 0) || !(stored.squaredNorm() > T(0)))
         return wrinkle_error("axis of lobe " + std::to_string(lobe) + " at node " + std::to_string(node) + " is zero");
+      // Its squared length a normal T, or normalising it in T overflows (1e20 in float)
+      // or loses its digits (3e-23).
+      const T length2 = stored.squaredNorm();
+      if (!(length2 >= std::numeric_limits<T>::min() && length2 <= std::numeric_limits<T>::max() * T(0x1p-8)))
+        return wrinkle_error("axis of lobe " + std::to_string(lobe) + " at node " + std::to_string(node) +
+                             " cannot be normalised in the requested precision");
     }
   // Four vectors within 90 degrees of one direction have a blend (positive weights) that
   // is never zero, so its normalisation is defined everywhere in the cell.

@@ -121,6 +121,7 @@ template Result<ZhFitTable<double>> zh_rows_from_table<double>(const Table&, con
 template <class T>
 Result<ZhFitTable<T>> ZhFitTable<T>::from_table(const Table& t) {
   if (t.kind != kZhFitKind) return zh_fit_error("wrong kind '" + t.kind + "'");
+  if (const auto problem = detail::array_sizes_problem(t)) return zh_fit_error(*problem);
   // A shard of a bake holds a range of the vertices only; shading it as the whole mesh
   // would misplace every row.
   const nlohmann::json meta = nlohmann::json::parse(t.meta, nullptr, /*allow_exceptions=*/false);

@@ -34,6 +34,7 @@ Result<ShLighting<T>> ShLighting<T>::from_table(const Table& t) {
   l.quantity = *q == "radiance" ? LightQuantity::radiance : LightQuantity::irradiance;
   for (double v : a->values<double>()) {
     if (!std::isfinite(v)) return lighting_error("a coefficient is not finite");
+    if (!detail::within_headroom<T>(v)) return lighting_error("a coefficient is too large for the requested precision");
     l.coefficients.push_back(static_cast<T>(v));
   }
   return l;

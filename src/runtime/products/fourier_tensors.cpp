@@ -103,6 +103,7 @@ Result<ShFourierTensors> ShFourierTensors::load(const std::filesystem::path& pat
 
 Result<ShFourierTensors> ShFourierTensors::from_table(const Table& table) {
   if (table.kind != kShFourierTensorsKind) return fourier_error("wrong kind '" + table.kind + "'");
+  if (const auto problem = detail::array_sizes_problem(table)) return fourier_error(*problem);
   if (!is_supported_order(table.order))
     return fourier_error("unsupported order " + std::to_string(table.order));
   const TableArray* tf = table.find("to_fourier");

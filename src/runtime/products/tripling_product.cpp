@@ -154,6 +154,7 @@ Result<TriplingTensor> TriplingTensor::load(const std::filesystem::path& path) {
 
 Result<TriplingTensor> TriplingTensor::from_table(const Table& table) {
   if (table.kind != kTriplingTensorKind) return tripling_error("wrong kind '" + table.kind + "'");
+  if (const auto problem = detail::array_sizes_problem(table)) return tripling_error(*problem);
   if (table.order < 1 || table.order > kMaxTriplingOrder)
     return tripling_error("unsupported order " + std::to_string(table.order) + " (1.." +
                           std::to_string(kMaxTriplingOrder) + ")");
@@ -170,6 +171,7 @@ Result<TriplingTensor> TriplingTensor::from_table(const Table& table) {
   t.value = val->values<double>();
   if (t.index.size() != 3 * t.value.size()) return tripling_error("array sizes disagree");
   const std::uint32_t count = static_cast<std::uint32_t>(sh_count(t.order));
+  const double gaunt_bound = std::sqrt((2.0 * t.order - 1) / (4 * std::numbers::pi)) * (1 + 1e-9);
   for (std::size_t e = 0; e < t.value.size(); ++e) {
     const std::uint32_t i = t.index[3 * e], j = t.index[3 * e + 1], k = t.index[3 * e + 2];
     const std::string where = "entry " + std::to_string(e) + " (" + std::to_string(i) + ", " +
@@ -185,6 +187,9 @@ Result<TriplingTensor> TriplingTensor::from_table(const Table& table) {
         tripling_azimuthal_factor(a.m, b.m, c.m) == 0.0)
       return tripling_error(where + ": violates the selection rules (a structural zero)");
     if (!std::isfinite(t.value[e])) return tripling_error(where + ": value is not finite");
+    // |integral of y_i y_j y_k| <= max |y_i| = sqrt((2l + 1) / (4 pi)) <= sqrt((2N - 1) / (4 pi)).
+    if (!(std::abs(t.value[e]) <= gaunt_bound))
+      return tripling_error(where + ": value exceeds the bound of any SH triple integral");
   }
   return t;
 }

@@ -22,6 +22,7 @@ Error helpers_error(const std::string& what) {
 Result<RotationHelpers> RotationHelpers::from_table(const Table& table) {
   if (table.kind != kRotationHelpersKind)
     return helpers_error("wrong kind '" + table.kind + "'");
+  if (const auto problem = detail::array_sizes_problem(table)) return helpers_error(*problem);
   if (!is_supported_order(table.order))
     return helpers_error("unsupported order " + std::to_string(table.order));
   RotationHelpers h;

@@ -53,6 +53,7 @@ Result<ZhfLobes> ZhfLobes::bands_below(int n) const {
 
 Result<ZhfLobes> ZhfLobes::from_table(const Table& t) {
   if (t.kind != kZhfLobesKind) return bad("wrong kind '" + t.kind + "'");
+  if (const auto problem = detail::array_sizes_problem(t)) return bad(*problem);
   auto bands = t.get<std::int32_t>("bands");
   auto offset = t.get<std::int32_t>("direction_offset");
   auto dirs = t.get<double>("directions");
@@ -115,6 +116,9 @@ Result<ZhfLobes> ZhfLobes::from_table(const Table& t) {
         const int c = col.value()[k];
         if (c < 0 || c >= n) return bad("sparse_col out of range in band " + std::to_string(l));
         if (!std::isfinite(val.value()[k])) return bad("non-finite A^ value in band " + std::to_string(l));
+        // Float's room: one table serves ZhfRotation<float> and <double>.
+        if (!detail::within_headroom<float>(val.value()[k]))
+          return bad("A^ value too large in band " + std::to_string(l));
         z.col.push_back(c);
         z.val.push_back(val.value()[k]);
       }

@@ -122,6 +122,7 @@ T GlossyFit<T>::shade(std::span<const T> light, std::size_t vertex, const Vec3<T
 template <class T>
 Result<GlossyFit<T>> GlossyFit<T>::from_table(const Table& t) {
   if (t.kind != kGlossyZhKind) return glossy_error("wrong kind '" + t.kind + "'");
+  if (const auto problem = detail::array_sizes_problem(t)) return glossy_error(*problem);
   const TableArray* u = t.find("view_factors");
   if (!u || u->shape.size() != 3 || u->shape[0] != u->shape[1] || u->shape[0] < 1 ||
       u->shape[0] > kMaxViewResolution || u->shape[2] < 1 || u->shape[2] > kMaxGlossyTerms)
