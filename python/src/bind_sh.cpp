@@ -161,6 +161,19 @@ RotationMethod method_from(const std::string& name) {
   return *m;
 }
 
+// A finite vector that a rotation took past T's range (coefficients near its largest) is
+// refused, as `shtool rotate` refuses it, not handed back as inf or NaN; a vector given
+// with NaN or inf comes back non-finite, as numpy's arithmetic would.
+template <class T>
+void refuse_overflow(const T* in, const T* out, std::size_t count, std::size_t n2) {
+  for (std::size_t k = 0; k < count; ++k) {
+    if (std::all_of(out + k * n2, out + (k + 1) * n2, [](T v) { return std::isfinite(v); })) continue;
+    if (std::all_of(in + k * n2, in + (k + 1) * n2, [](T v) { return std::isfinite(v); }))
+      throw py::value_error("rotate: the rotation of vector " + std::to_string(k) + " overflows " +
+                            (sizeof(T) == 4 ? "float32" : "float64") + " (coefficients too large)");
+  }
+}
+
 template <class T>
 py::array rotate_t(const py::array& coeffs_in, const py::object& matrix, const std::string& method_name,
                    std::optional<double> tol, const py::object& out_arg, int threads, const std::string& tables) {
@@ -180,6 +193,7 @@ py::array rotate_t(const py::array& coeffs_in, const py::object& matrix, const s
     py::gil_scoped_release release;
     const auto lobes = zhf_lobes(order, tables);
     rotate_zhf<T>(method_name == "zhf-tailored", order, lobes, r, in, o, coeffs.size() / sh_count(order), threads);
+    refuse_overflow(in, static_cast<const T*>(o), coeffs.size() / sh_count(order), sh_count(order));
     return out;
   }
   const RotationMethod method = method_from(method_name);
@@ -211,6 +225,7 @@ py::array rotate_t(const py::array& coeffs_in, const py::object& matrix, const s
       for (std::size_t k = begin; k < end; ++k)
         rotation.apply(std::span<const T>(in + k * n2, n2), std::span<T>(o + k * n2, n2));
     });
+    refuse_overflow(in, static_cast<const T*>(o), count, n2);
     return out;
   }
   if (m.ndim() < 2 || m.shape(m.ndim() - 1) != 3 || m.shape(m.ndim() - 2) != 3 || m.ndim() - 2 > coeffs.ndim() - 1 ||
@@ -265,6 +280,7 @@ py::array rotate_t(const py::array& coeffs_in, const py::object& matrix, const s
     ok = std::all_of(chunk_ok.begin(), chunk_ok.end(), [](char c) { return c != 0; });
   }
   if (!ok) throw py::value_error("rotation method unavailable for this order");
+  refuse_overflow(in, static_cast<const T*>(o), count, n2);
   return out;
 }
 

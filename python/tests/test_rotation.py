@@ -147,6 +147,23 @@ def test_bad_inputs():
         shtool.rotate(np.ones((2, 9)), np.stack([np.eye(3)] * 3))  # 3 matrices for 2 vectors
 
 
+@pytest.mark.parametrize("method", ["auto", "zxzxz", "zhf"])
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+def test_a_rotation_past_the_dtype_is_refused_not_returned_as_inf(method, dtype):
+    # Finite coefficients near the largest float the rotation's steps take past it: once
+    # returned as inf and NaN, now refused as the CLI refuses them, naming the vector.
+    big = np.finfo(dtype).max
+    f = np.ones((3, 16), dtype)
+    f[1] = big
+    with pytest.raises(ValueError, match=r"rotation of vector 1 overflows"):
+        shtool.rotate(f, np.eye(3), method=method)
+    with pytest.raises(ValueError, match=r"rotation of vector 1 overflows"):
+        shtool.rotate(f, np.stack([np.eye(3)] * 3))
+    # NaN in gives NaN out, as numpy's arithmetic would.
+    f[1] = np.nan
+    assert np.isnan(shtool.rotate(f, np.eye(3), method=method)[1]).all()
+
+
 @pytest.mark.parametrize("dtype", [np.float64, np.float32])
 def test_one_bad_matrix_in_a_batch_is_named(dtype):
     rs = np.stack([np.eye(3)] * 5 + [np.diag([1.0, 1.0, -1.0])]).astype(dtype)

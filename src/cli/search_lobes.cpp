@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -20,7 +21,7 @@ namespace {
 
 struct SearchLobesOptions {
   lobes::SearchLobesRequest request;
-  int band = 0;
+  std::optional<int> band;
   std::string bands;
   bool quiet = false;
 };
@@ -30,8 +31,8 @@ std::vector<int> band_list(const SearchLobesOptions& o) {
   if (!o.band && o.bands.empty()) return {};
   if (o.band && !o.bands.empty()) throw InputError("give either --band or --bands, not both");
   if (o.band) {
-    if (o.band < 1 || o.band >= kMaxOrder) throw InputError("--band must be in 1.." + std::to_string(kMaxOrder - 1));
-    return {o.band};
+    if (*o.band < 1 || *o.band >= kMaxOrder) throw InputError("--band must be in 1.." + std::to_string(kMaxOrder - 1));
+    return {*o.band};
   }
   return lobes::parse_band_range(o.bands);
 }

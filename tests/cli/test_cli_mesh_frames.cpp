@@ -291,7 +291,12 @@ TEST(MeshFrames, RenderDeformAndExportWebRefuseAnotherMesh) {
   const std::vector<std::pair<std::vector<std::string>, fs::path>> runs = {
       {{"render", other.string(), "--fit", table, "--light", light, "--out", image.string()}, image},
       {{"deform", table, "--rest", other.string(), "--pose", other.string(), "--out", posed.string()}, posed},
-      {{"export-web", other.string(), "--fit", table, "--light", light, "--out", folder.string()}, folder}};
+      {{"export-web", other.string(), "--fit", table, "--light", light, "--out", folder.string()}, folder},
+      // The transfer vectors record the mesh too (render --transfer once took another
+      // mesh's with as many vertices).
+      {{"render", other.string(), "--transfer", scratch("same.t.json").string(), "--light", light, "--out",
+        image.string()},
+       image}};
   for (const auto& [args, out] : runs) {
     const CommandResult r = run_shtool(args);
     EXPECT_EQ(r.exit_code, 1) << args[0];
@@ -316,6 +321,10 @@ TEST(MeshFrames, RenderDeformAndExportWebRefuseAnotherMesh) {
   bake(with_normals, "same_n", {"--normals", "computed"});
   must(run_shtool({"render", with_normals.string(), "--fit", scratch("same_n.shtb").string(), "--light", light,
                    "--width", "16", "--height", "16", "--out", scratch("same_n.png").string()}));
+  must(run_shtool({"render", with_normals.string(), "--transfer", scratch("same_n.t.json").string(), "--light",
+                   light, "--width", "16", "--height", "16", "--out", scratch("same_nt.png").string()}));
+  must(run_shtool({"render", mesh.string(), "--transfer", scratch("same.t.json").string(), "--light", light,
+                   "--width", "16", "--height", "16", "--out", scratch("same_t.png").string()}));
 
   // A table read z-up on a glTF.
   bake(mesh, "same_z", {"--up", "z"});

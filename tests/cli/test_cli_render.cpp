@@ -321,7 +321,7 @@ TEST(Render, BadRequestsAreRefusedByName) {
       {{kSpotObj, "--transfer", t, "--light", sky, "--shading", "zh"}, "--fit"},
       {{kSpotObj, "--fit", fit, "--light", sky, "--shading", "error"}, "--transfer"},
       {{kSpotObj, "--transfer", t, "--light", irradiance.string()}, "irradiance"},
-      {{other_mesh.string(), "--transfer", t, "--light", sky}, "vertices"},
+      {{other_mesh.string(), "--transfer", t, "--light", sky}, "baked on another mesh"},
       {{other_mesh.string(), "--fit", fit, "--light", sky}, "--fit"},
       {{kSpotObj, "--transfer", t, "--light", sky, "--camera", "0,0,5,0,0,0"}, "--camera"},
       {{kSpotObj, "--transfer", t, "--light", sky, "--camera", "0,0,5,0,0,0,0,0,1"}, "--camera"},

@@ -87,6 +87,14 @@ TEST_F(CliUntrusted, LimitsAreRefusedWithTheirFigures) {
   expect_refused(run({"fit-zh", "--transfer", (dir_ / "t.json").string(), "--threads", "100000"}), "at most");
   expect_refused(run({"search-lobes", "--band", "3", "--threads", "100000"}), "at most");
   expect_refused(run({"search-lobes", "--band", "100"}), "GiB");
+  // Refused before the search, naming the option's rule (inf used to run the whole
+  // search and then fail on the table's record; 0 and -5 generations ran one).
+  expect_refused(run({"search-lobes", "--band", "3", "--max-cond", "inf", "--out", (dir_ / "c.shtb").string()}),
+                 "max condition number must be finite");
+  for (const char* g : {"0", "-5"})
+    expect_refused(run({"search-lobes", "--band", "3", "--max-generations", g}), "max generations must be at least 1");
+  expect_refused(run({"search-lobes", "--band", "0"}), "--band must be in 1..");
+  EXPECT_FALSE(fs::exists(dir_ / "c.shtb"));
   expect_refused(run({"fit-zh", mesh_.string(), "--mode", "interreflected", "--bounces", "2147483647"}),
                  "--bounces must be in 1..64");
   const CommandResult seed = run({"fit-zh", "--transfer", (dir_ / "t.json").string(), "--seed", "-1"});

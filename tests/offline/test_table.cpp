@@ -933,6 +933,12 @@ TEST_F(TableTest, InspectGoodTable) {
   const json jj = json::parse(r.out);
   EXPECT_EQ(jj["summary"]["encoding"], "json");
   EXPECT_EQ(jj["summary"]["arrays"], arrays);
+  // Only a binary header carries a checksum; the text says which was verified.
+  EXPECT_EQ(j["header_checksummed"], true);
+  EXPECT_EQ(jj["header_checksummed"], false);
+  r = run(std::string(SHTOOL_EXE) + " inspect " + q(pj), dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("a JSON table's header has no checksum"), std::string::npos) << r.out;
 }
 
 TEST_F(TableTest, InspectRejectsCorruptTable) {

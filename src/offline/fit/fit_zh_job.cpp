@@ -184,10 +184,10 @@ FitZhInputs read_inputs(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJob*
   if (!r.transfer.empty()) {
     const std::string text = read_input_file(r.transfer, "--transfer");
     int file_order = 0;
-    std::string transfer_up;
-    in.transfer = parse_transfer_json(text, r.transfer, file_order, &transfer_up);
+    TransferMeshRecord record;
+    in.transfer = parse_transfer_json(text, r.transfer, file_order, &record);
     // Vectors simulated on a mesh keep its frame record, so that render checks the fit.
-    if (!transfer_up.empty()) in.meta[kMeshUpKey] = transfer_up;
+    if (!record.mesh_up.empty()) in.meta[kMeshUpKey] = record.mesh_up;
     if (r.order_given && file_order != r.order)
       throw InputError("--order " + std::to_string(r.order) + " but --transfer '" + r.transfer.string() +
                        "' has order " + std::to_string(file_order));
@@ -403,7 +403,8 @@ FitZhReport run_fit_zh_on(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJo
   if (io.requested("--json")) io.set("--json", fits_json(fits));
   if (io.requested("--ply")) io.set("--ply", ply_text(in.mesh, in.transfer, in.order, fits));
   if (io.requested("--save-transfer"))
-    io.set("--save-transfer", transfer_json(in.transfer, in.order, in.mesh.up));
+    io.set("--save-transfer", transfer_json(in.transfer, in.order, in.mesh.up, loaded_mesh_crc32(in.mesh),
+                                            name_of(r.normals, normal_source_names())));
   if (io.requested("--gltf"))
     io.set("--gltf",
            zh_fit_glb(in.mesh, fits, transfer_dc, "shtool " + generator["version"].get<std::string>() + " fit-zh"));

@@ -277,6 +277,19 @@ Mesh load_mesh(const std::filesystem::path& path, NormalSource normal_source, Up
   return load_obj_text(bytes, path, normal_source, up);
 }
 
+void check_mesh_crc32(std::uint64_t baked, std::string_view baked_normals, const Mesh& mesh,
+                      const std::filesystem::path& file, const std::string& what) {
+  std::uint32_t loaded = loaded_mesh_crc32(mesh);
+  // Normals are part of the checksum: a bake that computed them from a file that has its
+  // own saw other normals than the automatic loading here.
+  if (loaded != baked && mesh.normals_from_file && baked_normals == "computed")
+    loaded = loaded_mesh_crc32(load_mesh(file, NormalSource::computed, mesh.up));
+  if (loaded == baked) return;
+  throw InputError(what + " was baked on another mesh: it records mesh_crc32 " + std::to_string(baked) + ", and " +
+                   file.string() + " loads as " + std::to_string(loaded) +
+                   " (positions, normals and triangles in shtool's frame); give the mesh it was baked on");
+}
+
 void check_same_mesh(const Table& table, const Mesh& mesh, const std::filesystem::path& file, const std::string& what) {
   const nlohmann::json generator = nlohmann::json::parse(table.generator, nullptr, false);
   if (!generator.is_object() || !generator.contains("parameters") || !generator["parameters"].is_object()) return;
@@ -284,16 +297,9 @@ void check_same_mesh(const Table& table, const Mesh& mesh, const std::filesystem
   if (!params.contains("mesh_crc32")) return;
   if (!params["mesh_crc32"].is_number_unsigned())
     throw InputError(what + ": generator.parameters.mesh_crc32 must be an unsigned integer");
-  const std::uint64_t baked = params["mesh_crc32"].get<std::uint64_t>();
-  std::uint32_t loaded = loaded_mesh_crc32(mesh);
-  // Normals are part of the checksum: a bake that computed them from a file that has its
-  // own saw other normals than the automatic loading here.
-  if (loaded != baked && mesh.normals_from_file && params.contains("normals") && params["normals"] == "computed")
-    loaded = loaded_mesh_crc32(load_mesh(file, NormalSource::computed, mesh.up));
-  if (loaded == baked) return;
-  throw InputError(what + " was baked on another mesh: it records mesh_crc32 " + std::to_string(baked) + ", and " +
-                   file.string() + " loads as " + std::to_string(loaded) +
-                   " (positions, normals and triangles in shtool's frame); give the mesh it was baked on");
+  const std::string normals =
+      params.contains("normals") && params["normals"].is_string() ? params["normals"].get<std::string>() : "";
+  check_mesh_crc32(params["mesh_crc32"].get<std::uint64_t>(), normals, mesh, file, what);
 }
 
 Mesh load_obj_text(const std::string& text, const std::filesystem::path& path, NormalSource normal_source,

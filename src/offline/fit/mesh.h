@@ -20,6 +20,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -128,6 +129,10 @@ Mesh load_mesh(const std::filesystem::path& path, NormalSource normals = NormalS
 // when the bake computed its normals and the file has its own. A table without the
 // record (fit-zh --transfer, deform, older versions) is not checked.
 void check_same_mesh(const Table& table, const Mesh& mesh, const std::filesystem::path& file, const std::string& what);
+// The same check of a recorded checksum and the --normals it was loaded with (a transfer
+// file's record).
+void check_mesh_crc32(std::uint64_t baked, std::string_view baked_normals, const Mesh& mesh,
+                      const std::filesystem::path& file, const std::string& what);
 
 // The same for OBJ text already in memory; `path` names it in messages.
 // `mtl_text`, when not empty, is the .mtl the OBJ's usemtl lines name (Mesh::obj_materials,

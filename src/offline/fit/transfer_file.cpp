@@ -1,5 +1,6 @@
 #include "fit/transfer_file.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <string>
@@ -22,14 +23,25 @@ constexpr double kMaxTransferMagnitude = 1e100;
 
 // {"order": n, "vectors": [[n^2 numbers], ...]}
 std::vector<double> parse_transfer_json(std::string_view text, const std::filesystem::path& path_in, int& order,
-                                        std::string* mesh_up) {
+                                        TransferMeshRecord* record) {
   const std::string path = path_in.string();
   const nlohmann::json doc = parse_json_input(text, path_in, "--transfer");
   if (!doc.is_object() || !doc.contains("order") || !doc.at("order").is_number_integer())
     throw InputError("--transfer '" + path + "': expected {\"order\": n, \"vectors\": [[n^2 numbers], ...]}");
   if (doc.contains(kMeshUpKey) && (!doc.at(kMeshUpKey).is_string() || (doc.at(kMeshUpKey) != "y" && doc.at(kMeshUpKey) != "z")))
     throw InputError("--transfer '" + path + "': \"" + kMeshUpKey + "\" must be \"y\" or \"z\"");
-  if (mesh_up) *mesh_up = doc.contains(kMeshUpKey) ? doc.at(kMeshUpKey).get<std::string>() : std::string();
+  if (doc.contains("mesh_crc32") && (!doc.at("mesh_crc32").is_number_unsigned() ||
+                                     doc.at("mesh_crc32").get<std::uint64_t>() > 0xFFFFFFFFu))
+    throw InputError("--transfer '" + path + "': \"mesh_crc32\" must be an unsigned 32-bit integer");
+  const auto normal_names = {"auto", "file", "computed"};
+  if (doc.contains("normals") &&
+      std::none_of(normal_names.begin(), normal_names.end(), [&](const char* n) { return doc.at("normals") == n; }))
+    throw InputError("--transfer '" + path + "': \"normals\" must be \"auto\", \"file\" or \"computed\"");
+  if (record) {
+    record->mesh_up = doc.contains(kMeshUpKey) ? doc.at(kMeshUpKey).get<std::string>() : std::string();
+    if (doc.contains("mesh_crc32")) record->mesh_crc32 = doc.at("mesh_crc32").get<std::uint32_t>();
+    record->normals = doc.contains("normals") ? doc.at("normals").get<std::string>() : std::string();
+  }
   const nlohmann::json& o = doc.at("order");
   const std::int64_t order64 = o.is_number_unsigned()
                                    ? (o.get<std::uint64_t>() > static_cast<std::uint64_t>(kMaxOrder) ? -1 : o.get<std::int64_t>())
@@ -64,9 +76,14 @@ std::vector<double> parse_transfer_json(std::string_view text, const std::filesy
 
 
 // The --save-transfer output, in the --transfer format.
-std::string transfer_json(const std::vector<double>& transfer, int order, UpAxis up) {
+std::string transfer_json(const std::vector<double>& transfer, int order, UpAxis up, std::uint32_t mesh_crc32,
+                          std::string_view normals) {
   const std::size_t n2 = sh_count(order);
-  nlohmann::json doc = {{"order", order}, {kMeshUpKey, up_axis_name(up)}, {"vectors", nlohmann::json::array()}};
+  nlohmann::json doc = {{"order", order},
+                        {kMeshUpKey, up_axis_name(up)},
+                        {"mesh_crc32", mesh_crc32},
+                        {"normals", normals},
+                        {"vectors", nlohmann::json::array()}};
   for (std::size_t v = 0; v < transfer.size() / n2; ++v)
     doc["vectors"].push_back(std::vector<double>(transfer.begin() + v * n2, transfer.begin() + (v + 1) * n2));
   return dump_finite(doc, "--save-transfer") + "\n";

@@ -148,8 +148,9 @@ nlohmann::json lobes_summary_json(const std::vector<SearchResult>& searches) {
 std::shared_ptr<const ZhfLobes> zhf_lobes_for(int order, const std::filesystem::path& table) {
   const std::filesystem::path path = table.empty() ? default_zhf_lobes_path(order) : table;
   if (path.empty())
-    throw InputError("no shipped zhf-lobes table covers order " + std::to_string(order) +
-                     " (give one with --tables; make it with `shtool search-lobes --shared`)");
+    throw InputError("no shipped zhf-lobes table covering order " + std::to_string(order) +
+                     " was found (set SHTOOL_TABLES to the tables folder, or give one with --tables; make one with "
+                     "`shtool search-lobes --shared`)");
   Result<ZhfLobes> loaded = ZhfLobes::load(path);
   if (loaded) loaded = loaded.value().bands_below(order);
   if (!loaded) throw InputError(loaded.error().message);

@@ -393,13 +393,16 @@ RenderResult run_render(const RenderRequest& r) {
     frames = fit::vertex_frames(rest, mesh);
   }
   if (needs_transfer) {
-    std::string transfer_up;
+    fit::TransferMeshRecord record;
     data.transfer = fit::parse_transfer_json(read_input_file(r.transfer, "--transfer"), r.transfer,
-                                             data.transfer_order, &transfer_up);
+                                             data.transfer_order, &record);
+    const std::string& transfer_up = record.mesh_up;
     if (!transfer_up.empty() && transfer_up != up_axis_name(rest.up))
       throw InputError("--transfer " + r.transfer.string() + " was simulated on a mesh read " + transfer_up +
                        "-up, but " + r.mesh.string() + " is read " + up_axis_name(rest.up) +
                        "-up: give the --up it was simulated with, " + transfer_up);
+    if (record.mesh_crc32)
+      fit::check_mesh_crc32(*record.mesh_crc32, record.normals, rest, r.mesh, "--transfer " + r.transfer.string());
     const std::size_t rows = data.transfer.size() / (static_cast<std::size_t>(data.transfer_order) *
                                                      data.transfer_order);
     if (rows != mesh.positions.size())
