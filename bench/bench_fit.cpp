@@ -344,7 +344,8 @@ std::vector<FitSet> read_fit_sets(const std::string& path) {
       const std::vector<double> t = v.get<std::vector<double>>();
       s.vectors.insert(s.vectors.end(), t.begin(), t.end());
     }
-    for (const auto& [lobes, r] : set.at("best_residual").items()) s.best[std::stoi(lobes)] = r.get<std::vector<double>>();
+    for (const auto& [lobes, r] : set.at("best_residual").items())
+      s.best[std::stoi(lobes)] = r.get<std::vector<double>>();
     out.push_back(std::move(s));
   }
   return out;

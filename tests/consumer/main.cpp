@@ -1,7 +1,8 @@
 // An engine's view of shtool: built against the installed package with -fno-exceptions
 // and -fno-rtti, it loads every table kind it is given through X::load, in float and in
 // double (the shipped tables through SHTOOL_TABLES; argv[1] a fit-zh output, argv[2]
-// an env-sh lighting, argv[3] a probe-grid and argv[4] lighting of a lower order than the fit, when given), rotates by three methods, multiplies, maps glossy view
+// an env-sh lighting, argv[3] a probe-grid and argv[4] lighting of a lower order than
+// the fit, when given), rotates by three methods, multiplies, maps glossy view
 // directions and blends wrinkle weights, shades the fit-zh output, and runs the program
 // of docs/engine.md (engine_example.cpp). Every result is checked against an independent route (closed forms,
 // evaluation at rotated directions, pointwise products, the lobes summed into SH), so a
@@ -240,7 +241,8 @@ void check_engine_example(const char* fit, const char* lighting, const char* low
   const float worst = multiply_by_one(f);
   // Lighting of a lower order than the fit is refused, not read past its end.
   if (low_lighting)
-    require(!shade_vertex(fit, low_lighting, r.cast<float>(), rgb), "engine_example: shaded a fit with lower-order lighting");
+    require(!shade_vertex(fit, low_lighting, r.cast<float>(), rgb),
+            "engine_example: shaded a fit with lower-order lighting");
   require(worst >= 0, "engine_example: the tripling tensor did not load");
   check("engine_example f * 1 - f", worst, 0.0, 1e-5);
 }

@@ -149,8 +149,8 @@ TEST(WrinkleMap, BadTablesAreRefusedByName) {
   for (const double length : {1e20, 3e-23}) {
     Table t = good;
     const std::vector<double> axes = array(t, "axes")->values<double>();
-    for (int c = 0; c < 3; ++c) set_value(t, "axes", 9 * 3 + c, axes[9 * 3 + c] / std::sqrt(axes[27] * axes[27] +
-                                                                     axes[28] * axes[28] + axes[29] * axes[29]) * length);
+    const double norm = std::sqrt(axes[27] * axes[27] + axes[28] * axes[28] + axes[29] * axes[29]);
+    for (int c = 0; c < 3; ++c) set_value(t, "axes", 9 * 3 + c, axes[9 * 3 + c] / norm * length);
     const Result<WrinkleMap<float>> f = WrinkleMap<float>::from_table(t);
     ASSERT_FALSE(f.ok()) << length;
     // 3e-23 squared may flush to float zero: "is zero" then says the same.

@@ -646,7 +646,8 @@ void validate(const SearchOptions& o) {
   if (o.restarts < 1) throw InputError("restarts must be at least 1");
   if (o.threads < 1) throw InputError("threads must be at least 1");
   resolve_threads(o.threads);  // refuses more than the machine can use
-  if (!(o.max_cond >= 1) || !std::isfinite(o.max_cond)) throw InputError("max condition number must be finite and >= 1");
+  if (!(o.max_cond >= 1) || !std::isfinite(o.max_cond))
+    throw InputError("max condition number must be finite and >= 1");
   if (o.max_generations < 1) throw InputError("max generations must be at least 1");
 }
 
