@@ -55,14 +55,34 @@ void set_value(Table& t, const char* name, std::size_t i, double v) {
     }
 }
 
-TEST(UntrustedTables, FiniteValuesTooLargeToComputeWithAreRefused) {
-  // Finite values a table of that kind cannot hold: taken, they turned a float lighting
-  // into infinities (1e300 cast to float) and products and rotations into inf or NaN.
+// An env-sh table of order 2 (shape [4, 3]) built in memory with these values.
+Table order2_lighting(const std::vector<double>& values) {
   Table light;
   light.kind = std::string(kEnvShKind);
   light.order = 2;
   light.meta = R"({"quantity": "radiance"})";
-  light.arrays.push_back(TableArray::from<double>("coefficients", {4, 3}, std::vector<double>(12, 0.5)));
+  light.arrays.push_back(TableArray::from<double>("coefficients", {4, 3}, values));
+  return light;
+}
+
+// The shipped table `file` loads as X; with element i of `array` set to v it is refused,
+// the message holding `fragment`.
+template <class X>
+void expect_one_value_refused(const char* file, const char* array, std::size_t i, double v,
+                              const std::string& fragment) {
+  Result<Table> table = read_table(find_shipped_table(file));
+  ASSERT_TRUE(table.ok()) << table.error().message;
+  ASSERT_TRUE(X::from_table(table.value()).ok()) << file;
+  set_value(table.value(), array, i, v);
+  const Result<X> x = X::from_table(table.value());
+  ASSERT_FALSE(x.ok()) << file;
+  EXPECT_NE(x.error().message.find(fragment), std::string::npos) << x.error().message;
+}
+
+TEST(UntrustedTables, FiniteValuesTooLargeToComputeWithAreRefused) {
+  // Finite values a table of that kind cannot hold: taken, they turned a float lighting
+  // into infinities (1e300 cast to float) and products and rotations into inf or NaN.
+  Table light = order2_lighting(std::vector<double>(12, 0.5));
   ASSERT_TRUE(ShLighting<float>::from_table(light).ok());
   set_value(light, "coefficients", 5, 1e30);
   EXPECT_FALSE(ShLighting<float>::from_table(light).ok());
@@ -74,32 +94,15 @@ TEST(UntrustedTables, FiniteValuesTooLargeToComputeWithAreRefused) {
       << huge.error().message;
 
   // A triple integral of SH is at most max |y| = sqrt((2l + 1) / (4 pi)).
-  Result<Table> tripling = read_table(find_shipped_table("tripling-tensor.shtb"));
-  ASSERT_TRUE(tripling.ok()) << tripling.error().message;
-  ASSERT_TRUE(TriplingTensor::from_table(tripling.value()).ok());
-  set_value(tripling.value(), "value", 3, 1e300);
-  const Result<TriplingTensor> product = TriplingTensor::from_table(tripling.value());
-  ASSERT_FALSE(product.ok());
-  EXPECT_NE(product.error().message.find("exceeds the bound of any SH triple integral"), std::string::npos)
-      << product.error().message;
-
-  Result<Table> zhf = read_table(find_shipped_table("zhf-shared-N4.shtb"));
-  ASSERT_TRUE(zhf.ok()) << zhf.error().message;
-  ASSERT_TRUE(ZhfLobes::from_table(zhf.value()).ok());
-  set_value(zhf.value(), "sparse_val", 2, 1e30);
-  const Result<ZhfLobes> lobes = ZhfLobes::from_table(zhf.value());
-  ASSERT_FALSE(lobes.ok());
-  EXPECT_NE(lobes.error().message.find("A^ value too large"), std::string::npos) << lobes.error().message;
+  expect_one_value_refused<TriplingTensor>("tripling-tensor.shtb", "value", 3, 1e300,
+                                           "exceeds the bound of any SH triple integral");
+  expect_one_value_refused<ZhfLobes>("zhf-shared-N4.shtb", "sparse_val", 2, 1e30, "A^ value too large");
 }
 
 TEST(UntrustedTables, AnInMemoryTableWhoseShapeOutrunsItsDataIsRefused) {
   // TableArray::from does not check the shape against the values; read_table always does.
   // A loader given such a table in memory once read past its data.
-  Table light;
-  light.kind = std::string(kEnvShKind);
-  light.order = 2;
-  light.meta = R"({"quantity": "radiance"})";
-  light.arrays.push_back(TableArray::from<double>("coefficients", {4, 3}, std::vector<double>(1, 0.5)));
+  const Table light = order2_lighting(std::vector<double>(1, 0.5));
   const Result<ShLighting<double>> l = ShLighting<double>::from_table(light);
   ASSERT_FALSE(l.ok());
   EXPECT_NE(l.error().message.find("array 'coefficients' holds 8 bytes, its dtype and shape need 96"),
