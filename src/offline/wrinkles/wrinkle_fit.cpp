@@ -403,28 +403,70 @@ int minimize_conjugate_gradient(GlobalObjective& objective, std::vector<double>&
 
 namespace {
 
+Eigen::Map<Eigen::Vector3d> node_axis(WrinkleModel& m, int node, int lobe) {
+  return Eigen::Map<Eigen::Vector3d>(m.axes.data() + (static_cast<std::size_t>(node) * m.lobes + lobe) * 3);
+}
+
+// |g| of a node's lobe over the bands it stores (2..n-1).
+double lobe_strength(const WrinkleModel& m, int node, int lobe) {
+  const double* c = m.coeffs.data() + (static_cast<std::size_t>(node) * m.lobes + lobe) * m.order;
+  double s = 0;
+  for (int l = 2; l < m.order; ++l) s += c[l] * c[l];
+  return std::sqrt(s);
+}
+
 // A lobe and its reverse with the odd bands negated are the same lobe at a node, but the
 // bilinear blend between nodes sees the axis: where a lobe carries next to nothing (the
 // flat groove at depth 0) the search leaves its axis pointing anywhere, and neighbours
-// pointing apart blend through zero, which the runtime refuses. Each node's lobe is
-// turned to agree with the neighbours already visited (left, below).
+// pointing apart blend through zero, which the runtime refuses. The signs are chosen as a
+// maximum spanning tree of the grid (x periodic) agrees: edges taken strongest first
+// (|g| at both ends times |cos| of their axes), each joining two groups of nodes with the
+// relative sign it wants (union-find with parity), so that a weak lobe with an arbitrary
+// axis cannot set the signs of the strong ones beyond it.
 void align_lobe_signs(WrinkleModel& m) {
-  const int g = m.grid.grid;
-  auto axis = [&](int node, int lobe) {
-    return Eigen::Map<Eigen::Vector3d>(m.axes.data() + (static_cast<std::size_t>(node) * m.lobes + lobe) * 3);
+  const int g = m.grid.grid, nodes = g * g;
+  struct Edge {
+    double weight;
+    int a, b;
+    bool flip;
   };
-  for (int lobe = 0; lobe < m.lobes; ++lobe)
+  for (int lobe = 0; lobe < m.lobes; ++lobe) {
+    std::vector<Edge> edges;
+    auto add = [&](int a, int b) {
+      const double c = node_axis(m, a, lobe).normalized().dot(node_axis(m, b, lobe).normalized());
+      edges.push_back({lobe_strength(m, a, lobe) * lobe_strength(m, b, lobe) * std::abs(c), a, b, c < 0});
+    };
     for (int k = 0; k < g; ++k)
       for (int j = 0; j < g; ++j) {
-        const int node = k * g + j;
-        Eigen::Vector3d seen = Eigen::Vector3d::Zero();
-        if (j > 0) seen += axis(node - 1, lobe).normalized();
-        if (k > 0) seen += axis(node - g, lobe).normalized();
-        if (axis(node, lobe).dot(seen) >= 0) continue;
-        axis(node, lobe) = -axis(node, lobe);
-        double* coeffs = m.coeffs.data() + (static_cast<std::size_t>(node) * m.lobes + lobe) * m.order;
-        for (int l = 1; l < m.order; l += 2) coeffs[l] = -coeffs[l];
+        add(k * g + j, k * g + (j + 1) % g);
+        if (k + 1 < g) add(k * g + j, (k + 1) * g + j);
       }
+    // Ties (equal weights) in the order made: the signs do not depend on the sort.
+    std::stable_sort(edges.begin(), edges.end(), [](const Edge& x, const Edge& y) { return x.weight > y.weight; });
+    std::vector<int> parent(nodes);
+    std::vector<char> parity(nodes, 0);  // relative to the parent
+    std::iota(parent.begin(), parent.end(), 0);
+    // Root of n and n's parity relative to it (paths compressed).
+    auto find = [&](auto&& self, int n) -> std::pair<int, char> {
+      if (parent[n] == n) return {n, 0};
+      const auto [root, p] = self(self, parent[n]);
+      parent[n] = root;
+      parity[n] = static_cast<char>(parity[n] ^ p);
+      return {root, parity[n]};
+    };
+    for (const Edge& e : edges) {
+      const auto ra = find(find, e.a), rb = find(find, e.b);
+      if (ra.first == rb.first) continue;
+      parent[rb.first] = ra.first;
+      parity[rb.first] = static_cast<char>(ra.second ^ rb.second ^ (e.flip ? 1 : 0));
+    }
+    for (int node = 0; node < nodes; ++node) {
+      if (!find(find, node).second) continue;
+      node_axis(m, node, lobe) = -node_axis(m, node, lobe);
+      double* coeffs = m.coeffs.data() + (static_cast<std::size_t>(node) * m.lobes + lobe) * m.order;
+      for (int l = 1; l < m.order; l += 2) coeffs[l] = -coeffs[l];
+    }
+  }
 }
 
 // A map the runtime would refuse (a lobe's axes around a cell spread past 90 degrees of
@@ -436,15 +478,8 @@ void align_lobe_signs(WrinkleModel& m) {
 // afterwards on the mended model; a map that still spreads is refused by the job.
 void repair_spread_cells(WrinkleModel& m, std::span<const double> transfer) {
   const int g = m.grid.grid, n2 = sh_count(m.order);
-  auto axis = [&](int node, int lobe) {
-    return Eigen::Map<Eigen::Vector3d>(m.axes.data() + (static_cast<std::size_t>(node) * m.lobes + lobe) * 3);
-  };
-  auto strength = [&](int node, int lobe) {
-    const double* c = m.coeffs.data() + (static_cast<std::size_t>(node) * m.lobes + lobe) * m.order;
-    double s = 0;
-    for (int l = 2; l < m.order; ++l) s += c[l] * c[l];
-    return std::sqrt(s);
-  };
+  auto axis = [&](int node, int lobe) { return node_axis(m, node, lobe); };
+  auto strength = [&](int node, int lobe) { return lobe_strength(m, node, lobe); };
   auto spread = [&](const int (&cell)[4], int lobe) {
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
     for (int q : cell) sum += axis(q, lobe).normalized();
