@@ -461,7 +461,13 @@ def fit_zh(transfer, lobes=4, effort=None, seed=None, starts=None, restart_above
     computed in float64 (as the CLI) and returned in the dtype of `transfer`."""
     t = _float_array(transfer, "transfer")
     fits = _shtool._fit_zh(t, lobes, effort, seed, starts, restart_above, direct, method, threads)
-    return ZhFit(*(a.astype(t.dtype, copy=False) for a in fits))
+    with _np.errstate(over="ignore"):  # checked below, with a message that says why
+        out = [a.astype(t.dtype, copy=False) for a in fits]
+    # Lobes may cancel with coefficients tens of times |t|: near float32's largest value
+    # the fit does not fit float32.
+    if not all(_np.isfinite(a).all() for a in out if a.dtype.kind == "f"):
+        raise ValueError("fit_zh: the fit overflows %s (the vectors are too large); pass float64" % t.dtype)
+    return ZhFit(*out)
 
 
 def load_zh_fit(path):

@@ -70,6 +70,13 @@ def test_fit_zh_bad_input():
     t[1, 2] = np.inf
     with pytest.raises(ValueError):
         shtool.fit_zh(t)
+    # Finite, but the norm (or in float32 the fit) beyond the dtype: refused, not returned
+    # as inf and NaN.
+    with pytest.raises(ValueError, match="beyond double's range"):
+        shtool.fit_zh(np.full((1, 16), 1.7e308))
+    base = np.random.default_rng(3).normal(size=(1, 16))
+    with pytest.raises(ValueError, match="overflows float32"):
+        shtool.fit_zh((base / np.abs(base).max() * 3e38).astype(np.float32), lobes=3)
 
 
 def test_load_table_arrays_equal_the_cli_json(cli, tmp_path):

@@ -237,6 +237,48 @@ TEST_P(ZhFitMethods, ScalingTheVectorScalesTheFit) {
   }
 }
 
+TEST_P(ZhFitMethods, DirectStorageFitsTheLobesPartAtItsOwnScale) {
+  // With --direct the lobes fit bands 2 and up alone; the search sees that part at unit
+  // norm however small it is beside bands 0 and 1. Scaled by the whole vector's norm, a
+  // part 1e-4 of it stopped at its start, 20 times the error of the part fitted alone.
+  Lcg rng{14};
+  const int order = 4;
+  const std::vector<double> t = random_unit_vector(rng, order);
+  ZhFitOptions o = options(order, 3);
+  o.direct = true;
+  for (const double c : {1e-4, 1e-8}) {
+    std::vector<double> with_dc = t, part = t;
+    for (std::size_t i = 0; i < t.size(); ++i) {
+      with_dc[i] = i < 4 ? t[i] : t[i] * c;
+      part[i] = i < 4 ? 0.0 : t[i] * c;
+    }
+    const ZhFit fit = fit_zh(with_dc, o), alone = fit_zh(part, o);
+    // The same search up to rounding, which moves where a polish stops (and the joint
+    // method's long descent): within 0.1 %.
+    EXPECT_NEAR(fit.residual / alone.residual, 1.0, 1e-3) << c;
+  }
+}
+
+TEST(ZhFit, VectorsBeyondDoublesRangeAreRefusedAndThoseNearItFitted) {
+  ZhFitOptions o;
+  // ||t|| = 6 x 1.7e308 is not a double: refused, not returned as inf and NaN.
+  try {
+    fit_zh(std::vector<double>(36, 1.7e308), o);
+    ADD_FAILURE() << "a vector whose norm overflows was fitted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("beyond double's range"), std::string::npos) << e.what();
+  }
+  // 1e306 times a unit vector: the unit vector's fit, scaled.
+  Lcg rng{15};
+  const std::vector<double> t = random_unit_vector(rng, 6);
+  std::vector<double> big = t;
+  for (double& x : big) x *= 1e306;
+  const ZhFit unit = fit_zh(t, o), fit = fit_zh(big, o);
+  EXPECT_NEAR(fit.residual / (1e306 * unit.residual), 1.0, 1e-9);
+  for (const ZhLobe& lobe : fit.lobes)
+    for (const double g : lobe.coeffs) EXPECT_TRUE(std::isfinite(g));
+}
+
 TEST_P(ZhFitMethods, DeterministicAcrossThreadCounts) {
   Lcg rng{10};
   std::vector<double> vectors;

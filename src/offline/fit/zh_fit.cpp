@@ -1031,27 +1031,31 @@ ZhFit fit_zh(std::span<const double> t_in, const ZhFitOptions& o, std::uint64_t 
                                 std::to_string(order) + " needs " + std::to_string(n2));
   ZhFit fit;
   fit.norm = scaled_norm(t_in);
-  // L-BFGS's first steps and the absolute tolerances see the size of psi, so the search
-  // runs on t / ||t|| and its coefficients and residual are scaled back: c t is fitted as
-  // c times t's fit (to rounding), whatever c (at 1e3 or 1e-3 the raw vector's fit used
-  // to land in another local minimum, at 1e-20 to stop before its first step).
-  const double scale = fit.norm > 0 ? fit.norm : 1.0;
+  if (!std::isfinite(fit.norm)) throw InputError("fit_zh: the vector's norm is beyond double's range");
   const std::vector<bool> mask = free_bands(o);
   // Target for the lobes: t without the directly stored bands.
-  std::vector<double> t(t_in.size());
-  for (std::size_t i = 0; i < t.size(); ++i) t[i] = t_in[i] / scale;
+  std::vector<double> t(t_in.begin(), t_in.end());
   for (int l = 0; l < order; ++l)
     if (!mask[l])
       for (int m = -l; m <= l; ++m) {
         fit.direct.push_back(t_in[sh_index(l, m)]);
         t[sh_index(l, m)] = 0.0;
       }
+  // L-BFGS's first steps and the absolute tolerances see the size of psi, so the search
+  // runs on the lobes' target at unit norm and its coefficients and residual are scaled
+  // back: c t is fitted as c times t's fit (to rounding), whatever c (at 1e3 or 1e-3 the
+  // raw vector's fit used to land in another local minimum, at 1e-20 to stop before its
+  // first step).
+  const double target_norm = scaled_norm(t);
+  const double scale = target_norm > 0 ? target_norm : 1.0;
+  for (double& x : t) x /= scale;
   // With at least as many lobes as bands an exact fit exists ([4] Fig. 2: six
   // lobes represent an order-6 vector), so "good enough" means the BFGS tolerance, not
   // the paper's few-percent level: keep restarting until the fit is exact, and no longer
   // (further starts could only move rounding).
   const double restart = o.lobes >= order ? kExactFitResidual : o.restart_above;
-  const double good = fit.norm > 0 ? restart * restart : 0.0;  // psi at the threshold, ||t|| = 1
+  // psi at the threshold, which is relative to the whole vector (direct bands included).
+  const double good = target_norm > 0 ? (restart * fit.norm / scale) * (restart * fit.norm / scale) : 0.0;
   std::vector<ZhLobe> best;
   ZhFitOptions resolved = o;
   if (resolved.starts == kStartsByEffort) {
@@ -1078,8 +1082,12 @@ ZhFit fit_zh(std::span<const double> t_in, const ZhFitOptions& o, std::uint64_t 
   }
   canonicalize(best);
   fit.residual = std::sqrt(zh_objective(order, t, best, {})) * scale;
+  bool finite = std::isfinite(fit.residual);
   for (ZhLobe& lobe : best)
-    for (double& g : lobe.coeffs) g *= scale;
+    for (double& g : lobe.coeffs) finite = finite && std::isfinite(g *= scale);
+  // Lobes may cancel with coefficients tens of times ||t||: near double's largest values
+  // they do not fit it.
+  if (!finite) throw InputError("fit_zh: the fit's coefficients overflow double (the vector is too large)");
   fit.lobes = best;
   return fit;
 }

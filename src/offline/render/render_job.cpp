@@ -230,16 +230,17 @@ const char* glyph(char c) {
   }
 }
 
-// Draws `text` in white at (x, y) (top left) with 2 x 2 pixels per font pixel.
-void draw_text(lighting::Image& image, int x, int y, const std::string& text) {
+// Draws `text` in white at (x, y) (top left) with scale x scale pixels per font pixel
+// (characters 6 scale apart).
+void draw_text(lighting::Image& image, int x, int y, const std::string& text, int scale) {
   for (std::size_t k = 0; k < text.size(); ++k) {
     const char* g = glyph(text[k]);
     for (int row = 0; row < 7; ++row)
       for (int col = 0; col < 5; ++col) {
         if (g[row * 5 + col] != '1') continue;
-        for (int dy = 0; dy < 2; ++dy)
-          for (int dx = 0; dx < 2; ++dx) {
-            const int px = x + static_cast<int>(k) * 12 + col * 2 + dx, py = y + row * 2 + dy;
+        for (int dy = 0; dy < scale; ++dy)
+          for (int dx = 0; dx < scale; ++dx) {
+            const int px = x + static_cast<int>(k) * 6 * scale + col * scale + dx, py = y + row * scale + dy;
             if (px < 0 || py < 0 || px >= image.width || py >= image.height) continue;
             float* t = &image.texels[(std::size_t(py) * image.width + px) * image.channels];
             for (int c = 0; c < 3; ++c) t[c] = 1e3f;  // white after any tone mapping
@@ -287,7 +288,13 @@ lighting::Image compare_strip(const Hits& hits, const fit::Mesh& mesh, VertexDat
   // The label band is opaque black, the labels white.
   for (std::size_t p = std::size_t(hits.height) * strip.width; p < std::size_t(strip.height) * strip.width; ++p)
     strip.texels[p * 4 + 3] = 1.0f;
-  for (int k = 0; k < kPanels; ++k) draw_text(strip, k * hits.width + 4, hits.height + 4, labels[k]);
+  // Each label within its panel: half size where the full one would run into the next
+  // panel, cut short where even that would.
+  for (int k = 0; k < kPanels; ++k) {
+    const int room = hits.width - 8, len = static_cast<int>(labels[k].size());
+    const int scale = len * 12 <= room ? 2 : 1;
+    draw_text(strip, k * hits.width + 4, hits.height + 4, labels[k].substr(0, std::max(0, room / (6 * scale))), scale);
+  }
   return strip;
 }
 

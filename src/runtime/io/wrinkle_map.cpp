@@ -166,8 +166,7 @@ Result<WrinkleMap<T>> WrinkleMap<T>::from_table(const Table& t) {
       }
   for (const std::vector<double>* values : {&a, &c, &dv})
     for (const double v : *values)
-      if (std::abs(v) > static_cast<double>(std::numeric_limits<T>::max()))
-        return wrinkle_error("a value does not fit the requested precision");
+      if (!detail::within_headroom<T>(v)) return wrinkle_error("a value is too large for the requested precision");
 
   WrinkleMap m;
   m.order = static_cast<int>(n);

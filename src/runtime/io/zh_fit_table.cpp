@@ -84,13 +84,15 @@ Result<ZhFitTable<T>> zh_rows_from_table(const Table& t, const std::string& pref
     if (r < 0) return zh_fit_error("negative residual");
   for (const double r : no.value())
     if (r < 0) return zh_fit_error("negative norm");
-  // A float table must not overflow on the way in: every value it stores must fit T.
+  // A float table must not overflow on the way in: every value it stores must fit T, and
+  // the coefficients, which shading multiplies and sums, with room for that.
   auto fits = [](const std::vector<double>& values) {
     for (const double c : values)
       if (std::abs(c) > static_cast<double>(std::numeric_limits<T>::max())) return false;
     return true;
   };
-  if (!fits(co.value())) return zh_fit_error("a coefficient does not fit the requested precision");
+  for (const double c : co.value())
+    if (!detail::within_headroom<T>(c)) return zh_fit_error("a coefficient is too large for the requested precision");
   if (!fits(re.value()) || !fits(no.value()))
     return zh_fit_error("a residual or norm does not fit the requested precision");
   narrow(co.value(), z.coeffs);
@@ -106,7 +108,9 @@ Result<ZhFitTable<T>> zh_rows_from_table(const Table& t, const std::string& pref
                           std::to_string(z.order) + " has");
     auto dv = f64_array(t, "direct", d->shape);
     if (!dv) return dv.error();
-    if (!fits(dv.value())) return zh_fit_error("a direct coefficient does not fit the requested precision");
+    for (const double c : dv.value())
+      if (!detail::within_headroom<T>(c))
+        return zh_fit_error("a direct coefficient is too large for the requested precision");
     z.direct_count = static_cast<int>(d->shape[1]);
     narrow(dv.value(), z.direct);
   }

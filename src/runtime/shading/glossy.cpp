@@ -145,8 +145,7 @@ Result<GlossyFit<T>> GlossyFit<T>::from_table(const Table& t) {
   g_fit.view_resolution = static_cast<int>(g);
   g_fit.vertices = g_fit.rows.vertices / static_cast<std::size_t>(nb);
   for (const double f : factors.value())
-    if (std::abs(f) > static_cast<double>(std::numeric_limits<T>::max()))
-      return glossy_error("a view factor does not fit the requested precision");
+    if (!detail::within_headroom<T>(f)) return glossy_error("a view factor is too large for the requested precision");
   g_fit.view_factors.assign(factors.value().begin(), factors.value().end());
   auto index =
       table_format::optional_vertex_index(t, g_fit.vertices, "V = rows / n_b = " + std::to_string(g_fit.vertices));
