@@ -139,11 +139,14 @@ TEST(WrinkleMap, BadTablesAreRefusedByName) {
     EXPECT_EQ(map.error().message.rfind("wrinkle-zh table: ", 0), 0u) << map.error().message;
     EXPECT_FALSE(WrinkleMap<float>::from_table(t).ok()) << b.what;
   }
-  // A float map refuses values a float cannot hold; a double map takes them.
+  // A float map refuses values its shading sums cannot carry (max / 2^64); a double map
+  // takes them, up to its own limit.
   Table big = good;
-  set_value(big, "direct", 0, 1e300);
+  set_value(big, "direct", 0, 1e30);
   EXPECT_FALSE(WrinkleMap<float>::from_table(big).ok());
   EXPECT_TRUE(WrinkleMap<double>::from_table(big).ok());
+  set_value(big, "direct", 0, 1e300);
+  EXPECT_FALSE(WrinkleMap<double>::from_table(big).ok());
   // Axes a float cannot normalise: 1e20 (its square overflows) and 3e-23 (its square is
   // below the smallest normal float, and the normalised axis came out 0.8 long).
   for (const double length : {1e20, 3e-23}) {

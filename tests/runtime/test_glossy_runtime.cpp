@@ -142,7 +142,7 @@ TEST(GlossyFitTable, RefusesMalformedTables) {
   t.arrays.erase(t.arrays.begin() + 5);
   refused(t, "view_factors");
   t = small_table();
-  t.arrays[4] = TableArray::from<double>("direct", {4, 1}, std::vector<double>{0.3, 1e300, 0.2, 0.05});
+  t.arrays[4] = TableArray::from<double>("direct", {4, 1}, std::vector<double>{0.3, 1e30, 0.2, 0.05});
   ASSERT_TRUE(GlossyFit<double>::from_table(t));  // fits a double
   const Result<GlossyFit<float>> narrow = GlossyFit<float>::from_table(t);
   ASSERT_FALSE(narrow);
