@@ -109,6 +109,30 @@ TEST(UntrustedTransfer, HugeOrMistypedValuesAreRefused) {
   for (const auto& lobe : f.lobes) ASSERT_EQ(lobe.coeffs.size(), 2u);
 }
 
+TEST(UntrustedTransfer, TheMeshRecordIsReadOrRefused) {
+  int order = 0;
+  fit::TransferMeshRecord record;
+  fit::parse_transfer_json(R"({"order":1,"mesh_up":"y","mesh_crc32":4294967295,"normals":"computed","vectors":[[1]]})",
+                           "t", order, &record);
+  EXPECT_EQ(record.mesh_up, "y");
+  EXPECT_EQ(record.mesh_crc32, 4294967295u);
+  EXPECT_EQ(record.normals, "computed");
+  for (const char* crc : {"-1", "4294967296", "1.5", "\"x\"", "null"})
+    EXPECT_NE(input_error([&] {
+                fit::parse_transfer_json(std::string(R"({"order":1,"vectors":[[1]],"mesh_crc32":)") + crc + "}", "t",
+                                         order);
+              }).find("\"mesh_crc32\" must be an unsigned 32-bit integer"),
+              std::string::npos)
+        << crc;
+  for (const char* normals : {"3", "\"bogus\""})
+    EXPECT_NE(input_error([&] {
+                fit::parse_transfer_json(std::string(R"({"order":1,"vectors":[[1]],"normals":)") + normals + "}", "t",
+                                         order);
+              }).find("\"normals\" must be"),
+              std::string::npos)
+        << normals;
+}
+
 TEST(UntrustedObj, CoordinatesAndIndicesOutOfRange) {
   // A double that is no float, CR-only line endings hiding a NaN, an index beyond int.
   const std::pair<std::string, std::string> cases[] = {

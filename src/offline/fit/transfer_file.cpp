@@ -10,6 +10,7 @@
 #include "common/finite.h"
 #include "common/input_error.h"
 #include "common/input_file.h"
+#include "fit/mesh.h"
 #include "shtool/sh.h"
 
 namespace shtool::fit {
@@ -33,9 +34,9 @@ std::vector<double> parse_transfer_json(std::string_view text, const std::filesy
   if (doc.contains("mesh_crc32") && (!doc.at("mesh_crc32").is_number_unsigned() ||
                                      doc.at("mesh_crc32").get<std::uint64_t>() > 0xFFFFFFFFu))
     throw InputError("--transfer '" + path + "': \"mesh_crc32\" must be an unsigned 32-bit integer");
-  const auto normal_names = {"auto", "file", "computed"};
-  if (doc.contains("normals") &&
-      std::none_of(normal_names.begin(), normal_names.end(), [&](const char* n) { return doc.at("normals") == n; }))
+  const EnumNames<NormalSource>& normal_names = normal_source_names();
+  if (doc.contains("normals") && std::none_of(normal_names.begin(), normal_names.end(),
+                                              [&](const auto& n) { return doc.at("normals") == n.first; }))
     throw InputError("--transfer '" + path + "': \"normals\" must be \"auto\", \"file\" or \"computed\"");
   if (record) {
     record->mesh_up = doc.contains(kMeshUpKey) ? doc.at(kMeshUpKey).get<std::string>() : std::string();

@@ -1055,7 +1055,8 @@ ZhFit fit_zh(std::span<const double> t_in, const ZhFitOptions& o, std::uint64_t 
   // (further starts could only move rounding).
   const double restart = o.lobes >= order ? kExactFitResidual : o.restart_above;
   // psi at the threshold, which is relative to the whole vector (direct bands included).
-  const double good = target_norm > 0 ? (restart * fit.norm / scale) * (restart * fit.norm / scale) : 0.0;
+  const double threshold = target_norm > 0 ? restart * fit.norm / scale : 0.0;
+  const double good = threshold * threshold;
   std::vector<ZhLobe> best;
   ZhFitOptions resolved = o;
   if (resolved.starts == kStartsByEffort) {
