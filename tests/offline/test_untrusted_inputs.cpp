@@ -117,20 +117,15 @@ TEST(UntrustedTransfer, TheMeshRecordIsReadOrRefused) {
   EXPECT_EQ(record.mesh_up, "y");
   EXPECT_EQ(record.mesh_crc32, 4294967295u);
   EXPECT_EQ(record.normals, "computed");
+  // The file with `key` set to `value` is refused, the message holding `fragment`.
+  auto refused = [&](const std::string& key, const std::string& value, const std::string& fragment) {
+    const std::string text = R"({"order":1,"vectors":[[1]],")" + key + "\":" + value + "}";
+    EXPECT_NE(input_error([&] { fit::parse_transfer_json(text, "t", order); }).find(fragment), std::string::npos)
+        << text;
+  };
   for (const char* crc : {"-1", "4294967296", "1.5", "\"x\"", "null"})
-    EXPECT_NE(input_error([&] {
-                fit::parse_transfer_json(std::string(R"({"order":1,"vectors":[[1]],"mesh_crc32":)") + crc + "}", "t",
-                                         order);
-              }).find("\"mesh_crc32\" must be an unsigned 32-bit integer"),
-              std::string::npos)
-        << crc;
-  for (const char* normals : {"3", "\"bogus\""})
-    EXPECT_NE(input_error([&] {
-                fit::parse_transfer_json(std::string(R"({"order":1,"vectors":[[1]],"normals":)") + normals + "}", "t",
-                                         order);
-              }).find("\"normals\" must be"),
-              std::string::npos)
-        << normals;
+    refused("mesh_crc32", crc, "\"mesh_crc32\" must be an unsigned 32-bit integer");
+  for (const char* normals : {"3", "\"bogus\""}) refused("normals", normals, "\"normals\" must be");
 }
 
 TEST(UntrustedObj, CoordinatesAndIndicesOutOfRange) {
