@@ -40,14 +40,9 @@ double squared_norm(std::span<const double> v) {
 }
 
 // ||v|| without underflow or overflow in the squares (a transfer vector of 1e-160 has
-// squares below the smallest double).
+// squares below the smallest double): Eigen's blocked, rescaled sum.
 double scaled_norm(std::span<const double> v) {
-  double largest = 0;
-  for (double x : v) largest = std::max(largest, std::abs(x));
-  if (largest == 0) return 0;
-  double s = 0;
-  for (double x : v) s += (x / largest) * (x / largest);
-  return largest * std::sqrt(s);
+  return Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size())).stableNorm();
 }
 
 void check_options(const ZhFitOptions& o) {
