@@ -19,9 +19,11 @@ namespace shtool::python {
 namespace {
 
 // Coefficients (..., N^2) times factors[band], in the array's own dtype, in chunks of
-// vectors on `threads` workers with the GIL released.
+// vectors on `threads` workers with the GIL released; `what` names the operation in the
+// overflow refusal (irradiance multiplies band 0 by pi).
 template <class T>
-py::array scale_by_band(const py::array& coeffs_in, const std::vector<double>& factors, int threads) {
+py::array scale_by_band(const py::array& coeffs_in, const std::vector<double>& factors, int threads,
+                        const std::string& what) {
   const auto coeffs = contiguous<T>(coeffs_in);
   const std::size_t n2 = coeffs.shape(coeffs.ndim() - 1);
   py::array_t<T, py::array::c_style> out(shape_of(coeffs));
@@ -34,12 +36,14 @@ py::array scale_by_band(const py::array& coeffs_in, const std::vector<double>& f
   for_chunks(count, threads, [&](std::size_t begin, std::size_t end) {
     for (std::size_t k = begin * n2; k < end * n2; ++k) o[k] = static_cast<T>(in[k] * per_index[k % n2]);
   });
+  refuse_overflow(what, static_cast<const T*>(o), count, n2, [&](std::size_t k) { return all_finite(in + k * n2, n2); });
   return out;
 }
 
-py::array scale_any(const py::array& coeffs, const std::vector<double>& factors, int threads) {
-  return precision_of(coeffs, "coeffs") == Precision::f32 ? scale_by_band<float>(coeffs, factors, threads)
-                                                          : scale_by_band<double>(coeffs, factors, threads);
+py::array scale_any(const py::array& coeffs, const std::vector<double>& factors, int threads,
+                    const std::string& what) {
+  return precision_of(coeffs, "coeffs") == Precision::f32 ? scale_by_band<float>(coeffs, factors, threads, what)
+                                                          : scale_by_band<double>(coeffs, factors, threads, what);
 }
 
 int coeffs_order(const py::array& coeffs) {
@@ -79,7 +83,7 @@ py::tuple window(const py::array& coeffs, const std::string& kind, std::optional
     factors = sh_window_factors(*shape, c, order);
     if (*shape != ShWindow::none) used_cutoff = py::float_(c);
   }
-  return py::make_tuple(scale_any(coeffs, factors, threads), py::array_t<double>(factors.size(), factors.data()),
+  return py::make_tuple(scale_any(coeffs, factors, threads, "window: the windowed vector"), py::array_t<double>(factors.size(), factors.data()),
                         used_cutoff);
 }
 
@@ -89,7 +93,7 @@ py::array irradiance(const py::array& coeffs, int threads) {
   const int order = coeffs_order(coeffs);
   std::vector<double> factors(order);
   for (int l = 0; l < order; ++l) factors[l] = clamped_cosine_band(l);
-  return scale_any(coeffs, factors, threads);
+  return scale_any(coeffs, factors, threads, "irradiance: the irradiance");
 }
 
 py::array light(const std::string& kind, int order, const py::object& direction, std::optional<double> half_angle,

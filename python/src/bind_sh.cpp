@@ -161,17 +161,10 @@ RotationMethod method_from(const std::string& name) {
   return *m;
 }
 
-// A finite vector that a rotation took past T's range (coefficients near its largest) is
-// refused, as `shtool rotate` refuses it, not handed back as inf or NaN; a vector given
-// with NaN or inf comes back non-finite, as numpy's arithmetic would.
+// Rotations refuse overflow per vector (refuse_overflow), given the vectors they rotated.
 template <class T>
-void refuse_overflow(const T* in, const T* out, std::size_t count, std::size_t n2) {
-  for (std::size_t k = 0; k < count; ++k) {
-    if (std::all_of(out + k * n2, out + (k + 1) * n2, [](T v) { return std::isfinite(v); })) continue;
-    if (std::all_of(in + k * n2, in + (k + 1) * n2, [](T v) { return std::isfinite(v); }))
-      throw py::value_error("rotate: the rotation of vector " + std::to_string(k) + " overflows " +
-                            (sizeof(T) == 4 ? "float32" : "float64") + " (coefficients too large)");
-  }
+void refuse_rotation_overflow(const T* in, const T* out, std::size_t count, std::size_t n2) {
+  refuse_overflow("rotate: the rotation", out, count, n2, [&](std::size_t k) { return all_finite(in + k * n2, n2); });
 }
 
 template <class T>
@@ -193,7 +186,7 @@ py::array rotate_t(const py::array& coeffs_in, const py::object& matrix, const s
     py::gil_scoped_release release;
     const auto lobes = zhf_lobes(order, tables);
     rotate_zhf<T>(method_name == "zhf-tailored", order, lobes, r, in, o, coeffs.size() / sh_count(order), threads);
-    refuse_overflow(in, static_cast<const T*>(o), coeffs.size() / sh_count(order), sh_count(order));
+    refuse_rotation_overflow(in, static_cast<const T*>(o), coeffs.size() / sh_count(order), sh_count(order));
     return out;
   }
   const RotationMethod method = method_from(method_name);
@@ -225,7 +218,7 @@ py::array rotate_t(const py::array& coeffs_in, const py::object& matrix, const s
       for (std::size_t k = begin; k < end; ++k)
         rotation.apply(std::span<const T>(in + k * n2, n2), std::span<T>(o + k * n2, n2));
     });
-    refuse_overflow(in, static_cast<const T*>(o), count, n2);
+    refuse_rotation_overflow(in, static_cast<const T*>(o), count, n2);
     return out;
   }
   if (m.ndim() < 2 || m.shape(m.ndim() - 1) != 3 || m.shape(m.ndim() - 2) != 3 || m.ndim() - 2 > coeffs.ndim() - 1 ||
@@ -280,7 +273,7 @@ py::array rotate_t(const py::array& coeffs_in, const py::object& matrix, const s
     ok = std::all_of(chunk_ok.begin(), chunk_ok.end(), [](char c) { return c != 0; });
   }
   if (!ok) throw py::value_error("rotation method unavailable for this order");
-  refuse_overflow(in, static_cast<const T*>(o), count, n2);
+  refuse_rotation_overflow(in, static_cast<const T*>(o), count, n2);
   return out;
 }
 
@@ -365,6 +358,9 @@ py::array product_t(const py::array& a_in, const py::array& b_in, std::optional<
       product.triple(fa, fb, g);
       std::copy(g.begin(), g.begin() + o2, po + k * o2);
     }
+  });
+  refuse_overflow("product: the product", static_cast<const T*>(po), count, o2, [&](std::size_t k) {
+    return all_finite(pa + (ca == 1 ? 0 : k) * a2, a2) && all_finite(pb + (cb == 1 ? 0 : k) * b2, b2);
   });
   return out;
 }

@@ -3,6 +3,8 @@
 // caller's `out=`), and errors as Python exceptions (ValueError for bad input).
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <filesystem>
 #include <functional>
@@ -110,6 +112,27 @@ E choice(const std::string& name, const std::vector<std::pair<std::string, E>>& 
     known += (known.empty() ? "" : ", ") + n;
   }
   throw py::value_error(what + ": unknown value '" + name + "' (" + known + ")");
+}
+
+// A finite vector that an operation took past T's range (values near its largest) is
+// refused, as the CLI refuses it, not handed back as inf or NaN; a vector whose inputs
+// hold NaN or inf comes back non-finite, as numpy's arithmetic would. `inputs_finite(k)`
+// says whether the inputs of output vector k are finite; `what` names the operation
+// ("rotate: the rotation").
+template <class T, class InputsFinite>
+void refuse_overflow(const std::string& what, const T* out, std::size_t count, std::size_t n2,
+                     InputsFinite inputs_finite) {
+  for (std::size_t k = 0; k < count; ++k) {
+    if (std::all_of(out + k * n2, out + (k + 1) * n2, [](T v) { return std::isfinite(v); })) continue;
+    if (inputs_finite(k))
+      throw py::value_error(what + " of vector " + std::to_string(k) + " overflows " +
+                            (sizeof(T) == 4 ? "float32" : "float64") + " (coefficients too large)");
+  }
+}
+
+template <class T>
+bool all_finite(const T* values, std::size_t count) {
+  return std::all_of(values, values + count, [](T v) { return std::isfinite(v); });
 }
 
 // The binding groups (one translation unit each).

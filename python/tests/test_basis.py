@@ -73,6 +73,9 @@ def test_float32_stays_float32_and_out_is_written_in_place():
     (np.ones((2, 4)), ValueError),                # not (..., 3)
     (np.ones((2, 3), np.int64), TypeError),       # dtype
     (np.array([[np.nan, 0, 1.0]]), ValueError),   # not finite
+    (np.array([[1.0, np.nan, 0]]), ValueError),   # not finite after a finite largest component
+    (np.array([[1.0, 0, np.nan]], np.float32), ValueError),
+    (np.array([[0, 0, 1.0], [1.0, 0, -np.inf]]), ValueError),
 ])
 def test_bad_directions(bad, error):
     with pytest.raises(error):

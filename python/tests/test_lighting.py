@@ -111,6 +111,26 @@ def test_irradiance_and_window():
         shtool.window(c, "box")
 
 
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+def test_irradiance_and_product_past_the_dtype_are_refused_not_returned_as_inf(dtype):
+    # Irradiance multiplies band 0 by pi, a product squares: finite coefficients near the
+    # largest float are refused naming the vector, as rotate refuses them; NaN in gives
+    # NaN out, as numpy's arithmetic would.
+    f = np.ones((3, 9), dtype)
+    f[1, 0] = np.finfo(dtype).max / 2
+    with pytest.raises(ValueError, match=r"irradiance of vector 1 overflows"):
+        shtool.irradiance(f)
+    with pytest.raises(ValueError, match=r"product of vector 1 overflows"):
+        shtool.product(f, f)
+    with pytest.raises(ValueError, match=r"product of vector 1 overflows"):
+        shtool.product(f, np.full(9, 100, dtype))  # one vector for every row
+    assert np.isfinite(shtool.window(f, "hann", cutoff=3)).all()
+    f[1] = np.nan
+    assert np.isnan(shtool.irradiance(f)[1]).all()
+    assert np.isnan(shtool.product(f, f)[1]).all()
+    assert np.isfinite(shtool.product(f, f)[[0, 2]]).all()
+
+
 def test_light_equals_the_cli(cli, tmp_path):
     for args, kw in [(["--type", "cone", "--dir", "1,2,3", "--half-angle", 20, "--color", "1,0.5,0.25"],
                       dict(kind="cone", direction=(1, 2, 3), half_angle=20, color=(1, 0.5, 0.25))),

@@ -47,8 +47,10 @@ Mat3<double> checked_quaternion_matrix(const std::array<double, 4>& q, const std
 // a zero or non-finite vector.
 template <class T>
 bool normalize_direction(Vec3<T>& w) {
+  // allFinite first: maxCoeff skips a NaN that is not the first component.
+  if (!w.allFinite()) return false;
   const T largest = w.cwiseAbs().maxCoeff();
-  if (!(largest > T(0)) || !std::isfinite(largest)) return false;
+  if (!(largest > T(0))) return false;
   w /= largest;
   w /= w.norm();
   return true;
