@@ -328,22 +328,6 @@ def light(kind, order, direction=(0, 0, 1), half_angle=None, color=(1, 1, 1), gr
     return _shtool.light(kind, order, direction, half_angle, color, ground, quantity)
 
 
-def _quaternion_of(r):
-    """Unit quaternion (w, x, y, z) of a rotation matrix (Shepperd: the largest pivot)."""
-    t = _np.trace(r)
-    k = int(_np.argmax([t, r[0, 0], r[1, 1], r[2, 2]]))
-    if k == 0:
-        s = 2 * _np.sqrt(1 + t)
-        q = [s / 4, (r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s, (r[1, 0] - r[0, 1]) / s]
-    else:
-        i, j, l = (k - 1, k % 3, (k + 1) % 3)
-        s = 2 * _np.sqrt(1 + r[i, i] - r[j, j] - r[l, l])
-        q = [0.0] * 4
-        q[0] = (r[l, j] - r[j, l]) / s
-        q[1 + i], q[1 + j], q[1 + l] = s / 4, (r[j, i] + r[i, j]) / s, (r[l, i] + r[i, l]) / s
-    return _np.array(q)
-
-
 def _numbers(x, count, name):
     """`count` numbers from any array-like (a 3x3 matrix for 9) as float64."""
     try:
@@ -389,25 +373,19 @@ def transform_splat_arrays(sh=None, positions=None, rotations=None, log_scales=N
     """
     if quaternion is not None and matrix is not None:
         raise ValueError("give exactly one of quaternion= and matrix=, or neither")
-    reflects = False
+    q = m = None
     if quaternion is not None:
         q = _numbers(quaternion, 4, "quaternion")
         n = _np.sqrt(_np.sum(q * q))
         if not (n > 0 and _np.isfinite(n)):
             raise ValueError("quaternion must be a finite, non-zero quaternion (w, x, y, z)")
-        qr = q / n
-        m = _shtool._quat_to_matrix(qr, 1)
     elif matrix is not None:
-        m = _numbers(matrix, 9, "matrix").reshape(3, 3)
-        g, eye = m.T @ m, _np.eye(3)
+        m = _numbers(matrix, 9, "matrix")
+        g, eye = m.reshape(3, 3).T @ m.reshape(3, 3), _np.eye(3)
         # Eigen's isApprox(I, 1e-6), as the job checks it.
         if not (_np.isfinite(m).all() and
                 _np.sum((g - eye) ** 2) <= 1e-12 * min(_np.sum(g * g), 3.0)):
             raise ValueError("matrix must be orthogonal (a rotation or a reflection: orthonormal rows to 1e-6)")
-        reflects = bool(_np.linalg.det(m) < 0)
-        qr = _quaternion_of(-m if reflects else m)
-    else:
-        m, qr = _np.eye(3), _np.array([1.0, 0.0, 0.0, 0.0])
     if isinstance(scale, (bool, _np.bool_)) or not isinstance(scale, (int, float, _np.integer, _np.floating)):
         raise TypeError(f"scale must be a number, got {type(scale).__name__}")
     if not (scale > 0 and _np.isfinite(scale)):
@@ -415,32 +393,18 @@ def transform_splat_arrays(sh=None, positions=None, rotations=None, log_scales=N
     t = _numbers(translate, 3, "translate")
     if not _np.isfinite(t).all():
         raise ValueError("translate must be finite")
-    out = {}
-    if positions is not None:
-        p, dtype = _splat_array(positions, "positions", 3)
-        out["positions"] = (scale * (p @ m.T) + t).astype(dtype)
-    if normals is not None:
-        n, dtype = _splat_array(normals, "normals", 3)
-        out["normals"] = (n @ m.T).astype(dtype)
-    if rotations is not None:
-        q, dtype = _splat_array(rotations, "rotations", 4)
-        w2, x2, y2, z2 = _np.moveaxis(q, -1, 0)
-        w1, x1, y1, z1 = qr
-        out["rotations"] = _np.stack([w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2, w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
-                                      w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2, w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2],
-                                     axis=-1).astype(dtype)
-    if log_scales is not None:
-        ls, dtype = _splat_array(log_scales, "log_scales", 3)
-        out["log_scales"] = (ls + _np.log(scale)).astype(dtype)
-    if sh is not None:
-        c, dtype = _splat_array(sh, "sh", None)
-        # In float64 and rounded once, as the job: float32 in, the job's bits out.
-        r = rotate(c, -m if reflects else m, method="reference")
-        if reflects:
-            band = _np.floor(_np.sqrt(_np.arange(r.shape[-1]) + 0.5)).astype(int)
-            r[..., band % 2 == 1] *= -1
-        out["sh"] = r.astype(dtype, copy=False)
-    return out
+    arrays, dtypes = {}, {}
+    for name, value, width in (("sh", sh, None), ("positions", positions, 3), ("rotations", rotations, 4),
+                               ("log_scales", log_scales, 3), ("normals", normals, 3)):
+        if value is not None:
+            a, dtypes[name] = _splat_array(value, name, width)
+            arrays[name] = _np.ascontiguousarray(a)
+    # The job's own arithmetic, in float64, each result rounded once to its dtype.
+    moved = _shtool._transform_splat_arrays(
+        arrays.get("sh"), arrays.get("positions"), arrays.get("rotations"), arrays.get("log_scales"),
+        arrays.get("normals"), None if q is None else [float(x) for x in q],
+        None if m is None else [float(x) for x in m], [float(x) for x in t], float(scale))
+    return {name: value.astype(dtypes[name], copy=False) for name, value in moved.items()}
 
 
 @_dataclass

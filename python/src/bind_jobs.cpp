@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <limits>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -18,6 +19,7 @@
 #include "lighting/project_env_job.h"
 #include "lobes/search_lobes_job.h"
 #include "py_arrays.h"
+#include "shtool/orthogonal_map.h"
 #include "shtool/sh.h"
 #include "tensors/gen_tensors_job.h"
 
@@ -333,6 +335,61 @@ py::dict transform_splats(const py::object& in, const py::object& out, py::kwarg
                   py::arg("seconds") = report.seconds, py::arg("reflects") = report.reflects);
 }
 
+// transform_splat_arrays: the job's own arithmetic (SplatMotion, and the orthogonal map
+// of the SH colours) on float64 arrays, each None or given: positions, log_scales and
+// normals (S, 3), rotations (S, 4) w x y z, sh (S, 3, N^2); the module checks their
+// shapes and rounds each result to its caller's dtype once, as the job rounds to float.
+py::dict transform_splat_arrays(const py::object& sh, const py::object& positions, const py::object& rotations,
+                                const py::object& log_scales, const py::object& normals,
+                                const std::optional<std::array<double, 4>>& quaternion,
+                                const std::optional<std::array<double, 9>>& matrix,
+                                const std::array<double, 3>& translate, double scale) {
+  interop::TransformSplatsRequest r;
+  r.quaternion = quaternion, r.matrix = matrix, r.translate = translate, r.scale = scale;
+  const Eigen::Matrix3d m = interop::splat_rotation(r);
+  const interop::SplatMotion motion(m, scale, Eigen::Vector3d(translate[0], translate[1], translate[2]), quaternion);
+  py::dict out;
+  auto each_row = [&](const py::object& given, const char* name, std::size_t width, const auto& f) {
+    if (given.is_none()) return;
+    const auto in = contiguous<double>(given);
+    py::array_t<double, py::array::c_style> moved(shape_of(in));
+    const double* src = in.data();
+    double* dst = moved.mutable_data();
+    const std::size_t rows = static_cast<std::size_t>(in.size()) / width;
+    {
+      py::gil_scoped_release release;
+      for (std::size_t i = 0; i < rows; ++i) f(src + i * width, dst + i * width);
+    }
+    out[name] = moved;
+  };
+  using Vec = Eigen::Vector3d;
+  each_row(positions, "positions", 3, [&](const double* p, double* o) {
+    const Vec moved = motion.position(Vec(p[0], p[1], p[2]));
+    for (int k = 0; k < 3; ++k) o[k] = moved[k];
+  });
+  each_row(normals, "normals", 3, [&](const double* n, double* o) {
+    const Vec turned = motion.normal(Vec(n[0], n[1], n[2]));
+    for (int k = 0; k < 3; ++k) o[k] = turned[k];
+  });
+  each_row(rotations, "rotations", 4, [&](const double* q, double* o) {
+    const Eigen::Quaterniond turned = motion.orientation(Eigen::Quaterniond(q[0], q[1], q[2], q[3]));
+    o[0] = turned.w(), o[1] = turned.x(), o[2] = turned.y(), o[3] = turned.z();
+  });
+  each_row(log_scales, "log_scales", 3, [&](const double* v, double* o) {
+    for (int k = 0; k < 3; ++k) o[k] = motion.log_scale(v[k]);
+  });
+  if (!sh.is_none()) {
+    const auto c = contiguous<double>(sh);
+    const std::size_t n2 = static_cast<std::size_t>(c.shape(c.ndim() - 1));
+    const Result<OrthogonalMap> map = OrthogonalMap::make(m, order_of_count(static_cast<py::ssize_t>(n2), "sh"), 1e-6);
+    if (!map) throw py::value_error("transform_splat_arrays: " + map.error().message);
+    each_row(sh, "sh", n2, [&](const double* f, double* g) {
+      map.value().apply(std::span<const double>(f, n2), std::span<double>(g, n2));
+    });
+  }
+  return out;
+}
+
 std::vector<std::string> gen_tensors(int order, const py::object& out, py::kwargs kwargs) {
   GenTensorsRequest r;
   r.order = order;
@@ -408,6 +465,9 @@ void bind_jobs(py::module_& m) {
   m.def("_fit_zh_mesh", &fit_zh_mesh, py::arg("mesh"));
   m.def("_project_env_file", &project_env_file, py::arg("image"), py::arg("json"));
   m.def("_transform_splats", &transform_splats, py::arg("path_in"), py::arg("path_out"));
+  m.def("_transform_splat_arrays", &transform_splat_arrays, py::arg("sh"), py::arg("positions"), py::arg("rotations"),
+        py::arg("log_scales"), py::arg("normals"), py::arg("quaternion"), py::arg("matrix"), py::arg("translate"),
+        py::arg("scale"));
   m.def("_gen_tensors", &gen_tensors, py::arg("order"), py::arg("out"));
   m.def("_search_lobes", &search_lobes);
 }

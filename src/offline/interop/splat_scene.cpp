@@ -142,29 +142,38 @@ void SplatShLanes::apply(const double* in, double* out) const {
   }
 }
 
+SplatMotion::SplatMotion(const Eigen::Matrix3d& m, double scale, const Eigen::Vector3d& t,
+                         const std::optional<std::array<double, 4>>& quaternion)
+    : m(m),
+      scale(scale),
+      t(t),
+      turn(quaternion ? Eigen::Quaterniond((*quaternion)[0], (*quaternion)[1], (*quaternion)[2], (*quaternion)[3])
+                            .normalized()
+                      : Eigen::Quaterniond(m.determinant() < 0 ? Eigen::Matrix3d(-m) : m)),
+      log_s(std::log(scale)),
+      moves(!m.isIdentity(0) || scale != 1 || !t.isZero(0)) {}
+
 void transform_splat_scene(SplatScene& s, const Eigen::Matrix3d& m, double scale, const Eigen::Vector3d& t,
                            int threads) {
   if (m.isIdentity(0) && scale == 1 && t.isZero(0)) return;
   Result<OrthogonalMap> made = OrthogonalMap::make(m, s.degree + 1, 1e-6);
   if (!made) throw InputError("a splat transform: " + made.error().message);
-  const OrthogonalMap& map = made.value();
-  const SplatShLanes lanes(map);
-  const Eigen::Quaterniond qp(map.proper());
-  const float log_scale = static_cast<float>(std::log(scale));
+  const SplatShLanes lanes(made.value());
+  const SplatMotion motion(m, scale, t);
   const std::size_t rest = static_cast<std::size_t>((s.degree + 1) * (s.degree + 1)) - 1;
   const std::size_t stride = s.sh_stride();
   constexpr std::size_t kChunk = 4096;
   parallel_for((s.count + kChunk - 1) / kChunk, threads, [&](std::size_t chunk) {
     const std::size_t begin = chunk * kChunk, end = std::min(s.count, (chunk + 1) * kChunk);
     for (std::size_t i = begin; i < end; ++i) {
-      const Eigen::Vector3d p(s.position[3 * i], s.position[3 * i + 1], s.position[3 * i + 2]);
-      const Eigen::Vector3d moved = scale * (m * p) + t;
-      for (int k = 0; k < 3; ++k) s.position[3 * i + k] = static_cast<float>(moved[k]);
+      float* p = &s.position[3 * i];
+      const Eigen::Vector3d moved = motion.position(Eigen::Vector3d(p[0], p[1], p[2]));
+      for (int k = 0; k < 3; ++k) p[k] = static_cast<float>(moved[k]);
       float* q = &s.rotation[4 * i];
-      const Eigen::Quaterniond out = qp * Eigen::Quaterniond(q[0], q[1], q[2], q[3]);
+      const Eigen::Quaterniond out = motion.orientation(Eigen::Quaterniond(q[0], q[1], q[2], q[3]));
       q[0] = static_cast<float>(out.w()), q[1] = static_cast<float>(out.x()), q[2] = static_cast<float>(out.y()),
       q[3] = static_cast<float>(out.z());
-      for (int k = 0; k < 3; ++k) s.log_scale[3 * i + k] += log_scale;
+      for (int k = 0; k < 3; ++k) s.log_scale[3 * i + k] = static_cast<float>(motion.log_scale(s.log_scale[3 * i + k]));
     }
     if (rest == 0) return;
     // The SH of SplatShLanes::kLanes splats at once, channel-major in the lanes.

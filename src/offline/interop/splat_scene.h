@@ -13,6 +13,7 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include "shtool/orthogonal_map.h"
 
@@ -97,11 +98,34 @@ class SplatShLanes {
   std::vector<double> blocks_;  // band l's (2l+1)^2 values, row-major, from l(4l^2-1)/3
 };
 
-// p -> s M p + t for an orthogonal M (det +1 or -1, to 1e-6; InputError otherwise):
-// positions; orientations by the proper part P = det(M) M, since the covariance
-// M Sigma M^T = P Sigma P^T (q -> q_P q, the stored length kept); log-scales + log s;
-// the SH colour of every splat by the orthogonal map of M (shtool/orthogonal_map.h), so
-// that a splat seen along d before looks the same along M d after.
+// What p -> s M p + t (M orthogonal, det +1 or -1) does to one splat's values, each
+// computed in double: every path of transform-splats (PLY rewritten in place or streamed,
+// scenes of any format) and Python's transform_splat_arrays apply it, so they agree to
+// the bit. Orientations turn by the proper part P = det(M) M, since the covariance
+// M Sigma M^T = P Sigma P^T (q -> q_P q, the stored length kept), or by the user's own
+// quaternion when M was made from one (no round trip through the matrix); normals turn
+// by M; log-scales shift by log s. Positions stay bit for bit (signed zeros included)
+// when the map is the identity.
+struct SplatMotion {
+  SplatMotion(const Eigen::Matrix3d& m, double scale, const Eigen::Vector3d& t,
+              const std::optional<std::array<double, 4>>& quaternion = std::nullopt);
+
+  Eigen::Vector3d position(const Eigen::Vector3d& p) const { return moves ? Eigen::Vector3d(scale * (m * p) + t) : p; }
+  Eigen::Vector3d normal(const Eigen::Vector3d& n) const { return m * n; }
+  Eigen::Quaterniond orientation(const Eigen::Quaterniond& q) const { return turn * q; }  // turn is unit
+  double log_scale(double v) const { return log_s != 0 ? v + log_s : v; }  // -0 kept at s = 1
+
+  Eigen::Matrix3d m;
+  double scale;
+  Eigen::Vector3d t;
+  Eigen::Quaterniond turn;
+  double log_s;  // log scale
+  bool moves;    // positions change
+};
+
+// SplatMotion(M, s, t) on every splat of a scene, its SH colours by the orthogonal map of
+// M (shtool/orthogonal_map.h), so that a splat seen along d before looks the same along
+// M d after; InputError when M is not orthogonal to 1e-6.
 void transform_splat_scene(SplatScene& scene, const Eigen::Matrix3d& m, double scale, const Eigen::Vector3d& t,
                            int threads);
 

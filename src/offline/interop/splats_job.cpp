@@ -64,13 +64,12 @@ std::string upper(std::string_view letters) {
   return up;
 }
 
-// What PLY in, PLY out applies to every splat, in the file's own coordinates.
+// What PLY in, PLY out applies to every splat, in the file's own coordinates: the
+// SplatMotion of the request (the orientations turned by its own quaternion when it
+// gives one) and the orthogonal map of its SH colours.
 struct PlyMotion {
   const OrthogonalMap map;
-  Eigen::Quaterniond qr;  // the orientations' turn (unit)
-  double log_scale;
-  Eigen::Vector3d t;
-  bool moves;  // positions change
+  const SplatMotion splat;
 
   static OrthogonalMap make_map(const Eigen::Matrix3d& rot, int degree) {
     Result<OrthogonalMap> made = OrthogonalMap::make(rot, degree + 1, 1e-6);
@@ -79,16 +78,7 @@ struct PlyMotion {
   }
   PlyMotion(const TransformSplatsRequest& r, const Eigen::Matrix3d& rot, int degree)
       : map(make_map(rot, degree)),
-        // Orientations turn by the proper part (a reflection's covariance M Sigma M^T is
-        // P Sigma P^T); the given quaternion itself when there is one (no round trip
-        // through the matrix).
-        qr(r.quaternion ? Eigen::Quaterniond((*r.quaternion)[0], (*r.quaternion)[1], (*r.quaternion)[2],
-                                             (*r.quaternion)[3])
-                              .normalized()
-                        : Eigen::Quaterniond(map.proper())),
-        log_scale(std::log(r.scale)),
-        t(r.translate[0], r.translate[1], r.translate[2]),
-        moves(!rot.isIdentity(0) || r.scale != 1 || !t.isZero(0)) {}
+        splat(rot, r.scale, Eigen::Vector3d(r.translate[0], r.translate[1], r.translate[2]), r.quaternion) {}
 };
 
 // Whether a PLY can be rewritten record by record at fixed offsets (rewrite_binary_ply):
@@ -178,12 +168,12 @@ void transform_ply_streamed(const TransformSplatsRequest& r, const Eigen::Matrix
     for (std::size_t j = 0; j < limit; ++j) {
       char* s = records + j * size;
       const Eigen::Vector3d p(get(s, position[0]), get(s, position[1]), get(s, position[2]));
-      const Eigen::Vector3d moved = motion.moves ? Eigen::Vector3d(r.scale * (rot * p) + motion.t) : p;
+      const Eigen::Vector3d moved = motion.splat.position(p);
       for (int k = 0; k < 3; ++k) put(s, position[k], moved[k]);
       if (layout.normal) {
         const auto& idx = *layout.normal;
         const Eigen::Vector3d n(get(s, at(idx[0])), get(s, at(idx[1])), get(s, at(idx[2])));
-        const Eigen::Vector3d turned = rot * n;
+        const Eigen::Vector3d turned = motion.splat.normal(n);
         for (int k = 0; k < 3; ++k) put(s, at(idx[k]), turned[k]);
         for (int k = 0; k < 3 && normal_overflow == limit && n.allFinite(); ++k)
           if (!std::isfinite(get(s, at(idx[k])))) normal_overflow = j, normal_component = k;
@@ -191,14 +181,14 @@ void transform_ply_streamed(const TransformSplatsRequest& r, const Eigen::Matrix
       if (layout.rotation) {
         const auto& idx = *layout.rotation;
         const Eigen::Quaterniond q(get(s, at(idx[0])), get(s, at(idx[1])), get(s, at(idx[2])), get(s, at(idx[3])));
-        const Eigen::Quaterniond turned = motion.qr * q;  // |turned| = |q|: qr is unit
+        const Eigen::Quaterniond turned = motion.splat.orientation(q);
         const double parts[4] = {turned.w(), turned.x(), turned.y(), turned.z()};
         for (int k = 0; k < 4; ++k) put(s, at(idx[k]), parts[k]);
       }
-      if (layout.scale && motion.log_scale != 0)
+      if (layout.scale && motion.splat.log_s != 0)
         for (int k = 0; k < 3; ++k) {
           const std::size_t o = at((*layout.scale)[k]);
-          put(s, o, get(s, o) + motion.log_scale);
+          put(s, o, motion.splat.log_scale(get(s, o)));
         }
     }
     if (!rest.empty()) {
@@ -256,16 +246,13 @@ void transform_ply_in_place(const TransformSplatsRequest& r, const Eigen::Matrix
   const SplatLayout layout = find_splat_layout(v, r.in);
   const PlyMotion motion(r, rot, layout.degree);
   const OrthogonalMap& map = motion.map;
-  const Eigen::Quaterniond& qr = motion.qr;
-  const double log_scale = motion.log_scale;
-  const Eigen::Vector3d& t = motion.t;
+  const SplatMotion& splat = motion.splat;
   const int order = layout.degree + 1;
   const int k_rest = sh_count(order) - 1;
 
   // One map for every splat, by the reference rotation: exact to rounding at every angle
   // (an identity leaves the colours' bits as they were).
   const std::size_t count = v.count;
-  const bool moves = motion.moves;
   constexpr std::size_t kChunk = 4096;
   const std::size_t chunks = (count + kChunk - 1) / kChunk;
   // The first problem of each chunk; the first chunk's is reported, whatever the threads.
@@ -298,12 +285,12 @@ void transform_ply_in_place(const TransformSplatsRequest& r, const Eigen::Matrix
         }
       Eigen::Vector3d p;
       for (int k = 0; k < 3; ++k) p[k] = ply.get(v, i, layout.position[k]);
-      const Eigen::Vector3d moved = moves ? Eigen::Vector3d(r.scale * (rot * p) + t) : p;
+      const Eigen::Vector3d moved = splat.position(p);
       for (int k = 0; k < 3; ++k) ply.set(v, i, layout.position[k], moved[k]);
       if (layout.normal) {
         Eigen::Vector3d n;
         for (int k = 0; k < 3; ++k) n[k] = ply.get(v, i, (*layout.normal)[k]);
-        const Eigen::Vector3d turned = rot * n;
+        const Eigen::Vector3d turned = splat.normal(n);
         for (int k = 0; k < 3; ++k) ply.set(v, i, (*layout.normal)[k], turned[k]);
         // Carried as they are when not finite, but the turn must not make them so.
         for (int k = 0; k < 3 && n.allFinite(); ++k)
@@ -318,12 +305,12 @@ void transform_ply_in_place(const TransformSplatsRequest& r, const Eigen::Matrix
         const auto& idx = *layout.rotation;
         const Eigen::Quaterniond q(ply.get(v, i, idx[0]), ply.get(v, i, idx[1]), ply.get(v, i, idx[2]),
                                    ply.get(v, i, idx[3]));
-        const Eigen::Quaterniond out = qr * q;  // |out| = |q|: qr is unit
+        const Eigen::Quaterniond out = splat.orientation(q);
         const double parts[4] = {out.w(), out.x(), out.y(), out.z()};
         for (int k = 0; k < 4; ++k) ply.set(v, i, idx[k], parts[k]);
       }
-      if (layout.scale && log_scale != 0)
-        for (int k = 0; k < 3; ++k) ply.set(v, i, (*layout.scale)[k], ply.get(v, i, (*layout.scale)[k]) + log_scale);
+      if (layout.scale && splat.log_s != 0)
+        for (int k = 0; k < 3; ++k) ply.set(v, i, (*layout.scale)[k], splat.log_scale(ply.get(v, i, (*layout.scale)[k])));
       if (layout.degree > 0) {
         for (int c = 0; c < 3; ++c) {
           f[c] = ply.get(v, i, (*layout.dc)[c]);
