@@ -713,6 +713,9 @@ TEST(CliSplatFormats, SpzExtensionRecords) {
       {"v3 RDF", compress_with("gzip", with_records_legacy(plain3, rdf)), ref3, {}, ""},
       {"v3 RDF and an unknown record", compress_with("gzip", with_records_legacy(plain3, rdf + other)), ref3, {},
        "0x12340001 (3 bytes)"},
+      // Records of one unknown type are warned of once, counted.
+      {"v4 three unknown records", with_records_v4(v4, other + rdf + other + other), ref4, {},
+       "skipped 3 spz extension records of type 0x12340001 (9 bytes)"},
   };
   for (const Case& c : cases) {
     const fs::path spz = scratch("ext_in.spz"), ply = scratch("ext_out.ply");
@@ -768,12 +771,48 @@ TEST(CliSplatFormats, SpzExtensionRecords) {
       {with_records_v4(v4, rdf + rdf), "two SPZ_ADOBE_coordinate_system records"},
       {with_records_v4(v4, rdf.substr(0, 10)), "truncated extension record"},
       {compress_with("gzip", with_records_legacy(plain3, rdf.substr(0, 5))), "truncated extension record"},
+      // Type 0 is reserved: a zone of zeros is not millions of empty records.
+      {with_records_v4(v4, std::string(64, '\0')), "type 0x00000000"},
+      {compress_with("gzip", with_records_legacy(plain3, std::string(64, '\0'))), "type 0x00000000"},
+      // A gzip file's zone is bounded (16 MiB), not inflated as far as the stream goes:
+      // here 17 MiB of one record in a file of about 17 KB.
+      {compress_with("gzip", with_records_legacy(plain3, spz_record(0x12340001, std::string(17 << 20, 'x')))),
+       "oversized: more than 16 MiB of extension records"},
   };
   for (const auto& [bytes, message] : bad) {
     const fs::path spz = scratch("ext_bad.spz"), out = scratch("ext_bad.ply");
     write_bytes(spz, bytes);
     expect_refused(spz, out, message);
   }
+}
+
+// Flag 0x1 (trained with antialiasing, which a viewer that honours it renders with) is
+// carried from spz to spz (v4 and v3 written), and PLY, which has no such flag, is
+// written with a warning that says so.
+TEST(CliSplatFormats, SpzAntialiasedFlagIsCarriedOrWarnedOf) {
+  std::string v4 = hand_v4();
+  v4[14] = static_cast<char>(v4[14] | 1);
+  const fs::path in = scratch("aa_in.spz");
+  write_bytes(in, v4);
+  for (const std::string version : {"4", "3"}) {
+    const fs::path out = scratch("aa_out.spz");
+    const auto r = convert(in, out, {"--spz-version", version});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_EQ(r.err.find("warning"), std::string::npos) << r.err;
+    std::string bytes = read_file(out);
+    if (version == "3") {
+      write_bytes(scratch("aa_out.gz"), bytes);
+      fs::remove(scratch("aa_out"));
+      ASSERT_EQ(run_command({"gzip", "-d", "-k", "-f", scratch("aa_out.gz").string()}).exit_code, 0);
+      bytes = read_file(scratch("aa_out"));
+    }
+    EXPECT_EQ(bytes[14] & 1, 1) << "v" << version << ": the flag was dropped";
+  }
+  const auto r = convert(in, scratch("aa_out.ply"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("warning: " + in.string() + " says its splats were trained with antialiasing"),
+            std::string::npos)
+      << r.err;
 }
 
 // KHR_gaussian_splatting's colorSpace is carried from glTF to glTF; PLY and spz, which

@@ -441,6 +441,14 @@ TransformSplatsReport run_transform_splats(const TransformSplatsRequest& r) {
         SpzHeader header;
         scene = read_spz(bytes, r.in.string(), &header, threads);
         report.warnings.insert(report.warnings.end(), header.warnings.begin(), header.warnings.end());
+        if (header.antialiased) {
+          if (out_format == SplatFormat::spz)
+            spz.antialiased = true;
+          else
+            report.warnings.push_back(r.in.string() + " says its splats were trained with antialiasing (spz flag 0x1): " +
+                                      splat_format_name(out_format) + " has no such flag, and " + r.out.string() +
+                                      " does not say so (a viewer renders them without the antialiasing filter)");
+        }
         if (!header.frame.empty()) {
           // The file names the frame its values are in: that one, not --spz-frame.
           const std::string asked = upper(r.spz_frame);

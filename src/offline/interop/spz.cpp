@@ -10,6 +10,8 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <memory>
+#include <new>
 #include <numbers>
 #include <vector>
 
@@ -22,7 +24,7 @@ namespace {
 constexpr std::uint32_t kMagic = 0x5053474e;  // "NGSP" little endian
 constexpr float kColorScale = 0.15f;
 constexpr int kZstdLevel = 12;  // the reference writer's
-constexpr std::uint8_t kFlagExtensions = 0x2;
+constexpr std::uint8_t kFlagAntialiased = 0x1, kFlagExtensions = 0x2;
 // Extension record types (spz extensions/README.md): vendor 0xADBE (Adobe), extension 3.
 constexpr std::uint32_t kCoordinateSystemRecord = 0xADBE0003;
 // The CoordinateSystem values 1..16 of the spz library (splat-types.h), as frame letters.
@@ -31,6 +33,10 @@ constexpr std::string_view kCoordinateSystems[17] = {"",    "LDB", "RDB", "LUB",
 // Largest expansion of the decompressors: deflate's 258-byte match per 2 bits, 1032:1;
 // a zstd RLE block (4 bytes) stands for at most 128 KiB.
 constexpr double kDeflateRatio = 1032, kZstdRatio = 32768;
+constexpr std::size_t kInflateStep = std::size_t(64) << 20;
+// The extension records after a gzip file's splats: the known one is 12 bytes; vendor
+// records past 16 MiB are refused rather than inflated without end.
+constexpr std::size_t kMaxExtensionZone = std::size_t(16) << 20;
 // The plausible splats of a v4 file: at most its size x 1024 / 9 (the reference loader's).
 constexpr std::uint64_t kMaxCompressionRatio = 1024, kMinBytesPerSplat = 9;
 
@@ -66,6 +72,9 @@ void read_extension_records(std::string_view zone, const std::string& name, SpzH
   const auto* p = reinterpret_cast<const unsigned char*>(zone.data());
   std::size_t at = 0;
   bool seen_frame = false;
+  // Unknown types are warned of once each (count and bytes), in the order first seen: a
+  // zone of many records must not become as many lines.
+  std::vector<std::pair<std::uint32_t, std::pair<std::uint64_t, std::uint64_t>>> skipped;
   while (at < zone.size()) {
     if (zone.size() - at < 8)
       throw fail("truncated extension record: " + std::to_string(zone.size() - at) +
@@ -77,6 +86,7 @@ void read_extension_records(std::string_view zone, const std::string& name, SpzH
     if (length > zone.size() - at)
       throw fail(std::string("truncated extension record of type ") + hex + ": " + std::to_string(length) +
                  " bytes claimed, " + std::to_string(zone.size() - at) + " left");
+    if (type == 0) throw fail("an extension record of type 0x00000000, which spz reserves (no extension has it)");
     if (type == kCoordinateSystemRecord) {
       if (length != 4)
         throw fail("an SPZ_ADOBE_coordinate_system record of " + std::to_string(length) + " bytes (4 expected)");
@@ -92,10 +102,20 @@ void read_extension_records(std::string_view zone, const std::string& name, SpzH
       else
         header.frame = std::string(kCoordinateSystems[value]);
     } else {
-      header.warnings.push_back(name + ": skipped an spz extension record of type " + hex + " (" +
-                                std::to_string(length) + " bytes) that shtool does not know");
+      auto known = std::find_if(skipped.begin(), skipped.end(), [&](const auto& e) { return e.first == type; });
+      if (known == skipped.end()) known = skipped.insert(skipped.end(), {type, {0, 0}});
+      ++known->second.first;
+      known->second.second += length;
     }
     at += length;
+  }
+  for (const auto& [type, seen] : skipped) {
+    char hex[16];
+    std::snprintf(hex, sizeof hex, "0x%08X", static_cast<unsigned>(type));
+    header.warnings.push_back(name + ": skipped " +
+                              (seen.first == 1 ? std::string("an spz extension record") :
+                                                 std::to_string(seen.first) + " spz extension records") +
+                              " of type " + hex + " (" + std::to_string(seen.second) + " bytes) that shtool does not know");
   }
 }
 
@@ -173,22 +193,24 @@ void decode_blocks(const std::array<const unsigned char*, 6>& at, int version, i
   });
 }
 
-// Inflates up to `want` bytes more into out; returns the zlib status.
+// Inflates up to `want` bytes more into out; returns the zlib status. `out` grows as the
+// stream delivers, at most kInflateStep ahead of it: a stream that claims more than it
+// holds costs the memory of what it holds, not of what it claims.
 int inflate_some(z_stream& zs, std::string& out, std::size_t want) {
-  const std::size_t at = out.size();
-  out.resize(at + want);
-  zs.next_out = reinterpret_cast<Bytef*>(out.data() + at);
+  const std::size_t end = out.size() + want;
+  std::size_t filled = out.size();
   int status = Z_OK;
-  std::size_t left = want;
-  while (left > 0) {
-    const uInt chunk = static_cast<uInt>(std::min<std::size_t>(left, 1u << 30));
-    zs.avail_out = chunk;
+  while (filled < end) {
+    const std::size_t step = std::min(end - filled, kInflateStep);
+    out.resize(filled + step);
+    zs.next_out = reinterpret_cast<Bytef*>(out.data() + filled);
+    zs.avail_out = static_cast<uInt>(step);
     status = inflate(&zs, Z_NO_FLUSH);
-    left -= chunk - zs.avail_out;
+    filled += step - zs.avail_out;
     if (status != Z_OK) break;
     if (zs.avail_out != 0 && zs.avail_in == 0) break;  // the input ended
   }
-  out.resize(at + want - left);
+  out.resize(filled);
   return status;
 }
 
@@ -223,7 +245,11 @@ SplatScene read_gzip(std::string_view bytes, const std::string& name, SpzHeader*
     throw fail("oversized: " + std::to_string(n) + " splats claimed, more than " + std::to_string(bytes.size()) +
                " compressed bytes can hold");
   data.clear();
-  status = inflate_some(zs, data, total);
+  try {
+    status = inflate_some(zs, data, total);
+  } catch (const std::bad_alloc&) {
+    throw fail("out of memory: " + std::to_string(n) + " splats take " + std::to_string(total) + " bytes to decode");
+  }
   if (data.size() < total) throw fail("truncated: " + std::to_string(n) + " splats need " + std::to_string(total) +
                                       " bytes after the header, the stream holds " + std::to_string(data.size()));
   if (status != Z_OK && status != Z_STREAM_END) throw fail("corrupt gzip stream (" + std::string(zs.msg ? zs.msg : "zlib error") + ")");
@@ -234,13 +260,16 @@ SplatScene read_gzip(std::string_view bytes, const std::string& name, SpzHeader*
     const std::size_t before = more.size();
     status = inflate_some(zs, more, (flags & kFlagExtensions) ? std::size_t(1) << 16 : 1);
     if (!(flags & kFlagExtensions) && !more.empty()) break;
+    if (more.size() > kMaxExtensionZone)
+      throw fail("oversized: more than " + std::to_string(kMaxExtensionZone >> 20) +
+                 " MiB of extension records after the splats");
     if (status == Z_OK && more.size() == before) break;  // the input ended
   }
   if (!(flags & kFlagExtensions) && !more.empty())
     throw fail("the stream is longer than its " + std::to_string(n) + " splats");
   if (status != Z_STREAM_END) throw fail("truncated: the gzip stream does not end");
   if (zs.avail_in != 0) throw fail("bytes after the end of the gzip stream");
-  SpzHeader read{static_cast<int>(version), fractional_bits, (flags & 1) != 0, {}, {}};
+  SpzHeader read{static_cast<int>(version), fractional_bits, (flags & kFlagAntialiased) != 0, {}, {}};
   if (flags & kFlagExtensions) read_extension_records(more, name, read);
   SplatScene s;
   s.resize(n, degree);
@@ -283,12 +312,11 @@ SplatScene read_ngsp(std::string_view bytes, const std::string& name, SpzHeader*
                std::to_string(degree) + " (" + std::to_string(present.size()) + " expected)");
   if (toc < 32 || toc > bytes.size() || (!(flags & kFlagExtensions) && toc != 32))
     throw fail("inconsistent: table of contents at byte " + std::to_string(toc));
-  SpzHeader read{4, fractional_bits, (flags & 1) != 0, {}, {}};
+  SpzHeader read{4, fractional_bits, (flags & kFlagAntialiased) != 0, {}, {}};
   if (flags & kFlagExtensions) read_extension_records(bytes.substr(32, toc - 32), name, read);
   const std::uint64_t toc_end = std::uint64_t(toc) + 16ull * streams;
   if (toc_end > bytes.size()) throw fail("truncated: the file ends inside its table of contents");
   std::uint64_t at = toc_end;
-  std::vector<std::string> blocks(6);
   std::vector<std::pair<std::uint64_t, std::uint64_t>> where(streams);  // offset, size
   for (int j = 0; j < streams; ++j) {
     const int k = present[j];
@@ -304,21 +332,29 @@ SplatScene read_ngsp(std::string_view bytes, const std::string& name, SpzHeader*
     const unsigned long long frame = ZSTD_getFrameContentSize(bytes.data() + at, packed);
     if (frame != ZSTD_CONTENTSIZE_UNKNOWN && frame != unpacked)
       throw fail("inconsistent: stream " + std::to_string(j) + "'s zstd frame is not the size its table entry says");
-    blocks[k].resize(unpacked);
     where[j] = {at, packed};
     at += packed;
   }
   if (at != bytes.size()) throw fail(std::to_string(bytes.size() - at) + " bytes after the last stream");
+  // Allocated once the layout holds, and not zero-filled: a stream that fails early has
+  // touched (and so cost) only the pages it wrote.
+  std::array<std::unique_ptr<unsigned char[]>, 6> blocks;
+  try {
+    for (int k : present) blocks[k].reset(new unsigned char[sizes[k]]);
+  } catch (const std::bad_alloc&) {
+    std::uint64_t total = 0;
+    for (std::uint64_t size : sizes) total += size;
+    throw fail("out of memory: " + std::to_string(n) + " splats take " + std::to_string(total) + " bytes to decode");
+  }
   // The streams are independent frames: decompressed side by side, the first problem
   // in stream order reported.
   std::vector<std::string> problems(streams);
   parallel_for(static_cast<std::size_t>(streams), threads, [&](std::size_t j) {
     const int k = present[j];
-    const std::size_t got = ZSTD_decompress(blocks[k].data(), blocks[k].size(), bytes.data() + where[j].first,
-                                            where[j].second);
+    const std::size_t got = ZSTD_decompress(blocks[k].get(), sizes[k], bytes.data() + where[j].first, where[j].second);
     if (ZSTD_isError(got))
       problems[j] = "stream " + std::to_string(j) + ": " + ZSTD_getErrorName(got);
-    else if (got != blocks[k].size())
+    else if (got != sizes[k])
       problems[j] = "truncated: stream " + std::to_string(j) + " decompresses to fewer bytes than its entry says";
   });
   for (const std::string& p : problems)
@@ -326,7 +362,8 @@ SplatScene read_ngsp(std::string_view bytes, const std::string& name, SpzHeader*
   SplatScene s;
   s.resize(n, degree);
   std::array<const unsigned char*, 6> ptr{};
-  for (int k = 0; k < 6; ++k) ptr[k] = reinterpret_cast<const unsigned char*>(blocks[k].data());
+  static const unsigned char kNone = 0;  // the empty blocks' (never read)
+  for (int k = 0; k < 6; ++k) ptr[k] = blocks[k] ? blocks[k].get() : &kNone;
   decode_blocks(ptr, 4, fractional_bits, s, threads);
   if (header) *header = std::move(read);
   return s;
@@ -419,7 +456,7 @@ std::string write_spz(const SplatScene& s, const SpzWriteOptions& o, int threads
     put_u32(records, 4);  // the payload: one u32
     put_u32(records, o.coordinate_system);
   }
-  const std::uint8_t flags = records.empty() ? 0 : kFlagExtensions;
+  const std::uint8_t flags = (records.empty() ? 0 : kFlagExtensions) | (o.antialiased ? kFlagAntialiased : 0);
   std::string out;
   if (o.version == 3) {
     std::string plain;

@@ -21,6 +21,9 @@ struct SpzWriteOptions {
   // The value of an SPZ_ADOBE_coordinate_system record naming the frame the scene is in
   // (spz_coordinate_system_value); 0 writes no record, the file then being RUB.
   std::uint32_t coordinate_system = 0;
+  // Flag 0x1: the splats were trained with antialiasing (Mip-splatting's filter), which a
+  // viewer that honours it renders with; carried from an spz input.
+  bool antialiased = false;
 };
 
 // What a file says about itself beyond the splats.
