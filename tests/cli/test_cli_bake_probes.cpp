@@ -304,6 +304,42 @@ TEST(CliBakeProbes, ObjWithMtlMaterials) {
         << c;
 }
 
+// The .mtl's colours are read from its text: one number stands for all three (the MTL
+// format's rule, once read as r 0 0), and a value that is not a finite number, or a
+// library the OBJ names that is not there, is refused (tinyobjloader alone reads "nan"
+// and "abc" as 0, and a missing library baked at the default 0.8, all without a word).
+TEST(CliBakeProbes, ObjMaterialColoursAreReadOrRefused) {
+  const fs::path dir = empty_folder_for_this_test(scratch);
+  write_file(dir / "t.obj", "mtllib m.mtl\nusemtl a\nv -5 -5 0\nv 5 -5 0\nv 0 5 0\nf 1 2 3\n");
+  must(run_shtool({"light", "--type", "constant", "--order", "3", "--json", (dir / "sky.json").string()}));
+  // A floor under a constant sky: what it reflects is Kd times the sky.
+  const std::vector<std::string> args = {(dir / "t.obj").string(), "--up", "z", "--env", (dir / "sky.json").string(),
+                                         "--grid", "1,1,1", "--bounds=-1,-1,0.5,1,1,1.5", "--samples", "64"};
+  auto bake = [&](const std::string& mtl) {
+    write_file(dir / "m.mtl", "newmtl a\n" + mtl + "\n");
+    std::vector<std::string> argv = {"bake-probes"};
+    argv.insert(argv.end(), args.begin(), args.end());
+    argv.insert(argv.end(), {"--out", (dir / "o.shtb").string()});
+    must(run_shtool(argv));
+    return read_file(dir / "o.shtb");
+  };
+  const std::string one = bake("Kd 0.5"), three = bake("Kd 0.5 0.5 0.5");
+  EXPECT_TRUE(one == three) << "Kd 0.5 is not read as 0.5 0.5 0.5";
+  EXPECT_FALSE(one == bake("Kd 0.5 0 0"));
+  for (const auto& [mtl, message] : std::vector<std::pair<std::string, std::string>>{
+           {"Kd 0.5 nan 0.5", "material 'a' (its library's line 2): Kd nan is not a finite number"},
+           {"Kd 0.5 inf 0.5", "Kd inf is not a finite number"},
+           {"Kd 0.5 abc 0.5", "Kd 'abc' is not a number"},
+           {"Kd 0.5 0.5", "Kd has 2 numbers"},
+           {"Ke nan 0 0", "Ke nan is not a finite number"},
+           {"Kd 0.5 1e39 0.5", "Kd 1e39 is not a finite number (or is beyond float range)"}}) {
+    write_file(dir / "m.mtl", "newmtl a\n" + mtl + "\n");
+    expect_refused("bake-probes", args, message, dir / "bad.shtb");
+  }
+  std::filesystem::remove(dir / "m.mtl");
+  expect_refused("bake-probes", args, "its material library 'm.mtl' (mtllib) is not beside it", dir / "bad.shtb");
+}
+
 TEST(CliBakeProbes, RefusesBadScenesGridsBoundsAndOptions) {
   const fs::path scene = furnace(), out = scratch("refused.shtb");
   const std::string s = scene.string();

@@ -8,6 +8,7 @@
 #include <cstring>
 #include <limits>
 #include <numbers>
+#include <optional>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -79,11 +80,16 @@ void check_obj_text(const std::filesystem::path& path, const std::string& text) 
 }
 
 // Whether the .mtl block of material `name` has a `key` line (Kd, Ke).
-bool mtl_states(const std::string& mtl, const std::string& name, const std::string& key) {
+// The colour that material `name` of the .mtl text states (`key r [g b]`), read from the
+// text as the OBJ's coordinates are: tinyobjloader reads "nan" or an unreadable number as
+// 0. One number stands for all three (the MTL format's rule). nullopt when the material
+// does not state it; InputError naming the material and the line otherwise.
+std::optional<Eigen::Vector3d> mtl_colour(const std::string& mtl, const std::string& name, const std::string& key,
+                                          const std::filesystem::path& path) {
   std::istringstream in(mtl);
   std::string line;
   bool inside = false;
-  while (std::getline(in, line)) {
+  for (int number = 1; std::getline(in, line); ++number) {
     std::istringstream words(line);
     std::string first;
     if (!(words >> first)) continue;
@@ -92,11 +98,25 @@ bool mtl_states(const std::string& mtl, const std::string& name, const std::stri
       std::getline(words >> std::ws, n);
       while (!n.empty() && (n.back() == '\r' || n.back() == ' ' || n.back() == '\t')) n.pop_back();
       inside = n == name;
-    } else if (inside && first == key) {
-      return true;
+      continue;
     }
+    if (!inside || first != key) continue;
+    const std::string where = "material '" + name + "' (its library's line " + std::to_string(number) + "): " + key;
+    std::vector<double> values;
+    for (std::string word; words >> word;) {
+      char* stop = nullptr;
+      const double v = std::strtod(word.c_str(), &stop);
+      if (stop != word.c_str() + word.size() || word.find_first_of("xX") != std::string::npos)
+        fail_input(path, where + " '" + word + "' is not a number (shtool reads r g b or one value)");
+      if (!std::isfinite(v) || std::abs(v) > std::numeric_limits<float>::max())
+        fail_input(path, where + " " + word + " is not a finite number (or is beyond float range)");
+      values.push_back(v);
+    }
+    if (values.size() != 1 && values.size() != 3)
+      fail_input(path, where + " has " + std::to_string(values.size()) + " numbers (r g b, or one for all three)");
+    return values.size() == 1 ? Eigen::Vector3d::Constant(values[0]) : Eigen::Vector3d(values[0], values[1], values[2]);
   }
-  return false;
+  return std::nullopt;
 }
 
 }  // namespace
@@ -345,12 +365,12 @@ Mesh load_obj_text(const std::string& text, const std::filesystem::path& path, N
     for (const tinyobj::material_t& m : reader.GetMaterials()) {
       ObjMaterial om;
       om.name = m.name;
-      // tinyobjloader leaves absent colours at their defaults; only stated ones count.
-      om.has_kd = mtl_states(mtl_text, m.name, "Kd");
-      om.has_ke = mtl_states(mtl_text, m.name, "Ke");
-      om.kd = Eigen::Vector3d(m.diffuse[0], m.diffuse[1], m.diffuse[2]);
-      om.ke = Eigen::Vector3d(m.emission[0], m.emission[1], m.emission[2]);
-      if (!om.kd.allFinite() || !om.ke.allFinite()) fail_input(path, "material '" + m.name + "' has a non-finite colour");
+      // Only stated colours count (tinyobjloader leaves absent ones at its defaults).
+      const std::optional<Eigen::Vector3d> kd = mtl_colour(mtl_text, m.name, "Kd", path);
+      const std::optional<Eigen::Vector3d> ke = mtl_colour(mtl_text, m.name, "Ke", path);
+      om.has_kd = kd.has_value(), om.has_ke = ke.has_value();
+      om.kd = kd.value_or(Eigen::Vector3d::Zero());
+      om.ke = ke.value_or(Eigen::Vector3d::Zero());
       mesh.obj_materials.push_back(std::move(om));
     }
   std::size_t face_number = 0;

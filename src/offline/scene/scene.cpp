@@ -140,8 +140,12 @@ Scene obj_scene(const std::string& text, const std::filesystem::path& path, UpAx
   if (!lib.empty()) {
     mtl_path = path.parent_path() / lib;
     std::error_code ec;
-    if (std::filesystem::is_regular_file(mtl_path, ec)) mtl = read_input_file(mtl_path, "the OBJ's material library");
-    else mtl_path.clear();
+    // A library that is not there would bake every face at the default 0.8 without a
+    // word: the scene is not the one its author made.
+    if (!std::filesystem::is_regular_file(mtl_path, ec))
+      fail_input(path, "its material library '" + lib + "' (mtllib) is not beside it: " + mtl_path.string() +
+                           " is missing (remove the mtllib line to bake every face at the default albedo 0.8)");
+    mtl = read_input_file(mtl_path, "the OBJ's material library");
   }
   Scene s;
   s.mesh = fit::load_obj_text(text, path, fit::NormalSource::automatic, up, mtl);
