@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <functional>
 #include <filesystem>
 #include <numbers>
 #include <string>
@@ -338,6 +339,43 @@ TEST(CliBakeProbes, ObjMaterialColoursAreReadOrRefused) {
   }
   std::filesystem::remove(dir / "m.mtl");
   expect_refused("bake-probes", args, "its material library 'm.mtl' (mtllib) is not beside it", dir / "bad.shtb");
+}
+
+// What glTF's specification forbids is refused, not read some other way: a required
+// extension shtool does not implement (the texture coordinates KHR_texture_transform
+// moves), another major version, node arrays of the wrong length (once ignored), a
+// rotation that is not a unit quaternion (zero was taken as the identity), an albedo past
+// the schema's 1 (it gains energy at every bounce), a TRIANGLES list that is not whole
+// triangles (its tail was dropped), and a scene moved past single precision's reach (once
+// "degenerate").
+TEST(CliBakeProbes, GltfThatBreaksItsSpecificationIsRefused) {
+  const nlohmann::json doc = nlohmann::json::parse(read_file(furnace()));
+  const std::vector<std::pair<std::function<void(nlohmann::json&)>, std::string>> edits = {
+      {[](nlohmann::json& j) { j["extensionsRequired"] = {"KHR_texture_transform"}; },
+       "requires the glTF extension KHR_texture_transform"},
+      {[](nlohmann::json& j) { j["asset"]["version"] = "3.0"; }, "asset.version '3.0': glTF 2.x is read"},
+      {[](nlohmann::json& j) { j["nodes"][0]["matrix"] = {1, 0, 0}; }, "node 0's matrix has 3 numbers (16 expected)"},
+      {[](nlohmann::json& j) { j["nodes"][0]["translation"] = {1, 0}; }, "node 0's translation has 2 numbers"},
+      {[](nlohmann::json& j) { j["nodes"][0]["rotation"] = {0, 0, 0, 0}; }, "node 0's rotation is not a unit quaternion"},
+      {[](nlohmann::json& j) { j["nodes"][0]["rotation"] = {0, 0, 0, 2}; }, "(length 2)"},
+      {[](nlohmann::json& j) { j["materials"][0]["pbrMetallicRoughness"]["baseColorFactor"] = {5, 5, 5, 1}; },
+       "material 0 baseColorFactor must be at most 1"},
+      {[](nlohmann::json& j) { j["accessors"][0]["count"] = 2; }, "a TRIANGLES primitive of 2 vertices, not a multiple of 3"},
+      {[](nlohmann::json& j) { j["nodes"][0]["translation"] = {1e20, 0, 0}; }, "lies beyond +-1e15"},
+  };
+  for (const auto& [edit, message] : edits) {
+    nlohmann::json j = doc;
+    edit(j);
+    const fs::path scene = scratch("spec.gltf");
+    write_file(scene, j.dump());
+    expect_refused("bake-probes", {scene.string(), "--grid", "1,1,1", "--samples", "8"}, message, scratch("spec.shtb"));
+  }
+  // Within the tolerance a printed quaternion keeps, the rotation is read.
+  nlohmann::json j = doc;
+  j["nodes"][0]["rotation"] = {0, 0, 0, 1.0000004};
+  write_file(scratch("spec.gltf"), j.dump());
+  must(run_shtool({"bake-probes", scratch("spec.gltf").string(), "--grid", "1,1,1", "--samples", "8", "--out",
+                   scratch("spec.shtb").string()}));
 }
 
 TEST(CliBakeProbes, RefusesBadScenesGridsBoundsAndOptions) {

@@ -98,24 +98,36 @@ std::vector<std::uint32_t> read_indices(const tinygltf::Model& model, int index,
       [](const AccessorView& v, std::size_t i) { return static_cast<std::uint32_t>(v.number(i, 0, false)); });
 }
 
-// The node's local transform: its matrix, or T R S.
-Eigen::Matrix4d local_transform(const tinygltf::Node& node) {
+// The node's local transform: its matrix, or T R S. Arrays of another length, and a
+// rotation that is not a unit quaternion (glTF requires one; within 1e-3, which any
+// printed quaternion meets), are refused, not read as the identity or normalised.
+Eigen::Matrix4d local_transform(const tinygltf::Node& node, int index, const std::filesystem::path& path) {
+  const std::string what = "node " + std::to_string(index) + "'s ";
+  auto sized = [&](const std::vector<double>& v, std::size_t n, const char* name) {
+    if (!v.empty() && v.size() != n)
+      fail_input(path, what + name + " has " + std::to_string(v.size()) + " numbers (" + std::to_string(n) + " expected)");
+    return !v.empty();
+  };
   Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
-  if (node.matrix.size() == 16) {
+  if (sized(node.matrix, 16, "matrix")) {
     for (int c = 0; c < 4; ++c)
       for (int r = 0; r < 4; ++r) m(r, c) = node.matrix[c * 4 + r];  // column-major
     return m;
   }
   Eigen::Matrix4d t = Eigen::Matrix4d::Identity(), rot = Eigen::Matrix4d::Identity(),
                   s = Eigen::Matrix4d::Identity();
-  if (node.translation.size() == 3) t.block<3, 1>(0, 3) = Eigen::Vector3d(node.translation[0], node.translation[1],
-                                                                           node.translation[2]);
-  if (node.rotation.size() == 4)  // glTF stores x, y, z, w
-    rot.block<3, 3>(0, 0) =
-        Eigen::Quaterniond(node.rotation[3], node.rotation[0], node.rotation[1], node.rotation[2])
-            .normalized()
-            .toRotationMatrix();
-  if (node.scale.size() == 3) s.diagonal().head<3>() = Eigen::Vector3d(node.scale[0], node.scale[1], node.scale[2]);
+  if (sized(node.translation, 3, "translation"))
+    t.block<3, 1>(0, 3) = Eigen::Vector3d(node.translation[0], node.translation[1], node.translation[2]);
+  if (sized(node.rotation, 4, "rotation")) {  // glTF stores x, y, z, w
+    const Eigen::Quaterniond q(node.rotation[3], node.rotation[0], node.rotation[1], node.rotation[2]);
+    if (!(std::abs(q.norm() - 1) <= 1e-3)) {
+      std::ostringstream length;
+      length << q.norm();
+      fail_input(path, what + "rotation is not a unit quaternion (length " + length.str() + ")");
+    }
+    rot.block<3, 3>(0, 0) = q.normalized().toRotationMatrix();
+  }
+  if (sized(node.scale, 3, "scale")) s.diagonal().head<3>() = Eigen::Vector3d(node.scale[0], node.scale[1], node.scale[2]);
   return t * rot * s;
 }
 
@@ -192,6 +204,11 @@ struct Builder {
       triangles.push_back({corner(a), corner(b), corner(c)});
       materials.push_back(p.material);
     };
+    // glTF requires whole triangles: a short list would lose its tail without a word.
+    if (mode == TINYGLTF_MODE_TRIANGLES ? index.size() % 3 != 0 : index.size() < 3)
+      fail_input(path, "a " + std::string(mode == TINYGLTF_MODE_TRIANGLES ? "TRIANGLES" : "strip or fan") +
+                           " primitive of " + std::to_string(index.size()) + (p.indices >= 0 ? " indices" : " vertices") +
+                           (mode == TINYGLTF_MODE_TRIANGLES ? ", not a multiple of 3" : ", fewer than 3"));
     if (mode == TINYGLTF_MODE_TRIANGLES) {
       for (std::size_t k = 0; k + 2 < index.size(); k += 3)
         add(index[k], index[k + 1], index[k + 2]);
@@ -215,7 +232,7 @@ struct Builder {
     if (depth > 1024) fail_input(path, "the node hierarchy is deeper than 1024");
     visited[index] = true;
     const tinygltf::Node& n = model.nodes[index];
-    const Eigen::Matrix4d world = parent * local_transform(n);
+    const Eigen::Matrix4d world = parent * local_transform(n, index, path);
     if (const auto ext = n.extensions.find("KHR_lights_punctual"); ext != n.extensions.end() && ext->second.IsObject()) {
       const tinygltf::Value& light = ext->second.Get("light");
       if (!light.IsInt() || light.GetNumberAsInt() < 0 ||
@@ -303,6 +320,16 @@ tinygltf::Model parse_gltf(const std::string& bytes, const std::filesystem::path
 Mesh mesh_from_gltf(const tinygltf::Model& model, const std::string& bytes, const std::filesystem::path& path,
                     NormalSource normal_source, std::vector<GltfLightNode>* lights) {
   const std::string base = path.has_parent_path() ? path.parent_path().string() : std::string(".");
+  // glTF 2.x only: another major version says its fields mean something else.
+  if (model.asset.version.rfind("2.", 0) != 0)
+    fail_input(path, "asset.version '" + model.asset.version + "': glTF 2.x is read");
+  // An extension listed as required changes what the file means (compressed or moved
+  // data, transformed texture coordinates): read as plain glTF its values would be wrong.
+  for (const std::string& required : model.extensionsRequired)
+    if (required != "KHR_lights_punctual" && required != "KHR_materials_emissive_strength")
+      fail_input(path, "it requires the glTF extension " + required +
+                           " (extensionsRequired), which shtool does not implement (it reads KHR_lights_punctual and "
+                           "KHR_materials_emissive_strength)");
   if (model.scenes.empty()) fail_input(path, "no scene (glTF without scenes has nothing to render)");
   const int scene = model.defaultScene >= 0 ? model.defaultScene : 0;
   if (static_cast<std::size_t>(scene) >= model.scenes.size()) fail_input(path, "the default scene does not exist");

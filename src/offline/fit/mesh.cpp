@@ -196,6 +196,16 @@ Mesh finish_mesh(Mesh mesh, const std::vector<Eigen::Vector3d>& positions, const
                  const std::vector<int>& materials) {
   const std::size_t nv = positions.size(), nn = normals.size();
   auto position = [&](int v) { return positions[v]; };
+  // Every vertex a face uses is within reach first: far out, a small triangle's edges
+  // round to zero and it would pass for degenerate.
+  for (const auto& t : tris)
+    for (const Corner& c : t)
+      if (positions[c.v].cwiseAbs().maxCoeff() > kMaxCoordinate) {
+        std::ostringstream where;
+        where << "vertex " << c.v + 1 << " (" << positions[c.v].x() << ", " << positions[c.v].y() << ", "
+              << positions[c.v].z() << ") lies beyond +-1e15, which single-precision ray tracing cannot reach";
+        fail_input(path, where.str());
+      }
   // Degenerate: repeated index or zero area. Zero area is tested exactly (cross product
   // of edges equal to zero): a sliver with tiny but non-zero area still has a normal.
   std::vector<std::array<Corner, 3>> kept;
@@ -224,12 +234,6 @@ Mesh finish_mesh(Mesh mesh, const std::vector<Eigen::Vector3d>& positions, const
     if (remap[v] < 0) {
       ++mesh.unreferenced_vertices;
       continue;
-    }
-    if (positions[v].cwiseAbs().maxCoeff() > kMaxCoordinate) {
-      std::ostringstream where;
-      where << "vertex " << v + 1 << " (" << positions[v].x() << ", " << positions[v].y() << ", " << positions[v].z()
-            << ") lies beyond +-1e15, which single-precision ray tracing cannot reach";
-      fail_input(path, where.str());
     }
     remap[v] = static_cast<int>(mesh.positions.size());
     mesh.positions.push_back(position(static_cast<int>(v)));

@@ -55,6 +55,8 @@ Scene gltf_scene(const std::string& bytes, const std::filesystem::path& path) {
       if (strength.IsNumber()) m.emissive *= strength.GetNumberAsDouble();
     }
     check_color(m.base_color, path, what + " baseColorFactor");
+    // The schema's range; an albedo above 1 would gain energy at every bounce.
+    if ((m.base_color.array() > 1).any()) fail_input(path, what + " baseColorFactor must be at most 1");
     check_color(m.emissive, path, what + " emissive radiance");
     m.base_texture = texture_image(model, gm.pbrMetallicRoughness.baseColorTexture.index, path);
     m.emissive_texture = texture_image(model, gm.emissiveTexture.index, path);
