@@ -97,6 +97,20 @@ export function probeGridFromData( doc, atlasBytes, what = 'probes.json' ) {
 	texture.generateMipmaps = false;
 	texture.needsUpdate = true;
 	grid.texture = texture;
+	// three's dispose() frees the atlas only when its own bake made it (a render target):
+	// this one is the loader's, freed here with the rest.
+	const disposeGrid = grid.dispose.bind( grid );
+	grid.dispose = () => {
+
+		if ( grid.texture === texture ) {
+
+			texture.dispose();
+			grid.texture = null;
+
+		}
+		disposeGrid();
+
+	};
 	return grid;
 
 }

@@ -210,6 +210,7 @@ TEST(ThreeProbeGrid, ThreeLoadsTheFilesAndEvaluatesShtoolsIrradiance) {
   EXPECT_EQ(out["boundingBox"]["min"], nlohmann::json({-2.0, 0.0, -1.0}));
   EXPECT_EQ(out["boundingBox"]["max"], nlohmann::json({4.0, 3.0, 1.0}));
   EXPECT_EQ(out["padding_mismatches"], 0);
+  EXPECT_EQ(out["disposed"], true) << "grid.dispose() left the atlas texture on the GPU";
   // three's constants: RGBAFormat 1023, FloatType 1015, LinearFilter 1006.
   EXPECT_EQ(out["textureType"]["format"], 1023);
   EXPECT_EQ(out["textureType"]["type"], 1015);

@@ -2,7 +2,8 @@
 // itself, and evaluates every probe with three's SphericalHarmonics3.getIrradianceAt.
 //   node probe_grid_three.mjs DIR/probes.json NORMALS.json   (NORMALS.json: [[x, y, z], ...], three's frame)
 // Prints {"resolution", "boundingBox", "probes": [{"index": [i, j, k], "position": [x, y, z],
-// "irradiance": [[r, g, b] per normal]}], "padding_mismatches": n}, or {"error": message}.
+// "irradiance": [[r, g, b] per normal]}], "padding_mismatches": n, "disposed": whether
+// grid.dispose() freed the atlas texture}, or {"error": message}.
 import { readFile } from 'node:fs/promises';
 import { readFileSync } from 'node:fs';
 import { fileURLToPath, pathToFileURL } from 'node:url';
@@ -53,6 +54,11 @@ for (let k = 0; k < nz; k++)
         irradiance: normals.map((n) => sh.getIrradianceAt(n, new Vector3()).toArray()),
       });
     }
+// dispose() frees the loaded atlas (three's own frees only the render target its bake makes).
+let disposed = false;
+tex.addEventListener('dispose', () => { disposed = true; });
+grid.dispose();
+disposed = disposed && grid.texture === null;
 process.stdout.write(JSON.stringify({
   resolution: grid.resolution.toArray(),
   boundingBox: { min: grid.boundingBox.min.toArray(), max: grid.boundingBox.max.toArray() },
@@ -60,4 +66,5 @@ process.stdout.write(JSON.stringify({
                  generateMipmaps: tex.generateMipmaps },
   probes,
   padding_mismatches: paddingMismatches,
+  disposed,
 }) + '\n');
