@@ -505,8 +505,9 @@ export function parseLightRotation( text ) {
 	if ( text === null || text === undefined ) return [ 1, 0, 0, 0 ];
 	const q = text.split( ',' ).map( Number );
 	const length = Math.hypot( ...q );
-	if ( q.length !== 4 || ! q.every( Number.isFinite ) || ! ( length > 0 ) )
+	if ( q.length !== 4 || ! q.every( Number.isFinite ) )
 		throw new Error( `light-rotation=${text}: four numbers w,x,y,z of a quaternion are needed` );
+	if ( ! ( length > 0 ) ) throw new Error( `light-rotation=${text}: a quaternion of length 0 is no rotation` );
 	return q.map( ( v ) => v / length );
 
 }

@@ -239,6 +239,7 @@ TEST(CliBakeProbes, ShardsMergeToTheOneProcessTable) {
     const fs::path part = scratch(std::string("part") + k + ".shtb");
     const CommandResult r = run({"--shard", std::string(k) + "/3", "--out", part.string()});
     ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE(r.err.find("invalid probes (stored unfilled: merge fills them)"), std::string::npos) << r.err;
     expect_valid_against_schema("probe-grid.schema.json", {part});
     EXPECT_FALSE(shtool::ProbeGrid<double>::load(part).ok()) << "a partial table must not load as a grid";
     merge.push_back(part.string());
@@ -272,6 +273,11 @@ TEST(CliBakeProbes, ShardsMergeToTheOneProcessTable) {
   EXPECT_EQ(missing.exit_code, 1);
   EXPECT_NE(missing.err.find("shard 1 of 3 is missing"), std::string::npos) << missing.err;
   EXPECT_FALSE(fs::exists(merged));
+  // A shard given twice is named as such (once "shard 2 is missing or given twice").
+  expect_refused("merge",
+                 {scratch("part0.shtb").string(), scratch("part1.shtb").string(), scratch("part1.shtb").string(),
+                  scratch("part2.shtb").string()},
+                 "shard 1 of 3 is given twice", merged);
   expect_refused("bake-probes", {scene.string(), "--grid", "3,3,3", "--shard", "0/2", "--json", scratch("j.json").string()},
                  "--json needs the whole grid", scratch("p.shtb"));
   expect_refused("bake-probes", {scene.string(), "--grid", "1,1,2", "--shard", "0/3"}, "more shards than", scratch("p.shtb"));

@@ -263,10 +263,15 @@ MergedProbeGrid merge_probe_grid(const std::vector<std::pair<std::string, Table>
   }
   std::sort(read.begin(), read.end(), [](const Part& a, const Part& b) { return a.shard.index < b.shard.index; });
   const std::size_t count = read.front().shard.count;
+  // Sorted by index: a repeat sits beside its first, and the first index not in its place
+  // is the missing one.
+  for (std::size_t k = 1; k < read.size(); ++k)
+    if (read[k].shard.index == read[k - 1].shard.index)
+      throw InputError("merge: shard " + std::to_string(read[k].shard.index) + " of " + std::to_string(count) +
+                       " is given twice (" + *read[k - 1].name + " and " + *read[k].name + ")");
   for (std::size_t k = 0; k < read.size(); ++k)
-    if (read[k].shard.index != k || (k > 0 && read[k - 1].shard.index == k))
-      fail(*read[std::min(k, read.size() - 1)].name,
-           "shard " + std::to_string(k) + " of " + std::to_string(count) + " is missing or given twice");
+    if (read[k].shard.index != k)
+      throw InputError("merge: shard " + std::to_string(k) + " of " + std::to_string(count) + " is missing");
   if (read.size() != count)
     throw InputError("merge: " + std::to_string(read.size()) + " parts given for a bake in " + std::to_string(count) +
                      " shards");
