@@ -6,6 +6,7 @@ The runtime (evaluation, rotation, products, lighting) and the offline jobs of t
 z up, rotation g(w) = f(R^-1 w). Coefficients lie on the last axis (``axis=`` picks
 another); float32 stays float32, float64 stays float64. See docs/python.md.
 """
+import errno as _errno
 import functools as _functools
 import inspect as _inspect
 import json as _json
@@ -170,6 +171,15 @@ def _path(p, name):
         raise TypeError(f"{name} must be a path (str, bytes or os.PathLike), got {type(p).__name__}") from None
 
 
+def _input_path(p, name):
+    """_path of a file to read; FileNotFoundError (an OSError, as open() raises) when there
+    is none, before any work."""
+    path = _path(p, name)
+    if not _os.path.exists(path):
+        raise FileNotFoundError(_errno.ENOENT, f"{name}: no such file", path)
+    return path
+
+
 def _float_array(x, name):
     """x as an ndarray without copying; lists become float64, float arrays of the other byte
     order are converted to the machine's (other dtypes: TypeError)."""
@@ -297,7 +307,7 @@ def project_env_file(image, order=3, json=None, **options):
     """
     with _tempfile.TemporaryDirectory() as tmp:
         path = _path(json, "json") if json is not None else _os.path.join(tmp, "lighting.json")
-        r = _shtool._project_env_file(image, path, order=order, **options)
+        r = _shtool._project_env_file(_input_path(image, "image"), path, order=order, **options)
     return r["coefficients"]
 
 
@@ -309,7 +319,7 @@ def transform_splats(path_in, path_out, **options):
     gltf_frame=, sh_degree=, sh_bits=, spz_version=. Returns a dict (splats, degree,
     seconds, reflects).
     """
-    return _shtool._transform_splats(path_in, path_out, **options)
+    return _shtool._transform_splats(_input_path(path_in, "path_in"), path_out, **options)
 
 
 @_keywords()
@@ -436,7 +446,7 @@ def fit_zh(transfer, lobes=4, effort=None, seed=None, starts=None, restart_above
 
 def load_zh_fit(path):
     """A zh-fit table (``fit-zh --out``) as a ZhFit, checked as the runtime's loader checks it."""
-    return ZhFit(*_shtool._load_zh_fit(_path(path, "path")))
+    return ZhFit(*_shtool._load_zh_fit(_input_path(path, "path")))
 
 
 @_keywords()
@@ -449,7 +459,7 @@ def fit_zh_mesh(mesh, out=None, **options):
     """
     with _tempfile.TemporaryDirectory() as tmp:
         path = _path(out, "out") if out is not None else _os.path.join(tmp, "fit.zh.shtb")
-        _shtool._fit_zh_mesh(mesh, out=path, **options)
+        _shtool._fit_zh_mesh(_input_path(mesh, "mesh"), out=path, **options)
         if options.get("shard") is not None:
             return load_table(path)
         return load_zh_fit(path)
@@ -485,7 +495,7 @@ class Table:
 def load_table(path):
     """Any shtool table (binary or JSON encoding), checked as the runtime checks it. `path`:
     str, bytes or os.PathLike."""
-    kind, order, header, arrays = _shtool._load_table(_path(path, "path"))
+    kind, order, header, arrays = _shtool._load_table(_input_path(path, "path"))
     return Table(kind, order, _json.loads(header), dict(arrays))
 
 
@@ -496,7 +506,7 @@ class _TypedTable(Table):
     def load(cls, path):
         """The table at `path`, which must be of this kind and pass the checks of the
         engine API's loader of that kind (ValueError otherwise)."""
-        kind, order, header, arrays = _shtool._load_table(_path(path, "path"), cls.KIND)
+        kind, order, header, arrays = _shtool._load_table(_input_path(path, "path"), cls.KIND)
         return cls(kind, order, _json.loads(header), dict(arrays))
 
 

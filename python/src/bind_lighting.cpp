@@ -134,12 +134,32 @@ std::string index_text(std::size_t k, const std::vector<py::ssize_t>& shape) {
   return text;
 }
 
+// A NaN or infinite texel is named by its numpy index (the projection's own message says
+// texel (x, y), the column first, as the CLI's images are addressed).
+void refuse_non_finite_texels(const py::array_t<float, py::array::c_style>& texels) {
+  const float* p = texels.data();
+  const std::size_t count = static_cast<std::size_t>(texels.size());
+  std::size_t bad = count;
+  {
+    py::gil_scoped_release release;
+    for (std::size_t k = 0; k < count && bad == count; ++k)
+      if (!std::isfinite(p[k])) bad = k;
+  }
+  if (bad < count)
+    throw py::value_error("image[" + index_text(bad, shape_of(texels)) + "] is " +
+                          (std::isnan(p[bad]) ? "NaN" : "infinite"));
+}
+
 // An image as float32 texels (the projection reads float texels, as the CLI reads a
 // file's): the caller's memory when it is C-contiguous float32; float64 rounded to
 // float32, with a ValueError for a finite value beyond float32's range (it would become
-// infinite). NaN and infinities are left to the projection's own message.
+// infinite); NaN and infinities refused, each named by its numpy index.
 py::array_t<float, py::array::c_style> float_texels(const py::array& image) {
-  if (precision_of(image, "image") == Precision::f32) return contiguous<float>(image);
+  if (precision_of(image, "image") == Precision::f32) {
+    auto texels = contiguous<float>(image);
+    refuse_non_finite_texels(texels);
+    return texels;
+  }
   const auto d = contiguous<double>(image);
   py::array_t<float, py::array::c_style> f(shape_of(d));
   const double* in = d.data();
@@ -159,6 +179,7 @@ py::array_t<float, py::array::c_style> float_texels(const py::array& image) {
     throw py::value_error("image[" + index_text(bad, shape_of(d)) + "] = " + std::string(value, end) +
                           " is beyond float32's range (|x| <= 3.4028235e38): project_env computes in float32");
   }
+  refuse_non_finite_texels(f);
   return f;
 }
 

@@ -102,8 +102,12 @@ def test_gen_tensors_writes_the_cli_bytes(cli, tmp_path):
 
 
 def test_load_table_errors(tmp_path):
-    with pytest.raises(ValueError):
-        shtool.load_table(tmp_path / "missing.shtb")
+    # A missing file is an OSError, as open() raises, for every call that reads one.
+    for call in (shtool.load_table, shtool.load_zh_fit, shtool.fit_zh_mesh, shtool.project_env_file,
+                 lambda p: shtool.transform_splats(p, tmp_path / "out.ply")):
+        with pytest.raises(FileNotFoundError, match="no such file"):
+            call(tmp_path / "missing.shtb")
+    assert not (tmp_path / "out.ply").exists()
     (tmp_path / "bad.shtb").write_bytes(b"\x89SHT\r\n\x1a\nnonsense")
     with pytest.raises(ValueError):
         shtool.load_table(tmp_path / "bad.shtb")

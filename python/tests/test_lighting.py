@@ -1,6 +1,7 @@
 """product, project_env, irradiance, window, light."""
 import json
 import math
+import re
 
 import numpy as np
 import pytest
@@ -156,6 +157,22 @@ def test_project_env_bad_input(image, kw):
     order = kw.pop("order", 3)
     with pytest.raises(ValueError):
         shtool.project_env(image, order, **kw)
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_project_env_names_a_bad_texel_by_its_numpy_index(dtype):
+    # As numpy addresses it, [row, column, channel], whatever the problem (the CLI's
+    # images say texel (x, y), the column first).
+    for value, what in ((np.nan, "is NaN"), (np.inf, "is infinite")):
+        img = np.ones((4, 8, 3), dtype)
+        img[2, 3, 1] = value
+        with pytest.raises(ValueError, match=re.escape("image[2, 3, 1] " + what)):
+            shtool.project_env(img, 3)
+    if dtype == np.float64:
+        img = np.ones((4, 8, 3), dtype)
+        img[2, 3, 1] = 1e39
+        with pytest.raises(ValueError, match=re.escape("image[2, 3, 1] = 1e+39 is beyond float32's range")):
+            shtool.project_env(img, 3)
 
 
 @pytest.mark.parametrize("call", [
