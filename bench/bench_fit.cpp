@@ -160,11 +160,11 @@ void BM_EmbreeOcclusion(benchmark::State& state, OcclusionQuery query) {
   // The rays compute_transfer casts, each vertex's in order.
   std::vector<RTCRay> cast(vertices * rays);
   const double offset = options.offset_scale * mesh->bbox_diagonal();
+  const std::unique_ptr<shtool::fit::EmbreeScene> scene = shtool::fit::build_scene(*mesh);
   for (std::size_t v = 0; v < vertices; ++v) {
     const shtool::fit::VertexRays vr(*mesh, v, options.seed, rays, offset);
-    for (int k = 0; k < rays; ++k) cast[v * rays + k] = shtool::fit::embree_ray(vr.origin(), vr.direction(k));
+    for (int k = 0; k < rays; ++k) cast[v * rays + k] = scene->ray(vr.origin(), vr.direction(k));
   }
-  const std::unique_ptr<shtool::fit::EmbreeScene> scene = shtool::fit::build_scene(*mesh);
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
   if (query == OcclusionQuery::stream_coherent) context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;

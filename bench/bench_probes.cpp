@@ -94,7 +94,7 @@ void BM_BareEmbreeRays(benchmark::State& state) {
         const double z = 1 - 2 * rng.uniform(), phi = 2 * 3.141592653589793 * rng.uniform();
         const double r = std::sqrt(std::max(0.0, 1 - z * z));
         RTCRayHit rh{};
-        rh.ray = fit::embree_ray(origin, Eigen::Vector3d(r * std::cos(phi), r * std::sin(phi), z));
+        rh.ray = s.embree->ray(origin, Eigen::Vector3d(r * std::cos(phi), r * std::sin(phi), z));
         rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
         RTCIntersectContext ctx;
         rtcInitIntersectContext(&ctx);

@@ -182,6 +182,51 @@ TEST(MeshFrames, UpFacingQuadsBakeAlongZ) {
 
 // --gltf writes glTF's frame: a glTF input comes back with its positions bit for bit, a
 // y-up OBJ with its own coordinates, a z-up OBJ turned to y up.
+// Shadows do not depend on where a mesh is: spot placed 1e4 and 1e5 units away by a glTF
+// node's translation (a level's prop, a georeferenced scan) bakes the transfer it bakes
+// at the origin, to the bit. Traced in floats where it lies, the rays' offset off the
+// surface (2.6e-4) fell below float's spacing there (1e-3 at 1e4) and rays hit their own
+// triangles (327 vertices moved at 1e5). An OBJ, which tinyobjloader reads in float, is
+// refused that far out: its shape itself is rounded coarser than the offset.
+TEST(MeshFrames, FarFromTheOriginShadowsAsAtIt) {
+  const fs::path obj = fs::path(SHTOOL_SOURCE_DIR) / "data/spot.obj", glb = scratch("far.glb");
+  must(run_shtool({"fit-zh", obj.string(), "--order", "2", "--lobes", "1", "--rays", "16", "--out",
+                   scratch("far_fit.shtb").string(), "--gltf", glb.string()}));
+  auto transfer = [&](const fs::path& mesh, const std::string& name) {
+    must(run_shtool({"fit-zh", mesh.string(), "--order", "2", "--lobes", "1", "--rays", "64", "--out",
+                     scratch(name + ".shtb").string(), "--save-transfer", scratch(name + ".t.json").string()}));
+    return nlohmann::json::parse(read_file(scratch(name + ".t.json")))["vectors"];
+  };
+  const nlohmann::json at_origin = transfer(glb, "far0");
+  for (double by : {1e4, 1e5}) {
+    tinygltf::Model m;
+    tinygltf::TinyGLTF loader;
+    std::string err, warn;
+    ASSERT_TRUE(loader.LoadBinaryFromFile(&m, &err, &warn, glb.string())) << err;
+    m.nodes.at(0).translation = {by, -by, 0.5 * by};
+    const fs::path moved = scratch("far_moved.glb");
+    ASSERT_TRUE(loader.WriteGltfSceneToFile(&m, moved.string(), false, true, false, true));
+    EXPECT_EQ(transfer(moved, "far"), at_origin) << "moved by " << by;
+  }
+  // The OBJ 1e4 out: refused, naming the spacing.
+  std::istringstream in(read_file(obj));
+  std::ostringstream out;
+  out.precision(17);
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind("v ", 0) == 0) {
+      std::istringstream v(line.substr(2));
+      double x, y, z;
+      v >> x >> y >> z;
+      out << "v " << x + 1e4 << " " << y << " " << z << "\n";
+    } else {
+      out << line << "\n";
+    }
+  }
+  write_file(scratch("far.obj"), out.str());
+  expect_refused("fit-zh", {scratch("far.obj").string(), "--order", "2", "--rays", "16"},
+                 "an OBJ's single precision (as tinyobjloader reads it) spaces them", scratch("far_obj.shtb"));
+}
+
 TEST(MeshFrames, GltfOutputIsInGltfsFrame) {
   const Quad q = quad({1, 0, 0}, {0, 0.5f, -1});
   for (const std::string& kind : {"glb", "obj_y", "obj_z"}) {

@@ -42,8 +42,14 @@ std::unique_ptr<EmbreeScene> build_scene(const Mesh& mesh) {
     rtcReleaseGeometry(geom);
     throw std::runtime_error("Embree: cannot allocate geometry buffers");
   }
+  if (!mesh.positions.empty()) {
+    Eigen::Vector3d lo = mesh.positions[0], hi = lo;
+    for (const Eigen::Vector3d& p : mesh.positions) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+    const Eigen::Vector3d mid = 0.5 * (lo + hi);
+    if (mid.cwiseAbs().maxCoeff() > (hi - lo).maxCoeff()) s->center = mid;
+  }
   for (std::size_t i = 0; i < mesh.positions.size(); ++i)
-    for (int c = 0; c < 3; ++c) vb[3 * i + c] = static_cast<float>(mesh.positions[i][c]);
+    for (int c = 0; c < 3; ++c) vb[3 * i + c] = static_cast<float>(mesh.positions[i][c] - s->center[c]);
   for (std::size_t i = 0; i < mesh.triangles.size(); ++i)
     for (int c = 0; c < 3; ++c) ib[3 * i + c] = static_cast<unsigned>(mesh.triangles[i][c]);
   rtcCommitGeometry(geom);

@@ -27,15 +27,6 @@ struct EmbreeIdentity {
 };
 EmbreeIdentity embree_identity();
 
-struct EmbreeScene {
-  RTCDevice device = nullptr;
-  RTCScene scene = nullptr;
-  ~EmbreeScene() {
-    if (scene) rtcReleaseScene(scene);
-    if (device) rtcReleaseDevice(device);
-  }
-};
-
 // An unbounded ray (tnear 0, every mask bit) from origin along dir, in Embree's floats.
 inline RTCRay embree_ray(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir) {
   RTCRay ray{};
@@ -51,6 +42,22 @@ inline RTCRay embree_ray(const Eigen::Vector3d& origin, const Eigen::Vector3d& d
   ray.time = 0.0f;
   return ray;
 }
+
+// A mesh in Embree's floats. A mesh far from the origin for its size (a level's prop, a
+// georeferenced scan) is stored about its box's centre: at 1e4 units float's spacing
+// (1e-3) is coarser than the rays' offset off the surface and shadows break. Rays are
+// made with ray(), which moves their origin alike (distances and directions are
+// unchanged); a mesh near the origin is stored as it is (center zero).
+struct EmbreeScene {
+  RTCDevice device = nullptr;
+  RTCScene scene = nullptr;
+  Eigen::Vector3d center = Eigen::Vector3d::Zero();
+  ~EmbreeScene() {
+    if (scene) rtcReleaseScene(scene);
+    if (device) rtcReleaseDevice(device);
+  }
+  RTCRay ray(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir) const { return embree_ray(origin - center, dir); }
+};
 
 // A device with the pinned ISA. Throws std::runtime_error if Embree refuses it.
 RTCDevice new_pinned_device();

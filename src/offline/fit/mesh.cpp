@@ -430,7 +430,23 @@ Mesh load_obj_text(const std::string& text, const std::filesystem::path& path, N
     for (Eigen::Vector3d& p : positions) p = from_y_up(p);
     for (Eigen::Vector3d& n : normals) n = from_y_up(n);
   }
-  return finish_mesh(std::move(mesh), positions, normals, tris, path, normal_source, texcoords, tri_materials);
+  mesh = finish_mesh(std::move(mesh), positions, normals, tris, path, normal_source, texcoords, tri_materials);
+  // tinyobjloader stores coordinates as float: far from the origin for its size, a mesh's
+  // shape is rounded coarser than the shadow rays' offset off the surface (1e-4 of its
+  // box's diagonal) and it shadows itself in speckles. Refused, as glTF (whose node
+  // translations apply in double) is not.
+  double reach = 0;
+  for (const Eigen::Vector3d& p : mesh.positions) reach = std::max(reach, p.cwiseAbs().maxCoeff());
+  const double spacing = reach * std::numeric_limits<float>::epsilon(), diagonal = mesh.bbox_diagonal();
+  if (spacing > 1e-4 * diagonal) {
+    std::ostringstream why;
+    why << "its coordinates reach " << reach << ", where an OBJ's single precision (as tinyobjloader reads it) spaces "
+        << "them " << spacing << " apart: more than a ten-thousandth of the mesh's size (" << diagonal
+        << "), which breaks its shadows; move it near the origin (or export glTF: a node's translation is applied in "
+           "double)";
+    fail_input(path, why.str());
+  }
+  return mesh;
 }
 
 

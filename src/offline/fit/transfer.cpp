@@ -146,7 +146,9 @@ std::vector<double> direct_pass(const EmbreeScene* scene, const Points& points, 
     thread_local std::vector<RTCRay> traced;
     y.resize(n2);
     sum.assign(n2, 0.0);
-    point_rays(cast, rays, dirs, traced, embree_ray);
+    point_rays(cast, rays, dirs, traced, [&](const Eigen::Vector3d& origin, const Eigen::Vector3d& dir) {
+      return scene ? scene->ray(origin, dir) : embree_ray(origin, dir);
+    });
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
     if (scene && options.ray_streams)
@@ -180,9 +182,9 @@ std::vector<double> bounce_pass(const Mesh& mesh, const EmbreeScene& scene, cons
     thread_local std::vector<Eigen::Vector3d> dirs;
     thread_local std::vector<RTCRayHit> hits;
     sum.assign(n2, 0.0);
-    point_rays(cast, rays, dirs, hits, [](const Eigen::Vector3d& origin, const Eigen::Vector3d& dir) {
+    point_rays(cast, rays, dirs, hits, [&](const Eigen::Vector3d& origin, const Eigen::Vector3d& dir) {
       RTCRayHit hit{};
-      hit.ray = embree_ray(origin, dir);
+      hit.ray = scene.ray(origin, dir);
       hit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
       return hit;
     });

@@ -53,7 +53,7 @@ Eigen::MatrixXd transfer_matrix(const fit::Mesh& mesh, std::size_t v, const Eige
   for (int k = 0; k < rays; ++k) {
     local[k] = fit::uniform_fibonacci_direction(k, rays, turn0, shift);
     scene_dir[k] = (frame * local[k]).normalized();
-    traced[k] = fit::embree_ray(origin, scene_dir[k]);
+    traced[k] = scene->ray(origin, scene_dir[k]);
   }
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);

@@ -27,7 +27,7 @@ struct Hit {
 
 Hit intersect(const scene::Scene& s, const Eigen::Vector3d& origin, const Eigen::Vector3d& dir) {
   RTCRayHit rh{};
-  rh.ray = fit::embree_ray(origin, dir);
+  rh.ray = s.embree->ray(origin, dir);
   rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
@@ -43,7 +43,7 @@ Hit intersect(const scene::Scene& s, const Eigen::Vector3d& origin, const Eigen:
 }
 
 bool occluded(const scene::Scene& s, const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double tfar) {
-  RTCRay ray = fit::embree_ray(origin, dir);
+  RTCRay ray = s.embree->ray(origin, dir);
   if (std::isfinite(tfar)) ray.tfar = static_cast<float>(tfar);
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);

@@ -157,15 +157,7 @@ Hits cast_primary_rays(const fit::Mesh& mesh, const RenderRequest& r, const Came
       const double v = (1.0 - 2.0 * (y + 0.5) / r.height) * tan_half;
       const Vec dir = (forward + u * right + v * up).normalized();
       RTCRayHit hit{};
-      hit.ray.org_x = static_cast<float>(eye.x());
-      hit.ray.org_y = static_cast<float>(eye.y());
-      hit.ray.org_z = static_cast<float>(eye.z());
-      hit.ray.dir_x = static_cast<float>(dir.x());
-      hit.ray.dir_y = static_cast<float>(dir.y());
-      hit.ray.dir_z = static_cast<float>(dir.z());
-      hit.ray.tnear = 0.0f;
-      hit.ray.tfar = std::numeric_limits<float>::infinity();
-      hit.ray.mask = ~0u;
+      hit.ray = scene->ray(eye, dir);
       hit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
       rtcIntersect1(scene->scene, &context, &hit);
       if (hit.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
