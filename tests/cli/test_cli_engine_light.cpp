@@ -195,18 +195,43 @@ TEST(EngineLight, TheConsumersReadWhatWasMeant) {
     }
   }
   // Babylon.js, through its glTF EXT_lights_image_based loader steps and through a .env
-  // manifest's polynomial: E / pi at the direction of its default (left-handed) scene.
-  for (const std::string f : {"gltf", "babylon"}) {
-    const fs::path out = scratch("exported_" + f + ".json");
-    ASSERT_EQ(run_shtool({"export-light", in.string(), "--format", f, "--out", out.string()}).exit_code, 0);
-    const Directions d = directions(interop::default_frame(interop::LightFormat::babylon));
-    const nlohmann::json got = consumer_eval(f, out, d);
-    ASSERT_EQ(got.size(), 50u);
-    for (int k = 0; k < 50; ++k) {
-      const auto E = eval(e, d.shtool[k]);
-      for (int c = 0; c < 3; ++c)
-        EXPECT_NEAR(got[k]["irradiance_over_pi"][c].get<double>(), E[c] / kPi, 2e-5 * (1 + std::abs(E[c]))) << f;
+  // manifest's polynomial: E / pi at the direction of its default (left-handed) scene,
+  // times the intensity once (Babylon's glTF loader applies the light's intensity twice,
+  // to the SH and as the texture's level: shtool folds it into the coefficients).
+  for (const std::string f : {"gltf", "babylon"})
+    for (const double intensity : {1.0, 2.0}) {
+      const fs::path out = scratch("exported_" + f + ".json");
+      ASSERT_EQ(run_shtool({"export-light", in.string(), "--format", f, "--intensity", std::to_string(intensity),
+                            "--out", out.string()})
+                    .exit_code,
+                0);
+      const Directions d = directions(interop::default_frame(interop::LightFormat::babylon));
+      const nlohmann::json got = consumer_eval(f, out, d);
+      ASSERT_EQ(got.size(), 50u);
+      for (int k = 0; k < 50; ++k) {
+        const auto E = eval(e, d.shtool[k]);
+        for (int c = 0; c < 3; ++c)
+          EXPECT_NEAR(got[k]["irradiance_over_pi"][c].get<double>(), intensity * E[c] / kPi,
+                      2e-5 * (1 + std::abs(intensity * E[c])))
+              << f << " at --intensity " << intensity;
+      }
     }
+}
+
+// The two glTF documents pass the Khronos validator without an error or warning (an
+// empty scenes[0].nodes was one).
+TEST(EngineLight, GltfExportsAreValidGltf) {
+  SHTOOL_REQUIRE_NODE_CONSUMERS();
+  const fs::path in = scratch("valid.json");
+  std::ofstream(in) << lighting::lighting_json(random_light(3, Quantity::radiance, 19));
+  for (const std::string f : {"gltf", "gltf-khr"}) {
+    const fs::path out = scratch("valid_" + f + ".gltf");
+    ASSERT_EQ(run_shtool({"export-light", in.string(), "--format", f, "--out", out.string()}).exit_code, 0);
+    const auto r = run_command({"node", (node_consumers_dir() / "validate_gltf.mjs").string(), out.string()});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const nlohmann::json issues = nlohmann::json::parse(r.out)["issues"];
+    EXPECT_EQ(issues["numErrors"], 0) << f << issues.dump(1);
+    EXPECT_EQ(issues["numWarnings"], 0) << f << issues.dump(1);
   }
 }
 

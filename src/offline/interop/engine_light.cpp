@@ -340,25 +340,27 @@ ExportedLight export_light(const Lighting& light, LightFormat format, const Fram
     case LightFormat::gltf:
     case LightFormat::gltf_khr: {
       // EXT_lights_image_based: irradianceCoefficients as Babylon's loader reads them
-      // (irradiance, phase-carrying basis, its left-handed frame); always an intensity
-      // (Babylon's loader makes the SH NaN without one).
+      // (irradiance, phase-carrying basis, its left-handed frame). --intensity is folded
+      // into the coefficients and the intensity field written as 1: Babylon's loader
+      // applies the field twice (to the SH and as the texture's level), and it makes the
+      // SH NaN without one. The scene lists no nodes (an empty list is not valid glTF).
       const Nine g = engine(frame, first_nine(light, Quantity::irradiance, out.notes));
       nlohmann::json doc = {{"asset", {{"version", "2.0"}, {"generator", "shtool export-light"}}}};
-      if (format == LightFormat::gltf) {
-        doc["extensionsUsed"] = {"EXT_lights_image_based"};
-        doc["extensions"]["EXT_lights_image_based"]["lights"] = {
-            {{"name", "shtool"}, {"intensity", intensity}, {"rotation", {0, 0, 0, 1}}, {"irradianceCoefficients", rows_json(g)}}};
-        doc["scenes"] = {{{"nodes", nlohmann::json::array()}, {"extensions", {{"EXT_lights_image_based", {{"light", 0}}}}}}};
-      } else {
-        // The draft KHR_lights_environment has no intensity and no rotation.
-        doc["extensionsUsed"] = {"KHR_lights_environment"};
-        doc["extensions"]["KHR_lights_environment"]["lights"] = {{{"name", "shtool"}, {"irradianceCoefficients", rows_json(scaled(g))}}};
-        doc["scenes"] = {{{"nodes", nlohmann::json::array()}, {"extensions", {{"KHR_lights_environment", {{"light", 0}}}}}}};
-        if (intensity != 1) out.notes.push_back("--intensity is folded into the coefficients (no intensity field)");
-      }
+      const char* ext = format == LightFormat::gltf ? "EXT_lights_image_based" : "KHR_lights_environment";
+      doc["extensionsUsed"] = {ext};
+      nlohmann::json record = {{"name", "shtool"}};
+      if (format == LightFormat::gltf) record["intensity"] = 1.0, record["rotation"] = {0, 0, 0, 1};
+      record["irradianceCoefficients"] = rows_json(scaled(g));
+      doc["extensions"][ext]["lights"] = {record};
+      doc["scenes"] = {{{"extensions", {{ext, {{"light", 0}}}}}}};
+      if (intensity != 1) out.notes.push_back("--intensity is folded into the coefficients");
       doc["scene"] = 0;
       out.text = rows_text(doc);
-      out.notes.push_back("only the diffuse part (irradianceCoefficients) is written; no specular images");
+      out.notes.push_back(format == LightFormat::gltf
+                              ? "only the diffuse part (irradianceCoefficients) is written: the extension requires "
+                                "specularImages, without which Babylon's glTF loader stops (engines that read the "
+                                "coefficients alone take the file)"
+                              : "only the diffuse part (irradianceCoefficients) is written; no specular images");
       break;
     }
     case LightFormat::babylon: {
