@@ -32,18 +32,23 @@ void add_rotated_zonal(const Eigen::Vector3<T>& direction, const std::vector<dou
 }  // namespace
 
 std::vector<double> cap_zonal_coefficients(double half_angle, int order) {
-  // 2 pi integral_x^1 P_l = 2 pi (P_{l-1}(x) - P_{l+1}(x)) / (2l+1), from
-  // (2l+1) P_l = P'_{l+1} - P'_{l-1} and P_l(1) = 1; Bonnet's recurrence for P_l(x).
-  // For small caps 1 - x is formed as 2 sin^2(a/2), without cancellation.
-  const double x = std::cos(half_angle);
-  const double one_minus_x = 2 * std::pow(std::sin(half_angle / 2), 2);
-  std::vector<double> p(order + 1);
-  p[0] = 1;
-  if (order >= 1) p[1] = x;
-  for (int l = 1; l < order; ++l) p[l + 1] = ((2 * l + 1) * x * p[l] - l * p[l - 1]) / (l + 1);
+  // 2 pi integral_x^1 P_l, x = cos a. Band 0: 2 pi (1 - x), with 1 - x formed as
+  // 2 sin^2(a/2). Bands l >= 1: integral_x^1 P_l = (1 - x^2) P'_l(x) / (l (l + 1))
+  // (Legendre's equation integrated from x to 1), with 1 - x^2 = sin^2 a and P'_l from
+  // P'_{l+1} = P'_{l-1} + (2l+1) P_l, which near x = 1 adds terms of one sign: the form
+  // (P_{l-1} - P_{l+1}) / (2l+1) cancels there and lost eps / a^2 (9 % at 1e-6 degrees).
+  const double x = std::cos(half_angle), s = std::sin(half_angle);
+  std::vector<double> p(order + 1), dp(order + 1);
+  p[0] = 1, dp[0] = 0;
+  if (order >= 1) p[1] = x, dp[1] = 1;
+  for (int l = 1; l < order; ++l) {
+    p[l + 1] = ((2 * l + 1) * x * p[l] - l * p[l - 1]) / (l + 1);  // Bonnet
+    dp[l + 1] = dp[l - 1] + (2 * l + 1) * p[l];
+  }
   std::vector<double> z(order);
   for (int l = 0; l < order; ++l)
-    z[l] = 2 * std::numbers::pi * (l == 0 ? one_minus_x : (p[l - 1] - p[l + 1]) / (2 * l + 1));
+    z[l] = 2 * std::numbers::pi *
+           (l == 0 ? 2 * std::pow(std::sin(half_angle / 2), 2) : s * s * dp[l] / (static_cast<double>(l) * (l + 1)));
   return z;
 }
 
