@@ -218,6 +218,32 @@ TEST(EngineLight, TheConsumersReadWhatWasMeant) {
     }
 }
 
+// A glTF document of several lights: the default scene's reference picks the one read
+// (as Babylon's loader takes it), and a reference to no light is refused.
+TEST(EngineLight, GltfImportReadsTheLightItsSceneNames) {
+  auto document = [](int light) {
+    std::string rows = "[1,1,1],[0,0,0],[0,0,0],[0,0,0],[0,0,0],[0,0,0],[0,0,0],[0,0,0],[0,0,0]";
+    return R"({"asset": {"version": "2.0"}, "extensions": {"EXT_lights_image_based": {"lights": [)"
+           R"({"intensity": 1, "irradianceCoefficients": [)" + rows + R"(]},)"
+           R"({"intensity": 5, "irradianceCoefficients": [)" + rows + R"(]}]}},)"
+           R"("scene": 0, "scenes": [{"extensions": {"EXT_lights_image_based": {"light": )" + std::to_string(light) +
+           "}}}]}";
+  };
+  const fs::path in = scratch("two_lights.gltf"), out = scratch("two_lights.json");
+  double c00[2];
+  for (int light : {0, 1}) {
+    std::ofstream(in) << document(light);
+    ASSERT_EQ(run_shtool({"import-light", in.string(), "--format", "gltf", "--json", out.string()}).exit_code, 0);
+    c00[light] = nlohmann::json::parse(read_file(out))["coefficients"][0][0].get<double>();
+  }
+  EXPECT_DOUBLE_EQ(c00[1], 5 * c00[0]);
+  std::ofstream(in) << document(2);
+  const auto r = run_shtool({"import-light", in.string(), "--format", "gltf", "--json", scratch("none.json").string()});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("EXT_lights_image_based.light does not name one of its 2 lights"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(scratch("none.json")));
+}
+
 // The two glTF documents pass the Khronos validator without an error or warning (an
 // empty scenes[0].nodes was one).
 TEST(EngineLight, GltfExportsAreValidGltf) {

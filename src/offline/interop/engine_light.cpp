@@ -506,9 +506,25 @@ Lighting import_light_as_read(std::string_view text, const std::filesystem::path
       if (doc.contains("extensions") && doc["extensions"].is_object() && doc["extensions"].contains(ext) &&
           doc["extensions"][ext].is_object() && doc["extensions"][ext].contains("lights"))
         lights = &doc["extensions"][ext]["lights"];
-      if (!lights || !lights->is_array() || lights->empty() || !(*lights)[0].is_object())
+      if (!lights || !lights->is_array() || lights->empty())
         bad(name, std::string("no extensions.") + ext + ".lights[0]");
-      const nlohmann::json& light = (*lights)[0];
+      // The light the default scene names (as Babylon's loader takes it), else the first.
+      std::size_t which = 0;
+      const std::size_t scene = doc.contains("scene") && doc["scene"].is_number_unsigned() ? doc["scene"].get<std::size_t>() : 0;
+      if (doc.contains("scenes") && doc["scenes"].is_array() && scene < doc["scenes"].size()) {
+        const nlohmann::json& sc = doc["scenes"][scene];
+        if (sc.is_object() && sc.contains("extensions") && sc["extensions"].is_object() &&
+            sc["extensions"].contains(ext)) {
+          const nlohmann::json& ref = sc["extensions"][ext];
+          if (!ref.is_object() || !ref.contains("light") || !ref["light"].is_number_unsigned() ||
+              ref["light"].get<std::size_t>() >= lights->size())
+            bad(name, std::string("scenes[") + std::to_string(scene) + "].extensions." + ext +
+                          ".light does not name one of its " + std::to_string(lights->size()) + " lights");
+          which = ref["light"].get<std::size_t>();
+        }
+      }
+      if (!(*lights)[which].is_object()) bad(name, std::string("extensions.") + ext + ".lights[" + std::to_string(which) + "] is not an object");
+      const nlohmann::json& light = (*lights)[which];
       if (!light.contains("irradianceCoefficients")) bad(name, "the light has no irradianceCoefficients");
       Nine g = rows_of(light["irradianceCoefficients"], name, "irradianceCoefficients");
       // EXT_lights_image_based's rotation turns the environment; which way in Babylon's
