@@ -225,6 +225,22 @@ TEST(UntrustedExr, ChunksThatDoNotMatchTheWindowAreRefused) {
   }
 }
 
+// A header that claims more chunks than its file could hold (each takes at least 17
+// bytes: its table entry, its leader, a byte of data) is refused by its size, before the
+// image is allocated: a 313-byte header claiming 16384 x 8192 texels, within the texel
+// bound, once cost 1.6 GB before OpenEXR found its chunk table missing.
+TEST(UntrustedExr, MoreChunksThanTheFileCanHoldAreRefusedBeforeAllocating) {
+  lighting::Image img;
+  img.width = 4;
+  img.height = 40;
+  img.texels.assign(static_cast<std::size_t>(img.width) * img.height * 3, 0.5f);
+  const std::string exr = with_windows(lighting::encode_exr(img), 16383, 8191);
+  const std::string m = input_error([&] { lighting::decode_image(exr, "m.exr", std::int64_t(1) << 28); });
+  EXPECT_NE(m.find("m.exr: OpenEXR: 16384 x 8192 texels in "), std::string::npos) << "'" << m << "'";
+  EXPECT_NE(m.find("chunks claimed, more than its " + std::to_string(exr.size()) + " bytes can hold"), std::string::npos)
+      << "'" << m << "'";
+}
+
 TEST(UntrustedExr, AChannelListCutShortIsRefused) {
   // fuzz_images: every declared size fits the file, yet OpenEXR's C++ library allocated
   // 1.6 GB from a size it misread; OpenEXRCore refuses the headers.

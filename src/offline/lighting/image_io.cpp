@@ -154,6 +154,22 @@ class ExrCoreFile {
       if (lines_per_chunk_ < 1) fail_input(name, "OpenEXR: no scanlines per chunk");
       chunks_ = static_cast<std::size_t>((h + lines_per_chunk_ - 1) / lines_per_chunk_);
     }
+    // Each chunk of the full-resolution level takes at least its offset-table entry (8
+    // bytes), its header (8 bytes for scanlines, 16 for tiles) and a byte of data: a header
+    // claiming more than the file can hold is refused here, before the image is allocated
+    // (a 313-byte header claiming 16384 x 8192 texels once cost 1.6 GB before OpenEXR
+    // found its chunk table missing).
+    const std::size_t per_chunk = 8 + (tiled_ ? 16 : 8) + 1;
+    if (chunks_ > bytes.size() / per_chunk)
+      fail_input(name, "OpenEXR: " + std::to_string(w) + " x " + std::to_string(h) + " texels in " +
+                           std::to_string(chunks_) + " chunks claimed, more than its " + std::to_string(bytes.size()) +
+                           " bytes can hold (at least " + std::to_string(per_chunk) + " a chunk)");
+    // Every chunk's leader read before the image is allocated: a table that points
+    // nowhere (a 262 KB file claiming 16384 x 8192 texels took 1.6 GB) fails here.
+    for (std::size_t chunk = 0; chunk < chunks_; ++chunk) {
+      int x0 = 0, y0 = 0;
+      chunk_info(chunk, x0, y0);
+    }
   }
   ExrCoreFile(const ExrCoreFile&) = delete;
   ExrCoreFile& operator=(const ExrCoreFile&) = delete;
@@ -206,11 +222,11 @@ class ExrCoreFile {
       for (std::size_t c = 0; c < k; ++c) texels[t * std::size_t(stride) + c] = decoded.texels[t * k + c];
   }
 
-  void decode_chunk(std::size_t chunk, exr_decode_pipeline_t& decode, bool first, const std::vector<std::string>& names,
-                    float* texels, int stride) {
-    g_exr_core_message.clear();  // this worker's own
+  // Chunk `chunk`'s leader (read through the offset table, its sizes checked against the
+  // file by the core) and its place (x0, y0) in the image, which must hold it.
+  exr_chunk_info_t chunk_info(std::size_t chunk, int& x0, int& y0) const {
     exr_chunk_info_t info;
-    int x0 = 0, y0 = 0;
+    x0 = y0 = 0;
     if (tiled_) {
       const int tx = static_cast<int>(chunk % std::size_t(tiles_x_)), ty = static_cast<int>(chunk / std::size_t(tiles_x_));
       check(exr_read_tile_chunk_info(context_.handle, 0, tx, ty, 0, 0, &info));
@@ -223,6 +239,14 @@ class ExrCoreFile {
     if (x0 < 0 || y0 < 0 || info.width < 0 || info.height < 0 || x0 + info.width > width_ ||
         y0 + info.height > height_)
       fail_input(name_, "OpenEXR: chunk " + std::to_string(chunk) + " lies outside the data window");
+    return info;
+  }
+
+  void decode_chunk(std::size_t chunk, exr_decode_pipeline_t& decode, bool first, const std::vector<std::string>& names,
+                    float* texels, int stride) {
+    g_exr_core_message.clear();  // this worker's own
+    int x0 = 0, y0 = 0;
+    exr_chunk_info_t info = chunk_info(chunk, x0, y0);
     check(first ? exr_decoding_initialize(context_.handle, 0, &info, &decode) : exr_decoding_update(context_.handle, 0, &info, &decode));
     const std::size_t row = std::size_t(width_) * std::size_t(stride);
     for (int c = 0; c < decode.channel_count; ++c) {
