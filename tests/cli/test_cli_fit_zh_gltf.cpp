@@ -283,8 +283,11 @@ TEST(CliFitZhGltf, RefusalsNameTheProblemAndWriteNothing) {
   const std::vector<Case> cases = {
       {{"--transfer", vectors.string(), "--gltf", glb.string()}, "--gltf needs a mesh (not --transfer)"},
       {{kSpotObj, "--shard", "0/2", "--gltf", glb.string()}, "--gltf is not written with --shard"},
-      {{kSpotObj, "--gltf", out.string()}, "--gltf and --out name the same file"},
-      {{kSpotObj, "--gltf", kSpotObj}, "--gltf: '" + kSpotObj + "' is the input"},
+      // Binary glTF is written under a .glb name only (loaders go by the name); that
+      // check comes first, so a table's or the input's name is refused by it.
+      {{kSpotObj, "--gltf", out.string()}, "the output is binary glTF, so its name must end in .glb"},
+      {{kSpotObj, "--gltf", kSpotObj}, "the output is binary glTF, so its name must end in .glb"},
+      {{kSpotObj, "--gltf", scratch("refused.gltf").string()}, "--gltf " + scratch("refused.gltf").string() + ": the output is binary glTF"},
       {{kSpotObj, "--gltf", scratch("no_such_folder/x.glb").string()}, "--gltf"},
   };
   for (const Case& c : cases) {

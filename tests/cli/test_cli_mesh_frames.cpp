@@ -246,6 +246,16 @@ TEST(MeshFrames, GltfOutputIsInGltfsFrame) {
       for (int c = 0; c < 3; ++c) EXPECT_EQ(p[3 * v + c], expected[c]) << kind << " vertex " << v;
     }
   }
+  // Bit for bit, signed zeros too: a flat quad whose first corner has y = -0.0 (once
+  // written back as +0.0 by the node transform's + 0).
+  const Quad flat = quad({1, 0, 0}, {0, 0, 1});
+  ASSERT_TRUE(std::signbit(flat.positions[1]));
+  const fs::path out = scratch("flat.out.glb");
+  must(run_shtool({"fit-zh", write_glb(flat, "flat.glb").string(), "--order", "2", "--lobes", "1", "--rays", "16",
+                   "--out", scratch("flat.shtb").string(), "--gltf", out.string()}));
+  const std::vector<float> p = glb_positions(out);
+  ASSERT_EQ(p.size(), flat.positions.size());
+  EXPECT_EQ(std::memcmp(p.data(), flat.positions.data(), p.size() * sizeof(float)), 0) << "not the input's bits";
 }
 
 // The zenith (+z, shtool's frame) lights a quad facing up; the nadir leaves it dark

@@ -1,6 +1,7 @@
 #include "fit/fit_zh_job.h"
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -106,6 +107,13 @@ void check_request(const FitZhRequest& r) {
   if (!r.transfer.empty() && !r.save_transfer.empty())
     throw InputError("--save-transfer needs a mesh (not --transfer)");
   if (!r.transfer.empty() && !r.gltf.empty()) throw InputError("--gltf needs a mesh (not --transfer)");
+  // Binary glTF under another name would be read as JSON by loaders that go by the name.
+  if (!r.gltf.empty()) {
+    std::string ext = r.gltf.extension().string();
+    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    if (ext != ".glb")
+      throw InputError("--gltf " + r.gltf.string() + ": the output is binary glTF, so its name must end in .glb");
+  }
   if (r.mpi) {
     if (!r.shard.empty()) throw InputError("--mpi and --shard both split the vertices: give one of them");
     if (!r.ply.empty() || !r.save_transfer.empty())

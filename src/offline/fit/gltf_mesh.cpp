@@ -180,13 +180,15 @@ struct Builder {
                        " vertices of its primitive");
     const Eigen::Matrix3d linear = world.block<3, 3>(0, 0);
     const Eigen::Matrix3d normal_matrix = linear.inverse().transpose();
-    const bool mirrored = linear.determinant() < 0;
+    const bool mirrored = linear.determinant() < 0, identity = world.isIdentity(0);
     // Vertex numbers are int (Corner): refused far below that.
     if (local.size() > kMaxVertices - positions.size())
       fail_input(path, "more than " + std::to_string(kMaxVertices) + " vertices in the scene");
     const int base = static_cast<int>(positions.size());
     for (std::size_t v = 0; v < local.size(); ++v) {
-      const Eigen::Vector3d w = linear * local[v] + world.block<3, 1>(0, 3);
+      // Untransformed where the node is the identity: -0 + 0 would turn -0.0 into +0.0,
+      // and --gltf returns the input's positions bit for bit.
+      const Eigen::Vector3d w = identity ? local[v] : Eigen::Vector3d(linear * local[v] + world.block<3, 1>(0, 3));
       if (!w.allFinite()) fail_input(path, "vertex " + std::to_string(base + v) + " is not finite");
       positions.push_back(w);
       normals.push_back(local_normals.empty() ? Eigen::Vector3d::Zero() : (normal_matrix * local_normals[v]).eval());
