@@ -50,7 +50,7 @@ void setup_render(CLI::App* sub) {
     render::RenderRequest r = *req;
     r.camera = parse_camera(*camera);
     const render::RenderResult result = render::run_render(r);
-    std::cerr << "render: wrote " << r.out.string() << " (" << r.width << " x " << r.height << ", "
+    std::cerr << "render: wrote " << r.out.string() << " (" << result.width << " x " << result.height << ", "
               << result.covered_pixels << " pixels covered, " << result.seconds << " s)\n";
     if (result.negative_pixels)
       std::cerr << "render: " << result.negative_pixels << " pixels below zero ("

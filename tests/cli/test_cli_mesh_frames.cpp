@@ -227,6 +227,26 @@ TEST(MeshFrames, FarFromTheOriginShadowsAsAtIt) {
                  "an OBJ's single precision (as tinyobjloader reads it) spaces them", scratch("far_obj.shtb"));
 }
 
+// An OBJ's material library is part of the asset (bake-probes reads its colours): no
+// output of fit-zh replaces it, whether or not fit-zh reads it.
+TEST(MeshFrames, AnObjsMaterialLibraryIsAnInput) {
+  const fs::path dir = scratch("mtl_input");
+  fs::create_directories(dir);
+  shtool::test::write_file(dir / "q.obj", "mtllib m.mtl\nv -5 -5 0\nv 5 -5 0\nv 0 5 0\nf 1 2 3\n");
+  shtool::test::write_file(dir / "m.mtl", "newmtl a\nKd 1 1 1\n");
+  for (const char* option : {"--out", "--json"}) {
+    const std::vector<std::string> args = {(dir / "q.obj").string(), "--order", "2", "--rays", "8"};
+    std::vector<std::string> argv = {"fit-zh"};
+    argv.insert(argv.end(), args.begin(), args.end());
+    if (std::string(option) == "--json") argv.insert(argv.end(), {"--out", (dir / "o.shtb").string()});
+    argv.insert(argv.end(), {option, (dir / "m.mtl").string()});
+    const CommandResult r = run_shtool(argv);
+    EXPECT_EQ(r.exit_code, 1) << option;
+    EXPECT_NE(r.err.find("(a file of the mesh); refusing to overwrite it"), std::string::npos) << r.err;
+    EXPECT_EQ(read_file(dir / "m.mtl"), "newmtl a\nKd 1 1 1\n") << option;
+  }
+}
+
 TEST(MeshFrames, GltfOutputIsInGltfsFrame) {
   const Quad q = quad({1, 0, 0}, {0, 0.5f, -1});
   for (const std::string& kind : {"glb", "obj_y", "obj_z"}) {

@@ -326,6 +326,21 @@ void check_same_mesh(const Table& table, const Mesh& mesh, const std::filesystem
   check_mesh_crc32(params["mesh_crc32"].get<std::uint64_t>(), normals, mesh, file, what);
 }
 
+std::string obj_mtllib(const std::string& obj_text) {
+  std::istringstream in(obj_text);
+  std::string line;
+  while (std::getline(in, line)) {
+    std::istringstream words(line);
+    std::string first;
+    if (!(words >> first) || first != "mtllib") continue;
+    std::string name;
+    std::getline(words >> std::ws, name);
+    while (!name.empty() && (name.back() == '\r' || name.back() == ' ' || name.back() == '\t')) name.pop_back();
+    return name;
+  }
+  return {};
+}
+
 Mesh load_obj_text(const std::string& text, const std::filesystem::path& path, NormalSource normal_source,
                    UpAxis up, const std::string& mtl_text) {
   check_obj_text(path, text);
@@ -358,6 +373,8 @@ Mesh load_obj_text(const std::string& text, const std::filesystem::path& path, N
   Mesh mesh;
   mesh.input_crc32 = input_crc32(text);
   mesh.files.push_back(path);
+  // Its material library is part of the asset (bake-probes reads it): no output replaces it.
+  if (const std::string lib = obj_mtllib(text); !lib.empty()) mesh.files.push_back(path.parent_path() / lib);
   mesh.obj_vertices = nv;
   if (nv == 0) fail_input(path, "no vertices");
 

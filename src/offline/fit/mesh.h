@@ -137,6 +137,10 @@ void check_mesh_crc32(std::uint64_t baked, std::string_view baked_normals, const
 // The same for OBJ text already in memory; `path` names it in messages.
 // `mtl_text`, when not empty, is the .mtl the OBJ's usemtl lines name (Mesh::obj_materials,
 // Mesh::triangle_material).
+// The file named by an OBJ's first "mtllib NAME" line (the rest of the line: names may
+// hold spaces); empty when there is none.
+std::string obj_mtllib(const std::string& obj_text);
+
 Mesh load_obj_text(const std::string& text, const std::filesystem::path& path,
                    NormalSource normals = NormalSource::automatic, UpAxis up = UpAxis::y,
                    const std::string& mtl_text = {});

@@ -497,6 +497,8 @@ RenderResult run_render(const RenderRequest& r) {
     image = compare_strip(hits, mesh, data, light, threads, result.compare_nrms);
   }
   result.seconds = seconds_since(start);
+  result.width = image.width;
+  result.height = image.height;
   const int colours = std::min(image.channels, 3);
   for (std::size_t p = 0; p < std::size_t(image.width) * image.height; ++p) {
     const float* px = &image.texels[p * image.channels];

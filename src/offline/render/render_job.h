@@ -65,6 +65,7 @@ struct RenderResult {
   // black) and the lowest value among them.
   std::size_t negative_pixels = 0;
   double minimum = 0;
+  int width = 0, height = 0;  // of the image written (--compare: the whole strip)
   double seconds = 0;  // rays, shading (and the fits of --compare), not reading or writing files
   std::vector<double> compare_nrms;  // --compare: normalized RMS of the N = 1..4 fits
   std::optional<double> reference_nrms;  // --reference: the image's normalized RMS against it

@@ -119,25 +119,9 @@ Scene gltf_scene(const std::string& bytes, const std::filesystem::path& path) {
   return s;
 }
 
-// The first "mtllib NAME" of an OBJ (the rest of the line: names may hold spaces).
-std::string mtllib_of(const std::string& text) {
-  std::istringstream in(text);
-  std::string line;
-  while (std::getline(in, line)) {
-    std::istringstream words(line);
-    std::string first;
-    if (!(words >> first) || first != "mtllib") continue;
-    std::string name;
-    std::getline(words >> std::ws, name);
-    while (!name.empty() && (name.back() == '\r' || name.back() == ' ' || name.back() == '\t')) name.pop_back();
-    return name;
-  }
-  return {};
-}
-
 Scene obj_scene(const std::string& text, const std::filesystem::path& path, UpAxis up) {
   std::string mtl;
-  const std::string lib = mtllib_of(text);
+  const std::string lib = fit::obj_mtllib(text);
   std::filesystem::path mtl_path;
   if (!lib.empty()) {
     mtl_path = path.parent_path() / lib;
@@ -151,7 +135,6 @@ Scene obj_scene(const std::string& text, const std::filesystem::path& path, UpAx
   }
   Scene s;
   s.mesh = fit::load_obj_text(text, path, fit::NormalSource::automatic, up, mtl);
-  if (!mtl_path.empty()) s.mesh.files.push_back(mtl_path);
   s.default_material.base_color = Rgb(0.8, 0.8, 0.8);
   for (const fit::ObjMaterial& om : s.mesh.obj_materials) {
     Material m = s.default_material;
