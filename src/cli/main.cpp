@@ -50,8 +50,11 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    // --help/--version exit 0; every command-line error exits 1 like other user errors.
-    return app.exit(e) == 0 ? 0 : 1;
+    // --help/--version exit 0, printed by CLI11; every command-line error is reported as
+    // the other user errors are (the README's "shtool: error: ..."), exit 1.
+    if (e.get_exit_code() == 0) return app.exit(e);
+    std::cerr << "shtool: error: " << e.what() << "\nRun with --help for more information.\n";
+    return 1;
   } catch (const shtool::InputError& e) {
     std::cerr << "shtool: error: " << e.what() << '\n';
     return 1;
