@@ -138,7 +138,7 @@ TEST(ExrDecode, RefusalsNameTheProblem) {
   EXPECT_EQ(message([&] { decode_exr_channels(rgb, "c.exr", kMaxImageTexels, {"G", "G"}); }),
             "c.exr: channel 'G' asked for twice");
   const std::string other = write_file({Imf::ZIP_COMPRESSION, Imf::FLOAT, false}, 4, 4, 0, 0, {"U", "V"}, 6);
-  EXPECT_EQ(message([&] { decode_image(other, "uv.exr"); }), "uv.exr: no R, G, B or Y channels (found: U, V)");
+  EXPECT_EQ(message([&] { decode_image(other, "uv.exr"); }), "uv.exr: needs channels R, G and B, or Y (found: U, V)");
   EXPECT_EQ(message([&] { decode_image(rgb.substr(0, rgb.size() - 10), "cut.exr"); }).rfind("cut.exr: OpenEXR: ", 0),
             0u);
 }

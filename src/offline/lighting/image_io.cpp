@@ -288,7 +288,7 @@ Image decode_exr(std::string_view bytes, const std::filesystem::path& name, std:
   if (!rgb && !file.has("Y")) {
     std::string found;
     for (const std::string& c : file.channels()) found += (found.empty() ? "" : ", ") + c;
-    fail_input(name, "no R, G, B or Y channels (found: " + (found.empty() ? std::string("none") : found) + ")");
+    fail_input(name, "needs channels R, G and B, or Y (found: " + (found.empty() ? std::string("none") : found) + ")");
   }
   Image img;
   img.width = file.width();

@@ -102,7 +102,7 @@ Lighting light_coefficients(const std::vector<LightSpec>& lights, int order, Qua
     if (s.type == LightType::constant && s.direction)
       throw InputError(who + "takes no direction (it is the same from all)");
     if (s.type != LightType::constant) {
-      if (!s.direction) throw InputError(who + "needs a direction (--dir x,y,z)");
+      if (!s.direction) throw InputError(who + "needs a direction (--dir x,y,z; \"dir\" in a list)");
       d = Eigen::Vector3d((*s.direction)[0], (*s.direction)[1], (*s.direction)[2]);
       // Scaled by its largest component first: the norm of (1e200, 1e200, 1e200) or of
       // (1e-200, ...) is out of a double's range, the direction is not.
@@ -111,7 +111,7 @@ Lighting light_coefficients(const std::vector<LightSpec>& lights, int order, Qua
       d = (d / largest).normalized();
     }
     const bool angled = s.type == LightType::cone || s.type == LightType::sphere;
-    if (angled && !s.half_angle_degrees) throw InputError(who + "needs --half-angle (degrees)");
+    if (angled && !s.half_angle_degrees) throw InputError(who + "needs a half-angle in degrees (--half-angle; \"half_angle\" in a list)");
     if (!angled && s.half_angle_degrees) throw InputError(who + "takes no half-angle");
     if (angled && !(*s.half_angle_degrees > 0 && *s.half_angle_degrees <= 180))
       throw InputError(who + "the half-angle must be in (0, 180] degrees");
