@@ -36,12 +36,12 @@ py::array scale_by_band(const py::array& coeffs_in, const std::vector<double>& f
   for_chunks(count, threads, [&](std::size_t begin, std::size_t end) {
     for (std::size_t k = begin * n2; k < end * n2; ++k) o[k] = static_cast<T>(in[k] * per_index[k % n2]);
   });
-  refuse_overflow(what, static_cast<const T*>(o), count, n2, [&](std::size_t k) { return all_finite(in + k * n2, n2); });
+  refuse_overflow(what, static_cast<const T*>(o), count, n2,
+                  [&](std::size_t k) { return all_finite(in + k * n2, n2); });
   return out;
 }
 
-py::array scale_any(const py::array& coeffs, const std::vector<double>& factors, int threads,
-                    const std::string& what) {
+py::array scale_any(const py::array& coeffs, const std::vector<double>& factors, int threads, const std::string& what) {
   return precision_of(coeffs, "coeffs") == Precision::f32 ? scale_by_band<float>(coeffs, factors, threads, what)
                                                           : scale_by_band<double>(coeffs, factors, threads, what);
 }
@@ -83,8 +83,8 @@ py::tuple window(const py::array& coeffs, const std::string& kind, std::optional
     factors = sh_window_factors(*shape, c, order);
     if (*shape != ShWindow::none) used_cutoff = py::float_(c);
   }
-  return py::make_tuple(scale_any(coeffs, factors, threads, "window: the windowed vector"), py::array_t<double>(factors.size(), factors.data()),
-                        used_cutoff);
+  return py::make_tuple(scale_any(coeffs, factors, threads, "window: the windowed vector"),
+                        py::array_t<double>(factors.size(), factors.data()), used_cutoff);
 }
 
 py::array irradiance(const py::array& coeffs, int threads) {

@@ -48,9 +48,10 @@ void setup_bake_probes(CLI::App* sub) {
                 << " KHR_lights_punctual light(s) of a type other than directional, point or spot left out\n";
     if (r.sharded) std::cerr << "bake-probes: shard of probes [" << r.first_probe << ", " << r.end_probe << ")\n";
     std::cerr << "bake-probes: " << r.probes << " probes (" << r.resolution[0] << " x " << r.resolution[1] << " x "
-              << r.resolution[2] << ", encoding " << r.encoding << "), " << r.triangles << " triangles, " << r.lights << " lights; " << r.rays
-              << " rays in " << r.seconds << " s; " << r.invalid
-              << (r.sharded ? " invalid probes (stored unfilled: merge fills them)" : " invalid probes filled from neighbours");
+              << r.resolution[2] << ", encoding " << r.encoding << "), " << r.triangles << " triangles, " << r.lights
+              << " lights; " << r.rays << " rays in " << r.seconds << " s; " << r.invalid
+              << (r.sharded ? " invalid probes (stored unfilled: merge fills them)"
+                            : " invalid probes filled from neighbours");
     if (r.mpi_ranks) std::cerr << " (this rank's share; on each of " << r.mpi_ranks << " MPI ranks)";
     if (r.unfilled) std::cerr << " (" << r.unfilled << " with no valid neighbour left at 0)";
     std::cerr << "\nwrote " << req->out.string() << "\n";

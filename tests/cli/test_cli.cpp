@@ -230,9 +230,10 @@ TEST(Cli, UnknownSubcommandIsAnErrorNamingIt) {
 // Command-line errors CLI11 finds (a value outside a set, a number past its type, an
 // option given twice) read as every other error: "shtool: error: ...", exit 1.
 TEST(Cli, OptionErrorsReadAsOtherErrors) {
-  for (const std::vector<std::string>& args :
-       {std::vector<std::string>{"fit-zh", "m.obj", "--up", "x"}, {"fit-zh", "m.obj", "--rays", "99999999999"},
-        {"eval", "--order", "2", "--order", "3", "--dir", "0,0,1"}, {"eval", "--no-such-option"}}) {
+  for (const std::vector<std::string>& args : {std::vector<std::string>{"fit-zh", "m.obj", "--up", "x"},
+                                               {"fit-zh", "m.obj", "--rays", "99999999999"},
+                                               {"eval", "--order", "2", "--order", "3", "--dir", "0,0,1"},
+                                               {"eval", "--no-such-option"}}) {
     const CommandResult r = run_shtool(args);
     EXPECT_EQ(r.exit_code, 1) << args[2];
     EXPECT_EQ(r.err.rfind("shtool: error: ", 0), 0u) << r.err;

@@ -8,8 +8,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <functional>
 #include <filesystem>
+#include <functional>
 #include <numbers>
 #include <string>
 #include <vector>
@@ -320,8 +320,9 @@ TEST(CliBakeProbes, ObjMaterialColoursAreReadOrRefused) {
   write_file(dir / "t.obj", "mtllib m.mtl\nusemtl a\nv -5 -5 0\nv 5 -5 0\nv 0 5 0\nf 1 2 3\n");
   must(run_shtool({"light", "--type", "constant", "--order", "3", "--json", (dir / "sky.json").string()}));
   // A floor under a constant sky: what it reflects is Kd times the sky.
-  const std::vector<std::string> args = {(dir / "t.obj").string(), "--up", "z", "--env", (dir / "sky.json").string(),
-                                         "--grid", "1,1,1", "--bounds=-1,-1,0.5,1,1,1.5", "--samples", "64"};
+  const std::vector<std::string> args = {
+      (dir / "t.obj").string(),     "--up",      "z", "--env", (dir / "sky.json").string(), "--grid", "1,1,1",
+      "--bounds=-1,-1,0.5,1,1,1.5", "--samples", "64"};
   auto bake = [&](const std::string& mtl) {
     write_file(dir / "m.mtl", "newmtl a\n" + mtl + "\n");
     std::vector<std::string> argv = {"bake-probes"};
@@ -360,14 +361,32 @@ TEST(CliBakeProbes, GltfThatBreaksItsSpecificationIsRefused) {
       {[](nlohmann::json& j) { j["extensionsRequired"] = {"KHR_texture_transform"}; },
        "requires the glTF extension KHR_texture_transform"},
       {[](nlohmann::json& j) { j["asset"]["version"] = "3.0"; }, "asset.version '3.0': glTF 2.x is read"},
-      {[](nlohmann::json& j) { j["nodes"][0]["matrix"] = {1, 0, 0}; }, "node 0's matrix has 3 numbers (16 expected)"},
-      {[](nlohmann::json& j) { j["nodes"][0]["translation"] = {1, 0}; }, "node 0's translation has 2 numbers"},
-      {[](nlohmann::json& j) { j["nodes"][0]["rotation"] = {0, 0, 0, 0}; }, "node 0's rotation is not a unit quaternion"},
-      {[](nlohmann::json& j) { j["nodes"][0]["rotation"] = {0, 0, 0, 2}; }, "(length 2)"},
-      {[](nlohmann::json& j) { j["materials"][0]["pbrMetallicRoughness"]["baseColorFactor"] = {5, 5, 5, 1}; },
+      {[](nlohmann::json& j) {
+         j["nodes"][0]["matrix"] = {1, 0, 0};
+       },
+       "node 0's matrix has 3 numbers (16 expected)"},
+      {[](nlohmann::json& j) {
+         j["nodes"][0]["translation"] = {1, 0};
+       },
+       "node 0's translation has 2 numbers"},
+      {[](nlohmann::json& j) {
+         j["nodes"][0]["rotation"] = {0, 0, 0, 0};
+       },
+       "node 0's rotation is not a unit quaternion"},
+      {[](nlohmann::json& j) {
+         j["nodes"][0]["rotation"] = {0, 0, 0, 2};
+       },
+       "(length 2)"},
+      {[](nlohmann::json& j) {
+         j["materials"][0]["pbrMetallicRoughness"]["baseColorFactor"] = {5, 5, 5, 1};
+       },
        "material 0 baseColorFactor must be at most 1"},
-      {[](nlohmann::json& j) { j["accessors"][0]["count"] = 2; }, "a TRIANGLES primitive of 2 vertices, not a multiple of 3"},
-      {[](nlohmann::json& j) { j["nodes"][0]["translation"] = {1e20, 0, 0}; }, "lies beyond +-1e15"},
+      {[](nlohmann::json& j) { j["accessors"][0]["count"] = 2; },
+       "a TRIANGLES primitive of 2 vertices, not a multiple of 3"},
+      {[](nlohmann::json& j) {
+         j["nodes"][0]["translation"] = {1e20, 0, 0};
+       },
+       "lies beyond +-1e15"},
   };
   for (const auto& [edit, message] : edits) {
     nlohmann::json j = doc;

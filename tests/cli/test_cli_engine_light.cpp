@@ -224,10 +224,14 @@ TEST(EngineLight, GltfImportReadsTheLightItsSceneNames) {
   auto document = [](int light) {
     std::string rows = "[1,1,1],[0,0,0],[0,0,0],[0,0,0],[0,0,0],[0,0,0],[0,0,0],[0,0,0],[0,0,0]";
     return R"({"asset": {"version": "2.0"}, "extensions": {"EXT_lights_image_based": {"lights": [)"
-           R"({"intensity": 1, "irradianceCoefficients": [)" + rows + R"(]},)"
-           R"({"intensity": 5, "irradianceCoefficients": [)" + rows + R"(]}]}},)"
-           R"("scene": 0, "scenes": [{"extensions": {"EXT_lights_image_based": {"light": )" + std::to_string(light) +
-           "}}}]}";
+           R"({"intensity": 1, "irradianceCoefficients": [)" +
+           rows +
+           R"(]},)"
+           R"({"intensity": 5, "irradianceCoefficients": [)" +
+           rows +
+           R"(]}]}},)"
+           R"("scene": 0, "scenes": [{"extensions": {"EXT_lights_image_based": {"light": )" +
+           std::to_string(light) + "}}}]}";
   };
   const fs::path in = scratch("two_lights.gltf"), out = scratch("two_lights.json");
   double c00[2];

@@ -287,7 +287,8 @@ TEST(CliFitZhGltf, RefusalsNameTheProblemAndWriteNothing) {
       // check comes first, so a table's or the input's name is refused by it.
       {{kSpotObj, "--gltf", out.string()}, "the output is binary glTF, so its name must end in .glb"},
       {{kSpotObj, "--gltf", kSpotObj}, "the output is binary glTF, so its name must end in .glb"},
-      {{kSpotObj, "--gltf", scratch("refused.gltf").string()}, "--gltf " + scratch("refused.gltf").string() + ": the output is binary glTF"},
+      {{kSpotObj, "--gltf", scratch("refused.gltf").string()},
+       "--gltf " + scratch("refused.gltf").string() + ": the output is binary glTF"},
       {{kSpotObj, "--gltf", scratch("no_such_folder/x.glb").string()}, "--gltf"},
   };
   for (const Case& c : cases) {

@@ -711,10 +711,16 @@ TEST(CliSplatFormats, SpzExtensionRecords) {
       {"v4 RDF and an unknown record", with_records_v4(v4, other + rdf), ref4, {}, "0x12340001 (3 bytes)"},
       {"v4 RDF over --spz-frame", with_records_v4(v4, rdf), ref4, {"--spz-frame", "LUF"}, "not in --spz-frame LUF"},
       {"v3 RDF", compress_with("gzip", with_records_legacy(plain3, rdf)), ref3, {}, ""},
-      {"v3 RDF and an unknown record", compress_with("gzip", with_records_legacy(plain3, rdf + other)), ref3, {},
+      {"v3 RDF and an unknown record",
+       compress_with("gzip", with_records_legacy(plain3, rdf + other)),
+       ref3,
+       {},
        "0x12340001 (3 bytes)"},
       // Records of one unknown type are warned of once, counted.
-      {"v4 three unknown records", with_records_v4(v4, other + rdf + other + other), ref4, {},
+      {"v4 three unknown records",
+       with_records_v4(v4, other + rdf + other + other),
+       ref4,
+       {},
        "skipped 3 spz extension records of type 0x12340001 (9 bytes)"},
   };
   for (const Case& c : cases) {

@@ -237,7 +237,8 @@ TEST(UntrustedExr, MoreChunksThanTheFileCanHoldAreRefusedBeforeAllocating) {
   const std::string exr = with_windows(lighting::encode_exr(img), 16383, 8191);
   const std::string m = input_error([&] { lighting::decode_image(exr, "m.exr", std::int64_t(1) << 28); });
   EXPECT_NE(m.find("m.exr: OpenEXR: 16384 x 8192 texels in "), std::string::npos) << "'" << m << "'";
-  EXPECT_NE(m.find("chunks claimed, more than its " + std::to_string(exr.size()) + " bytes can hold"), std::string::npos)
+  EXPECT_NE(m.find("chunks claimed, more than its " + std::to_string(exr.size()) + " bytes can hold"),
+            std::string::npos)
       << "'" << m << "'";
 }
 

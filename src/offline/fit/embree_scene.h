@@ -56,7 +56,9 @@ struct EmbreeScene {
     if (scene) rtcReleaseScene(scene);
     if (device) rtcReleaseDevice(device);
   }
-  RTCRay ray(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir) const { return embree_ray(origin - center, dir); }
+  RTCRay ray(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir) const {
+    return embree_ray(origin - center, dir);
+  }
 };
 
 // A device with the pinned ISA. Throws std::runtime_error if Embree refuses it.

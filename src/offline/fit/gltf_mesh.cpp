@@ -105,7 +105,8 @@ Eigen::Matrix4d local_transform(const tinygltf::Node& node, int index, const std
   const std::string what = "node " + std::to_string(index) + "'s ";
   auto sized = [&](const std::vector<double>& v, std::size_t n, const char* name) {
     if (!v.empty() && v.size() != n)
-      fail_input(path, what + name + " has " + std::to_string(v.size()) + " numbers (" + std::to_string(n) + " expected)");
+      fail_input(path,
+                 what + name + " has " + std::to_string(v.size()) + " numbers (" + std::to_string(n) + " expected)");
     return !v.empty();
   };
   Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
@@ -127,7 +128,8 @@ Eigen::Matrix4d local_transform(const tinygltf::Node& node, int index, const std
     }
     rot.block<3, 3>(0, 0) = q.normalized().toRotationMatrix();
   }
-  if (sized(node.scale, 3, "scale")) s.diagonal().head<3>() = Eigen::Vector3d(node.scale[0], node.scale[1], node.scale[2]);
+  if (sized(node.scale, 3, "scale"))
+    s.diagonal().head<3>() = Eigen::Vector3d(node.scale[0], node.scale[1], node.scale[2]);
   return t * rot * s;
 }
 
@@ -209,7 +211,8 @@ struct Builder {
     // glTF requires whole triangles: a short list would lose its tail without a word.
     if (mode == TINYGLTF_MODE_TRIANGLES ? index.size() % 3 != 0 : index.size() < 3)
       fail_input(path, "a " + std::string(mode == TINYGLTF_MODE_TRIANGLES ? "TRIANGLES" : "strip or fan") +
-                           " primitive of " + std::to_string(index.size()) + (p.indices >= 0 ? " indices" : " vertices") +
+                           " primitive of " + std::to_string(index.size()) +
+                           (p.indices >= 0 ? " indices" : " vertices") +
                            (mode == TINYGLTF_MODE_TRIANGLES ? ", not a multiple of 3" : ", fewer than 3"));
     if (mode == TINYGLTF_MODE_TRIANGLES) {
       for (std::size_t k = 0; k + 2 < index.size(); k += 3)

@@ -510,7 +510,8 @@ Lighting import_light_as_read(std::string_view text, const std::filesystem::path
         bad(name, std::string("no extensions.") + ext + ".lights[0]");
       // The light the default scene names (as Babylon's loader takes it), else the first.
       std::size_t which = 0;
-      const std::size_t scene = doc.contains("scene") && doc["scene"].is_number_unsigned() ? doc["scene"].get<std::size_t>() : 0;
+      const std::size_t scene =
+          doc.contains("scene") && doc["scene"].is_number_unsigned() ? doc["scene"].get<std::size_t>() : 0;
       if (doc.contains("scenes") && doc["scenes"].is_array() && scene < doc["scenes"].size()) {
         const nlohmann::json& sc = doc["scenes"][scene];
         if (sc.is_object() && sc.contains("extensions") && sc["extensions"].is_object() &&
@@ -523,7 +524,8 @@ Lighting import_light_as_read(std::string_view text, const std::filesystem::path
           which = ref["light"].get<std::size_t>();
         }
       }
-      if (!(*lights)[which].is_object()) bad(name, std::string("extensions.") + ext + ".lights[" + std::to_string(which) + "] is not an object");
+      if (!(*lights)[which].is_object())
+        bad(name, std::string("extensions.") + ext + ".lights[" + std::to_string(which) + "] is not an object");
       const nlohmann::json& light = (*lights)[which];
       if (!light.contains("irradianceCoefficients")) bad(name, "the light has no irradianceCoefficients");
       Nine g = rows_of(light["irradianceCoefficients"], name, "irradianceCoefficients");

@@ -147,9 +147,9 @@ SplatMotion::SplatMotion(const Eigen::Matrix3d& m, double scale, const Eigen::Ve
     : m(m),
       scale(scale),
       t(t),
-      turn(quaternion ? Eigen::Quaterniond((*quaternion)[0], (*quaternion)[1], (*quaternion)[2], (*quaternion)[3])
-                            .normalized()
-                      : Eigen::Quaterniond(m.determinant() < 0 ? Eigen::Matrix3d(-m) : m)),
+      turn(quaternion
+               ? Eigen::Quaterniond((*quaternion)[0], (*quaternion)[1], (*quaternion)[2], (*quaternion)[3]).normalized()
+               : Eigen::Quaterniond(m.determinant() < 0 ? Eigen::Matrix3d(-m) : m)),
       log_s(std::log(scale)),
       moves(!m.isIdentity(0) || scale != 1 || !t.isZero(0)) {}
 

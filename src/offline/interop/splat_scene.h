@@ -113,7 +113,7 @@ struct SplatMotion {
   Eigen::Vector3d position(const Eigen::Vector3d& p) const { return moves ? Eigen::Vector3d(scale * (m * p) + t) : p; }
   Eigen::Vector3d normal(const Eigen::Vector3d& n) const { return m * n; }
   Eigen::Quaterniond orientation(const Eigen::Quaterniond& q) const { return turn * q; }  // turn is unit
-  double log_scale(double v) const { return log_s != 0 ? v + log_s : v; }  // -0 kept at s = 1
+  double log_scale(double v) const { return log_s != 0 ? v + log_s : v; }                 // -0 kept at s = 1
 
   Eigen::Matrix3d m;
   double scale;

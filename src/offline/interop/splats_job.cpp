@@ -310,7 +310,8 @@ void transform_ply_in_place(const TransformSplatsRequest& r, const Eigen::Matrix
         for (int k = 0; k < 4; ++k) ply.set(v, i, idx[k], parts[k]);
       }
       if (layout.scale && splat.log_s != 0)
-        for (int k = 0; k < 3; ++k) ply.set(v, i, (*layout.scale)[k], splat.log_scale(ply.get(v, i, (*layout.scale)[k])));
+        for (int k = 0; k < 3; ++k)
+          ply.set(v, i, (*layout.scale)[k], splat.log_scale(ply.get(v, i, (*layout.scale)[k])));
       if (layout.degree > 0) {
         for (int c = 0; c < 3; ++c) {
           f[c] = ply.get(v, i, (*layout.dc)[c]);
@@ -445,7 +446,8 @@ TransformSplatsReport run_transform_splats(const TransformSplatsRequest& r) {
           if (out_format == SplatFormat::spz)
             spz.antialiased = true;
           else
-            report.warnings.push_back(r.in.string() + " says its splats were trained with antialiasing (spz flag 0x1): " +
+            report.warnings.push_back(r.in.string() +
+                                      " says its splats were trained with antialiasing (spz flag 0x1): " +
                                       splat_format_name(out_format) + " has no such flag, and " + r.out.string() +
                                       " does not say so (a viewer renders them without the antialiasing filter)");
         }

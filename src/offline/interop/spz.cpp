@@ -113,9 +113,10 @@ void read_extension_records(std::string_view zone, const std::string& name, SpzH
     char hex[16];
     std::snprintf(hex, sizeof hex, "0x%08X", static_cast<unsigned>(type));
     header.warnings.push_back(name + ": skipped " +
-                              (seen.first == 1 ? std::string("an spz extension record") :
-                                                 std::to_string(seen.first) + " spz extension records") +
-                              " of type " + hex + " (" + std::to_string(seen.second) + " bytes) that shtool does not know");
+                              (seen.first == 1 ? std::string("an spz extension record")
+                                               : std::to_string(seen.first) + " spz extension records") +
+                              " of type " + hex + " (" + std::to_string(seen.second) +
+                              " bytes) that shtool does not know");
   }
 }
 

@@ -111,7 +111,8 @@ Lighting light_coefficients(const std::vector<LightSpec>& lights, int order, Qua
       d = (d / largest).normalized();
     }
     const bool angled = s.type == LightType::cone || s.type == LightType::sphere;
-    if (angled && !s.half_angle_degrees) throw InputError(who + "needs a half-angle in degrees (--half-angle; \"half_angle\" in a list)");
+    if (angled && !s.half_angle_degrees)
+      throw InputError(who + "needs a half-angle in degrees (--half-angle; \"half_angle\" in a list)");
     if (!angled && s.half_angle_degrees) throw InputError(who + "takes no half-angle");
     if (angled && !(*s.half_angle_degrees > 0 && *s.half_angle_degrees <= 180))
       throw InputError(who + "the half-angle must be in (0, 180] degrees");
