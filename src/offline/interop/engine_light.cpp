@@ -351,8 +351,9 @@ ExportedLight export_light(const Lighting& light, LightFormat format, const Fram
       nlohmann::json record = {{"name", "shtool"}};
       if (format == LightFormat::gltf) record["intensity"] = 1.0, record["rotation"] = {0, 0, 0, 1};
       record["irradianceCoefficients"] = rows_json(scaled(g));
-      doc["extensions"][ext]["lights"] = {record};
-      doc["scenes"] = {{{"extensions", {{ext, {{"light", 0}}}}}}};
+      // json::array: a braced list of one json is a copy of it under clang, an array under GCC.
+      doc["extensions"][ext]["lights"] = nlohmann::json::array({record});
+      doc["scenes"] = nlohmann::json::array({{{"extensions", {{ext, {{"light", 0}}}}}}});
       if (intensity != 1) out.notes.push_back("--intensity is folded into the coefficients");
       doc["scene"] = 0;
       out.text = rows_text(doc);
