@@ -1,5 +1,6 @@
 #include "common/input_file.h"
 
+#include <cctype>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -17,6 +18,12 @@
 #include "shtool/table.h"
 
 namespace shtool {
+
+std::string lowercase_extension(const std::filesystem::path& path) {
+  std::string ext = path.extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext;
+}
 namespace {
 
 std::string where(const std::filesystem::path& path, std::string_view what) {

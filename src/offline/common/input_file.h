@@ -34,6 +34,9 @@ class MappedInput {
   std::string read_;
 };
 
+// A file name's extension in lower case (".glb" for "Scene.GLB"): formats go by it.
+std::string lowercase_extension(const std::filesystem::path& path);
+
 // Parses `text` (the contents of `path`) as JSON. Throws InputError naming the input, the
 // parser's position and message, or nesting deeper than the tables' limit (64 levels,
 // refused before parsing so that no later step can exhaust the stack).

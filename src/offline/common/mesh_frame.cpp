@@ -5,6 +5,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "common/input_file.h"
 #include "common/input_error.h"
 
 namespace shtool {
@@ -44,8 +45,7 @@ void check_same_up(const Table& table, UpAxis mesh_up, const std::string& what, 
   }
   if (table_up == up_axis_name(mesh_up)) return;
   // A glTF takes no --up: the advice is then the mesh the table was baked on.
-  std::string ext = std::filesystem::path(mesh).extension().string();
-  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  const std::string ext = lowercase_extension(mesh);
   const std::string advice = ext == ".gltf" || ext == ".glb"
                                  ? "a glTF is always read y-up: give the mesh the bake was made on"
                                  : "give the --up the bake was made with, " + table_up;

@@ -1,7 +1,6 @@
 #include "fit/fit_zh_job.h"
 
 #include <algorithm>
-#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -108,12 +107,8 @@ void check_request(const FitZhRequest& r) {
     throw InputError("--save-transfer needs a mesh (not --transfer)");
   if (!r.transfer.empty() && !r.gltf.empty()) throw InputError("--gltf needs a mesh (not --transfer)");
   // Binary glTF under another name would be read as JSON by loaders that go by the name.
-  if (!r.gltf.empty()) {
-    std::string ext = r.gltf.extension().string();
-    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    if (ext != ".glb")
-      throw InputError("--gltf " + r.gltf.string() + ": the output is binary glTF, so its name must end in .glb");
-  }
+  if (!r.gltf.empty() && lowercase_extension(r.gltf) != ".glb")
+    throw InputError("--gltf " + r.gltf.string() + ": the output is binary glTF, so its name must end in .glb");
   if (r.mpi) {
     if (!r.shard.empty()) throw InputError("--mpi and --shard both split the vertices: give one of them");
     if (!r.ply.empty() || !r.save_transfer.empty())

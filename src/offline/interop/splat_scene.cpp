@@ -8,6 +8,7 @@
 
 #include <Eigen/Geometry>
 
+#include "common/input_file.h"
 #include "common/input_error.h"
 #include "common/parallel_for.h"
 #include "shtool/orthogonal_map.h"
@@ -29,8 +30,7 @@ void SplatScene::set_degree(int deg) {
 }
 
 SplatFormat splat_format_of(const std::filesystem::path& path, const std::string& what) {
-  std::string ext = path.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  const std::string ext = lowercase_extension(path);
   if (ext == ".ply") return SplatFormat::ply;
   if (ext == ".spz") return SplatFormat::spz;
   if (ext == ".gltf") return SplatFormat::gltf;

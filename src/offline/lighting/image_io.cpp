@@ -52,8 +52,7 @@ const char* format_name(Format f) {
 }
 
 Format format_of_extension(const std::filesystem::path& p) {
-  std::string e = p.extension().string();
-  std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  const std::string e = lowercase_extension(p);
   if (e == ".exr") return Format::exr;
   if (e == ".hdr" || e == ".rgbe" || e == ".pic") return Format::hdr;
   if (e == ".png") return Format::png;

@@ -239,8 +239,7 @@ Scene load_scene(const std::filesystem::path& path, UpAxis up) {
   if (!std::filesystem::exists(path, ec)) fail_input(path, "no such file");
   if (std::filesystem::is_directory(path, ec)) fail_input(path, "is a directory, not a scene file");
   const std::string bytes = read_input_file(path, "scene");
-  std::string ext = path.extension().string();
-  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  const std::string ext = lowercase_extension(path);
   Scene s;
   if ((bytes.size() >= 4 && bytes.compare(0, 4, "glTF") == 0) || ext == ".gltf" || ext == ".glb") {
     if (up != UpAxis::y) fail_input(path, "--up z: glTF is +Y up by its specification (--up applies to OBJ files)");
