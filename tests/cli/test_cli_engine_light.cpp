@@ -121,6 +121,21 @@ TEST(EngineLight, EveryFrameMapCarriesTheLight) {
   EXPECT_EQ(maps, 48);
 }
 
+// Each default frame is the glTF frame (x, z, -y of shtool's: +Y up, right-handed) as
+// the engine imports a glTF scene: unchanged by three.js, filament and Godot, x negated
+// by Unity's importers (UnityGLTF, glTFast) and Babylon's default left-handed scene.
+TEST(EngineLight, DefaultFramesAreTheGltfFrameAsEachEngineImportsIt) {
+  Eigen::Matrix3d gltf;
+  gltf << 1, 0, 0, 0, 0, 1, 0, -1, 0;
+  const Eigen::Matrix3d negate_x = Eigen::Vector3d(-1, 1, 1).asDiagonal();
+  using interop::LightFormat;
+  for (LightFormat f : {LightFormat::threejs, LightFormat::filament, LightFormat::filament_radiance, LightFormat::godot})
+    EXPECT_EQ(interop::default_frame(f).q, gltf) << interop::default_frame(f).text;
+  for (LightFormat f : {LightFormat::unity, LightFormat::gltf, LightFormat::gltf_khr, LightFormat::babylon})
+    EXPECT_EQ(interop::default_frame(f).q, negate_x * gltf) << interop::default_frame(f).text;
+  EXPECT_EQ(interop::default_frame(LightFormat::unity).text, "-x,z,-y");
+}
+
 // The reflections act on c_lm by signs (docs/interop.md).
 TEST(EngineLight, ReflectionsAreSigns) {
   const Lighting l = random_light(5, Quantity::radiance, 9);

@@ -225,10 +225,11 @@ FrameMap default_frame(LightFormat format) {
     case LightFormat::filament:
     case LightFormat::filament_radiance:
     case LightFormat::godot: return parse_frame_map("x,z,-y");
-    // Unity, left-handed y-up: the glTF frame with z negated (UnityGLTF's import).
-    case LightFormat::unity: return parse_frame_map("x,z,y");
-    // The frame Babylon's default (left-handed) scene evaluates glTF and .env lighting
-    // in: the glTF frame with x negated by its loader's root node.
+    // Left-handed y-up engines see the glTF frame with x negated: Unity's glTF importers
+    // (UnityGLTF's CoordinateSpaceConversionScale (-1, 1, 1), glTFast) and its FBX importer
+    // do so, and a probe must be in the frame the scene's meshes came in with; Babylon's
+    // default scene evaluates glTF and .env lighting there too (its loader's root node).
+    case LightFormat::unity:
     case LightFormat::gltf:
     case LightFormat::gltf_khr:
     case LightFormat::babylon: return parse_frame_map("-x,z,-y");
