@@ -129,7 +129,8 @@ TEST(EngineLight, DefaultFramesAreTheGltfFrameAsEachEngineImportsIt) {
   gltf << 1, 0, 0, 0, 0, 1, 0, -1, 0;
   const Eigen::Matrix3d negate_x = Eigen::Vector3d(-1, 1, 1).asDiagonal();
   using interop::LightFormat;
-  for (LightFormat f : {LightFormat::threejs, LightFormat::filament, LightFormat::filament_radiance, LightFormat::godot})
+  for (LightFormat f :
+       {LightFormat::threejs, LightFormat::filament, LightFormat::filament_radiance, LightFormat::godot})
     EXPECT_EQ(interop::default_frame(f).q, gltf) << interop::default_frame(f).text;
   for (LightFormat f : {LightFormat::unity, LightFormat::gltf, LightFormat::gltf_khr, LightFormat::babylon})
     EXPECT_EQ(interop::default_frame(f).q, negate_x * gltf) << interop::default_frame(f).text;
