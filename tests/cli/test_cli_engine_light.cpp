@@ -380,8 +380,32 @@ TEST(EngineLight, BadInput) {
   std::ofstream(turned) << R"({"asset": {"version": "2.0"}, "extensions": {"EXT_lights_image_based": {"lights": [)"
                         << R"({"rotation": [0, 0.7071068, 0, 0.7071068], "irradianceCoefficients": [)"
                         << R"([1,1,1],[0,0,0],[0,0,0],[0,0,0],[0,0,0],[0,0,0],[0,0,0],[0,0,0],[0,0,0]]}]}}})";
+  // A probe that takes light away; sh.txt rows two to a line, or tagged as another of
+  // cmgen's variants than the format read.
+  const fs::path negative = scratch("negative_probe.json"), two_rows = scratch("two_rows.txt"),
+                 radiance_rows = scratch("radiance_rows.txt"), irradiance_rows = scratch("irradiance_rows.txt");
+  {
+    std::ofstream n(negative), t(two_rows), r(radiance_rows), e(irradiance_rows);
+    n << R"({"object": {"intensity": -2, "sh": [1, 1, 1)";
+    for (int i = 3; i < 27; ++i) n << ", 0";
+    n << "]}}";
+    t << "(1, 1, 1); (2, 2, 2); // L00, irradiance, pre-scaled base\n";
+    for (int i = 0; i < 9; ++i) {
+      r << "(1, 1, 1); // L" << i << ", radiance\n";
+      e << "(1, 1, 1); // L" << i << (i == 4 ? ", irradiance\n" : ", irradiance, pre-scaled base\n");
+    }
+  }
   const fs::path out = scratch("bad_out");
   const std::vector<Case> cases = {
+      {{"import-light", negative.string(), "--format", "threejs", "--json", out.string()}, "intensity -2 is negative"},
+      {{"import-light", two_rows.string(), "--format", "filament", "--json", out.string()},
+       "one ( r, g, b) row a line"},
+      {{"import-light", radiance_rows.string(), "--format", "filament", "--json", out.string()},
+       "row 0 is marked ' L0, radiance'"},
+      {{"import-light", irradiance_rows.string(), "--format", "filament", "--json", out.string()},
+       "row 4 is marked ' L4, irradiance'"},
+      {{"import-light", irradiance_rows.string(), "--format", "filament-radiance", "--json", out.string()},
+       "row 0 is marked"},
       {{"export-light", in.string(), "--format", "threejs", "--frame", "x,y,z,", "--out", out.string()}, "--frame"},
       {{"export-light", in.string(), "--format", "threejs", "--cs", "off", "--out", out.string()}, "--format raw only"},
       {{"export-light", in.string(), "--format", "unity", "--norm", "4pi", "--out", out.string()}, "--format raw only"},
@@ -396,9 +420,11 @@ TEST(EngineLight, BadInput) {
       {{"export-light", in.string(), "--format", "threejs", "--frame", "x,y,z,x", "--out", out.string()}, "--frame"},
       {{"import-light", long_line.string(), "--format", "filament", "--json", out.string()}, "not a finite number"},
       {{"export-light", in.string(), "--format", "threejs", "--intensity", "-1", "--out", out.string()}, "--intensity"},
-      {{"export-light", scratch("missing.json").string(), "--format", "threejs", "--out", out.string()}, "missing.json"},
+      {{"export-light", scratch("missing.json").string(), "--format", "threejs", "--out", out.string()},
+       "missing.json"},
       {{"import-light", bad_probe.string(), "--format", "threejs", "--json", out.string()}, "27 numbers"},
-      {{"import-light", bad_txt.string(), "--format", "filament", "--json", out.string()}, "'nan' is not a finite number"},
+      {{"import-light", bad_txt.string(), "--format", "filament", "--json", out.string()},
+       "'nan' is not a finite number"},
       {{"import-light", short_txt.string(), "--format", "filament", "--json", out.string()}, "expected 9"},
       {{"import-light", in.string(), "--format", "gltf", "--json", out.string()}, "EXT_lights_image_based"},
   };

@@ -79,6 +79,15 @@ double finite_number(const nlohmann::json& v, const std::filesystem::path& name,
   return v.get<double>();
 }
 
+// A light's optional intensity field: 1 when absent; a negative one (an engine would
+// take light away) is refused, zero (a light switched off) read.
+double intensity_field(const nlohmann::json& holder, const std::filesystem::path& name) {
+  if (!holder.contains("intensity")) return 1;
+  const double s = finite_number(holder["intensity"], name, "intensity");
+  if (s < 0) bad(name, "intensity " + holder["intensity"].dump() + " is negative");
+  return s;
+}
+
 // 9 [r, g, b] rows.
 Nine rows_of(const nlohmann::json& rows, const std::filesystem::path& name, const std::string& what) {
   if (!rows.is_array() || rows.size() != 9) bad(name, what + " must hold 9 [r, g, b] rows");
@@ -474,6 +483,25 @@ Lighting import_light_as_read(std::string_view text, const std::filesystem::path
         g[3 * i + c] = irradiance ? kSigma[i] * x * kPi / kAbsK[i] : x;
       }
       if (std::getline(fields, v, ',')) bad(name, "row " + std::to_string(i) + " holds more than three numbers");
+      const std::string after =
+          line.substr(close + 1, comment == std::string::npos ? std::string::npos : comment - close - 1);
+      if (after.find_first_not_of(" \t\r;") != std::string::npos)
+        bad(name,
+            "row " + std::to_string(i) + " is followed by '" + after.substr(0, 40) + "' (one ( r, g, b) row a line)");
+      // cmgen tags each row with its variant; a tag that is not this format's means the
+      // numbers mean something else (E without 1/pi and the constants, or radiance).
+      if (comment != std::string::npos) {
+        const std::string tag = line.substr(comment + 2);
+        const bool says_irradiance = tag.find("irradiance") != std::string::npos;
+        const bool says_radiance = !says_irradiance && tag.find("radiance") != std::string::npos;
+        const bool says_prescaled = tag.find("pre-scaled") != std::string::npos;
+        const bool other =
+            irradiance ? says_radiance || says_irradiance != says_prescaled : says_irradiance || says_prescaled;
+        if (other)
+          bad(name,
+              "row " + std::to_string(i) + " is marked '" + tag.substr(0, 60) + "', another variant than --format " +
+                  (irradiance ? "filament reads (irradiance, pre-scaled base)" : "filament-radiance reads (radiance)"));
+      }
       ++i;
     }
     if (i != 9) bad(name, "expected 9 ( r, g, b) rows, found " + std::to_string(i));
@@ -487,7 +515,7 @@ Lighting import_light_as_read(std::string_view text, const std::filesystem::path
       if (!object->is_object() || !object->contains("sh")) bad(name, "no object.sh (a three.js LightProbe)");
       const nlohmann::json& sh = (*object)["sh"];
       if (!sh.is_array() || sh.size() != 27) bad(name, "object.sh must hold 27 numbers");
-      const double s = object->contains("intensity") ? finite_number((*object)["intensity"], name, "intensity") : 1;
+      const double s = intensity_field(*object, name);
       Nine g{};
       for (int i = 0; i < 27; ++i) g[i] = kSigma[i / 3] * finite_number(sh[i], name, "sh[" + std::to_string(i) + "]") * s;
       return from_nine(frame, g, Quantity::radiance, quantity);
@@ -544,7 +572,7 @@ Lighting import_light_as_read(std::string_view text, const std::filesystem::path
           bad(name, "the light's rotation is not the identity [0, 0, 0, 1]: shtool reads unrotated environments only "
                     "(import the coefficients without it, then turn them with shtool rotate)");
       }
-      const double s = light.contains("intensity") ? finite_number(light["intensity"], name, "intensity") : 1;
+      const double s = intensity_field(light, name);
       for (double& v : g) v *= s;
       return from_nine(frame, g, Quantity::irradiance, quantity);
     }
