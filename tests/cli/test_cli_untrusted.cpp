@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include "cli_test.h"
+#include "scratch_files.h"
 
 namespace shtool {
 namespace {
@@ -305,6 +306,15 @@ TEST_F(CliUntrusted, TinyImagesClaimingHugeSizesAreRefusedBeforeAllocating) {
     f.write(reinterpret_cast<const char*>(png), sizeof png);
   }
   expect_refused(project(dir_ / "huge.png"), "cannot be coded in a file of");
+  // A side past the decoder's limit (2^25 x 2, within the texel count), and no IHDR.
+  {
+    std::string png = read_file(dir_ / "huge.png");
+    write_file(dir_ / "wide.png",
+               png.substr(0, 16) + std::string("\x02\x00\x00\x00\x00\x00\x00\x02", 8) + png.substr(24));
+    write_file(dir_ / "no_ihdr.png", png.substr(0, 8) + png.substr(33));
+  }
+  expect_refused(project(dir_ / "wide.png"), "PNG: 33554432 x 2 texels: a side is longer than the 16777216");
+  expect_refused(project(dir_ / "no_ihdr.png"), "PNG: the file does not begin with its 13-byte IHDR chunk");
   // JPEG: SOI, a baseline frame header of 16384 x 8192 with three components, EOI.
   auto jpeg = [&](const fs::path& path, bool with_scan) {
     std::string b = "\xff\xd8";

@@ -405,12 +405,24 @@ void check_jpeg_complete(std::string_view b, const std::filesystem::path& name) 
 
 // stb_image allocates what a PNG chunk's length field claims before it reads the chunk:
 // a 78-byte file whose IDAT claims 1.7 GB took that much (fuzz_images). Every chunk
-// (length, type, data, CRC) must fit the bytes that follow it.
-void check_png_chunks(std::string_view b, const std::filesystem::path& name) {
+// (length, type, data, CRC) must fit the bytes that follow it. The size is read from
+// IHDR here: stb_image reports a side past its own limit as "unknown image type".
+void check_png_chunks(std::string_view b, const std::filesystem::path& name, std::int64_t max_texels) {
+  const auto byte = [&](std::size_t i) { return std::uint32_t(static_cast<unsigned char>(b[i])); };
+  const auto be32 = [&](std::size_t i) { return byte(i) << 24 | byte(i + 1) << 16 | byte(i + 2) << 8 | byte(i + 3); };
+  if (b.size() < 8 + 8 + 13 || b.substr(12, 4) != "IHDR" || be32(8) != 13)
+    fail_input(name, "PNG: the file does not begin with its 13-byte IHDR chunk");
+  const std::int64_t w = be32(16), h = be32(20);
+  check_size(name, w, h, max_texels);
+  // stb_image.h's default STBI_MAX_DIMENSIONS, which the library was built with (the
+  // macro lives in its implementation section, out of the header's reach).
+  constexpr std::int64_t kStbMaxSide = std::int64_t(1) << 24;
+  if (w > kStbMaxSide || h > kStbMaxSide)
+    fail_input(name, "PNG: " + std::to_string(w) + " x " + std::to_string(h) + " texels: a side is longer than the " +
+                         std::to_string(kStbMaxSide) + " the decoder reads");
   std::size_t at = 8;  // after the signature
   while (at + 8 <= b.size()) {
-    const auto byte = [&](std::size_t i) { return std::uint32_t(static_cast<unsigned char>(b[i])); };
-    const std::uint32_t length = byte(at) << 24 | byte(at + 1) << 16 | byte(at + 2) << 8 | byte(at + 3);
+    const std::uint32_t length = be32(at);
     const std::string type(b.substr(at + 4, 4));
     if (length > b.size() - at - 8 || b.size() - at - 8 - length < 4)
       fail_input(name, "PNG: chunk '" + type + "' claims " + std::to_string(length) + " bytes, more than the file holds");
@@ -445,7 +457,7 @@ void check_bytes_can_hold(std::string_view bytes, Format format, std::int64_t w,
 Image decode_stb(std::string_view bytes, const std::filesystem::path& name, Format format, std::int64_t max_texels) {
   if (format == Format::hdr) check_hdr_complete(bytes, name, max_texels);
   if (format == Format::jpeg) check_jpeg_complete(bytes, name);
-  if (format == Format::png) check_png_chunks(bytes, name);
+  if (format == Format::png) check_png_chunks(bytes, name, max_texels);
   const auto* data = reinterpret_cast<const stbi_uc*>(bytes.data());
   const int size = static_cast<int>(std::min<std::size_t>(bytes.size(), INT32_MAX));
   int w = 0, h = 0, comp = 0;
