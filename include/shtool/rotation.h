@@ -51,9 +51,12 @@ constexpr double default_rotation_tolerance() {
 }
 
 // Error bound (spectral norm of M(Ry(b)) - approximation) of a Taylor method for
-// tilt b at the given order; 0 for exact methods.
+// tilt b at the given order; 0 for exact methods. taylor1.5 also leaves out the
+// off-diagonal part of D2 = D1^2: give its norm when it is known (ShRotation uses the
+// helpers' infinity norm); without it, (order - 1)^2, which bounds it (D2 is negative
+// semidefinite with norm (order - 1)^2).
 double taylor_error_bound(RotationMethod method, int order, double beta,
-                          double ddy_offdiag_norm = 0.0);
+                          std::optional<double> ddy_offdiag_norm = std::nullopt);
 
 template <class T>
 class ShRotation;

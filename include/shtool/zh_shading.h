@@ -75,6 +75,8 @@ class ZhLightTable {
   // a lighting coefficient is NaN or infinite, the resolution is outside
   // 1..kMaxZhLightResolution, or the table would exceed 2^28 values.
   ZhLightTable(int order, std::span<const double> light, int resolution = kDefaultZhLightResolution);
+  // The same from float lighting (ShLighting<float>), widened to double first.
+  ZhLightTable(int order, std::span<const float> light, int resolution = kDefaultZhLightResolution);
 
   int order() const noexcept { return order_; }
   int resolution() const noexcept { return resolution_; }

@@ -862,6 +862,10 @@ TEST(TaylorBounds, OneAndAHalfOrderBoundIsAnUpperBound) {
         const double bound = taylor_error_bound(RotationMethod::taylor15, order, b, n2);
         EXPECT_GE(bound * (1 + 1e-12) + 5e-15, svd) << "N " << order << " b " << b << " |off| " << n2;
       }
+      // Without the norm, the closed form (N - 1)^2, which bounds it.
+      EXPECT_LE(two_norm, (order - 1) * (order - 1) * (1 + 1e-12)) << "N " << order;
+      EXPECT_GE(taylor_error_bound(RotationMethod::taylor15, order, b) * (1 + 1e-12) + 5e-15, svd)
+          << "N " << order << " b " << b;
     }
   }
 }

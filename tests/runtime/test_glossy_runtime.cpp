@@ -32,6 +32,11 @@ TEST(GlossyViewMap, InverseAndUnitLength) {
   EXPECT_EQ(glossy_view_direction(0.5, 0.5), Vec3<double>(0, 0, 1));
   for (const Vec3<double>& odd : {Vec3<double>(0, 0, 0), Vec3<double>(0.1, 0, INFINITY), Vec3<double>(NAN, 0, 1)})
     EXPECT_EQ(glossy_view_square(odd), (std::array<double, 2>{0.5, 0.5}));
+  // Views whose squared length leaves the type's range land where their directions do.
+  for (double s : {1e300, 1e-200})
+    EXPECT_EQ(glossy_view_square(Vec3<double>(s, 0, 0)), (std::array<double, 2>{1, 0.5}));
+  EXPECT_EQ(glossy_view_square(Vec3<double>(1e300, 1e300, 0)), glossy_view_square(Vec3<double>(1, 1, 0)));
+  for (float s : {1e20f, 1e-23f}) EXPECT_EQ(glossy_view_square(Vec3<float>(s, 0, 0)), (std::array<float, 2>{1, 0.5f}));
   const auto below = glossy_view_square(Vec3<double>(1, 0, -0.5));
   EXPECT_NEAR(below[0], 1.0, 1e-15);  // below the horizon: at the horizon, same azimuth
   EXPECT_NEAR(below[1], 0.5, 1e-15);

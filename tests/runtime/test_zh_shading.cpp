@@ -405,6 +405,22 @@ TEST(ZhShading, PerPointCallsAreNoexceptAndFlagMismatchesWithNaN) {
   }
 }
 
+// A float engine builds its table from float lighting: the same nodes as from the
+// lighting widened by hand. A subnormal axis is a direction like any other.
+TEST(ZhLightTable, FloatLightingAndTinyAxes) {
+  Lcg rng{41};
+  const std::vector<double> light = test::random_unit_vector(rng, kOrder);
+  const std::vector<float> light_f(light.begin(), light.end());
+  const ZhLightTable<float> from_float(kOrder, std::span<const float>(light_f), 8);
+  const ZhLightTable<float> from_double(kOrder, std::vector<double>(light_f.begin(), light_f.end()), 8);
+  EXPECT_TRUE(std::equal(from_float.nodes().begin(), from_float.nodes().end(), from_double.nodes().begin(),
+                         from_double.nodes().end()));
+  std::vector<float> tiny(kOrder), unit(kOrder);
+  from_float.lookup(Vec3<float>(1e-40f, 0, 0), tiny);
+  from_float.lookup(Vec3<float>(1, 0, 0), unit);
+  EXPECT_EQ(tiny, unit);
+}
+
 TEST(ZhShading, PerPointCallsAllocateNothing) {
   Lcg rng{37};
   const std::vector<double> light = test::random_unit_vector(rng, kOrder);

@@ -76,7 +76,7 @@ std::optional<RotationMethod> rotation_method_from_name(std::string_view name) {
   return std::nullopt;
 }
 
-double taylor_error_bound(RotationMethod method, int order, double beta, double ddy_offdiag_norm) {
+double taylor_error_bound(RotationMethod method, int order, double beta, std::optional<double> ddy_offdiag_norm) {
   // M(Ry(b)) = exp(b D1) with D1 real antisymmetric (normal), eigenvalues i m for
   // |m| <= l in band l. Truncations of the exponential series are polynomials in D1, so
   // the error is normal too and its norm is the largest scalar error over the spectrum:
@@ -90,7 +90,10 @@ double taylor_error_bound(RotationMethod method, int order, double beta, double 
     case RotationMethod::taylor1: return std::abs(first);
     case RotationMethod::taylor2: return std::abs(second);
     // 1.5th order drops the off-diagonal part of D2 from the 2nd order expansion.
-    case RotationMethod::taylor15: return std::abs(second) + 0.5 * beta * beta * ddy_offdiag_norm;
+    // Without its norm: D2 - diag(D2) has its eigenvalues in [-(N-1)^2, (N-1)^2] (Weyl:
+    // D2's in [-(N-1)^2, 0], the diagonal's, Rayleigh quotients of D2, too).
+    case RotationMethod::taylor15:
+      return std::abs(second) + 0.5 * beta * beta * ddy_offdiag_norm.value_or(double(order - 1) * double(order - 1));
     default: return 0.0;
   }
 }

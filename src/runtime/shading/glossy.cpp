@@ -45,14 +45,18 @@ Vec3<T> glossy_view_direction(T a, T b) noexcept {
 template <class T>
 std::array<T, 2> glossy_view_square(const Vec3<T>& v) noexcept {
   constexpr T quarter = std::numbers::pi_v<T> / 4;
-  const T length = v.norm();
-  if (!(length > 0) || !std::isfinite(length)) return {T(0.5), T(0.5)};  // zero, NaN or infinite: the normal
-  const T z = std::max<T>(v.z() / length, 0);
-  const T planar = std::hypot(v.x(), v.y());
+  // Scaled by its largest component first: the squared length of a valid view overflows
+  // above 1e154 (1e19 in float) and underflows below 1e-154.
+  if (!v.allFinite()) return {T(0.5), T(0.5)};  // NaN or infinite: the normal
+  const T big = v.cwiseAbs().maxCoeff();
+  if (!(big > 0)) return {T(0.5), T(0.5)};  // zero: the normal
+  const Vec3<T> u = v / big;
+  const T z = std::max<T>(u.z() / u.norm(), 0);
+  const T planar = std::hypot(u.x(), u.y());
   if (!(planar > 0)) return {T(0.5), T(0.5)};
   // Disk radius sqrt(1 - z) in the view's azimuth (the inverse of the lift).
   const T r = std::sqrt(std::max<T>(1 - z, 0));
-  T phi = std::atan2(v.y(), v.x());
+  T phi = std::atan2(u.y(), u.x());
   if (phi < -quarter) phi += 8 * quarter;  // [-pi/4, 7 pi/4): one branch per square side
   T sx, sy;
   if (phi < quarter) {

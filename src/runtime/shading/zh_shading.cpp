@@ -93,6 +93,10 @@ T zh_shade_exact(std::span<const T> light, std::span<const Vec3<T>> axes, std::s
 }
 
 template <class T>
+ZhLightTable<T>::ZhLightTable(int order, std::span<const float> light, int resolution)
+    : ZhLightTable(order, std::span<const double>(std::vector<double>(light.begin(), light.end())), resolution) {}
+
+template <class T>
 ZhLightTable<T>::ZhLightTable(int order, std::span<const double> light, int resolution)
     : order_(order), resolution_(resolution) {
   if (order < 1 || order > kMaxOrder)
@@ -155,9 +159,9 @@ typename ZhLightTable<T>::Cell ZhLightTable<T>::locate(const Vec3<T>& s) const n
   const T b = on_x ? s.z() : (on_y ? s.x() : s.y());
   const int face = 2 * k + (major < 0);
   const T half = static_cast<T>(resolution_) / 2;
-  const T scale = half / std::abs(major);
-  // Node coordinates: a = -1 + 2i/R  <=>  i = (a + 1) R/2.
-  const T fu = a * scale + half, fv = b * scale + half;
+  // Node coordinates: a = -1 + 2i/R  <=>  i = (a + 1) R/2. Divided before scaling: half
+  // / |major| overflows for a tiny (subnormal) axis, and 0 times that is NaN.
+  const T fu = a / std::abs(major) * half + half, fv = b / std::abs(major) * half + half;
   // Clamp for the cell index only, written so that NaN selects cell 0 (never an
   // out-of-range read); the fractions keep fu, fv, so NaN input gives NaN output and the
   // last cell is entered at fraction 1 rather than past the table.
