@@ -20,7 +20,7 @@ void setup_deform(CLI::App* sub) {
   sub->callback([req]() {
     const deform::DeformReport report = deform::run_deform(*req);
     std::cerr << "deform: " << report.vertices << " vertices, largest frame rotation " << report.largest_angle
-              << " rad, wrote " << req->out.string() << "\n";
+              << " rad, wrote " << req->out.string() << (req->json.empty() ? "" : ", " + req->json.string()) << "\n";
   });
 }
 

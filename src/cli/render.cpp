@@ -33,8 +33,9 @@ void setup_render(CLI::App* sub) {
                   "transfer (t . e), zh (Eq. 13), zh-table (Eq. 24-25), error (|zh - transfer|), normals, "
                   "membrane (thin-membrane model, Eq. 22-23), wrinkle (wrinkle map, Sec. 4.2), glossy (Eq. 16)",
                   "transfer with --transfer, else glossy for a glossy-zh --fit, else zh");
-  sub->add_option("--alpha", req->alpha, "membrane: transparency in [0, 1]")->capture_default_str();
-  sub->add_option("--alpha-map", req->alpha_map, "membrane: JSON {\"alpha\": [one per vertex]}");
+  CLI::Option* alpha =
+      sub->add_option("--alpha", req->alpha, "membrane: transparency in [0, 1]")->capture_default_str();
+  sub->add_option("--alpha-map", req->alpha_map, "membrane: JSON {\"alpha\": [one per vertex]}")->excludes(alpha);
   sub->add_option("--wrinkle", req->wrinkle, "wrinkle: the map, a wrinkle-zh table (fit-wrinkles --out)");
   sub->add_option("--wrinkle-map", req->wrinkle_map,
                   "wrinkle: JSON {\"x\": [...], \"d\": [...]}, groove position (period 1) and depth per vertex");
@@ -50,6 +51,7 @@ void setup_render(CLI::App* sub) {
     render::RenderRequest r = *req;
     r.camera = parse_camera(*camera);
     const render::RenderResult result = render::run_render(r);
+    for (const std::string& note : result.notes) std::cerr << "render: note: " << note << "\n";
     std::cerr << "render: wrote " << r.out.string() << " (" << result.width << " x " << result.height << ", "
               << result.covered_pixels << " pixels covered, " << result.seconds << " s)\n";
     if (result.negative_pixels)

@@ -3,11 +3,14 @@
 // furnace of a flat Phong surface seen along its normal (albedo 1), render picking the
 // glossy shading from the table, and bad requests refused with a message, exit 1 and no
 // output.
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <tuple>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -119,6 +122,59 @@ TEST(CliFitGlossy, RenderShadesTheTableAsGlossy) {
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("another mesh"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(bad));
+}
+
+// A flat grid whose OBJ carries normals tilted 27 degrees off its face: baked with
+// --normals computed, it must be drawn with computed normals too (the glossy frames are
+// the bake's), so it renders as the same grid written without normals. And a pose without
+// normals of a rest mesh with them, both in the same place, turns no lobe.
+TEST(CliFitGlossy, TheBakesNormalsAreTheOnesDrawnAndDeformed) {
+  std::string v, f, fn;
+  for (int j = 0; j < 4; ++j)
+    for (int i = 0; i < 4; ++i) v += "v " + std::to_string(i - 1.5) + " " + std::to_string(j - 1.5) + " 0\n";
+  for (int j = 0; j < 3; ++j)
+    for (int i = 0; i < 3; ++i) {
+      const int a = 4 * j + i + 1, b = a + 1, c = a + 5, d = a + 4;
+      for (const auto& t : {std::array<int, 3>{a, b, c}, std::array<int, 3>{a, c, d}}) {
+        f += "f " + std::to_string(t[0]) + " " + std::to_string(t[1]) + " " + std::to_string(t[2]) + "\n";
+        fn += "f " + std::to_string(t[0]) + "//1 " + std::to_string(t[1]) + "//1 " + std::to_string(t[2]) + "//1\n";
+      }
+    }
+  const fs::path plain = scratch("grid.obj"), tilted = scratch("grid_vn.obj"), light = scratch("grid_light.json");
+  std::ofstream(plain) << v << f;
+  std::ofstream(tilted) << v << "vn 0.5 0 1\n" << fn;
+  ASSERT_EQ(run_shtool({"light", "--type", "directional", "--dir", "1,0,1", "--order", "4", "--json", light.string()})
+                .exit_code,
+            0);
+  const fs::path a = scratch("grid.shtb"), b = scratch("grid_vn.shtb");
+  for (const auto& [mesh, table, normals] : {std::tuple{plain, a, "auto"}, std::tuple{tilted, b, "computed"}}) {
+    const CommandResult r = run_shtool({"fit-glossy", mesh.string(), "--up", "z", "--rays", "64", "--mode",
+                                        "unshadowed", "--lobes", "1", "--normals", normals, "--out", table.string()});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+  }
+  std::vector<std::vector<float>> images;
+  for (const auto& [mesh, table] : {std::pair{plain, a}, std::pair{tilted, b}}) {
+    const fs::path image = scratch("grid_" + table.stem().string() + ".exr");
+    const CommandResult r =
+        run_shtool({"render", mesh.string(), "--up", "z", "--fit", table.string(), "--light", light.string(),
+                    "--camera", "-2,0,2,0,0,0,0,0,1", "--width", "32", "--height", "32", "--out", image.string()});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    images.push_back(read_image(image).texels);
+  }
+  EXPECT_EQ(images[0], images[1]);
+
+  const fs::path fit = scratch("grid_vn.zh.shtb"), moved = scratch("grid_moved.shtb");
+  CommandResult r = run_shtool(
+      {"fit-zh", tilted.string(), "--up", "z", "--order", "3", "--lobes", "1", "--rays", "16", "--out", fit.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = run_shtool({"deform", fit.string(), "--rest", tilted.string(), "--pose", plain.string(), "--up", "z", "--out",
+                  moved.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  // acos of a trace within rounding of 3: 2e-8; the file's normals against computed ones
+  // gave 0.47.
+  const std::size_t at = r.err.find("largest frame rotation ");
+  ASSERT_NE(at, std::string::npos) << r.err;
+  EXPECT_LT(std::stod(r.err.substr(at + 23)), 1e-6) << r.err;
 }
 
 TEST(CliFitGlossy, BadOptionsAreRefusedWithoutOutput) {

@@ -312,6 +312,12 @@ TEST(Render, BadRequestsAreRefusedByName) {
   const fs::path other_mesh = scratch("tetra.obj");
   shtool::test::write_file(other_mesh, "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 1 4 3\n");
   const std::string t = bakes().shadowed_t.string(), fit = bakes().shadowed_fit.string(), sky = bakes().sky.string();
+  // A fit of another order than the vectors; a table of another kind; an alpha map.
+  const fs::path order2 = scratch("order2.shtb"), env_table = scratch("env.shtb"), alpha = scratch("alpha_bad.json");
+  must(run_shtool({"fit-zh", kSpotObj, "--order", "2", "--lobes", "1", "--rays", "16", "--out", order2.string()}));
+  must(run_shtool({"project-env", std::string(SHTOOL_SOURCE_DIR) + "/data/sky.hdr", "--order", "3", "--json",
+                   scratch("env.json").string(), "--out", env_table.string()}));
+  shtool::test::write_file(alpha, R"({"alpha": [0.5]})");
   struct Bad {
     std::vector<std::string> args;
     const char* message;
@@ -331,8 +337,33 @@ TEST(Render, BadRequestsAreRefusedByName) {
       {{kSpotObj, "--transfer", t, "--light", sky, "--compare", "--shading", "zh"}, "--compare"},
       {{kSpotObj, "--transfer", t, "--light", sky, "--exposure", "1e3"}, "--exposure"},
       {{kSpotObj, "--transfer", t, "--light", sky, "--compare", "--width", "8000", "--height", "8000"}, "2^26"},
+      // Bakes that do not go together.
+      {{kSpotObj, "--fit", order2.string(), "--transfer", t, "--light", sky, "--shading", "error"},
+       "is of order 2 and --transfer"},
+      {{kSpotObj, "--fit", env_table.string(), "--light", sky}, "a table of kind env-sh; render shades a zh-fit"},
+      {{kSpotObj, "--light", sky, "--shading", "membrane", "--alpha", "0.2", "--alpha-map", alpha.string()},
+       "excludes"},
   };
   for (const Bad& b : bad) expect_refused("render", b.args, b.message, scratch("bad.exr"));
+  // A bake the shading does not use is not read, and said so.
+  struct Unused {
+    std::vector<std::string> args;
+    const char* note;
+  } unused[] = {
+      {{"--fit", env_table.string(), "--light", sky, "--shading", "membrane"},
+       "--fit is not used by --shading membrane"},
+      {{"--transfer", t, "--shading", "normals"}, "--transfer is not used by --shading normals"},
+      {{"--transfer", t, "--fit", fit, "--light", sky, "--compare"}, "--fit is not used: --compare fits its own lobes"},
+      {{"--transfer", t, "--fit", fit, "--light", sky}, "--fit is not used by --shading transfer"},
+  };
+  for (const Unused& u : unused) {
+    std::vector<std::string> args = {"render",   kSpotObj, "--width", "16",
+                                     "--height", "16",     "--out",   scratch("unused.exr").string()};
+    args.insert(args.end(), u.args.begin(), u.args.end());
+    const auto r = run_shtool(args);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE(r.err.find(std::string("render: note: ") + u.note), std::string::npos) << r.err;
+  }
   const auto r = run_shtool({"render", kSpotObj, "--transfer", t, "--light", sky, "--out", scratch("x.jpg").string()});
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("--out"), std::string::npos) << r.err;

@@ -20,7 +20,6 @@ namespace shtool::deform {
 
 using fit::deform_fit;
 using fit::fit_for_mesh;
-using fit::rest_to_pose_rotations;
 
 DeformReport run_deform(const DeformRequest& r) {
   if (r.out.empty()) throw InputError("--out is required");
@@ -30,12 +29,12 @@ DeformReport run_deform(const DeformRequest& r) {
   io.input(r.pose, "the posed mesh");
   io.output(r.out, "--out");
   io.output(r.json, "--json");
-  const fit::Mesh rest = fit::load_mesh(r.rest, fit::NormalSource::automatic, r.up);
-  io.inputs(rest.files, "a file of the rest mesh");
-  const fit::Mesh posed = fit::load_mesh(r.pose, fit::NormalSource::automatic, r.up);
-  io.inputs(posed.files, "a file of the posed mesh");
+  if (r.pose.empty()) throw InputError("--pose is required");
   Result<Table> input = read_table(r.fit, TableExpectation{std::string(kZhFitKind), 1, 0});
   if (!input) throw InputError(input.error().message);
+  const fit::PosedMesh meshes = fit::load_posed_mesh(io, r.rest, r.pose, r.up, fit::recorded_normals(input.value()));
+  const fit::Mesh& rest = meshes.rest;
+  const fit::Mesh& posed = *meshes.posed;
   // A texture-space bake's rows are texels, not vertices.
   const nlohmann::json input_meta = table_meta(input.value());
   if (input_meta.is_object() && input_meta.contains("texture"))
@@ -45,7 +44,7 @@ DeformReport run_deform(const DeformRequest& r) {
   Result<ZhFitTable<double>> loaded = ZhFitTable<double>::from_table(input.value());
   if (!loaded) throw InputError(r.fit.string() + ": " + loaded.error().message);
   const ZhFitTable<double> fit = fit_for_mesh(std::move(loaded).value(), rest, r.fit.string());
-  const std::vector<Eigen::Matrix3d> rotations = rest_to_pose_rotations(rest, posed);
+  const std::vector<Eigen::Matrix3d>& rotations = meshes.rotations;
   const ZhFitTable<double> moved = deform_fit(fit, rotations);
 
   DeformReport report;

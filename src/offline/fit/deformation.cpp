@@ -79,7 +79,10 @@ std::vector<Eigen::Matrix3d> rest_to_pose_rotations(const Mesh& rest, const Mesh
     throw InputError("--pose: " + std::to_string(posed.positions.size()) + " vertices and " +
                      std::to_string(posed.triangles.size()) + " triangles against the rest mesh's " +
                      std::to_string(rest.positions.size()) + " and " + std::to_string(rest.triangles.size()) +
-                     ": a pose must have the rest mesh's topology");
+                     ": a pose must have the rest mesh's topology" +
+                     (rest.positions.size() == posed.positions.size()
+                          ? " (a triangle the pose collapses to zero area is dropped when it is read)"
+                          : ""));
   for (std::size_t t = 0; t < rest.triangles.size(); ++t)
     if (rest.triangles[t] != posed.triangles[t])
       throw InputError("--pose: triangle " + std::to_string(t) + " differs from the rest mesh's");
@@ -147,13 +150,19 @@ ZhFitTable<double> fit_for_mesh(ZhFitTable<double> fit, const Mesh& mesh, const 
 }
 
 PosedMesh load_posed_mesh(JobOutputs& io, const std::filesystem::path& mesh, const std::filesystem::path& pose,
-                          UpAxis up) {
-  PosedMesh m{load_mesh(mesh, NormalSource::automatic, up), std::nullopt, {}};
+                          UpAxis up, NormalSource normals) {
+  PosedMesh m{load_mesh(mesh, normals, up), std::nullopt, {}};
   io.inputs(m.rest.files, "a file of the mesh");
   if (!pose.empty()) {
-    m.posed = load_mesh(pose, NormalSource::automatic, up);
+    m.posed = load_mesh(pose, normals, up);
     io.inputs(m.posed->files, "a file of the --pose mesh");
-    m.rotations = rest_to_pose_rotations(m.rest, *m.posed);
+    if (m.rest.normals_from_file == m.posed->normals_from_file) {
+      m.rotations = rest_to_pose_rotations(m.rest, *m.posed);
+    } else {
+      const Mesh rest = load_mesh(mesh, NormalSource::computed, up),
+                 posed = load_mesh(pose, NormalSource::computed, up);
+      m.rotations = rest_to_pose_rotations(rest, posed);
+    }
   }
   return m;
 }

@@ -49,12 +49,15 @@ struct PosedMesh {
   const Mesh& shown() const { return posed ? *posed : rest; }
 };
 
-// Reads `mesh` and, unless `pose` is empty, `pose` (normals computed where the file's are
-// incomplete, OBJ up axis `up`), declaring their files inputs of `io` ("a file of the
-// mesh", "a file of the --pose mesh"). Throws InputError as load_mesh and
+// Reads `mesh` and, unless `pose` is empty, `pose`, both with `normals` (the bake's:
+// recorded_normals) and OBJ up axis `up`, declaring their files inputs of `io` ("a file
+// of the mesh", "a file of the --pose mesh"). Where one of the two has normals of its own
+// and the other not, the rotations come from computed normals on both: a pose written
+// without normals (scripts/pose_mesh.py --bend) would otherwise turn every frame by the
+// gap between the file's normals and computed ones. Throws InputError as load_mesh and
 // rest_to_pose_rotations do.
 PosedMesh load_posed_mesh(JobOutputs& io, const std::filesystem::path& mesh, const std::filesystem::path& pose,
-                          UpAxis up);
+                          UpAxis up, NormalSource normals);
 
 // The fit carried to the pose: axes s_i -> R_p s_i; lobe coefficients unchanged (a ZH lobe
 // is rotation invariant about its axis); a directly stored linear band rotated as band 1

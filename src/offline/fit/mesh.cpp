@@ -313,6 +313,22 @@ void check_mesh_crc32(std::uint64_t baked, std::string_view baked_normals, const
                    " (positions, normals and triangles in shtool's frame); give the mesh it was baked on");
 }
 
+NormalSource recorded_normals(std::string_view name) {
+  for (const auto& [text, source] : normal_source_names())
+    if (text == name) return source;
+  return NormalSource::automatic;
+}
+
+NormalSource recorded_normals(const Table& table) {
+  const nlohmann::json generator = nlohmann::json::parse(table.generator, nullptr, false);
+  if (!generator.is_object() || !generator.contains("parameters") || !generator["parameters"].is_object())
+    return NormalSource::automatic;
+  const nlohmann::json& params = generator["parameters"];
+  return params.contains("normals") && params["normals"].is_string()
+             ? recorded_normals(params["normals"].get<std::string>())
+             : NormalSource::automatic;
+}
+
 void check_same_mesh(const Table& table, const Mesh& mesh, const std::filesystem::path& file, const std::string& what) {
   const nlohmann::json generator = nlohmann::json::parse(table.generator, nullptr, false);
   if (!generator.is_object() || !generator.contains("parameters") || !generator["parameters"].is_object()) return;

@@ -129,6 +129,13 @@ Mesh load_mesh(const std::filesystem::path& path, NormalSource normals = NormalS
 // when the bake computed its normals and the file has its own. A table without the
 // record (fit-zh --transfer, deform, older versions) is not checked.
 void check_same_mesh(const Table& table, const Mesh& mesh, const std::filesystem::path& file, const std::string& what);
+// The --normals a bake's mesh was loaded with: a table's generator parameters.normals,
+// or a transfer file's record ("auto", "file", "computed"); auto where none is recorded.
+// A command that draws or deforms the bake loads its mesh the same way, so that the
+// frames it builds are the bake's (a bake that computed its normals from a file with its
+// own would otherwise be drawn with the file's).
+NormalSource recorded_normals(const Table& table);
+NormalSource recorded_normals(std::string_view name);
 // The same check of a recorded checksum and the --normals it was loaded with (a transfer
 // file's record).
 void check_mesh_crc32(std::uint64_t baked, std::string_view baked_normals, const Mesh& mesh,

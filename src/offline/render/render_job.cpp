@@ -319,6 +319,16 @@ RenderResult run_render(const RenderRequest& r) {
   const bool no_bake = shading == Shading::membrane || shading == Shading::normals || shading == Shading::wrinkle;
   if (!no_bake && r.fit.empty() && r.transfer.empty())
     throw InputError("one of --fit and --transfer is required");
+  // A bake the image does not use is not read, and said so.
+  RenderResult result;
+  const bool uses_fit = needs_fit || shading == Shading::glossy;
+  const std::string shading_name = name_of(shading, shading_names());
+  if (!r.fit.empty() && !uses_fit)
+    result.notes.push_back(r.compare ? "--fit is not used: --compare fits its own lobes (N = 1..4) to --transfer"
+                                     : "--fit is not used by --shading " + shading_name +
+                                           (shading == Shading::transfer ? " (--shading error compares the two)" : ""));
+  if (!r.transfer.empty() && !needs_transfer)
+    result.notes.push_back("--transfer is not used by --shading " + shading_name);
   if (!(r.alpha >= 0 && r.alpha <= 1)) throw InputError("--alpha must be between 0 and 1");
   if (!r.alpha_map.empty() && shading != Shading::membrane)
     throw InputError("--alpha-map applies to --shading membrane only");
@@ -344,21 +354,37 @@ RenderResult run_render(const RenderRequest& r) {
   io.output(r.out, "--out");
   (void)lighting::encode_image_for(r.out, lighting::Image{1, 1, 4, std::vector<float>(4, 0.0f)}, "--out");
 
-  const fit::PosedMesh meshes = fit::load_posed_mesh(io, r.mesh, r.pose, r.up);
+  // The bake is read before the mesh: the mesh is loaded with the normals it was baked
+  // with (fit::recorded_normals), so that its frames and checksum are the bake's.
+  VertexData data;
+  std::optional<Table> fit_table;
+  if (uses_fit) {
+    Result<Table> read = read_table(r.fit);
+    if (!read) throw InputError("--fit: " + read.error().message);
+    fit_table = std::move(read).value();
+    if (fit_table->kind != kZhFitKind && fit_table->kind != kGlossyZhKind)
+      throw InputError("--fit " + r.fit.string() + ": a table of kind " + fit_table->kind +
+                       "; render shades a zh-fit (fit-zh, deform) or glossy-zh (fit-glossy) table" +
+                       (fit_table->kind == kWrinkleZhKind ? " (a wrinkle table is --wrinkle's)" : ""));
+  }
+  fit::TransferMeshRecord record;
+  if (needs_transfer)
+    data.transfer =
+        fit::parse_transfer_json(read_input_file(r.transfer, "--transfer"), r.transfer, data.transfer_order, &record);
+  const fit::NormalSource normals =
+      fit_table ? fit::recorded_normals(*fit_table) : fit::recorded_normals(record.normals);
+  const fit::PosedMesh meshes = fit::load_posed_mesh(io, r.mesh, r.pose, r.up, normals);
   const fit::Mesh& rest = meshes.rest;
   const std::optional<fit::Mesh>& posed = meshes.posed;
   const std::vector<Eigen::Matrix3d>& rotations = meshes.rotations;
   const fit::Mesh& mesh = meshes.shown();
-  VertexData data;
   std::optional<GlossyFit<double>> glossy;
   std::vector<Eigen::Matrix3d> frames;  // glossy: the vertex frames of the mesh rendered
   std::optional<ZhFitTable<double>> zh_fit;  // a per-vertex fit-zh bake
   std::optional<TextureBake> texture;        // a fit-zh --texture bake: its maps are sampled per pixel
   if (needs_fit) {
-    // Read once; its kind and meta say how it is shaded.
-    Result<Table> read = read_table(r.fit);
-    if (!read) throw InputError("--fit: " + read.error().message);
-    const Table& table = read.value();
+    // Its kind and meta say how it is shaded.
+    const Table& table = *fit_table;
     if (table.kind_version.rfind("1.", 0) != 0)
       throw InputError("--fit " + r.fit.string() + ": kind_version " + table.kind_version + " is not supported");
     check_same_up(table, rest.up, "--fit " + r.fit.string(), r.mesh.string());
@@ -379,12 +405,10 @@ RenderResult run_render(const RenderRequest& r) {
   }
   if (shading == Shading::glossy) {
     if (!glossy) {
-      Result<Table> read = read_table(r.fit);
-      if (!read) throw InputError("--fit: " + read.error().message);
-      Result<GlossyFit<double>> g = GlossyFit<double>::from_table(read.value());
+      Result<GlossyFit<double>> g = GlossyFit<double>::from_table(*fit_table);
       if (!g) throw InputError("--fit " + r.fit.string() + ": " + g.error().message);
-      check_same_up(read.value(), rest.up, "--fit " + r.fit.string(), r.mesh.string());
-      fit::check_same_mesh(read.value(), rest, r.mesh, "--fit " + r.fit.string());
+      check_same_up(*fit_table, rest.up, "--fit " + r.fit.string(), r.mesh.string());
+      fit::check_same_mesh(*fit_table, rest, r.mesh, "--fit " + r.fit.string());
       glossy.emplace(std::move(g).value());
     }
     glossy = glossy_fit_for_mesh(std::move(*glossy), rest, "--fit " + r.fit.string());
@@ -392,9 +416,6 @@ RenderResult run_render(const RenderRequest& r) {
     frames = fit::vertex_frames(rest, mesh);
   }
   if (needs_transfer) {
-    fit::TransferMeshRecord record;
-    data.transfer = fit::parse_transfer_json(read_input_file(r.transfer, "--transfer"), r.transfer,
-                                             data.transfer_order, &record);
     const std::string& transfer_up = record.mesh_up;
     if (!transfer_up.empty() && transfer_up != up_axis_name(rest.up))
       throw InputError("--transfer " + r.transfer.string() + " was simulated on a mesh read " + transfer_up +
@@ -431,6 +452,10 @@ RenderResult run_render(const RenderRequest& r) {
                      " was baked on (was it baked on another mesh?)");
   if (zh_fit) {
     data.fit = fit::fit_for_mesh(std::move(*zh_fit), rest, "--fit " + r.fit.string());
+    if (needs_transfer && data.fit->order != data.transfer_order)
+      throw InputError("--fit " + r.fit.string() + " is of order " + std::to_string(data.fit->order) +
+                       " and --transfer " + r.transfer.string() + " of order " + std::to_string(data.transfer_order) +
+                       ": the error image compares a fit with the vectors it was fitted to");
     if (posed) data.fit = fit::deform_fit(*data.fit, rotations);
   }
   if (shading == Shading::membrane) {
@@ -478,7 +503,6 @@ RenderResult run_render(const RenderRequest& r) {
   const auto start = std::chrono::steady_clock::now();
   const Camera camera = r.camera ? *r.camera : view::frame_mesh(mesh, r.fov, double(r.width) / r.height);
   const Hits hits = cast_primary_rays(mesh, r, camera, threads);
-  RenderResult result;
   result.covered_pixels = hits.covered();
   lighting::Image image;
   if (glossy) {

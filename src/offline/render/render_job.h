@@ -69,6 +69,7 @@ struct RenderResult {
   double seconds = 0;  // rays, shading (and the fits of --compare), not reading or writing files
   std::vector<double> compare_nrms;  // --compare: normalized RMS of the N = 1..4 fits
   std::optional<double> reference_nrms;  // --reference: the image's normalized RMS against it
+  std::vector<std::string> notes;        // inputs given that this shading does not use
 };
 
 // Checks the request (InputError naming the option: missing inputs for the shading, a

@@ -95,15 +95,15 @@ ExportWebResult run_export_web(const ExportWebRequest& r) {
   io.input(r.light, "the --light");
   io.input(r.probes, "the --probes grid");
 
-  const fit::PosedMesh meshes = fit::load_posed_mesh(io, r.mesh, r.pose, r.up);
-  const fit::Mesh& mesh = meshes.shown();
-
   Result<Table> read = read_table(r.fit);
   if (!read) throw InputError("--fit: " + read.error().message);
   const Table& table = read.value();
   if (table.kind != kZhFitKind)
     throw InputError("--fit " + r.fit.string() + ": a table of kind " + table.kind +
                      "; export-web shades a per-vertex zh-fit (fit-zh --out)");
+  const fit::PosedMesh meshes = fit::load_posed_mesh(io, r.mesh, r.pose, r.up, fit::recorded_normals(table));
+  const fit::Mesh& mesh = meshes.shown();
+
   check_same_up(table, meshes.rest.up, "--fit " + r.fit.string(), r.mesh.string());
   fit::check_same_mesh(table, meshes.rest, r.mesh, "--fit " + r.fit.string());
   {
