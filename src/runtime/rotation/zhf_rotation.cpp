@@ -74,8 +74,8 @@ Result<ZhfLobes> ZhfLobes::from_table(const Table& t) {
   for (int l = 0; l < want; ++l)
     if (l >= nb || b[l] != l)
       return bad("does not hold band " + std::to_string(l) + " at position " + std::to_string(l) +
-                           " (bands 0.." + std::to_string(want - 1) + " are needed; a per-band search table "
-                           "cannot rotate on its own)");
+                 " (a rotation table holds every band from 0 up, in order; this one's first is band " +
+                 std::to_string(b[0]) + ": a per-band search table cannot rotate on its own)");
   const std::size_t nd = dirs.value().size() / 3;
   if (offset.value().size() != b.size() || cond.value().size() != b.size() || dirs.value().size() != 3 * nd)
     return bad("arrays 'direction_offset', 'cond' and 'bands' differ in length");
