@@ -326,6 +326,8 @@ class ShRotation {
   double taylor_widest_sin2_ = 0;  // the largest of the three: one test for generic rotations
   std::vector<T> cos_a_, sin_a_, cos_b_, sin_b_, cos_g_, sin_g_;  // cos(m angle), m < N
   std::vector<T> dense_;
+  // The reference recurrence's last two bands in long double (sized on its first use).
+  std::vector<long double> reference_bands_;
 };
 
 }  // namespace shtool

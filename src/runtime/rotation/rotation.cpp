@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <string>
 #include <type_traits>
+#include <utility>
 
 #include "shtool/sh.h"
 #include "kernels/rotation_kernels.h"
@@ -868,56 +869,71 @@ bool ShRotation<T>::apply_channels(std::span<const T> in, std::span<T> out, int 
 // Ivanic-Ruedenberg recurrences (J. Phys. Chem. 1996, with the 1998 errata), written
 // for real SH without the Condon-Shortley phase, whose band-1 matrix is R itself in
 // the (y, z, x) order. Our basis differs from theirs by (-1)^m on every function, so
-// the result is conjugated by diag((-1)^m) at the end.
+// the result is conjugated by diag((-1)^m) at the end. Each band is built from the one
+// before and inherits its rounding, which grows band by band (in double a band's norm
+// moved by 5e-13 at order 64 and 6e-7 at 128): the bands are carried in long double
+// and stored as T.
 template <class T>
 void ShRotation<T>::build_reference(const Mat3<T>& r) {
+  using W = long double;
   // Band 0.
   dense_[0] = 1;
   if (order_ < 2) return;
+  const std::size_t largest = static_cast<std::size_t>(2 * order_ - 1) * (2 * order_ - 1);
+  if (reference_bands_.size() < 2 * largest) reference_bands_.assign(2 * largest, W(0));
+  W* prev = reference_bands_.data();
+  W* cur = prev + largest;
   // Band 1 in IR's basis: index m = -1, 0, 1 <-> y, z, x.
   const int axis[3] = {1, 2, 0};
-  T* b1 = dense_.data() + block_offset(1);
+  W b1[9];
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) b1[i * 3 + j] = r(axis[i], axis[j]);
-  auto r1 = [b1](int i, int j) { return b1[(i + 1) * 3 + (j + 1)]; };
+  std::copy(b1, b1 + 9, prev);
+  for (int k = 0; k < 9; ++k) dense_[block_offset(1) + k] = static_cast<T>(b1[k]);
+  auto r1 = [&b1](int i, int j) { return b1[(i + 1) * 3 + (j + 1)]; };
 
   for (int l = 2; l < order_; ++l) {
-    const T* prev = dense_.data() + block_offset(l - 1);
-    T* cur = dense_.data() + block_offset(l);
     const int ps = 2 * l - 1, cs = 2 * l + 1;
     auto mp = [prev, ps, l](int a, int b) { return prev[(a + l - 1) * ps + (b + l - 1)]; };
     // P^l_{i,a,b}
-    auto P = [&](int i, int a, int b) -> T {
+    auto P = [&](int i, int a, int b) -> W {
       if (b == l) return r1(i, 1) * mp(a, l - 1) - r1(i, -1) * mp(a, -l + 1);
       if (b == -l) return r1(i, 1) * mp(a, -l + 1) + r1(i, -1) * mp(a, l - 1);
       return r1(i, 0) * mp(a, b);
     };
     for (int m = -l; m <= l; ++m) {
       const int am = std::abs(m);
-      const T d = m == 0 ? T(1) : T(0);
+      const W d = m == 0 ? W(1) : W(0);
       for (int n = -l; n <= l; ++n) {
-        const T denom = std::abs(n) == l ? T(2 * l * (2 * l - 1)) : T((l + n) * (l - n));
-        const T u = std::sqrt(T((l + m) * (l - m)) / denom);
-        const T v = T(0.5) * std::sqrt((1 + d) * T((l + am - 1) * (l + am)) / denom) * (1 - 2 * d);
-        const T w = T(-0.5) * std::sqrt(T((l - am - 1) * (l - am)) / denom) * (1 - d);
-        T value = 0;
+        const W denom = std::abs(n) == l ? W(2 * l * (2 * l - 1)) : W((l + n) * (l - n));
+        const W u = std::sqrt(W((l + m) * (l - m)) / denom);
+        const W v = W(0.5) * std::sqrt((1 + d) * W((l + am - 1) * (l + am)) / denom) * (1 - 2 * d);
+        const W w = W(-0.5) * std::sqrt(W((l - am - 1) * (l - am)) / denom) * (1 - d);
+        W value = 0;
         if (u != 0) value += u * P(0, m, n);
         if (v != 0) {
-          T V;
+          W V;
           if (m == 0) V = P(1, 1, n) + P(-1, -1, n);
-          else if (m > 0) V = P(1, m - 1, n) * std::sqrt(T(1) + (m == 1)) - P(-1, -m + 1, n) * T(m != 1);
-          else V = P(1, m + 1, n) * T(m != -1) + P(-1, -m - 1, n) * std::sqrt(T(1) + (m == -1));
+          else if (m > 0)
+            V = P(1, m - 1, n) * std::sqrt(W(1) + (m == 1)) - P(-1, -m + 1, n) * W(m != 1);
+          else
+            V = P(1, m + 1, n) * W(m != -1) + P(-1, -m - 1, n) * std::sqrt(W(1) + (m == -1));
           value += v * V;
         }
         if (w != 0) {
-          T W;
-          if (m > 0) W = P(1, m + 1, n) + P(-1, -m - 1, n);
-          else W = P(1, m - 1, n) - P(-1, -m + 1, n);
-          value += w * W;
+          W Wt;
+          if (m > 0)
+            Wt = P(1, m + 1, n) + P(-1, -m - 1, n);
+          else
+            Wt = P(1, m - 1, n) - P(-1, -m + 1, n);
+          value += w * Wt;
         }
         cur[(m + l) * cs + (n + l)] = value;
       }
     }
+    T* out = dense_.data() + block_offset(l);
+    for (int k = 0; k < cs * cs; ++k) out[k] = static_cast<T>(cur[k]);
+    std::swap(prev, cur);
   }
   // Condon-Shortley phase: entry (m, n) of every band picks up (-1)^(m + n).
   for (int l = 1; l < order_; ++l) {
