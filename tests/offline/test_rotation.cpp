@@ -248,10 +248,11 @@ TEST(RotationExact, ReferenceBlocksAreOrthogonal) {
 // The reference recurrence builds each band from the one before: at high orders its
 // rounding compounds. Carried in long double, R then R^T returns a vector within 7e-15 at
 // N = 64 and 1.3e-9 at 128 (in double: 4e-12 and 3e-6), and no band's norm moves by more
-// than 3e-15 at 64 (5e-13 in double).
+// than 2.4e-15 at 64 built by GCC at -O3, 1.4e-14 by clang at -O1 (the apply's sums; 5e-13
+// in double).
 TEST(RotationExact, ReferenceStaysExactAtHighOrders) {
   std::mt19937_64 rng(106);
-  for (const auto& [order, round_trip, band_norm] : {std::tuple{64, 5e-14, 1e-14}, std::tuple{128, 1e-8, 3e-9}}) {
+  for (const auto& [order, round_trip, band_norm] : {std::tuple{64, 5e-14, 5e-14}, std::tuple{128, 1e-8, 3e-9}}) {
     const Mat3<double> r = random_rotation(rng);
     const std::vector<double> f = random_coeffs(order, rng);
     const std::vector<double> g = rotate<double>(order, r, RotationMethod::reference, f);

@@ -154,7 +154,9 @@ PosedMesh load_posed_mesh(JobOutputs& io, const std::filesystem::path& mesh, con
   PosedMesh m{load_mesh(mesh, normals, up), std::nullopt, {}};
   io.inputs(m.rest.files, "a file of the mesh");
   if (!pose.empty()) {
-    m.posed = load_mesh(pose, normals, up);
+    // A bake that required the file's normals still takes a pose without them (posing
+    // tools drop them): the pose's own where it has them, computed otherwise.
+    m.posed = load_mesh(pose, normals == NormalSource::file ? NormalSource::automatic : normals, up);
     io.inputs(m.posed->files, "a file of the --pose mesh");
     if (m.rest.normals_from_file == m.posed->normals_from_file) {
       m.rotations = rest_to_pose_rotations(m.rest, *m.posed);

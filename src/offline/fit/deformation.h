@@ -50,12 +50,11 @@ struct PosedMesh {
 };
 
 // Reads `mesh` and, unless `pose` is empty, `pose`, both with `normals` (the bake's:
-// recorded_normals) and OBJ up axis `up`, declaring their files inputs of `io` ("a file
-// of the mesh", "a file of the --pose mesh"). Where one of the two has normals of its own
-// and the other not, the rotations come from computed normals on both: a pose written
-// without normals (scripts/pose_mesh.py --bend) would otherwise turn every frame by the
-// gap between the file's normals and computed ones. Throws InputError as load_mesh and
-// rest_to_pose_rotations do.
+// recorded_normals; a pose of a `file` bake with automatic ones) and OBJ up axis `up`, declaring their files inputs of
+// `io` ("a file of the mesh", "a file of the --pose mesh"). Where one of the two has normals of its own and the other
+// not, the rotations come from computed normals on both: a pose written without normals (scripts/pose_mesh.py --bend)
+// would otherwise turn every frame by the gap between the file's normals and computed ones. Throws InputError as
+// load_mesh and rest_to_pose_rotations do.
 PosedMesh load_posed_mesh(JobOutputs& io, const std::filesystem::path& mesh, const std::filesystem::path& pose,
                           UpAxis up, NormalSource normals);
 
