@@ -179,10 +179,11 @@ def test_the_gil_is_released_during_a_long_call():
 
 def test_a_call_holding_the_gil_is_caught():
     # The measure itself: sorting a list of ints holds the GIL throughout (no bytecode
-    # runs while it compares), so the share left to the measuring thread is far below the bound.
+    # runs while it compares), so the share left to the measuring thread is far below the
+    # bound: under 1 % on a quiet machine, 2.6 % once during a whole CI run on 2 cores.
     values = np.random.default_rng(17).permutation(1_000_000).tolist()
     share, took = gil_free_share(lambda: sorted(values))
-    assert took > 0.1 and share < RELEASED_SHARE / 4
+    assert took > 0.1 and share < RELEASED_SHARE / 2
 
 
 def test_empty_batches():
