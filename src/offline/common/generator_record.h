@@ -7,8 +7,15 @@
 
 #include <nlohmann/json.hpp>
 
+#include "shtool/table.h"
+
 namespace shtool {
 
 nlohmann::json generator_record(const std::string& command, const nlohmann::json& parameters);
+
+// The "parameters" object of a table's generator record; an empty object where the
+// record is not JSON or holds none (a table written by another tool), so that a caller
+// reads only the keys it needs and decides what their absence means.
+nlohmann::json recorded_parameters(const Table& table);
 
 }  // namespace shtool

@@ -5,8 +5,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "common/input_file.h"
+#include "common/generator_record.h"
 #include "common/input_error.h"
+#include "common/input_file.h"
 
 namespace shtool {
 
@@ -32,10 +33,7 @@ void check_same_up(const Table& table, UpAxis mesh_up, const std::string& what, 
   std::string table_up = "z";
   if (!meta.is_object() || !meta.contains(kMeshUpKey)) {
     // A fit of given vectors that carried no record: nothing says which frame they are in.
-    const nlohmann::json generator = nlohmann::json::parse(table.generator, nullptr, false);
-    if (generator.is_object() && generator.contains("parameters") && generator["parameters"].is_object() &&
-        generator["parameters"].contains("transfer"))
-      return;
+    if (recorded_parameters(table).contains("transfer")) return;
   }
   if (meta.is_object() && meta.contains(kMeshUpKey)) {
     const nlohmann::json& up = meta[kMeshUpKey];

@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 #include <tiny_obj_loader.h>
 
+#include "common/generator_record.h"
 #include "common/input_error.h"
 #include "common/input_file.h"
 #include "shtool/table.h"
@@ -320,19 +321,14 @@ NormalSource recorded_normals(std::string_view name) {
 }
 
 NormalSource recorded_normals(const Table& table) {
-  const nlohmann::json generator = nlohmann::json::parse(table.generator, nullptr, false);
-  if (!generator.is_object() || !generator.contains("parameters") || !generator["parameters"].is_object())
-    return NormalSource::automatic;
-  const nlohmann::json& params = generator["parameters"];
+  const nlohmann::json params = recorded_parameters(table);
   return params.contains("normals") && params["normals"].is_string()
              ? recorded_normals(params["normals"].get<std::string>())
              : NormalSource::automatic;
 }
 
 void check_same_mesh(const Table& table, const Mesh& mesh, const std::filesystem::path& file, const std::string& what) {
-  const nlohmann::json generator = nlohmann::json::parse(table.generator, nullptr, false);
-  if (!generator.is_object() || !generator.contains("parameters") || !generator["parameters"].is_object()) return;
-  const nlohmann::json& params = generator["parameters"];
+  const nlohmann::json params = recorded_parameters(table);
   if (!params.contains("mesh_crc32")) return;
   if (!params["mesh_crc32"].is_number_unsigned())
     throw InputError(what + ": generator.parameters.mesh_crc32 must be an unsigned integer");
