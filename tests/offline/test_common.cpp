@@ -16,6 +16,7 @@
 #include <csignal>
 #include <functional>
 
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -235,6 +236,52 @@ TEST_F(CommonFiles, OutputPathChecksNameTheProblem) {
   }
   EXPECT_THROW(check_output_path(dir_ / "no" / "x", "--json"), InputError);
   EXPECT_NO_THROW(check_output_path(dir_ / "x", "--json"));
+}
+
+// A rename into place replaces whatever the path is: a link that names a file is written
+// through (the link stays), and a FIFO or a device is refused before any work (the rename
+// would have turned /dev/full, or the FIFO a reader waits on, into a regular file).
+TEST_F(CommonFiles, OutputsWriteThroughLinksAndRefuseSpecialFiles) {
+  write_file_atomically(dir_ / "target.json", "old");
+  fs::create_symlink("target.json", dir_ / "link.json");
+  JobOutputs outputs;
+  outputs.output(dir_ / "link.json", "--out");
+  outputs.set("--out", "new");
+  outputs.commit();
+  EXPECT_TRUE(fs::is_symlink(dir_ / "link.json"));
+  EXPECT_EQ(read(dir_ / "target.json"), "new");
+  // A chain of links, and one whose file does not exist yet.
+  fs::create_symlink("link.json", dir_ / "chain.json");
+  write_file_atomically(dir_ / "chain.json", "chained");
+  EXPECT_TRUE(fs::is_symlink(dir_ / "chain.json"));
+  EXPECT_EQ(read(dir_ / "target.json"), "chained");
+  fs::create_symlink("later.json", dir_ / "dangling.json");
+  write_file_atomically(dir_ / "dangling.json", "created");
+  EXPECT_TRUE(fs::is_symlink(dir_ / "dangling.json"));
+  EXPECT_EQ(read(dir_ / "later.json"), "created");
+  // The input seen through a link is still the input.
+  JobOutputs same;
+  same.input(dir_ / "target.json", "the table");
+  EXPECT_THROW(same.output(dir_ / "link.json", "--out"), InputError);
+
+  ASSERT_EQ(::mkfifo((dir_ / "fifo").c_str(), 0600), 0);
+  for (const fs::path& special : {dir_ / "fifo", fs::path("/dev/null")}) {
+    try {
+      JobOutputs o;
+      o.output(special, "--json");
+      FAIL() << special;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("--json: cannot write '" + special.string() + "': it is a"),
+                std::string::npos)
+          << e.what();
+    }
+    EXPECT_THROW(write_file_atomically(special, "x"), InputError);
+  }
+  EXPECT_TRUE(fs::is_fifo(dir_ / "fifo"));
+  EXPECT_TRUE(fs::is_character_file("/dev/null"));
+  fs::create_symlink("fifo", dir_ / "to-fifo");
+  EXPECT_THROW(write_file_atomically(dir_ / "to-fifo", "x"), InputError);
+  EXPECT_TRUE(fs::is_fifo(dir_ / "fifo"));
 }
 
 TEST_F(CommonFiles, InputReaderMessages) {

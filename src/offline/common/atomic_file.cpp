@@ -143,7 +143,7 @@ CommitGuard::~CommitGuard() {
   }
 }
 
-PendingFile::PendingFile(std::filesystem::path target) : target_(std::move(target)) {
+PendingFile::PendingFile(std::filesystem::path target) : target_(output_target(target)) {
   check_output_path(target_, "");
   remove_stale_temporaries(target_);
   int open_errno = 0;
@@ -253,11 +253,37 @@ void check_output_path(const std::filesystem::path& path, std::string_view what)
   const std::string prefix = what.empty() ? std::string() : std::string(what) + ": ";
   if (path.empty()) throw InputError(prefix + "empty output path");
   std::error_code ec;
-  if (std::filesystem::is_directory(path, ec))
+  const std::filesystem::file_status st = std::filesystem::status(path, ec);
+  if (std::filesystem::is_directory(st))
     throw InputError(prefix + "cannot write '" + path.string() + "': it is a folder, not a file");
-  const std::filesystem::path dir = folder_of(path);
+  if (std::filesystem::exists(st) && !std::filesystem::is_regular_file(st)) {
+    const char* kind = std::filesystem::is_fifo(st)             ? "a FIFO"
+                       : std::filesystem::is_character_file(st) ? "a character device"
+                       : std::filesystem::is_block_file(st)     ? "a block device"
+                       : std::filesystem::is_socket(st)         ? "a socket"
+                                                                : "not a regular file";
+    throw InputError(prefix + "cannot write '" + path.string() + "': it is " + kind +
+                     "; shtool writes each output whole to a temporary file and renames it into place, "
+                     "which would replace it: give a file path");
+  }
+  const std::filesystem::path dir = folder_of(output_target(path));
   if (!std::filesystem::is_directory(dir, ec))
     throw InputError(prefix + "cannot write '" + path.string() + "': folder '" + dir.string() + "' does not exist");
+}
+
+std::filesystem::path output_target(const std::filesystem::path& path) {
+  // The kernel's own limit on links followed in one lookup (Linux's MAXSYMLINKS).
+  constexpr int kMaxLinks = 40;
+  std::filesystem::path p = path;
+  for (int hops = 0; hops < kMaxLinks; ++hops) {
+    std::error_code ec;
+    if (!std::filesystem::is_symlink(std::filesystem::symlink_status(p, ec))) return p;
+    const std::filesystem::path link = std::filesystem::read_symlink(p, ec);
+    if (ec) return p;
+    p = link.is_absolute() ? link : folder_of(p) / link;
+  }
+  throw InputError("cannot write '" + path.string() + "': more than " + std::to_string(kMaxLinks) +
+                   " symbolic links to follow");
 }
 
 }  // namespace shtool

@@ -74,8 +74,15 @@ std::filesystem::path temporary_name_for(const std::filesystem::path& target);
 bool same_file(const std::filesystem::path& a, const std::filesystem::path& b);
 
 // Checks, before any work, that `path` can be written: its folder exists and is a
-// folder, and the path itself is not a folder. `what` names the option in the message
-// ("--out"; empty: no prefix).
+// folder, and the path (its symbolic links followed) is a regular file or nothing: not
+// a folder, and not a FIFO, device or socket, which the rename into place would replace
+// instead of writing to. `what` names the option in the message ("--out"; empty: no
+// prefix).
 void check_output_path(const std::filesystem::path& path, std::string_view what);
+
+// The file a write to `path` replaces: `path` with its own symbolic links followed (a
+// link that names a file is written through, as `cp` does, rather than replaced by a
+// file); other paths as given.
+std::filesystem::path output_target(const std::filesystem::path& path);
 
 }  // namespace shtool

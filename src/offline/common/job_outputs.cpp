@@ -54,7 +54,8 @@ void JobOutputs::output(const std::filesystem::path& path, std::string option) {
   for (const Output& o : outputs_)
     if (same_file(path, o.path))
       throw InputError(option + " and " + o.option + " name the same file " + quoted(path));
-  outputs_.push_back({path, std::move(option), {}, false, std::nullopt});
+  // The path a link names, so that the rename writes through the link.
+  outputs_.push_back({output_target(path), std::move(option), {}, false, std::nullopt});
 }
 
 const JobOutputs::Output* JobOutputs::find_if(std::string_view option) const {
