@@ -80,6 +80,8 @@ def main():
     out = a.out.resolve()
     out.mkdir(parents=True, exist_ok=True)
     png = (a.png or out / "web-probes.png").resolve()
+    if not png.parent.is_dir():
+        sys.exit(f"web_probe_scene.py: --png {a.png}: folder {png.parent} does not exist")
     shtool = a.shtool.resolve()
 
     scene = out / "spot_ground.obj"

@@ -54,7 +54,10 @@ void setup_bake_probes(CLI::App* sub) {
                             : " invalid probes filled from neighbours");
     if (r.mpi_ranks) std::cerr << " (this rank's share; on each of " << r.mpi_ranks << " MPI ranks)";
     if (r.unfilled) std::cerr << " (" << r.unfilled << " with no valid neighbour left at 0)";
-    std::cerr << "\nwrote " << req->out.string() << "\n";
+    std::cerr << "\nwrote " << req->out.string();
+    if (!req->json.empty()) std::cerr << ", " << req->json.string();
+    if (!req->threejs.empty()) std::cerr << ", " << (req->threejs / "probes.json").string() << ", probes.bin";
+    std::cerr << "\n";
   });
 }
 

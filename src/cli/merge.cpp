@@ -39,7 +39,7 @@ void setup_merge(CLI::App* sub) {
       summary << "merge: " << r.parts << " parts, " << r.probes << " probes, " << seconds_since(t0) << " s, wrote "
               << opt->out.string();
       if (!json->empty()) summary << ", " << json->string();
-      if (!threejs->empty()) summary << ", " << threejs->string() << "/probes.json, probes.bin";
+      if (!threejs->empty()) summary << ", " << (*threejs / "probes.json").string() << ", probes.bin";
       summary << '\n';
       std::cerr << summary.str();
       return;

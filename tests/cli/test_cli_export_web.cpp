@@ -466,6 +466,43 @@ TEST(ExportWeb, WarnsWhenTheProbeBoxEndsAtTheGround) {
     EXPECT_EQ(scene["source"]["mesh"], fs::path(kSpotObj).filename().string());
     EXPECT_EQ(scene["source"]["up"], "y");
     EXPECT_EQ(scene["source"]["probes"], (ends_at_ground ? tight : deep).filename().string());
+    if (ends_at_ground) continue;
+    // Every sphere half a cell (0.75, 0.75, 0.6) inside each face of the deep box, or three
+    // leaves its outer parts black. The page's frame is three's: shtool (x, y, z) = (X, -Z, Y).
+    ASSERT_EQ(scene["spheres"].size(), 3u);
+    const double lo[3] = {-1.5, -1.5, -1.94}, hi[3] = {1.5, 1.5, 0.46}, half[3] = {0.75, 0.75, 0.6};
+    for (const nlohmann::json& sphere : scene["spheres"]) {
+      const double r = sphere["radius"].get<double>(), X = sphere["centre"][0].get<double>(),
+                   Y = sphere["centre"][1].get<double>(), Z = sphere["centre"][2].get<double>();
+      const double p[3] = {X, -Z, Y};
+      EXPECT_GT(r, 0.1);
+      for (int a = 0; a < 3; ++a) {
+        EXPECT_GE(p[a] - r - half[a], lo[a] - 1e-9) << sphere.dump();
+        EXPECT_LE(p[a] + r + half[a], hi[a] + 1e-9) << sphere.dump();
+      }
+    }
+  }
+  // A box that starts above the mesh's lowest point puts the page's ground at its bottom,
+  // and says so; an atlas side past WebGL2's 256 names the grid axis that makes it.
+  const fs::path high = scratch("high.shtb"), wide = scratch("wide.shtb");
+  must(run_shtool({"bake-probes", kSpotObj, "--grid", "2,2,2", "--bounds=-1.5,-1.5,-0.5,1.5,1.5,1", "--env",
+                   bakes().sky.string(), "--samples", "8", "--bounces", "0", "--out", high.string()}));
+  must(run_shtool({"bake-probes", kSpotObj, "--grid", "300,2,2", "--env", bakes().sky.string(), "--samples", "4",
+                   "--bounces", "0", "--out", wide.string()}));
+  for (const bool is_high : {true, false}) {
+    const fs::path page = scratch(is_high ? "high_page" : "wide_page");
+    fs::remove_all(page);
+    const CommandResult r =
+        run_shtool({"export-web", kSpotObj, "--fit", bakes().fit.string(), "--light", bakes().sky.string(), "--probes",
+                    (is_high ? high : wide).string(), "--out", page.string()});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    if (is_high) {
+      EXPECT_NE(r.err.find("box starts 0.236784 above the mesh's lowest point"), std::string::npos) << r.err;
+      EXPECT_EQ(r.err.find("below the ground"), std::string::npos) << r.err;
+    } else {
+      EXPECT_NE(r.err.find("300 x 2 x 28 texels, and its side for the grid's x (300 texels)"), std::string::npos)
+          << r.err;
+    }
   }
 }
 

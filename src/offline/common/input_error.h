@@ -4,6 +4,7 @@
 // Anything else that escapes is a bug in shtool (exit 3).
 #pragma once
 
+#include <cstdio>
 #include <filesystem>
 #include <stdexcept>
 #include <string>
@@ -25,6 +26,15 @@ inline void check_option_range(const char* option, long long value, long long lo
   if (value < lo || value > hi)
     throw InputError(std::string(option) + " must be in " + std::to_string(lo) + ".." + std::to_string(hi) + ", got " +
                      std::to_string(value));
+}
+
+// A number as a message shows it: six significant digits, an exponent where it is large
+// or small ("0.25", "1e+30", "3.5e-07"), where std::to_string gives "0.000000" for 3.5e-07
+// and 31 digits for 1e30.
+inline std::string message_number(double v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.6g", v);
+  return text;
 }
 
 }  // namespace shtool

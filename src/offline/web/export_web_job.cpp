@@ -190,33 +190,50 @@ ExportWebResult run_export_web(const ExportWebRequest& r) {
     const double ground = std::clamp(bounds.lo.z(), pmin.z(), pmax.z());
     // three samples the grid half a cell along the normal and leaves a point whose sample
     // falls outside the box unlit: the spheres' undersides go black where the box ends
-    // less than half a cell below the ground.
+    // less than half a cell below the ground, and any part of a sphere less than half a
+    // cell from the box's other faces would too.
     const Vec cell = (pmax - pmin).cwiseQuotient(
         Vec(probes->resolution[0], probes->resolution[1], probes->resolution[2]));
-    if (ground - 0.5 * cell.z() < pmin.z() - 0.01 * cell.z())
-      warnings.push_back("the probe grid's box ends " + std::to_string(ground - pmin.z()) +
-                                " below the ground, less than half a cell (" + std::to_string(0.5 * cell.z()) +
-                                "): three.js leaves the spheres' undersides unlit; bake with --bounds reaching at "
-                                "least half a cell below the ground");
+    const Vec half_cell = 0.5 * cell;
+    if (bounds.lo.z() < pmin.z())
+      warnings.push_back("the probe grid's box starts " + message_number(pmin.z() - bounds.lo.z()) +
+                         " above the mesh's lowest point: the page's ground is at the box's bottom, and three.js "
+                         "leaves the spheres' undersides unlit; bake with --bounds reaching at least half a cell (" +
+                         message_number(half_cell.z()) + ") below the mesh");
+    else if (ground - half_cell.z() < pmin.z() - 0.01 * cell.z())
+      warnings.push_back("the probe grid's box ends " + message_number(ground - pmin.z()) +
+                         " below the ground, less than half a cell (" + message_number(half_cell.z()) +
+                         "): three.js leaves the spheres' undersides unlit; bake with --bounds reaching at "
+                         "least half a cell below the ground");
     // The atlas stacks 7 (NY + 2) slices of a 3D texture (three's z is shtool's y).
     const int depth = 7 * (probes->resolution[1] + 2);
-    if (std::max({probes->resolution[0], probes->resolution[2], depth}) > 256)
-      warnings.push_back("the probe atlas is " + std::to_string(probes->resolution[0]) + " x " +
-                                std::to_string(probes->resolution[2]) + " x " + std::to_string(depth) +
-                                " texels; WebGL2 guarantees 3D textures of 256 (34 probes along y): a WebGL with a "
-                                "smaller MAX_3D_TEXTURE_SIZE refuses the page");
+    const char* axis_names[3] = {"x", "y", "z"};
+    const int sides[3] = {probes->resolution[0], depth, probes->resolution[2]};
+    for (int a = 0; a < 3; ++a)
+      if (sides[a] > 256)
+        warnings.push_back("the probe atlas is " + std::to_string(probes->resolution[0]) + " x " +
+                           std::to_string(probes->resolution[2]) + " x " + std::to_string(depth) +
+                           " texels, and its side for the grid's " + axis_names[a] + " (" + std::to_string(sides[a]) +
+                           " texels) passes the 256 WebGL2 guarantees (at most 256 probes along x or z, 34 along "
+                           "y): a WebGL with a smaller MAX_3D_TEXTURE_SIZE refuses the page");
     const Vec forward = (view::as_vector(camera.target) - view::as_vector(camera.eye)).normalized();
     Vec right = forward.cross(Vec::UnitZ());
     if (right.norm() < 1e-9) right = Vec::UnitX();
     right.normalize();
     Vec back = Vec::UnitZ().cross(right).normalized();
-    const double s = 0.25 * radius;
+    // Each sphere at least half a cell inside every face of the box, so that three lights
+    // all of it: smaller than a quarter of the mesh's radius where the box is too narrow.
+    const double room = (0.5 * (pmax - pmin) - half_cell).minCoeff();
+    const double s = std::min(0.25 * radius, 0.9 * room);
     nlohmann::json spheres = nlohmann::json::array();
-    for (const Vec& offset : {Vec(1.5 * radius * right), Vec(-1.5 * radius * right), Vec(1.6 * radius * back)}) {
-      Vec p = centre + offset;
-      p.z() = ground + s;
-      p = p.cwiseMax(pmin + Vec::Constant(s)).cwiseMin(pmax - Vec::Constant(s));
-      spheres.push_back({{"centre", vec_json(c * p)}, {"radius", s}});
+    if (s > 0) {
+      const Vec lo = pmin + half_cell + Vec::Constant(s), hi = pmax - half_cell - Vec::Constant(s);
+      for (const Vec& offset : {Vec(1.5 * radius * right), Vec(-1.5 * radius * right), Vec(1.6 * radius * back)}) {
+        Vec p = centre + offset;
+        p.z() = ground + s;
+        p = p.cwiseMax(lo).cwiseMin(hi);
+        spheres.push_back({{"centre", vec_json(c * p)}, {"radius", s}});
+      }
     }
     const Vec ground_centre(0.5 * (pmin.x() + pmax.x()), 0.5 * (pmin.y() + pmax.y()), ground);
     scene["probes"] = "probes/probes.json";
