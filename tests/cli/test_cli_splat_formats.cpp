@@ -753,6 +753,19 @@ TEST(CliSplatFormats, SpzExtensionRecords) {
     ASSERT_EQ(convert(scratch("ext_plain4.spz"), ref).exit_code, 0);
     EXPECT_TRUE(read_file(ply) == read_file(ref));
   }
+  // Bytes before the table of contents without flag 0x2 are no records: skipped, as the
+  // reference loader skips them, with a warning (the file is read in the default frame).
+  {
+    std::string unflagged = with_records_v4(v4, rdf);
+    unflagged[14] = static_cast<char>(unflagged[14] & ~2);
+    const fs::path spz = scratch("ext_unflagged.spz"), ply = scratch("ext_unflagged.ply");
+    write_bytes(spz, unflagged);
+    const auto r = convert(spz, ply);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE(r.err.find("12 bytes between the header and the table of contents, without flag 0x2"), std::string::npos)
+        << r.err;
+    EXPECT_TRUE(read_file(ply) == read_file(scratch("ext_other_ref.ply")));
+  }
   // Written in RDF: the record (v4 in the header zone, v3 after the SH), read back
   // without --spz-frame.
   const Scene scene = random_scene(200, 2, 71);
@@ -925,6 +938,32 @@ TEST(CliSplatFormats, FarSplatsCoarsenEverySpzPositionAndSaySo) {
   }
   EXPECT_LE(worst, std::ldexp(1.0, -11) + 1e-6);
   EXPECT_GT(worst, std::ldexp(1.0, -13));
+  // Past 2^23 units no fixed point holds the position: refused, naming the splat, the
+  // files and the range.
+  far.p = Eigen::Vector3d(1e9, 0, 0);
+  scene.splats.push_back(far);
+  write_bytes(in, ply_bytes(scene));
+  expect_refused(in, out,
+                 "--out " + out.string() + " (from " + in.string() +
+                     "): splat 21's x = 1e+09 is past spz's 24-bit fixed point, which holds positions within "
+                     "-8388608..8388607 scene units");
+}
+
+// Options that neither file's format uses do nothing, and the job says so (a script may
+// pass them for every file, so they are not refused).
+TEST(CliSplatFormats, OptionsNeitherFormatUsesAreSaidToDoNothing) {
+  const fs::path in = scratch("opts_in.ply"), glb = scratch("opts_out.glb"), spz = scratch("opts_out.spz");
+  write_bytes(in, ply_bytes(random_scene(5, 1, 3)));
+  auto r = convert(in, glb, {"--sh-bits", "1", "--spz-version", "3", "--spz-frame", "RDF", "--gltf-frame", "LUF"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (const char* said : {"--sh-bits does nothing here", "--spz-version does nothing here",
+                           "--spz-frame does nothing here: neither file is spz"})
+    EXPECT_NE(r.err.find(said), std::string::npos) << said << " not in: " << r.err;
+  EXPECT_EQ(r.err.find("--gltf-frame does nothing"), std::string::npos) << r.err;
+  r = convert(in, spz, {"--sh-bits", "6", "--gltf-frame", "LUF"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err.find("--sh-bits does nothing"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("--gltf-frame does nothing here: neither file is glTF"), std::string::npos) << r.err;
 }
 
 // An empty scene has no spz (the reference loader refuses numPoints 0) and no glTF
@@ -1007,6 +1046,9 @@ TEST(CliSplatFormats, BadFilesAreRefusedWithNothingWritten) {
     return p;
   }());
   std::string gz_long = compress_with("gzip", legacy_payload(3) + "extra");
+  std::string glb_v1 = sg, glb_magic = sg;
+  glb_v1[4] = 1;
+  glb_magic[3] = 'X';
   std::string bad_glb = sg;
   const std::size_t at = bad_glb.find("OPACITY");
   ASSERT_NE(at, std::string::npos);
@@ -1029,6 +1071,9 @@ TEST(CliSplatFormats, BadFilesAreRefusedWithNothingWritten) {
       {"not spz", ".spz", "hello", {}, "not an spz"},
       {"glb missing opacity", ".glb", bad_glb, {}, "OPACITY"},
       {"glb truncated", ".glb", sg.substr(0, sg.size() / 2), {}, "glTF"},
+      // tinygltf reads any container version as 2's, and a .glb without its magic as JSON.
+      {"glb container version 1", ".glb", glb_v1, {}, "GLB container version 1"},
+      {"glb without its magic", ".glb", glb_magic, {}, "not a GLB: it does not begin with the magic 'glTF'"},
       {"unknown extension", ".splat", s4, {}, "unknown splat format"},
       {"bad frame", ".spz", s4, {"--frame", "RUX"}, "frame"},
       {"frame repeats an axis", ".spz", s4, {"--spz-frame", "RRU"}, "frame"},

@@ -299,6 +299,19 @@ tinygltf::Model parse_gltf(const std::string& bytes, const std::filesystem::path
   const std::string base = path.has_parent_path() ? path.parent_path().string() : std::string(".");
   const bool binary = bytes.size() >= 4 && bytes.compare(0, 4, "glTF") == 0;
   if (bytes.size() > std::numeric_limits<unsigned int>::max()) fail_input(path, "file too large");
+  // tinygltf reads a GLB of any container version as glTF 2.0's, and a .glb without the
+  // magic as JSON (its message then a JSON parse error at byte 0).
+  if (!binary && lowercase_extension(path) == ".glb")
+    fail_input(path, "not a GLB: it does not begin with the magic 'glTF' (binary glTF's header)");
+  if (binary) {
+    if (bytes.size() < 12)
+      fail_input(path, "truncated: " + std::to_string(bytes.size()) + " bytes, a GLB header takes 12");
+    std::uint32_t version = 0;
+    std::memcpy(&version, bytes.data() + 4, 4);
+    if (version != 2)
+      fail_input(path, "GLB container version " + std::to_string(version) +
+                           ": glTF 2.0's binary container is version 2 (version 1 is glTF 1.0's, which is not read)");
+  }
   // tinygltf turns JSON into its values recursively (extras, extensions): nesting deep
   // enough would exhaust the stack, so it is bounded before tinygltf sees the text.
   if (auto problem = table_format::check_json_depth(json_text_of(bytes, binary), table_format::kMaxJsonDepth))

@@ -15,7 +15,6 @@
 
 #include "common/input_error.h"
 #include "fit/gltf_model.h"
-#include "io/table_format.h"
 
 namespace shtool::interop {
 namespace {
@@ -25,10 +24,6 @@ constexpr const char* kExtension = "KHR_gaussian_splatting";
 std::string attribute(const std::string& name) { return std::string(kExtension).append(":").append(name); }
 std::string sh_attribute(int l, int n) {
   return attribute("SH_DEGREE_" + std::to_string(l) + "_COEF_" + std::to_string(n));
-}
-
-bool skip_image(tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int, void*) {
-  return true;
 }
 
 // Accessor `index` as floats, `components` per element: float, or (normalized) integer
@@ -201,33 +196,7 @@ struct Reader {
 }  // namespace
 
 SplatScene read_gltf_splats(const std::string& bytes, const std::filesystem::path& path, int threads) {
-  tinygltf::Model model;
-  tinygltf::TinyGLTF loader;
-  loader.SetImageLoader(skip_image, nullptr);
-  std::string err, warn;
-  const std::string base = path.has_parent_path() ? path.parent_path().string() : std::string(".");
-  const bool binary = bytes.size() >= 4 && bytes.compare(0, 4, "glTF") == 0;
-  if (bytes.size() > std::numeric_limits<unsigned int>::max()) fail_input(path, "file too large");
-  // tinygltf turns JSON into values recursively: nesting is bounded before it sees it.
-  std::string_view json = bytes;
-  if (binary) {
-    std::uint32_t length = 0;
-    if (bytes.size() >= 20) std::memcpy(&length, bytes.data() + 12, 4);
-    json = bytes.size() >= 20 ? std::string_view(bytes).substr(20, length) : std::string_view();
-  }
-  if (auto problem = table_format::check_json_depth(json, table_format::kMaxJsonDepth)) fail_input(path, "glTF JSON " + *problem);
-  bool ok = false;
-  try {
-    ok = binary ? loader.LoadBinaryFromMemory(&model, &err, &warn, reinterpret_cast<const unsigned char*>(bytes.data()),
-                                              static_cast<unsigned int>(bytes.size()), base)
-                : loader.LoadASCIIFromString(&model, &err, &warn, bytes.data(), static_cast<unsigned int>(bytes.size()), base);
-  } catch (const std::exception& e) {
-    fail_input(path, std::string("cannot read glTF: tinygltf failed (") + e.what() + ")");
-  }
-  if (!ok) {
-    while (!err.empty() && (err.back() == '\n' || err.back() == ' ')) err.pop_back();
-    fail_input(path, "cannot read glTF" + (err.empty() ? std::string() : ": " + err));
-  }
+  const tinygltf::Model model = fit::parse_gltf(bytes, path, /*keep_images=*/false);
   // An extension listed as required changes what the file means (compressed or moved
   // data, other attributes): read as plain glTF its values would be wrong.
   for (const std::string& required : model.extensionsRequired)
@@ -279,9 +248,9 @@ std::string write_gltf_splats(const SplatScene& s, bool binary) {
       scale[3 * i + c] = std::exp(s.log_scale[3 * i + c]);
       // glTF holds no infinity; a log-scale past log(FLT_MAX) = 88.72 has no linear float.
       if (!std::isfinite(scale[3 * i + c]))
-        throw InputError("splat " + std::to_string(i) + ": its log-scale " + std::to_string(s.log_scale[3 * i + c]) +
-                         " gives a linear scale exp(" + std::to_string(s.log_scale[3 * i + c]) +
-                         ") past float's range (3.4e38), which glTF's KHR_gaussian_splatting:SCALE cannot hold");
+        throw InputError("splat " + std::to_string(i) + ": its log-scale " + message_number(s.log_scale[3 * i + c]) +
+                         " gives a linear scale exp(" + message_number(s.log_scale[3 * i + c]) +
+                         ") past float's range (3.4e+38), which glTF's KHR_gaussian_splatting:SCALE cannot hold");
     }
     opacity[i] = 1.0f / (1.0f + std::exp(-s.opacity[i]));
   }

@@ -1,11 +1,12 @@
 #include "interop/splats_job.h"
 
+#include <algorithm>
 #include <array>
 #include <cctype>
-#include <cstdint>
-#include <cstring>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -422,6 +423,25 @@ TransformSplatsReport run_transform_splats(const TransformSplatsRequest& r) {
   const auto t0 = std::chrono::steady_clock::now();
   TransformSplatsReport report;
   report.threads = threads;
+  // Options that neither file's format uses are said to do nothing, not refused: a
+  // script may pass them for every file it converts.
+  const auto is = [&](std::initializer_list<SplatFormat> formats) {
+    return std::find(formats.begin(), formats.end(), in_format) != formats.end() ||
+           std::find(formats.begin(), formats.end(), out_format) != formats.end();
+  };
+  const std::string out_kind = std::string(splat_format_name(out_format));
+  if (out_format != SplatFormat::spz && r.sh_bits != std::array<int, 2>{5, 4})
+    report.warnings.push_back("--sh-bits does nothing here: it sets the SH quantisation of spz output, and " +
+                              r.out.string() + " is " + out_kind);
+  if (out_format != SplatFormat::spz && r.spz_version != 4)
+    report.warnings.push_back("--spz-version does nothing here: it sets the version of spz output, and " +
+                              r.out.string() + " is " + out_kind);
+  if (!is({SplatFormat::spz}) && upper(r.spz_frame) != "RUB")
+    report.warnings.push_back("--spz-frame does nothing here: neither file is spz");
+  if (!is({SplatFormat::ply}) && upper(r.ply_frame) != "RDF")
+    report.warnings.push_back("--frame (the PLY frame) does nothing here: neither file is PLY");
+  if (!is({SplatFormat::gltf, SplatFormat::glb}) && upper(r.gltf_frame) != "RUB")
+    report.warnings.push_back("--gltf-frame does nothing here: neither file is glTF");
   if (in_format == SplatFormat::ply && out_format == SplatFormat::ply && !r.sh_degree) {
     report.reflects = rot.determinant() < 0;
     // Mapped, not read: the common file is streamed from the page cache to the output.
@@ -486,27 +506,40 @@ TransformSplatsReport run_transform_splats(const TransformSplatsRequest& r) {
       throw InputError("splat " + std::to_string(bad->splat) + ": its " + bad->what +
                        " overflows its type after the transform (" + overflow_cause(r, bad->what) + ")");
     std::string out;
-    switch (out_format) {
-      case SplatFormat::ply: out = write_ply_splats(scene); break;
-      case SplatFormat::spz:
-        // A frame other than spz's default is recorded in the file (when the record can name it).
-        if (const std::string frame = upper(r.spz_frame); frame != "RUB") {
-          spz.coordinate_system = spz_coordinate_system_value(frame);
-          if (spz.coordinate_system == 0)
-            report.warnings.push_back("--spz-frame " + frame + ": spz's coordinate-system record names no such frame "
-                                      "(only those with x along R or L), so " + r.out.string() +
-                                      " records none and readers will take its axes as RUB");
-        }
-        out = write_spz(scene, spz, threads);
-        if (const int bits = spz_fractional_bits(scene); bits < kSpzFractionalBits)
-          report.warnings.push_back(coarse_positions_warning(scene, bits));
-        report.spz_sh_bound = spz_sh_error_bound(scene.degree, spz);
-        report.spz_sh_scene = spz_sh_error_of(scene, spz, threads);
-        report.spz_dc_bound = spz_dc_error_bound();
-        report.spz_dc_scene = spz_dc_error_of(scene, threads);
-        break;
-      case SplatFormat::gltf: out = write_gltf_splats(scene, false); break;
-      case SplatFormat::glb: out = write_gltf_splats(scene, true); break;
+    // A scene the output format cannot hold: named with the files (the splats are counted
+    // as in the input).
+    try {
+      switch (out_format) {
+        case SplatFormat::ply:
+          out = write_ply_splats(scene);
+          break;
+        case SplatFormat::spz:
+          // A frame other than spz's default is recorded in the file (when the record can name it).
+          if (const std::string frame = upper(r.spz_frame); frame != "RUB") {
+            spz.coordinate_system = spz_coordinate_system_value(frame);
+            if (spz.coordinate_system == 0)
+              report.warnings.push_back("--spz-frame " + frame +
+                                        ": spz's coordinate-system record names no such frame "
+                                        "(only those with x along R or L), so " +
+                                        r.out.string() + " records none and readers will take its axes as RUB");
+          }
+          out = write_spz(scene, spz, threads);
+          if (const int bits = spz_fractional_bits(scene); bits < kSpzFractionalBits)
+            report.warnings.push_back(coarse_positions_warning(scene, bits));
+          report.spz_sh_bound = spz_sh_error_bound(scene.degree, spz);
+          report.spz_sh_scene = spz_sh_error_of(scene, spz, threads);
+          report.spz_dc_bound = spz_dc_error_bound();
+          report.spz_dc_scene = spz_dc_error_of(scene, threads);
+          break;
+        case SplatFormat::gltf:
+          out = write_gltf_splats(scene, false);
+          break;
+        case SplatFormat::glb:
+          out = write_gltf_splats(scene, true);
+          break;
+      }
+    } catch (const InputError& e) {
+      throw InputError("--out " + r.out.string() + " (from " + r.in.string() + "): " + e.what());
     }
     io.set("--out", std::move(out));
     report.splats = scene.count;

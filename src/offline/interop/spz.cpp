@@ -311,10 +311,17 @@ SplatScene read_ngsp(std::string_view bytes, const std::string& name, SpzHeader*
   if (streams != static_cast<int>(present.size()))
     throw fail("inconsistent: " + std::to_string(streams) + " streams for " + std::to_string(n) + " splats of SH degree " +
                std::to_string(degree) + " (" + std::to_string(present.size()) + " expected)");
-  if (toc < 32 || toc > bytes.size() || (!(flags & kFlagExtensions) && toc != 32))
-    throw fail("inconsistent: table of contents at byte " + std::to_string(toc));
+  if (toc < 32 || toc > bytes.size())
+    throw fail("inconsistent: table of contents at byte " + std::to_string(toc) + ", outside the header's end (32) " +
+               "and the file's (" + std::to_string(bytes.size()) + ")");
   SpzHeader read{4, fractional_bits, (flags & kFlagAntialiased) != 0, {}, {}};
-  if (flags & kFlagExtensions) read_extension_records(bytes.substr(32, toc - 32), name, read);
+  if (flags & kFlagExtensions)
+    read_extension_records(bytes.substr(32, toc - 32), name, read);
+  else if (toc > 32)
+    // The reference loader (load-spz.cc) skips them too: only flag 0x2 makes them records.
+    read.warnings.push_back(name + ": " + std::to_string(toc - 32) +
+                            " bytes between the header and the table of contents, without flag 0x2 (extensions) "
+                            "to say what they are: skipped, as the reference loader does");
   const std::uint64_t toc_end = std::uint64_t(toc) + 16ull * streams;
   if (toc_end > bytes.size()) throw fail("truncated: the file ends inside its table of contents");
   std::uint64_t at = toc_end;
@@ -394,9 +401,15 @@ int spz_fractional_bits(const SplatScene& s) {
   auto fits = [&](int bits) { return spz_fixed_point_holds(high, bits) && spz_fixed_point_holds(low, bits); };
   int fractional_bits = kSpzFractionalBits;
   while (fractional_bits > 0 && !fits(fractional_bits)) --fractional_bits;
-  if (!fits(fractional_bits))
-    throw InputError("a splat position (" + std::to_string(high > -low ? high : low) +
-                     ") is past spz's 24-bit fixed point (-8388608..8388607)");
+  if (!fits(fractional_bits)) {
+    std::size_t worst = 0;
+    for (std::size_t i = 1; i < s.position.size(); ++i)
+      if (std::abs(s.position[i]) > std::abs(s.position[worst])) worst = i;
+    throw InputError("splat " + std::to_string(worst / 3) + "'s " + "xyz"[worst % 3] + " = " +
+                     message_number(s.position[worst]) +
+                     " is past spz's 24-bit fixed point, which holds positions within -8388608..8388607 scene "
+                     "units (2^23, with no fractional bit left)");
+  }
   return fractional_bits;
 }
 
