@@ -15,6 +15,7 @@ import operator as _operator
 import os as _os
 import re as _re
 import tempfile as _tempfile
+import warnings as _warnings
 from dataclasses import dataclass as _dataclass
 
 import numpy as _np
@@ -164,11 +165,26 @@ def _keywords(**aliases):
 
 
 def _path(p, name):
-    """A path argument as str: str, bytes (decoded as os.fsdecode does) or os.PathLike."""
+    """A path argument (str, bytes or os.PathLike) as str, decoded as os.fsdecode does; a
+    name that is not UTF-8 as its bytes (os.fsencode), which the module takes as they are."""
     try:
-        return _os.fsdecode(p)
+        path = _os.fsdecode(p)
     except TypeError:
         raise TypeError(f"{name} must be a path (str, bytes or os.PathLike), got {type(p).__name__}") from None
+    try:
+        path.encode("utf-8")
+    except UnicodeEncodeError:
+        return _os.fsencode(path)
+    return path
+
+
+def _warn_all(report, aliases=None, stacklevel=4):
+    """The job's warnings (what the CLI prints as "warning:") as Python warnings, its CLI
+    options named as the call's keywords (`aliases` as _keywords')."""
+    report["warnings"] = [_python_message(message, aliases or {}) for message in report.get("warnings", ())]
+    for message in report["warnings"]:
+        _warnings.warn(message, RuntimeWarning, stacklevel=stacklevel)
+    return report
 
 
 def _input_path(p, name):
@@ -180,11 +196,16 @@ def _input_path(p, name):
     return path
 
 
-def _float_array(x, name):
+def _float_array(x, name, integers=False):
     """x as an ndarray without copying; lists become float64, float arrays of the other byte
-    order are converted to the machine's (other dtypes: TypeError)."""
+    order are converted to the machine's, and with `integers` (directions, rotations)
+    integer arrays become float64 (other dtypes, and None: TypeError)."""
+    if x is None:
+        raise TypeError(f"{name} must be an array of numbers, got None")
     if isinstance(x, _np.ndarray):
         a = x
+        if integers and a.dtype.kind in "iu":
+            a = a.astype(_np.float64)
     else:
         try:
             a = _np.asarray(x, dtype=_np.float64)
@@ -217,7 +238,7 @@ def eval_sh(order, dirs, out=None, threads=0):
     """Real SH values (..., order**2) at `dirs` (..., 3), normalised inside (a zero or
     non-finite direction: ValueError); float32 or float64 as `dirs`. `out`: a C-contiguous
     array of that shape and dtype, written in place."""
-    return _shtool._eval_sh(order, _float_array(dirs, "dirs"), out, threads)
+    return _shtool._eval_sh(order, _float_array(dirs, "dirs", integers=True), out, threads)
 
 
 def _back(r, axis):
@@ -241,14 +262,14 @@ def rotate(coeffs, matrix, method="auto", axis=-1, out=None, tol=None, threads=0
     a = _on_last_axis(_float_array(coeffs, "coeffs"), axis, "coeffs")
     if out is not None and axis not in (-1, a.ndim - 1):
         raise ValueError("out= needs axis=-1")
-    path = "" if tables is None else _path(tables, "tables")
+    path = "" if tables is None else _input_path(tables, "tables")
     return _back(_shtool._rotate(a, matrix, method, tol, out, threads, path), axis)
 
 
 @_keywords()
 def quat_to_matrix(q, threads=0):
     """Rotation matrix (..., 3, 3) of unit quaternions q = (w, x, y, z) (Hamilton)."""
-    return _shtool._quat_to_matrix(_float_array(q, "q"), threads)
+    return _shtool._quat_to_matrix(_float_array(q, "q", integers=True), threads)
 
 
 @_keywords()
@@ -307,19 +328,31 @@ def project_env_file(image, order=3, json=None, **options):
     """
     with _tempfile.TemporaryDirectory() as tmp:
         path = _path(json, "json") if json is not None else _os.path.join(tmp, "lighting.json")
-        r = _shtool._project_env_file(_input_path(image, "image"), path, order=order, **options)
+        image_path = _path(image, "image")
+        # A face set's pattern names six files ('%s' -> px nx py ny pz nz): each is checked.
+        faces = [image_path.replace("%s", f) if isinstance(image_path, str) else
+                 image_path.replace(b"%s", f.encode()) for f in ("px", "nx", "py", "ny", "pz", "nz")]
+        pattern = image_path != faces[0]
+        for face in faces if pattern else [image_path]:
+            _input_path(face, "image")
+        r = _shtool._project_env_file(image_path, path, order=order, **options)
     return r["coefficients"]
 
 
-@_keywords(quat="quaternion")
+_TRANSFORM_SPLATS_ALIASES = {"quat": "quaternion", "out": "path_out"}
+
+
+@_keywords(**_TRANSFORM_SPLATS_ALIASES)
 def transform_splats(path_in, path_out, **options):
     """``shtool transform-splats``: writes `path_out` as the CLI does. Keyword arguments:
     quaternion=(w, x, y, z) (or quat=) or matrix= (3x3, or 9 numbers row-major; a
     reflection is allowed), translate=(x, y, z), scale=, threads=, frame=, spz_frame=,
     gltf_frame=, sh_degree=, sh_bits=, spz_version=. Returns a dict (splats, degree,
-    seconds, reflects).
+    seconds, reflects, warnings); each warning (what the CLI prints as "warning:") is also
+    issued as a RuntimeWarning.
     """
-    return _shtool._transform_splats(_input_path(path_in, "path_in"), path_out, **options)
+    return _warn_all(_shtool._transform_splats(_input_path(path_in, "path_in"), path_out, **options),
+                     _TRANSFORM_SPLATS_ALIASES)
 
 
 @_keywords()
@@ -350,11 +383,11 @@ def _numbers(x, count, name):
 
 
 def _splat_array(x, name, width):
-    """(array as float64, dtype of the result): float32 and float64 are kept, integers and
-    bools are taken as float64 (never truncated on the way back). Shape (S, width), or
-    (S, 3, N**2) for SH colours (width None)."""
+    """(array as float64, dtype of the result): float32 and float64 are kept, integers are
+    taken as float64 (never truncated on the way back); bools are refused, as elsewhere.
+    Shape (S, width), or (S, 3, N**2) for SH colours (width None)."""
     a = _np.asarray(x)
-    if a.dtype.kind not in "iubf":
+    if a.dtype.kind not in "iuf":
         raise TypeError(f"{name} must be an array of numbers, got {a.dtype}")
     out = _np.dtype(_np.float32 if a.dtype.kind == "f" and a.dtype.itemsize == 4 else _np.float64)
     a = a.astype(_np.float64)
@@ -399,12 +432,23 @@ def transform_splat_arrays(sh=None, positions=None, rotations=None, log_scales=N
         if value is not None:
             a, dtypes[name] = _splat_array(value, name, width)
             arrays[name] = _np.ascontiguousarray(a)
+    counts = {name: a.shape[0] for name, a in arrays.items()}
+    if len(set(counts.values())) > 1:
+        raise ValueError("the arrays describe different numbers of splats: " +
+                         ", ".join(f"{name} {count}" for name, count in counts.items()))
     # The job's own arithmetic, in float64, each result rounded once to its dtype.
     moved = _shtool._transform_splat_arrays(
         arrays.get("sh"), arrays.get("positions"), arrays.get("rotations"), arrays.get("log_scales"),
         arrays.get("normals"), None if q is None else [float(x) for x in q],
         None if m is None else [float(x) for x in m], [float(x) for x in t], float(scale))
-    return {name: value.astype(dtypes[name], copy=False) for name, value in moved.items()}
+    with _np.errstate(over="ignore"):  # checked below, with a message that says why
+        out = {name: value.astype(dtypes[name], copy=False) for name, value in moved.items()}
+    for name, value in out.items():
+        if not _np.isfinite(value).all():
+            raise ValueError(f"transform_splat_arrays: {name} overflow {value.dtype} after the transform "
+                             f"(scale={scale}, translate={tuple(float(x) for x in t)})" +
+                             ("; pass float64" if value.dtype == _np.float32 else ""))
+    return out
 
 
 @_dataclass
@@ -449,7 +493,7 @@ def fit_zh_mesh(mesh, out=None, **options):
     """
     with _tempfile.TemporaryDirectory() as tmp:
         path = _path(out, "out") if out is not None else _os.path.join(tmp, "fit.zh.shtb")
-        _shtool._fit_zh_mesh(_input_path(mesh, "mesh"), out=path, **options)
+        _warn_all(_shtool._fit_zh_mesh(_input_path(mesh, "mesh"), out=path, **options))
         if options.get("shard") is not None:
             return load_table(path)
         return load_zh_fit(path)

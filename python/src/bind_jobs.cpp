@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <limits>
+#include <mutex>
 #include <optional>
 #include <span>
 #include <string>
@@ -78,11 +79,12 @@ std::string given(const py::handle& v) {
   return std::string(py::str(py::type::handle_of(v).attr("__name__"))) + " " + r;
 }
 
-// A path argument: str, bytes or os.PathLike (os.fsdecode); TypeError naming `what`.
+// A path argument: str, bytes or os.PathLike, as the bytes os.fsencode gives (a name
+// that is not UTF-8 reaches the file system as it is); TypeError naming `what`.
 std::filesystem::path path_arg(const py::handle& v, const std::string& what) {
   if (py::isinstance<py::str>(v) || py::isinstance<py::bytes>(v) || py::hasattr(v, "__fspath__")) {
     try {
-      return std::filesystem::path(py::module_::import("os").attr("fsdecode")(v).cast<std::string>());
+      return std::filesystem::path(py::module_::import("os").attr("fsencode")(v).cast<std::string>());
     } catch (const py::error_already_set&) {
     }
   }
@@ -265,14 +267,23 @@ py::dict fit_zh_mesh(const py::object& mesh, py::kwargs kwargs) {
   kw.done();
   r.order_given = true;
   fit::FitZhReport report;
+  std::vector<std::string> warnings;
   {
     py::gil_scoped_release release;
-    report = fit::run_fit_zh(r);
+    std::mutex lock;
+    fit::FitZhCallbacks cb;
+    cb.warning = [&](const std::string& w) {
+      const std::lock_guard<std::mutex> held(lock);
+      warnings.push_back(w);
+    };
+    report = fit::run_fit_zh(r, cb);
   }
-  return py::dict(py::arg("count") = report.count, py::arg("out") = report.out.string(),
+  py::list said;
+  for (const std::string& w : warnings) said.append(message_text(w));
+  return py::dict(py::arg("count") = report.count, py::arg("out") = path_text(report.out.string()),
                   py::arg("simulate_seconds") = report.simulate_seconds, py::arg("fit_seconds") = report.fit_seconds,
                   py::arg("normalized_rms") = report.normalized_rms, py::arg("threads") = report.threads,
-                  py::arg("sharded") = report.sharded);
+                  py::arg("sharded") = report.sharded, py::arg("warnings") = said);
 }
 
 py::dict project_env_file(const py::object& image, const py::object& json, py::kwargs kwargs) {
@@ -331,8 +342,11 @@ py::dict transform_splats(const py::object& in, const py::object& out, py::kwarg
     py::gil_scoped_release release;
     report = interop::run_transform_splats(r);
   }
+  py::list said;
+  for (const std::string& w : report.warnings) said.append(message_text(w));
   return py::dict(py::arg("splats") = report.splats, py::arg("degree") = report.degree,
-                  py::arg("seconds") = report.seconds, py::arg("reflects") = report.reflects);
+                  py::arg("seconds") = report.seconds, py::arg("reflects") = report.reflects,
+                  py::arg("warnings") = said);
 }
 
 // transform_splat_arrays: the job's own arithmetic (SplatMotion, and the orthogonal map
@@ -390,7 +404,7 @@ py::dict transform_splat_arrays(const py::object& sh, const py::object& position
   return out;
 }
 
-std::vector<std::string> gen_tensors(int order, const py::object& out, py::kwargs kwargs) {
+py::list gen_tensors(int order, const py::object& out, py::kwargs kwargs) {
   GenTensorsRequest r;
   r.order = order;
   r.out = path_arg(out, "gen_tensors: out");
@@ -403,8 +417,8 @@ std::vector<std::string> gen_tensors(int order, const py::object& out, py::kwarg
     py::gil_scoped_release release;
     files = run_gen_tensors(r);
   }
-  std::vector<std::string> paths;
-  for (const GeneratedFile& f : files) paths.push_back(f.path.string());
+  py::list paths;
+  for (const GeneratedFile& f : files) paths.append(path_text(f.path.string()));
   return paths;
 }
 

@@ -202,8 +202,14 @@ py::tuple project_env(const py::array& image, int order, const std::string& layo
     layout = image.ndim() == 4                      ? lighting::Layout::faces
              : image.shape(1) == 2 * image.shape(0) ? lighting::Layout::equirect
                                                     : lighting::Layout::cross;
-  if ((layout == lighting::Layout::faces) != (image.ndim() == 4))
-    throw py::value_error("layout faces takes an array (6, S, S, C); equirect and cross an array (H, W, C)");
+  if (layout != lighting::Layout::faces && image.ndim() == 4)
+    throw py::value_error(std::string("an image of shape (6, S, S, C) is six cube faces: pass layout=\"faces\" (or "
+                                      "\"auto\"); layout=\"") +
+                          layout_name + "\" takes an array (H, W, C)");
+  if (layout == lighting::Layout::faces && image.ndim() != 4)
+    throw py::value_error(
+        "layout=\"faces\" takes an array (6, S, S, C), faces +X -X +Y -Y +Z -Z; an (H, W, C) image "
+        "is equirect or a cross (layout=\"equirect\", \"cross\" or \"auto\")");
   if (image.shape(image.ndim() - 1) < 1 || image.size() == 0) throw py::value_error("image is empty");
   if (const py::ssize_t c = image.shape(image.ndim() - 1); c > 4)
     throw py::value_error("image has " + std::to_string(c) + " channels; 1 to 4 supported");

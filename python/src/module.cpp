@@ -124,9 +124,9 @@ PYBIND11_MODULE(_shtool, m) {
     try {
       if (p) std::rethrow_exception(p);
     } catch (const shtool::InputError& e) {
-      PyErr_SetString(PyExc_ValueError, e.what());
+      PyErr_SetObject(PyExc_ValueError, sp::message_text(e.what()).ptr());
     } catch (const std::invalid_argument& e) {
-      PyErr_SetString(PyExc_ValueError, e.what());
+      PyErr_SetObject(PyExc_ValueError, sp::message_text(e.what()).ptr());
     }
   });
   m.def("_set_package_tables", &sp::set_package_tables, pybind11::arg("dir"));

@@ -136,6 +136,22 @@ bool all_finite(const T* values, std::size_t count) {
 }
 
 // The binding groups (one translation unit each).
+// A path the library returns, as os.fsdecode gives it (a name that is not UTF-8 keeps its
+// bytes as surrogates, so that it names the same file when passed back).
+inline py::str path_text(const std::string& path) {
+  PyObject* s = PyUnicode_DecodeFSDefaultAndSize(path.data(), static_cast<Py_ssize_t>(path.size()));
+  if (!s) throw py::error_already_set();
+  return py::reinterpret_steal<py::str>(s);
+}
+
+// A message of the library, which may quote a path that is not UTF-8: its bytes shown as
+// \xNN (printing surrogates would fail).
+inline py::str message_text(const std::string& message) {
+  PyObject* s = PyUnicode_DecodeUTF8(message.data(), static_cast<Py_ssize_t>(message.size()), "backslashreplace");
+  if (!s) throw py::error_already_set();
+  return py::reinterpret_steal<py::str>(s);
+}
+
 void bind_sh(py::module_& m);
 void bind_lighting(py::module_& m);
 void bind_jobs(py::module_& m);

@@ -71,7 +71,7 @@ def test_float32_stays_float32_and_out_is_written_in_place():
 @pytest.mark.parametrize("bad, error", [
     (np.zeros((2, 3)), ValueError),               # zero direction
     (np.ones((2, 4)), ValueError),                # not (..., 3)
-    (np.ones((2, 3), np.int64), TypeError),       # dtype
+    (np.ones((2, 3), np.complex128), TypeError),  # dtype (integers are taken as float64)
     (np.array([[np.nan, 0, 1.0]]), ValueError),   # not finite
     (np.array([[1.0, np.nan, 0]]), ValueError),   # not finite after a finite largest component
     (np.array([[1.0, 0, np.nan]], np.float32), ValueError),
