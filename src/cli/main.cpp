@@ -1,6 +1,9 @@
 // shtool: one executable, one subcommand per file in src/cli/. Each file registers its
 // options with setup_<name>(sub) and does its work through the libraries; errors are
 // turned into a message and an exit code here, in one place.
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
 #include <exception>
 #include <iostream>
 #include <new>
@@ -68,6 +71,15 @@ int main(int argc, char** argv) {
   }
   if (app.get_subcommands().empty()) {
     std::cerr << "shtool: error: a subcommand is required\n" << app.help();
+    return 1;
+  }
+  // eval, rotate, product and inspect print their result: a full disk or a closed stdout
+  // behind `> result.json` must fail the command, not leave a cut file and exit 0.
+  std::cout.flush();
+  if (std::fflush(stdout) != 0 || std::ferror(stdout) || !std::cout) {
+    const int err = errno;
+    std::cerr << "shtool: error: cannot write the result to standard output"
+              << (err ? std::string(": ") + std::strerror(err) : std::string()) << '\n';
     return 1;
   }
   return 0;

@@ -244,6 +244,17 @@ TEST(Cli, OptionErrorsReadAsOtherErrors) {
 // ---------------------------------------------------------------------------
 // shtool eval: values
 
+// A result printed into a full disk or a closed stdout fails the command: `> result.json`
+// must not leave a cut file behind an exit status of 0.
+TEST(Cli, AResultThatCannotBeWrittenFailsTheCommand) {
+  for (const std::string redirect : {"> /dev/full", ">&-"}) {
+    const CommandResult r =
+        run_command({"/bin/sh", "-c", "'" + kShtoolExe + "' eval --order 3 --dir 0,0,1 " + redirect});
+    EXPECT_EQ(r.exit_code, 1) << redirect << ": " << r.err;
+    EXPECT_NE(r.err.find("cannot write the result to standard output"), std::string::npos) << redirect << ": " << r.err;
+  }
+}
+
 TEST(CliEval, ValuesEqualRuntimeBitForBit) {
   struct Case {
     int order;

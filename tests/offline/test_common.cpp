@@ -256,6 +256,15 @@ TEST_F(CommonFiles, OutputsWriteThroughLinksAndRefuseSpecialFiles) {
   EXPECT_TRUE(fs::is_symlink(dir_ / "chain.json"));
   EXPECT_EQ(read(dir_ / "target.json"), "chained");
   fs::create_symlink("later.json", dir_ / "dangling.json");
+  // Two outputs of one job, one through the link to a file not yet there: the same file.
+  {
+    JobOutputs two;
+    two.output(dir_ / "later.json", "--out");
+    EXPECT_THROW(two.output(dir_ / "dangling.json", "--json"), InputError);
+    JobOutputs other_order;
+    other_order.output(dir_ / "dangling.json", "--json");
+    EXPECT_THROW(other_order.output(dir_ / "later.json", "--out"), InputError);
+  }
   write_file_atomically(dir_ / "dangling.json", "created");
   EXPECT_TRUE(fs::is_symlink(dir_ / "dangling.json"));
   EXPECT_EQ(read(dir_ / "later.json"), "created");

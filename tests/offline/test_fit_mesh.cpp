@@ -133,6 +133,10 @@ TEST(FitMesh, BadInputGivesClearErrors) {
       {"uvnan.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt nan 0\nf 1/1 2/1 3/1\n", "line 4: non-finite coordinate"},
       {"uvinf.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0.5 inf\nf 1/1 2/1 3/1\n", "line 4: non-finite coordinate"},
       {"uvword.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt u 0\nf 1/1 2/1 3/1\n", "line 4: missing or unreadable"},
+      // A file cut inside its last face line: tinyobjloader would drop the face silently.
+      {"cut.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 3\nf 4",
+       "line 6: a face needs at least 3 vertices, 'f 4' has 1"},
+      {"two.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 # a comment 3\n", "line 5: a face needs at least 3"},
   };
   for (const auto& [name, text, needle] : cases) {
     const std::string error = load_error(write_obj(name, text));

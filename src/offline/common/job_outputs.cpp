@@ -47,15 +47,17 @@ void JobOutputs::output(const std::filesystem::path& path, std::string option) {
   if (path.empty()) return;
   if (find_if(option)) throw std::logic_error("output " + option + " declared twice");
   check_output_path(path, option);
+  // The path a link names, so that the rename writes through the link; compared as that,
+  // since a link to a file not yet there names no file for same_file to identify.
+  const std::filesystem::path target = output_target(path);
   for (const Input& i : inputs_)
-    if (same_file(path, i.path))
+    if (same_file(path, i.path) || same_file(target, i.path))
       throw InputError(option + ": " + quoted(path) + " is the input " + quoted(i.path) + " (" + i.what +
                        "); refusing to overwrite it");
   for (const Output& o : outputs_)
-    if (same_file(path, o.path))
+    if (same_file(target, o.path))
       throw InputError(option + " and " + o.option + " name the same file " + quoted(path));
-  // The path a link names, so that the rename writes through the link.
-  outputs_.push_back({output_target(path), std::move(option), {}, false, std::nullopt});
+  outputs_.push_back({target, std::move(option), {}, false, std::nullopt});
 }
 
 const JobOutputs::Output* JobOutputs::find_if(std::string_view option) const {

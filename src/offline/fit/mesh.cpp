@@ -25,7 +25,8 @@ namespace {
 // tinyobjloader reads a coordinate it cannot parse ("nan", "inf", hexadecimal "0x10") as
 // 0 without a warning, and a face index beyond int as a wrapped value, so both would pass
 // silently. Scan the text first: "v" and "vn" coordinates (three) and "vt" coordinates
-// (one to three) must be decimal numbers and finite, "f" indices must fit an int. Lines
+// (one to three) must be decimal numbers and finite, "f" lines name at least three
+// vertices whose indices fit an int. Lines
 // end at LF, CR or CR LF, as tinyobjloader splits them.
 void check_obj_text(const std::filesystem::path& path, const std::string& text) {
   std::size_t number = 0, pos = 0;
@@ -60,6 +61,16 @@ void check_obj_text(const std::filesystem::path& path, const std::string& text) 
         s = stop;
       }
     } else if (is_f) {
+      // tinyobjloader drops a face of fewer than three vertices without a word: the last
+      // line of a file cut short, most often.
+      int corners = 0;
+      for (std::istringstream words(line.substr(p + 1, line.find('#', p) - (p + 1)));; ++corners) {
+        std::string word;
+        if (!(words >> word)) break;
+      }
+      if (corners < 3)
+        fail_input(path, "line " + std::to_string(number) + ": a face needs at least 3 vertices, '" + shown + "' has " +
+                             std::to_string(corners) + " (a file cut short?)");
       for (const char* s = line.c_str() + p + 1; *s;) {
         if (*s == '-' || *s == '+' || (*s >= '0' && *s <= '9')) {
           char* stop = nullptr;
