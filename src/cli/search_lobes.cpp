@@ -90,7 +90,7 @@ void setup_search_lobes(CLI::App* sub) {
   sub->add_option("--restarts", o->request.search.restarts, "independent runs; the best is kept")
       ->capture_default_str()
       ->each([o](const std::string&) { o->request.restarts_given = true; });
-  sub->add_option("--threads", o->request.search.threads, "fitness threads")->capture_default_str();
+  sub->add_option("--threads", o->request.search.threads, "fitness threads (0: every core)")->capture_default_str();
   add_enum_option(sub, "--theta-candidates", o->request.search.theta,
                   {{"band", lobes::ThetaCandidates::band}, {"pooled", lobes::ThetaCandidates::pooled}},
                   "band (zeros of P_l^m, m<l, plus poles) or pooled (bands 1..l)", "band")

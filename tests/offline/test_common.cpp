@@ -208,6 +208,29 @@ TEST_F(CommonFiles, ASignalRemovesTheTemporaryFilesThenEndsTheProcessAsItWould) 
   }
 }
 
+// Folders made for the outputs go too (innermost first), as they do when the job fails;
+// a folder that holds something else stays.
+TEST_F(CommonFiles, ASignalRemovesTheFoldersMadeForTheOutputs) {
+  for (int sig : {SIGTERM, SIGINT}) {
+    const int status = child_status([&] {
+      MadeFolders made;
+      made.make(dir_ / "new" / "deep" / "er", "--out");
+      made.make(dir_ / "kept", "--out");
+      write_file_atomically(dir_ / "kept" / "someone-else.txt", "x");
+      JobOutputs io;
+      io.output(dir_ / "new" / "deep" / "er" / "a.txt", "--a");
+      io.set("--a", "new");
+      io.stage();  // the temporary file exists in the innermost folder
+      std::raise(sig);
+      ::_exit(42);  // not reached
+    });
+    ASSERT_TRUE(WIFSIGNALED(status)) << status;
+    EXPECT_EQ(WTERMSIG(status), sig);
+    EXPECT_EQ(listing(), std::vector<std::string>{"kept"});
+    fs::remove_all(dir_ / "kept");
+  }
+}
+
 TEST_F(CommonFiles, ASignalDuringACommitWaitsForItsEnd) {
   const int status = child_status([&] {
     PendingFile f(dir_ / "a.txt");

@@ -30,19 +30,32 @@ std::filesystem::path folder_of(const std::filesystem::path& target) {
   return dir.empty() ? std::filesystem::path(".") : dir;
 }
 
-// The temporary files that exist now, for the signal handler: fixed slots of plain
-// characters, since a handler may call unlink() but neither allocate nor lock. A slot is
-// free (0), being filled (1) or live (2); a file beyond the last slot is still removed
-// by its PendingFile, only not on a signal.
+// The temporary files and the folders made for outputs that exist now, for the signal
+// handler: fixed slots of plain characters, since a handler may call unlink() and rmdir()
+// but neither allocate nor lock. A slot is free (0), being filled (1) or live (2); a
+// path beyond the last slot is still removed by its owner, only not on a signal.
 constexpr int kSlots = 64;
 char g_temp_paths[kSlots][PATH_MAX];
 std::atomic<int> g_slot_state[kSlots];
+std::atomic<bool> g_slot_is_folder[kSlots];
 std::atomic<int> g_commits{0};           // CommitGuards alive
 std::atomic<int> g_deferred_signal{0};   // a signal that came during a commit
 
 void remove_registered_temporaries() {
   for (int i = 0; i < kSlots; ++i)
-    if (g_slot_state[i].load() == 2) ::unlink(g_temp_paths[i]);
+    if (g_slot_state[i].load() == 2 && !g_slot_is_folder[i].load()) ::unlink(g_temp_paths[i]);
+  // Folders after the files in them, innermost first: a pass removes those already
+  // empty, so as many passes as folders empty any chain of them (rmdir keeps a folder
+  // that holds anything else).
+  for (int pass = 0; pass < kSlots; ++pass) {
+    bool removed = false;
+    for (int i = 0; i < kSlots; ++i)
+      if (g_slot_state[i].load() == 2 && g_slot_is_folder[i].load() && ::rmdir(g_temp_paths[i]) == 0) {
+        g_slot_state[i].store(0);
+        removed = true;
+      }
+    if (!removed) break;
+  }
 }
 
 [[noreturn]] void end_as_signal(int sig) {
@@ -79,19 +92,22 @@ void install_signal_handlers() {
   });
 }
 
-int register_temporary(const std::filesystem::path& temp) {
+int register_path(const std::filesystem::path& path, bool folder) {
   install_signal_handlers();
-  const std::string& s = temp.native();
+  const std::string& s = path.native();
   if (s.size() >= PATH_MAX) return -1;
   for (int i = 0; i < kSlots; ++i) {
     int expected = 0;
     if (!g_slot_state[i].compare_exchange_strong(expected, 1)) continue;
     std::memcpy(g_temp_paths[i], s.c_str(), s.size() + 1);
+    g_slot_is_folder[i].store(folder);
     g_slot_state[i].store(2);
     return i;
   }
   return -1;
 }
+
+int register_temporary(const std::filesystem::path& temp) { return register_path(temp, false); }
 
 void unregister_temporary(int slot) {
   if (slot >= 0) g_slot_state[slot].store(0);
@@ -285,5 +301,9 @@ std::filesystem::path output_target(const std::filesystem::path& path) {
   throw InputError("cannot write '" + path.string() + "': more than " + std::to_string(kMaxLinks) +
                    " symbolic links to follow");
 }
+
+int register_made_folder(const std::filesystem::path& dir) { return register_path(dir, true); }
+
+void forget_made_folder(int slot) { unregister_temporary(slot); }
 
 }  // namespace shtool

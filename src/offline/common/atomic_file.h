@@ -65,6 +65,12 @@ class CommitGuard {
   CommitGuard& operator=(const CommitGuard&) = delete;
 };
 
+// A folder just made for outputs, removed (when empty) if SIGINT or SIGTERM ends the
+// process before forget_made_folder(slot); returns its slot (-1: none free, then only
+// its owner removes it). For MadeFolders (common/job_outputs.h).
+int register_made_folder(const std::filesystem::path& dir);
+void forget_made_folder(int slot);
+
 // A name for a hidden file beside `target` that the next write removes if this process
 // is gone (".<name>.tmp-<pid>-<random>").
 std::filesystem::path temporary_name_for(const std::filesystem::path& target);

@@ -182,6 +182,13 @@ void MadeFolders::make(const std::filesystem::path& dir, const std::string& opti
     throw InputError(option + ": cannot create the folder " + dir.string() + ": " +
                      (ec ? ec.message() : std::string("unknown error")));
   made_.push_back(dir);
+  slots_.push_back(register_made_folder(dir));
+}
+
+void MadeFolders::keep() {
+  for (int slot : slots_) forget_made_folder(slot);
+  slots_.clear();
+  made_.clear();
 }
 
 MadeFolders::~MadeFolders() {
@@ -189,6 +196,7 @@ MadeFolders::~MadeFolders() {
     std::error_code ec;
     std::filesystem::remove(*it, ec);  // only an empty one
   }
+  for (int slot : slots_) forget_made_folder(slot);
 }
 
 }  // namespace shtool

@@ -88,17 +88,19 @@ class JobOutputs {
 };
 
 // Folders a job makes for its outputs, removed again (innermost first, and only when still
-// empty) unless keep() is called after the commit: a job that fails leaves no folder.
+// empty) unless keep() is called after the commit: a job that fails, or that SIGINT or
+// SIGTERM ends, leaves no folder.
 class MadeFolders {
  public:
   // Makes `dir` and every missing parent. InputError naming `option` when one of them
   // exists and is not a folder, or cannot be made.
   void make(const std::filesystem::path& dir, const std::string& option);
-  void keep() { made_.clear(); }
+  void keep();
   ~MadeFolders();
 
  private:
   std::vector<std::filesystem::path> made_;  // outermost first
+  std::vector<int> slots_;                   // the signal handler's, one per folder
 };
 
 }  // namespace shtool

@@ -644,8 +644,7 @@ void validate(const SearchOptions& o) {
     throw InputError("elitism must be in [0, population)");
   if (o.stall < 1) throw InputError("stall generations must be at least 1");
   if (o.restarts < 1) throw InputError("restarts must be at least 1");
-  if (o.threads < 1) throw InputError("threads must be at least 1");
-  resolve_threads(o.threads);  // refuses more than the machine can use
+  resolve_threads(o.threads);  // 0 is every core; refuses a negative count and more than the machine can use
   if (!(o.max_cond >= 1) || !std::isfinite(o.max_cond))
     throw InputError("max condition number must be finite and >= 1");
   if (o.max_generations < 1) throw InputError("max generations must be at least 1");
@@ -653,8 +652,9 @@ void validate(const SearchOptions& o) {
 
 SearchResult run_search(const Problem& p, const SearchOptions& opt, const std::string& label) {
   std::vector<Workspace> ws;
-  ThreadPool pool(opt.threads);
-  for (int t = 0; t < opt.threads; ++t) ws.emplace_back(p);
+  const int threads = resolve_threads(opt.threads);
+  ThreadPool pool(threads);
+  for (int t = 0; t < threads; ++t) ws.emplace_back(p);
   SearchResult out;
   RunResult best;
   for (int r = 0; r < opt.restarts; ++r) {

@@ -110,7 +110,7 @@ struct SearchOptions {
   bool secondary = true;    // zeros of Y_l as a tie-breaking slope (never outweighs a zero of A^)
   ThetaCandidates theta = ThetaCandidates::band;
   double max_cond = kDefaultMaxCond;
-  int threads = 2;
+  int threads = 2;  // 0: every core
   std::uint64_t seed = 1;
   // Called from the calling thread: after every generation and sweep (persistent = false,
   // a transient status line) and once per finished restart (persistent = true).

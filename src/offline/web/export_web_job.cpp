@@ -165,7 +165,7 @@ ExportWebResult run_export_web(const ExportWebRequest& r) {
       for (std::size_t i = 0; i < turned.size(); ++i)
         if (!finite_as_float(turned[i]))
           throw InputError("--light " + r.light.string() + ": coefficient " + std::to_string(i) + " of channel " +
-                           names[ch] + " is " + std::to_string(turned[i]) +
+                           names[ch] + " is " + message_number(turned[i]) +
                            " in three's frame, beyond float32's range: the page shades in float");
       light_json[names[ch]] = turned;
     }
