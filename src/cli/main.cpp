@@ -7,6 +7,8 @@
 #include <exception>
 #include <iostream>
 #include <new>
+#include <string>
+#include <string_view>
 
 #include <CLI/CLI.hpp>
 
@@ -50,6 +52,19 @@ int main(int argc, char** argv) {
       {"export-web", "Write a folder with a web page (three.js) showing a mesh shaded by its ZH fit, the light turning live", setup_export_web},
   };
   for (const Subcommand& s : kSubcommands) s.setup(app.add_subcommand(s.name, s.help));
+  // CLI11 reads an empty value as 0 for a number (--threads '' ran on every core, --seed ''
+  // used seed 0): no option of shtool takes an empty value, and one is most often a shell
+  // variable that was never set.
+  for (int i = 1; i < argc; ++i) {
+    const std::string_view arg = argv[i];
+    const bool inline_empty = arg.size() > 3 && arg.substr(0, 2) == "--" && arg.back() == '=';
+    if (!arg.empty() && !inline_empty) continue;
+    const std::string option = inline_empty                     ? std::string(arg.substr(0, arg.size() - 1))
+                               : i > 1 && argv[i - 1][0] == '-' ? std::string(argv[i - 1])
+                                                                : "argument " + std::to_string(i);
+    std::cerr << "shtool: error: " << option << " is given an empty value (an unset shell variable?)\n";
+    return 1;
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

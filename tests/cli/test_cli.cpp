@@ -255,6 +255,19 @@ TEST(Cli, AResultThatCannotBeWrittenFailsTheCommand) {
   }
 }
 
+// An empty value is never an option's: CLI11 would read it as 0 (every core, seed 0).
+TEST(Cli, EmptyValuesAreRefusedByOption) {
+  for (const auto& [args, named] : std::vector<std::pair<std::vector<std::string>, std::string>>{
+           {{"eval", "--order", "", "--dir", "0,0,1"}, "--order is given an empty value"},
+           {{"eval", "--order=", "--dir", "0,0,1"}, "--order is given an empty value"},
+           {{"light", "--type", "constant", "--order", "2", "--json", "/tmp/x.json", "--threads", ""},
+            "--threads is given an empty value"}}) {
+    const CommandResult r = run_shtool(args);
+    EXPECT_EQ(r.exit_code, 1) << r.err;
+    EXPECT_NE(r.err.find(named), std::string::npos) << r.err;
+  }
+}
+
 TEST(CliEval, ValuesEqualRuntimeBitForBit) {
   struct Case {
     int order;
