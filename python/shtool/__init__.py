@@ -218,6 +218,15 @@ def _float_array(x, name, integers=False):
     return a
 
 
+def _native_out(out):
+    """`out` as given; ValueError for an array of the other byte order, which the module
+    cannot write in place (it would say only that the dtype is wrong)."""
+    if isinstance(out, _np.ndarray) and not out.dtype.isnative:
+        raise ValueError(f"out must be in this machine's byte order, got {out.dtype.str} "
+                         f"(out=out.astype(out.dtype.newbyteorder('=')) makes one)")
+    return out
+
+
 def _on_last_axis(a, axis, name):
     if a.ndim == 0:
         raise ValueError(f"{name} must have at least one axis")
@@ -227,10 +236,10 @@ def _on_last_axis(a, axis, name):
         raise TypeError(f"axis must be an int, got {type(axis).__name__}") from None
     if axis == -1 or axis == a.ndim - 1:
         return a
-    try:
-        return _np.moveaxis(a, axis, -1)
-    except _np.AxisError as e:
-        raise ValueError(f"axis: {e}") from None
+    if not -a.ndim <= axis < a.ndim:
+        raise ValueError(f"axis={axis} is out of range for {name} of {a.ndim} dimension"
+                         f"{'' if a.ndim == 1 else 's'} (shape {a.shape})")
+    return _np.moveaxis(a, axis, -1)
 
 
 @_keywords()
@@ -238,7 +247,7 @@ def eval_sh(order, dirs, out=None, threads=0):
     """Real SH values (..., order**2) at `dirs` (..., 3), normalised inside (a zero or
     non-finite direction: ValueError); float32 or float64 as `dirs`. `out`: a C-contiguous
     array of that shape and dtype, written in place."""
-    return _shtool._eval_sh(order, _float_array(dirs, "dirs", integers=True), out, threads)
+    return _shtool._eval_sh(order, _float_array(dirs, "dirs", integers=True), _native_out(out), threads)
 
 
 def _back(r, axis):
@@ -263,7 +272,7 @@ def rotate(coeffs, matrix, method="auto", axis=-1, out=None, tol=None, threads=0
     if out is not None and axis not in (-1, a.ndim - 1):
         raise ValueError("out= needs axis=-1")
     path = "" if tables is None else _input_path(tables, "tables")
-    return _back(_shtool._rotate(a, matrix, method, tol, out, threads, path), axis)
+    return _back(_shtool._rotate(a, matrix, method, tol, _native_out(out), threads, path), axis)
 
 
 @_keywords()
@@ -505,6 +514,8 @@ def search_lobes(**options):
     order=N; out=, json=, seed=, threads=, population=, stall=, restarts=, crossover=,
     mutation=, elitism=, max_generations=, theta_candidates=, max_cond=,
     no_local_search=, no_secondary=, paper=. Returns the JSON summary as a dict."""
+    if not any(options.get(k) is not None for k in ("bands", "band", "shared")):
+        raise ValueError('search_lobes: give bands=[...] (or band=l, or bands="a-b"), or shared=True with order=N')
     return _json.loads(_shtool._search_lobes(**options))
 
 

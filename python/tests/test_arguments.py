@@ -231,3 +231,12 @@ def test_project_env_names_the_layout_a_face_array_needs(tmp_path):
         shtool.project_env(np.ones((6, 8, 8, 3)), 3)
     with pytest.raises(FileNotFoundError, match="f_px.exr"):
         shtool.project_env_file(str(tmp_path / "f_%s.exr"), layout="faces")
+
+
+def test_messages_say_what_is_wrong_with_out_axis_and_search_lobes():
+    with pytest.raises(ValueError, match=r"out must be in this machine's byte order, got >f8"):
+        shtool.rotate(np.zeros(16), np.eye(3), out=np.empty(16, ">f8"))
+    with pytest.raises(ValueError, match=r"axis=3 is out of range for coeffs of 1 dimension \(shape \(16,\)\)"):
+        shtool.rotate(np.zeros(16), np.eye(3), axis=3)
+    with pytest.raises(ValueError, match=r"search_lobes: give bands=\[\.\.\.\]"):
+        shtool.search_lobes()
