@@ -271,7 +271,8 @@ def rotate(coeffs, matrix, method="auto", axis=-1, out=None, tol=None, threads=0
     a = _on_last_axis(_float_array(coeffs, "coeffs"), axis, "coeffs")
     if out is not None and axis not in (-1, a.ndim - 1):
         raise ValueError("out= needs axis=-1")
-    path = "" if tables is None else _input_path(tables, "tables")
+    # The reference method reads no table (as the CLI, it passes over a missing one).
+    path = "" if tables is None else _path(tables, "tables") if method == "reference" else _input_path(tables, "tables")
     return _back(_shtool._rotate(a, matrix, method, tol, _native_out(out), threads, path), axis)
 
 

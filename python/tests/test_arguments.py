@@ -205,9 +205,11 @@ def test_job_warnings_are_python_warnings(tmp_path):
 
 
 def test_rotate_tables_that_do_not_exist_raise_file_not_found():
-    for method in ("auto", "zhf", "reference"):
+    for method in ("auto", "zhf", "zxzxz"):
         with pytest.raises(FileNotFoundError, match="tables"):
             shtool.rotate(np.zeros(16), np.eye(3), method=method, tables="no-such-table.shtb")
+    # The reference method reads no table, as `shtool rotate --method reference`.
+    shtool.rotate(np.zeros(16), np.eye(3), method="reference", tables="no-such-table.shtb")
 
 
 def test_transform_splat_arrays_checks_what_the_job_checks():
