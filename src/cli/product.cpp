@@ -36,11 +36,7 @@ struct ProductOptions {
 };
 
 std::string read_input(const std::string& path) {
-  if (path == "-") {
-    std::ostringstream ss;
-    ss << std::cin.rdbuf();
-    return ss.str();
-  }
+  if (path == "-") return read_standard_input("--in");
   return read_input_file(path, "--in");
 }
 

@@ -161,6 +161,8 @@ TEST(CliProduct, BadInputIsAClearError) {
       {{"--order", "7", "--method", "grid", "--in", "-"},
        inputs_json({std::vector<double>(49, 1e300), std::vector<double>(49, 1e300)}), "overflows"},
       {{"--order", "2", "--method", "Grid", "--in", "-"}, ok2, "auto, tripling, fourier or grid"},
+      // Nothing on stdin is said as such, not as JSON that ended early.
+      {{"--order", "2", "--in", "-"}, "", "--in -: standard input is empty"},
   };
   for (const BadCase& c : cases) {
     const CommandResult r = product(c.args, c.stdin_data);
@@ -170,6 +172,13 @@ TEST(CliProduct, BadInputIsAClearError) {
     EXPECT_NE(r.err.find(c.message), std::string::npos)
         << "stderr '" << r.err << "' lacks '" << c.message << "'";
   }
+}
+
+TEST(CliProduct, ClosedStdinIsNamed) {
+  const CommandResult r = run_shtool({"product", "--order", "2", "--in", "-"}, {.no_stdin = true});
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_TRUE(r.out.empty()) << r.out;
+  EXPECT_NE(r.err.find("--in -: standard input is closed"), std::string::npos) << r.err;
 }
 
 }  // namespace

@@ -354,6 +354,7 @@ TEST_F(CliRotate, BadInputFailsWithAMessage) {
       {"missing --in file", with(base, with(ok_rot, {"--in", (*dir_ / "absent.json").string()})),
        {"--in", "absent.json"}},
       {"bad JSON on stdin", with(base, with(ok_rot, {"--in", "-"})), {"--in", "JSON"}, "{\"coefficients\": [1,"},
+      {"nothing on stdin", with(base, with(ok_rot, {"--in", "-"})), {"--in -: standard input is empty"}},
       {"both --coeffs and --in", with(base, with(ok_rot, {"--coeffs", c9, "--in", short_json.string()})),
        {"exactly one of --coeffs, --in"}},
       {"neither --coeffs nor --in", with(base, ok_rot), {"exactly one of --coeffs, --in"}},

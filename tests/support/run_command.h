@@ -38,6 +38,7 @@ struct CommandResult {
 
 struct CommandOptions {
   std::string stdin_data;            // written to the child's stdin, then stdin is closed
+  bool no_stdin = false;             // the child starts with file descriptor 0 closed
   double timeout_seconds = 0.0;      // <= 0: no timeout
   std::string working_directory;     // empty: inherit
   // The child's address space limit (RLIMIT_AS) in bytes; 0: none. A sanitizer's shadow
@@ -76,7 +77,10 @@ inline CommandResult run_command(const std::vector<std::string>& argv,
   if (pid < 0) detail::throw_errno("fork");
   if (pid == 0) {
     // Child: only async-signal-safe calls from here on.
-    dup2(in_pipe[0], STDIN_FILENO);
+    if (options.no_stdin)
+      close(STDIN_FILENO);
+    else
+      dup2(in_pipe[0], STDIN_FILENO);
     dup2(out_pipe[1], STDOUT_FILENO);
     dup2(err_pipe[1], STDERR_FILENO);
     if (options.address_space_bytes) {

@@ -60,6 +60,26 @@ std::string read_input_file(const std::filesystem::path& path, std::string_view 
   return bytes;
 }
 
+std::string read_standard_input(std::string_view what) {
+  const std::string name = std::string(what) + " -";
+  errno = 0;
+  if (::fcntl(STDIN_FILENO, F_GETFD) == -1) throw InputError(name + ": standard input is closed");
+  std::string bytes;
+  char buf[1 << 16];
+  for (;;) {
+    const ssize_t n = ::read(STDIN_FILENO, buf, sizeof buf);
+    if (n > 0) {
+      bytes.append(buf, static_cast<std::size_t>(n));
+    } else if (n == 0) {
+      break;
+    } else if (errno != EINTR) {
+      throw InputError(name + ": cannot read standard input: " + std::strerror(errno));
+    }
+  }
+  if (bytes.empty()) throw InputError(name + ": standard input is empty");
+  return bytes;
+}
+
 MappedInput::MappedInput(const std::filesystem::path& path, std::string_view what) {
   std::error_code ec;
   const auto status = std::filesystem::status(path, ec);

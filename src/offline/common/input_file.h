@@ -15,6 +15,11 @@ namespace shtool {
 // Throws InputError.
 std::string read_input_file(const std::filesystem::path& path, std::string_view what);
 
+// All of standard input as bytes, for an option given "-". A closed stdin, a read error
+// and empty input are refused by name ("--in -: standard input is closed"), so none of
+// them reaches a parser as "unexpected end of input". Throws InputError.
+std::string read_standard_input(std::string_view what);
+
 // A whole input file mapped read-only into memory, for the big ones (images): the pages
 // are read ahead and used in place, never copied (a 100 MB EXR: 0.06 s against 0.43 s
 // through read_input_file here, where first touches of fresh memory are slow). The same
