@@ -259,6 +259,35 @@ TEST_F(CommonFiles, OutputPathChecksNameTheProblem) {
   }
   EXPECT_THROW(check_output_path(dir_ / "no" / "x", "--json"), InputError);
   EXPECT_NO_THROW(check_output_path(dir_ / "x", "--json"));
+  EXPECT_EQ(listing(), std::vector<std::string>{}) << "the trial file is removed";
+  // A folder that exists but takes no file (even for root): refused before any work, by
+  // the option's name.
+  try {
+    check_output_path("/proc/shtool-test.json", "--json");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("--json: cannot write '/proc/shtool-test.json': cannot create a "
+                                         "temporary file in '/proc'"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+// A write that fails at the commit still names the option (the folder went away after
+// the checks).
+TEST_F(CommonFiles, CommitFailureNamesTheOption) {
+  fs::create_directory(dir_ / "sub");
+  JobOutputs outputs;
+  outputs.output(dir_ / "sub" / "x.json", "--json");
+  fs::remove(dir_ / "sub");
+  outputs.set("--json", "{}");
+  try {
+    outputs.commit();
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("--json: cannot write", 0), 0u) << e.what();
+  }
+  EXPECT_EQ(listing(), std::vector<std::string>{});
 }
 
 // A rename into place replaces whatever the path is: a link that names a file is written

@@ -159,8 +159,12 @@ CommitGuard::~CommitGuard() {
   }
 }
 
+namespace {
+void check_output_place(const std::filesystem::path& path, std::string_view what);
+}  // namespace
+
 PendingFile::PendingFile(std::filesystem::path target) : target_(output_target(target)) {
-  check_output_path(target_, "");
+  check_output_place(target_, "");
   remove_stale_temporaries(target_);
   int open_errno = 0;
   for (int attempt = 0; attempt < 16 && !file_; ++attempt) {
@@ -265,7 +269,10 @@ bool same_file(const std::filesystem::path& a, const std::filesystem::path& b) {
   return ca == cb;
 }
 
-void check_output_path(const std::filesystem::path& path, std::string_view what) {
+namespace {
+
+// check_output_path without the trial file, which is what PendingFile makes.
+void check_output_place(const std::filesystem::path& path, std::string_view what) {
   const std::string prefix = what.empty() ? std::string() : std::string(what) + ": ";
   if (path.empty()) throw InputError(prefix + "empty output path");
   std::error_code ec;
@@ -285,6 +292,20 @@ void check_output_path(const std::filesystem::path& path, std::string_view what)
   const std::filesystem::path dir = folder_of(output_target(path));
   if (!std::filesystem::is_directory(dir, ec))
     throw InputError(prefix + "cannot write '" + path.string() + "': folder '" + dir.string() + "' does not exist");
+}
+
+}  // namespace
+
+void check_output_path(const std::filesystem::path& path, std::string_view what) {
+  check_output_place(path, what);
+  // A folder that takes no new file (read-only, a full disk's inodes, /proc) fails here,
+  // before the work, rather than at the commit: the same temporary file, made and removed.
+  const std::string prefix = what.empty() ? std::string() : std::string(what) + ": ";
+  try {
+    const PendingFile probe(output_target(path));
+  } catch (const InputError& e) {
+    throw InputError(prefix + e.what());
+  }
 }
 
 std::filesystem::path output_target(const std::filesystem::path& path) {

@@ -82,8 +82,8 @@ bool same_file(const std::filesystem::path& a, const std::filesystem::path& b);
 // Checks, before any work, that `path` can be written: its folder exists and is a
 // folder, and the path (its symbolic links followed) is a regular file or nothing: not
 // a folder, and not a FIFO, device or socket, which the rename into place would replace
-// instead of writing to. `what` names the option in the message ("--out"; empty: no
-// prefix).
+// instead of writing to; and that its folder takes a new file (one is made and removed).
+// `what` names the option in the message ("--out"; empty: no prefix).
 void check_output_path(const std::filesystem::path& path, std::string_view what);
 
 // The file a write to `path` replaces: `path` with its own symbolic links followed (a

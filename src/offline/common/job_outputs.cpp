@@ -101,16 +101,20 @@ void JobOutputs::stage() {
   pending_.clear();
   pending_.reserve(outputs_.size());
   for (Output& o : outputs_) {
-    if (o.written) {
-      pending_.emplace_back(std::move(*o.written));
-      o.written.reset();
+    try {
+      if (o.written) {
+        pending_.emplace_back(std::move(*o.written));
+        o.written.reset();
+        pending_.back().finish();
+        continue;
+      }
+      pending_.emplace_back(o.path);
+      pending_.back().write(o.bytes);
       pending_.back().finish();
-      continue;
+      o.bytes = std::string();  // written: its memory goes back
+    } catch (const InputError& e) {
+      throw InputError(o.option + ": " + e.what());
     }
-    pending_.emplace_back(o.path);
-    pending_.back().write(o.bytes);
-    pending_.back().finish();
-    o.bytes = std::string();  // written: its memory goes back
   }
 }
 
