@@ -90,6 +90,32 @@ TEST(Transfer, ConvexMeshShadowedEqualsUnshadowed) {
   EXPECT_EQ(compute_transfer(cube, o), free);
 }
 
+// More rays than one chunk (the simulation makes and traces 4096 at a time, so any
+// --rays fits in memory): the sum is still every direction once, in order.
+TEST(Transfer, RaysBeyondOneChunkAreEachSummedOnce) {
+  const fit::Mesh plane = from_obj("plane.obj", kPlane);
+  const int rays = 2 * 4096 + 123;
+  TransferOptions o{.order = 3, .rays = rays, .seed = 3, .mode = TransferMode::unshadowed, .threads = 1};
+  const std::vector<double> free = compute_transfer(plane, o);
+  // The reference: the same directions summed in one loop.
+  const VertexRays cast(plane, 4, o.seed, rays, 0.0);
+  std::vector<double> sum(9, 0.0), y(9);
+  for (int k = 0; k < rays; ++k) {
+    eval_sh<double>(3, cast.direction(k), y);
+    for (int i = 0; i < 9; ++i) sum[i] += y[i];
+  }
+  for (int i = 0; i < 9; ++i) EXPECT_EQ(free[4 * 9 + i], sum[i] / rays) << i;
+  // Nothing above the plane: no ray of any chunk is blocked.
+  o.mode = TransferMode::shadowed;
+  EXPECT_EQ(compute_transfer(plane, o), free);
+  // Under a roof every ray of every chunk is.
+  const fit::Mesh roofed = from_obj("roof.obj", kPlane +
+                                                    "v -1000 -1000 1\nv 1000 -1000 1\nv 1000 1000 1\nv -1000 1000 1\n"
+                                                    "f 10 12 11\nf 10 13 12\n");
+  const std::vector<double> blocked = compute_transfer(roofed, o);
+  for (int i = 0; i < 9; ++i) EXPECT_EQ(blocked[4 * 9 + i], 0.0) << i;
+}
+
 TEST(Transfer, RoofBlocksAlmostEverything) {
   // A plane under a square roof of half-width 1000 at height 1: only directions with
   // tan(theta) > ~1000 escape, a cosine-weighted fraction cos^2 ~ 1e-6.

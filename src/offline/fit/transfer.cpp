@@ -119,15 +119,20 @@ struct Points {
   }
 };
 
-// A point's `rays` directions, and for each the Embree record make(origin, direction) that
-// one stream call (or one call per ray) traces.
+// Rays are made and traced in chunks of this many, in order, so memory stays bounded
+// whatever --rays asks (2^31 rays at once would need 200 GB of Embree records) and the
+// sums keep the one order that makes results identical for any chunking of the work.
+constexpr int kRayChunk = 4096;
+
+// Directions first .. first + count - 1 of a point's rays, and for each the Embree record
+// make(origin, direction) that one stream call (or one call per ray) traces.
 template <class Record, class Make>
-void point_rays(const VertexRays& cast, int rays, std::vector<Eigen::Vector3d>& dirs, std::vector<Record>& records,
-                Make make) {
-  dirs.resize(rays);
-  records.resize(rays);
-  for (int k = 0; k < rays; ++k) {
-    dirs[k] = cast.direction(k);
+void point_rays(const VertexRays& cast, int first, int count, std::vector<Eigen::Vector3d>& dirs,
+                std::vector<Record>& records, Make make) {
+  dirs.resize(count);
+  records.resize(count);
+  for (int k = 0; k < count; ++k) {
+    dirs[k] = cast.direction(first + k);
     records[k] = make(cast.origin(), dirs[k]);
   }
 }
@@ -146,19 +151,22 @@ std::vector<double> direct_pass(const EmbreeScene* scene, const Points& points, 
     thread_local std::vector<RTCRay> traced;
     y.resize(n2);
     sum.assign(n2, 0.0);
-    point_rays(cast, rays, dirs, traced, [&](const Eigen::Vector3d& origin, const Eigen::Vector3d& dir) {
-      return scene ? scene->ray(origin, dir) : embree_ray(origin, dir);
-    });
-    RTCIntersectContext context;
-    rtcInitIntersectContext(&context);
-    if (scene && options.ray_streams)
-      rtcOccluded1M(scene->scene, &context, traced.data(), static_cast<unsigned>(rays), sizeof(RTCRay));
-    else if (scene)
-      for (RTCRay& ray : traced) rtcOccluded1(scene->scene, &context, &ray);
-    for (int k = 0; k < rays; ++k) {
-      if (scene && traced[k].tfar < 0.0f) continue;  // blocked: Embree sets tfar to -inf
-      eval_sh<double>(options.order, dirs[k], y);
-      for (int i = 0; i < n2; ++i) sum[i] += y[i];
+    for (int first = 0; first < rays; first += kRayChunk) {
+      const int count = std::min(kRayChunk, rays - first);
+      point_rays(cast, first, count, dirs, traced, [&](const Eigen::Vector3d& origin, const Eigen::Vector3d& dir) {
+        return scene ? scene->ray(origin, dir) : embree_ray(origin, dir);
+      });
+      RTCIntersectContext context;
+      rtcInitIntersectContext(&context);
+      if (scene && options.ray_streams)
+        rtcOccluded1M(scene->scene, &context, traced.data(), static_cast<unsigned>(count), sizeof(RTCRay));
+      else if (scene)
+        for (RTCRay& ray : traced) rtcOccluded1(scene->scene, &context, &ray);
+      for (int k = 0; k < count; ++k) {
+        if (scene && traced[k].tfar < 0.0f) continue;  // blocked: Embree sets tfar to -inf
+        eval_sh<double>(options.order, dirs[k], y);
+        for (int i = 0; i < n2; ++i) sum[i] += y[i];
+      }
     }
     for (int i = 0; i < n2; ++i) result[row * n2 + i] = sum[i] / rays;
   });
@@ -182,28 +190,31 @@ std::vector<double> bounce_pass(const Mesh& mesh, const EmbreeScene& scene, cons
     thread_local std::vector<Eigen::Vector3d> dirs;
     thread_local std::vector<RTCRayHit> hits;
     sum.assign(n2, 0.0);
-    point_rays(cast, rays, dirs, hits, [&](const Eigen::Vector3d& origin, const Eigen::Vector3d& dir) {
-      RTCRayHit hit{};
-      hit.ray = scene.ray(origin, dir);
-      hit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-      return hit;
-    });
-    RTCIntersectContext context;
-    rtcInitIntersectContext(&context);
-    if (options.ray_streams)
-      rtcIntersect1M(scene.scene, &context, hits.data(), static_cast<unsigned>(rays), sizeof(RTCRayHit));
-    else
-      for (RTCRayHit& hit : hits) rtcIntersect1(scene.scene, &context, &hit);
-    for (int k = 0; k < rays; ++k) {
-      const RTCRayHit& hit = hits[k];
-      if (hit.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
-      const Eigen::Vector3i& tri = mesh.triangles[hit.hit.primID];
-      const Eigen::Vector3d ng = (mesh.positions[tri[1]] - mesh.positions[tri[0]])
-                                     .cross(mesh.positions[tri[2]] - mesh.positions[tri[0]]);
-      if (ng.dot(dirs[k]) >= 0.0) continue;
-      const double w1 = hit.hit.u, w2 = hit.hit.v, w0 = 1.0 - w1 - w2;
-      for (int i = 0; i < n2; ++i)
-        sum[i] += w0 * previous[tri[0] * n2 + i] + w1 * previous[tri[1] * n2 + i] + w2 * previous[tri[2] * n2 + i];
+    for (int first = 0; first < rays; first += kRayChunk) {
+      const int count = std::min(kRayChunk, rays - first);
+      point_rays(cast, first, count, dirs, hits, [&](const Eigen::Vector3d& origin, const Eigen::Vector3d& dir) {
+        RTCRayHit hit{};
+        hit.ray = scene.ray(origin, dir);
+        hit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+        return hit;
+      });
+      RTCIntersectContext context;
+      rtcInitIntersectContext(&context);
+      if (options.ray_streams)
+        rtcIntersect1M(scene.scene, &context, hits.data(), static_cast<unsigned>(count), sizeof(RTCRayHit));
+      else
+        for (RTCRayHit& hit : hits) rtcIntersect1(scene.scene, &context, &hit);
+      for (int k = 0; k < count; ++k) {
+        const RTCRayHit& hit = hits[k];
+        if (hit.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
+        const Eigen::Vector3i& tri = mesh.triangles[hit.hit.primID];
+        const Eigen::Vector3d ng = (mesh.positions[tri[1]] - mesh.positions[tri[0]])
+                                       .cross(mesh.positions[tri[2]] - mesh.positions[tri[0]]);
+        if (ng.dot(dirs[k]) >= 0.0) continue;
+        const double w1 = hit.hit.u, w2 = hit.hit.v, w0 = 1.0 - w1 - w2;
+        for (int i = 0; i < n2; ++i)
+          sum[i] += w0 * previous[tri[0] * n2 + i] + w1 * previous[tri[1] * n2 + i] + w2 * previous[tri[2] * n2 + i];
+      }
     }
     for (int i = 0; i < n2; ++i) current[row * n2 + i] = options.albedo * sum[i] / rays;
   });
