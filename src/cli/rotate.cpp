@@ -31,9 +31,7 @@ struct RotateOptions {
 
 std::vector<double> read_coefficients(const RotateOptions& opt) {
   if (!opt.coeffs.empty()) return parse_number_list(opt.coeffs, "--coeffs");
-  std::string text;
-  if (opt.in == "-") text = read_standard_input("--in");
-  else text = read_input_file(opt.in, "--in");
+  const std::string text = opt.in == "-" ? read_standard_input("--in") : read_input_file(opt.in, "--in");
   return parse_coefficients_json(text, opt.in);
 }
 

@@ -208,8 +208,8 @@ std::vector<double> bounce_pass(const Mesh& mesh, const EmbreeScene& scene, cons
         const RTCRayHit& hit = hits[k];
         if (hit.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
         const Eigen::Vector3i& tri = mesh.triangles[hit.hit.primID];
-        const Eigen::Vector3d ng = (mesh.positions[tri[1]] - mesh.positions[tri[0]])
-                                       .cross(mesh.positions[tri[2]] - mesh.positions[tri[0]]);
+        const Eigen::Vector3d ng =
+            (mesh.positions[tri[1]] - mesh.positions[tri[0]]).cross(mesh.positions[tri[2]] - mesh.positions[tri[0]]);
         if (ng.dot(dirs[k]) >= 0.0) continue;
         const double w1 = hit.hit.u, w2 = hit.hit.v, w0 = 1.0 - w1 - w2;
         for (int i = 0; i < n2; ++i)
