@@ -31,7 +31,7 @@ void setup_export_web(CLI::App* sub) {
   sub->add_option("--height", req->height, "canvas height, pixels")->capture_default_str();
   sub->add_option("--exposure", req->exposure, "scale by 2^E before tone mapping (as render's PNG)")
       ->capture_default_str();
-  sub->add_option("--out", req->out, "the folder to write (created if missing; its parent must exist)")->required();
+  sub->add_option("--out", req->out, "the folder to write (created if missing, with its missing parents)")->required();
   sub->callback([req, camera]() {
     web::ExportWebRequest r = *req;
     r.camera = parse_camera(*camera);

@@ -539,13 +539,14 @@ TEST(ExportWeb, RefusesBadInputsAndWritesNothing) {
   EXPECT_EQ(missing.exit_code, 1);
   EXPECT_NE(missing.err.find("three.js was not found"), std::string::npos) << missing.err;
   EXPECT_FALSE(fs::exists(no_three));
-  // A folder that cannot be made: its parent is a file.
+  // A folder that cannot be made: an ancestor is a file (missing parents are made).
   const fs::path blocker = scratch("blocker");
   write_file(blocker, "x");
   const CommandResult blocked = run_shtool({"export-web", kSpotObj, "--fit", bakes().fit.string(), "--light",
-                                            bakes().sky.string(), "--out", (blocker / "page").string()});
+                                            bakes().sky.string(), "--out", (blocker / "site" / "page").string()});
   EXPECT_EQ(blocked.exit_code, 1);
-  EXPECT_NE(blocked.err.find("is not a folder"), std::string::npos) << blocked.err;
+  EXPECT_NE(blocked.err.find("cannot be made: " + blocker.string() + " is not a folder"), std::string::npos)
+      << blocked.err;
   EXPECT_EQ(read_file(blocker), "x");
 }
 

@@ -77,6 +77,21 @@ TEST_F(CliUntrusted, AllOutputsOrNone) {
   EXPECT_EQ(in_k, 0u);
 }
 
+// Output folders are made with their missing parents by every command that writes one,
+// and a file in the way is named before any work.
+TEST_F(CliUntrusted, OutputFoldersAreMadeWithTheirParentsOrRefused) {
+  const CommandResult made =
+      run({"gen-tensors", "--order", "3", "--what", "rotation", "--out", (dir_ / "a" / "b" / "c").string()});
+  EXPECT_EQ(made.exit_code, 0) << made.err;
+  EXPECT_TRUE(fs::is_regular_file(dir_ / "a" / "b" / "c" / "rotation-helpers.shtb"));
+  expect_refused(run({"gen-tensors", "--order", "3", "--what", "rotation", "--out", (dir_ / "m.obj" / "b").string()}),
+                 "--out " + (dir_ / "m.obj" / "b").string() + ": cannot be made: " + (dir_ / "m.obj").string() +
+                     " is not a folder");
+  expect_refused(run({"gen-tensors", "--order", "3", "--what", "rotation", "--out", mesh_.string()}),
+                 "exists and is not a folder");
+  EXPECT_EQ(listing(), (std::vector<std::string>{"a", "m.obj", "t.json"}));
+}
+
 TEST_F(CliUntrusted, FoldersAndMissingFilesAreNamed) {
   expect_refused(run({"product", "--order", "2", "--in", dir_.string()}), "is a folder");
   expect_refused(run({"fit-zh", "--transfer", dir_.string()}), "is a folder");

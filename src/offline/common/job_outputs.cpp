@@ -175,6 +175,19 @@ void JobOutputs::publish() {
   remove_backups();
 }
 
+void check_output_folder(const std::filesystem::path& dir, std::string_view option) {
+  const std::string prefix = std::string(option) + " " + dir.string() + ": ";
+  std::error_code ec;
+  if (std::filesystem::is_directory(dir, ec)) return;
+  if (std::filesystem::exists(dir, ec)) throw InputError(prefix + "exists and is not a folder");
+  const std::filesystem::path absolute = std::filesystem::absolute(dir, ec);
+  for (std::filesystem::path p = absolute.parent_path(); !p.empty(); p = p.parent_path()) {
+    if (std::filesystem::is_directory(p, ec)) return;
+    if (std::filesystem::exists(p, ec)) throw InputError(prefix + "cannot be made: " + p.string() + " is not a folder");
+    if (p == p.parent_path()) break;
+  }
+}
+
 void MadeFolders::make(const std::filesystem::path& dir, const std::string& option) {
   std::error_code ec;
   if (std::filesystem::is_directory(dir, ec)) return;

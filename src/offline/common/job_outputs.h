@@ -87,6 +87,11 @@ class JobOutputs {
   std::vector<PendingFile> pending_;  // between stage() and publish()
 };
 
+// Checks, before any work, that an output folder is one or can be made: nothing else of
+// its name exists and its nearest existing ancestor is a folder (missing parents are
+// made too, as `mkdir -p` does). InputError naming `option` otherwise.
+void check_output_folder(const std::filesystem::path& dir, std::string_view option);
+
 // Folders a job makes for its outputs, removed again (innermost first, and only when still
 // empty) unless keep() is called after the commit: a job that fails, or that SIGINT or
 // SIGTERM ends, leaves no folder.

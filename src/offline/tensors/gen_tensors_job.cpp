@@ -51,19 +51,9 @@ std::vector<GeneratedFile> run_gen_tensors(const GenTensorsRequest& r) {
   // An existing folder: the outputs are declared (and checked) before the work, as every
   // job does. A missing one is made only once every file's bytes are ready, so that a
   // computation that fails (out of memory, say) leaves no folder behind.
+  check_output_folder(r.out, "--out");
   std::error_code ec;
-  const bool folder_exists = std::filesystem::exists(r.out, ec);
-  if (folder_exists && !std::filesystem::is_directory(r.out, ec))
-    throw InputError("cannot create output folder '" + r.out.string() + "': a file of that name exists");
-  if (!folder_exists)  // the nearest existing parent must be a folder
-    for (std::filesystem::path p = r.out.parent_path(); !p.empty(); p = p.parent_path()) {
-      if (std::filesystem::exists(p, ec)) {
-        if (!std::filesystem::is_directory(p, ec))
-          throw InputError("cannot create output folder '" + r.out.string() + "': '" + p.string() + "' is a file");
-        break;
-      }
-      if (p == p.parent_path()) break;
-    }
+  const bool folder_exists = std::filesystem::is_directory(r.out, ec);
   const std::vector<std::string> names = [&] {
     std::vector<std::string> n;
     if (wanted("rotation")) n.push_back("rotation-helpers" + ext);

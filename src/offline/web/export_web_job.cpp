@@ -60,12 +60,8 @@ ExportWebResult run_export_web(const ExportWebRequest& r) {
   if (r.light.empty()) throw InputError("--light is required");
   if (r.out.empty()) throw InputError("--out: an output folder is required");
   view::check_camera(r.camera);
-  const std::filesystem::path parent = std::filesystem::absolute(r.out).parent_path();
+  check_output_folder(r.out, "--out");
   std::error_code ec;
-  if (!std::filesystem::is_directory(parent, ec))
-    throw InputError("--out " + r.out.string() + ": its parent " + parent.string() + " is not a folder");
-  if (std::filesystem::exists(r.out, ec) && !std::filesystem::is_directory(r.out, ec))
-    throw InputError("--out " + r.out.string() + ": exists and is not a folder");
 
   const std::filesystem::path three = three_package_dir();
   if (!three.empty() && !std::filesystem::is_regular_file(three / "package.json", ec))

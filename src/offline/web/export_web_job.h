@@ -23,7 +23,7 @@ struct ExportWebRequest {
   std::filesystem::path fit;      // zh-fit table (fit-zh --out), per vertex
   std::filesystem::path light;    // lighting JSON (project-env --json, light --json): radiance, RGB
   std::filesystem::path probes;   // optional: probe-grid table (bake-probes --out)
-  std::filesystem::path out;      // the folder to write (created if missing; its parent must exist)
+  std::filesystem::path out;      // the folder to write (created if missing, with its missing parents)
   std::optional<view::Camera> camera;  // none: render's framing of the (posed) mesh
   double fov = 40;                // vertical, degrees
   int width = 512, height = 512;
