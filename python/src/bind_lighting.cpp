@@ -106,6 +106,10 @@ py::array light(const std::string& kind, int order, const py::object& direction,
     return std::array<double, 3>{a.data()[0], a.data()[1], a.data()[2]};
   };
   if (spec.type != lighting::LightType::constant) spec.direction = triple(direction, "direction");
+  // Said in the call's own words: the library's messages name --half-angle and a list.
+  const bool angled = spec.type == lighting::LightType::cone || spec.type == lighting::LightType::sphere;
+  if (angled && !half_angle) throw py::value_error("light('" + kind + "') needs half_angle= (degrees)");
+  if (!angled && half_angle) throw py::value_error("half_angle= is for the cone and sphere lights, not '" + kind + "'");
   spec.half_angle_degrees = half_angle;
   spec.color = triple(color, "color");
   if (!ground.is_none()) {

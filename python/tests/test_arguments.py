@@ -37,7 +37,8 @@ def test_threads_is_checked_for_every_call(name):
 @pytest.mark.parametrize("call, words", [
     (lambda: shtool.fit_zh(np.ones((2, 9)), lobes=0), ["lobes"]),
     (lambda: shtool.fit_zh(np.ones((2, 9)), effort=9), ["effort"]),
-    (lambda: shtool.light("cone", 3), ["half_angle"]),
+    (lambda: shtool.light("cone", 3), ["light('cone') needs half_angle= (degrees)"]),
+    (lambda: shtool.light("directional", 3, half_angle=10), ["half_angle= is for the cone and sphere"]),
     (lambda: shtool.gen_tensors(0, "unused"), ["order=0"]),
     (lambda: shtool.search_lobes(shared=True), ["shared", "order"]),
     (lambda: shtool.transform_splats(SOURCE_DIR / "data" / "spot.obj", "o.ply", quat=(0, 0, 0, 0)), ["quaternion"]),
