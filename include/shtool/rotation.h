@@ -124,8 +124,12 @@ class ShRotation {
   int order() const { return order_; }
   RotationMethod method() const { return resolved_; }  // never automatic after set()
 
-  // out = M(R) in, both of N^2 coefficients; in and out must not overlap.
+  // out = M(R) in on the first N^2 coefficients of each; in and out must not overlap. A
+  // span shorter than N^2 is a precondition violation (std::invalid_argument, or an
+  // abort without exceptions), checked.
   void apply(std::span<const T> in, std::span<T> out) const {
+    const std::size_t n = static_cast<std::size_t>(order_) * static_cast<std::size_t>(order_);
+    if (in.size() < n || out.size() < n) sizes_failed(in.size(), out.size());
     // Order 2 under zxzxz is band 1 = R itself, inline (see set()).
     if (order_ == 2 && resolved_ == RotationMethod::zxzxz) {
       detail::order2_rotate<T>(r_, in.data(), out.data());
@@ -250,6 +254,7 @@ class ShRotation {
   bool set_general(const Mat3<T>& r, RotationMethod method, double tolerance,
                    const ZyzCosSin<T>* e = nullptr);
   void apply_general(const T* in, T* out) const;
+  [[noreturn]] void sizes_failed(std::size_t in, std::size_t out) const;
   void apply_general3(const T* in, T* out) const;  // three channels interleaved
   // apply(in, out, channels) for channel counts other than 3, and the refusals.
   bool apply_channels(std::span<const T> in, std::span<T> out, int channels) const;

@@ -7,6 +7,7 @@
 // library itself builds both ways.
 #pragma once
 
+#include <cstddef>
 #include <string>
 
 namespace shtool::detail {
@@ -19,5 +20,14 @@ namespace shtool::detail {
 [[noreturn]] void dependency_failed(const std::string& message);
 // std::bad_alloc.
 [[noreturn]] void allocation_failed();
+
+// precondition_failed unless a span `what` of `call` holds at least `needed` values: a
+// per-call comparison, so the entry points that take spans of coefficients check them
+// (a short span would otherwise be read or written past its end).
+inline void check_span_size(const char* call, const char* what, std::size_t given, std::size_t needed) {
+  if (given < needed)
+    precondition_failed(std::string(call) + ": " + what + " holds " + std::to_string(given) + " values, " +
+                        std::to_string(needed) + " needed");
+}
 
 }  // namespace shtool::detail

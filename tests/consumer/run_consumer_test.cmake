@@ -57,7 +57,9 @@ elseif(STEP STREQUAL "consumer")
       "-DCMAKE_PREFIX_PATH=${PREFIX}" "-DCMAKE_BUILD_TYPE=${CONFIG}"
       # Only the scratch prefix may satisfy find_package(shtool): no user or system
       # package registry entries pointing back at some build tree.
-      -DCMAKE_FIND_USE_PACKAGE_REGISTRY=OFF -DCMAKE_FIND_USE_SYSTEM_PACKAGE_REGISTRY=OFF)
+      -DCMAKE_FIND_USE_PACKAGE_REGISTRY=OFF -DCMAKE_FIND_USE_SYSTEM_PACKAGE_REGISTRY=OFF
+      # An engine needs no JSON library: the package must configure without one.
+      -DCMAKE_DISABLE_FIND_PACKAGE_nlohmann_json=ON)
   if(GENERATOR)
     list(APPEND configure_args -G "${GENERATOR}")
   endif()

@@ -180,6 +180,38 @@ TEST(FourierProduct, MatchesTriplingTensorAndAliasing) {
   for (int i = 0; i < sh_count(order); ++i) ASSERT_NEAR(a[i], b[i], 1e-13) << "coefficient " << i;
 }
 
+// Spans shorter than N^2 are a checked precondition: std::invalid_argument naming the
+// call and the span, never a read or write past the end (a generated kernel included).
+TEST(FourierProduct, ShortSpansAreRefused) {
+  for (const int order : {3, 12}) {  // order 3 runs a generated tripling kernel
+    const int n = sh_count(order);
+    const std::vector<double> f(n, 0.5), short_f(n - 1, 0.5);
+    std::vector<double> g(n), short_g(n - 1);
+    const TriplingProduct<double> tripling(TriplingTensor::compute(order));
+    EXPECT_THROW(tripling.multiply(short_f, f, g), std::invalid_argument) << order;
+    EXPECT_THROW(tripling.multiply(f, short_f, g), std::invalid_argument) << order;
+    EXPECT_THROW(tripling.multiply(f, f, short_g), std::invalid_argument) << order;
+    EXPECT_THROW(tripling.integral(f, f, short_f), std::invalid_argument) << order;
+    FourierProduct<double> fourier(order, 2);
+    EXPECT_THROW(fourier.multiply(f, short_f, g), std::invalid_argument) << order;
+    EXPECT_THROW(fourier.multiply(f, f, short_g), std::invalid_argument) << order;
+    const std::span<const double> one[1] = {f};
+    EXPECT_THROW(fourier.multiply(std::span<const std::span<const double>>(one, 1), g), std::invalid_argument);
+    try {
+      tripling.multiply(f, f, short_g);
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("TriplingProduct::multiply: g holds " + std::to_string(n - 1) +
+                                           " values, " + std::to_string(n) + " needed"),
+                std::string::npos)
+          << e.what();
+    }
+    // Longer spans are fine: the first N^2 values are used.
+    std::vector<double> long_g(n + 5, 7.0);
+    tripling.multiply(f, f, long_g);
+    EXPECT_EQ(long_g[n], 7.0);
+  }
+}
+
 // triple() calls the generated kernel directly at orders 2..6 (tripling method) and must
 // still allow g to alias an input: every method, orders with and without a kernel, each
 // input aliased in turn, against the product into a separate output.

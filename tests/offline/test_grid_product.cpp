@@ -251,6 +251,20 @@ TEST(GridProduct, BadArgumentsThrow) {
   const std::span<const double> one[1] = {f};
   EXPECT_THROW(p.multiply(std::span<const std::span<const double>>(one, 1), g), std::invalid_argument);
   EXPECT_THROW(p.integral(std::span<const std::span<const double>>(one, 1)), std::invalid_argument);
+  // Spans shorter than N^2 are refused, not read or written past their end.
+  const std::vector<double> short_f(8, 1.0);
+  std::vector<double> short_g(8);
+  EXPECT_THROW(p.multiply(f, short_f, g), std::invalid_argument);
+  EXPECT_THROW(p.multiply(f, f, short_g), std::invalid_argument);
+  const std::span<const double> three[3] = {f, f, short_f};
+  EXPECT_THROW(p.integral(std::span<const std::span<const double>>(three, 3)), std::invalid_argument);
+  try {
+    p.multiply(short_f, f, g);
+    FAIL() << "no exception for a short input";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("GridProduct::multiply: an input holds 8 values, 9 needed"), std::string::npos)
+        << e.what();
+  }
 }
 
 }  // namespace

@@ -40,6 +40,7 @@
 #include "shtool/rotation_helpers.h"
 #include "shtool/sh.h"
 #include "shtool/table.h"
+#include "shtool/zhf_rotation.h"
 #include "table_test_util.h"
 #include "tensors/rotation_helpers_gen.h"
 #include "test_util.h"
@@ -1134,6 +1135,39 @@ TEST(RotationApi, ShortSetPathMatchesGeneralPathDouble) { check_short_set_path<d
 
 TEST(RotationApi, ReusedRotationMatchesFreshOneFloat) { check_reused_rotation<float>(); }
 TEST(RotationApi, ReusedRotationMatchesFreshOneDouble) { check_reused_rotation<double>(); }
+
+// apply() of one vector checks its spans as apply() of several channels does: a short
+// one is std::invalid_argument, on every path (order 2 inline, a generated kernel, the
+// general code).
+TEST(RotationApi, ShortSpansAreRefused) {
+  for (const int order : {2, 4, 12}) {
+    const int n = sh_count(order);
+    ShRotation<double> rotation(order, helpers());
+    ASSERT_TRUE(rotation.set(matrix_from_zyz<double>({0.3, 0.7, -0.2}), RotationMethod::zxzxz));
+    const std::vector<double> in(n, 1.0), short_in(n - 1, 1.0);
+    std::vector<double> out(n), short_out(n - 1);
+    EXPECT_THROW(rotation.apply(short_in, out), std::invalid_argument) << order;
+    try {
+      rotation.apply(in, short_out);
+      FAIL() << "no exception for a short output at order " << order;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("ShRotation::apply: out holds " + std::to_string(n - 1) + " values, " +
+                                           std::to_string(n) + " needed"),
+                std::string::npos)
+          << e.what();
+    }
+    rotation.apply(in, out);  // the right sizes still work
+  }
+  auto lobes = ZhfLobes::load(default_zhf_lobes_path(4));
+  ASSERT_TRUE(lobes.ok()) << lobes.error().message;
+  ZhfRotation<double> zhf(4, std::make_shared<const ZhfLobes>(std::move(lobes.value())));
+  ASSERT_TRUE(zhf.set(matrix_from_zyz<double>({0.3, 0.7, -0.2})));
+  const std::vector<double> in(16, 1.0);
+  std::vector<double> short_out(15);
+  EXPECT_THROW(zhf.apply(in, short_out), std::invalid_argument);
+  EXPECT_THROW(zhf.apply(std::span<const double>(in).first(15), std::span<double>(short_out.data(), 15)),
+               std::invalid_argument);
+}
 
 TEST(RotationApi, BatchOfNothingAndWrongSizes) {
   ShRotation<float> rotation(4, helpers());

@@ -1,10 +1,12 @@
 // The table reader and the loaders on hostile bytes, through read_table_bytes: inputs
 // that once crashed or misled shtool (deep JSON, bad sparse rows, oversized counts,
 // truncations) must come back as an Error naming the problem.
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <numbers>
 #include <string>
 #include <vector>
 
@@ -114,6 +116,44 @@ TEST(UntrustedTables, AnInMemoryTableWhoseShapeOutrunsItsDataIsRefused) {
   const Result<TriplingTensor> t = TriplingTensor::from_table(tripling.value());
   ASSERT_FALSE(t.ok());
   EXPECT_NE(t.error().message.find("its dtype and shape need"), std::string::npos) << t.error().message;
+}
+
+// A header's order raised by hand over entries of a lower order (JSON headers carry no
+// checksum): the products would drop every coupling of the missing bands.
+TEST(UntrustedTables, ATriplingTensorMustCoverItsOrder) {
+  Result<Table> tripling = read_table(find_shipped_table("tripling-tensor.shtb"));
+  ASSERT_TRUE(tripling.ok()) << tripling.error().message;
+  ASSERT_TRUE(TriplingTensor::from_table(tripling.value()).ok());
+  tripling.value().order += 1;
+  const Result<TriplingTensor> t = TriplingTensor::from_table(tripling.value());
+  ASSERT_FALSE(t.ok());
+  const int n2 = (tripling.value().order - 1) * (tripling.value().order - 1);
+  EXPECT_NE(t.error().message.find("no entry (0, " + std::to_string(n2) + ", " + std::to_string(n2) +
+                                   "): the entries do not cover order " + std::to_string(tripling.value().order)),
+            std::string::npos)
+      << t.error().message;
+  // An edited value of such an entry is refused by name too.
+  Table edited = read_table(find_shipped_table("tripling-tensor.shtb")).value();
+  TableArray* value = nullptr;
+  for (TableArray& a : edited.arrays)
+    if (a.name == "value") value = &a;
+  ASSERT_NE(value, nullptr);
+  const double half = 0.25 / std::sqrt(std::numbers::pi);  // entry 0 is (0, 0, 0) = 1 / sqrt(4 pi)
+  std::memcpy(value->data.data(), &half, sizeof half);
+  const Result<TriplingTensor> e = TriplingTensor::from_table(edited);
+  ASSERT_FALSE(e.ok());
+  EXPECT_NE(e.error().message.find("is not 1/sqrt(4 pi)"), std::string::npos) << e.error().message;
+}
+
+TEST(UntrustedTables, ZhfLobesHeaderOrderMustMatchItsBands) {
+  Result<Table> lobes = read_table(find_shipped_table("zhf-shared-N4.shtb"));
+  ASSERT_TRUE(lobes.ok()) << lobes.error().message;
+  ASSERT_TRUE(ZhfLobes::from_table(lobes.value()).ok());
+  lobes.value().order = 1000;
+  const Result<ZhfLobes> z = ZhfLobes::from_table(lobes.value());
+  ASSERT_FALSE(z.ok());
+  EXPECT_NE(z.error().message.find("the header says order 1000 but the table holds 4 bands"), std::string::npos)
+      << z.error().message;
 }
 
 TEST(UntrustedTables, DeepJsonIsRefusedNotRecursedInto) {

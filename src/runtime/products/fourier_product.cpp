@@ -335,15 +335,23 @@ FourierProduct<T>::FourierProduct(int order, int inputs) : impl_(new Impl(order,
 
 template <class T>
 void FourierProduct<T>::multiply(std::span<const std::span<const T>> f, std::span<T> g) {
+  if (static_cast<int>(f.size()) != impl_->inputs)
+    detail::precondition_failed("FourierProduct: " + std::to_string(f.size()) + " inputs given, " +
+                                std::to_string(impl_->inputs) + " expected");
+  const std::size_t n = static_cast<std::size_t>(sh_count(order()));
   const T* ptrs[kMaxProductInputs];
-  for (int i = 0; i < impl_->inputs; ++i) ptrs[i] = f[i].data();
+  for (int i = 0; i < impl_->inputs; ++i) {
+    detail::check_span_size("FourierProduct::multiply", "an input", f[i].size(), n);
+    ptrs[i] = f[i].data();
+  }
+  detail::check_span_size("FourierProduct::multiply", "g", g.size(), n);
   impl_->multiply(ptrs, g.data());
 }
 
 template <class T>
 void FourierProduct<T>::multiply(std::span<const T> f1, std::span<const T> f2, std::span<T> g) {
-  const T* ptrs[2] = {f1.data(), f2.data()};
-  impl_->multiply(ptrs, g.data());
+  const std::span<const T> f[2] = {f1, f2};
+  multiply(std::span<const std::span<const T>>(f, 2), g);
 }
 
 template class FourierProduct<float>;

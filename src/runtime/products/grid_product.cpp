@@ -590,6 +590,9 @@ void GridProduct<T>::multiply(std::span<const std::span<const T>> f, std::span<T
   if (static_cast<int>(f.size()) != impl_->inputs)
     detail::precondition_failed("GridProduct: " + std::to_string(f.size()) + " inputs given, " +
                                 std::to_string(impl_->inputs) + " expected");
+  const std::size_t n = static_cast<std::size_t>(sh_count(order()));
+  for (const std::span<const T>& fi : f) detail::check_span_size("GridProduct::multiply", "an input", fi.size(), n);
+  detail::check_span_size("GridProduct::multiply", "g", g.size(), n);
   impl_->multiply(f.data(), g.data());
 }
 
@@ -605,6 +608,8 @@ T GridProduct<T>::integral(std::span<const std::span<const T>> f) {
     detail::precondition_failed("GridProduct::integral: " + std::to_string(f.size()) +
                                 " functions given, " + std::to_string(impl_->inputs + 1) +
                                 " expected");
+  const std::size_t n = static_cast<std::size_t>(sh_count(impl_->order));
+  for (const std::span<const T>& fi : f) detail::check_span_size("GridProduct::integral", "a function", fi.size(), n);
   // integral (f_1 ... f_q) f_{q+1} = <P_N(f_1 ... f_q), f_{q+1}> exactly, since f_{q+1}
   // has order N: the projection of the first q is all that is needed.
   T* g = impl_->scratch.data();

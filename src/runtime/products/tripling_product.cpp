@@ -12,6 +12,7 @@
 
 #include "io/load_kind.h"
 #include "kernels/tripling_kernels.h"
+#include "precondition.h"
 #include "shtool/legendre.h"
 #include "shtool/quadrature.h"
 #include "shtool/sh.h"
@@ -191,6 +192,23 @@ Result<TriplingTensor> TriplingTensor::from_table(const Table& table) {
     if (!(std::abs(t.value[e]) <= gaunt_bound))
       return tripling_error(where + ": value exceeds the bound of any SH triple integral");
   }
+  // The table holds every band of its order: integral y_0^0 y_j y_j = 1 / sqrt(4 pi) for
+  // every j < N^2, so each (0, j, j) is an entry of that value. A header whose order was
+  // raised by hand (entries of a lower order, checksums intact) fails here instead of
+  // dropping the couplings of the missing bands from every product.
+  const double y00 = 0.5 / std::sqrt(std::numbers::pi);
+  std::uint32_t next = 0;  // the j of the next (0, j, j) expected
+  for (std::size_t e = 0; e < t.value.size() && t.index[3 * e] == 0 && next < count; ++e) {
+    if (t.index[3 * e + 1] != next || t.index[3 * e + 2] != next) continue;
+    if (!(std::abs(t.value[e] - y00) <= 1e-12 * y00))
+      return tripling_error("entry " + std::to_string(e) + " (0, " + std::to_string(next) + ", " +
+                            std::to_string(next) + "): is not 1/sqrt(4 pi), the integral of y_0^0 y_j y_j");
+    ++next;
+  }
+  if (next != count)
+    return tripling_error("no entry (0, " + std::to_string(next) + ", " + std::to_string(next) +
+                          "): the entries do not cover order " + std::to_string(t.order) + " (" +
+                          std::to_string(count) + " coefficients)");
   return t;
 }
 
@@ -248,6 +266,10 @@ TriplingProduct<T>::TriplingProduct(const TriplingTensor& tensor) : order_(tenso
 template <class T>
 void TriplingProduct<T>::multiply(std::span<const T> f1, std::span<const T> f2,
                                   std::span<T> g) const {
+  const std::size_t n = static_cast<std::size_t>(sh_count(order_));
+  detail::check_span_size("TriplingProduct::multiply", "f1", f1.size(), n);
+  detail::check_span_size("TriplingProduct::multiply", "f2", f2.size(), n);
+  detail::check_span_size("TriplingProduct::multiply", "g", g.size(), n);
   if (kernel_) {
     kernel_(f1.data(), f2.data(), g.data());
     return;
@@ -271,6 +293,8 @@ template <class T>
 T TriplingProduct<T>::integral(std::span<const T> f1, std::span<const T> f2,
                                std::span<const T> f3) const {
   const int count = sh_count(order_);
+  for (const auto& [f, name] : {std::pair{f1, "f1"}, std::pair{f2, "f2"}, std::pair{f3, "f3"}})
+    detail::check_span_size("TriplingProduct::integral", name, f.size(), static_cast<std::size_t>(count));
   const T* a = f1.data();
   const T* b = f2.data();
   T total = 0;

@@ -804,6 +804,14 @@ void ShRotation<T>::apply_lanes(const T* in, T* out) const {
 }
 
 template <class T>
+void ShRotation<T>::sizes_failed(std::size_t in, std::size_t out) const {
+  const std::size_t n = static_cast<std::size_t>(order_) * static_cast<std::size_t>(order_);
+  detail::check_span_size("ShRotation::apply", "in", in, n);
+  detail::check_span_size("ShRotation::apply", "out", out, n);
+  detail::invariant_failed("ShRotation::apply: sizes_failed with sizes that fit");
+}
+
+template <class T>
 void ShRotation<T>::apply_general(const T* in, T* out) const {
   apply_lanes<1>(in, out);
 }

@@ -3,6 +3,7 @@
 
 #include "basis/legendre_recurrence.h"
 #include "io/load_kind.h"
+#include "precondition.h"
 
 #include <algorithm>
 #include <array>
@@ -76,6 +77,9 @@ Result<ZhfLobes> ZhfLobes::from_table(const Table& t) {
       return bad("does not hold band " + std::to_string(l) + " at position " + std::to_string(l) +
                  " (a rotation table holds every band from 0 up, in order; this one's first is band " +
                  std::to_string(b[0]) + ": a per-band search table cannot rotate on its own)");
+  if (t.order != want)
+    return bad("the header says order " + std::to_string(t.order) + " but the table holds " + std::to_string(want) +
+               " bands");
   const std::size_t nd = dirs.value().size() / 3;
   if (offset.value().size() != b.size() || cond.value().size() != b.size() || dirs.value().size() != 3 * nd)
     return bad("arrays 'direction_offset', 'cond' and 'bands' differ in length");
@@ -375,6 +379,9 @@ bool ZhfRotation<T>::set(const Mat3<T>& r) {
 
 template <class T>
 void ZhfRotation<T>::apply(std::span<const T> in, std::span<T> out) const {
+  const std::size_t n = static_cast<std::size_t>(sh_count(order_));
+  detail::check_span_size("ZhfRotation::apply", "in", in.size(), n);
+  detail::check_span_size("ZhfRotation::apply", "out", out.size(), n);
   const int* cs = csc_start_.data();
   const int* cr = csc_row_.data();
   const T* cv = csc_val_.data();
@@ -440,6 +447,7 @@ bool ZhfTailoredSignal<T>::set(const Mat3<T>& r) {
 
 template <class T>
 void ZhfTailoredSignal<T>::apply(std::span<T> out) const {
+  detail::check_span_size("ZhfTailoredSignal::apply", "out", out.size(), static_cast<std::size_t>(sh_count(order_)));
   const T* samples = samples_.data();
   const int* rs = lobes_->row_start.data();
   const int* col = lobes_->col.data();
@@ -457,6 +465,9 @@ void ZhfTailoredSignal<T>::apply(std::span<T> out) const {
 template <class T>
 void ZhfTailoredSignal<T>::apply_samples(const ZhfLobes& lobes, int order, std::span<const T> samples,
                                          std::span<T> out) {
+  const std::size_t n = static_cast<std::size_t>(sh_count(order));
+  detail::check_span_size("ZhfTailoredSignal::apply_samples", "samples", samples.size(), n);
+  detail::check_span_size("ZhfTailoredSignal::apply_samples", "out", out.size(), n);
   for (int l = 0; l < order; ++l) {
     const T* sl = samples.data() + l * l;
     for (int i = l * l; i < (l + 1) * (l + 1); ++i) {
