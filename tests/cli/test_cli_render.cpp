@@ -318,6 +318,10 @@ TEST(Render, BadRequestsAreRefusedByName) {
   must(run_shtool({"project-env", std::string(SHTOOL_SOURCE_DIR) + "/data/sky.hdr", "--order", "3", "--json",
                    scratch("env.json").string(), "--out", env_table.string()}));
   shtool::test::write_file(alpha, R"({"alpha": [0.5]})");
+  // A reference that is black everywhere: the camera looks away from the mesh.
+  const fs::path black = scratch("black.exr");
+  must(run_shtool({"render", kSpotObj, "--shading", "normals", "--width", "64", "--height", "64", "--camera",
+                   "100,0,0,101,0,0,0,0,1", "--out", black.string()}));
   struct Bad {
     std::vector<std::string> args;
     const char* message;
@@ -343,6 +347,9 @@ TEST(Render, BadRequestsAreRefusedByName) {
       {{kSpotObj, "--fit", env_table.string(), "--light", sky}, "a table of kind env-sh; render shades a zh-fit"},
       {{kSpotObj, "--light", sky, "--shading", "membrane", "--alpha", "0.2", "--alpha-map", alpha.string()},
        "excludes"},
+      {{kSpotObj, "--fit", fit, "--light", sky, "--alpha", "0.5"}, "--alpha applies to --shading membrane only"},
+      {{kSpotObj, "--fit", fit, "--light", sky, "--reference", black.string()},
+       "every pixel is black, so an error relative to it is undefined"},
   };
   for (const Bad& b : bad) expect_refused("render", b.args, b.message, scratch("bad.exr"));
   // A bake the shading does not use is not read, and said so.
@@ -450,6 +457,24 @@ TEST(Deform, RigidRotationRotatesEveryLobe) {
     }
   EXPECT_LT(worst, 1e-4);
   EXPECT_TRUE(shtool::ZhFitTable<double>::load(out)) << "the posed table loads";
+  // The posed table belongs to the posed mesh: it renders there, and render and deform
+  // refuse it on the rest mesh (the pose would be applied twice, or not at all).
+  const std::string sky = bakes().sky.string();
+  must(run_shtool({"render", turned.string(), "--fit", out.string(), "--light", sky, "--width", "32", "--height",
+                   "32", "--out", scratch("turned.png").string()}));
+  for (const std::vector<std::string>& args :
+       {std::vector<std::string>{"render", kSpotObj, "--fit", out.string(), "--light", sky, "--width", "32",
+                                 "--height", "32", "--out", scratch("rest_posed.png").string()},
+        std::vector<std::string>{"render", kSpotObj, "--fit", out.string(), "--pose", turned.string(), "--light",
+                                 sky, "--width", "32", "--height", "32", "--out", scratch("rest_posed.png").string()},
+        std::vector<std::string>{"deform", out.string(), "--rest", kSpotObj, "--pose", turned.string(), "--out",
+                                 scratch("twice.shtb").string()}}) {
+    const auto refused = run_shtool(args);
+    EXPECT_EQ(refused.exit_code, 1) << args[0] << ": " << refused.err;
+    EXPECT_NE(refused.err.find("was baked on another mesh"), std::string::npos) << args[0] << ": " << refused.err;
+  }
+  EXPECT_FALSE(fs::exists(scratch("rest_posed.png")));
+  EXPECT_FALSE(fs::exists(scratch("twice.shtb")));
 }
 
 // Mean absolute difference between two renders, over pixels both cover, relative to the

@@ -132,6 +132,8 @@ TEST(RenderWrinkle, BadRequestsAreRefusedByName) {
   };
   const std::string short_x = variant("short.json", [](nlohmann::json& j) { j["x"].erase(j["x"].begin()); });
   const std::string deep = variant("deep.json", [](nlohmann::json& j) { j["d"][5] = 1.5; });
+  // Just past the deepest depth: the message must show the digits that differ.
+  const std::string barely = variant("barely.json", [](nlohmann::json& j) { j["d"][5] = 1.0000001; });
   const std::string negative = variant("negative.json", [](nlohmann::json& j) { j["d"][3] = -0.1; });
   const std::string text = variant("text.json", [](nlohmann::json& j) { j["x"][2] = "a"; });
   const std::string no_d = variant("no_d.json", [](nlohmann::json& j) { j.erase("d"); });
@@ -154,7 +156,9 @@ TEST(RenderWrinkle, BadRequestsAreRefusedByName) {
       {{obj, "--shading", "wrinkle", "--wrinkle", map, "--wrinkle-map", no_d, "--light", light},
        "'d' is missing or not an array"},
       {{obj, "--shading", "wrinkle", "--wrinkle", map, "--wrinkle-map", deep, "--light", light},
-       "d[5] = 1.500000 is outside the map's depths [0, 1.000000]"},
+       "d[5] = 1.5 is outside the map's depths [0, 1]"},
+      {{obj, "--shading", "wrinkle", "--wrinkle", map, "--wrinkle-map", barely, "--light", light},
+       "d[5] = 1.0000001 is outside the map's depths [0, 1]"},
       {{obj, "--shading", "wrinkle", "--wrinkle", map, "--wrinkle-map", negative, "--light", light}, "d[3]"},
       {{obj, "--shading", "wrinkle", "--wrinkle", map, "--wrinkle-map", text, "--light", light},
        "x[2] is not a number"},

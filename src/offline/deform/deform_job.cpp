@@ -56,6 +56,10 @@ DeformReport run_deform(const DeformRequest& r) {
                                  {"rest_crc32", rest.input_crc32},
                                  {"pose", r.pose.filename().string()},
                                  {"pose_crc32", posed.input_crc32},
+                                 // The table belongs to the posed mesh: render and deform
+                                 // check it against the mesh they are given, as any bake.
+                                 {"mesh_crc32", fit::loaded_mesh_crc32(posed)},
+                                 {"normals", posed.normals_from_file ? "file" : "computed"},
                                  {"up", up_axis_name(rest.up)}};
   const nlohmann::json meta = {{"mode", "deformed"}, {"direct", moved.direct_count}, {kMeshUpKey, up_axis_name(rest.up)}};
   const Table table = fit::zh_fit_table(moved, meta, generator_record("shtool deform", params));

@@ -519,6 +519,28 @@ Image decode_image(std::string_view bytes, const std::filesystem::path& name, st
   return decode(bytes, name, max_texels, threads, nullptr);
 }
 
+namespace {
+
+// check_finite for images: the message names the pixel and channel, not a flat index.
+void check_image_finite(std::span<const float> texels, int width, std::size_t channels,
+                        const std::vector<std::string>& names) {
+  for (std::size_t i = 0; i < texels.size(); ++i)
+    if (!std::isfinite(texels[i])) {
+      const std::size_t pixel = i / channels, c = i % channels;
+      throw InputError("the image's pixel (" + std::to_string(pixel % static_cast<std::size_t>(width)) + ", " +
+                       std::to_string(pixel / static_cast<std::size_t>(width)) + ") " + names[c] +
+                       " is not finite (a computation overflowed, under a light too strong for float, say: no "
+                       "output holds NaN or infinity)");
+    }
+}
+
+const std::vector<std::string>& rgba_names() {
+  static const std::vector<std::string> names = {"R", "G", "B", "A"};
+  return names;
+}
+
+}  // namespace
+
 ImageFile read_image(const std::filesystem::path& path, std::string_view what, int threads) {
   const MappedInput file(path, what);
   ImageFile f;
@@ -527,7 +549,8 @@ ImageFile read_image(const std::filesystem::path& path, std::string_view what, i
 }
 
 std::string encode_exr_channels(const ChannelImage& image, NonFinite non_finite) {
-  if (non_finite == NonFinite::refuse) check_finite(std::span<const float>(image.texels), "the image's value");
+  if (non_finite == NonFinite::refuse)
+    check_image_finite(image.texels, image.width, image.names.size(), image.names);
   Imf::Header header(image.width, image.height);
   header.compression() = Imf::ZIP_COMPRESSION;
   for (const std::string& n : image.names) header.channels().insert(n, Imf::Channel(Imf::FLOAT));
@@ -552,7 +575,7 @@ std::string encode_exr(const Image& image) {
 }
 
 std::string encode_png(const Image& image, double exposure) {
-  check_finite(std::span<const float>(image.texels), "the image's value");
+  check_image_finite(image.texels, image.width, static_cast<std::size_t>(image.channels), rgba_names());
   const double scale = std::exp2(exposure);
   std::vector<unsigned char> bytes(image.texels.size());
   for (std::size_t i = 0; i < bytes.size(); ++i) {

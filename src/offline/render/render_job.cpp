@@ -332,6 +332,7 @@ RenderResult run_render(const RenderRequest& r) {
   if (!(r.alpha >= 0 && r.alpha <= 1)) throw InputError("--alpha must be between 0 and 1");
   if (!r.alpha_map.empty() && shading != Shading::membrane)
     throw InputError("--alpha-map applies to --shading membrane only");
+  if (r.alpha != 0 && shading != Shading::membrane) throw InputError("--alpha applies to --shading membrane only");
   if (shading == Shading::wrinkle && (r.wrinkle.empty() || r.wrinkle_map.empty()))
     throw InputError("--shading wrinkle needs --wrinkle (a wrinkle-zh table) and --wrinkle-map (groove coordinates)");
   if (shading != Shading::wrinkle && (!r.wrinkle.empty() || !r.wrinkle_map.empty()))
@@ -498,6 +499,14 @@ RenderResult run_render(const RenderRequest& r) {
     if (r.reference.extension() != ".exr")
       throw InputError("--reference " + r.reference.string() + ": an EXR (linear radiance) is needed");
     reference = lighting::decode_image(read_input_file(r.reference, "--reference"), r.reference);
+    // The error is relative to the reference's own size: undefined against black.
+    bool any = false;
+    for (std::size_t p = 0; p < std::size_t(reference->width) * reference->height && !any; ++p)
+      for (int c = 0; c < 3; ++c) any = any || reference->texels[p * reference->channels + c] != 0;
+    if (!any)
+      throw InputError("--reference " + r.reference.string() +
+                       ": every pixel is black, so an error relative to it is undefined; give a render of the "
+                       "same view");
   }
 
   const auto start = std::chrono::steady_clock::now();
@@ -542,7 +551,7 @@ RenderResult run_render(const RenderRequest& r) {
         difference += (a - b) * (a - b);
         norm += b * b;
       }
-    result.reference_nrms = norm > 0 ? std::sqrt(difference / norm) : std::sqrt(difference);
+    result.reference_nrms = std::sqrt(difference / norm);  // norm > 0: checked on reading
   }
   io.set("--out", lighting::encode_image_for(r.out, image, "--out", r.exposure));
   io.commit();

@@ -1,5 +1,6 @@
 #include "render/wrinkle_shading.h"
 
+#include <charconv>
 #include <cmath>
 #include <string>
 
@@ -10,6 +11,17 @@
 #include "common/parallel_for.h"
 
 namespace shtool::render {
+namespace {
+
+// A number with the digits that tell it from its neighbours (1.0000001 against a bound
+// of 1): the shortest text that reads back as the same double.
+std::string exact_text(double v) {
+  char text[32];
+  const auto end = std::to_chars(text, text + sizeof text, v).ptr;
+  return std::string(text, end);
+}
+
+}  // namespace
 
 GrooveCoordinates read_groove_coordinates(const std::filesystem::path& path, const fit::Mesh& mesh,
                                           double max_depth) {
@@ -37,8 +49,8 @@ GrooveCoordinates read_groove_coordinates(const std::filesystem::path& path, con
     // The map holds depths 0..max_depth only; shading a deeper groove as the deepest one
     // would hide a mistake in the coordinates.
     if (!(out.d[k] >= 0 && out.d[k] <= max_depth))
-      throw InputError(what + ": d[" + std::to_string(k) + "] = " + std::to_string(out.d[k]) +
-                       " is outside the map's depths [0, " + std::to_string(max_depth) + "]");
+      throw InputError(what + ": d[" + std::to_string(k) + "] = " + exact_text(out.d[k]) +
+                       " is outside the map's depths [0, " + exact_text(max_depth) + "]");
   }
   return out;
 }

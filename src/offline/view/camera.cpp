@@ -22,10 +22,12 @@ void check_camera(const std::optional<Camera>& camera) {
   if (!camera) return;
   using Vec = Eigen::Vector3d;
   const Vec eye = as_vector(camera->eye), target = as_vector(camera->target), up = as_vector(camera->up);
-  // Embree traces in float: coordinates beyond 1e30 would overflow its arithmetic.
+  // Embree traces in float and refuses (asserts on) a ray whose origin lies beyond about
+  // 1.8e18; the bound of mesh coordinates keeps every ray well inside it.
   for (const Vec& v : {eye, target, up})
-    if (!v.allFinite() || v.cwiseAbs().maxCoeff() > 1e30)
-      throw InputError("--camera: every coordinate must be a finite number of magnitude at most 1e30");
+    if (!v.allFinite() || v.cwiseAbs().maxCoeff() > fit::kMaxCoordinate)
+      throw InputError("--camera: every coordinate must be a finite number of magnitude at most 1e15, the range "
+                       "single-precision ray tracing reaches");
   if ((target - eye).norm() == 0 || (target - eye).normalized().cross(up).norm() < 1e-9)
     throw InputError("--camera: eye and target must differ and up must not be parallel to the view");
 }

@@ -34,6 +34,13 @@ void check_request(const WrinkleRequest& r) {
   check_option_range("--samples", r.samples, 1, 16);
   check_option_range("--rays", r.rays, 1, 1 << 20);
   check_option_range("--max-evaluations", r.max_evaluations, 1, 1000000);
+  // Each sample holds a transfer vector and is simulated and fitted: the product of the two
+  // ranges (16.7 million samples, 5 GB and hours at --grid 256 --samples 16) is bounded.
+  const std::size_t samples = WrinkleGrid{r.grid, r.samples, 1.0}.sample_count();
+  if (samples > kMaxWrinkleSamples)
+    throw InputError("--grid " + std::to_string(r.grid) + " with --samples " + std::to_string(r.samples) + " makes " +
+                     std::to_string(samples) + " samples ((G S) x ((G - 1) S + 1)); at most " +
+                     std::to_string(kMaxWrinkleSamples) + " are simulated: lower --samples");
   if (!std::isfinite(r.max_depth) || r.max_depth <= 0 || r.max_depth > 4)
     throw InputError("--max-depth must be in (0, 4] periods, got " + std::to_string(r.max_depth));
   resolve_threads(r.threads);

@@ -28,6 +28,9 @@ Eigen::Vector3d groove_normal(double x, double depth);
 // The model's bounds (kMaxWrinkleOrder, kMaxWrinkleLobes) and its 4 directly stored
 // coefficients are the runtime's (shtool/wrinkle_map.h), which shades the same map.
 inline constexpr int kDirectCoefficients = kWrinkleDirect;
+// The most samples fit-wrinkles simulates (--grid 256 --samples 5 is 1.6 million): about
+// 1 GB of transfer at order 8.
+inline constexpr std::size_t kMaxWrinkleSamples = std::size_t(1) << 21;
 
 // Nodes: x_j = j / G (j = 0..G-1, periodic: x = 1 is x = 0 again) and
 // d_k = max_depth k / (G - 1) (k = 0..G-1). Samples, where the transfer is simulated and
