@@ -460,13 +460,13 @@ TEST(Deform, RigidRotationRotatesEveryLobe) {
   // The posed table belongs to the posed mesh: it renders there, and render and deform
   // refuse it on the rest mesh (the pose would be applied twice, or not at all).
   const std::string sky = bakes().sky.string();
-  must(run_shtool({"render", turned.string(), "--fit", out.string(), "--light", sky, "--width", "32", "--height",
-                   "32", "--out", scratch("turned.png").string()}));
+  must(run_shtool({"render", turned.string(), "--fit", out.string(), "--light", sky, "--width", "32", "--height", "32",
+                   "--out", scratch("turned.png").string()}));
   for (const std::vector<std::string>& args :
-       {std::vector<std::string>{"render", kSpotObj, "--fit", out.string(), "--light", sky, "--width", "32",
-                                 "--height", "32", "--out", scratch("rest_posed.png").string()},
-        std::vector<std::string>{"render", kSpotObj, "--fit", out.string(), "--pose", turned.string(), "--light",
-                                 sky, "--width", "32", "--height", "32", "--out", scratch("rest_posed.png").string()},
+       {std::vector<std::string>{"render", kSpotObj, "--fit", out.string(), "--light", sky, "--width", "32", "--height",
+                                 "32", "--out", scratch("rest_posed.png").string()},
+        std::vector<std::string>{"render", kSpotObj, "--fit", out.string(), "--pose", turned.string(), "--light", sky,
+                                 "--width", "32", "--height", "32", "--out", scratch("rest_posed.png").string()},
         std::vector<std::string>{"deform", out.string(), "--rest", kSpotObj, "--pose", turned.string(), "--out",
                                  scratch("twice.shtb").string()}}) {
     const auto refused = run_shtool(args);

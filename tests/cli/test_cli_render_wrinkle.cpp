@@ -149,7 +149,8 @@ TEST(RenderWrinkle, BadRequestsAreRefusedByName) {
   } bad[] = {
       {{obj, "--shading", "wrinkle", "--wrinkle-map", xd, "--light", light}, "--wrinkle"},
       {{obj, "--shading", "wrinkle", "--wrinkle", map, "--light", light}, "--wrinkle-map"},
-      {{obj, "--shading", "membrane", "--wrinkle", map, "--wrinkle-map", xd, "--light", light}, "--shading wrinkle only"},
+      {{obj, "--shading", "membrane", "--wrinkle", map, "--wrinkle-map", xd, "--light", light},
+       "--shading wrinkle only"},
       {{obj, "--shading", "wrinkle", "--wrinkle", zh_fit.string(), "--wrinkle-map", xd, "--light", light}, "--wrinkle"},
       {{obj, "--shading", "wrinkle", "--wrinkle", map, "--wrinkle-map", short_x, "--light", light},
        std::to_string(v) + " numbers each, one per mesh vertex; 'x' has " + std::to_string(v - 1)},

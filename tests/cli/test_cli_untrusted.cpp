@@ -180,9 +180,9 @@ TEST_F(CliUntrusted, CamerasAndThreadsOutsideTheirRangeAreRefused) {
                       out}),
                  "--camera");
   // Past Embree's ray range (about 1.8e18) it once aborted inside Embree (exit 134).
-  expect_refused(run({"render", mesh_.string(), "--shading", "normals", "--camera", "1e19,0,0,0,0,0,0,0,1", "--out",
-                      out}),
-                 "--camera: every coordinate must be a finite number of magnitude at most 1e15");
+  expect_refused(
+      run({"render", mesh_.string(), "--shading", "normals", "--camera", "1e19,0,0,0,0,0,0,0,1", "--out", out}),
+      "--camera: every coordinate must be a finite number of magnitude at most 1e15");
   expect_refused(run({"fit-zh", "--transfer", (dir_ / "t.json").string(), "--threads", "-2"}),
                  "--threads must be");
   EXPECT_FALSE(fs::exists(out));

@@ -200,8 +200,8 @@ TEST(FourierProduct, ShortSpansAreRefused) {
     try {
       tripling.multiply(f, f, short_g);
     } catch (const std::invalid_argument& e) {
-      EXPECT_NE(std::string(e.what()).find("TriplingProduct::multiply: g holds " + std::to_string(n - 1) +
-                                           " values, " + std::to_string(n) + " needed"),
+      EXPECT_NE(std::string(e.what()).find("TriplingProduct::multiply: g holds " + std::to_string(n - 1) + " values, " +
+                                           std::to_string(n) + " needed"),
                 std::string::npos)
           << e.what();
     }

@@ -549,8 +549,7 @@ ImageFile read_image(const std::filesystem::path& path, std::string_view what, i
 }
 
 std::string encode_exr_channels(const ChannelImage& image, NonFinite non_finite) {
-  if (non_finite == NonFinite::refuse)
-    check_image_finite(image.texels, image.width, image.names.size(), image.names);
+  if (non_finite == NonFinite::refuse) check_image_finite(image.texels, image.width, image.names.size(), image.names);
   Imf::Header header(image.width, image.height);
   header.compression() = Imf::ZIP_COMPRESSION;
   for (const std::string& n : image.names) header.channels().insert(n, Imf::Channel(Imf::FLOAT));

@@ -26,8 +26,9 @@ void check_camera(const std::optional<Camera>& camera) {
   // 1.8e18; the bound of mesh coordinates keeps every ray well inside it.
   for (const Vec& v : {eye, target, up})
     if (!v.allFinite() || v.cwiseAbs().maxCoeff() > fit::kMaxCoordinate)
-      throw InputError("--camera: every coordinate must be a finite number of magnitude at most 1e15, the range "
-                       "single-precision ray tracing reaches");
+      throw InputError(
+          "--camera: every coordinate must be a finite number of magnitude at most 1e15, the range "
+          "single-precision ray tracing reaches");
   if ((target - eye).norm() == 0 || (target - eye).normalized().cross(up).norm() < 1e-9)
     throw InputError("--camera: eye and target must differ and up must not be parallel to the view");
 }
