@@ -371,7 +371,13 @@ TEST(MeshFrames, RenderDeformAndExportWebRefuseAnotherMesh) {
       // mesh's with as many vertices).
       {{"render", other.string(), "--transfer", scratch("same.t.json").string(), "--light", light, "--out",
         image.string()},
+       image},
+      // A fit of those vectors (fit-zh --transfer) keeps their mesh's checksum.
+      {{"render", other.string(), "--fit", scratch("same_refit.shtb").string(), "--light", light, "--out",
+        image.string()},
        image}};
+  must(run_shtool({"fit-zh", "--transfer", scratch("same.t.json").string(), "--lobes", "1", "--out",
+                   scratch("same_refit.shtb").string()}));
   for (const auto& [args, out] : runs) {
     const CommandResult r = run_shtool(args);
     EXPECT_EQ(r.exit_code, 1) << args[0];
@@ -398,6 +404,10 @@ TEST(MeshFrames, RenderDeformAndExportWebRefuseAnotherMesh) {
                    "--width", "16", "--height", "16", "--out", scratch("same_n.png").string()}));
   must(run_shtool({"render", with_normals.string(), "--transfer", scratch("same_n.t.json").string(), "--light",
                    light, "--width", "16", "--height", "16", "--out", scratch("same_nt.png").string()}));
+  must(run_shtool({"fit-zh", "--transfer", scratch("same_n.t.json").string(), "--lobes", "1", "--out",
+                   scratch("same_n_refit.shtb").string()}));
+  must(run_shtool({"render", with_normals.string(), "--fit", scratch("same_n_refit.shtb").string(), "--light", light,
+                   "--width", "16", "--height", "16", "--out", scratch("same_nr.png").string()}));
   must(run_shtool({"render", mesh.string(), "--transfer", scratch("same.t.json").string(), "--light", light,
                    "--width", "16", "--height", "16", "--out", scratch("same_t.png").string()}));
 

@@ -143,10 +143,40 @@ TEST(CliFitZhMpi, RankZeroRefusesRowsOfAnotherInput) {
   args.insert(args.begin(), {SHTOOL_MPIEXEC, "--oversubscribe"});
   const CommandResult r = run_checked(args);
   EXPECT_NE(r.exit_code, 0);
-  EXPECT_NE(r.err.find("'rank 1' and 'rank 0' are not parts of the same bake: generator.parameters.input_crc32"),
-            std::string::npos)
-      << r.err;
+  // Refused before the simulation, from the loaded meshes' checksums.
+  EXPECT_NE(r.err.find("--mpi: rank 1's settings and mesh differ from rank 0's"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("rank 0: stopped, another rank's settings and mesh differ"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(out));
+}
+
+// Interreflected ranks exchange every bounce: ranks given other --bounces once waited for
+// each other for ever, and other orders ended in an internal error. Both are refused by
+// every rank before the simulation.
+TEST(CliFitZhMpi, RanksThatDisagreeAreRefusedBeforeTheyExchangeBounces) {
+  const fs::path out = scratch("disagree.shtb");
+  auto rank_args = [&](const std::string& order, const std::string& bounces) {
+    return std::vector<std::string>{kShtoolExe, "fit-zh",  kSpotObj,   "--rays", "8",      "--order",
+                                    order,      "--lobes", "1",        "--mpi",  "--mode", "interreflected",
+                                    "--bounces", bounces,  "--out",    out.string()};
+  };
+  for (const std::vector<std::string>& differ :
+       {std::vector<std::string>{"--bounces", "2"}, std::vector<std::string>{"--order", "3"}}) {
+    std::vector<std::string> args = {SHTOOL_MPIEXEC, "--oversubscribe", "-np", "1"};
+    const std::vector<std::string> first = rank_args("2", "1");
+    args.insert(args.end(), first.begin(), first.end());
+    args.insert(args.end(), {":", "-np", "1"});
+    const std::vector<std::string> second =
+        differ[0] == "--bounces" ? rank_args("2", differ[1]) : rank_args(differ[1], "1");
+    args.insert(args.end(), second.begin(), second.end());
+    prepare_mpirun();
+    const CommandResult r = run_command(args, {.timeout_seconds = 120});
+    EXPECT_FALSE(r.timed_out) << differ[0] << ": the ranks waited for each other";
+    EXPECT_NE(r.exit_code, 0) << differ[0];
+    EXPECT_NE(r.err.find("--mpi: rank 1's settings and mesh differ from rank 0's"), std::string::npos)
+        << differ[0] << ": " << r.err;
+    EXPECT_EQ(r.err.find("internal error"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out));
+  }
 }
 
 // bake-probes: 2 and 3 ranks write the one-process table and JSON, the invalid probe

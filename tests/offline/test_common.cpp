@@ -20,6 +20,8 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <sched.h>
+
 #include <gtest/gtest.h>
 
 #include "common/atomic_file.h"
@@ -422,6 +424,23 @@ TEST(ParallelFor, ThreadRequestsAreCapped) {
   EXPECT_EQ(resolve_threads(2), 2);
   EXPECT_THROW(resolve_threads(max_threads() + 1), InputError);
   EXPECT_THROW(resolve_threads(100000), InputError);
+}
+
+// --threads 0 means the CPUs this process may use, not the machine's: bound to one CPU
+// (taskset, a cpuset, mpirun --bind-to core) it is 1.
+TEST(ParallelFor, EveryCoreMeansTheCoresThisProcessMayUse) {
+  cpu_set_t old;
+  ASSERT_EQ(::sched_getaffinity(0, sizeof old, &old), 0);
+  int first = 0;
+  while (!CPU_ISSET(first, &old)) ++first;
+  cpu_set_t one;
+  CPU_ZERO(&one);
+  CPU_SET(first, &one);
+  ASSERT_EQ(::sched_setaffinity(0, sizeof one, &one), 0);
+  const int bound = resolve_threads(0);
+  ASSERT_EQ(::sched_setaffinity(0, sizeof old, &old), 0);
+  EXPECT_EQ(bound, 1);
+  EXPECT_EQ(resolve_threads(0), CPU_COUNT(&old));
 }
 
 // The draws reproduce libstdc++'s distributions on std::mt19937_64 bit for bit (the

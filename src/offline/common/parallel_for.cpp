@@ -5,6 +5,8 @@
 #include <string>
 #include <system_error>
 
+#include <sched.h>
+
 #include "common/input_error.h"
 
 namespace shtool {
@@ -14,9 +16,21 @@ int max_threads() {
   return std::max(64, 8 * hw);
 }
 
+int usable_cores() {
+  // The CPUs this process may run on: under taskset, a Slurm cpuset or mpirun's binding
+  // that is fewer than the machine has, and more threads would only take turns.
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  if (::sched_getaffinity(0, sizeof set, &set) == 0) {
+    const int n = CPU_COUNT(&set);
+    if (n > 0) return n;
+  }
+  return std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+}
+
 int resolve_threads(int requested) {
   if (requested < 0) throw InputError("--threads must be 0 (every core) or more, got " + std::to_string(requested));
-  if (requested == 0) return std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  if (requested == 0) return usable_cores();
   if (requested > max_threads())
     throw InputError("--threads " + std::to_string(requested) + " is more than this machine can use (at most " +
                      std::to_string(max_threads()) + ")");

@@ -17,7 +17,10 @@ namespace shtool {
 // The most threads a job may ask for: hardware threads times a small factor (more only
 // add switching, and thousands exhaust the process limit).
 int max_threads();
-// The count a job runs with: `requested` (0: hardware_concurrency), checked against
+// The CPUs this process may run on (its affinity mask: taskset, cpusets, mpirun's
+// binding), at least 1.
+int usable_cores();
+// The count a job runs with: `requested` (0: usable_cores()), checked against
 // max_threads(). Throws InputError for a request below 0 or above max_threads().
 int resolve_threads(int requested);
 

@@ -196,6 +196,10 @@ FitZhInputs read_inputs(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJob*
                        "' has order " + std::to_string(file_order));
     in.order = file_order;
     in.params = {{"transfer", r.transfer.filename().string()}, {"input_crc32", input_crc32(text)}};
+    // And its mesh's checksum, so that render and deform refuse the fit on another mesh
+    // as they refuse the table of the bake itself.
+    if (record.mesh_crc32) in.params["mesh_crc32"] = *record.mesh_crc32;
+    if (!record.normals.empty()) in.params["normals"] = record.normals;
     const std::size_t n2 = sh_count(in.order);
     in.total = in.transfer.size() / n2;
     in.range = plan.rows_of ? shard_range_of(*plan.rows_of, in.total) : VertexRange{0, in.total};
@@ -211,6 +215,19 @@ FitZhInputs read_inputs(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJob*
       cb.warning("skipped " + std::to_string(mesh.unreferenced_vertices) + " unreferenced vertices");
     if (mesh.degenerate_faces) cb.warning("skipped " + std::to_string(mesh.degenerate_faces) + " degenerate faces");
     if (mesh.zero_normals) cb.warning(std::to_string(mesh.zero_normals) + " vertices have no defined normal (+z used)");
+  }
+  if (mpi) {
+    // Before the simulation: an interreflected bake's ranks exchange every bounce, and
+    // ranks that disagree would exchange rows of other sizes or wait for ever.
+    const nlohmann::json job = {{"order", in.order},
+                                {"rays", r.rays},
+                                {"seed", r.seed},
+                                {"mode", name_of(r.mode, transfer_mode_names())},
+                                {"bounces", r.mode == TransferMode::interreflected ? r.bounces : 0},
+                                {"albedo", r.mode == TransferMode::interreflected ? r.albedo : 0.0},
+                                {"vertices", mesh.positions.size()},
+                                {"mesh_crc32", loaded_mesh_crc32(mesh)}};
+    mpi->check_same_job(job.dump(), "settings and mesh");
   }
   TransferOptions to{.order = in.order, .rays = r.rays, .seed = r.seed, .mode = r.mode, .bounces = r.bounces,
                      .albedo = r.albedo, .threads = plan.threads, .progress = cb.simulate_progress};

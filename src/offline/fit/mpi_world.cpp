@@ -78,6 +78,25 @@ std::vector<double> MpiJob::allgather(std::vector<double> mine) {
   return all;
 }
 
+void MpiJob::check_same_job(const std::string& mine, std::string_view what) {
+  if (!agree(true)) {
+    synchronised_ = true;
+    throw InputError("rank " + std::to_string(rank_) + ": stopped, another rank failed");
+  }
+  long long length = static_cast<long long>(mine.size());
+  MPI_Bcast(&length, 1, MPI_LONG_LONG, 0, MPI_COMM_WORLD);
+  std::string root = rank_ == 0 ? mine : std::string(static_cast<std::size_t>(length), '\0');
+  MPI_Bcast(root.data(), static_cast<int>(length), MPI_CHAR, 0, MPI_COMM_WORLD);
+  const bool same = root == mine;
+  if (agree(same)) return;
+  synchronised_ = true;
+  if (!same)
+    throw InputError("--mpi: rank " + std::to_string(rank_) + "'s " + std::string(what) + " differ from rank 0's: " +
+                     mine + " against " + root + " (every rank must run the same command on the same files)");
+  throw InputError("rank " + std::to_string(rank_) + ": stopped, another rank's " + std::string(what) +
+                   " differ from this one's");
+}
+
 std::vector<std::string> MpiJob::gather(std::string_view mine) {
   const long long count = static_cast<long long>(mine.size());
   long long total = 0;
@@ -117,6 +136,8 @@ bool MpiJob::all_ok(bool ok) {
 }
 
 std::vector<std::string> MpiJob::gather(std::string_view mine) { return {std::string(mine)}; }
+
+void MpiJob::check_same_job(const std::string&, std::string_view) {}
 
 std::vector<double> MpiJob::allgather(std::vector<double> mine) { return mine; }
 

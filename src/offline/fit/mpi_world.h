@@ -40,6 +40,14 @@ class MpiJob {
   // values (MPI's int counts and displacements).
   std::vector<double> allgather(std::vector<double> mine);
 
+  // Collective: checks that every rank describes its part of the job as rank 0 does
+  // (`mine`: the settings and input checksums the ranks must share, as text). Checks in
+  // first as allgather does. Throws InputError on every rank when one differs: that rank
+  // names `what` and both descriptions, the others that another rank differs. Ranks that
+  // disagree would otherwise exchange bounces of different sizes, or wait for one another
+  // for ever.
+  void check_same_job(const std::string& mine, std::string_view what);
+
   // Collective: every rank's bytes, in rank order, on rank 0 (empty on the others).
   // Throws InputError on every rank when the total passes 2^31 - 1 bytes (MPI's int
   // counts and displacements).

@@ -38,7 +38,7 @@ struct TransferOptions {
   TransferMode mode = TransferMode::shadowed;
   int bounces = 2;           // interreflected only
   double albedo = 0.8;       // interreflected only; in [0, 1)
-  int threads = 0;           // 0: std::thread::hardware_concurrency()
+  int threads = 0;           // 0: every core this process may use (usable_cores)
   // The rays of a vertex go to Embree as one stream (rtcOccluded1M for the shadow rays,
   // incoherent: 1.4x the rate of single rays on the bunny; rtcIntersect1M for the
   // bounces' closest hits); false: one rtcOccluded1 / rtcIntersect1 per ray, the
