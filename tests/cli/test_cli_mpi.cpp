@@ -155,9 +155,9 @@ TEST(CliFitZhMpi, RankZeroRefusesRowsOfAnotherInput) {
 TEST(CliFitZhMpi, RanksThatDisagreeAreRefusedBeforeTheyExchangeBounces) {
   const fs::path out = scratch("disagree.shtb");
   auto rank_args = [&](const std::string& order, const std::string& bounces) {
-    return std::vector<std::string>{kShtoolExe, "fit-zh",  kSpotObj,   "--rays", "8",      "--order",
-                                    order,      "--lobes", "1",        "--mpi",  "--mode", "interreflected",
-                                    "--bounces", bounces,  "--out",    out.string()};
+    return std::vector<std::string>{kShtoolExe,  "fit-zh",  kSpotObj, "--rays",    "8",      "--order",
+                                    order,       "--lobes", "1",      "--mpi",     "--mode", "interreflected",
+                                    "--bounces", bounces,   "--out",  out.string()};
   };
   for (const std::vector<std::string>& differ :
        {std::vector<std::string>{"--bounces", "2"}, std::vector<std::string>{"--order", "3"}}) {
