@@ -365,6 +365,17 @@ TEST(CliFitZh, MergeRefusesPartsThatDoNotMakeOneBake) {
         << shtool::encode_table(t, shtool::TableEncoding::binary, shtool::NonFinite::keep);
   }
 
+  // A residual below zero, checksums valid: finite, but no table may hold it.
+  const fs::path negative = scratch("refuse_negative.part");
+  {
+    shtool::Table t = shtool::read_table(parts[2]).value();
+    for (shtool::TableArray& a : t.arrays)
+      if (a.name == "residual") {
+        const double minus = -1;
+        std::memcpy(a.data.data() + 8 * 3, &minus, 8);
+      }
+    std::ofstream(negative, std::ios::binary) << shtool::encode_table(t);
+  }
   struct Case {
     std::string name;
     std::vector<fs::path> parts;
@@ -383,6 +394,11 @@ TEST(CliFitZh, MergeRefusesPartsThatDoNotMakeOneBake) {
       {"edited range", {parts[0], edited_range, parts[2]}, "shard 1 of 3 covers vertices [976, 1953)"},
       {"not a table", {parts[0], kSpotObj}, "spot.obj"},
       {"not finite", {parts[0], parts[1], holds_nan}, "refuse_nan.part': array 'residual' value 3 is not finite"},
+      {"names in the order of the values", {parts[0], parts[1], other_seed},
+       "'" + parts[0].string() + "' and '" + other_seed.string() +
+           "' are not parts of the same bake: generator.parameters.seed (1 vs 2)"},
+      {"a value the loader refuses", {parts[0], parts[1], negative},
+       "merge: the joined table would not load: zh-fit table:"},
   };
   for (const Case& c : cases) {
     const fs::path out = scratch("refused.shtb");

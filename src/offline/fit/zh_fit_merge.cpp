@@ -115,7 +115,8 @@ MergedFits merge_zh_fit_tables(std::vector<NamedTable> named) {
   const Part& first = parts.front();
   for (const Part& p : parts) {
     auto differ = [&](const std::string& what) {
-      throw InputError("'" + p.name + "' and '" + first.name + "' are not parts of the same bake: " + what);
+      // In the order of the values in `what`: the first part's, then this one's.
+      throw InputError("'" + first.name + "' and '" + p.name + "' are not parts of the same bake: " + what);
     };
     if (std::string d = first_difference(first.generator, p.generator, "generator"); !d.empty()) differ(d);
     if (std::string d = first_difference(first.meta, p.meta, "meta"); !d.empty()) differ(d);
@@ -166,6 +167,11 @@ MergedFits merge_zh_fit_tables(std::vector<NamedTable> named) {
     if (p->vertex_index) append(fits.vertex_index, "vertex_index");
   }
   merged.table = zh_fit_table(fits, first.meta, first.generator);
+  // What render and the engine's loader will check (unit axes, residuals of 0 or more, a
+  // row for every vertex), checked before the table is written: parts edited with valid
+  // checksums, or written by a faulty tool, are refused here rather than shipped.
+  if (const Result<ZhFitTable<double>> loads = ZhFitTable<double>::from_table(merged.table); !loads)
+    throw InputError("the joined table would not load: " + loads.error().message);
   return merged;
 }
 
