@@ -394,10 +394,12 @@ TEST(CliFitZh, MergeRefusesPartsThatDoNotMakeOneBake) {
       {"edited range", {parts[0], edited_range, parts[2]}, "shard 1 of 3 covers vertices [976, 1953)"},
       {"not a table", {parts[0], kSpotObj}, "spot.obj"},
       {"not finite", {parts[0], parts[1], holds_nan}, "refuse_nan.part': array 'residual' value 3 is not finite"},
-      {"names in the order of the values", {parts[0], parts[1], other_seed},
+      {"names in the order of the values",
+       {parts[0], parts[1], other_seed},
        "'" + parts[0].string() + "' and '" + other_seed.string() +
            "' are not parts of the same bake: generator.parameters.seed (1 vs 2)"},
-      {"a value the loader refuses", {parts[0], parts[1], negative},
+      {"a value the loader refuses",
+       {parts[0], parts[1], negative},
        "merge: the joined table would not load: zh-fit table:"},
   };
   for (const Case& c : cases) {
