@@ -137,6 +137,9 @@ TEST(FitMesh, BadInputGivesClearErrors) {
       {"cut.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 3\nf 4",
        "line 6: a face needs at least 3 vertices, 'f 4' has 1"},
       {"two.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 # a comment 3\n", "line 5: a face needs at least 3"},
+      // Compressed meshes are named as such, not read as garbled face lines.
+      {"spot.obj.gz", std::string("\x1f\x8b\x08\x00garbage", 12), "is gzip-compressed; shtool reads OBJ and glTF"},
+      {"spot.obj.zst", "\x28\xb5\x2f\xfd rest", "is zstd-compressed"},
   };
   for (const auto& [name, text, needle] : cases) {
     const std::string error = load_error(write_obj(name, text));

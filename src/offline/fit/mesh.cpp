@@ -365,6 +365,15 @@ std::string obj_mtllib(const std::string& obj_text) {
 
 Mesh load_obj_text(const std::string& text, const std::filesystem::path& path, NormalSource normal_source,
                    UpAxis up, const std::string& mtl_text) {
+  // Compressed files are not unpacked here (and would read as garbled OBJ lines): say so.
+  struct Magic {
+    std::string_view bytes, format;
+  };
+  for (const Magic& m : {Magic{"\x1f\x8b", "gzip"}, Magic{"\x28\xb5\x2f\xfd", "zstd"},
+                         Magic{"\xfd" "7zXZ", "xz"}, Magic{"BZh", "bzip2"}, Magic{"PK\x03\x04", "zip"}})
+    if (std::string_view(text).substr(0, m.bytes.size()) == m.bytes)
+      fail_input(path, "is " + std::string(m.format) +
+                           "-compressed; shtool reads OBJ and glTF (.gltf, .glb) files: decompress it first");
   check_obj_text(path, text);
 
   tinyobj::ObjReaderConfig config;
