@@ -370,7 +370,10 @@ Mesh load_obj_text(const std::string& text, const std::filesystem::path& path, N
     std::string_view bytes, format;
   };
   for (const Magic& m : {Magic{"\x1f\x8b", "gzip"}, Magic{"\x28\xb5\x2f\xfd", "zstd"},
-                         Magic{"\xfd" "7zXZ", "xz"}, Magic{"BZh", "bzip2"}, Magic{"PK\x03\x04", "zip"}})
+                         Magic{"\xfd"
+                               "7zXZ",
+                               "xz"},
+                         Magic{"BZh", "bzip2"}, Magic{"PK\x03\x04", "zip"}})
     if (std::string_view(text).substr(0, m.bytes.size()) == m.bytes)
       fail_input(path, "is " + std::string(m.format) +
                            "-compressed; shtool reads OBJ and glTF (.gltf, .glb) files: decompress it first");
