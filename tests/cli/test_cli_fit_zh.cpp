@@ -131,6 +131,16 @@ TEST(CliFitZh, TransferFileWithKnownLobeAndDeterminism) {
   EXPECT_LT(f["fits"][0]["residual"].get<double>(), 1e-5);
   std::ifstream s1(out1), s2(out2);
   EXPECT_EQ(std::string(std::istreambuf_iterator<char>(s1), {}), std::string(std::istreambuf_iterator<char>(s2), {}));
+  // The simulation's options do nothing to given vectors, and are said to.
+  const fs::path out3 = scratch("k3.json");
+  const CommandResult r = run_shtool({"fit-zh", "--transfer", in.string(), "--lobes", "1", "--rays", "999", "--mode",
+                                      "interreflected", "--out", scratch("k3.shtb").string(), "--json", out3.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("fit-zh: warning: --rays, --mode: nothing to do with --transfer"), std::string::npos) << r.err;
+  EXPECT_EQ(read_file(out3), read_file(out1));
+  const CommandResult quiet =
+      run_shtool({"fit-zh", "--transfer", in.string(), "--lobes", "1", "--out", scratch("k4.shtb").string()});
+  EXPECT_EQ(quiet.err.find("warning"), std::string::npos) << quiet.err;
 }
 
 TEST(CliFitZh, BadInputExitsOneWithAMessageAndNoOutput) {

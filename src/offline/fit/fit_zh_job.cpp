@@ -185,6 +185,24 @@ FitZhInputs read_inputs(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJob*
     return shard_range(count, s);
   };
   if (!r.transfer.empty()) {
+    // The simulation's options do nothing to given vectors: said, not refused, since a
+    // script may pass one set of options to both kinds of run.
+    if (cb.warning) {
+      const FitZhRequest defaults;
+      std::string unused;
+      auto note = [&](bool changed, const char* option) {
+        if (changed) unused += (unused.empty() ? "" : ", ") + std::string(option);
+      };
+      note(r.rays != defaults.rays, "--rays");
+      note(r.mode != defaults.mode, "--mode");
+      note(r.bounces != defaults.bounces, "--bounces");
+      note(r.albedo != defaults.albedo, "--albedo");
+      note(r.normals != defaults.normals, "--normals");
+      note(r.up != defaults.up, "--up");
+      if (!unused.empty())
+        cb.warning(unused + ": nothing to do with --transfer (these set how transfer is simulated on a mesh; the "
+                   "vectors are given)");
+    }
     const std::string text = read_input_file(r.transfer, "--transfer");
     int file_order = 0;
     TransferMeshRecord record;
