@@ -200,7 +200,8 @@ FitZhInputs read_inputs(const FitZhRequest& r, const FitZhCallbacks& cb, MpiJob*
       note(r.normals != defaults.normals, "--normals");
       note(r.up != defaults.up, "--up");
       if (!unused.empty())
-        cb.warning(unused + ": nothing to do with --transfer (these set how transfer is simulated on a mesh; the "
+        cb.warning(unused +
+                   ": nothing to do with --transfer (these set how transfer is simulated on a mesh; the "
                    "vectors are given)");
     }
     const std::string text = read_input_file(r.transfer, "--transfer");
