@@ -62,7 +62,6 @@ std::string read_input_file(const std::filesystem::path& path, std::string_view 
 
 std::string read_standard_input(std::string_view what) {
   const std::string name = std::string(what) + " -";
-  errno = 0;
   if (::fcntl(STDIN_FILENO, F_GETFD) == -1) throw InputError(name + ": standard input is closed");
   std::string bytes;
   char buf[1 << 16];

@@ -167,8 +167,8 @@ MergedFits merge_zh_fit_tables(std::vector<NamedTable> named) {
     if (p->vertex_index) append(fits.vertex_index, "vertex_index");
   }
   merged.table = zh_fit_table(fits, first.meta, first.generator);
-  // What render and the engine's loader will check (unit axes, residuals of 0 or more, a
-  // row for every vertex), checked before the table is written: parts edited with valid
+  // What render and the engine's loader check (unit axes, residuals and norms of 0 or
+  // more, finite values), checked before the table is written: parts edited with valid
   // checksums, or written by a faulty tool, are refused here rather than shipped.
   if (const Result<ZhFitTable<double>> loads = ZhFitTable<double>::from_table(merged.table); !loads)
     throw InputError("the joined table would not load: " + loads.error().message);

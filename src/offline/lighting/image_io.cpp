@@ -522,8 +522,8 @@ Image decode_image(std::string_view bytes, const std::filesystem::path& name, st
 namespace {
 
 // check_finite for images: the message names the pixel and channel, not a flat index.
-void check_image_finite(std::span<const float> texels, int width, std::size_t channels,
-                        const std::vector<std::string>& names) {
+void check_image_finite(std::span<const float> texels, int width, const std::vector<std::string>& names) {
+  const std::size_t channels = names.size();
   for (std::size_t i = 0; i < texels.size(); ++i)
     if (!std::isfinite(texels[i])) {
       const std::size_t pixel = i / channels, c = i % channels;
@@ -549,7 +549,7 @@ ImageFile read_image(const std::filesystem::path& path, std::string_view what, i
 }
 
 std::string encode_exr_channels(const ChannelImage& image, NonFinite non_finite) {
-  if (non_finite == NonFinite::refuse) check_image_finite(image.texels, image.width, image.names.size(), image.names);
+  if (non_finite == NonFinite::refuse) check_image_finite(image.texels, image.width, image.names);
   Imf::Header header(image.width, image.height);
   header.compression() = Imf::ZIP_COMPRESSION;
   for (const std::string& n : image.names) header.channels().insert(n, Imf::Channel(Imf::FLOAT));
@@ -574,7 +574,8 @@ std::string encode_exr(const Image& image) {
 }
 
 std::string encode_png(const Image& image, double exposure) {
-  check_image_finite(image.texels, image.width, static_cast<std::size_t>(image.channels), rgba_names());
+  check_image_finite(image.texels, image.width,
+                     {rgba_names().begin(), rgba_names().begin() + image.channels});
   const double scale = std::exp2(exposure);
   std::vector<unsigned char> bytes(image.texels.size());
   for (std::size_t i = 0; i < bytes.size(); ++i) {
