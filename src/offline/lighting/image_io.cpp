@@ -574,8 +574,7 @@ std::string encode_exr(const Image& image) {
 }
 
 std::string encode_png(const Image& image, double exposure) {
-  check_image_finite(image.texels, image.width,
-                     {rgba_names().begin(), rgba_names().begin() + image.channels});
+  check_image_finite(image.texels, image.width, {rgba_names().begin(), rgba_names().begin() + image.channels});
   const double scale = std::exp2(exposure);
   std::vector<unsigned char> bytes(image.texels.size());
   for (std::size_t i = 0; i < bytes.size(); ++i) {
